@@ -1,0 +1,91 @@
+/* tunetrace: services the host passes to every plugin (logging, memory, clock, threads,
+ * progress, interruption). One versioned table, like CLAP's clap_host or SQLite's
+ * sqlite3_api_routines: fields are only ever appended; a plugin must check
+ * `host->struct_size >= offsetof(tt_host, field) + sizeof(host->field)` (TT_HOST_HAS) before
+ * using a field newer than the ABI minor it was built for.
+ *
+ * Lifetime: the table and everything reachable from it are owned by the host and stay valid
+ * from the plugin's init() until after its deinit().
+ */
+#ifndef TUNETRACE_HOST_H
+#define TUNETRACE_HOST_H
+
+#include <tunetrace/common.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Body of a parallel loop: processes indices [begin, end) on worker `thread_index`
+ * (0 <= thread_index < thread_count()). */
+typedef void (*tt_parallel_fn)(void *ctx, uint64_t begin, uint64_t end, uint32_t thread_index);
+
+typedef struct tt_host {
+  uint32_t struct_size;   /* sizeof(tt_host) as the host was built: the table's version */
+  uint16_t abi_major;     /* TT_ABI_MAJOR of the host */
+  uint16_t abi_minor;     /* TT_ABI_MINOR of the host */
+  const char *host_name;  /* "tunetrace host" or the embedding application's name */
+  const char *host_version;
+
+  /* Logs one message with a severity; `plugin` names the sender. Thread-safe. */
+  void (*log)(tt_log_level level, const char *plugin, const char *fmt, ...) TT_PRINTF(3, 4);
+
+  /* Allocates `size` bytes aligned to `align` (a power of two, at most 4096); NULL on
+   * failure. Memory is owned by the caller and released with free_mem. Thread-safe. */
+  void *(*alloc)(size_t size, size_t align);
+  /* Releases memory from alloc (NULL is ignored). Thread-safe. */
+  void (*free_mem)(void *ptr);
+
+  /* Monotonic clock in nanoseconds (CLOCK_MONOTONIC); for timing only. Thread-safe. */
+  uint64_t (*clock_ns)(void);
+
+  /* Number of worker threads parallel_for uses (>= 1), as set by --threads. Thread-safe. */
+  uint32_t (*thread_count)(void);
+
+  /* Runs fn over [0, count) split into chunks of `grain` indices (0 = automatic) on the
+   * host's worker pool and returns when all chunks are done. Chunks are handed out
+   * dynamically, so which thread gets which chunk is not deterministic: code that must be
+   * deterministic derives its random numbers from the index, never from thread_index.
+   * Returns TT_ERR_INTERRUPTED if an interrupt arrived (chunks not yet started are skipped).
+   * Main thread only; not reentrant (fn must not call parallel_for). */
+  tt_status (*parallel_for)(uint64_t count, uint64_t grain, tt_parallel_fn fn, void *ctx);
+
+  /* Reports progress of a long task in [0, 1]; `task` is a short label. Thread-safe,
+   * cheap: the host rate-limits drawing. */
+  void (*progress)(const char *task, double fraction);
+
+  /* Non-zero once the user asked to stop (SIGINT/SIGTERM): finish the current unit of work
+   * (a pass, a tuning step), leave results consistent and return. Thread-safe. */
+  int (*should_stop)(void);
+
+  /* Looks up an optional host extension by versioned id ("tt.host.xxx/1"); NULL if the host
+   * has none. Thread-safe. No extensions are defined in ABI 1.0. */
+  const void *(*get_extension)(const char *id);
+
+  /* ---- fields below are ABI 1.1 and later; check with TT_HOST_HAS ---- */
+} tt_host;
+
+/* True if the host table provides `field` (it may be older than the plugin). */
+#define TT_HOST_HAS(host, field) \
+  ((host)->struct_size >= offsetof(tt_host, field) + sizeof((host)->field) && (host)->field)
+
+/* The host table libtunetrace's default implementation provides (stderr logging, pthread
+ * pool, no progress drawing). Used by tests and by applications that embed libtunetrace
+ * without a UI. Valid for the life of the process. Thread-safe. */
+TT_API const tt_host *tt_default_host(void);
+
+/* Sets the worker count of tt_default_host's pool (0 = number of CPUs). Main thread only,
+ * not while a parallel_for runs. */
+TT_API tt_status tt_default_host_set_threads(uint32_t threads);
+
+/* Requests a stop on tt_default_host (should_stop() becomes non-zero). Async-signal-safe. */
+TT_API void tt_default_host_request_stop(void);
+
+/* Sets the minimum level tt_default_host's log prints (default TT_LOG_INFO). */
+TT_API void tt_default_host_set_log_level(tt_log_level level);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TUNETRACE_HOST_H */

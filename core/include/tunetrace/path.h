@@ -1,0 +1,119 @@
+/* tunetrace: the path sampler shared by every integrator (thesis 2.5.4, 4.4).
+ *
+ * tt_path_trace builds one path from a camera ray, drawing every random decision from a
+ * tt_sample_source dimension by dimension, with a fixed layout so that one decision never
+ * shifts another's dimension (pbrt-v4 interleaves streams for the same reason):
+ *
+ *   dims 0-1  film position (the caller's; a path tracer maps them to sub-pixel jitter,
+ *             PSSMLT to the whole film)
+ *   dims 2-3  lens (reserved)
+ *   then per bounce b (b = 0 is the first surface hit), at 4 + TT_PATH_DIMS_PER_BOUNCE*b:
+ *     +0 light selection, +1..2 point on the light, +3 BSDF lobe choice,
+ *     +4..5 BSDF direction, +6 Russian roulette, +7 reserved.
+ *
+ * A source may report, for every BSDF-direction dimension pair, the solid-angle pdf of the
+ * direction it produced (0 for a delta lobe): PSSMLT's sigma-binning (thesis 4.4) picks
+ * each dimension's mutation size from it. The same path construction therefore drives the
+ * path tracer (sampler = independent/Halton/Sobol) and PSSMLT (sampler = the chain's
+ * primary-sample vector).
+ *
+ * Threads: a tt_path_tracer is immutable after creation; tt_path_trace is thread-safe.
+ */
+#ifndef TUNETRACE_PATH_H
+#define TUNETRACE_PATH_H
+
+#include <tunetrace/accel.h>
+#include <tunetrace/scene.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define TT_PATH_DIM_FILM 0
+#define TT_PATH_DIM_LENS 2
+#define TT_PATH_DIM_FIRST_BOUNCE 4
+#define TT_PATH_DIMS_PER_BOUNCE 8
+#define TT_PATH_BOUNCE_LIGHT_SELECT 0
+#define TT_PATH_BOUNCE_LIGHT_POS 1
+#define TT_PATH_BOUNCE_BSDF_LOBE 3
+#define TT_PATH_BOUNCE_BSDF_DIR 4
+#define TT_PATH_BOUNCE_RR 6
+/* Number of dimensions a path of up to `max_depth` bounces can use. */
+#define TT_PATH_DIM_COUNT(max_depth) (TT_PATH_DIM_FIRST_BOUNCE + TT_PATH_DIMS_PER_BOUNCE * ((max_depth) + 1))
+
+typedef enum tt_dim_kind {
+  TT_DIM_FILM = 1, TT_DIM_LENS = 2, TT_DIM_LIGHT_SELECT = 3, TT_DIM_LIGHT_POS = 4,
+  TT_DIM_BSDF_LOBE = 5, TT_DIM_BSDF_DIR = 6, TT_DIM_RR = 7, TT_DIM_RESERVED = 8
+} tt_dim_kind;
+
+/* What dimension `dim` is used for. */
+TT_API tt_dim_kind tt_path_dim_kind(uint32_t dim);
+
+/* Source of primary samples. get() returns dimension `dim` in [0, 1). report_pdf (may be
+ * NULL) is called once per sampled BSDF direction with its first dimension and the pdf
+ * (solid angle; 0 for specular/delta). */
+typedef struct tt_sample_source {
+  float (*get)(void *self, uint32_t dim);
+  void (*report_pdf)(void *self, uint32_t dim, float pdf);
+  void *self;
+} tt_sample_source;
+
+/* Which acceleration structure to trace against. */
+typedef struct tt_tracer {
+  const tt_accel_iface *iface;
+  const tt_accel *accel;
+} tt_tracer;
+
+typedef enum tt_mis_heuristic {
+  TT_MIS_NONE = 0,     /* light sampling only for area lights (NEE), BSDF hits on lights not counted */
+  TT_MIS_BALANCE = 1,
+  TT_MIS_POWER = 2     /* beta = 2 */
+} tt_mis_heuristic;
+
+typedef enum tt_light_strategy {
+  TT_STRATEGY_MIS = 0,       /* NEE + BSDF sampling combined with the MIS heuristic */
+  TT_STRATEGY_LIGHT = 1,     /* NEE only (emission found by BSDF sampling ignored after bounce 0) */
+  TT_STRATEGY_BSDF = 2       /* BSDF sampling only (no NEE) */
+} tt_light_strategy;
+
+typedef struct tt_path_options {
+  uint32_t struct_size;
+  uint32_t max_depth;        /* bounces; 0 = directly visible emission only */
+  uint32_t rr_depth;         /* Russian roulette from this bounce on (>= max_depth: never) */
+  tt_light_strategy strategy;
+  tt_mis_heuristic heuristic;
+} tt_path_options;
+
+/* Fills options with the defaults: max_depth 3 (thesis ch. 3), rr_depth 3, MIS, power. */
+TT_API void tt_path_options_default(tt_path_options *options);
+
+typedef struct tt_path_result {
+  float L[3];                /* radiance along the camera ray (finite: non-finite -> 0) */
+  float albedo[3];           /* first hit reflectance (0 on a miss) */
+  float normal[3];           /* first hit shading normal (0 on a miss) */
+  float position[3];         /* first hit position (for motion vectors) */
+  float distance;            /* first hit distance along the ray (+inf on a miss) */
+  uint32_t rays;             /* rays traced (closest + shadow) */
+  uint32_t bounces;          /* surface interactions */
+  uint32_t max_dim;          /* highest dimension + 1 that get() was asked for */
+  int32_t hit;               /* non-zero if the camera ray hit geometry */
+  int32_t nonfinite;         /* non-zero if a non-finite value was produced and zeroed */
+} tt_path_result;
+
+typedef struct tt_path_tracer tt_path_tracer;
+
+/* Prepares light sampling (area-weighted over emissive triangles, power-weighted over
+ * lights) and material data for `scene`, which must outlive it. Free with destroy. */
+TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **out);
+TT_API void tt_path_tracer_destroy(tt_path_tracer *pt);
+
+/* Traces one path starting with `camera_ray`. Thread-safe. */
+TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
+                          const tt_path_options *options, const tt_ray *camera_ray,
+                          const tt_sample_source *source, tt_path_result *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TUNETRACE_PATH_H */

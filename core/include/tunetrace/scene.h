@@ -1,0 +1,171 @@
+/* tunetrace: scenes. A scene is loaded from scene.json (see scenes/README.md), flattened to
+ * world-space triangle meshes, and is immutable afterwards except for the camera and the
+ * resolution, which the host may override before rendering. Plugins receive it as const
+ * and read it through the views below; views point into the scene and stay valid until
+ * tt_scene_destroy. Reading a scene is thread-safe.
+ *
+ * View structs begin with struct_size so fields can be appended; a reader built against an
+ * older header simply ignores the tail.
+ */
+#ifndef TUNETRACE_SCENE_H
+#define TUNETRACE_SCENE_H
+
+#include <tunetrace/common.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct tt_scene tt_scene;
+
+/* A triangle mesh in world space. */
+typedef struct tt_mesh {
+  uint32_t struct_size;
+  const char *name;           /* from the scene file ("mesh[3]" if unnamed) */
+  uint32_t vertex_count;
+  uint32_t triangle_count;
+  const float *positions;     /* 3 * vertex_count floats, world space */
+  const float *normals;       /* 3 * vertex_count unit normals, or NULL (use the face normal) */
+  const float *uvs;           /* 2 * vertex_count, or NULL */
+  const uint32_t *indices;    /* 3 * triangle_count vertex indices */
+  uint32_t material;          /* index into the scene's materials */
+  int32_t light;              /* index of the area light this mesh emits as, or -1 */
+} tt_mesh;
+
+typedef enum tt_material_type {
+  TT_MATERIAL_DIFFUSE = 1,     /* Lambert, or Oren-Nayar when roughness > 0 */
+  TT_MATERIAL_CONDUCTOR = 2,   /* anisotropic GGX microfacet metal (eta, k) */
+  TT_MATERIAL_DIELECTRIC = 3,  /* smooth glass with Fresnel (rough when alpha > 0) */
+  TT_MATERIAL_MIRROR = 4,      /* ideal specular reflector, tinted by `specular` */
+  TT_MATERIAL_PLASTIC = 5      /* diffuse base under a GGX dielectric coat (glossy) */
+} tt_material_type;
+
+typedef struct tt_material {
+  uint32_t struct_size;
+  const char *name;
+  tt_material_type type;
+  float albedo[3];          /* diffuse reflectance (linear RGB), DIFFUSE and PLASTIC base */
+  int32_t albedo_texture;   /* index of an image texture modulating albedo, or -1 */
+  float roughness;          /* Oren-Nayar sigma in radians (DIFFUSE) */
+  float alpha[2];           /* GGX alpha_x, alpha_y (CONDUCTOR, PLASTIC, rough DIELECTRIC) */
+  float eta[3];             /* CONDUCTOR: real part of the IOR per channel */
+  float k[3];               /* CONDUCTOR: imaginary part (absorption) per channel */
+  float ior;                /* DIELECTRIC / PLASTIC coat: index of refraction */
+  float specular[3];        /* tint of specular reflection/transmission */
+  float emission[3];        /* emitted radiance; non-zero makes every mesh using it a light */
+  int32_t two_sided;        /* emission from both sides when non-zero */
+} tt_material;
+
+typedef struct tt_texture {
+  uint32_t struct_size;
+  const char *path;         /* resolved path of the image file */
+  int32_t srgb;             /* non-zero: the file holds sRGB-encoded colour */
+} tt_texture;
+
+typedef enum tt_light_type {
+  TT_LIGHT_AREA = 1,          /* an emissive mesh (radiance from its material) */
+  TT_LIGHT_ENV_CONSTANT = 2,  /* uniform environment of radiance `radiance` */
+  TT_LIGHT_ENV_IMAGE = 3,     /* lat-long environment image `image` scaled by `radiance` */
+  TT_LIGHT_POINT = 4,
+  TT_LIGHT_SPOT = 5,
+  TT_LIGHT_DISTANT = 6
+} tt_light_type;
+
+typedef struct tt_light {
+  uint32_t struct_size;
+  tt_light_type type;
+  uint32_t mesh;            /* AREA: index of the emitting mesh */
+  float radiance[3];        /* AREA: emitted radiance; ENV: radiance or scale; POINT/SPOT:
+                               intensity; DISTANT: irradiance */
+  float position[3];        /* POINT, SPOT */
+  float direction[3];       /* SPOT, DISTANT: direction the light travels */
+  float cos_inner, cos_outer; /* SPOT falloff cone */
+  const char *image;        /* ENV_IMAGE: resolved path */
+  float area;               /* AREA: total surface area (world units^2) */
+} tt_light;
+
+/* One camera pose; a camera path is a list of them (times in seconds, increasing). */
+typedef struct tt_camera_key {
+  float time;
+  float position[3];
+  float target[3];
+  float up[3];
+  float fov_y;              /* vertical field of view in degrees */
+} tt_camera_key;
+
+typedef struct tt_camera {
+  uint32_t struct_size;
+  float position[3];
+  float target[3];
+  float up[3];
+  float fov_y;              /* vertical field of view, degrees, in (0, 180) */
+  uint32_t width, height;   /* resolution in pixels */
+  uint32_t key_count;       /* camera path keyframes (0: a still camera) */
+  const tt_camera_key *keys;
+} tt_camera;
+
+/* Render settings stored in the scene (the host's options override them). */
+typedef struct tt_render_settings {
+  uint32_t struct_size;
+  uint32_t spp;             /* samples per pixel for the final image */
+  uint32_t max_depth;       /* default path depth (bounces) for integrators */
+  uint64_t seed;
+  double time_budget_s;     /* 0: no budget */
+} tt_render_settings;
+
+/* Loads a scene file (scene.json; the format is chosen by extension). On error returns
+ * TT_ERR_IO / TT_ERR_PARSE and a message naming the file, the JSON path and what was
+ * expected. `*out` is owned by the caller: free with tt_scene_destroy. Thread-safe. */
+TT_API tt_status tt_scene_load(const char *path, tt_scene **out);
+
+/* Loads scene JSON from memory; `source` names it in messages; relative asset paths are
+ * resolved against `base_dir` (NULL = current directory). */
+TT_API tt_status tt_scene_load_json(const char *json, size_t length, const char *source,
+                                    const char *base_dir, tt_scene **out);
+
+/* Destroys a scene (NULL is ignored). No plugin may still hold views into it. */
+TT_API void tt_scene_destroy(tt_scene *scene);
+
+/* Path (or source name) the scene was loaded from. */
+TT_API const char *tt_scene_source(const tt_scene *scene);
+/* Stable identifier of the scene content (hex hash of geometry and materials), used as the
+ * scene key of tuning databases. */
+TT_API const char *tt_scene_id(const tt_scene *scene);
+
+TT_API uint32_t tt_scene_mesh_count(const tt_scene *scene);
+TT_API const tt_mesh *tt_scene_mesh(const tt_scene *scene, uint32_t index);
+TT_API uint32_t tt_scene_material_count(const tt_scene *scene);
+TT_API const tt_material *tt_scene_material(const tt_scene *scene, uint32_t index);
+TT_API uint32_t tt_scene_texture_count(const tt_scene *scene);
+TT_API const tt_texture *tt_scene_texture(const tt_scene *scene, uint32_t index);
+TT_API uint32_t tt_scene_light_count(const tt_scene *scene);
+TT_API const tt_light *tt_scene_light(const tt_scene *scene, uint32_t index);
+/* Total number of triangles over all meshes. */
+TT_API uint64_t tt_scene_triangle_count(const tt_scene *scene);
+/* World-space bounding box of all geometry: lo[3], hi[3]. */
+TT_API void tt_scene_bounds(const tt_scene *scene, float lo[3], float hi[3]);
+
+TT_API const tt_camera *tt_scene_camera(const tt_scene *scene);
+/* Camera pose at time t on the camera path (Catmull-Rom through the keys; the still camera
+ * when there are no keys). Writes a full camera (resolution included) into `out`. */
+TT_API void tt_scene_camera_at(const tt_scene *scene, double t, tt_camera *out);
+/* Replaces the still camera pose (not thread-safe: only before rendering). */
+TT_API void tt_scene_set_camera(tt_scene *scene, const tt_camera *camera);
+/* Overrides the resolution (both > 0). Not thread-safe: only before rendering. */
+TT_API tt_status tt_scene_set_resolution(tt_scene *scene, uint32_t width, uint32_t height);
+
+TT_API const tt_render_settings *tt_scene_settings(const tt_scene *scene);
+
+/* Scene indicators of thesis Table 3.2 (the predictors' state vector). */
+#define TT_SCENE_INDICATOR_COUNT 17
+/* Name of indicator i ("meshes", "triangles", ..., "var_var_tri_size"). */
+TT_API const char *tt_scene_indicator_name(uint32_t index);
+/* Computes the TT_SCENE_INDICATOR_COUNT indicators for the scene and its current camera;
+ * surface quantities are normalised by the scene extent as in thesis 3.3.1. */
+TT_API void tt_scene_indicators(const tt_scene *scene, double out[TT_SCENE_INDICATOR_COUNT]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TUNETRACE_SCENE_H */

@@ -1,0 +1,71 @@
+/* tunetrace: tuner plugins (kind TT_KIND_TUNER, interface "tt.tuner/1").
+ *
+ * A tuner searches a parameter space (published by another plugin) for the configuration
+ * with the lowest cost. Protocol (ask/tell): next() proposes a configuration; the caller
+ * measures it and calls feedback() with its cost before the next call to next(); best()
+ * returns the best configuration measured so far. Costs are minimised; an infeasible or
+ * failed configuration is fed back as TT_COST_INFEASIBLE.
+ *
+ * Threads: a tuner object is used by one thread at a time; distinct tuners are independent.
+ * The tuner never proposes a configuration outside its space: proposals pass
+ * tt_space_check, repaired if the check repairs them.
+ */
+#ifndef TUNETRACE_TUNER_H
+#define TUNETRACE_TUNER_H
+
+#include <tunetrace/params.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define TT_TUNER_INTERFACE_ID "tt.tuner/1"
+
+/* Cost to report for an infeasible configuration or a failed measurement. */
+#define TT_COST_INFEASIBLE 1e300
+
+typedef struct tt_tuner tt_tuner;  /* opaque, defined by the plugin */
+
+typedef struct tt_tuner_iface {
+  uint32_t struct_size;     /* sizeof(tt_tuner_iface) as the plugin was built */
+
+  /* The tuner's own settings (e.g. Nelder-Mead coefficients, initial simplex), or NULL if
+   * it has none. Owned by the plugin. Thread-safe. */
+  const tt_space *(*space)(void);
+
+  /* Creates a tuner over `target` (which must outlive it) with its own `settings` (of
+   * space(); NULL = defaults) and a seed; deterministic for a given seed and cost
+   * sequence. `*out` is owned by the caller: free with destroy. */
+  tt_status (*create)(const tt_space *target, const tt_config *settings, uint64_t seed,
+                      tt_tuner **out);
+
+  /* Writes the next configuration to measure into `out` (a config of `target`). Returns
+   * TT_OK, or TT_DONE when the search has converged or is exhausted (then `out` holds the
+   * best configuration). Calling next() twice without feedback() re-proposes the same one. */
+  tt_status (*next)(tt_tuner *tuner, tt_config *out);
+
+  /* Reports the measured cost of the last proposal (finite, or TT_COST_INFEASIBLE).
+   * TT_ERR_INVALID_ARGUMENT if there is no outstanding proposal or the cost is NaN. */
+  tt_status (*feedback)(tt_tuner *tuner, double cost);
+
+  /* Best configuration measured so far and its cost; TT_ERR_NO_DATA before any feedback. */
+  tt_status (*best)(const tt_tuner *tuner, tt_config *out, double *cost);
+
+  /* Serialises the complete search state as JSON (free with tt_free) so that a later
+   * load_state on a tuner created with the same target, settings and seed resumes exactly. */
+  tt_status (*save_state)(const tt_tuner *tuner, char **json);
+
+  /* Restores state written by save_state; errors name what did not match. */
+  tt_status (*load_state)(tt_tuner *tuner, const char *json);
+
+  /* Destroys the tuner (NULL is ignored). */
+  void (*destroy)(tt_tuner *tuner);
+
+  /* ---- appended in later ABI minors: check struct_size ---- */
+} tt_tuner_iface;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TUNETRACE_TUNER_H */

@@ -1,0 +1,2 @@
+/* placeholder */
+extern "C" { typedef int tt__placeholder_image_io; }

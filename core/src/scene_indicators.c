@@ -1,0 +1,2 @@
+/* placeholder: being written */
+typedef int tt__placeholder_scene_indicators;

@@ -1,0 +1,2 @@
+/* placeholder */
+typedef int tt__placeholder_progress;
