@@ -1,1 +1,25 @@
-int main(void) { return 0; }
+/* host: command-line entry point. Parses options and dispatches to the requested job. */
+#include "host.h"
+
+#include <stdio.h>
+
+int main(int argc, char **argv) {
+  tt__host_options opt;
+  int rc = tt__parse_options(argc, argv, &opt);
+  if (rc != TT_EXIT_OK) return rc;
+  if (opt.help) {
+    tt__print_usage(stdout);
+    return TT_EXIT_OK;
+  }
+  if (opt.version) {
+    printf("tunetrace host %s (plugin ABI %d.%d)\n", tt_version(), TT_ABI_MAJOR, TT_ABI_MINOR);
+    return TT_EXIT_OK;
+  }
+  if (opt.list_plugins) return tt__run_list_plugins(&opt);
+  if (opt.describe) return tt__run_describe(&opt);
+  if (!opt.scene) {
+    fprintf(stderr, "host: no scene given (try --help)\n");
+    return TT_EXIT_USAGE;
+  }
+  return tt__run_render(&opt);
+}

@@ -1,2 +1,109 @@
-/* placeholder */
-typedef int tt__placeholder_progress;
+/* host: progress bar with ETA on a TTY, plain lines otherwise, and a log that does not
+ * tear the bar. Both are passed to plugins through the host services table. */
+#include "host.h"
+
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static pthread_mutex_t tt__lock = PTHREAD_MUTEX_INITIALIZER;
+static int tt__quiet;
+static int tt__tty;
+static int tt__bar_visible;        /* a partial bar line is on screen */
+static char tt__task[64];
+static uint64_t tt__task_start_ns;
+static uint64_t tt__last_draw_ns;
+static int tt__last_decile = -1;   /* non-TTY: last 10% step printed */
+static tt_host tt__host;
+
+static uint64_t tt__now(void) { return tt_default_host()->clock_ns(); }
+
+/* Formats seconds as "12.3s", "4m05s" or "1h02m". */
+static void tt__fmt_time(double s, char *buf, size_t n) {
+  if (s < 0 || s != s) snprintf(buf, n, "?");
+  else if (s < 60) snprintf(buf, n, "%.1fs", s);
+  else if (s < 3600) snprintf(buf, n, "%dm%02ds", (int)(s / 60), (int)s % 60);
+  else snprintf(buf, n, "%dh%02dm", (int)(s / 3600), (int)(s / 60) % 60);
+}
+
+void tt__progress_update(const char *task, double fraction) {
+  if (tt__quiet) return;
+  if (fraction < 0) fraction = 0;
+  if (fraction > 1) fraction = 1;
+  pthread_mutex_lock(&tt__lock);
+  uint64_t now = tt__now();
+  if (strncmp(task, tt__task, sizeof tt__task - 1) != 0) {
+    snprintf(tt__task, sizeof tt__task, "%s", task);
+    tt__task_start_ns = now;
+    tt__last_decile = -1;
+    tt__last_draw_ns = 0;
+  }
+  double elapsed = (now - tt__task_start_ns) * 1e-9;
+  double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : -1;
+  char el[32], et[32];
+  tt__fmt_time(elapsed, el, sizeof el);
+  tt__fmt_time(eta, et, sizeof et);
+  if (tt__tty) {
+    /* redraw at most 10 times a second, and always at 100% */
+    if (fraction < 1 && now - tt__last_draw_ns < 100000000ull) goto out;
+    tt__last_draw_ns = now;
+    char bar[31];
+    int fill = (int)(fraction * 30 + 0.5);
+    for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
+    bar[30] = 0;
+    fprintf(stderr, "\r\033[K%s [%s] %5.1f%%  elapsed %s  ETA %s", tt__task, bar,
+            fraction * 100, el, et);
+    tt__bar_visible = 1;
+  } else {
+    int decile = (int)(fraction * 10);
+    if (decile != tt__last_decile) {
+      tt__last_decile = decile;
+      fprintf(stderr, "%s: %3d%%  elapsed %s  ETA %s\n", tt__task, decile * 10, el, et);
+    }
+  }
+  fflush(stderr);
+out:
+  pthread_mutex_unlock(&tt__lock);
+}
+
+void tt__progress_finish(void) {
+  pthread_mutex_lock(&tt__lock);
+  if (tt__bar_visible) fputc('\n', stderr);
+  tt__bar_visible = 0;
+  tt__task[0] = 0;
+  pthread_mutex_unlock(&tt__lock);
+}
+
+/* Log for plugins and the host: clears a partial bar line first. */
+static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
+  if (level < TT_LOG_WARN && tt__quiet) return;
+  if (level == TT_LOG_DEBUG && !getenv("TT_DEBUG")) return;
+  char msg[2048];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  static const char *names[] = {"debug", "info", "warning", "error"};
+  pthread_mutex_lock(&tt__lock);
+  if (tt__bar_visible) {
+    fputs("\r\033[K", stderr);
+    tt__bar_visible = 0;
+    tt__last_draw_ns = 0;
+  }
+  fprintf(stderr, "host: %s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
+          plugin ? "] " : "", names[level <= TT_LOG_ERROR ? level : TT_LOG_ERROR], msg);
+  pthread_mutex_unlock(&tt__lock);
+}
+
+const tt_host *tt__host_services(int quiet) {
+  tt__quiet = quiet;
+  tt__tty = isatty(2);
+  tt__host = *tt_default_host();
+  tt__host.host_name = "tunetrace host";
+  tt__host.log = tt__host_log;
+  tt__host.progress = tt__progress_update;
+  return &tt__host;
+}

@@ -1,2 +1,255 @@
-/* placeholder: being written */
-typedef int tt__placeholder_mesh_import;
+/* Mesh files (OBJ, PLY, glTF, ... whatever assimp reads) flattened to triangle arrays.
+ * Materials in the file are ignored: the scene.json entry chooses the material. */
+#include "scene_internal.h"
+
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* aiGetErrorString reads a process-wide buffer: serialise imports so the message we report
+ * belongs to our call. */
+static pthread_mutex_t tt__assimp_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* One placement of an assimp mesh by the node hierarchy. */
+typedef struct tt__ai_instance {
+  unsigned mesh;
+  double m[16];        /* row-major node-to-file-root matrix */
+  const char *name;    /* mesh name, else node name, may be "" */
+} tt__ai_instance;
+
+typedef struct tt__ai_list {
+  tt__ai_instance *items;
+  uint32_t count, cap;
+} tt__ai_list;
+
+/* Counts usable triangles (assimp keeps points and lines as separate primitives). */
+static uint32_t tt__ai_triangles(const struct aiMesh *m) {
+  uint32_t n = 0;
+  for (unsigned f = 0; f < m->mNumFaces; f++) n += m->mFaces[f].mNumIndices == 3;
+  return n;
+}
+
+/* Walks the node tree accumulating transforms, so glTF/FBX node placements survive and
+ * each placed mesh stays a separate part for split mode. Depth is bounded against cyclic
+ * or absurd files. */
+static int tt__ai_collect(const struct aiScene *sc, const struct aiNode *node, const double parent[16],
+                          int depth, tt__ai_list *list) {
+  if (!node || depth > 256) return 1;
+  const struct aiMatrix4x4 *t = &node->mTransformation;
+  double local[16] = {t->a1, t->a2, t->a3, t->a4, t->b1, t->b2, t->b3, t->b4,
+                      t->c1, t->c2, t->c3, t->c4, t->d1, t->d2, t->d3, t->d4};
+  double m[16];
+  for (int i = 0; i < 4; i++)
+    for (int j = 0; j < 4; j++) {
+      double s = 0;
+      for (int k = 0; k < 4; k++) s += parent[4 * i + k] * local[4 * k + j];
+      m[4 * i + j] = s;
+    }
+  for (unsigned i = 0; i < node->mNumMeshes; i++) {
+    unsigned mi = node->mMeshes[i];
+    if (mi >= sc->mNumMeshes || tt__ai_triangles(sc->mMeshes[mi]) == 0) continue;
+    tt__ai_instance *inst = tt__scene_push((void **)&list->items, &list->count, &list->cap, sizeof *inst);
+    if (!inst) return 0;
+    inst->mesh = mi;
+    memcpy(inst->m, m, sizeof m);
+    inst->name = sc->mMeshes[mi]->mName.length ? sc->mMeshes[mi]->mName.data : node->mName.data;
+  }
+  for (unsigned c = 0; c < node->mNumChildren; c++)
+    if (!tt__ai_collect(sc, node->mChildren[c], m, depth + 1, list)) return 0;
+  return 1;
+}
+
+/* Copies one placed assimp mesh into a mesh_data in file-root space. */
+static tt_status tt__ai_part(const struct aiScene *sc, const tt__ai_instance *inst, const char *where,
+                             tt__mesh_data *out) {
+  const struct aiMesh *m = sc->mMeshes[inst->mesh];
+  uint32_t nv = m->mNumVertices, nt = tt__ai_triangles(m);
+  memset(out, 0, sizeof *out);
+  if (nt > UINT32_MAX / 3) return tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh too large", where);
+  out->vertex_count = nv;
+  out->triangle_count = nt;
+  out->positions = malloc(3 * sizeof(float) * (nv ? nv : 1));
+  out->indices = malloc(3 * sizeof(uint32_t) * (nt ? nt : 1));
+  if (m->mNormals) out->normals = malloc(3 * sizeof(float) * (nv ? nv : 1));
+  if (m->mTextureCoords[0]) out->uvs = malloc(2 * sizeof(float) * (nv ? nv : 1));
+  if (!out->positions || !out->indices || (m->mNormals && !out->normals) ||
+      (m->mTextureCoords[0] && !out->uvs)) {
+    tt__mesh_data_free(out);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+  }
+  for (uint32_t v = 0; v < nv; v++) {
+    float *p = out->positions + 3 * (size_t)v;
+    p[0] = m->mVertices[v].x;
+    p[1] = m->mVertices[v].y;
+    p[2] = m->mVertices[v].z;
+    if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
+      tt__mesh_data_free(out);
+      return tt_set_error(TT_ERR_PARSE, "%s: non-finite vertex position", where);
+    }
+    if (out->normals) {
+      float *n = out->normals + 3 * (size_t)v;
+      double x = m->mNormals[v].x, y = m->mNormals[v].y, z = m->mNormals[v].z;
+      double len = sqrt(x * x + y * y + z * z);
+      /* files sometimes carry zero normals; a fixed unit vector is safer than NaN */
+      if (!(len > 0) || !isfinite(len)) x = 0, y = 0, z = 1, len = 1;
+      n[0] = (float)(x / len);
+      n[1] = (float)(y / len);
+      n[2] = (float)(z / len);
+    }
+    if (out->uvs) {
+      out->uvs[2 * (size_t)v] = m->mTextureCoords[0][v].x;
+      out->uvs[2 * (size_t)v + 1] = m->mTextureCoords[0][v].y;
+    }
+  }
+  uint32_t t = 0;
+  for (unsigned f = 0; f < m->mNumFaces; f++) {
+    const struct aiFace *face = &m->mFaces[f];
+    if (face->mNumIndices != 3) continue;
+    for (int c = 0; c < 3; c++) {
+      if (face->mIndices[c] >= nv) {
+        tt__mesh_data_free(out);
+        return tt_set_error(TT_ERR_PARSE, "%s: face index out of range", where);
+      }
+      out->indices[3 * (size_t)t + c] = face->mIndices[c];
+    }
+    t++;
+  }
+  static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  if (memcmp(inst->m, id, sizeof id) != 0 && tt__mesh_data_transform(out, inst->m) != TT_OK) {
+    tt__mesh_data_free(out);
+    return tt_set_error(TT_ERR_PARSE, "%s: node transform is singular or not affine", where);
+  }
+  return TT_OK;
+}
+
+/* Concatenates parts into one; normals/uvs survive only if every part has them, since a
+ * partial attribute array would be meaningless. Frees the parts. */
+static tt_status tt__ai_merge(tt__mesh_data *parts, uint32_t count, const char *where, tt__mesh_data *out) {
+  uint64_t nv = 0, nt = 0;
+  int has_n = 1, has_uv = 1;
+  for (uint32_t i = 0; i < count; i++) {
+    nv += parts[i].vertex_count;
+    nt += parts[i].triangle_count;
+    has_n &= parts[i].normals != NULL;
+    has_uv &= parts[i].uvs != NULL;
+  }
+  memset(out, 0, sizeof *out);
+  tt_status st = TT_OK;
+  if (nv > UINT32_MAX || nt > UINT32_MAX / 3) {
+    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh too large (%llu vertices)", where, (unsigned long long)nv);
+    goto done;
+  }
+  out->vertex_count = (uint32_t)nv;
+  out->triangle_count = (uint32_t)nt;
+  out->positions = malloc(3 * sizeof(float) * (nv ? nv : 1));
+  out->indices = malloc(3 * sizeof(uint32_t) * (nt ? nt : 1));
+  if (has_n) out->normals = malloc(3 * sizeof(float) * (nv ? nv : 1));
+  if (has_uv) out->uvs = malloc(2 * sizeof(float) * (nv ? nv : 1));
+  if (!out->positions || !out->indices || (has_n && !out->normals) || (has_uv && !out->uvs)) {
+    tt__mesh_data_free(out);
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+    goto done;
+  }
+  size_t v0 = 0, t0 = 0;
+  for (uint32_t i = 0; i < count; i++) {
+    const tt__mesh_data *p = &parts[i];
+    memcpy(out->positions + 3 * v0, p->positions, 3 * sizeof(float) * p->vertex_count);
+    if (has_n) memcpy(out->normals + 3 * v0, p->normals, 3 * sizeof(float) * p->vertex_count);
+    if (has_uv) memcpy(out->uvs + 2 * v0, p->uvs, 2 * sizeof(float) * p->vertex_count);
+    for (size_t k = 0; k < 3 * (size_t)p->triangle_count; k++) out->indices[3 * t0 + k] = (uint32_t)v0 + p->indices[k];
+    v0 += p->vertex_count;
+    t0 += p->triangle_count;
+  }
+done:
+  for (uint32_t i = 0; i < count; i++) tt__mesh_data_free(&parts[i]);
+  return st;
+}
+
+/* Imports, then builds one part per placed mesh and either returns them (split) or merges
+ * them into one. */
+tt_status tt__mesh_import(const char *file, const char *base_name, int split, const char *where,
+                          tt__mesh_data **out, uint32_t *count) {
+  *out = NULL;
+  *count = 0;
+  FILE *probe = fopen(file, "rb");
+  if (!probe)
+    return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, strerror(errno));
+  fclose(probe);
+  pthread_mutex_lock(&tt__assimp_lock);
+  const struct aiScene *sc = aiImportFile(file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  if (!sc) {
+    tt_status st = tt_set_error(TT_ERR_PARSE, "%s: cannot import mesh file \"%s\": %s", where, file,
+                                aiGetErrorString());
+    pthread_mutex_unlock(&tt__assimp_lock);
+    return st;
+  }
+  pthread_mutex_unlock(&tt__assimp_lock);
+
+  static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  tt__ai_list list = {NULL, 0, 0};
+  tt__mesh_data *parts = NULL;
+  tt_status st = TT_OK;
+  if (!tt__ai_collect(sc, sc->mRootNode, id, 0, &list)) {
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+    goto done;
+  }
+  if (list.count == 0) {
+    st = tt_set_error(TT_ERR_PARSE, "%s: mesh file \"%s\" contains no triangles", where, file);
+    goto done;
+  }
+  parts = calloc(list.count, sizeof *parts);
+  if (!parts) {
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+    goto done;
+  }
+  for (uint32_t i = 0; i < list.count && st == TT_OK; i++) {
+    st = tt__ai_part(sc, &list.items[i], where, &parts[i]);
+    if (st == TT_OK && split) {
+      char name[512];
+      int w = list.items[i].name[0] ? snprintf(name, sizeof name, "%s/%s", base_name, list.items[i].name)
+                                    : snprintf(name, sizeof name, "%s/%u", base_name, i);
+      if (w < 0) name[0] = '\0';
+      parts[i].name = tt__scene_strdup(name);
+      if (!parts[i].name) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+    }
+  }
+  if (st != TT_OK) {
+    for (uint32_t i = 0; i < list.count; i++) tt__mesh_data_free(&parts[i]);
+    free(parts);
+    parts = NULL;
+    goto done;
+  }
+  if (split) {
+    *out = parts;
+    *count = list.count;
+    parts = NULL;
+  } else {
+    tt__mesh_data *one = calloc(1, sizeof *one);
+    if (!one) {
+      for (uint32_t i = 0; i < list.count; i++) tt__mesh_data_free(&parts[i]);
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+    } else if ((st = tt__ai_merge(parts, list.count, where, one)) == TT_OK &&
+               !(one->name = tt__scene_strdup(base_name))) {
+      tt__mesh_data_free(one);
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+    }
+    if (st == TT_OK) {
+      *out = one;
+      *count = 1;
+    } else {
+      free(one);
+    }
+  }
+done:
+  free(parts);
+  free(list.items);
+  aiReleaseImport(sc);
+  return st;
+}

@@ -1,0 +1,81 @@
+/* End to end: the host's command line — usage errors, plugin errors, --describe and
+ * --list-plugins — each with its exit code and message. */
+#include "host_util.h"
+#include "tt_test.h"
+
+int main(void) {
+  static char out[1 << 16];
+  char args[8192];
+  const char *scene = source_path("scenes/cornell-box/scene.json");
+
+  CHECK(run_host("--help", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "--plugin");
+  CHECK_CONTAINS(out, "Exit codes");
+
+  CHECK(run_host("--version", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "plugin ABI 1.0");
+
+  CHECK(run_host("--frobnicate", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "unknown option \"--frobnicate\"");
+
+  CHECK(run_host("--spp zero x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--spp: expected an integer");
+
+  CHECK(run_host("--res 64by64 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--res: expected WIDTHxHEIGHT");
+
+  CHECK(run_host("--out image.png x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "ending in .exr");
+
+  CHECK(run_host("--set quality=3 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "expected PLUGIN.PARAM=VALUE");
+
+  CHECK(run_host("", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "no scene given");
+
+  /* scene errors: exit 4 with the file named */
+  CHECK(run_host("/nonexistent/scene.json", out, sizeof out) == 4);
+  CHECK_CONTAINS(out, "/nonexistent/scene.json");
+
+  /* plugin errors: exit 3, every failure reported */
+  snprintf(args, sizeof args, "--plugin no_such_plugin --plugin also_missing '%s'", scene);
+  CHECK(run_host(args, out, sizeof out) == 3);
+  CHECK_CONTAINS(out, "no_such_plugin");
+  CHECK_CONTAINS(out, "also_missing");
+
+  /* two plugins of one kind */
+  snprintf(args, sizeof args, "--plugin accel_embree --plugin accel_embree '%s'", scene);
+  CHECK(run_host(args, out, sizeof out) == 3);
+
+  /* --set errors: unknown plugin, unknown parameter, bad value — all reported, exit 2 */
+  snprintf(args, sizeof args,
+           "--set accel_nope.quality=2 --set accel_embree.qualty=2 "
+           "--set accel_embree.branchingFactor=3 --set integrator_pt.maxDepth=-4 '%s'",
+           scene);
+  CHECK(run_host(args, out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "no plugin \"accel_nope\" is loaded");
+  CHECK_CONTAINS(out, "qualty");
+  CHECK_CONTAINS(out, "branchingFactor");
+  CHECK_CONTAINS(out, "maxDepth");
+
+  /* --describe prints the Table 3.1 space as JSON on stdout */
+  CHECK(run_host("--describe accel_embree", out, sizeof out) == 0);
+  const char *names[] = {"quality", "branchingFactor", "maxDepth", "sahBlockSize", "minLeafSize",
+                         "maxLeafSize", "travcost", "intcost", "static", "compact", "robust"};
+  for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+    char quoted[64];
+    snprintf(quoted, sizeof quoted, "\"%s\"", names[i]);
+    CHECK_CONTAINS(out, quoted);
+  }
+  CHECK_CONTAINS(out, "\"possibleValues\"");
+  CHECK(run_host("--describe integrator_pt", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "\"maxDepth\"");
+  CHECK(run_host("--describe nothing_here", out, sizeof out) == 3);
+
+  /* --list-plugins finds the built plugins */
+  CHECK(run_host("--list-plugins", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "accel_embree");
+  CHECK_CONTAINS(out, "integrator_pt");
+
+  return tt_test_finish("host_cli");
+}

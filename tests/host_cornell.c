@@ -1,0 +1,149 @@
+/* End to end: render the default Cornell box through the host and check the image:
+ * finite and non-negative, directly visible light pixels equal the emitted radiance,
+ * mean in physically sensible bounds, bit-identical pixels for a fixed seed whatever the
+ * thread count, the run record's keys, PNG written, and SIGINT writing a partial image. */
+#include <tunetrace/tunetrace.h>
+
+#include <cjson/cJSON.h>
+#include <signal.h>
+#include <spawn.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "host_util.h"
+#include "tt_test.h"
+
+extern char **environ;
+
+/* Reads an EXR; returns pixel count or 0. */
+static size_t read_exr(const char *path, float **px, uint32_t *w, uint32_t *h) {
+  uint32_t c = 0;
+  if (tt_image_read(path, w, h, &c, px) != TT_OK) {
+    fprintf(stderr, "read %s: %s\n", path, tt_last_error());
+    return 0;
+  }
+  return c == 3 ? (size_t)*w * *h : 0;
+}
+
+int main(void) {
+  static char out[1 << 16];
+  char dir[] = "/tmp/tt_host_cornellXXXXXX";
+  if (!mkdtemp(dir)) return 1;
+  const char *scene_path = source_path("scenes/cornell-box/scene.json");
+  char args[8192], a_exr[4200], b_exr[4200], c_exr[4200], stats[4200], png[4200];
+  snprintf(a_exr, sizeof a_exr, "%s/a.exr", dir);
+  snprintf(b_exr, sizeof b_exr, "%s/b.exr", dir);
+  snprintf(c_exr, sizeof c_exr, "%s/c.exr", dir);
+  snprintf(stats, sizeof stats, "%s/a.json", dir);
+  snprintf(png, sizeof png, "%s/a.png", dir);
+
+  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 2 --out '%s' --stats '%s' '%s'",
+           a_exr, stats, scene_path);
+  CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 2 --out '%s' '%s'", b_exr, scene_path);
+  CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 1 --out '%s' '%s'", c_exr, scene_path);
+  CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+
+  float *a = NULL, *b = NULL, *c = NULL;
+  uint32_t w = 0, h = 0;
+  size_t n = read_exr(a_exr, &a, &w, &h);
+  CHECK(n == 64 * 64);
+  CHECK(read_exr(b_exr, &b, &w, &h) == n);
+  CHECK(read_exr(c_exr, &c, &w, &h) == n);
+  if (n && a && b && c) {
+    CHECK_MSG(memcmp(a, b, n * 3 * sizeof(float)) == 0, "same seed and threads: pixels differ");
+    CHECK_MSG(memcmp(a, c, n * 3 * sizeof(float)) == 0, "1 vs 2 threads: pixels differ");
+    /* finite, non-negative, sensible mean; brightest pixels are the light itself */
+    tt_scene *scene = NULL;
+    CHECK(tt_scene_load(scene_path, &scene) == TT_OK);
+    float le[3] = {0, 0, 0};
+    for (uint32_t m = 0; scene && m < tt_scene_material_count(scene); m++) {
+      const tt_material *mat = tt_scene_material(scene, m);
+      if (mat->emission[0] + mat->emission[1] + mat->emission[2] > le[0] + le[1] + le[2])
+        memcpy(le, mat->emission, sizeof le);
+    }
+    int bad = 0;
+    double sum = 0, maxr = 0;
+    size_t light_pixels = 0;
+    for (size_t i = 0; i < n * 3; i++) {
+      if (!isfinite(a[i]) || a[i] < 0) bad++;
+      sum += a[i];
+    }
+    for (size_t i = 0; i < n; i++) {
+      if (a[3 * i] > maxr) maxr = a[3 * i];
+      if (fabs(a[3 * i] - le[0]) < 1e-3 * le[0] && fabs(a[3 * i + 1] - le[1]) < 1e-3 * le[1] + 1e-6)
+        light_pixels++;
+    }
+    double mean = sum / (n * 3);
+    CHECK_MSG(bad == 0, "%d non-finite or negative values", bad);
+    CHECK_MSG(mean > 0.05 && mean < 0.25 * (le[0] + le[1] + le[2]) / 3, "mean %g", mean);
+    CHECK_NEAR(maxr, le[0], 1e-3 * le[0]);
+    CHECK_MSG(light_pixels >= 4, "only %zu pixels see exactly the emitted radiance", light_pixels);
+    /* no pixel is brighter than the light: nothing but the light emits */
+    CHECK(maxr <= le[0] * (1 + 1e-4));
+    tt_scene_destroy(scene);
+  }
+  tt_free(a);
+  tt_free(b);
+  tt_free(c);
+
+  /* PNG written next to the EXR; EXR metadata carries spp and seed */
+  struct stat st;
+  CHECK(stat(png, &st) == 0 && st.st_size > 100);
+  char meta[256];
+  CHECK(tt_image_read_meta(a_exr, "spp", meta, sizeof meta) == TT_OK || tt_image_read_meta(a_exr, "tunetrace:spp", meta, sizeof meta) == TT_OK);
+  CHECK(strcmp(meta, "8") == 0);
+
+  /* run record */
+  FILE *f = fopen(stats, "r");
+  CHECK(f != NULL);
+  if (f) {
+    static char text[1 << 16];
+    size_t len = fread(text, 1, sizeof text - 1, f);
+    text[len] = 0;
+    fclose(f);
+    cJSON *root = cJSON_Parse(text);
+    CHECK(root != NULL);
+    const char *keys[] = {"plugins", "params", "build_ms", "render_ms", "passes", "spp", "rays",
+                          "rays_per_s", "triangles", "seed", "threads", "metrics"};
+    for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
+      CHECK_MSG(cJSON_GetObjectItem(root, keys[k]) != NULL, "missing key %s", keys[k]);
+    cJSON *accel = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "plugins"), "accel");
+    CHECK(accel && !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(accel, "name")), "accel_embree"));
+    cJSON *ap = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree");
+    CHECK(ap && cJSON_GetObjectItem(ap, "quality") && cJSON_GetObjectItem(ap, "robust"));
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "spp")) == 8);
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "seed")) == 7);
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "rays")) >= 64 * 64 * 8);
+    cJSON_Delete(root);
+  }
+
+  /* SIGINT: the current pass finishes, the partial image is written, exit code 130 */
+  char d_exr[4200];
+  snprintf(d_exr, sizeof d_exr, "%s/d.exr", dir);
+  char *argv[] = {(char *)host_path(), "--quiet", "--res", "64x64", "--spp", "1000000",
+                  "--out", d_exr, (char *)scene_path, NULL};
+  pid_t pid;
+  CHECK(posix_spawn(&pid, host_path(), NULL, NULL, argv, environ) == 0);
+  struct timespec ts = {1, 500000000};
+  nanosleep(&ts, NULL);
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
+  float *d = NULL;
+  CHECK(read_exr(d_exr, &d, &w, &h) == 64 * 64);
+  if (tt_image_read_meta(d_exr, "spp", meta, sizeof meta) != TT_OK)
+    tt_image_read_meta(d_exr, "tunetrace:spp", meta, sizeof meta);
+  long spp = strtol(meta, NULL, 10);
+  CHECK_MSG(spp >= 1 && spp < 1000000, "interrupted render has %ld spp", spp);
+  tt_free(d);
+
+  char cmd[4200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  if (system(cmd) != 0) {}
+  return tt_test_finish("host_cornell");
+}

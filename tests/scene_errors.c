@@ -1,0 +1,234 @@
+/* Malformed scenes: each case checks the status code and that the message names the file,
+ * the JSON path and what was expected; then truncations and byte flips of the Cornell box
+ * must fail cleanly (or load) without crashing. */
+#include <tunetrace/scene.h>
+
+#include "tt_test.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static char g_root[1024];
+
+/* A valid scene the cases below break one field at a time. Placeholders: @CAM@, @MAT@,
+ * @MESH@ are substituted by each case. */
+#define CAM_OK "{\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45}"
+#define MAT_OK "{\"white\": {\"type\": \"diffuse\", \"albedo\": [0.7, 0.7, 0.7]}, \"red\": {\"albedo\": [0.6, 0.1, 0.1]}}"
+#define MESH_OK "[{\"name\": \"tri\", \"material\": \"white\", \"positions\": [[0,0,0],[1,0,0],[0,1,0]], \"indices\": [[0, 1, 2]]}]"
+#define SCENE(cam, mat, mesh) \
+  "{\"version\": 1, \"camera\": " cam ", \"materials\": " mat ", \"meshes\": " mesh "}"
+
+typedef struct error_case {
+  const char *json;
+  tt_status status;
+  const char *expect;   /* substring of tt_last_error() */
+  const char *expect2;  /* optional second substring */
+} error_case;
+
+static const error_case g_cases[] = {
+    /* 1. JSON syntax error with line:column */
+    {"{\n  \"version\": 1,\n  \"camera\": {\"position\": [0, 0 5]}\n}", TT_ERR_PARSE,
+     "bad.json:3:", "JSON syntax error"},
+    /* 2. out-of-range number, the example from the format documentation */
+    {SCENE("{\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 200}", MAT_OK, MESH_OK),
+     TT_ERR_PARSE, "bad.json: camera.fov: expected a number in (0, 180), got 200", NULL},
+    /* 3. unknown material, listing the known ones */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1,0,0, 0,1,0]},"
+                           " {\"material\": \"gold\", \"positions\": [0,0,0, 1,0,0, 0,1,0]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[1].material: unknown material \"gold\" (known: white, red)", NULL},
+    /* 4. missing required field */
+    {"{\"camera\": " CAM_OK ", \"materials\": " MAT_OK ", \"meshes\": " MESH_OK "}", TT_ERR_PARSE,
+     "bad.json: version: missing required field", NULL},
+    /* 5. unsupported version */
+    {"{\"version\": 2, \"camera\": " CAM_OK ", \"materials\": " MAT_OK ", \"meshes\": " MESH_OK "}",
+     TT_ERR_UNSUPPORTED, "bad.json: version: unsupported version 2 (expected 1)", NULL},
+    {"{\"version\": \"1\", \"camera\": " CAM_OK ", \"materials\": " MAT_OK ", \"meshes\": " MESH_OK "}",
+     TT_ERR_PARSE, "bad.json: version: expected the number 1, got a string \"1\"", NULL},
+    /* 6. wrong type */
+    {SCENE("{\"position\": \"origin\", \"target\": [0, 0, 0]}", MAT_OK, MESH_OK), TT_ERR_PARSE,
+     "bad.json: camera.position: expected an array of 3 numbers, got a string \"origin\"", NULL},
+    /* 7. wrong array length */
+    {SCENE(CAM_OK, "{\"white\": {\"albedo\": [0.5, 0.5]}}", MESH_OK), TT_ERR_PARSE,
+     "bad.json: materials.white.albedo: expected an array of 3 numbers", "got an array of 2 elements"},
+    /* 8. index out of range */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [[0,0,0],[1,0,0],[0,1,0]], \"indices\": [[0, 1, 2], [2, 1, 7]]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].indices[1][2]: index 7 out of range (the mesh has 3 vertices)", NULL},
+    /* 9. non-finite number (1e999 overflows to inf) */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1e999,0,0, 0,1,0]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].positions[3]: expected a finite number, got inf", NULL},
+    /* 10. zero area */
+    {SCENE(CAM_OK, MAT_OK, "[{\"name\": \"flat\", \"material\": \"white\", \"positions\": [[0,0,0],[1,1,1],[2,2,2]]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0]: mesh \"flat\" has zero area", NULL},
+    /* 11. empty mesh list */
+    {SCENE(CAM_OK, MAT_OK, "[]"), TT_ERR_PARSE, "bad.json: meshes: expected a non-empty array of meshes", NULL},
+    /* 12. unknown material type */
+    {SCENE(CAM_OK, "{\"white\": {\"type\": \"metal\"}}", MESH_OK), TT_ERR_PARSE,
+     "bad.json: materials.white.type: unknown material type \"metal\" (expected diffuse, conductor", NULL},
+    /* 13. missing section */
+    {"{\"version\": 1, \"materials\": " MAT_OK ", \"meshes\": " MESH_OK "}", TT_ERR_PARSE,
+     "bad.json: camera: missing required field (expected an object)", NULL},
+    /* 14. not an object at the top */
+    {"[1, 2, 3]", TT_ERR_PARSE, "bad.json: expected a JSON object at the top level, got an array", NULL},
+    /* 15. truncated input */
+    {"{\"version\": 1, \"camera\": {", TT_ERR_PARSE, "bad.json:1:", "unexpected end of input"},
+    /* 16. empty input */
+    {"", TT_ERR_PARSE, "bad.json:1:1: JSON syntax error", NULL},
+    /* 17. degenerate camera */
+    {SCENE("{\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"up\": [0, 0, 1]}", MAT_OK, MESH_OK),
+     TT_ERR_PARSE, "bad.json: camera.up: expected a vector not parallel to the view direction", NULL},
+    {SCENE("{\"position\": [1, 2, 3], \"target\": [1, 2, 3]}", MAT_OK, MESH_OK), TT_ERR_PARSE,
+     "bad.json: camera.target: expected a point different from camera.position", NULL},
+    /* 18. indices not whole triangles */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [[0,0,0],[1,0,0],[0,1,0]], \"indices\": [0, 1, 2, 0]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].indices: expected a multiple of 3 indices", NULL},
+    /* 19. non-integer index */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [[0,0,0],[1,0,0],[0,1,0]], \"indices\": [0, 1.5, 2]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].indices[1]: expected an integer in [0, 4.29497e+09], got 1.5", NULL},
+    /* 20. camera path times must increase */
+    {SCENE("{\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": [{\"time\": 1}, {\"time\": 1}]}", MAT_OK, MESH_OK),
+     TT_ERR_PARSE, "bad.json: camera.path[1].time: expected a time greater than the previous key's (1), got 1", NULL},
+    /* 21. unknown light type */
+    {"{\"version\": 1, \"camera\": " CAM_OK ", \"materials\": " MAT_OK ", \"meshes\": " MESH_OK
+     ", \"lights\": [{\"type\": \"area\"}]}", TT_ERR_PARSE,
+     "bad.json: lights[0].type: unknown light type \"area\"", "materials with emission"},
+    /* 22. non-affine matrix and singular scale */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1,0,0, 0,1,0], \"matrix\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,1,1]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].matrix: expected an affine matrix (last row 0 0 0 1)", NULL},
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1,0,0, 0,1,0], \"transform\": {\"scale\": [1, 0, 1]}}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].transform.scale: expected non-zero scale factors", NULL},
+    /* 23. resolution must be integers >= 1 */
+    {SCENE("{\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"resolution\": [640, 0]}", MAT_OK, MESH_OK),
+     TT_ERR_PARSE, "bad.json: camera.resolution[1]: expected an integer in [1, 65536], got 0", NULL},
+    /* 24. negative emission, wrong bool type, missing material */
+    {SCENE(CAM_OK, "{\"l\": {\"emission\": [1, -1, 1]}}", MESH_OK), TT_ERR_PARSE,
+     "bad.json: materials.l.emission[1]: expected a number in [0, inf), got -1", NULL},
+    {SCENE(CAM_OK, "{\"white\": {\"twoSided\": 1}}", MESH_OK), TT_ERR_PARSE,
+     "bad.json: materials.white.twoSided: expected true or false, got 1", NULL},
+    {SCENE(CAM_OK, MAT_OK, "[{\"positions\": [0,0,0, 1,0,0, 0,1,0]}]"), TT_ERR_PARSE,
+     "bad.json: meshes[0].material: missing required field (expected a string)", NULL},
+    /* 25. both file and inline positions, or neither */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"file\": \"a.obj\", \"positions\": [0,0,0, 1,0,0, 0,1,0]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0]: expected either \"file\" or \"positions\", not both", NULL},
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\"}]"), TT_ERR_PARSE,
+     "bad.json: meshes[0].positions: missing required field (expected inline positions or a \"file\")", NULL},
+    /* 26. normals count must match the vertices */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1,0,0, 0,1,0], \"normals\": [[0,0,1]]}]"),
+     TT_ERR_PARSE, "bad.json: meshes[0].normals: expected 3 normals (one per vertex), got 1", NULL},
+    /* 27. positions not a multiple of 3 */
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1,0]}]"), TT_ERR_PARSE,
+     "bad.json: meshes[0].positions: expected a multiple of 3 numbers (flat positions), got 5", NULL},
+};
+
+/* Loads each case from memory and checks status, message, and that no scene leaks out. */
+static void test_cases(void) {
+  for (size_t i = 0; i < sizeof g_cases / sizeof g_cases[0]; i++) {
+    const error_case *c = &g_cases[i];
+    tt_scene *s = (tt_scene *)&g_cases; /* must be reset to NULL */
+    tt_clear_error();
+    tt_status st = tt_scene_load_json(c->json, strlen(c->json), "bad.json", NULL, &s);
+    CHECK_MSG(st == c->status, "case %zu: status %d (%s), expected %d", i + 1, (int)st,
+              tt_last_error(), (int)c->status);
+    CHECK_MSG(s == NULL, "case %zu: scene returned on error", i + 1);
+    CHECK_CONTAINS(tt_last_error(), c->expect);
+    if (c->expect2) CHECK_CONTAINS(tt_last_error(), c->expect2);
+    if (st == TT_OK) tt_scene_destroy(s);
+  }
+}
+
+/* Errors that involve files: missing mesh file, unreadable mesh, syntax error position in
+ * a real file, unsupported extension, missing scene. */
+static void test_files(void) {
+  char path[1200];
+  tt_scene *s = NULL;
+  tt_status st;
+
+  snprintf(path, sizeof path, "%s/tests/data/scenes/missing-file.json", g_root);
+  st = tt_scene_load(path, &s);
+  CHECK(st == TT_ERR_IO && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "missing-file.json: meshes[0].file: cannot open mesh file");
+  CHECK_CONTAINS(tt_last_error(), "tests/data/scenes/models/nothere.obj"); /* resolved path */
+
+  snprintf(path, sizeof path, "%s/tests/data/scenes/garbage-file.json", g_root);
+  st = tt_scene_load(path, &s);
+  CHECK(st == TT_ERR_PARSE && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "garbage-file.json: meshes[0].file:");
+  CHECK_CONTAINS(tt_last_error(), "garbage.obj");
+
+  snprintf(path, sizeof path, "%s/tests/data/scenes/syntax-error.json", g_root);
+  st = tt_scene_load(path, &s);
+  CHECK(st == TT_ERR_PARSE && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "syntax-error.json:5:"); /* the missing comma is on line 5 */
+  CHECK_CONTAINS(tt_last_error(), "JSON syntax error");
+
+  st = tt_scene_load("scenes/x.pbrt", &s);
+  CHECK(st == TT_ERR_UNSUPPORTED && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "scenes/x.pbrt: unsupported scene format (expected .json)");
+
+  st = tt_scene_load("/nonexistent/dir/scene.json", &s);
+  CHECK(st == TT_ERR_IO && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "/nonexistent/dir/scene.json: cannot open scene file");
+
+  CHECK(tt_scene_load(NULL, &s) == TT_ERR_INVALID_ARGUMENT);
+  CHECK(tt_scene_load_json("{}", 2, "x", NULL, NULL) == TT_ERR_INVALID_ARGUMENT);
+  /* an embedded NUL would silently truncate the document */
+  CHECK(tt_scene_load_json("{\"version\": 1}\0xx", 17, "nul.json", NULL, &s) == TT_ERR_PARSE);
+  CHECK_CONTAINS(tt_last_error(), "nul.json:1:15: JSON syntax error: unexpected NUL byte");
+  /* the accessors tolerate NULL */
+  CHECK(tt_scene_mesh_count(NULL) == 0 && tt_scene_id(NULL) == NULL);
+  tt_scene_destroy(NULL);
+}
+
+/* Every prefix of the Cornell box and a few thousand single-byte corruptions either load
+ * or fail with a message; under ASan/valgrind this doubles as a memory-safety check. */
+static void test_no_crash(void) {
+  char path[1200];
+  snprintf(path, sizeof path, "%s/scenes/cornell-box/scene.json", g_root);
+  FILE *f = fopen(path, "rb");
+  CHECK(f != NULL);
+  if (!f) return;
+  static char text[1 << 16];
+  size_t n = fread(text, 1, sizeof text - 1, f);
+  fclose(f);
+  CHECK(n > 1000);
+  int failures_without_message = 0, loaded = 0;
+  for (size_t len = 0; len < n; len += 7) {
+    tt_scene *s = NULL;
+    tt_clear_error();
+    tt_status st = tt_scene_load_json(text, len, "cut.json", NULL, &s);
+    if (st == TT_OK) {
+      loaded++;
+      tt_scene_destroy(s);
+    } else if (!tt_last_error()[0] || s != NULL) {
+      failures_without_message++;
+    }
+  }
+  CHECK(loaded == 0); /* a cut document is never a complete scene */
+  static const char junk[] = "\"{}[],:0-9eE.+ \n\\x\x80";
+  uint32_t rng = 12345;
+  for (int iter = 0; iter < 3000; iter++) {
+    static char copy[1 << 16];
+    memcpy(copy, text, n);
+    for (int k = 0; k < 1 + iter % 3; k++) {
+      rng = rng * 1664525u + 1013904223u;
+      size_t at = (rng >> 8) % n;
+      rng = rng * 1664525u + 1013904223u;
+      copy[at] = junk[(rng >> 8) % (sizeof junk - 1)];
+    }
+    tt_scene *s = NULL;
+    tt_clear_error();
+    tt_status st = tt_scene_load_json(copy, n, "flip.json", NULL, &s);
+    if (st == TT_OK) tt_scene_destroy(s);
+    else if (!tt_last_error()[0] || s != NULL) failures_without_message++;
+  }
+  CHECK(failures_without_message == 0);
+}
+
+int main(void) {
+  const char *root = getenv("TT_SOURCE_ROOT");
+  snprintf(g_root, sizeof g_root, "%s", root ? root : "..");
+  test_cases();
+  test_files();
+  test_no_crash();
+  return tt_test_finish("scene_errors");
+}

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs tunetrace's build dependencies from Debian 12 packages (when missing) and
+# builds into ./build. Safe to run again: it only installs what is missing and rebuilds.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  meson ninja-build pkg-config gcc g++ make   # build tools
+  libembree-dev                               # ray/triangle intersection, BVH builders
+  libopenimageio-dev                          # EXR/PNG read and write
+  libopencolorio-dev                          # display transform for PNG
+  libcjson-dev                                # scene.json, parameter spaces, run records
+  libassimp-dev                               # OBJ/PLY/glTF mesh import
+  libsqlite3-dev                              # tuning database
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  echo "bootstrap: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if [ ! -f build/build.ninja ]; then
+  meson setup build
+fi
+ninja -C build
