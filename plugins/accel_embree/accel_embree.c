@@ -1,2 +1,455 @@
-/* placeholder */
-typedef int tt__placeholder;
+/* accel_embree: an acceleration-structure plugin over Embree 3.
+ *
+ * Backend "native" builds through Embree's scene API: one RTC_GEOMETRY_TYPE_TRIANGLE per
+ * scene mesh (geomID = mesh index), build quality and scene flags from the configuration,
+ * rtcCommitScene. Queries map one to one onto rtcIntersect1/rtcOccluded1 and the stream
+ * calls rtcIntersect1M/rtcOccluded1M. A later "custom" backend (rtcBuildBVH with our own
+ * nodes) plugs in at tt__embree_build's backend switch and reuses the space unchanged. */
+#include "accel_embree.h"
+
+#include <tunetrace/plugin.h>
+
+#include <embree3/rtcore.h>
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+
+#if RTC_VERSION_MAJOR != 3
+#  error "accel_embree needs Embree 3 (rtcore.h of another major version found)"
+#endif
+
+/* Rays converted per stream chunk: 64 RTCRayHit live on the stack (about 6 KiB), so the
+ * stream calls never allocate. */
+#define TT__CHUNK 64
+
+struct tt_accel {
+  RTCScene scene;
+  const tt_scene *source;      /* must outlive us (accel.h contract) */
+  tt__embree_settings settings;
+};
+
+/* Plugin-wide state: set in init, released in deinit (both on the host's main thread). */
+static const tt_host *g_host;
+static RTCDevice g_device;
+static tt_space *g_space;
+/* Bytes Embree holds right now, fed by the device's memory monitor from any thread. */
+static _Atomic long long g_embree_bytes;
+/* Set once the native-backend "these parameters do nothing" warning has been logged. */
+static atomic_flag g_warned_custom_only = ATOMIC_FLAG_INIT;
+/* Last Embree error message seen on this thread, so build() can put it in its error. */
+static _Thread_local char g_embree_error[256];
+
+/* Embree's error callback: log through the host and keep the text for tt_set_error. */
+static void tt__embree_error(void *user, enum RTCError code, const char *str) {
+  const tt_host *host = user;
+  snprintf(g_embree_error, sizeof g_embree_error, "Embree error %d: %s", (int)code,
+           str ? str : "(no message)");
+  if (host && host->log) host->log(TT_LOG_ERROR, TT__EMBREE_NAME, "%s", g_embree_error);
+}
+
+/* Embree's memory monitor: every allocation/free is reported once; keep a running total. */
+static bool tt__embree_memory(void *user, ssize_t bytes, bool post) {
+  (void)user;
+  (void)post;
+  atomic_fetch_add_explicit(&g_embree_bytes, (long long)bytes, memory_order_relaxed);
+  return true;  /* never veto: the host has no memory budget in ABI 1.0 */
+}
+
+/* Reads and clears Embree's per-thread error code; returns TT_OK or an error naming it. */
+static tt_status tt__embree_status(const char *what) {
+  enum RTCError e = rtcGetDeviceError(g_device);
+  if (e == RTC_ERROR_NONE) return TT_OK;
+  tt_status s = e == RTC_ERROR_OUT_OF_MEMORY ? TT_ERR_OUT_OF_MEMORY
+                : e == RTC_ERROR_UNSUPPORTED_CPU ? TT_ERR_UNSUPPORTED
+                : e == RTC_ERROR_INVALID_ARGUMENT ? TT_ERR_INVALID_ARGUMENT
+                                                  : TT_ERR_INTERNAL;
+  return tt_set_error(s, "accel_embree: %s failed: %s", what,
+                      g_embree_error[0] ? g_embree_error : "Embree reported an error");
+}
+
+/* ---- parameter space ---- */
+
+/* The space built at init. */
+static const tt_space *tt__embree_space(void) { return g_space; }
+
+/* ---- build / destroy ---- */
+
+/* Releases the Embree scene and our wrapper. */
+static void tt__embree_destroy(tt_accel *accel) {
+  if (!accel) return;
+  if (accel->scene) rtcReleaseScene(accel->scene);
+  free(accel);
+}
+
+/* Checks a mesh before Embree sees it: Embree does not validate indices and would read out
+ * of bounds on a bad one, so we reject instead of crashing. */
+static tt_status tt__check_mesh(const tt_mesh *m, uint32_t index) {
+  if (!m) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: mesh %u is NULL", index);
+  if (m->triangle_count == 0) return TT_OK;
+  if (!m->positions || !m->indices || m->vertex_count == 0)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "accel_embree: mesh %u (\"%s\") has triangles but no vertex or index "
+                        "data", index, m->name ? m->name : "?");
+  const uint64_t n = 3ull * m->triangle_count;
+  for (uint64_t k = 0; k < n; k++) {
+    if (m->indices[k] >= m->vertex_count)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "accel_embree: mesh %u (\"%s\") triangle %llu uses vertex %u of %u",
+                          index, m->name ? m->name : "?", (unsigned long long)(k / 3),
+                          m->indices[k], m->vertex_count);
+  }
+  return TT_OK;
+}
+
+/* Creates the triangle geometry for mesh `index` and attaches it under geomID = index. */
+static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t index,
+                                 enum RTCBuildQuality quality) {
+  RTCGeometry g = rtcNewGeometry(g_device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  if (!g) return tt__embree_status("rtcNewGeometry");
+  /* Positions are copied into an Embree-allocated buffer: Embree reads vertices with
+   * 16-byte loads, i.e. 4 bytes past the last float, which the scene's array does not
+   * promise. Indices have no such requirement and are shared. */
+  float *pos = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                       3 * sizeof(float), m->vertex_count);
+  if (!pos) {
+    rtcReleaseGeometry(g);
+    return tt__embree_status("rtcSetNewGeometryBuffer (vertices)");
+  }
+  memcpy(pos, m->positions, (size_t)m->vertex_count * 3 * sizeof(float));
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->indices, 0,
+                             3 * sizeof(uint32_t), m->triangle_count);
+  /* Per-geometry quality matters for two-level (dynamic) builds, where each mesh gets its
+   * own BVH; setting it too keeps "quality" meaningful in every flag combination. */
+  rtcSetGeometryBuildQuality(g, quality);
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(scene, g, index);
+  rtcReleaseGeometry(g);  /* the scene holds its own reference */
+  return tt__embree_status("attaching a mesh");
+}
+
+/* Builds with backend native: Embree's scene API and its own builders. */
+static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settings *st,
+                                  tt_accel *acc, tt_accel_build_stats *stats) {
+  static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW,
+                                                   RTC_BUILD_QUALITY_MEDIUM,
+                                                   RTC_BUILD_QUALITY_HIGH};
+  enum RTCBuildQuality quality = qualities[st->quality >= 1 && st->quality <= 3
+                                               ? st->quality - 1 : 1];
+  int flags = RTC_SCENE_FLAG_NONE;
+  if (!st->is_static) flags |= RTC_SCENE_FLAG_DYNAMIC;
+  if (st->compact) flags |= RTC_SCENE_FLAG_COMPACT;
+  if (st->robust) flags |= RTC_SCENE_FLAG_ROBUST;
+
+  long long bytes0 = atomic_load(&g_embree_bytes);
+  acc->scene = rtcNewScene(g_device);
+  if (!acc->scene) return tt__embree_status("rtcNewScene");
+  rtcSetSceneFlags(acc->scene, (enum RTCSceneFlags)flags);
+  rtcSetSceneBuildQuality(acc->scene, quality);
+
+  const uint32_t meshes = tt_scene_mesh_count(scene);
+  for (uint32_t i = 0; i < meshes; i++) {
+    const tt_mesh *m = tt_scene_mesh(scene, i);
+    if (m->triangle_count == 0) continue;  /* geomIDs may have gaps; Embree allows it */
+    tt_status s = tt__attach_mesh(acc->scene, m, i, quality);
+    if (s != TT_OK) return s;
+  }
+
+  const uint64_t t0 = g_host->clock_ns();
+  rtcCommitScene(acc->scene);
+  const uint64_t t1 = g_host->clock_ns();
+  tt_status s = tt__embree_status("rtcCommitScene");
+  if (s != TT_OK) return s;
+
+  long long bytes = atomic_load(&g_embree_bytes) - bytes0;
+  stats->build_ms = (double)(t1 - t0) * 1e-6;
+  stats->memory_bytes = bytes > 0 ? (uint64_t)bytes : 0;
+  return TT_OK;
+}
+
+/* Validates the inputs, checks/repairs the configuration and dispatches on the backend. */
+static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config,
+                                  tt_accel **out, tt_accel_build_stats *stats_out) {
+  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: build: out is NULL");
+  *out = NULL;
+  if (!g_device || !g_space)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: build before init");
+  if (!scene) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: build: scene is NULL");
+  if (config) {
+    const char *owner = tt_space_plugin(tt_config_space(config));
+    if (!owner || strcmp(owner, TT__EMBREE_NAME) != 0)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "accel_embree: build: the configuration belongs to plugin \"%s\"",
+                          owner ? owner : "?");
+  }
+
+  uint64_t triangles = 0;
+  const uint32_t meshes = tt_scene_mesh_count(scene);
+  for (uint32_t i = 0; i < meshes; i++) {
+    const tt_mesh *m = tt_scene_mesh(scene, i);
+    tt_status s = tt__check_mesh(m, i);
+    if (s != TT_OK) return s;
+    triangles += m->triangle_count;
+  }
+  if (triangles == 0)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "accel_embree: scene \"%s\" has no triangles (%u meshes): nothing to "
+                        "build", tt_scene_source(scene) ? tt_scene_source(scene) : "?", meshes);
+
+  /* The check may repair, and `config` is const: work on a copy. */
+  tt_config *cfg = config ? tt_config_clone(config) : tt_config_create(g_space);
+  if (!cfg) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot copy the config");
+  char why[256] = "";
+  tt_check_result cr = tt__embree_check_config(cfg, why, sizeof why);
+  if (cr == TT_CHECK_INFEASIBLE) {
+    tt_config_destroy(cfg);
+    return tt_set_error(TT_ERR_INFEASIBLE, "accel_embree: infeasible configuration: %s", why);
+  }
+  tt__embree_settings st;
+  tt__embree_settings_from_config(cfg, &st);
+
+  if (st.backend == TT__EMBREE_BACKEND_NATIVE) {
+    char names[160];
+    if (tt__embree_custom_only_changed(cfg, names, sizeof names) > 0 &&
+        !atomic_flag_test_and_set(&g_warned_custom_only))
+      g_host->log(TT_LOG_WARN, TT__EMBREE_NAME,
+                  "backend native ignores %s (they act only in the custom backend); "
+                  "logged once", names);
+  }
+  tt_config_destroy(cfg);
+
+  tt_accel *acc = calloc(1, sizeof *acc);
+  if (!acc) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: out of memory");
+  acc->source = scene;
+  acc->settings = st;
+
+  tt_accel_build_stats stats;
+  memset(&stats, 0, sizeof stats);
+  rtcGetDeviceError(g_device);  /* clear a stale code so only this build's errors count */
+  g_embree_error[0] = '\0';
+
+  tt_status s;
+  switch (st.backend) {
+    case TT__EMBREE_BACKEND_NATIVE:
+      s = tt__build_native(scene, &st, acc, &stats);
+      break;
+    default:
+      s = tt_set_error(TT_ERR_UNSUPPORTED, "accel_embree: unknown backend index %d",
+                       st.backend);
+      break;
+  }
+  if (s != TT_OK) {
+    tt__embree_destroy(acc);
+    return s;
+  }
+  stats.repaired = cr == TT_CHECK_REPAIRED;
+  if (stats.repaired)
+    g_host->log(TT_LOG_DEBUG, TT__EMBREE_NAME, "configuration repaired: %s", why);
+
+  if (stats_out && stats_out->struct_size > sizeof stats_out->struct_size) {
+    /* Fill only the prefix the caller knows (it may be built against an older header). */
+    size_t n = stats_out->struct_size < sizeof stats ? stats_out->struct_size : sizeof stats;
+    uint32_t caller_size = stats_out->struct_size;
+    memcpy(stats_out, &stats, n);
+    stats_out->struct_size = caller_size;
+  }
+  *out = acc;
+  return TT_OK;
+}
+
+/* ---- queries ---- */
+
+/* tt_ray -> RTCRay (mask all ones, time 0, no ray id). */
+static inline void tt__to_rtc_ray(const tt_ray *r, struct RTCRay *e) {
+  e->org_x = r->org[0];
+  e->org_y = r->org[1];
+  e->org_z = r->org[2];
+  e->tnear = r->tnear;
+  e->dir_x = r->dir[0];
+  e->dir_y = r->dir[1];
+  e->dir_z = r->dir[2];
+  e->time = 0.0f;
+  e->tfar = r->tfar;
+  e->mask = 0xFFFFFFFFu;
+  e->id = 0;
+  e->flags = 0;
+}
+
+/* Marks an RTCHit as "no hit yet", as Embree requires before intersecting. */
+static inline void tt__clear_rtc_hit(struct RTCHit *h) {
+  h->geomID = RTC_INVALID_GEOMETRY_ID;
+  h->primID = RTC_INVALID_GEOMETRY_ID;
+  for (int l = 0; l < RTC_MAX_INSTANCE_LEVEL_COUNT; l++) h->instID[l] = RTC_INVALID_GEOMETRY_ID;
+}
+
+/* Copies Embree's result back; on a miss the hit gets invalid ids, t = +inf and the ray
+ * keeps its tfar. */
+static inline void tt__from_rtc_hit(const struct RTCRayHit *e, tt_ray *r, tt_hit *h) {
+  if (e->hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+    h->t = INFINITY;
+    h->u = h->v = 0.0f;
+    h->geom_id = h->prim_id = TT_INVALID_ID;
+    h->ng[0] = h->ng[1] = h->ng[2] = 0.0f;
+    return;
+  }
+  r->tfar = e->ray.tfar;
+  h->t = e->ray.tfar;
+  h->u = e->hit.u;
+  h->v = e->hit.v;
+  h->geom_id = e->hit.geomID;  /* == mesh index: attached by ID */
+  h->prim_id = e->hit.primID;
+  h->ng[0] = e->hit.Ng_x;
+  h->ng[1] = e->hit.Ng_y;
+  h->ng[2] = e->hit.Ng_z;
+}
+
+/* Closest hit of one ray. */
+static void tt__embree_intersect1(const tt_accel *accel, tt_ray *ray, tt_hit *hit) {
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRayHit rh;
+  tt__to_rtc_ray(ray, &rh.ray);
+  tt__clear_rtc_hit(&rh.hit);
+  rtcIntersect1(accel->scene, &ctx, &rh);
+  tt__from_rtc_hit(&rh, ray, hit);
+}
+
+/* Occlusion of one ray: Embree sets tfar to -inf when something blocks it. */
+static int tt__embree_occluded1(const tt_accel *accel, const tt_ray *ray) {
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRay r;
+  tt__to_rtc_ray(ray, &r);
+  rtcOccluded1(accel->scene, &ctx, &r);
+  return r.tfar < 0.0f && isinf(r.tfar);
+}
+
+/* Coherent if every ray of the chunk starts at the same point (camera rays, light rays
+ * toward one light): Embree's coherent stream mode then pays off; otherwise incoherent. */
+static enum RTCIntersectContextFlags tt__chunk_coherence(const tt_ray *rays, size_t n) {
+  for (size_t i = 1; i < n; i++) {
+    if (rays[i].org[0] != rays[0].org[0] || rays[i].org[1] != rays[0].org[1] ||
+        rays[i].org[2] != rays[0].org[2])
+      return RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  }
+  return RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+}
+
+/* Closest hits of a stream, converted TT__CHUNK rays at a time on the stack. */
+static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_hit *hits,
+                                        size_t count) {
+  struct RTCRayHit buf[TT__CHUNK];
+  struct RTCIntersectContext ctx;
+  for (size_t base = 0; base < count; base += TT__CHUNK) {
+    size_t n = count - base < TT__CHUNK ? count - base : TT__CHUNK;
+    for (size_t i = 0; i < n; i++) {
+      tt__to_rtc_ray(&rays[base + i], &buf[i].ray);
+      tt__clear_rtc_hit(&buf[i].hit);
+    }
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = tt__chunk_coherence(rays + base, n);
+    rtcIntersect1M(accel->scene, &ctx, buf, (unsigned)n, sizeof buf[0]);
+    for (size_t i = 0; i < n; i++) tt__from_rtc_hit(&buf[i], &rays[base + i], &hits[base + i]);
+  }
+}
+
+/* Occlusion of a stream, chunked like intersect_stream. */
+static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays,
+                                       uint8_t *occluded, size_t count) {
+  struct RTCRay buf[TT__CHUNK];
+  struct RTCIntersectContext ctx;
+  for (size_t base = 0; base < count; base += TT__CHUNK) {
+    size_t n = count - base < TT__CHUNK ? count - base : TT__CHUNK;
+    for (size_t i = 0; i < n; i++) tt__to_rtc_ray(&rays[base + i], &buf[i]);
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = tt__chunk_coherence(rays + base, n);
+    rtcOccluded1M(accel->scene, &ctx, buf, (unsigned)n, sizeof buf[0]);
+    for (size_t i = 0; i < n; i++)
+      occluded[base + i] = (uint8_t)(buf[i].tfar < 0.0f && isinf(buf[i].tfar));
+  }
+}
+
+/* Embree's scene API exposes no traversal statistics. */
+static tt_status tt__embree_counters(tt_accel *accel, tt_accel_counters *out, int reset) {
+  (void)accel;
+  (void)out;
+  (void)reset;
+  return tt_set_error(TT_ERR_UNSUPPORTED,
+                      "accel_embree: backend native has no traversal counters");
+}
+
+static const tt_accel_iface g_iface = {
+    .struct_size = sizeof(tt_accel_iface),
+    .space = tt__embree_space,
+    .build = tt__embree_build,
+    .intersect1 = tt__embree_intersect1,
+    .occluded1 = tt__embree_occluded1,
+    .intersect_stream = tt__embree_intersect_stream,
+    .occluded_stream = tt__embree_occluded_stream,
+    .counters = tt__embree_counters,
+    .destroy = tt__embree_destroy,
+};
+
+/* ---- plugin entry ---- */
+
+/* Releases the device and the space (every accel has been destroyed by now). */
+static void tt__embree_deinit(void) {
+  if (g_device) rtcReleaseDevice(g_device);
+  g_device = NULL;
+  if (g_space) tt_space_destroy(g_space);
+  g_space = NULL;
+  g_host = NULL;
+}
+
+/* Keeps the host, creates the Embree device with our error and memory callbacks, and
+ * builds the parameter space once. */
+static tt_status tt__embree_init(const tt_host *host) {
+  if (!host || !host->log || !host->clock_ns)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "accel_embree: the host table lacks log or clock_ns");
+  g_host = host;
+  atomic_store(&g_embree_bytes, 0);
+  atomic_flag_clear(&g_warned_custom_only);
+  /* Build with the host's worker count (--threads), so build times in tuning runs are
+   * measured with the same parallelism as rendering. */
+  char device_config[64] = "";
+  if (host->thread_count)
+    snprintf(device_config, sizeof device_config, "threads=%u", host->thread_count());
+  g_device = rtcNewDevice(device_config[0] ? device_config : NULL);
+  if (!g_device) {
+    enum RTCError e = rtcGetDeviceError(NULL);
+    g_host = NULL;
+    return tt_set_error(e == RTC_ERROR_UNSUPPORTED_CPU ? TT_ERR_UNSUPPORTED : TT_ERR_INTERNAL,
+                        "accel_embree: rtcNewDevice failed (Embree error %d%s)", (int)e,
+                        e == RTC_ERROR_UNSUPPORTED_CPU ? ": CPU not supported" : "");
+  }
+  rtcSetDeviceErrorFunction(g_device, tt__embree_error, (void *)host);
+  rtcSetDeviceMemoryMonitorFunction(g_device, tt__embree_memory, NULL);
+  g_space = tt__embree_space_create();
+  if (!g_space) {
+    tt__embree_deinit();  /* the space builder already set the error message */
+    return TT_ERR_INTERNAL;
+  }
+  return TT_OK;
+}
+
+/* Serves "tt.accel/1" only. */
+static const void *tt__embree_get_interface(const char *id) {
+  return id && strcmp(id, TT_ACCEL_INTERFACE_ID) == 0 ? &g_iface : NULL;
+}
+
+TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_ACCEL,
+    .name = TT__EMBREE_NAME,
+    .version = TT__EMBREE_VERSION,
+    .description = "Embree 3 BVH (backend native: Embree's scene API; thesis Table 3.1 space)",
+    .init = tt__embree_init,
+    .deinit = tt__embree_deinit,
+    .get_interface = tt__embree_get_interface,
+};

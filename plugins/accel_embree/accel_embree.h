@@ -1,0 +1,48 @@
+/* accel_embree: internals shared by the plugin's translation units (not installed). */
+#ifndef TT_ACCEL_EMBREE_H
+#define TT_ACCEL_EMBREE_H
+
+#include <tunetrace/accel.h>
+#include <tunetrace/host.h>
+#include <tunetrace/params.h>
+
+#define TT__EMBREE_NAME "accel_embree"
+#define TT__EMBREE_VERSION "0.1.0"
+
+/* Backends, in the order of the "backend" NOM parameter's possible values. */
+typedef enum tt__embree_backend {
+  TT__EMBREE_BACKEND_NATIVE = 0  /* Embree's scene API (rtcCommitScene) */
+  /* TT__EMBREE_BACKEND_CUSTOM = 1: rtcBuildBVH with our own nodes (later issue) */
+} tt__embree_backend;
+
+/* A configuration decoded into plain values (thesis Table 3.1 + backend). */
+typedef struct tt__embree_settings {
+  int quality;            /* 1 Morton (LOW), 2 binned SAH (MEDIUM), 3 spatial splits (HIGH) */
+  int branching_factor;   /* 2, 4, 8 */
+  int max_depth;          /* [8, 64] */
+  int sah_block_size;     /* [1, 32] */
+  int min_leaf_size;      /* [1, 32] */
+  int max_leaf_size;      /* [1, 32] */
+  float trav_cost;        /* [0.1, 10] */
+  float int_cost;         /* [0.1, 10] */
+  int is_static;          /* scene will not change: no RTC_SCENE_FLAG_DYNAMIC */
+  int compact;            /* RTC_SCENE_FLAG_COMPACT */
+  int robust;             /* RTC_SCENE_FLAG_ROBUST */
+  int backend;            /* a tt__embree_backend */
+} tt__embree_settings;
+
+/* Builds the published parameter space (once, at init); NULL with tt_set_error on failure. */
+tt_space *tt__embree_space_create(void);
+
+/* Runs the constraint check on `config` through whatever space it belongs to (ours, or one
+ * parsed from JSON, which has no check function installed). */
+tt_check_result tt__embree_check_config(tt_config *config, char *why, size_t why_size);
+
+/* Decodes a configuration of the plugin's space into settings. */
+void tt__embree_settings_from_config(const tt_config *config, tt__embree_settings *out);
+
+/* Names (comma-separated, into `buf`) of the parameters that only the custom backend uses
+ * and that differ from their defaults; returns how many there are. */
+int tt__embree_custom_only_changed(const tt_config *config, char *buf, size_t size);
+
+#endif /* TT_ACCEL_EMBREE_H */

@@ -1,0 +1,157 @@
+/* accel_embree: the parameter space of thesis Table 3.1 (plus "backend"), its constraint
+ * check, and decoding a configuration into plain settings. */
+#include "accel_embree.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* Embree's own defaults for the numeric builder settings (RTCBuildArguments defaults,
+ * rtcDefaultBuildArguments), so the default configuration reproduces stock Embree. */
+#define TT__DEF_QUALITY 2
+#define TT__DEF_BF 2
+#define TT__DEF_MAX_DEPTH 32
+#define TT__DEF_SAH_BLOCK 1
+#define TT__DEF_MIN_LEAF 1
+#define TT__DEF_MAX_LEAF 32
+#define TT__DEF_TRAV_COST 1.0
+#define TT__DEF_INT_COST 1.0
+
+/* Parameters that act only in the custom (rtcBuildBVH) backend, with their defaults. */
+static const struct {
+  const char *name;
+  double def;
+} tt__custom_only[] = {
+    {"branchingFactor", TT__DEF_BF},  {"maxDepth", TT__DEF_MAX_DEPTH},
+    {"sahBlockSize", TT__DEF_SAH_BLOCK}, {"minLeafSize", TT__DEF_MIN_LEAF},
+    {"maxLeafSize", TT__DEF_MAX_LEAF}, {"travcost", TT__DEF_TRAV_COST},
+    {"intcost", TT__DEF_INT_COST},
+};
+
+/* Writes a reason into `why` if there is room (the check's contract allows a NULL buffer). */
+static void tt__why(char *why, size_t size, const char *text) {
+  if (why && size) snprintf(why, size, "%s", text);
+}
+
+/* Constraint check: repairs minLeafSize > maxLeafSize by swapping; rejects Morton settings
+ * the custom builder cannot honour. Pure and thread-safe (touches only `config`). */
+static tt_check_result tt__embree_check(const tt_space *space, tt_config *config, char *why,
+                                        size_t why_size, void *user) {
+  (void)user;
+  int64_t quality = tt_config_get_int(config, "quality", TT__DEF_QUALITY);
+  int64_t bf = tt_config_get_int(config, "branchingFactor", TT__DEF_BF);
+  int64_t min_leaf = tt_config_get_int(config, "minLeafSize", TT__DEF_MIN_LEAF);
+  int64_t max_leaf = tt_config_get_int(config, "maxLeafSize", TT__DEF_MAX_LEAF);
+
+  /* Checked before repairing: a swap cannot make a Morton configuration feasible. */
+  if (quality == 1 && (bf > 8 || max_leaf > 32 || min_leaf > 32)) {
+    tt__why(why, why_size,
+            "quality 1 (Morton) supports branchingFactor <= 8 and leaf sizes <= 32");
+    return TT_CHECK_INFEASIBLE;
+  }
+  if (min_leaf > max_leaf) {
+    int imin = tt_space_find(space, "minLeafSize");
+    int imax = tt_space_find(space, "maxLeafSize");
+    if (imin < 0 || imax < 0 ||
+        tt_config_set_number(config, (size_t)imin, (double)max_leaf) != TT_OK ||
+        tt_config_set_number(config, (size_t)imax, (double)min_leaf) != TT_OK) {
+      tt__why(why, why_size, "minLeafSize > maxLeafSize and the swap failed");
+      return TT_CHECK_INFEASIBLE;
+    }
+    if (why && why_size)
+      snprintf(why, why_size, "minLeafSize %lld > maxLeafSize %lld: swapped",
+               (long long)min_leaf, (long long)max_leaf);
+    return TT_CHECK_REPAIRED;
+  }
+  return TT_CHECK_OK;
+}
+
+/* Checks through the config's own space: lookups by name work in a JSON-parsed copy too. */
+tt_check_result tt__embree_check_config(tt_config *config, char *why, size_t why_size) {
+  return tt__embree_check(tt_config_space(config), config, why, why_size, NULL);
+}
+
+/* Builds the space; parameter names and defaults are those of thesis Table 3.1. */
+tt_space *tt__embree_space_create(void) {
+  tt_space *s = tt_space_create(TT__EMBREE_NAME, TT__EMBREE_VERSION);
+  if (!s) return NULL;
+  static const int64_t qualities[] = {1, 2, 3};
+  static const int64_t factors[] = {2, 4, 8};
+  static const char *const backends[] = {"native"};
+  int ok = 1;
+  ok &= tt_space_add_nom_int(s, "quality", qualities, 3, 1,
+                             "BVH builder: 1 Morton (RTC_BUILD_QUALITY_LOW), 2 binned SAH "
+                             "(MEDIUM), 3 SAH with spatial splits (HIGH); native and custom") >= 0;
+  ok &= tt_space_add_nom_int(s, "branchingFactor", factors, 3, 0,
+                             "children per inner node; custom backend only (native Embree "
+                             "picks its own BVH4/BVH8)") >= 0;
+  ok &= tt_space_add_int(s, "maxDepth", 8, 64, TT__DEF_MAX_DEPTH,
+                         "maximum BVH depth; custom backend only") >= 0;
+  ok &= tt_space_add_int(s, "sahBlockSize", 1, 32, TT__DEF_SAH_BLOCK,
+                         "SAH leaf cost granularity (primitives per block); custom backend "
+                         "only") >= 0;
+  ok &= tt_space_add_int(s, "minLeafSize", 1, 32, TT__DEF_MIN_LEAF,
+                         "minimum primitives per leaf; custom backend only") >= 0;
+  ok &= tt_space_add_int(s, "maxLeafSize", 1, 32, TT__DEF_MAX_LEAF,
+                         "maximum primitives per leaf; custom backend only") >= 0;
+  ok &= tt_space_add_float(s, "travcost", 0.1, 10.0, TT__DEF_TRAV_COST, 0,
+                           "SAH cost of traversing a node; custom backend only") >= 0;
+  ok &= tt_space_add_float(s, "intcost", 0.1, 10.0, TT__DEF_INT_COST, 0,
+                           "SAH cost of intersecting a primitive; custom backend only") >= 0;
+  ok &= tt_space_add_nom_bool(s, "static", 0,
+                              "scene never changes; false sets RTC_SCENE_FLAG_DYNAMIC (faster "
+                              "build, slower traversal); native backend") >= 0;
+  ok &= tt_space_add_nom_bool(s, "compact", 0,
+                              "RTC_SCENE_FLAG_COMPACT: smaller structure, slower traversal; "
+                              "native backend") >= 0;
+  ok &= tt_space_add_nom_bool(s, "robust", 0,
+                              "RTC_SCENE_FLAG_ROBUST: watertight traversal, slower; native "
+                              "backend") >= 0;
+  ok &= tt_space_add_nom_string(s, "backend", backends, 1, 0,
+                                "native: Embree's scene API (only quality, static, compact, "
+                                "robust act)") >= 0;
+  if (!ok) {
+    tt_space_destroy(s);
+    tt_set_error(TT_ERR_INTERNAL, "accel_embree: could not build the parameter space");
+    return NULL;
+  }
+  tt_space_add_constraint_text(s, "minLeafSize <= maxLeafSize (repaired by swapping)");
+  tt_space_add_constraint_text(s, "quality 1 (Morton) requires branchingFactor <= 8 and "
+                                  "maxLeafSize <= 32 (custom builder)");
+  tt_space_add_constraint_text(s, "branchingFactor^(maxDepth-1)*maxLeafSize >= triangle count "
+                                  "(custom backend; checked at build time)");
+  tt_space_set_check(s, tt__embree_check, NULL);
+  return s;
+}
+
+/* Decodes by name, so the decoding survives reordering of the space. */
+void tt__embree_settings_from_config(const tt_config *c, tt__embree_settings *o) {
+  o->quality = (int)tt_config_get_int(c, "quality", TT__DEF_QUALITY);
+  o->branching_factor = (int)tt_config_get_int(c, "branchingFactor", TT__DEF_BF);
+  o->max_depth = (int)tt_config_get_int(c, "maxDepth", TT__DEF_MAX_DEPTH);
+  o->sah_block_size = (int)tt_config_get_int(c, "sahBlockSize", TT__DEF_SAH_BLOCK);
+  o->min_leaf_size = (int)tt_config_get_int(c, "minLeafSize", TT__DEF_MIN_LEAF);
+  o->max_leaf_size = (int)tt_config_get_int(c, "maxLeafSize", TT__DEF_MAX_LEAF);
+  o->trav_cost = (float)tt_config_get_float(c, "travcost", TT__DEF_TRAV_COST);
+  o->int_cost = (float)tt_config_get_float(c, "intcost", TT__DEF_INT_COST);
+  o->is_static = (int)tt_config_get_int(c, "static", 0);
+  o->compact = (int)tt_config_get_int(c, "compact", 0);
+  o->robust = (int)tt_config_get_int(c, "robust", 0);
+  o->backend = (int)tt_config_get_int(c, "backend", TT__EMBREE_BACKEND_NATIVE);
+}
+
+/* Lists custom-only parameters set away from their defaults (for the native-backend WARN). */
+int tt__embree_custom_only_changed(const tt_config *config, char *buf, size_t size) {
+  int n = 0;
+  size_t used = 0;
+  if (size) buf[0] = '\0';
+  for (size_t i = 0; i < sizeof tt__custom_only / sizeof tt__custom_only[0]; i++) {
+    double v = tt_config_get_float(config, tt__custom_only[i].name, tt__custom_only[i].def);
+    if (v == tt__custom_only[i].def) continue;
+    if (used < size) {
+      int w = snprintf(buf + used, size - used, "%s%s", n ? ", " : "", tt__custom_only[i].name);
+      if (w > 0) used += (size_t)w;
+    }
+    n++;
+  }
+  return n;
+}
