@@ -1,2 +1,390 @@
-/* placeholder: being written */
-typedef int tt__placeholder_path;
+/* tunetrace: the shared path sampler (path.h): unidirectional path tracing with next-event
+ * estimation and BSDF sampling combined by multiple importance sampling (Veach 1997), with
+ * every random decision read from a fixed dimension of a tt_sample_source so that the same
+ * code serves the path tracer (quasi-random samplers) and PSSMLT (primary-sample vectors). */
+#include <tunetrace/path.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <tunetrace/image.h>
+
+#include "bsdf_internal.h"
+#include "lights_internal.h"
+
+/* An albedo texture, linear RGB. */
+typedef struct tt__texture_data {
+  uint32_t width, height;
+  float *rgb;             /* 3 * width * height, row 0 at the top of the image */
+} tt__texture_data;
+
+struct tt_path_tracer {
+  const tt_scene *scene;
+  tt__lights lights;
+  uint32_t material_count;
+  tt__bsdf *bsdfs;
+  int32_t *material_texture;  /* per material: texture index or -1 */
+  uint32_t texture_count;
+  tt__texture_data *textures;
+};
+
+/* sRGB decoding of one channel. */
+static float tt__srgb_to_linear(float c) {
+  return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
+}
+
+/* Loads texture `index` of the scene into linear RGB (once, at tracer creation). */
+static tt_status tt__load_texture(const tt_scene *scene, uint32_t index, tt__texture_data *out) {
+  const tt_texture *t = tt_scene_texture(scene, index);
+  uint32_t w = 0, h = 0, c = 0;
+  float *px = NULL;
+  tt_status st = tt_image_read(t->path, &w, &h, &c, &px);
+  if (st != TT_OK) return st;
+  if (w == 0 || h == 0 || c == 0) {
+    tt_free(px);
+    return tt_set_error(TT_ERR_PARSE, "texture '%s' is empty", t->path);
+  }
+  out->rgb = malloc(sizeof(float) * 3 * (size_t)w * h);
+  if (!out->rgb) {
+    tt_free(px);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "texture '%s': out of memory", t->path);
+  }
+  for (size_t i = 0; i < (size_t)w * h; ++i)
+    for (int k = 0; k < 3; ++k) {
+      float v = px[i * c + (c >= 3 ? (uint32_t)k : 0)];
+      out->rgb[3 * i + k] = t->srgb ? tt__srgb_to_linear(v) : v;
+    }
+  out->width = w;
+  out->height = h;
+  tt_free(px);
+  return TT_OK;
+}
+
+/* Bilinear lookup with wrap-around; v = 0 is the bottom of the image (OBJ convention). */
+static void tt__texture_lookup(const tt__texture_data *t, float u, float v, float out[3]) {
+  float x = (u - floorf(u)) * (float)t->width - 0.5f;
+  float y = (1.0f - (v - floorf(v))) * (float)t->height - 0.5f;
+  float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy;
+  int64_t x0 = (int64_t)fx, y0 = (int64_t)fy;
+  out[0] = out[1] = out[2] = 0.0f;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      int64_t xi = ((x0 + i) % t->width + t->width) % t->width;
+      int64_t yi = ((y0 + j) % t->height + t->height) % t->height;
+      float wgt = (i ? ax : 1.0f - ax) * (j ? ay : 1.0f - ay);
+      const float *p = t->rgb + 3 * ((size_t)yi * t->width + (size_t)xi);
+      for (int k = 0; k < 3; ++k) out[k] += wgt * p[k];
+    }
+}
+
+TT_API void tt_path_options_default(tt_path_options *options) {
+  if (!options) return;
+  memset(options, 0, sizeof *options);
+  options->struct_size = sizeof *options;
+  options->max_depth = 3;
+  options->rr_depth = 3;
+  options->strategy = TT_STRATEGY_MIS;
+  options->heuristic = TT_MIS_POWER;
+}
+
+TT_API tt_dim_kind tt_path_dim_kind(uint32_t dim) {
+  if (dim < TT_PATH_DIM_LENS) return TT_DIM_FILM;
+  if (dim < TT_PATH_DIM_FIRST_BOUNCE) return TT_DIM_LENS;
+  switch ((dim - TT_PATH_DIM_FIRST_BOUNCE) % TT_PATH_DIMS_PER_BOUNCE) {
+  case TT_PATH_BOUNCE_LIGHT_SELECT: return TT_DIM_LIGHT_SELECT;
+  case TT_PATH_BOUNCE_LIGHT_POS:
+  case TT_PATH_BOUNCE_LIGHT_POS + 1: return TT_DIM_LIGHT_POS;
+  case TT_PATH_BOUNCE_BSDF_LOBE: return TT_DIM_BSDF_LOBE;
+  case TT_PATH_BOUNCE_BSDF_DIR:
+  case TT_PATH_BOUNCE_BSDF_DIR + 1: return TT_DIM_BSDF_DIR;
+  case TT_PATH_BOUNCE_RR: return TT_DIM_RR;
+  default: return TT_DIM_RESERVED;
+  }
+}
+
+TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **out) {
+  if (!scene || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_path_tracer_create: scene or out is NULL");
+  *out = NULL;
+  tt_path_tracer *pt = calloc(1, sizeof *pt);
+  if (!pt) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_path_tracer_create: out of memory");
+  pt->scene = scene;
+  pt->lights.env = -1;
+  pt->material_count = tt_scene_material_count(scene);
+  pt->bsdfs = calloc(pt->material_count ? pt->material_count : 1, sizeof *pt->bsdfs);
+  if (!pt->bsdfs) {
+    free(pt);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_path_tracer_create: out of memory");
+  }
+  /* Only materials that a mesh uses must be renderable. */
+  uint8_t *used = calloc(pt->material_count ? pt->material_count : 1, 1);
+  if (!used) {
+    tt_path_tracer_destroy(pt);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_path_tracer_create: out of memory");
+  }
+  tt_status st = TT_OK;
+  for (uint32_t m = 0; m < tt_scene_mesh_count(scene) && st == TT_OK; ++m) {
+    const tt_mesh *mesh = tt_scene_mesh(scene, m);
+    if (mesh->material >= pt->material_count)
+      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "mesh '%s': material index %u out of range",
+                        mesh->name ? mesh->name : "?", mesh->material);
+    else
+      used[mesh->material] = 1;
+  }
+  for (uint32_t i = 0; i < pt->material_count && st == TT_OK; ++i) {
+    tt_status ms = tt__bsdf_init(&pt->bsdfs[i], tt_scene_material(scene, i));
+    if (ms != TT_OK && used[i]) st = ms;
+  }
+  /* Albedo textures of used materials, loaded once. */
+  pt->texture_count = tt_scene_texture_count(scene);
+  pt->material_texture = malloc((pt->material_count ? pt->material_count : 1) * sizeof *pt->material_texture);
+  pt->textures = calloc(pt->texture_count ? pt->texture_count : 1, sizeof *pt->textures);
+  if (st == TT_OK && (!pt->material_texture || !pt->textures))
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_path_tracer_create: out of memory");
+  for (uint32_t i = 0; i < pt->material_count && st == TT_OK; ++i) {
+    int32_t tex = tt_scene_material(scene, i)->albedo_texture;
+    pt->material_texture[i] = -1;
+    if (!used[i] || tex < 0) continue;
+    if ((uint32_t)tex >= pt->texture_count) {
+      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "material %u: texture index %d out of range", i, tex);
+      break;
+    }
+    if (!pt->textures[tex].rgb) st = tt__load_texture(scene, (uint32_t)tex, &pt->textures[tex]);
+    pt->material_texture[i] = tex;
+  }
+  free(used);
+  if (st == TT_OK) st = tt__lights_init(&pt->lights, scene);
+  if (st != TT_OK) {
+    tt_path_tracer_destroy(pt);
+    return st;
+  }
+  *out = pt;
+  return TT_OK;
+}
+
+TT_API void tt_path_tracer_destroy(tt_path_tracer *pt) {
+  if (!pt) return;
+  tt__lights_free(&pt->lights);
+  if (pt->textures)
+    for (uint32_t i = 0; i < pt->texture_count; ++i) free(pt->textures[i].rgb);
+  free(pt->textures);
+  free(pt->material_texture);
+  free(pt->bsdfs);
+  free(pt);
+}
+
+/* Reads dimension `dim`, clamped into [0, 1) against sloppy sources, tracking max_dim. */
+static inline float tt__dim(const tt_sample_source *src, uint32_t dim, uint32_t *max_dim) {
+  if (dim + 1 > *max_dim) *max_dim = dim + 1;
+  float u = src->get(src->self, dim);
+  if (!(u >= 0.0f)) u = 0.0f;
+  if (u >= 1.0f) u = 0x1.fffffep-1f;
+  return u;
+}
+
+/* MIS weight of a strategy with pdf a against one with pdf b. */
+static inline float tt__mis(tt_mis_heuristic h, float a, float b) {
+  if (isinf(a)) return 1.0f;
+  if (!(a > 0.0f)) return 0.0f;
+  if (h == TT_MIS_BALANCE) return a / (a + b);
+  float a2 = a * a, b2 = b * b;
+  return a2 / (a2 + b2);
+}
+
+/* Moves p off the surface along the geometric normal, to the side of w, by an amount that
+ * grows with |p| (float spacing grows with magnitude). */
+static inline void tt__offset(const float p[3], const float ng[3], const float w[3], float out[3]) {
+  float m = fmaxf(fabsf(p[0]), fmaxf(fabsf(p[1]), fabsf(p[2])));
+  float eps = 5e-5f * (1.0f + m);
+  if (tt__dot3(w, ng) < 0.0f) eps = -eps;
+  for (int i = 0; i < 3; ++i) out[i] = p[i] + eps * ng[i];
+}
+
+TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
+                          const tt_path_options *options, const tt_ray *camera_ray,
+                          const tt_sample_source *source, tt_path_result *out) {
+  memset(out, 0, sizeof *out);
+  out->distance = INFINITY;
+  tt_path_options o;
+  tt_path_options_default(&o);
+  if (options) {
+    size_t n = options->struct_size < sizeof o ? options->struct_size : sizeof o;
+    if (n > 0) memcpy(&o, options, n);
+  }
+  const tt__lights *lights = &pt->lights;
+  const int use_nee = o.strategy != TT_STRATEGY_BSDF;
+  /* Emission found by BSDF sampling after bounce 0 counts fully (BSDF), not at all (light
+   * only), or MIS-weighted. */
+  const int mis_on = o.strategy == TT_STRATEGY_MIS && o.heuristic != TT_MIS_NONE;
+  const int count_bsdf_hits = o.strategy == TT_STRATEGY_BSDF || mis_on;
+
+  float L[3] = {0.0f, 0.0f, 0.0f}, beta[3] = {1.0f, 1.0f, 1.0f};
+  tt_ray ray = *camera_ray;
+  float dlen = tt__normalize3(ray.dir);
+  if (!(dlen > 0.0f)) return;
+  ray.tnear *= dlen;
+  ray.tfar *= dlen;
+  int prev_delta = 1;
+  float prev_pdf = 0.0f, prev_p[3] = {0, 0, 0}, prev_n[3] = {0, 0, 1};
+  uint32_t max_dim = 0;
+
+  for (uint32_t b = 0;; ++b) {
+    tt_hit hit;
+    hit.geom_id = TT_INVALID_ID;
+    hit.prim_id = TT_INVALID_ID;
+    tracer->iface->intersect1(tracer->accel, &ray, &hit);
+    out->rays++;
+    if (hit.geom_id == TT_INVALID_ID) {
+      float Le[3];
+      if (tt__lights_env(lights, ray.dir, Le) && (b == 0 || prev_delta || count_bsdf_hits)) {
+        float w = 1.0f;
+        if (b > 0 && !prev_delta && mis_on)
+          w = tt__mis(o.heuristic, prev_pdf, tt__lights_pdf_env(lights, prev_n, ray.dir));
+        for (int i = 0; i < 3; ++i) L[i] += beta[i] * Le[i] * w;
+      }
+      break;
+    }
+
+    /* Surface geometry: position from barycentrics, winding normal, shading normal. */
+    const tt_mesh *mesh = tt_scene_mesh(pt->scene, hit.geom_id);
+    const uint32_t *idx = mesh->indices + 3 * (size_t)hit.prim_id;
+    const float *p0 = mesh->positions + 3 * (size_t)idx[0];
+    const float *p1 = mesh->positions + 3 * (size_t)idx[1];
+    const float *p2 = mesh->positions + 3 * (size_t)idx[2];
+    float w0 = 1.0f - hit.u - hit.v, p[3], e1[3], e2[3], ng_w[3], ng[3], ns[3], wo[3];
+    for (int i = 0; i < 3; ++i) {
+      p[i] = w0 * p0[i] + hit.u * p1[i] + hit.v * p2[i];
+      e1[i] = p1[i] - p0[i];
+      e2[i] = p2[i] - p0[i];
+      wo[i] = -ray.dir[i];
+    }
+    tt__cross3(e1, e2, ng_w);
+    if (tt__normalize3(ng_w) == 0.0f) break;  /* degenerate triangle */
+    memcpy(ng, ng_w, sizeof ng);
+    if (mesh->normals) {
+      const float *n0 = mesh->normals + 3 * (size_t)idx[0];
+      const float *n1 = mesh->normals + 3 * (size_t)idx[1];
+      const float *n2 = mesh->normals + 3 * (size_t)idx[2];
+      for (int i = 0; i < 3; ++i) ns[i] = w0 * n0[i] + hit.u * n1[i] + hit.v * n2[i];
+      if (tt__normalize3(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
+      else if (tt__dot3(ns, ng) < 0.0f)
+        for (int i = 0; i < 3; ++i) ns[i] = -ns[i];  /* to the geometric side */
+    } else {
+      memcpy(ns, ng, sizeof ns);
+    }
+    const tt__bsdf *bsdf = &pt->bsdfs[mesh->material];
+    tt__bsdf textured;
+    int32_t tex = pt->material_texture[mesh->material];
+    if (tex >= 0 && mesh->uvs) {  /* albedo modulated by the texture at the hit's uv */
+      const float *t0 = mesh->uvs + 2 * (size_t)idx[0], *t1 = mesh->uvs + 2 * (size_t)idx[1],
+                  *t2 = mesh->uvs + 2 * (size_t)idx[2];
+      float tc[3];
+      tt__texture_lookup(&pt->textures[tex], w0 * t0[0] + hit.u * t1[0] + hit.v * t2[0],
+                         w0 * t0[1] + hit.u * t1[1] + hit.v * t2[1], tc);
+      textured = *bsdf;
+      for (int i = 0; i < 3; ++i) textured.albedo[i] *= fminf(fmaxf(tc[i], 0.0f), 1.0f);
+      bsdf = &textured;
+    }
+    /* Opaque surfaces are two-sided: orient both normals towards the viewer. */
+    if (!tt__bsdf_transmissive(bsdf) && tt__dot3(wo, ng) < 0.0f)
+      for (int i = 0; i < 3; ++i) { ng[i] = -ng[i]; ns[i] = -ns[i]; }
+
+    if (b == 0) {
+      out->hit = 1;
+      out->distance = hit.t;
+      memcpy(out->position, p, sizeof out->position);
+      float s = tt__dot3(ns, wo) < 0.0f ? -1.0f : 1.0f;
+      for (int i = 0; i < 3; ++i) out->normal[i] = s * ns[i];
+      tt__bsdf_albedo(bsdf, out->albedo);
+    }
+
+    /* Emission (one-sided lights emit along the winding normal only). */
+    if (mesh->light >= 0 && (b == 0 || prev_delta || count_bsdf_hits)) {
+      float Le[3];
+      if (tt__lights_emitted(lights, hit.geom_id, ng_w, wo, Le)) {
+        float w = 1.0f;
+        if (b > 0 && !prev_delta && mis_on)
+          w = tt__mis(o.heuristic, prev_pdf, tt__lights_pdf_area(lights, hit.geom_id, prev_p, p, ng_w));
+        for (int i = 0; i < 3; ++i) L[i] += beta[i] * Le[i] * w;
+      }
+    }
+    if (b >= o.max_depth) break;
+    out->bounces++;
+
+    const uint32_t base = TT_PATH_DIM_FIRST_BOUNCE + TT_PATH_DIMS_PER_BOUNCE * b;
+    tt__frame fr;
+    tt__frame_from(&fr, ns, e1);
+    float wo_l[3];
+    tt__to_local(&fr, wo, wo_l);
+
+    /* Next-event estimation. */
+    if (use_nee && !bsdf->delta && lights->count > 0) {
+      float u_sel = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_SELECT, &max_dim);
+      float u1 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS, &max_dim);
+      float u2 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS + 1, &max_dim);
+      tt__light_sample ls;
+      if (tt__lights_sample(lights, p, ns, u_sel, u1, u2, &ls) && tt__dot3(ls.wi, ng) > 0.0f) {
+        float wi_l[3], f[3];
+        tt__to_local(&fr, ls.wi, wi_l);
+        tt__bsdf_eval(bsdf, wo_l, wi_l, f);
+        if (tt__max3(f) > 0.0f) {
+          tt_ray sh;
+          tt__offset(p, ng, ls.wi, sh.org);
+          memcpy(sh.dir, ls.wi, sizeof sh.dir);
+          sh.tnear = 0.0f;
+          sh.tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-3f);
+          out->rays++;
+          if (!tracer->iface->occluded1(tracer->accel, &sh)) {
+            float w = 1.0f;
+            if (!ls.delta && mis_on) w = tt__mis(o.heuristic, ls.pdf, tt__bsdf_pdf(bsdf, wo_l, wi_l));
+            float scale = fabsf(wi_l[2]) * w / ls.pdf;
+            for (int i = 0; i < 3; ++i) L[i] += beta[i] * f[i] * ls.L[i] * scale;
+          }
+        }
+      }
+    }
+
+    /* BSDF sampling continues the path. */
+    float u_lobe = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_LOBE, &max_dim);
+    float u1 = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_DIR, &max_dim);
+    float u2 = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_DIR + 1, &max_dim);
+    tt__bsdf_result bs;
+    if (!tt__bsdf_sample(bsdf, wo_l, u_lobe, u1, u2, &bs)) break;
+    if (source->report_pdf)
+      source->report_pdf(source->self, base + TT_PATH_BOUNCE_BSDF_DIR, bs.delta ? 0.0f : bs.pdf);
+    float wi[3];
+    tt__to_world(&fr, bs.wi, wi);
+    tt__normalize3(wi);
+    /* Shading normals must not send the path through the geometric surface (light leaks). */
+    float side = tt__dot3(wi, ng);
+    if (side == 0.0f || (side > 0.0f) != (bs.wi[2] > 0.0f)) break;
+    float scale = fabsf(bs.wi[2]) / bs.pdf;
+    for (int i = 0; i < 3; ++i) beta[i] *= bs.f[i] * scale;
+    if (!(tt__max3(beta) > 0.0f)) break;
+    prev_delta = bs.delta;
+    prev_pdf = bs.pdf;
+    memcpy(prev_p, p, sizeof prev_p);
+    memcpy(prev_n, ns, sizeof prev_n);
+
+    /* Russian roulette: survive with probability min(1, max throughput). */
+    if (b >= o.rr_depth) {
+      float q = fminf(1.0f, tt__max3(beta));
+      float u = tt__dim(source, base + TT_PATH_BOUNCE_RR, &max_dim);
+      if (!(u < q)) break;
+      for (int i = 0; i < 3; ++i) beta[i] /= q;
+    }
+
+    tt__offset(p, ng, wi, ray.org);
+    memcpy(ray.dir, wi, sizeof ray.dir);
+    ray.tnear = 0.0f;
+    ray.tfar = INFINITY;
+  }
+
+  out->max_dim = max_dim;
+  if (!isfinite(L[0]) || !isfinite(L[1]) || !isfinite(L[2])) {
+    out->nonfinite = 1;
+    L[0] = L[1] = L[2] = 0.0f;
+  }
+  memcpy(out->L, L, sizeof out->L);
+}

@@ -79,4 +79,9 @@ tt_status tt__scene_finish(tt_scene *scene);
 tt_status tt__mesh_import(const char *file, const char *base_name, int split,
                           const char *where, tt__mesh_data **out, uint32_t *count);
 
+/* Loads a pbrt-v4 scene file (pbrt_parse.c; Include/Import relative to the including
+ * file). Errors are TT_ERR_IO / TT_ERR_PARSE with "file:line: ..." messages; unsupported
+ * features warn once per location on stderr and are approximated or skipped. */
+tt_status tt__scene_load_pbrt(const char *path, tt_scene **out);
+
 #endif /* TT_SCENE_INTERNAL_H */

@@ -1,0 +1,710 @@
+/* pbrt-v4 importer: PLY meshes and the analytic shapes the shared scenes use (sphere, disk,
+ * Loop subdivision surfaces), all turned into triangles. Every read is bounds-checked: a
+ * truncated or corrupt file is an error, never a crash. */
+#include "pbrt_internal.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#ifdef TT_HAVE_ZLIB
+#include <zlib.h>
+#endif
+
+#define TT__PI 3.14159265358979323846
+
+/* ---- file reading ---------------------------------------------------------------------- */
+
+/* Whole file into memory, gunzipping ".gz" when zlib is available. */
+static tt_status tt__read_all(const char *path, const char *where, unsigned char **out, size_t *len) {
+  *out = NULL;
+  *len = 0;
+  size_t n = strlen(path);
+  int gz = n > 3 && strcasecmp(path + n - 3, ".gz") == 0;
+  size_t cap = 0, used = 0;
+  unsigned char *buf = NULL;
+  if (gz) {
+#ifdef TT_HAVE_ZLIB
+    gzFile f = gzopen(path, "rb");
+    if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\": %s", where, path, strerror(errno));
+    for (;;) {
+      if (used + 65536 > cap) {
+        size_t ncap = cap ? cap * 2 : 1 << 20;
+        unsigned char *nb = realloc(buf, ncap);
+        if (!nb) {
+          free(buf);
+          gzclose(f);
+          return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading \"%s\"", where, path);
+        }
+        buf = nb;
+        cap = ncap;
+      }
+      int got = gzread(f, buf + used, (unsigned)(cap - used));
+      if (got < 0) {
+        free(buf);
+        gzclose(f);
+        return tt_set_error(TT_ERR_IO, "%s: \"%s\": corrupt gzip stream", where, path);
+      }
+      if (got == 0) break;
+      used += (size_t)got;
+    }
+    gzclose(f);
+    *out = buf;
+    *len = used;
+    return TT_OK;
+#else
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: \"%s\": this build has no zlib for .ply.gz files", where, path);
+#endif
+  }
+  FILE *f = fopen(path, "rb");
+  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\": %s", where, path, strerror(errno));
+  for (;;) {
+    if (used + 65536 > cap) {
+      size_t ncap = cap ? cap * 2 : 1 << 20;
+      unsigned char *nb = realloc(buf, ncap);
+      if (!nb) {
+        free(buf);
+        fclose(f);
+        return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading \"%s\"", where, path);
+      }
+      buf = nb;
+      cap = ncap;
+    }
+    size_t got = fread(buf + used, 1, cap - used, f);
+    used += got;
+    if (got == 0) break;
+  }
+  int bad = ferror(f);
+  fclose(f);
+  if (bad) {
+    free(buf);
+    return tt_set_error(TT_ERR_IO, "%s: read error in \"%s\"", where, path);
+  }
+  *out = buf;
+  *len = used;
+  return TT_OK;
+}
+
+/* ---- PLY ------------------------------------------------------------------------------- */
+
+enum { TT__PLY_ASCII, TT__PLY_LE, TT__PLY_BE };
+enum { TT__P_NONE = 0, TT__P_I8, TT__P_U8, TT__P_I16, TT__P_U16, TT__P_I32, TT__P_U32, TT__P_F32, TT__P_F64 };
+
+typedef struct tt__ply_prop {
+  char name[32];
+  int type;       /* scalar type, or the item type of a list */
+  int count_type; /* list count type, TT__P_NONE for scalars */
+} tt__ply_prop;
+
+typedef struct tt__ply_elem {
+  char name[32];
+  uint64_t count;
+  tt__ply_prop props[32];
+  int prop_count;
+} tt__ply_elem;
+
+/* PLY type name to code (both the classic and the sized spellings). */
+static int tt__ply_type(const char *s) {
+  static const struct { const char *n; int t; } map[] = {
+      {"char", TT__P_I8},     {"int8", TT__P_I8},     {"uchar", TT__P_U8},   {"uint8", TT__P_U8},
+      {"short", TT__P_I16},   {"int16", TT__P_I16},   {"ushort", TT__P_U16}, {"uint16", TT__P_U16},
+      {"int", TT__P_I32},     {"int32", TT__P_I32},   {"uint", TT__P_U32},   {"uint32", TT__P_U32},
+      {"float", TT__P_F32},   {"float32", TT__P_F32}, {"double", TT__P_F64}, {"float64", TT__P_F64}};
+  for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+    if (strcmp(s, map[i].n) == 0) return map[i].t;
+  return TT__P_NONE;
+}
+
+/* Byte size of a scalar type. */
+static size_t tt__ply_size(int t) {
+  switch (t) {
+    case TT__P_I8: case TT__P_U8: return 1;
+    case TT__P_I16: case TT__P_U16: return 2;
+    case TT__P_I32: case TT__P_U32: case TT__P_F32: return 4;
+    case TT__P_F64: return 8;
+    default: return 0;
+  }
+}
+
+/* Cursor over the body: binary or ASCII, with an end that is never passed. */
+typedef struct tt__ply_cur {
+  const unsigned char *p, *end;
+  int format;
+} tt__ply_cur;
+
+/* Reads one scalar as double; 0 at end of data or on a malformed ASCII number. */
+static int tt__ply_read(tt__ply_cur *c, int t, double *v) {
+  if (c->format == TT__PLY_ASCII) {
+    while (c->p < c->end && (*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n')) c->p++;
+    if (c->p >= c->end) return 0;
+    char tmp[64];
+    size_t k = 0;
+    while (c->p < c->end && k + 1 < sizeof tmp && !(*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n'))
+      tmp[k++] = (char)*c->p++;
+    tmp[k] = '\0';
+    char *e;
+    *v = strtod(tmp, &e);
+    return e != tmp && *e == '\0';
+  }
+  size_t n = tt__ply_size(t);
+  if (n == 0 || (size_t)(c->end - c->p) < n) return 0;
+  unsigned char b[8];
+  memcpy(b, c->p, n);
+  c->p += n;
+  if (c->format == TT__PLY_BE)
+    for (size_t i = 0; i < n / 2; i++) {
+      unsigned char x = b[i];
+      b[i] = b[n - 1 - i];
+      b[n - 1 - i] = x;
+    }
+  switch (t) {
+    case TT__P_I8: { int8_t x; memcpy(&x, b, 1); *v = x; break; }
+    case TT__P_U8: *v = b[0]; break;
+    case TT__P_I16: { int16_t x; memcpy(&x, b, 2); *v = x; break; }
+    case TT__P_U16: { uint16_t x; memcpy(&x, b, 2); *v = x; break; }
+    case TT__P_I32: { int32_t x; memcpy(&x, b, 4); *v = x; break; }
+    case TT__P_U32: { uint32_t x; memcpy(&x, b, 4); *v = x; break; }
+    case TT__P_F32: { float x; memcpy(&x, b, 4); *v = x; break; }
+    case TT__P_F64: { double x; memcpy(&x, b, 8); *v = x; break; }
+    default: return 0;
+  }
+  return 1;
+}
+
+/* Vertex attribute slots filled from PLY properties. */
+enum { TT__A_X, TT__A_Y, TT__A_Z, TT__A_NX, TT__A_NY, TT__A_NZ, TT__A_U, TT__A_V, TT__A_COUNT };
+
+/* Maps a vertex property name to an attribute slot, or -1. */
+static int tt__ply_attr(const char *n) {
+  static const struct { const char *n; int a; } map[] = {
+      {"x", TT__A_X}, {"y", TT__A_Y}, {"z", TT__A_Z}, {"nx", TT__A_NX}, {"ny", TT__A_NY},
+      {"nz", TT__A_NZ}, {"u", TT__A_U}, {"v", TT__A_V}, {"s", TT__A_U}, {"t", TT__A_V},
+      {"texture_u", TT__A_U}, {"texture_v", TT__A_V}, {"texture_s", TT__A_U}, {"texture_t", TT__A_V}};
+  for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+    if (strcmp(n, map[i].n) == 0) return map[i].a;
+  return -1;
+}
+
+/* Appends triangle indices, growing the array geometrically. */
+static int tt__push_tri(uint32_t **idx, uint32_t *count, size_t *cap, uint32_t a, uint32_t b, uint32_t c) {
+  if ((size_t)*count * 3 + 3 > *cap) {
+    size_t ncap = *cap ? *cap * 2 : 3 * 1024;
+    uint32_t *n = realloc(*idx, ncap * sizeof *n);
+    if (!n) return 0;
+    *idx = n;
+    *cap = ncap;
+  }
+  if (*count == UINT32_MAX / 3) return 0;
+  uint32_t *t = *idx + 3 * (size_t)*count;
+  t[0] = a;
+  t[1] = b;
+  t[2] = c;
+  (*count)++;
+  return 1;
+}
+
+/* Parses the header, then the vertex and face elements; other elements are skipped. */
+static tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
+                               const char *where, tt__mesh_data *out) {
+  const unsigned char *p = data, *end = data + len;
+  tt__ply_elem *elems = NULL;
+  int elem_count = 0, format = -1;
+  tt_status st = TT_OK;
+  uint32_t *idx = NULL;
+  size_t idx_cap = 0;
+  uint32_t tri_count = 0;
+  float *pos = NULL, *nrm = NULL, *uv = NULL;
+  uint64_t nverts = 0;
+  int have_vertex = 0;
+#define TT__PLY_FAIL(...)                                         \
+  do {                                                            \
+    st = tt_set_error(TT_ERR_PARSE, __VA_ARGS__);                 \
+    goto done;                                                    \
+  } while (0)
+  if (len < 4 || memcmp(p, "ply", 3) != 0 || (p[3] != '\n' && p[3] != '\r'))
+    TT__PLY_FAIL("%s: \"%s\" is not a PLY file (no \"ply\" magic line)", where, path);
+  /* header: line by line up to end_header */
+  for (;;) {
+    const unsigned char *nl = memchr(p, '\n', (size_t)(end - p));
+    if (!nl) TT__PLY_FAIL("%s: \"%s\": PLY header has no end_header", where, path);
+    char line[256];
+    size_t n = (size_t)(nl - p);
+    if (n >= sizeof line) n = sizeof line - 1;
+    memcpy(line, p, n);
+    line[n] = '\0';
+    if (n && line[n - 1] == '\r') line[n - 1] = '\0';
+    p = nl + 1;
+    char w0[32] = "", w1[32] = "", w2[32] = "", w3[32] = "", w4[32] = "";
+    int nw = sscanf(line, "%31s %31s %31s %31s %31s", w0, w1, w2, w3, w4);
+    if (nw <= 0 || strcmp(w0, "comment") == 0 || strcmp(w0, "obj_info") == 0 || strcmp(w0, "ply") == 0) continue;
+    if (strcmp(w0, "end_header") == 0) break;
+    if (strcmp(w0, "format") == 0) {
+      if (strcmp(w1, "ascii") == 0) format = TT__PLY_ASCII;
+      else if (strcmp(w1, "binary_little_endian") == 0) format = TT__PLY_LE;
+      else if (strcmp(w1, "binary_big_endian") == 0) format = TT__PLY_BE;
+      else TT__PLY_FAIL("%s: \"%s\": unknown PLY format \"%s\"", where, path, w1);
+    } else if (strcmp(w0, "element") == 0) {
+      char *e;
+      double cnt = strtod(w2, &e);
+      if (nw < 3 || e == w2 || *e || cnt < 0 || cnt > 4e9 || cnt != floor(cnt))
+        TT__PLY_FAIL("%s: \"%s\": bad PLY element line \"%s\"", where, path, line);
+      if (elem_count >= 64) TT__PLY_FAIL("%s: \"%s\": too many PLY elements", where, path);
+      tt__ply_elem *ne = realloc(elems, (size_t)(elem_count + 1) * sizeof *ne);
+      if (!ne) {
+        st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+        goto done;
+      }
+      elems = ne;
+      memset(&elems[elem_count], 0, sizeof elems[0]);
+      snprintf(elems[elem_count].name, sizeof elems[0].name, "%s", w1);
+      elems[elem_count].count = (uint64_t)cnt;
+      elem_count++;
+    } else if (strcmp(w0, "property") == 0) {
+      if (elem_count == 0) TT__PLY_FAIL("%s: \"%s\": PLY property before any element", where, path);
+      tt__ply_elem *el = &elems[elem_count - 1];
+      if (el->prop_count >= 32) TT__PLY_FAIL("%s: \"%s\": too many PLY properties", where, path);
+      tt__ply_prop *pr = &el->props[el->prop_count];
+      memset(pr, 0, sizeof *pr);
+      if (strcmp(w1, "list") == 0) {
+        pr->count_type = tt__ply_type(w2);
+        pr->type = tt__ply_type(w3);
+        snprintf(pr->name, sizeof pr->name, "%s", w4);
+        if (nw < 5 || !pr->count_type || !pr->type || pr->count_type == TT__P_F32 || pr->count_type == TT__P_F64)
+          TT__PLY_FAIL("%s: \"%s\": bad PLY list property \"%s\"", where, path, line);
+      } else {
+        pr->type = tt__ply_type(w1);
+        snprintf(pr->name, sizeof pr->name, "%s", w2);
+        if (nw < 3 || !pr->type) TT__PLY_FAIL("%s: \"%s\": bad PLY property \"%s\"", where, path, line);
+      }
+      el->prop_count++;
+    } else {
+      TT__PLY_FAIL("%s: \"%s\": unexpected PLY header line \"%s\"", where, path, line);
+    }
+  }
+  if (format < 0) TT__PLY_FAIL("%s: \"%s\": PLY header has no format line", where, path);
+  tt__ply_cur cur = {p, end, format};
+  for (int e = 0; e < elem_count; e++) {
+    tt__ply_elem *el = &elems[e];
+    int is_vertex = strcmp(el->name, "vertex") == 0, is_face = strcmp(el->name, "face") == 0;
+    if (is_vertex) {
+      if (el->count > UINT32_MAX / 3) TT__PLY_FAIL("%s: \"%s\": too many vertices", where, path);
+      /* a count larger than the data left cannot be honest: stop before allocating */
+      if (format != TT__PLY_ASCII && el->count > (uint64_t)(end - cur.p))
+        TT__PLY_FAIL("%s: \"%s\": truncated PLY file (vertex data)", where, path);
+      int slot[32], have[TT__A_COUNT] = {0};
+      for (int i = 0; i < el->prop_count; i++) {
+        slot[i] = el->props[i].count_type ? -1 : tt__ply_attr(el->props[i].name);
+        if (slot[i] >= 0) have[slot[i]] = 1;
+      }
+      if (!have[TT__A_X] || !have[TT__A_Y] || !have[TT__A_Z])
+        TT__PLY_FAIL("%s: \"%s\": PLY vertex element lacks x, y or z", where, path);
+      nverts = el->count;
+      have_vertex = 1;
+      size_t nv = (size_t)nverts ? (size_t)nverts : 1;
+      pos = malloc(3 * nv * sizeof *pos);
+      if (have[TT__A_NX] && have[TT__A_NY] && have[TT__A_NZ]) nrm = malloc(3 * nv * sizeof *nrm);
+      if (have[TT__A_U] && have[TT__A_V]) uv = malloc(2 * nv * sizeof *uv);
+      if (!pos || (have[TT__A_NX] && have[TT__A_NY] && have[TT__A_NZ] && !nrm) || (have[TT__A_U] && have[TT__A_V] && !uv)) {
+        st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory for %llu PLY vertices", where,
+                          (unsigned long long)nverts);
+        goto done;
+      }
+      for (uint64_t v = 0; v < nverts; v++) {
+        double a[TT__A_COUNT] = {0};
+        for (int i = 0; i < el->prop_count; i++) {
+          const tt__ply_prop *pr = &el->props[i];
+          double x;
+          if (pr->count_type) {
+            double cnt;
+            if (!tt__ply_read(&cur, pr->count_type, &cnt) || cnt < 0)
+              TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY vertex %llu", where, path, (unsigned long long)v);
+            for (double k = 0; k < cnt; k++)
+              if (!tt__ply_read(&cur, pr->type, &x))
+                TT__PLY_FAIL("%s: \"%s\": truncated PLY vertex %llu", where, path, (unsigned long long)v);
+            continue;
+          }
+          if (!tt__ply_read(&cur, pr->type, &x))
+            TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY vertex %llu", where, path, (unsigned long long)v);
+          if (slot[i] >= 0) a[slot[i]] = x;
+        }
+        for (int k = 0; k < 3; k++) {
+          if (!isfinite(a[TT__A_X + k]))
+            TT__PLY_FAIL("%s: \"%s\": PLY vertex %llu is not finite", where, path, (unsigned long long)v);
+          pos[3 * v + (size_t)k] = (float)a[TT__A_X + k];
+          if (nrm) nrm[3 * v + (size_t)k] = isfinite(a[TT__A_NX + k]) ? (float)a[TT__A_NX + k] : 0.0f;
+        }
+        if (uv) {
+          uv[2 * v] = isfinite(a[TT__A_U]) ? (float)a[TT__A_U] : 0.0f;
+          uv[2 * v + 1] = isfinite(a[TT__A_V]) ? (float)a[TT__A_V] : 0.0f;
+        }
+      }
+      continue;
+    }
+    int list_prop = -1;
+    if (is_face)
+      for (int i = 0; i < el->prop_count; i++)
+        if (el->props[i].count_type &&
+            (strcmp(el->props[i].name, "vertex_indices") == 0 || strcmp(el->props[i].name, "vertex_index") == 0))
+          list_prop = i;
+    if (is_face && list_prop < 0) TT__PLY_FAIL("%s: \"%s\": PLY face element has no vertex_indices list", where, path);
+    if (is_face && !have_vertex) TT__PLY_FAIL("%s: \"%s\": PLY faces come before the vertices", where, path);
+    for (uint64_t f = 0; f < el->count; f++) {
+      for (int i = 0; i < el->prop_count; i++) {
+        const tt__ply_prop *pr = &el->props[i];
+        double x;
+        if (!pr->count_type) {
+          if (!tt__ply_read(&cur, pr->type, &x))
+            TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY %s %llu", where, path, el->name, (unsigned long long)f);
+          continue;
+        }
+        double cnt;
+        if (!tt__ply_read(&cur, pr->count_type, &cnt) || cnt < 0 || cnt > 1e6)
+          TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY %s %llu", where, path, el->name, (unsigned long long)f);
+        uint32_t first = 0, prev = 0;
+        for (uint32_t k = 0; k < (uint32_t)cnt; k++) {
+          if (!tt__ply_read(&cur, pr->type, &x))
+            TT__PLY_FAIL("%s: \"%s\": truncated PLY %s %llu", where, path, el->name, (unsigned long long)f);
+          if (i != list_prop) continue;
+          if (!(x >= 0) || x >= (double)nverts)
+            TT__PLY_FAIL("%s: \"%s\": PLY face %llu uses vertex %.0f (the file has %llu)", where, path,
+                         (unsigned long long)f, x, (unsigned long long)nverts);
+          uint32_t vi = (uint32_t)x;
+          if (k == 0) first = vi;
+          else if (k >= 2 && !tt__push_tri(&idx, &tri_count, &idx_cap, first, prev, vi)) {
+            st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory for PLY faces", where);
+            goto done;
+          }
+          prev = vi;
+        }
+      }
+    }
+  }
+  if (!have_vertex) TT__PLY_FAIL("%s: \"%s\": PLY file has no vertex element", where, path);
+  out->vertex_count = (uint32_t)nverts;
+  out->triangle_count = tri_count;
+  out->positions = pos;
+  out->normals = nrm;
+  out->uvs = uv;
+  out->indices = idx ? idx : malloc(sizeof(uint32_t));
+  pos = nrm = uv = NULL;
+  idx = NULL;
+  if (!out->indices) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+done:
+#undef TT__PLY_FAIL
+  free(elems);
+  free(idx);
+  free(pos);
+  free(nrm);
+  free(uv);
+  return st;
+}
+
+/* File loading and parsing are separate so the parser sees one bounded buffer. */
+tt_status tt__pbrt_read_ply(const char *path, const char *where, tt__mesh_data *out) {
+  memset(out, 0, sizeof *out);
+  unsigned char *data;
+  size_t len;
+  tt_status st = tt__read_all(path, where, &data, &len);
+  if (st != TT_OK) return st;
+  st = tt__ply_parse(data, len, path, where, out);
+  free(data);
+  if (st != TT_OK) tt__mesh_data_free(out);
+  return st;
+}
+
+/* ---- analytic shapes ------------------------------------------------------------------- */
+
+/* Allocates the arrays of a mesh_data; normals/uvs on request. */
+static tt_status tt__alloc_mesh(tt__mesh_data *d, uint32_t nv, uint32_t nt, int normals, int uvs) {
+  memset(d, 0, sizeof *d);
+  d->vertex_count = nv;
+  d->triangle_count = nt;
+  d->positions = malloc(3 * (size_t)nv * sizeof(float));
+  d->indices = malloc(3 * (size_t)nt * sizeof(uint32_t));
+  if (normals) d->normals = malloc(3 * (size_t)nv * sizeof(float));
+  if (uvs) d->uvs = malloc(2 * (size_t)nv * sizeof(float));
+  if (!d->positions || !d->indices || (normals && !d->normals) || (uvs && !d->uvs)) {
+    tt__mesh_data_free(d);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory tessellating a shape");
+  }
+  return TT_OK;
+}
+
+/* A UV sphere with pole fans (no degenerate triangles): 48 segments x 24 rings keeps the
+ * silhouette error under 0.25% of the radius. */
+tt_status tt__pbrt_sphere(double r, tt__mesh_data *d) {
+  const uint32_t seg = 48, rings = 24;
+  uint32_t nv = 2 + (rings - 1) * (seg + 1);
+  uint32_t nt = 2 * seg + 2 * seg * (rings - 2);
+  tt_status st = tt__alloc_mesh(d, nv, nt, 1, 1);
+  if (st != TT_OK) return st;
+  uint32_t v = 0;
+  /* pole vertices first: 0 = +z (theta 0), 1 = -z */
+  for (int s = 0; s < 2; s++, v++) {
+    float z = s ? -1.0f : 1.0f;
+    d->positions[3 * v] = 0; d->positions[3 * v + 1] = 0; d->positions[3 * v + 2] = (float)(z * r);
+    d->normals[3 * v] = 0; d->normals[3 * v + 1] = 0; d->normals[3 * v + 2] = z;
+    d->uvs[2 * v] = 0.5f; d->uvs[2 * v + 1] = s ? 1.0f : 0.0f;
+  }
+  for (uint32_t i = 1; i < rings; i++) {
+    double th = TT__PI * i / rings;
+    for (uint32_t j = 0; j <= seg; j++, v++) {
+      double ph = 2 * TT__PI * j / seg;
+      double n[3] = {sin(th) * cos(ph), sin(th) * sin(ph), cos(th)};
+      for (int k = 0; k < 3; k++) {
+        d->positions[3 * v + k] = (float)(r * n[k]);
+        d->normals[3 * v + k] = (float)n[k];
+      }
+      d->uvs[2 * v] = (float)j / seg;
+      d->uvs[2 * v + 1] = (float)i / rings;
+    }
+  }
+  uint32_t *t = d->indices;
+#define TT__RV(i, j) (2 + ((i) - 1) * (seg + 1) + (j))
+  /* winding chosen so (b-a)x(c-a) points outward */
+  for (uint32_t j = 0; j < seg; j++) {
+    *t++ = 0; *t++ = TT__RV(1, j); *t++ = TT__RV(1, j + 1);
+    *t++ = 1; *t++ = TT__RV(rings - 1, j + 1); *t++ = TT__RV(rings - 1, j);
+  }
+  for (uint32_t i = 1; i + 1 < rings; i++)
+    for (uint32_t j = 0; j < seg; j++) {
+      uint32_t a = TT__RV(i, j), b = TT__RV(i, j + 1), c = TT__RV(i + 1, j), e = TT__RV(i + 1, j + 1);
+      *t++ = a; *t++ = c; *t++ = e;
+      *t++ = a; *t++ = e; *t++ = b;
+    }
+#undef TT__RV
+  return TT_OK;
+}
+
+/* A 64-gon disk (or annulus) facing +z at height h. */
+tt_status tt__pbrt_disk(double r, double ri, double h, tt__mesh_data *d) {
+  const uint32_t seg = 64;
+  int annulus = ri > 0 && ri < r;
+  uint32_t nv = annulus ? 2 * (seg + 1) : seg + 2;
+  uint32_t nt = annulus ? 2 * seg : seg;
+  tt_status st = tt__alloc_mesh(d, nv, nt, 0, 1);
+  if (st != TT_OK) return st;
+  uint32_t v = 0;
+  if (!annulus) {
+    d->positions[0] = 0; d->positions[1] = 0; d->positions[2] = (float)h;
+    d->uvs[0] = 0; d->uvs[1] = 1;
+    v = 1;
+  }
+  for (int ring = annulus ? 0 : 1; ring < 2; ring++)
+    for (uint32_t j = 0; j <= seg; j++, v++) {
+      double ph = 2 * TT__PI * j / seg, rr = ring ? r : ri;
+      d->positions[3 * v] = (float)(rr * cos(ph));
+      d->positions[3 * v + 1] = (float)(rr * sin(ph));
+      d->positions[3 * v + 2] = (float)h;
+      d->uvs[2 * v] = (float)j / seg;
+      d->uvs[2 * v + 1] = (float)((r - rr) / (r - (annulus ? ri : 0)));
+    }
+  uint32_t *t = d->indices;
+  for (uint32_t j = 0; j < seg; j++) {
+    if (!annulus) {
+      *t++ = 0; *t++ = 1 + j; *t++ = 2 + j;
+    } else {
+      uint32_t a = j, b = j + 1, c = seg + 1 + j, e = seg + 2 + j;
+      *t++ = a; *t++ = c; *t++ = e;
+      *t++ = a; *t++ = e; *t++ = b;
+    }
+  }
+  return TT_OK;
+}
+
+/* ---- Loop subdivision ------------------------------------------------------------------ */
+
+/* Open-addressing table of undirected edges (a < b) -> edge index. */
+typedef struct tt__edges {
+  uint64_t *keys;     /* (a << 32 | b) + 1; 0 = empty */
+  uint32_t *ids;
+  size_t cap;
+  uint32_t count;
+  uint32_t *ends;     /* 2 per edge */
+  uint32_t *faces;    /* faces per edge (saturating) */
+  uint32_t *opp;      /* 2 per edge: opposite vertex of the first two faces */
+} tt__edges;
+
+/* Frees an edge table. */
+static void tt__edges_free(tt__edges *e) {
+  free(e->keys);
+  free(e->ids);
+  free(e->ends);
+  free(e->faces);
+  free(e->opp);
+  memset(e, 0, sizeof *e);
+}
+
+/* Builds the edge table of a triangle list; 0 when out of memory. */
+static int tt__edges_build(tt__edges *e, const uint32_t *idx, uint32_t nt) {
+  memset(e, 0, sizeof *e);
+  size_t cap = 16;
+  while (cap < (size_t)nt * 4) cap *= 2;
+  e->cap = cap;
+  e->keys = calloc(cap, sizeof *e->keys);
+  e->ids = malloc(cap * sizeof *e->ids);
+  size_t maxe = (size_t)nt * 3 + 1;
+  e->ends = malloc(2 * maxe * sizeof *e->ends);
+  e->faces = calloc(maxe, sizeof *e->faces);
+  e->opp = malloc(2 * maxe * sizeof *e->opp);
+  if (!e->keys || !e->ids || !e->ends || !e->faces || !e->opp) return 0;
+  for (uint32_t t = 0; t < nt; t++)
+    for (int k = 0; k < 3; k++) {
+      uint32_t a = idx[3 * (size_t)t + k], b = idx[3 * (size_t)t + (k + 1) % 3], c = idx[3 * (size_t)t + (k + 2) % 3];
+      if (a > b) { uint32_t x = a; a = b; b = x; }
+      uint64_t key = (((uint64_t)a << 32) | b) + 1;
+      size_t h = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & (cap - 1);
+      while (e->keys[h] && e->keys[h] != key) h = (h + 1) & (cap - 1);
+      uint32_t id;
+      if (!e->keys[h]) {
+        e->keys[h] = key;
+        id = e->ids[h] = e->count++;
+        e->ends[2 * (size_t)id] = a;
+        e->ends[2 * (size_t)id + 1] = b;
+      } else {
+        id = e->ids[h];
+      }
+      if (e->faces[id] < 2) e->opp[2 * (size_t)id + e->faces[id]] = c;
+      if (e->faces[id] < 3) e->faces[id]++;
+    }
+  return 1;
+}
+
+/* Looks up the id of edge (a, b). */
+static uint32_t tt__edges_find(const tt__edges *e, uint32_t a, uint32_t b) {
+  if (a > b) { uint32_t x = a; a = b; b = x; }
+  uint64_t key = (((uint64_t)a << 32) | b) + 1;
+  size_t h = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & (e->cap - 1);
+  while (e->keys[h] != key) h = (h + 1) & (e->cap - 1);
+  return e->ids[h];
+}
+
+/* Loop's vertex weight for valence n. */
+static double tt__loop_beta(uint32_t n) { return n == 3 ? 3.0 / 16.0 : 3.0 / (8.0 * n); }
+
+/* Per-vertex rule: even vertices (limit == 0) or limit-surface positions (limit == 1), from
+ * the neighbour sums over the edge table. Boundary and non-manifold vertices use the 1-D
+ * boundary rule over their boundary neighbours. */
+static int tt__loop_vertices(const float *pos, uint32_t nv, const tt__edges *e, int limit, float *out) {
+  double *sum = calloc(3 * (size_t)nv, sizeof *sum), *bsum = calloc(3 * (size_t)nv, sizeof *bsum);
+  uint32_t *val = calloc(nv, sizeof *val), *bval = calloc(nv, sizeof *bval);
+  if (!sum || !bsum || !val || !bval) {
+    free(sum); free(bsum); free(val); free(bval);
+    return 0;
+  }
+  for (uint32_t i = 0; i < e->count; i++) {
+    uint32_t a = e->ends[2 * (size_t)i], b = e->ends[2 * (size_t)i + 1];
+    int boundary = e->faces[i] != 2;
+    for (int k = 0; k < 3; k++) {
+      sum[3 * (size_t)a + k] += pos[3 * (size_t)b + k];
+      sum[3 * (size_t)b + k] += pos[3 * (size_t)a + k];
+      if (boundary) {
+        bsum[3 * (size_t)a + k] += pos[3 * (size_t)b + k];
+        bsum[3 * (size_t)b + k] += pos[3 * (size_t)a + k];
+      }
+    }
+    val[a]++; val[b]++;
+    if (boundary) { bval[a]++; bval[b]++; }
+  }
+  for (uint32_t v = 0; v < nv; v++) {
+    const float *p = pos + 3 * (size_t)v;
+    float *o = out + 3 * (size_t)v;
+    if (bval[v] == 2) {
+      double wv = limit ? 3.0 / 5.0 : 3.0 / 4.0, wn = limit ? 1.0 / 5.0 : 1.0 / 8.0;
+      for (int k = 0; k < 3; k++) o[k] = (float)(wv * p[k] + wn * bsum[3 * (size_t)v + k]);
+    } else if (bval[v] == 0 && val[v] >= 3) {
+      double beta = tt__loop_beta(val[v]);
+      double w = limit ? 1.0 / (val[v] + 3.0 / (8.0 * beta)) : beta;
+      for (int k = 0; k < 3; k++) o[k] = (float)((1.0 - val[v] * w) * p[k] + w * sum[3 * (size_t)v + k]);
+    } else {
+      memcpy(o, p, 3 * sizeof *o); /* corners and non-manifold vertices stay put */
+    }
+  }
+  free(sum); free(bsum); free(val); free(bval);
+  return 1;
+}
+
+/* Area-weighted vertex normals, so the subdivided surface shades smoothly like pbrt's. */
+static int tt__smooth_normals(tt__mesh_data *d) {
+  float *n = calloc(3 * (size_t)d->vertex_count, sizeof *n);
+  if (!n) return 0;
+  for (uint32_t t = 0; t < d->triangle_count; t++) {
+    const uint32_t *ix = d->indices + 3 * (size_t)t;
+    const float *a = d->positions + 3 * (size_t)ix[0], *b = d->positions + 3 * (size_t)ix[1],
+                *c = d->positions + 3 * (size_t)ix[2];
+    float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    float f[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    for (int k = 0; k < 3; k++)
+      for (int j = 0; j < 3; j++) n[3 * (size_t)ix[k] + j] += f[j];
+  }
+  for (uint32_t v = 0; v < d->vertex_count; v++) {
+    float *p = n + 3 * (size_t)v;
+    float l = sqrtf(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    if (l > 0) { p[0] /= l; p[1] /= l; p[2] /= l; }
+    else { p[0] = 0; p[1] = 0; p[2] = 1; }
+  }
+  free(d->normals);
+  d->normals = n;
+  return 1;
+}
+
+/* One Loop step, then the vertices are pushed to the limit surface as pbrt does. */
+tt_status tt__pbrt_loop_subdivide(tt__mesh_data *d) {
+  tt__edges e;
+  tt__mesh_data n;
+  memset(&n, 0, sizeof n);
+  if ((uint64_t)d->triangle_count * 4 > UINT32_MAX / 3 || (uint64_t)d->vertex_count + 3ull * d->triangle_count > UINT32_MAX / 3)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "loopsubdiv: mesh too large to subdivide");
+  if (!tt__edges_build(&e, d->indices, d->triangle_count)) goto oom;
+  uint32_t nv = d->vertex_count + e.count, nt = d->triangle_count * 4;
+  n.vertex_count = nv;
+  n.triangle_count = nt;
+  n.positions = malloc(3 * (size_t)nv * sizeof(float));
+  n.indices = malloc(3 * (size_t)nt * sizeof(uint32_t));
+  if (!n.positions || !n.indices) goto oom;
+  if (!tt__loop_vertices(d->positions, d->vertex_count, &e, 0, n.positions)) goto oom;
+  for (uint32_t i = 0; i < e.count; i++) {
+    const float *a = d->positions + 3 * (size_t)e.ends[2 * (size_t)i], *b = d->positions + 3 * (size_t)e.ends[2 * (size_t)i + 1];
+    float *o = n.positions + 3 * ((size_t)d->vertex_count + i);
+    if (e.faces[i] == 2) {
+      const float *c = d->positions + 3 * (size_t)e.opp[2 * (size_t)i], *f = d->positions + 3 * (size_t)e.opp[2 * (size_t)i + 1];
+      for (int k = 0; k < 3; k++) o[k] = 0.375f * (a[k] + b[k]) + 0.125f * (c[k] + f[k]);
+    } else {
+      for (int k = 0; k < 3; k++) o[k] = 0.5f * (a[k] + b[k]);
+    }
+  }
+  for (uint32_t t = 0; t < d->triangle_count; t++) {
+    const uint32_t *ix = d->indices + 3 * (size_t)t;
+    uint32_t m[3];
+    for (int k = 0; k < 3; k++) m[k] = d->vertex_count + tt__edges_find(&e, ix[k], ix[(k + 1) % 3]);
+    uint32_t *o = n.indices + 12 * (size_t)t;
+    o[0] = ix[0]; o[1] = m[0]; o[2] = m[2];
+    o[3] = ix[1]; o[4] = m[1]; o[5] = m[0];
+    o[6] = ix[2]; o[7] = m[2]; o[8] = m[1];
+    o[9] = m[0]; o[10] = m[1]; o[11] = m[2];
+  }
+  tt__edges_free(&e);
+  /* limit positions need the new mesh's own neighbourhoods */
+  if (!tt__edges_build(&e, n.indices, nt)) goto oom;
+  float *lim = malloc(3 * (size_t)nv * sizeof *lim);
+  if (!lim || !tt__loop_vertices(n.positions, nv, &e, 1, lim)) {
+    free(lim);
+    goto oom;
+  }
+  free(n.positions);
+  n.positions = lim;
+  tt__edges_free(&e);
+  if (!tt__smooth_normals(&n)) goto oom;
+  n.name = d->name;
+  d->name = NULL;
+  tt__mesh_data_free(d);
+  *d = n;
+  return TT_OK;
+oom:
+  tt__edges_free(&e);
+  tt__mesh_data_free(&n);
+  return tt_set_error(TT_ERR_OUT_OF_MEMORY, "loopsubdiv: out of memory");
+}
