@@ -1,5 +1,5 @@
 /* End to end: render the default Cornell box through the host and check the image:
- * finite and non-negative, directly visible light pixels equal the emitted radiance,
+ * finite and non-negative, directly visible light pixels show the emitted radiance,
  * mean in physically sensible bounds, bit-identical pixels for a fixed seed whatever the
  * thread count, the run record's keys, PNG written, and SIGINT writing a partial image. */
 #include <tunetrace/tunetrace.h>
@@ -74,16 +74,18 @@ int main(void) {
     }
     for (size_t i = 0; i < n; i++) {
       if (a[3 * i] > maxr) maxr = a[3 * i];
-      if (fabs(a[3 * i] - le[0]) < 1e-3 * le[0] && fabs(a[3 * i + 1] - le[1]) < 1e-3 * le[1] + 1e-6)
+      /* a pixel on the light sees its emission plus the little light its own diffuse
+       * albedo reflects back from the box below (a few percent) */
+      if (a[3 * i] >= le[0] * (1 - 1e-5) && a[3 * i] <= 1.05 * le[0] &&
+          a[3 * i + 1] >= le[1] * (1 - 1e-5) && a[3 * i + 1] <= 1.05 * le[1])
         light_pixels++;
     }
     double mean = sum / (n * 3);
     CHECK_MSG(bad == 0, "%d non-finite or negative values", bad);
     CHECK_MSG(mean > 0.05 && mean < 0.25 * (le[0] + le[1] + le[2]) / 3, "mean %g", mean);
-    CHECK_NEAR(maxr, le[0], 1e-3 * le[0]);
-    CHECK_MSG(light_pixels >= 4, "only %zu pixels see exactly the emitted radiance", light_pixels);
-    /* no pixel is brighter than the light: nothing but the light emits */
-    CHECK(maxr <= le[0] * (1 + 1e-4));
+    CHECK_MSG(light_pixels >= 4, "only %zu pixels see the emitted radiance", light_pixels);
+    /* no pixel is much brighter than the light: nothing but the light emits */
+    CHECK_MSG(maxr >= le[0] && maxr <= le[0] * 1.05, "max red %g vs emission %g", maxr, le[0]);
     tt_scene_destroy(scene);
   }
   tt_free(a);
