@@ -32,7 +32,7 @@ int main(void) {
   char dir[] = "/tmp/tt_host_cornellXXXXXX";
   if (!mkdtemp(dir)) return 1;
   const char *scene_path = source_path("scenes/cornell-box/scene.json");
-  char args[8192], a_exr[4200], b_exr[4200], c_exr[4200], stats[4200], png[4200];
+  char args[16384], a_exr[4200], b_exr[4200], c_exr[4200], stats[4200], png[4200];
   snprintf(a_exr, sizeof a_exr, "%s/a.exr", dir);
   snprintf(b_exr, sizeof b_exr, "%s/b.exr", dir);
   snprintf(c_exr, sizeof c_exr, "%s/c.exr", dir);

@@ -47,8 +47,8 @@ void tt_default_host_set_log_level(tt_log_level level) { atomic_store(&tt__log_m
 /* ---- memory and clock ---- */
 
 static void *tt__default_alloc(size_t size, size_t align) {
+  if (align == 0 || (align & (align - 1)) || align > 4096) return NULL;
   if (align < sizeof(void *)) align = sizeof(void *);
-  if (align & (align - 1)) return NULL;
   void *p = NULL;
   if (posix_memalign(&p, align, size ? size : 1) != 0) return NULL;
   return p;

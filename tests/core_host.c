@@ -1,0 +1,94 @@
+/* The default host services: parallel_for visits every index exactly once for any grain
+ * and thread count, thread indices stay in range, stop requests interrupt, allocation
+ * honours alignment, the clock is monotonic, and errors reach the callback. */
+#include <tunetrace/tunetrace.h>
+
+#include <stdatomic.h>
+
+#include "tt_test.h"
+
+typedef struct visit_ctx {
+  atomic_int *hits;
+  atomic_int bad_thread;
+  uint32_t threads;
+} visit_ctx;
+
+static void visit(void *ctx_, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  visit_ctx *ctx = ctx_;
+  if (thread_index >= ctx->threads) atomic_fetch_add(&ctx->bad_thread, 1);
+  for (uint64_t i = begin; i < end; i++) atomic_fetch_add(&ctx->hits[i], 1);
+}
+
+static int error_calls;
+static tt_status last_status;
+static void on_error(void *user, tt_status status, const char *message) {
+  (void)message;
+  (*(int *)user)++;
+  last_status = status;
+}
+
+static void count_calls(void *ctx, uint64_t begin, uint64_t end, uint32_t t) {
+  (void)t;
+  atomic_fetch_add((atomic_long *)ctx, (long)(end - begin));
+}
+
+int main(void) {
+  const tt_host *host = tt_default_host();
+  CHECK(host->struct_size == sizeof(tt_host));
+  CHECK(host->abi_major == TT_ABI_MAJOR);
+
+  enum { N = 100003 };
+  static atomic_int hits[N];
+  uint32_t thread_settings[] = {1, 2, 3, 8};
+  uint64_t grains[] = {0, 1, 7, 1000, N + 5};
+  for (size_t t = 0; t < 4; t++) {
+    CHECK(tt_default_host_set_threads(thread_settings[t]) == TT_OK);
+    CHECK(host->thread_count() == thread_settings[t]);
+    for (size_t g = 0; g < 5; g++) {
+      for (int i = 0; i < N; i++) atomic_store(&hits[i], 0);
+      visit_ctx ctx = {hits, 0, host->thread_count()};
+      CHECK(host->parallel_for(N, grains[g], visit, &ctx) == TT_OK);
+      int wrong = 0;
+      for (int i = 0; i < N; i++) wrong += atomic_load(&hits[i]) != 1;
+      CHECK_MSG(wrong == 0, "threads %u grain %llu: %d indices not visited exactly once",
+                thread_settings[t], (unsigned long long)grains[g], wrong);
+      CHECK(atomic_load(&ctx.bad_thread) == 0);
+    }
+  }
+  CHECK(tt_default_host_set_threads(2000) == TT_ERR_INVALID_ARGUMENT);
+  CHECK(host->parallel_for(0, 0, visit, NULL) == TT_OK);
+  CHECK(host->parallel_for(10, 0, NULL, NULL) == TT_ERR_INVALID_ARGUMENT);
+
+  /* alignment */
+  for (size_t align = 1; align <= 4096; align *= 2) {
+    void *p = host->alloc(1000, align);
+    CHECK(p != NULL && ((uintptr_t)p % align) == 0);
+    host->free_mem(p);
+  }
+  CHECK(host->alloc(10, 3) == NULL);
+
+  /* clock */
+  uint64_t a = host->clock_ns(), b = host->clock_ns();
+  CHECK(b >= a);
+
+  /* errors: code returned, message stored per thread, callback called */
+  tt_set_error_callback(on_error, &error_calls);
+  CHECK(tt_set_error(TT_ERR_PARSE, "file.json: %s", "bad") == TT_ERR_PARSE);
+  CHECK(strcmp(tt_last_error(), "file.json: bad") == 0);
+  CHECK(error_calls == 1 && last_status == TT_ERR_PARSE);
+  tt_clear_error();
+  CHECK(tt_last_error()[0] == 0);
+  tt_set_error_callback(NULL, NULL);
+  CHECK(strcmp(tt_status_string(TT_ERR_ABI), "plugin ABI mismatch") == 0);
+  CHECK(strcmp(tt_status_string((tt_status)12345), "unknown status") == 0);
+
+  /* stop request: should_stop turns on, parallel_for reports the interruption and skips */
+  CHECK(host->should_stop() == 0);
+  tt_default_host_request_stop();
+  CHECK(host->should_stop() != 0);
+  atomic_long calls = 0;
+  CHECK(host->parallel_for(1000, 1, count_calls, &calls) == TT_ERR_INTERRUPTED);
+  CHECK(atomic_load(&calls) == 0);
+
+  return tt_test_finish("core_host");
+}
