@@ -38,9 +38,51 @@ typedef struct tt__host_options {
   uint32_t width, height;   /* 0: the scene's resolution */
   int list_plugins;
   int quiet;
+  /* tuning (tune.c) */
+  const char *tune;         /* --tune PLUGIN; NULL: automatic when a tuner is loaded */
+  const char *objective;    /* --objective SPEC; NULL: the target's natural objective */
+  uint32_t iterations;      /* --iterations N; 0: TT_HOST_DEFAULT_ITERATIONS */
+  uint32_t tune_spp;        /* --tune-spp N: spp per measurement; 0: 1 */
+  uint32_t explore;         /* --explore N: random configurations instead of a tuner */
+  const char *db;           /* --db PATH; NULL: tt_tunedb_default_path() */
+  int no_db;                /* --no-db */
   int help;
   int version;
+  /* sequence rendering (sequence.c) */
+  int sequence;             /* --sequence given */
+  uint32_t seq_first, seq_last;  /* frames rendered, inclusive */
+  const char *out_dir;      /* --out-dir DIR */
+  double fps;               /* --fps F; 0: 24 */
+  uint32_t reference_scale; /* --reference-scale K; 0: no reference */
+  const char *post;         /* --post NAME: post-filter applied to each frame */
 } tt__host_options;
+
+#define TT_HOST_DEFAULT_ITERATIONS 50
+
+/* What a tuning measurement minimises (--objective). */
+typedef enum tt__objective_kind {
+  TT_OBJ_RENDER = 1,        /* wall ms of the measurement pass(es) */
+  TT_OBJ_BUILD = 2,         /* accel build ms */
+  TT_OBJ_TOTAL = 3,         /* build + render ms */
+  TT_OBJ_METRIC = 4         /* an integrator metric of the pass */
+} tt__objective_kind;
+
+typedef enum tt__metric_goal {
+  TT_GOAL_MIN = 0,          /* cost = value */
+  TT_GOAL_MAX = 1,          /* cost = -value */
+  TT_GOAL_TARGET = 2        /* cost = |value - target| */
+} tt__metric_goal;
+
+typedef struct tt__objective {
+  tt__objective_kind kind;
+  char metric[64];
+  tt__metric_goal goal;
+  double target;
+  char spec[192];           /* canonical spec, the database's objective column */
+} tt__objective;
+
+/* Parses an --objective spec; on error prints a message naming `opt` and returns -1. */
+int tt__parse_objective(const char *opt, const char *text, tt__objective *out);
 
 /* Parses argv; on error prints a message naming the option and returns TT_EXIT_USAGE. */
 int tt__parse_options(int argc, char **argv, tt__host_options *opt);
@@ -82,7 +124,65 @@ typedef struct tt__run_record {
   double metric_sums[TT_MAX_METRICS];
   const char *out_exr;
   const char *out_png;
+  const struct tt__tuning *tuning;  /* NULL when nothing was tuned or explored */
 } tt__run_record;
+
+/* The render state the passes and the tuning loop share (run.c). */
+typedef struct tt__render_state {
+  const tt__host_options *opt;
+  const tt_host *host;
+  tt__run_record *rec;
+  tt_scene *scene;
+  const tt_camera *camera;
+  tt_registry *reg;
+  tt_config **configs;          /* per loaded plugin, registry order */
+  tt_loaded_plugin *accel_p, *integ_p;
+  const tt_accel_iface *ai;
+  const tt_integrator_iface *ii;
+  tt_accel *accel;
+  tt_integrator *integrator;
+  tt_film *film;
+  uint32_t pass;                /* passes rendered into the film */
+} tt__render_state;
+
+/* Renders one pass of `spp` samples per pixel into the film and accounts it in the run
+ * record; `ps` receives the pass statistics and `*ms` its wall time. */
+tt_status tt__render_pass(tt__render_state *rs, uint32_t spp, tt_pass_stats *ps, double *ms);
+
+/* One measurement of the tuning loop. */
+typedef struct tt__tune_sample {
+  int iteration;                /* -1: the default configuration */
+  char *config;                 /* canonical JSON (malloc) */
+  double cost, build_ms, render_ms;
+  int status;                   /* tt_tunedb_status */
+  int cached;                   /* cost came from the database */
+} tt__tune_sample;
+
+/* Everything the tuning phase did, for the log and --stats. */
+typedef struct tt__tuning {
+  const char *mode;             /* "tune" or "explore" */
+  const char *plugin, *plugin_version, *tuner;
+  tt__objective objective;
+  uint32_t requested;
+  tt__tune_sample *samples;     /* [0] is the default configuration */
+  size_t count, cap;
+  uint32_t measured, cached, infeasible, failed;
+  int converged, interrupted;
+  double default_cost;
+  char *default_config;
+  double best_cost;
+  char *best_config;
+  const char *best_from;        /* "default", or the mode that found it */
+  double ms;                    /* wall time of the tuning phase */
+  const char *db_path;          /* NULL with --no-db */
+} tt__tuning;
+
+/* Runs the tuning (or exploration) phase when the options ask for one; leaves the best
+ * configuration applied to the target. Returns TT_EXIT_OK, TT_EXIT_USAGE (bad target or
+ * objective) or TT_EXIT_FAILURE; `*out` is NULL when no tuning was requested. */
+int tt__tune_phase(tt__render_state *rs, tt__tuning **out);
+/* Frees the tuning record. */
+void tt__tuning_free(tt__tuning *t);
 
 /* Writes the --stats JSON file. */
 tt_status tt__write_stats(const char *path, const tt__run_record *rec);

@@ -1,5 +1,6 @@
 /* host: command-line entry point. Parses options and dispatches to the requested job. */
 #include "host.h"
+#include "sequence.h"
 
 #include <stdio.h>
 
@@ -21,5 +22,6 @@ int main(int argc, char **argv) {
     fprintf(stderr, "host: no scene given (try --help)\n");
     return TT_EXIT_USAGE;
   }
+  if (opt.sequence) return tt__run_sequence(&opt);
   return tt__run_render(&opt);
 }

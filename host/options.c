@@ -2,6 +2,7 @@
 #include "host.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +27,46 @@ void tt__print_usage(FILE *out) {
     "  --res WxH              override the scene's resolution\n"
     "  --seed N               random seed (default: the scene's render.seed)\n"
     "  --threads N            worker threads (default: all CPUs)\n"
+    "\n"
+    "Tuning (thesis Fig. 3.2; see host/README.md):\n"
+    "  --plugin TUNER         loading a tuner (e.g. tuner_nm) turns tuning on: before the\n"
+    "                         final passes the host measures the target's default\n"
+    "                         configuration, then asks the tuner for --iterations\n"
+    "                         configurations, measuring each with one pass, and renders\n"
+    "                         the remaining spp with the best one\n"
+    "  --tune PLUGIN          the loaded plugin whose space is tuned (accel, integrator or\n"
+    "                         post). Default: the integrator if it serves a tuning hint\n"
+    "                         (tt.tuning_hint/1), else the accel\n"
+    "  --objective SPEC       what is minimised per measurement:\n"
+    "                           render         render ms of the pass (default)\n"
+    "                           build          accel build ms (accel targets)\n"
+    "                           build+render   both (accel targets; alias: total)\n"
+    "                           metric:NAME    an integrator metric of the pass, minimised;\n"
+    "                           metric:NAME:max            ... maximised\n"
+    "                           metric:NAME:target=X       ... |value - X| minimised,\n"
+    "                                          e.g. metric:acceptance:target=0.234\n"
+    "  --iterations N         configurations to ask the tuner for (default 50)\n"
+    "  --tune-spp N           samples per pixel of one measurement pass (default 1)\n"
+    "  --explore N            measure N random configurations of the target's space (no\n"
+    "                         tuner needed), for the analysis tools in tools/tuning/\n"
+    "  --db PATH              tuning database (SQLite; default\n"
+    "                         $XDG_DATA_HOME/tunetrace/tuning.db, else\n"
+    "                         ~/.local/share/tunetrace/tuning.db). A configuration already\n"
+    "                         measured in the same state on this machine is not measured\n"
+    "                         again: its stored cost is fed to the tuner\n"
+    "  --no-db                no database: measure everything, record nothing\n"
+    "\n"
+    "Sequences (temporal filters, see host/README.md):\n"
+    "  --sequence N|A:B       render frames 0..N-1 (or A..B) of the scene's camera path at\n"
+    "                         --fps (default 24), each with one Halton(2,3) sub-pixel\n"
+    "                         jitter of a cycle of 8 for all its samples; writes\n"
+    "                         color/depth/motion_NNNN.exr and manifest.json to --out-dir\n"
+    "  --out-dir DIR          folder of the sequence (created if missing)\n"
+    "  --reference-scale K    also render each frame at K x K the resolution and write the\n"
+    "                         Blackman-Harris-downsampled reference_NNNN.exr\n"
+    "  --post NAME            run the post-filter NAME (e.g. post_taa) over the frames in\n"
+    "                         order and write post_NNNN.exr; --set NAME.mode=network ...\n"
+    "  --fps F                frames per second along the camera path (default 24)\n"
     "\n"
     "Output:\n"
     "  --out FILE.exr         linear EXR; a display-referred PNG is written next to it\n"
@@ -153,6 +194,62 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       }
       opt->width = w;
       opt->height = h;
+    } else if (!strcmp(a, "--tune")) {
+      if (!(opt->tune = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--objective")) {
+      tt__objective obj;
+      if (!(opt->objective = tt__arg(argc, argv, &i)) ||
+          tt__parse_objective(a, opt->objective, &obj))
+        return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--iterations")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 1000000, &n))
+        return TT_EXIT_USAGE;
+      opt->iterations = (uint32_t)n;
+    } else if (!strcmp(a, "--tune-spp")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 1u << 16, &n))
+        return TT_EXIT_USAGE;
+      opt->tune_spp = (uint32_t)n;
+    } else if (!strcmp(a, "--explore")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 1000000, &n))
+        return TT_EXIT_USAGE;
+      opt->explore = (uint32_t)n;
+    } else if (!strcmp(a, "--db")) {
+      if (!(opt->db = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--no-db")) {
+      opt->no_db = 1;
+    } else if (!strcmp(a, "--sequence")) {
+      /* "N" renders frames 0..N-1, "A:B" frames A..B inclusive (sequence.c). */
+      unsigned f0 = 0, f1 = 0;
+      char extra;
+      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (v[0] >= '0' && v[0] <= '9' && sscanf(v, "%u:%u%c", &f0, &f1, &extra) == 2 && f0 <= f1) {
+        opt->seq_first = f0;
+        opt->seq_last = f1;
+      } else if (v[0] >= '0' && v[0] <= '9' && sscanf(v, "%u%c", &f0, &extra) == 1 && f0 >= 1) {
+        opt->seq_first = 0;
+        opt->seq_last = f0 - 1;
+      } else {
+        fprintf(stderr, "host: --sequence: expected a frame count N >= 1 or a range A:B "
+                "with A <= B, got \"%s\"\n", v);
+        return TT_EXIT_USAGE;
+      }
+      opt->sequence = 1;
+    } else if (!strcmp(a, "--out-dir")) {
+      if (!(opt->out_dir = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--post")) {
+      if (!(opt->post = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--reference-scale")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 16, &n)) return TT_EXIT_USAGE;
+      opt->reference_scale = (uint32_t)n;
+    } else if (!strcmp(a, "--fps")) {
+      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      char *end = NULL;
+      double fps = strtod(v, &end);
+      if (!*v || *end || !(fps > 0) || fps > 1000) {
+        fprintf(stderr, "host: --fps: expected frames per second in (0, 1000], got \"%s\"\n", v);
+        return TT_EXIT_USAGE;
+      }
+      opt->fps = fps;
     } else if (a[0] == '-' && a[1] != '\0') {
       fprintf(stderr, "host: unknown option \"%s\" (try --help)\n", a);
       return TT_EXIT_USAGE;
@@ -164,5 +261,74 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       opt->scene = a;
     }
   }
+  if (opt->db && opt->no_db) {
+    fprintf(stderr, "host: --db and --no-db exclude each other\n");
+    return TT_EXIT_USAGE;
+  }
   return TT_EXIT_OK;
+}
+
+int tt__parse_objective(const char *opt, const char *text, tt__objective *out) {
+  memset(out, 0, sizeof *out);
+  if (!strcmp(text, "render")) {
+    out->kind = TT_OBJ_RENDER;
+  } else if (!strcmp(text, "build")) {
+    out->kind = TT_OBJ_BUILD;
+  } else if (!strcmp(text, "build+render") || !strcmp(text, "total") ||
+             !strcmp(text, "render+build")) {
+    out->kind = TT_OBJ_TOTAL;
+  } else if (!strncmp(text, "metric:", 7)) {
+    const char *name = text + 7;
+    const char *colon = strchr(name, ':');
+    size_t len = colon ? (size_t)(colon - name) : strlen(name);
+    if (len == 0 || len >= sizeof out->metric) {
+      fprintf(stderr, "host: %s \"%s\": expected metric:NAME[:min|:max|:target=X] with a "
+              "metric name of 1..63 characters\n", opt, text);
+      return -1;
+    }
+    out->kind = TT_OBJ_METRIC;
+    memcpy(out->metric, name, len);
+    out->goal = TT_GOAL_MIN;
+    if (colon) {
+      const char *g = colon + 1;
+      char *end = NULL;
+      if (!strcmp(g, "min")) {
+        out->goal = TT_GOAL_MIN;
+      } else if (!strcmp(g, "max")) {
+        out->goal = TT_GOAL_MAX;
+      } else if (!strncmp(g, "target=", 7) && g[7] &&
+                 (out->target = strtod(g + 7, &end), *end == 0) && isfinite(out->target)) {
+        out->goal = TT_GOAL_TARGET;
+      } else {
+        fprintf(stderr, "host: %s \"%s\": after the metric name expected :min, :max or "
+                ":target=NUMBER, got \":%s\"\n", opt, text, g);
+        return -1;
+      }
+    }
+  } else {
+    fprintf(stderr, "host: %s: unknown objective \"%s\" (expected render, build, "
+            "build+render, metric:NAME, metric:NAME:max or metric:NAME:target=X)\n", opt, text);
+    return -1;
+  }
+  /* one spelling per objective, so the database matches "total" and "build+render" */
+  switch (out->kind) {
+    case TT_OBJ_RENDER: snprintf(out->spec, sizeof out->spec, "render"); break;
+    case TT_OBJ_BUILD: snprintf(out->spec, sizeof out->spec, "build"); break;
+    case TT_OBJ_TOTAL: snprintf(out->spec, sizeof out->spec, "build+render"); break;
+    case TT_OBJ_METRIC:
+      if (out->goal == TT_GOAL_TARGET) {
+        /* shortest text that reads back as the same double: 0.234, not 0.23400000000000001 */
+        char num[32];
+        for (int prec = 6; prec <= 17; prec++) {
+          snprintf(num, sizeof num, "%.*g", prec, out->target);
+          if (strtod(num, NULL) == out->target) break;
+        }
+        snprintf(out->spec, sizeof out->spec, "metric:%s:target=%s", out->metric, num);
+      } else {
+        snprintf(out->spec, sizeof out->spec, "metric:%s:%s", out->metric,
+                 out->goal == TT_GOAL_MAX ? "max" : "min");
+      }
+      break;
+  }
+  return 0;
 }

@@ -199,6 +199,39 @@ int tt__run_describe(const tt__host_options *opt) {
 
 /* ---- render ---- */
 
+tt_status tt__render_pass(tt__render_state *rs, uint32_t spp, tt_pass_stats *ps, double *ms) {
+  tt__run_record *rec = rs->rec;
+  tt_render_ctx ctx;
+  memset(&ctx, 0, sizeof ctx);
+  ctx.struct_size = sizeof ctx;
+  ctx.scene = rs->scene;
+  ctx.accel_iface = rs->ai;
+  ctx.accel = rs->accel;
+  ctx.film = rs->film;
+  ctx.camera = rs->camera;
+  ctx.seed = rec->seed;
+  ctx.pass_index = rs->pass;
+  ctx.spp = spp;
+  ctx.sample_offset = rec->spp;
+  memset(ps, 0, sizeof *ps);
+  ps->struct_size = sizeof *ps;
+  uint64_t p0 = rs->host->clock_ns();
+  tt_status st = rs->ii->render_pass(rs->integrator, &ctx, ps);
+  *ms = (rs->host->clock_ns() - p0) * 1e-6;
+  rec->render_ms += *ms;
+  rec->rays += ps->rays;
+  rec->samples += ps->samples;
+  rec->nonfinite += ps->nonfinite;
+  if (st != TT_OK) return st;
+  rs->pass++;
+  rec->passes++;
+  rec->spp += spp;
+  rec->last_pass = *ps;
+  for (uint32_t m = 0; m < ps->metric_count && m < TT_MAX_METRICS; m++)
+    rec->metric_sums[m] += ps->metrics[m].value;
+  return TT_OK;
+}
+
 /* Default output: <scene folder>.exr for ".../NAME/scene.json", else <file stem>.exr. */
 static void tt__default_out(const char *scene, char *buf, size_t n) {
   char tmp[4096];
@@ -282,6 +315,7 @@ int tt__run_render(const tt__host_options *opt) {
   tt_integrator *integrator = NULL;
   tt_film *film = NULL;
   tt_loaded_plugin *accel_p = NULL, *integ_p = NULL;
+  tt__tuning *tuning = NULL;
   const tt_accel_iface *ai = NULL;
   const tt_integrator_iface *ii = NULL;
   if (!reg) {
@@ -346,51 +380,54 @@ int tt__run_render(const tt__host_options *opt) {
     goto done;
   }
 
-  /* progressive passes of 1 spp each, until the target or the time budget */
+  /* tuning phase (when a tuner is loaded, or --tune/--explore): its passes go into the film */
+  tt__render_state rs;
+  memset(&rs, 0, sizeof rs);
+  rs.opt = opt;
+  rs.host = host;
+  rs.rec = &rec;
+  rs.scene = scene;
+  rs.camera = camera;
+  rs.reg = reg;
+  rs.configs = configs;
+  rs.accel_p = accel_p;
+  rs.integ_p = integ_p;
+  rs.ai = ai;
+  rs.ii = ii;
+  rs.accel = accel;
+  rs.integrator = integrator;
+  rs.film = film;
   uint64_t t0 = host->clock_ns();
-  for (uint32_t pass = 0; rec.spp < target_spp; pass++) {
+  int trc = tt__tune_phase(&rs, &tuning);
+  accel = rs.accel;
+  rec.tuning = tuning;
+  if (trc != TT_EXIT_OK) {
+    rc = trc;
+    if (rc == TT_EXIT_USAGE || !tuning) goto done;
+  }
+  if (tuning && tuning->interrupted) rec.interrupted = 1;
+
+  /* progressive passes of 1 spp each, until the target or the time budget */
+  while (rc == TT_EXIT_OK && !rec.interrupted && rec.spp < target_spp) {
     double elapsed = (host->clock_ns() - t0) * 1e-9;
     if (budget_s > 0 && elapsed >= budget_s) break;
     if (host->should_stop()) {
       rec.interrupted = 1;
       break;
     }
-    tt_render_ctx ctx;
-    memset(&ctx, 0, sizeof ctx);
-    ctx.struct_size = sizeof ctx;
-    ctx.scene = scene;
-    ctx.accel_iface = ai;
-    ctx.accel = accel;
-    ctx.film = film;
-    ctx.camera = camera;
-    ctx.seed = rec.seed;
-    ctx.pass_index = pass;
-    ctx.spp = 1;
-    ctx.sample_offset = rec.spp;
     tt_pass_stats ps;
-    memset(&ps, 0, sizeof ps);
-    ps.struct_size = sizeof ps;
-    uint64_t p0 = host->clock_ns();
-    tt_status st = ii->render_pass(integrator, &ctx, &ps);
-    rec.render_ms += (host->clock_ns() - p0) * 1e-6;
-    rec.rays += ps.rays;
-    rec.samples += ps.samples;
-    rec.nonfinite += ps.nonfinite;
+    double ms = 0;
+    tt_status st = tt__render_pass(&rs, 1, &ps, &ms);
     if (st == TT_ERR_INTERRUPTED) {
       rec.interrupted = 1;
       break;
     }
     if (st != TT_OK) {
       fprintf(stderr, "host: %s: pass %u failed: %s\n", tt_loaded_plugin_entry(integ_p)->name,
-              pass, tt_last_error());
+              rs.pass, tt_last_error());
       rc = TT_EXIT_FAILURE;
       break;
     }
-    rec.passes++;
-    rec.spp += ctx.spp;
-    rec.last_pass = ps;
-    for (uint32_t m = 0; m < ps.metric_count && m < TT_MAX_METRICS; m++)
-      rec.metric_sums[m] += ps.metrics[m].value;
     double frac = target_spp == UINT32_MAX ? 0 : (double)rec.spp / target_spp;
     if (budget_s > 0) {
       double tf = (host->clock_ns() - t0) * 1e-9 / budget_s;
@@ -432,6 +469,7 @@ done:
   if (accel) ai->destroy(accel);
   for (int i = 0; i < TT_HOST_MAX_LIST; i++)
     if (configs[i]) tt_config_destroy(configs[i]);
+  tt__tuning_free(tuning);
   tt_registry_destroy(reg);
   tt_scene_destroy(scene);
   return rc;

@@ -17,6 +17,58 @@ static void tt__add_config(cJSON *parent, const char *name, const tt_config *con
   cJSON_AddItemToObject(parent, name, obj ? obj : cJSON_CreateNull());
 }
 
+/* Adds a configuration given as JSON text (null if absent or unparsable). */
+static void tt__add_json(cJSON *parent, const char *name, const char *json) {
+  cJSON *obj = json ? cJSON_Parse(json) : NULL;
+  cJSON_AddItemToObject(parent, name, obj ? obj : cJSON_CreateNull());
+}
+
+/* The "tuning" object: what the tuning or exploration phase measured and chose. */
+static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
+  static const char *status_names[] = {"ok", "infeasible", "failed"};
+  cJSON *o = cJSON_AddObjectToObject(root, "tuning");
+  cJSON_AddStringToObject(o, "mode", t->mode);
+  cJSON_AddStringToObject(o, "plugin", t->plugin ? t->plugin : "");
+  cJSON_AddStringToObject(o, "plugin_version", t->plugin_version ? t->plugin_version : "");
+  if (t->tuner) cJSON_AddStringToObject(o, "tuner", t->tuner);
+  else cJSON_AddNullToObject(o, "tuner");
+  cJSON_AddStringToObject(o, "objective", t->objective.spec);
+  cJSON_AddNumberToObject(o, "requested", t->requested);
+  cJSON_AddNumberToObject(o, "iterations", t->count ? (double)(t->count - 1) : 0.0);
+  cJSON_AddNumberToObject(o, "measured", t->measured);
+  cJSON_AddNumberToObject(o, "cached", t->cached);
+  cJSON_AddNumberToObject(o, "infeasible", t->infeasible);
+  cJSON_AddNumberToObject(o, "failed", t->failed);
+  cJSON_AddBoolToObject(o, "converged", t->converged);
+  cJSON_AddBoolToObject(o, "interrupted", t->interrupted);
+  cJSON_AddNumberToObject(o, "default_cost", t->default_cost);
+  tt__add_json(o, "default_config", t->default_config);
+  cJSON_AddNumberToObject(o, "best_cost", t->best_cost);
+  tt__add_json(o, "best_config", t->best_config);
+  cJSON_AddStringToObject(o, "best_from", t->best_from ? t->best_from : "default");
+  cJSON_AddNumberToObject(o, "tuning_ms", t->ms);
+  if (t->db_path) cJSON_AddStringToObject(o, "db", t->db_path);
+  else cJSON_AddNullToObject(o, "db");
+  /* costs[i] and history[i] are iteration i; the default is separate (default_cost) */
+  cJSON *costs = cJSON_AddArrayToObject(o, "costs");
+  cJSON *hist = cJSON_AddArrayToObject(o, "history");
+  for (size_t i = 0; i < t->count; i++) {
+    const tt__tune_sample *s = &t->samples[i];
+    if (s->iteration < 0) continue;
+    cJSON_AddItemToArray(costs, cJSON_CreateNumber(s->cost));
+    cJSON *h = cJSON_CreateObject();
+    cJSON_AddNumberToObject(h, "iteration", s->iteration);
+    cJSON_AddNumberToObject(h, "cost", s->cost);
+    cJSON_AddNumberToObject(h, "build_ms", s->build_ms);
+    cJSON_AddNumberToObject(h, "render_ms", s->render_ms);
+    cJSON_AddStringToObject(h, "status", s->status >= 0 && s->status <= 2 ?
+                            status_names[s->status] : "unknown");
+    cJSON_AddBoolToObject(h, "cached", s->cached);
+    tt__add_json(h, "config", s->config);
+    cJSON_AddItemToArray(hist, h);
+  }
+}
+
 tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "tunetrace", tt_version());
@@ -71,6 +123,7 @@ tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
     if (rec->last_pass.metrics[m].name)
       cJSON_AddNumberToObject(metrics, rec->last_pass.metrics[m].name,
                               rec->passes ? rec->metric_sums[m] / rec->passes : 0.0);
+  if (rec->tuning) tt__add_tuning(root, rec->tuning);
   cJSON *out = cJSON_AddObjectToObject(root, "output");
   if (rec->out_exr) cJSON_AddStringToObject(out, "exr", rec->out_exr);
   if (rec->out_png) cJSON_AddStringToObject(out, "png", rec->out_png);

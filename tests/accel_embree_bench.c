@@ -1,17 +1,45 @@
-/* accel_embree bench (suite 'bench'): single-thread Mrays/s of intersect1 versus
- * intersect_stream (and occluded1 versus occluded_stream) on a ~500k-triangle procedural
- * mesh, for coherent camera rays and incoherent random rays, and build ms / memory per
- * quality. Prints figures; fails only if the plugin cannot load or build, or if the single
- * and stream calls disagree on a hit count. Figures depend on the machine. */
+/* accel_embree bench (suite 'bench'): backend native versus backend custom, single thread.
+ *
+ * Scenes: the Cornell box (scenes/cornell-box), a ~500k-triangle procedural bumpy sphere,
+ * and, when ../shared/scenes is present, the Stanford bunny and the voxel monument (OBJ
+ * files loaded through a scene.json "file" mesh). Rays: primary rays of a 512x512 pinhole
+ * camera (coherent) and diffuse-bounce rays from the primary hits (incoherent; cosine
+ * directions around the normal). For each configuration: build ms (median of 5, Embree's
+ * thread pool), and single-thread Mrays/s of intersect1 and occluded1 (median of 5 passes
+ * over all rays). Ends with the custom/native ratios that decide the default backend.
+ *
+ *   meson test -C BUILD --suite bench accel_embree_bench -v
+ *   (or BUILD/tests/accel_embree_bench [runs] with TT_PLUGIN_PATH=BUILD/plugins)
+ *
+ * Fails only if the plugin cannot load or build, or custom and native disagree on more
+ * than 1 ray in 10^4 (edge round-off). Figures depend on the machine. */
 #include "accel_embree_common.h"
+
+#include <tunetrace/camera.h>
 
 #include <time.h>
 
-/* Monotonic seconds. */
-static double now_s(void) {
+#define W 512
+#define H 512
+#define NRAYS ((size_t)W * H)
+
+/* CPU seconds of this thread: ray rates are single-threaded, and CPU time keeps them
+ * meaningful on a shared, loaded machine (time spent preempted is not counted). */
+static double cpu_s(void) {
   struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Median of n values (sorts them). */
+static double median(double *v, int n) {
+  for (int i = 1; i < n; i++)
+    for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
+      double t = v[j];
+      v[j] = v[j - 1];
+      v[j - 1] = t;
+    }
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /* A bumpy sphere: (rings x segments) quads split in two, radius modulated so that the
@@ -45,135 +73,301 @@ static tt_scene *bumpy_sphere(uint32_t rings, uint32_t segs) {
   return ae_scene_end(&buf, "bumpy sphere");
 }
 
-/* Times intersect1 over all rays (best of `reps`); returns Mrays/s and the hit count. */
-static double time_single(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
-                          tt_ray *work, tt_hit *hits, size_t n, int reps, size_t *nhit) {
-  double best = 1e30;
-  for (int k = 0; k < reps; k++) {
-    memcpy(work, rays, n * sizeof *rays);
-    double t0 = now_s();
-    for (size_t i = 0; i < n; i++) A->intersect1(acc, &work[i], &hits[i]);
-    double dt = now_s() - t0;
-    if (dt < best) best = dt;
+/* Loads an OBJ through a scene.json "file" mesh, then aims the camera at its bounds from
+ * the front-left-above. NULL (skipped) when the file is absent or does not load. */
+static tt_scene *obj_scene(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fclose(f);
+  char json[4600];
+  snprintf(json, sizeof json,
+           "{\"version\":1,\"camera\":{\"position\":[0,0,5],\"target\":[0,0,0],\"up\":[0,1,0],"
+           "\"fov\":40,\"resolution\":[%d,%d]},\"materials\":{\"m\":{\"type\":\"diffuse\","
+           "\"albedo\":[0.5,0.5,0.5]}},\"meshes\":[{\"name\":\"obj\",\"material\":\"m\","
+           "\"file\":\"%s\"}]}", W, H, path);
+  tt_scene *s = NULL;
+  if (tt_scene_load_json(json, strlen(json), path, NULL, &s) != TT_OK) {
+    printf("note: %s does not load (%s): skipped\n", path, tt_last_error());
+    return NULL;
   }
-  *nhit = 0;
-  for (size_t i = 0; i < n; i++) *nhit += hits[i].geom_id != TT_INVALID_ID;
-  return (double)n / best * 1e-6;
+  float lo[3], hi[3], c[3], ext = 0.0f;
+  tt_scene_bounds(s, lo, hi);
+  for (int k = 0; k < 3; k++) {
+    c[k] = 0.5f * (lo[k] + hi[k]);
+    if (hi[k] - lo[k] > ext) ext = hi[k] - lo[k];
+  }
+  tt_camera cam = *tt_scene_camera(s);
+  cam.position[0] = c[0] - 0.8f * ext, cam.position[1] = c[1] + 0.6f * ext;
+  cam.position[2] = c[2] + 1.4f * ext;
+  memcpy(cam.target, c, sizeof c);
+  cam.key_count = 0;
+  cam.keys = NULL;
+  tt_scene_set_camera(s, &cam);
+  return s;
 }
 
-/* Times intersect_stream over all rays in streams of `chunk` (best of `reps`). */
-static double time_stream(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
-                          tt_ray *work, tt_hit *hits, size_t n, size_t chunk, int reps,
-                          size_t *nhit) {
-  double best = 1e30;
-  for (int k = 0; k < reps; k++) {
-    memcpy(work, rays, n * sizeof *rays);
-    double t0 = now_s();
-    for (size_t i = 0; i < n; i += chunk)
-      A->intersect_stream(acc, work + i, hits + i, n - i < chunk ? n - i : chunk);
-    double dt = now_s() - t0;
-    if (dt < best) best = dt;
-  }
-  *nhit = 0;
-  for (size_t i = 0; i < n; i++) *nhit += hits[i].geom_id != TT_INVALID_ID;
-  return (double)n / best * 1e-6;
+/* Primary rays through pixel centres of the scene camera at W x H. */
+static void primary_rays(tt_scene *scene, tt_ray *rays) {
+  CHECK(tt_scene_set_resolution(scene, W, H) == TT_OK);
+  tt_camera_frame fr;
+  CHECK(tt_camera_frame_init(&fr, tt_scene_camera(scene)) == TT_OK);
+  for (size_t y = 0; y < H; y++)
+    for (size_t x = 0; x < W; x++)
+      tt_camera_generate_ray(&fr, (float)x + 0.5f, (float)y + 0.5f, &rays[y * W + x]);
 }
 
-/* Times occluded1 and occluded_stream; returns both rates through out parameters. */
-static void time_occluded(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
-                          uint8_t *occ, size_t n, int reps, double *single, double *stream,
-                          size_t *n1, size_t *n2) {
-  double b1 = 1e30, b2 = 1e30;
-  for (int k = 0; k < reps; k++) {
-    double t0 = now_s();
-    for (size_t i = 0; i < n; i++) occ[i] = (uint8_t)A->occluded1(acc, &rays[i]);
-    double t1 = now_s();
-    if (t1 - t0 < b1) b1 = t1 - t0;
-  }
-  *n1 = 0;
-  for (size_t i = 0; i < n; i++) *n1 += occ[i];
-  for (int k = 0; k < reps; k++) {
-    double t0 = now_s();
-    A->occluded_stream(acc, rays, occ, n);
-    double t1 = now_s();
-    if (t1 - t0 < b2) b2 = t1 - t0;
-  }
-  *n2 = 0;
-  for (size_t i = 0; i < n; i++) *n2 += occ[i];
-  *single = (double)n / b1 * 1e-6;
-  *stream = (double)n / b2 * 1e-6;
-}
-
-int main(void) {
-  ae_plugin pl = ae_load(NULL);
-  const tt_accel_iface *A = pl.accel;
-  const tt_space *space = A->space();
-  double t0 = now_s();
-  tt_scene *scene = bumpy_sphere(500, 500);
-  printf("scene: %llu triangles (generated + loaded in %.2f s)\n",
-         (unsigned long long)tt_scene_triangle_count(scene), now_s() - t0);
-
-  /* build time and memory per quality (Embree builds with its own thread pool) */
-  tt_config *c = tt_config_create(space);
-  for (int q = 1; q <= 3; q++) {
-    char text[4];
-    snprintf(text, sizeof text, "%d", q);
-    CHECK(tt_config_set_string(c, "quality", text) == TT_OK);
-    for (int stat = 0; stat <= 1; stat++) {
-      CHECK(tt_config_set_string(c, "static", stat ? "true" : "false") == TT_OK);
-      double best = 1e30;
-      uint64_t mem = 0;
+/* Diffuse-bounce rays: from each primary hit, a cosine-distributed direction around the
+ * normal facing the camera; a missed primary gives a random ray through the scene box. */
+static void bounce_rays(const tt_scene *scene, const tt_ray *prim, const tt_hit *hits,
+                        tt_ray *out) {
+  ae_rng rng = {0x9e3779b97f4a7c15ull};
+  float lo[3], hi[3];
+  tt_scene_bounds(scene, lo, hi);
+  double diag = 0.0;
+  for (int k = 0; k < 3; k++) diag += (double)(hi[k] - lo[k]) * (hi[k] - lo[k]);
+  diag = sqrt(diag);
+  for (size_t i = 0; i < NRAYS; i++) {
+    tt_ray *r = &out[i];
+    const tt_hit *h = &hits[i];
+    double n[3], d[3];
+    if (h->geom_id != TT_INVALID_ID) {
+      double len = sqrt((double)h->ng[0] * h->ng[0] + (double)h->ng[1] * h->ng[1] +
+                        (double)h->ng[2] * h->ng[2]);
+      double dot = 0.0;
       for (int k = 0; k < 3; k++) {
-        tt_accel *acc = NULL;
-        tt_accel_build_stats st = {.struct_size = sizeof st};
-        tt_status s = A->build(scene, c, &acc, &st);
-        CHECK_MSG(s == TT_OK, "build: %s", tt_last_error());
-        if (s != TT_OK) break;
-        if (st.build_ms < best) best = st.build_ms;
-        mem = st.memory_bytes;
+        n[k] = len > 0 ? h->ng[k] / len : (k == 2);
+        dot += n[k] * prim[i].dir[k];
+      }
+      if (dot > 0)
+        for (int k = 0; k < 3; k++) n[k] = -n[k];
+      /* cosine sample: uniform point on the unit sphere added to the normal */
+      double s[3], l2;
+      do {
+        for (int k = 0; k < 3; k++) s[k] = ae_uniform(&rng, -1, 1);
+        l2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2];
+      } while (l2 > 1.0 || l2 < 1e-6);
+      double dl = 0;
+      for (int k = 0; k < 3; k++) {
+        d[k] = n[k] + s[k] / sqrt(l2);
+        dl += d[k] * d[k];
+      }
+      dl = sqrt(dl) + 1e-30;
+      for (int k = 0; k < 3; k++) {
+        r->org[k] = (float)(prim[i].org[k] + (double)h->t * prim[i].dir[k] + 1e-4 * diag * n[k]);
+        r->dir[k] = (float)(d[k] / dl);
+      }
+    } else {
+      for (int k = 0; k < 3; k++) {
+        r->org[k] = (float)ae_uniform(&rng, lo[k], hi[k]);
+        d[k] = ae_uniform(&rng, -1, 1);
+      }
+      for (int k = 0; k < 3; k++) r->dir[k] = (float)d[k];
+    }
+    r->tnear = 0.0f;
+    r->tfar = INFINITY;
+  }
+}
+
+/* One configuration of the table. */
+typedef struct bench_cfg {
+  const char *label;
+  const char *settings;  /* "name=value,..." applied over the defaults */
+} bench_cfg;
+
+static const bench_cfg g_cfgs[] = {
+    {"native default", "backend=native"},
+    {"native static", "backend=native,static=true"},
+    {"custom default (bf2)", "backend=custom"},
+    {"custom bf4", "backend=custom,branchingFactor=4"},
+    {"custom bf8", "backend=custom,branchingFactor=8"},
+    {"custom bf4 blk4 leaf8", "backend=custom,branchingFactor=4,sahBlockSize=4,maxLeafSize=8"},
+    {"custom bf8 blk4 leaf8", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"},
+    {"custom bf8 blk4 leaf8 q3", "backend=custom,quality=3,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"},
+    {"custom bf8 blk4 leaf16", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=16"},
+    {"custom bf8 blk4 t2", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8,travcost=2"},
+    {"custom bf4 robust", "backend=custom,branchingFactor=4,robust=true"},
+};
+#define NCFG (sizeof g_cfgs / sizeof g_cfgs[0])
+
+/* Applies "name=value,..." to `c`. */
+static void apply(tt_config *c, const char *settings) {
+  char buf[256];
+  snprintf(buf, sizeof buf, "%s", settings);
+  for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+    char *eq = strchr(tok, '=');
+    if (!eq) continue;
+    *eq = '\0';
+    tt_status s = tt_config_set_string(c, tok, eq + 1);
+    CHECK_MSG(s == TT_OK, "set %s=%s: %s", tok, eq + 1, tt_last_error());
+  }
+}
+
+/* Single-thread Mrays/s of intersect1 over `n` rays: median of `runs` passes. */
+static double rate_isect(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
+                         tt_ray *work, tt_hit *hits, int runs) {
+  double v[16];
+  for (int k = 0; k < runs; k++) {
+    memcpy(work, rays, NRAYS * sizeof *rays);
+    double t0 = cpu_s();
+    for (size_t i = 0; i < NRAYS; i++) A->intersect1(acc, &work[i], &hits[i]);
+    v[k] = (double)NRAYS / (cpu_s() - t0) * 1e-6;
+  }
+  return median(v, runs);
+}
+
+/* Single-thread Mrays/s of occluded1: median of `runs` passes. */
+static double rate_occl(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
+                        uint8_t *occ, int runs) {
+  double v[16];
+  for (int k = 0; k < runs; k++) {
+    double t0 = cpu_s();
+    for (size_t i = 0; i < NRAYS; i++) occ[i] = (uint8_t)A->occluded1(acc, &rays[i]);
+    v[k] = (double)NRAYS / (cpu_s() - t0) * 1e-6;
+  }
+  return median(v, runs);
+}
+
+/* Configuration-label filter (argv[3]); native default always runs (reference). */
+static const char *g_cfg_filter;
+
+/* Log of the custom-default / native-default ratios, for a geometric mean over scenes. */
+static double g_log_ratio_sum[2];
+static int g_ratio_n;
+
+/* Runs every configuration on one scene and prints its table. */
+static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *scene, int runs) {
+  tt_ray *prim = malloc(NRAYS * sizeof *prim), *bounce = malloc(NRAYS * sizeof *bounce),
+         *work = malloc(NRAYS * sizeof *work);
+  tt_hit *hits = malloc(NRAYS * sizeof *hits), *ref_hits = malloc(NRAYS * sizeof *ref_hits);
+  uint8_t *occ = malloc(NRAYS);
+  primary_rays(scene, prim);
+  printf("\n%s: %llu triangles, %zu primary + %zu diffuse-bounce rays, %d runs (medians)\n",
+         name, (unsigned long long)tt_scene_triangle_count(scene), NRAYS, NRAYS, runs);
+  printf("%-24s %9s %8s %7s %7s %8s | %8s %8s | %8s %8s\n", "configuration", "build ms",
+         "MiB", "nodes", "depth", "SAH", "prim", "bounce", "occl-p", "occl-b");
+  const tt_space *space = A->space();
+  double native_rate[2] = {0, 0};
+  for (size_t ci = 0; ci < NCFG; ci++) {
+    if (ci > 0 && g_cfg_filter && !strstr(g_cfgs[ci].label, g_cfg_filter)) continue;
+    tt_config *c = tt_config_create(space);
+    apply(c, g_cfgs[ci].settings);
+    double bms[16];
+    tt_accel_build_stats st = {.struct_size = sizeof st};
+    tt_accel *acc = NULL;
+    for (int k = 0; k < runs; k++) {
+      if (acc) A->destroy(acc);
+      acc = NULL;
+      memset(&st, 0, sizeof st);
+      st.struct_size = sizeof st;
+      tt_status s = A->build(scene, c, &acc, &st);
+      CHECK_MSG(s == TT_OK, "%s build [%s]: %s", name, g_cfgs[ci].label, tt_last_error());
+      if (s != TT_OK) break;
+      bms[k] = st.build_ms;
+    }
+    tt_config_destroy(c);
+    if (!acc) continue;
+    if (ci == 0) {
+      /* Bounce rays come from native's primary hits, so every backend traces the same. */
+      memcpy(work, prim, NRAYS * sizeof *prim);
+      for (size_t i = 0; i < NRAYS; i++) A->intersect1(acc, &work[i], &ref_hits[i]);
+      bounce_rays(scene, prim, ref_hits, bounce);
+    }
+    double rp = rate_isect(A, acc, prim, work, hits, runs);
+    size_t differ = 0;
+    for (size_t i = 0; i < NRAYS; i++)
+      differ += (hits[i].geom_id != ref_hits[i].geom_id) || (hits[i].prim_id != ref_hits[i].prim_id);
+    double rb = rate_isect(A, acc, bounce, work, hits, runs);
+    double op = rate_occl(A, acc, prim, occ, runs);
+    double ob = rate_occl(A, acc, bounce, occ, runs);
+    printf("%-24s %9.2f %8.2f %7llu %7u %8.2f | %8.2f %8.2f | %8.2f %8.2f\n", g_cfgs[ci].label,
+           median(bms, runs), (double)st.memory_bytes / (1024.0 * 1024.0),
+           (unsigned long long)st.nodes, st.max_depth, st.sah_cost, rp, rb, op, ob);
+    CHECK_MSG(differ <= NRAYS / 10000, "%s [%s]: %zu primary hits differ from native", name,
+              g_cfgs[ci].label, differ);
+    if (ci == 0) native_rate[0] = rp, native_rate[1] = rb;
+    if (strcmp(g_cfgs[ci].label, "custom default (bf2)") == 0 && native_rate[0] > 0) {
+      printf("%-24s custom default / native default: primary %.2fx, bounce %.2fx\n", "",
+             rp / native_rate[0], rb / native_rate[1]);
+      g_log_ratio_sum[0] += log(rp / native_rate[0]);
+      g_log_ratio_sum[1] += log(rb / native_rate[1]);
+      g_ratio_n++;
+    }
+    A->destroy(acc);
+    if (strstr(g_cfgs[ci].settings, "backend=custom")) {
+      /* Work per ray, from the counters (a separate build: counting slows the kernels). */
+      tt_config *cc = tt_config_create(space);
+      apply(cc, g_cfgs[ci].settings);
+      apply(cc, "counters=true");
+      acc = NULL;
+      if (A->build(scene, cc, &acc, NULL) == TT_OK) {
+        double per[2][2];
+        for (int set = 0; set < 2; set++) {
+          memcpy(work, set ? bounce : prim, NRAYS * sizeof *work);
+          for (size_t i = 0; i < NRAYS; i++) A->intersect1(acc, &work[i], &hits[i]);
+          tt_accel_counters cnt = {.struct_size = sizeof cnt};
+          CHECK(A->counters(acc, &cnt, 1) == TT_OK && cnt.rays == NRAYS);
+          per[set][0] = (double)cnt.nodes_visited / (double)NRAYS;
+          per[set][1] = (double)cnt.triangles_tested / (double)NRAYS;
+        }
+        printf("%-24s   per ray: primary %.1f nodes %.1f triangles, bounce %.1f nodes %.1f "
+               "triangles\n", "", per[0][0], per[0][1], per[1][0], per[1][1]);
         A->destroy(acc);
       }
-      printf("build quality=%d static=%d: %8.2f ms (best of 3), %6.1f MiB\n", q, stat, best,
-             (double)mem / (1024.0 * 1024.0));
+      tt_config_destroy(cc);
     }
   }
+  free(prim), free(bounce), free(work), free(hits), free(ref_hits), free(occ);
+}
 
-  /* queries, default configuration except static=true (a still scene) */
-  CHECK(tt_config_set_string(c, "quality", "2") == TT_OK);
-  tt_accel *acc = NULL;
-  if (A->build(scene, c, &acc, NULL) != TT_OK) {
-    fprintf(stderr, "build failed: %s\n", tt_last_error());
-    return 1;
+int main(int argc, char **argv) {
+  int runs = argc > 1 ? atoi(argv[1]) : 5;
+  const char *only = argc > 2 ? argv[2] : NULL;  /* scene-name filter, for quick looks */
+  g_cfg_filter = argc > 3 ? argv[3] : NULL;
+  if (runs < 1 || runs > 16) runs = 5;
+  ae_plugin pl = ae_load(NULL);
+  const tt_accel_iface *A = pl.accel;
+  const char *root = getenv("TT_SOURCE_ROOT");
+  char path[4096];
+
+  printf("accel_embree bench: single-thread Mrays/s (intersect1 / occluded1, per CPU second "
+         "of the tracing thread), build ms (wall, Embree's thread pool); medians of %d\n", runs);
+  snprintf(path, sizeof path, "%s/scenes/cornell-box/scene.json", root ? root : ".");
+  tt_scene *s = NULL;
+  if (only && !strstr("Cornell box", only)) {
+  } else if (tt_scene_load(path, &s) == TT_OK) {
+    bench_scene(A, "Cornell box", s, runs);
+    tt_scene_destroy(s);
+  } else {
+    printf("note: %s: %s (skipped)\n", path, tt_last_error());
   }
-  const size_t W = 512, H = 512, n = W * H;
-  tt_ray *cam = malloc(n * sizeof *cam), *rnd = malloc(n * sizeof *rnd),
-         *work = malloc(n * sizeof *work);
-  tt_hit *hits = malloc(n * sizeof *hits);
-  uint8_t *occ = malloc(n);
-  ae_camera_rays(cam, W, H);
-  ae_random_rays(7, rnd, n);
-  const struct {
-    const char *name;
-    const tt_ray *rays;
-  } sets[] = {{"coherent camera", cam}, {"incoherent random", rnd}};
-  for (size_t s = 0; s < 2; s++) {
-    size_t h1, h2, h3, o1, o2;
-    double single = time_single(A, acc, sets[s].rays, work, hits, n, 3, &h1);
-    double s64 = time_stream(A, acc, sets[s].rays, work, hits, n, 64, 3, &h2);
-    double s4k = time_stream(A, acc, sets[s].rays, work, hits, n, 4096, 3, &h3);
-    double os, ostr;
-    time_occluded(A, acc, sets[s].rays, occ, n, 3, &os, &ostr, &o1, &o2);
-    printf("%-17s %zu rays: intersect1 %6.2f Mrays/s | intersect_stream(64) %6.2f | "
-           "intersect_stream(4096) %6.2f | occluded1 %6.2f | occluded_stream %6.2f "
-           "(hits %zu)\n", sets[s].name, n, single, s64, s4k, os, ostr, h1);
-    /* Same answers up to edge round-off between kernels (at most 1 in 10^4 rays). */
-    CHECK(labs((long)h1 - (long)h2) <= (long)(n / 10000) && labs((long)h1 - (long)h3) <= (long)(n / 10000));
-    CHECK(labs((long)o1 - (long)o2) <= (long)(n / 10000) && labs((long)o1 - (long)h1) <= (long)(n / 10000));
+  if (!only || strstr("bumpy sphere", only)) {
+    s = bumpy_sphere(500, 500);
+    bench_scene(A, "bumpy sphere (procedural)", s, runs);
+    tt_scene_destroy(s);
   }
-  A->destroy(acc);
-  tt_config_destroy(c);
-  free(cam), free(rnd), free(work), free(hits), free(occ);
-  tt_scene_destroy(scene);
+  const char *shared = getenv("TT_SHARED_SCENES");
+  char sdir[4000];
+  snprintf(sdir, sizeof sdir, "%s", shared ? shared : "");
+  if (!shared) snprintf(sdir, sizeof sdir, "%s/../shared/scenes", root ? root : ".");
+  static const char *const objs[][2] = {
+      {"Stanford bunny", "stanford-bunny/stanford-bunny.obj"},
+      {"voxel monument", "voxel-monument/monu3.obj"},
+  };
+  for (size_t i = 0; i < sizeof objs / sizeof objs[0]; i++) {
+    if (only && !strstr(objs[i][0], only)) continue;
+    snprintf(path, sizeof path, "%s/%s", sdir, objs[i][1]);
+    s = obj_scene(path);
+    if (!s) {
+      printf("note: %s not available: skipped\n", path);
+      continue;
+    }
+    bench_scene(A, objs[i][0], s, runs);
+    tt_scene_destroy(s);
+  }
+  if (g_ratio_n)
+    printf("\ncustom default / native default, geometric mean over %d scenes: primary %.2fx, "
+           "bounce %.2fx\n", g_ratio_n, exp(g_log_ratio_sum[0] / g_ratio_n),
+           exp(g_log_ratio_sum[1] / g_ratio_n));
   tt_registry_destroy(pl.reg);
   return tt_test_finish("accel_embree_bench");
 }

@@ -138,6 +138,8 @@ int main(void) {
         CHECK(tt_config_set_string(cfg, "compact", compact ? "true" : "false") == TT_OK);
         CHECK(tt_config_set_string(cfg, "robust", robust ? "true" : "false") == TT_OK);
         CHECK(tt_config_set_string(cfg, "static", stat ? "true" : "false") == TT_OK);
+        /* this test covers backend native; accel_embree_custom covers custom */
+        CHECK(tt_config_set_string(cfg, "backend", "native") == TT_OK);
 
         tt_accel *acc = NULL;
         tt_accel_build_stats st;

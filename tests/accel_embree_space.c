@@ -1,7 +1,8 @@
 /* accel_embree parameter space, constraint check and error paths: the published space has
- * exactly the thesis Table 3.1 names with Embree's defaults (plus backend {"native"}), the
- * check repairs minLeafSize > maxLeafSize, custom-only parameters set under the native
- * backend produce exactly one WARN, and bad inputs fail with messages instead of crashing. */
+ * exactly the thesis Table 3.1 names with Embree's defaults (plus backend {"native",
+ * "custom"} and counters), the check repairs minLeafSize > maxLeafSize and non-power-of-two
+ * sahBlockSize, custom-only parameters set under the native backend produce exactly one
+ * WARN, and bad inputs fail with messages instead of crashing. */
 #include "accel_embree_common.h"
 
 #include <cjson/cJSON.h>
@@ -63,14 +64,14 @@ static double json_num(const cJSON *v) {
 static void test_space(const tt_space *space) {
   CHECK(space != NULL);
   CHECK(strcmp(tt_space_plugin(space), "accel_embree") == 0);
-  CHECK(tt_space_count(space) == 12);
+  CHECK(tt_space_count(space) == 13);
   char *json = tt_space_to_json(space);
   CHECK(json != NULL);
   cJSON *root = cJSON_Parse(json);
   CHECK_MSG(root != NULL, "tt_space_to_json output does not parse: %s", json);
   if (!root) return;
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
-  CHECK(cJSON_GetArraySize(params) == 12);
+  CHECK(cJSON_GetArraySize(params) == 13);
   for (size_t k = 0; k < sizeof table31 / sizeof table31[0]; k++) {
     const expect *e = &table31[k];
     CHECK_CONTAINS(json, e->name);
@@ -109,20 +110,34 @@ static void test_space(const tt_space *space) {
   }
   int st = tt_space_find(space, "static");
   CHECK(tt_space_nom_value(space, (size_t)st, 0).kind == TT_VALUE_BOOL);
-  /* backend: a string NOM with the single value "native" (custom is not published yet) */
+  /* backend: a string NOM {"native", "custom"}; default native (the bench's winner with
+   * default parameters, README.md) */
   int be = tt_space_find(space, "backend");
   CHECK(be == 11);
-  CHECK(tt_space_nom_count(space, (size_t)be) == 1);
+  CHECK(tt_space_nom_count(space, (size_t)be) == 2);
   tt_value bv = tt_space_nom_value(space, (size_t)be, 0);
   CHECK(bv.kind == TT_VALUE_STRING && bv.s && strcmp(bv.s, "native") == 0);
+  bv = tt_space_nom_value(space, (size_t)be, 1);
+  CHECK(bv.kind == TT_VALUE_STRING && bv.s && strcmp(bv.s, "custom") == 0);
+  CHECK(tt_space_default(space, (size_t)be).index == 0);
   const cJSON *bp = find_param(root, "backend");
   const cJSON *bvals = bp ? cJSON_GetObjectItemCaseSensitive(bp, "possibleValues") : NULL;
-  CHECK(cJSON_GetArraySize(bvals) == 1 && cJSON_IsString(cJSON_GetArrayItem(bvals, 0)) &&
+  CHECK(cJSON_GetArraySize(bvals) == 2 && cJSON_IsString(cJSON_GetArrayItem(bvals, 0)) &&
         strcmp(cJSON_GetArrayItem(bvals, 0)->valuestring, "native") == 0);
+  CHECK(cJSON_IsString(cJSON_GetObjectItemCaseSensitive(bp, "value")) &&
+        strcmp(cJSON_GetObjectItemCaseSensitive(bp, "value")->valuestring, "native") == 0);
+  /* counters: instrumentation bool, appended last, default false */
+  int cn = tt_space_find(space, "counters");
+  CHECK(cn == 12);
+  CHECK(tt_space_type(space, (size_t)cn) == TT_PARAM_NOM && tt_space_nom_count(space, (size_t)cn) == 2);
+  CHECK(tt_space_default(space, (size_t)cn).i == 0);
   /* constraint texts are published */
   CHECK_CONTAINS(json, "minLeafSize <= maxLeafSize");
   CHECK_CONTAINS(json, "Morton");
   CHECK_CONTAINS(json, "branchingFactor^(maxDepth-1)*maxLeafSize");
+  CHECK_CONTAINS(json, "power of two");
+  CHECK_CONTAINS(json, "travcost/intcost");
+  CHECK_CONTAINS(json, "compact=true with backend custom");
   cJSON_Delete(root);
   tt_free(json);
 }
@@ -141,8 +156,23 @@ static void test_check(const tt_space *space) {
   CHECK(tt_space_check(space, c, why, sizeof why) == TT_CHECK_OK);
   /* out-of-space values are refused by the config itself, never reach the plugin */
   CHECK(tt_config_set_string(c, "branchingFactor", "16") != TT_OK);
-  CHECK(tt_config_set_string(c, "backend", "custom") != TT_OK);
+  CHECK(tt_config_set_string(c, "backend", "custom") == TT_OK);
+  CHECK(tt_config_set_string(c, "backend", "embree4") != TT_OK);
   CHECK(tt_config_set_string(c, "backend", "native") == TT_OK);
+  /* sahBlockSize acts through its largest power of two: 6 -> 4, reported */
+  CHECK(tt_config_set_string(c, "sahBlockSize", "6") == TT_OK);
+  CHECK(tt_space_check(space, c, why, sizeof why) == TT_CHECK_REPAIRED);
+  CHECK_CONTAINS(why, "sahBlockSize 6 acts as 4");
+  CHECK(tt_config_get_int(c, "sahBlockSize", -1) == 4);
+  CHECK(tt_space_check(space, c, why, sizeof why) == TT_CHECK_OK);
+  CHECK(tt_config_set_string(c, "sahBlockSize", "32") == TT_OK);
+  CHECK(tt_space_check(space, c, why, sizeof why) == TT_CHECK_OK);
+  /* both repairs at once are both reported */
+  CHECK(tt_config_set_string(c, "sahBlockSize", "31") == TT_OK);
+  CHECK(tt_config_set_string(c, "minLeafSize", "30") == TT_OK);
+  CHECK(tt_space_check(space, c, why, sizeof why) == TT_CHECK_REPAIRED);
+  CHECK_CONTAINS(why, "swapped");
+  CHECK_CONTAINS(why, "acts as 16");
   tt_config_destroy(c);
 }
 

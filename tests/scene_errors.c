@@ -161,9 +161,9 @@ static void test_files(void) {
   CHECK_CONTAINS(tt_last_error(), "syntax-error.json:5:"); /* the missing comma is on line 5 */
   CHECK_CONTAINS(tt_last_error(), "JSON syntax error");
 
-  st = tt_scene_load("scenes/x.pbrt", &s);
+  st = tt_scene_load("scenes/x.obj", &s);
   CHECK(st == TT_ERR_UNSUPPORTED && s == NULL);
-  CHECK_CONTAINS(tt_last_error(), "scenes/x.pbrt: unsupported scene format (expected .json)");
+  CHECK_CONTAINS(tt_last_error(), "scenes/x.obj: unsupported scene format (expected .json or .pbrt)");
 
   st = tt_scene_load("/nonexistent/dir/scene.json", &s);
   CHECK(st == TT_ERR_IO && s == NULL);

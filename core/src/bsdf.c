@@ -1,7 +1,9 @@
 /* tunetrace: BSDFs of the scene materials (bsdf_internal.h).
  *   diffuse    Lambert, or Oren-Nayar (qualitative model, sigma = roughness) when > 0
  *   mirror     ideal reflector tinted by `specular` (delta)
- *   dielectric smooth glass, Fresnel reflect/refract chosen by the lobe dimension (delta)
+ *   dielectric smooth glass, Fresnel reflect/refract chosen by the lobe dimension (delta);
+ *              rough glass (alpha > 0): GGX reflection + transmission through the generalised
+ *              half vector (Walter et al. 2007), visible-normal sampling, lobe by Fresnel
  *   conductor  anisotropic GGX (Walter 2007) with visible-normal sampling (Heitz 2018),
  *              complex Fresnel (eta, k), height-correlated Smith G2; delta below alpha 1e-3
  *   plastic    Lambert base under a GGX dielectric coat; the lobe is chosen with a
@@ -165,11 +167,8 @@ tt_status tt__bsdf_init(tt__bsdf *b, const tt_material *m) {
     if (!(m->ior > 0.0f) || !isfinite(m->ior))
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, "material '%s': dielectric ior %g must be > 0",
                           name, (double)m->ior);
-    if (m->alpha[0] > 0.0f || m->alpha[1] > 0.0f)
-      return tt_set_error(TT_ERR_UNSUPPORTED,
-                          "material '%s': rough dielectric (alpha > 0) is not implemented by the "
-                          "path sampler; set alpha to 0 for smooth glass", name);
-    b->delta = 1;
+    /* Rough glass below alpha 1e-3 is treated as smooth (the GGX lobe is numerically a delta). */
+    b->delta = m->alpha[0] < TT__MIN_ALPHA && m->alpha[1] < TT__MIN_ALPHA;
     return TT_OK;
   case TT_MATERIAL_CONDUCTOR:
     for (int i = 0; i < 3; ++i)
@@ -252,11 +251,108 @@ static void tt__plastic_eval(const tt__bsdf *b, const float wo[3], const float w
   for (int i = 0; i < 3; ++i) f[i] = spec * b->specular[i] + diff * b->albedo[i];
 }
 
+/* ---- rough dielectric (Walter et al. 2007; pbrt-v4 DielectricBxDF) ---- */
+
+/* Generalised half vector of (wo, wi) facing +z, and etap (IOR on wi's side over wo's side,
+ * 1 for reflection). Returns 1 for reflection, 2 for transmission, 0 when no microfacet
+ * can connect the pair (grazing, or a back-facing microfacet). */
+static int tt__rough_glass_half(const tt__bsdf *b, const float wo[3], const float wi[3],
+                                float wm[3], float *etap) {
+  float co = wo[2], ci = wi[2];
+  if (co == 0.0f || ci == 0.0f) return 0;
+  int reflect = (co > 0.0f) == (ci > 0.0f);
+  *etap = reflect ? 1.0f : (co > 0.0f ? b->ior : 1.0f / b->ior);
+  for (int i = 0; i < 3; ++i) wm[i] = wi[i] * *etap + wo[i];
+  if (tt__normalize3(wm) == 0.0f) return 0;
+  if (wm[2] < 0.0f) { wm[0] = -wm[0]; wm[1] = -wm[1]; wm[2] = -wm[2]; }
+  if (tt__dot3(wm, wi) * ci < 0.0f || tt__dot3(wm, wo) * co < 0.0f) return 0;
+  return reflect ? 1 : 2;
+}
+
+/* Rough glass value; transmission carries the 1/etap^2 radiance scaling, so it obeys
+ * f(wo, wi) / eta_o^2 = f(wi, wo) / eta_i^2 instead of plain symmetry. */
+static void tt__rough_glass_eval(const tt__bsdf *b, const float wo[3], const float wi[3], float f[3]) {
+  f[0] = f[1] = f[2] = 0.0f;
+  float wm[3], etap;
+  int kind = tt__rough_glass_half(b, wo, wi, wm, &etap);
+  if (!kind) return;
+  float dwo = tt__dot3(wo, wm), dwi = tt__dot3(wi, wm);
+  float F = tt__fresnel_dielectric(dwo, b->ior);
+  float dg = tt__ggx_d(b->alpha_x, b->alpha_y, wm) * tt__ggx_g2(b->alpha_x, b->alpha_y, wo, wi);
+  float v;
+  if (kind == 1) {
+    v = dg * F / fabsf(4.0f * wo[2] * wi[2]);
+  } else {
+    float denom = dwi + dwo / etap;
+    denom *= denom;
+    v = dg * (1.0f - F) * fabsf(dwi * dwo / (wi[2] * wo[2] * denom)) / (etap * etap);
+  }
+  if (!isfinite(v)) return;
+  for (int i = 0; i < 3; ++i) f[i] = v * b->specular[i];
+}
+
+/* Solid-angle pdf of tt__rough_glass_sample: visible normal of +-wo, then reflect with
+ * probability F or refract; the Jacobians dwm/dwi of Walter 2007 (eqs. 14 and 17). */
+static float tt__rough_glass_pdf(const tt__bsdf *b, const float wo[3], const float wi[3]) {
+  float wm[3], etap;
+  int kind = tt__rough_glass_half(b, wo, wi, wm, &etap);
+  if (!kind) return 0.0f;
+  float dwo = tt__dot3(wo, wm), dwi = tt__dot3(wi, wm);
+  float F = tt__fresnel_dielectric(dwo, b->ior);
+  float pvn = tt__ggx_g1(b->alpha_x, b->alpha_y, wo) * tt__ggx_d(b->alpha_x, b->alpha_y, wm) *
+              fabsf(dwo) / fabsf(wo[2]);
+  float pdf;
+  if (kind == 1) {
+    pdf = pvn / (4.0f * fabsf(dwo)) * F;
+  } else {
+    float denom = dwi + dwo / etap;
+    pdf = pvn * fabsf(dwi) / (denom * denom) * (1.0f - F);
+  }
+  return isfinite(pdf) ? pdf : 0.0f;
+}
+
+/* Samples rough glass: a visible microfacet normal for wo (mirrored into the upper
+ * hemisphere when wo is inside), then reflection (probability F) or refraction. */
+static int tt__rough_glass_sample(const tt__bsdf *b, const float wo[3], float u_lobe, float u1,
+                                  float u2, tt__bsdf_result *s) {
+  if (wo[2] == 0.0f) return 0;
+  float sg = wo[2] > 0.0f ? 1.0f : -1.0f;
+  float ws[3] = {sg * wo[0], sg * wo[1], sg * wo[2]}, wm[3], wi[3];
+  tt__ggx_sample_vndf(b->alpha_x, b->alpha_y, ws, u1, u2, wm);
+  float dwo = tt__dot3(wo, wm);
+  float F = tt__fresnel_dielectric(dwo, b->ior);
+  if (u_lobe < F) {
+    for (int i = 0; i < 3; ++i) wi[i] = -wo[i] + 2.0f * dwo * wm[i];
+    if (!(wi[2] * wo[2] > 0.0f)) return 0;
+  } else {
+    float eta = b->ior, c = dwo, n[3] = {wm[0], wm[1], wm[2]};
+    if (c < 0.0f) {
+      eta = 1.0f / eta; c = -c;
+      n[0] = -n[0]; n[1] = -n[1]; n[2] = -n[2];
+    }
+    float sin2_t = (1.0f - c * c) / (eta * eta);
+    if (sin2_t >= 1.0f) return 0;
+    float cos_t = sqrtf(1.0f - sin2_t);
+    for (int i = 0; i < 3; ++i) wi[i] = -wo[i] / eta + (c / eta - cos_t) * n[i];
+    tt__normalize3(wi);
+    if (!(wi[2] * wo[2] < 0.0f)) return 0;
+  }
+  /* f and pdf from the closed forms, so sample/eval/pdf agree exactly. */
+  tt__rough_glass_eval(b, wo, wi, s->f);
+  s->pdf = tt__rough_glass_pdf(b, wo, wi);
+  s->wi[0] = wi[0]; s->wi[1] = wi[1]; s->wi[2] = wi[2];
+  return s->pdf > 0.0f && isfinite(s->pdf);
+}
+
 /* ---- public ---- */
 
 void tt__bsdf_eval(const tt__bsdf *b, const float wo_in[3], const float wi_in[3], float f[3]) {
   f[0] = f[1] = f[2] = 0.0f;
-  if (b->delta || b->type == TT_MATERIAL_DIELECTRIC) return;
+  if (b->delta) return;
+  if (b->type == TT_MATERIAL_DIELECTRIC) {  /* both hemispheres: no two-sided mirroring */
+    tt__rough_glass_eval(b, wo_in, wi_in, f);
+    return;
+  }
   float wo[3] = {wo_in[0], wo_in[1], wo_in[2]}, wi[3] = {wi_in[0], wi_in[1], wi_in[2]};
   if (wo[2] < 0.0f) { wo[2] = -wo[2]; wi[2] = -wi[2]; }  /* two-sided */
   if (!(wo[2] > 0.0f) || !(wi[2] > 0.0f)) return;
@@ -269,7 +365,8 @@ void tt__bsdf_eval(const tt__bsdf *b, const float wo_in[3], const float wi_in[3]
 }
 
 float tt__bsdf_pdf(const tt__bsdf *b, const float wo_in[3], const float wi_in[3]) {
-  if (b->delta || b->type == TT_MATERIAL_DIELECTRIC) return 0.0f;
+  if (b->delta) return 0.0f;
+  if (b->type == TT_MATERIAL_DIELECTRIC) return tt__rough_glass_pdf(b, wo_in, wi_in);
   float wo[3] = {wo_in[0], wo_in[1], wo_in[2]}, wi[3] = {wi_in[0], wi_in[1], wi_in[2]};
   if (wo[2] < 0.0f) { wo[2] = -wo[2]; wi[2] = -wi[2]; }
   if (!(wo[2] > 0.0f) || !(wi[2] > 0.0f)) return 0.0f;
@@ -318,7 +415,9 @@ int tt__bsdf_sample(const tt__bsdf *b, const float wo_in[3], float u_lobe, float
   s->delta = 0;
   s->pdf = 0.0f;
   s->f[0] = s->f[1] = s->f[2] = 0.0f;
-  if (b->type == TT_MATERIAL_DIELECTRIC) return tt__dielectric_sample(b, wo_in, u_lobe, s);
+  if (b->type == TT_MATERIAL_DIELECTRIC)
+    return b->delta ? tt__dielectric_sample(b, wo_in, u_lobe, s)
+                    : tt__rough_glass_sample(b, wo_in, u_lobe, u1, u2, s);
   float wo[3] = {wo_in[0], wo_in[1], wo_in[2]};
   float flip = 1.0f;
   if (wo[2] < 0.0f) { wo[2] = -wo[2]; flip = -1.0f; }

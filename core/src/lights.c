@@ -1,12 +1,15 @@
 /* tunetrace: light sampling (lights_internal.h). Selection among lights by power (the
  * integral of emitted radiance, as pbrt's PowerLightSampler), triangles of an area light by
- * area, uniform points on triangles (pdf 1/area turned into solid angle by d^2/|cos|). */
+ * area, uniform points on triangles (pdf 1/area turned into solid angle by d^2/|cos|), image
+ * environments by a 2D piecewise-constant distribution (pbrt's Distribution2D). */
 #include "lights_internal.h"
 
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <tunetrace/image.h>
 
 #include "bsdf_internal.h"
 
@@ -63,6 +66,76 @@ static double tt__tri_area(const float *p0, const float *p1, const float *p2) {
   return 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
 }
 
+/* Loads image environment `index` (light `l`), scales it by l->radiance and builds its
+ * sampling distribution; *mean_lum gets the solid-angle mean luminance (for its power). */
+static tt_status tt__env_image_init(tt__lights *ls, uint32_t index, const tt_light *l,
+                                    double *mean_lum) {
+  const char *path = l->image ? l->image : "";
+  uint32_t w = 0, h = 0, c = 0;
+  float *px = NULL;
+  if (tt_image_read(path, &w, &h, &c, &px) != TT_OK)
+    return tt_set_error(TT_ERR_IO, "light %u: cannot read environment image '%s': %s", index, path,
+                        tt_last_error());
+  if (w == 0 || h == 0 || c == 0) {
+    tt_free(px);
+    return tt_set_error(TT_ERR_PARSE, "light %u: environment image '%s' is empty", index, path);
+  }
+  size_t n = (size_t)w * h;
+  ls->env_rgb = malloc(3 * n * sizeof *ls->env_rgb);
+  ls->env_weight = malloc(n * sizeof *ls->env_weight);
+  ls->env_marginal = malloc((h + 1) * sizeof *ls->env_marginal);
+  ls->env_conditional = malloc((size_t)h * (w + 1) * sizeof *ls->env_conditional);
+  double *row_w = malloc(w * sizeof *row_w);
+  double *marg_w = malloc(h * sizeof *marg_w);
+  if (!ls->env_rgb || !ls->env_weight || !ls->env_marginal || !ls->env_conditional || !row_w || !marg_w) {
+    tt_free(px);
+    free(row_w);
+    free(marg_w);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "light %u: out of memory for environment image", index);
+  }
+  ls->env_w = w;
+  ls->env_h = h;
+  double total = 0.0, lum_sum = 0.0;
+  for (uint32_t y = 0; y < h; ++y) {
+    /* Texel rows are bands of equal dtheta: solid angle and weight scale with sin(theta). */
+    double th0 = M_PI * y / h, th1 = M_PI * (y + 1) / h;
+    double sin_c = sin(0.5 * (th0 + th1)), band = (cos(th0) - cos(th1)) * 2.0 * M_PI / w;
+    for (uint32_t x = 0; x < w; ++x) {
+      size_t i = (size_t)y * w + x;
+      float *rgb = ls->env_rgb + 3 * i;
+      for (int k = 0; k < 3; ++k) {
+        float v = px[i * c + (c >= 3 ? (uint32_t)k : 0)] * l->radiance[k];
+        rgb[k] = v >= 0.0f && isfinite(v) ? v : 0.0f;  /* negative/NaN texels emit nothing */
+      }
+      /* Luminance weights; a texel that is non-black but of zero luminance keeps a chance. */
+      double lu = tt__luminance(rgb);
+      if (!(lu > 0.0) && tt__max3(rgb) > 0.0f) lu = tt__max3(rgb);
+      row_w[x] = lu * sin_c;
+      ls->env_weight[i] = (float)row_w[x];
+      lum_sum += tt__luminance(rgb) * band;
+    }
+    marg_w[y] = tt__build_cdf(row_w, w, ls->env_conditional + (size_t)y * (w + 1));
+    total += marg_w[y];
+  }
+  tt__build_cdf(marg_w, h, ls->env_marginal);
+  ls->env_pdf_scale = total > 0.0 ? (float)((double)n / total) : 0.0f;
+  *mean_lum = lum_sum / (4.0 * M_PI);
+  tt_free(px);
+  free(row_w);
+  free(marg_w);
+  return TT_OK;
+}
+
+/* Texel of the image environment seen in direction dir (leaving the scene); sets sin(theta). */
+static size_t tt__env_texel(const tt__lights *ls, const float dir[3], float *sin_theta) {
+  float y = fminf(1.0f, fmaxf(-1.0f, dir[1]));
+  float u = 0.5f * (1.0f + atan2f(dir[0], -dir[2]) * TT__INV_PI), v = acosf(y) * TT__INV_PI;
+  uint32_t xi = (uint32_t)fminf(fmaxf(u, 0.0f) * (float)ls->env_w, (float)(ls->env_w - 1));
+  uint32_t yi = (uint32_t)fminf(fmaxf(v, 0.0f) * (float)ls->env_h, (float)(ls->env_h - 1));
+  *sin_theta = sqrtf(fmaxf(0.0f, 1.0f - y * y));
+  return (size_t)yi * ls->env_w + xi;
+}
+
 void tt__lights_free(tt__lights *ls) {
   if (!ls) return;
   free(ls->lights);
@@ -70,6 +143,10 @@ void tt__lights_free(tt__lights *ls) {
   free(ls->cdf);
   free(ls->tri_cdf);
   free(ls->mesh_light);
+  free(ls->env_rgb);
+  free(ls->env_marginal);
+  free(ls->env_conditional);
+  free(ls->env_weight);
   memset(ls, 0, sizeof *ls);
   ls->env = -1;
 }
@@ -87,11 +164,7 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
         return tt_set_error(TT_ERR_INVALID_ARGUMENT, "light %u: mesh index %u out of range (%u meshes)",
                             i, l->mesh, meshes);
       tri_total += tt_scene_mesh(scene, l->mesh)->triangle_count + 1;
-    } else if (l->type == TT_LIGHT_ENV_IMAGE) {
-      return tt_set_error(TT_ERR_UNSUPPORTED,
-                          "light %u: image environment lights ('%s') are not supported by the path "
-                          "sampler yet; use a constant environment", i, l->image ? l->image : "");
-    } else if (l->type != TT_LIGHT_ENV_CONSTANT && l->type != TT_LIGHT_POINT &&
+    } else if (l->type != TT_LIGHT_ENV_IMAGE && l->type != TT_LIGHT_ENV_CONSTANT && l->type != TT_LIGHT_POINT &&
                l->type != TT_LIGHT_SPOT && l->type != TT_LIGHT_DISTANT) {
       return tt_set_error(TT_ERR_UNSUPPORTED, "light %u: unknown light type %d", i, (int)l->type);
     }
@@ -166,9 +239,18 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
       break;
     }
     case TT_LIGHT_ENV_CONSTANT:
-      if (ls->env >= 0)
+    case TT_LIGHT_ENV_IMAGE:
+      if (ls->env >= 0) {
         st = tt_set_error(TT_ERR_UNSUPPORTED, "light %u: only one environment light is supported", i);
+        break;
+      }
       ls->env = (int32_t)i;
+      if (l->type == TT_LIGHT_ENV_IMAGE) {
+        double mean_lum = 0.0;  /* solid-angle mean of the image's luminance */
+        st = tt__env_image_init(ls, i, l, &mean_lum);
+        lum = mean_lum;
+      }
+      /* pi r^2 (a disk covering the scene) times the radiance integrated over the sphere. */
       power[i] = lum * 4.0 * M_PI * M_PI * radius * radius;
       break;
     case TT_LIGHT_POINT:
@@ -271,6 +353,26 @@ int tt__lights_sample(const tt__lights *ls, const float p[3], const float n[3], 
     memcpy(out->L, l->radiance, sizeof out->L);
     return out->pdf > 0.0f;
   }
+  case TT_LIGHT_ENV_IMAGE: {
+    if (!(ls->env_pdf_scale > 0.0f)) return 0;
+    float uu = u1, vv = u2;
+    uint32_t row = tt__cdf_pick(ls->env_marginal, ls->env_h, &vv);
+    uint32_t col = tt__cdf_pick(ls->env_conditional + (size_t)row * (ls->env_w + 1), ls->env_w, &uu);
+    size_t i = (size_t)row * ls->env_w + col;
+    float u = ((float)col + uu) / (float)ls->env_w, v = ((float)row + vv) / (float)ls->env_h;
+    float theta = v * TT__PI, phi = TT__PI * (2.0f * u - 1.0f), st = sinf(theta);
+    if (!(st > 0.0f)) return 0;
+    out->wi[0] = st * sinf(phi);
+    out->wi[1] = cosf(theta);
+    out->wi[2] = -st * cosf(phi);
+    /* The pdf of the texel the direction rounds to (as tt__lights_pdf_env computes it). */
+    float st2;
+    i = tt__env_texel(ls, out->wi, &st2);
+    out->dist = INFINITY;
+    out->pdf = pmf * ls->env_weight[i] * ls->env_pdf_scale / (2.0f * TT__PI * TT__PI * st);
+    memcpy(out->L, ls->env_rgb + 3 * i, sizeof out->L);
+    return out->pdf > 0.0f && isfinite(out->pdf);
+  }
   case TT_LIGHT_POINT:
   case TT_LIGHT_SPOT: {
     float d[3] = {l->position[0] - p[0], l->position[1] - p[1], l->position[2] - p[2]};
@@ -324,12 +426,24 @@ float tt__lights_pdf_area(const tt__lights *ls, uint32_t mesh, const float p_ref
 
 int tt__lights_env(const tt__lights *ls, const float dir[3], float L[3]) {
   if (ls->env < 0) return 0;
-  memcpy(L, ls->lights[ls->env].radiance, 3 * sizeof(float));
+  if (ls->env_rgb) {
+    float st;
+    memcpy(L, ls->env_rgb + 3 * tt__env_texel(ls, dir, &st), 3 * sizeof(float));
+  } else {
+    memcpy(L, ls->lights[ls->env].radiance, 3 * sizeof(float));
+  }
   return tt__max3(L) > 0.0f;
 }
 
 float tt__lights_pdf_env(const tt__lights *ls, const float n[3], const float dir[3]) {
   if (ls->env < 0 || ls->count == 0) return 0.0f;
+  if (ls->env_rgb) {
+    float st;
+    size_t i = tt__env_texel(ls, dir, &st);
+    if (!(st > 0.0f)) return 0.0f;
+    float pdf = ls->pmf[ls->env] * ls->env_weight[i] * ls->env_pdf_scale / (2.0f * TT__PI * TT__PI * st);
+    return isfinite(pdf) ? pdf : 0.0f;
+  }
   float c = tt__dot3(n, dir);
   return c > 0.0f ? ls->pmf[ls->env] * c * TT__INV_PI : 0.0f;
 }

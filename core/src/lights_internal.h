@@ -1,8 +1,11 @@
 /* tunetrace internal: light sampling for the path sampler. Lights are chosen in proportion
  * to their power; on an area light a triangle is chosen in proportion to its area (its
  * radiance is uniform, so this is area * luminance), then a uniform point on it. Constant
- * environments are sampled with a cosine lobe around the receiver's normal. Built once per
- * tt_path_tracer; queries are pure and allocation-free. */
+ * environments are sampled with a cosine lobe around the receiver's normal; image
+ * environments (lat-long, Mitsuba's y-up convention: u = (1 + atan2(d.x, -d.z) / pi) / 2,
+ * v = acos(d.y) / pi, row 0 at the top) by a 2D piecewise-constant distribution over their
+ * texels weighted by luminance * sin(theta). Built once per tt_path_tracer; queries are
+ * pure and allocation-free. */
 #ifndef TT_LIGHTS_INTERNAL_H
 #define TT_LIGHTS_INTERNAL_H
 
@@ -30,6 +33,14 @@ typedef struct tt__lights {
   float *tri_cdf;            /* per area light: tri_count + 1 entries, normalised */
   int32_t *mesh_light;       /* per mesh: index into lights, or -1 */
   int32_t env;               /* index of the environment light, or -1 */
+  /* ENV_IMAGE: texel radiance (scale applied, nearest lookup, so the sampling density is
+   * proportional to the luminance it integrates) and its sampling distribution. */
+  uint32_t env_w, env_h;
+  float *env_rgb;            /* 3 * env_w * env_h, row 0 = +y */
+  float *env_marginal;       /* env_h + 1: CDF over rows */
+  float *env_conditional;    /* env_h * (env_w + 1): CDF over columns, per row */
+  float *env_weight;         /* env_w * env_h sampling weights */
+  float env_pdf_scale;       /* pdf in (u, v) of a texel = weight * env_pdf_scale */
 } tt__lights;
 
 typedef struct tt__light_sample {
@@ -40,7 +51,8 @@ typedef struct tt__light_sample {
   int delta;                 /* a point/spot/distant light: not reachable by BSDF sampling */
 } tt__light_sample;
 
-/* Builds light data for `scene`; TT_ERR_UNSUPPORTED for image environments. */
+/* Builds light data for `scene` (reads an image environment's file: TT_ERR_IO naming it if
+ * it cannot be decoded). */
 tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene);
 void tt__lights_free(tt__lights *ls);
 

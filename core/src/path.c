@@ -13,10 +13,18 @@
 #include "bsdf_internal.h"
 #include "lights_internal.h"
 
-/* An albedo texture, linear RGB. */
+/* OpenImageIO TextureSystem lookups (texture_oiio.cpp), used instead of direct loading
+ * when TT_TEXTURES=oiio (measured slower on the textured Cornell box: README, "Textures"). */
+typedef struct tt__oiio_tex tt__oiio_tex;
+tt_status tt__oiio_tex_open(const char *path, int srgb, tt__oiio_tex **out);
+void tt__oiio_tex_close(tt__oiio_tex *t);
+void tt__oiio_tex_lookup(const tt__oiio_tex *t, float u, float v, float out[3]);
+
+/* An albedo texture: linear RGB in memory, or an OIIO texture handle. */
 typedef struct tt__texture_data {
   uint32_t width, height;
   float *rgb;             /* 3 * width * height, row 0 at the top of the image */
+  tt__oiio_tex *oiio;     /* non-NULL: looked up through the TextureSystem instead */
 } tt__texture_data;
 
 struct tt_path_tracer {
@@ -34,9 +42,12 @@ static float tt__srgb_to_linear(float c) {
   return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
 }
 
-/* Loads texture `index` of the scene into linear RGB (once, at tracer creation). */
-static tt_status tt__load_texture(const tt_scene *scene, uint32_t index, tt__texture_data *out) {
+/* Loads texture `index` of the scene into linear RGB (once, at tracer creation), or opens
+ * it in the OIIO TextureSystem when `use_oiio`. */
+static tt_status tt__load_texture(const tt_scene *scene, uint32_t index, int use_oiio,
+                                  tt__texture_data *out) {
   const tt_texture *t = tt_scene_texture(scene, index);
+  if (use_oiio) return tt__oiio_tex_open(t->path, t->srgb, &out->oiio);
   uint32_t w = 0, h = 0, c = 0;
   float *px = NULL;
   tt_status st = tt_image_read(t->path, &w, &h, &c, &px);
@@ -63,6 +74,10 @@ static tt_status tt__load_texture(const tt_scene *scene, uint32_t index, tt__tex
 
 /* Bilinear lookup with wrap-around; v = 0 is the bottom of the image (OBJ convention). */
 static void tt__texture_lookup(const tt__texture_data *t, float u, float v, float out[3]) {
+  if (t->oiio) {
+    tt__oiio_tex_lookup(t->oiio, u, v, out);
+    return;
+  }
   float x = (u - floorf(u)) * (float)t->width - 0.5f;
   float y = (1.0f - (v - floorf(v))) * (float)t->height - 0.5f;
   float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy;
@@ -142,6 +157,8 @@ TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **o
   pt->textures = calloc(pt->texture_count ? pt->texture_count : 1, sizeof *pt->textures);
   if (st == TT_OK && (!pt->material_texture || !pt->textures))
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_path_tracer_create: out of memory");
+  const char *tex_mode = getenv("TT_TEXTURES");
+  const int use_oiio = tex_mode && strcmp(tex_mode, "oiio") == 0;
   for (uint32_t i = 0; i < pt->material_count && st == TT_OK; ++i) {
     int32_t tex = tt_scene_material(scene, i)->albedo_texture;
     pt->material_texture[i] = -1;
@@ -150,7 +167,8 @@ TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **o
       st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "material %u: texture index %d out of range", i, tex);
       break;
     }
-    if (!pt->textures[tex].rgb) st = tt__load_texture(scene, (uint32_t)tex, &pt->textures[tex]);
+    if (!pt->textures[tex].rgb && !pt->textures[tex].oiio)
+      st = tt__load_texture(scene, (uint32_t)tex, use_oiio, &pt->textures[tex]);
     pt->material_texture[i] = tex;
   }
   free(used);
@@ -167,7 +185,10 @@ TT_API void tt_path_tracer_destroy(tt_path_tracer *pt) {
   if (!pt) return;
   tt__lights_free(&pt->lights);
   if (pt->textures)
-    for (uint32_t i = 0; i < pt->texture_count; ++i) free(pt->textures[i].rgb);
+    for (uint32_t i = 0; i < pt->texture_count; ++i) {
+      free(pt->textures[i].rgb);
+      tt__oiio_tex_close(pt->textures[i].oiio);
+    }
   free(pt->textures);
   free(pt->material_texture);
   free(pt->bsdfs);
@@ -324,10 +345,15 @@ TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
       float u1 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS, &max_dim);
       float u2 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS + 1, &max_dim);
       tt__light_sample ls;
-      if (tt__lights_sample(lights, p, ns, u_sel, u1, u2, &ls) && tt__dot3(ls.wi, ng) > 0.0f) {
-        float wi_l[3], f[3];
+      if (tt__lights_sample(lights, p, ns, u_sel, u1, u2, &ls)) {
+        float wi_l[3], f[3] = {0.0f, 0.0f, 0.0f};
         tt__to_local(&fr, ls.wi, wi_l);
-        tt__bsdf_eval(bsdf, wo_l, wi_l, f);
+        /* The light must lie on the geometric side the shading frame says (opaque surfaces
+         * face the viewer, so only the front; rough glass may also transmit). */
+        float side = tt__dot3(ls.wi, ng);
+        int side_ok = tt__bsdf_transmissive(bsdf) ? side != 0.0f && (side > 0.0f) == (wi_l[2] > 0.0f)
+                                                  : side > 0.0f;
+        if (side_ok) tt__bsdf_eval(bsdf, wo_l, wi_l, f);
         if (tt__max3(f) > 0.0f) {
           tt_ray sh;
           tt__offset(p, ng, ls.wi, sh.org);

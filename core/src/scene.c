@@ -282,8 +282,9 @@ tt_status tt_scene_load(const char *path, tt_scene **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: out is NULL");
   *out = NULL;
   if (!path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: path is NULL");
+  if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
   if (!tt__has_ext(path, ".json"))
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json)", path);
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json or .pbrt)", path);
   FILE *f = fopen(path, "rb");
   if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open scene file: %s", path, strerror(errno));
   char *buf = NULL;

@@ -3,9 +3,13 @@
  * Backend "native" builds through Embree's scene API: one RTC_GEOMETRY_TYPE_TRIANGLE per
  * scene mesh (geomID = mesh index), build quality and scene flags from the configuration,
  * rtcCommitScene. Queries map one to one onto rtcIntersect1/rtcOccluded1 and the stream
- * calls rtcIntersect1M/rtcOccluded1M. A later "custom" backend (rtcBuildBVH with our own
- * nodes) plugs in at tt__embree_build's backend switch and reuses the space unchanged. */
+ * calls rtcIntersect1M/rtcOccluded1M.
+ *
+ * Backend "custom" builds with rtcBuildBVH and every numeric parameter, lays the tree out
+ * itself and traverses it with its own SIMD kernels (accel_embree_custom.c,
+ * accel_embree_trav.c); `compact` falls back to native, which has the only compact layout. */
 #include "accel_embree.h"
+#include "accel_embree_bvh.h"
 
 #include <tunetrace/plugin.h>
 
@@ -27,7 +31,10 @@
 #define TT__CHUNK 64
 
 struct tt_accel {
-  RTCScene scene;
+  RTCScene scene;              /* native backend (NULL for custom) */
+  tt__bvh *bvh;                /* custom backend (NULL for native) */
+  tt__kernels kernels;         /* custom: the traversal kernels for this tree's shape */
+  int counting;                /* custom with counters on */
   const tt_scene *source;      /* must outlive us (accel.h contract) */
   tt__embree_settings settings;
 };
@@ -40,16 +47,31 @@ static tt_space *g_space;
 static _Atomic long long g_embree_bytes;
 /* Set once the native-backend "these parameters do nothing" warning has been logged. */
 static atomic_flag g_warned_custom_only = ATOMIC_FLAG_INIT;
+/* Set once the "compact falls back to native" note has been logged. */
+static atomic_flag g_noted_compact = ATOMIC_FLAG_INIT;
 /* Last Embree error message seen on this thread, so build() can put it in its error. */
 static _Thread_local char g_embree_error[256];
+/* Non-zero while this thread expects (and reports) Embree errors itself. */
+static _Thread_local int g_embree_quiet;
+/* Custom backend kernels for this CPU (chosen at init). */
+static const tt__kernel_table *g_kernels;
+static const char *g_kernels_isa;
 
 /* Embree's error callback: log through the host and keep the text for tt_set_error. */
 static void tt__embree_error(void *user, enum RTCError code, const char *str) {
   const tt_host *host = user;
   snprintf(g_embree_error, sizeof g_embree_error, "Embree error %d: %s", (int)code,
            str ? str : "(no message)");
-  if (host && host->log) host->log(TT_LOG_ERROR, TT__EMBREE_NAME, "%s", g_embree_error);
+  if (host && host->log)
+    host->log(g_embree_quiet ? TT_LOG_DEBUG : TT_LOG_ERROR, TT__EMBREE_NAME, "%s",
+              g_embree_error);
 }
+
+/* The calling thread's last Embree error text. */
+const char *tt__embree_last_error(void) { return g_embree_error; }
+
+/* Downgrades this thread's Embree error logging while a failure is expected. */
+void tt__embree_set_quiet(int quiet) { g_embree_quiet = quiet; }
 
 /* Embree's memory monitor: every allocation/free is reported once; keep a running total. */
 static bool tt__embree_memory(void *user, ssize_t bytes, bool post) {
@@ -78,10 +100,11 @@ static const tt_space *tt__embree_space(void) { return g_space; }
 
 /* ---- build / destroy ---- */
 
-/* Releases the Embree scene and our wrapper. */
+/* Releases the Embree scene or our tree, and the wrapper. */
 static void tt__embree_destroy(tt_accel *accel) {
   if (!accel) return;
   if (accel->scene) rtcReleaseScene(accel->scene);
+  tt__custom_free(accel->bvh);
   free(accel);
 }
 
@@ -211,7 +234,14 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
   tt__embree_settings st;
   tt__embree_settings_from_config(cfg, &st);
 
-  if (st.backend == TT__EMBREE_BACKEND_NATIVE) {
+  if (st.backend == TT__EMBREE_BACKEND_CUSTOM && st.compact) {
+    /* Our layout has no compact (index-leaf) variant; Embree's scene API has one. */
+    if (!atomic_flag_test_and_set(&g_noted_compact))
+      g_host->log(TT_LOG_INFO, TT__EMBREE_NAME,
+                  "compact=true: backend custom falls back to native (Embree's compact BVH4 "
+                  "with index leaves); logged once");
+    st.backend = TT__EMBREE_BACKEND_NATIVE;
+  } else if (st.backend == TT__EMBREE_BACKEND_NATIVE) {
     char names[160];
     if (tt__embree_custom_only_changed(cfg, names, sizeof names) > 0 &&
         !atomic_flag_test_and_set(&g_warned_custom_only))
@@ -236,6 +266,21 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
     case TT__EMBREE_BACKEND_NATIVE:
       s = tt__build_native(scene, &st, acc, &stats);
       break;
+    case TT__EMBREE_BACKEND_CUSTOM: {
+      if (!g_kernels) {
+        s = tt_set_error(TT_ERR_UNSUPPORTED,
+                         "accel_embree: backend custom needs SSE4.1, which this CPU lacks");
+        break;
+      }
+      const uint64_t t0 = g_host->clock_ns();
+      s = tt__custom_build(scene, &st, g_device, &acc->bvh, &stats);
+      stats.build_ms = (double)(g_host->clock_ns() - t0) * 1e-6;
+      if (s != TT_OK) break;
+      int w = st.branching_factor == 2 ? 0 : st.branching_factor == 4 ? 1 : 2;
+      acc->counting = st.counters != 0;
+      acc->kernels = (*g_kernels)[w][st.robust ? 1 : 0][acc->counting];
+      break;
+    }
     default:
       s = tt_set_error(TT_ERR_UNSUPPORTED, "accel_embree: unknown backend index %d",
                        st.backend);
@@ -308,6 +353,10 @@ static inline void tt__from_rtc_hit(const struct RTCRayHit *e, tt_ray *r, tt_hit
 
 /* Closest hit of one ray. */
 static void tt__embree_intersect1(const tt_accel *accel, tt_ray *ray, tt_hit *hit) {
+  if (accel->bvh) {
+    accel->kernels.intersect(accel->bvh, ray, hit);
+    return;
+  }
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   struct RTCRayHit rh;
@@ -319,6 +368,7 @@ static void tt__embree_intersect1(const tt_accel *accel, tt_ray *ray, tt_hit *hi
 
 /* Occlusion of one ray: Embree sets tfar to -inf when something blocks it. */
 static int tt__embree_occluded1(const tt_accel *accel, const tt_ray *ray) {
+  if (accel->bvh) return accel->kernels.occluded(accel->bvh, ray);
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   struct RTCRay r;
@@ -341,6 +391,12 @@ static enum RTCIntersectContextFlags tt__chunk_coherence(const tt_ray *rays, siz
 /* Closest hits of a stream, converted TT__CHUNK rays at a time on the stack. */
 static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_hit *hits,
                                         size_t count) {
+  if (accel->bvh) {
+    /* Our kernels are single-ray; a stream is a loop without any conversion. */
+    const tt__isect_fn fn = accel->kernels.intersect;
+    for (size_t i = 0; i < count; i++) fn(accel->bvh, &rays[i], &hits[i]);
+    return;
+  }
   struct RTCRayHit buf[TT__CHUNK];
   struct RTCIntersectContext ctx;
   for (size_t base = 0; base < count; base += TT__CHUNK) {
@@ -359,6 +415,11 @@ static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_
 /* Occlusion of a stream, chunked like intersect_stream. */
 static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays,
                                        uint8_t *occluded, size_t count) {
+  if (accel->bvh) {
+    const tt__occl_fn fn = accel->kernels.occluded;
+    for (size_t i = 0; i < count; i++) occluded[i] = (uint8_t)fn(accel->bvh, &rays[i]);
+    return;
+  }
   struct RTCRay buf[TT__CHUNK];
   struct RTCIntersectContext ctx;
   for (size_t base = 0; base < count; base += TT__CHUNK) {
@@ -372,13 +433,35 @@ static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays
   }
 }
 
-/* Embree's scene API exposes no traversal statistics. */
+/* Custom backend with counters=true: the totals since the build (or the last reset).
+ * Embree's scene API exposes no traversal statistics. */
 static tt_status tt__embree_counters(tt_accel *accel, tt_accel_counters *out, int reset) {
-  (void)accel;
-  (void)out;
-  (void)reset;
-  return tt_set_error(TT_ERR_UNSUPPORTED,
-                      "accel_embree: backend native has no traversal counters");
+  if (!accel || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: counters: NULL argument");
+  if (!accel->bvh)
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "accel_embree: backend native has no traversal counters");
+  if (!accel->counting)
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "accel_embree: counters are off (set accel_embree.counters=true)");
+  tt_accel_counters c;
+  memset(&c, 0, sizeof c);
+  c.rays = atomic_load(&accel->bvh->c_rays);
+  c.nodes_visited = atomic_load(&accel->bvh->c_nodes);
+  c.triangles_tested = atomic_load(&accel->bvh->c_tris);
+  if (reset) {
+    atomic_store(&accel->bvh->c_rays, 0);
+    atomic_store(&accel->bvh->c_nodes, 0);
+    atomic_store(&accel->bvh->c_tris, 0);
+  }
+  /* Fill only the prefix the caller knows, like the build stats. */
+  if (out->struct_size > sizeof out->struct_size) {
+    uint32_t caller_size = out->struct_size;
+    size_t n = caller_size < sizeof c ? caller_size : sizeof c;
+    memcpy(out, &c, n);
+    out->struct_size = caller_size;
+  }
+  return TT_OK;
 }
 
 static const tt_accel_iface g_iface = {
@@ -413,6 +496,22 @@ static tt_status tt__embree_init(const tt_host *host) {
   g_host = host;
   atomic_store(&g_embree_bytes, 0);
   atomic_flag_clear(&g_warned_custom_only);
+  atomic_flag_clear(&g_noted_compact);
+  /* Kernel set: AVX2+FMA when the CPU has both, else the SSE4.1 baseline;
+   * TT_ACCEL_EMBREE_ISA=sse41 forces the baseline (tests run both). */
+  __builtin_cpu_init();
+  const char *isa = getenv("TT_ACCEL_EMBREE_ISA");
+  g_kernels = NULL;
+  g_kernels_isa = "none";
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+      !(isa && strcmp(isa, "sse41") == 0)) {
+    g_kernels = tt__trav_table_avx2();
+    g_kernels_isa = "avx2";
+  } else if (__builtin_cpu_supports("sse4.1")) {
+    g_kernels = tt__trav_table_sse41();
+    g_kernels_isa = "sse41";
+  }
+  host->log(TT_LOG_DEBUG, TT__EMBREE_NAME, "custom backend kernels: %s", g_kernels_isa);
   /* Build with the host's worker count (--threads), so build times in tuning runs are
    * measured with the same parallelism as rendering. */
   char device_config[64] = "";
@@ -448,7 +547,8 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
     .kind = TT_KIND_ACCEL,
     .name = TT__EMBREE_NAME,
     .version = TT__EMBREE_VERSION,
-    .description = "Embree 3 BVH (backend native: Embree's scene API; thesis Table 3.1 space)",
+    .description = "Embree 3 BVH: backend native (Embree's scene API) or custom (rtcBuildBVH, "
+                   "own SIMD traversal); thesis Table 3.1 space",
     .init = tt__embree_init,
     .deinit = tt__embree_deinit,
     .get_interface = tt__embree_get_interface,

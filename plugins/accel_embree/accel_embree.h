@@ -11,8 +11,8 @@
 
 /* Backends, in the order of the "backend" NOM parameter's possible values. */
 typedef enum tt__embree_backend {
-  TT__EMBREE_BACKEND_NATIVE = 0  /* Embree's scene API (rtcCommitScene) */
-  /* TT__EMBREE_BACKEND_CUSTOM = 1: rtcBuildBVH with our own nodes (later issue) */
+  TT__EMBREE_BACKEND_NATIVE = 0,  /* Embree's scene API (rtcCommitScene) */
+  TT__EMBREE_BACKEND_CUSTOM = 1   /* rtcBuildBVH, our layout and SIMD traversal */
 } tt__embree_backend;
 
 /* A configuration decoded into plain values (thesis Table 3.1 + backend). */
@@ -29,6 +29,7 @@ typedef struct tt__embree_settings {
   int compact;            /* RTC_SCENE_FLAG_COMPACT */
   int robust;             /* RTC_SCENE_FLAG_ROBUST */
   int backend;            /* a tt__embree_backend */
+  int counters;           /* custom backend: count rays, nodes and triangles per query */
 } tt__embree_settings;
 
 /* Builds the published parameter space (once, at init); NULL with tt_set_error on failure. */
@@ -44,5 +45,25 @@ void tt__embree_settings_from_config(const tt_config *config, tt__embree_setting
 /* Names (comma-separated, into `buf`) of the parameters that only the custom backend uses
  * and that differ from their defaults; returns how many there are. */
 int tt__embree_custom_only_changed(const tt_config *config, char *buf, size_t size);
+
+/* ---- custom backend (accel_embree_custom.c) ---- */
+
+struct tt__bvh;
+struct RTCDeviceTy;
+
+/* Builds the custom backend's tree for `st` over `scene` with Embree's rtcBuildBVH on
+ * `device`; fills nodes/leaves/sah_cost/max_depth/memory_bytes of `stats`. Configurations
+ * the builder cannot honour (depth limit, ...) give TT_ERR_INFEASIBLE with a message. */
+tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
+                           struct RTCDeviceTy *device, struct tt__bvh **out,
+                           tt_accel_build_stats *stats);
+/* Frees a custom tree (NULL is ignored). */
+void tt__custom_free(struct tt__bvh *bvh);
+
+/* Text of the calling thread's last Embree error ("" if none). */
+const char *tt__embree_last_error(void);
+/* While on, Embree errors on this thread are logged at DEBUG, not ERROR: the caller expects
+ * them and reports them itself (an infeasible custom build). */
+void tt__embree_set_quiet(int quiet);
 
 #endif /* TT_ACCEL_EMBREE_H */

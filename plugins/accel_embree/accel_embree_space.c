@@ -15,6 +15,9 @@
 #define TT__DEF_MAX_LEAF 32
 #define TT__DEF_TRAV_COST 1.0
 #define TT__DEF_INT_COST 1.0
+/* Default backend: index into {"native", "custom"}; the faster one in the bench on the
+ * project's scene set (README.md, "Choosing the default backend"). */
+#define TT__DEF_BACKEND TT__EMBREE_BACKEND_NATIVE
 
 /* Parameters that act only in the custom (rtcBuildBVH) backend, with their defaults. */
 static const struct {
@@ -32,8 +35,17 @@ static void tt__why(char *why, size_t size, const char *text) {
   if (why && size) snprintf(why, size, "%s", text);
 }
 
-/* Constraint check: repairs minLeafSize > maxLeafSize by swapping; rejects Morton settings
- * the custom builder cannot honour. Pure and thread-safe (touches only `config`). */
+/* Largest power of two <= v (v >= 1). */
+static int64_t tt__pow2_floor(int64_t v) {
+  int64_t p = 1;
+  while (p * 2 <= v) p *= 2;
+  return p;
+}
+
+/* Constraint check: repairs minLeafSize > maxLeafSize by swapping and sahBlockSize to the
+ * power of two Embree actually uses; rejects Morton settings the custom builder cannot
+ * honour. Scene-dependent constraints (maxDepth vs triangle count) are checked at build.
+ * Pure and thread-safe (touches only `config`). */
 static tt_check_result tt__embree_check(const tt_space *space, tt_config *config, char *why,
                                         size_t why_size, void *user) {
   (void)user;
@@ -48,6 +60,20 @@ static tt_check_result tt__embree_check(const tt_space *space, tt_config *config
             "quality 1 (Morton) supports branchingFactor <= 8 and leaf sizes <= 32");
     return TT_CHECK_INFEASIBLE;
   }
+  /* Embree uses only the largest power of two <= sahBlockSize (bsr of it): 5..7 act as 4.
+   * Canonicalising spares a tuner from measuring the same tree three times. */
+  int64_t block = tt_config_get_int(config, "sahBlockSize", TT__DEF_SAH_BLOCK);
+  char block_why[128] = "";
+  if (block >= 1 && tt__pow2_floor(block) != block) {
+    int ib = tt_space_find(space, "sahBlockSize");
+    if (ib < 0 || tt_config_set_number(config, (size_t)ib, (double)tt__pow2_floor(block)) != TT_OK) {
+      tt__why(why, why_size, "sahBlockSize is not a power of two and could not be rounded");
+      return TT_CHECK_INFEASIBLE;
+    }
+    snprintf(block_why, sizeof block_why,
+             "sahBlockSize %lld acts as %lld (Embree uses its largest power of two)",
+             (long long)block, (long long)tt__pow2_floor(block));
+  }
   if (min_leaf > max_leaf) {
     int imin = tt_space_find(space, "minLeafSize");
     int imax = tt_space_find(space, "maxLeafSize");
@@ -58,8 +84,12 @@ static tt_check_result tt__embree_check(const tt_space *space, tt_config *config
       return TT_CHECK_INFEASIBLE;
     }
     if (why && why_size)
-      snprintf(why, why_size, "minLeafSize %lld > maxLeafSize %lld: swapped",
-               (long long)min_leaf, (long long)max_leaf);
+      snprintf(why, why_size, "minLeafSize %lld > maxLeafSize %lld: swapped%s%s",
+               (long long)min_leaf, (long long)max_leaf, block_why[0] ? "; " : "", block_why);
+    return TT_CHECK_REPAIRED;
+  }
+  if (block_why[0]) {
+    tt__why(why, why_size, block_why);
     return TT_CHECK_REPAIRED;
   }
   return TT_CHECK_OK;
@@ -76,39 +106,48 @@ tt_space *tt__embree_space_create(void) {
   if (!s) return NULL;
   static const int64_t qualities[] = {1, 2, 3};
   static const int64_t factors[] = {2, 4, 8};
-  static const char *const backends[] = {"native"};
+  static const char *const backends[] = {"native", "custom"};
   int ok = 1;
   ok &= tt_space_add_nom_int(s, "quality", qualities, 3, 1,
                              "BVH builder: 1 Morton (RTC_BUILD_QUALITY_LOW), 2 binned SAH "
                              "(MEDIUM), 3 SAH with spatial splits (HIGH); native and custom") >= 0;
   ok &= tt_space_add_nom_int(s, "branchingFactor", factors, 3, 0,
-                             "children per inner node; custom backend only (native Embree "
-                             "picks its own BVH4/BVH8)") >= 0;
+                             "children per inner node (maxBranchingFactor; our BVH2/4/8 "
+                             "layout); custom backend only (native Embree picks its own "
+                             "BVH4/BVH8)") >= 0;
   ok &= tt_space_add_int(s, "maxDepth", 8, 64, TT__DEF_MAX_DEPTH,
-                         "maximum BVH depth; custom backend only") >= 0;
+                         "maximum BVH depth (the last 8 levels split by object median); "
+                         "custom backend only") >= 0;
   ok &= tt_space_add_int(s, "sahBlockSize", 1, 32, TT__DEF_SAH_BLOCK,
-                         "SAH leaf cost granularity (primitives per block); custom backend "
-                         "only") >= 0;
+                         "SAH leaf cost granularity (primitives per block; only powers of two "
+                         "act, others are rounded down by the check); custom backend only") >= 0;
   ok &= tt_space_add_int(s, "minLeafSize", 1, 32, TT__DEF_MIN_LEAF,
                          "minimum primitives per leaf; custom backend only") >= 0;
   ok &= tt_space_add_int(s, "maxLeafSize", 1, 32, TT__DEF_MAX_LEAF,
                          "maximum primitives per leaf; custom backend only") >= 0;
   ok &= tt_space_add_float(s, "travcost", 0.1, 10.0, TT__DEF_TRAV_COST, 0,
-                           "SAH cost of traversing a node; custom backend only") >= 0;
+                           "SAH cost of traversing a node (only travcost/intcost acts); "
+                           "custom backend only") >= 0;
   ok &= tt_space_add_float(s, "intcost", 0.1, 10.0, TT__DEF_INT_COST, 0,
-                           "SAH cost of intersecting a primitive; custom backend only") >= 0;
+                           "SAH cost of intersecting a primitive (only travcost/intcost "
+                           "acts); custom backend only") >= 0;
   ok &= tt_space_add_nom_bool(s, "static", 0,
                               "scene never changes; false sets RTC_SCENE_FLAG_DYNAMIC (faster "
-                              "build, slower traversal); native backend") >= 0;
+                              "build, slower traversal); native backend (custom passes "
+                              "RTC_BUILD_FLAG_DYNAMIC, a no-op in Embree 3.13.5)") >= 0;
   ok &= tt_space_add_nom_bool(s, "compact", 0,
                               "RTC_SCENE_FLAG_COMPACT: smaller structure, slower traversal; "
-                              "native backend") >= 0;
+                              "native backend (custom falls back to native)") >= 0;
   ok &= tt_space_add_nom_bool(s, "robust", 0,
-                              "RTC_SCENE_FLAG_ROBUST: watertight traversal, slower; native "
-                              "backend") >= 0;
-  ok &= tt_space_add_nom_string(s, "backend", backends, 1, 0,
+                              "RTC_SCENE_FLAG_ROBUST in native; watertight triangle test and "
+                              "conservative box test in custom") >= 0;
+  ok &= tt_space_add_nom_string(s, "backend", backends, 2, TT__DEF_BACKEND,
                                 "native: Embree's scene API (only quality, static, compact, "
-                                "robust act)") >= 0;
+                                "robust act); custom: rtcBuildBVH with every parameter, our "
+                                "SIMD traversal") >= 0;
+  ok &= tt_space_add_nom_bool(s, "counters", 0,
+                              "instrumentation, not a tuning parameter: count rays, nodes "
+                              "visited and triangles tested (custom backend; slows queries)") >= 0;
   if (!ok) {
     tt_space_destroy(s);
     tt_set_error(TT_ERR_INTERNAL, "accel_embree: could not build the parameter space");
@@ -118,7 +157,17 @@ tt_space *tt__embree_space_create(void) {
   tt_space_add_constraint_text(s, "quality 1 (Morton) requires branchingFactor <= 8 and "
                                   "maxLeafSize <= 32 (custom builder)");
   tt_space_add_constraint_text(s, "branchingFactor^(maxDepth-1)*maxLeafSize >= triangle count "
-                                  "(custom backend; checked at build time)");
+                                  "(custom backend; checked at build time: TT_ERR_INFEASIBLE "
+                                  "naming the smallest feasible maxDepth; an unbalanced SAH "
+                                  "tree may still hit Embree's \"depth limit reached\", "
+                                  "also reported as infeasible)");
+  tt_space_add_constraint_text(s, "sahBlockSize acts through its largest power of two "
+                                  "(repaired: rounded down)");
+  tt_space_add_constraint_text(s, "only the ratio travcost/intcost acts (Embree compares "
+                                  "intcost*blocks with travcost + split cost); quality 1 "
+                                  "(Morton) ignores sahBlockSize, travcost and intcost");
+  tt_space_add_constraint_text(s, "compact=true with backend custom builds with backend "
+                                  "native (logged)");
   tt_space_set_check(s, tt__embree_check, NULL);
   return s;
 }
@@ -136,7 +185,8 @@ void tt__embree_settings_from_config(const tt_config *c, tt__embree_settings *o)
   o->is_static = (int)tt_config_get_int(c, "static", 0);
   o->compact = (int)tt_config_get_int(c, "compact", 0);
   o->robust = (int)tt_config_get_int(c, "robust", 0);
-  o->backend = (int)tt_config_get_int(c, "backend", TT__EMBREE_BACKEND_NATIVE);
+  o->backend = (int)tt_config_get_int(c, "backend", TT__DEF_BACKEND);
+  o->counters = (int)tt_config_get_int(c, "counters", 0);
 }
 
 /* Lists custom-only parameters set away from their defaults (for the native-backend WARN). */

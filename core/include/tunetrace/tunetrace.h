@@ -19,5 +19,6 @@
 #include <tunetrace/predictor.h>
 #include <tunetrace/post.h>
 #include <tunetrace/loader.h>
+#include <tunetrace/tunedb.h>
 
 #endif /* TUNETRACE_TUNETRACE_H */

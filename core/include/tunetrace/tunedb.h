@@ -1,0 +1,132 @@
+/* tunetrace: the tuning database (thesis 3.3) — every measured (state, configuration) pair.
+ *
+ * One SQLite file in WAL mode, so readers (analysis tools, predictors) never block the
+ * tuning loop and a killed process leaves every committed row readable. Each call to
+ * tt_tunedb_record is its own transaction: a finished measurement is durable at once.
+ * The schema is versioned with PRAGMA user_version (TT_TUNEDB_SCHEMA_VERSION); a file
+ * written by a newer schema is refused with a message naming both versions.
+ *
+ * A row holds the state (scene id, camera, measurement context, scene indicators), the
+ * plugin (name + version) and its configuration (canonical compact JSON from
+ * tt_config_to_json), the objective, the measured build/render times and cost, and where
+ * and when it was measured (machine id, CPU model, UTC timestamp). The lookup key of
+ * "the same measurement" is (scene_id, camera, context, plugin, plugin_version, config,
+ * objective, machine, cpu): the tuning loop never measures a key the database already has.
+ *
+ * Default location: $XDG_DATA_HOME/tunetrace/tuning.db, else
+ * ~/.local/share/tunetrace/tuning.db (tt_tunedb_default_path).
+ *
+ * Threads: a tt_tunedb handle is used by one thread at a time; several processes may share
+ * one file (SQLite locking, 5 s busy timeout).
+ */
+#ifndef TUNETRACE_TUNEDB_H
+#define TUNETRACE_TUNEDB_H
+
+#include <tunetrace/common.h>
+#include <tunetrace/scene.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Schema version stored in PRAGMA user_version. */
+#define TT_TUNEDB_SCHEMA_VERSION 1
+
+typedef struct tt_tunedb tt_tunedb;  /* opaque database handle */
+
+/* Outcome of one measurement. Only OK and INFEASIBLE rows answer lookups: a failure may be
+ * transient (out of memory, a driver hiccup) and is measured again next time. */
+typedef enum tt_tunedb_status {
+  TT_TUNEDB_OK = 0,          /* measured; cost is finite */
+  TT_TUNEDB_INFEASIBLE = 1,  /* rejected by the space's constraints; cost TT_COST_INFEASIBLE */
+  TT_TUNEDB_FAILED = 2       /* build or render failed; cost TT_COST_INFEASIBLE */
+} tt_tunedb_status;
+
+/* One row. Strings are borrowed: on record they are copied, in tt_tunedb_foreach they are
+ * valid during the callback only. NULL strings are stored as NULL, except where noted. */
+typedef struct tt_tunedb_row {
+  uint32_t struct_size;      /* sizeof(tt_tunedb_row) */
+  int64_t id;                /* rowid; written by tt_tunedb_record */
+  const char *scene_id;      /* tt_scene_id (required) */
+  const char *scene;         /* scene file, for people */
+  const char *camera;        /* JSON of the view: position, target, up, fov_y, resolution */
+  const char *context;       /* JSON of what else shapes the cost: spp per measurement,
+                                threads, the other plugins and their configurations */
+  int32_t has_indicators;    /* non-zero: indicators[] is set */
+  double indicators[TT_SCENE_INDICATOR_COUNT];  /* tt_scene_indicators, Table 3.2 */
+  const char *plugin;        /* tuned plugin's name (required) */
+  const char *plugin_version;/* its version (required) */
+  const char *config;        /* canonical configuration JSON (required) */
+  const char *objective;     /* objective spec, e.g. "render", "build+render" (required) */
+  double build_ms;           /* build time of this measurement (0 if nothing was built) */
+  double render_ms;          /* render time of this measurement */
+  double cost;               /* the objective's value; TT_COST_INFEASIBLE if not OK */
+  int32_t status;            /* tt_tunedb_status */
+  const char *mode;          /* "default", "tune", "explore" */
+  int32_t iteration;         /* -1 for the default configuration, else 0, 1, ... */
+  const char *run_id;        /* identifies one host run */
+  const char *tuner;         /* tuner plugin name, NULL for exploration */
+  const char *metrics;       /* JSON object of the integrator's pass metrics, or NULL */
+  const char *machine;       /* NULL on record: tt_tunedb_machine_id() */
+  const char *cpu;           /* NULL on record: tt_tunedb_cpu_model() */
+  const char *timestamp;     /* ISO 8601 UTC; NULL on record: now */
+} tt_tunedb_row;
+
+/* Default database path (see above). Free with tt_free; NULL if neither $XDG_DATA_HOME
+ * nor $HOME is set. */
+TT_API char *tt_tunedb_default_path(void);
+
+/* Opens (creating the file, its parent directory and the schema if needed) the database
+ * at `path`. `*out` is owned by the caller: free with tt_tunedb_close. */
+TT_API tt_status tt_tunedb_open(const char *path, tt_tunedb **out);
+/* Closes the database (NULL is ignored). */
+TT_API void tt_tunedb_close(tt_tunedb *db);
+/* Path the database was opened with. */
+TT_API const char *tt_tunedb_path(const tt_tunedb *db);
+
+/* Inserts `row` and commits it; sets row->id. Required fields missing or a non-finite
+ * cost are TT_ERR_INVALID_ARGUMENT. */
+TT_API tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *row);
+
+/* Looks up the key fields of `key` (scene_id, camera, context, plugin, plugin_version,
+ * config, objective, machine, cpu; NULL machine/cpu mean this machine). On a hit writes
+ * the mean cost of the matching OK/INFEASIBLE rows into `*cost` and their number into
+ * `*count` (either may be NULL) and returns TT_OK; TT_ERR_NO_DATA if there is none. */
+TT_API tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
+                                  uint32_t *count);
+
+/* Calls fn for every row (of `plugin`, or all if NULL) in insertion order; a non-zero
+ * return from fn stops the walk. */
+TT_API tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
+                                   int (*fn)(void *user, const tt_tunedb_row *row),
+                                   void *user);
+
+/* Number of rows (of `plugin`, or all if NULL). */
+TT_API tt_status tt_tunedb_count(tt_tunedb *db, const char *plugin, uint64_t *count);
+
+/* Writes every row as CSV (RFC 4180 quoting, header line; the indicators as one column
+ * each, named after tt_scene_indicator_name, empty when unknown). */
+TT_API tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path);
+
+/* This machine: /etc/machine-id (else the host name), and the CPU model from
+ * /proc/cpuinfo ("unknown" if absent). Static strings. */
+TT_API const char *tt_tunedb_machine_id(void);
+TT_API const char *tt_tunedb_cpu_model(void);
+
+/* ---- tuning hint: an optional plugin capability ----
+ * A plugin may serve TT_TUNING_HINT_ID through get_interface to tell hosts which objective
+ * tuning its space should minimise by default, in the host's --objective syntax (e.g.
+ * PSSMLT: "metric:acceptance:target=0.234"). A host that tunes without an explicit target
+ * prefers an integrator that serves a hint. */
+#define TT_TUNING_HINT_ID "tt.tuning_hint/1"
+
+typedef struct tt_tuning_hint {
+  uint32_t struct_size;      /* sizeof(tt_tuning_hint) as the plugin was built */
+  const char *objective;     /* default objective spec, static string */
+} tt_tuning_hint;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TUNETRACE_TUNEDB_H */

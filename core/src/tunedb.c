@@ -1,0 +1,495 @@
+/* tunetrace: the tuning database on SQLite (see tunedb.h for the model). */
+#include <tunetrace/tunedb.h>
+
+#include <errno.h>
+#include <math.h>
+#include <sqlite3.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+struct tt_tunedb {
+  sqlite3 *sql;
+  sqlite3_stmt *insert;
+  sqlite3_stmt *lookup;
+  char *path;
+};
+
+/* Version 1 schema. Indicators are a JSON object so the row stays one table when
+ * TT_SCENE_INDICATOR_COUNT grows; the CSV export spreads them into columns. */
+static const char tt__schema_v1[] =
+  "CREATE TABLE IF NOT EXISTS samples ("
+  " id INTEGER PRIMARY KEY,"
+  " scene_id TEXT NOT NULL,"
+  " scene TEXT,"
+  " camera TEXT NOT NULL,"
+  " context TEXT NOT NULL,"
+  " indicators TEXT,"
+  " plugin TEXT NOT NULL,"
+  " plugin_version TEXT NOT NULL,"
+  " config TEXT NOT NULL,"
+  " objective TEXT NOT NULL,"
+  " build_ms REAL NOT NULL,"
+  " render_ms REAL NOT NULL,"
+  " cost REAL NOT NULL,"
+  " status INTEGER NOT NULL,"
+  " mode TEXT,"
+  " iteration INTEGER,"
+  " run_id TEXT,"
+  " tuner TEXT,"
+  " metrics TEXT,"
+  " machine TEXT NOT NULL,"
+  " cpu TEXT NOT NULL,"
+  " timestamp TEXT NOT NULL);"
+  "CREATE INDEX IF NOT EXISTS samples_key ON samples"
+  " (scene_id, plugin, plugin_version, objective, config);";
+
+static const char tt__columns[] =
+  "id, scene_id, scene, camera, context, indicators, plugin, plugin_version, config,"
+  " objective, build_ms, render_ms, cost, status, mode, iteration, run_id, tuner, metrics,"
+  " machine, cpu, timestamp";
+
+/* Records an SQLite failure with the database path and SQLite's own message. */
+static tt_status tt__sql_error(const tt_tunedb *db, sqlite3 *sql, const char *what) {
+  return tt_set_error(TT_ERR_IO, "tuning database %s: %s: %s", db && db->path ? db->path : "?",
+                      what, sql ? sqlite3_errmsg(sql) : "out of memory");
+}
+
+/* Trims trailing whitespace in place. */
+static void tt__rstrip(char *s) {
+  size_t n = strlen(s);
+  while (n && (s[n - 1] == '\n' || s[n - 1] == ' ' || s[n - 1] == '\t')) s[--n] = 0;
+}
+
+const char *tt_tunedb_machine_id(void) {
+  static char id[256];
+  if (id[0]) return id;
+  FILE *f = fopen("/etc/machine-id", "r");
+  if (f) {
+    if (!fgets(id, sizeof id, f)) id[0] = 0;
+    fclose(f);
+    tt__rstrip(id);
+  }
+  /* containers often lack /etc/machine-id: the host name is the next stable name */
+  if (!id[0] && gethostname(id, sizeof id - 1) != 0) id[0] = 0;
+  if (!id[0]) snprintf(id, sizeof id, "unknown");
+  return id;
+}
+
+const char *tt_tunedb_cpu_model(void) {
+  static char model[256];
+  if (model[0]) return model;
+  FILE *f = fopen("/proc/cpuinfo", "r");
+  char line[512];
+  while (f && fgets(line, sizeof line, f)) {
+    if (strncmp(line, "model name", 10) != 0) continue;
+    const char *colon = strchr(line, ':');
+    if (!colon) continue;
+    colon++;
+    while (*colon == ' ' || *colon == '\t') colon++;
+    snprintf(model, sizeof model, "%s", colon);
+    tt__rstrip(model);
+    break;
+  }
+  if (f) fclose(f);
+  if (!model[0]) snprintf(model, sizeof model, "unknown");
+  return model;
+}
+
+char *tt_tunedb_default_path(void) {
+  const char *xdg = getenv("XDG_DATA_HOME");
+  const char *home = getenv("HOME");
+  char buf[4096];
+  /* XDG says a relative $XDG_DATA_HOME is invalid and must be ignored */
+  if (xdg && xdg[0] == '/') snprintf(buf, sizeof buf, "%s/tunetrace/tuning.db", xdg);
+  else if (home && home[0]) snprintf(buf, sizeof buf, "%s/.local/share/tunetrace/tuning.db", home);
+  else return NULL;
+  char *out = malloc(strlen(buf) + 1);
+  if (out) strcpy(out, buf);
+  return out;
+}
+
+/* mkdir -p of the directory holding `path`, so the default location works first time. */
+static void tt__make_parent_dirs(const char *path) {
+  char buf[4096];
+  snprintf(buf, sizeof buf, "%s", path);
+  char *slash = strrchr(buf, '/');
+  if (!slash || slash == buf) return;
+  *slash = 0;
+  for (char *p = buf + 1; *p; p++) {
+    if (*p != '/') continue;
+    *p = 0;
+    mkdir(buf, 0755);
+    *p = '/';
+  }
+  mkdir(buf, 0755);
+}
+
+/* Runs SQL without results; 0 on success. */
+static int tt__exec(tt_tunedb *db, const char *sql, const char *what) {
+  char *msg = NULL;
+  if (sqlite3_exec(db->sql, sql, NULL, NULL, &msg) == SQLITE_OK) return 0;
+  tt_set_error(TT_ERR_IO, "tuning database %s: %s: %s", db->path, what,
+               msg ? msg : sqlite3_errmsg(db->sql));
+  sqlite3_free(msg);
+  return -1;
+}
+
+/* Reads PRAGMA user_version; -1 on error. */
+static int tt__user_version(tt_tunedb *db) {
+  sqlite3_stmt *st = NULL;
+  int v = -1;
+  if (sqlite3_prepare_v2(db->sql, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK &&
+      sqlite3_step(st) == SQLITE_ROW)
+    v = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  if (v < 0) tt__sql_error(db, db->sql, "reading the schema version");
+  return v;
+}
+
+void tt_tunedb_close(tt_tunedb *db) {
+  if (!db) return;
+  sqlite3_finalize(db->insert);
+  sqlite3_finalize(db->lookup);
+  sqlite3_close(db->sql);
+  free(db->path);
+  free(db);
+}
+
+tt_status tt_tunedb_open(const char *path, tt_tunedb **out) {
+  if (!path || !*path || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_open: path and out are required");
+  *out = NULL;
+  tt_tunedb *db = calloc(1, sizeof *db);
+  if (!db) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open: out of memory");
+  db->path = malloc(strlen(path) + 1);
+  if (!db->path) {
+    free(db);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open: out of memory");
+  }
+  strcpy(db->path, path);
+  tt__make_parent_dirs(path);
+  if (sqlite3_open_v2(path, &db->sql, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, NULL) !=
+      SQLITE_OK) {
+    tt__sql_error(db, db->sql, "cannot open");
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
+  }
+  /* several hosts may tune into one file: wait for a writer instead of failing */
+  sqlite3_busy_timeout(db->sql, 5000);
+  /* WAL: readers never block the loop; synchronous=NORMAL keeps every commit across a
+   * process kill (only a power loss can drop the last transactions) */
+  if (tt__exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;", "enabling WAL")) {
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
+  }
+  int version = tt__user_version(db);
+  if (version < 0) {
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
+  }
+  if (version > TT_TUNEDB_SCHEMA_VERSION) {
+    tt_set_error(TT_ERR_UNSUPPORTED,
+                 "tuning database %s: schema version %d is newer than this build reads (%d)",
+                 path, version, TT_TUNEDB_SCHEMA_VERSION);
+    tt_tunedb_close(db);
+    return TT_ERR_UNSUPPORTED;
+  }
+  if (version < TT_TUNEDB_SCHEMA_VERSION) {
+    char sql[sizeof tt__schema_v1 + 128];
+    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE; %s PRAGMA user_version=%d; COMMIT;",
+             tt__schema_v1, TT_TUNEDB_SCHEMA_VERSION);
+    if (tt__exec(db, sql, "creating the schema")) {
+      sqlite3_exec(db->sql, "ROLLBACK", NULL, NULL, NULL);
+      tt_tunedb_close(db);
+      return TT_ERR_IO;
+    }
+  }
+  char sql[1024];
+  snprintf(sql, sizeof sql, "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
+           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
+  if (sqlite3_prepare_v2(db->sql, sql, -1, &db->insert, NULL) != SQLITE_OK ||
+      sqlite3_prepare_v2(db->sql,
+                         "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
+                         " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
+                         " AND config = ?6 AND objective = ?7 AND machine = ?8 AND cpu = ?9"
+                         " AND status IN (0, 1)",
+                         -1, &db->lookup, NULL) != SQLITE_OK) {
+    tt__sql_error(db, db->sql, "preparing statements");
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
+  }
+  *out = db;
+  return TT_OK;
+}
+
+const char *tt_tunedb_path(const tt_tunedb *db) { return db ? db->path : NULL; }
+
+/* Binds a string or NULL. */
+static void tt__bind_text(sqlite3_stmt *st, int i, const char *s) {
+  if (s) sqlite3_bind_text(st, i, s, -1, SQLITE_TRANSIENT);
+  else sqlite3_bind_null(st, i);
+}
+
+/* Indicators as a JSON object {"meshes": 3, ...}; NULL if the row has none. */
+static char *tt__indicators_json(const tt_tunedb_row *row) {
+  if (!row->has_indicators) return NULL;
+  size_t cap = 64 + TT_SCENE_INDICATOR_COUNT * 64;
+  char *s = malloc(cap);
+  if (!s) return NULL;
+  size_t n = 0;
+  s[n++] = '{';
+  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) {
+    double v = row->indicators[i];
+    /* JSON has no NaN/Inf: an undefined indicator (e.g. variance of one mesh) is null */
+    if (isfinite(v))
+      n += snprintf(s + n, cap - n, "%s\"%s\":%.17g", i ? "," : "", tt_scene_indicator_name(i), v);
+    else
+      n += snprintf(s + n, cap - n, "%s\"%s\":null", i ? "," : "", tt_scene_indicator_name(i));
+  }
+  snprintf(s + n, cap - n, "}");
+  return s;
+}
+
+/* Parses the indicators JSON written above back into out[]; returns 1 if present. Only
+ * our own compact format needs reading, so a scan for "name": is enough. */
+static int tt__indicators_parse(const char *json, double *out) {
+  if (!json) return 0;
+  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) {
+    char key[128];
+    snprintf(key, sizeof key, "\"%s\":", tt_scene_indicator_name(i));
+    const char *p = strstr(json, key);
+    out[i] = p && strncmp(p + strlen(key), "null", 4) != 0 ? strtod(p + strlen(key), NULL) : NAN;
+  }
+  return 1;
+}
+
+/* Current UTC time as ISO 8601 with milliseconds. */
+static void tt__now_iso(char *buf, size_t n) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  struct tm tm;
+  gmtime_r(&ts.tv_sec, &tm);
+  char base[32];
+  strftime(base, sizeof base, "%Y-%m-%dT%H:%M:%S", &tm);
+  snprintf(buf, n, "%s.%03ldZ", base, ts.tv_nsec / 1000000L);
+}
+
+tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *row) {
+  if (!db || !row || !row->scene_id || !row->plugin || !row->plugin_version || !row->config ||
+      !row->objective)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_record: scene_id, plugin, "
+                        "plugin_version, config and objective are required");
+  if (!isfinite(row->cost) || !isfinite(row->build_ms) || !isfinite(row->render_ms))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_record: cost and times must be "
+                        "finite (use TT_COST_INFEASIBLE for failures)");
+  char now[64];
+  tt__now_iso(now, sizeof now);
+  char *ind = tt__indicators_json(row);
+  sqlite3_stmt *st = db->insert;
+  sqlite3_reset(st);
+  sqlite3_clear_bindings(st);
+  int i = 1;
+  tt__bind_text(st, i++, row->scene_id);
+  tt__bind_text(st, i++, row->scene);
+  tt__bind_text(st, i++, row->camera ? row->camera : "{}");
+  tt__bind_text(st, i++, row->context ? row->context : "{}");
+  tt__bind_text(st, i++, ind);
+  tt__bind_text(st, i++, row->plugin);
+  tt__bind_text(st, i++, row->plugin_version);
+  tt__bind_text(st, i++, row->config);
+  tt__bind_text(st, i++, row->objective);
+  sqlite3_bind_double(st, i++, row->build_ms);
+  sqlite3_bind_double(st, i++, row->render_ms);
+  sqlite3_bind_double(st, i++, row->cost);
+  sqlite3_bind_int(st, i++, row->status);
+  tt__bind_text(st, i++, row->mode);
+  sqlite3_bind_int(st, i++, row->iteration);
+  tt__bind_text(st, i++, row->run_id);
+  tt__bind_text(st, i++, row->tuner);
+  tt__bind_text(st, i++, row->metrics);
+  tt__bind_text(st, i++, row->machine ? row->machine : tt_tunedb_machine_id());
+  tt__bind_text(st, i++, row->cpu ? row->cpu : tt_tunedb_cpu_model());
+  tt__bind_text(st, i++, row->timestamp ? row->timestamp : now);
+  /* autocommit: the insert is its own transaction, durable when step returns */
+  int rc = sqlite3_step(st);
+  free(ind);
+  sqlite3_reset(st);
+  if (rc != SQLITE_DONE) return tt__sql_error(db, db->sql, "recording a measurement");
+  row->id = sqlite3_last_insert_rowid(db->sql);
+  return TT_OK;
+}
+
+tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
+                           uint32_t *count) {
+  if (!db || !key || !key->scene_id || !key->plugin || !key->plugin_version || !key->config ||
+      !key->objective)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_lookup: scene_id, plugin, "
+                        "plugin_version, config and objective are required");
+  sqlite3_stmt *st = db->lookup;
+  sqlite3_reset(st);
+  sqlite3_clear_bindings(st);
+  tt__bind_text(st, 1, key->scene_id);
+  tt__bind_text(st, 2, key->camera ? key->camera : "{}");
+  tt__bind_text(st, 3, key->context ? key->context : "{}");
+  tt__bind_text(st, 4, key->plugin);
+  tt__bind_text(st, 5, key->plugin_version);
+  tt__bind_text(st, 6, key->config);
+  tt__bind_text(st, 7, key->objective);
+  tt__bind_text(st, 8, key->machine ? key->machine : tt_tunedb_machine_id());
+  tt__bind_text(st, 9, key->cpu ? key->cpu : tt_tunedb_cpu_model());
+  int rc = sqlite3_step(st);
+  if (rc != SQLITE_ROW) {
+    sqlite3_reset(st);
+    return tt__sql_error(db, db->sql, "looking up a configuration");
+  }
+  int64_t n = sqlite3_column_int64(st, 1);
+  double mean = sqlite3_column_double(st, 0);
+  sqlite3_reset(st);
+  if (n <= 0) return TT_ERR_NO_DATA;
+  if (cost) *cost = mean;
+  if (count) *count = (uint32_t)n;
+  return TT_OK;
+}
+
+/* Fills `row` from the current result row of a SELECT of tt__columns. */
+static void tt__read_row(sqlite3_stmt *st, tt_tunedb_row *row) {
+  memset(row, 0, sizeof *row);
+  row->struct_size = sizeof *row;
+  int i = 0;
+  row->id = sqlite3_column_int64(st, i++);
+  row->scene_id = (const char *)sqlite3_column_text(st, i++);
+  row->scene = (const char *)sqlite3_column_text(st, i++);
+  row->camera = (const char *)sqlite3_column_text(st, i++);
+  row->context = (const char *)sqlite3_column_text(st, i++);
+  row->has_indicators = tt__indicators_parse((const char *)sqlite3_column_text(st, i++),
+                                             row->indicators);
+  row->plugin = (const char *)sqlite3_column_text(st, i++);
+  row->plugin_version = (const char *)sqlite3_column_text(st, i++);
+  row->config = (const char *)sqlite3_column_text(st, i++);
+  row->objective = (const char *)sqlite3_column_text(st, i++);
+  row->build_ms = sqlite3_column_double(st, i++);
+  row->render_ms = sqlite3_column_double(st, i++);
+  row->cost = sqlite3_column_double(st, i++);
+  row->status = sqlite3_column_int(st, i++);
+  row->mode = (const char *)sqlite3_column_text(st, i++);
+  row->iteration = sqlite3_column_int(st, i++);
+  row->run_id = (const char *)sqlite3_column_text(st, i++);
+  row->tuner = (const char *)sqlite3_column_text(st, i++);
+  row->metrics = (const char *)sqlite3_column_text(st, i++);
+  row->machine = (const char *)sqlite3_column_text(st, i++);
+  row->cpu = (const char *)sqlite3_column_text(st, i++);
+  row->timestamp = (const char *)sqlite3_column_text(st, i++);
+}
+
+tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
+                            int (*fn)(void *user, const tt_tunedb_row *row), void *user) {
+  if (!db || !fn) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_foreach: db and fn");
+  char sql[1024];
+  snprintf(sql, sizeof sql, "SELECT %s FROM samples%s ORDER BY id", tt__columns,
+           plugin ? " WHERE plugin = ?1" : "");
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(db->sql, sql, -1, &st, NULL) != SQLITE_OK)
+    return tt__sql_error(db, db->sql, "reading rows");
+  if (plugin) tt__bind_text(st, 1, plugin);
+  int rc;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+    tt_tunedb_row row;
+    tt__read_row(st, &row);
+    if (fn(user, &row)) {
+      rc = SQLITE_DONE;
+      break;
+    }
+  }
+  tt_status status = rc == SQLITE_DONE ? TT_OK : tt__sql_error(db, db->sql, "reading rows");
+  sqlite3_finalize(st);
+  return status;
+}
+
+tt_status tt_tunedb_count(tt_tunedb *db, const char *plugin, uint64_t *count) {
+  if (!db || !count) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_count: db, count");
+  sqlite3_stmt *st = NULL;
+  const char *sql = plugin ? "SELECT count(*) FROM samples WHERE plugin = ?1"
+                           : "SELECT count(*) FROM samples";
+  if (sqlite3_prepare_v2(db->sql, sql, -1, &st, NULL) != SQLITE_OK)
+    return tt__sql_error(db, db->sql, "counting rows");
+  if (plugin) tt__bind_text(st, 1, plugin);
+  tt_status status = TT_OK;
+  if (sqlite3_step(st) == SQLITE_ROW) *count = (uint64_t)sqlite3_column_int64(st, 0);
+  else status = tt__sql_error(db, db->sql, "counting rows");
+  sqlite3_finalize(st);
+  return status;
+}
+
+/* Writes one CSV field, quoted when it holds a comma, quote or line break (RFC 4180). */
+static void tt__csv_text(FILE *f, const char *s) {
+  if (!s) return;
+  if (!strpbrk(s, ",\"\r\n")) {
+    fputs(s, f);
+    return;
+  }
+  fputc('"', f);
+  for (; *s; s++) {
+    if (*s == '"') fputc('"', f);
+    fputc(*s, f);
+  }
+  fputc('"', f);
+}
+
+typedef struct tt__csv_ctx {
+  FILE *f;
+} tt__csv_ctx;
+
+/* One CSV line per row; doubles with %.17g so the export round-trips. */
+static int tt__csv_row(void *user, const tt_tunedb_row *r) {
+  FILE *f = ((tt__csv_ctx *)user)->f;
+  static const char *status_names[] = {"ok", "infeasible", "failed"};
+  fprintf(f, "%lld,", (long long)r->id);
+  const char *texts[] = {r->scene_id, r->scene, r->camera, r->context, r->plugin,
+                         r->plugin_version, r->config, r->objective};
+  for (size_t i = 0; i < sizeof texts / sizeof texts[0]; i++) {
+    tt__csv_text(f, texts[i]);
+    fputc(',', f);
+  }
+  fprintf(f, "%.17g,%.17g,%.17g,%s,", r->build_ms, r->render_ms, r->cost,
+          r->status >= 0 && r->status <= 2 ? status_names[r->status] : "unknown");
+  tt__csv_text(f, r->mode);
+  fprintf(f, ",%d,", r->iteration);
+  tt__csv_text(f, r->run_id);
+  fputc(',', f);
+  tt__csv_text(f, r->tuner);
+  fputc(',', f);
+  tt__csv_text(f, r->metrics);
+  fputc(',', f);
+  tt__csv_text(f, r->machine);
+  fputc(',', f);
+  tt__csv_text(f, r->cpu);
+  fputc(',', f);
+  tt__csv_text(f, r->timestamp);
+  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) {
+    fputc(',', f);
+    if (r->has_indicators && isfinite(r->indicators[i])) fprintf(f, "%.17g", r->indicators[i]);
+  }
+  fputc('\n', f);
+  return 0;
+}
+
+tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
+  if (!db || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_export_csv: db, path");
+  FILE *f = fopen(path, "w");
+  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open for writing: %s", path, strerror(errno));
+  fputs("id,scene_id,scene,camera,context,plugin,plugin_version,config,objective,build_ms,"
+        "render_ms,cost,status,mode,iteration,run_id,tuner,metrics,machine,cpu,timestamp", f);
+  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++)
+    fprintf(f, ",ind_%s", tt_scene_indicator_name(i));
+  fputc('\n', f);
+  tt__csv_ctx ctx = {f};
+  tt_status st = tt_tunedb_foreach(db, NULL, tt__csv_row, &ctx);
+  int ok = !ferror(f);
+  ok = (fclose(f) == 0) && ok;
+  if (st != TT_OK) return st;
+  return ok ? TT_OK : tt_set_error(TT_ERR_IO, "%s: write failed", path);
+}

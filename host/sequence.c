@@ -1,0 +1,419 @@
+/* host: --sequence rendering (see sequence.h). Each frame is rendered with every sample at
+ * the frame's Halton(2,3) jitter (tt_render_ctx.fixed_jitter), so geometry aliases as in a
+ * rasteriser while shading converges with --spp; motion vectors come from the previous
+ * frame's pose (one frame interval earlier, also for the first frame). The reference frame
+ * is the same pose rendered at --reference-scale times the resolution per axis with
+ * ordinary random sub-pixel positions, downsampled with a Blackman-Harris filter. */
+#include "sequence.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define TT__SEQ_BH_RADIUS 1.0f  /* output pixels: close to the 1-pixel box TAA converges to */
+
+/* Blackman-Harris window on [-r, r] (0 outside). */
+static double tt__bh(double x, double r) {
+  if (fabs(x) >= r) return 0.0;
+  double t = x / (2.0 * r) + 0.5;
+  return 0.35875 - 0.48829 * cos(2.0 * M_PI * t) + 0.14128 * cos(4.0 * M_PI * t) -
+         0.01168 * cos(6.0 * M_PI * t);
+}
+
+void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h, float radius,
+                       float *dst) {
+  uint32_t sw = w * scale, sh = h * scale;
+  int reach = (int)ceilf(radius * (float)scale) + 1;
+  /* Separable: horizontal pass into tmp (sh x w), then vertical. */
+  float *tmp = malloc((size_t)sh * w * 3 * sizeof(float));
+  if (!tmp) return;
+  for (uint32_t x = 0; x < w; x++) {
+    double cx = (x + 0.5) * scale;  /* output centre in source pixels */
+    int i0 = (int)floor(cx) - reach, i1 = (int)floor(cx) + reach;
+    for (uint32_t y = 0; y < sh; y++) {
+      double acc[3] = {0, 0, 0}, ws = 0;
+      for (int i = i0; i <= i1; i++) {
+        if (i < 0 || i >= (int)sw) continue;
+        double wt = tt__bh((i + 0.5 - cx) / scale, radius);
+        if (wt <= 0) continue;
+        const float *p = src + ((size_t)y * sw + i) * 3;
+        for (int c = 0; c < 3; c++) acc[c] += wt * p[c];
+        ws += wt;
+      }
+      for (int c = 0; c < 3; c++) tmp[((size_t)y * w + x) * 3 + c] = (float)(acc[c] / ws);
+    }
+  }
+  for (uint32_t y = 0; y < h; y++) {
+    double cy = (y + 0.5) * scale;
+    int j0 = (int)floor(cy) - reach, j1 = (int)floor(cy) + reach;
+    for (uint32_t x = 0; x < w; x++) {
+      double acc[3] = {0, 0, 0}, ws = 0;
+      for (int j = j0; j <= j1; j++) {
+        if (j < 0 || j >= (int)sh) continue;
+        double wt = tt__bh((j + 0.5 - cy) / scale, radius);
+        if (wt <= 0) continue;
+        const float *p = tmp + ((size_t)j * w + x) * 3;
+        for (int c = 0; c < 3; c++) acc[c] += wt * p[c];
+        ws += wt;
+      }
+      for (int c = 0; c < 3; c++) dst[((size_t)y * w + x) * 3 + c] = (float)(acc[c] / ws);
+    }
+  }
+  free(tmp);
+}
+
+/* Creates `dir` if missing (one level). */
+static int tt__ensure_dir(const char *dir) {
+  struct stat st;
+  if (stat(dir, &st) == 0) return S_ISDIR(st.st_mode) ? 0 : -1;
+  return mkdir(dir, 0777);
+}
+
+/* Everything one sequence run holds. */
+typedef struct tt__seq {
+  const tt__host_options *opt;
+  const tt_host *host;
+  tt_scene *scene;
+  tt_registry *reg;
+  tt_config *configs[TT_HOST_MAX_LIST];
+  const tt_accel_iface *ai;
+  const tt_integrator_iface *ii;
+  const tt_post_iface *pi;
+  tt_accel *accel;
+  tt_integrator *integrator;
+  tt_post *post;
+  const char *post_name;
+  uint64_t seed;
+  uint32_t spp;
+} tt__seq;
+
+/* Loads --plugin/--post plugins and the default accel/integrator; builds --set configs.
+ * Mirrors run.c's loading, whose helpers are private to it. */
+static int tt__seq_plugins(tt__seq *s) {
+  const tt__host_options *opt = s->opt;
+  for (int i = 0; i < opt->plugin_path_count; i++) tt_registry_add_dir(s->reg, opt->plugin_paths[i]);
+  for (int i = 0; i < opt->plugin_count; i++)
+    if (tt_registry_load(s->reg, opt->plugins[i], NULL) != TT_OK) {
+      fprintf(stderr, "host: plugin \"%s\": %s\n", opt->plugins[i], tt_last_error());
+      return TT_EXIT_PLUGIN;
+    }
+  if (opt->post && !tt_registry_find_name(s->reg, opt->post) &&
+      tt_registry_load(s->reg, opt->post, NULL) != TT_OK) {
+    fprintf(stderr, "host: --post \"%s\": %s\n", opt->post, tt_last_error());
+    return TT_EXIT_PLUGIN;
+  }
+  if (!tt_registry_find_kind(s->reg, TT_KIND_ACCEL) &&
+      tt_registry_load(s->reg, "accel_embree", NULL) != TT_OK) {
+    fprintf(stderr, "host: default accel plugin \"accel_embree\": %s\n", tt_last_error());
+    return TT_EXIT_PLUGIN;
+  }
+  if (!tt_registry_find_kind(s->reg, TT_KIND_INTEGRATOR) &&
+      tt_registry_load(s->reg, "integrator_pt", NULL) != TT_OK) {
+    fprintf(stderr, "host: default integrator plugin \"integrator_pt\": %s\n", tt_last_error());
+    return TT_EXIT_PLUGIN;
+  }
+  size_t n = tt_registry_count(s->reg);
+  for (size_t i = 0; i < n; i++) {
+    const tt_space *sp = tt_loaded_plugin_space(tt_registry_get(s->reg, i));
+    s->configs[i] = sp ? tt_config_create(sp) : NULL;
+  }
+  for (int k = 0; k < opt->set_count; k++) {
+    const char *arg = opt->sets[k];
+    const char *dot = strchr(arg, '.'), *eq = strchr(arg, '=');
+    char plugin[128], param[128];
+    snprintf(plugin, sizeof plugin, "%.*s", (int)(dot - arg), arg);
+    snprintf(param, sizeof param, "%.*s", (int)(eq - dot - 1), dot + 1);
+    size_t i = 0;
+    while (i < n && strcmp(tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name, plugin)) i++;
+    if (i == n || !s->configs[i]) {
+      fprintf(stderr, "host: --set %s: no loaded plugin \"%s\" with parameters\n", arg, plugin);
+      return TT_EXIT_USAGE;
+    }
+    if (tt_config_set_string(s->configs[i], param, eq + 1) != TT_OK) {
+      fprintf(stderr, "host: --set %s: %s\n", arg, tt_last_error());
+      return TT_EXIT_USAGE;
+    }
+  }
+  return TT_EXIT_OK;
+}
+
+/* Config of the first loaded plugin of `kind` (or named `name`), and its interface. */
+static const void *tt__seq_find(tt__seq *s, uint32_t kind, const char *name,
+                                const tt_config **cfg) {
+  for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
+    tt_loaded_plugin *p = tt_registry_get(s->reg, i);
+    const tt_plugin *e = tt_loaded_plugin_entry(p);
+    if (e->kind != kind || (name && strcmp(e->name, name))) continue;
+    *cfg = s->configs[i];
+    return tt_loaded_plugin_iface(p);
+  }
+  *cfg = NULL;
+  return NULL;
+}
+
+/* Renders one frame of `cam` into `film` (cleared) with all samples at `jitter` (or random
+ * sub-pixel positions when jitter is NULL) and resolves it into `rgb`. */
+static tt_status tt__seq_render(tt__seq *s, tt_film *film, const tt_camera *cam,
+                                const tt_camera *prev, const float *jitter, uint64_t seed,
+                                float *rgb) {
+  tt_film_clear(film);
+  s->ii->reset(s->integrator);
+  tt_render_ctx ctx;
+  memset(&ctx, 0, sizeof ctx);
+  ctx.struct_size = sizeof ctx;
+  ctx.scene = s->scene;
+  ctx.accel_iface = s->ai;
+  ctx.accel = s->accel;
+  ctx.film = film;
+  ctx.camera = cam;
+  ctx.prev_camera = prev;
+  ctx.seed = seed;
+  ctx.spp = s->spp;
+  if (jitter) {
+    ctx.fixed_jitter = 1;
+    ctx.jitter[0] = jitter[0];
+    ctx.jitter[1] = jitter[1];
+  }
+  tt_pass_stats ps;
+  memset(&ps, 0, sizeof ps);
+  ps.struct_size = sizeof ps;
+  tt_status st = s->ii->render_pass(s->integrator, &ctx, &ps);
+  if (st == TT_OK) tt_film_resolve(film, rgb);
+  return st;
+}
+
+/* Writes an EXR, reporting failures. */
+static int tt__seq_write(const char *path, uint32_t w, uint32_t h, uint32_t ch,
+                         const float *px, const char *const *names) {
+  tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
+  if (tt_image_write_exr(path, w, h, ch, px, names, meta, 1) != TT_OK) {
+    fprintf(stderr, "host: cannot write %s: %s\n", path, tt_last_error());
+    return -1;
+  }
+  return 0;
+}
+
+int tt__run_sequence(const tt__host_options *opt) {
+  if (!opt->out_dir) {
+    fprintf(stderr, "host: --sequence needs --out-dir DIR\n");
+    return TT_EXIT_USAGE;
+  }
+  tt__seq s;
+  memset(&s, 0, sizeof s);
+  s.opt = opt;
+  s.host = tt__host_services(opt->quiet);
+  if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
+    fprintf(stderr, "host: --threads: %s\n", tt_last_error());
+    return TT_EXIT_USAGE;
+  }
+  if (tt__ensure_dir(opt->out_dir) != 0) {
+    fprintf(stderr, "host: --out-dir %s: cannot create the directory: %s\n", opt->out_dir,
+            strerror(errno));
+    return TT_EXIT_OUTPUT;
+  }
+  if (tt_scene_load(opt->scene, &s.scene) != TT_OK) {
+    fprintf(stderr, "host: %s\n", tt_last_error());
+    return TT_EXIT_SCENE;
+  }
+  if (opt->width && tt_scene_set_resolution(s.scene, opt->width, opt->height) != TT_OK) {
+    fprintf(stderr, "host: --res: %s\n", tt_last_error());
+    tt_scene_destroy(s.scene);
+    return TT_EXIT_USAGE;
+  }
+  int rc = TT_EXIT_OK;
+  tt_film *film = NULL, *ref_film = NULL;
+  float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
+  FILE *manifest = NULL;
+  s.reg = tt_registry_create(s.host);
+  if (!s.reg) {
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
+  if ((rc = tt__seq_plugins(&s)) != TT_EXIT_OK) goto done;
+  const tt_config *acfg, *icfg, *pcfg = NULL;
+  s.ai = tt__seq_find(&s, TT_KIND_ACCEL, NULL, &acfg);
+  s.ii = tt__seq_find(&s, TT_KIND_INTEGRATOR, NULL, &icfg);
+  if (opt->post) {
+    char name[128];
+    const char *slash = strrchr(opt->post, '/');
+    snprintf(name, sizeof name, "%s", slash ? slash + 1 : opt->post);
+    char *dot = strstr(name, ".so");
+    if (dot) *dot = 0;
+    s.pi = tt__seq_find(&s, TT_KIND_POST, name, &pcfg);
+    if (!s.pi) {
+      fprintf(stderr, "host: --post %s: not a post-filter plugin (kind post)\n", opt->post);
+      rc = TT_EXIT_PLUGIN;
+      goto done;
+    }
+    s.post_name = tt_loaded_plugin_entry(tt_registry_find_name(s.reg, name))->name;
+  }
+  const tt_render_settings *settings = tt_scene_settings(s.scene);
+  s.seed = opt->seed_set ? opt->seed : settings->seed;
+  s.spp = opt->spp ? opt->spp : settings->spp;
+  tt_accel_build_stats bs;
+  memset(&bs, 0, sizeof bs);
+  bs.struct_size = sizeof bs;
+  if (s.ai->build(s.scene, acfg, &s.accel, &bs) != TT_OK ||
+      s.ii->create(s.scene, icfg, &s.integrator) != TT_OK) {
+    fprintf(stderr, "host: %s\n", tt_last_error());
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
+  const tt_camera *still = tt_scene_camera(s.scene);
+  uint32_t w = still->width, h = still->height, k = opt->reference_scale;
+  double fps = opt->fps > 0 ? opt->fps : 24.0;
+  film = tt_film_create(w, h, TT_AOV_DEPTH | TT_AOV_MOTION);
+  rgb = malloc((size_t)w * h * 3 * sizeof(float));
+  post_rgb = malloc((size_t)w * h * 3 * sizeof(float));
+  motion = malloc((size_t)w * h * 2 * sizeof(float));
+  if (k) {
+    ref_film = tt_film_create(w * k, h * k, 0);
+    ref_hi = malloc((size_t)w * k * h * k * 3 * sizeof(float));
+    ref = malloc((size_t)w * h * 3 * sizeof(float));
+  }
+  if (!film || !rgb || !post_rgb || !motion || (k && (!ref_film || !ref_hi || !ref))) {
+    fprintf(stderr, "host: out of memory for %ux%u frames\n", w, h);
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
+  if (s.pi && s.pi->create(w, h, pcfg, &s.post) != TT_OK) {
+    fprintf(stderr, "host: --post %s: %s\n", s.post_name, tt_last_error());
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
+  char path[4096];
+  snprintf(path, sizeof path, "%s/manifest.json", opt->out_dir);
+  manifest = fopen(path, "w");
+  if (!manifest) {
+    fprintf(stderr, "host: cannot write %s: %s\n", path, strerror(errno));
+    rc = TT_EXIT_OUTPUT;
+    goto done;
+  }
+  fprintf(manifest, "{\n  \"version\": 1,\n  \"scene\": \"%s\",\n  \"width\": %u,\n"
+          "  \"height\": %u,\n  \"fps\": %g,\n  \"spp\": %u,\n  \"seed\": %llu,\n"
+          "  \"jitter_cycle\": %u,\n  \"reference_scale\": %u,\n"
+          "  \"reference_filter\": \"blackman-harris radius %.1f px\",\n  \"post\": %s%s%s,\n"
+          "  \"colour\": \"linear RGB\",\n  \"motion\": \"pixels, this frame -> previous\",\n"
+          "  \"frames\": [\n", tt_scene_source(s.scene), w, h, fps, s.spp,
+          (unsigned long long)s.seed, TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS,
+          s.post_name ? "\"" : "", s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
+  if (!opt->quiet)
+    fprintf(stderr, "host: sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s\n",
+            opt->scene, opt->seq_first, opt->seq_last, fps, w, h, s.spp,
+            k ? ", reference x" : "", k ? (k == 2 ? "2" : k == 4 ? "4" : "K") : "");
+  static const char *const depth_names[] = {"Z"};
+  static const char *const motion_names[] = {"X", "Y"};
+  uint32_t nframes = opt->seq_last - opt->seq_first + 1;
+  for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
+    if (s.host->should_stop()) {
+      rc = TT_EXIT_INTERRUPTED;
+      break;
+    }
+    tt_camera cam, prev;
+    tt_scene_camera_at(s.scene, f / fps, &cam);
+    tt_scene_camera_at(s.scene, (f - 1.0) / fps, &prev);
+    cam.width = prev.width = w;
+    cam.height = prev.height = h;
+    uint32_t ji = f % TT__SEQ_JITTER_CYCLE;
+    float jit[2];
+    tt_jitter_halton23(ji, jit);
+    uint64_t t0 = s.host->clock_ns();
+    if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {
+      fprintf(stderr, "host: frame %u: %s\n", f, tt_last_error());
+      rc = TT_EXIT_FAILURE;
+      break;
+    }
+    double render_ms = (s.host->clock_ns() - t0) * 1e-6;
+    const float *depth = tt_film_aov_const(film, TT_AOV_DEPTH);
+    memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
+    char cpath[4096], dpath[4096], mpath[4096];
+    snprintf(cpath, sizeof cpath, "%s/color_%04u.exr", opt->out_dir, f);
+    snprintf(dpath, sizeof dpath, "%s/depth_%04u.exr", opt->out_dir, f);
+    snprintf(mpath, sizeof mpath, "%s/motion_%04u.exr", opt->out_dir, f);
+    if (tt__seq_write(cpath, w, h, 3, rgb, NULL) || tt__seq_write(dpath, w, h, 1, depth, depth_names) ||
+        tt__seq_write(mpath, w, h, 2, motion, motion_names)) {
+      rc = TT_EXIT_OUTPUT;
+      break;
+    }
+    double ref_ms = 0, post_ms = 0;
+    if (k) {
+      tt_camera hi = cam;
+      hi.width = w * k;
+      hi.height = h * k;
+      uint64_t r0 = s.host->clock_ns();
+      if (tt__seq_render(&s, ref_film, &hi, NULL, NULL, s.seed + 1000003u * (f + 1), ref_hi) != TT_OK) {
+        fprintf(stderr, "host: reference frame %u: %s\n", f, tt_last_error());
+        rc = TT_EXIT_FAILURE;
+        break;
+      }
+      tt__downsample_bh(ref_hi, k, w, h, TT__SEQ_BH_RADIUS, ref);
+      ref_ms = (s.host->clock_ns() - r0) * 1e-6;
+      snprintf(path, sizeof path, "%s/reference_%04u.exr", opt->out_dir, f);
+      if (tt__seq_write(path, w, h, 3, ref, NULL)) {
+        rc = TT_EXIT_OUTPUT;
+        break;
+      }
+    }
+    if (s.post) {
+      tt_post_frame pf;
+      memset(&pf, 0, sizeof pf);
+      pf.struct_size = sizeof pf;
+      pf.width = w;
+      pf.height = h;
+      pf.color = rgb;
+      pf.depth = depth;
+      pf.motion = motion;
+      pf.frame_index = f - opt->seq_first;
+      pf.jitter_index = ji;
+      pf.jitter[0] = jit[0];
+      pf.jitter[1] = jit[1];
+      pf.reset_history = f == opt->seq_first;
+      uint64_t p0 = s.host->clock_ns();
+      if (s.pi->process(s.post, &pf, post_rgb) != TT_OK) {
+        fprintf(stderr, "host: --post %s: frame %u: %s\n", s.post_name, f, tt_last_error());
+        rc = TT_EXIT_FAILURE;
+        break;
+      }
+      post_ms = (s.host->clock_ns() - p0) * 1e-6;
+      snprintf(path, sizeof path, "%s/post_%04u.exr", opt->out_dir, f);
+      if (tt__seq_write(path, w, h, 3, post_rgb, NULL)) {
+        rc = TT_EXIT_OUTPUT;
+        break;
+      }
+    }
+    fprintf(manifest, "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
+            "\"jitter\": [%.6f, %.6f], \"reset\": %s, \"color\": \"color_%04u.exr\", "
+            "\"depth\": \"depth_%04u.exr\", \"motion\": \"motion_%04u.exr\"",
+            f == opt->seq_first ? "" : ",", f, f / fps, ji, jit[0], jit[1],
+            f == opt->seq_first ? "true" : "false", f, f, f);
+    if (k) fprintf(manifest, ", \"reference\": \"reference_%04u.exr\"", f);
+    if (s.post) fprintf(manifest, ", \"post\": \"post_%04u.exr\", \"post_ms\": %.3f", f, post_ms);
+    fprintf(manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", render_ms, ref_ms);
+    tt__progress_update("sequence", (double)(f - opt->seq_first + 1) / nframes);
+  }
+  tt__progress_finish();
+  fprintf(manifest, "  ]\n}\n");
+  if (fclose(manifest) != 0 && rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
+  manifest = NULL;
+  if (!opt->quiet && rc == TT_EXIT_OK)
+    fprintf(stderr, "host: wrote %u frames to %s\n", nframes, opt->out_dir);
+done:
+  if (manifest) fclose(manifest);
+  if (s.post) s.pi->destroy(s.post);
+  if (s.integrator) s.ii->destroy(s.integrator);
+  if (s.accel) s.ai->destroy(s.accel);
+  tt_film_destroy(film);
+  tt_film_destroy(ref_film);
+  free(rgb);
+  free(ref_hi);
+  free(ref);
+  free(post_rgb);
+  free(motion);
+  for (size_t i = 0; i < TT_HOST_MAX_LIST; i++) tt_config_destroy(s.configs[i]);
+  tt_registry_destroy(s.reg);
+  tt_scene_destroy(s.scene);
+  return rc;
+}

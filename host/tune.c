@@ -1,0 +1,702 @@
+/* host: the online tuning loop (thesis Fig. 3.2 / 3.14) and random exploration.
+ *
+ * Each measurement applies a configuration to the target plugin (accel: destroy + build;
+ * integrator and post: configure), renders one pass into the film and turns what it
+ * measured into a cost. The tuning database (tunedb.h) answers configurations already
+ * measured in the same state on this machine, so no (state, configuration) pair is
+ * measured twice (thesis 3.3); every measurement is committed as soon as it is taken.
+ */
+#include "host.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+/* Everything one tuning phase works with. */
+typedef struct tt__tune_ctx {
+  tt__render_state *rs;
+  tt__tuning *t;
+  tt_loaded_plugin *target;
+  size_t target_index;          /* registry index of the target (its configs[] slot) */
+  uint32_t target_kind;
+  const tt_space *space;
+  const tt_post_iface *pi;
+  tt_post *post;
+  float *post_in, *post_out;
+  tt_tunedb *db;
+  tt_tunedb_row key;            /* state part of every row */
+  char *camera_json, *context_json;
+  char run_id[64];
+  char *applied;                /* config JSON the target currently runs with */
+  uint32_t spp;
+} tt__tune_ctx;
+
+/* strdup that reports failure through NULL only (callers treat NULL as "no text"). */
+static char *tt__dup(const char *s) {
+  if (!s) return NULL;
+  char *d = malloc(strlen(s) + 1);
+  if (d) strcpy(d, s);
+  return d;
+}
+
+/* Registry index of a loaded plugin. */
+static size_t tt__index_of(tt_registry *reg, const tt_loaded_plugin *p) {
+  for (size_t i = 0; i < tt_registry_count(reg); i++)
+    if (tt_registry_get(reg, i) == p) return i;
+  return (size_t)-1;
+}
+
+/* Comma-separated names of the loaded plugins, for error messages. */
+static void tt__names(tt_registry *reg, char *buf, size_t n) {
+  buf[0] = 0;
+  for (size_t i = 0; i < tt_registry_count(reg); i++) {
+    size_t len = strlen(buf);
+    snprintf(buf + len, n - len, "%s%s", i ? ", " : "",
+             tt_loaded_plugin_entry(tt_registry_get(reg, i))->name);
+  }
+}
+
+/* Non-zero if the plugin publishes a space with at least one parameter. */
+static int tt__tunable(const tt_loaded_plugin *p) {
+  const tt_space *s = p ? tt_loaded_plugin_space(p) : NULL;
+  return s && tt_space_count(s) > 0;
+}
+
+/* The plugin's tuning hint (tt.tuning_hint/1), or NULL. */
+static const tt_tuning_hint *tt__hint(const tt_loaded_plugin *p) {
+  const tt_tuning_hint *h = p ? tt_loaded_plugin_get(p, TT_TUNING_HINT_ID) : NULL;
+  if (!h || h->struct_size < sizeof(uint32_t) + sizeof(const char *) || !h->objective)
+    return NULL;
+  return h;
+}
+
+void tt__tuning_free(tt__tuning *t) {
+  if (!t) return;
+  for (size_t i = 0; i < t->count; i++) free(t->samples[i].config);
+  free(t->samples);
+  free(t->default_config);
+  free(t->best_config);
+  free(t);
+}
+
+/* Appends a sample (taking ownership of `config`); 0 or -1 when out of memory. */
+static int tt__push_sample(tt__tuning *t, const tt__tune_sample *s) {
+  if (t->count == t->cap) {
+    size_t cap = t->cap ? 2 * t->cap : 64;
+    tt__tune_sample *n = realloc(t->samples, cap * sizeof *n);
+    if (!n) return -1;
+    t->samples = n;
+    t->cap = cap;
+  }
+  t->samples[t->count++] = *s;
+  return 0;
+}
+
+/* JSON of the view: the part of the state the camera contributes. */
+static char *tt__camera_json(const tt_camera *c) {
+  char buf[1024];
+  snprintf(buf, sizeof buf,
+           "{\"position\":[%.9g,%.9g,%.9g],\"target\":[%.9g,%.9g,%.9g],\"up\":[%.9g,%.9g,%.9g],"
+           "\"fov_y\":%.9g,\"resolution\":[%u,%u]}",
+           c->position[0], c->position[1], c->position[2], c->target[0], c->target[1],
+           c->target[2], c->up[0], c->up[1], c->up[2], c->fov_y, c->width, c->height);
+  return tt__dup(buf);
+}
+
+/* JSON of everything else that shapes the cost: samples per measurement, threads, and the
+ * other rendering plugins with their configurations (an accel's render time depends on the
+ * integrator's maxDepth, an integrator's on the accel). Tuners are left out: they choose
+ * configurations, they do not change what a configuration costs. */
+static char *tt__context_json(tt__tune_ctx *c) {
+  tt__render_state *rs = c->rs;
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddNumberToObject(root, "spp", c->spp);
+  cJSON_AddNumberToObject(root, "threads", rs->rec->threads);
+  cJSON *plugins = cJSON_AddObjectToObject(root, "plugins");
+  for (size_t i = 0; i < tt_registry_count(rs->reg); i++) {
+    const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(rs->reg, i));
+    if (i == c->target_index || e->kind == TT_KIND_TUNER || e->kind == TT_KIND_PREDICTOR)
+      continue;
+    cJSON *p = cJSON_AddObjectToObject(plugins, e->name);
+    cJSON_AddStringToObject(p, "version", e->version);
+    char *cfg = rs->configs[i] ? tt_config_to_json(rs->configs[i]) : NULL;
+    cJSON *obj = cfg ? cJSON_Parse(cfg) : NULL;
+    tt_free(cfg);
+    cJSON_AddItemToObject(p, "config", obj ? obj : cJSON_CreateObject());
+  }
+  char *text = cJSON_PrintUnformatted(root);
+  cJSON_Delete(root);
+  char *out = tt__dup(text);
+  cJSON_free(text);
+  return out;
+}
+
+/* JSON object of a pass's metrics, or NULL when it has none. */
+static char *tt__metrics_json(const tt_pass_stats *ps) {
+  if (!ps->metric_count) return NULL;
+  cJSON *root = cJSON_CreateObject();
+  for (uint32_t m = 0; m < ps->metric_count && m < TT_MAX_METRICS; m++)
+    if (ps->metrics[m].name && isfinite(ps->metrics[m].value))
+      cJSON_AddNumberToObject(root, ps->metrics[m].name, ps->metrics[m].value);
+  char *text = cJSON_PrintUnformatted(root);
+  cJSON_Delete(root);
+  char *out = tt__dup(text);
+  cJSON_free(text);
+  return out;
+}
+
+/* Applies `cfg` to the target; TT_OK or the plugin's error. `build_ms` gets the accel's
+ * build time (0 for other kinds). */
+static tt_status tt__apply(tt__tune_ctx *c, const tt_config *cfg, const char *json,
+                           double *build_ms) {
+  tt__render_state *rs = c->rs;
+  tt_status st = TT_OK;
+  *build_ms = 0;
+  if (c->applied && !strcmp(c->applied, json) && (c->target_kind != TT_KIND_ACCEL || rs->accel))
+    return TT_OK;
+  if (c->target_kind == TT_KIND_ACCEL) {
+    /* the loop of Fig. 3.2: a new configuration means a new structure */
+    rs->ai->destroy(rs->accel);
+    rs->accel = NULL;
+    tt_accel_build_stats bs;
+    memset(&bs, 0, sizeof bs);
+    bs.struct_size = sizeof bs;
+    uint64_t b0 = rs->host->clock_ns();
+    st = rs->ai->build(rs->scene, cfg, &rs->accel, &bs);
+    double wall = (rs->host->clock_ns() - b0) * 1e-6;
+    *build_ms = bs.build_ms > 0 ? bs.build_ms : wall;
+    if (st == TT_OK) {
+      rs->rec->build = bs;
+      rs->rec->build_ms = *build_ms;
+    } else {
+      rs->accel = NULL;
+    }
+  } else if (c->target_kind == TT_KIND_INTEGRATOR) {
+    st = rs->ii->configure(rs->integrator, cfg);
+  } else if (c->target_kind == TT_KIND_POST) {
+    if (!c->post) st = c->pi->create(rs->camera->width, rs->camera->height, cfg, &c->post);
+    else st = c->pi->configure(c->post, cfg);
+  }
+  free(c->applied);
+  c->applied = st == TT_OK ? tt__dup(json) : NULL;
+  return st;
+}
+
+/* Runs a post filter on the film as it is; its wall ms, or a negative value on failure. */
+static double tt__run_post(tt__tune_ctx *c, uint32_t frame_index) {
+  tt__render_state *rs = c->rs;
+  uint32_t w = rs->camera->width, h = rs->camera->height;
+  tt_film_resolve(rs->film, c->post_in);
+  tt_post_frame f;
+  memset(&f, 0, sizeof f);
+  f.struct_size = sizeof f;
+  f.width = w;
+  f.height = h;
+  f.color = c->post_in;
+  f.frame_index = frame_index;
+  uint64_t t0 = rs->host->clock_ns();
+  tt_status st = c->pi->process(c->post, &f, c->post_out);
+  double ms = (rs->host->clock_ns() - t0) * 1e-6;
+  return st == TT_OK ? ms : -1.0;
+}
+
+/* The objective's cost of one pass; -1 (with a message) if the metric is not published. */
+static int tt__cost(const tt__objective *o, double build_ms, double render_ms,
+                    const tt_pass_stats *ps, double *cost, char *why, size_t why_n) {
+  switch (o->kind) {
+    case TT_OBJ_RENDER: *cost = render_ms; return 0;
+    case TT_OBJ_BUILD: *cost = build_ms; return 0;
+    case TT_OBJ_TOTAL: *cost = build_ms + render_ms; return 0;
+    case TT_OBJ_METRIC: break;
+  }
+  char names[512] = "";
+  for (uint32_t m = 0; m < ps->metric_count && m < TT_MAX_METRICS; m++) {
+    const char *name = ps->metrics[m].name;
+    if (!name) continue;
+    if (!strcmp(name, o->metric)) {
+      double v = ps->metrics[m].value;
+      if (!isfinite(v)) break;
+      *cost = o->goal == TT_GOAL_MAX ? -v : o->goal == TT_GOAL_TARGET ? fabs(v - o->target) : v;
+      return 0;
+    }
+    size_t len = strlen(names);
+    snprintf(names + len, sizeof names - len, "%s%s", len ? ", " : "", name);
+  }
+  snprintf(why, why_n, "the integrator's pass published no finite metric \"%s\" (it has: %s)",
+           o->metric, names[0] ? names : "none");
+  return -1;
+}
+
+/* Outcome of one measurement. */
+enum { TT__MEASURED = 0, TT__INTERRUPTED = 1, TT__BAD_METRIC = 2, TT__NO_MEMORY = 3 };
+
+/* Measures `cfg` (or answers it from the database), records and appends the sample.
+ * `*cost_out` gets the cost to feed back. */
+static int tt__measure(tt__tune_ctx *c, tt_config *cfg, int iteration, const char *mode,
+                       double *cost_out) {
+  tt__render_state *rs = c->rs;
+  tt__tuning *t = c->t;
+  tt__tune_sample s;
+  memset(&s, 0, sizeof s);
+  s.iteration = iteration;
+  char *json = tt_config_to_json(cfg);
+  s.config = tt__dup(json);
+  tt_free(json);
+  if (!s.config) return TT__NO_MEMORY;
+
+  tt_tunedb_row row = c->key;
+  row.config = s.config;
+  double cached = 0;
+  uint32_t times = 0;
+  if (c->db && tt_tunedb_lookup(c->db, &row, &cached, &times) == TT_OK) {
+    s.cost = cached;
+    s.cached = 1;
+    s.status = cached >= TT_COST_INFEASIBLE ? TT_TUNEDB_INFEASIBLE : TT_TUNEDB_OK;
+    t->cached++;
+    if (s.status == TT_TUNEDB_INFEASIBLE) t->infeasible++;
+    if (iteration < 0)
+      rs->host->log(TT_LOG_INFO, NULL, "tuning: default configuration: cost %.6g from the "
+                    "database (%u earlier measurement%s), not measured again", cached, times,
+                    times == 1 ? "" : "s");
+    else
+      rs->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: cost %.6g from the database "
+                    "(%u earlier measurement%s), not measured again", iteration, cached, times,
+                    times == 1 ? "" : "s");
+    *cost_out = cached;
+    return tt__push_sample(t, &s) ? TT__NO_MEMORY : TT__MEASURED;
+  }
+
+  char why[512] = "";
+  tt_pass_stats ps;
+  memset(&ps, 0, sizeof ps);
+  double build_ms = 0, render_ms = 0;
+  tt_config *work = tt_config_clone(cfg);
+  tt_check_result check = work ? tt_space_check(c->space, work, why, sizeof why) : TT_CHECK_OK;
+  if (!work) {
+    free(s.config);
+    return TT__NO_MEMORY;
+  }
+  if (check == TT_CHECK_INFEASIBLE) {
+    s.status = TT_TUNEDB_INFEASIBLE;
+    rs->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: infeasible: %s", iteration, why);
+  } else if (tt__apply(c, work, s.config, &build_ms) != TT_OK) {
+    s.status = TT_TUNEDB_FAILED;
+    rs->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: %s rejected %s: %s", iteration,
+                  t->plugin, s.config, tt_last_error());
+  } else {
+    tt_status st = tt__render_pass(rs, c->spp, &ps, &render_ms);
+    if (st == TT_ERR_INTERRUPTED) {
+      tt_config_destroy(work);
+      free(s.config);
+      return TT__INTERRUPTED;
+    }
+    if (st == TT_OK && c->target_kind == TT_KIND_POST) {
+      double pms = tt__run_post(c, rs->pass);
+      if (pms < 0) st = TT_ERR_INTERNAL;
+      else render_ms += pms;
+    }
+    if (st != TT_OK) {
+      s.status = TT_TUNEDB_FAILED;
+      rs->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: the pass failed: %s", iteration,
+                    tt_last_error());
+    } else if (tt__cost(&t->objective, build_ms, render_ms, &ps, &s.cost, why, sizeof why)) {
+      tt_config_destroy(work);
+      free(s.config);
+      fprintf(stderr, "host: --objective %s: %s\n", t->objective.spec, why);
+      return TT__BAD_METRIC;
+    } else {
+      s.status = TT_TUNEDB_OK;
+    }
+  }
+  tt_config_destroy(work);
+  if (s.status != TT_TUNEDB_OK) s.cost = TT_COST_INFEASIBLE;
+  if (s.status == TT_TUNEDB_INFEASIBLE) t->infeasible++;
+  if (s.status == TT_TUNEDB_FAILED) t->failed++;
+  s.build_ms = build_ms;
+  s.render_ms = render_ms;
+  t->measured++;
+
+  if (c->db) {
+    char *metrics = tt__metrics_json(&ps);
+    row.build_ms = build_ms;
+    row.render_ms = render_ms;
+    row.cost = s.cost;
+    row.status = s.status;
+    row.mode = iteration < 0 ? "default" : mode;
+    row.iteration = iteration;
+    row.metrics = metrics;
+    if (tt_tunedb_record(c->db, &row) != TT_OK)
+      rs->host->log(TT_LOG_WARN, NULL, "tuning: %s", tt_last_error());
+    free(metrics);
+  }
+  *cost_out = s.cost;
+  return tt__push_sample(t, &s) ? TT__NO_MEMORY : TT__MEASURED;
+}
+
+/* SplitMix64: the exploration's random stream (seeded from the run's seed). */
+static uint64_t tt__splitmix(uint64_t *state) {
+  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+/* Picks the best configuration: lowest mean cost over every measurement of the same
+ * configuration (the default included), so one lucky timing cannot win over a config
+ * measured several times, matching how tuner_nm averages re-measured incumbents. */
+static void tt__pick_best(tt__tuning *t) {
+  t->best_cost = TT_COST_INFEASIBLE;
+  free(t->best_config);
+  t->best_config = NULL;
+  for (size_t i = 0; i < t->count; i++) {
+    const char *cfg = t->samples[i].config;
+    int seen = 0;
+    for (size_t j = 0; j < i && !seen; j++) seen = !strcmp(t->samples[j].config, cfg);
+    if (seen) continue;
+    double sum = 0;
+    uint32_t n = 0;
+    for (size_t j = i; j < t->count; j++) {
+      if (strcmp(t->samples[j].config, cfg) || t->samples[j].status == TT_TUNEDB_FAILED) continue;
+      sum += t->samples[j].cost;
+      n++;
+    }
+    if (!n) continue;
+    double mean = sum / n;
+    if (mean < t->best_cost || !t->best_config) {
+      t->best_cost = mean;
+      free(t->best_config);
+      t->best_config = tt__dup(cfg);
+    }
+  }
+  if (!t->best_config) {
+    t->best_config = tt__dup(t->default_config);
+    t->best_cost = t->default_cost;
+  }
+  t->best_from = t->best_config && t->default_config && !strcmp(t->best_config, t->default_config)
+                     ? "default" : t->mode;
+}
+
+/* Chooses the target plugin and objective from the options; prints and returns
+ * TT_EXIT_USAGE on a bad choice. */
+static int tt__choose(tt__tune_ctx *c) {
+  tt__render_state *rs = c->rs;
+  const tt__host_options *opt = rs->opt;
+  char names[1024];
+  const tt_tuning_hint *hint = NULL;
+  if (opt->tune) {
+    c->target = tt_registry_find_name(rs->reg, opt->tune);
+    if (!c->target) {
+      tt__names(rs->reg, names, sizeof names);
+      fprintf(stderr, "host: --tune %s: no loaded plugin is called \"%s\" (loaded: %s)\n",
+              opt->tune, opt->tune, names);
+      return TT_EXIT_USAGE;
+    }
+    uint32_t kind = tt_loaded_plugin_entry(c->target)->kind;
+    if (kind != TT_KIND_ACCEL && kind != TT_KIND_INTEGRATOR && kind != TT_KIND_POST) {
+      fprintf(stderr, "host: --tune %s: a %s plugin cannot be tuned by the host (only accel, "
+              "integrator and post plugins)\n", opt->tune, tt_plugin_kind_name(kind));
+      return TT_EXIT_USAGE;
+    }
+    if (!tt__tunable(c->target)) {
+      fprintf(stderr, "host: --tune %s: the plugin publishes no tunable parameters\n", opt->tune);
+      return TT_EXIT_USAGE;
+    }
+    hint = tt__hint(c->target);
+  } else {
+    /* an integrator that says how to tune it (PSSMLT) wins; otherwise the accel, whose
+     * parameters change speed only, never the image (integrator_pt's maxDepth would) */
+    hint = tt__hint(rs->integ_p);
+    if (hint && tt__tunable(rs->integ_p)) c->target = rs->integ_p;
+    else if (tt__tunable(rs->accel_p)) c->target = rs->accel_p, hint = NULL;
+    else {
+      fprintf(stderr, "host: tuning: neither the integrator nor the accel publishes tunable "
+              "parameters; name a plugin with --tune\n");
+      return TT_EXIT_USAGE;
+    }
+  }
+  c->target_index = tt__index_of(rs->reg, c->target);
+  c->target_kind = tt_loaded_plugin_entry(c->target)->kind;
+  c->space = tt_loaded_plugin_space(c->target);
+  const char *spec = opt->objective ? opt->objective : hint ? hint->objective : "render";
+  if (tt__parse_objective(opt->objective ? "--objective" : "tuning hint", spec,
+                          &c->t->objective))
+    return TT_EXIT_USAGE;
+  if ((c->t->objective.kind == TT_OBJ_BUILD || c->t->objective.kind == TT_OBJ_TOTAL) &&
+      c->target_kind != TT_KIND_ACCEL) {
+    fprintf(stderr, "host: --objective %s: only an accel target builds anything; %s is "
+            "of kind %s (use render or metric:NAME)\n", spec, tt_loaded_plugin_entry(c->target)->name,
+            tt_plugin_kind_name(c->target_kind));
+    return TT_EXIT_USAGE;
+  }
+  if (c->target_kind == TT_KIND_POST) {
+    c->pi = tt_loaded_plugin_iface(c->target);
+    size_t px = (size_t)rs->camera->width * rs->camera->height * 3;
+    c->post_in = malloc(px * sizeof(float));
+    c->post_out = malloc(px * sizeof(float));
+    if (!c->post_in || !c->post_out) {
+      fprintf(stderr, "host: tuning: out of memory\n");
+      return TT_EXIT_FAILURE;
+    }
+  }
+  return TT_EXIT_OK;
+}
+
+/* Opens the database (--db, the default path, or none with --no-db). */
+static int tt__open_db(tt__tune_ctx *c) {
+  const tt__host_options *opt = c->rs->opt;
+  if (opt->no_db) return TT_EXIT_OK;
+  char *path = opt->db ? tt__dup(opt->db) : tt_tunedb_default_path();
+  if (!path) {
+    c->rs->host->log(TT_LOG_WARN, NULL, "tuning: no $XDG_DATA_HOME or $HOME: tuning without "
+                     "a database (use --db PATH)");
+    return TT_EXIT_OK;
+  }
+  if (tt_tunedb_open(path, &c->db) != TT_OK) {
+    if (opt->db) {
+      fprintf(stderr, "host: --db: %s\n", tt_last_error());
+      free(path);
+      return TT_EXIT_FAILURE;
+    }
+    c->rs->host->log(TT_LOG_WARN, NULL, "tuning: %s; tuning without a database",
+                     tt_last_error());
+    c->db = NULL;
+  }
+  free(path);
+  return TT_EXIT_OK;
+}
+
+/* Fills the state part of the database key, shared by every row of the run. */
+static int tt__make_key(tt__tune_ctx *c) {
+  tt__render_state *rs = c->rs;
+  const tt_plugin *e = tt_loaded_plugin_entry(c->target);
+  c->camera_json = tt__camera_json(rs->camera);
+  c->context_json = tt__context_json(c);
+  if (!c->camera_json || !c->context_json) return -1;
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  snprintf(c->run_id, sizeof c->run_id, "%llx-%d",
+           (unsigned long long)ts.tv_sec * 1000000000ull + (unsigned long long)ts.tv_nsec,
+           (int)getpid());
+  memset(&c->key, 0, sizeof c->key);
+  c->key.struct_size = sizeof c->key;
+  c->key.scene_id = tt_scene_id(rs->scene);
+  c->key.scene = tt_scene_source(rs->scene);
+  c->key.camera = c->camera_json;
+  c->key.context = c->context_json;
+  c->key.plugin = e->name;
+  c->key.plugin_version = e->version;
+  c->key.objective = c->t->objective.spec;
+  c->key.run_id = c->run_id;
+  c->key.tuner = c->t->tuner;
+  if (c->db) {
+    tt_scene_indicators(rs->scene, c->key.indicators);
+    c->key.has_indicators = 1;
+  }
+  return 0;
+}
+
+/* Draws progress of the tuning phase. */
+static void tt__tune_progress(const tt__tuning *t, uint32_t done) {
+  tt__progress_update(!strcmp(t->mode, "explore") ? "explore" : "tuning",
+                      t->requested ? (double)done / t->requested : 1.0);
+}
+
+int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
+  const tt__host_options *opt = rs->opt;
+  *out = NULL;
+  tt_loaded_plugin *tuner_p = tt_registry_find_kind(rs->reg, TT_KIND_TUNER);
+  int explore = opt->explore > 0;
+  if (!tuner_p && !explore) {
+    if (opt->tune || opt->objective || opt->iterations || opt->tune_spp) {
+      fprintf(stderr, "host: %s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
+              opt->tune ? "--tune" : opt->objective ? "--objective"
+              : opt->iterations ? "--iterations" : "--tune-spp");
+      return TT_EXIT_USAGE;
+    }
+    return TT_EXIT_OK;
+  }
+  if (explore && opt->iterations) {
+    fprintf(stderr, "host: --explore N and --iterations exclude each other (exploration "
+            "measures N random configurations)\n");
+    return TT_EXIT_USAGE;
+  }
+
+  tt__tuning *t = calloc(1, sizeof *t);
+  if (!t) return TT_EXIT_FAILURE;
+  tt__tune_ctx c;
+  memset(&c, 0, sizeof c);
+  c.rs = rs;
+  c.t = t;
+  c.spp = opt->tune_spp ? opt->tune_spp : 1;
+  t->mode = explore ? "explore" : "tune";
+  t->tuner = explore ? NULL : tt_loaded_plugin_entry(tuner_p)->name;
+  t->requested = explore ? opt->explore : opt->iterations ? opt->iterations
+                                                          : TT_HOST_DEFAULT_ITERATIONS;
+  int rc = tt__choose(&c);
+  tt_tuner *tuner = NULL;
+  tt_config *cand = NULL;
+  const tt_tuner_iface *ti = NULL;
+  if (rc == TT_EXIT_OK) rc = tt__open_db(&c);
+  if (rc != TT_EXIT_OK) goto fail;
+  const tt_plugin *te = tt_loaded_plugin_entry(c.target);
+  t->plugin = te->name;
+  t->plugin_version = te->version;
+  t->db_path = c.db ? tt_tunedb_path(c.db) : NULL;
+  if (tt__make_key(&c)) {
+    rc = TT_EXIT_FAILURE;
+    goto fail;
+  }
+  tt_config *current = rs->configs[c.target_index];
+  char *json = tt_config_to_json(current);
+  t->default_config = tt__dup(json);
+  tt_free(json);
+  /* c.applied stays NULL: the default is applied again like every candidate (an accel is
+   * rebuilt), so its build time is measured and it pays the same cold-start costs */
+  if (explore && tuner_p && !opt->quiet)
+    rs->host->log(TT_LOG_INFO, NULL, "tuning: --explore draws random configurations; the "
+                  "tuner %s is not used", tt_loaded_plugin_entry(tuner_p)->name);
+  rs->host->log(TT_LOG_INFO, NULL, "%s %s %s%s%s, objective %s, %u %s, %u spp per "
+                "measurement, database %s", explore ? "exploring" : "tuning", te->name,
+                te->version, explore ? "" : " with ", explore ? "" : t->tuner,
+                t->objective.spec, t->requested, explore ? "configurations" : "iterations",
+                c.spp, c.db ? tt_tunedb_path(c.db) : "none");
+
+  uint64_t t0 = rs->host->clock_ns();
+  cand = tt_config_create(c.space);
+  if (!cand) {
+    rc = TT_EXIT_FAILURE;
+    goto fail;
+  }
+  if (!explore) {
+    ti = tt_loaded_plugin_iface(tuner_p);
+    const tt_config *settings = rs->configs[tt__index_of(rs->reg, tuner_p)];
+    if (ti->create(c.space, settings, rs->rec->seed, &tuner) != TT_OK) {
+      fprintf(stderr, "host: %s: %s\n", t->tuner, tt_last_error());
+      rc = TT_EXIT_FAILURE;
+      goto fail;
+    }
+  }
+
+  /* one unmeasured warm-up pass (it still goes into the image): the first pass pays for
+   * page faults and lazy initialisation, which would make the default look slow */
+  double cost = 0;
+  tt_pass_stats warm;
+  if (tt__render_pass(rs, 1, &warm, &cost) == TT_ERR_INTERRUPTED) t->interrupted = 1;
+
+  /* the default configuration first: the baseline the tuned one is compared with */
+  int m = t->interrupted ? TT__INTERRUPTED : tt__measure(&c, current, -1, t->mode, &cost);
+  if (m == TT__BAD_METRIC) {
+    rc = TT_EXIT_USAGE;
+    goto fail;
+  }
+  if (m == TT__NO_MEMORY) {
+    rc = TT_EXIT_FAILURE;
+    goto fail;
+  }
+  t->interrupted = m == TT__INTERRUPTED;
+  t->default_cost = t->count ? t->samples[0].cost : TT_COST_INFEASIBLE;
+  tt__tune_progress(t, 0);
+
+  uint64_t rng = rs->rec->seed ^ 0x7475756e65ull;
+  size_t dims = tt_space_count(c.space);
+  double *unit = calloc(dims ? dims : 1, sizeof *unit);
+  for (uint32_t it = 0; it < t->requested && !t->interrupted && unit; it++) {
+    if (rs->host->should_stop()) {
+      t->interrupted = 1;
+      break;
+    }
+    if (opt->time_budget > 0 && (rs->host->clock_ns() - t0) * 1e-9 >= opt->time_budget) break;
+    if (explore) {
+      for (size_t d = 0; d < dims; d++) unit[d] = (tt__splitmix(&rng) >> 11) * 0x1.0p-53;
+      tt_config_from_unit(cand, unit);
+      char why[256];
+      /* a repairable draw is measured as repaired; an infeasible one is recorded as such
+       * (tt__measure checks again), since where the constraints bite is part of the map */
+      tt_space_check(c.space, cand, why, sizeof why);
+    } else {
+      tt_status st = ti->next(tuner, cand);
+      if (st == TT_DONE) {
+        t->converged = 1;
+        rs->host->log(TT_LOG_INFO, NULL, "tuning: %s reports convergence after %u iterations",
+                      t->tuner, it);
+        break;
+      }
+      if (st != TT_OK) {
+        rs->host->log(TT_LOG_ERROR, NULL, "tuning: %s: next: %s", t->tuner, tt_last_error());
+        rc = TT_EXIT_FAILURE;
+        break;
+      }
+    }
+    m = tt__measure(&c, cand, (int)it, t->mode, &cost);
+    if (m == TT__INTERRUPTED) {
+      t->interrupted = 1;
+      break;
+    }
+    if (m != TT__MEASURED) {
+      rc = m == TT__BAD_METRIC ? TT_EXIT_USAGE : TT_EXIT_FAILURE;
+      break;
+    }
+    if (!explore && ti->feedback(tuner, cost) != TT_OK) {
+      rs->host->log(TT_LOG_ERROR, NULL, "tuning: %s: feedback: %s", t->tuner, tt_last_error());
+      rc = TT_EXIT_FAILURE;
+      break;
+    }
+    tt__tune_progress(t, it + 1);
+  }
+  free(unit);
+  tt__progress_finish();
+  t->ms = (rs->host->clock_ns() - t0) * 1e-6;
+
+  /* keep the best: the rest of the image renders with it */
+  tt__pick_best(t);
+  if (t->best_config && tt_config_from_json(current, t->best_config, "tuning") != TT_OK)
+    rs->host->log(TT_LOG_ERROR, NULL, "tuning: cannot restore the best configuration: %s",
+                  tt_last_error());
+  if (!t->interrupted && rc == TT_EXIT_OK) {
+    double build_ms = 0;
+    if (tt__apply(&c, current, t->best_config, &build_ms) != TT_OK) {
+      fprintf(stderr, "host: tuning: %s rejected the best configuration: %s\n", t->plugin,
+              tt_last_error());
+      rc = TT_EXIT_FAILURE;
+    }
+  }
+  uint32_t iters = t->count ? (uint32_t)t->count - 1 : 0;
+  if (t->default_cost > 0 && t->default_cost < TT_COST_INFEASIBLE &&
+      t->best_cost < TT_COST_INFEASIBLE && t->objective.kind != TT_OBJ_METRIC)
+    rs->host->log(TT_LOG_INFO, NULL, "tuning: best cost %.6g (%s), default %.6g: %.1f%% lower, "
+                  "after %u iterations (%u measured, %u from the database): %s", t->best_cost,
+                  t->best_from, t->default_cost, 100.0 * (1.0 - t->best_cost / t->default_cost),
+                  iters, t->measured, t->cached, t->best_config);
+  else
+    rs->host->log(TT_LOG_INFO, NULL, "tuning: best cost %.6g (%s), default %.6g, after %u "
+                  "iterations (%u measured, %u from the database): %s", t->best_cost,
+                  t->best_from, t->default_cost, iters, t->measured, t->cached,
+                  t->best_config);
+
+fail:
+  if (tuner) ti->destroy(tuner);
+  tt_config_destroy(cand);
+  free(c.applied);
+  free(c.camera_json);
+  free(c.context_json);
+  if (c.post) c.pi->destroy(c.post);
+  free(c.post_in);
+  free(c.post_out);
+  /* the path is still shown in stats: keep a copy alive as long as the record */
+  if (c.db) {
+    static char db_path[4096];
+    snprintf(db_path, sizeof db_path, "%s", tt_tunedb_path(c.db));
+    t->db_path = db_path;
+  }
+  tt_tunedb_close(c.db);
+  if (rc == TT_EXIT_USAGE) {
+    tt__tuning_free(t);
+    return rc;
+  }
+  *out = t;
+  return rc;
+}

@@ -1,0 +1,492 @@
+/* accel_embree: the custom backend's builder.
+ *
+ * Embree's generic builder (rtcBuildBVH) decides the tree with every numeric parameter of
+ * thesis Table 3.1; its callbacks only record a temporary tree in Embree's thread-local
+ * allocator. A single-threaded depth-first pass then lays that tree out our way (BVH2/4/8
+ * nodes with SoA child boxes, padded with empty boxes; leaves of precomputed 4-triangle
+ * packets; nodes in pre-order so a parent and its first child are close in memory), counts
+ * the statistics, and the Embree BVH object is released. Traversal: accel_embree_trav.c. */
+#include "accel_embree.h"
+#include "accel_embree_bvh.h"
+
+#include <embree3/rtcore.h>
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Spatial-split builds keep a split budget in the top 5 bits of geomID (Embree 3.13.5,
+ * RESERVED_NUM_SPATIAL_SPLITS_GEOMID_BITS); leaves must mask them off. */
+#define TT__GEOMID_BITS 27
+#define TT__GEOMID_MASK ((1u << TT__GEOMID_BITS) - 1u)
+
+/* Deepest tree the kernels' fixed stacks accept (Embree keeps depth <= maxDepth <= 64). */
+#define TT__MAX_TREE_DEPTH 88
+
+/* Temporary tree, allocated by Embree's thread-local allocator (freed with the RTCBVH). */
+typedef struct tt__tmp_inner {
+  uint32_t is_leaf;  /* 0 */
+  uint32_t count;
+  void *child[8];
+  struct RTCBounds bounds[8];
+} tt__tmp_inner;
+
+typedef struct tt__tmp_leaf {
+  uint32_t is_leaf;  /* 1 */
+  uint32_t count;
+  uint32_t ids[];    /* count (geomID, primID) pairs */
+} tt__tmp_leaf;
+
+/* State shared by the callbacks (called from Embree's worker threads). */
+typedef struct tt__cb_ctx {
+  const tt_scene *scene;
+  uint32_t geom_mask;             /* TT__GEOMID_MASK for spatial splits, else all ones */
+  _Atomic uint64_t inner, leaves, packets;
+  _Atomic int too_wide;           /* a node with more than 8 children was requested */
+} tt__cb_ctx;
+
+/* createNode: an inner node sized for 8 children (we never ask for more). */
+static void *tt__cb_node(RTCThreadLocalAllocator alloc, unsigned int count, void *user) {
+  tt__cb_ctx *c = user;
+  tt__tmp_inner *n = rtcThreadLocalAlloc(alloc, sizeof *n, 16);
+  if (!n) return NULL;
+  if (count > 8) {
+    atomic_store(&c->too_wide, 1);
+    count = 8;
+  }
+  n->is_leaf = 0;
+  n->count = count;
+  atomic_fetch_add_explicit(&c->inner, 1, memory_order_relaxed);
+  return n;
+}
+
+/* setNodeChildren: keep the child pointers. */
+static void tt__cb_children(void *node, void **children, unsigned int count, void *user) {
+  (void)user;
+  tt__tmp_inner *n = node;
+  for (unsigned i = 0; i < count && i < 8; i++) n->child[i] = children[i];
+}
+
+/* setNodeBounds: keep the child boxes (the parent's boxes are what the SoA node stores). */
+static void tt__cb_bounds(void *node, const struct RTCBounds **bounds, unsigned int count,
+                          void *user) {
+  (void)user;
+  tt__tmp_inner *n = node;
+  for (unsigned i = 0; i < count && i < 8; i++) n->bounds[i] = *bounds[i];
+}
+
+/* createLeaf: the (geomID, primID) pairs; the triangles are packed later, in one pass. */
+static void *tt__cb_leaf(RTCThreadLocalAllocator alloc, const struct RTCBuildPrimitive *prims,
+                         size_t count, void *user) {
+  tt__cb_ctx *c = user;
+  tt__tmp_leaf *l = rtcThreadLocalAlloc(alloc, sizeof *l + 8 * count, 16);
+  if (!l) return NULL;
+  l->is_leaf = 1;
+  l->count = (uint32_t)count;
+  for (size_t i = 0; i < count; i++) {
+    l->ids[2 * i] = prims[i].geomID & c->geom_mask;
+    l->ids[2 * i + 1] = prims[i].primID;
+  }
+  atomic_fetch_add_explicit(&c->leaves, 1, memory_order_relaxed);
+  atomic_fetch_add_explicit(&c->packets, (count + 3) / 4, memory_order_relaxed);
+  return l;
+}
+
+/* Vertex pointers of a triangle. */
+static inline void tt__tri_verts(const tt_mesh *m, uint32_t prim, const float *v[3]) {
+  for (int k = 0; k < 3; k++) v[k] = m->positions + 3 * (size_t)m->indices[3 * (size_t)prim + k];
+}
+
+/* splitPrimitive (quality 3): clips the triangle at the plane and intersects each side's
+ * box with the primitive's current box (which may already be a fragment), as Embree's own
+ * triangle splitter does. */
+static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim, float pos,
+                         struct RTCBounds *lo, struct RTCBounds *hi, void *user) {
+  tt__cb_ctx *c = user;
+  const tt_mesh *m = tt_scene_mesh(c->scene, prim->geomID & c->geom_mask);
+  const float *v[3];
+  tt__tri_verts(m, prim->primID, v);
+  float l[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+  float r[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+#define TT__EXT(b, p)                                  \
+  for (int k = 0; k < 3; k++) {                        \
+    b[k] = fminf(b[k], (p)[k]);                        \
+    b[3 + k] = fmaxf(b[3 + k], (p)[k]);                \
+  }
+  for (int i = 0; i < 3; i++) {
+    const float *a = v[i], *b = v[(i + 1) % 3];
+    float ad = a[dim], bd = b[dim];
+    if (ad <= pos) TT__EXT(l, a);
+    if (ad >= pos) TT__EXT(r, a);
+    if ((ad < pos && pos < bd) || (bd < pos && pos < ad)) {
+      float t = (pos - ad) / (bd - ad), p[3];
+      for (int k = 0; k < 3; k++) p[k] = a[k] + t * (b[k] - a[k]);
+      p[dim] = pos;
+      TT__EXT(l, p);
+      TT__EXT(r, p);
+    }
+  }
+#undef TT__EXT
+  const float pl[3] = {prim->lower_x, prim->lower_y, prim->lower_z};
+  const float pu[3] = {prim->upper_x, prim->upper_y, prim->upper_z};
+  float *lo_lo = &lo->lower_x, *lo_up = &lo->upper_x, *hi_lo = &hi->lower_x, *hi_up = &hi->upper_x;
+  for (int k = 0; k < 3; k++) {
+    lo_lo[k] = fmaxf(l[k], pl[k]);
+    lo_up[k] = fminf(l[3 + k], pu[k]);
+    hi_lo[k] = fmaxf(r[k], pl[k]);
+    hi_up[k] = fminf(r[3 + k], pu[k]);
+  }
+  lo->align0 = lo->align1 = hi->align0 = hi->align1 = 0.0f;
+}
+
+/* ---- flattening into our layout ---- */
+
+typedef struct tt__flat {
+  const tt_scene *scene;
+  int N, robust;
+  char *nodes;                  /* capacity node_cap nodes of 32 * N bytes */
+  uint64_t node_count, node_cap;
+  tt__tri4 *packets;
+  uint64_t packet_count, packet_cap;
+  uint64_t leaves;
+  double area_inner, area_leaf_tris;
+  uint32_t max_depth;
+  const char *error;            /* set on the first structural problem */
+} tt__flat;
+
+/* Surface area of a box given as lower[3], upper[3]. */
+static double tt__area(const float *lower, const float *upper) {
+  double d[3];
+  for (int k = 0; k < 3; k++) d[k] = upper[k] > lower[k] ? (double)upper[k] - lower[k] : 0.0;
+  return 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+}
+
+/* Writes triangle `j` of a leaf into its packet lane: vertices or edges, and Ng computed
+ * in double from the same float data the test uses, so den and T agree with it. */
+static void tt__pack_tri(tt__flat *f, tt__tri4 *pk, int lane, uint32_t geom, uint32_t prim) {
+  const float *v[3];
+  tt__tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
+  float e1[3], e2[3];
+  for (int k = 0; k < 3; k++) {
+    e1[k] = v[0][k] - v[1][k];
+    e2[k] = v[2][k] - v[0][k];
+    pk->p[k][lane] = v[0][k];
+    pk->p[3 + k][lane] = f->robust ? v[1][k] : e1[k];
+    pk->p[6 + k][lane] = f->robust ? v[2][k] : e2[k];
+  }
+  double a[3], b[3];  /* v1 - v0 and v2 - v0 */
+  for (int k = 0; k < 3; k++) {
+    a[k] = f->robust ? (double)v[1][k] - v[0][k] : -(double)e1[k];
+    b[k] = f->robust ? (double)v[2][k] - v[0][k] : (double)e2[k];
+  }
+  pk->p[9][lane] = (float)(a[1] * b[2] - a[2] * b[1]);
+  pk->p[10][lane] = (float)(a[2] * b[0] - a[0] * b[2]);
+  pk->p[11][lane] = (float)(a[0] * b[1] - a[1] * b[0]);
+  pk->geom[lane] = geom;
+  pk->prim[lane] = prim;
+}
+
+/* Lays out the temporary subtree `tmp` (whose box is lower/upper, at `depth`, root = 1)
+ * and returns its reference, or TT__REF_NONE for an empty leaf. */
+static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const float *lower,
+                            const float *upper) {
+  if (f->error) return TT__REF_NONE;
+  if (!tmp) {
+    f->error = "Embree returned a NULL child";
+    return TT__REF_NONE;
+  }
+  if (depth > f->max_depth) f->max_depth = depth;
+  if (depth > TT__MAX_TREE_DEPTH) {
+    f->error = "tree deeper than the traversal stack allows";
+    return TT__REF_NONE;
+  }
+  if (((const tt__tmp_leaf *)tmp)->is_leaf) {
+    const tt__tmp_leaf *l = tmp;
+    if (l->count == 0) return TT__REF_NONE;
+    uint32_t np = (l->count + 3) / 4;
+    if (np > TT__LEAF_MAX_PACKETS || f->packet_count + np > f->packet_cap ||
+        f->packet_count + np - 1 > TT__LEAF_MAX_FIRST) {
+      f->error = np > TT__LEAF_MAX_PACKETS ? "a leaf holds more than 64 triangles"
+                                           : "too many triangle packets for 27-bit indices";
+      return TT__REF_NONE;
+    }
+    uint64_t first = f->packet_count;
+    f->packet_count += np;
+    tt__tri4 *pk = f->packets + first;
+    for (uint32_t i = 0; i < np; i++)
+      for (int lane = 0; lane < 4; lane++) pk[i].geom[lane] = pk[i].prim[lane] = TT_INVALID_ID;
+    for (uint32_t j = 0; j < l->count; j++)
+      tt__pack_tri(f, &pk[j / 4], (int)(j % 4), l->ids[2 * j], l->ids[2 * j + 1]);
+    f->leaves++;
+    f->area_leaf_tris += tt__area(lower, upper) * l->count;
+    return TT__REF_LEAF | ((np - 1) << TT__LEAF_SHIFT) | (uint32_t)first;
+  }
+  const tt__tmp_inner *n = tmp;
+  if (f->node_count >= f->node_cap || f->node_count > TT__NODE_MAX_INDEX) {
+    f->error = "more inner nodes than Embree created";
+    return TT__REF_NONE;
+  }
+  const uint64_t index = f->node_count++;
+  f->area_inner += tt__area(lower, upper);
+  const int N = f->N;
+  /* Children first (they may be anywhere later in the arrays), then this node's rows; the
+   * node is addressed by index because nothing moves, but computing rows after the
+   * recursion keeps the code obviously independent of it. */
+  uint32_t refs[8];
+  float box[8][6];
+  for (int i = 0; i < N; i++) {
+    refs[i] = TT__REF_NONE;
+    if ((uint32_t)i < n->count) {
+      const struct RTCBounds *b = &n->bounds[i];
+      box[i][0] = b->lower_x, box[i][1] = b->lower_y, box[i][2] = b->lower_z;
+      box[i][3] = b->upper_x, box[i][4] = b->upper_y, box[i][5] = b->upper_z;
+      refs[i] = tt__flatten(f, n->child[i], depth + 1, box[i], box[i] + 3);
+    }
+  }
+  float *rows = (float *)(f->nodes + index * (uint64_t)(32 * N));
+  uint32_t *child = (uint32_t *)(rows + 6 * N);
+  for (int i = 0; i < N; i++) {
+    int empty = refs[i] == TT__REF_NONE;
+    for (int k = 0; k < 3; k++) {
+      rows[(2 * k) * N + i] = empty ? INFINITY : box[i][k];
+      rows[(2 * k + 1) * N + i] = empty ? -INFINITY : box[i][3 + k];
+    }
+    child[i] = empty ? 0u : refs[i];
+  }
+  for (int i = N; i < 2 * N; i++) child[i] = 0u;  /* padding */
+  return (uint32_t)index;
+}
+
+/* ---- the build ---- */
+
+/* Frees a tree (NULL is ignored). */
+void tt__custom_free(tt__bvh *bvh) {
+  if (!bvh) return;
+  free(bvh->nodes);
+  free(bvh->packets);
+  free(bvh);
+}
+
+/* Rounds up to a multiple of 64 (aligned_alloc wants size % alignment == 0). */
+static size_t tt__round64(size_t n) { return (n + 63) & ~(size_t)63; }
+
+/* Smallest maxDepth with bf^(maxDepth-1) * maxLeafSize >= n (a tree of that depth can hold
+ * n primitives at all; SAH's unbalanced splits may need more). */
+static int tt__min_depth(uint64_t n, int bf, int max_leaf) {
+  int d = 1;
+  double cap = (double)max_leaf;
+  while (cap < (double)n && d < 1000) {
+    cap *= bf;
+    d++;
+  }
+  return d;
+}
+
+tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
+                           RTCDevice device, tt__bvh **out, tt_accel_build_stats *stats) {
+  *out = NULL;
+  const int bf = st->branching_factor;
+  if (bf != 2 && bf != 4 && bf != 8)
+    return tt_set_error(TT_ERR_INFEASIBLE,
+                        "accel_embree: custom backend: branchingFactor %d (expected 2, 4 or 8)",
+                        bf);
+  /* Repaired by the check already; kept so a direct call can never reach Embree's
+   * out-of-bounds paths. */
+  int min_leaf = st->min_leaf_size, max_leaf = st->max_leaf_size;
+  if (min_leaf > max_leaf) {
+    int t = min_leaf;
+    min_leaf = max_leaf;
+    max_leaf = t;
+  }
+  if (min_leaf < 1 || max_leaf > RTC_BUILD_MAX_PRIMITIVES_PER_LEAF)
+    return tt_set_error(TT_ERR_INFEASIBLE,
+                        "accel_embree: custom backend: leaf sizes must lie in [1, %d] "
+                        "(minLeafSize %d, maxLeafSize %d)", RTC_BUILD_MAX_PRIMITIVES_PER_LEAF,
+                        min_leaf, max_leaf);
+  if (st->max_depth < 1 || st->max_depth > 64 || st->sah_block_size < 1 ||
+      !(st->trav_cost > 0.0f) || !(st->int_cost > 0.0f))
+    return tt_set_error(TT_ERR_INFEASIBLE,
+                        "accel_embree: custom backend: maxDepth %d, sahBlockSize %d, travcost "
+                        "%g, intcost %g out of range", st->max_depth, st->sah_block_size,
+                        (double)st->trav_cost, (double)st->int_cost);
+
+  /* Valid triangles (finite vertices) become build primitives. */
+  const uint32_t meshes = tt_scene_mesh_count(scene);
+  uint64_t n = 0;
+  for (uint32_t g = 0; g < meshes; g++) n += tt_scene_mesh(scene, g)->triangle_count;
+  const int high = st->quality == 3;
+  /* Spatial splits duplicate references: the builder needs room beyond the count (about
+   * twice it, as Embree's own presplit factor allows); without it HIGH silently falls back
+   * to binned SAH. */
+  uint64_t cap = high ? 2 * n + 64 : n;
+  if (cap > ((size_t)-1) / sizeof(struct RTCBuildPrimitive) / 2)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: %llu triangles is too many",
+                        (unsigned long long)n);
+  struct RTCBuildPrimitive *prims =
+      cap ? aligned_alloc(32, tt__round64(cap * sizeof *prims)) : NULL;
+  if (cap && !prims)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                        "accel_embree: cannot allocate %llu build primitives",
+                        (unsigned long long)cap);
+  float root_lo[3] = {INFINITY, INFINITY, INFINITY}, root_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  uint64_t count = 0;
+  for (uint32_t g = 0; g < meshes; g++) {
+    const tt_mesh *m = tt_scene_mesh(scene, g);
+    for (uint32_t p = 0; p < m->triangle_count; p++) {
+      const float *v[3];
+      tt__tri_verts(m, p, v);
+      float lo[3], hi[3];
+      int ok = 1;
+      for (int k = 0; k < 3; k++) {
+        lo[k] = fminf(v[0][k], fminf(v[1][k], v[2][k]));
+        hi[k] = fmaxf(v[0][k], fmaxf(v[1][k], v[2][k]));
+        ok &= isfinite(v[0][k]) && isfinite(v[1][k]) && isfinite(v[2][k]);
+      }
+      if (!ok) continue;  /* NaN/inf vertices: never hit (Embree's scene API drops them too) */
+      struct RTCBuildPrimitive *b = &prims[count++];
+      b->lower_x = lo[0], b->lower_y = lo[1], b->lower_z = lo[2];
+      b->upper_x = hi[0], b->upper_y = hi[1], b->upper_z = hi[2];
+      b->geomID = g;
+      b->primID = p;
+      for (int k = 0; k < 3; k++) {
+        root_lo[k] = fminf(root_lo[k], lo[k]);
+        root_hi[k] = fmaxf(root_hi[k], hi[k]);
+      }
+    }
+  }
+
+  /* Scene-dependent part of the maxDepth constraint, detected before Embree throws. */
+  if (count > 0) {
+    int need = tt__min_depth(count, bf, max_leaf);
+    if (st->max_depth < need) {
+      free(prims);
+      return tt_set_error(TT_ERR_INFEASIBLE,
+                          "accel_embree: maxDepth %d is too small for %llu triangles with "
+                          "branchingFactor %d and maxLeafSize %d: needs "
+                          "branchingFactor^(maxDepth-1)*maxLeafSize >= triangles, i.e. "
+                          "maxDepth >= %d", st->max_depth, (unsigned long long)count, bf,
+                          max_leaf, need);
+    }
+  }
+
+  tt__bvh *bvh = calloc(1, sizeof *bvh);
+  if (!bvh) {
+    free(prims);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: out of memory");
+  }
+  bvh->width = bf;
+  bvh->robust = st->robust != 0;
+  bvh->root = TT__REF_NONE;
+  if (count == 0) {  /* every triangle invalid: a tree that nothing hits */
+    free(prims);
+    *out = bvh;
+    stats->memory_bytes = sizeof *bvh;
+    return TT_OK;
+  }
+
+  tt__cb_ctx ctx;
+  memset(&ctx, 0, sizeof ctx);
+  ctx.scene = scene;
+  ctx.geom_mask = high && meshes <= TT__GEOMID_MASK ? TT__GEOMID_MASK : 0xFFFFFFFFu;
+
+  static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW,
+                                                   RTC_BUILD_QUALITY_MEDIUM,
+                                                   RTC_BUILD_QUALITY_HIGH};
+  struct RTCBuildArguments args = rtcDefaultBuildArguments();
+  args.byteSize = sizeof args;
+  args.buildQuality = qualities[st->quality >= 1 && st->quality <= 3 ? st->quality - 1 : 1];
+  /* DYNAMIC is accepted and ignored by Embree 3.13.5's builders; passed for fidelity. */
+  args.buildFlags = st->is_static ? RTC_BUILD_FLAG_NONE : RTC_BUILD_FLAG_DYNAMIC;
+  args.maxBranchingFactor = (unsigned)bf;
+  args.maxDepth = (unsigned)st->max_depth;
+  args.sahBlockSize = (unsigned)st->sah_block_size;
+  args.minLeafSize = (unsigned)min_leaf;
+  args.maxLeafSize = (unsigned)max_leaf;
+  args.traversalCost = st->trav_cost;
+  args.intersectionCost = st->int_cost;
+  args.bvh = rtcNewBVH(device);
+  args.primitives = prims;
+  args.primitiveCount = count;
+  args.primitiveArrayCapacity = high ? cap : count;
+  args.createNode = tt__cb_node;
+  args.setNodeChildren = tt__cb_children;
+  args.setNodeBounds = tt__cb_bounds;
+  args.createLeaf = tt__cb_leaf;
+  args.splitPrimitive = high ? tt__cb_split : NULL;
+  args.buildProgress = NULL;
+  args.userPtr = &ctx;
+  if (!args.bvh) {
+    free(prims);
+    tt__custom_free(bvh);
+    return tt_set_error(TT_ERR_INTERNAL, "accel_embree: rtcNewBVH failed: %s",
+                        tt__embree_last_error());
+  }
+
+  /* An Embree failure here is a property of the configuration (mostly "depth limit
+   * reached"), reported to the tuner as infeasible: keep it out of the ERROR log. */
+  tt__embree_set_quiet(1);
+  void *root = rtcBuildBVH(&args);
+  enum RTCError err = rtcGetDeviceError(device);
+  tt__embree_set_quiet(0);
+  free(prims);
+  if (!root || err != RTC_ERROR_NONE || atomic_load(&ctx.too_wide)) {
+    const char *msg = tt__embree_last_error();
+    tt_status code = err == RTC_ERROR_OUT_OF_MEMORY ? TT_ERR_OUT_OF_MEMORY : TT_ERR_INFEASIBLE;
+    int depth = msg && strstr(msg, "depth limit") != NULL;
+    rtcReleaseBVH(args.bvh);
+    tt__custom_free(bvh);
+    if (atomic_load(&ctx.too_wide))
+      return tt_set_error(TT_ERR_INTERNAL,
+                          "accel_embree: rtcBuildBVH made a node wider than 8 children");
+    return tt_set_error(code,
+                        "accel_embree: rtcBuildBVH failed for quality %d, branchingFactor %d, "
+                        "maxDepth %d, leaves [%d, %d] over %llu triangles: %s%s", st->quality,
+                        bf, st->max_depth, min_leaf, max_leaf, (unsigned long long)count,
+                        msg && msg[0] ? msg : "no tree returned",
+                        depth ? " (raise maxDepth or maxLeafSize)" : "");
+  }
+
+  tt__flat f;
+  memset(&f, 0, sizeof f);
+  f.scene = scene;
+  f.N = bf;
+  f.robust = bvh->robust;
+  f.node_cap = atomic_load(&ctx.inner);
+  f.packet_cap = atomic_load(&ctx.packets);
+  size_t node_bytes = (size_t)f.node_cap * (size_t)(32 * bf);
+  size_t packet_bytes = (size_t)f.packet_cap * sizeof(tt__tri4);
+  f.nodes = node_bytes ? aligned_alloc(64, tt__round64(node_bytes)) : NULL;
+  f.packets = packet_bytes ? aligned_alloc(64, tt__round64(packet_bytes)) : NULL;
+  if ((node_bytes && !f.nodes) || (packet_bytes && !f.packets)) {
+    free(f.nodes);
+    free(f.packets);
+    rtcReleaseBVH(args.bvh);
+    tt__custom_free(bvh);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot allocate the BVH (%zu bytes)",
+                        node_bytes + packet_bytes);
+  }
+  if (packet_bytes) memset(f.packets, 0, packet_bytes);
+  bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
+  rtcReleaseBVH(args.bvh);
+  bvh->nodes = f.nodes;
+  bvh->packets = f.packets;
+  bvh->node_count = f.node_count;
+  bvh->packet_count = f.packet_count;
+  if (f.error) {
+    tt__custom_free(bvh);
+    return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
+  }
+
+  double root_area = tt__area(root_lo, root_hi);
+  stats->nodes = f.node_count;
+  stats->leaves = f.leaves;
+  /* Expected inner-node visits plus triangle tests of a random line through the root box
+   * (SAH with unit costs, counted per triangle): comparable across configurations. */
+  stats->sah_cost = root_area > 0.0 ? (f.area_inner + f.area_leaf_tris) / root_area : 0.0;
+  stats->max_depth = f.max_depth;
+  stats->memory_bytes = sizeof *bvh + node_bytes + packet_bytes;
+  *out = bvh;
+  return TT_OK;
+}

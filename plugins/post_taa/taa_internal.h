@@ -1,0 +1,122 @@
+/* post_taa: internal declarations shared by the plugin's files and its white-box tests.
+ * Nothing here is exported from post_taa.so (hidden visibility). */
+#ifndef TT_POST_TAA_INTERNAL_H
+#define TT_POST_TAA_INTERNAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <tunetrace/common.h>
+#include <tunetrace/host.h>
+
+#define TT__TAA_NAME "post_taa"
+#define TT__TAA_VERSION "0.1.0"
+
+/* ---- shared image helpers (taa_image.c) ---- */
+
+/* Row-parallel loop: the host's pool when available, a plain loop otherwise. */
+typedef void (*tt__taa_rows_fn)(void *ctx, uint32_t y0, uint32_t y1);
+void tt__taa_parallel_rows(const tt_host *host, uint32_t height, tt__taa_rows_fn fn,
+                           void *ctx);
+
+/* Reinhard-max tonemap c / (1 + max(c)) and its inverse (the resolve runs in [0, 1)). */
+void tt__taa_tonemap(const float in[3], float out[3]);
+void tt__taa_untonemap(const float in[3], float out[3]);
+
+/* Samples `channels`-channel image `img` (width x height, interleaved) at continuous
+ * position (fx, fy) (pixel centres at i + 0.5) with the separable 4x4 Catmull-Rom kernel,
+ * clamping taps to the edge. Writes `channels` floats into `out`. */
+void tt__taa_sample_catmull_rom(const float *img, uint32_t width, uint32_t height,
+                                uint32_t channels, float fx, float fy, float *out);
+/* Same with bilinear interpolation. */
+void tt__taa_sample_bilinear(const float *img, uint32_t width, uint32_t height,
+                             uint32_t channels, float fx, float fy, float *out);
+
+/* ---- variance-clipping TAA (taa_vctaa.c) ---- */
+
+typedef struct tt__vctaa_params {
+  float blend;      /* weight of the current frame in the exponential average */
+  float gamma;      /* variance box half-size in standard deviations */
+  int catmull_rom;  /* history fetch: 1 Catmull-Rom, 0 bilinear */
+} tt__vctaa_params;
+
+typedef struct tt__vctaa {
+  uint32_t width, height;
+  float *history;   /* tonemapped RGB of the previous output */
+  float *scratch;   /* next history */
+  int valid;        /* history holds a frame */
+} tt__vctaa;
+
+tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height);
+void tt__vctaa_free(tt__vctaa *v);
+/* Filters one frame. `motion` may be NULL (static camera). */
+void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
+                       const float *color, const float *motion, float *out_rgb);
+
+/* ---- the kernel-prediction network (taa_net.c) ---- */
+
+#define TT__NET_MAGIC "TTAANET\0"
+#define TT__NET_VERSION 1u
+#define TT__NET_JITTER_SETS 8u
+#define TT__NET_MAX_LAYERS 8u
+#define TT__NET_MAX_CH 64u
+#define TT__NET_MIX_K 5u                               /* colour-mix kernel side */
+#define TT__NET_MIX_TAPS (TT__NET_MIX_K * TT__NET_MIX_K)
+#define TT__NET_BORDER 2u                              /* zero border of padded planes */
+
+/* One convolution: weights in the file's PyTorch layout [set][out][in][k][k] + bias
+ * [set][out], repacked at load into [set][ky][kx][in][out_padded] for the SIMD loops. */
+typedef struct tt__net_layer {
+  uint32_t in, out, ksize, sets, activation;  /* activation: 0 none, 1 ReLU, 2 softmax */
+  uint32_t out_pad;                           /* out rounded up to a multiple of 8 */
+  float *w;       /* original layout, sets * out * in * k * k */
+  float *b;       /* sets * out */
+  float *wp;      /* packed, sets * k * k * in * out_pad */
+  float *bp;      /* sets * out_pad */
+} tt__net_layer;
+
+/* A loaded model: body layers (ReLU), then the kernel layer (softmax over 2 * 25 taps) and
+ * the 1x1 hidden-state layer, both reading the last body layer. */
+typedef struct tt__net_model {
+  uint32_t in_channels;     /* 6 + 3 + hidden */
+  uint32_t width;           /* body channels (12 or 6) */
+  uint32_t hidden;          /* hidden-state channels (0..8) */
+  float motion_scale;       /* motion input = pixels * motion_scale */
+  uint32_t body_count;      /* body layers (1..TT__NET_MAX_LAYERS - 2) */
+  tt__net_layer body[TT__NET_MAX_LAYERS];
+  tt__net_layer kernel;     /* -> 50 channels */
+  tt__net_layer hid;        /* -> hidden channels (absent when hidden == 0) */
+} tt__net_model;
+
+/* Loads a weights file; errors name the file and what is wrong (magic, version, shape,
+ * truncation, checksum). */
+tt_status tt__net_load(const char *path, tt__net_model *m);
+/* Parses a weights file from memory (`source` names it in messages). */
+tt_status tt__net_parse(const void *data, size_t size, const char *source, tt__net_model *m);
+void tt__net_free(tt__net_model *m);
+
+/* Per-sequence state and scratch planes of the network filter. */
+typedef struct tt__net_state {
+  uint32_t width, height;
+  uint32_t state_ch;        /* 3 + hidden */
+  float *state;             /* previous [rgb_tonemapped, hidden], width x height x state_ch */
+  float *next_state;
+  float *planes[2];         /* padded ping-pong feature planes */
+  uint32_t plane_stride;    /* floats per padded pixel */
+  float *tm;                /* padded tonemapped colour, 3 ch */
+  float *reproj;            /* padded reprojected rgb of the previous output, 3 ch */
+  int valid;
+  int reference;            /* use the plain scalar loops (tests) */
+  double ms_reproject, ms_network, ms_mix;   /* timings of the last frame */
+} tt__net_state;
+
+tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t width,
+                             uint32_t height);
+void tt__net_state_free(tt__net_state *s);
+/* Filters one frame; `depth` and `motion` may be NULL (read as 0). Writes linear RGB, and
+ * the tonemapped result is kept in s->state. */
+void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                     const float *color, const float *depth, const float *motion,
+                     uint32_t jitter_index, float *out_rgb);
+
+#endif

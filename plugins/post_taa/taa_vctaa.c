@@ -1,0 +1,134 @@
+/* post_taa: variance-clipping TAA (Salvi 2016 on Karis 2014). Per pixel: fetch the
+ * reprojected history, build the 3x3 neighbourhood's variance box in YCoCg (mean +- gamma
+ * sigma), clip the history toward the box centre, and blend with the current pixel. The
+ * whole resolve runs on tonemapped colour c / (1 + max c) so that single bright samples do
+ * not dominate the average; the output is untonemapped. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "taa_internal.h"
+
+tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height) {
+  memset(v, 0, sizeof *v);
+  size_t n = (size_t)width * height * 3;
+  v->width = width;
+  v->height = height;
+  v->history = calloc(n, sizeof(float));
+  v->scratch = calloc(n, sizeof(float));
+  if (!v->history || !v->scratch) {
+    tt__vctaa_free(v);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u history",
+                        width, height);
+  }
+  return TT_OK;
+}
+
+void tt__vctaa_free(tt__vctaa *v) {
+  free(v->history);
+  free(v->scratch);
+  v->history = v->scratch = NULL;
+  v->valid = 0;
+}
+
+/* RGB -> YCoCg (the luma/chroma space where an axis-aligned box fits colour clouds best). */
+static inline void vc_to_ycocg(const float c[3], float o[3]) {
+  o[0] = 0.25f * c[0] + 0.5f * c[1] + 0.25f * c[2];
+  o[1] = 0.5f * c[0] - 0.5f * c[2];
+  o[2] = -0.25f * c[0] + 0.5f * c[1] - 0.25f * c[2];
+}
+
+/* YCoCg -> RGB. */
+static inline void vc_from_ycocg(const float o[3], float c[3]) {
+  c[0] = o[0] + o[1] - o[2];
+  c[1] = o[0] + o[2];
+  c[2] = o[0] - o[1] - o[2];
+}
+
+typedef struct vc_job {
+  tt__vctaa *v;
+  const tt__vctaa_params *p;
+  const float *color;
+  const float *motion;
+  float *out;
+} vc_job;
+
+/* Current pixel (x, y) tonemapped into YCoCg, edge-clamped. */
+static inline void vc_fetch(const vc_job *job, int x, int y, float o[3]) {
+  int w = (int)job->v->width, h = (int)job->v->height;
+  x = x < 0 ? 0 : (x >= w ? w - 1 : x);
+  y = y < 0 ? 0 : (y >= h ? h - 1 : y);
+  float t[3];
+  tt__taa_tonemap(job->color + ((size_t)y * w + x) * 3, t);
+  vc_to_ycocg(t, o);
+}
+
+/* Resolves rows [y0, y1). */
+static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const vc_job *job = ctx;
+  const tt__vctaa *v = job->v;
+  const tt__vctaa_params *p = job->p;
+  uint32_t w = v->width, h = v->height;
+  for (uint32_t y = y0; y < y1; y++) {
+    for (uint32_t x = 0; x < w; x++) {
+      size_t i = (size_t)y * w + x;
+      float cur[3], m1[3] = {0, 0, 0}, m2[3] = {0, 0, 0};
+      for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+          float s[3];
+          vc_fetch(job, (int)x + dx, (int)y + dy, s);
+          if (dx == 0 && dy == 0) memcpy(cur, s, sizeof cur);
+          for (int c = 0; c < 3; c++) {
+            m1[c] += s[c];
+            m2[c] += s[c] * s[c];
+          }
+        }
+      float res[3];
+      float mx = job->motion ? job->motion[2 * i] : 0.0f;
+      float my = job->motion ? job->motion[2 * i + 1] : 0.0f;
+      /* Motion points from this frame back to the previous one (film.h). */
+      float hx = (float)x + 0.5f + mx, hy = (float)y + 0.5f + my;
+      if (!v->valid || !(hx >= 0.0f && hy >= 0.0f && hx <= (float)w && hy <= (float)h)) {
+        /* Disocclusion by the frame border or no history: the current sample alone. */
+        memcpy(res, cur, sizeof res);
+      } else {
+        float hist_rgb[3], hist[3];
+        if (p->catmull_rom)
+          tt__taa_sample_catmull_rom(v->history, w, h, 3, hx, hy, hist_rgb);
+        else
+          tt__taa_sample_bilinear(v->history, w, h, 3, hx, hy, hist_rgb);
+        vc_to_ycocg(hist_rgb, hist);
+        /* Clip toward the box centre along the line to the mean (not a per-axis clamp), so
+         * the clipped colour stays on a plausible hue. */
+        float scale = 0.0f, d[3];
+        for (int c = 0; c < 3; c++) {
+          float mean = m1[c] / 9.0f;
+          float sigma = sqrtf(fmaxf(m2[c] / 9.0f - mean * mean, 0.0f));
+          float ext = p->gamma * sigma + 1e-6f;
+          d[c] = hist[c] - mean;
+          float u = fabsf(d[c]) / ext;
+          if (u > scale) scale = u;
+          m1[c] = mean;
+        }
+        if (scale > 1.0f)
+          for (int c = 0; c < 3; c++) hist[c] = m1[c] + d[c] / scale;
+        for (int c = 0; c < 3; c++) res[c] = hist[c] + p->blend * (cur[c] - hist[c]);
+      }
+      float rgb[3];
+      vc_from_ycocg(res, rgb);
+      for (int c = 0; c < 3; c++) rgb[c] = fminf(fmaxf(rgb[c], 0.0f), 0.999f);
+      memcpy(v->scratch + 3 * i, rgb, sizeof rgb);
+      tt__taa_untonemap(rgb, job->out + 3 * i);
+    }
+  }
+}
+
+void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
+                       const float *color, const float *motion, float *out_rgb) {
+  vc_job job = {v, p, color, motion, out_rgb};
+  tt__taa_parallel_rows(host, v->height, vc_rows, &job);
+  float *t = v->history;
+  v->history = v->scratch;
+  v->scratch = t;
+  v->valid = 1;
+}

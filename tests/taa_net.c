@@ -1,0 +1,313 @@
+/* post_taa network inference (white-box: compiles the plugin's sources in):
+ * - the SIMD path equals the plain scalar reference on random weights (every shape variant:
+ *   12/6 channels, hidden 0/5/8, 2..4 layers, jitter sets on/off);
+ * - the shipped weights reproduce the PyTorch golden outputs (tests/data/taa) to 1e-4;
+ * - weights file errors (bad magic, wrong version, truncated, corrupted, bad shapes) give
+ *   messages naming the file and the problem;
+ * - Catmull-Rom reprojection against an analytic shift. */
+#include "tt_test.h"
+
+#include "taa_internal.h"
+
+#include <stdint.h>
+
+/* ---- a tiny weights writer (the format of README.md) ---- */
+
+typedef struct buf {
+  unsigned char *p;
+  size_t n, cap;
+} buf;
+
+/* Appends bytes. */
+static void put(buf *b, const void *d, size_t n) {
+  if (b->n + n > b->cap) {
+    b->cap = (b->n + n) * 2;
+    b->p = realloc(b->p, b->cap);
+  }
+  memcpy(b->p + b->n, d, n);
+  b->n += n;
+}
+static void put_u32(buf *b, uint32_t v) { put(b, &v, 4); }  /* tests run on LE hosts */
+static void put_f32(buf *b, float v) { put(b, &v, 4); }
+
+static uint32_t rng_state = 12345;
+/* Uniform in [-1, 1) (xorshift). */
+static float rnd(void) {
+  rng_state ^= rng_state << 13;
+  rng_state ^= rng_state >> 17;
+  rng_state ^= rng_state << 5;
+  return (float)(rng_state >> 8) / 8388608.0f - 1.0f;
+}
+
+/* Model shape for the writer. */
+typedef struct shape {
+  uint32_t width, hidden, body, ks[4], sets_body[4], sets_k, sets_h;
+} shape;
+
+/* Serialises a random model of `s`; layer weights ~ U(-1,1) * scale. */
+static buf write_model(const shape *s) {
+  buf b = {0};
+  uint32_t layers = s->body + 1 + (s->hidden ? 1 : 0);
+  uint32_t in = 9 + s->hidden;
+  put(&b, "TTAANET\0", 8);
+  put_u32(&b, 1);
+  put_u32(&b, 48 + 24 * layers);
+  put_u32(&b, in);
+  put_u32(&b, s->width);
+  put_u32(&b, s->hidden);
+  put_u32(&b, 5);
+  put_u32(&b, 8);
+  put_u32(&b, layers);
+  put_f32(&b, 0.125f);
+  put_u32(&b, 0);
+  uint32_t rec[8][6];
+  uint32_t cin = in;
+  for (uint32_t i = 0; i < s->body; i++) {
+    uint32_t r[6] = {1, cin, s->width, s->ks[i], s->sets_body[i], 1};
+    memcpy(rec[i], r, sizeof r);
+    cin = s->width;
+  }
+  uint32_t rk[6] = {2, s->width, 50, 5, s->sets_k, 2};
+  memcpy(rec[s->body], rk, sizeof rk);
+  if (s->hidden) {
+    uint32_t rh[6] = {3, s->width, s->hidden, 1, s->sets_h, 0};
+    memcpy(rec[s->body + 1], rh, sizeof rh);
+  }
+  for (uint32_t i = 0; i < layers; i++)
+    for (int k = 0; k < 6; k++) put_u32(&b, rec[i][k]);
+  size_t start = b.n;
+  for (uint32_t i = 0; i < layers; i++) {
+    uint32_t *r = rec[i];
+    size_t nw = (size_t)r[4] * r[2] * r[1] * r[3] * r[3], nb = (size_t)r[4] * r[2];
+    float scale = 1.2f / sqrtf((float)(r[1] * r[3] * r[3]));
+    for (size_t k = 0; k < nw; k++) put_f32(&b, rnd() * scale);
+    for (size_t k = 0; k < nb; k++) put_f32(&b, 0.1f * rnd());
+  }
+  uint32_t h = 2166136261u;
+  for (size_t i = start; i < b.n; i++) {
+    h ^= b.p[i];
+    h *= 16777619u;
+  }
+  put_u32(&b, h);
+  return b;
+}
+
+/* Random frame inputs. */
+static void random_frame(uint32_t w, uint32_t h, float *color, float *depth, float *motion) {
+  for (size_t i = 0; i < (size_t)w * h; i++) {
+    for (int c = 0; c < 3; c++) color[3 * i + c] = 1.0f + rnd();
+    depth[i] = 5.0f + 4.0f * rnd();
+    motion[2 * i] = 2.5f * rnd();
+    motion[2 * i + 1] = 2.5f * rnd();
+  }
+}
+
+/* SIMD path == scalar reference for one shape over 3 frames. */
+static void check_fast_vs_reference(const shape *s, const char *label) {
+  const uint32_t w = 23, h = 17;
+  buf b = write_model(s);
+  tt__net_model m;
+  tt_status st = tt__net_parse(b.p, b.n, label, &m);
+  CHECK_MSG(st == TT_OK, "%s: %s", label, tt_last_error());
+  free(b.p);
+  if (st != TT_OK) return;
+  tt__net_state fast, ref;
+  CHECK(tt__net_state_init(&fast, &m, w, h) == TT_OK);
+  CHECK(tt__net_state_init(&ref, &m, w, h) == TT_OK);
+  ref.reference = 1;
+  size_t n = (size_t)w * h;
+  float *color = malloc(n * 3 * 4), *depth = malloc(n * 4), *motion = malloc(n * 2 * 4);
+  float *o1 = malloc(n * 3 * 4), *o2 = malloc(n * 3 * 4);
+  double worst = 0.0, worst_state = 0.0;
+  for (uint32_t f = 0; f < 3; f++) {
+    random_frame(w, h, color, depth, motion);
+    tt__net_process(&fast, &m, tt_default_host(), color, depth, motion, 5 + f, o1);
+    tt__net_process(&ref, &m, tt_default_host(), color, depth, motion, 5 + f, o2);
+    for (size_t i = 0; i < n * 3; i++) worst = fmax(worst, fabs(o1[i] - o2[i]) / (1 + fabs(o2[i])));
+    for (size_t i = 0; i < n * fast.state_ch; i++)
+      worst_state = fmax(worst_state, fabs(fast.state[i] - ref.state[i]));
+  }
+  printf("%s: fast vs reference: state %.2e, output %.2e\n", label, worst_state, worst);
+  CHECK_MSG(worst_state < 1e-4, "%s: state differs by %g", label, worst_state);
+  CHECK_MSG(worst < 1e-3, "%s: output differs by %g", label, worst);
+  free(color), free(depth), free(motion), free(o1), free(o2);
+  tt__net_state_free(&fast);
+  tt__net_state_free(&ref);
+  tt__net_free(&m);
+}
+
+static void test_fast_vs_reference(void) {
+  shape thesis12 = {12, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1};
+  shape thesis6 = {6, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1};
+  shape no_hidden = {12, 0, 3, {3, 3, 5}, {1, 1, 1}, 1, 1};
+  shape hidden8_all = {12, 8, 3, {3, 3, 5}, {8, 8, 8}, 8, 8};
+  shape two = {12, 3, 1, {3}, {8}, 8, 1};
+  shape wide = {40, 5, 2, {3, 5}, {1, 8}, 8, 1};
+  check_fast_vs_reference(&thesis12, "thesis-12");
+  check_fast_vs_reference(&thesis6, "thesis-6");
+  check_fast_vs_reference(&no_hidden, "hidden-0");
+  check_fast_vs_reference(&hidden8_all, "hidden-8-all-sets");
+  check_fast_vs_reference(&two, "2-layers");
+  check_fast_vs_reference(&wide, "width-40");
+}
+
+/* Reads a whole file. */
+static unsigned char *slurp(const char *path, size_t *n) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  *n = (size_t)ftell(f);
+  rewind(f);
+  unsigned char *p = malloc(*n);
+  if (fread(p, 1, *n, f) != *n) {
+    free(p);
+    p = NULL;
+  }
+  fclose(f);
+  return p;
+}
+
+/* The shipped weights reproduce the PyTorch outputs of tools/taa/export_golden.py. */
+static void test_golden(const char *root) {
+  char wpath[1024], gpath[1024];
+  snprintf(wpath, sizeof wpath, "%s/plugins/post_taa/post_taa_c12.ttw", root);
+  snprintf(gpath, sizeof gpath, "%s/tests/data/taa/golden_c12.bin", root);
+  size_t wn = 0, gn = 0;
+  unsigned char *wdata = slurp(wpath, &wn), *g = slurp(gpath, &gn);
+  CHECK_MSG(wdata && g, "cannot read %s or %s", wpath, gpath);
+  if (!wdata || !g) return;
+  CHECK(gn > 28 && memcmp(g, "TTAAGLD1", 8) == 0);
+  uint32_t hdr[5];
+  memcpy(hdr, g + 8, sizeof hdr);
+  uint32_t h = 2166136261u;
+  for (size_t i = 0; i < wn; i++) {
+    h ^= wdata[i];
+    h *= 16777619u;
+  }
+  CHECK_MSG(h == hdr[0], "golden fixture was made from other weights: rerun "
+            "tools/taa/export_golden.py after changing %s", wpath);
+  tt__net_model m;
+  CHECK_MSG(tt__net_parse(wdata, wn, wpath, &m) == TT_OK, "%s", tt_last_error());
+  uint32_t w = hdr[1], hh = hdr[2], frames = hdr[3], sc = hdr[4];
+  CHECK(sc == 3 + m.hidden);
+  size_t n = (size_t)w * hh;
+  const unsigned char *p = g + 28;
+  tt__net_state s;
+  CHECK(tt__net_state_init(&s, &m, w, hh) == TT_OK);
+  float *out = malloc(n * 3 * 4);
+  double worst_state = 0, worst_out = 0;
+  for (uint32_t f = 0; f < frames; f++) {
+    uint32_t jit, fresh;
+    memcpy(&jit, p, 4);
+    memcpy(&fresh, p + 4, 4);
+    p += 8;
+    const float *color = (const float *)p, *depth = color + n * 3, *motion = depth + n;
+    const float *want_state = motion + n * 2, *want_out = want_state + n * sc;
+    p = (const unsigned char *)(want_out + n * 3);
+    if (fresh) s.valid = 0;
+    tt__net_process(&s, &m, tt_default_host(), color, depth, motion, jit, out);
+    for (size_t i = 0; i < n * sc; i++)
+      worst_state = fmax(worst_state, fabs(s.state[i] - want_state[i]));
+    for (size_t i = 0; i < n * 3; i++)
+      worst_out = fmax(worst_out, fabs(out[i] - want_out[i]) / (1 + fabs(want_out[i])));
+  }
+  CHECK((size_t)(p - g) == gn);
+  printf("golden: %u frames %ux%u: state %.2e (tol 1e-4), linear output rel %.2e\n", frames,
+         w, hh, worst_state, worst_out);
+  CHECK(worst_state < 1e-4);
+  CHECK(worst_out < 1e-3);
+  free(out);
+  tt__net_state_free(&s);
+  tt__net_free(&m);
+  free(wdata);
+  free(g);
+}
+
+/* Parsing `b` (modified) fails with `status` and a message containing `needle`. */
+static void expect_error(const unsigned char *data, size_t n, tt_status status,
+                         const char *needle) {
+  tt__net_model m;
+  tt_status st = tt__net_parse(data, n, "bad.ttw", &m);
+  CHECK_MSG(st == status, "expected %d, got %d (%s)", status, st, tt_last_error());
+  if (st == TT_OK) {
+    tt__net_free(&m);
+    return;
+  }
+  CHECK_CONTAINS(tt_last_error(), "bad.ttw");
+  CHECK_CONTAINS(tt_last_error(), needle);
+}
+
+static void test_errors(void) {
+  shape s = {6, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1};
+  buf b = write_model(&s);
+  unsigned char *c = malloc(b.n);
+  memcpy(c, b.p, b.n);
+  c[0] = 'X';
+  expect_error(c, b.n, TT_ERR_PARSE, "bad magic");
+  expect_error(c, 4, TT_ERR_PARSE, "bad magic");
+  memcpy(c, b.p, b.n);
+  c[8] = 2;
+  expect_error(c, b.n, TT_ERR_UNSUPPORTED, "version 2 is not supported");
+  expect_error(b.p, b.n - 100, TT_ERR_PARSE, "truncated");
+  expect_error(b.p, 30, TT_ERR_PARSE, "truncated header");
+  expect_error(b.p, 60, TT_ERR_PARSE, "truncated layer table");
+  memcpy(c, b.p, b.n);
+  c[b.n - 50] ^= 0x40;
+  expect_error(c, b.n, TT_ERR_PARSE, "checksum");
+  memcpy(c, b.p, b.n);
+  c[48 + 24 + 8] = 7;  /* second body layer outputs 7 channels instead of 6 */
+  expect_error(c, b.n, TT_ERR_PARSE, "layer 1 (body)");
+  memcpy(c, b.p, b.n);
+  c[16] = 20;  /* in_channels != 9 + hidden */
+  expect_error(c, b.n, TT_ERR_PARSE, "bad model shape");
+  tt__net_model m;
+  CHECK(tt__net_load("/nonexistent/w.ttw", &m) == TT_ERR_IO);
+  CHECK_CONTAINS(tt_last_error(), "/nonexistent/w.ttw");
+  expect_error(b.p, b.n, TT_OK, "");  /* the intact file parses */
+  free(c);
+  free(b.p);
+}
+
+/* Catmull-Rom fetch vs an analytic shift: exact on quadratics, close on a smooth image. */
+static void test_catmull_rom(void) {
+  enum { w = 40, h = 30 };
+  static float quad[w * h], smooth[w * h * 2];
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      float u = x + 0.5f, v = y + 0.5f;
+      quad[y * w + x] = 0.3f + 0.02f * u - 0.01f * v + 0.0004f * u * u + 0.0003f * u * v;
+      smooth[2 * (y * w + x)] = sinf(0.21f * u) * cosf(0.17f * v);
+      smooth[2 * (y * w + x) + 1] = 0.5f + 0.5f * cosf(0.11f * u + 0.07f * v);
+    }
+  double wq = 0, ws = 0, wb = 0;
+  for (int k = 0; k < 200; k++) {
+    float fx = 4.0f + (w - 8) * (0.5f + 0.5f * rnd()), fy = 4.0f + (h - 8) * (0.5f + 0.5f * rnd());
+    float q, s[2], bl[2];
+    tt__taa_sample_catmull_rom(quad, w, h, 1, fx, fy, &q);
+    wq = fmax(wq, fabs(q - (0.3f + 0.02f * fx - 0.01f * fy + 0.0004f * fx * fx + 0.0003f * fx * fy)));
+    tt__taa_sample_catmull_rom(smooth, w, h, 2, fx, fy, s);
+    tt__taa_sample_bilinear(smooth, w, h, 2, fx, fy, bl);
+    float e0 = sinf(0.21f * fx) * cosf(0.17f * fy), e1 = 0.5f + 0.5f * cosf(0.11f * fx + 0.07f * fy);
+    ws = fmax(ws, fmax(fabs(s[0] - e0), fabs(s[1] - e1)));
+    wb = fmax(wb, fmax(fabs(bl[0] - e0), fabs(bl[1] - e1)));
+  }
+  printf("catmull-rom: quadratic error %.2e, smooth image %.2e (bilinear %.2e)\n", wq, ws, wb);
+  CHECK(wq < 1e-4);
+  CHECK(ws < 2e-3);
+  CHECK(ws < 0.5 * wb);
+  /* Whole-pixel shifts reproduce the pixels exactly. */
+  float v;
+  tt__taa_sample_catmull_rom(quad, w, h, 1, 7.5f + 3.0f, 5.5f - 2.0f, &v);
+  CHECK_NEAR(v, quad[3 * w + 10], 1e-6);
+}
+
+int main(void) {
+  const char *root = getenv("TT_SOURCE_ROOT");
+  if (!root) root = ".";
+  tt_default_host_set_threads(2);
+  test_catmull_rom();
+  test_errors();
+  test_fast_vs_reference();
+  test_golden(root);
+  return tt_test_finish("taa_net");
+}

@@ -1,0 +1,130 @@
+/* host --sequence end to end: a camera sliding sideways at constant speed in front of a
+ * plane gives motion vectors of exactly speed * focal / distance pixels (and depth =
+ * distance); the manifest walks the Halton jitter cycle; the reference and the post_taa
+ * output are written; bad options are usage errors. */
+#include "tt_test.h"
+
+#include "host_util.h"
+
+#include <tunetrace/camera.h>
+#include <tunetrace/image.h>
+
+#include <unistd.h>
+
+/* A wall at z = 0 seen from z = 5; keys every second, 2.4 units apart (constant velocity
+ * through the middle segments). */
+static const char *k_scene =
+  "{\"version\": 1,\n"
+  " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45,\n"
+  "   \"resolution\": [64, 48], \"path\": [\n"
+  "   {\"time\": 0, \"position\": [0, 0, 5], \"target\": [0, 0, 0]},\n"
+  "   {\"time\": 1, \"position\": [2.4, 0, 5], \"target\": [2.4, 0, 0]},\n"
+  "   {\"time\": 2, \"position\": [4.8, 0, 5], \"target\": [4.8, 0, 0]},\n"
+  "   {\"time\": 3, \"position\": [7.2, 0, 5], \"target\": [7.2, 0, 0]}]},\n"
+  " \"render\": {\"spp\": 1, \"maxDepth\": 1},\n"
+  " \"materials\": {\"w\": {\"albedo\": 0.6}, \"b\": {\"albedo\": 0.05}},\n"
+  " \"meshes\": [\n"
+  "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],\n"
+  "   \"indices\": [[0, 1, 2], [0, 2, 3]]},\n"
+  "  {\"material\": \"b\", \"positions\": [[0, -0.3, 0.01], [0.05, -0.3, 0.01], [0.6, 0.4, 0.01]]}],\n"
+  " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
+
+/* Reads a whole text file (caller frees). */
+static char *slurp_text(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  rewind(f);
+  char *s = malloc((size_t)n + 1);
+  size_t r = fread(s, 1, (size_t)n, f);
+  s[r] = 0;
+  fclose(f);
+  return s;
+}
+
+int main(void) {
+  char dir[] = "/tmp/taa_sequence_XXXXXX";
+  if (!mkdtemp(dir)) TEST_SKIP("cannot create a temporary folder");
+  char scene[256], out[256], args[1024], log[16384], path[512];
+  (void)source_path;  /* host_util.h helper this test does not need */
+  snprintf(scene, sizeof scene, "%s/scene.json", dir);
+  snprintf(out, sizeof out, "%s/seq", dir);
+  FILE *f = fopen(scene, "w");
+  fputs(k_scene, f);
+  fclose(f);
+
+  /* Frames 24..33 lie in the constant-speed segment: 0.1 units per frame. */
+  snprintf(args, sizeof args, "--quiet --threads 2 --sequence 24:33 --out-dir '%s' "
+           "--reference-scale 2 --set integrator_pt.maxDepth=1 --post post_taa '%s'", out, scene);
+  int rc = run_host(args, log, sizeof log);
+  CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
+
+  /* Motion of the wall: the previous camera was 0.1 to the left, so points sat further
+   * right: +0.1 * focal / 5 pixels in x, 0 in y. */
+  double focal = 24.0 / tan(22.5 * M_PI / 180.0);
+  double want = 0.1 * focal / 5.0;
+  uint32_t w, h, c;
+  float *px = NULL;
+  snprintf(path, sizeof path, "%s/motion_0027.exr", out);
+  CHECK_MSG(tt_image_read(path, &w, &h, &c, &px) == TT_OK, "%s", tt_last_error());
+  if (px) {
+    CHECK(w == 64 && h == 48 && c == 2);
+    double worst = 0;
+    for (size_t i = 0; i < (size_t)w * h; i++) {
+      worst = fmax(worst, fabs(px[2 * i] - want));
+      worst = fmax(worst, fabs(px[2 * i + 1]));
+    }
+    printf("motion: expected (%.4f, 0) px, worst deviation %.2e\n", want, worst);
+    CHECK(worst < 5e-3);
+    tt_free(px);
+    px = NULL;
+  }
+  snprintf(path, sizeof path, "%s/depth_0027.exr", out);
+  CHECK(tt_image_read(path, &w, &h, &c, &px) == TT_OK);
+  if (px) {
+    CHECK(c == 1);
+    double worst = 0;
+    for (size_t i = 0; i < (size_t)w * h; i++) worst = fmax(worst, fabs(px[i] - 5.0));
+    CHECK_MSG(worst < 0.02, "depth deviates by %g", worst);
+    tt_free(px);
+    px = NULL;
+  }
+  const char *kinds[] = {"color", "reference", "post"};
+  for (int k = 0; k < 3; k++) {
+    snprintf(path, sizeof path, "%s/%s_0033.exr", out, kinds[k]);
+    CHECK_MSG(access(path, R_OK) == 0, "missing %s", path);
+  }
+  snprintf(path, sizeof path, "%s/manifest.json", out);
+  char *man = slurp_text(path);
+  CHECK(man != NULL);
+  if (man) {
+    CHECK_CONTAINS(man, "\"jitter_cycle\": 8");
+    CHECK_CONTAINS(man, "\"post\": \"post_taa\"");
+    /* Frame 24 starts the sequence (history reset) with jitter index 0; 29 has index 5. */
+    CHECK_CONTAINS(man, "{\"index\": 24, \"time\": 1.000000, \"jitter_index\": 0, "
+                        "\"jitter\": [0.000000, -0.166667], \"reset\": true");
+    float j5[2];
+    tt_jitter_halton23(5, j5);
+    char want5[256];
+    snprintf(want5, sizeof want5, "{\"index\": 29, \"time\": %.6f, \"jitter_index\": 5, "
+             "\"jitter\": [%.6f, %.6f], \"reset\": false", 29 / 24.0, j5[0], j5[1]);
+    CHECK_CONTAINS(man, want5);
+    free(man);
+  }
+
+  /* Usage errors name the option. */
+  snprintf(args, sizeof args, "--sequence 5:2 --out-dir '%s' '%s'", out, scene);
+  CHECK(run_host(args, log, sizeof log) == 2);
+  CHECK_CONTAINS(log, "--sequence");
+  snprintf(args, sizeof args, "--sequence 3 '%s'", scene);
+  CHECK(run_host(args, log, sizeof log) == 2);
+  CHECK_CONTAINS(log, "--out-dir");
+  snprintf(args, sizeof args, "--sequence 2 --out-dir '%s' --post integrator_pt '%s'", out, scene);
+  CHECK(run_host(args, log, sizeof log) == 3);
+  CHECK_CONTAINS(log, "not a post-filter");
+
+  snprintf(args, sizeof args, "rm -rf '%s'", dir);
+  if (system(args) != 0) fprintf(stderr, "could not remove %s\n", dir);
+  return tt_test_finish("taa_sequence");
+}

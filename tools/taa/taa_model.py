@@ -1,0 +1,181 @@
+"""The thesis' kernel-prediction TAA network (chapter 5.4, Fig. 5.2) in PyTorch, bit-for-bit
+the same computation as plugins/post_taa/taa_net.c, plus the weights file writer/reader.
+
+Per frame: tonemap the new colour c/(1+max c); reproject the previous state [rgb, hidden]
+with 4x4 Catmull-Rom along the motion vectors (clamped taps); input = [rgb, motion *
+motion_scale, depth / max depth, reprojected state]; body convolutions with ReLU and zero
+padding; kernel layer -> 50 logits, softmax per pixel; colour mix of eq. 5.3 (25 taps over
+the new frame, 25 over the reprojected output, zero padding); 1x1 hidden-state layer.
+Layers with 8 weight sets use set (jitter_index mod 8)."""
+import struct
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+MAGIC = b"TTAANET\0"
+VERSION = 1
+JITTER_SETS = 8
+MIX_K = 5
+ROLE_BODY, ROLE_KERNEL, ROLE_HIDDEN = 1, 2, 3
+ACT_NONE, ACT_RELU, ACT_SOFTMAX = 0, 1, 2
+
+
+def tonemap(c):
+    """c / (1 + max(r, g, b)) over channel dim 1 (negative values clamped to 0)."""
+    c = c.clamp(min=0.0)
+    m = c.max(dim=1, keepdim=True).values
+    return c / (1.0 + m)
+
+
+def untonemap(t):
+    m = t.clamp(min=0.0).max(dim=1, keepdim=True).values.clamp(max=0.999)
+    return t.clamp(min=0.0) / (1.0 - m)
+
+
+def catmull_rom_reproject(img, motion):
+    """Samples img (N,C,H,W) at (x + 0.5 + mx, y + 0.5 + my) with the separable 4x4
+    Catmull-Rom kernel, taps clamped to the edge (taa_image.c)."""
+    n, c, h, w = img.shape
+    ys = torch.arange(h, dtype=img.dtype, device=img.device).view(1, h, 1)
+    xs = torch.arange(w, dtype=img.dtype, device=img.device).view(1, 1, w)
+    ux = (xs + 0.5 + motion[:, 0]) - 0.5
+    uy = (ys + 0.5 + motion[:, 1]) - 0.5
+    bx, by = torch.floor(ux), torch.floor(uy)
+    fx, fy = ux - bx, uy - by
+
+    def weights(f):
+        return [f * (-0.5 + f * (1.0 - 0.5 * f)),
+                1.0 + f * f * (-2.5 + 1.5 * f),
+                f * (0.5 + f * (2.0 - 1.5 * f)),
+                f * f * (-0.5 + 0.5 * f)]
+
+    wx, wy = weights(fx), weights(fy)
+    flat = img.reshape(n, c, h * w)
+    out = torch.zeros_like(img)
+    bxi, byi = bx.long(), by.long()
+    for j in range(4):
+        yi = (byi - 1 + j).clamp(0, h - 1)
+        for i in range(4):
+            xi = (bxi - 1 + i).clamp(0, w - 1)
+            idx = (yi * w + xi).reshape(n, 1, h * w).expand(n, c, h * w)
+            tap = torch.gather(flat, 2, idx).reshape(n, c, h, w)
+            out = out + (wx[i] * wy[j]).unsqueeze(1) * tap
+    return out
+
+
+class SetConv(nn.Module):
+    """A convolution with 1 or 8 weight sets (chosen by jitter index)."""
+
+    def __init__(self, cin, cout, k, sets, role, act):
+        super().__init__()
+        self.cin, self.cout, self.k, self.sets, self.role, self.act = cin, cout, k, sets, role, act
+        fan_in = cin * k * k
+        self.weight = nn.Parameter(torch.randn(sets, cout, cin, k, k) * (2.0 / fan_in) ** 0.5)
+        self.bias = nn.Parameter(torch.zeros(sets, cout))
+
+    def forward(self, x, j):
+        s = j % JITTER_SETS if self.sets > 1 else 0
+        return F.conv2d(x, self.weight[s], self.bias[s], padding=self.k // 2)
+
+
+class TAANet(nn.Module):
+    """width: body channels (12 or 6); hidden: state channels; body: kernel sizes of the
+    body layers (thesis: 3, 3, 5); jitter_layers: which layers have 8 sets, a string of
+    'b1', 'b2', ..., 'k', 'h' tokens (thesis best: 2-3-K = 'b2 b3 k')."""
+
+    def __init__(self, width=12, hidden=5, body=(3, 3, 5), jitter_layers="b2 b3 k",
+                 motion_scale=0.125):
+        super().__init__()
+        self.width, self.hidden, self.motion_scale = width, hidden, motion_scale
+        toks = set(jitter_layers.split())
+        self.in_channels = 9 + hidden
+        layers, cin = [], self.in_channels
+        for i, k in enumerate(body):
+            sets = JITTER_SETS if f"b{i + 1}" in toks else 1
+            layers.append(SetConv(cin, width, k, sets, ROLE_BODY, ACT_RELU))
+            cin = width
+        self.body = nn.ModuleList(layers)
+        self.kernel = SetConv(width, 2 * MIX_K * MIX_K, MIX_K,
+                              JITTER_SETS if "k" in toks else 1, ROLE_KERNEL, ACT_SOFTMAX)
+        self.hid = (SetConv(width, hidden, 1, JITTER_SETS if "h" in toks else 1, ROLE_HIDDEN,
+                            ACT_NONE) if hidden else None)
+
+    def init_state(self, tm):
+        """State standing in for the previous output on the first frame / after a reset."""
+        n, _, h, w = tm.shape
+        return torch.cat([tm, tm.new_zeros(n, self.hidden, h, w)], 1)
+
+    def step(self, color, depth_n, motion, state, j, fresh):
+        """One frame. color: linear (N,3,H,W); depth_n: depth / frame max (N,1,H,W); motion
+        (N,2,H,W) pixels; state (N,3+hidden,H,W) or None; returns (out_tm, new_state)."""
+        tm = tonemap(color)
+        fb = self.init_state(tm) if fresh or state is None else catmull_rom_reproject(state, motion)
+        x = torch.cat([tm, motion * self.motion_scale, depth_n, fb], 1)
+        for layer in self.body:
+            x = F.relu(layer(x, j))
+        k = torch.softmax(self.kernel(x, j), dim=1)
+        n, _, h, w = tm.shape
+        cu = F.unfold(tm, MIX_K, padding=MIX_K // 2).view(n, 3, MIX_K * MIX_K, h, w)
+        ru = F.unfold(fb[:, :3], MIX_K, padding=MIX_K // 2).view(n, 3, MIX_K * MIX_K, h, w)
+        t = MIX_K * MIX_K
+        out = (k[:, None, :t] * cu).sum(2) + (k[:, None, t:] * ru).sum(2)
+        parts = [out]
+        if self.hid is not None:
+            parts.append(self.hid(x, j))
+        return out, torch.cat(parts, 1)
+
+    def layers(self):
+        return list(self.body) + [self.kernel] + ([self.hid] if self.hid is not None else [])
+
+    def flops_per_pixel(self):
+        """Table 5.1: (2 * K^2 * I * O + O) per layer (one weight set is used per frame)."""
+        rows = []
+        for l in self.layers():
+            rows.append((l.role, l.k, l.cin, l.cout, 2 * l.k * l.k * l.cin * l.cout + l.cout))
+        return rows
+
+
+def fnv1a(data):
+    h = 2166136261
+    for b in data:
+        h = ((h ^ b) * 16777619) & 0xFFFFFFFF
+    return h
+
+
+def save_weights(model, path):
+    layers = model.layers()
+    header = struct.pack("<8sIIIIIIIIfI", MAGIC, VERSION, 48 + 24 * len(layers),
+                         model.in_channels, model.width, model.hidden, MIX_K, JITTER_SETS,
+                         len(layers), model.motion_scale, 0)
+    table = b"".join(struct.pack("<IIIIII", l.role, l.cin, l.cout, l.k, l.sets, l.act)
+                     for l in layers)
+    payload = b"".join(
+        l.weight.detach().cpu().numpy().astype("<f4").tobytes() +
+        l.bias.detach().cpu().numpy().astype("<f4").tobytes() for l in layers)
+    with open(path, "wb") as f:
+        f.write(header + table + payload + struct.pack("<I", fnv1a(payload)))
+
+
+def load_weights(path):
+    """Reads a weights file back into a TAANet (for evaluation of exported models)."""
+    data = open(path, "rb").read()
+    (magic, version, hbytes, cin, width, hidden, mix_k, sets, nl, ms, _) = struct.unpack_from(
+        "<8sIIIIIIIIfI", data, 0)
+    if magic != MAGIC or version != VERSION:
+        raise ValueError(f"{path}: not a version {VERSION} post_taa weights file")
+    recs = [struct.unpack_from("<IIIIII", data, 48 + 24 * i) for i in range(nl)]
+    body = tuple(r[3] for r in recs if r[0] == ROLE_BODY)
+    toks = [f"b{i + 1}" for i, r in enumerate(r for r in recs if r[0] == ROLE_BODY) if r[4] > 1]
+    toks += ["k" for r in recs if r[0] == ROLE_KERNEL and r[4] > 1]
+    toks += ["h" for r in recs if r[0] == ROLE_HIDDEN and r[4] > 1]
+    m = TAANet(width, hidden, body, " ".join(toks), ms)
+    off = hbytes
+    for l in m.layers():
+        nw, nb = l.weight.numel(), l.bias.numel()
+        w = np.frombuffer(data, "<f4", nw, off); off += 4 * nw
+        b = np.frombuffer(data, "<f4", nb, off); off += 4 * nb
+        l.weight.data = torch.from_numpy(w.copy()).view_as(l.weight)
+        l.bias.data = torch.from_numpy(b.copy()).view_as(l.bias)
+    return m

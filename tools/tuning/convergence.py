@@ -1,0 +1,132 @@
+#!/usr/bin/python3
+"""Tuning convergence plot (thesis Fig. 3.3): cost per iteration against the default.
+
+Reads the `tuning` object of host --stats files, or the rows of one tuning run from the
+tuning database, and draws for each run the measured cost of every iteration (hollow
+markers: answered from the database), the best cost so far, and the default
+configuration's cost as a horizontal line.
+
+  convergence.py run_render.json run_total.json -o convergence.png
+  convergence.py --db ~/.local/share/tunetrace/tuning.db --last 2 -o convergence.png
+  convergence.py run.json --summary          # text only, no matplotlib needed
+"""
+import argparse
+import json
+import math
+import sqlite3
+import sys
+
+INFEASIBLE = 1e299  # TT_COST_INFEASIBLE is 1e300: anything this large was not measured
+
+
+def runs_from_stats(paths):
+    """One run per stats file: (label, default_cost, [(cost, cached)], best_cost)."""
+    runs = []
+    for path in paths:
+        with open(path) as f:
+            t = json.load(f).get("tuning")
+        if not t:
+            sys.exit(f"convergence: {path}: no \"tuning\" object (was a tuner loaded?)")
+        hist = t.get("history", [])
+        samples = [(h["cost"], bool(h.get("cached"))) for h in hist]
+        label = f'{t["plugin"]} / {t["objective"]}'
+        runs.append((label, t["default_cost"], samples, t["best_cost"]))
+    return runs
+
+
+def runs_from_db(path, last, plugin):
+    """The `last` runs (by run_id, newest last) in the database, optionally of one plugin."""
+    db = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+    where, args = ("WHERE plugin = ?", (plugin,)) if plugin else ("", ())
+    ids = [r[0] for r in db.execute(
+        f"SELECT run_id FROM samples {where} GROUP BY run_id ORDER BY max(id) DESC LIMIT ?",
+        args + (last,))]
+    runs = []
+    for run_id in reversed(ids):
+        rows = db.execute("SELECT iteration, cost, plugin, objective FROM samples "
+                          "WHERE run_id = ? ORDER BY iteration, id", (run_id,)).fetchall()
+        default = [c for it, c, _, _ in rows if it < 0]
+        samples = [(c, False) for it, c, _, _ in rows if it >= 0]
+        feasible = [c for c, _ in samples if c < INFEASIBLE] + default
+        # the database holds measurements only: cached iterations of that run are absent
+        label = f"{rows[0][2]} / {rows[0][3]} ({run_id})"
+        runs.append((label, default[0] if default else math.nan, samples,
+                     min(feasible) if feasible else math.nan))
+    return runs
+
+
+def best_so_far(samples, default):
+    """Running minimum of the feasible costs, starting from the default."""
+    out, best = [], default if default < INFEASIBLE else math.inf
+    for cost, _ in samples:
+        if cost < best:
+            best = cost
+        out.append(best)
+    return out
+
+
+def summary(runs):
+    """One line per run: iterations, default, best, gain and when the best was reached."""
+    lines = []
+    for label, default, samples, best in runs:
+        running = best_so_far(samples, default)
+        reached = next((i for i, b in enumerate(running) if b <= best), None)
+        gain = 100.0 * (1.0 - best / default) if default and default < INFEASIBLE else math.nan
+        cached = sum(1 for _, c in samples if c)
+        lines.append(f"{label}: iterations {len(samples)}, cached {cached}, default {default:.6g}, "
+                     f"best {best:.6g}, gain {gain:.1f}%, best reached at iteration "
+                     f"{reached if reached is not None else 'default'}")
+    return "\n".join(lines)
+
+
+def plot(runs, out):
+    """Draws the Fig. 3.3-style chart into `out`."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, (label, default, samples, _) in enumerate(runs):
+        color = colors[k % len(colors)]
+        xs = [i for i, (c, _) in enumerate(samples) if c < INFEASIBLE]
+        measured = [(i, samples[i][0]) for i in xs if not samples[i][1]]
+        cached = [(i, samples[i][0]) for i in xs if samples[i][1]]
+        if measured:
+            ax.plot(*zip(*measured), "o", ms=3, color=color, alpha=0.6)
+        if cached:
+            ax.plot(*zip(*cached), "o", ms=4, mfc="none", color=color, alpha=0.6)
+        ax.plot(range(len(samples)), best_so_far(samples, default), "-", color=color,
+                label=f"{label}: best so far")
+        if default < INFEASIBLE:
+            ax.axhline(default, color=color, ls="--", lw=1, label=f"{label}: default")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("cost (ms for time objectives)")
+    ax.set_title("Tuning convergence")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("stats", nargs="*", help="host --stats JSON files")
+    ap.add_argument("--db", help="read runs from this tuning database instead")
+    ap.add_argument("--last", type=int, default=1, help="with --db: the N most recent runs")
+    ap.add_argument("--plugin", help="with --db: only runs tuning this plugin")
+    ap.add_argument("-o", "--out", help="PNG to write")
+    ap.add_argument("--summary", action="store_true", help="print one line per run")
+    a = ap.parse_args()
+    if bool(a.db) == bool(a.stats):
+        ap.error("give stats files or --db, not both and not neither")
+    runs = runs_from_db(a.db, a.last, a.plugin) if a.db else runs_from_stats(a.stats)
+    if not runs:
+        sys.exit("convergence: no tuning runs found")
+    if a.summary or not a.out:
+        print(summary(runs))
+    if a.out:
+        plot(runs, a.out)
+
+
+if __name__ == "__main__":
+    main()
