@@ -12,6 +12,7 @@ PACKAGES=(
   libcjson-dev                                # scene.json, parameter spaces, run records
   libassimp-dev                               # OBJ/PLY/glTF mesh import
   libsqlite3-dev                              # tuning database
+  zlib1g-dev                                  # .ply.gz meshes in the pbrt importer
   python3-matplotlib                          # tools/tuning/ charts (tests/tune_plot.sh)
 )
 
