@@ -265,17 +265,12 @@ static double run_toy(const tt__mlt_kernel *k, int chains, int steps, const char
   for (int i = 0; i < B8; ++i)
     for (int j = 0; j < B8; ++j)
       p89[i * B8 + j] = (G((i + 1.0) / B8) - G((double)i / B8)) * (G((j + 1.0) / B8) - G((double)j / B8));
-  double z20 = 0.0, z16 = 0.0;
   for (int i = 0; i < B1; ++i) {
     double lo = (double)i / B1, hi = (i + 1.0) / B1;
     p20a[i] = hi * hi - lo * lo;
     pu[i] = 1.0 / B1;
     p16[i] = 0.5 * (q(lo) + q(hi - 1e-12)) * (hi - lo);  /* q is constant on each bin */
-    z20 += p20a[i];
-    z16 += p16[i];
   }
-  (void)z20;
-  (void)z16;
   double c89 = chi2(h89, p89, B8 * B8, chains) / chi2_bound(B8 * B8 - 1);
   double c20a = chi2(h20a, p20a, B1, n20a) / chi2_bound(B1 - 1);
   double c20b = chi2(h20b, pu, B1, n20b) / chi2_bound(B1 - 1);

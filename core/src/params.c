@@ -915,3 +915,86 @@ void tt_config_from_unit(tt_config *config, const double *unit) {
     }
   }
 }
+
+/* ---- subsets (tuning a few parameters of a larger space) ---- */
+
+/* Adds to `dst` a copy of parameter `i` of `src` whose default is `def`. */
+static int tt__copy_param(tt_space *dst, const tt_space *src, size_t i, tt_value def) {
+  const tt__param *p = tt__param_at(src, i);
+  const char *desc = tt_space_description(src, i);
+  switch (p->type) {
+    case TT_PARAM_INT: {
+      int64_t lo = 0, hi = 0;
+      tt__space_int_range(src, i, &lo, &hi);
+      return tt_space_add_int(dst, p->name, lo, hi, def.i, desc);
+    }
+    case TT_PARAM_FLOAT:
+      return tt_space_add_float(dst, p->name, tt_space_min(src, i), tt_space_max(src, i), def.f,
+                                tt_space_is_log(src, i), desc);
+    case TT_PARAM_NOM: {
+      size_t n = tt_space_nom_count(src, i);
+      size_t d = def.index >= 0 ? (size_t)def.index : 0;
+      if (p->nom_kind == TT_VALUE_BOOL) return tt_space_add_nom_bool(dst, p->name, (int)d, desc);
+      if (p->nom_kind == TT_VALUE_STRING) {
+        const char **vals = malloc(n * sizeof *vals);
+        if (!vals) return -1;
+        for (size_t k = 0; k < n; k++) vals[k] = tt_space_nom_value(src, i, k).s;
+        int r = tt_space_add_nom_string(dst, p->name, vals, n, d, desc);
+        free(vals);
+        return r;
+      }
+      int64_t *vals = malloc(n * sizeof *vals);
+      if (!vals) return -1;
+      for (size_t k = 0; k < n; k++) vals[k] = tt_space_nom_value(src, i, k).i;
+      int r = tt_space_add_nom_int(dst, p->name, vals, n, d, desc);
+      free(vals);
+      return r;
+    }
+  }
+  return -1;
+}
+
+tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_t count,
+                          const tt_config *base) {
+  if (!space || (count && !names))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_subset: no space or names"), NULL;
+  if (base && tt_config_space(base) != space)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_space_subset: %s: the base configuration belongs to another space",
+                        space->plugin), NULL;
+  tt_space *sub = tt_space_create(space->plugin, space->version);
+  if (!sub) return NULL;
+  for (size_t k = 0; k < count; k++) {
+    int i = tt_space_find(space, names[k]);
+    if (i < 0) {
+      tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no parameter \"%s\" to tune (known: see --describe %s)",
+                   space->plugin, names[k], space->plugin);
+      tt_space_destroy(sub);
+      return NULL;
+    }
+    tt_value def = base ? tt_config_get(base, (size_t)i) : tt_space_default(space, (size_t)i);
+    if (tt__copy_param(sub, space, (size_t)i, def) < 0) {
+      tt_space_destroy(sub);
+      return NULL;
+    }
+  }
+  for (size_t k = 0; k < tt__space_constraint_count(space); k++)
+    tt_space_add_constraint_text(sub, tt__space_constraint(space, k));
+  return sub;
+}
+
+int tt_config_assign(tt_config *dst, const tt_config *src) {
+  if (!dst || !src) return -1;
+  const tt_space *ds = tt_config_space(dst), *ss = tt_config_space(src);
+  int copied = 0;
+  for (size_t k = 0; k < tt_space_count(ss); k++) {
+    int i = tt_space_find(ds, tt_space_name(ss, k));
+    if (i < 0 || tt_space_type(ds, (size_t)i) != tt_space_type(ss, k)) continue;
+    tt_value v = tt_config_get(src, k);
+    tt_status st = v.index >= 0 ? tt_config_set_index(dst, (size_t)i, (size_t)v.index)
+                                : tt_config_set_number(dst, (size_t)i, v.kind == TT_VALUE_INT ? (double)v.i : v.f);
+    if (st != TT_OK) return -1;
+    copied++;
+  }
+  return copied;
+}

@@ -99,11 +99,11 @@ static tt_status mlt_build_space(void) {
     snprintf(desc, sizeof desc, "small-step sigma of Theta bin %d (used when %d <= M)", i, i);
     ok &= tt_space_add_float(s, name, 1e-4, 0.3, 0.01, 1, desc) >= 0;
   }
-  ok &= tt_space_add_int(s, "mutationsPerPixel", 1, 4096, 1,
+  ok &= tt_space_add_int(s, "mutationsPerPixel", 1, 64, 1,
                          "mutations per pixel per pass and per --spp unit") >= 0;
-  ok &= tt_space_add_int(s, "bootstrapSamples", 1, 100000000, 100000,
+  ok &= tt_space_add_int(s, "bootstrapSamples", 1000, 1000000, 100000,
                          "bootstrap paths for b and the chain starts (restarts when changed)") >= 0;
-  ok &= tt_space_add_int(s, "chains", 1, 1000000, 1000,
+  ok &= tt_space_add_int(s, "chains", 1, 100000, 1000,
                          "independent Markov chains (restarts when changed)") >= 0;
   tt_space_add_constraint_text(s, "only a_1..a_{bins+1} and sigma1..sigma{bins} are used, and only with binning");
   if (!ok) {

@@ -169,6 +169,20 @@ TT_API char *tt_config_to_json(const tt_config *config);
  * naming `source`, the parameter and what was expected. */
 TT_API tt_status tt_config_from_json(tt_config *config, const char *json, const char *source);
 
+/* ---- subsets: tuning some parameters of a larger space ---- */
+
+/* Creates a space holding copies of the parameters `names` of `space` (same bounds, types
+ * and possible values; constraint texts copied, no check function), with defaults taken
+ * from `base` (a config of `space`; NULL = the space's defaults). Free with
+ * tt_space_destroy. NULL and a message naming the unknown parameter on error. */
+TT_API tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_t count,
+                                 const tt_config *base);
+
+/* Copies into `dst` every parameter of `src` that `dst`'s space has under the same name
+ * and type (e.g. a subset configuration back into the full one). Returns how many were
+ * copied, or -1 if a value does not fit (nothing is rolled back). */
+TT_API int tt_config_assign(tt_config *dst, const tt_config *src);
+
 #ifdef __cplusplus
 }
 #endif
