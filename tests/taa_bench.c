@@ -49,13 +49,18 @@ static void bench_net(const char *weights, uint32_t w, uint32_t h, int reps) {
   }
   tt__net_state s;
   CHECK(tt__net_state_init(&s, &m, w, h) == TT_OK);
-  double best[4] = {1e30, 1e30, 1e30, 1e30}, best_cpu = 1e30;
+  double best[4] = {1e30, 1e30, 1e30, 1e30}, best_cpu = 1e30, cpu_parts[3] = {0, 0, 0};
   for (int r = 0; r <= reps; r++) {
     double t0 = now_ms(), c0 = cpu_ms();
     tt__net_process(&s, &m, tt_default_host(), color, depth, motion, (uint32_t)r, out);
     double t = now_ms() - t0, c = cpu_ms() - c0;
     if (r == 0) continue;  /* warm-up */
-    if (c < best_cpu) best_cpu = c;
+    if (c < best_cpu) {
+      best_cpu = c;
+      cpu_parts[0] = s.cpu_reproject;
+      cpu_parts[1] = s.cpu_network;
+      cpu_parts[2] = s.cpu_mix;
+    }
     if (t < best[0]) {
       best[0] = t;
       best[1] = s.ms_reproject;
@@ -68,6 +73,9 @@ static void bench_net(const char *weights, uint32_t w, uint32_t h, int reps) {
          "kernel+mix+hidden %.1f), CPU %.1f ms; %.0f FLOP/px, %.1f GFLOP/s (wall) / %.1f "
          "GFLOP/s per CPU-second\n", strrchr(weights, '/') + 1, w, h, best[0], best[1],
          best[2], best[3], best_cpu, flops, gflops, flops * n / best_cpu * 1e-6);
+  printf("network %s %ux%u: CPU ms: reprojection+input %.1f, body convs %.1f, "
+         "kernel+softmax+mix+hidden %.1f\n", strrchr(weights, '/') + 1, w, h, cpu_parts[0],
+         cpu_parts[1], cpu_parts[2]);
   if (w == 640) {
     s.reference = 1;
     s.valid = 0;

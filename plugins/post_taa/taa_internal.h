@@ -44,6 +44,7 @@ typedef struct tt__vctaa {
   uint32_t width, height;
   float *history;   /* tonemapped RGB of the previous output */
   float *scratch;   /* next history */
+  float *ycocg;     /* the new frame, tonemapped, in YCoCg */
   int valid;        /* history holds a frame */
 } tt__vctaa;
 
@@ -107,7 +108,8 @@ typedef struct tt__net_state {
   float *reproj;            /* padded reprojected rgb of the previous output, 3 ch */
   int valid;
   int reference;            /* use the plain scalar loops (tests) */
-  double ms_reproject, ms_network, ms_mix;   /* timings of the last frame */
+  double ms_reproject, ms_network, ms_mix;   /* wall ms of the last frame's passes */
+  double cpu_reproject, cpu_network, cpu_mix; /* process CPU ms of the same passes */
 } tt__net_state;
 
 tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t width,

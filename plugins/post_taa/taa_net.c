@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "taa_internal.h"
 
@@ -360,6 +361,35 @@ static inline __attribute__((always_inline)) void net_conv_px(
   for (int j = 0; j < NV; j++) acc[j] = r[j];
 }
 
+/* Two horizontally adjacent output pixels at once: each weight vector loaded serves two
+ * FMAs, halving the load traffic that bounds the single-pixel loop. */
+static inline __attribute__((always_inline)) void net_conv_px2(
+    const float *in, size_t row, size_t px, uint32_t I, uint32_t K, const float *w,
+    const float *b, const int NV, v8f *acc0, v8f *acc1) {
+  v8f r0[8], r1[8];
+#pragma GCC unroll 8
+  for (int j = 0; j < NV; j++) r0[j] = r1[j] = *(const v8f *)(b + 8 * j);
+  for (uint32_t ky = 0; ky < K; ky++)
+    for (uint32_t kx = 0; kx < K; kx++) {
+      const float *p = in + ky * row + kx * px;
+      for (uint32_t c = 0; c < I; c++) {
+        float v0 = p[c], v1 = p[c + px];
+#pragma GCC unroll 8
+        for (int j = 0; j < NV; j++) {
+          v8f wv = *(const v8f *)(w + 8 * j);
+          r0[j] += v0 * wv;
+          r1[j] += v1 * wv;
+        }
+        w += 8 * NV;
+      }
+    }
+#pragma GCC unroll 8
+  for (int j = 0; j < NV; j++) {
+    acc0[j] = r0[j];
+    acc1[j] = r1[j];
+  }
+}
+
 /* Body layer rows with NV output vectors (constant-folded per call site). */
 static inline __attribute__((always_inline)) void net_body_rows_nv(const net_job *job,
                                                                    uint32_t y0, uint32_t y1,
@@ -370,16 +400,23 @@ static inline __attribute__((always_inline)) void net_body_rows_nv(const net_job
   size_t px = s->plane_stride, row = (size_t)(s->width + 2 * TT__NET_BORDER) * px;
   const float *w = l->wp + (size_t)job->set * kk * l->in * l->out_pad;
   const float *b = l->bp + (size_t)job->set * l->out_pad;
-  v8f acc[8];
+  v8f acc[8], acc1[8];
+  float tmp[64];
   for (uint32_t y = y0; y < y1; y++)
-    for (uint32_t x = 0; x < s->width; x++) {
+    for (uint32_t x = 0; x < s->width; x += 2) {
       size_t pi = net_pidx(s, x, y);
       const float *in = job->in_plane + (pi - r * (s->width + 2 * TT__NET_BORDER) - r) * px;
-      net_conv_px(in, row, px, l->in, l->ksize, w, b, NV, acc);
+      int pair = x + 1 < s->width;
+      if (pair)
+        net_conv_px2(in, row, px, l->in, l->ksize, w, b, NV, acc, acc1);
+      else
+        net_conv_px(in, row, px, l->in, l->ksize, w, b, NV, acc);
       float *o = job->out_plane + pi * px;
-      float tmp[64];
       for (int j = 0; j < NV; j++) memcpy(tmp + 8 * j, &acc[j], sizeof(v8f));
       for (uint32_t c = 0; c < l->out; c++) o[c] = tmp[c] > 0.0f ? tmp[c] : 0.0f;
+      if (!pair) continue;
+      for (int j = 0; j < NV; j++) memcpy(tmp + 8 * j, &acc1[j], sizeof(v8f));
+      for (uint32_t c = 0; c < l->out; c++) o[px + c] = tmp[c] > 0.0f ? tmp[c] : 0.0f;
     }
 }
 
@@ -426,14 +463,63 @@ static inline __attribute__((always_inline)) void net_exp_neg(v8f *xp) {
   *xp = p * scale;
 }
 
+/* Everything of the head after the kernel layer's logits `acc`, for pixel (x, y):
+ * softmax, colour mix (eq. 5.3), hidden layer, state and linear output. */
+static inline __attribute__((always_inline)) void net_head_finish(const net_job *job,
+                                                                  uint32_t x, uint32_t y,
+                                                                  v8f *acc, const float *hw,
+                                                                  const float *hb) {
+  tt__net_state *s = job->s;
+  const tt__net_model *m = job->m;
+  uint32_t wp = s->width + 2 * TT__NET_BORDER, sc = s->state_ch;
+  size_t px = s->plane_stride, row = (size_t)wp * px, pi = net_pidx(s, x, y);
+  /* Softmax over the 50 logits: the padded lanes 50..55 must not count. */
+  float mx = -INFINITY;
+  for (int j = 0; j < 7; j++)
+    for (int l = 0; l < 8 && 8 * j + l < 50; l++) mx = fmaxf(mx, acc[j][l]);
+  v8f sum = {0, 0, 0, 0, 0, 0, 0, 0};
+  for (int j = 0; j < 7; j++) {
+    acc[j] -= mx;
+    net_exp_neg(&acc[j]);
+    if (j == 6)
+      for (int l = 2; l < 8; l++) acc[j][l] = 0.0f;
+    sum += acc[j];
+  }
+  float total = 0.0f;
+  for (int l = 0; l < 8; l++) total += sum[l];
+  float k[56];
+  float inv = 1.0f / total;
+  for (int j = 0; j < 7; j++) memcpy(k + 8 * j, &acc[j], sizeof(v8f));
+  /* Eq. 5.3: 25 taps over the new frame, 25 over the reprojected previous output. */
+  float o[3] = {0, 0, 0};
+  for (uint32_t ty = 0; ty < 5; ty++)
+    for (uint32_t tx = 0; tx < 5; tx++) {
+      size_t q = pi + (size_t)ty * wp + tx - 2 * wp - 2;
+      float a = k[ty * 5 + tx], bb = k[25 + ty * 5 + tx];
+      const float *c = s->tm + 3 * q, *r = s->reproj + 3 * q;
+      o[0] += a * c[0] + bb * r[0];
+      o[1] += a * c[1] + bb * r[1];
+      o[2] += a * c[2] + bb * r[2];
+    }
+  size_t i = (size_t)y * s->width + x;
+  float *st = s->next_state + i * sc;
+  for (int c = 0; c < 3; c++) st[c] = o[c] * inv;
+  if (m->hidden) {
+    v8f hacc[1];
+    net_conv_px(job->in_plane + pi * px, row, px, m->hid.in, 1, hw, hb, 1, hacc);
+    for (uint32_t c = 0; c < m->hidden; c++) st[3 + c] = hacc[0][c];
+  }
+  tt__taa_untonemap(st, job->out_rgb + 3 * i);
+}
+
 /* Kernel layer + softmax + colour mix + hidden layer, fused per pixel (the 50 logits never
- * leave registers). */
+ * leave registers); pixels go in pairs through the kernel layer. */
 TAA_CLONES static void net_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
   const net_job *job = ctx;
   tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   const tt__net_layer *kl = &m->kernel, *hl = &m->hid;
-  uint32_t wp = s->width + 2 * TT__NET_BORDER, sc = s->state_ch;
+  uint32_t wp = s->width + 2 * TT__NET_BORDER;
   size_t px = s->plane_stride, row = (size_t)wp * px;
   uint32_t ks = kl->sets > 1 ? job->set : 0;
   uint32_t kr = kl->ksize / 2;
@@ -442,49 +528,21 @@ TAA_CLONES static void net_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
   uint32_t hs = hl->sets > 1 ? job->set : 0;
   const float *hw = m->hidden ? hl->wp + (size_t)hs * hl->in * hl->out_pad : NULL;
   const float *hb = m->hidden ? hl->bp + (size_t)hs * hl->out_pad : NULL;
-  v8f acc[7], hacc[2];
-  for (uint32_t y = y0; y < y1; y++)
-    for (uint32_t x = 0; x < s->width; x++) {
-      size_t pi = net_pidx(s, x, y);
-      const float *in = job->in_plane + (pi - kr * wp - kr) * px;
-      net_conv_px(in, row, px, kl->in, kl->ksize, kw, kb, 7, acc);
-      /* Softmax over the 50 logits: the padded lanes 50..55 must not count. */
-      float mx = -INFINITY;
-      for (int j = 0; j < 7; j++)
-        for (int l = 0; l < 8 && 8 * j + l < 50; l++) mx = fmaxf(mx, acc[j][l]);
-      v8f sum = {0, 0, 0, 0, 0, 0, 0, 0};
-      for (int j = 0; j < 7; j++) {
-        acc[j] -= mx;
-        net_exp_neg(&acc[j]);
-        if (j == 6)
-          for (int l = 2; l < 8; l++) acc[j][l] = 0.0f;
-        sum += acc[j];
-      }
-      float total = 0.0f;
-      for (int l = 0; l < 8; l++) total += sum[l];
-      float k[56];
-      float inv = 1.0f / total;
-      for (int j = 0; j < 7; j++) memcpy(k + 8 * j, &acc[j], sizeof(v8f));
-      /* Eq. 5.3: 25 taps over the new frame, 25 over the reprojected previous output. */
-      float o[3] = {0, 0, 0};
-      for (uint32_t ty = 0; ty < 5; ty++)
-        for (uint32_t tx = 0; tx < 5; tx++) {
-          size_t q = pi + (size_t)ty * wp + tx - 2 * wp - 2;
-          float a = k[ty * 5 + tx], bb = k[25 + ty * 5 + tx];
-          const float *c = s->tm + 3 * q, *r = s->reproj + 3 * q;
-          o[0] += a * c[0] + bb * r[0];
-          o[1] += a * c[1] + bb * r[1];
-          o[2] += a * c[2] + bb * r[2];
-        }
-      size_t i = (size_t)y * s->width + x;
-      float *st = s->next_state + i * sc;
-      for (int c = 0; c < 3; c++) st[c] = o[c] * inv;
-      if (m->hidden) {
-        net_conv_px(job->in_plane + pi * px, row, px, hl->in, 1, hw, hb, 1, hacc);
-        for (uint32_t c = 0; c < m->hidden; c++) st[3 + c] = hacc[0][c];
-      }
-      tt__taa_untonemap(st, job->out_rgb + 3 * i);
+  v8f acc0[7], acc1[7];
+  for (uint32_t y = y0; y < y1; y++) {
+    uint32_t x = 0;
+    for (; x + 1 < s->width; x += 2) {
+      const float *in = job->in_plane + (net_pidx(s, x, y) - kr * wp - kr) * px;
+      net_conv_px2(in, row, px, kl->in, kl->ksize, kw, kb, 7, acc0, acc1);
+      net_head_finish(job, x, y, acc0, hw, hb);
+      net_head_finish(job, x + 1, y, acc1, hw, hb);
     }
+    if (x < s->width) {
+      const float *in = job->in_plane + (net_pidx(s, x, y) - kr * wp - kr) * px;
+      net_conv_px(in, row, px, kl->in, kl->ksize, kw, kb, 7, acc0);
+      net_head_finish(job, x, y, acc0, hw, hb);
+    }
+  }
 }
 
 /* Plain scalar reference of one convolution on padded planes (file layout, no packing). */
@@ -551,11 +609,19 @@ static void net_ref_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
     }
 }
 
+/* Process CPU time in ms (all threads): timings that survive a loaded machine. */
+static double net_cpu_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                      const float *color, const float *depth, const float *motion,
                      uint32_t jitter_index, float *out_rgb) {
   const tt_host *h = host;
   uint64_t t0 = h && h->clock_ns ? h->clock_ns() : 0;
+  double c0 = net_cpu_ms();
   net_job job = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion,
                  .set = jitter_index % TT__NET_JITTER_SETS, .out_rgb = out_rgb};
   /* Depth enters as a fraction of the frame's farthest hit, so scenes of any scale look
@@ -567,6 +633,7 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   job.depth_scale = dmax > 0.0f ? 1.0f / dmax : 0.0f;
   tt__taa_parallel_rows(h, s->height, net_input_rows, &job);
   uint64_t t1 = h && h->clock_ns ? h->clock_ns() : 0;
+  double c1 = net_cpu_ms();
   int cur = 0;
   for (uint32_t l = 0; l < m->body_count; l++) {
     job.layer = &m->body[l];
@@ -580,8 +647,13 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   job.set = jitter_index % TT__NET_JITTER_SETS;
   job.in_plane = s->planes[cur];
   uint64_t t2 = h && h->clock_ns ? h->clock_ns() : 0;
+  double c2 = net_cpu_ms();
   tt__taa_parallel_rows(h, s->height, s->reference ? net_ref_head_rows : net_head_rows, &job);
   uint64_t t3 = h && h->clock_ns ? h->clock_ns() : 0;
+  double c3 = net_cpu_ms();
+  s->cpu_reproject = c1 - c0;
+  s->cpu_network = c2 - c1;
+  s->cpu_mix = c3 - c2;
   float *t = s->state;
   s->state = s->next_state;
   s->next_state = t;

@@ -16,7 +16,8 @@ tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height) {
   v->height = height;
   v->history = calloc(n, sizeof(float));
   v->scratch = calloc(n, sizeof(float));
-  if (!v->history || !v->scratch) {
+  v->ycocg = calloc(n, sizeof(float));
+  if (!v->history || !v->scratch || !v->ycocg) {
     tt__vctaa_free(v);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u history",
                         width, height);
@@ -27,7 +28,8 @@ tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height) {
 void tt__vctaa_free(tt__vctaa *v) {
   free(v->history);
   free(v->scratch);
-  v->history = v->scratch = NULL;
+  free(v->ycocg);
+  v->history = v->scratch = v->ycocg = NULL;
   v->valid = 0;
 }
 
@@ -53,14 +55,23 @@ typedef struct vc_job {
   float *out;
 } vc_job;
 
-/* Current pixel (x, y) tonemapped into YCoCg, edge-clamped. */
+/* Current pixel (x, y) in tonemapped YCoCg (precomputed plane), edge-clamped. */
 static inline void vc_fetch(const vc_job *job, int x, int y, float o[3]) {
   int w = (int)job->v->width, h = (int)job->v->height;
   x = x < 0 ? 0 : (x >= w ? w - 1 : x);
   y = y < 0 ? 0 : (y >= h ? h - 1 : y);
-  float t[3];
-  tt__taa_tonemap(job->color + ((size_t)y * w + x) * 3, t);
-  vc_to_ycocg(t, o);
+  memcpy(o, job->v->ycocg + ((size_t)y * w + x) * 3, 3 * sizeof(float));
+}
+
+/* Tonemaps rows [y0, y1) of the new frame into YCoCg once (each is read 9 times). */
+static void vc_prepare_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const vc_job *job = ctx;
+  size_t w = job->v->width;
+  for (size_t i = y0 * w; i < y1 * w; i++) {
+    float t[3];
+    tt__taa_tonemap(job->color + 3 * i, t);
+    vc_to_ycocg(t, job->v->ycocg + 3 * i);
+  }
 }
 
 /* Resolves rows [y0, y1). */
@@ -126,6 +137,7 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
 void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
                        const float *color, const float *motion, float *out_rgb) {
   vc_job job = {v, p, color, motion, out_rgb};
+  tt__taa_parallel_rows(host, v->height, vc_prepare_rows, &job);
   tt__taa_parallel_rows(host, v->height, vc_rows, &job);
   float *t = v->history;
   v->history = v->scratch;

@@ -1,0 +1,148 @@
+#!/usr/bin/python3
+"""Camera paths for benchmark scenes (thesis 3.3.5.1): a few keyframes mixing open and
+occluded views, interpolated by tt_scene_camera_at and sampled into 100 poses by
+`host --camera-index I` / `--frames A:B` (t = I/99 of the path's time range).
+
+  camera_path.py auto SOURCE [--seconds 2]         print a {"path": [...]} fragment
+      SOURCE is a scene.json (bounds computed from its meshes) or one line of
+      `scenes_info` output (build-*/tests/scenes_info SCENE.pbrt > info.json): the still
+      camera and bounds as imported, i.e. in tunetrace's world coordinates (the pbrt importer
+      may mirror x). Keys: the still view (open); halfway to the bounds' centre turned left;
+      80% of the way to the centre looking sideways (occluded close-ups); the same spot
+      looking back; the still position turned right.
+  camera_path.py merge SCENE.json FRAGMENT.json OUT.json
+      a copy of SCENE.json with camera.path from FRAGMENT (relative mesh/texture paths are
+      rewritten so OUT.json still finds the original files)
+  camera_path.py sample SOURCE [--n 100]
+      print the n sampled poses (JSON lines: index, t, position, target, up, fov) as host
+      computes them, from a scene.json or a fragment
+
+host renders a path only from scene.json. A .pbrt scene has no camera path: its fragment
+(scenes/paths/<scene>.json) is merged into the scene.json that `host --convert` writes, or
+into any scene.json of the same scene (same world coordinates).
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+sys.dont_write_bytecode = True   # no __pycache__ in the source tree
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scenelib as sl  # noqa: E402
+from generate import hermite_eval  # noqa: E402
+
+
+def _rotate(v, up, deg):
+    return sl.axis_angle(up, deg) @ v
+
+
+def auto_path(position, target, up, fov, lo, hi, seconds=2.0):
+    P0, T0 = np.array(position, float), np.array(target, float)
+    up = np.array(up, float)
+    up = up / np.linalg.norm(up)
+    diag = float(np.linalg.norm(np.array(hi, float) - np.array(lo, float)))
+    fwd = T0 - P0
+    dist = float(np.linalg.norm(fwd))
+    fwd = fwd / dist
+    look = max(dist, 0.25 * diag)   # distance of the look-at points
+    C = (np.array(lo, float) + np.array(hi, float)) / 2
+    P2 = P0 + 0.8 * (C - P0)   # towards the middle of the bounds (inside a room or box)
+    P1 = (P0 + P2) / 2
+    poses = [
+        (P0, P0 + fwd * look, fov),                                   # open: the still view
+        (P1, P1 + _rotate(fwd, up, 35) * look, fov),                  # turning left
+        (P2, P2 + _rotate(fwd, up, 100) * look * 0.5, fov * 1.15),    # close-up, sideways
+        (P2 + up * 0.02 * diag, P2 - fwd * look, fov * 1.15),         # looking back
+        (P0, P0 + _rotate(fwd, up, -30) * look, fov),                 # back, turned right
+    ]
+    keys = sl.path_keys(poses, seconds)
+    for k in keys:
+        k["fov"] = round(min(max(k["fov"], 5.0), 120.0), 4)
+    return keys
+
+
+def load_source(path):
+    """(camera dict with position/target/up/fov, lo, hi, scene or None)."""
+    with open(path) as f:
+        text = f.read()
+    d = json.loads(text.splitlines()[0]) if text.lstrip().startswith('{"scene"') else json.loads(text)
+    if "bounds" in d:   # scenes_info output
+        c = dict(d["camera"])
+        c["_scene"] = "(scenes_info of %s)" % os.path.basename(d["scene"])
+        return c, d["bounds"][0], d["bounds"][1], None
+    lo, hi = sl.scene_bounds(d, os.path.dirname(os.path.abspath(path)))
+    c = dict(d["camera"])
+    c.setdefault("up", [0, 1, 0])
+    c.setdefault("fov", 45)
+    return c, lo, hi, d
+
+
+def cmd_auto(a):
+    c, lo, hi, _ = load_source(a.source)
+    name = c.get("_scene", os.path.basename(a.source))
+    keys = auto_path(c["position"], c["target"], c.get("up", [0, 1, 0]), c.get("fov", 45), lo,
+                     hi, a.seconds)
+    print(json.dumps({"_comment": "tools/scenes/camera_path.py auto %s" % name,
+                      "path": keys}, indent=1))
+
+
+def cmd_merge(a):
+    scene = sl.load_scene(a.scene)
+    with open(a.fragment) as f:
+        frag = json.load(f)
+    scene["camera"]["path"] = frag["path"] if isinstance(frag, dict) else frag
+    sl.rebase_files(scene, os.path.dirname(os.path.abspath(a.scene)),
+                    os.path.dirname(os.path.abspath(a.out)))
+    sl.save_scene(a.out, scene)
+
+
+def cmd_sample(a):
+    with open(a.source) as f:
+        d = json.load(f)
+    cam = d.get("camera", {})
+    keys = cam.get("path") if "camera" in d else d["path"]
+    still = {"position": cam.get("position"), "target": cam.get("target"),
+             "up": cam.get("up", [0, 1, 0]), "fov": cam.get("fov", 45)}
+    full = []
+    for k in keys:
+        kk = dict(k)
+        for f in ("position", "target", "up", "fov"):
+            if f not in kk:
+                kk[f] = still[f]
+        kk["fov"] = [kk["fov"]] * 3
+        full.append(kk)
+    times = [k["time"] for k in full]
+    for i in range(a.n):
+        t = times[0] + (times[-1] - times[0]) * i / max(a.n - 1, 1)
+        pos = hermite_eval(full, times, t, "position")
+        tgt = hermite_eval(full, times, t, "target")
+        up = hermite_eval(full, times, t, "up")
+        up = up / max(np.linalg.norm(up), 1e-12)
+        fov = float(hermite_eval(full, times, t, "fov")[0])
+        print(json.dumps({"index": i, "t": round(t, 6), "position": sl.r3(pos, 6),
+                          "target": sl.r3(tgt, 6), "up": sl.r3(up, 6),
+                          "fov": round(min(max(fov, 1e-3), 179.999), 6)}))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    p = sub.add_parser("auto")
+    p.add_argument("source")
+    p.add_argument("--seconds", type=float, default=2.0)
+    p = sub.add_parser("merge")
+    p.add_argument("scene")
+    p.add_argument("fragment")
+    p.add_argument("out")
+    p = sub.add_parser("sample")
+    p.add_argument("source")
+    p.add_argument("--n", type=int, default=100)
+    a = ap.parse_args()
+    {"auto": cmd_auto, "merge": cmd_merge, "sample": cmd_sample}[a.cmd](a)
+
+
+if __name__ == "__main__":
+    main()
