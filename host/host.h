@@ -44,6 +44,7 @@ typedef struct tt__host_options {
   uint32_t iterations;      /* --iterations N; 0: TT_HOST_DEFAULT_ITERATIONS */
   uint32_t tune_spp;        /* --tune-spp N: spp per measurement; 0: 1 */
   uint32_t explore;         /* --explore N: random configurations instead of a tuner */
+  uint32_t verify;          /* --verify N: default vs best side by side, N rounds */
   const char *db;           /* --db PATH; NULL: tt_tunedb_default_path() */
   int no_db;                /* --no-db */
   int help;
@@ -55,7 +56,15 @@ typedef struct tt__host_options {
   double fps;               /* --fps F; 0: 24 */
   uint32_t reference_scale; /* --reference-scale K; 0: no reference */
   const char *post;         /* --post NAME: post-filter applied to each frame */
+  /* camera path samples (run.c): sample I of TT_HOST_PATH_SAMPLES at t = I/(N-1) of the
+   * path's time range */
+  int camera_index_set;     /* --camera-index given */
+  uint32_t camera_index;    /* --camera-index I, in [0, TT_HOST_PATH_SAMPLES) */
+  int frames;               /* --frames A:B given: samples A..B-1 to <out stem>_NNNN.exr */
+  uint32_t frames_first, frames_end;
 } tt__host_options;
+
+#define TT_HOST_PATH_SAMPLES 100
 
 #define TT_HOST_DEFAULT_ITERATIONS 50
 
@@ -175,6 +184,7 @@ typedef struct tt__tuning {
   const char *best_from;        /* "default", or the mode that found it */
   double ms;                    /* wall time of the tuning phase */
   const char *db_path;          /* NULL with --no-db */
+  char *verify_json;            /* --verify result (JSON object, malloc), or NULL */
 } tt__tuning;
 
 /* Runs the tuning (or exploration) phase when the options ask for one; leaves the best

@@ -49,6 +49,9 @@ void tt__print_usage(FILE *out) {
     "  --tune-spp N           samples per pixel of one measurement pass (default 1)\n"
     "  --explore N            measure N random configurations of the target's space (no\n"
     "                         tuner needed), for the analysis tools in tools/tuning/\n"
+    "  --verify N             after tuning, measure the default and the best configuration\n"
+    "                         side by side, alternating, N rounds of one pass each; the\n"
+    "                         median ratios go to the log and to --stats (tuning.verify)\n"
     "  --db PATH              tuning database (SQLite; default\n"
     "                         $XDG_DATA_HOME/tunetrace/tuning.db, else\n"
     "                         ~/.local/share/tunetrace/tuning.db). A configuration already\n"
@@ -56,7 +59,7 @@ void tt__print_usage(FILE *out) {
     "                         again: its stored cost is fed to the tuner\n"
     "  --no-db                no database: measure everything, record nothing\n"
     "\n"
-    "Sequences (temporal filters, see host/README.md):\n"
+    "Sequences (temporal filters, see tools/taa/README.md):\n"
     "  --sequence N|A:B       render frames 0..N-1 (or A..B) of the scene's camera path at\n"
     "                         --fps (default 24), each with one Halton(2,3) sub-pixel\n"
     "                         jitter of a cycle of 8 for all its samples; writes\n"
@@ -67,6 +70,12 @@ void tt__print_usage(FILE *out) {
     "  --post NAME            run the post-filter NAME (e.g. post_taa) over the frames in\n"
     "                         order and write post_NNNN.exr; --set NAME.mode=network ...\n"
     "  --fps F                frames per second along the camera path (default 24)\n"
+    "\n"
+    "Camera path samples (benchmark views, scenes/README.md):\n"
+    "  --camera-index I       render sample I (0..99) of the scene's camera path: the pose\n"
+    "                         at t = I/99 of the path's time range (no path: still camera)\n"
+    "  --frames A:B           render samples A..B-1 (0 <= A < B <= 100), each a full render,\n"
+    "                         to <out stem>_NNNN.exr/.png (default stem: <scene folder>)\n"
     "\n"
     "Output:\n"
     "  --out FILE.exr         linear EXR; a display-referred PNG is written next to it\n"
@@ -213,6 +222,10 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 1000000, &n))
         return TT_EXIT_USAGE;
       opt->explore = (uint32_t)n;
+    } else if (!strcmp(a, "--verify")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 10000, &n))
+        return TT_EXIT_USAGE;
+      opt->verify = (uint32_t)n;
     } else if (!strcmp(a, "--db")) {
       if (!(opt->db = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--no-db")) {
@@ -250,6 +263,25 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
         return TT_EXIT_USAGE;
       }
       opt->fps = fps;
+    } else if (!strcmp(a, "--camera-index")) {
+      if (!(v = tt__arg(argc, argv, &i)) ||
+          tt__parse_u64(a, v, 0, TT_HOST_PATH_SAMPLES - 1, &n))
+        return TT_EXIT_USAGE;
+      opt->camera_index = (uint32_t)n;
+      opt->camera_index_set = 1;
+    } else if (!strcmp(a, "--frames")) {
+      unsigned f0 = 0, f1 = 0;
+      char extra;
+      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (!(v[0] >= '0' && v[0] <= '9' && sscanf(v, "%u:%u%c", &f0, &f1, &extra) == 2 &&
+            f0 < f1 && f1 <= TT_HOST_PATH_SAMPLES)) {
+        fprintf(stderr, "host: --frames: expected A:B with 0 <= A < B <= %d (path samples "
+                "A..B-1), got \"%s\"\n", TT_HOST_PATH_SAMPLES, v);
+        return TT_EXIT_USAGE;
+      }
+      opt->frames = 1;
+      opt->frames_first = f0;
+      opt->frames_end = f1;
     } else if (a[0] == '-' && a[1] != '\0') {
       fprintf(stderr, "host: unknown option \"%s\" (try --help)\n", a);
       return TT_EXIT_USAGE;
@@ -263,6 +295,14 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
   }
   if (opt->db && opt->no_db) {
     fprintf(stderr, "host: --db and --no-db exclude each other\n");
+    return TT_EXIT_USAGE;
+  }
+  if ((opt->frames || opt->camera_index_set) && opt->sequence) {
+    fprintf(stderr, "host: --camera-index/--frames and --sequence exclude each other\n");
+    return TT_EXIT_USAGE;
+  }
+  if (opt->frames && opt->camera_index_set) {
+    fprintf(stderr, "host: --camera-index and --frames exclude each other\n");
     return TT_EXIT_USAGE;
   }
   return TT_EXIT_OK;

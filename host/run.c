@@ -290,6 +290,33 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
 }
 
 int tt__run_render(const tt__host_options *opt) {
+  if (opt->frames) {
+    /* --frames A:B: one full render per camera path sample, <stem>_NNNN.exr (and
+     * <stats stem>_NNNN.json); the scene is reloaded for each sample */
+    char stem[4096], name[4200], stats[4200];
+    if (opt->out) snprintf(stem, sizeof stem, "%.*s", (int)(strlen(opt->out) - 4), opt->out);
+    else {
+      tt__default_out(opt->scene, stem, sizeof stem);
+      stem[strlen(stem) - 4] = 0;
+    }
+    for (uint32_t f = opt->frames_first; f < opt->frames_end; f++) {
+      tt__host_options one = *opt;
+      one.frames = 0;
+      one.camera_index_set = 1;
+      one.camera_index = f;
+      snprintf(name, sizeof name, "%s_%04u.exr", stem, f);
+      one.out = name;
+      if (opt->stats) {
+        const char *dot = strrchr(opt->stats, '.');
+        int len = dot && !strcmp(dot, ".json") ? (int)(dot - opt->stats) : (int)strlen(opt->stats);
+        snprintf(stats, sizeof stats, "%.*s_%04u.json", len, opt->stats, f);
+        one.stats = stats;
+      }
+      int frc = tt__run_render(&one);
+      if (frc != TT_EXIT_OK) return frc;
+    }
+    return TT_EXIT_OK;
+  }
   const tt_host *host = tt__host_services(opt->quiet);
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
     fprintf(stderr, "host: --threads: %s\n", tt_last_error());
@@ -306,6 +333,20 @@ int tt__run_render(const tt__host_options *opt) {
     fprintf(stderr, "host: --res: %s\n", tt_last_error());
     tt_scene_destroy(scene);
     return TT_EXIT_USAGE;
+  }
+  if (opt->camera_index_set) {
+    /* path sample I of TT_HOST_PATH_SAMPLES: t = first key + I/(N-1) of the time range */
+    const tt_camera *c0 = tt_scene_camera(scene);
+    double t = 0;
+    if (c0->key_count > 0)
+      t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) *
+                                 (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
+    else if (!opt->quiet)
+      fprintf(stderr, "host: warning: --camera-index %u: the scene has no camera path; "
+              "using its still camera\n", opt->camera_index);
+    tt_camera cam;
+    tt_scene_camera_at(scene, t, &cam);
+    tt_scene_set_camera(scene, &cam);
   }
 
   int rc = TT_EXIT_OK;

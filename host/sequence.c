@@ -65,11 +65,19 @@ void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h,
   free(tmp);
 }
 
-/* Creates `dir` if missing (one level). */
+/* Creates `dir` and its missing parents (mkdir -p). */
 static int tt__ensure_dir(const char *dir) {
+  char tmp[4096];
+  snprintf(tmp, sizeof tmp, "%s", dir);
+  for (char *p = tmp + 1; *p; p++) {
+    if (*p != '/') continue;
+    *p = 0;
+    if (mkdir(tmp, 0777) != 0 && errno != EEXIST) return -1;
+    *p = '/';
+  }
+  if (mkdir(tmp, 0777) != 0 && errno != EEXIST) return -1;
   struct stat st;
-  if (stat(dir, &st) == 0) return S_ISDIR(st.st_mode) ? 0 : -1;
-  return mkdir(dir, 0777);
+  return stat(tmp, &st) == 0 && S_ISDIR(st.st_mode) ? 0 : -1;
 }
 
 /* Everything one sequence run holds. */

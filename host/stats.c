@@ -49,6 +49,7 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
   cJSON_AddNumberToObject(o, "tuning_ms", t->ms);
   if (t->db_path) cJSON_AddStringToObject(o, "db", t->db_path);
   else cJSON_AddNullToObject(o, "db");
+  if (t->verify_json) tt__add_json(o, "verify", t->verify_json);
   /* costs[i] and history[i] are iteration i; the default is separate (default_cost) */
   cJSON *costs = cJSON_AddArrayToObject(o, "costs");
   cJSON *hist = cJSON_AddArrayToObject(o, "history");

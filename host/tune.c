@@ -3,8 +3,15 @@
  * Each measurement applies a configuration to the target plugin (accel: destroy + build;
  * integrator and post: configure), renders one pass into the film and turns what it
  * measured into a cost. The tuning database (tunedb.h) answers configurations already
- * measured in the same state on this machine, so no (state, configuration) pair is
- * measured twice (thesis 3.3); every measurement is committed as soon as it is taken.
+ * measured in the same state on this machine by an earlier run, so no (state,
+ * configuration) pair is measured twice across runs (thesis 3.3); every measurement is
+ * committed as soon as it is taken. Within one run, a configuration the tuner proposes
+ * again after it was measured in this run is measured again: that is a tuner re-measuring
+ * its incumbent against noise (tuner_nm's reevaluate), and a database answer would feed it
+ * the same number back and make the noise invisible.
+ *
+ * --verify N then measures the default and the best configuration side by side, N
+ * alternating rounds, so the gain is reported from one run and one process.
  */
 #include "host.h"
 
@@ -76,6 +83,7 @@ static const tt_tuning_hint *tt__hint(const tt_loaded_plugin *p) {
 
 void tt__tuning_free(tt__tuning *t) {
   if (!t) return;
+  free(t->verify_json);
   for (size_t i = 0; i < t->count; i++) free(t->samples[i].config);
   free(t->samples);
   free(t->default_config);
@@ -150,13 +158,16 @@ static char *tt__metrics_json(const tt_pass_stats *ps) {
 }
 
 /* Applies `cfg` to the target; TT_OK or the plugin's error. `build_ms` gets the accel's
- * build time (0 for other kinds). */
+ * build time (0 for other kinds). Unless `force`, a configuration the target already runs
+ * with is not applied again; a measurement always forces, so that a re-measured accel is
+ * rebuilt and its build time is measured like any other candidate's. */
 static tt_status tt__apply(tt__tune_ctx *c, const tt_config *cfg, const char *json,
-                           double *build_ms) {
+                           double *build_ms, int force) {
   tt__render_state *rs = c->rs;
   tt_status st = TT_OK;
   *build_ms = 0;
-  if (c->applied && !strcmp(c->applied, json) && (c->target_kind != TT_KIND_ACCEL || rs->accel))
+  if (!force && c->applied && !strcmp(c->applied, json) &&
+      (c->target_kind != TT_KIND_ACCEL || rs->accel))
     return TT_OK;
   if (c->target_kind == TT_KIND_ACCEL) {
     /* the loop of Fig. 3.2: a new configuration means a new structure */
@@ -234,8 +245,20 @@ static int tt__cost(const tt__objective *o, double build_ms, double render_ms,
 /* Outcome of one measurement. */
 enum { TT__MEASURED = 0, TT__INTERRUPTED = 1, TT__BAD_METRIC = 2, TT__NO_MEMORY = 3 };
 
+/* How many times `config` was really measured (not answered from the database) in this
+ * run so far. */
+static uint32_t tt__measured_in_run(const tt__tuning *t, const char *config) {
+  uint32_t n = 0;
+  for (size_t i = 0; i < t->count; i++)
+    if (!t->samples[i].cached && !strcmp(t->samples[i].config, config)) n++;
+  return n;
+}
+
 /* Measures `cfg` (or answers it from the database), records and appends the sample.
- * `*cost_out` gets the cost to feed back. */
+ * `*cost_out` gets the cost to feed back. The database answers only configurations this
+ * run has not measured yet: a tuner that proposes a configuration again after measuring it
+ * here wants a new sample (it re-measures its incumbent against noise), which is measured
+ * and recorded as a new row. */
 static int tt__measure(tt__tune_ctx *c, tt_config *cfg, int iteration, const char *mode,
                        double *cost_out) {
   tt__render_state *rs = c->rs;
@@ -251,8 +274,11 @@ static int tt__measure(tt__tune_ctx *c, tt_config *cfg, int iteration, const cha
   tt_tunedb_row row = c->key;
   row.config = s.config;
   double cached = 0;
-  uint32_t times = 0;
-  if (c->db && tt_tunedb_lookup(c->db, &row, &cached, &times) == TT_OK) {
+  uint32_t times = 0, here = tt__measured_in_run(t, s.config);
+  if (here)
+    rs->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: measuring again a configuration "
+                  "measured %u time%s in this run", iteration, here, here == 1 ? "" : "s");
+  else if (c->db && tt_tunedb_lookup(c->db, &row, &cached, &times) == TT_OK) {
     s.cost = cached;
     s.cached = 1;
     s.status = cached >= TT_COST_INFEASIBLE ? TT_TUNEDB_INFEASIBLE : TT_TUNEDB_OK;
@@ -283,7 +309,7 @@ static int tt__measure(tt__tune_ctx *c, tt_config *cfg, int iteration, const cha
   if (check == TT_CHECK_INFEASIBLE) {
     s.status = TT_TUNEDB_INFEASIBLE;
     rs->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: infeasible: %s", iteration, why);
-  } else if (tt__apply(c, work, s.config, &build_ms) != TT_OK) {
+  } else if (tt__apply(c, work, s.config, &build_ms, 1) != TT_OK) {
     s.status = TT_TUNEDB_FAILED;
     rs->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: %s rejected %s: %s", iteration,
                   t->plugin, s.config, tt_last_error());
@@ -378,6 +404,134 @@ static void tt__pick_best(tt__tuning *t) {
   }
   t->best_from = t->best_config && t->default_config && !strcmp(t->best_config, t->default_config)
                      ? "default" : t->mode;
+}
+
+/* Median of n values (sorts them in place); NaN for n = 0. */
+static int tt__cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : x > y;
+}
+static double tt__median(double *v, size_t n) {
+  if (!n) return NAN;
+  qsort(v, n, sizeof *v, tt__cmp_double);
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* One verification measurement: applies `cfg` (rebuilding an accel) and renders one pass.
+ * 0 on success, 1 when interrupted, -1 when the configuration fails. */
+static int tt__verify_one(tt__tune_ctx *c, const tt_config *cfg, const char *json,
+                          double out[3]) {
+  tt__render_state *rs = c->rs;
+  double build_ms = 0, render_ms = 0, cost = 0;
+  char why[512];
+  tt_pass_stats ps;
+  memset(&ps, 0, sizeof ps);
+  if (tt__apply(c, cfg, json, &build_ms, 1) != TT_OK) return -1;
+  tt_status st = tt__render_pass(rs, c->spp, &ps, &render_ms);
+  if (st == TT_ERR_INTERRUPTED) return 1;
+  if (st == TT_OK && c->target_kind == TT_KIND_POST) {
+    double pms = tt__run_post(c, rs->pass);
+    if (pms < 0) return -1;
+    render_ms += pms;
+  }
+  if (st != TT_OK || tt__cost(&c->t->objective, build_ms, render_ms, &ps, &cost, why, sizeof why))
+    return -1;
+  out[0] = build_ms;
+  out[1] = render_ms;
+  out[2] = cost;
+  return 0;
+}
+
+/* --verify N: the default and the best configuration measured side by side in N rounds of
+ * one pass each, alternating the order (ABBA...) so that a drift in machine speed hits both
+ * alike. The figures are per-round ratios best/default and their medians: the gain of the
+ * tuned configuration taken in one run, not two tuning-time numbers measured minutes apart.
+ * Nothing is recorded in the database (these are repeats, not new states). Returns 1 if
+ * interrupted. */
+static int tt__verify(tt__tune_ctx *c, uint32_t rounds) {
+  tt__render_state *rs = c->rs;
+  tt__tuning *t = c->t;
+  tt_config *cfg[2] = {tt_config_create(c->space), tt_config_create(c->space)};
+  const char *json[2] = {t->default_config, t->best_config};
+  double *m = calloc((size_t)rounds * 6 + 3 * (size_t)rounds, sizeof *m);  /* [r][who][3] */
+  cJSON *root = cJSON_CreateObject();
+  int rc = 0;
+  uint32_t done = 0;
+  if (!cfg[0] || !cfg[1] || !m || !root || !json[0] || !json[1] ||
+      tt_config_from_json(cfg[0], json[0], "default") != TT_OK ||
+      tt_config_from_json(cfg[1], json[1], "best") != TT_OK) {
+    rs->host->log(TT_LOG_ERROR, NULL, "tuning: --verify: cannot set up: %s", tt_last_error());
+    goto out;
+  }
+  for (uint32_t r = 0; r < rounds && !rc; r++) {
+    if (rs->host->should_stop()) {
+      rc = 1;
+      break;
+    }
+    for (int k = 0; k < 2 && !rc; k++) {
+      int who = (r % 2) ? 1 - k : k;  /* 0 = default, 1 = best */
+      int v = tt__verify_one(c, cfg[who], json[who], &m[((size_t)r * 2 + who) * 3]);
+      if (v == 1) rc = 1;
+      if (v < 0) {
+        rs->host->log(TT_LOG_ERROR, NULL, "tuning: --verify: the %s configuration failed: %s",
+                      who ? "best" : "default", tt_last_error());
+        goto out;
+      }
+    }
+    if (!rc) done++;
+  }
+  if (!done) goto out;
+  double *tmp = &m[(size_t)rounds * 6];
+  cJSON_AddNumberToObject(root, "rounds", done);
+  cJSON_AddNumberToObject(root, "spp", c->spp);
+  static const char *who_name[2] = {"default", "best"};
+  static const char *field[3] = {"build_ms", "render_ms", "cost"};
+  double med[2][4];
+  for (int who = 0; who < 2; who++) {
+    cJSON *o = cJSON_AddObjectToObject(root, who_name[who]);
+    for (int f = 0; f < 4; f++) {
+      cJSON *arr = f < 3 ? cJSON_AddArrayToObject(o, field[f]) : NULL;
+      for (uint32_t r = 0; r < done; r++) {
+        const double *x = &m[((size_t)r * 2 + who) * 3];
+        tmp[r] = f < 3 ? x[f] : x[0] + x[1];
+        if (arr) cJSON_AddItemToArray(arr, cJSON_CreateNumber(tmp[r]));
+      }
+      med[who][f] = tt__median(tmp, done);
+    }
+    cJSON_AddNumberToObject(o, "median_build_ms", med[who][0]);
+    cJSON_AddNumberToObject(o, "median_render_ms", med[who][1]);
+    cJSON_AddNumberToObject(o, "median_total_ms", med[who][3]);
+    cJSON_AddNumberToObject(o, "median_cost", med[who][2]);
+  }
+  /* per-round ratios best/default: render, build+render, and the objective's cost */
+  static const char *ratio_name[3] = {"render_ratio", "total_ratio", "cost_ratio"};
+  double ratio[3];
+  for (int q = 0; q < 3; q++) {
+    uint32_t n = 0;
+    for (uint32_t r = 0; r < done; r++) {
+      const double *d = &m[((size_t)r * 2) * 3], *b = &m[((size_t)r * 2 + 1) * 3];
+      double num = q == 0 ? b[1] : q == 1 ? b[0] + b[1] : b[2];
+      double den = q == 0 ? d[1] : q == 1 ? d[0] + d[1] : d[2];
+      if (den > 0 && isfinite(num / den)) tmp[n++] = num / den;
+    }
+    ratio[q] = tt__median(tmp, n);
+    if (isfinite(ratio[q])) cJSON_AddNumberToObject(root, ratio_name[q], ratio[q]);
+    else cJSON_AddNullToObject(root, ratio_name[q]);
+  }
+  char *text = cJSON_PrintUnformatted(root);
+  free(t->verify_json);
+  t->verify_json = tt__dup(text);
+  cJSON_free(text);
+  rs->host->log(TT_LOG_INFO, NULL, "tuning: verify, %u rounds side by side: render median "
+                "%.4g ms (default) vs %.4g ms (best), ratio %.4f; build+render %.4g vs %.4g ms, "
+                "ratio %.4f", done, med[0][1], med[1][1], ratio[0], med[0][3], med[1][3],
+                ratio[1]);
+out:
+  cJSON_Delete(root);
+  free(m);
+  tt_config_destroy(cfg[0]);
+  tt_config_destroy(cfg[1]);
+  return rc;
 }
 
 /* Chooses the target plugin and objective from the options; prints and returns
@@ -511,10 +665,10 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
   tt_loaded_plugin *tuner_p = tt_registry_find_kind(rs->reg, TT_KIND_TUNER);
   int explore = opt->explore > 0;
   if (!tuner_p && !explore) {
-    if (opt->tune || opt->objective || opt->iterations || opt->tune_spp) {
+    if (opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify) {
       fprintf(stderr, "host: %s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
               opt->tune ? "--tune" : opt->objective ? "--objective"
-              : opt->iterations ? "--iterations" : "--tune-spp");
+              : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp" : "--verify");
       return TT_EXIT_USAGE;
     }
     return TT_EXIT_OK;
@@ -653,12 +807,14 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
 
   /* keep the best: the rest of the image renders with it */
   tt__pick_best(t);
+  if (opt->verify && !t->interrupted && rc == TT_EXIT_OK && tt__verify(&c, opt->verify))
+    t->interrupted = 1;
   if (t->best_config && tt_config_from_json(current, t->best_config, "tuning") != TT_OK)
     rs->host->log(TT_LOG_ERROR, NULL, "tuning: cannot restore the best configuration: %s",
                   tt_last_error());
   if (!t->interrupted && rc == TT_EXIT_OK) {
     double build_ms = 0;
-    if (tt__apply(&c, current, t->best_config, &build_ms) != TT_OK) {
+    if (tt__apply(&c, current, t->best_config, &build_ms, 0) != TT_OK) {
       fprintf(stderr, "host: tuning: %s rejected the best configuration: %s\n", t->plugin,
               tt_last_error());
       rc = TT_EXIT_FAILURE;

@@ -14,6 +14,8 @@ PACKAGES=(
   libsqlite3-dev                              # tuning database
   zlib1g-dev                                  # .ply.gz meshes in the pbrt importer
   python3-matplotlib                          # tools/tuning/ charts (tests/tune_plot.sh)
+  python3-numpy python3-openimageio           # tools/scenes/ generators (tests/scenes_generate.sh)
+  python3-numpy python3-scipy                 # tools/tuning/analyze.py (tests/tune_analyze.sh)
 )
 
 missing=()

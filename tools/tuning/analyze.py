@@ -1,0 +1,496 @@
+#!/usr/bin/python3
+"""Parameter analysis of tuning-database rows (thesis 3.2, Figs. 3.3, 3.5, 3.6, 3.8, 3.10-3.12).
+
+Input: a tuning database (--db, the SQLite file host writes) or a CSV with the columns of
+tt_tunedb_export_csv (--csv; a CSV without a `config` column is read as one column per
+parameter plus build_ms/render_ms). Rows can be filtered by plugin, mode, scene, run and
+parameter values; only status-ok rows are used.
+
+  analyze.py correlation --db t.db --mode explore -o corr.png --table corr.csv   # Fig. 3.5
+  analyze.py leafsize    --db t.db --where quality=1 -o leaf.png                 # Fig. 3.6
+  analyze.py leafsize    --db t.db --mode tune -o leaf_tuned.png                 # Fig. 3.10
+  analyze.py costs       --db t.db --mode tune --metric total -o costs.png       # Figs. 3.11/3.12
+  analyze.py blocksize   --db t.db -o block.png                                  # Fig. 3.8
+  analyze.py convergence render.json total.json -o conv.png                      # Fig. 3.3
+
+Gathering the data: `host --explore N --objective build+render --db t.db scene.json` draws N
+random configurations (correlation, leaf size, block size maps); tuning runs
+(`host --plugin tuner_nm ...`) give the converging distributions of Figs. 3.10-3.12.
+Needs python3-numpy, python3-scipy and python3-matplotlib (Debian packages).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sqlite3
+import sys
+
+TIMES = ("render_ms", "build_ms", "total_ms")
+METRICS = {"render": "render_ms", "build": "build_ms", "total": "total_ms", "cost": "cost"}
+
+
+def die(msg):
+    sys.exit(f"analyze: {msg}")
+
+
+# ---------------------------------------------------------------- loading
+
+
+def _parse_where(items):
+    """--where name=value filters: value compared as text against the config's value."""
+    out = []
+    for w in items or []:
+        if "=" not in w:
+            die(f"--where {w}: expected NAME=VALUE")
+        k, v = w.split("=", 1)
+        out.append((k.strip(), v.strip()))
+    return out
+
+
+def _as_text(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float) and v.is_integer():
+        return str(int(v))
+    return str(v)
+
+
+def load_rows(a):
+    """Rows as dicts: scene, plugin, mode, run_id, objective, iteration, build_ms, render_ms,
+    total_ms, cost, config (dict, key order of the space)."""
+    rows = []
+    if a.db:
+        if not os.path.exists(a.db):
+            die(f"{a.db}: no such database")
+        try:
+            db = sqlite3.connect(f"file:{a.db}?mode=ro", uri=True)
+            cur = db.execute("SELECT scene, plugin, mode, run_id, objective, iteration, build_ms, "
+                             "render_ms, cost, status, config FROM samples ORDER BY id")
+        except sqlite3.Error as e:
+            die(f"{a.db}: {e}")
+        for scene, plugin, mode, run_id, objective, it, b, r, c, status, config in cur:
+            if status != 0:
+                continue
+            rows.append(dict(scene=scene or "", plugin=plugin, mode=mode, run_id=run_id,
+                             objective=objective, iteration=it, build_ms=b, render_ms=r,
+                             cost=c, config=json.loads(config)))
+    else:
+        with open(a.csv, newline="") as f:
+            rd = csv.DictReader(f)
+            if not rd.fieldnames:
+                die(f"{a.csv}: empty CSV")
+            has_config = "config" in rd.fieldnames
+            fixed = {"build_ms", "render_ms", "total_ms", "cost", "status", "scene", "plugin",
+                     "mode", "run_id", "objective", "iteration"}
+            for rec in rd:
+                if rec.get("status", "0") not in ("0", ""):
+                    continue
+                if has_config:
+                    config = json.loads(rec["config"])
+                else:
+                    config = {}
+                    for k in rd.fieldnames:
+                        if k in fixed or k.startswith("ind_"):
+                            continue
+                        v = rec[k]
+                        try:
+                            config[k] = float(v)
+                        except ValueError:
+                            config[k] = {"true": True, "false": False}.get(v.lower(), v)
+                b = float(rec.get("build_ms") or 0)
+                r = float(rec.get("render_ms") or 0)
+                rows.append(dict(scene=rec.get("scene", ""), plugin=rec.get("plugin", ""),
+                                 mode=rec.get("mode", ""), run_id=rec.get("run_id", ""),
+                                 objective=rec.get("objective", ""),
+                                 iteration=int(float(rec.get("iteration") or 0)),
+                                 build_ms=b, render_ms=r,
+                                 cost=float(rec.get("cost") or (b + r)), config=config))
+    where = _parse_where(a.where)
+    out = []
+    for row in rows:
+        if a.plugin and row["plugin"] != a.plugin:
+            continue
+        if a.mode and row["mode"] not in a.mode.split(","):
+            continue
+        if a.scene and a.scene not in row["scene"]:
+            continue
+        if a.run and row["run_id"] != a.run:
+            continue
+        if a.objective and row["objective"] != a.objective:
+            continue
+        if any(_as_text(row["config"].get(k)) != v for k, v in where):
+            continue
+        row["total_ms"] = row["build_ms"] + row["render_ms"]
+        out.append(row)
+    if not out:
+        die("no rows match (check --db/--csv and the filters)")
+    return out
+
+
+def scene_label(path):
+    """Short name of a scene file: its folder for scene.json, else the file stem."""
+    base = os.path.basename(path or "")
+    stem = os.path.splitext(base)[0]
+    parent = os.path.basename(os.path.dirname(path or ""))
+    return parent if stem in ("scene", "") and parent else (stem or "scene")
+
+
+def by_scene(rows):
+    groups = {}
+    for r in rows:
+        groups.setdefault(r["scene"], []).append(r)
+    return groups
+
+
+def encode(values):
+    """Numeric codes of one parameter's values: numbers as they are, bools 0/1, other
+    nominal values by order of first appearance. Returns (floats, labels or None)."""
+    if all(isinstance(v, bool) for v in values):
+        return [float(v) for v in values], None
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return [float(v) for v in values], None
+    labels = []
+    for v in values:
+        if v not in labels:
+            labels.append(v)
+    return [float(labels.index(v)) for v in values], labels
+
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+# ---------------------------------------------------------------- correlation (Fig. 3.5)
+
+
+def correlation(rows, method, alpha):
+    """Correlation matrix of every parameter and the times. Returns (names, r, p) with
+    NaN for constant variables."""
+    import numpy as np
+    from scipy import stats
+
+    params = list(rows[0]["config"].keys())
+    cols = []
+    for k in params:
+        cols.append(encode([r["config"].get(k) for r in rows])[0])
+    for t in TIMES:
+        cols.append([r[t] for r in rows])
+    names = params + list(TIMES)
+    x = np.array(cols, dtype=float)
+    n = len(names)
+    rr = np.full((n, n), np.nan)
+    pp = np.full((n, n), np.nan)
+    fn = stats.spearmanr if method == "spearman" else stats.pearsonr
+    for i in range(n):
+        for j in range(n):
+            if np.ptp(x[i]) == 0 or np.ptp(x[j]) == 0 or len(rows) < 3:
+                continue
+            if i == j:
+                rr[i, j], pp[i, j] = 1.0, 0.0
+                continue
+            res = fn(x[i], x[j])
+            rr[i, j], pp[i, j] = float(res[0]), float(res[1])
+    return names, rr, pp
+
+
+def cmd_correlation(a):
+    import numpy as np
+
+    rows = load_rows(a)
+    names, r, p = correlation(rows, a.method, a.alpha)
+    n = len(names)
+    if a.table:
+        with open(a.table, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["variable"] + names + [f"p_{x}" for x in names])
+            for i in range(n):
+                w.writerow([names[i]] + [f"{v:.6g}" for v in r[i]] + [f"{v:.6g}" for v in p[i]])
+    # text: each parameter against the three times
+    print(f"{a.method} correlation over {len(rows)} rows "
+          f"({len(by_scene(rows))} scene(s)); * = p < {a.alpha}")
+    print(f"{'parameter':>16} " + " ".join(f"{t:>16}" for t in TIMES))
+    for i in range(n - len(TIMES)):
+        cells = []
+        for t in TIMES:
+            j = names.index(t)
+            v, pv = r[i, j], p[i, j]
+            cells.append(f"{'-':>16}" if math.isnan(v) else
+                         f"{v:+.3f} (p={pv:.1e}){'*' if pv < a.alpha else ' '}".rjust(16))
+        print(f"{names[i]:>16} " + " ".join(cells))
+    if a.out:
+        plt = _plt()
+        shown = np.where(p < a.alpha, r, np.nan)  # blank: not significant (thesis Fig. 3.5)
+        fig, ax = plt.subplots(figsize=(0.55 * n + 2.5, 0.5 * n + 1.5))
+        im = ax.imshow(shown, cmap="RdBu_r", vmin=-1, vmax=1)
+        ax.set_xticks(range(n), names, rotation=60, ha="right", fontsize=8)
+        ax.set_yticks(range(n), names, fontsize=8)
+        for i in range(n):
+            for j in range(n):
+                if not math.isnan(shown[i, j]):
+                    ax.text(j, i, f"{100 * shown[i, j]:.0f}", ha="center", va="center",
+                            fontsize=6, color="white" if abs(shown[i, j]) > 0.6 else "black")
+        fig.colorbar(im, ax=ax, shrink=0.8, label=f"{a.method} r")
+        ax.set_title(f"{a.method.capitalize()} correlation (blank: p ≥ {a.alpha}), "
+                     f"{len(rows)} configurations", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(a.out, dpi=110)
+        print(f"wrote {a.out}")
+
+
+# ---------------------------------------------------------------- leaf size (Figs. 3.6/3.10)
+
+
+def grid_means(rows, xk, yk, metric, bins, lo, hi):
+    """Mean of `metric` per (x bin, y bin) cell; NaN where a cell has no data."""
+    import numpy as np
+    edges = np.linspace(lo, hi + 1e-9, bins + 1)
+    s = np.zeros((bins, bins))
+    c = np.zeros((bins, bins))
+    for r in rows:
+        x, y = r["config"].get(xk), r["config"].get(yk)
+        if x is None or y is None:
+            continue
+        i = min(max(np.searchsorted(edges, float(x), side="right") - 1, 0), bins - 1)
+        j = min(max(np.searchsorted(edges, float(y), side="right") - 1, 0), bins - 1)
+        s[j, i] += r[metric]
+        c[j, i] += 1
+    with np.errstate(invalid="ignore"):
+        return s / np.where(c > 0, c, np.nan), edges
+
+
+def cmd_leafsize(a):
+    rows = load_rows(a)
+    for k in ("minLeafSize", "maxLeafSize"):
+        if k not in rows[0]["config"]:
+            die(f"the rows have no {k} parameter (is this accel_embree?)")
+    groups = by_scene(rows)
+    plt = _plt()
+    fig, axes = plt.subplots(len(groups), 3, figsize=(12, 3.6 * len(groups)), squeeze=False)
+    print(f"leaf size map: {len(rows)} rows, {a.bins}x{a.bins} cells")
+    for gi, (scene, rs) in enumerate(groups.items()):
+        for mi, metric in enumerate(TIMES):
+            g, edges = grid_means(rs, "minLeafSize", "maxLeafSize", metric, a.bins, 1, 32)
+            ax = axes[gi][mi]
+            import numpy as np
+            finite = g[np.isfinite(g)]
+            # colour range clipped at the 90th percentile: a few very slow cells (compact,
+            # counters) would otherwise flatten the rest of the map
+            vmax = float(np.percentile(finite, 90)) if finite.size else None
+            im = ax.imshow(g, origin="lower", extent=(edges[0], edges[-1], edges[0], edges[-1]),
+                           cmap="viridis_r", aspect="auto", vmax=vmax)
+            fig.colorbar(im, ax=ax, label=f"mean {metric}")
+            best = min(rs, key=lambda r: r[metric])
+            ax.plot(best["config"]["minLeafSize"], best["config"]["maxLeafSize"], "r*", ms=10)
+            ax.set_xlabel("minLeafSize")
+            ax.set_ylabel("maxLeafSize")
+            ax.set_title(f"{scene_label(scene)}: {metric} ({len(rs)} rows)", fontsize=9)
+            print(f"  {scene_label(scene)} {metric}: best {best[metric]:.4g} at "
+                  f"min {best['config']['minLeafSize']}, max {best['config']['maxLeafSize']}")
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=100)
+    print(f"wrote {a.out}")
+
+
+# ---------------------------------------------------------------- SAH costs (Figs. 3.11/3.12)
+
+
+def cmd_costs(a):
+    import numpy as np
+    rows = load_rows(a)
+    for k in ("travcost", "intcost"):
+        if k not in rows[0]["config"]:
+            die(f"the rows have no {k} parameter (is this accel_embree?)")
+    metric = METRICS[a.metric]
+    groups = by_scene(rows)
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(groups), figsize=(4.6 * len(groups), 4), squeeze=False)
+    print(f"intcost/travcost ({metric}): {len(rows)} rows")
+    for gi, (scene, rs) in enumerate(groups.items()):
+        ax = axes[0][gi]
+        x = np.array([r["config"]["intcost"] for r in rs], float)
+        y = np.array([r["config"]["travcost"] for r in rs], float)
+        v = np.array([r[metric] for r in rs], float)
+        # background: mean cost per cell (the heat map), points: every configuration
+        if len(rs) >= 20:
+            hb = ax.hexbin(x, y, C=v, gridsize=a.bins, reduce_C_function=np.mean,
+                           cmap="viridis_r", alpha=0.5, xscale="log", yscale="log")
+        sc = ax.scatter(x, y, c=v, s=14, cmap="viridis_r", edgecolors="k", linewidths=0.2)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        fig.colorbar(sc, ax=ax, label=metric)
+        k = max(1, len(rs) // 10)  # the best tenth, circled: where the optima cluster
+        for r in sorted(rs, key=lambda r: r[metric])[:k]:
+            ax.plot(r["config"]["intcost"], r["config"]["travcost"], "o", mfc="none",
+                    mec="red", ms=8)
+        ax.set_xlabel("intcost")
+        ax.set_ylabel("travcost")
+        ax.set_title(f"{scene_label(scene)} ({len(rs)} rows)", fontsize=9)
+        best = min(rs, key=lambda r: r[metric])
+        print(f"  {scene_label(scene)}: best {best[metric]:.4g} at intcost "
+              f"{best['config']['intcost']:.3g}, travcost {best['config']['travcost']:.3g}")
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=100)
+    print(f"wrote {a.out}")
+
+
+# ---------------------------------------------------------------- sahBlockSize (Fig. 3.8)
+
+
+def cmd_blocksize(a):
+    import numpy as np
+    rows = load_rows(a)
+    if "sahBlockSize" not in rows[0]["config"]:
+        die("the rows have no sahBlockSize parameter (is this accel_embree?)")
+    groups = by_scene(rows)
+    plt = _plt()
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    print(f"sahBlockSize: {len(rows)} rows (median and quartiles per value)")
+    for scene, rs in groups.items():
+        vals = sorted({int(r["config"]["sahBlockSize"]) for r in rs})
+        for ax, metric in zip(axes, ("build_ms", "render_ms")):
+            med, q1, q3 = [], [], []
+            for b in vals:
+                v = [r[metric] for r in rs if int(r["config"]["sahBlockSize"]) == b]
+                med.append(np.median(v))
+                q1.append(np.percentile(v, 25))
+                q3.append(np.percentile(v, 75))
+            line, = ax.step(vals, med, where="mid", label=scene_label(scene))
+            ax.fill_between(vals, q1, q3, step="mid", alpha=0.2, color=line.get_color())
+            ax.set_ylabel(f"{metric} (median, IQR)")
+            best = vals[int(np.argmin(med))]
+            print(f"  {scene_label(scene)} {metric}: lowest median at sahBlockSize {best} "
+                  f"({min(med):.4g}); {len(vals)} values")
+    axes[0].set_title("sahBlockSize: build time (top) and render time (bottom)")
+    axes[1].set_xlabel("sahBlockSize")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=100)
+    print(f"wrote {a.out}")
+
+
+# ---------------------------------------------------------------- convergence (Fig. 3.3)
+
+
+def cmd_convergence(a):
+    """Render time and total time per iteration of tuning runs (host --stats files), one
+    panel each, with the default's level: default vs tuned-for-render vs tuned-for-total."""
+    runs = []
+    for path in a.stats:
+        try:
+            with open(path) as f:
+                t = json.load(f).get("tuning")
+        except (OSError, ValueError) as e:
+            die(f"{path}: {e}")
+        if not t:
+            die(f"{path}: no \"tuning\" object (was a tuner loaded?)")
+        runs.append((path, t))
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, (path, t) in enumerate(runs):
+        hist = [h for h in t.get("history", []) if h.get("status") in (None, "ok", 0)]
+        color = colors[k % len(colors)]
+        label = f"tuned for {t['objective']}"
+        for ax, key in zip(axes, ("render", "total")):
+            ys = [h["render_ms"] if key == "render" else h["render_ms"] + h["build_ms"]
+                  for h in hist]
+            ax.plot([h["iteration"] for h in hist], ys, "-", color=color, lw=1, alpha=0.8,
+                    label=label)
+        v = t.get("verify")
+        if v:
+            print(f"{path}: {t['objective']}: verify render ratio {v.get('render_ratio'):.4f}, "
+                  f"total ratio {v.get('total_ratio'):.4f} over {v.get('rounds')} rounds")
+    # the default: the first run's default measurement (and its verify median if present)
+    t0 = runs[0][1]
+    v0 = t0.get("verify") or {}
+    d = v0.get("default", {})
+    hist0 = t0.get("history", [])
+    for ax, key, title in zip(axes, ("render", "total"), ("render time", "build + render time")):
+        level = d.get("median_render_ms" if key == "render" else "median_total_ms")
+        if level is None and t0["objective"] in ("render", "build+render"):
+            level = t0["default_cost"] if (key == "render") == (t0["objective"] == "render") \
+                else None
+        if level is not None:
+            ax.axhline(level, color="k", lw=1.5, label="default")
+        ax.set_title(title)
+        ax.set_xlabel("iteration")
+        ax.set_ylabel("ms")
+        ax.legend(fontsize=8)
+    if not hist0:
+        die(f"{runs[0][0]}: no history")
+    fig.suptitle("Tuning convergence (thesis Fig. 3.3)")
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=100)
+    print(f"wrote {a.out}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog="\n".join(__doc__.splitlines()[1:]))
+    sub = ap.add_subparsers(dest="cmd", required=True)
+
+    def data_args(p):
+        src = p.add_mutually_exclusive_group(required=True)
+        src.add_argument("--db", help="tuning database (SQLite)")
+        src.add_argument("--csv", help="CSV (tt_tunedb_export_csv columns, or one per parameter)")
+        p.add_argument("--plugin", default="accel_embree", help="rows of this plugin "
+                       "(default accel_embree; '' for all)")
+        p.add_argument("--mode", help="default, tune, explore (comma-separated)")
+        p.add_argument("--scene", help="rows whose scene path contains this text")
+        p.add_argument("--run", help="rows of this run_id")
+        p.add_argument("--objective", help="rows measured for this objective")
+        p.add_argument("--where", action="append", help="NAME=VALUE on the configuration "
+                       "(repeatable), e.g. --where quality=1 --where compact=false")
+        p.add_argument("-o", "--out", help="PNG to write")
+
+    p = sub.add_parser("correlation", help="correlation matrix with p-values (Fig. 3.5)")
+    data_args(p)
+    p.add_argument("--method", choices=("spearman", "pearson"), default="spearman")
+    p.add_argument("--alpha", type=float, default=0.01, help="p-value below which a cell is shown")
+    p.add_argument("--table", help="CSV of r and p for every pair")
+    p.set_defaults(fn=cmd_correlation)
+
+    p = sub.add_parser("leafsize", help="min/max leaf size heat maps (Figs. 3.6, 3.10)")
+    data_args(p)
+    p.add_argument("--bins", type=int, default=8, help="cells per axis over [1, 32]")
+    p.set_defaults(fn=cmd_leafsize)
+
+    p = sub.add_parser("costs", help="intcost/travcost map (Figs. 3.11, 3.12)")
+    data_args(p)
+    p.add_argument("--metric", choices=sorted(METRICS), default="render")
+    p.add_argument("--bins", type=int, default=12, help="hexagons across (with >= 20 rows)")
+    p.set_defaults(fn=cmd_costs)
+
+    p = sub.add_parser("blocksize", help="sahBlockSize step chart (Fig. 3.8)")
+    data_args(p)
+    p.set_defaults(fn=cmd_blocksize)
+
+    p = sub.add_parser("convergence", help="render/total time per iteration (Fig. 3.3)")
+    p.add_argument("stats", nargs="+", help="host --stats files of tuning runs (e.g. one "
+                   "tuned for render, one for build+render)")
+    p.add_argument("-o", "--out", required=True, help="PNG to write")
+    p.set_defaults(fn=cmd_convergence)
+
+    a = ap.parse_args()
+    if a.cmd != "convergence":
+        if a.plugin == "":
+            a.plugin = None
+        if a.cmd != "correlation" and not a.out:
+            ap.error(f"{a.cmd} needs -o/--out PNG")
+    try:
+        import numpy  # noqa: F401
+        import matplotlib  # noqa: F401
+        if a.cmd == "correlation":
+            import scipy  # noqa: F401
+    except ImportError as e:
+        die(f"{e.name} is missing: install python3-numpy, python3-scipy, python3-matplotlib")
+    a.fn(a)
+
+
+if __name__ == "__main__":
+    main()
