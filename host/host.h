@@ -41,6 +41,7 @@ typedef struct tt__host_options {
   /* tuning (tune.c) */
   const char *tune;         /* --tune PLUGIN; NULL: automatic when a tuner is loaded */
   const char *objective;    /* --objective SPEC; NULL: the target's natural objective */
+  const char *tune_params;  /* --tune-params A,B,...: search only these; NULL: the hint's or all */
   uint32_t iterations;      /* --iterations N; 0: TT_HOST_DEFAULT_ITERATIONS */
   uint32_t tune_spp;        /* --tune-spp N: spp per measurement; 0: 1 */
   uint32_t explore;         /* --explore N: random configurations instead of a tuner */
@@ -105,6 +106,17 @@ const tt_host *tt__host_services(int quiet);
 void tt__progress_update(const char *task, double fraction);
 /* Ends the current progress line (newline on a TTY). */
 void tt__progress_finish(void);
+
+/* Creates a registry with the command line's --plugin-path folders. */
+tt_registry *tt__make_registry(const tt__host_options *opt, const tt_host *host);
+/* Loads every --plugin and --post, reporting each failure, then the default accel and
+ * integrator for kinds not named. Returns the number of failures. */
+int tt__load_plugins(tt_registry *reg, const tt__host_options *opt);
+/* Builds one configuration per loaded plugin (registry order) from its defaults, the
+ * scene's render settings (integrator maxDepth) and the --set options; reports every bad
+ * --set and returns the number of errors. */
+int tt__build_configs(tt_registry *reg, const tt__host_options *opt, const tt_scene *scene,
+                      tt_config **configs);
 
 /* Runs --list-plugins, --describe or a render. */
 int tt__run_list_plugins(const tt__host_options *opt);

@@ -45,6 +45,9 @@ void tt__print_usage(FILE *out) {
     "                           metric:NAME:max            ... maximised\n"
     "                           metric:NAME:target=X       ... |value - X| minimised,\n"
     "                                          e.g. metric:acceptance:target=0.234\n"
+    "  --tune-params A,B,...  search only these parameters of the target; the others keep\n"
+    "                         their configured values (default: the tuning hint's list,\n"
+    "                         e.g. PSSMLT's a_i and sigma_i, else all)\n"
     "  --iterations N         configurations to ask the tuner for (default 50)\n"
     "  --tune-spp N           samples per pixel of one measurement pass (default 1)\n"
     "  --explore N            measure N random configurations of the target's space (no\n"
@@ -210,6 +213,14 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       if (!(opt->objective = tt__arg(argc, argv, &i)) ||
           tt__parse_objective(a, opt->objective, &obj))
         return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--tune-params")) {
+      if (!(opt->tune_params = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (!opt->tune_params[0] || strstr(opt->tune_params, ",,") ||
+          opt->tune_params[0] == ',' || opt->tune_params[strlen(opt->tune_params) - 1] == ',') {
+        fprintf(stderr, "host: --tune-params: expected NAME[,NAME...], got \"%s\"\n",
+                opt->tune_params);
+        return TT_EXIT_USAGE;
+      }
     } else if (!strcmp(a, "--iterations")) {
       if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 1000000, &n))
         return TT_EXIT_USAGE;

@@ -32,22 +32,25 @@ static void tt__install_signals(void) {
 /* ---- plugins ---- */
 
 /* Creates a registry with the command line's search directories. */
-static tt_registry *tt__make_registry(const tt__host_options *opt, const tt_host *host) {
+tt_registry *tt__make_registry(const tt__host_options *opt, const tt_host *host) {
   tt_registry *reg = tt_registry_create(host);
   if (!reg) return NULL;
   for (int i = 0; i < opt->plugin_path_count; i++) tt_registry_add_dir(reg, opt->plugin_paths[i]);
   return reg;
 }
 
-/* Loads every --plugin, reporting each failure; then the defaults for kinds not named.
- * Returns the number of failures. */
-static int tt__load_plugins(tt_registry *reg, const tt__host_options *opt) {
+int tt__load_plugins(tt_registry *reg, const tt__host_options *opt) {
   int failures = 0;
   for (int i = 0; i < opt->plugin_count; i++) {
     if (tt_registry_load(reg, opt->plugins[i], NULL) != TT_OK) {
       fprintf(stderr, "host: plugin \"%s\": %s\n", opt->plugins[i], tt_last_error());
       failures++;
     }
+  }
+  if (opt->post && !tt_registry_find_name(reg, opt->post) &&
+      tt_registry_load(reg, opt->post, NULL) != TT_OK) {
+    fprintf(stderr, "host: --post \"%s\": %s\n", opt->post, tt_last_error());
+    failures++;
   }
   if (failures) return failures;
   static const struct { uint32_t kind; const char *name; } defaults[] = {
@@ -75,14 +78,20 @@ static void tt__loaded_names(tt_registry *reg, char *buf, size_t n) {
   }
 }
 
-/* Builds one configuration per loaded plugin from its defaults and the --set options;
- * reports every bad --set and returns the number of errors. */
-static int tt__build_configs(tt_registry *reg, const tt__host_options *opt, tt_config **configs) {
+int tt__build_configs(tt_registry *reg, const tt__host_options *opt, const tt_scene *scene,
+                      tt_config **configs) {
   int errors = 0;
   size_t count = tt_registry_count(reg);
   for (size_t i = 0; i < count; i++) {
-    const tt_space *space = tt_loaded_plugin_space(tt_registry_get(reg, i));
+    tt_loaded_plugin *p = tt_registry_get(reg, i);
+    const tt_space *space = tt_loaded_plugin_space(p);
     configs[i] = space ? tt_config_create(space) : NULL;
+    /* the scene's render.maxDepth is the integrator's default depth; --set overrides it */
+    int d = space ? tt_space_find(space, "maxDepth") : -1;
+    if (scene && d >= 0 && tt_loaded_plugin_entry(p)->kind == TT_KIND_INTEGRATOR &&
+        tt_config_set_number(configs[i], (size_t)d, tt_scene_settings(scene)->max_depth) != TT_OK)
+      fprintf(stderr, "host: warning: %s: render.maxDepth of the scene: %s\n",
+              tt_loaded_plugin_entry(p)->name, tt_last_error());
   }
   for (int s = 0; s < opt->set_count; s++) {
     const char *arg = opt->sets[s];
@@ -367,7 +376,7 @@ int tt__run_render(const tt__host_options *opt) {
     rc = TT_EXIT_PLUGIN;
     goto done;
   }
-  if (tt__build_configs(reg, opt, configs)) {
+  if (tt__build_configs(reg, opt, scene, configs)) {
     rc = TT_EXIT_USAGE;
     goto done;
   }

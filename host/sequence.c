@@ -98,56 +98,6 @@ typedef struct tt__seq {
   uint32_t spp;
 } tt__seq;
 
-/* Loads --plugin/--post plugins and the default accel/integrator; builds --set configs.
- * Mirrors run.c's loading, whose helpers are private to it. */
-static int tt__seq_plugins(tt__seq *s) {
-  const tt__host_options *opt = s->opt;
-  for (int i = 0; i < opt->plugin_path_count; i++) tt_registry_add_dir(s->reg, opt->plugin_paths[i]);
-  for (int i = 0; i < opt->plugin_count; i++)
-    if (tt_registry_load(s->reg, opt->plugins[i], NULL) != TT_OK) {
-      fprintf(stderr, "host: plugin \"%s\": %s\n", opt->plugins[i], tt_last_error());
-      return TT_EXIT_PLUGIN;
-    }
-  if (opt->post && !tt_registry_find_name(s->reg, opt->post) &&
-      tt_registry_load(s->reg, opt->post, NULL) != TT_OK) {
-    fprintf(stderr, "host: --post \"%s\": %s\n", opt->post, tt_last_error());
-    return TT_EXIT_PLUGIN;
-  }
-  if (!tt_registry_find_kind(s->reg, TT_KIND_ACCEL) &&
-      tt_registry_load(s->reg, "accel_embree", NULL) != TT_OK) {
-    fprintf(stderr, "host: default accel plugin \"accel_embree\": %s\n", tt_last_error());
-    return TT_EXIT_PLUGIN;
-  }
-  if (!tt_registry_find_kind(s->reg, TT_KIND_INTEGRATOR) &&
-      tt_registry_load(s->reg, "integrator_pt", NULL) != TT_OK) {
-    fprintf(stderr, "host: default integrator plugin \"integrator_pt\": %s\n", tt_last_error());
-    return TT_EXIT_PLUGIN;
-  }
-  size_t n = tt_registry_count(s->reg);
-  for (size_t i = 0; i < n; i++) {
-    const tt_space *sp = tt_loaded_plugin_space(tt_registry_get(s->reg, i));
-    s->configs[i] = sp ? tt_config_create(sp) : NULL;
-  }
-  for (int k = 0; k < opt->set_count; k++) {
-    const char *arg = opt->sets[k];
-    const char *dot = strchr(arg, '.'), *eq = strchr(arg, '=');
-    char plugin[128], param[128];
-    snprintf(plugin, sizeof plugin, "%.*s", (int)(dot - arg), arg);
-    snprintf(param, sizeof param, "%.*s", (int)(eq - dot - 1), dot + 1);
-    size_t i = 0;
-    while (i < n && strcmp(tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name, plugin)) i++;
-    if (i == n || !s->configs[i]) {
-      fprintf(stderr, "host: --set %s: no loaded plugin \"%s\" with parameters\n", arg, plugin);
-      return TT_EXIT_USAGE;
-    }
-    if (tt_config_set_string(s->configs[i], param, eq + 1) != TT_OK) {
-      fprintf(stderr, "host: --set %s: %s\n", arg, tt_last_error());
-      return TT_EXIT_USAGE;
-    }
-  }
-  return TT_EXIT_OK;
-}
-
 /* Config of the first loaded plugin of `kind` (or named `name`), and its interface. */
 static const void *tt__seq_find(tt__seq *s, uint32_t kind, const char *name,
                                 const tt_config **cfg) {
@@ -235,12 +185,19 @@ int tt__run_sequence(const tt__host_options *opt) {
   tt_film *film = NULL, *ref_film = NULL;
   float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
   FILE *manifest = NULL;
-  s.reg = tt_registry_create(s.host);
+  s.reg = tt__make_registry(opt, s.host);
   if (!s.reg) {
     rc = TT_EXIT_FAILURE;
     goto done;
   }
-  if ((rc = tt__seq_plugins(&s)) != TT_EXIT_OK) goto done;
+  if (tt__load_plugins(s.reg, opt)) {
+    rc = TT_EXIT_PLUGIN;
+    goto done;
+  }
+  if (tt__build_configs(s.reg, opt, s.scene, s.configs)) {
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
   const tt_config *acfg, *icfg, *pcfg = NULL;
   s.ai = tt__seq_find(&s, TT_KIND_ACCEL, NULL, &acfg);
   s.ii = tt__seq_find(&s, TT_KIND_INTEGRATOR, NULL, &icfg);

@@ -30,7 +30,8 @@ typedef struct tt__tune_ctx {
   tt_loaded_plugin *target;
   size_t target_index;          /* registry index of the target (its configs[] slot) */
   uint32_t target_kind;
-  const tt_space *space;
+  const tt_space *space;        /* the target's full space: what is measured and checked */
+  tt_space *subset;             /* the searched parameters, or NULL to search all of space */
   const tt_post_iface *pi;
   tt_post *post;
   float *post_in, *post_out;
@@ -534,6 +535,49 @@ out:
   return rc;
 }
 
+/* Builds c->subset from --tune-params or the hint's tunable list (defaults = the target's
+ * configured values); leaves it NULL when every parameter is searched. */
+static int tt__make_subset(tt__tune_ctx *c, const tt_tuning_hint *hint) {
+  const char *names[256];
+  size_t n = 0;
+  char buf[4096];
+  const tt__host_options *opt = c->rs->opt;
+  if (opt->tune_params) {
+    snprintf(buf, sizeof buf, "%s", opt->tune_params);
+    for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
+  } else if (hint && hint->struct_size >= offsetof(tt_tuning_hint, tunable) + sizeof(hint->tunable) &&
+             hint->tunable) {
+    for (; hint->tunable[n] && n < 256; n++) names[n] = hint->tunable[n];
+  }
+  /* the hint's starting values (PSSMLT: binning on), then the user's --set on top */
+  if (hint && hint->struct_size >= offsetof(tt_tuning_hint, setup) + sizeof(hint->setup) &&
+      hint->setup) {
+    tt_config *cfg = c->rs->configs[c->target_index];
+    const char *name = tt_loaded_plugin_entry(c->target)->name;
+    size_t len = strlen(name);
+    if (tt_config_from_json(cfg, hint->setup, "tuning hint setup") != TT_OK) {
+      fprintf(stderr, "host: %s: %s\n", name, tt_last_error());
+      return 1;
+    }
+    for (int k = 0; k < opt->set_count; k++)
+      if (!strncmp(opt->sets[k], name, len) && opt->sets[k][len] == '.') {
+        char param[128];
+        const char *eq = strchr(opt->sets[k], '=');
+        snprintf(param, sizeof param, "%.*s", (int)(eq - opt->sets[k] - len - 1),
+                 opt->sets[k] + len + 1);
+        tt_config_set_string(cfg, param, eq + 1); /* validated when the configs were built */
+      }
+  }
+  if (n == 0) return 0;
+  c->subset = tt_space_subset(c->space, names, n, c->rs->configs[c->target_index]);
+  if (!c->subset) {
+    fprintf(stderr, "host: %s: %s\n", opt->tune_params ? "--tune-params" : "tuning hint",
+            tt_last_error());
+    return 1;
+  }
+  return 0;
+}
+
 /* Chooses the target plugin and objective from the options; prints and returns
  * TT_EXIT_USAGE on a bad choice. */
 static int tt__choose(tt__tune_ctx *c) {
@@ -575,6 +619,7 @@ static int tt__choose(tt__tune_ctx *c) {
   c->target_index = tt__index_of(rs->reg, c->target);
   c->target_kind = tt_loaded_plugin_entry(c->target)->kind;
   c->space = tt_loaded_plugin_space(c->target);
+  if (tt__make_subset(c, hint)) return TT_EXIT_USAGE;
   const char *spec = opt->objective ? opt->objective : hint ? hint->objective : "render";
   if (tt__parse_objective(opt->objective ? "--objective" : "tuning hint", spec,
                           &c->t->objective))
@@ -692,7 +737,7 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
                                                           : TT_HOST_DEFAULT_ITERATIONS;
   int rc = tt__choose(&c);
   tt_tuner *tuner = NULL;
-  tt_config *cand = NULL;
+  tt_config *cand = NULL, *sub = NULL;
   const tt_tuner_iface *ti = NULL;
   if (rc == TT_EXIT_OK) rc = tt__open_db(&c);
   if (rc != TT_EXIT_OK) goto fail;
@@ -720,15 +765,19 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
                 c.spp, c.db ? tt_tunedb_path(c.db) : "none");
 
   uint64_t t0 = rs->host->clock_ns();
+  /* the tuner searches `search` (a subset when --tune-params or the hint narrows it);
+   * every candidate is the current configuration with the searched values put in */
+  const tt_space *search = c.subset ? c.subset : c.space;
   cand = tt_config_create(c.space);
-  if (!cand) {
+  sub = tt_config_create(search);
+  if (!cand || !sub) {
     rc = TT_EXIT_FAILURE;
     goto fail;
   }
   if (!explore) {
     ti = tt_loaded_plugin_iface(tuner_p);
     const tt_config *settings = rs->configs[tt__index_of(rs->reg, tuner_p)];
-    if (ti->create(c.space, settings, rs->rec->seed, &tuner) != TT_OK) {
+    if (ti->create(search, settings, rs->rec->seed, &tuner) != TT_OK) {
       fprintf(stderr, "host: %s: %s\n", t->tuner, tt_last_error());
       rc = TT_EXIT_FAILURE;
       goto fail;
@@ -756,7 +805,7 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
   tt__tune_progress(t, 0);
 
   uint64_t rng = rs->rec->seed ^ 0x7475756e65ull;
-  size_t dims = tt_space_count(c.space);
+  size_t dims = tt_space_count(search);
   double *unit = calloc(dims ? dims : 1, sizeof *unit);
   for (uint32_t it = 0; it < t->requested && !t->interrupted && unit; it++) {
     if (rs->host->should_stop()) {
@@ -766,13 +815,15 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
     if (opt->time_budget > 0 && (rs->host->clock_ns() - t0) * 1e-9 >= opt->time_budget) break;
     if (explore) {
       for (size_t d = 0; d < dims; d++) unit[d] = (tt__splitmix(&rng) >> 11) * 0x1.0p-53;
-      tt_config_from_unit(cand, unit);
+      tt_config_from_unit(sub, unit);
+      tt_config_copy(cand, current);
+      tt_config_assign(cand, sub);
       char why[256];
       /* a repairable draw is measured as repaired; an infeasible one is recorded as such
        * (tt__measure checks again), since where the constraints bite is part of the map */
       tt_space_check(c.space, cand, why, sizeof why);
     } else {
-      tt_status st = ti->next(tuner, cand);
+      tt_status st = ti->next(tuner, sub);
       if (st == TT_DONE) {
         t->converged = 1;
         rs->host->log(TT_LOG_INFO, NULL, "tuning: %s reports convergence after %u iterations",
@@ -784,6 +835,10 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
         rc = TT_EXIT_FAILURE;
         break;
       }
+    }
+    if (!explore) {
+      tt_config_copy(cand, current);
+      tt_config_assign(cand, sub);
     }
     m = tt__measure(&c, cand, (int)it, t->mode, &cost);
     if (m == TT__INTERRUPTED) {
@@ -836,6 +891,8 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
 fail:
   if (tuner) ti->destroy(tuner);
   tt_config_destroy(cand);
+  tt_config_destroy(sub);
+  tt_space_destroy(c.subset);
   free(c.applied);
   free(c.camera_json);
   free(c.context_json);

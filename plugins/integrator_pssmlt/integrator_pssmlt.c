@@ -605,9 +605,18 @@ static const tt_integrator_iface mlt_iface = {
 };
 
 /* Tells a tuning host what to minimise by default (thesis 4.4: small-step acceptance). */
+/* What the thesis tunes (4.4): the bin edges a_1..a_{M+1} and sigmas sigma_1..sigma_M of the
+ * default M = 7, plus the sigma of the non-direction dimensions, with binning on. Chains,
+ * bootstrap size or depth would change the cost of a measurement, not the method. */
+static const char *const mlt_tunable[] = {
+  "a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8",
+  "sigma1", "sigma2", "sigma3", "sigma4", "sigma5", "sigma6", "sigma7", "sigma", NULL};
+
 static const tt_tuning_hint mlt_hint = {
   .struct_size = sizeof(tt_tuning_hint),
   .objective = "metric:small_step_acceptance:target=0.234",
+  .tunable = mlt_tunable,
+  .setup = "{\"binning\": true, \"bins\": 7}",
 };
 
 static tt_status mlt_init(const tt_host *host) {

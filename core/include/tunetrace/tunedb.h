@@ -123,6 +123,14 @@ TT_API const char *tt_tunedb_cpu_model(void);
 typedef struct tt_tuning_hint {
   uint32_t struct_size;      /* sizeof(tt_tuning_hint) as the plugin was built */
   const char *objective;     /* default objective spec, static string */
+  /* NULL-terminated names of the parameters a default tuning run searches (the others stay
+   * at their configured values), or NULL for all. PSSMLT lists its a_i and sigma_i: the
+   * thesis tunes those, while chains or bootstrap size would only change the cost of a
+   * measurement. --tune-params overrides it. */
+  const char *const *tunable;
+  /* JSON object of parameter values a tuning run of this plugin starts from, e.g.
+   * {"binning": true} for PSSMLT; the user's --set values win. NULL: none. */
+  const char *setup;
 } tt_tuning_hint;
 
 #ifdef __cplusplus
