@@ -255,17 +255,6 @@ static void *tt__grow(void *items, size_t *cap, size_t need, size_t size) {
 
 /* ---- matrices (row-major, column vectors: p' = M p, as pbrt) ---------------------------- */
 
-/* r = a * b (r may alias neither). */
-static void tt__mul(double r[16], const double a[16], const double b[16]) {
-  double t[16];
-  for (int i = 0; i < 4; i++)
-    for (int j = 0; j < 4; j++) {
-      double s = 0;
-      for (int k = 0; k < 4; k++) s += a[4 * i + k] * b[4 * k + j];
-      t[4 * i + j] = s;
-    }
-  memcpy(r, t, sizeof t);
-}
 
 /* Identity matrix. */
 static void tt__ident(double m[16]) {
@@ -336,36 +325,18 @@ static void tt__cross(const double a[3], const double b[3], double o[3]) {
 
 /* Opens a file onto the include stack (parent = current file). */
 static tt_status tt__push_file(tt__pp *P, const char *path, const tt__pfile *from, int from_line) {
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    if (from) return tt__perr(from, from_line, "cannot open included file \"%s\": %s", path, strerror(errno));
-    return tt_set_error(TT_ERR_IO, "%s: cannot open scene file: %s", path, strerror(errno));
-  }
   char *buf = NULL;
-  size_t len = 0, cap = 0;
-  for (;;) {
-    if (len + 4096 + 1 > cap) {
-      size_t nc = cap ? cap * 2 : 65536;
-      char *n = realloc(buf, nc);
-      if (!n) {
-        free(buf);
-        fclose(f);
-        return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading the file", path);
-      }
-      buf = n;
-      cap = nc;
+  size_t len = 0;
+  tt_status rst = tt__read_file(path, &buf, &len);
+  if (rst != TT_OK) {
+    /* inside an Include, name the including file and line instead */
+    if (from && rst == TT_ERR_IO) {
+      char msg[1024];
+      snprintf(msg, sizeof msg, "%s", tt_last_error());
+      return tt__perr(from, from_line, "cannot open included file \"%s\" (%s)", path, msg);
     }
-    size_t got = fread(buf + len, 1, cap - len - 1, f);
-    len += got;
-    if (got == 0) break;
+    return rst;
   }
-  int bad = ferror(f);
-  fclose(f);
-  if (bad) {
-    free(buf);
-    return from ? tt__perr(from, from_line, "read error in \"%s\"", path) : tt_set_error(TT_ERR_IO, "%s: read error", path);
-  }
-  buf[len] = '\0';
   tt__pfile *pf = calloc(1, sizeof *pf);
   if (!pf) {
     free(buf);
@@ -918,7 +889,7 @@ static tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const cha
 /* ---- graphics state -------------------------------------------------------------------- */
 
 /* Post-multiplies the CTM, as every pbrt transform directive does. */
-static void tt__concat(tt__pp *P, const double m[16]) { tt__mul(P->gs.ctm, P->gs.ctm, m); }
+static void tt__concat(tt__pp *P, const double m[16]) { tt__mat4_mul(P->gs.ctm, P->gs.ctm, m); }
 
 /* Pushes the graphics state for AttributeBegin / TransformBegin / ObjectBegin. */
 static tt_status tt__push(tt__pp *P, int kind, const tt__tok *at) {
@@ -984,7 +955,7 @@ static void tt__world_setup(tt__pp *P) {
 /* The world matrix of a shape: mirror * CTM. */
 static void tt__world_matrix(tt__pp *P, const double ctm[16], double m[16]) {
   tt__world_setup(P);
-  tt__mul(m, P->W, ctm);
+  tt__mat4_mul(m, P->W, ctm);
 }
 
 /* ---- materials ------------------------------------------------------------------------- */

@@ -277,20 +277,17 @@ static int tt__has_ext(const char *path, const char *ext) {
   return n >= e && strcasecmp(path + n - e, ext) == 0;
 }
 
-/* Reads the file and hands it to the JSON loader with its directory as the asset base. */
-tt_status tt_scene_load(const char *path, tt_scene **out) {
-  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: out is NULL");
+/* Reads a whole file into a NUL-terminated malloc'ed buffer (shared by the JSON and pbrt
+ * loaders). Errors name the file: "cannot open scene file", "read error". */
+tt_status tt__read_file(const char *path, char **out, size_t *out_len) {
   *out = NULL;
-  if (!path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: path is NULL");
-  if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
-  if (!tt__has_ext(path, ".json"))
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json or .pbrt)", path);
+  *out_len = 0;
   FILE *f = fopen(path, "rb");
   if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open scene file: %s", path, strerror(errno));
   char *buf = NULL;
   size_t len = 0, cap = 0;
   for (;;) {
-    if (len + 4096 > cap) {
+    if (len + 4096 + 1 > cap) {
       size_t ncap = cap ? cap * 2 : 65536;
       char *n = realloc(buf, ncap);
       if (!n) {
@@ -301,7 +298,7 @@ tt_status tt_scene_load(const char *path, tt_scene **out) {
       buf = n;
       cap = ncap;
     }
-    size_t got = fread(buf + len, 1, cap - len, f);
+    size_t got = fread(buf + len, 1, cap - len - 1, f);
     len += got;
     if (got == 0) break;
   }
@@ -311,6 +308,36 @@ tt_status tt_scene_load(const char *path, tt_scene **out) {
     free(buf);
     return tt_set_error(TT_ERR_IO, "%s: read error", path);
   }
+  buf[len] = '\0';
+  *out = buf;
+  *out_len = len;
+  return TT_OK;
+}
+
+/* Row-major 4x4 product r = a * b (r may alias a or b). */
+void tt__mat4_mul(double r[16], const double a[16], const double b[16]) {
+  double t[16];
+  for (int i = 0; i < 4; i++)
+    for (int j = 0; j < 4; j++) {
+      double acc = 0;
+      for (int k = 0; k < 4; k++) acc += a[4 * i + k] * b[4 * k + j];
+      t[4 * i + j] = acc;
+    }
+  memcpy(r, t, sizeof t);
+}
+
+/* Reads the file and hands it to the JSON loader with its directory as the asset base. */
+tt_status tt_scene_load(const char *path, tt_scene **out) {
+  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: out is NULL");
+  *out = NULL;
+  if (!path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: path is NULL");
+  if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
+  if (!tt__has_ext(path, ".json"))
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json or .pbrt)", path);
+  char *buf = NULL;
+  size_t len = 0;
+  tt_status rst = tt__read_file(path, &buf, &len);
+  if (rst != TT_OK) return rst;
   /* base directory = everything before the last '/' ("." for a bare file name) */
   char *dir = tt__scene_strdup(path);
   if (!dir) {

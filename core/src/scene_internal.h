@@ -84,4 +84,9 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split,
  * features warn once per location on stderr and are approximated or skipped. */
 tt_status tt__scene_load_pbrt(const char *path, tt_scene **out);
 
+/* Reads a whole file into a NUL-terminated malloc'ed buffer; errors name the file. */
+tt_status tt__read_file(const char *path, char **out, size_t *len);
+/* Row-major 4x4 product r = a * b (r may alias a or b). */
+void tt__mat4_mul(double r[16], const double a[16], const double b[16]);
+
 #endif /* TT_SCENE_INTERNAL_H */

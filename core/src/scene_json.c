@@ -487,17 +487,6 @@ static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root) {
 
 /* ---- meshes ---------------------------------------------------------------------------- */
 
-/* Row-major 4x4 product r = a * b. */
-static void tt__mat_mul(double r[16], const double a[16], const double b[16]) {
-  double t[16];
-  for (int i = 0; i < 4; i++)
-    for (int j = 0; j < 4; j++) {
-      double s = 0;
-      for (int k = 0; k < 4; k++) s += a[4 * i + k] * b[4 * k + j];
-      t[4 * i + j] = s;
-    }
-  memcpy(r, t, sizeof t);
-}
 
 /* Rotation about a unit axis by `deg` degrees (Rodrigues). */
 static void tt__mat_rot(double r[16], double x, double y, double z, double deg) {
@@ -569,8 +558,8 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
     tt__mat_rot(rx, 1, 0, 0, ang[0]);
     tt__mat_rot(ry, 0, 1, 0, ang[1]);
     tt__mat_rot(rz, 0, 0, 1, ang[2]);
-    tt__mat_mul(R, ry, rx);
-    tt__mat_mul(R, rz, R);
+    tt__mat4_mul(R, ry, rx);
+    tt__mat4_mul(R, rz, R);
   } else if (cJSON_IsObject(rot)) {
     static const char *const rknown[] = {"axis", "angle", NULL};
     tt__jcheck_keys(c, rot, sub, rknown);
@@ -591,8 +580,8 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
   }
   double S[16] = {s[0], 0, 0, 0, 0, s[1], 0, 0, 0, 0, s[2], 0, 0, 0, 0, 1};
   double T[16] = {1, 0, 0, t[0], 0, 1, 0, t[1], 0, 0, 1, t[2], 0, 0, 0, 1};
-  tt__mat_mul(m, R, S);
-  tt__mat_mul(m, T, m);
+  tt__mat4_mul(m, R, S);
+  tt__mat4_mul(m, T, m);
   *has = 1;
   return TT_OK;
 }
