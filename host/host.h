@@ -63,7 +63,11 @@ typedef struct tt__host_options {
   uint32_t camera_index;    /* --camera-index I, in [0, TT_HOST_PATH_SAMPLES) */
   int frames;               /* --frames A:B given: samples A..B-1 to <out stem>_NNNN.exr */
   uint32_t frames_first, frames_end;
+  int convert;              /* --convert: write the loaded scene as scene.json to --out */
 } tt__host_options;
+
+/* Runs --convert: loads the scene and writes it as scene.json v1 + PLY meshes (convert.c). */
+int tt__run_convert(const tt__host_options *opt);
 
 #define TT_HOST_PATH_SAMPLES 100
 

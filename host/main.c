@@ -22,6 +22,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "host: no scene given (try --help)\n");
     return TT_EXIT_USAGE;
   }
+  if (opt.convert) return tt__run_convert(&opt);
   if (opt.sequence) return tt__run_sequence(&opt);
   return tt__run_render(&opt);
 }

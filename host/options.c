@@ -84,6 +84,8 @@ void tt__print_usage(FILE *out) {
     "  --out FILE.exr         linear EXR; a display-referred PNG is written next to it\n"
     "                         (default: <scene folder>.exr in the current directory)\n"
     "  --stats FILE.json      machine-readable record of the run\n"
+    "  --convert              write the loaded scene (scene.json or .pbrt) as scene.json v1\n"
+    "                         to --out FILE.json, meshes as PLY in meshes/ next to it; no render\n"
     "  --quiet                no progress bar, warnings and errors only\n"
     "  --help, --version\n"
     "\n"
@@ -163,12 +165,14 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       if (tt__push(opt->sets, &opt->set_count, a, v)) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--describe")) {
       if (!(opt->describe = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--convert")) {
+      opt->convert = 1;
     } else if (!strcmp(a, "--out") || !strcmp(a, "-o")) {
       if (!(opt->out = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
       const char *dot = strrchr(opt->out, '.');
-      if (!dot || strcmp(dot, ".exr") != 0) {
-        fprintf(stderr, "host: --out: expected a file name ending in .exr, got \"%s\"\n",
-                opt->out);
+      if (!dot || (strcmp(dot, ".exr") != 0 && strcmp(dot, ".json") != 0)) {
+        fprintf(stderr, "host: --out: expected a file name ending in .exr (.json with --convert), "
+                "got \"%s\"\n", opt->out);
         return TT_EXIT_USAGE;
       }
     } else if (!strcmp(a, "--stats")) {
@@ -314,6 +318,17 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
   }
   if (opt->frames && opt->camera_index_set) {
     fprintf(stderr, "host: --camera-index and --frames exclude each other\n");
+    return TT_EXIT_USAGE;
+  }
+  const char *odot = opt->out ? strrchr(opt->out, '.') : NULL;
+  int out_json = odot && strcmp(odot, ".json") == 0;
+  if (opt->convert && !out_json) {
+    fprintf(stderr, "host: --convert: expected --out FILE.json (the scene.json to write)\n");
+    return TT_EXIT_USAGE;
+  }
+  if (!opt->convert && out_json) {
+    fprintf(stderr, "host: --out: expected a file name ending in .exr, got \"%s\" (.json only "
+            "with --convert)\n", opt->out);
     return TT_EXIT_USAGE;
   }
   return TT_EXIT_OK;

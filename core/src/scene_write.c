@@ -99,19 +99,23 @@ static void tt__put_f32(unsigned char *b, float v) {
 }
 
 /* Writes one mesh as binary little-endian PLY: positions, normals and uvs when present,
- * triangles as uchar-counted uint lists. */
+ * triangles as uchar-counted uint lists. Each vertex starts with a uchar "guard" byte 'T':
+ * assimp 5.2 skips whitespace after end_header, so a first float whose low byte is e.g.
+ * 0x0a would shift (and crash) the whole binary body; readers ignore the extra property. */
 static tt_status tt__write_ply(const tt_mesh *m, const char *file, const char *json_path) {
   FILE *f = fopen(file, "wb");
   if (!f)
     return tt_set_error(TT_ERR_IO, "%s: cannot write mesh file \"%s\": %s", json_path, file, strerror(errno));
   fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by tunetrace\n");
-  fprintf(f, "element vertex %u\nproperty float x\nproperty float y\nproperty float z\n", m->vertex_count);
+  fprintf(f, "element vertex %u\nproperty uchar guard\nproperty float x\nproperty float y\nproperty float z\n",
+          m->vertex_count);
   if (m->normals) fprintf(f, "property float nx\nproperty float ny\nproperty float nz\n");
   if (m->uvs) fprintf(f, "property float u\nproperty float v\n");
   fprintf(f, "element face %u\nproperty list uchar uint vertex_indices\nend_header\n", m->triangle_count);
-  unsigned char buf[32];
+  unsigned char buf[40];
   for (uint32_t v = 0; v < m->vertex_count; v++) {
-    size_t n = 0;
+    size_t n = 1;
+    buf[0] = 'T';
     for (int a = 0; a < 3; a++, n += 4) tt__put_f32(buf + n, m->positions[3 * (size_t)v + a]);
     if (m->normals)
       for (int a = 0; a < 3; a++, n += 4) tt__put_f32(buf + n, m->normals[3 * (size_t)v + a]);
@@ -130,14 +134,13 @@ static tt_status tt__write_ply(const tt_mesh *m, const char *file, const char *j
   return TT_OK;
 }
 
-/* File name for mesh i: "<index>_<name>" with anything but [A-Za-z0-9._-] made '_'. */
+/* File name for mesh i: "meshes/<index>_<name>.ply" with anything but [A-Za-z0-9-] made '_'. */
 static void tt__mesh_file_name(char *buf, size_t n, uint32_t i, const char *name) {
   int w = snprintf(buf, n, "meshes/%u_", i);
   size_t at = w > 0 ? (size_t)w : 0;
   for (const char *p = name ? name : ""; *p && at + 5 < n && at < 80; p++) {
     char c = *p;
-    int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
-             c == '-' || c == '_';
+    int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-';
     buf[at++] = ok ? c : '_';
   }
   buf[at] = '\0';
@@ -285,8 +288,9 @@ static tt_status tt__wmeshes(const tt__wctx *w, const tt_scene *s, char **keys, 
   int first = 1;
   for (uint32_t i = 0; i < s->mesh_count; i++) {
     const tt_mesh *m = &s->meshes[i];
-    if (m->triangle_count == 0) {
-      tt__wwarn(w, m->name ? m->name : "mesh", "mesh without triangles skipped");
+    double area = m->triangle_count ? tt__mesh_area(m) : 0.0;
+    if (!(area > 0) || !isfinite(area)) { /* the loader rejects such meshes */
+      tt__wwarn(w, m->name ? m->name : "mesh", "mesh of zero area (all triangles degenerate) skipped");
       continue;
     }
     char rel[128];
@@ -297,10 +301,14 @@ static tt_status tt__wmeshes(const tt__wctx *w, const tt_scene *s, char **keys, 
     tt_status st = tt__write_ply(m, full, w->path);
     free(full);
     if (st != TT_OK) return st;
-    fputs(first ? "\n    {\"name\": " : ",\n    {\"name\": ", f);
+    fputs(first ? "\n    {" : ",\n    {", f);
     first = 0;
-    tt__wstr(f, m->name);
-    fputs(", \"material\": ", f);
+    if (m->name && m->name[0]) { /* the loader rejects "", and names unnamed meshes itself */
+      fputs("\"name\": ", f);
+      tt__wstr(f, m->name);
+      fputs(", ", f);
+    }
+    fputs("\"material\": ", f);
     tt__wstr(f, keys[m->material < s->material_count ? m->material : 0]);
     fputs(", \"file\": ", f);
     tt__wstr(f, rel);
@@ -386,7 +394,7 @@ tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
                         !scene ? "scene" : "path");
   const char *slash = strrchr(path, '/');
   size_t dl = slash ? (size_t)(slash - path) : 1;
-  char *dir = malloc(dl + 1);
+  char *dir = malloc(dl + 2);
   size_t tl = strlen(path) + 8;
   char *tmp = malloc(tl);
   char **keys = tt__material_keys(scene);

@@ -164,6 +164,13 @@ TT_API const char *tt_scene_indicator_name(uint32_t index);
  * surface quantities are normalised by the scene extent as in thesis 3.3.1. */
 TT_API void tt_scene_indicators(const tt_scene *scene, double out[TT_SCENE_INDICATOR_COUNT]);
 
+/* Writes the loaded, flattened scene as scene.json v1 at `path`, with every mesh as a binary
+ * little-endian PLY file meshes/<index>_<name>.ply next to it (folder created if missing);
+ * tt_scene_load reads it back with the same meshes, materials, lights, camera and settings.
+ * Textures and environment images are referenced by absolute path; area lights are implied
+ * by emissive materials. Errors (TT_ERR_IO) name the file. */
+TT_API tt_status tt_scene_write_json(const tt_scene *scene, const char *path);
+
 #ifdef __cplusplus
 }
 #endif
