@@ -6,7 +6,8 @@
  * per box plane), so one SIMD operation tests one plane of all children. Lanes without a
  * child hold an empty box (lower = +inf, upper = -inf) that no ray can hit, so the kernels
  * never need to know how many children a node really has. Leaves are runs of triangle
- * packets of 4 triangles each, with the data the intersection test needs precomputed. */
+ * packets of 4 triangles (the last one 2 when that suffices), with the data the
+ * intersection test needs precomputed. */
 #ifndef TT_ACCEL_EMBREE_BVH_H
 #define TT_ACCEL_EMBREE_BVH_H
 
@@ -17,13 +18,13 @@
 
 /* Child references (32 bits):
  *   inner node: bit 31 clear, bits 0..30 = node index;
- *   leaf:       bit 31 set, bits 27..30 = packet count - 1 (1..16 packets, 4..64 triangles),
- *               bits 0..26 = index of the first packet.
+ *   leaf:       bit 31 set, bits 27..30 = triangle pairs - 1 (1..16 pairs, 2..32 triangle
+ *               slots), bits 0..26 = index of the leaf's first triangle slot.
  * TT__REF_NONE marks "no tree" (a scene whose triangles are all invalid). */
 #define TT__REF_LEAF 0x80000000u
 #define TT__REF_NONE 0xFFFFFFFFu
 #define TT__LEAF_SHIFT 27
-#define TT__LEAF_MAX_PACKETS 16u
+#define TT__LEAF_MAX_PAIRS 16u
 #define TT__LEAF_MAX_FIRST ((1u << TT__LEAF_SHIFT) - 1u)
 #define TT__NODE_MAX_INDEX 0x7FFFFFFEu
 
@@ -32,7 +33,12 @@
 typedef struct tt__node2 {
   float b[6][2];
   uint32_t child[2];
-  uint32_t pad[2];
+  /* Prefetch hints (BVH2 only; they change no result): for each inner child c,
+   * grand[c] = c's second child reference (its first child, when inner, is node c + 1 by
+   * pre-order); TT__REF_NONE otherwise. A binary tree's traversal is a chain of dependent
+   * node loads; knowing the grandchildren one level early lets the kernel fetch two levels
+   * ahead, so two node misses overlap instead of following each other. */
+  uint32_t grand[2];
 } tt__node2; /* 64 bytes */
 typedef struct tt__node4 {
   float b[6][4];
@@ -45,16 +51,22 @@ typedef struct tt__node8 {
   uint32_t pad[8];
 } tt__node8; /* 256 bytes */
 
-/* Four triangles, SoA. Rows 0-2: v0; rows 3-5 / 6-8: e1 = v0 - v1 and e2 = v2 - v0 (fast
- * Moller-Trumbore test), or v1 and v2 themselves when the tree is robust (the watertight
- * test must see the original vertices: reconstructing them from edges would round and open
- * cracks); rows 9-11: Ng = cross(v1 - v0, v2 - v0). Unused lanes have all-zero geometry
- * (determinant 0: never hit) and prim = TT_INVALID_ID. */
-typedef struct tt__tri4 {
-  float p[12][4];
-  uint32_t geom[4];
-  uint32_t prim[4];
-} tt__tri4; /* 224 bytes */
+/* Leaf triangles live in one pool of 48-byte slots (12 floats, one triangle each), grouped
+ * into SoA packets: a leaf of n triangles has ceil(n/2) pairs of slots, i.e. floor(pairs/2)
+ * packets of width W = 4 (192 bytes) followed, when pairs is odd, by one packet of width
+ * W = 2 (96 bytes). A BVH2 leaf of 1-2 triangles thus takes 96 bytes, not a 4-wide
+ * packet's 192. Packet rows (W floats each, row r lane l at float r * W + l; 16-byte
+ * aligned): 0-2 v0; 3-5 / 6-8 e1 = v0 - v1 and e2 = v2 - v0 (fast Moller-Trumbore test),
+ * or v1 and v2 themselves when the tree is robust (the watertight test must see the
+ * original vertices: reconstructing them from edges would round and open cracks); 9-11
+ * Ng = cross(v1 - v0, v2 - v0). Unused lanes have all-zero geometry (determinant 0: never
+ * hit). Triangle j of a leaf is in slot first + j whatever its packet; its ids are in a
+ * parallel array (read once per ray, for the final hit, so a leaf test touches no line it
+ * does not use). */
+#define TT__SLOT_FLOATS 12
+typedef struct tt__id {
+  uint32_t geom, prim;  /* TT_INVALID_ID for an unused slot */
+} tt__id;
 
 /* A built tree. */
 typedef struct tt__bvh {
@@ -62,9 +74,10 @@ typedef struct tt__bvh {
   int robust;            /* packets hold vertices; watertight test, conservative boxes */
   uint32_t root;         /* a child reference, or TT__REF_NONE */
   void *nodes;           /* tt__node{2,4,8}[node_count], 64-byte aligned */
-  tt__tri4 *packets;     /* packet_count packets, 64-byte aligned */
+  float *slots;          /* slot_count triangle slots of 12 floats, 64-byte aligned */
+  tt__id *ids;           /* slot_count ids, parallel to slots */
   uint64_t node_count;
-  uint64_t packet_count;
+  uint64_t slot_count;
   /* Traversal counters, updated (relaxed, once per ray) only by the counting kernels. */
   _Atomic uint64_t c_rays, c_nodes, c_tris;
 } tt__bvh;

@@ -3,8 +3,9 @@
  * Embree's generic builder (rtcBuildBVH) decides the tree with every numeric parameter of
  * thesis Table 3.1; its callbacks only record a temporary tree in Embree's thread-local
  * allocator. A single-threaded depth-first pass then lays that tree out our way (BVH2/4/8
- * nodes with SoA child boxes, padded with empty boxes; leaves of precomputed 4-triangle
- * packets; nodes in pre-order so a parent and its first child are close in memory), counts
+ * nodes with SoA child boxes, padded with empty boxes, BVH2 nodes with grandchild prefetch
+ * hints; leaves of precomputed 4-triangle packets with a 2-triangle tail packet, ids apart;
+ * nodes in pre-order so a parent and its first child are close in memory), counts
  * the statistics, and the Embree BVH object is released. Traversal: accel_embree_trav.c. */
 #include "accel_embree.h"
 #include "accel_embree_bvh.h"
@@ -43,7 +44,7 @@ typedef struct tt__tmp_leaf {
 typedef struct tt__cb_ctx {
   const tt_scene *scene;
   uint32_t geom_mask;             /* TT__GEOMID_MASK for spatial splits, else all ones */
-  _Atomic uint64_t inner, leaves, packets;
+  _Atomic uint64_t inner, leaves, slots;
   _Atomic int too_wide;           /* a node with more than 8 children was requested */
 } tt__cb_ctx;
 
@@ -90,7 +91,7 @@ static void *tt__cb_leaf(RTCThreadLocalAllocator alloc, const struct RTCBuildPri
     l->ids[2 * i + 1] = prims[i].primID;
   }
   atomic_fetch_add_explicit(&c->leaves, 1, memory_order_relaxed);
-  atomic_fetch_add_explicit(&c->packets, (count + 3) / 4, memory_order_relaxed);
+  atomic_fetch_add_explicit(&c->slots, 2 * ((count + 1) / 2), memory_order_relaxed);
   return l;
 }
 
@@ -148,8 +149,14 @@ typedef struct tt__flat {
   int N, robust;
   char *nodes;                  /* capacity node_cap nodes of 32 * N bytes */
   uint64_t node_count, node_cap;
-  tt__tri4 *packets;
-  uint64_t packet_count, packet_cap;
+  float *slots;                 /* triangle slots (accel_embree_bvh.h) */
+  tt__id *ids;                  /* parallel to slots */
+  uint64_t slot_count, slot_cap;  /* slots used (incl. gaps) and allocated */
+  /* 4-wide packets start on a slot index divisible by 4 (192-byte multiples: cache-line
+   * aligned). Aligning a leaf may skip 2 slots; such gaps are filled by later leaves of
+   * 1-2 triangles (a single 2-wide packet), LIFO, up to 64 pending. */
+  uint64_t gaps[64];
+  int ngaps;
   uint64_t leaves;
   double area_inner, area_leaf_tris;
   uint32_t max_depth;
@@ -163,29 +170,31 @@ static double tt__area(const float *lower, const float *upper) {
   return 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
 }
 
-/* Writes triangle `j` of a leaf into its packet lane: vertices or edges, and Ng computed
- * in double from the same float data the test uses, so den and T agree with it. */
-static void tt__pack_tri(tt__flat *f, tt__tri4 *pk, int lane, uint32_t geom, uint32_t prim) {
+/* Writes a triangle into lane `lane` of the width-W packet at `pk`: vertices or edges,
+ * and Ng computed in double from the same float data the test uses, so den and T agree
+ * with it. */
+static void tt__pack_tri(tt__flat *f, float *pk, int W, int lane, tt__id *id, uint32_t geom,
+                         uint32_t prim) {
   const float *v[3];
   tt__tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
   float e1[3], e2[3];
   for (int k = 0; k < 3; k++) {
     e1[k] = v[0][k] - v[1][k];
     e2[k] = v[2][k] - v[0][k];
-    pk->p[k][lane] = v[0][k];
-    pk->p[3 + k][lane] = f->robust ? v[1][k] : e1[k];
-    pk->p[6 + k][lane] = f->robust ? v[2][k] : e2[k];
+    pk[k * W + lane] = v[0][k];
+    pk[(3 + k) * W + lane] = f->robust ? v[1][k] : e1[k];
+    pk[(6 + k) * W + lane] = f->robust ? v[2][k] : e2[k];
   }
   double a[3], b[3];  /* v1 - v0 and v2 - v0 */
   for (int k = 0; k < 3; k++) {
     a[k] = f->robust ? (double)v[1][k] - v[0][k] : -(double)e1[k];
     b[k] = f->robust ? (double)v[2][k] - v[0][k] : (double)e2[k];
   }
-  pk->p[9][lane] = (float)(a[1] * b[2] - a[2] * b[1]);
-  pk->p[10][lane] = (float)(a[2] * b[0] - a[0] * b[2]);
-  pk->p[11][lane] = (float)(a[0] * b[1] - a[1] * b[0]);
-  pk->geom[lane] = geom;
-  pk->prim[lane] = prim;
+  pk[9 * W + lane] = (float)(a[1] * b[2] - a[2] * b[1]);
+  pk[10 * W + lane] = (float)(a[2] * b[0] - a[0] * b[2]);
+  pk[11 * W + lane] = (float)(a[0] * b[1] - a[1] * b[0]);
+  id->geom = geom;
+  id->prim = prim;
 }
 
 /* Lays out the temporary subtree `tmp` (whose box is lower/upper, at `depth`, root = 1)
@@ -205,23 +214,41 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
   if (((const tt__tmp_leaf *)tmp)->is_leaf) {
     const tt__tmp_leaf *l = tmp;
     if (l->count == 0) return TT__REF_NONE;
-    uint32_t np = (l->count + 3) / 4;
-    if (np > TT__LEAF_MAX_PACKETS || f->packet_count + np > f->packet_cap ||
-        f->packet_count + np - 1 > TT__LEAF_MAX_FIRST) {
-      f->error = np > TT__LEAF_MAX_PACKETS ? "a leaf holds more than 64 triangles"
-                                           : "too many triangle packets for 27-bit indices";
+    const uint32_t pairs = (l->count + 1) / 2, nslots = 2 * pairs, wide = pairs / 2;
+    if (pairs > TT__LEAF_MAX_PAIRS) {
+      f->error = "a leaf holds more than 32 triangles";
       return TT__REF_NONE;
     }
-    uint64_t first = f->packet_count;
-    f->packet_count += np;
-    tt__tri4 *pk = f->packets + first;
-    for (uint32_t i = 0; i < np; i++)
-      for (int lane = 0; lane < 4; lane++) pk[i].geom[lane] = pk[i].prim[lane] = TT_INVALID_ID;
-    for (uint32_t j = 0; j < l->count; j++)
-      tt__pack_tri(f, &pk[j / 4], (int)(j % 4), l->ids[2 * j], l->ids[2 * j + 1]);
+    uint64_t first;
+    if (wide == 0 && f->ngaps > 0) {
+      first = f->gaps[--f->ngaps];
+    } else {
+      if (wide > 0 && f->slot_count % 4 != 0) {  /* slot counts are even: it is 2 */
+        if (f->ngaps < 64) f->gaps[f->ngaps++] = f->slot_count;
+        f->slot_count += 2;
+      }
+      first = f->slot_count;
+      f->slot_count += nslots;
+    }
+    if (f->slot_count > f->slot_cap || first + nslots - 1 > TT__LEAF_MAX_FIRST) {
+      f->error = f->slot_count > f->slot_cap ? "more triangle slots than counted"
+                                             : "too many triangle slots for 27-bit indices";
+      return TT__REF_NONE;
+    }
+    float *base = f->slots + first * TT__SLOT_FLOATS;
+    tt__id *id = f->ids + first;
+    for (uint32_t i = 0; i < nslots; i++) id[i].geom = id[i].prim = TT_INVALID_ID;
+    for (uint32_t j = 0; j < l->count; j++) {
+      /* Slot j: lane j % 4 of 4-wide packet j / 4, or lane j - 4 * wide of the 2-wide
+       * packet that closes a leaf with an odd number of pairs. */
+      int W = j < 4 * wide ? 4 : 2;
+      uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;  /* packet's first slot */
+      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j],
+                   l->ids[2 * j], l->ids[2 * j + 1]);
+    }
     f->leaves++;
     f->area_leaf_tris += tt__area(lower, upper) * l->count;
-    return TT__REF_LEAF | ((np - 1) << TT__LEAF_SHIFT) | (uint32_t)first;
+    return TT__REF_LEAF | ((pairs - 1) << TT__LEAF_SHIFT) | (uint32_t)first;
   }
   const tt__tmp_inner *n = tmp;
   if (f->node_count >= f->node_cap || f->node_count > TT__NODE_MAX_INDEX) {
@@ -256,6 +283,18 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
     child[i] = empty ? 0u : refs[i];
   }
   for (int i = N; i < 2 * N; i++) child[i] = 0u;  /* padding */
+  if (N == 2) {
+    /* Grandchild hints (tt__node2.grand): the children were laid out first, so an inner
+     * child's node is already written. */
+    for (int i = 0; i < 2; i++) {
+      uint32_t g = TT__REF_NONE;
+      if (refs[i] != TT__REF_NONE && !(refs[i] & TT__REF_LEAF)) {
+        const tt__node2 *cn = (const tt__node2 *)(f->nodes + (uint64_t)refs[i] * 64u);
+        if (cn->b[0][1] <= cn->b[1][1]) g = cn->child[1];  /* non-empty second box */
+      }
+      child[2 + i] = g;
+    }
+  }
   return (uint32_t)index;
 }
 
@@ -265,7 +304,8 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
 void tt__custom_free(tt__bvh *bvh) {
   if (!bvh) return;
   free(bvh->nodes);
-  free(bvh->packets);
+  free(bvh->slots);
+  free(bvh->ids);
   free(bvh);
 }
 
@@ -454,26 +494,49 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   f.N = bf;
   f.robust = bvh->robust;
   f.node_cap = atomic_load(&ctx.inner);
-  f.packet_cap = atomic_load(&ctx.packets);
+  f.slot_cap = atomic_load(&ctx.slots) + 2 * atomic_load(&ctx.leaves);  /* + alignment gaps */
   size_t node_bytes = (size_t)f.node_cap * (size_t)(32 * bf);
-  size_t packet_bytes = (size_t)f.packet_cap * sizeof(tt__tri4);
+  size_t slot_bytes = (size_t)f.slot_cap * TT__SLOT_FLOATS * sizeof(float);
+  size_t id_bytes = (size_t)f.slot_cap * sizeof(tt__id);
   f.nodes = node_bytes ? aligned_alloc(64, tt__round64(node_bytes)) : NULL;
-  f.packets = packet_bytes ? aligned_alloc(64, tt__round64(packet_bytes)) : NULL;
-  if ((node_bytes && !f.nodes) || (packet_bytes && !f.packets)) {
+  f.slots = slot_bytes ? aligned_alloc(64, tt__round64(slot_bytes)) : NULL;
+  f.ids = id_bytes ? aligned_alloc(64, tt__round64(id_bytes)) : NULL;
+  if ((node_bytes && !f.nodes) || (slot_bytes && !f.slots) || (id_bytes && !f.ids)) {
     free(f.nodes);
-    free(f.packets);
+    free(f.slots);
+    free(f.ids);
     rtcReleaseBVH(args.bvh);
     tt__custom_free(bvh);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot allocate the BVH (%zu bytes)",
-                        node_bytes + packet_bytes);
+                        node_bytes + slot_bytes + id_bytes);
   }
-  if (packet_bytes) memset(f.packets, 0, packet_bytes);
+  if (slot_bytes) memset(f.slots, 0, slot_bytes);
+  if (id_bytes) memset(f.ids, 0xFF, id_bytes);  /* TT_INVALID_ID, also in alignment gaps */
   bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
   rtcReleaseBVH(args.bvh);
   bvh->nodes = f.nodes;
-  bvh->packets = f.packets;
+  if (!f.error && f.slot_count < f.slot_cap) {
+    /* Give back the unused capacity (reserved for alignment gaps): exact-size copies. */
+    size_t sb = (size_t)f.slot_count * TT__SLOT_FLOATS * sizeof(float);
+    size_t ib = (size_t)f.slot_count * sizeof(tt__id);
+    float *ns = sb ? aligned_alloc(64, tt__round64(sb)) : NULL;
+    tt__id *ni = ib ? aligned_alloc(64, tt__round64(ib)) : NULL;
+    if ((!sb || ns) && (!ib || ni)) {
+      if (sb) memcpy(ns, f.slots, sb);
+      if (ib) memcpy(ni, f.ids, ib);
+      free(f.slots);
+      free(f.ids);
+      f.slots = ns, f.ids = ni;
+      slot_bytes = sb, id_bytes = ib;
+    } else {  /* keep the larger arrays */
+      free(ns);
+      free(ni);
+    }
+  }
+  bvh->slots = f.slots;
+  bvh->ids = f.ids;
   bvh->node_count = f.node_count;
-  bvh->packet_count = f.packet_count;
+  bvh->slot_count = f.slot_count;
   if (f.error) {
     tt__custom_free(bvh);
     return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
@@ -486,7 +549,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
    * (SAH with unit costs, counted per triangle): comparable across configurations. */
   stats->sah_cost = root_area > 0.0 ? (f.area_inner + f.area_leaf_tris) / root_area : 0.0;
   stats->max_depth = f.max_depth;
-  stats->memory_bytes = sizeof *bvh + node_bytes + packet_bytes;
+  stats->memory_bytes = sizeof *bvh + node_bytes + slot_bytes + id_bytes;
   *out = bvh;
   return TT_OK;
 }

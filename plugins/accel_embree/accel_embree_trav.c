@@ -11,7 +11,9 @@
  * (SoA rows, near/far planes chosen by the ray direction's signs, so no min/max per axis);
  * hit children are visited front to back by entry distance (closest hit) or in node order
  * (occlusion, which stops at the first hit); a popped entry farther than the closest hit
- * so far is skipped. Leaves are tested 4 triangles at a time. */
+ * so far is skipped. Hit children are prefetched, and in a BVH2 their children too (the
+ * node's grand[] hints), so consecutive node misses overlap. Leaves are tested one SIMD
+ * packet (4 or 2 triangles) at a time. */
 #include "accel_embree_bvh.h"
 
 #include <immintrin.h>
@@ -65,8 +67,9 @@ typedef struct tt__rc {
 /* Best hit so far. */
 typedef struct tt__best {
   float t, u, v;
-  const tt__tri4 *pk;
-  int lane;
+  const float *pk;  /* packet of the hit, NULL for none */
+  int W, lane;      /* its width and the hit's lane */
+  uint32_t slot;    /* the hit triangle's slot (ids) */
 } tt__best;
 
 /* Prepares the ray; returns 0 when no hit is possible (NaN/inf input, empty interval). */
@@ -202,8 +205,20 @@ TT__INLINE void tt__prefetch(const tt__bvh *bvh, uint32_t ref, int N) {
   const char *p;
   int lines;
   if (ref & TT__REF_LEAF) {
-    p = (const char *)(bvh->packets + (ref & TT__LEAF_MAX_FIRST));
-    lines = 4;
+    /* The leaf's first packet, 3 lines from its line (a 4-wide packet is line aligned, a
+     * 2-wide one of 96 bytes starts at a 32-byte boundary), and the second one of a leaf
+     * of 7-8 triangles (leaves tuned to maxLeafSize 8). */
+    p = (const char *)((uintptr_t)(bvh->slots + (size_t)(ref & TT__LEAF_MAX_FIRST) *
+                                                    TT__SLOT_FLOATS) & ~(uintptr_t)63);
+    _mm_prefetch(p, _MM_HINT_T0);
+    _mm_prefetch(p + 64, _MM_HINT_T0);
+    _mm_prefetch(p + 128, _MM_HINT_T0);
+    if (((ref >> TT__LEAF_SHIFT) & 0xFu) >= 3u) {  /* 4+ pairs: the second packet too */
+      _mm_prefetch(p + 192, _MM_HINT_T0);
+      _mm_prefetch(p + 256, _MM_HINT_T0);
+      _mm_prefetch(p + 320, _MM_HINT_T0);
+    }
+    return;
   } else {
     p = (const char *)bvh->nodes + (size_t)ref * (size_t)(32 * N);
     lines = N / 2;
@@ -211,32 +226,54 @@ TT__INLINE void tt__prefetch(const tt__bvh *bvh, uint32_t ref, int N) {
   for (int i = 0; i < lines; i++) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
 }
 
-/* Tests the 4 triangles of a packet against the ray's current [tnear, tfar]. Returns the
+/* Prefetches the hit children of a node, and for BVH2 also their grandchildren (the
+ * node's grand[] hints and, by pre-order, the line after an inner child). */
+TT__INLINE void tt__prefetch_children(const tt__bvh *bvh, const uint32_t *child, int mask,
+                                      int N) {
+  for (int m = mask; m; m &= m - 1) {
+    int c = __builtin_ctz((unsigned)m);
+    uint32_t ref = child[c];
+    tt__prefetch(bvh, ref, N);
+    if (N == 2 && !(ref & TT__REF_LEAF)) {
+      _mm_prefetch((const char *)bvh->nodes + (size_t)(ref + 1) * 64u, _MM_HINT_T0);
+      uint32_t g = child[2 + c];
+      if (g != TT__REF_NONE) tt__prefetch(bvh, g, N);
+    }
+  }
+}
+
+/* Tests the (up to) 4 triangles of a packet against the ray's current [tnear, tfar]. Returns the
  * valid-lane mask; T, U, V are scaled by |det| (division postponed to the winner). */
-TT__INLINE int tt__tri_test(const tt__tri4 *pk, const tt__rc *r, int robust, __m128 *T_out,
+/* Row r of a width-W packet (W = 2: lanes 2 and 3 read as zero, i.e. never hit). */
+TT__INLINE __m128 tt__row(const float *pk, int W, int r) {
+  if (W == 4) return _mm_load_ps(pk + 4 * r);
+  return _mm_castpd_ps(_mm_load_sd((const double *)(pk + 2 * r)));
+}
+
+TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust, __m128 *T_out,
                             __m128 *U_out, __m128 *V_out, __m128 *den_out) {
   const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps();
   __m128 T, U, V, absden, valid;
   if (!robust) {
     /* Moller-Trumbore with precomputed Ng: C = v0 - o, R = C x D, den = Ng.D,
      * u = R.e2 / den, v = R.e1 / den, t = Ng.C / den. */
-    __m128 cx = _mm_sub_ps(_mm_load_ps(pk->p[0]), TT__V4(r->o[0]));
-    __m128 cy = _mm_sub_ps(_mm_load_ps(pk->p[1]), TT__V4(r->o[1]));
-    __m128 cz = _mm_sub_ps(_mm_load_ps(pk->p[2]), TT__V4(r->o[2]));
+    __m128 cx = _mm_sub_ps(tt__row(pk, W, 0), TT__V4(r->o[0]));
+    __m128 cy = _mm_sub_ps(tt__row(pk, W, 1), TT__V4(r->o[1]));
+    __m128 cz = _mm_sub_ps(tt__row(pk, W, 2), TT__V4(r->o[2]));
     __m128 rx = _mm_sub_ps(_mm_mul_ps(cy, TT__V4(r->d[2])), _mm_mul_ps(cz, TT__V4(r->d[1])));
     __m128 ry = _mm_sub_ps(_mm_mul_ps(cz, TT__V4(r->d[0])), _mm_mul_ps(cx, TT__V4(r->d[2])));
     __m128 rz = _mm_sub_ps(_mm_mul_ps(cx, TT__V4(r->d[1])), _mm_mul_ps(cy, TT__V4(r->d[0])));
-    __m128 nx = _mm_load_ps(pk->p[9]), ny = _mm_load_ps(pk->p[10]), nz = _mm_load_ps(pk->p[11]);
+    __m128 nx = tt__row(pk, W, 9), ny = tt__row(pk, W, 10), nz = tt__row(pk, W, 11);
     __m128 den = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, TT__V4(r->d[0])), _mm_mul_ps(ny, TT__V4(r->d[1]))),
                             _mm_mul_ps(nz, TT__V4(r->d[2])));
     __m128 sgn = _mm_and_ps(den, sign);
     absden = _mm_xor_ps(den, sgn);
-    U = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, _mm_load_ps(pk->p[6])),
-                                         _mm_mul_ps(ry, _mm_load_ps(pk->p[7]))),
-                              _mm_mul_ps(rz, _mm_load_ps(pk->p[8]))), sgn);
-    V = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, _mm_load_ps(pk->p[3])),
-                                         _mm_mul_ps(ry, _mm_load_ps(pk->p[4]))),
-                              _mm_mul_ps(rz, _mm_load_ps(pk->p[5]))), sgn);
+    U = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, tt__row(pk, W, 6)),
+                                         _mm_mul_ps(ry, tt__row(pk, W, 7))),
+                              _mm_mul_ps(rz, tt__row(pk, W, 8))), sgn);
+    V = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, tt__row(pk, W, 3)),
+                                         _mm_mul_ps(ry, tt__row(pk, W, 4))),
+                              _mm_mul_ps(rz, tt__row(pk, W, 5))), sgn);
     valid = _mm_and_ps(_mm_cmpge_ps(U, zero), _mm_cmpge_ps(V, zero));
     valid = _mm_and_ps(valid, _mm_cmple_ps(_mm_add_ps(U, V), absden));
     valid = _mm_and_ps(valid, _mm_cmpgt_ps(absden, zero));
@@ -247,15 +284,15 @@ TT__INLINE int tt__tri_test(const tt__tri4 *pk, const tt__rc *r, int robust, __m
     /* Watertight: vertices relative to the origin, sheared so the ray is the +z axis;
      * U, V, W are 2D edge functions, evaluated identically for a shared edge. */
     const int kx = r->kx, ky = r->ky, kz = r->kz;
-    __m128 az = _mm_sub_ps(_mm_load_ps(pk->p[0 + kz]), TT__V4(r->o[kz]));
-    __m128 bz = _mm_sub_ps(_mm_load_ps(pk->p[3 + kz]), TT__V4(r->o[kz]));
-    __m128 cz = _mm_sub_ps(_mm_load_ps(pk->p[6 + kz]), TT__V4(r->o[kz]));
-    __m128 ax = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(pk->p[0 + kx]), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, az));
-    __m128 ay = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(pk->p[0 + ky]), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, az));
-    __m128 bx = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(pk->p[3 + kx]), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, bz));
-    __m128 by = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(pk->p[3 + ky]), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, bz));
-    __m128 cx = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(pk->p[6 + kx]), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, cz));
-    __m128 cy = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(pk->p[6 + ky]), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, cz));
+    __m128 az = _mm_sub_ps(tt__row(pk, W, 0 + kz), TT__V4(r->o[kz]));
+    __m128 bz = _mm_sub_ps(tt__row(pk, W, 3 + kz), TT__V4(r->o[kz]));
+    __m128 cz = _mm_sub_ps(tt__row(pk, W, 6 + kz), TT__V4(r->o[kz]));
+    __m128 ax = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 0 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, az));
+    __m128 ay = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 0 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, az));
+    __m128 bx = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 3 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, bz));
+    __m128 by = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 3 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, bz));
+    __m128 cx = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 6 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, cz));
+    __m128 cy = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 6 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, cz));
     __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
     __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
     __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
@@ -283,17 +320,51 @@ TT__INLINE int tt__tri_test(const tt__tri4 *pk, const tt__rc *r, int robust, __m
 }
 
 /* Real triangles in a leaf's packets (for the counters only). */
-TT__INLINE uint64_t tt__leaf_tris(const tt__tri4 *pk, uint32_t n) {
+TT__INLINE uint64_t tt__leaf_tris(const tt__id *id, uint32_t n) {
   uint64_t c = 0;
-  for (uint32_t i = 0; i < n; i++)
-    for (int l = 0; l < 4; l++) c += pk[i].prim[l] != TT_INVALID_ID;
+  for (uint32_t i = 0; i < n; i++) c += id[i].prim != TT_INVALID_ID;
   return c;
+}
+
+/* Tests one width-W packet (first slot `slot`) for a closer hit; updates `best` and the
+ * ray's tfar. */
+TT__INLINE void tt__leaf_packet(const float *pk, const int W, uint32_t slot, const tt__bvh *bvh,
+                                tt__rc *restrict r, const int robust,
+                                tt__best *restrict best) {
+  __m128 T, U, V, den;
+  int m = tt__tri_test(pk, W, r, robust, &T, &U, &V, &den);
+  if (!m) return;
+  /* Nearest valid lane: t = T / |det| for valid lanes, +inf elsewhere. */
+  _Alignas(16) float t4[4];
+  __m128 valid = _mm_castsi128_ps(
+      _mm_cmpgt_epi32(_mm_and_si128(_mm_set1_epi32(m), _mm_setr_epi32(1, 2, 4, 8)),
+                      _mm_setzero_si128()));
+  __m128 t = _mm_blendv_ps(_mm_set1_ps(INFINITY), _mm_div_ps(T, den), valid);
+  _mm_store_ps(t4, t);
+  int lane = 0;
+  for (int l = 1; l < W; l++)
+    if (t4[l] < t4[lane]) lane = l;
+  if (!(t4[lane] <= best->t)) return;
+  _Alignas(16) float u4[4], v4[4], d4[4];
+  _mm_store_ps(u4, U);
+  _mm_store_ps(v4, V);
+  _mm_store_ps(d4, den);
+  best->t = t4[lane];
+  best->u = u4[lane] / d4[lane];
+  best->v = v4[lane] / d4[lane];
+  best->pk = pk;
+  best->W = W;
+  best->lane = lane;
+  best->slot = slot + (uint32_t)lane;
+  /* The ids are read once, after traversal: fetch their line meanwhile. */
+  _mm_prefetch((const char *)(bvh->ids + best->slot), _MM_HINT_T0);
+  tt__set_tfar(r, best->t);
 }
 
 /* Closest-hit traversal, specialised by width N, robust and counting after inlining. */
 TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, const int N,
                               const int robust, const int counting) {
-  tt__best best = {ray->tfar, 0.0f, 0.0f, NULL, 0};
+  tt__best best = {ray->tfar, 0.0f, 0.0f, NULL, 4, 0, 0};
   uint64_t c_nodes = 0, c_tris = 0;
   tt__rc r;
   uint32_t ref = bvh->root;
@@ -311,7 +382,7 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
         if (counting) c_nodes++;
         if (mask) {
           const uint32_t *child = tt__children(node, N);
-          for (int m = mask; m; m &= m - 1) tt__prefetch(bvh, child[__builtin_ctz((unsigned)m)], N);
+          tt__prefetch_children(bvh, child, mask, N);
           int i0 = __builtin_ctz((unsigned)mask);
           mask &= mask - 1;
           if (!mask) {
@@ -353,35 +424,14 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
           continue;
         }
       } else {
-        const uint32_t n = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u;
-        const tt__tri4 *pk = bvh->packets + (ref & TT__LEAF_MAX_FIRST);
-        if (counting) c_tris += tt__leaf_tris(pk, n);
-        for (uint32_t i = 0; i < n; i++) {
-          __m128 T, U, V, den;
-          int m = tt__tri_test(&pk[i], &r, robust, &T, &U, &V, &den);
-          if (!m) continue;
-          /* Nearest valid lane: t = T / |det| for valid lanes, +inf elsewhere. */
-          _Alignas(16) float t4[4];
-          __m128 valid = _mm_castsi128_ps(
-              _mm_cmpgt_epi32(_mm_and_si128(_mm_set1_epi32(m), _mm_setr_epi32(1, 2, 4, 8)),
-                              _mm_setzero_si128()));
-          __m128 t = _mm_blendv_ps(_mm_set1_ps(INFINITY), _mm_div_ps(T, den), valid);
-          _mm_store_ps(t4, t);
-          int lane = 0;
-          for (int l = 1; l < 4; l++)
-            if (t4[l] < t4[lane]) lane = l;
-          if (!(t4[lane] <= best.t)) continue;
-          _Alignas(16) float u4[4], v4[4], d4[4];
-          _mm_store_ps(u4, U);
-          _mm_store_ps(v4, V);
-          _mm_store_ps(d4, den);
-          best.t = t4[lane];
-          best.u = u4[lane] / d4[lane];
-          best.v = v4[lane] / d4[lane];
-          best.pk = &pk[i];
-          best.lane = lane;
-          tt__set_tfar(&r, best.t);
-        }
+        const uint32_t pairs = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u;
+        const uint32_t first = ref & TT__LEAF_MAX_FIRST;
+        const float *pk = bvh->slots + (size_t)first * TT__SLOT_FLOATS;
+        if (counting) c_tris += tt__leaf_tris(bvh->ids + first, 2 * pairs);
+        uint32_t q = 0;
+        for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
+          tt__leaf_packet(pk, 4, first + 2 * q, bvh, &r, robust, &best);
+        if (q < pairs) tt__leaf_packet(pk, 2, first + 2 * q, bvh, &r, robust, &best);
       }
       /* Pop the next entry that can still hold a closer hit. */
       for (;;) {
@@ -410,11 +460,12 @@ done:
   hit->t = best.t;
   hit->u = best.u;
   hit->v = best.v;
-  hit->geom_id = best.pk->geom[best.lane];
-  hit->prim_id = best.pk->prim[best.lane];
-  hit->ng[0] = best.pk->p[9][best.lane];
-  hit->ng[1] = best.pk->p[10][best.lane];
-  hit->ng[2] = best.pk->p[11][best.lane];
+  const tt__id *id = bvh->ids + best.slot;
+  hit->geom_id = id->geom;
+  hit->prim_id = id->prim;
+  hit->ng[0] = best.pk[9 * best.W + best.lane];
+  hit->ng[1] = best.pk[10 * best.W + best.lane];
+  hit->ng[2] = best.pk[11 * best.W + best.lane];
 }
 
 /* Any-hit traversal: children in node order (sorting does not pay when the first hit
@@ -436,7 +487,7 @@ TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
         if (counting) c_nodes++;
         if (mask) {
           const uint32_t *child = tt__children(node, N);
-          for (int m = mask; m; m &= m - 1) tt__prefetch(bvh, child[__builtin_ctz((unsigned)m)], N);
+          tt__prefetch_children(bvh, child, mask, N);
           ref = child[__builtin_ctz((unsigned)mask)];
           mask &= mask - 1;
           while (mask) {
@@ -446,15 +497,20 @@ TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
           continue;
         }
       } else {
-        const uint32_t n = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u;
-        const tt__tri4 *pk = bvh->packets + (ref & TT__LEAF_MAX_FIRST);
-        if (counting) c_tris += tt__leaf_tris(pk, n);
-        for (uint32_t i = 0; i < n; i++) {
-          __m128 T, U, V, den;
-          if (tt__tri_test(&pk[i], &r, robust, &T, &U, &V, &den)) {
+        const uint32_t pairs = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u;
+        const uint32_t first = ref & TT__LEAF_MAX_FIRST;
+        const float *pk = bvh->slots + (size_t)first * TT__SLOT_FLOATS;
+        if (counting) c_tris += tt__leaf_tris(bvh->ids + first, 2 * pairs);
+        __m128 T, U, V, den;
+        uint32_t q = 0;
+        for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
+          if (tt__tri_test(pk, 4, &r, robust, &T, &U, &V, &den)) {
             result = 1;
             goto done;
           }
+        if (q < pairs && tt__tri_test(pk, 2, &r, robust, &T, &U, &V, &den)) {
+          result = 1;
+          goto done;
         }
       }
       if (sp == 0) break;
