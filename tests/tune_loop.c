@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "host_util.h"
+#include "json_util.h"
 #include "tt_test.h"
 
 extern char **environ;
@@ -22,21 +23,6 @@ extern char **environ;
 static char dir[] = "/tmp/tt_tune_loopXXXXXX";
 static char scene_path[4200];
 static tt_registry *reg;
-
-/* Reads and parses a JSON file (NULL on failure). */
-static cJSON *read_json(const char *path) {
-  FILE *f = fopen(path, "r");
-  if (!f) return NULL;
-  static char text[1 << 20];
-  size_t len = fread(text, 1, sizeof text - 1, f);
-  text[len] = 0;
-  fclose(f);
-  return cJSON_Parse(text);
-}
-
-static double num(const cJSON *o, const char *key) {
-  return cJSON_GetNumberValue(cJSON_GetObjectItem(o, key));
-}
 
 /* Row count of the samples table, or -1 if the database cannot be read. */
 static long db_rows(const char *path, const char *where) {

@@ -4,18 +4,8 @@
 #include <cjson/cJSON.h>
 
 #include "host_util.h"
+#include "json_util.h"
 #include "tt_test.h"
-
-/* Reads a whole file (static buffer). */
-static cJSON *read_json(const char *path) {
-  static char text[1 << 20];
-  FILE *f = fopen(path, "r");
-  if (!f) return NULL;
-  size_t n = fread(text, 1, sizeof text - 1, f);
-  fclose(f);
-  text[n] = 0;
-  return cJSON_Parse(text);
-}
 
 /* Checks that every history config equals `def` except in the names of `allowed`. */
 static int changed_outside(cJSON *tuning, const char *const *allowed, size_t n_allowed,

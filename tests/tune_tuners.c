@@ -14,26 +14,12 @@
 #include <stdlib.h>
 
 #include "host_util.h"
+#include "json_util.h"
 #include "tt_test.h"
 
 static char dir[] = "/tmp/tt_tune_tunersXXXXXX";
 static char scene_path[4200];
 static char out[1 << 20];
-
-/* Reads and parses a JSON file (NULL on failure). */
-static cJSON *read_json(const char *path) {
-  FILE *f = fopen(path, "r");
-  if (!f) return NULL;
-  static char text[1 << 22];
-  size_t len = fread(text, 1, sizeof text - 1, f);
-  text[len] = 0;
-  fclose(f);
-  return cJSON_Parse(text);
-}
-
-static double num(const cJSON *o, const char *key) {
-  return cJSON_GetNumberValue(cJSON_GetObjectItem(o, key));
-}
 
 /* Canonical text of a history entry's config (caller frees). */
 static char *cfg_of(const cJSON *h) {
