@@ -242,6 +242,35 @@ static void test_basic(void) {
   tt_scene_destroy(s);
 }
 
+/* Rough dielectric: roughness / uroughness / vroughness -> alpha as for conductor. */
+static void test_rough_glass(void) {
+  tt_scene *s = load("rough-glass.pbrt");
+  if (!s) return;
+  const tt_material *m;
+  if ((m = mat(s, "frosted"))) {
+    CHECK(m->type == TT_MATERIAL_DIELECTRIC);
+    CHECK_NEAR(m->ior, 1.5, 1e-6);
+    CHECK_NEAR(m->alpha[0], 0.2, 1e-6); CHECK_NEAR(m->alpha[1], 0.2, 1e-6); /* remapped: sqrt(0.04) */
+  }
+  if ((m = mat(s, "aniso"))) {
+    CHECK(m->type == TT_MATERIAL_DIELECTRIC);
+    CHECK_NEAR(m->ior, 1.33, 1e-6);
+    CHECK_NEAR(m->alpha[0], 0.1, 1e-6); CHECK_NEAR(m->alpha[1], 0.3, 1e-6);
+  }
+  if ((m = mat(s, "rawglass"))) {
+    CHECK(m->type == TT_MATERIAL_DIELECTRIC);
+    CHECK_NEAR(m->alpha[0], 0.3, 1e-6); CHECK_NEAR(m->alpha[1], 0.3, 1e-6); /* remaproughness false */
+  }
+  if ((m = mat(s, "clamped"))) { CHECK_NEAR(m->alpha[0], 1.0, 1e-6); CHECK_NEAR(m->alpha[1], 1.0, 1e-6); }
+  if ((m = mat(s, "smooth"))) { CHECK(m->alpha[0] == 0.0f && m->alpha[1] == 0.0f); }
+  if ((m = mat(s, "thin"))) {
+    CHECK(m->type == TT_MATERIAL_DIELECTRIC);
+    CHECK_NEAR(m->ior, 1.4, 1e-6);
+    CHECK(m->alpha[0] == 0.0f && m->alpha[1] == 0.0f); /* thindielectric stays smooth */
+  }
+  tt_scene_destroy(s);
+}
+
 /* Projects the centroid of mesh i through the scene camera. */
 static void project(const tt_scene *s, uint32_t i, float *fx, float *fy) {
   tt_camera_frame f;
@@ -300,5 +329,6 @@ int main(void) {
   snprintf(g_dir, sizeof g_dir, "%s/tests/data/pbrt", root ? root : ".");
   test_basic();
   test_handedness();
+  test_rough_glass();
   return tt_test_finish("pbrt_import");
 }

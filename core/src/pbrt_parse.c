@@ -1108,14 +1108,12 @@ static tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *typ
   } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "thindielectric") == 0) {
     m.type = TT_MATERIAL_DIELECTRIC;
     if ((st = tt__ior(P, at, pl, &m.ior)) != TT_OK) return st;
+    /* dielectric: roughness -> GGX alpha exactly as for conductor (rough glass, Walter 2007).
+     * thindielectric has no roughness in pbrt-v4 and stays smooth (alpha 0). */
     if (type[0] == 't')
       tt__pwarn(P, at->file, at->line, "thindielectric", "thindielectric approximated by a solid dielectric");
-    else {
-      float a[2];
-      if ((st = tt__rough(P, at, pl, "", remap, a)) != TT_OK) return st;
-      if (a[0] > 0 || a[1] > 0)
-        tt__pwarn(P, at->file, at->line, "roughness", "rough dielectric rendered as smooth glass (the path sampler has no rough dielectric)");
-    }
+    else if ((st = tt__rough(P, at, pl, "", remap, m.alpha)) != TT_OK)
+      return st;
   } else {
     static const char *const known[] = {"hair", "measured", "subsurface", "coatedconductor", NULL};
     int pbrt_known = 0;
