@@ -59,33 +59,16 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
     return tt_set_error(TT_ERR_UNSUPPORTED, "%s: \"%s\": this build has no zlib for .ply.gz files", where, path);
 #endif
   }
-  FILE *f = fopen(path, "rb");
-  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\": %s", where, path, strerror(errno));
-  for (;;) {
-    if (used + 65536 > cap) {
-      size_t ncap = cap ? cap * 2 : 1 << 20;
-      unsigned char *nb = realloc(buf, ncap);
-      if (!nb) {
-        free(buf);
-        fclose(f);
-        return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading \"%s\"", where, path);
-      }
-      buf = nb;
-      cap = ncap;
-    }
-    size_t got = fread(buf + used, 1, cap - used, f);
-    used += got;
-    if (got == 0) break;
+  /* plain files: the loaders' shared reader; its message is re-worded to name the shape */
+  char *text = NULL;
+  tt_status st = tt__read_file(path, &text, len);
+  if (st == TT_ERR_IO) {
+    char msg[1024];
+    snprintf(msg, sizeof msg, "%s", tt_last_error());
+    return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\" (%s)", where, path, msg);
   }
-  int bad = ferror(f);
-  fclose(f);
-  if (bad) {
-    free(buf);
-    return tt_set_error(TT_ERR_IO, "%s: read error in \"%s\"", where, path);
-  }
-  *out = buf;
-  *len = used;
-  return TT_OK;
+  *out = (unsigned char *)text;
+  return st;
 }
 
 /* ---- PLY ------------------------------------------------------------------------------- */
