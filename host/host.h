@@ -48,6 +48,8 @@ typedef struct tt__host_options {
   uint32_t verify;          /* --verify N: default vs best side by side, N rounds */
   const char *db;           /* --db PATH; NULL: tt_tunedb_default_path() */
   int no_db;                /* --no-db */
+  const char *reference;    /* --reference FILE: the image --objective rrmse compares with */
+  const char *tune_pass_images; /* --tune-pass-images DIR: each measurement's own pass image */
   int help;
   int version;
   /* sequence rendering (sequence.c) */
@@ -78,7 +80,8 @@ typedef enum tt__objective_kind {
   TT_OBJ_RENDER = 1,        /* wall ms of the measurement pass(es) */
   TT_OBJ_BUILD = 2,         /* accel build ms */
   TT_OBJ_TOTAL = 3,         /* build + render ms */
-  TT_OBJ_METRIC = 4         /* an integrator metric of the pass */
+  TT_OBJ_METRIC = 4,        /* an integrator metric of the pass */
+  TT_OBJ_RRMSE = 5          /* rRMSE of the pass's own image against --reference */
 } tt__objective_kind;
 
 typedef enum tt__metric_goal {

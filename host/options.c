@@ -45,6 +45,12 @@ void tt__print_usage(FILE *out) {
     "                           metric:NAME:max            ... maximised\n"
     "                           metric:NAME:target=X       ... |value - X| minimised,\n"
     "                                          e.g. metric:acceptance:target=0.234\n"
+    "                           rrmse          rRMSE of the pass's own image (luminance)\n"
+    "                                          against --reference; any integrator\n"
+    "  --reference FILE.exr   the reference image of --objective rrmse (same resolution\n"
+    "                         as the render)\n"
+    "  --tune-pass-images DIR write each measured tuning pass's own image (not the\n"
+    "                         accumulated film) to DIR/pass_default.exr, pass_NNNN.exr\n"
     "  --tune-params A,B,...  search only these parameters of the target; the others keep\n"
     "                         their configured values (default: the tuning hint's list,\n"
     "                         e.g. PSSMLT's a_i and sigma_i, else all)\n"
@@ -245,6 +251,10 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       if (!(opt->db = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--no-db")) {
       opt->no_db = 1;
+    } else if (!strcmp(a, "--reference")) {
+      if (!(opt->reference = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--tune-pass-images")) {
+      if (!(opt->tune_pass_images = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--sequence")) {
       /* "N" renders frames 0..N-1, "A:B" frames A..B inclusive (sequence.c). */
       unsigned f0 = 0, f1 = 0;
@@ -308,6 +318,21 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       opt->scene = a;
     }
   }
+  {
+    tt__objective obj;
+    int rrmse = opt->objective && !tt__parse_objective("--objective", opt->objective, &obj) &&
+                obj.kind == TT_OBJ_RRMSE;
+    if (rrmse && !opt->reference) {
+      fprintf(stderr, "host: --objective rrmse needs --reference FILE.exr (an image of the "
+              "same scene and resolution, e.g. a high-spp integrator_pt render)\n");
+      return TT_EXIT_USAGE;
+    }
+    if (opt->reference && !rrmse) {
+      fprintf(stderr, "host: --reference %s: only --objective rrmse uses a reference\n",
+              opt->reference);
+      return TT_EXIT_USAGE;
+    }
+  }
   if (opt->db && opt->no_db) {
     fprintf(stderr, "host: --db and --no-db exclude each other\n");
     return TT_EXIT_USAGE;
@@ -343,6 +368,8 @@ int tt__parse_objective(const char *opt, const char *text, tt__objective *out) {
   } else if (!strcmp(text, "build+render") || !strcmp(text, "total") ||
              !strcmp(text, "render+build")) {
     out->kind = TT_OBJ_TOTAL;
+  } else if (!strcmp(text, "rrmse")) {
+    out->kind = TT_OBJ_RRMSE;
   } else if (!strncmp(text, "metric:", 7)) {
     const char *name = text + 7;
     const char *colon = strchr(name, ':');
@@ -373,7 +400,8 @@ int tt__parse_objective(const char *opt, const char *text, tt__objective *out) {
     }
   } else {
     fprintf(stderr, "host: %s: unknown objective \"%s\" (expected render, build, "
-            "build+render, metric:NAME, metric:NAME:max or metric:NAME:target=X)\n", opt, text);
+            "build+render, rrmse, metric:NAME, metric:NAME:max or metric:NAME:target=X)\n",
+            opt, text);
     return -1;
   }
   /* one spelling per objective, so the database matches "total" and "build+render" */
@@ -381,6 +409,7 @@ int tt__parse_objective(const char *opt, const char *text, tt__objective *out) {
     case TT_OBJ_RENDER: snprintf(out->spec, sizeof out->spec, "render"); break;
     case TT_OBJ_BUILD: snprintf(out->spec, sizeof out->spec, "build"); break;
     case TT_OBJ_TOTAL: snprintf(out->spec, sizeof out->spec, "build+render"); break;
+    case TT_OBJ_RRMSE: snprintf(out->spec, sizeof out->spec, "rrmse"); break;
     case TT_OBJ_METRIC:
       if (out->goal == TT_GOAL_TARGET) {
         /* shortest text that reads back as the same double: 0.234, not 0.23400000000000001 */

@@ -19,7 +19,9 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <errno.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -41,6 +43,14 @@ typedef struct tt__tune_ctx {
   char run_id[64];
   char *applied;                /* config JSON the target currently runs with */
   uint32_t spp;
+  /* the pass's own image (--objective rrmse, --tune-pass-images): the film's accumulators
+   * before the pass, and the image the pass alone added */
+  int want_pass;
+  float *snap;                  /* sum_rgb (3), sum_weight (1), splat_rgb (3) per pixel */
+  double snap_scale;
+  float *pass_rgb;              /* 3 per pixel */
+  double *ref_lum;              /* --reference as luminance, 1 per pixel */
+  char ref_hash[17];            /* FNV-1a 64 of the reference's luminance (database context) */
 } tt__tune_ctx;
 
 /* strdup that reports failure through NULL only (callers treat NULL as "no text"). */
@@ -137,6 +147,11 @@ static char *tt__context_json(tt__tune_ctx *c) {
     tt_free(cfg);
     cJSON_AddItemToObject(p, "config", obj ? obj : cJSON_CreateObject());
   }
+  if (c->ref_lum) {  /* an rRMSE cost means something only against the same reference */
+    cJSON *r = cJSON_AddObjectToObject(root, "reference");
+    cJSON_AddStringToObject(r, "file", rs->opt->reference);
+    cJSON_AddStringToObject(r, "fnv1a64", c->ref_hash);
+  }
   char *text = cJSON_PrintUnformatted(root);
   cJSON_Delete(root);
   char *out = tt__dup(text);
@@ -216,13 +231,155 @@ static double tt__run_post(tt__tune_ctx *c, uint32_t frame_index) {
   return st == TT_OK ? ms : -1.0;
 }
 
+/* Luminance weights of tools/pssmlt (Rec. 709). */
+static double tt__lum(const float *rgb) {
+  return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+}
+
+/* Reads --reference as luminance (RGB[A] -> Rec. 709 luminance, one channel as is) and
+ * checks its size against the render's; prints and returns TT_EXIT_USAGE on a problem. */
+static int tt__load_reference(tt__tune_ctx *c) {
+  const char *path = c->rs->opt->reference;
+  uint32_t w = 0, h = 0, ch = 0, W = c->rs->camera->width, H = c->rs->camera->height;
+  float *px = NULL;
+  if (tt_image_read(path, &w, &h, &ch, &px) != TT_OK) {
+    fprintf(stderr, "host: --reference %s: cannot read the image: %s\n", path, tt_last_error());
+    return TT_EXIT_USAGE;
+  }
+  if (w != W || h != H) {
+    fprintf(stderr, "host: --reference %s: the reference is %ux%u but the render is %ux%u; "
+            "--objective rrmse compares pixel by pixel (render the reference with --res %ux%u)\n",
+            path, w, h, W, H, W, H);
+    tt_free(px);
+    return TT_EXIT_USAGE;
+  }
+  if (ch != 1 && ch < 3) {
+    fprintf(stderr, "host: --reference %s: expected 1 (luminance) or 3-4 (RGB[A]) channels, "
+            "got %u\n", path, ch);
+    tt_free(px);
+    return TT_EXIT_USAGE;
+  }
+  size_t n = (size_t)w * h;
+  c->ref_lum = malloc(n * sizeof *c->ref_lum);
+  if (!c->ref_lum) {
+    tt_free(px);
+    fprintf(stderr, "host: tuning: out of memory\n");
+    return TT_EXIT_FAILURE;
+  }
+  uint64_t hash = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i < n; i++) {
+    double v = ch == 1 ? px[i] : tt__lum(px + i * ch);
+    if (!isfinite(v)) {
+      fprintf(stderr, "host: --reference %s: pixel (%zu, %zu) is not finite\n", path, i % w,
+              i / w);
+      tt_free(px);
+      return TT_EXIT_USAGE;
+    }
+    c->ref_lum[i] = v;
+    const unsigned char *b = (const unsigned char *)&c->ref_lum[i];
+    for (size_t k = 0; k < sizeof c->ref_lum[i]; k++) hash = (hash ^ b[k]) * 0x100000001b3ull;
+  }
+  snprintf(c->ref_hash, sizeof c->ref_hash, "%016llx", (unsigned long long)hash);
+  tt_free(px);
+  return TT_EXIT_OK;
+}
+
+/* Copies the film's accumulators before a measurement pass. */
+static void tt__snapshot(tt__tune_ctx *c) {
+  tt_film *f = c->rs->film;
+  size_t n = (size_t)tt_film_width(f) * tt_film_height(f);
+  memcpy(c->snap, tt_film_sum_rgb(f), 3 * n * sizeof(float));
+  memcpy(c->snap + 3 * n, tt_film_sum_weight(f), n * sizeof(float));
+  memcpy(c->snap + 4 * n, tt_film_splat_rgb(f), 3 * n * sizeof(float));
+  c->snap_scale = tt_film_splat_scale(f);
+}
+
+/* The image the last pass alone renders (c->pass_rgb), from the accumulators before
+ * (c->snap) and after it. The tuning passes still accumulate into the film; this only
+ * separates the pass's share:
+ *  - per-pixel samples: (sum_wL after - before) / (sum_w after - before);
+ *  - splats (film.h: resolved = splat * scale, scale = c / N for N units so far, as
+ *    PSSMLT's b * pixels / mutations): the pass's splats times c / (N_after - N_before),
+ *    i.e. 1 / (1/scale_after - 1/scale_before). An unchanged scale means splats that add
+ *    up: the pass's splats times that scale. A film without splats before the pass, or a
+ *    scale that grew (the integrator restarted its estimate and cleared the splats), leaves
+ *    the splat buffer to this pass alone: splats after times scale after. */
+static void tt__pass_image(tt__tune_ctx *c) {
+  tt_film *f = c->rs->film;
+  size_t n = (size_t)tt_film_width(f) * tt_film_height(f);
+  const float *sr = tt_film_sum_rgb(f), *sw = tt_film_sum_weight(f), *sp = tt_film_splat_rgb(f);
+  const float *br = c->snap, *bw = c->snap + 3 * n, *bp = c->snap + 4 * n;
+  double ka = tt_film_splat_scale(f), kb = c->snap_scale;
+  int splats_before = 0;
+  for (size_t i = 0; i < 3 * n && !splats_before; i++) splats_before = bp[i] != 0.0f;
+  double inv = 1.0 / ka - 1.0 / kb;
+  int fresh = !splats_before || (ka != kb && (!(inv > 0) || !isfinite(inv)));
+  double k = fresh || ka == kb ? ka : 1.0 / inv;
+  for (size_t i = 0; i < n; i++) {
+    double dw = (double)sw[i] - bw[i];
+    for (int ch = 0; ch < 3; ch++) {
+      size_t j = 3 * i + ch;
+      double v = dw > 0 ? ((double)sr[j] - br[j]) / dw : 0.0;
+      v += (fresh ? (double)sp[j] : (double)sp[j] - bp[j]) * k;
+      c->pass_rgb[j] = (float)v;
+    }
+  }
+}
+
+/* rRMSE of the pass image against the reference, over luminance, as tools/pssmlt:
+ * sqrt(mean((I - R)^2 / (R^2 + 1e-3))). */
+static double tt__rrmse(const tt__tune_ctx *c) {
+  size_t n = (size_t)c->rs->camera->width * c->rs->camera->height;
+  double sum = 0;
+  for (size_t i = 0; i < n; i++) {
+    double I = tt__lum(c->pass_rgb + 3 * i), R = c->ref_lum[i];
+    sum += (I - R) * (I - R) / (R * R + 1e-3);
+  }
+  return sqrt(sum / (double)n);
+}
+
+/* Renders one measurement pass (+ the post filter of a post target), keeping the pass's own
+ * image in c->pass_rgb when one is wanted. */
+static tt_status tt__measure_pass(tt__tune_ctx *c, tt_pass_stats *ps, double *render_ms) {
+  tt__render_state *rs = c->rs;
+  if (c->want_pass) tt__snapshot(c);
+  tt_status st = tt__render_pass(rs, c->spp, ps, render_ms);
+  if (st != TT_OK) return st;
+  if (c->want_pass) tt__pass_image(c);
+  if (c->target_kind == TT_KIND_POST) {
+    double pms = tt__run_post(c, rs->pass);
+    if (pms < 0) return TT_ERR_INTERNAL;
+    *render_ms += pms;
+  }
+  return TT_OK;
+}
+
+/* Writes the pass image of a measurement to --tune-pass-images (a warning on failure). */
+static void tt__write_pass_image(tt__tune_ctx *c, int iteration, double cost) {
+  const char *dir = c->rs->opt->tune_pass_images;
+  if (!dir) return;
+  char path[4200], it[32], cs[64];
+  if (iteration < 0) snprintf(path, sizeof path, "%s/pass_default.exr", dir);
+  else snprintf(path, sizeof path, "%s/pass_%04d.exr", dir, iteration);
+  snprintf(it, sizeof it, "%d", iteration);
+  snprintf(cs, sizeof cs, "%.17g", cost);
+  tt_image_meta meta[3] = {{"tunetrace:iteration", it},
+                           {"tunetrace:objective", c->t->objective.spec},
+                           {"tunetrace:cost", cs}};
+  if (tt_image_write_exr(path, c->rs->camera->width, c->rs->camera->height, 3, c->pass_rgb,
+                         NULL, meta, 3) != TT_OK)
+    c->rs->host->log(TT_LOG_WARN, NULL, "tuning: --tune-pass-images: %s", tt_last_error());
+}
+
 /* The objective's cost of one pass; -1 (with a message) if the metric is not published. */
-static int tt__cost(const tt__objective *o, double build_ms, double render_ms,
+static int tt__cost(const tt__tune_ctx *c, double build_ms, double render_ms,
                     const tt_pass_stats *ps, double *cost, char *why, size_t why_n) {
+  const tt__objective *o = &c->t->objective;
   switch (o->kind) {
     case TT_OBJ_RENDER: *cost = render_ms; return 0;
     case TT_OBJ_BUILD: *cost = build_ms; return 0;
     case TT_OBJ_TOTAL: *cost = build_ms + render_ms; return 0;
+    case TT_OBJ_RRMSE: *cost = tt__rrmse(c); return 0;
     case TT_OBJ_METRIC: break;
   }
   char names[512] = "";
@@ -315,28 +472,24 @@ static int tt__measure(tt__tune_ctx *c, tt_config *cfg, int iteration, const cha
     rs->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: %s rejected %s: %s", iteration,
                   t->plugin, s.config, tt_last_error());
   } else {
-    tt_status st = tt__render_pass(rs, c->spp, &ps, &render_ms);
+    tt_status st = tt__measure_pass(c, &ps, &render_ms);
     if (st == TT_ERR_INTERRUPTED) {
       tt_config_destroy(work);
       free(s.config);
       return TT__INTERRUPTED;
     }
-    if (st == TT_OK && c->target_kind == TT_KIND_POST) {
-      double pms = tt__run_post(c, rs->pass);
-      if (pms < 0) st = TT_ERR_INTERNAL;
-      else render_ms += pms;
-    }
     if (st != TT_OK) {
       s.status = TT_TUNEDB_FAILED;
       rs->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: the pass failed: %s", iteration,
                     tt_last_error());
-    } else if (tt__cost(&t->objective, build_ms, render_ms, &ps, &s.cost, why, sizeof why)) {
+    } else if (tt__cost(c, build_ms, render_ms, &ps, &s.cost, why, sizeof why)) {
       tt_config_destroy(work);
       free(s.config);
       fprintf(stderr, "host: --objective %s: %s\n", t->objective.spec, why);
       return TT__BAD_METRIC;
     } else {
       s.status = TT_TUNEDB_OK;
+      if (c->want_pass) tt__write_pass_image(c, iteration, s.cost);
     }
   }
   tt_config_destroy(work);
@@ -427,15 +580,11 @@ static int tt__verify_one(tt__tune_ctx *c, const tt_config *cfg, const char *jso
   char why[512];
   tt_pass_stats ps;
   memset(&ps, 0, sizeof ps);
+  (void)rs;
   if (tt__apply(c, cfg, json, &build_ms, 1) != TT_OK) return -1;
-  tt_status st = tt__render_pass(rs, c->spp, &ps, &render_ms);
+  tt_status st = tt__measure_pass(c, &ps, &render_ms);
   if (st == TT_ERR_INTERRUPTED) return 1;
-  if (st == TT_OK && c->target_kind == TT_KIND_POST) {
-    double pms = tt__run_post(c, rs->pass);
-    if (pms < 0) return -1;
-    render_ms += pms;
-  }
-  if (st != TT_OK || tt__cost(&c->t->objective, build_ms, render_ms, &ps, &cost, why, sizeof why))
+  if (st != TT_OK || tt__cost(c, build_ms, render_ms, &ps, &cost, why, sizeof why))
     return -1;
   out[0] = build_ms;
   out[1] = render_ms;
@@ -631,6 +780,26 @@ static int tt__choose(tt__tune_ctx *c) {
             tt_plugin_kind_name(c->target_kind));
     return TT_EXIT_USAGE;
   }
+  if (c->t->objective.kind == TT_OBJ_RRMSE) {
+    int r = tt__load_reference(c);
+    if (r != TT_EXIT_OK) return r;
+  }
+  const char *dir = opt->tune_pass_images;
+  if (dir && mkdir(dir, 0777) != 0 && errno != EEXIST) {
+    fprintf(stderr, "host: --tune-pass-images %s: cannot create the folder: %s\n", dir,
+            strerror(errno));
+    return TT_EXIT_USAGE;
+  }
+  c->want_pass = c->t->objective.kind == TT_OBJ_RRMSE || dir;
+  if (c->want_pass) {
+    size_t px = (size_t)rs->camera->width * rs->camera->height;
+    c->snap = malloc(7 * px * sizeof(float));
+    c->pass_rgb = malloc(3 * px * sizeof(float));
+    if (!c->snap || !c->pass_rgb) {
+      fprintf(stderr, "host: tuning: out of memory\n");
+      return TT_EXIT_FAILURE;
+    }
+  }
   if (c->target_kind == TT_KIND_POST) {
     c->pi = tt_loaded_plugin_iface(c->target);
     size_t px = (size_t)rs->camera->width * rs->camera->height * 3;
@@ -710,10 +879,12 @@ int tt__tune_phase(tt__render_state *rs, tt__tuning **out) {
   tt_loaded_plugin *tuner_p = tt_registry_find_kind(rs->reg, TT_KIND_TUNER);
   int explore = opt->explore > 0;
   if (!tuner_p && !explore) {
-    if (opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify) {
+    if (opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify ||
+        opt->tune_pass_images) {
       fprintf(stderr, "host: %s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
               opt->tune ? "--tune" : opt->objective ? "--objective"
-              : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp" : "--verify");
+              : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp"
+              : opt->verify ? "--verify" : "--tune-pass-images");
       return TT_EXIT_USAGE;
     }
     return TT_EXIT_OK;
@@ -899,6 +1070,9 @@ fail:
   if (c.post) c.pi->destroy(c.post);
   free(c.post_in);
   free(c.post_out);
+  free(c.snap);
+  free(c.pass_rgb);
+  free(c.ref_lum);
   /* the path is still shown in stats: keep a copy alive as long as the record */
   if (c.db) {
     static char db_path[4096];

@@ -7,6 +7,8 @@ against a high-spp integrator_pt reference (maxDepth = rrDepth = PSSMLT's maxDep
     python3 tools/pssmlt/compare_tuned.py --build build-mlt2 --res 96x96 --spp 16 --seeds 5 \
         --ref-spp 1024 --tuned-dir /tmp/pssmlt_tune --out /tmp/pssmlt_cmp \
         cornell-box=scenes/cornell-box/scene.json ...
+    # + binning tuned towards rRMSE (tune_convergence.py --objective rrmse --out DIR)
+    python3 tools/pssmlt/compare_tuned.py ... --rrmse-dir DIR --methods pt,classic,binned,tuned,rrmse
     python3 tools/pssmlt/compare_tuned.py --plot-only --out /tmp/pssmlt_cmp \
         --fig tools/pssmlt/figures/rrmse_equal_mutations.png NAME=SCENE ...
 
@@ -27,7 +29,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from compare import read_lum  # noqa: E402
 
-LABELS = {'pt': 'path tracer', 'classic': 'PSSMLT classic', 'binned': 'binned untuned', 'tuned': 'binned tuned'}
+LABELS = {'pt': 'path tracer', 'classic': 'PSSMLT classic', 'binned': 'binned untuned', 'tuned': 'binned tuned',
+          'rrmse': 'binned rRMSE-tuned', 'rrmse200': 'binned rRMSE-tuned, 200 it.'}
+SHORT = {'pt': 'PT', 'classic': 'classic', 'binned': 'untuned', 'tuned': 'acc.-tuned', 'rrmse': 'rRMSE-tuned',
+         'rrmse200': 'rRMSE 200 it.'}
 
 
 def run(host, scene, args, extra, out, stats):
@@ -70,6 +75,12 @@ def do_scene(args, name, scene):
         'binned': mlt + ['--set', 'integrator_pssmlt.binning=true'],
         'tuned': mlt + sum((['--set', s] for s in tuned_set), []),
     }
+    if args.rrmse_dir:  # tuned with host --objective rrmse (tune_convergence.py --objective rrmse)
+        with open(os.path.join(args.rrmse_dir, f'{name}_tuned.json')) as f:
+            methods['rrmse'] = mlt + sum((['--set', s] for s in json.load(f)['set']), [])
+    if args.rrmse200_dir:  # the same with a longer tuning run (--iterations 200)
+        with open(os.path.join(args.rrmse200_dir, f'{name}_tuned.json')) as f:
+            methods['rrmse200'] = mlt + sum((['--set', s] for s in json.load(f)['set']), [])
     resf = os.path.join(out, 'results.json')
     rows = json.load(open(resf)) if os.path.exists(resf) else []
     done = {(r['method'], r['seed'], r['spp']) for r in rows}
@@ -109,6 +120,23 @@ def table(name, rows):
     return out
 
 
+def paired(name, rows, base='classic'):
+    """Per-seed ratio method / base (same seed, same mutation count): median, min-max and
+    the number of seeds where the method has the lower error."""
+    out = []
+    for spp in sorted({r['spp'] for r in rows}):
+        b = {r['seed']: r['rrmse'] for r in rows if r['method'] == base and r['spp'] == spp}
+        for m in LABELS:
+            if m == base:
+                continue
+            q = [(r['rrmse'] / b[r['seed']]) for r in rows if r['method'] == m and r['spp'] == spp and r['seed'] in b]
+            if q:
+                q = np.array(q)
+                out.append(f'| {name} | {spp} | {LABELS[m]} | {np.median(q):.3f} ({q.min():.3f}-{q.max():.3f}) '
+                           f'| {int((q < 1).sum())}/{len(q)} |')
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('scenes', nargs='+', help='NAME=PATH')
@@ -121,6 +149,9 @@ def main(argv=None):
     ap.add_argument('--seeds', type=int, default=5)
     ap.add_argument('--methods', default='pt,classic,binned,tuned')
     ap.add_argument('--tuned-dir', default='/tmp/pssmlt_tune')
+    ap.add_argument('--rrmse-dir', default=None, help='tune_convergence.py --objective rrmse output: '
+                    'adds the method "rrmse" (use --methods ...,rrmse)')
+    ap.add_argument('--rrmse200-dir', default=None, help='as --rrmse-dir, method "rrmse200" (a 200-iteration run)')
     ap.add_argument('--tuned-run', type=int, default=1, help='use the best configuration of this tuning run')
     ap.add_argument('--out', default='/tmp/pssmlt_cmp')
     ap.add_argument('--fig', default=None)
@@ -140,6 +171,10 @@ def main(argv=None):
     print('|---|---|---|---|---|---|---|')
     for name in allrows:
         print('\n'.join(table(name, allrows[name])))
+    print('\n| scene | mut./px | method | rRMSE / classic, same seed: median (min-max) | seeds better than classic |')
+    print('|---|---|---|---|---|')
+    for name in allrows:
+        print('\n'.join(paired(name, allrows[name])))
     if not args.fig or not allrows:
         return 0
     import matplotlib
@@ -161,9 +196,7 @@ def main(argv=None):
                 patch.set_facecolor(f'C{list(LABELS).index(ms[k])}')
                 patch.set_alpha(0.6)
             ax.set_xticks(range(1, len(ms) + 1))
-            ax.set_xticklabels(['PT', 'classic', 'untuned', 'tuned'][:0] or
-                               [{'pt': 'PT', 'classic': 'classic', 'binned': 'untuned', 'tuned': 'tuned'}[m] for m in ms],
-                               fontsize=7, rotation=30)
+            ax.set_xticklabels([SHORT[m] for m in ms], fontsize=7, rotation=30)
             ax.tick_params(axis='y', labelsize=7)
             ax.set_title(f'{name}\n{spp} mut./px, {len(data[0])} seeds', fontsize=8)
             if j == 0:

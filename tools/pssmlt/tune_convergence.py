@@ -12,6 +12,8 @@ eq. 4.2-4.3) with their sigma_i, against the untuned bins (equal widths, all 0.0
     python3 tools/pssmlt/tune_convergence.py scenes/cornell-box/scene.json \
         --name cornell-box --build build-mlt2 --res 64x64 --iterations 50 --tune-spp 5 \
         --out /tmp/pssmlt_tune --fig tools/pssmlt/figures/tuning_cornell-box.png
+    # the rRMSE objective: each pass's own image against a path-traced reference
+    python3 tools/pssmlt/tune_convergence.py ... --objective rrmse --reference ref_tune.exr
 """
 import argparse
 import json
@@ -47,6 +49,8 @@ def tune(args, scene, seed):
            '--stats', stats]
     if args.objective:
         cmd += ['--objective', args.objective]
+    if args.reference:
+        cmd += ['--reference', args.reference]
     subprocess.run(cmd, check=True)
     with open(stats) as f:
         return json.load(f)
@@ -65,6 +69,8 @@ def main(argv=None):
     ap.add_argument('--seeds', type=int, default=1, help='independent tuning runs (best of seed 1 is kept)')
     ap.add_argument('--objective', default=None, help="host --objective (default: the plugin's hint, "
                     "metric:small_step_acceptance:target=0.234)")
+    ap.add_argument('--reference', default=None, help='host --reference (with --objective rrmse): the image '
+                    'each tuning pass is compared with; render it with another seed than the evaluation reference')
     ap.add_argument('--out', default='/tmp/pssmlt_tune')
     ap.add_argument('--fig', default=None)
     args = ap.parse_args(argv)
