@@ -1,10 +1,16 @@
 /* pbrt-v4 importer on the real scenes in ../shared/scenes (skipped when absent): every
  * scene loads, has at least the triangles shared/scenes/README.md counts (PLY/OBJ faces;
  * tessellated spheres/disks, Loop subdivision and repeated PLY references add to them),
- * a light and finite bounds. Prints the import time of each. */
+ * a light and finite bounds. Prints the import time of each.
+ * Then the committed wrappers scenes/<name>/scene.json (which import these files and carry
+ * the camera paths): each loads with the pbrt file's geometry (same scene id), has a path
+ * whose samples 0, 50 and 99 are finite and distinct, and `host --camera-index` renders
+ * those samples at 16x16, 1 spp without NaN and not all black. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime, dup2, mkdir */
+#include <tunetrace/image.h>
 #include <tunetrace/scene.h>
 
+#include "host_util.h"
 #include "tt_test.h"
 
 #include <sys/stat.h>
@@ -39,6 +45,111 @@ static const real_scene k_scenes[] = {
     {"bathroom/bathroom.pbrt", 592186},
     {"bmw-m6/bmw-m6.pbrt", 792746},
 };
+
+/* scenes/<name>/scene.json -> the pbrt file it wraps (relative to ../shared/scenes). */
+typedef struct wrapper {
+  const char *name, *pbrt;
+} wrapper;
+
+static const wrapper k_wrappers[] = {
+    {"veach-mis", "veach-mis/veach-mis.pbrt"},
+    {"killeroos", "killeroos/killeroo-simple.pbrt"},
+    {"caustic-glass", "caustic-glass/caustic-glass-v4.pbrt"},
+    {"living-room", "living-room/living-room.pbrt"},
+    {"veach-ajar", "veach-ajar/veach-ajar.pbrt"},
+    {"staircase", "staircase/staircase.pbrt"},
+    {"bathroom", "bathroom/bathroom.pbrt"},
+    {"bmw-m6", "bmw-m6/bmw-m6.pbrt"},
+};
+
+/* Pose of path sample i of 100, as host --camera-index computes it. */
+static void path_sample(const tt_scene *s, unsigned i, tt_camera *out) {
+  const tt_camera *c = tt_scene_camera(s);
+  double t0 = c->keys[0].time, t1 = c->keys[c->key_count - 1].time;
+  tt_scene_camera_at(s, t0 + (t1 - t0) * i / 99.0, out);
+}
+
+static void test_wrappers(const char *root, const char *shared) {
+  const char *build = getenv("TT_BUILD_ROOT");
+  char tmp[2048];
+  snprintf(tmp, sizeof tmp, "%s/pbrt_real_tmp", build ? build : ".");
+  mkdir(tmp, 0755);
+  for (size_t w = 0; w < sizeof k_wrappers / sizeof k_wrappers[0]; w++) {
+    const wrapper *k = &k_wrappers[w];
+    char path[2048], pbrt[2048];
+    snprintf(path, sizeof path, "%s/scenes/%s/scene.json", root, k->name);
+    if (snprintf(pbrt, sizeof pbrt, "%s/%s", shared, k->pbrt) >= (int)sizeof pbrt) continue;
+    tt_scene *s = NULL, *p = NULL;
+    tt_status st = tt_scene_load(path, &s);
+    CHECK_MSG(st == TT_OK && s, "%s: %s", path, tt_last_error());
+    if (!s) continue;
+    /* the wrapper imports the canonical path (texture paths, hence the id, follow it) */
+    char *real = realpath(pbrt, NULL);
+    st = tt_scene_load(real ? real : pbrt, &p);
+    free(real);
+    CHECK_MSG(st == TT_OK && p, "%s: %s", pbrt, tt_last_error());
+    if (p) {
+      CHECK_MSG(strcmp(tt_scene_id(s), tt_scene_id(p)) == 0, "%s: scene id differs from %s", k->name, k->pbrt);
+      CHECK(tt_scene_triangle_count(s) == tt_scene_triangle_count(p));
+      CHECK(tt_scene_light_count(s) == tt_scene_light_count(p));
+    }
+    const tt_camera *c = tt_scene_camera(s);
+    CHECK_MSG(c->key_count >= 4, "%s: %u path keys", k->name, c->key_count);
+    CHECK_MSG(tt_scene_settings(s)->max_depth <= 64, "%s: maxDepth %u above integrator_pt's 64", k->name,
+              tt_scene_settings(s)->max_depth);
+    if (c->key_count >= 2) {
+      static const unsigned idx[3] = {0, 50, 99};
+      tt_camera cam[3];
+      for (int i = 0; i < 3; i++) {
+        path_sample(s, idx[i], &cam[i]);
+        for (int a = 0; a < 3; a++)
+          CHECK_MSG(isfinite(cam[i].position[a]) && isfinite(cam[i].target[a]) && isfinite(cam[i].up[a]),
+                    "%s: sample %u not finite", k->name, idx[i]);
+        CHECK(cam[i].fov_y > 0 && cam[i].fov_y < 180);
+      }
+      /* three different places: the paths are not closed loops */
+      for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++) {
+          double dp = 0;
+          for (int a = 0; a < 3; a++) dp += fabs((double)cam[i].position[a] - cam[j].position[a]);
+          CHECK_MSG(dp > 0, "%s: samples %u and %u at the same position", k->name, idx[i], idx[j]);
+        }
+      for (int i = 0; i < 3; i++) {
+        char out[2300], args[4000], log[4096];
+        snprintf(out, sizeof out, "%s/%s_%u.exr", tmp, k->name, idx[i]);
+        if (snprintf(args, sizeof args, "--quiet --camera-index %u --res 16x16 --spp 1 --threads 2 --out '%s' '%s'",
+                     idx[i], out, path) >= 3000) {
+          CHECK_MSG(0, "%s: paths too long", k->name);
+          continue;
+        }
+        int rc = run_host(args, log, sizeof log);
+        CHECK_MSG(rc == 0, "%s: host %s: exit %d\n%s", k->name, args, rc, log);
+        uint32_t iw = 0, ih = 0, ch = 0;
+        float *px = NULL;
+        if (rc != 0 || tt_image_read(out, &iw, &ih, &ch, &px) != TT_OK) {
+          CHECK_MSG(0, "%s: cannot read %s: %s", k->name, out, tt_last_error());
+          continue;
+        }
+        double sum = 0;
+        size_t bad = 0;
+        for (size_t q = 0; q < (size_t)iw * ih; q++)
+          for (uint32_t a = 0; a < ch && a < 3; a++) {
+            float v = px[q * ch + a];
+            if (!isfinite(v)) bad++;
+            else sum += v;
+          }
+        printf("%-14s sample %2u: position [%g %g %g], mean %.4g\n", k->name, idx[i], cam[i].position[0],
+               cam[i].position[1], cam[i].position[2], sum / ((double)iw * ih * 3));
+        CHECK(iw == 16 && ih == 16);
+        CHECK_MSG(bad == 0, "%s: sample %u: %zu non-finite values", k->name, idx[i], bad);
+        CHECK_MSG(sum > 0, "%s: sample %u renders all black", k->name, idx[i]);
+        tt_free(px);
+      }
+    }
+    tt_scene_destroy(p);
+    tt_scene_destroy(s);
+  }
+}
 
 int main(void) {
   const char *root = getenv("TT_SOURCE_ROOT");
@@ -82,5 +193,7 @@ int main(void) {
     tt_scene_destroy(s);
   }
   CHECK(cornell_inline == 164);
+  test_wrappers(root ? root : ".", dir);
+  (void)source_path;
   return tt_test_finish("pbrt_real");
 }

@@ -1,15 +1,21 @@
 /* scene.json v1 loader (format: scenes/README.md). Every error names the source, the JSON
  * path of the offending value and what was expected; unknown keys only warn, so files
- * written for a newer minor revision still load. */
+ * written for a newer minor revision still load. A top-level "import" wraps another scene
+ * file (.pbrt or a scene.json without an import of its own): its meshes, materials, lights,
+ * camera and settings are loaded first, then this file's camera/render override them and
+ * its materials/meshes/lights are appended. */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "scene_internal.h"
 
 #include <cjson/cJSON.h>
 
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #define TT__PI 3.14159265358979323846
 
@@ -287,9 +293,11 @@ static tt_status tt__jcheck_pose(const tt__jctx *c, const char *prefix, const fl
   return TT_OK;
 }
 
-/* Still camera plus the optional keyframed path. */
-static tt_status tt__jcamera(const tt__jctx *c, const cJSON *root) {
+/* Still camera plus the optional keyframed path. With an imported scene every field is
+ * optional and overrides the imported camera; a path replaces the imported one. */
+static tt_status tt__jcamera(const tt__jctx *c, const cJSON *root, int imported) {
   const cJSON *cam = cJSON_GetObjectItemCaseSensitive(root, "camera");
+  if (!cam && imported) return TT_OK;
   if (!cam) return tt__jfail(c, TT_ERR_PARSE, "camera", "missing required field (expected an object)");
   tt_status st = tt__jobject(c, cam, "camera");
   if (st != TT_OK) return st;
@@ -299,8 +307,9 @@ static tt_status tt__jcamera(const tt__jctx *c, const cJSON *root) {
   static const tt__range res_r = {1, 65536, TT__INT};
   tt_camera *k = &c->scene->camera;
   double v;
-  if ((st = tt__jvec(c, cam, "position", "camera", 1, 3, &tt__any, 0, k->position)) != TT_OK) return st;
-  if ((st = tt__jvec(c, cam, "target", "camera", 1, 3, &tt__any, 0, k->target)) != TT_OK) return st;
+  int req = !imported;
+  if ((st = tt__jvec(c, cam, "position", "camera", req, 3, &tt__any, 0, k->position)) != TT_OK) return st;
+  if ((st = tt__jvec(c, cam, "target", "camera", req, 3, &tt__any, 0, k->target)) != TT_OK) return st;
   if ((st = tt__jvec(c, cam, "up", "camera", 0, 3, &tt__any, 0, k->up)) != TT_OK) return st;
   v = k->fov_y;
   if ((st = tt__jnum(c, cam, "fov", "camera", 0, &fov_r, &v)) != TT_OK) return st;
@@ -318,6 +327,11 @@ static tt_status tt__jcamera(const tt__jctx *c, const cJSON *root) {
     return tt__jfail(c, TT_ERR_PARSE, "camera.path", "expected an array of keys, got %s",
                      tt__jdesc(path, got, sizeof got));
   int n = cJSON_GetArraySize(path);
+  /* a path in this file replaces an imported one (an empty array removes it) */
+  free(c->scene->keys);
+  c->scene->keys = NULL;
+  k->key_count = 0;
+  k->keys = NULL;
   if (n == 0) return TT_OK;
   c->scene->keys = calloc((size_t)n, sizeof *c->scene->keys);
   if (!c->scene->keys) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "camera.path", "out of memory");
@@ -458,8 +472,9 @@ static tt_status tt__jmaterial(const tt__jctx *c, const cJSON *e, const char *mp
 }
 
 /* The materials object, in file order (indices follow it). */
-static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root) {
+static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root, int imported) {
   const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
+  if (!mats && imported) return TT_OK;
   if (!mats) return tt__jfail(c, TT_ERR_PARSE, "materials", "missing required field (expected an object of named materials)");
   tt_status st = tt__jobject(c, mats, "materials");
   if (st != TT_OK) return st;
@@ -470,7 +485,8 @@ static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root) {
     if (e->string[0] == '_') continue; /* comment entries */
     for (uint32_t i = 0; i < s->material_count; i++)
       if (strcmp(s->materials[i].name, e->string) == 0)
-        return tt__jfail(c, TT_ERR_PARSE, mp, "duplicate material name");
+        return tt__jfail(c, TT_ERR_PARSE, mp, "duplicate material name%s",
+                         imported ? " (names of the imported scene count too)" : "");
     tt_material m;
     memset(&m, 0, sizeof m);
     if ((st = tt__jmaterial(c, e, mp, &m)) != TT_OK) return st;
@@ -809,11 +825,14 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
 }
 
 /* The non-empty meshes array. */
-static tt_status tt__jmeshes(const tt__jctx *c, const cJSON *root) {
+static tt_status tt__jmeshes(const tt__jctx *c, const cJSON *root, int imported) {
   const cJSON *ms = cJSON_GetObjectItemCaseSensitive(root, "meshes");
   char got[128];
+  if (!ms && imported) return TT_OK;
   if (!ms) return tt__jfail(c, TT_ERR_PARSE, "meshes", "missing required field (expected a non-empty array of meshes)");
-  if (!cJSON_IsArray(ms) || !ms->child)
+  if (imported && !cJSON_IsArray(ms))
+    return tt__jfail(c, TT_ERR_PARSE, "meshes", "expected an array of meshes, got %s", tt__jdesc(ms, got, sizeof got));
+  if (!cJSON_IsArray(ms) || (!ms->child && !imported))
     return tt__jfail(c, TT_ERR_PARSE, "meshes", "expected a non-empty array of meshes, got %s",
                      tt__jdesc(ms, got, sizeof got));
   unsigned i = 0;
@@ -849,7 +868,9 @@ static tt_status tt__jlight(const tt__jctx *c, const cJSON *e, unsigned index, i
   if (strcmp(type, "environment") == 0) {
     static const char *const known[] = {"type", "radiance", "image", NULL};
     tt__jcheck_keys(c, e, lp, known);
-    if (*env_seen) return tt__jfail(c, TT_ERR_PARSE, lp, "only one environment light is allowed");
+    if (*env_seen)
+      return tt__jfail(c, TT_ERR_PARSE, lp, "only one environment light is allowed%s",
+                       *env_seen > 1 ? " (the imported scene has one)" : "");
     *env_seen = 1;
     l.type = TT_LIGHT_ENV_CONSTANT;
     l.radiance[0] = l.radiance[1] = l.radiance[2] = 1.0f;
@@ -937,12 +958,127 @@ static tt_status tt__jlights(const tt__jctx *c, const cJSON *root) {
   if (!ls) return TT_OK;
   if (!cJSON_IsArray(ls))
     return tt__jfail(c, TT_ERR_PARSE, "lights", "expected an array of lights, got %s", tt__jdesc(ls, got, sizeof got));
-  int env = 0;
+  int env = 0; /* 2: the imported scene's environment light */
+  for (uint32_t i = 0; i < c->scene->light_count; i++)
+    if (c->scene->lights[i].type == TT_LIGHT_ENV_CONSTANT || c->scene->lights[i].type == TT_LIGHT_ENV_IMAGE)
+      env = 2;
   unsigned i = 0;
   for (const cJSON *e = ls->child; e; e = e->next, i++) {
     tt_status st = tt__jlight(c, e, i, &env);
     if (st != TT_OK) return st;
   }
+  return TT_OK;
+}
+
+/* ---- import ---------------------------------------------------------------------------- */
+
+static tt_status tt__load_json(const char *json, size_t length, const char *source,
+                               const char *base_dir, int depth, tt_scene **out);
+
+/* Case-insensitive suffix test (".pbrt", ".json"). */
+static int tt__jhas_ext(const char *path, const char *ext) {
+  size_t n = strlen(path), e = strlen(ext);
+  return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* Reads an imported scene.json and loads it with its own directory as the asset base. */
+static tt_status tt__jload_json_file(const char *path, int depth, tt_scene **out) {
+  char *buf = NULL;
+  size_t len = 0;
+  tt_status st = tt__read_file(path, &buf, &len);
+  if (st != TT_OK) return st;
+  char *dir = tt__scene_strdup(path);
+  if (!dir) {
+    free(buf);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+  }
+  char *slash = strrchr(dir, '/');
+  if (slash == dir) slash[1] = '\0';
+  else if (slash) *slash = '\0';
+  else strcpy(dir, ".");
+  st = tt__load_json(buf, len, path, dir, depth, out);
+  free(dir);
+  free(buf);
+  return st;
+}
+
+/* Removes the area lights of an imported scene (they are implied by emissive materials and
+ * recreated by tt__scene_finish once this file's meshes are appended), so the light order
+ * stays "explicit lights, then area lights in mesh order". */
+static void tt__strip_area_lights(tt_scene *s) {
+  uint32_t w = 0;
+  for (uint32_t i = 0; i < s->light_count; i++)
+    if (s->lights[i].type != TT_LIGHT_AREA) s->lights[w++] = s->lights[i];
+  s->light_count = w;
+  for (uint32_t i = 0; i < s->mesh_count; i++) s->meshes[i].light = -1;
+}
+
+/* The optional top-level "import": loads the wrapped scene into *out (NULL when absent).
+ * Only one level: a scene.json that is imported may not import again, which also rules
+ * out cycles. Errors name this file, the field and the imported file. */
+static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt_scene **out) {
+  *out = NULL;
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(root, "import");
+  if (!it) return TT_OK;
+  const char *rel = NULL;
+  tt_status st = tt__jstr(c, root, "import", "", 1, &rel);
+  if (st != TT_OK) return st;
+  if (depth > 0)
+    return tt__jfail(c, TT_ERR_PARSE, "import",
+                     "\"%s\" not loaded: this file is itself imported by a scene.json, and imports "
+                     "cannot be nested (import the scene directly)", rel);
+  int pbrt = tt__jhas_ext(rel, ".pbrt"), json = tt__jhas_ext(rel, ".json");
+  if (!pbrt && !json)
+    return tt__jfail(c, TT_ERR_UNSUPPORTED, "import", "unsupported scene format \"%s\" (expected .pbrt or .json)", rel);
+  char *full = tt__resolve(c, rel);
+  if (!full) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "import", "out of memory");
+  FILE *f = fopen(full, "rb");
+  if (!f) {
+    int e = errno;
+    st = tt__jfail(c, TT_ERR_IO, "import", "cannot open scene file \"%s\": %s", full, strerror(e));
+    free(full);
+    return st;
+  }
+  fclose(f);
+  /* the canonical path makes the scene (its texture paths, hence tt_scene_id) independent of
+   * how the wrapper was reached: scenes/x/../../../shared/... and /abs/shared/... agree */
+  char *real = realpath(full, NULL);
+  if (real) {
+    free(full);
+    full = real;
+  }
+  if (json) {
+    /* a file importing itself would otherwise be reported as a nested import */
+    char *a = realpath(full, NULL), *b = realpath(c->src, NULL);
+    int self = a && b && strcmp(a, b) == 0;
+    free(a);
+    free(b);
+    if (self) {
+      st = tt__jfail(c, TT_ERR_PARSE, "import", "\"%s\" is this file (a scene cannot import itself)", full);
+      free(full);
+      return st;
+    }
+  }
+  tt_scene *s = NULL;
+  st = pbrt ? tt__scene_load_pbrt(full, &s) : tt__jload_json_file(full, depth + 1, &s);
+  if (st != TT_OK) {
+    /* keep the imported loader's message (file:line or JSON path) behind ours */
+    char inner[1024];
+    snprintf(inner, sizeof inner, "%s", tt_last_error());
+    st = tt__jfail(c, st, "import", "%s", inner);
+    free(full);
+    return st;
+  }
+  free(full);
+  char *src = tt__scene_strdup(c->src);
+  if (!src) {
+    tt_scene_destroy(s);
+    return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "import", "out of memory");
+  }
+  free(s->source);
+  s->source = src;
+  tt__strip_area_lights(s);
+  *out = s;
   return TT_OK;
 }
 
@@ -965,6 +1101,12 @@ static void tt__line_col(const char *text, size_t at, unsigned *line, unsigned *
 /* Parses, validates section by section, then finishes (area lights, bounds, id). */
 tt_status tt_scene_load_json(const char *json, size_t length, const char *source,
                              const char *base_dir, tt_scene **out) {
+  return tt__load_json(json, length, source, base_dir, 0, out);
+}
+
+/* depth: 0 for the scene being loaded, 1 for a scene.json imported by it. */
+static tt_status tt__load_json(const char *json, size_t length, const char *source,
+                               const char *base_dir, int depth, tt_scene **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load_json: out is NULL");
   *out = NULL;
   if (!source) source = "(memory)";
@@ -1008,12 +1150,7 @@ tt_status tt_scene_load_json(const char *json, size_t length, const char *source
     cJSON_Delete(root);
     return st;
   }
-  c.scene = tt__scene_new(source);
-  if (!c.scene) {
-    cJSON_Delete(root);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", source);
-  }
-  static const char *const known[] = {"version", "camera", "render", "materials", "meshes", "lights", NULL};
+  static const char *const known[] = {"version", "import", "camera", "render", "materials", "meshes", "lights", NULL};
   tt__jcheck_keys(&c, root, "", known);
   const cJSON *ver = cJSON_GetObjectItemCaseSensitive(root, "version");
   if (!ver) st = tt__jfail(&c, TT_ERR_PARSE, "version", "missing required field (expected 1)");
@@ -1021,10 +1158,22 @@ tt_status tt_scene_load_json(const char *json, size_t length, const char *source
     st = tt__jfail(&c, TT_ERR_PARSE, "version", "expected the number 1, got %s", tt__jdesc(ver, got, sizeof got));
   else if (ver->valuedouble != 1.0)
     st = tt__jfail(&c, TT_ERR_UNSUPPORTED, "version", "unsupported version %g (expected 1)", ver->valuedouble);
-  if (st == TT_OK) st = tt__jrender(&c, root);
-  if (st == TT_OK) st = tt__jcamera(&c, root);
-  if (st == TT_OK) st = tt__jmaterials(&c, root);
-  if (st == TT_OK) st = tt__jmeshes(&c, root);
+  tt_scene *imported = NULL;
+  if (st == TT_OK) st = tt__jimport(&c, root, depth, &imported);
+  if (st != TT_OK) {
+    cJSON_Delete(root);
+    return st;
+  }
+  int imp = imported != NULL;
+  c.scene = imp ? imported : tt__scene_new(source);
+  if (!c.scene) {
+    cJSON_Delete(root);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", source);
+  }
+  st = tt__jrender(&c, root);
+  if (st == TT_OK) st = tt__jcamera(&c, root, imp);
+  if (st == TT_OK) st = tt__jmaterials(&c, root, imp);
+  if (st == TT_OK) st = tt__jmeshes(&c, root, imp);
   if (st == TT_OK) st = tt__jlights(&c, root);
   if (st == TT_OK) st = tt__scene_finish(c.scene);
   cJSON_Delete(root);

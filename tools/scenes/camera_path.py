@@ -16,10 +16,17 @@ occluded views, interpolated by tt_scene_camera_at and sampled into 100 poses by
   camera_path.py sample SOURCE [--n 100]
       print the n sampled poses (JSON lines: index, t, position, target, up, fov) as host
       computes them, from a scene.json or a fragment
+  camera_path.py wrap SCENE.pbrt PATH OUT.json [--max-depth N]
+      a small scene.json that imports SCENE.pbrt (path relative to OUT.json's folder) and
+      carries camera.path from PATH (a fragment or a scene.json with a path)
+  camera_path.py sheet SCENE.json OUT.png [--n 10] [--cols 5] [--res 96x64] [--spp 16]
+                       [--threads 2] [--colors 64] [--host build/host/host]
+      renders n evenly spaced samples of the path (`host --camera-index`, indices
+      round(j * 99 / (n - 1))) into a labelled contact sheet with a `colors` palette
+      (needs python3-pil)
 
-host renders a path only from scene.json. A .pbrt scene has no camera path: its fragment
-(scenes/paths/<scene>.json) is merged into the scene.json that `host --convert` writes, or
-into any scene.json of the same scene (same world coordinates).
+host renders a path only from scene.json. A .pbrt scene has no camera path: a scene.json
+that imports it carries one (scenes/<name>/scene.json, written with `wrap`).
 """
 import argparse
 import json
@@ -99,6 +106,61 @@ def cmd_merge(a):
     sl.save_scene(a.out, scene)
 
 
+def read_keys(path):
+    with open(path) as f:
+        d = json.load(f)
+    return d["path"] if "path" in d else d["camera"]["path"]
+
+
+def wrapper_text(comment, rel_import, keys, render=None):
+    """scene.json text of a wrapper: import + camera.path (one key per line) + render."""
+    head = json.dumps({"_comment": comment, "version": 1, "import": rel_import}, indent=2)[:-2]
+    text = head + ',\n  "camera": {\n    "path": [\n      ' + \
+        ',\n      '.join(json.dumps(k) for k in keys) + '\n    ]\n  }'
+    if render:
+        text += ',\n  "render": ' + json.dumps(render)
+    return text + '\n}\n'
+
+
+def cmd_wrap(a):
+    out_dir = os.path.dirname(os.path.abspath(a.out))
+    rel = os.path.relpath(os.path.abspath(a.pbrt), out_dir)
+    comment = ("%s wrapped with a camera path (tools/scenes/camera_path.py); check it with "
+               "`camera_path.py sheet`" % os.path.basename(a.pbrt))
+    text = wrapper_text(comment, rel, read_keys(a.path),
+                        {"maxDepth": a.max_depth} if a.max_depth is not None else None)
+    json.loads(text)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(a.out, "w") as f:
+        f.write(text)
+
+
+def cmd_sheet(a):
+    import subprocess
+    import tempfile
+    from PIL import Image, ImageDraw
+    n, w_h = a.n, [int(x) for x in a.res.split("x")]
+    idx = [round(i * 99 / max(n - 1, 1)) for i in range(n)]
+    cols = min(n, a.cols)
+    rows = (n + cols - 1) // cols
+    label = 11
+    sheet = Image.new("RGB", (cols * w_h[0], rows * (w_h[1] + label)), (40, 40, 40))
+    draw = ImageDraw.Draw(sheet)
+    with tempfile.TemporaryDirectory() as tmp:
+        for j, i in enumerate(idx):
+            out = os.path.join(tmp, "f%02d.exr" % i)
+            subprocess.run(["nice", "-n", "5", a.host, "--quiet", "--camera-index", str(i), "--res", a.res,
+                            "--spp", str(a.spp), "--threads", str(a.threads), "--out", out, a.scene],
+                           check=True, stderr=subprocess.DEVNULL)
+            im = Image.open(out[:-4] + ".png").convert("RGB")
+            x, y = (j % cols) * w_h[0], (j // cols) * (w_h[1] + label)
+            sheet.paste(im, (x, y + label))
+            draw.text((x + 2, y), "%d" % i, fill=(255, 255, 255))
+    if a.colors:   # a palette keeps committed sheets small (noise costs PNG bytes)
+        sheet = sheet.quantize(colors=a.colors, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    sheet.save(a.out, optimize=True)
+
+
 def cmd_sample(a):
     with open(a.source) as f:
         d = json.load(f)
@@ -140,8 +202,25 @@ def main():
     p = sub.add_parser("sample")
     p.add_argument("source")
     p.add_argument("--n", type=int, default=100)
+    p = sub.add_parser("wrap")
+    p.add_argument("pbrt")
+    p.add_argument("path")
+    p.add_argument("out")
+    p.add_argument("--max-depth", type=int, default=None)
+    p = sub.add_parser("sheet")
+    p.add_argument("scene")
+    p.add_argument("out")
+    p.add_argument("--n", type=int, default=10)
+    p.add_argument("--cols", type=int, default=5)
+    p.add_argument("--res", default="96x64")
+    p.add_argument("--spp", type=int, default=16)
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--colors", type=int, default=64, help="palette size of the PNG (0: RGB)")
+    p.add_argument("--host", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                  "..", "..", "build", "host", "host"))
     a = ap.parse_args()
-    {"auto": cmd_auto, "merge": cmd_merge, "sample": cmd_sample}[a.cmd](a)
+    {"auto": cmd_auto, "merge": cmd_merge, "sample": cmd_sample, "wrap": cmd_wrap,
+     "sheet": cmd_sheet}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,9 @@
 # Renders the benchmark set's thumbnails (scenes/README.md "Benchmark scene set") with host:
 # 128 px wide PNGs in scenes/thumbnails/, and prints one scenes_info JSON line per scene plus
 # the render's build/render times. Generated scenes are written to $WORK (default
-# /tmp/tt_scene_set) first.
+# /tmp/tt_scene_set) first. The pbrt scenes are rendered through their wrappers
+# scenes/<name>/scene.json (the pbrt file's scene, still camera; living-room and staircase
+# at maxDepth 64 where the pbrt files' 65 makes host fall back to integrator_pt's default 3).
 #   tools/scenes/thumbnails.sh [BUILD_DIR] [SPP]     (defaults: build, 64)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
@@ -27,14 +29,14 @@ list=(
   "cornell-box-plastic|$ROOT/scenes/cornell-box-variants/box-plastic/scene.json"
   "cornell-specular-box|$ROOT/scenes/cornell-box-variants/specular-box/scene.json"
   "cornell-cylinder|$WORK/cornell-cylinder/scene.json"
-  "veach-mis|$S/veach-mis/veach-mis.pbrt"
-  "killeroos|$S/killeroos/killeroo-simple.pbrt"
-  "caustic-glass|$S/caustic-glass/caustic-glass-v4.pbrt"
-  "living-room|$S/living-room/living-room.pbrt"
-  "veach-ajar|$S/veach-ajar/veach-ajar.pbrt"
-  "staircase|$S/staircase/staircase.pbrt"
-  "bathroom|$S/bathroom/bathroom.pbrt"
-  "bmw-m6|$S/bmw-m6/bmw-m6.pbrt"
+  "veach-mis|$ROOT/scenes/veach-mis/scene.json"
+  "killeroos|$ROOT/scenes/killeroos/scene.json"
+  "caustic-glass|$ROOT/scenes/caustic-glass/scene.json"
+  "living-room|$ROOT/scenes/living-room/scene.json"
+  "veach-ajar|$ROOT/scenes/veach-ajar/scene.json"
+  "staircase|$ROOT/scenes/staircase/scene.json"
+  "bathroom|$ROOT/scenes/bathroom/scene.json"
+  "bmw-m6|$ROOT/scenes/bmw-m6/scene.json"
   "voxel-world|$WORK/voxel/scene.json"
   "tessellated-far|$WORK/tessellated/far.json"
   "tessellated-near|$WORK/tessellated/near.json"
@@ -43,6 +45,8 @@ for entry in "${list[@]}"; do
   name=${entry%%|*}
   scene=${entry#*|}
   if [ ! -f "$scene" ]; then echo "skip $name: $scene missing" >&2; continue; fi
+  # the pbrt wrappers scenes/<name>/scene.json import ../shared/scenes
+  if grep -q '"import"' "$scene" && [ ! -d "$S" ]; then echo "skip $name: $S missing" >&2; continue; fi
   info=$("$INFO" "$scene" 2>/dev/null)
   res=$("$PY" -c 'import json,sys; w,h=json.loads(sys.argv[1])["camera"]["resolution"]; print("128x%d" % max(1, round(128*h/w)))' "$info")
   "$HOST" --quiet --res "$res" --spp "$SPP" --out "$WORK/$name.exr" --stats "$WORK/$name.stats.json" \
