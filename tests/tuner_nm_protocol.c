@@ -166,7 +166,11 @@ static double resume_cost(const tt_config *c, void *user) {
   double noise = ((double)(h & 0xffff) / 65536.0 - 0.5) * 0.02;
   double x = tt_config_get(c, 0).f, y = (double)tt_config_get(c, 1).i;
   int m = tt_config_get(c, 2).index, b = (int)tt_config_get(c, 3).i;
-  return (x - 0.3 * m) * (x - 0.3 * m) + 0.01 * (y - 7) * (y - 7) + 0.05 * m + 0.1 * b + noise;
+  double extra = 0.0;
+  if (tt_space_count(tt_config_space(c)) > 5)  /* the many-arm variant */
+    extra = 0.03 * (double)tt_config_get(c, 5).index + 0.07 * (double)tt_config_get(c, 6).i;
+  return (x - 0.3 * m) * (x - 0.3 * m) + 0.01 * (y - 7) * (y - 7) + 0.05 * m + 0.1 * b + noise +
+         extra;
 }
 
 static tt_space *resume_space(void) {
@@ -180,11 +184,21 @@ static tt_space *resume_space(void) {
   return s;
 }
 
-#define RESUME_TOTAL 150
-#define RESUME_CUT 60
-
-static void test_save_load(const tt_tuner_iface *nm) {
+/* 48 arms x 4 points > 50: tuner_nm probes every arm before building simplices. */
+static tt_space *resume_space_many(void) {
   tt_space *s = resume_space();
+  static const int64_t kinds[4] = {1, 2, 3, 4};
+  tt_space_add_nom_int(s, "kind", kinds, 4, 2, NULL);
+  tt_space_add_nom_bool(s, "flag2", 0, NULL);
+  return s;
+}
+
+#define RESUME_TOTAL 150
+
+static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void), int cut,
+                              int checks_mismatch) {
+  const int RESUME_CUT = cut;
+  tt_space *s = make();
   tt_config *set = tnm_settings(nm, "reevaluate", "2", NULL);
   tt_config *c = tt_config_create(s);
   static char *ref[RESUME_TOTAL];
@@ -223,8 +237,8 @@ static void test_save_load(const tt_tuner_iface *nm) {
     tt_free(j);
     nm->feedback(b, resume_cost(c, &rc));
   }
-  printf("save/load: %d of %d proposals identical after resuming at %d\n", same, n_ref,
-         RESUME_CUT);
+  printf("save/load (%zu parameters): %d of %d proposals identical after resuming at %d\n",
+         tt_space_count(s), same, n_ref, RESUME_CUT);
   CHECK(n_ref == RESUME_TOTAL);
   CHECK(same == n_ref);
 
@@ -233,6 +247,15 @@ static void test_save_load(const tt_tuner_iface *nm) {
   CHECK(nm->save_state(b, &s2) == TT_OK);
   CHECK_CONTAINS(s2, "\"tuner\":\"tuner_nm\"");
   tt_free(s2);
+  if (!checks_mismatch) {
+    tt_free(state);
+    for (int k = 0; k < n_ref; k++) tt_free(ref[k]);
+    nm->destroy(b);
+    tt_config_destroy(c);
+    tt_config_destroy(set);
+    tt_space_destroy(s);
+    return;
+  }
 
   /* Mismatches are refused with a message naming what differs. */
   tt_config *other_set = tnm_settings(nm, "reevaluate", "3", NULL);
@@ -257,6 +280,13 @@ static void test_save_load(const tt_tuner_iface *nm) {
   tt_config_destroy(c);
   tt_config_destroy(set);
   tt_space_destroy(s);
+}
+
+static void test_save_load(const tt_tuner_iface *nm) {
+  test_save_load_at(nm, resume_space, 60, 1);
+  /* Probe mode: cut during the probes (20) and while simplices are being built (60). */
+  test_save_load_at(nm, resume_space_many, 20, 0);
+  test_save_load_at(nm, resume_space_many, 60, 0);
 }
 
 /* ---- duplicates, noise detection ---- */

@@ -311,6 +311,26 @@ static tt_status tt__nm_create(const tt_space *target, const tt_config *settings
     arm->phase = TT__NM_FRESH;
     arm->reeval_iter = -1;
     arm->size = set.init_size;
+    arm->init_spread = NAN;
+  }
+  t->probe = arms > 1 && t->n > 0 && (double)arms * (double)(t->n + 1) > TT__NM_PROBE_ABOVE;
+  t->probe_pt = calloc(t->n + 1, sizeof(double));
+  if (!t->probe_pt) {
+    tt__nm_destroy(t);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuner_nm: out of memory");
+  }
+  if (t->probe) {
+    /* One point, drawn uniformly in a box of side initSize/4 around the default (shifted
+     * inside [0,1]), at which every arm is probed: the arms are compared at the same
+     * INT/FLOAT values near the default, and the default itself, which the caller
+     * measures anyway, is not proposed again. */
+    double sz = TT__NM_PROBE_BOX * (set.init_size > 1.0 ? 1.0 : set.init_size);
+    for (size_t d = 0; d < t->n; d++) {
+      double l = t->center[d] - 0.5 * sz;
+      if (l > 1.0 - sz) l = 1.0 - sz;
+      if (l < 0.0) l = 0.0;
+      t->probe_pt[d] = l + sz * tt__nm_rand(&t->rng);
+    }
   }
   *out = t;
   return TT_OK;
@@ -331,24 +351,51 @@ static void tt__nm_destroy(tt_tuner *t) {
   free(t->unit);
   free(t->key);
   free(t->center);
+  free(t->probe_pt);
   tt_config_destroy(t->proposal);
   tt_config_destroy(t->work);
   tt_config_destroy(t->work2);
   free(t);
 }
 
-/* Picks the arm to advance: round-robin until every arm has evaluated its initial simplex;
- * then, with probability epsilon, a random live arm, otherwise the arm with the lowest
- * optimistic bound (incumbent minus the cost spread of its simplex, see
- * tt__nm_arm_optimistic). Plain greedy on the incumbent would polish the best arm down to
- * the tolerance while a close second, whose basin may be deeper, waits. */
+/* What a not yet built arm is credited with: the median cost spread of the first full
+ * simplices built so far (0 before the first one). */
+static double tt__nm_spread_credit(const tt_tuner *t) {
+  double v[TT__NM_MAX_ARMS];
+  size_t m = 0;
+  for (size_t a = 0; a < t->n_arms && m < TT__NM_MAX_ARMS; a++)
+    if (!isnan(t->arms[a].init_spread)) {
+      double x = t->arms[a].init_spread;
+      size_t j = m++;
+      while (j > 0 && v[j - 1] > x) v[j] = v[j - 1], j--;  /* insertion sort */
+      v[j] = x;
+    }
+  if (!m) return 0.0;
+  return m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
+}
+
+/* Picks the arm to advance.
+ *
+ * Several arms (probe mode): round-robin until every arm has measured its probe (vertex 0
+ * at the shared probe point, t->probe_pt); then, with probability epsilon, a random live
+ * arm, otherwise the arm with the lowest optimistic bound. A built arm's bound is its best
+ * vertex minus the cost spread of its simplex (tt__nm_arm_optimistic); an arm that has no
+ * full simplex yet is credited with the median spread of the first simplices of the arms
+ * built so far. So simplices are built only for arms whose probe comes within that spread
+ * of the incumbent, one after the other, instead of n+1 points for every arm up front.
+ *
+ * One arm, or no simplex dimension: round-robin until every arm has evaluated its initial
+ * simplex, then the same bound. Plain greedy on the incumbent would polish the best arm
+ * down to the tolerance while a close second, whose basin may be deeper, waits. */
 static int tt__nm_choose_arm(tt_tuner *t) {
   size_t live = 0, A = t->n_arms;
   for (size_t a = 0; a < A; a++) live += t->arms[a].phase != TT__NM_DONE;
   if (!live) return -1;
   for (size_t j = 0; j < A; j++) {
     size_t a = (t->rr + j) % A;
-    if (t->arms[a].phase != TT__NM_DONE && !tt__nm_arm_init_complete(&t->arms[a])) {
+    const tt__nm_arm *arm = &t->arms[a];
+    if (t->probe ? arm->phase == TT__NM_FRESH || arm->phase == TT__NM_WAIT_PROBE
+                 : arm->phase != TT__NM_DONE && !tt__nm_arm_init_complete(arm)) {
       t->rr = (a + 1) % A;
       return (int)a;
     }
@@ -358,14 +405,33 @@ static int tt__nm_choose_arm(tt_tuner *t) {
     for (size_t a = 0; a < A; a++)
       if (t->arms[a].phase != TT__NM_DONE && r-- == 0) return (int)a;
   }
+  double credit = t->probe ? tt__nm_spread_credit(t) : 0.0;
   int best = -1;
   double bs = INFINITY;
   for (size_t a = 0; a < A; a++) {
-    if (t->arms[a].phase == TT__NM_DONE) continue;
-    double s = tt__nm_arm_optimistic(t, &t->arms[a]);
+    const tt__nm_arm *arm = &t->arms[a];
+    if (arm->phase == TT__NM_DONE) continue;
+    double s = t->probe && !tt__nm_arm_built(arm) ? tt__nm_arm_best(t, arm) - credit
+                                                  : tt__nm_arm_optimistic(t, arm);
     if (best < 0 || s < bs) best = (int)a, bs = s;
   }
   return best;
+}
+
+/* Unit coordinates (simplex dimensions) of the best measured configuration, else the
+ * default's: a newly built arm centres its simplex there, so what the other arms learnt
+ * about the INT/FLOAT parameters carries over. */
+static void tt__nm_incumbent_point(tt_tuner *t, double *x) {
+  if (!t->cache.count) {
+    memcpy(x, t->center, t->n * sizeof(double));
+    return;
+  }
+  int32_t b = 0;
+  for (size_t id = 1; id < t->cache.count; id++)
+    if (tt__nm_point_cost(t, (int32_t)id) < tt__nm_point_cost(t, b)) b = (int32_t)id;
+  tt__nm_config_from_key(t, t->work2, &t->cache.keys[(size_t)b * t->P]);
+  tt_config_to_unit(t->work2, t->unit);
+  for (size_t d = 0; d < t->n; d++) x[d] = t->unit[t->dim_param[d]];
 }
 
 /* Writes arm `ai`'s pending point into t->work: NOM values of the arm, simplex
@@ -429,8 +495,28 @@ static tt_status tt__nm_next(tt_tuner *t, tt_config *out) {
     int ai = tt__nm_choose_arm(t);
     if (ai < 0) return tt__nm_finish(t, out);
     tt__nm_arm *a = &t->arms[ai];
+    int chosen = 1;
     while (a->phase != TT__NM_DONE && steps < TT__NM_MAX_INTERNAL_STEPS) {
-      if (a->phase == TT__NM_FRESH) tt__nm_arm_generate(t, a, t->center, a->size, 0);
+      /* A probe answered internally (cache, infeasible): choose again, do not build. */
+      if (a->phase == TT__NM_PROBED && !chosen) break;
+      chosen = 0;
+      if (a->phase == TT__NM_FRESH && t->probe) {
+        /* Probe: one point per arm, the same INT/FLOAT coordinates for every arm. */
+        memcpy(a->x, t->probe_pt, t->n * sizeof(double));
+        for (size_t i = 0; i < t->n + 4; i++) a->id[i] = -2;
+        a->phase = TT__NM_WAIT_PROBE;
+        a->pend = 0;
+        a->k = 0;
+      } else if (a->phase == TT__NM_FRESH) {
+        tt__nm_arm_generate(t, a, t->center, a->size, 0);
+      } else if (a->phase == TT__NM_PROBED) {
+        /* Build: the probe stays vertex 0; the other n vertices are a Latin hypercube of
+         * side initSize around the incumbent's continuous coordinates. */
+        double tmp[64], *c = t->n <= 64 ? tmp : malloc(t->n * sizeof *c);
+        if (c) tt__nm_incumbent_point(t, c);
+        tt__nm_arm_generate(t, a, c ? c : t->center, a->size, 1);
+        if (c != tmp) free(c);
+      }
       if (a->phase == TT__NM_WAIT_REEVAL) {
         t->reeval_id = a->id[0];
         tt__nm_config_from_key(t, t->proposal, &t->cache.keys[(size_t)t->reeval_id * t->P]);

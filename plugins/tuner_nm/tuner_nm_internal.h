@@ -14,6 +14,13 @@
 #define TT__NM_MAX_ARMS 32
 /* A re-measured incumbent stops being re-measured once its mean has this many samples. */
 #define TT__NM_REEVAL_CAP 8
+/* Probe mode (see tt__nm_choose_arm) when building every arm's initial simplex up front,
+ * arms x (n+1) measurements, would cost more than this (the host's default iteration
+ * count). */
+#define TT__NM_PROBE_ABOVE 50
+/* Side of the box around the default in which the shared probe point is drawn, as a
+ * fraction of initSize. */
+#define TT__NM_PROBE_BOX 0.25
 /* Candidate initial simplices drawn; the one with the largest volume is kept. */
 #define TT__NM_INIT_TRIES 8
 /* Internal steps (cache hits, infeasible points) one next() may take before giving up. */
@@ -31,7 +38,9 @@ typedef enum tt__nm_phase {
   TT__NM_WAIT_CONTRACT_OUT = 5,
   TT__NM_WAIT_CONTRACT_IN = 6,
   TT__NM_WAIT_SHRINK = 7,   /* vertex k of a shrink */
-  TT__NM_DONE = 8           /* converged after the last restart */
+  TT__NM_DONE = 8,          /* converged after the last restart */
+  TT__NM_WAIT_PROBE = 9,    /* probe: vertex 0 at the shared probe point */
+  TT__NM_PROBED = 10        /* probe measured; the simplex is built when the arm is chosen */
 } tt__nm_phase;
 
 typedef struct tt__nm_settings {
@@ -55,6 +64,7 @@ typedef struct tt__nm_arm {
   int64_t restarts; /* restarts made so far */
   double size;      /* current simplex spread (initSize, halved on each restart) */
   int64_t evals;    /* measurements made for this arm (reported in the state) */
+  double init_spread;  /* cost spread (worst - best) of the first full simplex; NaN before */
   double *x;        /* (n + 4) * n unit coordinates */
   int32_t *id;      /* n + 4 cache ids */
 } tt__nm_arm;
@@ -91,6 +101,8 @@ struct tt_tuner {
   int64_t evaluations;  /* measurements fed back */
   int deterministic;    /* 0 unknown, 1 repeated measurement was identical, -1 noisy */
   size_t rr;            /* round-robin cursor for the initialisation phase */
+  int probe;            /* several arms and n > 0: probe every arm once, build on demand */
+  double *probe_pt;     /* n: the probe's unit coordinates, the same for every arm */
 
   /* Outstanding proposal: arm index (-1 if none), whether it is a re-measurement (then
    * reeval_id is the cache id), and the configuration. */
@@ -118,6 +130,8 @@ void tt__nm_arm_generate(tt_tuner *t, tt__nm_arm *a, const double *center, doubl
                          int keep_best);
 void tt__nm_arm_receive(tt_tuner *t, tt__nm_arm *a);
 int tt__nm_arm_init_complete(const tt__nm_arm *a);
+int tt__nm_arm_built(const tt__nm_arm *a);
+double tt__nm_arm_spread(const tt_tuner *t, const tt__nm_arm *a);
 double tt__nm_arm_best(const tt_tuner *t, const tt__nm_arm *a);
 double tt__nm_arm_optimistic(const tt_tuner *t, const tt__nm_arm *a);
 void tt__nm_lhs(tt_tuner *t, double *pts, size_t count, size_t n, const double *lo,

@@ -129,31 +129,33 @@ void tt__nm_arm_generate(tt_tuner *t, tt__nm_arm *a, const double *center, doubl
   double best_vol = -1.0;
   for (int tries = 0; tries < TT__NM_INIT_TRIES; tries++) {
     tt__nm_draw(t, cand, center, lo, s);
+    if (keep_best) {
+      /* Vertex 0 is kept and replaces the drawn point nearest to it, so the restart (or
+       * the build of a probed arm) costs n measurements, not n+1. The volume is judged
+       * after the replacement: that is the simplex the search will use. */
+      size_t nearest = 0;
+      double nd = INFINITY;
+      for (size_t j = 0; j <= n; j++) {
+        double dd = 0.0;
+        for (size_t d = 0; d < n; d++) {
+          double e = cand[j * n + d] - X(a, t, 0)[d];
+          dd += e * e;
+        }
+        if (dd < nd) nd = dd, nearest = j;
+      }
+      if (nearest != 0) memcpy(&cand[nearest * n], cand, n * sizeof(double));
+      memcpy(cand, X(a, t, 0), n * sizeof(double));
+    }
     double vol = tt__nm_volume(cand, n, m);
     if (vol > best_vol) {
       best_vol = vol;
       memcpy(best, cand, (n + 1) * n * sizeof(double));
     }
   }
-  if (keep_best) {
-    /* Restart around vertex 0: it replaces the drawn point nearest to it, so the restart
-     * costs n measurements, not n+1. */
-    size_t nearest = 0;
-    double nd = INFINITY;
-    for (size_t j = 0; j <= n; j++) {
-      double dd = 0.0;
-      for (size_t d = 0; d < n; d++) {
-        double e = best[j * n + d] - X(a, t, 0)[d];
-        dd += e * e;
-      }
-      if (dd < nd) nd = dd, nearest = j;
-    }
-    size_t v = 1;
-    for (size_t j = 0; j <= n; j++)
-      if (j != nearest) memcpy(X(a, t, v++), &best[j * n], n * sizeof(double));
-  } else {
+  if (keep_best)
+    memcpy(X(a, t, 1), &best[n], n * n * sizeof(double));
+  else
     memcpy(a->x, best, (n + 1) * n * sizeof(double));
-  }
   free(buf);
   a->k = keep_best ? 1 : 0;
   a->pend = a->k;
@@ -274,11 +276,17 @@ void tt__nm_arm_receive(tt_tuner *t, tt__nm_arm *a) {
   size_t n = t->n;
   size_t R = n + 1, E = n + 2, C = n + 3;
   switch (a->phase) {
+    case TT__NM_WAIT_PROBE:
+      a->phase = TT__NM_PROBED;
+      return;
     case TT__NM_WAIT_INIT:
       if (++a->k <= (int)n) {
         a->pend = a->k;
         return;
       }
+      /* The first full simplex's cost spread is what building an arm typically reveals;
+       * the scheduler credits it to arms that are not built yet. */
+      if (a->restarts == 0 && isnan(a->init_spread)) a->init_spread = tt__nm_arm_spread(t, a);
       tt__nm_begin_iteration(t, a);
       return;
     case TT__NM_WAIT_REEVAL:
@@ -343,9 +351,34 @@ int tt__nm_arm_init_complete(const tt__nm_arm *a) {
   return 1;
 }
 
+/* Probed or partly initialised arms have no simplex to judge them by yet. */
+int tt__nm_arm_built(const tt__nm_arm *a) {
+  if (a->phase == TT__NM_FRESH || a->phase == TT__NM_WAIT_PROBE || a->phase == TT__NM_PROBED)
+    return 0;
+  if (a->phase == TT__NM_WAIT_INIT) return a->restarts > 0;
+  return 1;
+}
+
+/* worst - best over the measured vertices (failed measurements left out); 0 if fewer than
+ * two, NaN if none is feasible. */
+double tt__nm_arm_spread(const tt_tuner *t, const tt__nm_arm *a) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (size_t i = 0; i <= t->n; i++)
+    if (a->id[i] >= 0) {
+      double c = tt__nm_cost(t, a, i);
+      if (c < lo) lo = c;
+      if (c < TT_COST_INFEASIBLE && c > hi) hi = c;
+    }
+  if (!(lo < TT_COST_INFEASIBLE)) return NAN;
+  return hi - lo;
+}
+
+/* Lowest cost among the vertices and the measured trial points: a reflection that beat
+ * the best vertex counts while its expansion is pending. A trial never beats the best
+ * vertex once its step is over (a better one becomes a vertex). */
 double tt__nm_arm_best(const tt_tuner *t, const tt__nm_arm *a) {
   double b = INFINITY;
-  for (size_t i = 0; i <= t->n; i++)
+  for (size_t i = 0; i <= t->n + 3; i++)
     if (a->id[i] >= 0) {
       double c = tt__nm_cost(t, a, i);
       if (c < b) b = c;
@@ -357,11 +390,10 @@ double tt__nm_arm_optimistic(const tt_tuner *t, const tt__nm_arm *a) {
   /* The spread f_worst - f_best of a simplex is what the arm may still gain in cost units:
    * large while it explores, near zero once it has converged, so a converged arm yields
    * to one that is slightly worse but still moving. Failed measurements are left out. */
-  double lo = INFINITY, hi = -INFINITY;
+  double lo = tt__nm_arm_best(t, a), hi = -INFINITY;
   for (size_t i = 0; i <= t->n; i++)
     if (a->id[i] >= 0) {
       double c = tt__nm_cost(t, a, i);
-      if (c < lo) lo = c;
       if (c < TT_COST_INFEASIBLE && c > hi) hi = c;
     }
   if (!(lo < TT_COST_INFEASIBLE)) return lo;

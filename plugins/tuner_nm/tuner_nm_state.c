@@ -77,6 +77,7 @@ tt_status tt__nm_save(const tt_tuner *t, char **json) {
   cJSON_AddNumberToObject(root, "evaluations", (double)t->evaluations);
   cJSON_AddNumberToObject(root, "deterministic", t->deterministic);
   cJSON_AddNumberToObject(root, "roundRobin", (double)t->rr);
+  cJSON_AddItemToObject(root, "probePoint", tt__nm_doubles(t->probe_pt, n));
 
   if (t->out_arm >= 0) {
     cJSON *o = cJSON_AddObjectToObject(root, "outstanding");
@@ -120,6 +121,10 @@ tt_status tt__nm_save(const tt_tuner *t, char **json) {
     cJSON_AddNumberToObject(o, "restarts", (double)a->restarts);
     tt__nm_add_exact(o, "size", a->size);
     cJSON_AddNumberToObject(o, "evals", (double)a->evals);
+    if (isnan(a->init_spread))
+      cJSON_AddNullToObject(o, "initSpread");
+    else
+      tt__nm_add_exact(o, "initSpread", a->init_spread);
     cJSON_AddItemToObject(o, "x", tt__nm_doubles(a->x, (n + 4) * n));
     cJSON *ids = cJSON_AddArrayToObject(o, "id");
     for (size_t i = 0; i < n + 4; i++) cJSON_AddItemToArray(ids, cJSON_CreateNumber(a->id[i]));
@@ -190,7 +195,7 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
   tt_status st = TT_OK;
   tt__nm_cache cache = {0};
   tt__nm_arm *arms = NULL;
-  double *key = NULL;
+  double *key = NULL, *probe = NULL;
   const cJSON *name = cJSON_GetObjectItemCaseSensitive(root, "tuner");
   if (!cJSON_IsString(name) || strcmp(name->valuestring, "tuner_nm")) {
     st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: load_state: not a tuner_nm state");
@@ -294,7 +299,7 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
                tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "x"), a->x,
                                    (n + 4) * n) &&
                tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "id"), ids, n + 4) &&
-               ph >= TT__NM_FRESH && ph <= TT__NM_DONE && pend >= 0 &&
+               ph >= TT__NM_FRESH && ph <= TT__NM_PROBED && pend >= 0 &&
                pend < (double)(n + 4) && k >= 0 && k <= (double)(n + 1);
       for (size_t i = 0; ok && i < n + 4; i++) {
         if (ids[i] < -2 || ids[i] >= (double)cache.count) ok = 0;
@@ -314,6 +319,9 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
       a->restarts = (int64_t)rs;
       a->size = size;
       a->evals = (int64_t)ev;
+      /* initSpread: null or absent (older states) means "no full simplex yet". */
+      double isp;
+      a->init_spread = tt__nm_num(o, "initSpread", &isp) ? isp : NAN;
     }
     free(ids);
   }
@@ -337,7 +345,18 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
     tt__nm_config_from_key(t, t->proposal, key);
   }
 
+  /* Probe point (absent in older states: keep the one drawn at create). */
+  const cJSON *pj = cJSON_GetObjectItemCaseSensitive(root, "probePoint");
+  if (pj && n) {
+    probe = malloc(n * sizeof *probe);
+    if (!probe || !tt__nm_read_doubles(pj, probe, n)) {
+      st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad \"probePoint\"");
+      goto done;
+    }
+  }
+
   /* Commit. */
+  if (probe) memcpy(t->probe_pt, probe, n * sizeof(double));
   for (size_t ai = 0; ai < t->n_arms; ai++) {
     free(t->arms[ai].x);
     free(t->arms[ai].id);
@@ -371,6 +390,7 @@ done:
   free(cache.n);
   free(cache.table);
   free(key);
+  free(probe);
   cJSON_Delete(root);
   return st;
 }

@@ -65,6 +65,62 @@ def best_so_far(samples, default):
     return out
 
 
+def converged_at(samples, default, tol=0.01):
+    """Iteration after which the best cost so far improved by less than `tol` (relative) in
+    total: the first i with (best_so_far[i] - final) < tol * best_so_far[i]; -1 when the
+    default was already within tol of the final best."""
+    running = best_so_far(samples, default)
+    if not running:
+        return -1
+    final = running[-1]
+    start = default if default < INFEASIBLE else math.inf
+    if start - final < tol * start:
+        return -1
+    for i, b in enumerate(running):
+        if b - final < tol * b:
+            return i
+    return len(running) - 1
+
+
+def plot_scene(groups, out, title):
+    """Fig. 3.3-style grid: one panel per objective, for every run (seed) the best cost so
+    far against the iteration (solid) and that run's default cost (dashed, same colour).
+    `groups` maps an objective to a list of (seed, default_cost, [(cost, cached)])."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    objs = sorted(groups)
+    fig, axes = plt.subplots(1, len(objs), figsize=(6 * len(objs), 4.2), squeeze=False)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, obj in zip(axes[0], objs):
+        for k, (seed, default, samples) in enumerate(sorted(groups[obj])):
+            color = colors[k % len(colors)]
+            xs = [i for i, (c, _) in enumerate(samples) if c < INFEASIBLE]
+            ax.plot(xs, [samples[i][0] for i in xs], ".", ms=2, color=color, alpha=0.25)
+            ax.plot(range(len(samples)), best_so_far(samples, default), "-", color=color,
+                    label=f"seed {seed}")
+            if default < INFEASIBLE:
+                ax.axhline(default, color=color, ls="--", lw=0.9)
+            c = converged_at(samples, default)
+            if c >= 0:
+                ax.plot([c], [best_so_far(samples, default)[c]], "v", color=color, ms=6)
+        feas = [c for _, d, sm in groups[obj] for c, _ in sm if c < INFEASIBLE] + \
+               [d for _, d, _ in groups[obj] if d < INFEASIBLE]
+        if feas:
+            lo = min(feas)
+            hi = sorted(feas)[int(0.9 * (len(feas) - 1))]  # clip the worst 10 % of passes
+            ax.set_ylim(0.95 * lo, max(hi, max(d for _, d, _ in groups[obj])) * 1.05)
+        ax.set_xlabel("iteration")
+        ax.set_ylabel(f"{obj} cost (ms)")
+        ax.set_title(f"{title}: {obj}")
+        ax.legend(fontsize=7, title="best so far; dashed: default; v: converged (1 %)",
+                  title_fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
 def summary(runs):
     """One line per run: iterations, default, best, gain and when the best was reached."""
     lines = []

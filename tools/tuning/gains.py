@@ -6,15 +6,20 @@ For every scene x objective x seed this runs one tuning run of the host with --v
 process), then reports per scene and objective the medians over the seeds of:
   - render gain = 1 - median over rounds of render_ms(best) / render_ms(default)
   - total gain  = 1 - median over rounds of (build+render)(best) / (build+render)(default)
-  - iterations to converge = the iteration at which the finally kept configuration was
+  - iterations to best = the iteration at which the finally kept configuration was
     first measured (0 = the first proposal; -1 = the default was kept)
-and the spread (min..max) over seeds. Nothing in the database is reused: every run gets its
+  - iterations to converge = the iteration after which the best tuning-time cost so far
+    improved by less than 1 % in total (convergence.converged_at; -1: the default was
+    never beaten by 1 %)
+and the spread (min..max) over seeds. --figures DIR writes one convergence chart per scene
+(thesis Fig. 3.3 style: best cost so far per seed, default dashed, one panel per objective). Nothing in the database is reused: every run gets its
 own database file, so each run measures its own default.
 
   gains.py --host build/host/host --scene scenes/cornell-box/scene.json \\
       --scene ../shared/scenes/living-room/living-room.pbrt --seeds 5 --iterations 40 \\
       --res 128x128 --verify 7 --out-dir /tmp/gains
   gains.py --summarize /tmp/gains          # tables again from the stats files
+  gains.py --summarize /tmp/gains --figures tools/tuning/figures --figure-prefix conv120_
 """
 import argparse
 import glob
@@ -24,6 +29,9 @@ import statistics
 import subprocess
 import sys
 import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from convergence import converged_at, plot_scene  # noqa: E402
 
 
 def scene_name(path):
@@ -72,7 +80,10 @@ def summarize(paths):
             continue
         base = os.path.basename(p)[:-5].split("__")
         key = (base[0], base[1], t["objective"])
+        samples = [(h["cost"], bool(h.get("cached"))) for h in t.get("history", [])]
         groups.setdefault(key, []).append(dict(
+            seed=d.get("seed", base[-1]), samples=samples, default_cost=t["default_cost"],
+            conv1=converged_at(samples, t["default_cost"]),
             render_gain=1 - v["render_ratio"], total_gain=1 - v["total_ratio"],
             conv=converge_iteration(t), iterations=t["iterations"],
             d_render=v["default"]["median_render_ms"], d_total=v["default"]["median_total_ms"],
@@ -81,13 +92,14 @@ def summarize(paths):
             best=t["best_config"]))
     lines = ["| scene | start | tuned for | runs | default render / total ms | render gain, median "
              "(min..max) | total gain, median (min..max) | gain seen while tuning | "
-             "iterations to best, median (range) |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "iterations to best, median (range) | converged (1 %), median (range) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     pct = lambda x: f"{100 * x:+.1f}%"
     for (scene, tag, obj), rs in sorted(groups.items()):
         rg = [r["render_gain"] for r in rs]
         tg = [r["total_gain"] for r in rs]
         cv = [r["conv"] for r in rs]
+        c1 = [r["conv1"] for r in rs]
         lines.append(
             f"| {scene} | {tag} | {obj} | {len(rs)} | "
             f"{statistics.median(r['d_render'] for r in rs):.1f} / "
@@ -95,8 +107,26 @@ def summarize(paths):
             f"{pct(statistics.median(rg))} ({pct(min(rg))}..{pct(max(rg))}) | "
             f"{pct(statistics.median(tg))} ({pct(min(tg))}..{pct(max(tg))}) | "
             f"{pct(statistics.median(r['tune_gain'] for r in rs))} | "
-            f"{statistics.median(cv):g} ({min(cv)}..{max(cv)}) |")
+            f"{statistics.median(cv):g} ({min(cv)}..{max(cv)}) | "
+            f"{statistics.median(c1):g} ({min(c1)}..{max(c1)}) |")
     return "\n".join(lines), groups
+
+
+def figures(groups, out_dir, prefix):
+    """One convergence chart per scene and start tag, both objectives side by side."""
+    os.makedirs(out_dir, exist_ok=True)
+    by_scene = {}
+    for (scene, tag, obj), rs in groups.items():
+        by_scene.setdefault((scene, tag), {})[obj] = [
+            (r["seed"], r["default_cost"], r["samples"]) for r in rs]
+    written = []
+    for (scene, tag), g in sorted(by_scene.items()):
+        out = os.path.join(out_dir, f"{prefix}{scene}" + ("" if tag == "native" else f"_{tag}")
+                           + ".png")
+        n = max(len(v[0][2]) for v in g.values())
+        plot_scene(g, out, f"{scene} ({n} iterations)")
+        written.append(out)
+    return written
 
 
 def main():
@@ -120,10 +150,16 @@ def main():
     ap.add_argument("--out-dir", default="gains")
     ap.add_argument("--force", action="store_true", help="rerun runs whose stats exist")
     ap.add_argument("--summarize", metavar="DIR", help="only print the tables of DIR")
+    ap.add_argument("--figures", metavar="DIR", help="write a convergence chart per scene")
+    ap.add_argument("--figure-prefix", default="convergence_", help="file name prefix of the "
+                    "charts (default convergence_)")
     a = ap.parse_args()
     if a.summarize:
-        table, _ = summarize(sorted(glob.glob(os.path.join(a.summarize, "*.json"))))
+        table, groups = summarize(sorted(glob.glob(os.path.join(a.summarize, "*.json"))))
         print(table)
+        if a.figures:
+            for p in figures(groups, a.figures, a.figure_prefix):
+                print(p)
         return
     if not a.scene:
         ap.error("give at least one --scene")
@@ -136,8 +172,11 @@ def main():
                 p = run_one(a, scene, obj, seed, extra, a.tag)
                 if p:
                     paths.append(p)
-    table, _ = summarize(paths)
+    table, groups = summarize(paths)
     print(table)
+    if a.figures:
+        for p in figures(groups, a.figures, a.figure_prefix):
+            print(p)
 
 
 if __name__ == "__main__":
