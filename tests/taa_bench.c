@@ -1,9 +1,18 @@
-/* post_taa timings (suite bench): ms per frame at 640x480 and 1920x1080 for the network's
- * reprojection+input, convolutions and fused kernel layer+colour mix (thesis Table 5.2),
- * the scalar reference path, and VCTAA; FLOPs per pixel from the layer shapes (Table 5.1)
- * and the reached GFLOP/s. Uses the shipped 12- and 6-channel weights. Threads: $TT_THREADS
- * (default 2, the goal's budget). Both wall time and process CPU time are printed: on a
- * shared machine the CPU time (one thread: TT_THREADS=1) is the figure that survives load. */
+/* post_taa timings (suite bench; thesis Table 5.2): ms per frame at 640x480 and 1920x1080
+ * for 1 and 2 threads, split into reprojection (tonemap + Catmull-Rom of the previous state
+ * into the input planes), network (body layers + kernel layer) and colour mix (softmax,
+ * eq. 5.3, hidden layer, outputs), for the 12- and 6-channel shipped weights and VCTAA
+ * (one fused pass: no split). Every figure is the median of >= 5 frames after a warm-up,
+ * both wall time and process CPU time (on a shared machine the CPU time is the figure that
+ * survives load; wall = CPU / threads only on an idle machine).
+ *
+ * FLOPs per pixel come from the layer shapes (2 K^2 I O + O per layer, one weight set;
+ * softmax, mix and reprojection not counted). The FLOP peak is measured: a loop of
+ * independent 8-wide FMAs (AVX2) gives this core's FLOP/s per CPU-second, i.e. 2 FMA units
+ * x 8 floats x 2 flops x the effective clock, which is printed as the clock it implies.
+ *
+ * Environment: TT_BENCH_THREADS="1 2" (thread counts), TT_BENCH_QUICK=1 (640x480 only),
+ * TT_POST_TAA_ISA=avx2|generic (force a lower instruction set). */
 #include "tt_test.h"
 
 #include "taa_internal.h"
@@ -24,13 +33,98 @@ static double cpu_ms(void) {
   return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : x > y;
+}
+
+/* Median of n values (sorts a copy). */
+static double median(const double *v, int n) {
+  double t[64];
+  memcpy(t, v, (size_t)n * sizeof *t);
+  qsort(t, (size_t)n, sizeof *t, cmp_double);
+  return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+}
+
 /* FLOPs per pixel of one layer (2 K^2 I O + O, one weight set). */
 static double layer_flops(const tt__net_layer *l) {
   return 2.0 * l->ksize * l->ksize * l->in * l->out + l->out;
 }
 
-/* Times the network at w x h (median-ish: best of `reps` after a warm-up). */
-static void bench_net(const char *weights, uint32_t w, uint32_t h, int reps) {
+typedef float v8f __attribute__((vector_size(32)));
+
+/* 12 independent chains of 8-wide FMAs (2 FMA units x 4 cycles latency need >= 8). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target("avx2,fma"), noinline))
+#endif
+static void fma_loop(v8f *a, long n) {
+  v8f r[12], b, c;
+  for (int i = 0; i < 8; i++) b[i] = 1.0000001f, c[i] = 1e-7f;
+  for (int i = 0; i < 12; i++) r[i] = a[i];
+  for (long k = 0; k < n; k++) {
+#pragma GCC unroll 12
+    for (int i = 0; i < 12; i++) r[i] = r[i] * b + c;
+  }
+  for (int i = 0; i < 12; i++) a[i] = r[i];
+}
+
+/* This core's AVX2 FMA peak in GFLOP/s per CPU-second (best of 5 runs of ~0.1 s). */
+static double measure_peak(void) {
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+  if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) return 0.0;
+  v8f a[12];
+  for (int i = 0; i < 12; i++)
+    for (int l = 0; l < 8; l++) a[i][l] = (float)(i + l);
+  double best = 0.0;
+  long n = 5000000;
+  for (int r = 0; r < 5; r++) {
+    double c0 = cpu_ms();
+    fma_loop(a, n);
+    double c = cpu_ms() - c0;
+    double g = (double)n * 12 * 16 / (c * 1e-3) * 1e-9;
+    if (g > best) best = g;
+  }
+  volatile float sink = a[3][2];
+  (void)sink;
+  return best;
+#else
+  return 0.0;
+#endif
+}
+
+static double g_peak;  /* GFLOP/s per core */
+static char g_notes[8192];  /* per-part lines printed after the table */
+
+typedef struct frame_in {
+  uint32_t w, h;
+  float *color, *depth, *motion, *out;
+} frame_in;
+
+/* A moving synthetic frame: edges and gradients, motion of a slow pan. */
+static frame_in make_frame(uint32_t w, uint32_t h) {
+  frame_in f = {w, h, NULL, NULL, NULL, NULL};
+  size_t n = (size_t)w * h;
+  f.color = malloc(n * 12), f.depth = malloc(n * 4), f.motion = malloc(n * 8);
+  f.out = malloc(n * 12);
+  for (size_t i = 0; i < n; i++) {
+    uint32_t x = (uint32_t)(i % w), y = (uint32_t)(i / w);
+    f.color[3 * i] = (float)(i % 97) / 50.0f;
+    f.color[3 * i + 1] = ((x / 7 + y / 5) % 2) ? 1.5f : 0.1f;
+    f.color[3 * i + 2] = (float)y / (float)h;
+    f.depth[i] = 1.0f + (float)(i % 13);
+    f.motion[2 * i] = 0.7f;
+    f.motion[2 * i + 1] = -0.3f;
+  }
+  return f;
+}
+
+static void free_frame(frame_in *f) {
+  free(f->color), free(f->depth), free(f->motion), free(f->out);
+}
+
+/* One Table 5.2 row of the network: medians over `reps` frames. */
+static void bench_net(const char *weights, const char *label, uint32_t w, uint32_t h,
+                      uint32_t threads, int reps) {
   tt__net_model m;
   if (tt__net_load(weights, &m) != TT_OK) {
     fprintf(stderr, "%s\n", tt_last_error());
@@ -38,96 +132,94 @@ static void bench_net(const char *weights, uint32_t w, uint32_t h, int reps) {
     return;
   }
   double flops = layer_flops(&m.kernel) + (m.hidden ? layer_flops(&m.hid) : 0);
-  for (uint32_t i = 0; i < m.body_count; i++) flops += layer_flops(&m.body[i]);
-  size_t n = (size_t)w * h;
-  float *color = malloc(n * 12), *depth = malloc(n * 4), *motion = malloc(n * 8), *out = malloc(n * 12);
-  for (size_t i = 0; i < n; i++) {
-    color[3 * i] = color[3 * i + 1] = color[3 * i + 2] = (float)(i % 97) / 50.0f;
-    depth[i] = 1.0f + (float)(i % 13);
-    motion[2 * i] = 0.7f;
-    motion[2 * i + 1] = -0.3f;
-  }
+  double body_flops = 0;
+  for (uint32_t i = 0; i < m.body_count; i++) body_flops += layer_flops(&m.body[i]);
+  flops += body_flops;
+  frame_in f = make_frame(w, h);
   tt__net_state s;
   CHECK(tt__net_state_init(&s, &m, w, h) == TT_OK);
-  double best[4] = {1e30, 1e30, 1e30, 1e30}, best_cpu = 1e30, cpu_parts[3] = {0, 0, 0};
+  double wall[64], cpu[64], wr[64], wn[64], wm[64], cr[64], cn[64], cm[64], tb[64], tk[64];
   for (int r = 0; r <= reps; r++) {
     double t0 = now_ms(), c0 = cpu_ms();
-    tt__net_process(&s, &m, tt_default_host(), color, depth, motion, (uint32_t)r, out);
+    tt__net_process(&s, &m, tt_default_host(), f.color, f.depth, f.motion, (uint32_t)r, f.out);
     double t = now_ms() - t0, c = cpu_ms() - c0;
-    if (r == 0) continue;  /* warm-up */
-    if (c < best_cpu) {
-      best_cpu = c;
-      cpu_parts[0] = s.cpu_reproject;
-      cpu_parts[1] = s.cpu_network;
-      cpu_parts[2] = s.cpu_mix;
-    }
-    if (t < best[0]) {
-      best[0] = t;
-      best[1] = s.ms_reproject;
-      best[2] = s.ms_network;
-      best[3] = s.ms_mix;
-    }
+    if (r == 0) continue;  /* warm-up (first frame has no history) */
+    int k = r - 1;
+    wall[k] = t, cpu[k] = c;
+    wr[k] = s.ms_reproject, wn[k] = s.ms_network, wm[k] = s.ms_mix;
+    cr[k] = s.cpu_reproject, cn[k] = s.cpu_network, cm[k] = s.cpu_mix;
+    tb[k] = s.ms_body, tk[k] = s.ms_kernel;
   }
-  double gflops = flops * n / (best[2] + best[3]) * 1e-6;
-  printf("network %s %ux%u: wall %.1f ms (reprojection+input %.1f, body convs %.1f, "
-         "kernel+mix+hidden %.1f), CPU %.1f ms; %.0f FLOP/px, %.1f GFLOP/s (wall) / %.1f "
-         "GFLOP/s per CPU-second\n", strrchr(weights, '/') + 1, w, h, best[0], best[1],
-         best[2], best[3], best_cpu, flops, gflops, flops * n / best_cpu * 1e-6);
-  printf("network %s %ux%u: CPU ms: reprojection+input %.1f, body convs %.1f, "
-         "kernel+softmax+mix+hidden %.1f\n", strrchr(weights, '/') + 1, w, h, cpu_parts[0],
-         cpu_parts[1], cpu_parts[2]);
-  if (w == 640) {
-    s.reference = 1;
-    s.valid = 0;
-    double t0 = now_ms();
-    tt__net_process(&s, &m, tt_default_host(), color, depth, motion, 0, out);
-    printf("network %s %ux%u: scalar reference path %.1f ms\n", strrchr(weights, '/') + 1, w, h,
-           now_ms() - t0);
-  }
+  double mc = median(cpu, reps), px = (double)w * h;
+  double gf = flops * px / (median(cn, reps) * 1e-3) * 1e-9;
+  printf("| %-10s | %4ux%-4u | %u | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f | %5.1f / %5.1f / %5.1f "
+         "| %5.1f | %3.0f%% |\n", label, w, h, threads, median(wr, reps), median(wn, reps),
+         median(wm, reps), median(wall, reps), mc, median(cr, reps), median(cn, reps),
+         median(cm, reps), gf, g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
+  /* Body layers vs kernel layer: the network CPU time split by the threads' own timers. */
+  double bb = median(tb, reps), kk = median(tk, reps), sh = bb + kk > 0 ? bb / (bb + kk) : 0;
+  double cb = median(cn, reps) * sh, ck = median(cn, reps) * (1 - sh);
+  snprintf(g_notes + strlen(g_notes), sizeof g_notes - strlen(g_notes),
+           "%s %ux%u T=%u: body layers %.1f CPU ms (%.1f GFLOP/s), kernel layer %.1f CPU ms "
+           "(%.1f GFLOP/s); %.0f FLOP/px\n", label, w, h, threads, cb,
+           body_flops * px / (cb * 1e-3) * 1e-9, ck,
+           layer_flops(&m.kernel) * px / (ck * 1e-3) * 1e-9, flops);
   tt__net_state_free(&s);
   tt__net_free(&m);
-  free(color), free(depth), free(motion), free(out);
+  free_frame(&f);
 }
 
-/* Times VCTAA at w x h. */
-static void bench_vctaa(uint32_t w, uint32_t h, int reps) {
-  size_t n = (size_t)w * h;
-  float *color = malloc(n * 12), *motion = malloc(n * 8), *out = malloc(n * 12);
-  for (size_t i = 0; i < n; i++) {
-    color[3 * i] = color[3 * i + 1] = color[3 * i + 2] = (float)(i % 97) / 50.0f;
-    motion[2 * i] = 0.7f;
-    motion[2 * i + 1] = -0.3f;
-  }
+/* VCTAA: one fused pass (history fetch + variance clip + blend). */
+static void bench_vctaa(uint32_t w, uint32_t h, uint32_t threads, int reps) {
+  frame_in f = make_frame(w, h);
   tt__vctaa v;
   CHECK(tt__vctaa_init(&v, w, h) == TT_OK);
   tt__vctaa_params p = {0.1f, 1.0f, 1};
-  double best = 1e30, best_cpu = 1e30;
+  double wall[64], cpu[64];
   for (int r = 0; r <= reps; r++) {
     double t0 = now_ms(), c0 = cpu_ms();
-    tt__vctaa_process(&v, tt_default_host(), &p, color, motion, out);
+    tt__vctaa_process(&v, tt_default_host(), &p, f.color, f.motion, f.out);
     double t = now_ms() - t0, c = cpu_ms() - c0;
-    if (r && t < best) best = t;
-    if (r && c < best_cpu) best_cpu = c;
+    if (r) wall[r - 1] = t, cpu[r - 1] = c;
   }
-  printf("vctaa %ux%u: wall %.1f ms, CPU %.1f ms\n", w, h, best, best_cpu);
+  printf("| %-10s | %4ux%-4u | %u | %6s | %6s | %6s | %6.1f | %6.1f | %21s | %5s | %4s |\n",
+         "VCTAA", w, h, threads, "-", "-", "-", median(wall, reps), median(cpu, reps), "-", "-",
+         "-");
   tt__vctaa_free(&v);
-  free(color), free(motion), free(out);
+  free_frame(&f);
 }
 
 int main(void) {
   const char *root = getenv("TT_SOURCE_ROOT");
-  const char *th = getenv("TT_THREADS");
-  uint32_t threads = th ? (uint32_t)atoi(th) : 2;
-  tt_default_host_set_threads(threads);
-  printf("threads: %u\n", threads);
+  const char *tl = getenv("TT_BENCH_THREADS");
+  int quick = getenv("TT_BENCH_QUICK") != NULL;
   char w12[1024], w6[1024];
   snprintf(w12, sizeof w12, "%s/plugins/post_taa/post_taa_c12.ttw", root ? root : ".");
   snprintf(w6, sizeof w6, "%s/plugins/post_taa/post_taa_c6.ttw", root ? root : ".");
-  bench_vctaa(640, 480, 5);
-  bench_vctaa(1920, 1080, 3);
-  bench_net(w12, 640, 480, 5);
-  bench_net(w6, 640, 480, 5);
-  bench_net(w12, 1920, 1080, 2);
-  bench_net(w6, 1920, 1080, 2);
+  g_peak = measure_peak();
+  printf("FLOP peak (measured, AVX2 FMA loop): %.1f GFLOP/s per core = 2 FMA units x 8 floats "
+         "x 2 flops x %.2f GHz effective clock\n", g_peak, g_peak / 32.0);
+  printf("network instruction set: %s\n", tt__net_fast_isa());
+  printf("medians of >= 5 frames; wall ms split reprojection / network / mix; CPU ms = process "
+         "CPU time (all threads); GFLOP/s = network FLOPs per network CPU-second\n\n");
+  printf("| method     | size      | T | reproj | netw.  |  mix   | total  | CPU    | CPU reproj/netw/mix   | GF/s  | peak |\n");
+  printf("|------------|-----------|---|--------|--------|--------|--------|--------|-----------------------|-------|------|\n");
+  unsigned th[4] = {1, 2, 0, 0};
+  int nth = 2;
+  if (tl) {
+    nth = sscanf(tl, "%u %u %u %u", &th[0], &th[1], &th[2], &th[3]);
+    if (nth < 1) nth = 1, th[0] = 2;
+  }
+  for (int sz = 0; sz < (quick ? 1 : 2); sz++) {
+    uint32_t w = sz ? 1920 : 640, h = sz ? 1080 : 480;
+    int reps = sz ? 5 : 7;
+    for (int t = 0; t < nth; t++) {
+      tt_default_host_set_threads(th[t]);
+      bench_net(w12, "network-12", w, h, th[t], reps);
+      bench_net(w6, "network-6", w, h, th[t], reps);
+      bench_vctaa(w, h, th[t], reps);
+    }
+  }
+  printf("\n%s", g_notes);
   return tt_test_finish("taa_bench");
 }

@@ -210,6 +210,57 @@ static void test_modes_and_errors(void) {
   unsetenv("TT_POST_TAA_WEIGHTS");
 }
 
+/* Mode network through the loaded plugin (the shipped 12- and 6-channel weights, the host's
+ * thread pool): finite, non-negative, near the jitter-averaged image, and the same frames
+ * after reset() reproduce the same outputs bit for bit. */
+static void test_network_plugin(void) {
+  static float color[W * H * 3], out[W * H * 3], first[W * H * 3], ref[W * H * 3],
+      tmp[W * H * 3];
+  memset(ref, 0, sizeof ref);
+  for (uint32_t j = 0; j < 8; j++) {
+    float jit[2];
+    tt_jitter_halton23(j, jit);
+    render(pattern_lines, jit, tmp);
+    for (int i = 0; i < W * H * 3; i++) ref[i] += tm(tmp[i]) / 8.0f;
+  }
+  for (int i = 0; i < W * H * 3; i++) ref[i] = ref[i] / (1.0f - ref[i]);
+  const char *channels[2] = {"12", "6"};
+  for (int v = 0; v < 2; v++) {
+    tt_config *c = tt_config_create(g_space);
+    CHECK(tt_config_set_string(c, "mode", "network") == TT_OK);
+    CHECK(tt_config_set_string(c, "channels", channels[v]) == TT_OK);
+    tt_post *p = NULL;
+    CHECK_MSG(g_post->create(W, H, c, &p) == TT_OK, "%s", tt_last_error());
+    tt_config_destroy(c);
+    if (!p) continue;
+    for (int pass = 0; pass < 2; pass++) {
+      int bad = 0;
+      for (uint32_t fr = 0; fr < 12; fr++) {
+        float jit[2];
+        tt_jitter_halton23(fr % 8, jit);
+        render(pattern_lines, jit, color);
+        tt_post_frame f = {.struct_size = sizeof f, .width = W, .height = H, .color = color,
+                           .jitter_index = fr % 8};
+        CHECK(g_post->process(p, &f, out) == TT_OK);
+        for (int i = 0; i < W * H * 3; i++) bad += !(isfinite(out[i]) && out[i] >= 0.0f);
+      }
+      CHECK_MSG(bad == 0, "channels %s: %d non-finite or negative outputs", channels[v], bad);
+      double e = rmse_tm(out, ref, 2);
+      printf("network %s ch (plugin): RMSE to the jitter average %.4f (pass %d)\n",
+             channels[v], e, pass);
+      CHECK(e < 0.25);
+      if (pass == 0) {
+        memcpy(first, out, sizeof out);
+        g_post->reset(p);
+      } else {
+        CHECK_MSG(memcmp(first, out, sizeof out) == 0, "channels %s: not reproducible",
+                  channels[v]);
+      }
+    }
+    g_post->destroy(p);
+  }
+}
+
 int main(void) {
   tt_registry *reg = tt_registry_create(tt_default_host());
   tt_loaded_plugin *lp = NULL;
@@ -224,6 +275,7 @@ int main(void) {
   test_moving_no_ghost();
   test_reset();
   test_modes_and_errors();
+  test_network_plugin();
   tt_registry_destroy(reg);
   return tt_test_finish("taa_vctaa");
 }

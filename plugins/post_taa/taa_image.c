@@ -34,18 +34,9 @@ void tt__taa_parallel_rows(const tt_host *host, uint32_t height, tt__taa_rows_fn
   }
 }
 
-void tt__taa_tonemap(const float in[3], float out[3]) {
-  float m = fmaxf(fmaxf(in[0], in[1]), fmaxf(in[2], 0.0f));
-  float s = 1.0f / (1.0f + m);
-  for (int c = 0; c < 3; c++) out[c] = fmaxf(in[c], 0.0f) * s;
-}
+void tt__taa_tonemap(const float in[3], float out[3]) { tt__taa_tonemap_inl(in, out); }
 
-void tt__taa_untonemap(const float in[3], float out[3]) {
-  /* Keep max below 1 so bright pixels stay finite after the inverse. */
-  float m = fminf(fmaxf(fmaxf(in[0], in[1]), fmaxf(in[2], 0.0f)), 0.999f);
-  float s = 1.0f / (1.0f - m);
-  for (int c = 0; c < 3; c++) out[c] = fmaxf(in[c], 0.0f) * s;
-}
+void tt__taa_untonemap(const float in[3], float out[3]) { tt__taa_untonemap_inl(in, out); }
 
 /* Catmull-Rom weights for fractional offset f of the second tap (Karis 2014). */
 static void taa_cr_weights(float f, float w[4]) {

@@ -23,6 +23,25 @@ void tt__taa_parallel_rows(const tt_host *host, uint32_t height, tt__taa_rows_fn
 void tt__taa_tonemap(const float in[3], float out[3]);
 void tt__taa_untonemap(const float in[3], float out[3]);
 
+/* fmaxf / fminf as inline compares (libm's are calls at -O2: IEEE NaN rules); same results
+ * as fmaxf / fminf when at most one argument is NaN. */
+static inline float tt__taa_fmax(float a, float b) { return (a > b || b != b) ? a : b; }
+static inline float tt__taa_fmin(float a, float b) { return (a < b || b != b) ? a : b; }
+
+/* Inline bodies of tt__taa_tonemap / tt__taa_untonemap for the per-pixel loops. */
+static inline void tt__taa_tonemap_inl(const float in[3], float out[3]) {
+  float m = tt__taa_fmax(tt__taa_fmax(in[0], in[1]), tt__taa_fmax(in[2], 0.0f));
+  float s = 1.0f / (1.0f + m);
+  for (int c = 0; c < 3; c++) out[c] = tt__taa_fmax(in[c], 0.0f) * s;
+}
+static inline void tt__taa_untonemap_inl(const float in[3], float out[3]) {
+  /* Keep max below 1 so bright pixels stay finite after the inverse. */
+  float m = tt__taa_fmin(tt__taa_fmax(tt__taa_fmax(in[0], in[1]), tt__taa_fmax(in[2], 0.0f)),
+                         0.999f);
+  float s = 1.0f / (1.0f - m);
+  for (int c = 0; c < 3; c++) out[c] = tt__taa_fmax(in[c], 0.0f) * s;
+}
+
 /* Samples `channels`-channel image `img` (width x height, interleaved) at continuous
  * position (fx, fy) (pixel centres at i + 0.5) with the separable 4x4 Catmull-Rom kernel,
  * clamping taps to the edge. Writes `channels` floats into `out`. */
@@ -66,14 +85,17 @@ void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params
 #define TT__NET_BORDER 2u                              /* zero border of padded planes */
 
 /* One convolution: weights in the file's PyTorch layout [set][out][in][k][k] + bias
- * [set][out], repacked at load into [set][ky][kx][in][out_padded] for the SIMD loops. */
+ * [set][out] (the reference path and the hidden layer use them as they are), repacked at
+ * load for the fast path's convolutions. */
 typedef struct tt__net_layer {
   uint32_t in, out, ksize, sets, activation;  /* activation: 0 none, 1 ReLU, 2 softmax */
-  uint32_t out_pad;                           /* out rounded up to a multiple of 8 */
   float *w;       /* original layout, sets * out * in * k * k */
   float *b;       /* sets * out */
-  float *wp;      /* packed, sets * k * k * in * out_pad */
-  float *bp;      /* sets * out_pad */
+  /* Pixel-vector path (taa_net_fast.c): outputs in blocks of `oblk`, weights
+   * [set][block][in][k][k][oblk] (zero for padded outputs), biases [set][nob * oblk]. */
+  uint32_t oblk, nob;
+  float *wq;
+  float *bq;
 } tt__net_layer;
 
 /* A loaded model: body layers (ReLU), then the kernel layer (softmax over 2 * 25 taps) and
@@ -102,19 +124,48 @@ typedef struct tt__net_state {
   uint32_t state_ch;        /* 3 + hidden */
   float *state;             /* previous [rgb_tonemapped, hidden], width x height x state_ch */
   float *next_state;
-  float *planes[2];         /* padded ping-pong feature planes */
+  float *planes[2];         /* reference path: padded HWC ping-pong planes (allocated on
+                             * its first frame), and its tonemapped / reprojected rgb */
   uint32_t plane_stride;    /* floats per padded pixel */
   float *tm;                /* padded tonemapped colour, 3 ch */
   float *reproj;            /* padded reprojected rgb of the previous output, 3 ch */
   int valid;
   int reference;            /* use the plain scalar loops (tests) */
+  /* Fast path (taa_net_fast.c): planar input planes [in_channels][height + 2 halo][rs],
+   * column x at index x + TT__NET_COL_OFF, zero outside the image; per-thread band scratch
+   * (ring buffers of the body layers and the kernel layer's logits). */
+  float *inp;
+  uint32_t rs, halo, vw;    /* row stride, zero rows above/below, width rounded to 16 */
+  size_t inp_cs;            /* channel stride of inp */
+  void *scratch;            /* per-thread band scratch, scratch_threads * scratch_bytes */
+  uint32_t scratch_threads;
+  size_t scratch_bytes;
+  uint32_t band_rows;       /* rows per band (0: automatic) */
+  uint32_t tile_cols;       /* columns per tile, multiple of 64 (0: automatic) */
   double ms_reproject, ms_network, ms_mix;   /* wall ms of the last frame's passes */
   double cpu_reproject, cpu_network, cpu_mix; /* process CPU ms of the same passes */
+  double ms_body, ms_kernel;  /* fast path: the network's time in body layers and kernel
+                               * layer, summed over threads (thread ms, not wall) */
 } tt__net_state;
 
 tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t width,
                              uint32_t height);
 void tt__net_state_free(tt__net_state *s);
+#define TT__NET_COL_OFF 8u   /* zero columns left of x = 0 in the fast path's planes */
+
+/* Fast path (taa_net_fast.c): repacks a layer's weights for the pixel-vector convolutions. */
+tt_status tt__net_fast_pack(tt__net_layer *l);
+/* Allocates the fast path's planes; called by tt__net_state_init. */
+tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m);
+void tt__net_fast_free(tt__net_state *s);
+/* One frame on the fast path: input planes (tonemap + reprojection) by rows, then the
+ * network, softmax, colour mix and hidden layer fused by row bands on the host's pool. */
+void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                          const float *color, const float *depth, const float *motion,
+                          uint32_t jitter_index, float *out_rgb);
+/* The instruction set the fast path dispatches to: "avx512", "avx2" or "generic". */
+const char *tt__net_fast_isa(void);
+
 /* Filters one frame; `depth` and `motion` may be NULL (read as 0). Writes linear RGB, and
  * the tonemapped result is kept in s->state. */
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,

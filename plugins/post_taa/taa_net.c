@@ -6,11 +6,10 @@
  * eq. 5.3 over the new frame and the reprojected output, and the 1x1 hidden-state layer.
  * Layers whose file record has 8 weight sets use set (jitter_index mod 8).
  *
- * Feature planes are HWC with a zero border of 2 pixels, so the convolution loops need no
- * bounds tests. The fast path vectorises over output channels with GCC vector extensions
- * (8 floats), compiled for AVX-512/AVX2 and a generic fallback via target_clones; the
- * reference path is plain scalar loops over the file's PyTorch layout, used by the tests
- * to check the fast one. The weights file format is documented in README.md. */
+ * This file reads the weights file (format in README.md) and holds the reference path:
+ * plain scalar loops over the file's PyTorch layout on HWC planes with a zero border of 2
+ * pixels (double accumulation, libm expf), used when `reference` is set, i.e. by the tests
+ * to check the fast path. Every other frame goes to taa_net_fast.c (banded, SIMD). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,13 +18,6 @@
 
 #include "taa_internal.h"
 
-typedef float v8f __attribute__((vector_size(32)));
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#  define TAA_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#  define TAA_CLONES
-#endif
 
 /* ---- weights file ---- */
 
@@ -52,7 +44,7 @@ static uint32_t net_fnv1a(const unsigned char *p, size_t n) {
   return h;
 }
 
-/* 32-byte aligned zeroed floats (the SIMD loops load weights as aligned vectors). */
+/* 32-byte aligned zeroed floats. */
 static float *net_alloc(size_t count) {
   size_t bytes = (count * sizeof(float) + 31) & ~(size_t)31;
   float *p = aligned_alloc(32, bytes ? bytes : 32);
@@ -64,8 +56,8 @@ static float *net_alloc(size_t count) {
 static void net_layer_free(tt__net_layer *l) {
   free(l->w);
   free(l->b);
-  free(l->wp);
-  free(l->bp);
+  free(l->wq);
+  free(l->bq);
   memset(l, 0, sizeof *l);
 }
 
@@ -75,30 +67,17 @@ void tt__net_free(tt__net_model *m) {
   net_layer_free(&m->hid);
 }
 
-/* Copies weights from the payload and repacks them for the SIMD loops. */
+/* Copies weights from the payload and repacks them for the fast path. */
 static tt_status net_layer_read(tt__net_layer *l, const unsigned char *p, const char *src) {
   size_t per = (size_t)l->out * l->in * l->ksize * l->ksize;
-  size_t kk = (size_t)l->ksize * l->ksize;
-  l->out_pad = (l->out + 7u) & ~7u;
   l->w = net_alloc(per * l->sets);
   l->b = net_alloc((size_t)l->out * l->sets);
-  l->wp = net_alloc(kk * l->in * l->out_pad * l->sets);
-  l->bp = net_alloc((size_t)l->out_pad * l->sets);
-  if (!l->w || !l->b || !l->wp || !l->bp)
+  if (!l->w || !l->b)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory for weights", src);
   for (size_t i = 0; i < per * l->sets; i++) l->w[i] = net_f32(p + 4 * i);
   p += 4 * per * l->sets;
   for (size_t i = 0; i < (size_t)l->out * l->sets; i++) l->b[i] = net_f32(p + 4 * i);
-  for (uint32_t s = 0; s < l->sets; s++) {
-    for (uint32_t o = 0; o < l->out; o++) {
-      l->bp[s * l->out_pad + o] = l->b[s * l->out + o];
-      for (uint32_t c = 0; c < l->in; c++)
-        for (size_t t = 0; t < kk; t++)
-          l->wp[((s * kk + t) * l->in + c) * l->out_pad + o] =
-              l->w[s * per + ((size_t)o * l->in + c) * kk + t];
-    }
-  }
-  return TT_OK;
+  return tt__net_fast_pack(l);
 }
 
 #define NET_HEADER_FIXED 48u  /* magic 8, version, header size, 6 counts, motion scale, 2 reserved */
@@ -256,18 +235,28 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
   uint32_t ch = m->in_channels > m->width ? m->in_channels : m->width;
   s->plane_stride = ch;
   size_t px = (size_t)width * height;
-  size_t ppx = (size_t)(width + 2 * TT__NET_BORDER) * (height + 2 * TT__NET_BORDER);
   s->state = net_alloc(px * s->state_ch);
   s->next_state = net_alloc(px * s->state_ch);
-  s->planes[0] = net_alloc(ppx * ch + 8);
-  s->planes[1] = net_alloc(ppx * ch + 8);
-  s->tm = net_alloc(ppx * 3);
-  s->reproj = net_alloc(ppx * 3);
-  if (!s->state || !s->next_state || !s->planes[0] || !s->planes[1] || !s->tm || !s->reproj) {
+  if (!s->state || !s->next_state || tt__net_fast_init(s, m) != TT_OK) {
     tt__net_state_free(s);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
                         "network planes", width, height);
   }
+  return TT_OK;
+}
+
+/* The reference path's padded HWC planes, allocated on its first use. */
+static tt_status net_reference_planes(tt__net_state *s) {
+  if (s->planes[0]) return TT_OK;
+  size_t ch = s->plane_stride;
+  size_t ppx = (size_t)(s->width + 2 * TT__NET_BORDER) * (s->height + 2 * TT__NET_BORDER);
+  s->planes[0] = net_alloc(ppx * ch + 8);
+  s->planes[1] = net_alloc(ppx * ch + 8);
+  s->tm = net_alloc(ppx * 3);
+  s->reproj = net_alloc(ppx * 3);
+  if (!s->planes[0] || !s->planes[1] || !s->tm || !s->reproj)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for the "
+                        "reference planes");
   return TT_OK;
 }
 
@@ -278,6 +267,7 @@ void tt__net_state_free(tt__net_state *s) {
   free(s->planes[1]);
   free(s->tm);
   free(s->reproj);
+  tt__net_fast_free(s);
   memset(s, 0, sizeof *s);
 }
 
@@ -335,214 +325,6 @@ static void net_input_rows(void *ctx, uint32_t y0, uint32_t y1) {
       for (uint32_t c = 0; c < sc; c++) in[6 + c] = fb[c];
       memcpy(s->reproj + 3 * pi, fb, 3 * sizeof(float));
     }
-}
-
-/* One output pixel of a convolution: acc[0..NV*8) = bias + sum over taps and inputs. `in`
- * points at the top-left tap; `w` at the packed weights [k][k][in][out_pad]. The partial
- * sums live in a local array indexed only by unrolled constants, so they stay in registers
- * and are stored once at the end. */
-static inline __attribute__((always_inline)) void net_conv_px(
-    const float *in, size_t row, size_t px, uint32_t I, uint32_t K, const float *w,
-    const float *b, const int NV, v8f *acc) {
-  v8f r[8];
-#pragma GCC unroll 8
-  for (int j = 0; j < NV; j++) r[j] = *(const v8f *)(b + 8 * j);
-  for (uint32_t ky = 0; ky < K; ky++)
-    for (uint32_t kx = 0; kx < K; kx++) {
-      const float *p = in + ky * row + kx * px;
-      for (uint32_t c = 0; c < I; c++) {
-        float v = p[c];
-#pragma GCC unroll 8
-        for (int j = 0; j < NV; j++) r[j] += v * *(const v8f *)(w + 8 * j);
-        w += 8 * NV;
-      }
-    }
-#pragma GCC unroll 8
-  for (int j = 0; j < NV; j++) acc[j] = r[j];
-}
-
-/* Two horizontally adjacent output pixels at once: each weight vector loaded serves two
- * FMAs, halving the load traffic that bounds the single-pixel loop. */
-static inline __attribute__((always_inline)) void net_conv_px2(
-    const float *in, size_t row, size_t px, uint32_t I, uint32_t K, const float *w,
-    const float *b, const int NV, v8f *acc0, v8f *acc1) {
-  v8f r0[8], r1[8];
-#pragma GCC unroll 8
-  for (int j = 0; j < NV; j++) r0[j] = r1[j] = *(const v8f *)(b + 8 * j);
-  for (uint32_t ky = 0; ky < K; ky++)
-    for (uint32_t kx = 0; kx < K; kx++) {
-      const float *p = in + ky * row + kx * px;
-      for (uint32_t c = 0; c < I; c++) {
-        float v0 = p[c], v1 = p[c + px];
-#pragma GCC unroll 8
-        for (int j = 0; j < NV; j++) {
-          v8f wv = *(const v8f *)(w + 8 * j);
-          r0[j] += v0 * wv;
-          r1[j] += v1 * wv;
-        }
-        w += 8 * NV;
-      }
-    }
-#pragma GCC unroll 8
-  for (int j = 0; j < NV; j++) {
-    acc0[j] = r0[j];
-    acc1[j] = r1[j];
-  }
-}
-
-/* Body layer rows with NV output vectors (constant-folded per call site). */
-static inline __attribute__((always_inline)) void net_body_rows_nv(const net_job *job,
-                                                                   uint32_t y0, uint32_t y1,
-                                                                   const int NV) {
-  const tt__net_state *s = job->s;
-  const tt__net_layer *l = job->layer;
-  uint32_t r = l->ksize / 2, kk = l->ksize * l->ksize;
-  size_t px = s->plane_stride, row = (size_t)(s->width + 2 * TT__NET_BORDER) * px;
-  const float *w = l->wp + (size_t)job->set * kk * l->in * l->out_pad;
-  const float *b = l->bp + (size_t)job->set * l->out_pad;
-  v8f acc[8], acc1[8];
-  float tmp[64];
-  for (uint32_t y = y0; y < y1; y++)
-    for (uint32_t x = 0; x < s->width; x += 2) {
-      size_t pi = net_pidx(s, x, y);
-      const float *in = job->in_plane + (pi - r * (s->width + 2 * TT__NET_BORDER) - r) * px;
-      int pair = x + 1 < s->width;
-      if (pair)
-        net_conv_px2(in, row, px, l->in, l->ksize, w, b, NV, acc, acc1);
-      else
-        net_conv_px(in, row, px, l->in, l->ksize, w, b, NV, acc);
-      float *o = job->out_plane + pi * px;
-      for (int j = 0; j < NV; j++) memcpy(tmp + 8 * j, &acc[j], sizeof(v8f));
-      for (uint32_t c = 0; c < l->out; c++) o[c] = tmp[c] > 0.0f ? tmp[c] : 0.0f;
-      if (!pair) continue;
-      for (int j = 0; j < NV; j++) memcpy(tmp + 8 * j, &acc1[j], sizeof(v8f));
-      for (uint32_t c = 0; c < l->out; c++) o[px + c] = tmp[c] > 0.0f ? tmp[c] : 0.0f;
-    }
-}
-
-/* Body layer rows, dispatching on the padded output width. */
-TAA_CLONES static void net_body_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const net_job *job = ctx;
-  switch (job->layer->out_pad / 8) {
-    case 1: net_body_rows_nv(job, y0, y1, 1); break;
-    case 2: net_body_rows_nv(job, y0, y1, 2); break;
-    case 3: net_body_rows_nv(job, y0, y1, 3); break;
-    case 4: net_body_rows_nv(job, y0, y1, 4); break;
-    case 5: net_body_rows_nv(job, y0, y1, 5); break;
-    case 6: net_body_rows_nv(job, y0, y1, 6); break;
-    case 7: net_body_rows_nv(job, y0, y1, 7); break;
-    default: net_body_rows_nv(job, y0, y1, 8); break;
-  }
-}
-
-/* exp(x) for x <= 0 on 8 lanes: 2^n * p(r) with a degree-6 polynomial (rel. error ~2e-7);
- * libm's scalar expf would cost more than the whole kernel layer. */
-static inline __attribute__((always_inline)) void net_exp_neg(v8f *xp) {
-  v8f x = *xp;
-  typedef int32_t v8i __attribute__((vector_size(32)));
-  const v8f lo = {-87.0f, -87.0f, -87.0f, -87.0f, -87.0f, -87.0f, -87.0f, -87.0f};
-  v8i keep = x > lo;   /* lanes: -1 true, 0 false */
-  v8i xi, li;
-  memcpy(&xi, &x, sizeof xi);
-  memcpy(&li, &lo, sizeof li);
-  xi = (xi & keep) | (li & ~keep);
-  memcpy(&x, &xi, sizeof x);
-  /* Round to nearest with the 1.5 * 2^23 trick (exact for |t| < 2^22). */
-  v8f t = x * 1.44269504088896341f;
-  v8f n = (t + 12582912.0f) - 12582912.0f;
-  v8f r = x - n * 0.693145751953125f - n * 1.428606765330187045e-06f;
-  v8f p = r * (1.0f / 720.0f) + 1.0f / 120.0f;
-  p = p * r + 1.0f / 24.0f;
-  p = p * r + 1.0f / 6.0f;
-  p = p * r + 0.5f;
-  p = p * r + 1.0f;
-  p = p * r + 1.0f;
-  v8i e = (__builtin_convertvector(n, v8i) + 127) << 23;
-  v8f scale;
-  memcpy(&scale, &e, sizeof scale);
-  *xp = p * scale;
-}
-
-/* Everything of the head after the kernel layer's logits `acc`, for pixel (x, y):
- * softmax, colour mix (eq. 5.3), hidden layer, state and linear output. */
-static inline __attribute__((always_inline)) void net_head_finish(const net_job *job,
-                                                                  uint32_t x, uint32_t y,
-                                                                  v8f *acc, const float *hw,
-                                                                  const float *hb) {
-  tt__net_state *s = job->s;
-  const tt__net_model *m = job->m;
-  uint32_t wp = s->width + 2 * TT__NET_BORDER, sc = s->state_ch;
-  size_t px = s->plane_stride, row = (size_t)wp * px, pi = net_pidx(s, x, y);
-  /* Softmax over the 50 logits: the padded lanes 50..55 must not count. */
-  float mx = -INFINITY;
-  for (int j = 0; j < 7; j++)
-    for (int l = 0; l < 8 && 8 * j + l < 50; l++) mx = fmaxf(mx, acc[j][l]);
-  v8f sum = {0, 0, 0, 0, 0, 0, 0, 0};
-  for (int j = 0; j < 7; j++) {
-    acc[j] -= mx;
-    net_exp_neg(&acc[j]);
-    if (j == 6)
-      for (int l = 2; l < 8; l++) acc[j][l] = 0.0f;
-    sum += acc[j];
-  }
-  float total = 0.0f;
-  for (int l = 0; l < 8; l++) total += sum[l];
-  float k[56];
-  float inv = 1.0f / total;
-  for (int j = 0; j < 7; j++) memcpy(k + 8 * j, &acc[j], sizeof(v8f));
-  /* Eq. 5.3: 25 taps over the new frame, 25 over the reprojected previous output. */
-  float o[3] = {0, 0, 0};
-  for (uint32_t ty = 0; ty < 5; ty++)
-    for (uint32_t tx = 0; tx < 5; tx++) {
-      size_t q = pi + (size_t)ty * wp + tx - 2 * wp - 2;
-      float a = k[ty * 5 + tx], bb = k[25 + ty * 5 + tx];
-      const float *c = s->tm + 3 * q, *r = s->reproj + 3 * q;
-      o[0] += a * c[0] + bb * r[0];
-      o[1] += a * c[1] + bb * r[1];
-      o[2] += a * c[2] + bb * r[2];
-    }
-  size_t i = (size_t)y * s->width + x;
-  float *st = s->next_state + i * sc;
-  for (int c = 0; c < 3; c++) st[c] = o[c] * inv;
-  if (m->hidden) {
-    v8f hacc[1];
-    net_conv_px(job->in_plane + pi * px, row, px, m->hid.in, 1, hw, hb, 1, hacc);
-    for (uint32_t c = 0; c < m->hidden; c++) st[3 + c] = hacc[0][c];
-  }
-  tt__taa_untonemap(st, job->out_rgb + 3 * i);
-}
-
-/* Kernel layer + softmax + colour mix + hidden layer, fused per pixel (the 50 logits never
- * leave registers); pixels go in pairs through the kernel layer. */
-TAA_CLONES static void net_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const net_job *job = ctx;
-  tt__net_state *s = job->s;
-  const tt__net_model *m = job->m;
-  const tt__net_layer *kl = &m->kernel, *hl = &m->hid;
-  uint32_t wp = s->width + 2 * TT__NET_BORDER;
-  size_t px = s->plane_stride, row = (size_t)wp * px;
-  uint32_t ks = kl->sets > 1 ? job->set : 0;
-  uint32_t kr = kl->ksize / 2;
-  const float *kw = kl->wp + (size_t)ks * kl->ksize * kl->ksize * kl->in * kl->out_pad;
-  const float *kb = kl->bp + (size_t)ks * kl->out_pad;
-  uint32_t hs = hl->sets > 1 ? job->set : 0;
-  const float *hw = m->hidden ? hl->wp + (size_t)hs * hl->in * hl->out_pad : NULL;
-  const float *hb = m->hidden ? hl->bp + (size_t)hs * hl->out_pad : NULL;
-  v8f acc0[7], acc1[7];
-  for (uint32_t y = y0; y < y1; y++) {
-    uint32_t x = 0;
-    for (; x + 1 < s->width; x += 2) {
-      const float *in = job->in_plane + (net_pidx(s, x, y) - kr * wp - kr) * px;
-      net_conv_px2(in, row, px, kl->in, kl->ksize, kw, kb, 7, acc0, acc1);
-      net_head_finish(job, x, y, acc0, hw, hb);
-      net_head_finish(job, x + 1, y, acc1, hw, hb);
-    }
-    if (x < s->width) {
-      const float *in = job->in_plane + (net_pidx(s, x, y) - kr * wp - kr) * px;
-      net_conv_px(in, row, px, kl->in, kl->ksize, kw, kb, 7, acc0);
-      net_head_finish(job, x, y, acc0, hw, hb);
-    }
-  }
 }
 
 /* Plain scalar reference of one convolution on padded planes (file layout, no packing). */
@@ -619,6 +401,14 @@ static double net_cpu_ms(void) {
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                      const float *color, const float *depth, const float *motion,
                      uint32_t jitter_index, float *out_rgb) {
+  if (!s->reference) {
+    tt__net_fast_process(s, m, host, color, depth, motion, jitter_index, out_rgb);
+    return;
+  }
+  if (net_reference_planes(s) != TT_OK) {
+    memcpy(out_rgb, color, (size_t)s->width * s->height * 3 * sizeof(float));
+    return;
+  }
   const tt_host *h = host;
   uint64_t t0 = h && h->clock_ns ? h->clock_ns() : 0;
   double c0 = net_cpu_ms();
@@ -640,7 +430,7 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
     job.set = m->body[l].sets > 1 ? jitter_index % TT__NET_JITTER_SETS : 0;
     job.in_plane = s->planes[cur];
     job.out_plane = s->planes[cur ^ 1];
-    tt__taa_parallel_rows(h, s->height, s->reference ? net_ref_body_rows : net_body_rows,
+    tt__taa_parallel_rows(h, s->height, net_ref_body_rows,
                           &job);
     cur ^= 1;
   }
@@ -648,7 +438,7 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   job.in_plane = s->planes[cur];
   uint64_t t2 = h && h->clock_ns ? h->clock_ns() : 0;
   double c2 = net_cpu_ms();
-  tt__taa_parallel_rows(h, s->height, s->reference ? net_ref_head_rows : net_head_rows, &job);
+  tt__taa_parallel_rows(h, s->height, net_ref_head_rows, &job);
   uint64_t t3 = h && h->clock_ns ? h->clock_ns() : 0;
   double c3 = net_cpu_ms();
   s->cpu_reproject = c1 - c0;

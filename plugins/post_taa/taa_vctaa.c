@@ -55,45 +55,78 @@ typedef struct vc_job {
   float *out;
 } vc_job;
 
-/* Current pixel (x, y) in tonemapped YCoCg (precomputed plane), edge-clamped. */
-static inline void vc_fetch(const vc_job *job, int x, int y, float o[3]) {
-  int w = (int)job->v->width, h = (int)job->v->height;
-  x = x < 0 ? 0 : (x >= w ? w - 1 : x);
-  y = y < 0 ? 0 : (y >= h ? h - 1 : y);
-  memcpy(o, job->v->ycocg + ((size_t)y * w + x) * 3, 3 * sizeof(float));
-}
-
 /* Tonemaps rows [y0, y1) of the new frame into YCoCg once (each is read 9 times). */
 static void vc_prepare_rows(void *ctx, uint32_t y0, uint32_t y1) {
   const vc_job *job = ctx;
   size_t w = job->v->width;
   for (size_t i = y0 * w; i < y1 * w; i++) {
     float t[3];
-    tt__taa_tonemap(job->color + 3 * i, t);
+    tt__taa_tonemap_inl(job->color + 3 * i, t);
     vc_to_ycocg(t, job->v->ycocg + 3 * i);
   }
 }
 
-/* Resolves rows [y0, y1). */
+/* tt__taa_sample_catmull_rom for 3 channels, inlined (same weights, taps and order). */
+static inline void vc_catmull_rom3(const float *img, int w, int h, float fx, float fy,
+                                   float out[3]) {
+  float ux = fx - 0.5f, uy = fy - 0.5f;
+  float bx = floorf(ux), by = floorf(uy);
+  float wx[4], wy[4], f = ux - bx;
+  wx[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
+  wx[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
+  wx[2] = f * (0.5f + f * (2.0f - 1.5f * f));
+  wx[3] = f * f * (-0.5f + 0.5f * f);
+  f = uy - by;
+  wy[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
+  wy[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
+  wy[2] = f * (0.5f + f * (2.0f - 1.5f * f));
+  wy[3] = f * f * (-0.5f + 0.5f * f);
+  int x0 = (int)bx - 1, y0 = (int)by - 1;
+  int xi[4];
+  for (int i = 0; i < 4; i++) {
+    int v = x0 + i;
+    xi[i] = 3 * (v < 0 ? 0 : (v >= w ? w - 1 : v));
+  }
+  float o0 = 0.0f, o1 = 0.0f, o2 = 0.0f;
+  for (int j = 0; j < 4; j++) {
+    int yy = y0 + j;
+    const float *row = img + (size_t)(yy < 0 ? 0 : (yy >= h ? h - 1 : yy)) * w * 3;
+    for (int i = 0; i < 4; i++) {
+      const float *p = row + xi[i];
+      float wt = wx[i] * wy[j];
+      o0 += wt * p[0];
+      o1 += wt * p[1];
+      o2 += wt * p[2];
+    }
+  }
+  out[0] = o0;
+  out[1] = o1;
+  out[2] = o2;
+}
+
+/* Resolves rows [y0, y1). The 3x3 neighbourhood reads edge-clamped rows and columns. */
 static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
   const vc_job *job = ctx;
   const tt__vctaa *v = job->v;
   const tt__vctaa_params *p = job->p;
   uint32_t w = v->width, h = v->height;
   for (uint32_t y = y0; y < y1; y++) {
+    const float *rows[3] = {v->ycocg + (size_t)(y ? y - 1 : 0) * w * 3,
+                            v->ycocg + (size_t)y * w * 3,
+                            v->ycocg + (size_t)(y + 1 < h ? y + 1 : h - 1) * w * 3};
     for (uint32_t x = 0; x < w; x++) {
       size_t i = (size_t)y * w + x;
+      uint32_t xs[3] = {3 * (x ? x - 1 : 0), 3 * x, 3 * (x + 1 < w ? x + 1 : w - 1)};
       float cur[3], m1[3] = {0, 0, 0}, m2[3] = {0, 0, 0};
-      for (int dy = -1; dy <= 1; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-          float s[3];
-          vc_fetch(job, (int)x + dx, (int)y + dy, s);
-          if (dx == 0 && dy == 0) memcpy(cur, s, sizeof cur);
+      for (int dy = 0; dy < 3; dy++)
+        for (int dx = 0; dx < 3; dx++) {
+          const float *s = rows[dy] + xs[dx];
           for (int c = 0; c < 3; c++) {
             m1[c] += s[c];
             m2[c] += s[c] * s[c];
           }
         }
+      memcpy(cur, rows[1] + xs[1], sizeof cur);
       float res[3];
       float mx = job->motion ? job->motion[2 * i] : 0.0f;
       float my = job->motion ? job->motion[2 * i + 1] : 0.0f;
@@ -105,7 +138,7 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
       } else {
         float hist_rgb[3], hist[3];
         if (p->catmull_rom)
-          tt__taa_sample_catmull_rom(v->history, w, h, 3, hx, hy, hist_rgb);
+          vc_catmull_rom3(v->history, (int)w, (int)h, hx, hy, hist_rgb);
         else
           tt__taa_sample_bilinear(v->history, w, h, 3, hx, hy, hist_rgb);
         vc_to_ycocg(hist_rgb, hist);
@@ -114,7 +147,7 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
         float scale = 0.0f, d[3];
         for (int c = 0; c < 3; c++) {
           float mean = m1[c] / 9.0f;
-          float sigma = sqrtf(fmaxf(m2[c] / 9.0f - mean * mean, 0.0f));
+          float sigma = sqrtf(tt__taa_fmax(m2[c] / 9.0f - mean * mean, 0.0f));
           float ext = p->gamma * sigma + 1e-6f;
           d[c] = hist[c] - mean;
           float u = fabsf(d[c]) / ext;
@@ -127,9 +160,9 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
       }
       float rgb[3];
       vc_from_ycocg(res, rgb);
-      for (int c = 0; c < 3; c++) rgb[c] = fminf(fmaxf(rgb[c], 0.0f), 0.999f);
+      for (int c = 0; c < 3; c++) rgb[c] = tt__taa_fmin(tt__taa_fmax(rgb[c], 0.0f), 0.999f);
       memcpy(v->scratch + 3 * i, rgb, sizeof rgb);
-      tt__taa_untonemap(rgb, job->out + 3 * i);
+      tt__taa_untonemap_inl(rgb, job->out + 3 * i);
     }
   }
 }

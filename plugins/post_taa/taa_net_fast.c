@@ -1,0 +1,744 @@
+/* post_taa: the fast path of the kernel-prediction network (the computation of taa_net.c's
+ * reference loops, reordered for speed).
+ *
+ * 1. Input planes, by rows: tonemap, motion, depth and the Catmull-Rom reprojection of the
+ *    previous state (one 8-float vector per tap when the state has 8 channels) into planar
+ *    (CHW) planes with zero rows above/below and zero columns left/right of the image.
+ * 2. Network, by row bands on the host's pool: each band streams its rows through all
+ *    layers; a body layer keeps only the K rows its consumer reads, in a ring buffer per
+ *    thread (cache resident), so nothing but the input planes and the outputs touches the
+ *    full frame. A band recomputes the halo rows it shares with its neighbours (about 2
+ *    rows of work per band). Per row, the kernel layer's 50 logits of 64-column chunks go
+ *    to a small scratch buffer and the softmax, colour mix (eq. 5.3), hidden layer, state
+ *    and linear output follow at once on the same chunk.
+ *
+ * Convolutions vectorise over pixels: 8 (AVX2) or 16 (AVX-512 registers) neighbouring
+ * output pixels times a block of 6 to 12 output channels accumulate in registers; each
+ * weight is a broadcast operand, each input vector serves the whole block. Every output
+ * channel and pixel is computed by the same operations in the same order whatever the band
+ * split or thread count, so results do not depend on the number of threads (bit-identical;
+ * tests/taa_net.c checks it). The instruction set is chosen at run time (AVX-512VL, AVX2+FMA,
+ * or the portable vector-extension code); TT_POST_TAA_ISA=avx2|generic forces a lower one. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "taa_internal.h"
+
+#pragma GCC diagnostic ignored "-Wpsabi"  /* v8f helpers are always inlined */
+typedef float v8f __attribute__((vector_size(32)));
+typedef float v8fu __attribute__((vector_size(32), aligned(4)));
+typedef int32_t v8i __attribute__((vector_size(32)));
+
+#define AI static inline __attribute__((always_inline))
+#define COL TT__NET_COL_OFF
+#define CHUNK 64u  /* columns of one kernel-layer chunk (multiple of 16) */
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#  define FAST_X86 1
+#  define TGT_V4 __attribute__((target("avx2,fma,avx512f,avx512vl")))
+#  define TGT_V3 __attribute__((target("avx2,fma")))
+#else
+#  define FAST_X86 0
+#  define TGT_V4
+#  define TGT_V3
+#endif
+
+/* 64-byte aligned zeroed floats. */
+static float *fz_alloc(size_t count) {
+  size_t bytes = (count * sizeof(float) + 63) & ~(size_t)63;
+  float *p = aligned_alloc(64, bytes ? bytes : 64);
+  if (p) memset(p, 0, bytes ? bytes : 64);
+  return p;
+}
+
+/* ---- weights ---- */
+
+tt_status tt__net_fast_pack(tt__net_layer *l) {
+  uint32_t o = l->out;
+  l->oblk = o % 12 == 0 ? 12 : o % 10 == 0 ? 10 : o % 8 == 0 ? 8 : o <= 6 ? 6 : 8;
+  l->nob = (o + l->oblk - 1) / l->oblk;
+  size_t kk = (size_t)l->ksize * l->ksize, per = (size_t)o * l->in * kk;
+  size_t qper = (size_t)l->nob * l->oblk * l->in * kk;
+  l->wq = fz_alloc(qper * l->sets);
+  l->bq = fz_alloc((size_t)l->nob * l->oblk * l->sets);
+  if (!l->wq || !l->bq)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for weights");
+  for (uint32_t s = 0; s < l->sets; s++)
+    for (uint32_t oc = 0; oc < o; oc++) {
+      uint32_t b = oc / l->oblk, j = oc % l->oblk;
+      l->bq[(size_t)s * l->nob * l->oblk + oc] = l->b[(size_t)s * o + oc];
+      for (uint32_t c = 0; c < l->in; c++)
+        for (size_t t = 0; t < kk; t++)
+          l->wq[s * qper + (((size_t)b * l->in + c) * kk + t) * l->oblk + j] =
+              l->w[s * per + ((size_t)oc * l->in + c) * kk + t];
+    }
+  return TT_OK;
+}
+
+/* ---- state ---- */
+
+/* Rows a body layer's output must extend beyond a band (what the later layers read). */
+static uint32_t fast_halo_after(const tt__net_model *m, uint32_t l) {
+  uint32_t h = m->kernel.ksize / 2;
+  for (uint32_t k = l + 1; k < m->body_count; k++) h += m->body[k].ksize / 2;
+  return h;
+}
+
+tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
+  s->halo = fast_halo_after(m, 0) + m->body[0].ksize / 2;
+  if (s->halo < 2) s->halo = 2;  /* the colour mix reads 2 rows around */
+  s->vw = (s->width + 15u) & ~15u;
+  s->rs = s->vw + 2 * COL;
+  s->inp_cs = (size_t)(s->height + 2 * s->halo) * s->rs;
+  s->inp = fz_alloc((size_t)m->in_channels * s->inp_cs);
+  if (!s->inp)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
+                        "network planes", s->width, s->height);
+  return TT_OK;
+}
+
+void tt__net_fast_free(tt__net_state *s) {
+  free(s->inp);
+  free(s->scratch);
+  s->inp = NULL;
+  s->scratch = NULL;
+  s->scratch_threads = 0;
+  s->scratch_bytes = 0;
+}
+
+/* ---- SIMD building blocks ---- */
+
+AI v8f vsplat(float f) { return (v8f){f, f, f, f, f, f, f, f}; }
+
+AI v8f vsel(v8i mask, v8f a, v8f b) {
+  v8i ai, bi;
+  memcpy(&ai, &a, sizeof ai);
+  memcpy(&bi, &b, sizeof bi);
+  ai = (ai & mask) | (bi & ~mask);
+  memcpy(&a, &ai, sizeof a);
+  return a;
+}
+
+AI v8f vmax(v8f a, v8f b) { return vsel(a > b, a, b); }
+AI v8f vmin(v8f a, v8f b) { return vsel(a < b, a, b); }
+AI v8f vload(const float *p) { return *(const v8fu *)p; }
+AI void vstore(float *p, v8f v) { *(v8fu *)p = v; }
+
+/* exp(x) for x <= 0: 2^n * p(r), degree-6 polynomial (rel. error ~2e-7). */
+AI v8f vexp_neg(v8f x) {
+  x = vmax(x, vsplat(-87.0f));
+  v8f t = x * 1.44269504088896341f;
+  v8f n = (t + 12582912.0f) - 12582912.0f;
+  v8f r = x - n * 0.693145751953125f - n * 1.428606765330187045e-06f;
+  v8f p = r * (1.0f / 720.0f) + 1.0f / 120.0f;
+  p = p * r + 1.0f / 24.0f;
+  p = p * r + 1.0f / 6.0f;
+  p = p * r + 0.5f;
+  p = p * r + 1.0f;
+  p = p * r + 1.0f;
+  v8i e = (__builtin_convertvector(n, v8i) + 127) << 23;
+  v8f scale;
+  memcpy(&scale, &e, sizeof scale);
+  return p * scale;
+}
+
+/* ---- convolution rows ---- */
+
+/* One convolution over n columns of one output row. rowp[ky] points at channel 0 of the
+ * input row y + ky - r, whose column x0 + i is at rowp[ky][COL + x0 + i] (x0 in the input
+ * row's own coordinates); channel c adds c * cs. Output channel oc of column i goes to
+ * dst[oc * dcs + i]; ReLU when `relu`. */
+typedef struct conv_a {
+  const float *rowp[5];
+  size_t cs;
+  uint32_t in, ksize, oblk, nob, out;
+  const float *w, *b;  /* this set's packed weights and biases */
+  uint32_t x0, n;
+  float *dst;
+  size_t dcs;
+  int relu;
+} conv_a;
+
+AI void conv_rows_t(const conv_a *a, const int K, const int O, const int P) {
+  const uint32_t I = a->in, r = (uint32_t)K / 2;
+  for (uint32_t ob = 0; ob < a->nob; ob++) {
+    const float *wb = a->w + (size_t)ob * I * K * K * O;
+    const float *bb = a->b + (size_t)ob * O;
+    for (uint32_t xl = 0; xl < a->n; xl += 8u * P) {
+      v8f acc[12][2];
+#pragma GCC unroll 12
+      for (int o = 0; o < O; o++)
+#pragma GCC unroll 2
+        for (int j = 0; j < P; j++) acc[o][j] = vsplat(bb[o]);
+      const float *wp = wb;
+      size_t col = COL + a->x0 + xl - r;
+      for (uint32_t c = 0; c < I; c++) {
+#pragma GCC unroll 5
+        for (int ky = 0; ky < K; ky++) {
+          const float *p = a->rowp[ky] + c * a->cs + col;
+#pragma GCC unroll 5
+          for (int kx = 0; kx < K; kx++) {
+            v8f in[2];
+#pragma GCC unroll 2
+            for (int j = 0; j < P; j++) in[j] = vload(p + kx + 8 * j);
+#pragma GCC unroll 12
+            for (int o = 0; o < O; o++) {
+              float wv = wp[o];
+#pragma GCC unroll 2
+              for (int j = 0; j < P; j++) acc[o][j] += in[j] * wv;
+            }
+            wp += O;
+          }
+        }
+      }
+#pragma GCC unroll 12
+      for (int o = 0; o < O; o++) {
+        uint32_t oc = ob * O + (uint32_t)o;
+        if (oc >= a->out) break;
+        float *d = a->dst + oc * a->dcs + xl;
+#pragma GCC unroll 2
+        for (int j = 0; j < P; j++) {
+          v8f v = acc[o][j];
+          if (a->relu) v = vsel(v > vsplat(0.0f), v, vsplat(0.0f));
+          vstore(d + 8 * j, v);
+        }
+      }
+    }
+  }
+}
+
+/* Dispatch on (output block, kernel size) to constant-folded loops; `wide`: 32 vector
+ * registers (AVX-512VL), so 16 pixels per block. */
+#define CONV_CASE(O_, K_) \
+  case (O_) * 8 + (K_): conv_rows_t(a, K_, O_, wide ? 2 : ((O_) <= 6 ? 2 : 1)); break;
+AI void conv_rows_dispatch(const conv_a *a, const int wide) {
+  switch (a->oblk * 8 + a->ksize) {
+    CONV_CASE(6, 1) CONV_CASE(6, 3) CONV_CASE(6, 5)
+    CONV_CASE(8, 1) CONV_CASE(8, 3) CONV_CASE(8, 5)
+    CONV_CASE(10, 1) CONV_CASE(10, 3) CONV_CASE(10, 5)
+    CONV_CASE(12, 1) CONV_CASE(12, 3) CONV_CASE(12, 5)
+    default: break;
+  }
+}
+
+/* ---- softmax + colour mix + hidden layer + outputs ---- */
+
+typedef struct mix_a {
+  const tt__net_state *s;
+  const tt__net_model *m;
+  float *lg;            /* logits [50][CHUNK] of columns x0.. (overwritten) */
+  uint32_t x0, n, y;
+  const float *hrow;    /* last body layer, row y: channel c at hrow[c * hcs + COL + x - hx] */
+  size_t hcs;
+  int hx;               /* first column of the tile's ring rows */
+  const float *hw, *hb; /* hidden layer weights [out][in] and biases of this set */
+  float *out_rgb;
+} mix_a;
+
+AI void mix_rows_t(const mix_a *a) {
+  const tt__net_state *s = a->s;
+  const uint32_t hidden = a->m->hidden, hin = a->m->hid.in, sc = s->state_ch;
+  const size_t rs = s->rs, cs = s->inp_cs;
+  for (uint32_t xl = 0; xl < a->n; xl += 8) {
+    uint32_t x = a->x0 + xl;
+    if (x >= s->width) break;
+    float *lg = a->lg + xl;
+    v8f mx = vload(lg);
+    for (int k = 1; k < 50; k++) mx = vmax(mx, vload(lg + k * CHUNK));
+    v8f sum = vsplat(0.0f);
+    for (int k = 0; k < 50; k++) {
+      v8f e = vexp_neg(vload(lg + k * CHUNK) - mx);
+      vstore(lg + k * CHUNK, e);
+      sum += e;
+    }
+    v8f o[3] = {vsplat(0.0f), vsplat(0.0f), vsplat(0.0f)};
+    for (uint32_t ty = 0; ty < 5; ty++) {
+      const float *row = s->inp + (size_t)(a->y + ty - 2 + s->halo) * rs + COL + x - 2;
+      for (uint32_t tx = 0; tx < 5; tx++) {
+        v8f ka = vload(lg + (ty * 5 + tx) * CHUNK), kb = vload(lg + (25 + ty * 5 + tx) * CHUNK);
+#pragma GCC unroll 3
+        for (int c = 0; c < 3; c++)
+          o[c] += ka * vload(row + c * cs + tx) + kb * vload(row + (6 + c) * cs + tx);
+      }
+    }
+    v8f inv = vsplat(1.0f) / sum;
+    float st[8][16];
+    for (int c = 0; c < 3; c++) {
+      o[c] = o[c] * inv;
+      for (int l = 0; l < 8; l++) st[l][c] = o[c][l];
+    }
+    for (uint32_t k = 0; k < hidden; k++) {
+      v8f h = vsplat(a->hb[k]);
+      for (uint32_t c = 0; c < hin; c++)
+        h += vload(a->hrow + c * a->hcs + (int)(COL + x) - a->hx) * a->hw[k * hin + c];
+      for (int l = 0; l < 8; l++) st[l][3 + k] = h[l];
+    }
+    /* Linear output: the inverse tonemap of taa_image.c on 8 lanes. */
+    v8f z = vsplat(0.0f);
+    v8f mm = vmin(vmax(vmax(o[0], o[1]), vmax(o[2], z)), vsplat(0.999f));
+    v8f scale = vsplat(1.0f) / (vsplat(1.0f) - mm);
+    v8f lin[3];
+    for (int c = 0; c < 3; c++) lin[c] = vmax(o[c], z) * scale;
+    uint32_t lanes = s->width - x < 8 ? s->width - x : 8;
+    size_t i = (size_t)a->y * s->width + x;
+    float *ns = s->next_state + i * sc, *out = a->out_rgb + i * 3;
+    for (uint32_t l = 0; l < lanes; l++) {
+      for (uint32_t c = 0; c < sc; c++) ns[l * sc + c] = st[l][c];
+      for (int c = 0; c < 3; c++) out[l * 3 + c] = lin[c][l];
+    }
+  }
+}
+
+/* ---- per-ISA entry points ---- */
+
+typedef struct fast_isa {
+  const char *name;
+  void (*conv)(const conv_a *);
+  void (*mix)(const mix_a *);
+} fast_isa;
+
+#if FAST_X86
+TGT_V4 static void conv_v4(const conv_a *a) { conv_rows_dispatch(a, 1); }
+TGT_V4 static void mix_v4(const mix_a *a) { mix_rows_t(a); }
+TGT_V3 static void conv_v3(const conv_a *a) { conv_rows_dispatch(a, 0); }
+TGT_V3 static void mix_v3(const mix_a *a) { mix_rows_t(a); }
+#endif
+static void conv_generic(const conv_a *a) { conv_rows_dispatch(a, 0); }
+static void mix_generic(const mix_a *a) { mix_rows_t(a); }
+
+static const fast_isa *fast_pick(void) {
+  static const fast_isa generic = {"generic", conv_generic, mix_generic};
+#if FAST_X86
+  static const fast_isa v4 = {"avx512", conv_v4, mix_v4}, v3 = {"avx2", conv_v3, mix_v3};
+  const char *force = getenv("TT_POST_TAA_ISA");
+  __builtin_cpu_init();
+  int has_v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  int has_v4 = has_v3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (force && !strcmp(force, "generic")) return &generic;
+  if (force && !strcmp(force, "avx2")) return has_v3 ? &v3 : &generic;
+  return has_v4 ? &v4 : has_v3 ? &v3 : &generic;
+#else
+  return &generic;
+#endif
+}
+
+const char *tt__net_fast_isa(void) { return fast_pick()->name; }
+
+/* ---- stage 1: input planes ---- */
+
+typedef struct in_job {
+  tt__net_state *s;
+  const tt__net_model *m;
+  const float *color, *depth, *motion;
+  float depth_scale;
+} in_job;
+
+/* Catmull-Rom fetch of an 8-channel image (one vector per tap); same weights and order as
+ * tt__taa_sample_catmull_rom. */
+AI v8f fast_cr8(const float *img, uint32_t width, uint32_t height, float fx, float fy) {
+  float ux = fx - 0.5f, uy = fy - 0.5f;
+  float bx = floorf(ux), by = floorf(uy);
+  float wx[4], wy[4];
+  float f = ux - bx;
+  wx[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
+  wx[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
+  wx[2] = f * (0.5f + f * (2.0f - 1.5f * f));
+  wx[3] = f * f * (-0.5f + 0.5f * f);
+  f = uy - by;
+  wy[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
+  wy[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
+  wy[2] = f * (0.5f + f * (2.0f - 1.5f * f));
+  wy[3] = f * f * (-0.5f + 0.5f * f);
+  int x0 = (int)bx - 1, y0 = (int)by - 1, w = (int)width, h = (int)height;
+  int xi[4];
+  for (int i = 0; i < 4; i++) {
+    int v = x0 + i;
+    xi[i] = v < 0 ? 0 : (v >= w ? w - 1 : v);
+  }
+  v8f acc = vsplat(0.0f);
+  for (int j = 0; j < 4; j++) {
+    int yy = y0 + j;
+    yy = yy < 0 ? 0 : (yy >= h ? h - 1 : yy);
+    const float *row = img + (size_t)yy * width * 8;
+    for (int i = 0; i < 4; i++) acc += vload(row + (size_t)xi[i] * 8) * (wx[i] * wy[j]);
+  }
+  return acc;
+}
+
+AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
+  tt__net_state *s = job->s;
+  const tt__net_model *m = job->m;
+  uint32_t w = s->width, sc = s->state_ch, nch = 6 + sc;
+  size_t cs = s->inp_cs;
+  float fb[16];
+  for (uint32_t y = y0; y < y1; y++) {
+    float *base = s->inp + (size_t)(y + s->halo) * s->rs + COL;
+    for (uint32_t x = 0; x < w; x++) {
+      size_t i = (size_t)y * w + x;
+      float t[3];
+      tt__taa_tonemap_inl(job->color + 3 * i, t);
+      float mx = job->motion ? job->motion[2 * i] : 0.0f;
+      float my = job->motion ? job->motion[2 * i + 1] : 0.0f;
+      if (s->valid) {
+        /* Motion points from this frame back to the previous one (film.h). */
+        float fx = (float)x + 0.5f + mx, fy = (float)y + 0.5f + my;
+        if (sc == 8) {
+          v8f v = fast_cr8(s->state, w, s->height, fx, fy);
+          memcpy(fb, &v, sizeof v);
+        } else {
+          tt__taa_sample_catmull_rom(s->state, w, s->height, sc, fx, fy, fb);
+        }
+      } else {
+        memset(fb, 0, sizeof fb);
+        memcpy(fb, t, sizeof t);
+      }
+      float v[6 + 16];
+      v[0] = t[0];
+      v[1] = t[1];
+      v[2] = t[2];
+      v[3] = mx * m->motion_scale;
+      v[4] = my * m->motion_scale;
+      v[5] = job->depth ? job->depth[i] * job->depth_scale : 0.0f;
+      memcpy(v + 6, fb, sc * sizeof(float));
+      for (uint32_t c = 0; c < nch; c++) base[c * cs + x] = v[c];
+    }
+  }
+}
+
+#if FAST_X86
+TGT_V3 static void input_rows_v3(void *ctx, uint32_t y0, uint32_t y1) {
+  input_rows_t(ctx, y0, y1);
+}
+#endif
+static void input_rows_generic(void *ctx, uint32_t y0, uint32_t y1) {
+  input_rows_t(ctx, y0, y1);
+}
+
+/* ---- stage 2: bands ---- */
+
+typedef struct band_job {
+  tt__net_state *s;
+  const tt__net_model *m;
+  const fast_isa *isa;
+  uint32_t set, band_rows, bands;
+  uint32_t tile_cols, tiles, margin;  /* column tiles: output columns per tile, count, and
+                                       * the extra columns each side the body layers cover */
+  uint32_t lw, rrs;                   /* ring row: columns computed, stride */
+  float *out_rgb;
+  size_t ring_off[TT__NET_MAX_LAYERS], logits_off;
+} band_job;
+
+/* Per-thread scratch header: accumulated ns of the stage's parts. */
+typedef struct band_times {
+  double body_ns, kernel_ns, mix_ns;
+} band_times;
+#define SCRATCH_HEADER 64u
+
+/* One band's ring buffers and progress. */
+typedef struct band_ctx {
+  const band_job *job;
+  unsigned char *scr;
+  band_times *tm;
+  float *ring[TT__NET_MAX_LAYERS];
+  uint32_t rlen[TT__NET_MAX_LAYERS];
+  int next[TT__NET_MAX_LAYERS];
+  int bx;             /* image column of ring column 0 */
+  uint32_t tx0, tx1;  /* the tile's output columns */
+} band_ctx;
+
+static double fast_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec * 1e9 + ts.tv_nsec;
+}
+
+/* Ring slot of row y (y may be negative). */
+static inline float *ring_row(const band_ctx *b, uint32_t l, int y) {
+  int R = (int)b->rlen[l];
+  int k = ((y % R) + R) % R;
+  return b->ring[l] + (size_t)k * b->job->rrs;
+}
+
+/* Layer index of a set: the jitter set for 8-set layers. */
+static inline uint32_t set_of(const tt__net_layer *l, uint32_t set) {
+  return l->sets > 1 ? set : 0;
+}
+
+/* Input row pointers of layer l (0: the input planes; else the previous ring) for output
+ * row y; returns the channel stride. *col0: image column of the rows' column 0. */
+static size_t layer_rows(const band_ctx *b, uint32_t l, uint32_t ksize, int y,
+                         const float **rowp, int *col0) {
+  const tt__net_state *s = b->job->s;
+  int r = (int)ksize / 2;
+  if (l == 0) {
+    for (int ky = 0; ky < (int)ksize; ky++)
+      rowp[ky] = s->inp + (size_t)(y + ky - r + (int)s->halo) * s->rs;
+    *col0 = 0;
+    return s->inp_cs;
+  }
+  for (int ky = 0; ky < (int)ksize; ky++) rowp[ky] = ring_row(b, l - 1, y + ky - r);
+  *col0 = b->bx;
+  return (size_t)b->rlen[l - 1] * b->job->rrs;
+}
+
+/* Computes row y of body layer l into its ring (zeros outside the image). */
+static void body_row(band_ctx *b, uint32_t l, int y) {
+  const band_job *job = b->job;
+  const tt__net_state *s = job->s;
+  const tt__net_layer *ly = &job->m->body[l];
+  float *dst = ring_row(b, l, y);
+  size_t rrs = job->rrs, dcs = (size_t)b->rlen[l] * rrs;
+  if (y < 0 || y >= (int)s->height) {
+    for (uint32_t c = 0; c < ly->out; c++) memset(dst + c * dcs, 0, rrs * sizeof(float));
+    return;
+  }
+  double t0 = fast_ns();
+  conv_a a;
+  int col0;
+  a.cs = layer_rows(b, l, ly->ksize, y, a.rowp, &col0);
+  a.in = ly->in;
+  a.ksize = ly->ksize;
+  a.oblk = ly->oblk;
+  a.nob = ly->nob;
+  a.out = ly->out;
+  uint32_t st = set_of(ly, job->set);
+  a.w = ly->wq + (size_t)st * ly->nob * ly->oblk * ly->in * ly->ksize * ly->ksize;
+  a.b = ly->bq + (size_t)st * ly->nob * ly->oblk;
+  a.dcs = dcs;
+  a.relu = 1;
+  /* Image columns [xs, xe) of the ring row [bx, bx + lw); the rest is zero padding (left of
+   * the image, right of it) and must read as 0 in the next layer. */
+  int bx = b->bx, lw = (int)job->lw;
+  int xs = bx > 0 ? bx : 0, xe = bx + lw < (int)s->vw ? bx + lw : (int)s->vw;
+  for (int x0 = xs; x0 < xe; x0 += (int)CHUNK) {
+    a.x0 = (uint32_t)(x0 - col0);
+    a.n = xe - x0 < (int)CHUNK ? (uint32_t)(xe - x0) : CHUNK;
+    a.dst = dst + COL + (x0 - bx);
+    job->isa->conv(&a);
+  }
+  int zr = (int)s->width > xs ? (int)s->width : xs;  /* first column right of the image */
+  for (uint32_t c = 0; c < ly->out; c++) {
+    float *d = dst + c * dcs + COL;
+    if (xs > bx) memset(d, 0, (size_t)(xs - bx) * sizeof(float));
+    if (zr < bx + lw) memset(d + (zr - bx), 0, (size_t)(bx + lw - zr) * sizeof(float));
+  }
+  b->tm->body_ns += fast_ns() - t0;
+}
+
+/* Makes body layer l hold rows up to y (computing the inputs first). */
+static void ensure_rows(band_ctx *b, uint32_t l, int y) {
+  while (b->next[l] <= y) {
+    int yy = b->next[l];
+    if (l > 0) ensure_rows(b, l - 1, yy + (int)b->job->m->body[l].ksize / 2);
+    body_row(b, l, yy);
+    b->next[l]++;
+  }
+}
+
+/* Kernel layer, softmax, colour mix, hidden layer and outputs of row y. */
+static void head_row(band_ctx *b, int y) {
+  const band_job *job = b->job;
+  const tt__net_state *s = job->s;
+  const tt__net_model *m = job->m;
+  const tt__net_layer *kl = &m->kernel;
+  uint32_t last = m->body_count - 1;
+  conv_a a;
+  int col0;
+  a.cs = layer_rows(b, m->body_count, kl->ksize, y, a.rowp, &col0);
+  a.in = kl->in;
+  a.ksize = kl->ksize;
+  a.oblk = kl->oblk;
+  a.nob = kl->nob;
+  a.out = kl->out;
+  uint32_t ks = set_of(kl, job->set);
+  a.w = kl->wq + (size_t)ks * kl->nob * kl->oblk * kl->in * kl->ksize * kl->ksize;
+  a.b = kl->bq + (size_t)ks * kl->nob * kl->oblk;
+  a.dcs = CHUNK;
+  a.relu = 0;
+  a.dst = (float *)(b->scr + job->logits_off);
+  mix_a mx;
+  mx.s = s;
+  mx.m = m;
+  mx.lg = a.dst;
+  mx.y = (uint32_t)y;
+  mx.hrow = ring_row(b, last, y);
+  mx.hcs = (size_t)b->rlen[last] * job->rrs;
+  mx.hx = b->bx;
+  uint32_t hs = set_of(&m->hid, job->set);
+  mx.hw = m->hidden ? m->hid.w + (size_t)hs * m->hid.out * m->hid.in : NULL;
+  mx.hb = m->hidden ? m->hid.b + (size_t)hs * m->hid.out : NULL;
+  mx.out_rgb = job->out_rgb;
+  for (uint32_t x0 = b->tx0; x0 < b->tx1 && x0 < s->width; x0 += CHUNK) {
+    a.x0 = (uint32_t)((int)x0 - col0);
+    mx.x0 = x0;
+    a.n = mx.n = b->tx1 - x0 < CHUNK ? b->tx1 - x0 : CHUNK;
+    double t0 = fast_ns();
+    job->isa->conv(&a);
+    double t1 = fast_ns();
+    job->isa->mix(&mx);
+    b->tm->kernel_ns += t1 - t0;
+    b->tm->mix_ns += fast_ns() - t1;
+  }
+}
+
+/* Rows [y0, y1) of columns [tx0, tx1) through all layers. */
+static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t y1,
+                     uint32_t tx0, uint32_t tx1) {
+  band_ctx b;
+  memset(&b, 0, sizeof b);
+  b.job = job;
+  b.tx0 = tx0;
+  b.tx1 = tx1;
+  b.bx = (int)tx0 - (int)job->margin;
+  b.scr = (unsigned char *)job->s->scratch + (size_t)thread * job->s->scratch_bytes;
+  b.tm = (band_times *)b.scr;
+  const tt__net_model *m = job->m;
+  for (uint32_t l = 0; l < m->body_count; l++) {
+    b.ring[l] = (float *)(b.scr + job->ring_off[l]);
+    b.rlen[l] = l + 1 < m->body_count ? m->body[l + 1].ksize : m->kernel.ksize;
+    b.next[l] = (int)y0 - (int)fast_halo_after(m, l);
+  }
+  int rk = (int)m->kernel.ksize / 2;
+  for (int y = (int)y0; y < (int)y1; y++) {
+    ensure_rows(&b, m->body_count - 1, y + rk);
+    head_row(&b, y);
+  }
+}
+
+static void band_body(void *ctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  const band_job *job = ctx;
+  uint32_t h = job->s->height;
+  if (thread_index >= job->s->scratch_threads) thread_index = 0;  /* not expected */
+  for (uint64_t k = begin; k < end; k++) {
+    uint32_t band = (uint32_t)(k / job->tiles), tile = (uint32_t)(k % job->tiles);
+    uint32_t y0 = band * job->band_rows, y1 = y0 + job->band_rows;
+    uint32_t x0 = tile * job->tile_cols, x1 = x0 + job->tile_cols;
+    band_run(job, thread_index, y0, y1 < h ? y1 : h, x0, x1 < job->s->vw ? x1 : job->s->vw);
+  }
+}
+
+/* Scratch layout for `threads` threads; (re)allocates when it grew. */
+static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job *job,
+                              uint32_t threads) {
+  /* Column tiles keep the ring buffers within ~512 KB (L2): a tile's body layers cover 16
+   * more columns each side (>= the receptive field's 2..12), recomputed by both tiles. */
+  size_t ring_ch = 0;
+  for (uint32_t l = 0; l < m->body_count; l++)
+    ring_ch += (size_t)m->body[l].out *
+               (l + 1 < m->body_count ? m->body[l + 1].ksize : m->kernel.ksize);
+  uint32_t cols = s->tile_cols;
+  if (!cols) {
+    size_t fit = (512u * 1024u) / (ring_ch * sizeof(float));
+    cols = s->vw;
+    if (fit < s->vw + 2 * COL) {
+      uint32_t tiles = (uint32_t)((s->vw + fit - 1) / (fit > 128 ? fit - 64 : 64));
+      cols = (s->vw + tiles - 1) / tiles;
+    }
+  }
+  cols = (cols + 63) & ~63u;
+  if (cols >= s->vw) cols = s->vw;
+  job->tile_cols = cols;
+  job->tiles = (s->vw + cols - 1) / cols;
+  job->margin = job->tiles > 1 ? 16u : 0u;
+  job->lw = cols + 2 * job->margin;
+  job->rrs = job->lw + 2 * COL;
+  size_t off = SCRATCH_HEADER;
+  for (uint32_t l = 0; l < m->body_count; l++) {
+    uint32_t R = l + 1 < m->body_count ? m->body[l + 1].ksize : m->kernel.ksize;
+    job->ring_off[l] = off;
+    off += ((size_t)m->body[l].out * R * job->rrs * sizeof(float) + 63) & ~(size_t)63;
+  }
+  job->logits_off = off;
+  off += (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float);
+  off = (off + 4095) & ~(size_t)4095;  /* threads' blocks on separate pages */
+  if (s->scratch && s->scratch_threads >= threads && s->scratch_bytes == off) return TT_OK;
+  free(s->scratch);
+  s->scratch = aligned_alloc(4096, off * threads);
+  if (!s->scratch) {
+    s->scratch_threads = 0;
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for scratch");
+  }
+  /* Ring columns outside the image stay zero: only [COL, COL + vw) is ever written. */
+  memset(s->scratch, 0, off * threads);
+  s->scratch_threads = threads;
+  s->scratch_bytes = off;
+  return TT_OK;
+}
+
+/* Process CPU time in ms (all threads). */
+static double fast_cpu_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                          const float *color, const float *depth, const float *motion,
+                          uint32_t jitter_index, float *out_rgb) {
+  const fast_isa *isa = fast_pick();
+  double w0 = fast_ns() * 1e-6, c0 = fast_cpu_ms();
+  in_job ij = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion};
+  float dmax = 0.0f;
+  if (depth)
+    for (size_t i = 0; i < (size_t)s->width * s->height; i++)
+      if (depth[i] > dmax && isfinite(depth[i])) dmax = depth[i];
+  ij.depth_scale = dmax > 0.0f ? 1.0f / dmax : 0.0f;
+#if FAST_X86
+  tt__taa_parallel_rows(host, s->height, strcmp(isa->name, "generic") ? input_rows_v3
+                                                                    : input_rows_generic, &ij);
+#else
+  tt__taa_parallel_rows(host, s->height, input_rows_generic, &ij);
+#endif
+  double w1 = fast_ns() * 1e-6, c1 = fast_cpu_ms();
+
+  int pool = host && host->parallel_for && s->height >= 16;
+  uint32_t threads = pool && host->thread_count ? host->thread_count() : 1;
+  if (threads < 1) threads = 1;
+  band_job job = {.s = s, .m = m, .isa = isa, .set = jitter_index % TT__NET_JITTER_SETS,
+                  .out_rgb = out_rgb};
+  if (fast_scratch(s, m, &job, threads) != TT_OK) {
+    /* Out of memory for a few MB of scratch: leave the frame as the input. */
+    memcpy(out_rgb, color, (size_t)s->width * s->height * 3 * sizeof(float));
+    return;
+  }
+  for (uint32_t t = 0; t < s->scratch_threads; t++)
+    memset((unsigned char *)s->scratch + (size_t)t * s->scratch_bytes, 0, sizeof(band_times));
+  /* Bands: about 4 per thread (dynamic scheduling evens out a loaded machine), at least 16
+   * rows each (a band recomputes ~2 rows of halo work). The split does not change results. */
+  uint32_t rows = s->band_rows;
+  if (!rows) {
+    rows = (s->height + 4 * threads - 1) / (4 * threads);
+    if (rows < 16) rows = 16;
+  }
+  job.band_rows = rows;
+  job.bands = (s->height + rows - 1) / rows;
+  uint64_t items = (uint64_t)job.bands * job.tiles;
+  if (!pool || threads == 1 || items == 1 ||
+      host->parallel_for(items, 1, band_body, &job) != TT_OK)
+    band_body(&job, 0, items, 0);  /* serial, or finishing an interrupted frame */
+  double w2 = fast_ns() * 1e-6, c2 = fast_cpu_ms();
+
+  double body = 0, kern = 0, mix = 0;
+  for (uint32_t t = 0; t < s->scratch_threads; t++) {
+    const band_times *bt = (const band_times *)((unsigned char *)s->scratch +
+                                                (size_t)t * s->scratch_bytes);
+    body += bt->body_ns;
+    kern += bt->kernel_ns;
+    mix += bt->mix_ns;
+  }
+  double tot = body + kern + mix, fmix = tot > 0 ? mix / tot : 0;
+  s->ms_body = body * 1e-6;
+  s->ms_kernel = kern * 1e-6;
+  s->ms_reproject = w1 - w0;
+  s->ms_network = (w2 - w1) * (1 - fmix);
+  s->ms_mix = (w2 - w1) * fmix;
+  s->cpu_reproject = c1 - c0;
+  s->cpu_network = (c2 - c1) * (1 - fmix);
+  s->cpu_mix = (c2 - c1) * fmix;
+  float *t = s->state;
+  s->state = s->next_state;
+  s->next_state = t;
+  s->valid = 1;
+}
