@@ -497,14 +497,20 @@ static tt_status tt__embree_init(const tt_host *host) {
   atomic_store(&g_embree_bytes, 0);
   atomic_flag_clear(&g_warned_custom_only);
   atomic_flag_clear(&g_noted_compact);
-  /* Kernel set: AVX2+FMA when the CPU has both, else the SSE4.1 baseline;
-   * TT_ACCEL_EMBREE_ISA=sse41 forces the baseline (tests run both). */
+  /* Kernel set: AVX-512 (F, VL, DQ, BW) when the CPU has it, else AVX2+FMA when it has
+   * both, else the SSE4.1 baseline; TT_ACCEL_EMBREE_ISA=avx2 or sse41 caps the choice
+   * (tests run every set the CPU has). */
   __builtin_cpu_init();
   const char *isa = getenv("TT_ACCEL_EMBREE_ISA");
   g_kernels = NULL;
   g_kernels_isa = "none";
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-      !(isa && strcmp(isa, "sse41") == 0)) {
+  const int avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+      !(isa && (strcmp(isa, "sse41") == 0 || strcmp(isa, "avx2") == 0))) {
+    g_kernels = tt__trav_table_avx512();
+    g_kernels_isa = "avx512";
+  } else if (avx2 && !(isa && strcmp(isa, "sse41") == 0)) {
     g_kernels = tt__trav_table_avx2();
     g_kernels_isa = "avx2";
   } else if (__builtin_cpu_supports("sse4.1")) {

@@ -2,8 +2,9 @@
  * (accel_embree_custom.c) and the traversal kernels (accel_embree_trav.c, compiled once per
  * instruction set). Not installed.
  *
- * Inner nodes hold N = 2, 4 or 8 children with their boxes stored SoA (one row of N floats
- * per box plane), so one SIMD operation tests one plane of all children. Lanes without a
+ * Inner nodes hold N = 2, 4 or 8 children with their boxes stored SoA (BVH4/8: one row of
+ * N floats per box plane, so one SIMD operation tests one plane of all children; BVH2: one
+ * row per axis holding both children's lower and upper planes). Lanes without a
  * child hold an empty box (lower = +inf, upper = -inf) that no ray can hit, so the kernels
  * never need to know how many children a node really has. Leaves are runs of triangle
  * packets of 4 triangles (the last one 2 when that suffices), with the data the
@@ -28,16 +29,23 @@
 #define TT__LEAF_MAX_FIRST ((1u << TT__LEAF_SHIFT) - 1u)
 #define TT__NODE_MAX_INDEX 0x7FFFFFFEu
 
-/* Box rows of a node: lower x, upper x, lower y, upper y, lower z, upper z (so that the
- * near plane of axis k is row 2k + (dir[k] < 0) and the far plane the other one). */
+/* Box rows of a BVH4/BVH8 node: lower x, upper x, lower y, upper y, lower z, upper z (so
+ * that the near plane of axis k is row 2k + (dir[k] < 0) and the far plane the other one).
+ *
+ * A BVH2 node packs both children's boxes per axis into one 4-wide row (lower c0, lower
+ * c1, upper c0, upper c1): the kernel tests both children on an axis with one 4-wide
+ * multiply-subtract (upper lanes negated by the ray constants) and one permute chosen by
+ * the direction's sign, then combines the axes with three max ops (see
+ * accel_embree_trav.c, tt__box2). */
 typedef struct tt__node2 {
-  float b[6][2];
+  float b[3][4];
   uint32_t child[2];
-  /* Prefetch hints (BVH2 only; they change no result): for each inner child c,
-   * grand[c] = c's second child reference (its first child, when inner, is node c + 1 by
-   * pre-order); TT__REF_NONE otherwise. A binary tree's traversal is a chain of dependent
-   * node loads; knowing the grandchildren one level early lets the kernel fetch two levels
-   * ahead, so two node misses overlap instead of following each other. */
+  /* Prefetch hints (they change no result): for each inner child c, grand[c] = c's
+   * second child reference (its first child, when inner, is node c + 1 by pre-order);
+   * for a leaf child (or an inner child without a second box) child[c] itself, so the
+   * kernel prefetches hints without testing them. A binary tree's traversal is a chain of
+   * dependent node loads; knowing the grandchildren one level early lets the kernel fetch
+   * two levels ahead, so two node misses overlap instead of following each other. */
   uint32_t grand[2];
 } tt__node2; /* 64 bytes */
 typedef struct tt__node4 {
@@ -68,14 +76,26 @@ typedef struct tt__id {
   uint32_t geom, prim;  /* TT_INVALID_ID for an unused slot */
 } tt__id;
 
+/* BVH2 layout: one arena of 64-byte lines holding nodes and leaves interleaved in
+ * pre-order (a node, then its first child's subtree, then its second's), so a leaf child
+ * sits next to its parent and every reference - node, leaf, or grand[] hint - is a line
+ * index: inner: bit 31 clear, bits 0..26 the node's line; leaf: bit 31 set, bits 27..30
+ * pairs - 1, bits 0..26 the leaf block's first line. A leaf block of p triangle pairs is
+ * its packets (as above: floor(p/2) 4-wide, one 2-wide when p is odd; p * 96 bytes) then
+ * its 2p ids (p * 16 bytes), padded to whole lines: a 1-2 triangle leaf is exactly two
+ * lines, and the hit's ids come from a line the test already read. */
+#define TT__LINE2_MASK ((1u << TT__LEAF_SHIFT) - 1u)
+
 /* A built tree. */
 typedef struct tt__bvh {
   int width;             /* 2, 4 or 8 */
   int robust;            /* packets hold vertices; watertight test, conservative boxes */
   uint32_t root;         /* a child reference, or TT__REF_NONE */
-  void *nodes;           /* tt__node{2,4,8}[node_count], 64-byte aligned */
-  float *slots;          /* slot_count triangle slots of 12 floats, 64-byte aligned */
-  tt__id *ids;           /* slot_count ids, parallel to slots */
+  void *arena;           /* BVH2: nodes and leaves (above), 64-byte aligned; else NULL */
+  void *nodes;           /* BVH4/8: tt__node{4,8}[node_count], 64-byte aligned */
+  float *slots;          /* BVH4/8: slot_count triangle slots of 12 floats, 64-byte aligned */
+  tt__id *ids;           /* BVH4/8: slot_count ids, parallel to slots */
+  uint64_t arena_lines;
   uint64_t node_count;
   uint64_t slot_count;
   /* Traversal counters, updated (relaxed, once per ray) only by the counting kernels. */
@@ -96,5 +116,6 @@ typedef struct tt__kernels {
 typedef tt__kernels tt__kernel_table[3][2][2];
 const tt__kernel_table *tt__trav_table_sse41(void);
 const tt__kernel_table *tt__trav_table_avx2(void);
+const tt__kernel_table *tt__trav_table_avx512(void);
 
 #endif /* TT_ACCEL_EMBREE_BVH_H */

@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 /* Spatial-split builds keep a split budget in the top 5 bits of geomID (Embree 3.13.5,
  * RESERVED_NUM_SPATIAL_SPLITS_GEOMID_BITS); leaves must mask them off. */
@@ -147,7 +148,9 @@ static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim,
 typedef struct tt__flat {
   const tt_scene *scene;
   int N, robust;
-  char *nodes;                  /* capacity node_cap nodes of 32 * N bytes */
+  char *arena;                  /* BVH2: capacity arena_cap lines (accel_embree_bvh.h) */
+  uint64_t arena_lines, arena_cap;
+  char *nodes;                  /* BVH4/8: capacity node_cap nodes of 32 * N bytes */
   uint64_t node_count, node_cap;
   float *slots;                 /* triangle slots (accel_embree_bvh.h) */
   tt__id *ids;                  /* parallel to slots */
@@ -219,6 +222,29 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
       f->error = "a leaf holds more than 32 triangles";
       return TT__REF_NONE;
     }
+    if (f->N == 2) {
+      /* BVH2: a leaf block in the arena, packets then ids, whole lines. */
+      const uint64_t line = f->arena_lines, lines = (112u * pairs + 63u) / 64u;
+      if (line + lines > f->arena_cap || line + lines - 1 > TT__LINE2_MASK) {
+        f->error = line + lines > f->arena_cap ? "more BVH2 lines than counted"
+                                               : "BVH2 arena too large for 27-bit lines";
+        return TT__REF_NONE;
+      }
+      f->arena_lines += lines;
+      float *base = (float *)(f->arena + line * 64u);
+      tt__id *id = (tt__id *)((char *)base + (size_t)pairs * 96u);
+      for (uint32_t i = 0; i < nslots; i++) id[i].geom = id[i].prim = TT_INVALID_ID;
+      for (uint32_t j = 0; j < l->count; j++) {
+        int W = j < 4 * wide ? 4 : 2;
+        uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;
+        tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j],
+                     l->ids[2 * j], l->ids[2 * j + 1]);
+      }
+      f->slot_count += nslots;
+      f->leaves++;
+      f->area_leaf_tris += tt__area(lower, upper) * l->count;
+      return TT__REF_LEAF | ((pairs - 1) << TT__LEAF_SHIFT) | (uint32_t)line;
+    }
     uint64_t first;
     if (wide == 0 && f->ngaps > 0) {
       first = f->gaps[--f->ngaps];
@@ -255,9 +281,17 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
     f->error = "more inner nodes than Embree created";
     return TT__REF_NONE;
   }
-  const uint64_t index = f->node_count++;
-  f->area_inner += tt__area(lower, upper);
   const int N = f->N;
+  uint64_t index = f->node_count++;
+  if (N == 2) {  /* BVH2: the node's line, before its children's (pre-order) */
+    if (f->arena_lines >= f->arena_cap || f->arena_lines > TT__LINE2_MASK) {
+      f->error = f->arena_lines >= f->arena_cap ? "more BVH2 lines than counted"
+                                                : "BVH2 arena too large for 27-bit lines";
+      return TT__REF_NONE;
+    }
+    index = f->arena_lines++;
+  }
+  f->area_inner += tt__area(lower, upper);
   /* Children first (they may be anywhere later in the arrays), then this node's rows; the
    * node is addressed by index because nothing moves, but computing rows after the
    * recursion keeps the code obviously independent of it. */
@@ -272,13 +306,16 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
       refs[i] = tt__flatten(f, n->child[i], depth + 1, box[i], box[i] + 3);
     }
   }
-  float *rows = (float *)(f->nodes + index * (uint64_t)(32 * N));
+  float *rows = (float *)(N == 2 ? f->arena + index * 64u : f->nodes + index * (uint64_t)(32 * N));
   uint32_t *child = (uint32_t *)(rows + 6 * N);
   for (int i = 0; i < N; i++) {
     int empty = refs[i] == TT__REF_NONE;
     for (int k = 0; k < 3; k++) {
-      rows[(2 * k) * N + i] = empty ? INFINITY : box[i][k];
-      rows[(2 * k + 1) * N + i] = empty ? -INFINITY : box[i][3 + k];
+      /* BVH2: row k = (lower c0, lower c1, upper c0, upper c1); wider: rows 2k, 2k+1. */
+      float *lo = N == 2 ? &rows[4 * k + i] : &rows[(2 * k) * N + i];
+      float *up = N == 2 ? &rows[4 * k + 2 + i] : &rows[(2 * k + 1) * N + i];
+      *lo = empty ? INFINITY : box[i][k];
+      *up = empty ? -INFINITY : box[i][3 + k];
     }
     child[i] = empty ? 0u : refs[i];
   }
@@ -287,10 +324,10 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
     /* Grandchild hints (tt__node2.grand): the children were laid out first, so an inner
      * child's node is already written. */
     for (int i = 0; i < 2; i++) {
-      uint32_t g = TT__REF_NONE;
+      uint32_t g = child[i];  /* a leaf (or empty) child: its own lines, or the root's */
       if (refs[i] != TT__REF_NONE && !(refs[i] & TT__REF_LEAF)) {
-        const tt__node2 *cn = (const tt__node2 *)(f->nodes + (uint64_t)refs[i] * 64u);
-        if (cn->b[0][1] <= cn->b[1][1]) g = cn->child[1];  /* non-empty second box */
+        const tt__node2 *cn = (const tt__node2 *)(f->arena + (uint64_t)refs[i] * 64u);
+        if (cn->b[0][1] <= cn->b[0][3]) g = cn->child[1];  /* non-empty second box */
       }
       child[2 + i] = g;
     }
@@ -303,6 +340,7 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
 /* Frees a tree (NULL is ignored). */
 void tt__custom_free(tt__bvh *bvh) {
   if (!bvh) return;
+  free(bvh->arena);
   free(bvh->nodes);
   free(bvh->slots);
   free(bvh->ids);
@@ -311,6 +349,24 @@ void tt__custom_free(tt__bvh *bvh) {
 
 /* Rounds up to a multiple of 64 (aligned_alloc wants size % alignment == 0). */
 static size_t tt__round64(size_t n) { return (n + 63) & ~(size_t)63; }
+
+/* Allocates a tree array (64-byte aligned, `bytes` rounded up to 64). Arrays of 2 MiB and
+ * more start on a 2 MiB boundary and are marked MADV_HUGEPAGE before they are first
+ * written: incoherent rays touch lines all over a large tree, and with 4 KiB pages nearly
+ * every node visit also misses the TLB (a page walk on top of the cache miss). Transparent
+ * huge pages need the kernel's "madvise" or "always" mode; otherwise this is a no-op. */
+#define TT__HUGE ((size_t)2 << 20)
+static void *tt__tree_alloc(size_t bytes) {
+  if (!bytes) return NULL;
+  size_t n = tt__round64(bytes);
+  if (n < TT__HUGE) return aligned_alloc(64, n);
+  n = (n + TT__HUGE - 1) & ~(TT__HUGE - 1);
+  void *p = aligned_alloc(TT__HUGE, n);
+#ifdef MADV_HUGEPAGE
+  if (p) madvise(p, n, MADV_HUGEPAGE);  /* advice only: failure changes nothing */
+#endif
+  return p;
+}
 
 /* Smallest maxDepth with bf^(maxDepth-1) * maxLeafSize >= n (a tree of that depth can hold
  * n primitives at all; SAH's unbalanced splits may need more). */
@@ -494,13 +550,50 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   f.N = bf;
   f.robust = bvh->robust;
   f.node_cap = atomic_load(&ctx.inner);
+  if (bf == 2) {
+    /* Nodes, then leaf blocks of ceil(112 * pairs / 64) lines (at most 63 bytes of
+     * padding each); the exact size is known after the layout pass. */
+    const uint64_t pairs = atomic_load(&ctx.slots) / 2, leaves = atomic_load(&ctx.leaves);
+    f.arena_cap = f.node_cap + (112u * pairs + 63u * leaves) / 64u + 1u;
+    size_t cap_bytes = (size_t)f.arena_cap * 64u;
+    f.arena = tt__tree_alloc(cap_bytes);
+    if (!f.arena) {
+      rtcReleaseBVH(args.bvh);
+      tt__custom_free(bvh);
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                          "accel_embree: cannot allocate the BVH (%zu bytes)", cap_bytes);
+    }
+    memset(f.arena, 0, cap_bytes);
+    bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
+    rtcReleaseBVH(args.bvh);
+    size_t bytes = (size_t)f.arena_lines * 64u;
+    if (!f.error && f.arena_lines < f.arena_cap) {  /* exact-size copy */
+      char *a = tt__tree_alloc(bytes);
+      if (a) {
+        memcpy(a, f.arena, bytes);
+        free(f.arena);
+        f.arena = a;
+      } else {
+        bytes = cap_bytes;
+      }
+    }
+    bvh->arena = f.arena;
+    bvh->arena_lines = f.arena_lines;
+    bvh->node_count = f.node_count;
+    bvh->slot_count = f.slot_count;
+    if (f.error) {
+      tt__custom_free(bvh);
+      return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
+    }
+    stats->memory_bytes = sizeof *bvh + bytes;
+  } else {
   f.slot_cap = atomic_load(&ctx.slots) + 2 * atomic_load(&ctx.leaves);  /* + alignment gaps */
   size_t node_bytes = (size_t)f.node_cap * (size_t)(32 * bf);
   size_t slot_bytes = (size_t)f.slot_cap * TT__SLOT_FLOATS * sizeof(float);
   size_t id_bytes = (size_t)f.slot_cap * sizeof(tt__id);
-  f.nodes = node_bytes ? aligned_alloc(64, tt__round64(node_bytes)) : NULL;
-  f.slots = slot_bytes ? aligned_alloc(64, tt__round64(slot_bytes)) : NULL;
-  f.ids = id_bytes ? aligned_alloc(64, tt__round64(id_bytes)) : NULL;
+  f.nodes = tt__tree_alloc(node_bytes);
+  f.slots = tt__tree_alloc(slot_bytes);
+  f.ids = tt__tree_alloc(id_bytes);
   if ((node_bytes && !f.nodes) || (slot_bytes && !f.slots) || (id_bytes && !f.ids)) {
     free(f.nodes);
     free(f.slots);
@@ -519,8 +612,8 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     /* Give back the unused capacity (reserved for alignment gaps): exact-size copies. */
     size_t sb = (size_t)f.slot_count * TT__SLOT_FLOATS * sizeof(float);
     size_t ib = (size_t)f.slot_count * sizeof(tt__id);
-    float *ns = sb ? aligned_alloc(64, tt__round64(sb)) : NULL;
-    tt__id *ni = ib ? aligned_alloc(64, tt__round64(ib)) : NULL;
+    float *ns = tt__tree_alloc(sb);
+    tt__id *ni = tt__tree_alloc(ib);
     if ((!sb || ns) && (!ib || ni)) {
       if (sb) memcpy(ns, f.slots, sb);
       if (ib) memcpy(ni, f.ids, ib);
@@ -541,6 +634,8 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     tt__custom_free(bvh);
     return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
   }
+  stats->memory_bytes = sizeof *bvh + node_bytes + slot_bytes + id_bytes;
+  }
 
   double root_area = tt__area(root_lo, root_hi);
   stats->nodes = f.node_count;
@@ -549,7 +644,6 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
    * (SAH with unit costs, counted per triangle): comparable across configurations. */
   stats->sah_cost = root_area > 0.0 ? (f.area_inner + f.area_leaf_tris) / root_area : 0.0;
   stats->max_depth = f.max_depth;
-  stats->memory_bytes = sizeof *bvh + node_bytes + slot_bytes + id_bytes;
   *out = bvh;
   return TT_OK;
 }

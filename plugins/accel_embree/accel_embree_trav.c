@@ -1,19 +1,30 @@
 /* accel_embree: SIMD single-ray traversal of the custom backend's BVH (layout in
  * accel_embree_bvh.h).
  *
- * This file is compiled twice (see meson.build): once with -msse4.1 (the baseline every
- * x86-64 CI machine has) and once with -mavx2 -mfma; TT__TRAV_ISA names the copy. The
- * plugin picks the AVX2 table at run time only when the CPU reports AVX2 and FMA, so no
- * AVX instruction ever runs on an older CPU. Everything here is static except the table
- * getter, so the two copies cannot be mixed up by the linker.
+ * This file is compiled three times (see meson.build): with -msse4.1 (the baseline every
+ * x86-64 CI machine has), with -mavx2 -mfma, and with AVX-512 F/VL/DQ/BW (same source: the
+ * compiler gets 32 vector registers, so the ray constants stay in registers);
+ * TT__TRAV_ISA names the copy. The plugin picks a table at run time only when the CPU
+ * reports its features, so no AVX instruction ever runs on an older CPU. Everything here
+ * is static except the table getter, so the copies cannot be mixed up by the linker.
  *
- * Traversal: one stack per ray; at each inner node all N child boxes are tested at once
- * (SoA rows, near/far planes chosen by the ray direction's signs, so no min/max per axis);
+ * Traversal: one stack per ray; at each inner node all child boxes are tested at once;
  * hit children are visited front to back by entry distance (closest hit) or in node order
  * (occlusion, which stops at the first hit); a popped entry farther than the closest hit
- * so far is skipped. Hit children are prefetched, and in a BVH2 their children too (the
- * node's grand[] hints), so consecutive node misses overlap. Leaves are tested one SIMD
- * packet (4 or 2 triangles) at a time. */
+ * so far is skipped. Leaves are tested one SIMD packet (4 or 2 triangles) at a time.
+ *
+ * BVH2 (tt__intersect2, tt__occluded2), the default tree: a 64-byte node holds both
+ * children's boxes as three rows (lower c0, lower c1, upper c0, upper c1); one 4-wide
+ * multiply-subtract per axis with constants (a, a, -a, -a), a = |1/d|, then a permute
+ * chosen once per ray by the direction's sign gives (near, near, -far, -far), and three
+ * max ops give both children's [tmin, tmax] (tt__box2). The next child is chosen by
+ * branches on the hit mask, never by an index computed from it: a predicted branch lets
+ * the next node's load start while the box test is still running, which halved the cost
+ * of a node. Nodes and leaves share one arena of lines (accel_embree_bvh.h), so any
+ * reference's address is one mask and shift: the kernel prefetches the chosen child's
+ * first two lines (for an inner child, that includes its first child) and the node's
+ * grand[] hint (the child's second child), i.e. two levels ahead, without branching on
+ * leaf versus node. */
 #include "accel_embree_bvh.h"
 
 #include <immintrin.h>
@@ -21,7 +32,7 @@
 #include <string.h>
 
 #ifndef TT__TRAV_ISA
-#  error "compile with -DTT__TRAV_ISA=sse41 or avx2"
+#  error "compile with -DTT__TRAV_ISA=sse41, avx2 or avx512"
 #endif
 #define TT__CAT2(a, b) a##b
 #define TT__CAT(a, b) TT__CAT2(a, b)
@@ -36,6 +47,8 @@
 
 /* Stack entries: 64 levels (maxDepth <= 64, checked at build) x (8 - 1) siblings + slack. */
 #define TT__STACK 640
+/* BVH2: at most one entry per level; the builder refuses trees deeper than 88. */
+#define TT__MAX_DEPTH2 96
 
 /* 1 + 2 * gamma(3) (pbrt's bound on the error of a slab distance): far plane distances
  * are scaled by it in robust mode so round-off cannot make a box look missed. */
@@ -69,7 +82,7 @@ typedef struct tt__best {
   float t, u, v;
   const float *pk;  /* packet of the hit, NULL for none */
   int W, lane;      /* its width and the hit's lane */
-  uint32_t slot;    /* the hit triangle's slot (ids) */
+  const tt__id *id; /* the hit triangle's ids */
 } tt__best;
 
 /* Prepares the ray; returns 0 when no hit is possible (NaN/inf input, empty interval). */
@@ -183,7 +196,6 @@ TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *
 /* Tests one inner node of width N; returns the hit mask, distances in `dist`. */
 TT__INLINE int tt__node_test(const void *node, const tt__rc *r, int N, int robust,
                              float *dist) {
-  if (N == 2) return tt__box4(&((const tt__node2 *)node)->b[0][0], 2, r, robust, 1, dist);
   if (N == 4) return tt__box4(&((const tt__node4 *)node)->b[0][0], 4, r, robust, 0, dist);
   return tt__box8((const tt__node8 *)node, r, robust, dist);
 }
@@ -226,20 +238,10 @@ TT__INLINE void tt__prefetch(const tt__bvh *bvh, uint32_t ref, int N) {
   for (int i = 0; i < lines; i++) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
 }
 
-/* Prefetches the hit children of a node, and for BVH2 also their grandchildren (the
- * node's grand[] hints and, by pre-order, the line after an inner child). */
+/* Prefetches the hit children of a BVH4/8 node (BVH2: tt__pf2). */
 TT__INLINE void tt__prefetch_children(const tt__bvh *bvh, const uint32_t *child, int mask,
                                       int N) {
-  for (int m = mask; m; m &= m - 1) {
-    int c = __builtin_ctz((unsigned)m);
-    uint32_t ref = child[c];
-    tt__prefetch(bvh, ref, N);
-    if (N == 2 && !(ref & TT__REF_LEAF)) {
-      _mm_prefetch((const char *)bvh->nodes + (size_t)(ref + 1) * 64u, _MM_HINT_T0);
-      uint32_t g = child[2 + c];
-      if (g != TT__REF_NONE) tt__prefetch(bvh, g, N);
-    }
-  }
+  for (int m = mask; m; m &= m - 1) tt__prefetch(bvh, child[__builtin_ctz((unsigned)m)], N);
 }
 
 /* Tests the (up to) 4 triangles of a packet against the ray's current [tnear, tfar]. Returns the
@@ -251,7 +253,8 @@ TT__INLINE __m128 tt__row(const float *pk, int W, int r) {
 }
 
 TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust, __m128 *T_out,
-                            __m128 *U_out, __m128 *V_out, __m128 *den_out) {
+                            __m128 *U_out, __m128 *V_out, __m128 *den_out,
+                            __m128 *valid_out) {
   const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps();
   __m128 T, U, V, absden, valid;
   if (!robust) {
@@ -315,7 +318,7 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
   }
   valid = _mm_and_ps(valid, _mm_cmpge_ps(T, _mm_mul_ps(absden, TT__V4(r->tnear))));
   valid = _mm_and_ps(valid, _mm_cmple_ps(T, _mm_mul_ps(absden, TT__V4(r->tfar))));
-  *T_out = T, *U_out = U, *V_out = V, *den_out = absden;
+  *T_out = T, *U_out = U, *V_out = V, *den_out = absden, *valid_out = valid;
   return _mm_movemask_ps(valid);
 }
 
@@ -326,26 +329,28 @@ TT__INLINE uint64_t tt__leaf_tris(const tt__id *id, uint32_t n) {
   return c;
 }
 
-/* Tests one width-W packet (first slot `slot`) for a closer hit; updates `best` and the
- * ray's tfar. */
-TT__INLINE void tt__leaf_packet(const float *pk, const int W, uint32_t slot, const tt__bvh *bvh,
-                                tt__rc *restrict r, const int robust,
-                                tt__best *restrict best) {
-  __m128 T, U, V, den;
-  int m = tt__tri_test(pk, W, r, robust, &T, &U, &V, &den);
-  if (!m) return;
+/* Tests one width-W packet (ids of its lanes at `ids`) for a closer hit; updates `best`
+ * and the ray's tfar. Returns 1 when the hit became closer. */
+TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids,
+                               tt__rc *restrict r, const int robust,
+                               tt__best *restrict best) {
+  __m128 T, U, V, den, valid;
+  int m = tt__tri_test(pk, W, r, robust, &T, &U, &V, &den, &valid);
+  if (!m) return 0;
   /* Nearest valid lane: t = T / |det| for valid lanes, +inf elsewhere. */
-  _Alignas(16) float t4[4];
-  __m128 valid = _mm_castsi128_ps(
-      _mm_cmpgt_epi32(_mm_and_si128(_mm_set1_epi32(m), _mm_setr_epi32(1, 2, 4, 8)),
-                      _mm_setzero_si128()));
-  __m128 t = _mm_blendv_ps(_mm_set1_ps(INFINITY), _mm_div_ps(T, den), valid);
+  __m128 t = _mm_div_ps(T, den);
+  int lane;
+  if (m & (m - 1)) {
+    __m128 tv = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, valid);
+    __m128 mn = _mm_min_ps(tv, _mm_shuffle_ps(tv, tv, _MM_SHUFFLE(2, 3, 0, 1)));
+    mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(1, 0, 3, 2)));
+    lane = __builtin_ctz((unsigned)(_mm_movemask_ps(_mm_cmpeq_ps(tv, mn)) & m));
+  } else {
+    lane = __builtin_ctz((unsigned)m);
+  }
+  _Alignas(16) float t4[4], u4[4], v4[4], d4[4];
   _mm_store_ps(t4, t);
-  int lane = 0;
-  for (int l = 1; l < W; l++)
-    if (t4[l] < t4[lane]) lane = l;
-  if (!(t4[lane] <= best->t)) return;
-  _Alignas(16) float u4[4], v4[4], d4[4];
+  if (!(t4[lane] <= best->t)) return 0;
   _mm_store_ps(u4, U);
   _mm_store_ps(v4, V);
   _mm_store_ps(d4, den);
@@ -355,16 +360,304 @@ TT__INLINE void tt__leaf_packet(const float *pk, const int W, uint32_t slot, con
   best->pk = pk;
   best->W = W;
   best->lane = lane;
-  best->slot = slot + (uint32_t)lane;
+  best->id = ids + lane;
   /* The ids are read once, after traversal: fetch their line meanwhile. */
-  _mm_prefetch((const char *)(bvh->ids + best->slot), _MM_HINT_T0);
+  _mm_prefetch((const char *)best->id, _MM_HINT_T0);
   tt__set_tfar(r, best->t);
+  return 1;
 }
 
-/* Closest-hit traversal, specialised by width N, robust and counting after inlining. */
+/* Tests the `pairs` triangle pairs of a leaf (packets at `pk`, ids at `ids`) for a closer
+ * hit; returns 1 when one was found. */
+TT__INLINE int tt__leaf_closest(const float *pk, const tt__id *ids, uint32_t pairs,
+                                tt__rc *restrict r, const int robust,
+                                tt__best *restrict best) {
+  int found = 0;
+  uint32_t q = 0;
+  for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
+    found |= tt__leaf_packet(pk, 4, ids + 2 * q, r, robust, best);
+  if (q < pairs) found |= tt__leaf_packet(pk, 2, ids + 2 * q, r, robust, best);
+  return found;
+}
+
+/* Returns 1 when some triangle of a leaf lies within the ray's [tnear, tfar]. */
+TT__INLINE int tt__leaf_any(const float *pk, uint32_t pairs, const tt__rc *r,
+                            const int robust) {
+  __m128 T, U, V, den, valid;
+  uint32_t q = 0;
+  for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
+    if (tt__tri_test(pk, 4, r, robust, &T, &U, &V, &den, &valid)) return 1;
+  return q < pairs && tt__tri_test(pk, 2, r, robust, &T, &U, &V, &den, &valid);
+}
+
+/* Leaf fields of a reference (wide trees: slots and ids arrays). */
+TT__INLINE uint32_t tt__leaf_pairs(uint32_t ref) { return ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u; }
+TT__INLINE const float *tt__leaf_pk(const tt__bvh *bvh, uint32_t ref) {
+  return bvh->slots + (size_t)(ref & TT__LEAF_MAX_FIRST) * TT__SLOT_FLOATS;
+}
+TT__INLINE const tt__id *tt__leaf_ids(const tt__bvh *bvh, uint32_t ref) {
+  return bvh->ids + (ref & TT__LEAF_MAX_FIRST);
+}
+
+/* Writes the final hit (or the miss) of a closest-hit query. */
+TT__INLINE void tt__finish(const tt__bvh *bvh, const tt__best *best, tt_ray *ray, tt_hit *hit) {
+  if (!best->pk) {
+    hit->t = INFINITY;
+    hit->u = hit->v = 0.0f;
+    hit->geom_id = hit->prim_id = TT_INVALID_ID;
+    hit->ng[0] = hit->ng[1] = hit->ng[2] = 0.0f;
+    return;
+  }
+  ray->tfar = best->t;
+  hit->t = best->t;
+  hit->u = best->u;
+  hit->v = best->v;
+  hit->geom_id = best->id->geom;
+  hit->prim_id = best->id->prim;
+  hit->ng[0] = best->pk[9 * best->W + best->lane];
+  hit->ng[1] = best->pk[10 * best->W + best->lane];
+  hit->ng[2] = best->pk[11 * best->W + best->lane];
+}
+
+/* Adds one ray's work to the tree's counters. */
+TT__INLINE void tt__count(const tt__bvh *bvh, uint64_t nodes, uint64_t tris) {
+  tt__bvh *mut = (tt__bvh *)bvh;  /* counters are the one mutable part of a built tree */
+  atomic_fetch_add_explicit(&mut->c_rays, 1, memory_order_relaxed);
+  atomic_fetch_add_explicit(&mut->c_nodes, nodes, memory_order_relaxed);
+  atomic_fetch_add_explicit(&mut->c_tris, tris, memory_order_relaxed);
+}
+
+/* ---- BVH2 ---- */
+
+/* Box-test constants of a BVH2 node row (lower c0, lower c1, upper c0, upper c1): with
+ * a = |1/d|, lanes (a, a, -a, -a) turn the row into (lower - o) * a and -(upper - o) * a,
+ * i.e. (near, near, -far, -far) when d >= 0 and (-far, -far, near, near) when d < 0;
+ * perm swaps the halves in the second case. After the per-axis permute, the max over
+ * the axes and (tnear, tnear, -tfar, -tfar) gives (tmin c0, tmin c1, -tmax c0, -tmax c1):
+ * one max op tests both children on all three axes, no per-child min/max. */
+typedef struct tt__rc2 {
+  __m128 a[3];      /* a * (1, 1, -1, -1) */
+  __m128 b[3];      /* FMA, not robust: o * a * (1, 1, -1, -1); otherwise o */
+  __m128i perm[3];  /* identity or half swap */
+  __m128 lim;       /* (tnear, tnear, -tfar, -tfar) */
+} tt__rc2;
+
+TT__INLINE void tt__setup2(tt__rc2 *q, const tt_ray *ray, const int robust) {
+  const __m128 pm = _mm_setr_ps(1.0f, 1.0f, -1.0f, -1.0f);
+  for (int k = 0; k < 3; k++) {
+    float o = ray->org[k], d = ray->dir[k];
+    float dk = fabsf(d) < 1e-18f ? copysignf(1e-18f, d) : d;
+    float a = fabsf(1.0f / dk);
+    q->a[k] = _mm_mul_ps(_mm_set1_ps(a), pm);
+#if TT__HAVE_AVX2
+    q->b[k] = robust ? _mm_set1_ps(o) : _mm_mul_ps(_mm_set1_ps(o * a), pm);
+#else
+    (void)robust;
+    q->b[k] = _mm_set1_ps(o);
+#endif
+    int neg = signbit(dk) != 0;
+#ifdef __AVX__
+    q->perm[k] = neg ? _mm_setr_epi32(2, 3, 0, 1) : _mm_setr_epi32(0, 1, 2, 3);
+#else
+    q->perm[k] = neg ? _mm_setr_epi8(8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7)
+                     : _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+#endif
+  }
+  q->lim = _mm_setr_ps(ray->tnear, ray->tnear, -ray->tfar, -ray->tfar);
+}
+
+TT__INLINE void tt__set_tfar2(tt__rc2 *q, float tnear, float t) {
+  q->lim = _mm_setr_ps(tnear, tnear, -t, -t);
+}
+
+TT__INLINE __m128 tt__perm2(__m128 v, __m128i p) {
+#ifdef __AVX__
+  return _mm_permutevar_ps(v, p);
+#else
+  return _mm_castsi128_ps(_mm_shuffle_epi8(_mm_castps_si128(v), p));
+#endif
+}
+
+/* Tests both children of a BVH2 node: returns the hit mask (bit c: child c), the entry
+ * distances in lanes 0 and 1 of *m. */
+TT__INLINE int tt__box2(const tt__node2 *n, const tt__rc2 *q, const int robust, __m128 *m_out) {
+  __m128 t[3];
+  for (int k = 0; k < 3; k++) {
+    __m128 row = _mm_load_ps(n->b[k]), v;
+#if TT__HAVE_AVX2
+    if (!robust)
+      v = _mm_fmsub_ps(row, q->a[k], q->b[k]);
+    else
+#endif
+      v = _mm_mul_ps(_mm_sub_ps(row, q->b[k]), q->a[k]);
+    t[k] = tt__perm2(v, q->perm[k]);
+  }
+  __m128 m = _mm_max_ps(_mm_max_ps(t[0], t[1]), t[2]);
+  /* robust: tmax * (1 + 2 gamma(3)), i.e. -tmax scaled the same way */
+  if (robust) m = _mm_mul_ps(m, _mm_setr_ps(1.0f, 1.0f, TT__ROBUST_FAR, TT__ROBUST_FAR));
+  m = _mm_max_ps(m, q->lim);
+  __m128 tmax = _mm_xor_ps(_mm_movehl_ps(m, m), _mm_set1_ps(-0.0f));
+  *m_out = m;
+  return _mm_movemask_ps(_mm_cmple_ps(m, tmax)) & 3;
+}
+
+/* First line of what a BVH2 reference points at (node or leaf block): one mask, no
+ * branch, whatever its kind. */
+TT__INLINE const char *tt__line2(const tt__bvh *bvh, uint32_t ref) {
+  return (const char *)bvh->arena + ((size_t)(ref & TT__LINE2_MASK) << 6);
+}
+
+/* Prefetches the first two lines of what `ref` (a BVH2 child or grand[] hint) points at:
+ * an inner node and, by pre-order, its first child; or a leaf's first packet (a 2-wide
+ * packet spans 2 lines). Branch-free: one address computation for either kind. */
+TT__INLINE void tt__pf2(const tt__bvh *bvh, uint32_t ref) {
+  const char *p = tt__line2(bvh, ref);
+  _mm_prefetch(p, _MM_HINT_T0);
+  _mm_prefetch(p + 64, _MM_HINT_T0);
+}
+
+/* Closest hit in a BVH2: the nearer hit child is visited next, the farther one pushed
+ * with its entry distance (8-byte entries) and skipped when popped beyond the hit. */
+TT__INLINE void tt__intersect2(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, const int robust,
+                               const int counting) {
+  tt__best best = {ray->tfar, 0.0f, 0.0f, NULL, 4, 0, NULL};
+  uint64_t c_nodes = 0, c_tris = 0;
+  tt__rc r;
+  tt__rc2 q;
+  uint32_t ref = bvh->root;
+  if (ref != TT__REF_NONE && tt__setup(&r, ray, robust)) {
+    tt__setup2(&q, ray, robust);
+    const float tnear = ray->tnear;
+    const char *nodes = (const char *)bvh->arena;
+    struct {
+      uint32_t ref;
+      float dist;
+    } stack[TT__MAX_DEPTH2];
+    int sp = 0;
+    for (;;) {
+      while (!(ref & TT__REF_LEAF)) {
+        const tt__node2 *n = (const tt__node2 *)(nodes + (size_t)ref * 64u);
+        __m128 m;
+        int mask = tt__box2(n, &q, robust, &m);
+        if (counting) c_nodes++;
+        /* Branches, not selects: a predicted branch lets the next node's load start
+         * before the box test is done; an index computed from the mask would make
+         * every step wait for the whole test. */
+        if (mask == 1) {
+          ref = n->child[0];
+          tt__pf2(bvh, ref);
+          tt__pf2(bvh, n->grand[0]);
+        } else if (mask == 2) {
+          ref = n->child[1];
+          tt__pf2(bvh, ref);
+          tt__pf2(bvh, n->grand[1]);
+        } else if (mask == 3) {
+          const float d0 = _mm_cvtss_f32(m), d1 = _mm_cvtss_f32(_mm_movehdup_ps(m));
+          if (d1 < d0) {
+            stack[sp].ref = n->child[0];
+            stack[sp].dist = d0;
+            ref = n->child[1];
+          } else {
+            stack[sp].ref = n->child[1];
+            stack[sp].dist = d1;
+            ref = n->child[0];
+          }
+          sp++;
+          tt__pf2(bvh, n->child[0]);
+          tt__pf2(bvh, n->child[1]);
+          tt__pf2(bvh, n->grand[0]);
+          tt__pf2(bvh, n->grand[1]);
+        } else {
+          goto pop;
+        }
+      }
+      {
+        const uint32_t pairs = tt__leaf_pairs(ref);
+        const float *pk = (const float *)tt__line2(bvh, ref);
+        const tt__id *ids = (const tt__id *)(pk + pairs * (2 * TT__SLOT_FLOATS));
+        if (counting) c_tris += tt__leaf_tris(ids, 2 * pairs);
+        if (tt__leaf_closest(pk, ids, pairs, &r, robust, &best))
+          tt__set_tfar2(&q, tnear, best.t);
+      }
+    pop:
+      for (;;) {
+        if (sp == 0) goto done;
+        --sp;
+        if (stack[sp].dist <= best.t) break;
+      }
+      ref = stack[sp].ref;
+    }
+  }
+done:
+  if (counting) tt__count(bvh, c_nodes, c_tris);
+  tt__finish(bvh, &best, ray, hit);
+}
+
+/* Any hit in a BVH2: children in node order, stop at the first hit. */
+TT__INLINE int tt__occluded2(const tt__bvh *bvh, const tt_ray *ray, const int robust,
+                             const int counting) {
+  uint64_t c_nodes = 0, c_tris = 0;
+  int result = 0;
+  tt__rc r;
+  tt__rc2 q;
+  uint32_t ref = bvh->root;
+  if (ref != TT__REF_NONE && tt__setup(&r, ray, robust)) {
+    tt__setup2(&q, ray, robust);
+    const char *nodes = (const char *)bvh->arena;
+    uint32_t stack[TT__MAX_DEPTH2];
+    int sp = 0;
+    for (;;) {
+      while (!(ref & TT__REF_LEAF)) {
+        const tt__node2 *n = (const tt__node2 *)(nodes + (size_t)ref * 64u);
+        __m128 m;
+        int mask = tt__box2(n, &q, robust, &m);
+        if (counting) c_nodes++;
+        if (mask == 1) {  /* branches, not selects: see tt__intersect2 */
+          ref = n->child[0];
+          tt__pf2(bvh, ref);
+          tt__pf2(bvh, n->grand[0]);
+        } else if (mask == 2) {
+          ref = n->child[1];
+          tt__pf2(bvh, ref);
+          tt__pf2(bvh, n->grand[1]);
+        } else if (mask == 3) {
+          stack[sp++] = n->child[1];
+          ref = n->child[0];
+          tt__pf2(bvh, n->child[0]);
+          tt__pf2(bvh, n->child[1]);
+          tt__pf2(bvh, n->grand[0]);
+          tt__pf2(bvh, n->grand[1]);
+        } else {
+          goto pop;
+        }
+      }
+      {
+        const uint32_t pairs = tt__leaf_pairs(ref);
+        const float *pk = (const float *)tt__line2(bvh, ref);
+        if (counting)
+          c_tris += tt__leaf_tris((const tt__id *)(pk + pairs * (2 * TT__SLOT_FLOATS)), 2 * pairs);
+        if (tt__leaf_any(pk, pairs, &r, robust)) {
+          result = 1;
+          goto done;
+        }
+      }
+    pop:
+      if (sp == 0) break;
+      ref = stack[--sp];
+    }
+  }
+done:
+  if (counting) tt__count(bvh, c_nodes, c_tris);
+  return result;
+}
+
+/* ---- BVH4 / BVH8 ---- */
+
+/* Closest-hit traversal, specialised by width N (4 or 8), robust and counting after
+ * inlining. */
 TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, const int N,
                               const int robust, const int counting) {
-  tt__best best = {ray->tfar, 0.0f, 0.0f, NULL, 4, 0, 0};
+  tt__best best = {ray->tfar, 0.0f, 0.0f, NULL, 4, 0, NULL};
   uint64_t c_nodes = 0, c_tris = 0;
   tt__rc r;
   uint32_t ref = bvh->root;
@@ -383,12 +676,24 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
         if (mask) {
           const uint32_t *child = tt__children(node, N);
           tt__prefetch_children(bvh, child, mask, N);
-          int i0 = __builtin_ctz((unsigned)mask);
-          mask &= mask - 1;
-          if (!mask) {
-            ref = child[i0];
+          if (!(mask & (mask - 1))) {
+            /* One hit child: a (predicted) branch per child, not child[ctz(mask)], so
+             * the next node's load need not wait for the box test (see tt__intersect2). */
+            switch (mask) {
+              case 1: ref = child[0]; break;
+              case 2: ref = child[1]; break;
+              case 4: ref = child[2]; break;
+              case 8: ref = child[3]; break;
+              case 16: ref = child[N > 4 ? 4 : 0]; break;
+              case 32: ref = child[N > 5 ? 5 : 0]; break;
+              case 64: ref = child[N > 6 ? 6 : 0]; break;
+              default: ref = child[N > 7 ? 7 : 0]; break;
+            }
+            __asm__("" : "+r"(ref));  /* keep the switch a branch, not a table lookup */
             continue;
           }
+          int i0 = __builtin_ctz((unsigned)mask);
+          mask &= mask - 1;
           int i1 = __builtin_ctz((unsigned)mask);
           mask &= mask - 1;
           if (!mask) {
@@ -424,14 +729,10 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
           continue;
         }
       } else {
-        const uint32_t pairs = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u;
-        const uint32_t first = ref & TT__LEAF_MAX_FIRST;
-        const float *pk = bvh->slots + (size_t)first * TT__SLOT_FLOATS;
-        if (counting) c_tris += tt__leaf_tris(bvh->ids + first, 2 * pairs);
-        uint32_t q = 0;
-        for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
-          tt__leaf_packet(pk, 4, first + 2 * q, bvh, &r, robust, &best);
-        if (q < pairs) tt__leaf_packet(pk, 2, first + 2 * q, bvh, &r, robust, &best);
+        const uint32_t pairs = tt__leaf_pairs(ref);
+        const tt__id *ids = tt__leaf_ids(bvh, ref);
+        if (counting) c_tris += tt__leaf_tris(ids, 2 * pairs);
+        tt__leaf_closest(tt__leaf_pk(bvh, ref), ids, pairs, &r, robust, &best);
       }
       /* Pop the next entry that can still hold a closer hit. */
       for (;;) {
@@ -443,29 +744,8 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
     }
   }
 done:
-  if (counting) {
-    tt__bvh *mut = (tt__bvh *)bvh;  /* counters are the one mutable part of a built tree */
-    atomic_fetch_add_explicit(&mut->c_rays, 1, memory_order_relaxed);
-    atomic_fetch_add_explicit(&mut->c_nodes, c_nodes, memory_order_relaxed);
-    atomic_fetch_add_explicit(&mut->c_tris, c_tris, memory_order_relaxed);
-  }
-  if (!best.pk) {
-    hit->t = INFINITY;
-    hit->u = hit->v = 0.0f;
-    hit->geom_id = hit->prim_id = TT_INVALID_ID;
-    hit->ng[0] = hit->ng[1] = hit->ng[2] = 0.0f;
-    return;
-  }
-  ray->tfar = best.t;
-  hit->t = best.t;
-  hit->u = best.u;
-  hit->v = best.v;
-  const tt__id *id = bvh->ids + best.slot;
-  hit->geom_id = id->geom;
-  hit->prim_id = id->prim;
-  hit->ng[0] = best.pk[9 * best.W + best.lane];
-  hit->ng[1] = best.pk[10 * best.W + best.lane];
-  hit->ng[2] = best.pk[11 * best.W + best.lane];
+  if (counting) tt__count(bvh, c_nodes, c_tris);
+  tt__finish(bvh, &best, ray, hit);
 }
 
 /* Any-hit traversal: children in node order (sorting does not pay when the first hit
@@ -497,18 +777,9 @@ TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
           continue;
         }
       } else {
-        const uint32_t pairs = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u;
-        const uint32_t first = ref & TT__LEAF_MAX_FIRST;
-        const float *pk = bvh->slots + (size_t)first * TT__SLOT_FLOATS;
-        if (counting) c_tris += tt__leaf_tris(bvh->ids + first, 2 * pairs);
-        __m128 T, U, V, den;
-        uint32_t q = 0;
-        for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
-          if (tt__tri_test(pk, 4, &r, robust, &T, &U, &V, &den)) {
-            result = 1;
-            goto done;
-          }
-        if (q < pairs && tt__tri_test(pk, 2, &r, robust, &T, &U, &V, &den)) {
+        const uint32_t pairs = tt__leaf_pairs(ref);
+        if (counting) c_tris += tt__leaf_tris(tt__leaf_ids(bvh, ref), 2 * pairs);
+        if (tt__leaf_any(tt__leaf_pk(bvh, ref), pairs, &r, robust)) {
           result = 1;
           goto done;
         }
@@ -518,22 +789,20 @@ TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
     }
   }
 done:
-  if (counting) {
-    tt__bvh *mut = (tt__bvh *)bvh;
-    atomic_fetch_add_explicit(&mut->c_rays, 1, memory_order_relaxed);
-    atomic_fetch_add_explicit(&mut->c_nodes, c_nodes, memory_order_relaxed);
-    atomic_fetch_add_explicit(&mut->c_tris, c_tris, memory_order_relaxed);
-  }
+  if (counting) tt__count(bvh, c_nodes, c_tris);
   return result;
 }
 
 /* One intersect/occluded pair per (width, robust, counting). */
 #define TT__DEF(N, R, C)                                                                    \
   static void tt__isect_##N##_##R##_##C(const tt__bvh *b, tt_ray *ray, tt_hit *h) {         \
-    tt__intersect(b, ray, h, N, R, C);                                                      \
+    if (N == 2)                                                                             \
+      tt__intersect2(b, ray, h, R, C);                                                      \
+    else                                                                                    \
+      tt__intersect(b, ray, h, N, R, C);                                                    \
   }                                                                                         \
   static int tt__occl_##N##_##R##_##C(const tt__bvh *b, const tt_ray *ray) {                \
-    return tt__occluded(b, ray, N, R, C);                                                   \
+    return N == 2 ? tt__occluded2(b, ray, R, C) : tt__occluded(b, ray, N, R, C);            \
   }
 #define TT__DEF_N(N) TT__DEF(N, 0, 0) TT__DEF(N, 0, 1) TT__DEF(N, 1, 0) TT__DEF(N, 1, 1)
 TT__DEF_N(2)
