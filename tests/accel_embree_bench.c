@@ -1,12 +1,18 @@
-/* accel_embree bench (suite 'bench'): backend native versus backend custom, single thread.
+/* accel_embree bench (suite 'bench'): backend native versus backend custom, single thread
+ * and all threads.
  *
  * Scenes: the Cornell box (scenes/cornell-box), a ~500k-triangle procedural bumpy sphere,
  * and, when ../shared/scenes is present, the Stanford bunny and the voxel monument (OBJ
- * files loaded through a scene.json "file" mesh). Rays: primary rays of a 512x512 pinhole
- * camera (coherent) and diffuse-bounce rays from the primary hits (incoherent; cosine
- * directions around the normal). For each configuration: build ms (median of 5, Embree's
- * thread pool), and single-thread Mrays/s of intersect1 and occluded1 (median of 5 passes
- * over all rays). Ends with the custom/native ratios that decide the default backend.
+ * files loaded through a scene.json "file" mesh, camera aimed at the bounds) and the pbrt
+ * scenes living-room, bmw-m6 and staircase (loaded with tt_scene_load, traced from the
+ * scene's own camera at 512x512). Rays: primary rays of a 512x512 pinhole camera
+ * (coherent) and diffuse-bounce rays from the primary hits (incoherent; cosine directions
+ * around the normal). For each configuration: build ms (median of `runs`, Embree's thread
+ * pool), and single-thread Mrays/s of intersect1 and occluded1 (median of `runs` passes
+ * over all rays, CPU time of the tracing thread). For native default, custom default and
+ * the best custom configuration also intersect1 on all threads (the same rays split in
+ * chunks over one pthread per CPU; wall time, median of `runs` passes). Ends with the
+ * custom/native ratios that decide the default backend, as geometric means over scenes.
  *
  *   meson test -C BUILD --suite bench accel_embree_bench -v
  *   (or BUILD/tests/accel_embree_bench [runs] with TT_PLUGIN_PATH=BUILD/plugins)
@@ -17,7 +23,10 @@
 
 #include <tunetrace/camera.h>
 
+#include <pthread.h>
+#include <stdatomic.h>
 #include <time.h>
+#include <unistd.h>
 
 #define W 512
 #define H 512
@@ -28,6 +37,13 @@
 static double cpu_s(void) {
   struct timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Wall-clock seconds (all-threads rates). */
+static double wall_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
@@ -103,6 +119,23 @@ static tt_scene *obj_scene(const char *path) {
   cam.key_count = 0;
   cam.keys = NULL;
   tt_scene_set_camera(s, &cam);
+  return s;
+}
+
+/* Loads a pbrt scene with core's loader (its own camera is used for primary rays). NULL
+ * (skipped) when the file is absent or does not load. */
+static tt_scene *pbrt_scene(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fclose(f);
+  tt_scene *s = NULL;
+  fflush(stdout); /* the loader's warnings go to stderr: keep them between tables */
+  double t0 = wall_s();
+  if (tt_scene_load(path, &s) != TT_OK) {
+    printf("note: %s does not load (%s): skipped\n", path, tt_last_error());
+    return NULL;
+  }
+  printf("note: %s loaded in %.1f s\n", path, wall_s() - t0);
   return s;
 }
 
@@ -227,12 +260,79 @@ static double rate_occl(const tt_accel_iface *A, const tt_accel *acc, const tt_r
   return median(v, runs);
 }
 
+/* ---- all threads: the same ray set split in chunks over one pthread per CPU ---- */
+
+static int g_threads = 1;
+
+#define MT_CHUNK 1024
+
+typedef struct mt_job {
+  const tt_accel_iface *A;
+  const tt_accel *acc;
+  tt_ray *work;
+  tt_hit *hits;
+  atomic_size_t next;
+  _Atomic long long cpu_ns;  /* CPU time of all worker threads, summed */
+} mt_job;
+
+static void *mt_worker(void *arg) {
+  mt_job *j = arg;
+  double c0 = cpu_s();
+  for (;;) {
+    size_t b = atomic_fetch_add_explicit(&j->next, MT_CHUNK, memory_order_relaxed);
+    if (b >= NRAYS) break;
+    size_t e = b + MT_CHUNK < NRAYS ? b + MT_CHUNK : NRAYS;
+    for (size_t i = b; i < e; i++) j->A->intersect1(j->acc, &j->work[i], &j->hits[i]);
+  }
+  atomic_fetch_add(&j->cpu_ns, (long long)((cpu_s() - c0) * 1e9));
+  return NULL;
+}
+
+/* All-threads Mrays/s of intersect1 (wall time, thread start and join included): median
+ * of `runs` passes. `share` gets the median fraction of threads x wall time the threads
+ * were on a CPU (below 1: other load on the machine took the rest). */
+static double rate_isect_mt(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
+                            tt_ray *work, tt_hit *hits, int runs, double *share) {
+  double v[16], sh[16];
+  pthread_t th[64];
+  for (int k = 0; k < runs; k++) {
+    memcpy(work, rays, NRAYS * sizeof *rays);
+    mt_job j = {.A = A, .acc = acc, .work = work, .hits = hits};
+    atomic_init(&j.next, 0);
+    atomic_init(&j.cpu_ns, 0);
+    double t0 = wall_s();
+    int started = 0;
+    for (int t = 1; t < g_threads; t++)
+      if (pthread_create(&th[started], NULL, mt_worker, &j) == 0) started++;
+    mt_worker(&j);
+    for (int t = 0; t < started; t++) pthread_join(th[t], NULL);
+    double w = wall_s() - t0;
+    v[k] = (double)NRAYS / w * 1e-6;
+    sh[k] = 1e-9 * (double)atomic_load(&j.cpu_ns) / (w * (started + 1));
+  }
+  *share = median(sh, runs);
+  return median(v, runs);
+}
+
+/* The configurations also measured on all threads, and the one the README calls best. */
+#define BEST_LABEL "custom bf8 blk4 leaf8"
+static int all_threads_cfg(const char *label) {
+  return !strcmp(label, "native default") || !strcmp(label, "custom default (bf2)") ||
+         !strcmp(label, BEST_LABEL);
+}
+
 /* Configuration-label filter (argv[3]); native default always runs (reference). */
 static const char *g_cfg_filter;
 
 /* Log of the custom-default / native-default ratios, for a geometric mean over scenes. */
 static double g_log_ratio_sum[2];
 static int g_ratio_n;
+
+/* Per configuration: log of its ratio to native default (prim, bounce, occl-p, occl-b,
+ * all-threads prim, all-threads bounce) summed over scenes, and the scene count. */
+static double g_cfg_log[16][6];
+static int g_cfg_n[16], g_cfg_mt_n[16];
+static int g_scene_n;
 
 /* Runs every configuration on one scene and prints its table. */
 static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *scene, int runs) {
@@ -246,7 +346,8 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
   printf("%-24s %9s %8s %7s %7s %8s | %8s %8s | %8s %8s\n", "configuration", "build ms",
          "MiB", "nodes", "depth", "SAH", "prim", "bounce", "occl-p", "occl-b");
   const tt_space *space = A->space();
-  double native_rate[2] = {0, 0};
+  double native_rate[2] = {0, 0}, native_all[4] = {0, 0, 0, 0}, native_mt[2] = {0, 0};
+  g_scene_n++;
   for (size_t ci = 0; ci < NCFG; ci++) {
     if (ci > 0 && g_cfg_filter && !strstr(g_cfgs[ci].label, g_cfg_filter)) continue;
     tt_config *c = tt_config_create(space);
@@ -284,7 +385,34 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
            (unsigned long long)st.nodes, st.max_depth, st.sah_cost, rp, rb, op, ob);
     CHECK_MSG(differ <= NRAYS / 10000, "%s [%s]: %zu primary hits differ from native", name,
               g_cfgs[ci].label, differ);
-    if (ci == 0) native_rate[0] = rp, native_rate[1] = rb;
+    double mp = 0, mb = 0;
+    if (all_threads_cfg(g_cfgs[ci].label)) {
+      double shp, shb;
+      mp = rate_isect_mt(A, acc, prim, work, hits, runs, &shp);
+      size_t mt_differ = 0;
+      for (size_t i = 0; i < NRAYS; i++)
+        mt_differ += (hits[i].geom_id != ref_hits[i].geom_id) ||
+                     (hits[i].prim_id != ref_hits[i].prim_id);
+      CHECK_MSG(mt_differ <= NRAYS / 10000, "%s [%s]: %zu all-threads primary hits differ",
+                name, g_cfgs[ci].label, mt_differ);
+      mb = rate_isect_mt(A, acc, bounce, work, hits, runs, &shb);
+      printf("%-24s   all %d threads (wall): primary %.2f, bounce %.2f Mrays/s (threads on "
+             "a CPU %.0f%% / %.0f%% of the time)\n", "", g_threads, mp, mb, 100 * shp, 100 * shb);
+    }
+    double all[4] = {rp, rb, op, ob};
+    if (ci == 0) {
+      native_rate[0] = rp, native_rate[1] = rb;
+      memcpy(native_all, all, sizeof all);
+      native_mt[0] = mp, native_mt[1] = mb;
+    } else if (native_all[0] > 0 && ci < 16) {
+      for (int k = 0; k < 4; k++) g_cfg_log[ci][k] += log(all[k] / native_all[k]);
+      g_cfg_n[ci]++;
+      if (mp > 0 && native_mt[0] > 0) {
+        g_cfg_log[ci][4] += log(mp / native_mt[0]);
+        g_cfg_log[ci][5] += log(mb / native_mt[1]);
+        g_cfg_mt_n[ci]++;
+      }
+    }
     if (strcmp(g_cfgs[ci].label, "custom default (bf2)") == 0 && native_rate[0] > 0) {
       printf("%-24s custom default / native default: primary %.2fx, bounce %.2fx\n", "",
              rp / native_rate[0], rb / native_rate[1]);
@@ -292,6 +420,9 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
       g_log_ratio_sum[1] += log(rb / native_rate[1]);
       g_ratio_n++;
     }
+    if (mp > 0 && ci > 0 && native_mt[0] > 0)
+      printf("%-24s   all threads, / native default: primary %.2fx, bounce %.2fx\n", "",
+             mp / native_mt[0], mb / native_mt[1]);
     A->destroy(acc);
     if (strstr(g_cfgs[ci].settings, "backend=custom")) {
       /* Work per ray, from the counters (a separate build: counting slows the kernels). */
@@ -324,6 +455,10 @@ int main(int argc, char **argv) {
   const char *only = argc > 2 ? argv[2] : NULL;  /* scene-name filter, for quick looks */
   g_cfg_filter = argc > 3 ? argv[3] : NULL;
   if (runs < 1 || runs > 16) runs = 5;
+  long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+  g_threads = ncpu < 1 ? 1 : ncpu > 64 ? 64 : (int)ncpu;
+  const char *tenv = getenv("TT_BENCH_THREADS");
+  if (tenv && atoi(tenv) >= 1 && atoi(tenv) <= 64) g_threads = atoi(tenv);
   ae_plugin pl = ae_load(NULL);
   const tt_accel_iface *A = pl.accel;
   const char *root = getenv("TT_SOURCE_ROOT");
@@ -331,6 +466,9 @@ int main(int argc, char **argv) {
 
   printf("accel_embree bench: single-thread Mrays/s (intersect1 / occluded1, per CPU second "
          "of the tracing thread), build ms (wall, Embree's thread pool); medians of %d\n", runs);
+  printf("all-threads rows: intersect1 on %d threads (pthreads, chunks of %d rays), Mrays/s "
+         "per WALL second (shared machine: other load counts against them), medians of %d\n",
+         g_threads, MT_CHUNK, runs);
   snprintf(path, sizeof path, "%s/scenes/cornell-box/scene.json", root ? root : ".");
   tt_scene *s = NULL;
   if (only && !strstr("Cornell box", only)) {
@@ -364,10 +502,45 @@ int main(int argc, char **argv) {
     bench_scene(A, objs[i][0], s, runs);
     tt_scene_destroy(s);
   }
+  static const char *const pbrts[][2] = {
+      {"living room (pbrt)", "living-room/living-room.pbrt"},
+      {"BMW M6 (pbrt)", "bmw-m6/bmw-m6.pbrt"},
+      {"staircase (pbrt)", "staircase/staircase.pbrt"},
+  };
+  for (size_t i = 0; i < sizeof pbrts / sizeof pbrts[0]; i++) {
+    if (only && !strstr(pbrts[i][0], only)) continue;
+    snprintf(path, sizeof path, "%s/%s", sdir, pbrts[i][1]);
+    s = pbrt_scene(path);
+    if (!s) {
+      printf("note: %s not available: skipped\n", path);
+      continue;
+    }
+    bench_scene(A, pbrts[i][0], s, runs);
+    tt_scene_destroy(s);
+  }
   if (g_ratio_n)
     printf("\ncustom default / native default, geometric mean over %d scenes: primary %.2fx, "
            "bounce %.2fx\n", g_ratio_n, exp(g_log_ratio_sum[0] / g_ratio_n),
            exp(g_log_ratio_sum[1] / g_ratio_n));
+  for (size_t ci = 1; ci < NCFG && ci < 16; ci++)
+    if (!strcmp(g_cfgs[ci].label, "custom default (bf2)") && g_cfg_mt_n[ci])
+      printf("custom default / native default, all %d threads (wall), geometric mean over %d "
+             "scenes: primary %.2fx, bounce %.2fx\n", g_threads, g_cfg_mt_n[ci],
+             exp(g_cfg_log[ci][4] / g_cfg_mt_n[ci]), exp(g_cfg_log[ci][5] / g_cfg_mt_n[ci]));
+  printf("\nratios to native default, geometric means over the scenes measured (all threads: "
+         "wall time, %d threads)\n", g_threads);
+  printf("%-24s %7s %7s %7s %7s | %8s %8s\n", "configuration", "prim", "bounce", "occl-p",
+         "occl-b", "all-prim", "all-bnc");
+  for (size_t ci = 1; ci < NCFG && ci < 16; ci++) {
+    if (!g_cfg_n[ci]) continue;
+    double n = g_cfg_n[ci];
+    printf("%-24s %6.2fx %6.2fx %6.2fx %6.2fx |", g_cfgs[ci].label, exp(g_cfg_log[ci][0] / n),
+           exp(g_cfg_log[ci][1] / n), exp(g_cfg_log[ci][2] / n), exp(g_cfg_log[ci][3] / n));
+    if (g_cfg_mt_n[ci])
+      printf(" %7.2fx %7.2fx", exp(g_cfg_log[ci][4] / g_cfg_mt_n[ci]),
+             exp(g_cfg_log[ci][5] / g_cfg_mt_n[ci]));
+    printf("%s\n", g_cfg_n[ci] < g_scene_n ? "  (not on every scene)" : "");
+  }
   tt_registry_destroy(pl.reg);
   return tt_test_finish("accel_embree_bench");
 }
