@@ -38,14 +38,6 @@ void tt__taa_tonemap(const float in[3], float out[3]) { tt__taa_tonemap_inl(in, 
 
 void tt__taa_untonemap(const float in[3], float out[3]) { tt__taa_untonemap_inl(in, out); }
 
-/* Catmull-Rom weights for fractional offset f of the second tap (Karis 2014). */
-static void taa_cr_weights(float f, float w[4]) {
-  w[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
-  w[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
-  w[2] = f * (0.5f + f * (2.0f - 1.5f * f));
-  w[3] = f * f * (-0.5f + 0.5f * f);
-}
-
 /* Clamps a tap index to [0, n - 1]. */
 static inline int taa_clampi(int i, int n) { return i < 0 ? 0 : (i >= n ? n - 1 : i); }
 
@@ -54,8 +46,8 @@ void tt__taa_sample_catmull_rom(const float *img, uint32_t width, uint32_t heigh
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float wx[4], wy[4];
-  taa_cr_weights(ux - bx, wx);
-  taa_cr_weights(uy - by, wy);
+  tt__taa_cr_weights(ux - bx, wx);
+  tt__taa_cr_weights(uy - by, wy);
   int x0 = (int)bx - 1, y0 = (int)by - 1;
   int xi[4];
   for (int i = 0; i < 4; i++) xi[i] = taa_clampi(x0 + i, (int)width);

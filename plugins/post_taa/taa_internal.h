@@ -42,6 +42,15 @@ static inline void tt__taa_untonemap_inl(const float in[3], float out[3]) {
   for (int c = 0; c < 3; c++) out[c] = tt__taa_fmax(in[c], 0.0f) * s;
 }
 
+/* Catmull-Rom weights of the 4 taps for fractional offset f of the second tap (Karis 2014);
+ * shared by every history fetch so that all paths weight taps identically. */
+static inline void tt__taa_cr_weights(float f, float w[4]) {
+  w[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
+  w[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
+  w[2] = f * (0.5f + f * (2.0f - 1.5f * f));
+  w[3] = f * f * (-0.5f + 0.5f * f);
+}
+
 /* Samples `channels`-channel image `img` (width x height, interleaved) at continuous
  * position (fx, fy) (pixel centres at i + 0.5) with the separable 4x4 Catmull-Rom kernel,
  * clamping taps to the edge. Writes `channels` floats into `out`. */

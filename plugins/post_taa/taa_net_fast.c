@@ -341,16 +341,8 @@ AI v8f fast_cr8(const float *img, uint32_t width, uint32_t height, float fx, flo
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float wx[4], wy[4];
-  float f = ux - bx;
-  wx[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
-  wx[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
-  wx[2] = f * (0.5f + f * (2.0f - 1.5f * f));
-  wx[3] = f * f * (-0.5f + 0.5f * f);
-  f = uy - by;
-  wy[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
-  wy[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
-  wy[2] = f * (0.5f + f * (2.0f - 1.5f * f));
-  wy[3] = f * f * (-0.5f + 0.5f * f);
+  tt__taa_cr_weights(ux - bx, wx);
+  tt__taa_cr_weights(uy - by, wy);
   int x0 = (int)bx - 1, y0 = (int)by - 1, w = (int)width, h = (int)height;
   int xi[4];
   for (int i = 0; i < 4; i++) {

@@ -71,16 +71,9 @@ static inline void vc_catmull_rom3(const float *img, int w, int h, float fx, flo
                                    float out[3]) {
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
-  float wx[4], wy[4], f = ux - bx;
-  wx[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
-  wx[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
-  wx[2] = f * (0.5f + f * (2.0f - 1.5f * f));
-  wx[3] = f * f * (-0.5f + 0.5f * f);
-  f = uy - by;
-  wy[0] = f * (-0.5f + f * (1.0f - 0.5f * f));
-  wy[1] = 1.0f + f * f * (-2.5f + 1.5f * f);
-  wy[2] = f * (0.5f + f * (2.0f - 1.5f * f));
-  wy[3] = f * f * (-0.5f + 0.5f * f);
+  float wx[4], wy[4];
+  tt__taa_cr_weights(ux - bx, wx);
+  tt__taa_cr_weights(uy - by, wy);
   int x0 = (int)bx - 1, y0 = (int)by - 1;
   int xi[4];
   for (int i = 0; i < 4; i++) {
