@@ -272,7 +272,7 @@ tt_status tt__scene_finish(tt_scene *s) {
 /* ---- public API ------------------------------------------------------------------------ */
 
 /* Case-insensitive suffix test for format dispatch. */
-static int tt__has_ext(const char *path, const char *ext) {
+int tt__has_ext(const char *path, const char *ext) {
   size_t n = strlen(path), e = strlen(ext);
   return n >= e && strcasecmp(path + n - e, ext) == 0;
 }
@@ -334,24 +334,7 @@ tt_status tt_scene_load(const char *path, tt_scene **out) {
   if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
   if (!tt__has_ext(path, ".json"))
     return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json or .pbrt)", path);
-  char *buf = NULL;
-  size_t len = 0;
-  tt_status rst = tt__read_file(path, &buf, &len);
-  if (rst != TT_OK) return rst;
-  /* base directory = everything before the last '/' ("." for a bare file name) */
-  char *dir = tt__scene_strdup(path);
-  if (!dir) {
-    free(buf);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
-  }
-  char *slash = strrchr(dir, '/');
-  if (slash == dir) slash[1] = '\0';
-  else if (slash) *slash = '\0';
-  else strcpy(dir, ".");
-  tt_status st = tt_scene_load_json(buf, len, path, dir, out);
-  free(dir);
-  free(buf);
-  return st;
+  return tt__scene_load_json_file(path, 0, out);
 }
 
 /* Frees the heap copies behind the const views. */

@@ -84,6 +84,13 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split,
  * features warn once per location on stderr and are approximated or skipped. */
 tt_status tt__scene_load_pbrt(const char *path, tt_scene **out);
 
+/* Case-insensitive file-name suffix test (".pbrt", ".json"). */
+int tt__has_ext(const char *path, const char *ext);
+
+/* Reads and loads a scene.json file with its own directory as the asset base; depth 0 for
+ * the scene being loaded, 1 for a scene.json imported by it (scene_json.c). */
+tt_status tt__scene_load_json_file(const char *path, int depth, tt_scene **out);
+
 /* Reads a whole file into a NUL-terminated malloc'ed buffer; errors name the file. */
 tt_status tt__read_file(const char *path, char **out, size_t *len);
 /* Row-major 4x4 product r = a * b (r may alias a or b). */

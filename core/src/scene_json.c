@@ -975,14 +975,8 @@ static tt_status tt__jlights(const tt__jctx *c, const cJSON *root) {
 static tt_status tt__load_json(const char *json, size_t length, const char *source,
                                const char *base_dir, int depth, tt_scene **out);
 
-/* Case-insensitive suffix test (".pbrt", ".json"). */
-static int tt__jhas_ext(const char *path, const char *ext) {
-  size_t n = strlen(path), e = strlen(ext);
-  return n >= e && strcasecmp(path + n - e, ext) == 0;
-}
-
-/* Reads an imported scene.json and loads it with its own directory as the asset base. */
-static tt_status tt__jload_json_file(const char *path, int depth, tt_scene **out) {
+/* Reads a scene.json file and loads it with its own directory as the asset base. */
+tt_status tt__scene_load_json_file(const char *path, int depth, tt_scene **out) {
   char *buf = NULL;
   size_t len = 0;
   tt_status st = tt__read_file(path, &buf, &len);
@@ -1027,7 +1021,7 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
     return tt__jfail(c, TT_ERR_PARSE, "import",
                      "\"%s\" not loaded: this file is itself imported by a scene.json, and imports "
                      "cannot be nested (import the scene directly)", rel);
-  int pbrt = tt__jhas_ext(rel, ".pbrt"), json = tt__jhas_ext(rel, ".json");
+  int pbrt = tt__has_ext(rel, ".pbrt"), json = tt__has_ext(rel, ".json");
   if (!pbrt && !json)
     return tt__jfail(c, TT_ERR_UNSUPPORTED, "import", "unsupported scene format \"%s\" (expected .pbrt or .json)", rel);
   char *full = tt__resolve(c, rel);
@@ -1060,7 +1054,7 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
     }
   }
   tt_scene *s = NULL;
-  st = pbrt ? tt__scene_load_pbrt(full, &s) : tt__jload_json_file(full, depth + 1, &s);
+  st = pbrt ? tt__scene_load_pbrt(full, &s) : tt__scene_load_json_file(full, depth + 1, &s);
   if (st != TT_OK) {
     /* keep the imported loader's message (file:line or JSON path) behind ours */
     char inner[1024];
