@@ -3,6 +3,7 @@
 # modes none / vctaa / network (12 and 6 channels) with the C plugin and prints RMSE and
 # temporal error against the dataset's references (tools/taa/eval.py).
 #   tools/taa/evaluate.sh BUILD_DIR DATA_DIR OUT_DIR [W12.ttw] [W6.ttw] [SEQUENCES]
+# (THREADS=N: render threads, default 2)
 set -eu
 build=$1
 data=$2
@@ -19,7 +20,7 @@ for s in $seqs; do
       net6) set -- --set post_taa.mode=network; export TT_POST_TAA_WEIGHTS="$w6" ;;
       *) set -- --set post_taa.mode=$m; unset TT_POST_TAA_WEIGHTS || true ;;
     esac
-    TT_PLUGIN_PATH="$build/plugins" "$build/host/host" --quiet --threads 2 \
+    TT_PLUGIN_PATH="$build/plugins" "$build/host/host" --quiet --threads "${THREADS:-2}" \
       --sequence "$n" --out-dir "$out/$s/$m" --set integrator_pt.maxDepth=1 \
       --post post_taa "$@" "$data/scenes/$s/scene.json"
   done
