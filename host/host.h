@@ -59,10 +59,15 @@ typedef struct tt__host_options {
   double fps;               /* --fps F; 0: 24 */
   uint32_t reference_scale; /* --reference-scale K; 0: no reference */
   const char *post;         /* --post NAME: post-filter applied to each frame */
+  const char *seq_pattern;  /* --out DIR/NAME_%04d.exr: frame file pattern (sequence) */
+  int aov_set;              /* --aov given */
+  uint32_t aov_mask;        /* TT__SEQ_AOV_* bits written per frame */
+  int reference_only;       /* --supersample K: the frames are the reference */
   /* camera path samples (run.c): sample I of TT_HOST_PATH_SAMPLES at t = I/(N-1) of the
    * path's time range */
   int camera_index_set;     /* --camera-index given */
   uint32_t camera_index;    /* --camera-index I, in [0, TT_HOST_PATH_SAMPLES) */
+  const char *frames_arg;   /* --frames text (meaning depends on --out, checked at the end) */
   int frames;               /* --frames A:B given: samples A..B-1 to <out stem>_NNNN.exr */
   uint32_t frames_first, frames_end;
   int convert;              /* --convert: write the loaded scene as scene.json to --out */
@@ -72,6 +77,10 @@ typedef struct tt__host_options {
 int tt__run_convert(const tt__host_options *opt);
 
 #define TT_HOST_PATH_SAMPLES 100
+
+/* Per-frame AOVs of a sequence (--aov). */
+#define TT__SEQ_AOV_DEPTH 1u
+#define TT__SEQ_AOV_MOTION 2u
 
 #define TT_HOST_DEFAULT_ITERATIONS 50
 
@@ -119,6 +128,10 @@ tt_registry *tt__make_registry(const tt__host_options *opt, const tt_host *host)
 /* Loads every --plugin and --post, reporting each failure, then the default accel and
  * integrator for kinds not named. Returns the number of failures. */
 int tt__load_plugins(tt_registry *reg, const tt__host_options *opt);
+/* The plugin's tt.options/1 table (settings outside the tuned space), or NULL when it serves
+ * none or an older table than the fields the host calls. */
+const tt_options_iface *tt__plugin_options(const tt_loaded_plugin *p);
+
 /* Builds one configuration per loaded plugin (registry order) from its defaults, the
  * scene's render settings (integrator maxDepth) and the --set options; reports every bad
  * --set and returns the number of errors. */

@@ -79,6 +79,18 @@ void tt__print_usage(FILE *out) {
     "  --post NAME            run the post-filter NAME (e.g. post_taa) over the frames in\n"
     "                         order and write post_NNNN.exr; --set NAME.mode=network ...\n"
     "  --fps F                frames per second along the camera path (default 24)\n"
+    "  --frames A:B --out DIR/frame_%04d.exr\n"
+    "                         the same as a sequence of frames A..B, each written to the\n"
+    "                         pattern (manifest.json in DIR); beside it: --aov depth,motion\n"
+    "                         -> frame_NNNN.depth.exr / .motion.exr; --supersample K writes\n"
+    "                         the K x K-supersampled reference as the frame instead; a\n"
+    "                         post-filter (--plugin post_taa --set post_taa.mode=network)\n"
+    "                         writes the filtered frame, the rendered one as frame_NNNN.raw.exr\n"
+    "  --aov LIST             per-frame AOVs: depth, motion (default: both with --out-dir,\n"
+    "                         none with an --out pattern)\n"
+    "  --supersample K        write only the reference (K x K the resolution, Blackman-Harris)\n"
+    "  --set NAME.KEY=VALUE   also sets a plugin's options (not tuned; host --describe NAME),\n"
+    "                         e.g. --set post_taa.weights=FILE.ttw\n"
     "\n"
     "Camera path samples (benchmark views, scenes/README.md):\n"
     "  --camera-index I       render sample I (0..99) of the scene's camera path: the pose\n"
@@ -137,6 +149,127 @@ static int tt__push(const char **list, int *count, const char *opt, const char *
     return -1;
   }
   list[(*count)++] = value;
+  return 0;
+}
+
+/* Parses --aov "depth,motion" into TT__SEQ_AOV_* bits ("none" = no AOV). */
+static int tt__parse_aovs(const char *text, uint32_t *mask) {
+  *mask = 0;
+  if (!strcmp(text, "none")) return 0;
+  const char *p = text;
+  while (*p) {
+    size_t len = strcspn(p, ",");
+    if (len == 5 && !strncmp(p, "depth", 5)) {
+      *mask |= TT__SEQ_AOV_DEPTH;
+    } else if (len == 6 && !strncmp(p, "motion", 6)) {
+      *mask |= TT__SEQ_AOV_MOTION;
+    } else {
+      fprintf(stderr, "host: --aov: expected a comma-separated list of depth, motion (or "
+              "none), got \"%.*s\" in \"%s\"\n", (int)len, p, text);
+      return -1;
+    }
+    p += len;
+    if (*p == ',') p++;
+  }
+  return 0;
+}
+
+/* 1 when `out` is a frame-number pattern: exactly one %d, %Nd or %0Nd (and %% escapes);
+ * 0 when it has no '%'; -1 (and prints) when its '%' conversions are not that. */
+static int tt__out_pattern(const char *out) {
+  int convs = 0;
+  for (const char *p = out; *p; p++) {
+    if (*p != '%') continue;
+    if (p[1] == '%') {
+      p++;
+      continue;
+    }
+    const char *q = p + 1;
+    while (*q >= '0' && *q <= '9') q++;
+    if (*q != 'd' || q - p > 4) convs = 99;
+    else convs++;
+    p = q;
+  }
+  if (convs == 0 && !strchr(out, '%')) return 0;
+  if (convs == 1) return 1;
+  fprintf(stderr, "host: --out %s: a frame pattern needs exactly one %%d, %%4d or %%04d "
+          "(the frame number; %%%% for a literal %%)\n", out);
+  return -1;
+}
+
+/* Checks and resolves the sequence options once all are read: --frames means frames of a
+ * sequence when --out is a pattern (DIR/frame_%04d.exr), else camera path samples. */
+static int tt__check_sequence_options(tt__host_options *opt) {
+  int pattern = opt->out ? tt__out_pattern(opt->out) : 0;
+  if (pattern < 0) return -1;
+  const char *v = opt->frames_arg;
+  unsigned f0 = 0, f1 = 0;
+  char extra;
+  int range = v && v[0] >= '0' && v[0] <= '9' && sscanf(v, "%u:%u%c", &f0, &f1, &extra) == 2;
+  if (pattern) {
+    if (opt->out_dir) {
+      fprintf(stderr, "host: --out %s (a frame pattern) and --out-dir exclude each other\n",
+              opt->out);
+      return -1;
+    }
+    if (v && opt->sequence) {
+      fprintf(stderr, "host: --frames and --sequence exclude each other\n");
+      return -1;
+    }
+    if (v) {
+      if (!range || f0 > f1) {
+        fprintf(stderr, "host: --frames: expected A:B with A <= B (frames A..B of the "
+                "camera path, written to --out %s), got \"%s\"\n", opt->out, v);
+        return -1;
+      }
+      opt->sequence = 1;
+      opt->seq_first = f0;
+      opt->seq_last = f1;
+    }
+    if (!opt->sequence) {
+      fprintf(stderr, "host: --out %s is a frame pattern: give the frames with --frames A:B "
+              "(or --sequence N)\n", opt->out);
+      return -1;
+    }
+    if (opt->camera_index_set) {
+      fprintf(stderr, "host: --camera-index and a frame pattern in --out exclude each "
+              "other\n");
+      return -1;
+    }
+    const char *dot = strrchr(opt->out, '.');
+    if (!dot || strcmp(dot, ".exr")) {
+      fprintf(stderr, "host: --out %s: expected a file pattern ending in .exr\n", opt->out);
+      return -1;
+    }
+    opt->seq_pattern = opt->out;
+    opt->out = NULL;
+  } else if (v) {
+    if (!(range && f0 < f1 && f1 <= TT_HOST_PATH_SAMPLES)) {
+      fprintf(stderr, "host: --frames: expected A:B with 0 <= A < B <= %d (path samples "
+              "A..B-1; for frames of a sequence give --out DIR/frame_%%04d.exr), got \"%s\"\n",
+              TT_HOST_PATH_SAMPLES, v);
+      return -1;
+    }
+    opt->frames = 1;
+    opt->frames_first = f0;
+    opt->frames_end = f1;
+  }
+  if (!opt->sequence && (opt->aov_set || opt->reference_only)) {
+    fprintf(stderr, "host: --aov and --supersample apply to sequences: give --frames A:B "
+            "with --out DIR/frame_%%04d.exr, or --sequence\n");
+    return -1;
+  }
+  if (!opt->sequence && (opt->reference_scale || opt->out_dir)) {
+    fprintf(stderr, "host: --reference-scale and --out-dir apply to --sequence\n");
+    return -1;
+  }
+  if (opt->reference_only && opt->post) {
+    fprintf(stderr, "host: --supersample writes the reference frames: no --post filter "
+            "(render the filtered frames in a separate run)\n");
+    return -1;
+  }
+  if (opt->sequence && !opt->aov_set)  /* --out-dir sequences keep writing both AOVs */
+    opt->aov_mask = opt->seq_pattern ? 0 : TT__SEQ_AOV_DEPTH | TT__SEQ_AOV_MOTION;
   return 0;
 }
 
@@ -295,18 +428,15 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       opt->camera_index = (uint32_t)n;
       opt->camera_index_set = 1;
     } else if (!strcmp(a, "--frames")) {
-      unsigned f0 = 0, f1 = 0;
-      char extra;
-      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
-      if (!(v[0] >= '0' && v[0] <= '9' && sscanf(v, "%u:%u%c", &f0, &f1, &extra) == 2 &&
-            f0 < f1 && f1 <= TT_HOST_PATH_SAMPLES)) {
-        fprintf(stderr, "host: --frames: expected A:B with 0 <= A < B <= %d (path samples "
-                "A..B-1), got \"%s\"\n", TT_HOST_PATH_SAMPLES, v);
+      if (!(opt->frames_arg = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--aov")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_aovs(v, &opt->aov_mask))
         return TT_EXIT_USAGE;
-      }
-      opt->frames = 1;
-      opt->frames_first = f0;
-      opt->frames_end = f1;
+      opt->aov_set = 1;
+    } else if (!strcmp(a, "--supersample")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 16, &n)) return TT_EXIT_USAGE;
+      opt->reference_scale = (uint32_t)n;
+      opt->reference_only = 1;
     } else if (a[0] == '-' && a[1] != '\0') {
       fprintf(stderr, "host: unknown option \"%s\" (try --help)\n", a);
       return TT_EXIT_USAGE;
@@ -333,6 +463,7 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       return TT_EXIT_USAGE;
     }
   }
+  if (tt__check_sequence_options(opt)) return TT_EXIT_USAGE;
   if (opt->db && opt->no_db) {
     fprintf(stderr, "host: --db and --no-db exclude each other\n");
     return TT_EXIT_USAGE;

@@ -1,7 +1,9 @@
 /* host: the jobs — list plugins, describe a plugin, render a scene. */
 #include "host.h"
 
+#include <cjson/cJSON.h>
 #include <libgen.h>
+#include <stddef.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -78,6 +80,15 @@ static void tt__loaded_names(tt_registry *reg, char *buf, size_t n) {
   }
 }
 
+const tt_options_iface *tt__plugin_options(const tt_loaded_plugin *p) {
+  const tt_options_iface *oi = tt_loaded_plugin_get(p, TT_OPTIONS_INTERFACE_ID);
+  /* tables older than the fields we call are ignored (struct_size rule of the ABI) */
+  if (!oi || oi->struct_size < offsetof(tt_options_iface, get) + sizeof oi->get || !oi->count ||
+      !oi->info || !oi->set || !oi->get)
+    return NULL;
+  return oi;
+}
+
 int tt__build_configs(tt_registry *reg, const tt__host_options *opt, const tt_scene *scene,
                       tt_config **configs) {
   int errors = 0;
@@ -110,13 +121,31 @@ int tt__build_configs(tt_registry *reg, const tt__host_options *opt, const tt_sc
     }
     size_t idx = 0;
     while (tt_registry_get(reg, idx) != p) idx++;
+    /* a key that is no parameter may be an option (tt.options/1: files, names) */
+    const tt_options_iface *oi = tt__plugin_options(p);
+    int is_param = configs[idx] && tt_space_find(tt_config_space(configs[idx]), param) >= 0;
+    if (!is_param && oi && oi->get(param)) {
+      if (oi->set(param, eq + 1) != TT_OK) {
+        fprintf(stderr, "host: --set %s: %s\n", arg, tt_last_error());
+        errors++;
+      }
+      continue;
+    }
     if (!configs[idx]) {
-      fprintf(stderr, "host: --set %s: plugin \"%s\" has no parameters\n", arg, plugin);
+      fprintf(stderr, "host: --set %s: plugin \"%s\" has no parameters%s\n", arg, plugin,
+              oi ? " and no such option" : "");
       errors++;
       continue;
     }
     if (tt_config_set_string(configs[idx], param, eq + 1) != TT_OK) {
-      fprintf(stderr, "host: --set %s: %s\n", arg, tt_last_error());
+      char hint[256] = "";
+      for (uint32_t o = 0; oi && !is_param && o < oi->count(); o++) {
+        const tt_option_info *info = oi->info(o);
+        size_t len = strlen(hint);
+        if (info && info->key)
+          snprintf(hint + len, sizeof hint - len, "%s%s", o ? ", " : "; options: ", info->key);
+      }
+      fprintf(stderr, "host: --set %s: %s%s\n", arg, tt_last_error(), hint);
       errors++;
     }
   }
@@ -189,19 +218,38 @@ int tt__run_describe(const tt__host_options *opt) {
   }
   const tt_plugin *e = tt_loaded_plugin_entry(p);
   const tt_space *space = tt_loaded_plugin_space(p);
-  if (space) {
-    char *json = tt_space_to_json(space);
-    if (!json) {
-      fprintf(stderr, "host: --describe %s: %s\n", e->name, tt_last_error());
-      tt_registry_destroy(reg);
-      return TT_EXIT_FAILURE;
-    }
-    printf("%s\n", json);
-    tt_free(json);
-  } else {
-    printf("{\n  \"plugin\": \"%s\",\n  \"version\": \"%s\",\n  \"parameters\": [],\n"
-           "  \"constraints\": []\n}\n", e->name, e->version);
+  char *json = space ? tt_space_to_json(space) : NULL;
+  cJSON *root = json ? cJSON_Parse(json) : cJSON_CreateObject();
+  tt_free(json);
+  if (!root) {
+    fprintf(stderr, "host: --describe %s: %s\n", e->name,
+            space ? tt_last_error() : "out of memory");
+    tt_registry_destroy(reg);
+    return TT_EXIT_FAILURE;
   }
+  if (!space) {
+    cJSON_AddStringToObject(root, "plugin", e->name);
+    cJSON_AddStringToObject(root, "version", e->version);
+    cJSON_AddItemToObject(root, "parameters", cJSON_CreateArray());
+    cJSON_AddItemToObject(root, "constraints", cJSON_CreateArray());
+  }
+  /* options (tt.options/1): set with --set NAME.KEY=VALUE like parameters, never tuned */
+  cJSON *opts = cJSON_AddArrayToObject(root, "options");
+  const tt_options_iface *oi = tt__plugin_options(p);
+  for (uint32_t i = 0; oi && i < oi->count(); i++) {
+    const tt_option_info *info = oi->info(i);
+    if (!info || !info->key) continue;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "name", info->key);
+    cJSON_AddStringToObject(o, "description", info->description ? info->description : "");
+    const char *v = oi->get(info->key);
+    cJSON_AddStringToObject(o, "value", v ? v : "");
+    cJSON_AddItemToArray(opts, o);
+  }
+  char *out = cJSON_Print(root);
+  cJSON_Delete(root);
+  if (out) printf("%s\n", out);
+  free(out);
   tt_registry_destroy(reg);
   return TT_EXIT_OK;
 }

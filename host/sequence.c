@@ -96,7 +96,42 @@ typedef struct tt__seq {
   const char *post_name;
   uint64_t seed;
   uint32_t spp;
+  char dir[4096];           /* output folder (--out-dir, or the folder of the --out pattern) */
+  const char *pattern;      /* file name part of the --out pattern, or NULL */
 } tt__seq;
+
+/* What a sequence writes per frame. */
+typedef enum tt__seq_file {
+  TT__SEQ_COLOR, TT__SEQ_DEPTH, TT__SEQ_MOTION, TT__SEQ_REFERENCE, TT__SEQ_POST
+} tt__seq_file;
+
+/* File name (inside s->dir) of frame f's `what`. --out-dir: color_0007.exr, depth_0007.exr,
+ * ... With an --out pattern the frame itself takes the pattern's name -- the reference with
+ * --supersample, else the post-filtered frame when a filter runs, else the rendered frame --
+ * and the other files sit beside it: frame_0007.raw.exr (rendered frame under a filter),
+ * frame_0007.depth.exr, frame_0007.motion.exr, frame_0007.reference.exr. */
+static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *out, size_t n) {
+  static const char *const legacy[] = {"color", "depth", "motion", "reference", "post"};
+  if (!s->pattern) {
+    snprintf(out, n, "%s_%04u.exr", legacy[what], f);
+    return;
+  }
+  tt__seq_file main = s->opt->reference_only ? TT__SEQ_REFERENCE
+                      : s->post                ? TT__SEQ_POST
+                                               : TT__SEQ_COLOR;
+  char name[1024];
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"
+  snprintf(name, sizeof name, s->pattern, (int)f);  /* checked: one %d conversion */
+#pragma GCC diagnostic pop
+  if (what == main) {
+    snprintf(out, n, "%s", name);
+    return;
+  }
+  static const char *const suffix[] = {"raw", "depth", "motion", "reference", "post"};
+  size_t stem = strlen(name) - 4;  /* the pattern ends in .exr */
+  snprintf(out, n, "%.*s.%s.exr", (int)stem, name, suffix[what]);
+}
 
 /* Config of the first loaded plugin of `kind` (or named `name`), and its interface. */
 static const void *tt__seq_find(tt__seq *s, uint32_t kind, const char *name,
@@ -155,21 +190,32 @@ static int tt__seq_write(const char *path, uint32_t w, uint32_t h, uint32_t ch,
 }
 
 int tt__run_sequence(const tt__host_options *opt) {
-  if (!opt->out_dir) {
-    fprintf(stderr, "host: --sequence needs --out-dir DIR\n");
+  if (!opt->out_dir && !opt->seq_pattern) {
+    fprintf(stderr, "host: --sequence needs --out-dir DIR (or --out DIR/frame_%%04d.exr)\n");
     return TT_EXIT_USAGE;
   }
   tt__seq s;
   memset(&s, 0, sizeof s);
   s.opt = opt;
+  if (opt->seq_pattern) {
+    const char *slash = strrchr(opt->seq_pattern, '/');
+    if (slash)
+      snprintf(s.dir, sizeof s.dir, "%.*s", (int)(slash - opt->seq_pattern + (slash == opt->seq_pattern)),
+               opt->seq_pattern);
+    else
+      snprintf(s.dir, sizeof s.dir, ".");
+    s.pattern = slash ? slash + 1 : opt->seq_pattern;
+  } else {
+    snprintf(s.dir, sizeof s.dir, "%s", opt->out_dir);
+  }
   s.host = tt__host_services(opt->quiet);
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
     fprintf(stderr, "host: --threads: %s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
-  if (tt__ensure_dir(opt->out_dir) != 0) {
-    fprintf(stderr, "host: --out-dir %s: cannot create the directory: %s\n", opt->out_dir,
-            strerror(errno));
+  if (tt__ensure_dir(s.dir) != 0) {
+    fprintf(stderr, "host: %s %s: cannot create the directory: %s\n",
+            opt->seq_pattern ? "--out" : "--out-dir", s.dir, strerror(errno));
     return TT_EXIT_OUTPUT;
   }
   if (tt_scene_load(opt->scene, &s.scene) != TT_OK) {
@@ -214,6 +260,24 @@ int tt__run_sequence(const tt__host_options *opt) {
       goto done;
     }
     s.post_name = tt_loaded_plugin_entry(tt_registry_find_name(s.reg, name))->name;
+  } else {
+    /* --plugin post_taa: a loaded post-filter runs over the frames as with --post */
+    s.pi = tt__seq_find(&s, TT_KIND_POST, NULL, &pcfg);
+    if (s.pi) {
+      for (size_t i = 0; i < tt_registry_count(s.reg); i++) {
+        const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s.reg, i));
+        if (e->kind == TT_KIND_POST) {
+          s.post_name = e->name;
+          break;
+        }
+      }
+      if (opt->reference_only) {
+        fprintf(stderr, "host: --supersample writes the reference frames: no post-filter "
+                "(%s is loaded)\n", s.post_name);
+        rc = TT_EXIT_USAGE;
+        goto done;
+      }
+    }
   }
   const tt_render_settings *settings = tt_scene_settings(s.scene);
   s.seed = opt->seed_set ? opt->seed : settings->seed;
@@ -245,12 +309,12 @@ int tt__run_sequence(const tt__host_options *opt) {
     goto done;
   }
   if (s.pi && s.pi->create(w, h, pcfg, &s.post) != TT_OK) {
-    fprintf(stderr, "host: --post %s: %s\n", s.post_name, tt_last_error());
+    fprintf(stderr, "host: post-filter %s: %s\n", s.post_name, tt_last_error());
     rc = TT_EXIT_FAILURE;
     goto done;
   }
-  char path[4096];
-  snprintf(path, sizeof path, "%s/manifest.json", opt->out_dir);
+  char path[4096 + 1100], name[1024];
+  snprintf(path, sizeof path, "%s/manifest.json", s.dir);
   manifest = fopen(path, "w");
   if (!manifest) {
     fprintf(stderr, "host: cannot write %s: %s\n", path, strerror(errno));
@@ -266,12 +330,15 @@ int tt__run_sequence(const tt__host_options *opt) {
           (unsigned long long)s.seed, TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS,
           s.post_name ? "\"" : "", s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
   if (!opt->quiet)
-    fprintf(stderr, "host: sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s\n",
+    fprintf(stderr, "host: sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n",
             opt->scene, opt->seq_first, opt->seq_last, fps, w, h, s.spp,
-            k ? ", reference x" : "", k ? (k == 2 ? "2" : k == 4 ? "4" : "K") : "");
+            k ? (opt->reference_only ? ", reference only x" : ", reference x") : "",
+            k ? (k == 2 ? "2" : k == 4 ? "4" : "K") : "", s.dir);
   static const char *const depth_names[] = {"Z"};
   static const char *const motion_names[] = {"X", "Y"};
   uint32_t nframes = opt->seq_last - opt->seq_first + 1;
+  /* the jittered frame is rendered unless only the reference is asked for */
+  int render_frame = !opt->reference_only || opt->aov_mask;
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
     if (s.host->should_stop()) {
       rc = TT_EXIT_INTERRUPTED;
@@ -285,25 +352,45 @@ int tt__run_sequence(const tt__host_options *opt) {
     uint32_t ji = f % TT__SEQ_JITTER_CYCLE;
     float jit[2];
     tt_jitter_halton23(ji, jit);
-    uint64_t t0 = s.host->clock_ns();
-    if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {
-      fprintf(stderr, "host: frame %u: %s\n", f, tt_last_error());
-      rc = TT_EXIT_FAILURE;
-      break;
+    fprintf(manifest, "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
+            "\"jitter\": [%.6f, %.6f], \"reset\": %s", f == opt->seq_first ? "" : ",", f,
+            f / fps, ji, jit[0], jit[1], f == opt->seq_first ? "true" : "false");
+    double render_ms = 0, ref_ms = 0, post_ms = 0;
+    const float *depth = NULL;
+    if (render_frame) {
+      uint64_t t0 = s.host->clock_ns();
+      if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {
+        fprintf(stderr, "host: frame %u: %s\n", f, tt_last_error());
+        rc = TT_EXIT_FAILURE;
+        break;
+      }
+      render_ms = (s.host->clock_ns() - t0) * 1e-6;
+      depth = tt_film_aov_const(film, TT_AOV_DEPTH);
+      memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
+      struct {
+        tt__seq_file what;
+        const char *key;
+        int on;
+        uint32_t ch;
+        const float *px;
+        const char *const *names;
+      } files[] = {
+        {TT__SEQ_COLOR, "color", !opt->reference_only, 3, rgb, NULL},
+        {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__SEQ_AOV_DEPTH), 1, depth, depth_names},
+        {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__SEQ_AOV_MOTION), 2, motion,
+         motion_names},
+      };
+      for (size_t i = 0; i < sizeof files / sizeof files[0] && rc == TT_EXIT_OK; i++) {
+        if (!files[i].on) continue;
+        tt__seq_name(&s, files[i].what, f, name, sizeof name);
+        snprintf(path, sizeof path, "%s/%s", s.dir, name);
+        if (tt__seq_write(path, w, h, files[i].ch, files[i].px, files[i].names))
+          rc = TT_EXIT_OUTPUT;
+        else
+          fprintf(manifest, ", \"%s\": \"%s\"", files[i].key, name);
+      }
+      if (rc != TT_EXIT_OK) break;
     }
-    double render_ms = (s.host->clock_ns() - t0) * 1e-6;
-    const float *depth = tt_film_aov_const(film, TT_AOV_DEPTH);
-    memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
-    char cpath[4096], dpath[4096], mpath[4096];
-    snprintf(cpath, sizeof cpath, "%s/color_%04u.exr", opt->out_dir, f);
-    snprintf(dpath, sizeof dpath, "%s/depth_%04u.exr", opt->out_dir, f);
-    snprintf(mpath, sizeof mpath, "%s/motion_%04u.exr", opt->out_dir, f);
-    if (tt__seq_write(cpath, w, h, 3, rgb, NULL) || tt__seq_write(dpath, w, h, 1, depth, depth_names) ||
-        tt__seq_write(mpath, w, h, 2, motion, motion_names)) {
-      rc = TT_EXIT_OUTPUT;
-      break;
-    }
-    double ref_ms = 0, post_ms = 0;
     if (k) {
       tt_camera hi = cam;
       hi.width = w * k;
@@ -316,11 +403,13 @@ int tt__run_sequence(const tt__host_options *opt) {
       }
       tt__downsample_bh(ref_hi, k, w, h, TT__SEQ_BH_RADIUS, ref);
       ref_ms = (s.host->clock_ns() - r0) * 1e-6;
-      snprintf(path, sizeof path, "%s/reference_%04u.exr", opt->out_dir, f);
+      tt__seq_name(&s, TT__SEQ_REFERENCE, f, name, sizeof name);
+      snprintf(path, sizeof path, "%s/%s", s.dir, name);
       if (tt__seq_write(path, w, h, 3, ref, NULL)) {
         rc = TT_EXIT_OUTPUT;
         break;
       }
+      fprintf(manifest, ", \"reference\": \"%s\"", name);
     }
     if (s.post) {
       tt_post_frame pf;
@@ -338,33 +427,30 @@ int tt__run_sequence(const tt__host_options *opt) {
       pf.reset_history = f == opt->seq_first;
       uint64_t p0 = s.host->clock_ns();
       if (s.pi->process(s.post, &pf, post_rgb) != TT_OK) {
-        fprintf(stderr, "host: --post %s: frame %u: %s\n", s.post_name, f, tt_last_error());
+        fprintf(stderr, "host: post-filter %s: frame %u: %s\n", s.post_name, f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
       post_ms = (s.host->clock_ns() - p0) * 1e-6;
-      snprintf(path, sizeof path, "%s/post_%04u.exr", opt->out_dir, f);
+      tt__seq_name(&s, TT__SEQ_POST, f, name, sizeof name);
+      snprintf(path, sizeof path, "%s/%s", s.dir, name);
       if (tt__seq_write(path, w, h, 3, post_rgb, NULL)) {
         rc = TT_EXIT_OUTPUT;
         break;
       }
+      fprintf(manifest, ", \"post\": \"%s\", \"post_ms\": %.3f", name, post_ms);
     }
-    fprintf(manifest, "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
-            "\"jitter\": [%.6f, %.6f], \"reset\": %s, \"color\": \"color_%04u.exr\", "
-            "\"depth\": \"depth_%04u.exr\", \"motion\": \"motion_%04u.exr\"",
-            f == opt->seq_first ? "" : ",", f, f / fps, ji, jit[0], jit[1],
-            f == opt->seq_first ? "true" : "false", f, f, f);
-    if (k) fprintf(manifest, ", \"reference\": \"reference_%04u.exr\"", f);
-    if (s.post) fprintf(manifest, ", \"post\": \"post_%04u.exr\", \"post_ms\": %.3f", f, post_ms);
     fprintf(manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", render_ms, ref_ms);
     tt__progress_update("sequence", (double)(f - opt->seq_first + 1) / nframes);
   }
+  /* a frame that failed half-way still closes its manifest entry */
+  if (rc != TT_EXIT_OK && rc != TT_EXIT_INTERRUPTED) fprintf(manifest, ", \"incomplete\": true}\n");
   tt__progress_finish();
   fprintf(manifest, "  ]\n}\n");
   if (fclose(manifest) != 0 && rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
   manifest = NULL;
   if (!opt->quiet && rc == TT_EXIT_OK)
-    fprintf(stderr, "host: wrote %u frames to %s\n", nframes, opt->out_dir);
+    fprintf(stderr, "host: wrote %u frames to %s\n", nframes, s.dir);
 done:
   if (manifest) fclose(manifest);
   if (s.post) s.pi->destroy(s.post);

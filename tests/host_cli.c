@@ -71,6 +71,10 @@ int main(void) {
   CHECK(run_host("--describe integrator_pt", out, sizeof out) == 0);
   CHECK_CONTAINS(out, "\"maxDepth\"");
   CHECK(run_host("--describe nothing_here", out, sizeof out) == 3);
+  /* options (tt.options/1) are listed apart from the tuned parameters */
+  CHECK(run_host("--describe post_taa", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "\"options\"");
+  CHECK_CONTAINS(out, "\"weights\"");
 
   /* --list-plugins finds the built plugins */
   CHECK(run_host("--list-plugins", out, sizeof out) == 0);

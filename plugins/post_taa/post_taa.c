@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <tunetrace/options.h>
 #include <tunetrace/plugin.h>
 #include <tunetrace/post.h>
 
@@ -21,6 +22,7 @@ enum { TAA_MODE_VCTAA = 0, TAA_MODE_NETWORK = 1, TAA_MODE_NONE = 2 };
 
 static const tt_host *g_host;
 static tt_space *g_space;
+static char g_weights_option[4096];  /* option "weights" ("" = not set) */
 
 struct tt_post {
   uint32_t width, height;
@@ -54,7 +56,8 @@ static tt_status taa_build_space(void) {
   ok &= tt_space_add_nom_bool(s, "catmullRom", 1,
                               "vctaa: Catmull-Rom history fetch (false: bilinear)") >= 0;
   ok &= tt_space_add_nom_int(s, "channels", channels, 2, 0,
-                             "network: shipped model variant (body channels); the "
+                             "network: shipped model variant (body channels); the option "
+                             "weights (--set post_taa.weights=FILE) or the "
                              "TT_POST_TAA_WEIGHTS environment variable names another file") >= 0;
   if (!ok) {
     tt_space_destroy(s);
@@ -67,9 +70,13 @@ static tt_status taa_build_space(void) {
 /* Space accessor for the interface. */
 static const tt_space *taa_space(void) { return g_space; }
 
-/* Finds the weights file: $TT_POST_TAA_WEIGHTS, else the shipped file next to the plugin,
- * else in the source tree (uninstalled builds). */
+/* Finds the weights file: option "weights", else $TT_POST_TAA_WEIGHTS, else the shipped file
+ * next to the plugin, else in the source tree (uninstalled builds). */
 static void taa_weights_path(uint32_t channels, char *out, size_t size) {
+  if (g_weights_option[0]) {
+    snprintf(out, size, "%s", g_weights_option);
+    return;
+  }
   const char *env = getenv("TT_POST_TAA_WEIGHTS");
   if (env && *env) {
     snprintf(out, size, "%s", env);
@@ -221,6 +228,44 @@ static const tt_post_iface g_iface = {
   .destroy = taa_destroy,
 };
 
+/* ---- options (tt.options/1): settings that are not tuned ---- */
+
+static const tt_option_info g_options[] = {
+  {"weights", "network: weights file (.ttw, README.md) used instead of the shipped "
+              "post_taa_c<channels>.ttw; \"\" = the shipped file"},
+};
+
+/* Number of options. */
+static uint32_t taa_option_count(void) { return 1; }
+
+/* Option `i`, or NULL. */
+static const tt_option_info *taa_option_info(uint32_t i) { return i < 1 ? &g_options[i] : NULL; }
+
+/* Sets an option; the weights file is checked when a network filter is created. */
+static tt_status taa_option_set(const char *key, const char *value) {
+  if (!key || strcmp(key, "weights"))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": no option \"%s\" (options: "
+                        "weights)", key ? key : "(null)");
+  if (!value || strlen(value) >= sizeof g_weights_option)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": option weights: expected a "
+                        "file name shorter than %zu bytes", sizeof g_weights_option);
+  snprintf(g_weights_option, sizeof g_weights_option, "%s", value);
+  return TT_OK;
+}
+
+/* Current value of an option. */
+static const char *taa_option_get(const char *key) {
+  return key && !strcmp(key, "weights") ? g_weights_option : NULL;
+}
+
+static const tt_options_iface g_options_iface = {
+  .struct_size = sizeof(tt_options_iface),
+  .count = taa_option_count,
+  .info = taa_option_info,
+  .set = taa_option_set,
+  .get = taa_option_get,
+};
+
 /* Keeps the host table and builds the space. */
 static tt_status taa_init(const tt_host *host) {
   g_host = host;
@@ -232,11 +277,15 @@ static void taa_deinit(void) {
   tt_space_destroy(g_space);
   g_space = NULL;
   g_host = NULL;
+  g_weights_option[0] = 0;
 }
 
-/* Serves "tt.post/1". */
+/* Serves "tt.post/1" and "tt.options/1". */
 static const void *taa_get_interface(const char *id) {
-  return id && !strcmp(id, TT_POST_INTERFACE_ID) ? &g_iface : NULL;
+  if (!id) return NULL;
+  if (!strcmp(id, TT_POST_INTERFACE_ID)) return &g_iface;
+  if (!strcmp(id, TT_OPTIONS_INTERFACE_ID)) return &g_options_iface;
+  return NULL;
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {

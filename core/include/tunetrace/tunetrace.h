@@ -18,6 +18,7 @@
 #include <tunetrace/tuner.h>
 #include <tunetrace/predictor.h>
 #include <tunetrace/post.h>
+#include <tunetrace/options.h>
 #include <tunetrace/loader.h>
 #include <tunetrace/tunedb.h>
 
