@@ -11,8 +11,13 @@
  * independent 8-wide FMAs (AVX2) gives this core's FLOP/s per CPU-second, i.e. 2 FMA units
  * x 8 floats x 2 flops x the effective clock, which is printed as the clock it implies.
  *
+ * Each network row is measured twice, alternating frames in one process: D = all layers by
+ * direct convolution, W = the kernel layer and 12-channel 5x5 body layers by Winograd
+ * F(2x2, 5x5) (fewer multiplies; its GFLOP/s are "effective": the direct convolution's FLOP
+ * count over the time taken).
+ *
  * Environment: TT_BENCH_THREADS="1 2" (thread counts), TT_BENCH_QUICK=1 (640x480 only),
- * TT_POST_TAA_ISA=avx2|generic (force a lower instruction set). */
+ * TT_POST_TAA_ISA=avx2|generic (force a lower instruction set; generic has no Winograd). */
 #include "tt_test.h"
 
 #include "taa_internal.h"
@@ -94,6 +99,7 @@ static double measure_peak(void) {
 
 static double g_peak;  /* GFLOP/s per core */
 static char g_notes[8192];  /* per-part lines printed after the table */
+static char g_summary[4096];  /* direct vs Winograd, side by side */
 
 typedef struct frame_in {
   uint32_t w, h;
@@ -122,7 +128,11 @@ static void free_frame(frame_in *f) {
   free(f->color), free(f->depth), free(f->motion), free(f->out);
 }
 
-/* One Table 5.2 row of the network: medians over `reps` frames. */
+/* Two Table 5.2 rows of the network, the 5x5 layers (kernel layer; 12-channel 5x5 body
+ * layers) by direct convolution (D) and by Winograd F(2x2, 5x5) (W)
+ * (tt__net_state.winograd; TT_POST_TAA_WINOGRAD=0 selects direct in the plugin): two states
+ * run alternately frame by frame in this process (the order swapped every frame), so both
+ * see the same machine load; medians over `reps` frames each. */
 static void bench_net(const char *weights, const char *label, uint32_t w, uint32_t h,
                       uint32_t threads, int reps) {
   tt__net_model m;
@@ -136,35 +146,56 @@ static void bench_net(const char *weights, const char *label, uint32_t w, uint32
   for (uint32_t i = 0; i < m.body_count; i++) body_flops += layer_flops(&m.body[i]);
   flops += body_flops;
   frame_in f = make_frame(w, h);
-  tt__net_state s;
-  CHECK(tt__net_state_init(&s, &m, w, h) == TT_OK);
-  double wall[64], cpu[64], wr[64], wn[64], wm[64], cr[64], cn[64], cm[64], tb[64], tk[64];
-  for (int r = 0; r <= reps; r++) {
-    double t0 = now_ms(), c0 = cpu_ms();
-    tt__net_process(&s, &m, tt_default_host(), f.color, f.depth, f.motion, (uint32_t)r, f.out);
-    double t = now_ms() - t0, c = cpu_ms() - c0;
-    if (r == 0) continue;  /* warm-up (first frame has no history) */
-    int k = r - 1;
-    wall[k] = t, cpu[k] = c;
-    wr[k] = s.ms_reproject, wn[k] = s.ms_network, wm[k] = s.ms_mix;
-    cr[k] = s.cpu_reproject, cn[k] = s.cpu_network, cm[k] = s.cpu_mix;
-    tb[k] = s.ms_body, tk[k] = s.ms_kernel;
+  tt__net_state st[2];
+  double wall[2][64], cpu[2][64], wr[2][64], wn[2][64], wm[2][64], cr[2][64], cn[2][64],
+      cm[2][64], tb[2][64], tk[2][64];
+  for (int md = 0; md < 2; md++) {
+    CHECK(tt__net_state_init(&st[md], &m, w, h) == TT_OK);
+    st[md].winograd = md;
   }
-  double mc = median(cpu, reps), px = (double)w * h;
-  double gf = flops * px / (median(cn, reps) * 1e-3) * 1e-9;
-  printf("| %-10s | %4ux%-4u | %u | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f | %5.1f / %5.1f / %5.1f "
-         "| %5.1f | %3.0f%% |\n", label, w, h, threads, median(wr, reps), median(wn, reps),
-         median(wm, reps), median(wall, reps), mc, median(cr, reps), median(cn, reps),
-         median(cm, reps), gf, g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
-  /* Body layers vs kernel layer: the network CPU time split by the threads' own timers. */
-  double bb = median(tb, reps), kk = median(tk, reps), sh = bb + kk > 0 ? bb / (bb + kk) : 0;
-  double cb = median(cn, reps) * sh, ck = median(cn, reps) * (1 - sh);
-  snprintf(g_notes + strlen(g_notes), sizeof g_notes - strlen(g_notes),
-           "%s %ux%u T=%u: body layers %.1f CPU ms (%.1f GFLOP/s), kernel layer %.1f CPU ms "
-           "(%.1f GFLOP/s); %.0f FLOP/px\n", label, w, h, threads, cb,
-           body_flops * px / (cb * 1e-3) * 1e-9, ck,
-           layer_flops(&m.kernel) * px / (ck * 1e-3) * 1e-9, flops);
-  tt__net_state_free(&s);
+  for (int r = 0; r <= reps; r++) {
+    for (int q = 0; q < 2; q++) {
+      int md = (r + q) % 2;
+      tt__net_state *s = &st[md];
+      double t0 = now_ms(), c0 = cpu_ms();
+      tt__net_process(s, &m, tt_default_host(), f.color, f.depth, f.motion, (uint32_t)r, f.out);
+      double t = now_ms() - t0, c = cpu_ms() - c0;
+      if (r == 0) continue;  /* warm-up (first frame has no history) */
+      int k = r - 1;
+      wall[md][k] = t, cpu[md][k] = c;
+      wr[md][k] = s->ms_reproject, wn[md][k] = s->ms_network, wm[md][k] = s->ms_mix;
+      cr[md][k] = s->cpu_reproject, cn[md][k] = s->cpu_network, cm[md][k] = s->cpu_mix;
+      tb[md][k] = s->ms_body, tk[md][k] = s->ms_kernel;
+    }
+  }
+  double px = (double)w * h, mcpu[2], mwall[2], mker[2];
+  for (int md = 0; md < 2; md++) {
+    char lab[64];
+    snprintf(lab, sizeof lab, "%s %s", label, md ? "W" : "D");
+    double mc = median(cpu[md], reps);
+    double gf = flops * px / (median(cn[md], reps) * 1e-3) * 1e-9;
+    printf("| %-12s | %4ux%-4u | %u | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f | %5.1f / %5.1f / "
+           "%5.1f | %5.1f | %3.0f%% |\n", lab, w, h, threads, median(wr[md], reps),
+           median(wn[md], reps), median(wm[md], reps), median(wall[md], reps), mc,
+           median(cr[md], reps), median(cn[md], reps), median(cm[md], reps), gf,
+           g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
+    /* Body layers vs kernel layer: the network CPU time split by the threads' own timers. */
+    double bb = median(tb[md], reps), kk = median(tk[md], reps);
+    double sh = bb + kk > 0 ? bb / (bb + kk) : 0;
+    double cb = median(cn[md], reps) * sh, ck = median(cn[md], reps) * (1 - sh);
+    snprintf(g_notes + strlen(g_notes), sizeof g_notes - strlen(g_notes),
+             "%s %ux%u T=%u %s: body layers %.1f CPU ms (%.1f GFLOP/s%s), kernel layer %.1f "
+             "CPU ms (%.1f GFLOP/s%s); %.0f FLOP/px (direct convolution)\n", label, w, h,
+             threads, md ? "W" : "D", cb, body_flops * px / (cb * 1e-3) * 1e-9,
+             md && m.body_count > 1 && m.body[m.body_count - 1].wino ? " effective" : "", ck,
+             layer_flops(&m.kernel) * px / (ck * 1e-3) * 1e-9, md ? " effective" : "", flops);
+    mcpu[md] = mc, mwall[md] = median(wall[md], reps), mker[md] = ck;
+  }
+  snprintf(g_summary + strlen(g_summary), sizeof g_summary - strlen(g_summary),
+           "| %-10s | %4ux%-4u | %u | %7.1f | %7.1f | %5.2fx | %7.1f | %7.1f | %6.1f | %6.1f |\n",
+           label, w, h, threads, mcpu[0], mcpu[1], mcpu[0] / mcpu[1], mwall[0], mwall[1],
+           mker[0], mker[1]);
+  for (int md = 0; md < 2; md++) tt__net_state_free(&st[md]);
   tt__net_free(&m);
   free_frame(&f);
 }
@@ -182,7 +213,7 @@ static void bench_vctaa(uint32_t w, uint32_t h, uint32_t threads, int reps) {
     double t = now_ms() - t0, c = cpu_ms() - c0;
     if (r) wall[r - 1] = t, cpu[r - 1] = c;
   }
-  printf("| %-10s | %4ux%-4u | %u | %6s | %6s | %6s | %6.1f | %6.1f | %21s | %5s | %4s |\n",
+  printf("| %-12s | %4ux%-4u | %u | %6s | %6s | %6s | %6.1f | %6.1f | %21s | %5s | %4s |\n",
          "VCTAA", w, h, threads, "-", "-", "-", median(wall, reps), median(cpu, reps), "-", "-",
          "-");
   tt__vctaa_free(&v);
@@ -201,9 +232,12 @@ int main(void) {
          "x 2 flops x %.2f GHz effective clock\n", g_peak, g_peak / 32.0);
   printf("network instruction set: %s\n", tt__net_fast_isa());
   printf("medians of >= 5 frames; wall ms split reprojection / network / mix; CPU ms = process "
-         "CPU time (all threads); GFLOP/s = network FLOPs per network CPU-second\n\n");
-  printf("| method     | size      | T | reproj | netw.  |  mix   | total  | CPU    | CPU reproj/netw/mix   | GF/s  | peak |\n");
-  printf("|------------|-----------|---|--------|--------|--------|--------|--------|-----------------------|-------|------|\n");
+         "CPU time (all threads); GFLOP/s = network FLOPs per network CPU-second, FLOPs of the "
+         "direct convolutions for both D (direct) and W (Winograd F(2x2, 5x5) 5x5 layers: "
+         "'effective' GFLOP/s, it does fewer multiplies); D and W frames alternate in one "
+         "process\n\n");
+  printf("| method       | size      | T | reproj | netw.  |  mix   | total  | CPU    | CPU reproj/netw/mix   | GF/s  | peak |\n");
+  printf("|--------------|-----------|---|--------|--------|--------|--------|--------|-----------------------|-------|------|\n");
   unsigned th[4] = {1, 2, 0, 0};
   int nth = 2;
   if (tl) {
@@ -221,5 +255,12 @@ int main(void) {
     }
   }
   printf("\n%s", g_notes);
+  printf("\ndirect (D) vs Winograd (W) 5x5 layers, same process, alternating frames "
+         "(medians; CPU = process CPU ms per frame, wall = ms per frame; kern = kernel layer "
+         "CPU ms):\n\n");
+  printf("| network    | size      | T | CPU D   | CPU W   | D/W    | wall D  | wall W  | "
+         "kern D | kern W |\n");
+  printf("|------------|-----------|---|---------|---------|--------|---------|---------|"
+         "--------|--------|\n%s", g_summary);
   return tt_test_finish("taa_bench");
 }

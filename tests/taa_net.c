@@ -6,7 +6,9 @@
  *   messages naming the file and the problem;
  * - Catmull-Rom reprojection against an analytic shift;
  * - the result does not depend on the thread count or the band split: 1, 2 and 3 threads
- *   and forced band heights give bit-identical outputs and states (memcmp). */
+ *   and forced band heights give bit-identical outputs and states (memcmp);
+ * - all of it for both kernel-layer algorithms of the fast path (Winograd F(2x2, 5x5) and
+ *   direct), the vs-reference checks also on forced AVX2. */
 #include "tt_test.h"
 
 #include "taa_internal.h"
@@ -104,8 +106,9 @@ static void random_frame(uint32_t w, uint32_t h, float *color, float *depth, flo
   }
 }
 
-/* SIMD path == scalar reference for one shape over 3 frames. */
-static void check_fast_vs_reference(const shape *s, const char *label) {
+/* SIMD path == scalar reference for one shape over 3 frames; `wino`: the fast path's kernel
+ * layer by Winograd F(2x2, 5x5) (1) or direct (0). */
+static void check_fast_vs_reference(const shape *s, const char *label, int wino) {
   const uint32_t w = 23, h = 17;
   buf b = write_model(s);
   tt__net_model m;
@@ -117,6 +120,7 @@ static void check_fast_vs_reference(const shape *s, const char *label) {
   CHECK(tt__net_state_init(&fast, &m, w, h) == TT_OK);
   CHECK(tt__net_state_init(&ref, &m, w, h) == TT_OK);
   ref.reference = 1;
+  fast.winograd = wino;
   size_t n = (size_t)w * h;
   float *color = malloc(n * 3 * 4), *depth = malloc(n * 4), *motion = malloc(n * 2 * 4);
   float *o1 = malloc(n * 3 * 4), *o2 = malloc(n * 3 * 4);
@@ -129,7 +133,8 @@ static void check_fast_vs_reference(const shape *s, const char *label) {
     for (size_t i = 0; i < n * fast.state_ch; i++)
       worst_state = fmax(worst_state, fabs(fast.state[i] - ref.state[i]));
   }
-  printf("%s: fast vs reference: state %.2e, output %.2e\n", label, worst_state, worst);
+  printf("%s (%s, %s): fast vs reference: state %.2e, output %.2e\n", label,
+         wino ? "winograd" : "direct", tt__net_fast_isa(), worst_state, worst);
   CHECK_MSG(worst_state < 1e-4, "%s: state differs by %g", label, worst_state);
   CHECK_MSG(worst < 1e-3, "%s: output differs by %g", label, worst);
   free(color), free(depth), free(motion), free(o1), free(o2);
@@ -145,21 +150,78 @@ static void test_fast_vs_reference(void) {
   shape hidden8_all = {12, 8, 3, {3, 3, 5}, {8, 8, 8}, 8, 8};
   shape two = {12, 3, 1, {3}, {8}, 8, 1};
   shape wide = {40, 5, 2, {3, 5}, {1, 8}, 8, 1};
-  check_fast_vs_reference(&thesis12, "thesis-12");
-  check_fast_vs_reference(&thesis6, "thesis-6");
-  check_fast_vs_reference(&no_hidden, "hidden-0");
-  check_fast_vs_reference(&hidden8_all, "hidden-8-all-sets");
-  check_fast_vs_reference(&two, "2-layers");
-  check_fast_vs_reference(&wide, "width-40");
+  /* Both kernel-layer algorithms, on the best instruction set and on forced AVX2 (8 tiles
+   * per group instead of 16; on other machines both runs take the same path). */
+  const char *isa0 = getenv("TT_POST_TAA_ISA");
+  char *saved = isa0 ? strdup(isa0) : NULL;
+  for (int pass = 0; pass < 2; pass++) {
+    if (pass) setenv("TT_POST_TAA_ISA", "avx2", 1);
+    for (int wino = 1; wino >= 0; wino--) {
+      check_fast_vs_reference(&thesis12, "thesis-12", wino);
+      check_fast_vs_reference(&thesis6, "thesis-6", wino);
+      check_fast_vs_reference(&no_hidden, "hidden-0", wino);
+      check_fast_vs_reference(&hidden8_all, "hidden-8-all-sets", wino);
+      check_fast_vs_reference(&two, "2-layers", wino);
+      check_fast_vs_reference(&wide, "width-40", wino);
+    }
+  }
+  if (saved) setenv("TT_POST_TAA_ISA", saved, 1);
+  else unsetenv("TT_POST_TAA_ISA");
+  free(saved);
+}
+
+/* Winograd vs direct 5x5 layers on frames with odd sizes (tiles cut by the image edge on
+ * the right and bottom), several column chunks, and tiny frames (one row or column): both
+ * close to each other. */
+static void winograd_vs_direct(const tt__net_model *mp, uint32_t w, uint32_t h) {
+  tt__net_state sw, sd;
+  CHECK(tt__net_state_init(&sw, mp, w, h) == TT_OK);
+  CHECK(tt__net_state_init(&sd, mp, w, h) == TT_OK);
+  sw.winograd = 1;
+  sd.winograd = 0;
+  size_t n = (size_t)w * h;
+  float *color = malloc(n * 3 * 4), *depth = malloc(n * 4), *motion = malloc(n * 2 * 4);
+  float *o1 = malloc(n * 3 * 4), *o2 = malloc(n * 3 * 4);
+  double worst = 0.0, worst_state = 0.0;
+  for (uint32_t f = 0; f < 4; f++) {
+    random_frame(w, h, color, depth, motion);
+    tt__net_process(&sw, mp, tt_default_host(), color, depth, motion, f, o1);
+    tt__net_process(&sd, mp, tt_default_host(), color, depth, motion, f, o2);
+    for (size_t i = 0; i < n * 3; i++) worst = fmax(worst, fabs(o1[i] - o2[i]) / (1 + fabs(o2[i])));
+    for (size_t i = 0; i < n * sw.state_ch; i++)
+      worst_state = fmax(worst_state, fabs(sw.state[i] - sd.state[i]));
+  }
+  printf("winograd vs direct (%s, %ux%u, 4 frames): state %.2e, output %.2e\n",
+         tt__net_fast_isa(), w, h, worst_state, worst);
+  CHECK_MSG(worst_state < 1e-4, "winograd vs direct %ux%u: state differs by %g", w, h,
+            worst_state);
+  CHECK_MSG(worst < 1e-3, "winograd vs direct %ux%u: output differs by %g", w, h, worst);
+  free(color), free(depth), free(motion), free(o1), free(o2);
+  tt__net_state_free(&sw);
+  tt__net_state_free(&sd);
+}
+
+static void test_winograd_vs_direct(void) {
+  shape thesis12 = {12, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1};
+  buf b = write_model(&thesis12);
+  tt__net_model m;
+  CHECK_MSG(tt__net_parse(b.p, b.n, "wino", &m) == TT_OK, "%s", tt_last_error());
+  free(b.p);
+  const uint32_t sizes[][2] = {{157, 45}, {1, 1}, {3, 2}, {17, 1}, {2, 5}, {33, 3}};
+  for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++)
+    winograd_vs_direct(&m, sizes[k][0], sizes[k][1]);
+  tt__net_free(&m);
 }
 
 /* Runs 4 frames of a random 12-channel model at w x h with `threads` threads and bands of
  * `band_rows` rows (0: automatic); returns the outputs and final state (caller frees). */
 static void run_threads(const tt__net_model *m, uint32_t w, uint32_t h, uint32_t threads,
-                        uint32_t band_rows, uint32_t tile_cols, float **out, float **state) {
+                        uint32_t band_rows, uint32_t tile_cols, int wino, float **out,
+                        float **state) {
   tt_default_host_set_threads(threads);
   tt__net_state s;
   CHECK(tt__net_state_init(&s, m, w, h) == TT_OK);
+  s.winograd = wino;
   s.band_rows = band_rows;
   s.tile_cols = tile_cols;
   size_t n = (size_t)w * h;
@@ -186,21 +248,28 @@ static void test_thread_invariance(void) {
   free(b.p);
   const uint32_t w = 201, h = 67;  /* not multiples of 8 or 16: column tails, uneven bands */
   size_t n = (size_t)w * h;
-  float *o1, *s1;
-  run_threads(&m, w, h, 1, 0, 0, &o1, &s1);
-  struct { uint32_t threads, rows, cols; } cases[] = {
-      {2, 0, 0}, {3, 0, 0}, {2, 16, 0}, {2, 17, 64}, {1, 5, 128}, {2, 0, 64}};
-  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-    float *o2, *s2;
-    run_threads(&m, w, h, cases[k].threads, cases[k].rows, cases[k].cols, &o2, &s2);
-    int same_out = memcmp(o1, o2, n * 3 * 4 * 4) == 0, same_state = memcmp(s1, s2, n * 8 * 4) == 0;
-    printf("threads %u, band rows %u, tile columns %u vs 1 thread: %s\n", cases[k].threads,
-           cases[k].rows, cases[k].cols, same_out && same_state ? "bit-identical" : "DIFFERENT");
-    CHECK_MSG(same_out && same_state, "threads %u band rows %u tile columns %u: results differ "
-              "from 1 thread", cases[k].threads, cases[k].rows, cases[k].cols);
-    free(o2), free(s2);
+  /* Winograd: odd band heights start bands on odd rows (half a tile pair). */
+  for (int wino = 1; wino >= 0; wino--) {
+    float *o1, *s1;
+    run_threads(&m, w, h, 1, 0, 0, wino, &o1, &s1);
+    struct { uint32_t threads, rows, cols; } cases[] = {
+        {2, 0, 0}, {3, 0, 0}, {2, 16, 0}, {2, 17, 64}, {1, 5, 128}, {2, 0, 64}, {3, 3, 64},
+        {2, 1, 0}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+      float *o2, *s2;
+      run_threads(&m, w, h, cases[k].threads, cases[k].rows, cases[k].cols, wino, &o2, &s2);
+      int same_out = memcmp(o1, o2, n * 3 * 4 * 4) == 0;
+      int same_state = memcmp(s1, s2, n * 8 * 4) == 0;
+      printf("%s: threads %u, band rows %u, tile columns %u vs 1 thread: %s\n",
+             wino ? "winograd" : "direct", cases[k].threads, cases[k].rows, cases[k].cols,
+             same_out && same_state ? "bit-identical" : "DIFFERENT");
+      CHECK_MSG(same_out && same_state, "%s: threads %u band rows %u tile columns %u: results "
+                "differ from 1 thread", wino ? "winograd" : "direct", cases[k].threads,
+                cases[k].rows, cases[k].cols);
+      free(o2), free(s2);
+    }
+    free(o1), free(s1);
   }
-  free(o1), free(s1);
   tt__net_free(&m);
   tt_default_host_set_threads(2);
 }
@@ -246,32 +315,37 @@ static void test_golden(const char *root) {
   CHECK(sc == 3 + m.hidden);
   size_t n = (size_t)w * hh;
   const unsigned char *p = g + 28;
-  tt__net_state s;
-  CHECK(tt__net_state_init(&s, &m, w, hh) == TT_OK);
-  float *out = malloc(n * 3 * 4);
-  double worst_state = 0, worst_out = 0;
-  for (uint32_t f = 0; f < frames; f++) {
-    uint32_t jit, fresh;
-    memcpy(&jit, p, 4);
-    memcpy(&fresh, p + 4, 4);
-    p += 8;
-    const float *color = (const float *)p, *depth = color + n * 3, *motion = depth + n;
-    const float *want_state = motion + n * 2, *want_out = want_state + n * sc;
-    p = (const unsigned char *)(want_out + n * 3);
-    if (fresh) s.valid = 0;
-    tt__net_process(&s, &m, tt_default_host(), color, depth, motion, jit, out);
-    for (size_t i = 0; i < n * sc; i++)
-      worst_state = fmax(worst_state, fabs(s.state[i] - want_state[i]));
-    for (size_t i = 0; i < n * 3; i++)
-      worst_out = fmax(worst_out, fabs(out[i] - want_out[i]) / (1 + fabs(want_out[i])));
+  for (int wino = 1; wino >= 0; wino--) {
+    p = g + 28;
+    tt__net_state s;
+    CHECK(tt__net_state_init(&s, &m, w, hh) == TT_OK);
+    s.winograd = wino;
+    float *out = malloc(n * 3 * 4);
+    double worst_state = 0, worst_out = 0;
+    for (uint32_t f = 0; f < frames; f++) {
+      uint32_t jit, fresh;
+      memcpy(&jit, p, 4);
+      memcpy(&fresh, p + 4, 4);
+      p += 8;
+      const float *color = (const float *)p, *depth = color + n * 3, *motion = depth + n;
+      const float *want_state = motion + n * 2, *want_out = want_state + n * sc;
+      p = (const unsigned char *)(want_out + n * 3);
+      if (fresh) s.valid = 0;
+      tt__net_process(&s, &m, tt_default_host(), color, depth, motion, jit, out);
+      for (size_t i = 0; i < n * sc; i++)
+        worst_state = fmax(worst_state, fabs(s.state[i] - want_state[i]));
+      for (size_t i = 0; i < n * 3; i++)
+        worst_out = fmax(worst_out, fabs(out[i] - want_out[i]) / (1 + fabs(want_out[i])));
+    }
+    CHECK((size_t)(p - g) == gn);
+    printf("golden (%s, %s): %u frames %ux%u: state %.2e (tol 1e-4), linear output rel %.2e\n",
+           wino ? "winograd" : "direct", tt__net_fast_isa(), frames, w, hh, worst_state,
+           worst_out);
+    CHECK(worst_state < 1e-4);
+    CHECK(worst_out < 1e-3);
+    free(out);
+    tt__net_state_free(&s);
   }
-  CHECK((size_t)(p - g) == gn);
-  printf("golden: %u frames %ux%u: state %.2e (tol 1e-4), linear output rel %.2e\n", frames,
-         w, hh, worst_state, worst_out);
-  CHECK(worst_state < 1e-4);
-  CHECK(worst_out < 1e-3);
-  free(out);
-  tt__net_state_free(&s);
   tt__net_free(&m);
   free(wdata);
   free(g);
@@ -362,6 +436,7 @@ int main(void) {
   test_catmull_rom();
   test_errors();
   test_fast_vs_reference();
+  test_winograd_vs_direct();
   test_thread_invariance();
   test_golden(root);
   return tt_test_finish("taa_net");

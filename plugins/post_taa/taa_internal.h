@@ -105,6 +105,10 @@ typedef struct tt__net_layer {
   uint32_t oblk, nob;
   float *wq;
   float *bq;
+  /* Winograd F(2x2, 5x5) weights U = G g G^T of a 5x5 softmax (kernel) layer, per set
+   * [block][36 positions][in][oblk] (zero for padded outputs); NULL for other layers. They
+   * live in the tail of the `wq` allocation (freed with it). */
+  float *wino;
 } tt__net_layer;
 
 /* A loaded model: body layers (ReLU), then the kernel layer (softmax over 2 * 25 taps) and
@@ -155,6 +159,9 @@ typedef struct tt__net_state {
   double cpu_reproject, cpu_network, cpu_mix; /* process CPU ms of the same passes */
   double ms_body, ms_kernel;  /* fast path: the network's time in body layers and kernel
                                * layer, summed over threads (thread ms, not wall) */
+  int winograd;             /* fast path (AVX2 / AVX-512): kernel layer by Winograd F(2x2, 5x5)
+                             * (1) or by direct convolution (0); set at init from
+                             * TT_POST_TAA_WINOGRAD (default 1), may be changed between frames */
 } tt__net_state;
 
 tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t width,

@@ -18,7 +18,15 @@
  * channel and pixel is computed by the same operations in the same order whatever the band
  * split or thread count, so results do not depend on the number of threads (bit-identical;
  * tests/taa_net.c checks it). The instruction set is chosen at run time (AVX-512VL, AVX2+FMA,
- * or the portable vector-extension code); TT_POST_TAA_ISA=avx2|generic forces a lower one. */
+ * or the portable vector-extension code); TT_POST_TAA_ISA=avx2|generic forces a lower one.
+ *
+ * On AVX2 / AVX-512 the 5x5 layers with output blocks of 10 or 12 (the kernel layer, and
+ * 12-channel body layers after the first) run as Winograd F(2x2, 5x5): 2x2 output tiles at
+ * absolute even rows and columns, so those layers produce rows in pairs (a band starting or
+ * ending on an odd row computes the whole pair and keeps its row; rings hold one row more).
+ * 36 instead of 100 multiplies per 2x2 outputs and input channel; the transforms add
+ * rounding of ~1e-7 relative (tests/taa_net.c). TT_POST_TAA_WINOGRAD=0 (read at state init,
+ * tt__net_state.winograd) selects the direct convolutions; the portable path has only those. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,16 +63,69 @@ static float *fz_alloc(size_t count) {
 
 /* ---- weights ---- */
 
+/* Winograd F(2x2, 5x5) (Lavin & Gray 2016) with the interpolation points 0, 1, -1, 2, -2
+ * and infinity: a 2x2 output tile of a 5x5 correlation is Y = A^T [U . V] A with the 6x6
+ * input tile d, V = B^T d B, and U = G g G^T per weight filter g; summed over input
+ * channels, the elementwise products become 36 small matrix products (out x in times
+ * in x tiles): 36 multiplies per 2x2 outputs and input channel instead of 100. B^T and A^T
+ * hold small integers (exact in float); the fractions sit in G, applied once per weight
+ * set in double. */
+#define WINO_POS 36u
+static const double wino_g[6][5] = {
+    {1.0 / 4, 0, 0, 0, 0},
+    {1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6},
+    {1.0 / 6, -1.0 / 6, 1.0 / 6, -1.0 / 6, 1.0 / 6},
+    {1.0 / 24, 1.0 / 12, 1.0 / 6, 1.0 / 3, 2.0 / 3},
+    {1.0 / 24, -1.0 / 12, 1.0 / 6, -1.0 / 3, 2.0 / 3},
+    {0, 0, 0, 0, 1}};
+
+/* U = G g G^T of every (set, output, input) filter into l->wino, laid out
+ * [set][block][36][in][oblk] (`uper` floats per set). */
+static void wino_weights(tt__net_layer *l, size_t uper) {
+  const uint32_t O = l->oblk, I = l->in;
+  for (uint32_t s = 0; s < l->sets; s++)
+    for (uint32_t oc = 0; oc < l->out; oc++)
+      for (uint32_t c = 0; c < I; c++) {
+        const float *g = l->w + (((size_t)s * l->out + oc) * I + c) * 25;
+        double t[6][5], u[6][6];
+        for (int i = 0; i < 6; i++)
+          for (int k = 0; k < 5; k++) {
+            double a = 0;
+            for (int j = 0; j < 5; j++) a += wino_g[i][j] * g[j * 5 + k];
+            t[i][k] = a;
+          }
+        for (int i = 0; i < 6; i++)
+          for (int j = 0; j < 6; j++) {
+            double a = 0;
+            for (int k = 0; k < 5; k++) a += t[i][k] * wino_g[j][k];
+            u[i][j] = a;
+          }
+        uint32_t b = oc / O, o = oc % O;
+        float *dst = l->wino + s * uper + (size_t)b * WINO_POS * I * O;
+        for (int p = 0; p < 36; p++) dst[((size_t)p * I + c) * O + o] = (float)u[p / 6][p % 6];
+      }
+}
+
 tt_status tt__net_fast_pack(tt__net_layer *l) {
   uint32_t o = l->out;
   l->oblk = o % 12 == 0 ? 12 : o % 10 == 0 ? 10 : o % 8 == 0 ? 8 : o <= 6 ? 6 : 8;
   l->nob = (o + l->oblk - 1) / l->oblk;
   size_t kk = (size_t)l->ksize * l->ksize, per = (size_t)o * l->in * kk;
   size_t qper = (size_t)l->nob * l->oblk * l->in * kk;
-  l->wq = fz_alloc(qper * l->sets);
+  /* 5x5 layers (the kernel layer, body layers) also get Winograd weights, in the same
+   * block; used for output blocks of 10 or 12 (not the first layer, which reads the input
+   * planes). */
+  int wino = l->ksize == 5 && (l->oblk == 10 || l->oblk == 12);
+  size_t uper = wino ? (size_t)l->nob * WINO_POS * l->in * l->oblk : 0;
+  l->wq = fz_alloc(qper * l->sets + uper * l->sets);
   l->bq = fz_alloc((size_t)l->nob * l->oblk * l->sets);
+  l->wino = NULL;
   if (!l->wq || !l->bq)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for weights");
+  if (wino) {
+    l->wino = l->wq + qper * l->sets;
+    wino_weights(l, uper);
+  }
   for (uint32_t s = 0; s < l->sets; s++)
     for (uint32_t oc = 0; oc < o; oc++) {
       uint32_t b = oc / l->oblk, j = oc % l->oblk;
@@ -93,6 +154,8 @@ tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
   s->rs = s->vw + 2 * COL;
   s->inp_cs = (size_t)(s->height + 2 * s->halo) * s->rs;
   s->inp = fz_alloc((size_t)m->in_channels * s->inp_cs);
+  const char *wg = getenv("TT_POST_TAA_WINOGRAD");
+  s->winograd = !(wg && wg[0] == '0');
   if (!s->inp)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
                         "network planes", s->width, s->height);
@@ -223,6 +286,171 @@ AI void conv_rows_dispatch(const conv_a *a, const int wide) {
   }
 }
 
+/* ---- Winograd F(2x2, 5x5) for the kernel layer and 5x5 body layers ---- */
+
+/* Two output rows p, p + 1 (p even: tiles sit on absolute even rows and columns, whatever
+ * the band or column tile) of columns x0 .. x0 + n (n a multiple of 16, x0 even, in the
+ * input rows' own coordinates as in conv_a). rowp[i]: input row p - 2 + i (i < 6); the
+ * zero padding is the input rows' zero rows and columns. Output channel oc of row p + r,
+ * column i goes to dst[r][oc * dcs + i] (bias added, ReLU when `relu`). Tiles are
+ * vectorised: 8 tiles (16 columns) per vector, P vectors per group; per group the input
+ * transform fills V[36][in][8P], then per block of O outputs the 36 products
+ * M[pos][O][8P] = U[pos][O][in] x V[pos][in][8P] and the output transform. Every tile's
+ * arithmetic is the same whatever lane or group it is in, so results do not depend on the
+ * band or tile split. */
+typedef struct wino_a {
+  const float *rowp[6];
+  size_t cs;
+  uint32_t in, nob, out;
+  const float *u, *b;   /* this set's transformed weights [block][36][in][O] and biases */
+  uint32_t x0, n;
+  float *dst[2];        /* output rows p, p + 1: channel oc, column i at dst[r][oc * dcs + i] */
+  size_t dcs;
+  int relu;
+  float *vbuf, *mbuf;   /* scratch: 36 * in * 16 and 2 * 36 * O * 16 floats */
+} wino_a;
+
+/* Even lanes of the 16 floats a:b (stride-2 gather of 8 tiles' column). */
+AI v8f wino_even(v8f a, v8f b) {
+  return __builtin_shuffle(a, b, (v8i){0, 2, 4, 6, 8, 10, 12, 14});
+}
+
+/* B^T of one 6-vector (rows of B^T: 4 0 -5 0 1 0 / 0 4 4 -1 -1 0 / 0 -4 4 1 -1 0 /
+ * 0 -2 -1 2 1 0 / 0 2 -1 -2 1 0 / 0 4 0 -5 0 1). */
+AI void wino_bt(const v8f d[6], v8f v[6]) {
+  v8f s12 = d[1] + d[2], s34 = d[3] + d[4], a21 = d[2] - d[1], a34 = d[3] - d[4];
+  v8f a31 = d[3] - d[1], a42 = d[4] - d[2];
+  v[0] = d[0] * 4.0f - d[2] * 5.0f + d[4];
+  v[1] = s12 * 4.0f - s34;
+  v[2] = a21 * 4.0f + a34;
+  v[3] = a31 * 2.0f + a42;
+  v[4] = a42 - a31 * 2.0f;
+  v[5] = d[1] * 4.0f - d[3] * 5.0f + d[5];
+}
+
+/* A^T of one 6-vector: m0 + m1 + m2 + m3 + m4, m1 - m2 + 2 (m3 - m4) + m5. */
+AI void wino_at(const v8f m[6], v8f *y0, v8f *y1) {
+  *y0 = (m[0] + m[1]) + (m[2] + m[3]) + m[4];
+  *y1 = (m[1] - m[2]) + (m[3] - m[4]) * 2.0f + m[5];
+}
+
+/* One group of 8P tiles (16P columns from xl). */
+AI void wino_group_t(const wino_a *a, uint32_t xl, const int O, const int P) {
+  const uint32_t I = a->in;
+  const int T = 8 * P;
+  float *V = a->vbuf, *M = a->mbuf;
+  for (uint32_t c = 0; c < I; c++) {
+#pragma GCC unroll 2
+    for (int j = 0; j < P; j++) {
+      v8f e[6][6];
+#pragma GCC unroll 6
+      for (int i = 0; i < 6; i++) {
+        const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl + 16 * j - 2;
+        v8f d[6];
+#pragma GCC unroll 3
+        for (int k = 0; k < 6; k += 2) {
+          v8f lo = vload(q + k), hi = vload(q + k + 8), lo1 = vload(q + k + 1),
+              hi1 = vload(q + k + 9);
+          d[k] = wino_even(lo, hi);
+          d[k + 1] = wino_even(lo1, hi1);
+        }
+        wino_bt(d, e[i]);  /* along the row: e[i][s] */
+      }
+#pragma GCC unroll 6
+      for (int s2 = 0; s2 < 6; s2++) {
+        v8f col[6], v[6];
+#pragma GCC unroll 6
+        for (int i = 0; i < 6; i++) col[i] = e[i][s2];
+        wino_bt(col, v);  /* along the column: V[r][s2] */
+#pragma GCC unroll 6
+        for (int r = 0; r < 6; r++) vstore(V + ((size_t)(r * 6 + s2) * I + c) * T + 8 * j, v[r]);
+      }
+    }
+  }
+  /* Block ob's 36 products go to one half of M while the output transforms of block
+   * ob - 1 (one output channel and vector after each product) read the other: their adds
+   * and loads overlap the products' multiply-adds. */
+  for (uint32_t ob = 0; ob <= a->nob; ob++) {
+    float *Mc = M + (size_t)(ob & 1) * WINO_POS * O * T;
+    float *Mp = M + (size_t)(~ob & 1) * WINO_POS * O * T;
+    const float *u = a->u + (size_t)(ob < a->nob ? ob : 0) * WINO_POS * I * O;
+    for (uint32_t pos = 0; pos < WINO_POS; pos++) {
+      if (ob < a->nob) {
+        v8f acc[12][2];
+#pragma GCC unroll 12
+        for (int o = 0; o < O; o++)
+#pragma GCC unroll 2
+          for (int j = 0; j < P; j++) acc[o][j] = vsplat(0.0f);
+        const float *vp = V + (size_t)pos * I * T;
+        for (uint32_t c = 0; c < I; c++) {
+          v8f in[2];
+#pragma GCC unroll 2
+          for (int j = 0; j < P; j++) in[j] = vload(vp + 8 * j);
+#pragma GCC unroll 12
+          for (int o = 0; o < O; o++) {
+            float wv = u[o];
+#pragma GCC unroll 2
+            for (int j = 0; j < P; j++) acc[o][j] += in[j] * wv;
+          }
+          u += O;
+          vp += T;
+        }
+#pragma GCC unroll 12
+        for (int o = 0; o < O; o++)
+#pragma GCC unroll 2
+          for (int j = 0; j < P; j++) vstore(Mc + ((size_t)pos * O + o) * T + 8 * j, acc[o][j]);
+      }
+      if (ob == 0 || pos >= (uint32_t)(O * P)) continue;
+      int o = (int)pos / P, j = (int)pos % P;
+      uint32_t oc = (ob - 1) * O + (uint32_t)o;
+      if (oc >= a->out) continue;
+      v8f bias = vsplat(a->b[oc]);
+      v8f r0[6], r1[6];
+#pragma GCC unroll 6
+      for (int i = 0; i < 6; i++) {
+        v8f m[6];
+#pragma GCC unroll 6
+        for (int k = 0; k < 6; k++) m[k] = vload(Mp + ((size_t)(i * 6 + k) * O + o) * T + 8 * j);
+        wino_at(m, &r0[i], &r1[i]);  /* along the row: output columns 0, 1 */
+      }
+      v8f y00, y10, y01, y11;
+      wino_at(r0, &y00, &y10);  /* along the column: output rows 0, 1 */
+      wino_at(r1, &y01, &y11);
+      y00 += bias, y01 += bias, y10 += bias, y11 += bias;
+      if (a->relu) {
+        v8f z = vsplat(0.0f);
+        y00 = vsel(y00 > z, y00, z), y01 = vsel(y01 > z, y01, z);
+        y10 = vsel(y10 > z, y10, z), y11 = vsel(y11 > z, y11, z);
+      }
+      /* Tile t's columns 2t, 2t + 1: interleave the column-0 and column-1 vectors. */
+      const v8i ilo = {0, 8, 1, 9, 2, 10, 3, 11}, ihi = {4, 12, 5, 13, 6, 14, 7, 15};
+      float *d0 = a->dst[0] + oc * a->dcs + xl + 16 * j;
+      float *d1 = a->dst[1] + oc * a->dcs + xl + 16 * j;
+      vstore(d0, __builtin_shuffle(y00, y01, ilo));
+      vstore(d0 + 8, __builtin_shuffle(y00, y01, ihi));
+      vstore(d1, __builtin_shuffle(y10, y11, ilo));
+      vstore(d1 + 8, __builtin_shuffle(y10, y11, ihi));
+    }
+  }
+}
+
+/* All groups of a chunk: 16 tiles per group with 32 registers (`wide`), else 8. Output
+ * blocks of 10 (the kernel layer's 50 outputs) or 12 (12-channel body layers). */
+#define WINO_CASE(O_) \
+  case O_: \
+    for (uint32_t xl = 0; xl < a->n;) { \
+      if (wide && a->n - xl >= 32) wino_group_t(a, xl, O_, 2), xl += 32; \
+      else wino_group_t(a, xl, O_, 1), xl += 16; \
+    } \
+    break;
+AI void wino_dispatch(const wino_a *a, uint32_t oblk, const int wide) {
+  switch (oblk) {
+    WINO_CASE(10)
+    WINO_CASE(12)
+    default: break;
+  }
+}
+
 /* ---- softmax + colour mix + hidden layer + outputs ---- */
 
 typedef struct mix_a {
@@ -245,8 +473,12 @@ AI void mix_rows_t(const mix_a *a) {
     uint32_t x = a->x0 + xl;
     if (x >= s->width) break;
     float *lg = a->lg + xl;
-    v8f mx = vload(lg);
-    for (int k = 1; k < 50; k++) mx = vmax(mx, vload(lg + k * CHUNK));
+    /* Max in 5 independent chains (the same value as one chain: max is exact). */
+    v8f m5[5];
+    for (int k = 0; k < 5; k++) m5[k] = vload(lg + k * CHUNK);
+    for (int k = 5; k < 50; k += 5)
+      for (int j = 0; j < 5; j++) m5[j] = vmax(m5[j], vload(lg + (k + j) * CHUNK));
+    v8f mx = vmax(vmax(vmax(m5[0], m5[1]), vmax(m5[2], m5[3])), m5[4]);
     v8f sum = vsplat(0.0f);
     for (int k = 0; k < 50; k++) {
       v8f e = vexp_neg(vload(lg + k * CHUNK) - mx);
@@ -297,21 +529,25 @@ typedef struct fast_isa {
   const char *name;
   void (*conv)(const conv_a *);
   void (*mix)(const mix_a *);
+  void (*wino)(const wino_a *, uint32_t oblk);  /* NULL: direct kernel layer only */
 } fast_isa;
 
 #if FAST_X86
 TGT_V4 static void conv_v4(const conv_a *a) { conv_rows_dispatch(a, 1); }
 TGT_V4 static void mix_v4(const mix_a *a) { mix_rows_t(a); }
+TGT_V4 static void wino_v4(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 1); }
 TGT_V3 static void conv_v3(const conv_a *a) { conv_rows_dispatch(a, 0); }
 TGT_V3 static void mix_v3(const mix_a *a) { mix_rows_t(a); }
+TGT_V3 static void wino_v3(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 0); }
 #endif
 static void conv_generic(const conv_a *a) { conv_rows_dispatch(a, 0); }
 static void mix_generic(const mix_a *a) { mix_rows_t(a); }
 
 static const fast_isa *fast_pick(void) {
-  static const fast_isa generic = {"generic", conv_generic, mix_generic};
+  static const fast_isa generic = {"generic", conv_generic, mix_generic, NULL};
 #if FAST_X86
-  static const fast_isa v4 = {"avx512", conv_v4, mix_v4}, v3 = {"avx2", conv_v3, mix_v3};
+  static const fast_isa v4 = {"avx512", conv_v4, mix_v4, wino_v4},
+                        v3 = {"avx2", conv_v3, mix_v3, wino_v3};
   const char *force = getenv("TT_POST_TAA_ISA");
   __builtin_cpu_init();
   int has_v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
@@ -420,6 +656,10 @@ typedef struct band_job {
   uint32_t lw, rrs;                   /* ring row: columns computed, stride */
   float *out_rgb;
   size_t ring_off[TT__NET_MAX_LAYERS], logits_off;
+  int wino;                           /* Winograd allowed this frame (5x5 body layers
+                                       * after the first: rows in even pairs) */
+  int kwino;                          /* kernel layer by Winograd, rows in even pairs */
+  size_t vbuf_off, mbuf_off;          /* Winograd scratch */
 } band_job;
 
 /* Per-thread scratch header: accumulated ns of the stage's parts. */
@@ -451,6 +691,22 @@ static inline float *ring_row(const band_ctx *b, uint32_t l, int y) {
   int R = (int)b->rlen[l];
   int k = ((y % R) + R) % R;
   return b->ring[l] + (size_t)k * b->job->rrs;
+}
+
+/* Body layer l can run as Winograd row pairs (5x5 with transformed weights, reading a
+ * ring: not the first layer). */
+static inline int body_wino_ok(const tt__net_model *m, uint32_t l) {
+  return l >= 1 && l < m->body_count && m->body[l].wino != NULL;
+}
+
+/* Rows in the ring of body layer l: what its consumer reads (the next body layer's or the
+ * kernel layer's kernel size), one more when Winograd row pairs write or read it. The same
+ * for both algorithms, so switching between frames keeps the scratch layout. */
+static uint32_t ring_len(const tt__net_model *m, uint32_t l) {
+  int last = l + 1 >= m->body_count;
+  uint32_t k = last ? m->kernel.ksize : m->body[l + 1].ksize;
+  int pairs = body_wino_ok(m, l) || (last ? m->kernel.wino != NULL : body_wino_ok(m, l + 1));
+  return k + (pairs ? 1u : 0u);
 }
 
 /* Layer index of a set: the jitter set for 8-set layers. */
@@ -519,13 +775,68 @@ static void body_row(band_ctx *b, uint32_t l, int y) {
   b->tm->body_ns += fast_ns() - t0;
 }
 
+/* Rows q, q + 1 (q even) of 5x5 body layer l >= 1 by Winograd into its ring (zeros
+ * outside the image). */
+static void body_pair(band_ctx *b, uint32_t l, int q) {
+  const band_job *job = b->job;
+  const tt__net_state *s = job->s;
+  const tt__net_layer *ly = &job->m->body[l];
+  size_t rrs = job->rrs, dcs = (size_t)b->rlen[l] * rrs;
+  float *dst[2] = {ring_row(b, l, q), ring_row(b, l, q + 1)};
+  int h = (int)s->height, inside[2] = {q >= 0 && q < h, q + 1 >= 0 && q + 1 < h};
+  if (inside[0] || inside[1]) {
+    double t0 = fast_ns();
+    wino_a a;
+    for (int i = 0; i < 6; i++) a.rowp[i] = ring_row(b, l - 1, q - 2 + i);
+    a.cs = (size_t)b->rlen[l - 1] * rrs;
+    a.in = ly->in;
+    a.nob = ly->nob;
+    a.out = ly->out;
+    uint32_t st = set_of(ly, job->set);
+    a.u = ly->wino + (size_t)st * ly->nob * WINO_POS * ly->in * ly->oblk;
+    a.b = ly->bq + (size_t)st * ly->nob * ly->oblk;
+    a.dcs = dcs;
+    a.relu = 1;
+    a.vbuf = (float *)(b->scr + job->vbuf_off);
+    a.mbuf = (float *)(b->scr + job->mbuf_off);
+    /* As body_row: image columns [xs, xe) of the ring row [bx, bx + lw). */
+    int bx = b->bx, lw = (int)job->lw;
+    int xs = bx > 0 ? bx : 0, xe = bx + lw < (int)s->vw ? bx + lw : (int)s->vw;
+    for (int x0 = xs; x0 < xe; x0 += (int)CHUNK) {
+      a.x0 = (uint32_t)(x0 - bx);
+      a.n = xe - x0 < (int)CHUNK ? (uint32_t)(xe - x0) : CHUNK;
+      a.dst[0] = dst[0] + COL + (x0 - bx);
+      a.dst[1] = dst[1] + COL + (x0 - bx);
+      job->isa->wino(&a, ly->oblk);
+    }
+    int zr = (int)s->width > xs ? (int)s->width : xs;
+    for (int r = 0; r < 2; r++)
+      for (uint32_t c = 0; c < ly->out; c++) {
+        float *d = dst[r] + c * dcs + COL;
+        if (xs > bx) memset(d, 0, (size_t)(xs - bx) * sizeof(float));
+        if (zr < bx + lw) memset(d + (zr - bx), 0, (size_t)(bx + lw - zr) * sizeof(float));
+      }
+    b->tm->body_ns += fast_ns() - t0;
+  }
+  for (int r = 0; r < 2; r++)
+    if (!inside[r])
+      for (uint32_t c = 0; c < ly->out; c++) memset(dst[r] + c * dcs, 0, rrs * sizeof(float));
+}
+
+/* Body layer l computes row pairs this frame. */
+static inline int body_pairs(const band_job *job, uint32_t l) {
+  return job->wino && body_wino_ok(job->m, l);
+}
+
 /* Makes body layer l hold rows up to y (computing the inputs first). */
 static void ensure_rows(band_ctx *b, uint32_t l, int y) {
+  int pair = body_pairs(b->job, l);
   while (b->next[l] <= y) {
     int yy = b->next[l];
-    if (l > 0) ensure_rows(b, l - 1, yy + (int)b->job->m->body[l].ksize / 2);
-    body_row(b, l, yy);
-    b->next[l]++;
+    if (l > 0) ensure_rows(b, l - 1, yy + pair + (int)b->job->m->body[l].ksize / 2);
+    if (pair) body_pair(b, l, yy);
+    else body_row(b, l, yy);
+    b->next[l] += 1 + pair;
   }
 }
 
@@ -575,6 +886,60 @@ static void head_row(band_ctx *b, int y) {
   }
 }
 
+/* Winograd kernel layer of rows p, p + 1 (p even), then the head of those in [y0, y1). */
+static void head_pair(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
+  const band_job *job = b->job;
+  const tt__net_state *s = job->s;
+  const tt__net_model *m = job->m;
+  const tt__net_layer *kl = &m->kernel;
+  uint32_t last = m->body_count - 1;
+  wino_a a;
+  for (int i = 0; i < 6; i++) a.rowp[i] = ring_row(b, last, p - 2 + i);
+  a.cs = (size_t)b->rlen[last] * job->rrs;
+  int col0 = b->bx;
+  a.in = kl->in;
+  a.nob = kl->nob;
+  a.out = kl->out;
+  uint32_t ks = set_of(kl, job->set);
+  a.u = kl->wino + (size_t)ks * kl->nob * WINO_POS * kl->in * kl->oblk;
+  a.b = kl->bq + (size_t)ks * kl->nob * kl->oblk;
+  float *lg = (float *)(b->scr + job->logits_off);
+  size_t lgn = (size_t)kl->nob * kl->oblk * CHUNK;
+  a.dst[0] = lg;
+  a.dst[1] = lg + lgn;
+  a.dcs = CHUNK;
+  a.relu = 0;
+  a.vbuf = (float *)(b->scr + job->vbuf_off);
+  a.mbuf = (float *)(b->scr + job->mbuf_off);
+  mix_a mx;
+  mx.s = s;
+  mx.m = m;
+  mx.hcs = (size_t)b->rlen[last] * job->rrs;
+  mx.hx = b->bx;
+  uint32_t hs = set_of(&m->hid, job->set);
+  mx.hw = m->hidden ? m->hid.w + (size_t)hs * m->hid.out * m->hid.in : NULL;
+  mx.hb = m->hidden ? m->hid.b + (size_t)hs * m->hid.out : NULL;
+  mx.out_rgb = job->out_rgb;
+  for (uint32_t x0 = b->tx0; x0 < b->tx1 && x0 < s->width; x0 += CHUNK) {
+    a.x0 = (uint32_t)((int)x0 - col0);
+    mx.x0 = x0;
+    a.n = mx.n = b->tx1 - x0 < CHUNK ? b->tx1 - x0 : CHUNK;
+    double t0 = fast_ns();
+    job->isa->wino(&a, kl->oblk);
+    double t1 = fast_ns();
+    for (int r = 0; r < 2; r++) {
+      int y = p + r;
+      if (y < (int)y0 || y >= (int)y1 || y >= (int)s->height) continue;
+      mx.lg = a.dst[r];
+      mx.y = (uint32_t)y;
+      mx.hrow = ring_row(b, last, y);
+      job->isa->mix(&mx);
+    }
+    b->tm->kernel_ns += t1 - t0;
+    b->tm->mix_ns += fast_ns() - t1;
+  }
+}
+
 /* Rows [y0, y1) of columns [tx0, tx1) through all layers. */
 static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t y1,
                      uint32_t tx0, uint32_t tx1) {
@@ -589,10 +954,21 @@ static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t
   const tt__net_model *m = job->m;
   for (uint32_t l = 0; l < m->body_count; l++) {
     b.ring[l] = (float *)(b.scr + job->ring_off[l]);
-    b.rlen[l] = l + 1 < m->body_count ? m->body[l + 1].ksize : m->kernel.ksize;
-    b.next[l] = (int)y0 - (int)fast_halo_after(m, l);
+    b.rlen[l] = ring_len(m, l);
+    int v = (int)(job->kwino ? y0 & ~1u : y0) - (int)fast_halo_after(m, l);
+    if (body_pairs(job, l)) v -= v & 1;  /* first pair on an even row */
+    b.next[l] = v;
   }
   int rk = (int)m->kernel.ksize / 2;
+  if (job->kwino) {
+    /* Row pairs at absolute even rows; a band starting or ending on an odd row computes
+     * its first / last pair whole and keeps its own row. */
+    for (int p = (int)(y0 & ~1u); p < (int)y1; p += 2) {
+      ensure_rows(&b, m->body_count - 1, p + 1 + rk);
+      head_pair(&b, p, y0, y1);
+    }
+    return;
+  }
   for (int y = (int)y0; y < (int)y1; y++) {
     ensure_rows(&b, m->body_count - 1, y + rk);
     head_row(&b, y);
@@ -617,9 +993,7 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
   /* Column tiles keep the ring buffers within ~512 KB (L2): a tile's body layers cover 16
    * more columns each side (>= the receptive field's 2..12), recomputed by both tiles. */
   size_t ring_ch = 0;
-  for (uint32_t l = 0; l < m->body_count; l++)
-    ring_ch += (size_t)m->body[l].out *
-               (l + 1 < m->body_count ? m->body[l + 1].ksize : m->kernel.ksize);
+  for (uint32_t l = 0; l < m->body_count; l++) ring_ch += (size_t)m->body[l].out * ring_len(m, l);
   uint32_t cols = s->tile_cols;
   if (!cols) {
     size_t fit = (512u * 1024u) / (ring_ch * sizeof(float));
@@ -638,12 +1012,22 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
   job->rrs = job->lw + 2 * COL;
   size_t off = SCRATCH_HEADER;
   for (uint32_t l = 0; l < m->body_count; l++) {
-    uint32_t R = l + 1 < m->body_count ? m->body[l + 1].ksize : m->kernel.ksize;
+    uint32_t R = ring_len(m, l);
     job->ring_off[l] = off;
     off += ((size_t)m->body[l].out * R * job->rrs * sizeof(float) + 63) & ~(size_t)63;
   }
   job->logits_off = off;
-  off += (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float);
+  off += 2 * (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float);  /* 2 rows */
+  /* Winograd scratch (every such layer reads W channels, blocks of <= 12 outputs). */
+  job->vbuf_off = job->mbuf_off = 0;
+  int any = m->kernel.wino != NULL;
+  for (uint32_t l = 0; l < m->body_count; l++) any |= body_wino_ok(m, l);
+  if (any) {
+    job->vbuf_off = off;
+    off += (size_t)WINO_POS * m->width * 16 * sizeof(float);
+    job->mbuf_off = off;
+    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);
+  }
   off = (off + 4095) & ~(size_t)4095;  /* threads' blocks on separate pages */
   if (s->scratch && s->scratch_threads >= threads && s->scratch_bytes == off) return TT_OK;
   free(s->scratch);
@@ -690,6 +1074,8 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   if (threads < 1) threads = 1;
   band_job job = {.s = s, .m = m, .isa = isa, .set = jitter_index % TT__NET_JITTER_SETS,
                   .out_rgb = out_rgb};
+  job.wino = s->winograd && isa->wino;
+  job.kwino = job.wino && m->kernel.wino;
   if (fast_scratch(s, m, &job, threads) != TT_OK) {
     /* Out of memory for a few MB of scratch: leave the frame as the input. */
     memcpy(out_rgb, color, (size_t)s->width * s->height * 3 * sizeof(float));
@@ -703,6 +1089,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   if (!rows) {
     rows = (s->height + 4 * threads - 1) / (4 * threads);
     if (rows < 16) rows = 16;
+    if (job.wino) rows = (rows + 1) & ~1u;  /* whole Winograd row pairs per band */
   }
   job.band_rows = rows;
   job.bands = (s->height + rows - 1) / rows;
