@@ -840,6 +840,22 @@ static void ensure_rows(band_ctx *b, uint32_t l, int y) {
   }
 }
 
+/* The colour-mix arguments shared by every row of a band (the hidden layer's weight set,
+ * the ring of the last body layer, the output image). */
+static void mix_setup(const band_ctx *b, mix_a *mx) {
+  const band_job *job = b->job;
+  const tt__net_model *m = job->m;
+  uint32_t last = m->body_count - 1;
+  mx->s = job->s;
+  mx->m = m;
+  mx->hcs = (size_t)b->rlen[last] * job->rrs;
+  mx->hx = b->bx;
+  uint32_t hs = set_of(&m->hid, job->set);
+  mx->hw = m->hidden ? m->hid.w + (size_t)hs * m->hid.out * m->hid.in : NULL;
+  mx->hb = m->hidden ? m->hid.b + (size_t)hs * m->hid.out : NULL;
+  mx->out_rgb = job->out_rgb;
+}
+
 /* Kernel layer, softmax, colour mix, hidden layer and outputs of row y. */
 static void head_row(band_ctx *b, int y) {
   const band_job *job = b->job;
@@ -862,17 +878,10 @@ static void head_row(band_ctx *b, int y) {
   a.relu = 0;
   a.dst = (float *)(b->scr + job->logits_off);
   mix_a mx;
-  mx.s = s;
-  mx.m = m;
+  mix_setup(b, &mx);
   mx.lg = a.dst;
   mx.y = (uint32_t)y;
   mx.hrow = ring_row(b, last, y);
-  mx.hcs = (size_t)b->rlen[last] * job->rrs;
-  mx.hx = b->bx;
-  uint32_t hs = set_of(&m->hid, job->set);
-  mx.hw = m->hidden ? m->hid.w + (size_t)hs * m->hid.out * m->hid.in : NULL;
-  mx.hb = m->hidden ? m->hid.b + (size_t)hs * m->hid.out : NULL;
-  mx.out_rgb = job->out_rgb;
   for (uint32_t x0 = b->tx0; x0 < b->tx1 && x0 < s->width; x0 += CHUNK) {
     a.x0 = (uint32_t)((int)x0 - col0);
     mx.x0 = x0;
@@ -912,14 +921,7 @@ static void head_pair(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
   a.vbuf = (float *)(b->scr + job->vbuf_off);
   a.mbuf = (float *)(b->scr + job->mbuf_off);
   mix_a mx;
-  mx.s = s;
-  mx.m = m;
-  mx.hcs = (size_t)b->rlen[last] * job->rrs;
-  mx.hx = b->bx;
-  uint32_t hs = set_of(&m->hid, job->set);
-  mx.hw = m->hidden ? m->hid.w + (size_t)hs * m->hid.out * m->hid.in : NULL;
-  mx.hb = m->hidden ? m->hid.b + (size_t)hs * m->hid.out : NULL;
-  mx.out_rgb = job->out_rgb;
+  mix_setup(b, &mx);
   for (uint32_t x0 = b->tx0; x0 < b->tx1 && x0 < s->width; x0 += CHUNK) {
     a.x0 = (uint32_t)((int)x0 - col0);
     mx.x0 = x0;
