@@ -5,7 +5,7 @@ sequences; prints a markdown table and picks the smallest variant within 1% of t
 held-back RMSE (mean over the held-back sequences).
 
   ablations.py --data D1,D2 --scenes ... --val ... --out DIR [--steps 600] [--batch 4]
-               [--patch 32] [--variants base,nojit,h0,h3,h8,l2,l4] [--cache DIR]"""
+               [--patch 32] [--variants base,nojit,kh,h0,h3,h8,l2,l4] [--cache DIR]"""
 import argparse
 import json
 import os
@@ -17,6 +17,7 @@ import taa_model
 VARIANTS = {   # name: (hidden, body, jitter layers)
     "base": (5, "3,3,5", "b2 b3 k"),       # shipped architecture (2-3-K)
     "nojit": (5, "3,3,5", ""),             # one weight set everywhere
+    "kh": (5, "3,3,5", "b2 b3 k h"),       # 2-3-K-H: jitter sets in the hidden layer too
     "h0": (0, "3,3,5", "b2 b3 k"),
     "h3": (3, "3,3,5", "b2 b3 k"),
     "h8": (8, "3,3,5", "b2 b3 k"),

@@ -4,7 +4,8 @@
 # reference (thesis 5.5.1), plus the VCTAA output of post_taa for comparison.
 #   tools/taa/render_dataset.sh BUILD_DIR OUT_DIR [FRAMES]
 # SET=fast renders make_scenes.py's fast-motion set (windows, blinds, windows-pan,
-# blinds-dolly, stairs-fast, fence-fast) instead of stairs, fence, pillars; THREADS (2).
+# blinds-dolly, stairs-fast, fence-fast) instead of stairs, fence, pillars; SET=jumps its
+# small-sudden-turn set (blocks-jumps, stairs-jumps, fence-jumps, windows-jumps); THREADS (2).
 set -eu
 build=$1
 out=$2
@@ -13,6 +14,9 @@ here=$(dirname "$0")
 if [ "${SET:-}" = fast ]; then
   /usr/bin/python3 "$here/make_scenes.py" "$out/scenes" --set fast
   names="windows blinds windows-pan blinds-dolly stairs-fast fence-fast"
+elif [ "${SET:-}" = jumps ]; then
+  /usr/bin/python3 "$here/make_scenes.py" "$out/scenes" --set jumps
+  names="blocks-jumps stairs-jumps fence-jumps windows-jumps"
 else
   /usr/bin/python3 "$here/make_scenes.py" "$out/scenes"
   names="stairs fence pillars"
