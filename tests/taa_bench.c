@@ -22,34 +22,7 @@
 
 #include "taa_internal.h"
 
-#include <time.h>
-
-/* Wall clock in ms. */
-static double now_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-/* CPU time of the whole process (all threads) in ms. */
-static double cpu_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
-/* Median of n values (sorts a copy). */
-static double median(const double *v, int n) {
-  double t[64];
-  memcpy(t, v, (size_t)n * sizeof *t);
-  qsort(t, (size_t)n, sizeof *t, cmp_double);
-  return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-}
+#include "bench_util.h"
 
 /* FLOPs per pixel of one layer (2 K^2 I O + O, one weight set). */
 static double layer_flops(const tt__net_layer *l) {
@@ -83,9 +56,9 @@ static double measure_peak(void) {
   double best = 0.0;
   long n = 5000000;
   for (int r = 0; r < 5; r++) {
-    double c0 = cpu_ms();
+    double c0 = bench_cpu_ms();
     fma_loop(a, n);
-    double c = cpu_ms() - c0;
+    double c = bench_cpu_ms() - c0;
     double g = (double)n * 12 * 16 / (c * 1e-3) * 1e-9;
     if (g > best) best = g;
   }
@@ -157,9 +130,9 @@ static void bench_net(const char *weights, const char *label, uint32_t w, uint32
     for (int q = 0; q < 2; q++) {
       int md = (r + q) % 2;
       tt__net_state *s = &st[md];
-      double t0 = now_ms(), c0 = cpu_ms();
+      double t0 = bench_wall_ms(), c0 = bench_cpu_ms();
       tt__net_process(s, &m, tt_default_host(), f.color, f.depth, f.motion, (uint32_t)r, f.out);
-      double t = now_ms() - t0, c = cpu_ms() - c0;
+      double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
       if (r == 0) continue;  /* warm-up (first frame has no history) */
       int k = r - 1;
       wall[md][k] = t, cpu[md][k] = c;
@@ -172,24 +145,24 @@ static void bench_net(const char *weights, const char *label, uint32_t w, uint32
   for (int md = 0; md < 2; md++) {
     char lab[64];
     snprintf(lab, sizeof lab, "%s %s", label, md ? "W" : "D");
-    double mc = median(cpu[md], reps);
-    double gf = flops * px / (median(cn[md], reps) * 1e-3) * 1e-9;
+    double mc = bench_median(cpu[md], reps);
+    double gf = flops * px / (bench_median(cn[md], reps) * 1e-3) * 1e-9;
     printf("| %-12s | %4ux%-4u | %u | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f | %5.1f / %5.1f / "
-           "%5.1f | %5.1f | %3.0f%% |\n", lab, w, h, threads, median(wr[md], reps),
-           median(wn[md], reps), median(wm[md], reps), median(wall[md], reps), mc,
-           median(cr[md], reps), median(cn[md], reps), median(cm[md], reps), gf,
+           "%5.1f | %5.1f | %3.0f%% |\n", lab, w, h, threads, bench_median(wr[md], reps),
+           bench_median(wn[md], reps), bench_median(wm[md], reps), bench_median(wall[md], reps), mc,
+           bench_median(cr[md], reps), bench_median(cn[md], reps), bench_median(cm[md], reps), gf,
            g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
     /* Body layers vs kernel layer: the network CPU time split by the threads' own timers. */
-    double bb = median(tb[md], reps), kk = median(tk[md], reps);
+    double bb = bench_median(tb[md], reps), kk = bench_median(tk[md], reps);
     double sh = bb + kk > 0 ? bb / (bb + kk) : 0;
-    double cb = median(cn[md], reps) * sh, ck = median(cn[md], reps) * (1 - sh);
+    double cb = bench_median(cn[md], reps) * sh, ck = bench_median(cn[md], reps) * (1 - sh);
     snprintf(g_notes + strlen(g_notes), sizeof g_notes - strlen(g_notes),
              "%s %ux%u T=%u %s: body layers %.1f CPU ms (%.1f GFLOP/s%s), kernel layer %.1f "
              "CPU ms (%.1f GFLOP/s%s); %.0f FLOP/px (direct convolution)\n", label, w, h,
              threads, md ? "W" : "D", cb, body_flops * px / (cb * 1e-3) * 1e-9,
              md && m.body_count > 1 && m.body[m.body_count - 1].wino ? " effective" : "", ck,
              layer_flops(&m.kernel) * px / (ck * 1e-3) * 1e-9, md ? " effective" : "", flops);
-    mcpu[md] = mc, mwall[md] = median(wall[md], reps), mker[md] = ck;
+    mcpu[md] = mc, mwall[md] = bench_median(wall[md], reps), mker[md] = ck;
   }
   snprintf(g_summary + strlen(g_summary), sizeof g_summary - strlen(g_summary),
            "| %-10s | %4ux%-4u | %u | %7.1f | %7.1f | %5.2fx | %7.1f | %7.1f | %6.1f | %6.1f |\n",
@@ -208,13 +181,13 @@ static void bench_vctaa(uint32_t w, uint32_t h, uint32_t threads, int reps) {
   tt__vctaa_params p = {0.1f, 1.0f, 1};
   double wall[64], cpu[64];
   for (int r = 0; r <= reps; r++) {
-    double t0 = now_ms(), c0 = cpu_ms();
+    double t0 = bench_wall_ms(), c0 = bench_cpu_ms();
     tt__vctaa_process(&v, tt_default_host(), &p, f.color, f.motion, f.out);
-    double t = now_ms() - t0, c = cpu_ms() - c0;
+    double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
     if (r) wall[r - 1] = t, cpu[r - 1] = c;
   }
   printf("| %-12s | %4ux%-4u | %u | %6s | %6s | %6s | %6.1f | %6.1f | %21s | %5s | %4s |\n",
-         "VCTAA", w, h, threads, "-", "-", "-", median(wall, reps), median(cpu, reps), "-", "-",
+         "VCTAA", w, h, threads, "-", "-", "-", bench_median(wall, reps), bench_median(cpu, reps), "-", "-",
          "-");
   tt__vctaa_free(&v);
   free_frame(&f);

@@ -10,35 +10,9 @@
 
 #include "taa_internal.h"
 
+#include "bench_util.h"
+
 #include <oneapi/dnnl/dnnl.h>
-#include <time.h>
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
-/* Median of n <= 16 values. */
-static double median(const double *v, int n) {
-  double t[16];
-  memcpy(t, v, (size_t)n * sizeof *t);
-  qsort(t, (size_t)n, sizeof *t, cmp_double);
-  return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-}
-
-/* Process CPU time in ms. */
-static double cpu_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-/* Wall time in ms. */
-static double wall_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 #define OK(x) do { dnnl_status_t s_ = (x); if (s_ != dnnl_success) { fprintf(stderr, "%s: %d\n", #x, (int)s_); exit(1); } } while (0)
 
@@ -79,14 +53,14 @@ static double time_conv(dnnl_engine_t eng, dnnl_stream_t st, int w, int h, int i
                              {DNNL_ARG_DST, dm}};
   double cs[5], ws[5];
   for (int r = 0; r < 6; r++) {
-    double c0 = cpu_ms(), w0 = wall_ms();
+    double c0 = bench_cpu_ms(), w0 = bench_wall_ms();
     OK(dnnl_primitive_execute(prim, st, 4, args));
     OK(dnnl_stream_wait(st));
-    double c = cpu_ms() - c0, ww = wall_ms() - w0;
+    double c = bench_cpu_ms() - c0, ww = bench_wall_ms() - w0;
     if (r) cs[r - 1] = c, ws[r - 1] = ww;
   }
-  double best = median(cs, 5);
-  *wall = median(ws, 5);
+  double best = bench_median(cs, 5);
+  *wall = bench_median(ws, 5);
   dnnl_primitive_destroy(prim);
   dnnl_primitive_desc_destroy(pd);
   dnnl_memory_destroy(sm), dnnl_memory_destroy(dm), dnnl_memory_destroy(wm), dnnl_memory_destroy(bm);
@@ -125,8 +99,8 @@ static void time_c(const char *root, int width, int w, int h, int threads) {
     body[r - 1] = s.cpu_network * share, kern[r - 1] = s.cpu_network * (1 - share);
   }
   printf("C (%s) %dx%d W=%d: CPU ms body %.1f, kernel layer %.1f; total %.1f CPU ms (%.1f "
-         "wall), %d thread(s)\n", tt__net_fast_isa(), w, h, width, median(body, 5),
-         median(kern, 5), median(cn, 5), median(wn, 5), threads);
+         "wall), %d thread(s)\n", tt__net_fast_isa(), w, h, width, bench_median(body, 5),
+         bench_median(kern, 5), bench_median(cn, 5), bench_median(wn, 5), threads);
   tt__net_state_free(&s);
   tt__net_free(&m);
   free(color), free(depth), free(motion), free(out);

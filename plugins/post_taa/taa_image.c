@@ -1,8 +1,16 @@
 /* post_taa: image helpers shared by VCTAA and the network: row-parallel loops, the
- * Reinhard-max tonemap, and Catmull-Rom / bilinear history fetches. */
+ * Reinhard-max tonemap, Catmull-Rom / bilinear history fetches and the CPU clock of the
+ * stage timings. */
 #include <math.h>
+#include <time.h>
 
 #include "taa_internal.h"
+
+double tt__taa_cpu_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
 
 typedef struct taa_rows_job {
   tt__taa_rows_fn fn;

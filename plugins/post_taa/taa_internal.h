@@ -42,6 +42,9 @@ static inline void tt__taa_untonemap_inl(const float in[3], float out[3]) {
   for (int c = 0; c < 3; c++) out[c] = tt__taa_fmax(in[c], 0.0f) * s;
 }
 
+/* Process CPU time in ms, all threads (stage timings that survive a loaded machine). */
+double tt__taa_cpu_ms(void);
+
 /* Catmull-Rom weights of the 4 taps for fractional offset f of the second tap (Karis 2014);
  * shared by every history fetch so that all paths weight taps identically. */
 static inline void tt__taa_cr_weights(float f, float w[4]) {

@@ -14,7 +14,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "taa_internal.h"
 
@@ -391,13 +390,6 @@ static void net_ref_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
     }
 }
 
-/* Process CPU time in ms (all threads): timings that survive a loaded machine. */
-static double net_cpu_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                      const float *color, const float *depth, const float *motion,
                      uint32_t jitter_index, float *out_rgb) {
@@ -411,7 +403,7 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   }
   const tt_host *h = host;
   uint64_t t0 = h && h->clock_ns ? h->clock_ns() : 0;
-  double c0 = net_cpu_ms();
+  double c0 = tt__taa_cpu_ms();
   net_job job = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion,
                  .set = jitter_index % TT__NET_JITTER_SETS, .out_rgb = out_rgb};
   /* Depth enters as a fraction of the frame's farthest hit, so scenes of any scale look
@@ -423,7 +415,7 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   job.depth_scale = dmax > 0.0f ? 1.0f / dmax : 0.0f;
   tt__taa_parallel_rows(h, s->height, net_input_rows, &job);
   uint64_t t1 = h && h->clock_ns ? h->clock_ns() : 0;
-  double c1 = net_cpu_ms();
+  double c1 = tt__taa_cpu_ms();
   int cur = 0;
   for (uint32_t l = 0; l < m->body_count; l++) {
     job.layer = &m->body[l];
@@ -437,10 +429,10 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   job.set = jitter_index % TT__NET_JITTER_SETS;
   job.in_plane = s->planes[cur];
   uint64_t t2 = h && h->clock_ns ? h->clock_ns() : 0;
-  double c2 = net_cpu_ms();
+  double c2 = tt__taa_cpu_ms();
   tt__taa_parallel_rows(h, s->height, net_ref_head_rows, &job);
   uint64_t t3 = h && h->clock_ns ? h->clock_ns() : 0;
-  double c3 = net_cpu_ms();
+  double c3 = tt__taa_cpu_ms();
   s->cpu_reproject = c1 - c0;
   s->cpu_network = c2 - c1;
   s->cpu_mix = c3 - c2;

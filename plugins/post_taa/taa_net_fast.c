@@ -1045,18 +1045,11 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
   return TT_OK;
 }
 
-/* Process CPU time in ms (all threads). */
-static double fast_cpu_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                           const float *color, const float *depth, const float *motion,
                           uint32_t jitter_index, float *out_rgb) {
   const fast_isa *isa = fast_pick();
-  double w0 = fast_ns() * 1e-6, c0 = fast_cpu_ms();
+  double w0 = fast_ns() * 1e-6, c0 = tt__taa_cpu_ms();
   in_job ij = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion};
   float dmax = 0.0f;
   if (depth)
@@ -1069,7 +1062,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
 #else
   tt__taa_parallel_rows(host, s->height, input_rows_generic, &ij);
 #endif
-  double w1 = fast_ns() * 1e-6, c1 = fast_cpu_ms();
+  double w1 = fast_ns() * 1e-6, c1 = tt__taa_cpu_ms();
 
   int pool = host && host->parallel_for && s->height >= 16;
   uint32_t threads = pool && host->thread_count ? host->thread_count() : 1;
@@ -1099,7 +1092,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   if (!pool || threads == 1 || items == 1 ||
       host->parallel_for(items, 1, band_body, &job) != TT_OK)
     band_body(&job, 0, items, 0);  /* serial, or finishing an interrupted frame */
-  double w2 = fast_ns() * 1e-6, c2 = fast_cpu_ms();
+  double w2 = fast_ns() * 1e-6, c2 = tt__taa_cpu_ms();
 
   double body = 0, kern = 0, mix = 0;
   for (uint32_t t = 0; t < s->scratch_threads; t++) {
