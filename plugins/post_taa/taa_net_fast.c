@@ -731,6 +731,26 @@ static size_t layer_rows(const band_ctx *b, uint32_t l, uint32_t ksize, int y,
   return (size_t)b->rlen[l - 1] * b->job->rrs;
 }
 
+/* Image columns [*xs, *xe) of the band's ring rows [bx, bx + lw); the rest is zero padding
+ * (left of the image, right of it) and must read as 0 in the next layer. */
+static void band_image_cols(const band_ctx *b, int *xs, int *xe) {
+  int bx = b->bx, lw = (int)b->job->lw, vw = (int)b->job->s->vw;
+  *xs = bx > 0 ? bx : 0;
+  *xe = bx + lw < vw ? bx + lw : vw;
+}
+
+/* Zeroes the padding columns of one ring row (`out` channels `dcs` apart), given xs of
+ * band_image_cols. */
+static void zero_pad_cols(const band_ctx *b, float *dst, size_t dcs, uint32_t out, int xs) {
+  int bx = b->bx, lw = (int)b->job->lw, w = (int)b->job->s->width;
+  int zr = w > xs ? w : xs;  /* first column right of the image */
+  for (uint32_t c = 0; c < out; c++) {
+    float *d = dst + c * dcs + COL;
+    if (xs > bx) memset(d, 0, (size_t)(xs - bx) * sizeof(float));
+    if (zr < bx + lw) memset(d + (zr - bx), 0, (size_t)(bx + lw - zr) * sizeof(float));
+  }
+}
+
 /* Computes row y of body layer l into its ring (zeros outside the image). */
 static void body_row(band_ctx *b, uint32_t l, int y) {
   const band_job *job = b->job;
@@ -756,22 +776,15 @@ static void body_row(band_ctx *b, uint32_t l, int y) {
   a.b = ly->bq + (size_t)st * ly->nob * ly->oblk;
   a.dcs = dcs;
   a.relu = 1;
-  /* Image columns [xs, xe) of the ring row [bx, bx + lw); the rest is zero padding (left of
-   * the image, right of it) and must read as 0 in the next layer. */
-  int bx = b->bx, lw = (int)job->lw;
-  int xs = bx > 0 ? bx : 0, xe = bx + lw < (int)s->vw ? bx + lw : (int)s->vw;
+  int xs, xe;
+  band_image_cols(b, &xs, &xe);
   for (int x0 = xs; x0 < xe; x0 += (int)CHUNK) {
     a.x0 = (uint32_t)(x0 - col0);
     a.n = xe - x0 < (int)CHUNK ? (uint32_t)(xe - x0) : CHUNK;
-    a.dst = dst + COL + (x0 - bx);
+    a.dst = dst + COL + (x0 - b->bx);
     job->isa->conv(&a);
   }
-  int zr = (int)s->width > xs ? (int)s->width : xs;  /* first column right of the image */
-  for (uint32_t c = 0; c < ly->out; c++) {
-    float *d = dst + c * dcs + COL;
-    if (xs > bx) memset(d, 0, (size_t)(xs - bx) * sizeof(float));
-    if (zr < bx + lw) memset(d + (zr - bx), 0, (size_t)(bx + lw - zr) * sizeof(float));
-  }
+  zero_pad_cols(b, dst, dcs, ly->out, xs);
   b->tm->body_ns += fast_ns() - t0;
 }
 
@@ -799,9 +812,8 @@ static void body_pair(band_ctx *b, uint32_t l, int q) {
     a.relu = 1;
     a.vbuf = (float *)(b->scr + job->vbuf_off);
     a.mbuf = (float *)(b->scr + job->mbuf_off);
-    /* As body_row: image columns [xs, xe) of the ring row [bx, bx + lw). */
-    int bx = b->bx, lw = (int)job->lw;
-    int xs = bx > 0 ? bx : 0, xe = bx + lw < (int)s->vw ? bx + lw : (int)s->vw;
+    int bx = b->bx, xs, xe;
+    band_image_cols(b, &xs, &xe);
     for (int x0 = xs; x0 < xe; x0 += (int)CHUNK) {
       a.x0 = (uint32_t)(x0 - bx);
       a.n = xe - x0 < (int)CHUNK ? (uint32_t)(xe - x0) : CHUNK;
@@ -809,13 +821,7 @@ static void body_pair(band_ctx *b, uint32_t l, int q) {
       a.dst[1] = dst[1] + COL + (x0 - bx);
       job->isa->wino(&a, ly->oblk);
     }
-    int zr = (int)s->width > xs ? (int)s->width : xs;
-    for (int r = 0; r < 2; r++)
-      for (uint32_t c = 0; c < ly->out; c++) {
-        float *d = dst[r] + c * dcs + COL;
-        if (xs > bx) memset(d, 0, (size_t)(xs - bx) * sizeof(float));
-        if (zr < bx + lw) memset(d + (zr - bx), 0, (size_t)(bx + lw - zr) * sizeof(float));
-      }
+    for (int r = 0; r < 2; r++) zero_pad_cols(b, dst[r], dcs, ly->out, xs);
     b->tm->body_ns += fast_ns() - t0;
   }
   for (int r = 0; r < 2; r++)
