@@ -10,18 +10,13 @@ import hashlib
 import json
 import os
 
+import sys
+
 import numpy as np
-import OpenImageIO as oiio
 import torch
 
-
-def read_exr(path):
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise IOError(f"{path}: {oiio.geterror()}")
-    px = inp.read_image("float")
-    inp.close()
-    return np.asarray(px, dtype=np.float32)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+from images import read_exr  # noqa: E402  (re-exported: training code reads EXRs through dataset)
 
 
 class Sequence:

@@ -17,8 +17,9 @@ import sys
 
 import numpy as np
 
-import dataset
-import flip as flipmod
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import flip as flipmod  # noqa: E402
+import images  # noqa: E402  (OpenImageIO only: evaluation must not need torch)
 
 
 def tm(x):
@@ -53,7 +54,7 @@ def frames(folder, key, man=None):
             fail(f"{os.path.join(folder, 'manifest.json')}: frames[{i}] has no \"{key}\" file "
                  f"(it has: {', '.join(k for k in f if isinstance(f[k], str))})")
         try:
-            out.append(dataset.read_exr(os.path.join(folder, f[key])))
+            out.append(images.read_exr(os.path.join(folder, f[key])))
         except IOError as e:
             fail(str(e))
         if out[-1].ndim != 3 or out[-1].shape[-1] < 3 or out[-1].shape != out[0].shape:

@@ -258,8 +258,9 @@ def main(argv):
         return selftest()
     if len(a.images) != 2:
         ap.error("give --selftest or REF TEST")
-    import dataset
-    r, t = (tonemap_srgb(dataset.read_exr(p)[..., :3]) for p in a.images)
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+    import images
+    r, t = (tonemap_srgb(images.read_exr(p)[..., :3]) for p in a.images)
     print(f"mean FLIP {float(flip_mean(r, t, a.ppd)):.6f}")
     return 0
 
