@@ -1,4 +1,4 @@
-/* BSDF unit tests (white-box, core/src/bsdf.c compiled in), for every material type:
+/* BSDF unit tests (white-box, core/src/render/bsdf.c compiled in), for every material type:
  *  - directional albedo (integral of f cos over the sphere, estimated with the BSDF's own
  *    sampling) <= 1 for several incoming angles, and = albedo exactly for Lambert;
  *  - the albedo from uniform sphere sampling of eval() agrees with the importance-sampled
@@ -13,8 +13,8 @@
  *    f(wo, wi) / eta_o^2 = f(wi, wo) / eta_i^2, and convergence to smooth glass as alpha -> 0. */
 #include <stdlib.h>
 
-#include "../core/src/bsdf_internal.h"
-#include "../core/src/rng_internal.h"
+#include "../core/src/render/bsdf_internal.h"
+#include "../core/src/util/rng_internal.h"
 #include "tt_test.h"
 
 typedef struct named_material {

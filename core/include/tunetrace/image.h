@@ -1,6 +1,6 @@
 /* tunetrace: image I/O. EXR and PNG through OpenImageIO; display transform through
  * OpenColorIO (the $OCIO config if set, else a built-in sRGB config). These wrap C++ libraries
- * behind a C interface (core/src/image_io.cpp). Thread-safe (OIIO and OCIO are). */
+ * behind a C interface (core/src/io/image_io.cpp). Thread-safe (OIIO and OCIO are). */
 #ifndef TUNETRACE_IMAGE_H
 #define TUNETRACE_IMAGE_H
 

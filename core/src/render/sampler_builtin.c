@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rng_internal.h"
+#include "util/rng_internal.h"
 
 typedef enum tt__sampler_kind {
   TT__SAMPLER_INDEPENDENT = 0,

@@ -10,8 +10,8 @@
 
 #include <tunetrace/image.h>
 
-#include "bsdf_internal.h"
-#include "lights_internal.h"
+#include "render/bsdf_internal.h"
+#include "render/lights_internal.h"
 
 /* OpenImageIO TextureSystem lookups (texture_oiio.cpp), used instead of direct loading
  * when TT_TEXTURES=oiio (measured slower on the textured Cornell box: README, "Textures"). */

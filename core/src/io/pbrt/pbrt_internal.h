@@ -5,7 +5,7 @@
 #ifndef TT_PBRT_INTERNAL_H
 #define TT_PBRT_INTERNAL_H
 
-#include "scene_internal.h"
+#include "scene/scene_internal.h"
 
 #include <stddef.h>
 

@@ -1,7 +1,7 @@
 /* pbrt-v4 importer: PLY meshes and the analytic shapes the shared scenes use (sphere, disk,
  * Loop subdivision surfaces), all turned into triangles. Every read is bounds-checked: a
  * truncated or corrupt file is an error, never a crash. */
-#include "pbrt_internal.h"
+#include "io/pbrt/pbrt_internal.h"
 
 #include <errno.h>
 #include <math.h>

@@ -20,7 +20,7 @@
  * base in its reflectance; conductor min(1, sqrt(alpha_x * alpha_y)), since rough metal
  * scatters broadly and smooth metal is mirror-like. 0 for a scene without area.
  */
-#include "scene_internal.h"
+#include "scene/scene_internal.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -9,7 +9,7 @@
  *   plastic    Lambert base under a GGX dielectric coat; the lobe is chosen with a
  *              Fresnel-weighted probability and f/pdf cover both lobes
  * Opaque BSDFs are two-sided: a viewer below the shading normal sees them mirrored. */
-#include "bsdf_internal.h"
+#include "render/bsdf_internal.h"
 
 #include <complex.h>
 

@@ -1,9 +1,9 @@
 /* scene.json v1 writer (format: scenes/README.md): writes a loaded, flattened scene so that
  * tt_scene_load reads back the same meshes, materials, lights, camera and settings. Meshes
  * go to binary little-endian PLY files in meshes/ next to the JSON (read back through
- * assimp, core/src/mesh_import.c); textures and environment images are referenced by
+ * assimp, core/src/io/mesh_import.c); textures and environment images are referenced by
  * absolute path. Used by `host --convert`. */
-#include "scene_internal.h"
+#include "scene/scene_internal.h"
 
 #include <errno.h>
 #include <limits.h>

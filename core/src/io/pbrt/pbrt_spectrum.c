@@ -2,7 +2,7 @@
  * projected once at load time: through the CIE 1931 matching functions (Wyman, Sloan and
  * Shirley's 2013 multi-lobe Gaussian fit) and the XYZ -> linear sRGB matrix. Tables of
  * named metals are the usual RGB fits of the measured data pbrt ships. */
-#include "pbrt_internal.h"
+#include "io/pbrt/pbrt_internal.h"
 
 #include <math.h>
 #include <string.h>

@@ -1,6 +1,6 @@
 /* Scenes: construction helpers shared by the loaders, the content hash, accessors, camera
  * path evaluation and format dispatch for tt_scene_load. */
-#include "scene_internal.h"
+#include "scene/scene_internal.h"
 
 #include <errno.h>
 #include <math.h>

@@ -10,7 +10,7 @@
  * right of the image is on the right here too; files that already flip with `Scale -1 1 1`
  * are left alone. */
 #define _XOPEN_SOURCE 700 /* realpath */
-#include "pbrt_internal.h"
+#include "io/pbrt/pbrt_internal.h"
 
 #include <errno.h>
 #include <limits.h>

@@ -1,7 +1,7 @@
 /* JSON form of parameter spaces (thesis Fig. 3.1 plus descriptions and constraints) and of
  * configurations ({"name": value, ...}), with errors that name the input, the JSON path and
  * what was expected. */
-#include "params_internal.h"
+#include "params/params_internal.h"
 
 #include <tunetrace/params.h>
 

@@ -1,6 +1,6 @@
 /* Parameter spaces (tt_space) and configurations (tt_config): building, reading, setting
  * values with strict validation, and the unit-cube mapping used by tuners. */
-#include "params_internal.h"
+#include "params/params_internal.h"
 
 #include <tunetrace/params.h>
 

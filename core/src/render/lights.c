@@ -2,7 +2,7 @@
  * integral of emitted radiance, as pbrt's PowerLightSampler), triangles of an area light by
  * area, uniform points on triangles (pdf 1/area turned into solid angle by d^2/|cos|), image
  * environments by a 2D piecewise-constant distribution (pbrt's Distribution2D). */
-#include "lights_internal.h"
+#include "render/lights_internal.h"
 
 #include <float.h>
 #include <math.h>
@@ -11,7 +11,7 @@
 
 #include <tunetrace/image.h>
 
-#include "bsdf_internal.h"
+#include "render/bsdf_internal.h"
 
 #define TT__PI 3.14159265358979324f
 #define TT__INV_PI 0.31830988618379067f
