@@ -1,6 +1,6 @@
 /* Mesh files (OBJ, PLY, glTF, ... whatever assimp reads) flattened to triangle arrays.
  * Materials in the file are ignored: the scene.json entry chooses the material. */
-#include "scene/scene_internal.h"
+#include "io/io_internal.h"
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>

@@ -5,7 +5,7 @@
  * camera and settings are loaded first, then this file's camera/render override them and
  * its materials/meshes/lights are appended. */
 #define _XOPEN_SOURCE 700 /* realpath */
-#include "scene/scene_internal.h"
+#include "io/io_internal.h"
 
 #include <cjson/cJSON.h>
 

@@ -1,13 +1,11 @@
 /* Scenes: construction helpers shared by the loaders, the content hash, accessors, camera
- * path evaluation and format dispatch for tt_scene_load. */
+ * path evaluation. Format dispatch (tt_scene_load) is in io/scene_load.c. */
 #include "scene/scene_internal.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 /* ---- construction ---------------------------------------------------------------------- */
 
@@ -270,72 +268,6 @@ tt_status tt__scene_finish(tt_scene *s) {
 }
 
 /* ---- public API ------------------------------------------------------------------------ */
-
-/* Case-insensitive suffix test for format dispatch. */
-int tt__has_ext(const char *path, const char *ext) {
-  size_t n = strlen(path), e = strlen(ext);
-  return n >= e && strcasecmp(path + n - e, ext) == 0;
-}
-
-/* Reads a whole file into a NUL-terminated malloc'ed buffer (shared by the JSON and pbrt
- * loaders). Errors name the file: "cannot open scene file", "read error". */
-tt_status tt__read_file(const char *path, char **out, size_t *out_len) {
-  *out = NULL;
-  *out_len = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open scene file: %s", path, strerror(errno));
-  char *buf = NULL;
-  size_t len = 0, cap = 0;
-  for (;;) {
-    if (len + 4096 + 1 > cap) {
-      size_t ncap = cap ? cap * 2 : 65536;
-      char *n = realloc(buf, ncap);
-      if (!n) {
-        free(buf);
-        fclose(f);
-        return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading the file", path);
-      }
-      buf = n;
-      cap = ncap;
-    }
-    size_t got = fread(buf + len, 1, cap - len - 1, f);
-    len += got;
-    if (got == 0) break;
-  }
-  int bad = ferror(f);
-  fclose(f);
-  if (bad) {
-    free(buf);
-    return tt_set_error(TT_ERR_IO, "%s: read error", path);
-  }
-  buf[len] = '\0';
-  *out = buf;
-  *out_len = len;
-  return TT_OK;
-}
-
-/* Row-major 4x4 product r = a * b (r may alias a or b). */
-void tt__mat4_mul(double r[16], const double a[16], const double b[16]) {
-  double t[16];
-  for (int i = 0; i < 4; i++)
-    for (int j = 0; j < 4; j++) {
-      double acc = 0;
-      for (int k = 0; k < 4; k++) acc += a[4 * i + k] * b[4 * k + j];
-      t[4 * i + j] = acc;
-    }
-  memcpy(r, t, sizeof t);
-}
-
-/* Reads the file and hands it to the JSON loader with its directory as the asset base. */
-tt_status tt_scene_load(const char *path, tt_scene **out) {
-  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: out is NULL");
-  *out = NULL;
-  if (!path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: path is NULL");
-  if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
-  if (!tt__has_ext(path, ".json"))
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json or .pbrt)", path);
-  return tt__scene_load_json_file(path, 0, out);
-}
 
 /* Frees the heap copies behind the const views. */
 void tt_scene_destroy(tt_scene *s) {

@@ -1,5 +1,6 @@
-/* Internal scene representation shared by the scene loaders (scene.json today, .pbrt later),
- * the mesh importer and the indicators. Not part of the public ABI. */
+/* Internal scene representation shared by the scene loaders (io/: scene.json, pbrt-v4), the
+ * mesh importer and the indicators, and the builders the loaders fill it with. Not part of
+ * the public ABI. */
 #ifndef TT_SCENE_INTERNAL_H
 #define TT_SCENE_INTERNAL_H
 
@@ -70,30 +71,5 @@ tt_status tt__mesh_data_transform(tt__mesh_data *data, const double m[16]);
 /* Completes a scene after loading: creates the area lights of emissive meshes, computes
  * the bounds, the triangle count and the id. */
 tt_status tt__scene_finish(tt_scene *scene);
-
-/* Loads every triangle of an OBJ/PLY/glTF/... file through assimp. With split == 0 all
- * sub-meshes are merged into one; otherwise one tt__mesh_data per sub-mesh, named
- * "<base_name>/<sub-mesh name or index>". `where` prefixes error messages (e.g.
- * "x.json: meshes[2].file"). On success *out holds *count entries (free each with
- * tt__mesh_data_free, then free(*out)). */
-tt_status tt__mesh_import(const char *file, const char *base_name, int split,
-                          const char *where, tt__mesh_data **out, uint32_t *count);
-
-/* Loads a pbrt-v4 scene file (pbrt_parse.c; Include/Import relative to the including
- * file). Errors are TT_ERR_IO / TT_ERR_PARSE with "file:line: ..." messages; unsupported
- * features warn once per location on stderr and are approximated or skipped. */
-tt_status tt__scene_load_pbrt(const char *path, tt_scene **out);
-
-/* Case-insensitive file-name suffix test (".pbrt", ".json"). */
-int tt__has_ext(const char *path, const char *ext);
-
-/* Reads and loads a scene.json file with its own directory as the asset base; depth 0 for
- * the scene being loaded, 1 for a scene.json imported by it (scene_json.c). */
-tt_status tt__scene_load_json_file(const char *path, int depth, tt_scene **out);
-
-/* Reads a whole file into a NUL-terminated malloc'ed buffer; errors name the file. */
-tt_status tt__read_file(const char *path, char **out, size_t *len);
-/* Row-major 4x4 product r = a * b (r may alias a or b). */
-void tt__mat4_mul(double r[16], const double a[16], const double b[16]);
 
 #endif /* TT_SCENE_INTERNAL_H */

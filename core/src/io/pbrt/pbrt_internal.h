@@ -5,12 +5,12 @@
 #ifndef TT_PBRT_INTERNAL_H
 #define TT_PBRT_INTERNAL_H
 
+#include "io/pbrt/pbrt.h"
 #include "scene/scene_internal.h"
+#include "util/files.h"
+#include "util/mat4.h"
 
 #include <stddef.h>
-
-/* tt__scene_load_pbrt (the entry point tt_scene_load dispatches to) is declared in
- * scene_internal.h. */
 
 /* ---- shapes (pbrt_shapes.c) ------------------------------------------------------------ */
 
