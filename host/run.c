@@ -202,7 +202,8 @@ int tt__run_list_plugins(const tt__host_options *opt) {
     fprintf(stderr, "host: %d plugin(s), %d rejected; search path: %s\n", ctx.found,
             ctx.rejected, tt_registry_search_path(reg));
   tt_registry_destroy(reg);
-  return TT_EXIT_OK;
+  /* everything is listed first; a rejected file is then a plugin error like --plugin's */
+  return ctx.rejected ? TT_EXIT_PLUGIN : TT_EXIT_OK;
 }
 
 /* ---- --describe ---- */

@@ -3,6 +3,8 @@
 #include "host_util.h"
 #include "tt_test.h"
 
+#include <unistd.h>
+
 int main(void) {
   static char out[1 << 16];
   char args[8192];
@@ -80,6 +82,35 @@ int main(void) {
   CHECK(run_host("--list-plugins", out, sizeof out) == 0);
   CHECK_CONTAINS(out, "accel_embree");
   CHECK_CONTAINS(out, "integrator_pt");
+
+  /* a plugin cut short inside its code segment: exit 3 naming the file, for --plugin and
+   * for a --plugin-path folder listed (dlopen faulted with SIGBUS, exit 135, before) */
+  char tmp[] = "/tmp/tt_host_cli_XXXXXX";
+  CHECK(mkdtemp(tmp) != NULL);
+  char src[4096], cut[4200];
+  snprintf(src, sizeof src, "%s/plugins/tuner_nm/tuner_nm.so", getenv("TT_BUILD_ROOT"));
+  snprintf(cut, sizeof cut, "%s/tuner_nm.so", tmp);
+  FILE *in = fopen(src, "rb"), *o = fopen(cut, "wb");
+  CHECK(in && o);
+  if (in && o) {
+    static unsigned char buf[1 << 14];  /* the first 16 KiB: inside the code segment */
+    size_t n = fread(buf, 1, sizeof buf, in);
+    CHECK(n == sizeof buf && fwrite(buf, 1, n, o) == n);
+  }
+  if (in) fclose(in);
+  if (o) fclose(o);
+  snprintf(args, sizeof args, "--plugin '%s' --spp 1 --res 4x4 --out %s/x.exr '%s'", cut, tmp,
+           scene);
+  CHECK(run_host(args, out, sizeof out) == 3);
+  CHECK_CONTAINS(out, cut);
+  CHECK_CONTAINS(out, "truncated ELF file");
+  snprintf(args, sizeof args, "--plugin-path '%s' --list-plugins", tmp);
+  CHECK(run_host(args, out, sizeof out) == 3);
+  CHECK_CONTAINS(out, "rejected: cannot load plugin");
+  CHECK_CONTAINS(out, cut);
+  CHECK_CONTAINS(out, "integrator_pt");  /* the good ones are still listed */
+  unlink(cut);
+  rmdir(tmp);
 
   return tt_test_finish("host_cli");
 }

@@ -12,8 +12,10 @@
 #include "tt_test.h"
 
 #include <dlfcn.h>
+#include <elf.h>
 #include <stdarg.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 static int g_argc;
@@ -173,6 +175,13 @@ static void test_rejections(void) {
   expect_reject("fixture_short_iface", "\"tt.tuner/1\" table is", 0);
   CHECK(log_count("deinit fixture_short_iface") == log_count("init fixture_short_iface"));
 
+  /* NULL required functions: rejected naming every missing one, deinit'ed, unmapped (the
+   * host would otherwise call through NULL) */
+  expect_reject("fixture_null_tuner", "has no feedback, destroy (NULL", 0);
+  CHECK(log_count("deinit fixture_null_tuner") == 1);
+  expect_reject("fixture_null_post", "\"tt.post/1\" has no process (NULL", 0);
+  expect_reject("fixture_null_sampler", "\"tt.sampler/1\" has no name (NULL", 0);
+
   /* init failure passes the plugin's own reason on; deinit is not called after a failed
    * init. The status is the plugin's. */
   const char *path = fixture("fixture_init_fails");
@@ -203,6 +212,80 @@ static void test_newer_minor(void) {
   CHECK(tt_registry_probe(reg, path, &copy) == TT_OK);
   CHECK(copy.abi_minor == 99 && copy.struct_size == sizeof(tt_plugin));
   tt_registry_destroy(reg);
+}
+
+/* Reads a whole small file; aborts the test on failure. */
+static unsigned char *slurp(const char *path, long *size) {
+  FILE *f = fopen(path, "rb");
+  if (!f || fseek(f, 0, SEEK_END) != 0 || (*size = ftell(f)) <= 0) exit(1);
+  unsigned char *b = malloc((size_t)*size);
+  rewind(f);
+  if (!b || fread(b, 1, (size_t)*size, f) != (size_t)*size) exit(1);
+  fclose(f);
+  return b;
+}
+
+/* Runs load and probe of `path` in a child, so that a SIGBUS fails a check instead of the
+ * whole test. Returns 0 loaded, 2 rejected with the file named, 3 rejected without it,
+ * 128+N killed by signal N. */
+static int child_load(const char *path) {
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid == 0) {
+    tt_registry *reg = tt_registry_create(&g_host);
+    int lrc = tt_registry_load(reg, path, NULL);
+    if (lrc != TT_OK && !strstr(tt_last_error(), path)) _exit(3);
+    tt_plugin copy;
+    int prc = tt_registry_probe(reg, path, &copy);
+    if (prc != TT_OK && !strstr(tt_last_error(), path)) _exit(3);
+    tt_registry_destroy(reg);
+    _exit(lrc == TT_OK ? 0 : 2);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+/* Writes the first `n` bytes of `b` to `path`. */
+static void write_prefix(const char *path, const unsigned char *b, long n) {
+  FILE *f = fopen(path, "wb");
+  if (!f || fwrite(b, 1, (size_t)n, f) != (size_t)n) exit(1);
+  fclose(f);
+}
+
+/* Plugins cut short inside a PT_LOAD segment (which dlopen maps past EOF and then faults
+ * on with SIGBUS, exit 135 before the fix) are rejected by load and by probe with the file
+ * named; cut anywhere else they are rejected or load, never crash. */
+static void test_truncated(const char *tmp) {
+  long size;
+  unsigned char *b = slurp(fixture("fixture_good"), &size);
+  const Elf64_Ehdr *eh = (const Elf64_Ehdr *)b;
+  CHECK(size > (long)sizeof *eh && memcmp(eh->e_ident, ELFMAG, SELFMAG) == 0);
+  char path[512];
+  snprintf(path, sizeof path, "%s/truncated_segment.so", tmp);
+  int inside = 0;
+  for (unsigned i = 0; i < eh->e_phnum; i++) {
+    const Elf64_Phdr *ph = (const Elf64_Phdr *)(b + eh->e_phoff + (size_t)i * sizeof *ph);
+    if (ph->p_type != PT_LOAD || ph->p_filesz < 2 || ph->p_offset == 0) continue;
+    long cuts[2] = {(long)(ph->p_offset + ph->p_filesz / 2),
+                    (long)(ph->p_offset + ph->p_filesz - 1)};
+    for (int k = 0; k < 2; k++) {
+      write_prefix(path, b, cuts[k]);
+      int rc = child_load(path);
+      CHECK_MSG(rc == 2, "cut at byte %ld of %ld (inside PT_LOAD %u): result %d", cuts[k], size,
+                i, rc);
+      inside++;
+    }
+  }
+  CHECK(inside >= 4);
+  for (int k = 1; k < 32; k++) {
+    long cut = size * k / 32;
+    write_prefix(path, b, cut);
+    int rc = child_load(path);
+    CHECK_MSG(rc == 0 || rc == 2, "cut at byte %ld of %ld: result %d", cut, size, rc);
+  }
+  unlink(path);
+  free(b);
 }
 
 /* Non-ELF and truncated files are rejected with the file named. */
@@ -436,6 +519,7 @@ int main(int argc, char **argv) {
   test_rejections();
   test_newer_minor();
   test_bad_files(tmp);
+  test_truncated(tmp);
   test_duplicates();
   test_resolution(tmp);
   test_list_and_probe(tmp);

@@ -18,6 +18,10 @@
  *   loads too; the host checks struct_size before touching a field newer than that minor.
  * - An interface that changes incompatibly gets a new id ("tt.accel/2"); the old id may
  *   still be served alongside it.
+ * - Every function of a kind's interface table (and the sampler's name) is required: the
+ *   host rejects a table with a NULL one, naming it, rather than call through it.
+ * - The file itself is checked before dlopen: an ELF shared object of the host's class
+ *   whose segments all lie inside the file (a truncated copy is rejected, not mapped).
  *
  * Threads: init, deinit and get_interface run on the host's main thread.
  */

@@ -2,6 +2,8 @@
  * loaded until the registry is destroyed (see loader.h for the rules). */
 #include <tunetrace/loader.h>
 
+#include "plugin/elf_check.h"
+
 #include <tunetrace/accel.h>
 #include <tunetrace/integrator.h>
 #include <tunetrace/post.h>
@@ -156,6 +158,73 @@ static int tt__ends_with(const char *s, const char *suffix) {
   return a >= b && strcmp(s + a - b, suffix) == 0;
 }
 
+/* A function (or string) slot of a kind's ABI 1.0 interface table that must not be NULL. */
+typedef struct tt__required {
+  size_t offset;
+  const char *name;
+} tt__required;
+
+#define TT__REQ(type, field) {offsetof(type, field), #field}
+static const tt__required tt__accel_required[] = {
+  TT__REQ(tt_accel_iface, space), TT__REQ(tt_accel_iface, build),
+  TT__REQ(tt_accel_iface, intersect1), TT__REQ(tt_accel_iface, occluded1),
+  TT__REQ(tt_accel_iface, intersect_stream), TT__REQ(tt_accel_iface, occluded_stream),
+  TT__REQ(tt_accel_iface, counters), TT__REQ(tt_accel_iface, destroy), {0, NULL}};
+static const tt__required tt__integrator_required[] = {
+  TT__REQ(tt_integrator_iface, space), TT__REQ(tt_integrator_iface, create),
+  TT__REQ(tt_integrator_iface, configure), TT__REQ(tt_integrator_iface, render_pass),
+  TT__REQ(tt_integrator_iface, reset), TT__REQ(tt_integrator_iface, destroy), {0, NULL}};
+static const tt__required tt__tuner_required[] = {
+  TT__REQ(tt_tuner_iface, space), TT__REQ(tt_tuner_iface, create),
+  TT__REQ(tt_tuner_iface, next), TT__REQ(tt_tuner_iface, feedback),
+  TT__REQ(tt_tuner_iface, best), TT__REQ(tt_tuner_iface, save_state),
+  TT__REQ(tt_tuner_iface, load_state), TT__REQ(tt_tuner_iface, destroy), {0, NULL}};
+static const tt__required tt__predictor_required[] = {
+  TT__REQ(tt_predictor_iface, space), TT__REQ(tt_predictor_iface, create),
+  TT__REQ(tt_predictor_iface, observe), TT__REQ(tt_predictor_iface, predict),
+  TT__REQ(tt_predictor_iface, save), TT__REQ(tt_predictor_iface, load),
+  TT__REQ(tt_predictor_iface, destroy), {0, NULL}};
+static const tt__required tt__post_required[] = {
+  TT__REQ(tt_post_iface, space), TT__REQ(tt_post_iface, create),
+  TT__REQ(tt_post_iface, configure), TT__REQ(tt_post_iface, process),
+  TT__REQ(tt_post_iface, reset), TT__REQ(tt_post_iface, destroy), {0, NULL}};
+static const tt__required tt__sampler_required[] = {
+  TT__REQ(tt_sampler_iface, name), TT__REQ(tt_sampler_iface, space),
+  TT__REQ(tt_sampler_iface, create), TT__REQ(tt_sampler_iface, state_size),
+  TT__REQ(tt_sampler_iface, start), TT__REQ(tt_sampler_iface, get),
+  TT__REQ(tt_sampler_iface, destroy), {0, NULL}};
+#undef TT__REQ
+
+/* The slots the host may call through, per kind: every function of ABI 1.0 (the headers
+ * say "all functions are required"), and the sampler's name. */
+static const tt__required *tt__iface_required(uint32_t kind) {
+  switch (kind) {
+    case TT_KIND_ACCEL: return tt__accel_required;
+    case TT_KIND_INTEGRATOR: return tt__integrator_required;
+    case TT_KIND_TUNER: return tt__tuner_required;
+    case TT_KIND_PREDICTOR: return tt__predictor_required;
+    case TT_KIND_POST: return tt__post_required;
+    case TT_KIND_SAMPLER: return tt__sampler_required;
+  }
+  return NULL;
+}
+
+/* Writes the comma-separated names of the NULL required slots of `iface` into `buf`
+ * ("" when none is NULL). Pointer slots are read as bytes: function and data pointers have
+ * one size on every platform the loader supports (POSIX dlsym relies on it too). */
+static void tt__iface_missing(uint32_t kind, const void *iface, char *buf, size_t n) {
+  buf[0] = '\0';
+  size_t used = 0;
+  for (const tt__required *r = tt__iface_required(kind); r && r->name; r++) {
+    void *slot;
+    memcpy(&slot, (const char *)iface + r->offset, sizeof slot);
+    if (slot) continue;
+    int w = snprintf(buf + used, n - used, "%s%s", used ? ", " : "", r->name);
+    if (w < 0 || (size_t)w >= n - used) break;
+    used += (size_t)w;
+  }
+}
+
 /* Minimum interface table size per kind: the ABI 1.0 sizeof, which is the current one. */
 static size_t tt__iface_min_size(uint32_t kind) {
   switch (kind) {
@@ -286,6 +355,9 @@ char *tt_registry_resolve(tt_registry *reg, const char *name_or_path) {
 static tt_status tt__open_entry(const char *path, void **handle_out, const tt_plugin **entry_out) {
   *handle_out = NULL;
   *entry_out = NULL;
+  /* a truncated file would make dlopen fault (SIGBUS) instead of failing */
+  tt_status est = tt__elf_check_plugin(path);
+  if (est != TT_OK) return est;
   dlerror();
   void *h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
   if (!h) {
@@ -397,6 +469,14 @@ tt_status tt_registry_load(tt_registry *reg, const char *name_or_path, tt_loaded
                       "bytes of ABI 1.0 (plugin ABI %u.%u, host ABI %d.%d)",
                       path, e->name, id, (unsigned)*(const uint32_t *)iface, need,
                       (unsigned)e->abi_major, (unsigned)e->abi_minor, TT_ABI_MAJOR, TT_ABI_MINOR);
+  } else {
+    /* the host calls through these without checking: a NULL one would be a SIGSEGV later */
+    char missing[512];
+    tt__iface_missing(e->kind, iface, missing, sizeof missing);
+    if (missing[0])
+      st = tt_set_error(TT_ERR_ABI, "plugin %s (%s): interface \"%s\" has no %s (NULL; every "
+                        "function of a %s interface is required)", path, e->name, id, missing,
+                        tt_plugin_kind_name(e->kind));
   }
 
   tt_loaded_plugin *p = NULL;
