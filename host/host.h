@@ -48,6 +48,7 @@ typedef struct tt__host_options {
   uint32_t verify;          /* --verify N: default vs best side by side, N rounds */
   const char *db;           /* --db PATH; NULL: tt_tunedb_default_path() */
   int no_db;                /* --no-db */
+  int clock_cpu;            /* --clock cpu: every timing is the process's CPU time */
   const char *reference;    /* --reference FILE: the image --objective rrmse compares with */
   const char *tune_pass_images; /* --tune-pass-images DIR: each measurement's own pass image */
   int help;
@@ -118,6 +119,10 @@ void tt__print_usage(FILE *out);
 /* The host services table the program passes to plugins: the default host with a
  * progress-bar-aware log and a progress bar on stderr. */
 const tt_host *tt__host_services(int quiet);
+/* Makes the services' clock_ns the process's CPU time (--clock cpu): every build and render
+ * time that plugins and the tuning loop measure then excludes the time other processes ran
+ * on our cores. */
+void tt__host_use_cpu_clock(void);
 /* Draws progress of the render: fraction in [0,1], with elapsed time and ETA. */
 void tt__progress_update(const char *task, double fraction);
 /* Ends the current progress line (newline on a TTY). */

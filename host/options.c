@@ -68,6 +68,10 @@ void tt__print_usage(FILE *out) {
     "                         measured in the same state on this machine is not measured\n"
     "                         again: its stored cost is fed to the tuner\n"
     "  --no-db                no database: measure everything, record nothing\n"
+    "  --clock wall|cpu       what build and render times measure: wall time (default) or\n"
+    "                         the process's CPU time, which other processes running on the\n"
+    "                         same cores do not inflate (use it with --threads 1 on a\n"
+    "                         shared machine); tuning rows record the clock in `context`\n"
     "\n"
     "Sequences (temporal filters, see tools/taa/README.md):\n"
     "  --sequence N|A:B       render frames 0..N-1 (or A..B) of the scene's camera path at\n"
@@ -385,6 +389,14 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       if (!(opt->db = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--no-db")) {
       opt->no_db = 1;
+    } else if (!strcmp(a, "--clock")) {
+      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (!strcmp(v, "cpu")) opt->clock_cpu = 1;
+      else if (!strcmp(v, "wall")) opt->clock_cpu = 0;
+      else {
+        fprintf(stderr, "host: --clock: expected wall or cpu, got \"%s\"\n", v);
+        return TT_EXIT_USAGE;
+      }
     } else if (!strcmp(a, "--reference")) {
       if (!(opt->reference = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--tune-pass-images")) {

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 static pthread_mutex_t tt__lock = PTHREAD_MUTEX_INITIALIZER;
@@ -97,6 +98,15 @@ static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt
           plugin ? "] " : "", names[level <= TT_LOG_ERROR ? level : TT_LOG_ERROR], msg);
   pthread_mutex_unlock(&tt__lock);
 }
+
+/* CPU time of the whole process (all its threads), in ns: the clock of --clock cpu. */
+static uint64_t tt__cpu_clock_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+void tt__host_use_cpu_clock(void) { tt__host.clock_ns = tt__cpu_clock_ns; }
 
 const tt_host *tt__host_services(int quiet) {
   tt__quiet = quiet;

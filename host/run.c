@@ -376,6 +376,7 @@ int tt__run_render(const tt__host_options *opt) {
     return TT_EXIT_OK;
   }
   const tt_host *host = tt__host_services(opt->quiet);
+  if (opt->clock_cpu) tt__host_use_cpu_clock();
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
     fprintf(stderr, "host: --threads: %s\n", tt_last_error());
     return TT_EXIT_USAGE;

@@ -209,6 +209,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     snprintf(s.dir, sizeof s.dir, "%s", opt->out_dir);
   }
   s.host = tt__host_services(opt->quiet);
+  if (opt->clock_cpu) tt__host_use_cpu_clock();
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
     fprintf(stderr, "host: --threads: %s\n", tt_last_error());
     return TT_EXIT_USAGE;

@@ -107,6 +107,7 @@ tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
   cJSON_AddNumberToObject(root, "triangles", (double)tt_scene_triangle_count(rec->scene));
   cJSON_AddNumberToObject(root, "seed", (double)rec->seed);
   cJSON_AddNumberToObject(root, "threads", rec->threads);
+  cJSON_AddStringToObject(root, "clock", rec->opt && rec->opt->clock_cpu ? "cpu" : "wall");
   cJSON *res = cJSON_AddArrayToObject(root, "resolution");
   cJSON_AddItemToArray(res, cJSON_CreateNumber(rec->width));
   cJSON_AddItemToArray(res, cJSON_CreateNumber(rec->height));

@@ -115,14 +115,17 @@ static int tt__push_sample(tt__tuning *t, const tt__tune_sample *s) {
   return 0;
 }
 
-/* JSON of the view: the part of the state the camera contributes. */
-static char *tt__camera_json(const tt_camera *c) {
-  char buf[1024];
+/* JSON of the view: the part of the state the camera contributes. A sample of the scene's
+ * camera path (--camera-index I) also records "path_index": I, so that a row says which
+ * camera of the path it belongs to (the baseline generator's job is one such sample). */
+static char *tt__camera_json(const tt_camera *c, const tt__host_options *opt) {
+  char buf[1024], index[48] = "";
+  if (opt->camera_index_set) snprintf(index, sizeof index, ",\"path_index\":%u", opt->camera_index);
   snprintf(buf, sizeof buf,
            "{\"position\":[%.9g,%.9g,%.9g],\"target\":[%.9g,%.9g,%.9g],\"up\":[%.9g,%.9g,%.9g],"
-           "\"fov_y\":%.9g,\"resolution\":[%u,%u]}",
+           "\"fov_y\":%.9g,\"resolution\":[%u,%u]%s}",
            c->position[0], c->position[1], c->position[2], c->target[0], c->target[1],
-           c->target[2], c->up[0], c->up[1], c->up[2], c->fov_y, c->width, c->height);
+           c->target[2], c->up[0], c->up[1], c->up[2], c->fov_y, c->width, c->height, index);
   return tt__dup(buf);
 }
 
@@ -135,6 +138,8 @@ static char *tt__context_json(tt__tune_ctx *c) {
   cJSON *root = cJSON_CreateObject();
   cJSON_AddNumberToObject(root, "spp", c->spp);
   cJSON_AddNumberToObject(root, "threads", rs->rec->threads);
+  /* CPU-time costs never answer wall-time lookups, nor the other way round */
+  if (rs->opt->clock_cpu) cJSON_AddStringToObject(root, "clock", "cpu");
   cJSON *plugins = cJSON_AddObjectToObject(root, "plugins");
   for (size_t i = 0; i < tt_registry_count(rs->reg); i++) {
     const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(rs->reg, i));
@@ -841,7 +846,7 @@ static int tt__open_db(tt__tune_ctx *c) {
 static int tt__make_key(tt__tune_ctx *c) {
   tt__render_state *rs = c->rs;
   const tt_plugin *e = tt_loaded_plugin_entry(c->target);
-  c->camera_json = tt__camera_json(rs->camera);
+  c->camera_json = tt__camera_json(rs->camera, rs->opt);
   c->context_json = tt__context_json(c);
   if (!c->camera_json || !c->context_json) return -1;
   struct timespec ts;
