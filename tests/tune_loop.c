@@ -242,6 +242,38 @@ int main(void) {
   CHECK(t && cJSON_IsNull(cJSON_GetObjectItem(t, "db")));
   cJSON_Delete(root);
 
+  /* --clock cpu along a camera path: rows say which clock and which path sample they are;
+   * a wall-clock run of the same state is not answered by CPU-time rows */
+  {
+    char path_scene[4200];
+    snprintf(path_scene, sizeof path_scene, "%s", source_path("scenes/cornell-box/path.json"));
+    snprintf(db, sizeof db, "%s/clock.db", dir);
+    snprintf(stats, sizeof stats, "%s/clock.json", dir);
+    snprintf(args, sizeof args, "--quiet --plugin tuner_nm --iterations 3 --res 16x16 --spp 1 "
+             "--threads 1 --clock cpu --camera-index 7 --db '%s' --stats '%s' --out "
+             "'%s/clock.exr' '%s'", db, stats, dir, path_scene);
+    CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+    long n = db_rows(db, NULL);
+    CHECK(n == 4);
+    CHECK(db_rows(db, "context LIKE '%\"clock\":\"cpu\"%' AND camera LIKE '%\"path_index\":7}'") == n);
+    root = read_json(stats);
+    CHECK(root && !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(root, "clock")), "cpu"));
+    cJSON_Delete(root);
+    snprintf(args, sizeof args, "--quiet --plugin tuner_nm --iterations 3 --res 16x16 --spp 1 "
+             "--threads 1 --camera-index 7 --db '%s' --stats '%s' --out '%s/clock.exr' '%s'", db,
+             stats, dir, path_scene);
+    CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+    root = read_json(stats);
+    t = cJSON_GetObjectItem(root, "tuning");
+    CHECK(t && num(t, "cached") == 0 && num(t, "measured") == 4);
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(root, "clock")), "wall"));
+    cJSON_Delete(root);
+    CHECK(db_rows(db, "context NOT LIKE '%\"clock\"%'") == 4);
+    snprintf(args, sizeof args, "--clock sometimes '%s'", scene_path);
+    CHECK(run_host(args, out, sizeof out) == 2);
+    CHECK_CONTAINS(out, "--clock: expected wall or cpu");
+  }
+
   /* no --db: the default location under $XDG_DATA_HOME; --no-db writes nothing */
   char def_db[4400];
   snprintf(def_db, sizeof def_db, "%s/tunetrace/tuning.db", data_home);
