@@ -9,9 +9,10 @@
 #
 # Each revision is exported with `git archive` into $TT_BITCHECK_DIR (default
 # /tmp/tt-bitcheck/<commit>) and built there once (cached across runs); the scenes are the
-# default scene (path tracer and PSSMLT), two pbrt-v4 scenes from ../shared/scenes and one
-# scene.json wrapper that imports a pbrt file (../shared, or $TT_SHARED, is linked beside
-# each exported tree). Exit status 0 when all images match, 1 when any differs, 2 on a build
+# default scene (path tracer, PSSMLT, and PSSMLT tuned by tuner_nm towards its acceptance
+# target: a timing-free objective, so the tuning loop's whole trajectory shows in the
+# image), two pbrt-v4 scenes from ../shared/scenes and one scene.json wrapper that imports a
+# pbrt file (../shared, or $TT_SHARED, is linked beside each exported tree). Exit status 0 when all images match, 1 when any differs, 2 on a build
 # or render failure.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -26,18 +27,21 @@ build_rev() {  # rev -> prints the build folder
   local sha dir
   sha=$(git rev-parse --verify "$1^{commit}") || return 1
   dir=$root/$sha
-  if [ ! -x "$dir/build/host/host" ]; then
+  if [ ! -f "$dir/build/build.ninja" ]; then
     rm -rf "$dir" && mkdir -p "$dir/src" || return 1
     git archive "$sha" | tar -x -C "$dir/src" || return 1
     ln -s "$shared" "$dir/shared" || return 1  # scenes reach ../shared from the tree's root
-    (meson setup "$dir/build" "$dir/src" >"$dir/setup.log" 2>&1 &&
-      ninja -C "$dir/build" -j "$jobs" host/host \
-        plugins/accel_embree/accel_embree.so plugins/integrator_pt/integrator_pt.so \
-        plugins/integrator_pssmlt/integrator_pssmlt.so >"$dir/build.log" 2>&1) || {
-      echo "build of $1 ($sha) failed: see $dir/setup.log and $dir/build.log" >&2
+    meson setup "$dir/build" "$dir/src" >"$dir/setup.log" 2>&1 || {
+      echo "meson setup of $1 ($sha) failed: see $dir/setup.log" >&2
       return 1
     }
   fi
+  ninja -C "$dir/build" -j "$jobs" host/host plugins/accel_embree/accel_embree.so \
+    plugins/integrator_pt/integrator_pt.so plugins/integrator_pssmlt/integrator_pssmlt.so \
+    plugins/tuner_nm/tuner_nm.so >"$dir/build.log" 2>&1 || {
+    echo "build of $1 ($sha) failed: see $dir/build.log" >&2
+    return 1
+  }
   echo "$dir/build"
 }
 
@@ -45,6 +49,7 @@ build_rev() {  # rev -> prints the build folder
 cases=(
   "cornell-pt|--plugin integrator_pt --spp 16 --res 96x96 --seed 7 scenes/cornell-box/scene.json"
   "cornell-pssmlt|--plugin integrator_pssmlt --spp 8 --res 96x96 --seed 11 scenes/cornell-box/scene.json"
+  "cornell-pssmlt-tuned|--plugin integrator_pssmlt --plugin tuner_nm --iterations 8 --spp 12 --res 64x64 --seed 13 scenes/cornell-box/scene.json"
   "killeroo-pbrt|--plugin integrator_pt --spp 8 --res 96x96 --seed 3 ../shared/scenes/killeroos/killeroo-simple.pbrt"
   "cornell-pbrt|--plugin integrator_pt --spp 8 --res 96x96 --seed 5 ../shared/scenes/cornell-box-pbrt/cornell-box-specular.pbrt"
   "veach-mis-json|--plugin integrator_pt --spp 8 --res 96x72 --seed 9 scenes/veach-mis/scene.json"
