@@ -18,7 +18,7 @@
 #include <tunetrace/integrator.h>
 #include <tunetrace/path.h>
 #include <tunetrace/plugin.h>
-#include <tunetrace/tunedb.h>
+#include <tunetrace/tuning_hint.h>
 
 #include "pssmlt_chain.h"
 

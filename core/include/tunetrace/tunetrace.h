@@ -21,5 +21,7 @@
 #include <tunetrace/options.h>
 #include <tunetrace/loader.h>
 #include <tunetrace/tunedb.h>
+#include <tunetrace/tuning_hint.h>
+#include <tunetrace/tuning.h>
 
 #endif /* TUNETRACE_TUNETRACE_H */

@@ -1,5 +1,5 @@
-/* tunetrace internal: integer hashing and the PCG32 generator shared by the built-in
- * samplers, the integrators and the tests. Header-only (static inline): every function is
+/* tunetrace internal: integer hashing, SplitMix64 and the PCG32 generator shared by the
+ * built-in samplers, the integrators, the tuning loop and the tests. Header-only (static inline): every function is
  * pure or works on caller-owned state, so all are thread-safe and allocation-free. */
 #ifndef TT_RNG_INTERNAL_H
 #define TT_RNG_INTERNAL_H
@@ -11,6 +11,12 @@ static inline uint64_t tt__mix64(uint64_t z) {
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
   return z ^ (z >> 31);
+}
+
+/* SplitMix64 (Steele, Lea, Flood 2014): the next value of the stream `*state`. Seeds
+ * other generators and draws the tuning loop's random exploration. */
+static inline uint64_t tt__splitmix64(uint64_t *state) {
+  return tt__mix64(*state += 0x9e3779b97f4a7c15ull);
 }
 
 /* Hashes two 64-bit words; order matters (hash(a,b) != hash(b,a) in general). */
