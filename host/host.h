@@ -85,31 +85,9 @@ int tt__run_convert(const tt__host_options *opt);
 
 #define TT_HOST_DEFAULT_ITERATIONS 50
 
-/* What a tuning measurement minimises (--objective). */
-typedef enum tt__objective_kind {
-  TT_OBJ_RENDER = 1,        /* wall ms of the measurement pass(es) */
-  TT_OBJ_BUILD = 2,         /* accel build ms */
-  TT_OBJ_TOTAL = 3,         /* build + render ms */
-  TT_OBJ_METRIC = 4,        /* an integrator metric of the pass */
-  TT_OBJ_RRMSE = 5          /* rRMSE of the pass's own image against --reference */
-} tt__objective_kind;
-
-typedef enum tt__metric_goal {
-  TT_GOAL_MIN = 0,          /* cost = value */
-  TT_GOAL_MAX = 1,          /* cost = -value */
-  TT_GOAL_TARGET = 2        /* cost = |value - target| */
-} tt__metric_goal;
-
-typedef struct tt__objective {
-  tt__objective_kind kind;
-  char metric[64];
-  tt__metric_goal goal;
-  double target;
-  char spec[192];           /* canonical spec, the database's objective column */
-} tt__objective;
-
-/* Parses an --objective spec; on error prints a message naming `opt` and returns -1. */
-int tt__parse_objective(const char *opt, const char *text, tt__objective *out);
+/* Parses an --objective spec (tt_objective_parse); on error prints a message naming `opt`
+ * and returns -1. */
+int tt__parse_objective(const char *opt, const char *text, tt_objective *out);
 
 /* Parses argv; on error prints a message naming the option and returns TT_EXIT_USAGE. */
 int tt__parse_options(int argc, char **argv, tt__host_options *opt);
@@ -127,21 +105,6 @@ void tt__host_use_cpu_clock(void);
 void tt__progress_update(const char *task, double fraction);
 /* Ends the current progress line (newline on a TTY). */
 void tt__progress_finish(void);
-
-/* Creates a registry with the command line's --plugin-path folders. */
-tt_registry *tt__make_registry(const tt__host_options *opt, const tt_host *host);
-/* Loads every --plugin and --post, reporting each failure, then the default accel and
- * integrator for kinds not named. Returns the number of failures. */
-int tt__load_plugins(tt_registry *reg, const tt__host_options *opt);
-/* The plugin's tt.options/1 table (settings outside the tuned space), or NULL when it serves
- * none or an older table than the fields the host calls. */
-const tt_options_iface *tt__plugin_options(const tt_loaded_plugin *p);
-
-/* Builds one configuration per loaded plugin (registry order) from its defaults, the
- * scene's render settings (integrator maxDepth) and the --set options; reports every bad
- * --set and returns the number of errors. */
-int tt__build_configs(tt_registry *reg, const tt__host_options *opt, const tt_scene *scene,
-                      tt_config **configs);
 
 /* Runs --list-plugins, --describe or a render. */
 int tt__run_list_plugins(const tt__host_options *opt);
@@ -173,62 +136,22 @@ typedef struct tt__run_record {
   const struct tt__tuning *tuning;  /* NULL when nothing was tuned or explored */
 } tt__run_record;
 
-/* The render state the passes and the tuning loop share (run.c). */
-typedef struct tt__render_state {
-  const tt__host_options *opt;
-  const tt_host *host;
-  tt__run_record *rec;
-  tt_scene *scene;
-  const tt_camera *camera;
-  tt_registry *reg;
-  tt_config **configs;          /* per loaded plugin, registry order */
-  tt_loaded_plugin *accel_p, *integ_p;
-  const tt_accel_iface *ai;
-  const tt_integrator_iface *ii;
-  tt_accel *accel;
-  tt_integrator *integrator;
-  tt_film *film;
-  uint32_t pass;                /* passes rendered into the film */
-} tt__render_state;
-
-/* Renders one pass of `spp` samples per pixel into the film and accounts it in the run
- * record; `ps` receives the pass statistics and `*ms` its wall time. */
-tt_status tt__render_pass(tt__render_state *rs, uint32_t spp, tt_pass_stats *ps, double *ms);
-
-/* One measurement of the tuning loop. */
-typedef struct tt__tune_sample {
-  int iteration;                /* -1: the default configuration */
-  char *config;                 /* canonical JSON (malloc) */
-  double cost, build_ms, render_ms;
-  int status;                   /* tt_tunedb_status */
-  int cached;                   /* cost came from the database */
-} tt__tune_sample;
-
-/* Everything the tuning phase did, for the log and --stats. */
+/* What the tuning phase (tune.c) leaves for the log and --stats: the library's session
+ * with its samples, best configuration and counters, and what the host added around it. */
 typedef struct tt__tuning {
+  tt_tuning *session;           /* NULL when the phase failed before the session existed */
   const char *mode;             /* "tune" or "explore" */
   const char *plugin, *plugin_version, *tuner;
-  tt__objective objective;
   uint32_t requested;
-  tt__tune_sample *samples;     /* [0] is the default configuration */
-  size_t count, cap;
-  uint32_t measured, cached, infeasible, failed;
-  int converged, interrupted;
-  double default_cost;
-  char *default_config;
-  double best_cost;
-  char *best_config;
-  const char *best_from;        /* "default", or the mode that found it */
+  int interrupted;
   double ms;                    /* wall time of the tuning phase */
-  const char *db_path;          /* NULL with --no-db */
+  char db_path[4096];           /* "" with --no-db */
   char *verify_json;            /* --verify result (JSON object, malloc), or NULL */
+  tt_tunedb *db;                /* the database the session records into, or NULL */
+  double *ref_lum;              /* --reference as luminance (--objective rrmse), or NULL */
 } tt__tuning;
 
-/* Runs the tuning (or exploration) phase when the options ask for one; leaves the best
- * configuration applied to the target. Returns TT_EXIT_OK, TT_EXIT_USAGE (bad target or
- * objective) or TT_EXIT_FAILURE; `*out` is NULL when no tuning was requested. */
-int tt__tune_phase(tt__render_state *rs, tt__tuning **out);
-/* Frees the tuning record. */
+/* Frees the tuning record (NULL is ignored). */
 void tt__tuning_free(tt__tuning *t);
 
 /* Writes the --stats JSON file. */

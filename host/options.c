@@ -357,7 +357,7 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
     } else if (!strcmp(a, "--tune")) {
       if (!(opt->tune = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--objective")) {
-      tt__objective obj;
+      tt_objective obj;
       if (!(opt->objective = tt__arg(argc, argv, &i)) ||
           tt__parse_objective(a, opt->objective, &obj))
         return TT_EXIT_USAGE;
@@ -462,9 +462,9 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
     }
   }
   {
-    tt__objective obj;
+    tt_objective obj;
     int rrmse = opt->objective && !tt__parse_objective("--objective", opt->objective, &obj) &&
-                obj.kind == TT_OBJ_RRMSE;
+                obj.kind == TT_OBJECTIVE_RRMSE;
     if (rrmse && !opt->reference) {
       fprintf(stderr, "host: --objective rrmse needs --reference FILE.exr (an image of the "
               "same scene and resolution, e.g. a high-spp integrator_pt render)\n");
@@ -503,71 +503,8 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
   return TT_EXIT_OK;
 }
 
-int tt__parse_objective(const char *opt, const char *text, tt__objective *out) {
-  memset(out, 0, sizeof *out);
-  if (!strcmp(text, "render")) {
-    out->kind = TT_OBJ_RENDER;
-  } else if (!strcmp(text, "build")) {
-    out->kind = TT_OBJ_BUILD;
-  } else if (!strcmp(text, "build+render") || !strcmp(text, "total") ||
-             !strcmp(text, "render+build")) {
-    out->kind = TT_OBJ_TOTAL;
-  } else if (!strcmp(text, "rrmse")) {
-    out->kind = TT_OBJ_RRMSE;
-  } else if (!strncmp(text, "metric:", 7)) {
-    const char *name = text + 7;
-    const char *colon = strchr(name, ':');
-    size_t len = colon ? (size_t)(colon - name) : strlen(name);
-    if (len == 0 || len >= sizeof out->metric) {
-      fprintf(stderr, "host: %s \"%s\": expected metric:NAME[:min|:max|:target=X] with a "
-              "metric name of 1..63 characters\n", opt, text);
-      return -1;
-    }
-    out->kind = TT_OBJ_METRIC;
-    memcpy(out->metric, name, len);
-    out->goal = TT_GOAL_MIN;
-    if (colon) {
-      const char *g = colon + 1;
-      char *end = NULL;
-      if (!strcmp(g, "min")) {
-        out->goal = TT_GOAL_MIN;
-      } else if (!strcmp(g, "max")) {
-        out->goal = TT_GOAL_MAX;
-      } else if (!strncmp(g, "target=", 7) && g[7] &&
-                 (out->target = strtod(g + 7, &end), *end == 0) && isfinite(out->target)) {
-        out->goal = TT_GOAL_TARGET;
-      } else {
-        fprintf(stderr, "host: %s \"%s\": after the metric name expected :min, :max or "
-                ":target=NUMBER, got \":%s\"\n", opt, text, g);
-        return -1;
-      }
-    }
-  } else {
-    fprintf(stderr, "host: %s: unknown objective \"%s\" (expected render, build, "
-            "build+render, rrmse, metric:NAME, metric:NAME:max or metric:NAME:target=X)\n",
-            opt, text);
-    return -1;
-  }
-  /* one spelling per objective, so the database matches "total" and "build+render" */
-  switch (out->kind) {
-    case TT_OBJ_RENDER: snprintf(out->spec, sizeof out->spec, "render"); break;
-    case TT_OBJ_BUILD: snprintf(out->spec, sizeof out->spec, "build"); break;
-    case TT_OBJ_TOTAL: snprintf(out->spec, sizeof out->spec, "build+render"); break;
-    case TT_OBJ_RRMSE: snprintf(out->spec, sizeof out->spec, "rrmse"); break;
-    case TT_OBJ_METRIC:
-      if (out->goal == TT_GOAL_TARGET) {
-        /* shortest text that reads back as the same double: 0.234, not 0.23400000000000001 */
-        char num[32];
-        for (int prec = 6; prec <= 17; prec++) {
-          snprintf(num, sizeof num, "%.*g", prec, out->target);
-          if (strtod(num, NULL) == out->target) break;
-        }
-        snprintf(out->spec, sizeof out->spec, "metric:%s:target=%s", out->metric, num);
-      } else {
-        snprintf(out->spec, sizeof out->spec, "metric:%s:%s", out->metric,
-                 out->goal == TT_GOAL_MAX ? "max" : "min");
-      }
-      break;
-  }
-  return 0;
+int tt__parse_objective(const char *opt, const char *text, tt_objective *out) {
+  if (tt_objective_parse(text, out) == TT_OK) return 0;
+  fprintf(stderr, "host: %s: %s\n", opt, tt_last_error());
+  return -1;
 }

@@ -80,18 +80,11 @@ static int tt__ensure_dir(const char *dir) {
   return stat(tmp, &st) == 0 && S_ISDIR(st.st_mode) ? 0 : -1;
 }
 
-/* Everything one sequence run holds. */
+/* Everything one sequence run holds besides the session. */
 typedef struct tt__seq {
   const tt__host_options *opt;
-  const tt_host *host;
-  tt_scene *scene;
-  tt_registry *reg;
-  tt_config *configs[TT_HOST_MAX_LIST];
-  const tt_accel_iface *ai;
-  const tt_integrator_iface *ii;
+  tt__session ses;          /* scene, plugins, configurations, accel, integrator, film */
   const tt_post_iface *pi;
-  tt_accel *accel;
-  tt_integrator *integrator;
   tt_post *post;
   const char *post_name;
   uint64_t seed;
@@ -136,11 +129,11 @@ static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *
 /* Config of the first loaded plugin of `kind` (or named `name`), and its interface. */
 static const void *tt__seq_find(tt__seq *s, uint32_t kind, const char *name,
                                 const tt_config **cfg) {
-  for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
-    tt_loaded_plugin *p = tt_registry_get(s->reg, i);
+  for (size_t i = 0; i < tt_registry_count(s->ses.reg); i++) {
+    tt_loaded_plugin *p = tt_registry_get(s->ses.reg, i);
     const tt_plugin *e = tt_loaded_plugin_entry(p);
     if (e->kind != kind || (name && strcmp(e->name, name))) continue;
-    *cfg = s->configs[i];
+    *cfg = s->ses.configs[i];
     return tt_loaded_plugin_iface(p);
   }
   *cfg = NULL;
@@ -153,13 +146,13 @@ static tt_status tt__seq_render(tt__seq *s, tt_film *film, const tt_camera *cam,
                                 const tt_camera *prev, const float *jitter, uint64_t seed,
                                 float *rgb) {
   tt_film_clear(film);
-  s->ii->reset(s->integrator);
+  s->ses.ii->reset(s->ses.integrator);
   tt_render_ctx ctx;
   memset(&ctx, 0, sizeof ctx);
   ctx.struct_size = sizeof ctx;
-  ctx.scene = s->scene;
-  ctx.accel_iface = s->ai;
-  ctx.accel = s->accel;
+  ctx.scene = s->ses.scene;
+  ctx.accel_iface = s->ses.ai;
+  ctx.accel = s->ses.accel;
   ctx.film = film;
   ctx.camera = cam;
   ctx.prev_camera = prev;
@@ -173,7 +166,7 @@ static tt_status tt__seq_render(tt__seq *s, tt_film *film, const tt_camera *cam,
   tt_pass_stats ps;
   memset(&ps, 0, sizeof ps);
   ps.struct_size = sizeof ps;
-  tt_status st = s->ii->render_pass(s->integrator, &ctx, &ps);
+  tt_status st = s->ses.ii->render_pass(s->ses.integrator, &ctx, &ps);
   if (st == TT_OK) tt_film_resolve(film, rgb);
   return st;
 }
@@ -208,46 +201,19 @@ int tt__run_sequence(const tt__host_options *opt) {
   } else {
     snprintf(s.dir, sizeof s.dir, "%s", opt->out_dir);
   }
-  s.host = tt__host_services(opt->quiet);
-  if (opt->clock_cpu) tt__host_use_cpu_clock();
-  if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
-    fprintf(stderr, "host: --threads: %s\n", tt_last_error());
-    return TT_EXIT_USAGE;
-  }
   if (tt__ensure_dir(s.dir) != 0) {
     fprintf(stderr, "host: %s %s: cannot create the directory: %s\n",
             opt->seq_pattern ? "--out" : "--out-dir", s.dir, strerror(errno));
     return TT_EXIT_OUTPUT;
   }
-  if (tt_scene_load(opt->scene, &s.scene) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
-    return TT_EXIT_SCENE;
-  }
-  if (opt->width && tt_scene_set_resolution(s.scene, opt->width, opt->height) != TT_OK) {
-    fprintf(stderr, "host: --res: %s\n", tt_last_error());
-    tt_scene_destroy(s.scene);
-    return TT_EXIT_USAGE;
-  }
   int rc = TT_EXIT_OK;
-  tt_film *film = NULL, *ref_film = NULL;
   float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
+  tt_film *film = NULL, *ref_film = NULL;
   FILE *manifest = NULL;
-  s.reg = tt__make_registry(opt, s.host);
-  if (!s.reg) {
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  if (tt__load_plugins(s.reg, opt)) {
-    rc = TT_EXIT_PLUGIN;
-    goto done;
-  }
-  if (tt__build_configs(s.reg, opt, s.scene, s.configs)) {
-    rc = TT_EXIT_USAGE;
-    goto done;
-  }
-  const tt_config *acfg, *icfg, *pcfg = NULL;
-  s.ai = tt__seq_find(&s, TT_KIND_ACCEL, NULL, &acfg);
-  s.ii = tt__seq_find(&s, TT_KIND_INTEGRATOR, NULL, &icfg);
+  rc = tt__session_open(&s.ses, opt);
+  if (rc != TT_EXIT_OK) goto done;
+  const tt_host *host = s.ses.host;
+  const tt_config *pcfg = NULL;
   if (opt->post) {
     char name[128];
     const char *slash = strrchr(opt->post, '/');
@@ -260,13 +226,13 @@ int tt__run_sequence(const tt__host_options *opt) {
       rc = TT_EXIT_PLUGIN;
       goto done;
     }
-    s.post_name = tt_loaded_plugin_entry(tt_registry_find_name(s.reg, name))->name;
+    s.post_name = tt_loaded_plugin_entry(tt_registry_find_name(s.ses.reg, name))->name;
   } else {
     /* --plugin post_taa: a loaded post-filter runs over the frames as with --post */
     s.pi = tt__seq_find(&s, TT_KIND_POST, NULL, &pcfg);
     if (s.pi) {
-      for (size_t i = 0; i < tt_registry_count(s.reg); i++) {
-        const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s.reg, i));
+      for (size_t i = 0; i < tt_registry_count(s.ses.reg); i++) {
+        const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s.ses.reg, i));
         if (e->kind == TT_KIND_POST) {
           s.post_name = e->name;
           break;
@@ -280,22 +246,15 @@ int tt__run_sequence(const tt__host_options *opt) {
       }
     }
   }
-  const tt_render_settings *settings = tt_scene_settings(s.scene);
+  const tt_render_settings *settings = tt_scene_settings(s.ses.scene);
   s.seed = opt->seed_set ? opt->seed : settings->seed;
   s.spp = opt->spp ? opt->spp : settings->spp;
-  tt_accel_build_stats bs;
-  memset(&bs, 0, sizeof bs);
-  bs.struct_size = sizeof bs;
-  if (s.ai->build(s.scene, acfg, &s.accel, &bs) != TT_OK ||
-      s.ii->create(s.scene, icfg, &s.integrator) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  const tt_camera *still = tt_scene_camera(s.scene);
+  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION);
+  if (rc != TT_EXIT_OK) goto done;
+  const tt_camera *still = s.ses.camera;
   uint32_t w = still->width, h = still->height, k = opt->reference_scale;
   double fps = opt->fps > 0 ? opt->fps : 24.0;
-  film = tt_film_create(w, h, TT_AOV_DEPTH | TT_AOV_MOTION);
+  film = s.ses.film;
   rgb = malloc((size_t)w * h * 3 * sizeof(float));
   post_rgb = malloc((size_t)w * h * 3 * sizeof(float));
   motion = malloc((size_t)w * h * 2 * sizeof(float));
@@ -304,7 +263,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     ref_hi = malloc((size_t)w * k * h * k * 3 * sizeof(float));
     ref = malloc((size_t)w * h * 3 * sizeof(float));
   }
-  if (!film || !rgb || !post_rgb || !motion || (k && (!ref_film || !ref_hi || !ref))) {
+  if (!rgb || !post_rgb || !motion || (k && (!ref_film || !ref_hi || !ref))) {
     fprintf(stderr, "host: out of memory for %ux%u frames\n", w, h);
     rc = TT_EXIT_FAILURE;
     goto done;
@@ -327,7 +286,7 @@ int tt__run_sequence(const tt__host_options *opt) {
           "  \"jitter_cycle\": %u,\n  \"reference_scale\": %u,\n"
           "  \"reference_filter\": \"blackman-harris radius %.1f px\",\n  \"post\": %s%s%s,\n"
           "  \"colour\": \"linear RGB\",\n  \"motion\": \"pixels, this frame -> previous\",\n"
-          "  \"frames\": [\n", tt_scene_source(s.scene), w, h, fps, s.spp,
+          "  \"frames\": [\n", tt_scene_source(s.ses.scene), w, h, fps, s.spp,
           (unsigned long long)s.seed, TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS,
           s.post_name ? "\"" : "", s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
   if (!opt->quiet)
@@ -341,13 +300,13 @@ int tt__run_sequence(const tt__host_options *opt) {
   /* the jittered frame is rendered unless only the reference is asked for */
   int render_frame = !opt->reference_only || opt->aov_mask;
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
-    if (s.host->should_stop()) {
+    if (host->should_stop()) {
       rc = TT_EXIT_INTERRUPTED;
       break;
     }
     tt_camera cam, prev;
-    tt_scene_camera_at(s.scene, f / fps, &cam);
-    tt_scene_camera_at(s.scene, (f - 1.0) / fps, &prev);
+    tt_scene_camera_at(s.ses.scene, f / fps, &cam);
+    tt_scene_camera_at(s.ses.scene, (f - 1.0) / fps, &prev);
     cam.width = prev.width = w;
     cam.height = prev.height = h;
     uint32_t ji = f % TT__SEQ_JITTER_CYCLE;
@@ -359,13 +318,13 @@ int tt__run_sequence(const tt__host_options *opt) {
     double render_ms = 0, ref_ms = 0, post_ms = 0;
     const float *depth = NULL;
     if (render_frame) {
-      uint64_t t0 = s.host->clock_ns();
+      uint64_t t0 = host->clock_ns();
       if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {
         fprintf(stderr, "host: frame %u: %s\n", f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
-      render_ms = (s.host->clock_ns() - t0) * 1e-6;
+      render_ms = (host->clock_ns() - t0) * 1e-6;
       depth = tt_film_aov_const(film, TT_AOV_DEPTH);
       memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
       struct {
@@ -396,14 +355,14 @@ int tt__run_sequence(const tt__host_options *opt) {
       tt_camera hi = cam;
       hi.width = w * k;
       hi.height = h * k;
-      uint64_t r0 = s.host->clock_ns();
+      uint64_t r0 = host->clock_ns();
       if (tt__seq_render(&s, ref_film, &hi, NULL, NULL, s.seed + 1000003u * (f + 1), ref_hi) != TT_OK) {
         fprintf(stderr, "host: reference frame %u: %s\n", f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
       tt__downsample_bh(ref_hi, k, w, h, TT__SEQ_BH_RADIUS, ref);
-      ref_ms = (s.host->clock_ns() - r0) * 1e-6;
+      ref_ms = (host->clock_ns() - r0) * 1e-6;
       tt__seq_name(&s, TT__SEQ_REFERENCE, f, name, sizeof name);
       snprintf(path, sizeof path, "%s/%s", s.dir, name);
       if (tt__seq_write(path, w, h, 3, ref, NULL)) {
@@ -426,13 +385,13 @@ int tt__run_sequence(const tt__host_options *opt) {
       pf.jitter[0] = jit[0];
       pf.jitter[1] = jit[1];
       pf.reset_history = f == opt->seq_first;
-      uint64_t p0 = s.host->clock_ns();
+      uint64_t p0 = host->clock_ns();
       if (s.pi->process(s.post, &pf, post_rgb) != TT_OK) {
         fprintf(stderr, "host: post-filter %s: frame %u: %s\n", s.post_name, f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
-      post_ms = (s.host->clock_ns() - p0) * 1e-6;
+      post_ms = (host->clock_ns() - p0) * 1e-6;
       tt__seq_name(&s, TT__SEQ_POST, f, name, sizeof name);
       snprintf(path, sizeof path, "%s/%s", s.dir, name);
       if (tt__seq_write(path, w, h, 3, post_rgb, NULL)) {
@@ -455,17 +414,12 @@ int tt__run_sequence(const tt__host_options *opt) {
 done:
   if (manifest) fclose(manifest);
   if (s.post) s.pi->destroy(s.post);
-  if (s.integrator) s.ii->destroy(s.integrator);
-  if (s.accel) s.ai->destroy(s.accel);
-  tt_film_destroy(film);
   tt_film_destroy(ref_film);
   free(rgb);
   free(ref_hi);
   free(ref);
   free(post_rgb);
   free(motion);
-  for (size_t i = 0; i < TT_HOST_MAX_LIST; i++) tt_config_destroy(s.configs[i]);
-  tt_registry_destroy(s.reg);
-  tt_scene_destroy(s.scene);
+  tt__session_close(&s.ses);
   return rc;
 }

@@ -4,7 +4,7 @@
 #ifndef TT_HOST_SEQUENCE_H
 #define TT_HOST_SEQUENCE_H
 
-#include "host.h"
+#include "session.h"
 
 /* Length of the sub-pixel jitter cycle (thesis 5.5.1). */
 #define TT__SEQ_JITTER_CYCLE 8u

@@ -4,6 +4,7 @@
 #include <cjson/cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Adds the configuration of one plugin as a JSON object, or null. */
 static void tt__add_config(cJSON *parent, const char *name, const tt_config *config) {
@@ -26,35 +27,45 @@ static void tt__add_json(cJSON *parent, const char *name, const char *json) {
 /* The "tuning" object: what the tuning or exploration phase measured and chose. */
 static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
   static const char *status_names[] = {"ok", "infeasible", "failed"};
+  const tt_tuning *session = t->session;
+  tt_tuning_stats st = {.struct_size = sizeof st};
+  tt_tuning_get_stats(session, &st);
+  const tt_objective *objective = tt_tuning_objective(session);
+  double default_cost = TT_COST_INFEASIBLE, best_cost = TT_COST_INFEASIBLE;
+  tt_tuning_default_cost(session, &default_cost);
+  tt_tuning_best(session, NULL, &best_cost);
+  const char *default_json = tt_tuning_default_json(session);
+  const char *best_json = tt_tuning_best_json(session);
   cJSON *o = cJSON_AddObjectToObject(root, "tuning");
   cJSON_AddStringToObject(o, "mode", t->mode);
   cJSON_AddStringToObject(o, "plugin", t->plugin ? t->plugin : "");
   cJSON_AddStringToObject(o, "plugin_version", t->plugin_version ? t->plugin_version : "");
   if (t->tuner) cJSON_AddStringToObject(o, "tuner", t->tuner);
   else cJSON_AddNullToObject(o, "tuner");
-  cJSON_AddStringToObject(o, "objective", t->objective.spec);
+  cJSON_AddStringToObject(o, "objective", objective ? objective->spec : "");
   cJSON_AddNumberToObject(o, "requested", t->requested);
-  cJSON_AddNumberToObject(o, "iterations", t->count ? (double)(t->count - 1) : 0.0);
-  cJSON_AddNumberToObject(o, "measured", t->measured);
-  cJSON_AddNumberToObject(o, "cached", t->cached);
-  cJSON_AddNumberToObject(o, "infeasible", t->infeasible);
-  cJSON_AddNumberToObject(o, "failed", t->failed);
-  cJSON_AddBoolToObject(o, "converged", t->converged);
+  cJSON_AddNumberToObject(o, "iterations", st.iterations);
+  cJSON_AddNumberToObject(o, "measured", st.measured);
+  cJSON_AddNumberToObject(o, "cached", st.cached);
+  cJSON_AddNumberToObject(o, "infeasible", st.infeasible);
+  cJSON_AddNumberToObject(o, "failed", st.failed);
+  cJSON_AddBoolToObject(o, "converged", st.converged);
   cJSON_AddBoolToObject(o, "interrupted", t->interrupted);
-  cJSON_AddNumberToObject(o, "default_cost", t->default_cost);
-  tt__add_json(o, "default_config", t->default_config);
-  cJSON_AddNumberToObject(o, "best_cost", t->best_cost);
-  tt__add_json(o, "best_config", t->best_config);
-  cJSON_AddStringToObject(o, "best_from", t->best_from ? t->best_from : "default");
+  cJSON_AddNumberToObject(o, "default_cost", default_cost);
+  tt__add_json(o, "default_config", default_json);
+  cJSON_AddNumberToObject(o, "best_cost", best_cost);
+  tt__add_json(o, "best_config", best_json);
+  cJSON_AddStringToObject(o, "best_from", !best_json || !default_json ||
+                          !strcmp(best_json, default_json) ? "default" : t->mode);
   cJSON_AddNumberToObject(o, "tuning_ms", t->ms);
-  if (t->db_path) cJSON_AddStringToObject(o, "db", t->db_path);
+  if (t->db_path[0]) cJSON_AddStringToObject(o, "db", t->db_path);
   else cJSON_AddNullToObject(o, "db");
   if (t->verify_json) tt__add_json(o, "verify", t->verify_json);
   /* costs[i] and history[i] are iteration i; the default is separate (default_cost) */
   cJSON *costs = cJSON_AddArrayToObject(o, "costs");
   cJSON *hist = cJSON_AddArrayToObject(o, "history");
-  for (size_t i = 0; i < t->count; i++) {
-    const tt__tune_sample *s = &t->samples[i];
+  for (size_t i = 0; i < tt_tuning_sample_count(session); i++) {
+    const tt_tuning_sample *s = tt_tuning_sample_at(session, i);
     if (s->iteration < 0) continue;
     cJSON_AddItemToArray(costs, cJSON_CreateNumber(s->cost));
     cJSON *h = cJSON_CreateObject();

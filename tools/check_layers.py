@@ -8,8 +8,9 @@ Two views of the same rule, both from the tree as built:
     object defines (`nm`), i.e. what the linker resolves, public API calls included;
   - includes: every "folder/header.h" a source or header of core/src/<folder> includes.
 A folder may use only folders of a lower layer (LAYERS below); two folders of one layer may
-not use each other, so there can be no cycle. Prints the folder graph; exit status 1 naming
-each edge that breaks the rule, 0 otherwise."""
+not use each other, so there can be no cycle. The host program's files must form no cycle
+either (no function calls back into its caller's file): checked on host/*.o the same way.
+Prints both graphs; exit status 1 naming each edge that breaks the rule, 0 otherwise."""
 import collections
 import glob
 import os
@@ -98,6 +99,57 @@ def include_edges():
     return edges
 
 
+def host_edges(build):
+    """(caller file, callee file) -> symbols, over the objects of the host executable."""
+    objdir = os.path.join(build, "host", "host.p")
+    objs = sorted(glob.glob(os.path.join(objdir, "*.o")))
+    if not objs:
+        sys.exit(f"check_layers: {objdir}: no objects (build the host first)")
+    defined, used = {}, {}
+    for obj in objs:
+        name = os.path.basename(obj)[:-2]
+        for p in nm(["-g", "--defined-only"], obj):
+            if len(p) == 3:
+                defined[p[2]] = name
+        used[name] = {p[1] for p in nm(["-u"], obj) if len(p) == 2}
+    edges = collections.defaultdict(set)
+    for name, syms in used.items():
+        for sym in syms:
+            d = defined.get(sym)
+            if d and d != name:
+                edges[(name, d)].add(sym)
+    return edges
+
+
+def find_cycle(edges):
+    """One cycle of the directed graph as a list of nodes, or None."""
+    succ = collections.defaultdict(list)
+    for a, b in edges:
+        succ[a].append(b)
+    state, stack = {}, []
+
+    def visit(n):
+        state[n] = 1
+        stack.append(n)
+        for m in sorted(succ[n]):
+            if state.get(m) == 1:
+                return stack[stack.index(m):] + [m]
+            if not state.get(m):
+                c = visit(m)
+                if c:
+                    return c
+        stack.pop()
+        state[n] = 2
+        return None
+
+    for n in sorted(succ):
+        if not state.get(n):
+            c = visit(n)
+            if c:
+                return c
+    return None
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
@@ -118,7 +170,17 @@ def main():
                 for w in sorted(why)[:8]:
                     print(f"      {w}")
     print("layers: " + " < ".join("{" + ", ".join(layer) + "}" for layer in LAYERS))
-    print(f"check_layers: {'ok, no folder uses a folder of its own or a higher layer' if not bad else f'{bad} edges break the layering'}")
+    hedges = host_edges(sys.argv[1])
+    print("host files (caller -> callee):")
+    for (a, b), syms in sorted(hedges.items()):
+        print(f"  {a:12} -> {b:12} {', '.join(sorted(syms))}")
+    cycle = find_cycle(hedges)
+    if cycle:
+        bad += 1
+        print("host: NOT ALLOWED, a cycle: " + " -> ".join(cycle))
+    print("check_layers: " + ("ok, no folder uses a folder of its own or a higher layer, and "
+                              "the host's files form no cycle" if not bad else
+                              f"{bad} edges or cycles break the layering"))
     return 1 if bad else 0
 
 

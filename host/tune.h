@@ -1,0 +1,14 @@
+/* host: the tuning phase (tune.c): maps the command line's tuning options onto a library
+ * tuning session (tunetrace/tuning.h) over the host session, and logs what it found. */
+#ifndef TT_HOST_TUNE_H
+#define TT_HOST_TUNE_H
+
+#include "session.h"
+
+/* Runs the tuning (or exploration) phase when the options ask for one; its passes render
+ * into the session's film, and it leaves the best configuration applied to the target.
+ * Returns TT_EXIT_OK, TT_EXIT_USAGE (bad target or objective) or TT_EXIT_FAILURE; `*out` is
+ * NULL when no tuning was requested (free it with tt__tuning_free). */
+int tt__tune_phase(tt__session *s, tt__tuning **out);
+
+#endif
