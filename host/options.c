@@ -321,6 +321,10 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       }
     } else if (!strcmp(a, "--stats")) {
       if (!(opt->stats = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (!*opt->stats) {
+        fprintf(stderr, "host: --stats: expected a file name, got an empty string\n");
+        return TT_EXIT_USAGE;
+      }
     } else if (!strcmp(a, "--spp")) {
       if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 1u << 24, &n))
         return TT_EXIT_USAGE;

@@ -14,9 +14,15 @@
 /* ---- signals: the first SIGINT/SIGTERM asks for a clean stop, the second exits ---- */
 
 static volatile sig_atomic_t tt__signals;
+/* Set while the final outputs are written: a second signal then waits for the writes (which
+ * are atomic anyway) and the host exits 130 right after them. */
+static volatile sig_atomic_t tt__writing_outputs;
 
 static void tt__on_signal(int sig) {
-  if (tt__signals++) _exit(128 + sig);
+  if (tt__signals++) {
+    if (tt__writing_outputs) return;
+    _exit(128 + sig);
+  }
   tt_default_host_request_stop();
   static const char msg[] = "\nhost: interrupted: finishing the current pass (again to abort)\n";
   ssize_t ignored = write(2, msg, sizeof msg - 1);
@@ -203,6 +209,18 @@ int tt__run_render(const tt__host_options *opt) {
     return TT_EXIT_OK;
   }
   tt__install_signals();
+
+  /* outputs are checked before the render, not found unwritable after it */
+  char exr[4096], png[4096];
+  if (opt->out) snprintf(exr, sizeof exr, "%s", opt->out);
+  else tt__default_out(opt->scene, exr, sizeof exr);
+  snprintf(png, sizeof png, "%.*s.png", (int)(strlen(exr) - 4), exr);
+  const char *outputs[3] = {exr, png, opt->stats};
+  for (int i = 0; i < 3; i++)
+    if (outputs[i] && tt_file_check_writable(outputs[i]) != TT_OK) {
+      fprintf(stderr, "host: %s%s\n", i == 2 ? "--stats: " : "", tt_last_error());
+      return TT_EXIT_OUTPUT;
+    }
   tt__session s;
   tt__tuning *tuning = NULL;
   int rc = tt__session_open(&s, opt);
@@ -267,11 +285,9 @@ int tt__run_render(const tt__host_options *opt) {
     fprintf(stderr, "host: warning: %llu non-finite samples were dropped\n",
             (unsigned long long)rec->nonfinite);
 
-  /* write what was rendered, even when interrupted or a later pass failed */
-  char exr[4096], png[4096];
-  if (opt->out) snprintf(exr, sizeof exr, "%s", opt->out);
-  else tt__default_out(opt->scene, exr, sizeof exr);
-  snprintf(png, sizeof png, "%.*s.png", (int)(strlen(exr) - 4), exr);
+  /* write what was rendered, even when interrupted or a later pass failed; a second
+   * signal during the writes waits for them (tt__on_signal) */
+  tt__writing_outputs = 1;
   rec->out_exr = exr;
   rec->out_png = png;
   if (rec->spp > 0) {
@@ -288,6 +304,8 @@ int tt__run_render(const tt__host_options *opt) {
     fprintf(stderr, "host: cannot write %s: %s\n", opt->stats, tt_last_error());
     if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
   }
+  tt__writing_outputs = 0;
+  if (tt__signals > 1) _exit(TT_EXIT_INTERRUPTED);  /* the deferred second signal */
   if (rec->interrupted && rc == TT_EXIT_OK) rc = TT_EXIT_INTERRUPTED;
 
 done:

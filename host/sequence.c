@@ -182,6 +182,25 @@ static int tt__seq_write(const char *path, uint32_t w, uint32_t h, uint32_t ch,
   return 0;
 }
 
+/* The manifest so far (the memstream `m`) closed with "]}" and written atomically, after
+ * every frame: a kill keeps a valid manifest listing every frame already written. */
+static int tt__seq_manifest_commit(const char *path, FILE *m, char **buf, size_t *len) {
+  static const char tail[] = "  ]\n}\n";
+  tt_atomic_file *f = NULL;
+  if (fflush(m) != 0 || tt_atomic_file_open(path, &f) != TT_OK) {
+    fprintf(stderr, "host: cannot write %s: %s\n", path, f ? "out of memory" : tt_last_error());
+    return -1;
+  }
+  FILE *out = tt_atomic_file_stream(f);
+  fwrite(*buf, 1, *len, out);
+  fputs(tail, out);
+  if (tt_atomic_file_commit(f) != TT_OK) {
+    fprintf(stderr, "host: cannot write %s: %s\n", path, tt_last_error());
+    return -1;
+  }
+  return 0;
+}
+
 int tt__run_sequence(const tt__host_options *opt) {
   if (!opt->out_dir && !opt->seq_pattern) {
     fprintf(stderr, "host: --sequence needs --out-dir DIR (or --out DIR/frame_%%04d.exr)\n");
@@ -209,7 +228,9 @@ int tt__run_sequence(const tt__host_options *opt) {
   int rc = TT_EXIT_OK;
   float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
   tt_film *film = NULL, *ref_film = NULL;
-  FILE *manifest = NULL;
+  FILE *manifest = NULL;  /* memstream over mbuf: the manifest text so far */
+  char *mbuf = NULL, mpath[4096 + 32];
+  size_t mlen = 0;
   rc = tt__session_open(&s.ses, opt);
   if (rc != TT_EXIT_OK) goto done;
   const tt_host *host = s.ses.host;
@@ -274,10 +295,15 @@ int tt__run_sequence(const tt__host_options *opt) {
     goto done;
   }
   char path[4096 + 1100], name[1024];
-  snprintf(path, sizeof path, "%s/manifest.json", s.dir);
-  manifest = fopen(path, "w");
+  snprintf(mpath, sizeof mpath, "%s/manifest.json", s.dir);
+  if (tt_file_check_writable(mpath) != TT_OK) {
+    fprintf(stderr, "host: %s\n", tt_last_error());
+    rc = TT_EXIT_OUTPUT;
+    goto done;
+  }
+  manifest = open_memstream(&mbuf, &mlen);
   if (!manifest) {
-    fprintf(stderr, "host: cannot write %s: %s\n", path, strerror(errno));
+    fprintf(stderr, "host: cannot write %s: %s\n", mpath, strerror(errno));
     rc = TT_EXIT_OUTPUT;
     goto done;
   }
@@ -299,6 +325,7 @@ int tt__run_sequence(const tt__host_options *opt) {
   uint32_t nframes = opt->seq_last - opt->seq_first + 1;
   /* the jittered frame is rendered unless only the reference is asked for */
   int render_frame = !opt->reference_only || opt->aov_mask;
+  int entry_open = 0;  /* a frame's manifest entry is started but not closed */
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
     if (host->should_stop()) {
       rc = TT_EXIT_INTERRUPTED;
@@ -312,6 +339,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     uint32_t ji = f % TT__SEQ_JITTER_CYCLE;
     float jit[2];
     tt_jitter_halton23(ji, jit);
+    entry_open = 1;
     fprintf(manifest, "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
             "\"jitter\": [%.6f, %.6f], \"reset\": %s", f == opt->seq_first ? "" : ",", f,
             f / fps, ji, jit[0], jit[1], f == opt->seq_first ? "true" : "false");
@@ -401,18 +429,22 @@ int tt__run_sequence(const tt__host_options *opt) {
       fprintf(manifest, ", \"post\": \"%s\", \"post_ms\": %.3f", name, post_ms);
     }
     fprintf(manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", render_ms, ref_ms);
+    entry_open = 0;
+    if (tt__seq_manifest_commit(mpath, manifest, &mbuf, &mlen)) rc = TT_EXIT_OUTPUT;
     tt__progress_update("sequence", (double)(f - opt->seq_first + 1) / nframes);
   }
   /* a frame that failed half-way still closes its manifest entry */
-  if (rc != TT_EXIT_OK && rc != TT_EXIT_INTERRUPTED) fprintf(manifest, ", \"incomplete\": true}\n");
+  if (entry_open) fprintf(manifest, ", \"incomplete\": true}\n");
   tt__progress_finish();
-  fprintf(manifest, "  ]\n}\n");
-  if (fclose(manifest) != 0 && rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
+  if (tt__seq_manifest_commit(mpath, manifest, &mbuf, &mlen) && rc == TT_EXIT_OK)
+    rc = TT_EXIT_OUTPUT;
+  fclose(manifest);
   manifest = NULL;
   if (!opt->quiet && rc == TT_EXIT_OK)
     fprintf(stderr, "host: wrote %u frames to %s\n", nframes, s.dir);
 done:
   if (manifest) fclose(manifest);
+  free(mbuf);
   if (s.post) s.pi->destroy(s.post);
   tt_film_destroy(ref_film);
   free(rgb);

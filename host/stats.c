@@ -60,6 +60,7 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
   cJSON_AddNumberToObject(o, "tuning_ms", t->ms);
   if (t->db_path[0]) cJSON_AddStringToObject(o, "db", t->db_path);
   else cJSON_AddNullToObject(o, "db");
+  cJSON_AddNumberToObject(o, "db_unrecorded", st.unrecorded);
   if (t->verify_json) tt__add_json(o, "verify", t->verify_json);
   /* costs[i] and history[i] are iteration i; the default is separate (default_cost) */
   cJSON *costs = cJSON_AddArrayToObject(o, "costs");
@@ -144,13 +145,10 @@ tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
   char *text = cJSON_Print(root);
   cJSON_Delete(root);
   if (!text) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
-  FILE *f = fopen(path, "w");
-  if (!f) {
-    free(text);
-    return tt_set_error(TT_ERR_IO, "%s: cannot open for writing", path);
-  }
-  int ok = fputs(text, f) >= 0 && fputc('\n', f) != EOF;
-  ok = (fclose(f) == 0) && ok;
+  /* atomic: a kill or a full disk leaves the previous record, never half of one */
+  size_t n = strlen(text);
+  text[n] = '\n';  /* cJSON_Print's buffer has room: replaces the terminator, written by size */
+  tt_status st = tt_file_write_atomic(path, text, n + 1);
   free(text);
-  return ok ? TT_OK : tt_set_error(TT_ERR_IO, "%s: write failed", path);
+  return st;
 }

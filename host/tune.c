@@ -644,6 +644,14 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
     rc = TT_EXIT_FAILURE;
   }
   tt__log_result(&c);
+  tt_tuning_stats ts = {.struct_size = sizeof ts};
+  tt_tuning_get_stats(t->session, &ts);
+  if (ts.unrecorded) {
+    /* the image is still rendered and written; the exit status says records were lost */
+    s->host->log(TT_LOG_ERROR, NULL, "tuning: %u of %u measurements could not be recorded in "
+                 "the database %s", ts.unrecorded, ts.measured, t->db_path);
+    if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
+  }
 
 done:
   tt_space_destroy(c.subset);

@@ -7,8 +7,9 @@
 
 /* Runs the tuning (or exploration) phase when the options ask for one; its passes render
  * into the session's film, and it leaves the best configuration applied to the target.
- * Returns TT_EXIT_OK, TT_EXIT_USAGE (bad target or objective) or TT_EXIT_FAILURE; `*out` is
- * NULL when no tuning was requested (free it with tt__tuning_free). */
+ * Returns TT_EXIT_OK, TT_EXIT_USAGE (bad target or objective), TT_EXIT_OUTPUT (measurements
+ * the database could not record) or TT_EXIT_FAILURE; `*out` is NULL when no tuning was
+ * requested (free it with tt__tuning_free). */
 int tt__tune_phase(tt__session *s, tt__tuning **out);
 
 #endif

@@ -129,6 +129,11 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
            "--set post_taa.mode=network --set post_taa.weights=%s/none.ttw '%s'", dir, dir, scene);
   CHECK(run_host(args, log, sizeof log) == 1);
   CHECK_CONTAINS(log, "none.ttw");
+  /* a directory as the weights file: refused by name (it asked for ~LONG_MAX bytes, #13) */
+  snprintf(args, sizeof args, "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
+           "--set post_taa.mode=network --set 'post_taa.weights=%s' '%s'", dir, dir, scene);
+  CHECK(run_host(args, log, sizeof log) == 1);
+  CHECK_CONTAINS(log, "cannot open weights file: a directory, not a regular file");
 
   /* usage errors name the option */
   snprintf(args, sizeof args, "--frames 3:1 --out '%s/x/f%%d.exr' '%s'", dir, scene);

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include <tunetrace/camera.h>
+#include <tunetrace/file.h>
 #include <tunetrace/integrator.h>
 #include <tunetrace/path.h>
 #include <tunetrace/plugin.h>
@@ -51,6 +52,7 @@ struct tt_integrator {
   tt__mlt_kernel kernel;
   /* chains (valid when ready) */
   int ready;
+  int black;                /* ready, but the bootstrap found no light: b = 0, no chains run */
   uint32_t nchains, dims, width, height;
   tt__mlt_chain *chains;
   unsigned char *chain_mem;
@@ -201,6 +203,7 @@ static void mlt_drop_chains(tt_integrator *it) {
   it->chains = NULL;
   it->chain_mem = NULL;
   it->ready = 0;
+  it->black = 0;
   it->mutations_total = 0;
 }
 
@@ -351,9 +354,14 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
     job->weights[i] = sum;
   }
   if (!(sum > 0.0)) {
-    st = tt_set_error(TT_ERR_NUMERIC, MLT_NAME ": all %llu bootstrap paths have zero contribution: "
-                      "nothing in view is lit (black scene?); PSSMLT needs light to start its chains",
-                      (unsigned long long)n);
+    /* b = 0: the estimate of every pixel is 0, a black image like PT's, not a failure */
+    it->b = 0.0;
+    it->black = 1;
+    it->ready = 1;
+    it->mutations_total = 0;
+    host->log(TT_LOG_WARN, MLT_NAME, "all %llu bootstrap paths have zero contribution: nothing "
+              "in view is lit, the image is black (raise bootstrap if the lights are tiny)",
+              (unsigned long long)n);
     goto done;
   }
   it->b = sum / (double)n;
@@ -473,11 +481,12 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
 
 /* Writes the Theta histogram (CSV with a comment header) for tools/pssmlt. */
 static void mlt_write_theta(const tt_integrator *it) {
-  FILE *f = fopen(it->theta_dump, "w");
-  if (!f) {
-    mlt_host()->log(TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump '%s'", it->theta_dump);
+  tt_atomic_file *af;
+  if (tt_atomic_file_open(it->theta_dump, &af) != TT_OK) {
+    mlt_host()->log(TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s", tt_last_error());
     return;
   }
+  FILE *f = tt_atomic_file_stream(af);
   fprintf(f, "# integrator_pssmlt Theta = 1/(alpha*pdf) histogram of proposed BSDF directions\n");
   fprintf(f, "# alpha=%.9g bins=%d binning=%d edges=", it->kernel.alpha, it->kernel.bins, it->kernel.binning);
   for (int i = 0; i <= it->kernel.bins; ++i) fprintf(f, "%s%.9g", i ? ";" : "", it->kernel.edges[i]);
@@ -486,7 +495,8 @@ static void mlt_write_theta(const tt_integrator *it) {
     fprintf(f, "%.6f,%.6f,%llu\n", (double)i / TT__MLT_THETA_BINS, (double)(i + 1) / TT__MLT_THETA_BINS,
             (unsigned long long)it->theta_hist[i]);
   fprintf(f, "1.000000,inf,%llu\n", (unsigned long long)it->theta_hist[TT__MLT_THETA_BINS]);
-  fclose(f);
+  if (tt_atomic_file_commit(af) != TT_OK)
+    mlt_host()->log(TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s", tt_last_error());
 }
 
 static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_pass_stats *stats) {
@@ -534,7 +544,7 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
   }
   uint64_t boot_rays = atomic_load(&job->rays);
 
-  if (st == TT_OK) {
+  if (st == TT_OK && !it->black) {
     uint64_t total = (uint64_t)ctx->spp * it->set.mpp * pixels;
     job->base = total / it->nchains;
     job->extra = total % it->nchains;

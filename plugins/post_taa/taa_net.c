@@ -10,6 +10,8 @@
  * plain scalar loops over the file's PyTorch layout on HWC planes with a zero border of 2
  * pixels (double accumulation, libm expf), used when `reference` is set, i.e. by the tests
  * to check the fast path. Every other frame goes to taa_net_fast.c (banded, SIMD). */
+#include <tunetrace/file.h>
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -202,24 +204,17 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
 
 tt_status tt__net_load(const char *path, tt__net_model *m) {
   memset(m, 0, sizeof *m);
-  FILE *f = fopen(path, "rb");
-  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open the weights file", path);
-  if (fseek(f, 0, SEEK_END) != 0) {
-    fclose(f);
-    return tt_set_error(TT_ERR_IO, "%s: cannot read the weights file", path);
+  /* the shared reader refuses a directory, FIFO or device (a directory used to ask for
+   * ~LONG_MAX bytes) and caps the size far above any network this plugin runs */
+  char *buf;
+  size_t n;
+  if (tt_file_read(path, "weights file", (size_t)64 << 20, &buf, &n) != TT_OK) return TT_ERR_IO;
+  if (n == 0) {
+    tt_free(buf);
+    return tt_set_error(TT_ERR_PARSE, "%s: empty weights file", path);
   }
-  long n = ftell(f);
-  rewind(f);
-  unsigned char *buf = n > 0 ? malloc((size_t)n) : NULL;
-  if (n <= 0 || !buf || fread(buf, 1, (size_t)n, f) != (size_t)n) {
-    free(buf);
-    fclose(f);
-    return tt_set_error(n == 0 ? TT_ERR_PARSE : TT_ERR_IO, "%s: %s", path,
-                        n == 0 ? "empty weights file" : "cannot read the weights file");
-  }
-  fclose(f);
-  tt_status st = tt__net_parse(buf, (size_t)n, path, m);
-  free(buf);
+  tt_status st = tt__net_parse((const unsigned char *)buf, n, path, m);
+  tt_free(buf);
   return st;
 }
 

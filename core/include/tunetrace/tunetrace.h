@@ -9,6 +9,7 @@
 #include <tunetrace/ray.h>
 #include <tunetrace/camera.h>
 #include <tunetrace/film.h>
+#include <tunetrace/file.h>
 #include <tunetrace/image.h>
 #include <tunetrace/sampler.h>
 #include <tunetrace/path.h>

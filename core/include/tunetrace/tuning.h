@@ -241,6 +241,8 @@ typedef struct tt_tuning_stats {
   int32_t converged;        /* the tuner reported convergence */
   int32_t interrupted;      /* the user asked to stop */
   double tuning_ms;         /* wall ms of tt_tuning_run */
+  uint32_t unrecorded;      /* measurements the database failed to record (a full disk):
+                             * one warning is logged, then they are only counted */
 } tt_tuning_stats;
 
 /* Fills `out` up to out->struct_size. */

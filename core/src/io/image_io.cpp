@@ -1,9 +1,11 @@
 // Image I/O behind a C interface: EXR/PNG through OpenImageIO 2.4, the display transform
 // through OpenColorIO 2.1. No C++ exception ever crosses into C: every entry point catches
 // and turns failures into tt_set_error messages that name the file.
+#include <tunetrace/file.h>
 #include <tunetrace/image.h>
 
 #include <OpenColorIO/OpenColorIO.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -143,25 +145,34 @@ tt_status tt__add_meta(OIIO::ImageSpec &spec, const char *path, const tt_image_m
   return TT_OK;
 }
 
-// Opens `path` for writing with `spec` and writes `data` of type `fmt`; errors name the path.
+// Writes `data` of type `fmt` with `spec` to `path` atomically: OIIO encodes into our own
+// stream over a temporary file (tunetrace/file.h), which commit checks for every write
+// error (OIIO's PNG writer ignores a full disk), fsyncs and renames over `path`. A kill or a
+// failure leaves the previous file. Errors name the path.
 tt_status tt__write(const char *path, const OIIO::ImageSpec &spec, OIIO::TypeDesc fmt,
                     const void *data) {
   std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
   if (!out)
     return tt_set_error(TT_ERR_IO, "%s: cannot create image writer: %s", path,
                         OIIO::geterror().c_str());
-  if (!out->open(path, spec))
-    return tt_set_error(TT_ERR_IO, "%s: cannot open for writing: %s", path,
-                        out->geterror().c_str());
-  if (!out->write_image(fmt, data)) {
-    std::string err = out->geterror();
-    out->close();
-    std::remove(path);  // do not leave a truncated image that looks valid
-    return tt_set_error(TT_ERR_IO, "%s: write failed: %s", path, err.c_str());
+  if (!out->supports("ioproxy"))
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: the %s writer cannot write atomically", path,
+                        out->format_name());
+  tt_atomic_file *file = nullptr;
+  if (tt_atomic_file_open(path, &file) != TT_OK) return TT_ERR_IO;
+  OIIO::Filesystem::IOFile io(tt_atomic_file_stream(file), OIIO::Filesystem::IOProxy::Write);
+  out->set_ioproxy(&io);
+  std::string err;
+  if (!out->open(path, spec)) err = "cannot open for writing: " + out->geterror();
+  else if (!out->write_image(fmt, data)) err = "write failed: " + out->geterror();
+  // close() finishes the file (EXR offset tables, PNG end chunk) through the proxy
+  if (!out->close() && err.empty()) err = "close failed: " + out->geterror();
+  out.reset();
+  if (!err.empty()) {
+    tt_atomic_file_abort(file);
+    return tt_set_error(TT_ERR_IO, "%s: %s", path, err.c_str());
   }
-  if (!out->close())
-    return tt_set_error(TT_ERR_IO, "%s: close failed: %s", path, out->geterror().c_str());
-  return TT_OK;
+  return tt_atomic_file_commit(file);  // its message names the path and the OS reason
 }
 
 // Clamps to [0, 1], mapping NaN to 0 (a comparison with NaN is false).

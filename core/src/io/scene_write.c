@@ -5,6 +5,8 @@
  * absolute path. Used by `host --convert`. */
 #include "scene/scene_internal.h"
 
+#include <tunetrace/file.h>
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -103,9 +105,13 @@ static void tt__put_f32(unsigned char *b, float v) {
  * assimp 5.2 skips whitespace after end_header, so a first float whose low byte is e.g.
  * 0x0a would shift (and crash) the whole binary body; readers ignore the extra property. */
 static tt_status tt__write_ply(const tt_mesh *m, const char *file, const char *json_path) {
-  FILE *f = fopen(file, "wb");
-  if (!f)
-    return tt_set_error(TT_ERR_IO, "%s: cannot write mesh file \"%s\": %s", json_path, file, strerror(errno));
+  tt_atomic_file *af;
+  if (tt_atomic_file_open(file, &af) != TT_OK) {
+    char why[1024];
+    snprintf(why, sizeof why, "%s", tt_last_error());
+    return tt_set_error(TT_ERR_IO, "%s: cannot write mesh file \"%s\": %s", json_path, file, why);
+  }
+  FILE *f = tt_atomic_file_stream(af);
   fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by tunetrace\n");
   fprintf(f, "element vertex %u\nproperty uchar guard\nproperty float x\nproperty float y\nproperty float z\n",
           m->vertex_count);
@@ -128,9 +134,11 @@ static tt_status tt__write_ply(const tt_mesh *m, const char *file, const char *j
     for (int c = 0; c < 3; c++) tt__put_u32(buf + 1 + 4 * c, m->indices[3 * (size_t)t + c]);
     fwrite(buf, 1, 13, f);
   }
-  int bad = ferror(f);
-  if (fclose(f) != 0 || bad)
-    return tt_set_error(TT_ERR_IO, "%s: error writing mesh file \"%s\"", json_path, file);
+  if (tt_atomic_file_commit(af) != TT_OK) {
+    char why[1024];
+    snprintf(why, sizeof why, "%s", tt_last_error());
+    return tt_set_error(TT_ERR_IO, "%s: error writing mesh file \"%s\": %s", json_path, file, why);
+  }
   return TT_OK;
 }
 
@@ -386,8 +394,8 @@ static tt_status tt__wlights(const tt__wctx *w, const tt_scene *s) {
 
 /* ---- entry point ----------------------------------------------------------------------- */
 
-/* Writes <path> and <dir of path>/meshes/<i>_<name>.ply; the JSON goes to a temporary
- * file renamed into place so a failed write never leaves a truncated scene. */
+/* Writes <path> and <dir of path>/meshes/<i>_<name>.ply, each atomically (tunetrace/file.h)
+ * so a failed or killed write never leaves a truncated scene. */
 tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
   if (!scene || !path || !path[0])
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_write_json: %s is NULL or empty",
@@ -395,12 +403,11 @@ tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
   const char *slash = strrchr(path, '/');
   size_t dl = slash ? (size_t)(slash - path) : 1;
   char *dir = malloc(dl + 2);
-  size_t tl = strlen(path) + 8;
-  char *tmp = malloc(tl);
   char **keys = tt__material_keys(scene);
   tt_status st = TT_OK;
   FILE *f = NULL;
-  if (!dir || !tmp || !keys) {
+  tt_atomic_file *af = NULL;
+  if (!dir || !keys) {
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     goto done;
   }
@@ -408,12 +415,11 @@ tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
   else dir[0] = '.';
   if (slash && dl == 0) dir[dl++] = '/'; /* "/scene.json" */
   dir[dl] = '\0';
-  snprintf(tmp, tl, "%s.tmp", path);
-  f = fopen(tmp, "w");
-  if (!f) {
-    st = tt_set_error(TT_ERR_IO, "%s: cannot write scene file: %s", path, strerror(errno));
+  if (tt_atomic_file_open(path, &af) != TT_OK) {
+    st = TT_ERR_IO;
     goto done;
   }
+  f = tt_atomic_file_stream(af);
   tt__wctx w = {f, path};
   fputs("{\n  \"version\": 1,\n  \"_comment\": ", f);
   char note[1200];
@@ -427,24 +433,13 @@ tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
   if ((st = tt__wmeshes(&w, scene, keys, dir)) != TT_OK) goto done;
   if ((st = tt__wlights(&w, scene)) != TT_OK) goto done;
   fputs("}\n", f);
-  int bad = ferror(f);
-  int closed = fclose(f);
-  f = NULL;
-  if (bad || closed != 0) {
-    st = tt_set_error(TT_ERR_IO, "%s: error writing scene file", path);
-    goto done;
-  }
-  if (rename(tmp, path) != 0) {
-    st = tt_set_error(TT_ERR_IO, "%s: cannot move \"%s\" into place: %s", path, tmp, strerror(errno));
-    goto done;
-  }
+  st = tt_atomic_file_commit(af);  /* names the path and the OS reason on failure */
+  af = NULL;
 done:
-  if (f) fclose(f);
-  if (st != TT_OK && tmp) remove(tmp);
+  tt_atomic_file_abort(af);
   if (keys)
     for (uint32_t i = 0; i < scene->material_count; i++) free(keys[i]);
   free(keys);
-  free(tmp);
   free(dir);
   return st;
 }

@@ -1,6 +1,8 @@
 /* tunetrace: the tuning database on SQLite (see tunedb.h for the model). */
 #include <tunetrace/tunedb.h>
 
+#include <tunetrace/file.h>
+
 #include <errno.h>
 #include <math.h>
 #include <sqlite3.h>
@@ -479,8 +481,9 @@ static int tt__csv_row(void *user, const tt_tunedb_row *r) {
 
 tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
   if (!db || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_export_csv: db, path");
-  FILE *f = fopen(path, "w");
-  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open for writing: %s", path, strerror(errno));
+  tt_atomic_file *af;
+  if (tt_atomic_file_open(path, &af) != TT_OK) return TT_ERR_IO;
+  FILE *f = tt_atomic_file_stream(af);
   fputs("id,scene_id,scene,camera,context,plugin,plugin_version,config,objective,build_ms,"
         "render_ms,cost,status,mode,iteration,run_id,tuner,metrics,machine,cpu,timestamp", f);
   for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++)
@@ -488,8 +491,11 @@ tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
   fputc('\n', f);
   tt__csv_ctx ctx = {f};
   tt_status st = tt_tunedb_foreach(db, NULL, tt__csv_row, &ctx);
-  int ok = !ferror(f);
-  ok = (fclose(f) == 0) && ok;
-  if (st != TT_OK) return st;
-  return ok ? TT_OK : tt_set_error(TT_ERR_IO, "%s: write failed", path);
+  if (st != TT_OK) {
+    char why[1024];
+    snprintf(why, sizeof why, "%s", tt_last_error());
+    tt_atomic_file_abort(af);
+    return tt_set_error(st, "%s", why);
+  }
+  return tt_atomic_file_commit(af);  /* the previous export stays if this one fails */
 }

@@ -48,6 +48,7 @@ struct tt_tuning {
   tt_tuning_sample *samples;    /* configs are owned (malloc) */
   size_t count, cap;
   uint32_t measured, cached, infeasible, failed;
+  uint32_t unrecorded;          /* database writes that failed */
   int converged, interrupted;
   int32_t next_iteration;       /* -1: the default comes next */
   int pending;                  /* next() returned `work`; report() is expected */
@@ -296,8 +297,10 @@ static void tt__record_db(tt_tuning *t, const tt_tuning_sample *s, const tt_pass
   row.mode = s->iteration < 0 ? "default" : tt_tuning_mode(t);
   row.iteration = s->iteration;
   row.metrics = metrics;
-  if (tt_tunedb_record(t->db, &row) != TT_OK)
-    t->host->log(TT_LOG_WARN, NULL, "tuning: %s", tt_last_error());
+  /* one warning with the reason (a full disk fails every later write too), then a count */
+  if (tt_tunedb_record(t->db, &row) != TT_OK && t->unrecorded++ == 0)
+    t->host->log(TT_LOG_WARN, NULL, "tuning: %s; later failures are counted, not repeated",
+                 tt_last_error());
   free(metrics);
 }
 
@@ -606,6 +609,7 @@ void tt_tuning_get_stats(const tt_tuning *t, tt_tuning_stats *out) {
   s.converged = t->converged;
   s.interrupted = t->interrupted;
   s.tuning_ms = t->ms;
+  s.unrecorded = t->unrecorded;
   size_t n = out->struct_size < sizeof s ? out->struct_size : sizeof s;
   memcpy(out, &s, n);
   out->struct_size = (uint32_t)n;

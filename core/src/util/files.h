@@ -1,15 +1,20 @@
-/* Files: whole-file reads and file-name suffix tests (files.c). Internal to libtunetrace. */
+/* Files: internal helpers beside the public tunetrace/file.h (files.c, atomic_file.c).
+ * Internal to libtunetrace. */
 #ifndef TT_UTIL_FILES_H
 #define TT_UTIL_FILES_H
 
 #include <tunetrace/common.h>
 
 #include <stddef.h>
+#include <sys/types.h>
 
 /* Case-insensitive file-name suffix test (".pbrt", ".json"). */
 int tt__has_ext(const char *path, const char *ext);
 
-/* Reads a whole file into a NUL-terminated malloc'ed buffer; errors name the file. */
+/* tt_file_read of a scene file (what = "scene file", default limit); errors name the file. */
 tt_status tt__read_file(const char *path, char **out, size_t *len);
+
+/* "a directory", "a FIFO", ... for a st_mode that is not a regular file. */
+const char *tt__file_kind(mode_t mode);
 
 #endif /* TT_UTIL_FILES_H */
