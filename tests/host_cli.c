@@ -110,6 +110,28 @@ int main(void) {
   CHECK_CONTAINS(out, cut);
   CHECK_CONTAINS(out, "integrator_pt");  /* the good ones are still listed */
   unlink(cut);
+
+  /* a camera beyond Embree's range: exit 4 naming the field, with both backends (the native
+   * one aborted on Embree's ray.valid() assertion, exit 134) */
+  char far[4200];
+  snprintf(far, sizeof far, "%s/far.json", tmp);
+  FILE *fj = fopen(far, "w");
+  CHECK(fj != NULL);
+  if (fj) {
+    fputs("{\"version\": 1, \"camera\": {\"position\": [0, 0, 1e19], \"target\": [0, 0, 0], "
+          "\"resolution\": [8, 8]}, \"materials\": {\"w\": {\"albedo\": [0.5, 0.5, 0.5]}}, "
+          "\"lights\": [{\"type\": \"point\", \"position\": [0, 5, 5], \"intensity\": [9, 9, 9]}], "
+          "\"meshes\": [{\"material\": \"w\", \"positions\": [-1,-1,0, 1,-1,0, 1,1,0]}]}", fj);
+    fclose(fj);
+  }
+  const char *backends[2] = {"native", "custom"};
+  for (int b = 0; b < 2; b++) {
+    snprintf(args, sizeof args, "--set accel_embree.backend=%s --spp 1 --out %s/far.exr '%s'",
+             backends[b], tmp, far);
+    CHECK(run_host(args, out, sizeof out) == 4);
+    CHECK_CONTAINS(out, "far.json: camera position (0, 0, 1e+19) is beyond the coordinate limit");
+  }
+  unlink(far);
   rmdir(tmp);
 
   return tt_test_finish("host_cli");

@@ -118,6 +118,19 @@ static const error_case g_cases[] = {
     /* 27. positions not a multiple of 3 */
     {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,0, 1,0]}]"), TT_ERR_PARSE,
      "bad.json: meshes[0].positions: expected a multiple of 3 numbers (flat positions), got 5", NULL},
+    /* 28. (#13) coordinates no renderer can trace: the camera at z = 1e19 aborted in Embree
+     * (ray.valid() assertion), geometry at 1e30 or 1e38 vanished silently */
+    {SCENE("{\"position\": [0, 0, 1e19], \"target\": [0, 0, 0]}", MAT_OK, MESH_OK), TT_ERR_PARSE,
+     "bad.json: camera position (0, 0, 1e+19) is beyond the coordinate limit of +-1e18", NULL},
+    {SCENE("{\"position\": [0, 0, 5], \"target\": [-3e18, 0, 0]}", MAT_OK, MESH_OK), TT_ERR_PARSE,
+     "bad.json: camera target", "beyond the coordinate limit"},
+    {SCENE(CAM_OK, MAT_OK, "[{\"name\": \"far\", \"material\": \"white\", \"positions\": [0,0,0, 1e30,0,0, 0,1,0]}]"),
+     TT_ERR_PARSE, "bad.json: mesh 0 \"far\": vertex 1 at (1e+30, 0, 0) is beyond the coordinate limit", NULL},
+    {SCENE(CAM_OK, MAT_OK, "[{\"material\": \"white\", \"positions\": [0,0,-1e38, 1,0,0, 0,1,0]}]"),
+     TT_ERR_PARSE, "vertex 0 at (0, 0, -1e+38) is beyond the coordinate limit", NULL},
+    {"{\"version\": 1, \"camera\": " CAM_OK ", \"materials\": " MAT_OK ", \"meshes\": " MESH_OK ","
+     " \"lights\": [{\"type\": \"point\", \"position\": [5e18, 0, 0], \"intensity\": [1, 1, 1]}]}",
+     TT_ERR_PARSE, "bad.json: light 0 at (5e+18, 0, 0) is beyond the coordinate limit", NULL},
 };
 
 /* Loads each case from memory and checks status, message, and that no scene leaks out. */

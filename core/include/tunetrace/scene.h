@@ -85,6 +85,11 @@ typedef struct tt_light {
 } tt_light;
 
 /* One camera pose; a camera path is a list of them (times in seconds, increasing). */
+/* Largest |coordinate| of a vertex, camera position, target or path key and point or spot
+ * light a scene may hold; loaders reject what lies beyond, naming it. Rays are traced up to
+ * about 1.8e18 (Embree's limit); 1e18 leaves room for offsets and light directions. */
+#define TT_SCENE_COORD_LIMIT 1e18
+
 typedef struct tt_camera_key {
   float time;
   float position[3];

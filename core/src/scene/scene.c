@@ -229,9 +229,59 @@ static void tt__scene_compute_id(tt_scene *s) {
   snprintf(s->id, sizeof s->id, "%016llx", (unsigned long long)h);
 }
 
+/* Index of the first of n 3-vectors with a coordinate beyond TT_SCENE_COORD_LIMIT (or not
+ * finite), or -1. */
+static long tt__far_vec(const float *v, size_t n) {
+  for (size_t i = 0; i < n; i++)
+    for (int a = 0; a < 3; a++)
+      if (!(fabsf(v[3 * i + a]) <= (float)TT_SCENE_COORD_LIMIT)) return (long)i;
+  return -1;
+}
+
+/* Positions no renderer can trace are rejected at load, naming what holds them: Embree
+ * asserts on a ray origin beyond ~1.8e18 (SIGABRT with the camera at z = 1e19) and drops
+ * triangles beyond it (geometry at 1e30 vanished silently). */
+static tt_status tt__scene_check_range(const tt_scene *s) {
+  const char *why = "beyond the coordinate limit of +-1e18 (rays are traced up to ~1.8e18: "
+                    "rescale the scene)";
+  const tt_camera *c = &s->camera;
+  const float *cam[3] = {c->position, c->target, c->up};
+  static const char *const cam_names[3] = {"position", "target", "up"};
+  for (int k = 0; k < 3; k++)
+    if (tt__far_vec(cam[k], 1) >= 0)
+      return tt_set_error(TT_ERR_PARSE, "%s: camera %s (%g, %g, %g) is %s", s->source,
+                          cam_names[k], cam[k][0], cam[k][1], cam[k][2], why);
+  for (uint32_t i = 0; i < c->key_count; i++) {
+    const tt_camera_key *key = &s->keys[i];
+    if (tt__far_vec(key->position, 1) >= 0 || tt__far_vec(key->target, 1) >= 0)
+      return tt_set_error(TT_ERR_PARSE, "%s: camera path key %u (time %g): position (%g, %g, %g) "
+                          "or target (%g, %g, %g) is %s", s->source, i, key->time,
+                          key->position[0], key->position[1], key->position[2], key->target[0],
+                          key->target[1], key->target[2], why);
+  }
+  for (uint32_t i = 0; i < s->light_count; i++) {
+    const tt_light *l = &s->lights[i];
+    if ((l->type == TT_LIGHT_POINT || l->type == TT_LIGHT_SPOT) && tt__far_vec(l->position, 1) >= 0)
+      return tt_set_error(TT_ERR_PARSE, "%s: light %u at (%g, %g, %g) is %s", s->source, i,
+                          l->position[0], l->position[1], l->position[2], why);
+  }
+  for (uint32_t i = 0; i < s->mesh_count; i++) {
+    const tt_mesh *m = &s->meshes[i];
+    long v = tt__far_vec(m->positions, m->vertex_count);
+    if (v >= 0) {
+      const float *p = m->positions + 3 * (size_t)v;
+      return tt_set_error(TT_ERR_PARSE, "%s: mesh %u \"%s\": vertex %ld at (%g, %g, %g) is %s",
+                          s->source, i, m->name ? m->name : "", v, p[0], p[1], p[2], why);
+    }
+  }
+  return TT_OK;
+}
+
 /* Emissive meshes become area lights here, after all meshes exist, so every loader gets
  * the same light list (explicit lights first, then area lights in mesh order). */
 tt_status tt__scene_finish(tt_scene *s) {
+  tt_status range = tt__scene_check_range(s);
+  if (range != TT_OK) return range;
   for (uint32_t i = 0; i < s->mesh_count; i++) {
     tt_mesh *m = &s->meshes[i];
     const tt_material *mat = &s->materials[m->material];
