@@ -133,8 +133,89 @@ static void test_errors(void) {
   write_file("broken.ply", ply, sizeof ply - 1);
   expect_error("ply.pbrt", "WorldBegin\n\nShape \"plymesh\" \"string filename\" \"broken.ply\"\n", TT_ERR_PARSE, "ply.pbrt:3:",
                "truncated");
-  expect_error("ply2.pbrt", "WorldBegin\nShape \"plymesh\" \"string filename\" \"none.ply\"\n", TT_ERR_IO, "ply2.pbrt:2:",
-               "cannot open PLY file");
+}
+
+/* Runs tt_scene_load with stderr captured into `err` (n bytes); returns its status. */
+static tt_status load_capturing(const char *path, tt_scene **s, char *err, size_t n) {
+  char cap[4400];
+  snprintf(cap, sizeof cap, "%s/stderr.txt", g_tmp);
+  fflush(stderr);
+  int saved = dup(2), fd = open(cap, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  dup2(fd, 2);
+  tt_status st = tt_scene_load(path, s);
+  fflush(stderr);
+  dup2(saved, 2);
+  close(saved);
+  close(fd);
+  FILE *f = fopen(cap, "rb");
+  size_t got = f ? fread(err, 1, n - 1, f) : 0;
+  err[got] = '\0';
+  if (f) fclose(f);
+  return st;
+}
+
+/* Regressions of issue #13: a PLY with two vertex elements (the second without normals)
+ * wrote past the first one's normals buffer; a missing PLY was fatal while a missing
+ * texture falls back; a FIFO or /dev/zero named by Include or plymesh hung or ran out of
+ * memory. An alarm turns a hang into a failure. */
+static void test_files(void) {
+  alarm(30);
+  char err[8192];
+  /* two vertex elements: 2 with normals, then 40 without (a 364-byte file like the
+   * fuzzer's); rejected by name */
+  char ply[2048];
+  int n = snprintf(ply, sizeof ply,
+                   "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                   "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                   "element vertex 40\nproperty float x\nproperty float y\nproperty float z\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                   "0 0 0 0 0 1\n1 0 0 0 0 1\n");
+  for (int v = 0; v < 40; v++) n += snprintf(ply + n, sizeof ply - n, "%d 1 0\n", v);
+  n += snprintf(ply + n, sizeof ply - n, "3 0 1 2\n");
+  write_file("twovert.ply", ply, (size_t)n);
+  expect_error("twovert.pbrt", "WorldBegin\nShape \"plymesh\" \"string filename\" \"twovert.ply\"\n",
+               TT_ERR_PARSE, "twovert.pbrt:2:", "second \"element vertex\"");
+  CHECK_CONTAINS(tt_last_error(), "twovert.ply");
+
+  /* a missing PLY warns and is skipped, like a missing texture; the scene loads */
+  static const char missing[] = "WorldBegin\nShape \"plymesh\" \"string filename\" \"none.ply\"\n"
+                                "Shape \"sphere\" \"float radius\" 1\n";
+  const char *path = write_file("ply2.pbrt", missing, sizeof missing - 1);
+  tt_scene *s = NULL;
+  tt_status st = load_capturing(path, &s, err, sizeof err);
+  CHECK_MSG(st == TT_OK && s && tt_scene_mesh_count(s) == 1, "status %d: %s", (int)st, tt_last_error());
+  CHECK_CONTAINS(err, "ply2.pbrt:2:");
+  CHECK_CONTAINS(err, "PLY file");
+  CHECK_CONTAINS(err, "none.ply\" not found (shape skipped)");
+  tt_scene_destroy(s);
+
+  /* /dev/zero and a FIFO: refused at once, naming the file */
+  char fifo[4400], *abs_tmp = realpath(g_tmp, NULL);
+  snprintf(fifo, sizeof fifo, "%s/fifo.ply", abs_tmp ? abs_tmp : g_tmp);
+  free(abs_tmp);
+  unlink(fifo);
+  CHECK(mkfifo(fifo, 0644) == 0);
+  const char *const bad[] = {"/dev/zero", fifo};
+  for (int i = 0; i < 2; i++) {
+    char text[8192];
+    snprintf(text, sizeof text, "WorldBegin\nShape \"plymesh\" \"string filename\" \"%s\"\n", bad[i]);
+    expect_error("special.pbrt", text, TT_ERR_IO, "special.pbrt:2:", bad[i]);
+    CHECK_CONTAINS(tt_last_error(), "not a regular file");
+    snprintf(text, sizeof text, "WorldBegin\nInclude \"%s\"\n", bad[i]);
+    expect_error("special.pbrt", text, TT_ERR_PARSE, "special.pbrt:2:", bad[i]);
+    CHECK_CONTAINS(tt_last_error(), "not a regular file");
+  }
+  unlink(fifo);
+  /* the scene file itself */
+  snprintf(fifo + strlen(fifo) - 4, 8, ".pbrt");
+  unlink(fifo);
+  CHECK(mkfifo(fifo, 0644) == 0);
+  st = tt_scene_load(fifo, &s);
+  CHECK(st != TT_OK && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), fifo);
+  CHECK_CONTAINS(tt_last_error(), "not a regular file");
+  unlink(fifo);
+  alarm(0);
 }
 
 static void test_fuzz(void) {
@@ -256,6 +337,7 @@ int main(void) {
   snprintf(g_tmp, sizeof g_tmp, "%s/pbrt_errors.tmp", b ? b : ".");
   mkdir(g_tmp, 0755);
   test_errors();
+  test_files();
   test_fuzz();
   return tt_test_finish("pbrt_errors");
 }

@@ -182,6 +182,20 @@ static void test_files(void) {
   CHECK(st == TT_ERR_IO && s == NULL);
   CHECK_CONTAINS(tt_last_error(), "/nonexistent/dir/scene.json: cannot open scene file");
 
+  /* (#13) a device as mesh file or import: refused at once, naming it (assimp read
+   * /dev/zero until memory ran out; a FIFO blocked forever) */
+  static const char dev_mesh[] = "{\"version\": 1, \"camera\": " CAM_OK ", \"materials\": "
+                                 "{\"w\": {}}, \"meshes\": "
+                                 "[{\"material\": \"w\", \"file\": \"/dev/zero\"}]}";
+  st = tt_scene_load_json(dev_mesh, sizeof dev_mesh - 1, "dev.json", NULL, &s);
+  CHECK(st == TT_ERR_IO && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "dev.json: meshes[0].file: cannot open mesh file \"/dev/zero\": "
+                 "a character device, not a regular file");
+  static const char dev_import[] = "{\"version\": 1, \"import\": \"/dev/null.pbrt\"}";
+  st = tt_scene_load_json(dev_import, sizeof dev_import - 1, "imp.json", NULL, &s);
+  CHECK(st == TT_ERR_IO && s == NULL);
+  CHECK_CONTAINS(tt_last_error(), "imp.json: import: cannot open scene file \"/dev/null.pbrt\"");
+
   CHECK(tt_scene_load(NULL, &s) == TT_ERR_INVALID_ARGUMENT);
   CHECK(tt_scene_load_json("{}", 2, "x", NULL, NULL) == TT_ERR_INVALID_ARGUMENT);
   /* an embedded NUL would silently truncate the document */

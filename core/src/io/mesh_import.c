@@ -2,6 +2,8 @@
  * Materials in the file are ignored: the scene.json entry chooses the material. */
 #include "io/io_internal.h"
 
+#include <tunetrace/file.h>
+
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -178,10 +180,10 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
                           tt__mesh_data **out, uint32_t *count) {
   *out = NULL;
   *count = 0;
-  FILE *probe = fopen(file, "rb");
-  if (!probe)
-    return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, strerror(errno));
-  fclose(probe);
+  /* assimp would block on a FIFO and read /dev/zero forever: regular files only */
+  char why[256];
+  if (tt__file_regular_reason(file, why, sizeof why) != 0)
+    return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, why);
   pthread_mutex_lock(&tt__assimp_lock);
   const struct aiScene *sc = aiImportFile(file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
   if (!sc) {

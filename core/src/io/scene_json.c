@@ -7,6 +7,8 @@
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io_internal.h"
 
+#include <tunetrace/file.h>
+
 #include <cjson/cJSON.h>
 
 #include <errno.h>
@@ -232,13 +234,9 @@ static char *tt__resolve(const tt__jctx *c, const char *rel) {
   return p;
 }
 
-/* Readability probe for optional assets (textures, environment images). */
-static int tt__file_exists(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return 0;
-  fclose(f);
-  return 1;
-}
+/* Readability probe for optional assets (textures, environment images): a regular file
+ * (a FIFO or a device would hang or flood the image reader). */
+static int tt__file_exists(const char *path) { return tt_file_check_regular(path, NULL) == TT_OK; }
 
 /* 3-vector helpers for camera checks. */
 static double tt__len3(const float v[3]) {
@@ -1026,14 +1024,12 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
     return tt__jfail(c, TT_ERR_UNSUPPORTED, "import", "unsupported scene format \"%s\" (expected .pbrt or .json)", rel);
   char *full = tt__resolve(c, rel);
   if (!full) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "import", "out of memory");
-  FILE *f = fopen(full, "rb");
-  if (!f) {
-    int e = errno;
-    st = tt__jfail(c, TT_ERR_IO, "import", "cannot open scene file \"%s\": %s", full, strerror(e));
+  char why[256];
+  if (tt__file_regular_reason(full, why, sizeof why) != 0) {
+    st = tt__jfail(c, TT_ERR_IO, "import", "cannot open scene file \"%s\": %s", full, why);
     free(full);
     return st;
   }
-  fclose(f);
   /* the canonical path makes the scene (its texture paths, hence tt_scene_id) independent of
    * how the wrapper was reached: scenes/x/../../../shared/... and /abs/shared/... agree */
   char *real = realpath(full, NULL);

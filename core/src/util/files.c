@@ -55,12 +55,29 @@ static int tt__open_regular(const char *path, const char *what, struct stat *st)
   return fd;
 }
 
-tt_status tt_file_check_regular(const char *path, const char *what) {
+int tt__file_regular_reason(const char *path, char *why, size_t n) {
+  if (!path || !*path) {
+    snprintf(why, n, "empty path");
+    return -1;
+  }
   struct stat st;
-  int fd = tt__open_regular(path, what ? what : "file", &st);
-  if (fd < 0) return TT_ERR_IO;
+  int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0 || fstat(fd, &st) != 0) {
+    snprintf(why, n, "%s", strerror(errno));
+    if (fd >= 0) close(fd);
+    return -1;
+  }
   close(fd);
-  return TT_OK;
+  if (S_ISREG(st.st_mode)) return 0;
+  snprintf(why, n, "%s, not a regular file", tt__file_kind(st.st_mode));
+  return -1;
+}
+
+tt_status tt_file_check_regular(const char *path, const char *what) {
+  char why[256];
+  if (tt__file_regular_reason(path, why, sizeof why) == 0) return TT_OK;
+  return tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path && *path ? path : "(empty path)",
+                      what ? what : "file", why);
 }
 
 tt_status tt_file_read(const char *path, const char *what, size_t max_bytes, char **data,

@@ -14,6 +14,11 @@ int tt__has_ext(const char *path, const char *ext);
 /* tt_file_read of a scene file (what = "scene file", default limit); errors name the file. */
 tt_status tt__read_file(const char *path, char **out, size_t *len);
 
+/* 0 if `path` is a regular file; else -1 and the reason in `why` ("No such file or
+ * directory", "a FIFO, not a regular file"), for loaders that word their own message. Never
+ * blocks. */
+int tt__file_regular_reason(const char *path, char *why, size_t n);
+
 /* "a directory", "a FIFO", ... for a st_mode that is not a regular file. */
 const char *tt__file_kind(mode_t mode);
 

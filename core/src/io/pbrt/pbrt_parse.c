@@ -12,6 +12,8 @@
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/pbrt/pbrt_internal.h"
 
+#include <tunetrace/file.h>
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -20,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #define TT__PI 3.14159265358979323846
 #define TT__MAX_INCLUDE_DEPTH 64
@@ -235,13 +238,9 @@ static char *tt__dirname(const char *path) {
   return d;
 }
 
-/* True when the path names a readable regular file. */
-static int tt__exists(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return 0;
-  fclose(f);
-  return 1;
-}
+/* True when the path names a readable regular file (a FIFO is not probed by opening it
+ * blocking, and is not one). */
+static int tt__exists(const char *path) { return tt_file_check_regular(path, NULL) == TT_OK; }
 
 /* Generic growth for the parser's arrays. */
 static void *tt__grow(void *items, size_t *cap, size_t need, size_t size) {
@@ -743,31 +742,37 @@ static tt_status tt__get3(const tt__tok *at, tt__plist *pl, const char *name, do
 static tt_status tt__read_spd(tt__pp *P, const tt__tok *at, const char *path, double **pairs, size_t *n) {
   *pairs = NULL;
   *n = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    tt__pwarn(P, at->file, at->line, path, "spectrum file \"%s\" not found", path);
+  char *text;
+  size_t len;
+  /* regular files only, at most 16 MiB: a FIFO would block, /dev/zero never end */
+  if (tt_file_read(path, "spectrum file", (size_t)16 << 20, &text, &len) != TT_OK) {
+    tt__pwarn(P, at->file, at->line, path, "%s", tt_last_error());
     return TT_ERR_IO;
   }
   size_t cap = 0, cnt = 0;
   double *v = NULL;
-  char line[512];
-  while (fgets(line, sizeof line, f)) {
+  for (char *line = text; line && *line;) {
+    char *nl = strchr(line, '\n');
+    if (nl) *nl = '\0';
     char *h = strchr(line, '#');
     if (h) *h = '\0';
     char *s = line, *e;
     for (;;) {
       double x = strtod(s, &e);
       if (e == s) break;
-      v = tt__grow(v, &cap, cnt + 1, sizeof *v);
-      if (!v) {
-        fclose(f);
+      double *nv = tt__grow(v, &cap, cnt + 1, sizeof *v);
+      if (!nv) {
+        free(v);
+        tt_free(text);
         return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
       }
+      v = nv;
       v[cnt++] = x;
       s = e;
     }
+    line = nl ? nl + 1 : NULL;
   }
-  fclose(f);
+  tt_free(text);
   if (cnt < 2 || cnt % 2) {
     free(v);
     tt__pwarn(P, at->file, at->line, path, "spectrum file \"%s\" does not hold (lambda, value) pairs", path);
@@ -1371,6 +1376,14 @@ static tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__p
     tt__find(pl, "edgelength");
     char *path = tt__join(at->file->dir, fn, strlen(fn));
     if (!path) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
+    struct stat sb;
+    if (stat(path, &sb) != 0 && errno == ENOENT) {
+      /* like a missing texture (the shared scenes' MISSING_FILES convention): warn, skip */
+      tt__pwarn(P, at->file, at->line, "filename", "%s: PLY file \"%s\" not found (shape skipped)",
+                what, path);
+      free(path);
+      return TT_OK;
+    }
     char where[600];
     snprintf(where, sizeof where, "%s:%d", at->file->path, at->line);
     st = tt__pbrt_read_ply(path, where, &d);

@@ -3,6 +3,8 @@
  * truncated or corrupt file is an error, never a crash. */
 #include "io/pbrt/pbrt_internal.h"
 
+#include <tunetrace/file.h>
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -18,7 +20,9 @@
 
 /* ---- file reading ---------------------------------------------------------------------- */
 
-/* Whole file into memory, gunzipping ".gz" when zlib is available. */
+/* Whole file into memory, gunzipping ".gz" when zlib is available. Only regular files are
+ * read (a FIFO would block, /dev/zero never end), and at most TT_FILE_READ_DEFAULT_MAX bytes,
+ * decompressed or not. */
 static tt_status tt__read_all(const char *path, const char *where, unsigned char **out, size_t *len) {
   *out = NULL;
   *len = 0;
@@ -28,10 +32,21 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
   unsigned char *buf = NULL;
   if (gz) {
 #ifdef TT_HAVE_ZLIB
+    if (tt_file_check_regular(path, "PLY file") != TT_OK) {
+      char msg[1024];
+      snprintf(msg, sizeof msg, "%s", tt_last_error());
+      return tt_set_error(TT_ERR_IO, "%s: %s", where, msg);
+    }
     gzFile f = gzopen(path, "rb");
     if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\": %s", where, path, strerror(errno));
     for (;;) {
       if (used + 65536 > cap) {
+        if (cap >= TT_FILE_READ_DEFAULT_MAX) {
+          free(buf);
+          gzclose(f);
+          return tt_set_error(TT_ERR_IO, "%s: \"%s\": PLY file decompresses to more than %zu bytes",
+                              where, path, (size_t)TT_FILE_READ_DEFAULT_MAX);
+        }
         size_t ncap = cap ? cap * 2 : 1 << 20;
         unsigned char *nb = realloc(buf, ncap);
         if (!nb) {
@@ -59,13 +74,13 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
     return tt_set_error(TT_ERR_UNSUPPORTED, "%s: \"%s\": this build has no zlib for .ply.gz files", where, path);
 #endif
   }
-  /* plain files: the loaders' shared reader; its message is re-worded to name the shape */
+  /* plain files: the shared reader (regular files only, size-capped), message prefixed */
   char *text = NULL;
-  tt_status st = tt__read_file(path, &text, len);
-  if (st == TT_ERR_IO) {
+  tt_status st = tt_file_read(path, "PLY file", 0, &text, len);
+  if (st != TT_OK) {
     char msg[1024];
     snprintf(msg, sizeof msg, "%s", tt_last_error());
-    return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\" (%s)", where, path, msg);
+    return tt_set_error(st, "%s: %s", where, msg);
   }
   *out = (unsigned char *)text;
   return st;
@@ -273,9 +288,15 @@ static tt_status tt__ply_parse(const unsigned char *data, size_t len, const char
     tt__ply_elem *el = &elems[e];
     int is_vertex = strcmp(el->name, "vertex") == 0, is_face = strcmp(el->name, "face") == 0;
     if (is_vertex) {
+      /* one vertex element only: faces index it, and its buffers are sized from its count
+       * (a second one wrote its attributes past the first one's normals buffer) */
+      if (have_vertex)
+        TT__PLY_FAIL("%s: \"%s\": PLY file has a second \"element vertex\" (one is expected)",
+                     where, path);
       if (el->count > UINT32_MAX / 3) TT__PLY_FAIL("%s: \"%s\": too many vertices", where, path);
-      /* a count larger than the data left cannot be honest: stop before allocating */
-      if (format != TT__PLY_ASCII && el->count > (uint64_t)(end - cur.p))
+      /* a count larger than the data left cannot be honest (every vertex takes at least one
+       * byte, binary or ASCII): stop before allocating */
+      if (el->count > (uint64_t)(end - cur.p))
         TT__PLY_FAIL("%s: \"%s\": truncated PLY file (vertex data)", where, path);
       int slot[32], have[TT__A_COUNT] = {0};
       for (int i = 0; i < el->prop_count; i++) {
