@@ -126,13 +126,34 @@ int main(void) {
   /* SIGINT: the current pass finishes, the partial image is written, exit code 130 */
   char d_exr[4200];
   snprintf(d_exr, sizeof d_exr, "%s/d.exr", dir);
-  char *argv[] = {(char *)host_path(), "--quiet", "--res", "64x64", "--spp", "1000000",
+  char *argv[] = {(char *)host_path(), "--res", "64x64", "--spp", "1000000",
                   "--out", d_exr, (char *)scene_path, NULL};
+  /* the signal goes once the first pass is done (its "render:" progress line is out), not
+   * after a fixed sleep: on a loaded machine the program may take seconds to start, and a
+   * SIGINT before the handler is installed kills it */
+  int fds[2];
+  CHECK(pipe(fds) == 0);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_adddup2(&fa, fds[1], 2);
+  posix_spawn_file_actions_addclose(&fa, fds[0]);
   pid_t pid;
-  CHECK(posix_spawn(&pid, host_path(), NULL, NULL, argv, environ) == 0);
-  struct timespec ts = {1, 500000000};
-  nanosleep(&ts, NULL);
+  CHECK(posix_spawn(&pid, host_path(), &fa, NULL, argv, environ) == 0);
+  posix_spawn_file_actions_destroy(&fa);
+  close(fds[1]);
+  char log[8192];
+  size_t got = 0;
+  ssize_t r;
+  while (got + 1 < sizeof log && (r = read(fds[0], log + got, sizeof log - 1 - got)) > 0) {
+    got += (size_t)r;
+    log[got] = '\0';
+    if (strstr(log, "render:")) break;
+  }
+  CHECK_MSG(strstr(log, "render:") != NULL, "no progress line before EOF: %s", log);
   kill(pid, SIGINT);
+  char sink[4096];
+  while (read(fds[0], sink, sizeof sink) > 0) {}
+  close(fds[0]);
   int status = 0;
   waitpid(pid, &status, 0);
   CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
