@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static char g_root[1024];
 
@@ -195,6 +196,32 @@ static void test_files(void) {
   st = tt_scene_load_json(dev_import, sizeof dev_import - 1, "imp.json", NULL, &s);
   CHECK(st == TT_ERR_IO && s == NULL);
   CHECK_CONTAINS(tt_last_error(), "imp.json: import: cannot open scene file \"/dev/null.pbrt\"");
+
+  /* (#13 defect 10) PLYs found by fuzzing assimp 5.2.5 (SIGSEGV, an ai_assert abort, an
+   * endless loop on a header cut short) as mesh files: our reader loads or rejects them
+   * with the file named, at once */
+  static const char *const assimp_killers[] = {"assimp-segv.ply", "assimp-abort.ply",
+                                               "assimp-hang.ply"};
+  char base[1200];
+  snprintf(base, sizeof base, "%s/tests/data/scenes", g_root);
+  alarm(60);
+  for (int i = 0; i < 3; i++) {
+    char json[512];
+    int n = snprintf(json, sizeof json, "{\"version\": 1, \"camera\": " CAM_OK ", \"materials\": "
+                     "{\"w\": {}}, \"meshes\": [{\"material\": \"w\", \"file\": \"%s\"}]}",
+                     assimp_killers[i]);
+    st = tt_scene_load_json(json, (size_t)n, "ply.json", base, &s);
+    if (st == TT_OK) {
+      CHECK(tt_scene_mesh_count(s) == 1);
+      tt_scene_destroy(s);
+      s = NULL;
+    } else {
+      CHECK(s == NULL);
+      CHECK_CONTAINS(tt_last_error(), "ply.json: meshes[0].file");
+      CHECK_CONTAINS(tt_last_error(), assimp_killers[i]);
+    }
+  }
+  alarm(0);
 
   CHECK(tt_scene_load(NULL, &s) == TT_ERR_INVALID_ARGUMENT);
   CHECK(tt_scene_load_json("{}", 2, "x", NULL, NULL) == TT_ERR_INVALID_ARGUMENT);

@@ -22,6 +22,7 @@ import sys
 LAYERS = [
     ["util"],                      # errors, files, strings, matrices, rng + hash
     ["plugin", "params", "scene"],  # loader + host services; parameter spaces; scene data
+    ["io/ply"],                    # PLY reader (mesh data), shared by io/pbrt and io
     ["io/pbrt"],                   # pbrt-v4 importer (builds scenes)
     ["io"],                        # scene.json, mesh import, image I/O, format dispatch
     ["render"],                    # camera, film, samplers, BSDFs, lights, path, textures

@@ -1,6 +1,8 @@
-/* Mesh files (OBJ, PLY, glTF, ... whatever assimp reads) flattened to triangle arrays.
- * Materials in the file are ignored: the scene.json entry chooses the material. */
+/* Mesh files flattened to triangle arrays: PLY through the library's own reader (io/ply),
+ * OBJ, glTF and whatever else assimp reads through assimp. Materials in the file are
+ * ignored: the scene.json entry chooses the material. */
 #include "io/io_internal.h"
+#include "io/ply/ply.h"
 
 #include <tunetrace/file.h>
 
@@ -174,8 +176,47 @@ done:
   return st;
 }
 
+/* Unit shading normals as assimp's path gives them: zero or non-finite ones become +z. */
+static void tt__normalize_normals(tt__mesh_data *d) {
+  for (uint32_t v = 0; d->normals && v < d->vertex_count; v++) {
+    float *n = d->normals + 3 * (size_t)v;
+    double x = n[0], y = n[1], z = n[2], len = sqrt(x * x + y * y + z * z);
+    if (!(len > 0) || !isfinite(len)) x = 0, y = 0, z = 1, len = 1;
+    n[0] = (float)(x / len);
+    n[1] = (float)(y / len);
+    n[2] = (float)(z / len);
+  }
+}
+
+/* A PLY through the library's own reader (io/ply): one part named like assimp's. */
+static tt_status tt__ply_import(const char *file, const char *base_name, int split,
+                                const char *where, tt__mesh_data **out, uint32_t *count) {
+  tt__mesh_data *one = calloc(1, sizeof *one);
+  if (!one) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+  tt_status st = tt__ply_read(file, where, one);
+  if (st == TT_OK && one->triangle_count == 0)
+    st = tt_set_error(TT_ERR_PARSE, "%s: mesh file \"%s\" contains no triangles", where, file);
+  if (st == TT_OK) {
+    tt__normalize_normals(one);
+    char name[512];
+    if (split) snprintf(name, sizeof name, "%s/0", base_name);
+    else snprintf(name, sizeof name, "%s", base_name);
+    if (!(one->name = tt__scene_strdup(name)))
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
+  }
+  if (st != TT_OK) {
+    tt__mesh_data_free(one);
+    free(one);
+    return st;
+  }
+  *out = one;
+  *count = 1;
+  return TT_OK;
+}
+
 /* Imports, then builds one part per placed mesh and either returns them (split) or merges
- * them into one. */
+ * them into one. PLY files go to the library's fuzzed reader; assimp reads the formats only
+ * it reads (OBJ, glTF, FBX, ...), with its data-structure validation step on. */
 tt_status tt__mesh_import(const char *file, const char *base_name, int split, const char *where,
                           tt__mesh_data **out, uint32_t *count) {
   *out = NULL;
@@ -184,8 +225,13 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
   char why[256];
   if (tt__file_regular_reason(file, why, sizeof why) != 0)
     return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, why);
+  if (tt__has_ext(file, ".ply") || tt__has_ext(file, ".ply.gz"))
+    return tt__ply_import(file, base_name, split, where, out, count);
   pthread_mutex_lock(&tt__assimp_lock);
-  const struct aiScene *sc = aiImportFile(file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  /* ValidateDataStructure rejects out-of-range indices and inconsistent arrays that a
+   * corrupt file makes assimp's importers produce, before we walk them */
+  const struct aiScene *sc = aiImportFile(
+      file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure);
   if (!sc) {
     tt_status st = tt_set_error(TT_ERR_PARSE, "%s: cannot import mesh file \"%s\": %s", where, file,
                                 aiGetErrorString());
