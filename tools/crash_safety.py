@@ -1,0 +1,232 @@
+#!/usr/bin/python3
+"""Crash safety, measured (#13): kills `host` with SIGKILL at random moments of a render and
+of a tuning run, and checks what a kill may leave behind.
+
+  tools/crash_safety.py [--build build] [--kills 100] [--part render|tune|both] [--seed 1]
+
+Render: the host renders the Cornell box over the EXR, PNG and --stats record of the
+previous trial, and is killed at a random moment (half of the kills uniform over a whole
+run, half in its last fifth, where the outputs are written). Afterwards every output must be
+byte for byte the previous one or a complete new one (the image reads back whole at the
+right size with its metadata; the JSON parses with its fields); missing or truncated is a
+failure. Temporaries (.NAME.tmp-XXXXXX) a kill leaves are counted, not failures.
+
+Tuning: the host tunes accel_embree with tuner_nm into one database, killed at a random
+moment; just before the kill the script reads the ids of the rows committed so far (another
+connection, WAL). Afterwards PRAGMA integrity_check must say ok and every id read before
+the kill must still be there. At the end one more tuning run into the same file must
+succeed.
+
+Prints one summary line per part and exits 1 on any failure. meson runs a
+short version (3 kills per part) in the render suite (test crash_safety)."""
+import argparse
+import hashlib
+import json
+import os
+import random
+import signal
+import sqlite3
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def digest(path):
+    try:
+        with open(path, "rb") as f:
+            return hashlib.sha256(f.read()).hexdigest()
+    except FileNotFoundError:
+        return None
+
+
+def image_complete(path, width, height):
+    """True if the whole image reads back at width x height with its spp metadata."""
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return None
+    inp = oiio.ImageInput.open(path)
+    if not inp:
+        return False
+    try:
+        spec = inp.spec()
+        if spec.width != width or spec.height != height:
+            return False
+        pixels = inp.read_image()
+        if pixels is None:
+            return False
+        return spec.getattribute("tunetrace:spp") is not None or spec.getattribute("spp") is not None
+    finally:
+        inp.close()
+
+
+def stats_complete(path):
+    try:
+        with open(path) as f:
+            rec = json.load(f)
+        return all(k in rec for k in ("spp", "render_ms", "output"))
+    except (OSError, ValueError):
+        return False
+
+
+def timed_run(args):
+    t0 = time.monotonic()
+    subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    return time.monotonic() - t0
+
+
+def kill_at(args, delay, before_kill=None):
+    """Starts args, sleeps `delay` s, calls before_kill(), SIGKILLs; returns (killed, result)."""
+    p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(delay)
+    seen = before_kill() if before_kill else None
+    killed = p.poll() is None
+    if killed:
+        p.send_signal(signal.SIGKILL)
+    p.wait()
+    return killed, seen
+
+
+def temporaries(folder):
+    return [n for n in os.listdir(folder) if ".tmp-" in n]
+
+
+def render_part(host, scene, work, kills, rng):
+    size = 96
+    outs = {"exr": os.path.join(work, "box.exr"), "png": os.path.join(work, "box.png"),
+            "stats": os.path.join(work, "box.json")}
+
+    def args(seed):
+        return [host, "--quiet", "--spp", "8", "--res", "%dx%d" % (size, size), "--seed",
+                str(seed), "--out", outs["exr"], "--stats", outs["stats"], scene]
+
+    first = subprocess.run(args(1), capture_output=True, text=True)
+    if first.returncode != 0:
+        print("render: the first run failed: " + first.stdout + first.stderr)
+        return 1
+    duration = statistics.median(timed_run(args(2)) for _ in range(3))
+    counts = {k: {"old": 0, "new": 0, "lost": 0, "corrupt": 0} for k in outs}
+    finished = 0
+    failures = []
+    for trial in range(kills):
+        before = {k: digest(p) for k, p in outs.items()}
+        if trial % 2:
+            delay = duration * rng.uniform(0.8, 1.05)
+        else:
+            delay = duration * rng.uniform(0.0, 1.05)
+        killed, _ = kill_at(args(100 + trial), delay)
+        finished += not killed
+        for k, p in outs.items():
+            now = digest(p)
+            if now is None:
+                state = "lost"
+            elif now == before[k]:
+                state = "old"
+            elif k == "stats":
+                state = "new" if stats_complete(p) else "corrupt"
+            else:
+                ok = image_complete(p, size, size)
+                state = "new" if ok or ok is None else "corrupt"
+            counts[k][state] += 1
+            if state in ("lost", "corrupt"):
+                failures.append("trial %d (kill at %.3f s): %s is %s" % (trial, delay, p, state))
+    left = temporaries(work)
+    for f in failures:
+        print("FAIL render: " + f)
+    print("render: %d kills (%d runs finished first; a run takes %.2f s): %s; %d temporaries "
+          "left behind" % (kills, finished, duration, "; ".join(
+              "%s old %d, new %d, lost %d, corrupt %d" % (k, c["old"], c["new"], c["lost"],
+                                                          c["corrupt"])
+              for k, c in counts.items()), len(left)))
+    return 1 if failures else 0
+
+
+def tune_part(host, scene, work, kills, rng):
+    db = os.path.join(work, "tuning.db")
+
+    def args(seed):
+        return [host, "--quiet", "--plugin", "tuner_nm", "--iterations", "40", "--spp", "1",
+                "--res", "16x16", "--seed", str(seed), "--db", db,
+                "--out", os.path.join(work, "tuned.exr"), scene]
+
+    duration = statistics.median(timed_run(args(s)) for s in (1, 2))
+
+    def committed():
+        try:
+            con = sqlite3.connect("file:%s?mode=ro" % db, uri=True, timeout=60)
+            ids = {r[0] for r in con.execute("SELECT id FROM samples")}
+            con.close()
+            return ids
+        except sqlite3.Error as e:
+            return e
+
+    failures = []
+    seen_total = lost_total = 0
+    integrity_ok = 0
+    finished = 0
+    for trial in range(kills):
+        delay = duration * rng.uniform(0.05, 1.0)
+        killed, seen = kill_at(args(1000 + trial), delay, committed)
+        finished += not killed
+        if isinstance(seen, Exception):
+            failures.append("trial %d: reading before the kill: %s" % (trial, seen))
+            continue
+        con = sqlite3.connect(db, timeout=60)
+        check = con.execute("PRAGMA integrity_check").fetchone()[0]
+        after = {r[0] for r in con.execute("SELECT id FROM samples")}
+        con.close()
+        integrity_ok += check == "ok"
+        if check != "ok":
+            failures.append("trial %d: integrity_check: %s" % (trial, check))
+        lost = seen - after
+        seen_total += len(seen)
+        lost_total += len(lost)
+        if lost:
+            failures.append("trial %d (kill at %.3f s): %d committed rows lost: %s"
+                            % (trial, delay, len(lost), sorted(lost)[:10]))
+    final = subprocess.run(args(99999), capture_output=True, text=True)
+    if final.returncode != 0:
+        failures.append("a tuning run after the kills failed (exit %d): %s"
+                        % (final.returncode, final.stderr[-1000:]))
+    con = sqlite3.connect(db)
+    rows = con.execute("SELECT count(*) FROM samples").fetchone()[0]
+    con.close()
+    for f in failures:
+        print("FAIL tune: " + f)
+    print("tune: %d kills (%d runs finished first; a run takes %.2f s): integrity_check ok "
+          "%d/%d; %d committed rows read just before the kills (summed), %d lost; %d rows in "
+          "the database; the run after the kills %s"
+          % (kills, finished, duration, integrity_ok, kills, seen_total,
+             lost_total, rows,
+             "succeeded" if final.returncode == 0 else "failed"))
+    return 1 if failures else 0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build", default=os.environ.get("TT_BUILD_ROOT", "build"))
+    ap.add_argument("--kills", type=int, default=100, help="kills per part")
+    ap.add_argument("--part", choices=("render", "tune", "both"), default="both")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--keep", help="work folder to keep (default: a temporary one)")
+    a = ap.parse_args()
+    root = os.environ.get("TT_SOURCE_ROOT", os.path.dirname(os.path.dirname(
+        os.path.abspath(__file__))))
+    host = os.path.join(a.build, "host", "host")
+    scene = os.path.join(root, "scenes", "cornell-box", "scene.json")
+    rng = random.Random(a.seed)
+    with tempfile.TemporaryDirectory(prefix="tt_crash_safety_") as tmp:
+        work = a.keep or tmp
+        os.makedirs(work, exist_ok=True)
+        rc = 0
+        if a.part in ("render", "both"):
+            rc |= render_part(host, scene, work, a.kills, rng)
+        if a.part in ("tune", "both"):
+            rc |= tune_part(host, scene, work, a.kills, rng)
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())
