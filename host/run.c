@@ -102,7 +102,7 @@ int tt__run_describe(const tt__host_options *opt) {
   }
   /* options (tt.options/1): set with --set NAME.KEY=VALUE like parameters, never tuned */
   cJSON *opts = cJSON_AddArrayToObject(root, "options");
-  const tt_options_iface *oi = tt__plugin_options(p);
+  const tt_options_iface *oi = tt_session_plugin_options(p);
   for (uint32_t i = 0; oi && i < oi->count(); i++) {
     const tt_option_info *info = oi->info(i);
     if (!info || !info->key) continue;
@@ -246,6 +246,7 @@ int tt__run_render(const tt__host_options *opt) {
   uint64_t t0 = host->clock_ns();
   int trc = tt__tune_phase(&s, &tuning);
   rec->tuning = tuning;
+  tt__session_sync(&s);  /* the tuning passes and builds ran through the library */
   if (trc != TT_EXIT_OK) {
     rc = trc;
     if (rc == TT_EXIT_USAGE || !tuning) goto done;
@@ -269,7 +270,7 @@ int tt__run_render(const tt__host_options *opt) {
     }
     if (st != TT_OK) {
       fprintf(stderr, "host: %s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
-              s.pass, tt_last_error());
+              rec->passes, tt_last_error());
       rc = TT_EXIT_FAILURE;
       break;
     }

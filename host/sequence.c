@@ -146,17 +146,16 @@ static tt_status tt__seq_render(tt__seq *s, tt_film *film, const tt_camera *cam,
                                 const tt_camera *prev, const float *jitter, uint64_t seed,
                                 float *rgb) {
   tt_film_clear(film);
-  s->ses.ii->reset(s->ses.integrator);
+  const tt_integrator_iface *ii = tt_loaded_plugin_iface(s->ses.integ_p);
+  ii->reset(tt_session_integrator(s->ses.lib));
   tt_render_ctx ctx;
-  memset(&ctx, 0, sizeof ctx);
-  ctx.struct_size = sizeof ctx;
-  ctx.scene = s->ses.scene;
-  ctx.accel_iface = s->ses.ai;
-  ctx.accel = s->ses.accel;
+  tt_session_init_ctx(s->ses.lib, &ctx);
   ctx.film = film;
   ctx.camera = cam;
   ctx.prev_camera = prev;
   ctx.seed = seed;
+  ctx.pass_index = 0;
+  ctx.sample_offset = 0;
   ctx.spp = s->spp;
   if (jitter) {
     ctx.fixed_jitter = 1;
@@ -166,7 +165,7 @@ static tt_status tt__seq_render(tt__seq *s, tt_film *film, const tt_camera *cam,
   tt_pass_stats ps;
   memset(&ps, 0, sizeof ps);
   ps.struct_size = sizeof ps;
-  tt_status st = s->ses.ii->render_pass(s->ses.integrator, &ctx, &ps);
+  tt_status st = tt_session_render_ctx(s->ses.lib, &ctx, &ps);
   if (st == TT_OK) tt_film_resolve(film, rgb);
   return st;
 }

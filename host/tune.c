@@ -3,11 +3,11 @@
  *
  * The host chooses the target plugin and the objective from the options (or the
  * integrator's tuning hint), opens the tuning database, describes the state (camera,
- * context, indicators) and lets the session run the loop through two callbacks on the host
- * session: apply a configuration (accel: rebuild; integrator and post: configure) and render
- * one measurement pass into the film (the tuning passes accumulate into the image). The
- * session answers what the database knows, measures the rest, and keeps the best; --verify N
- * then measures default and best side by side, so the gain is reported from one run.
+ * context, indicators) and lets the tuning session run the loop through the render session's
+ * tuning target (tunetrace/session.h: apply a configuration, render one measurement pass into
+ * the film; the tuning passes accumulate into the image). The tuning session answers what
+ * the database knows, measures the rest, and keeps the best; --verify N then measures
+ * default and best side by side, so the gain is reported from one run.
  */
 #include "tune.h"
 
@@ -31,21 +31,11 @@ typedef struct tt__tune_ctx {
   tt_space *subset;             /* the searched parameters, or NULL to search all of space */
   const char *objective_spec;
   tt_objective objective;
-  const tt_post_iface *pi;
-  tt_post *post;
-  float *post_in, *post_out;
   tt_tunedb *db;
-  char *camera_json, *context_json;
   uint32_t spp;
-  /* the pass's own image (--objective rrmse, --tune-pass-images): the film's accumulators
-   * before the pass, and the image the pass alone added */
-  int want_pass;
-  float *snap;                  /* sum_rgb (3), sum_weight (1), splat_rgb (3) per pixel */
-  double snap_scale;
-  float *pass_rgb;              /* 3 per pixel */
+  int want_pass;                /* the pass's own image (--objective rrmse, --tune-pass-images) */
   double *ref_lum;              /* --reference as luminance, 1 per pixel */
   char ref_hash[17];            /* FNV-1a 64 of the reference's luminance (database context) */
-  tt_pass_stats ps;             /* statistics of the last measurement pass */
 } tt__tune_ctx;
 
 /* strdup that reports failure through NULL only (callers treat NULL as "no text"). */
@@ -79,150 +69,9 @@ void tt__tuning_free(tt__tuning *t) {
   free(t);
 }
 
-/* JSON of the view: the part of the state the camera contributes. A sample of the scene's
- * camera path (--camera-index I) also records "path_index": I, so that a row says which
- * camera of the path it belongs to (the baseline generator's job is one such sample). */
-static char *tt__camera_json(const tt_camera *c, const tt__host_options *opt) {
-  char buf[1024], index[48] = "";
-  if (opt->camera_index_set) snprintf(index, sizeof index, ",\"path_index\":%u", opt->camera_index);
-  snprintf(buf, sizeof buf,
-           "{\"position\":[%.9g,%.9g,%.9g],\"target\":[%.9g,%.9g,%.9g],\"up\":[%.9g,%.9g,%.9g],"
-           "\"fov_y\":%.9g,\"resolution\":[%u,%u]%s}",
-           c->position[0], c->position[1], c->position[2], c->target[0], c->target[1],
-           c->target[2], c->up[0], c->up[1], c->up[2], c->fov_y, c->width, c->height, index);
-  return tt__dup(buf);
-}
-
-/* JSON of everything else that shapes the cost: samples per measurement, threads, and the
- * other rendering plugins with their configurations (an accel's render time depends on the
- * integrator's maxDepth, an integrator's on the accel). Tuners are left out: they choose
- * configurations, they do not change what a configuration costs. */
-static char *tt__context_json(tt__tune_ctx *c) {
-  tt__session *s = c->s;
-  cJSON *root = cJSON_CreateObject();
-  cJSON_AddNumberToObject(root, "spp", c->spp);
-  cJSON_AddNumberToObject(root, "threads", s->rec.threads);
-  /* CPU-time costs never answer wall-time lookups, nor the other way round */
-  if (c->opt->clock_cpu) cJSON_AddStringToObject(root, "clock", "cpu");
-  cJSON *plugins = cJSON_AddObjectToObject(root, "plugins");
-  for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
-    const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->reg, i));
-    if (i == c->target_index || e->kind == TT_KIND_TUNER || e->kind == TT_KIND_PREDICTOR)
-      continue;
-    cJSON *p = cJSON_AddObjectToObject(plugins, e->name);
-    cJSON_AddStringToObject(p, "version", e->version);
-    char *cfg = s->configs[i] ? tt_config_to_json(s->configs[i]) : NULL;
-    cJSON *obj = cfg ? cJSON_Parse(cfg) : NULL;
-    tt_free(cfg);
-    cJSON_AddItemToObject(p, "config", obj ? obj : cJSON_CreateObject());
-  }
-  if (c->ref_lum) {  /* an rRMSE cost means something only against the same reference */
-    cJSON *r = cJSON_AddObjectToObject(root, "reference");
-    cJSON_AddStringToObject(r, "file", c->opt->reference);
-    cJSON_AddStringToObject(r, "fnv1a64", c->ref_hash);
-  }
-  char *text = cJSON_PrintUnformatted(root);
-  cJSON_Delete(root);
-  char *out = tt__dup(text);
-  cJSON_free(text);
-  return out;
-}
-
-/* ---- the target: what the session applies and renders through ---- */
-
-/* tt_tuning_target.apply: a new configuration for the target plugin. */
-static tt_status tt__target_apply(void *user, const tt_config *cfg, double *build_ms) {
-  tt__tune_ctx *c = user;
-  tt__session *s = c->s;
-  *build_ms = 0;
-  if (c->target_kind == TT_KIND_ACCEL) return tt__session_rebuild_accel(s, cfg, build_ms);
-  if (c->target_kind == TT_KIND_INTEGRATOR) return s->ii->configure(s->integrator, cfg);
-  if (!c->post) return c->pi->create(s->camera->width, s->camera->height, cfg, &c->post);
-  return c->pi->configure(c->post, cfg);
-}
-
-/* Runs the post filter on the film as it is; its wall ms, or a negative value on failure. */
-static double tt__run_post(tt__tune_ctx *c, uint32_t frame_index) {
-  tt__session *s = c->s;
-  uint32_t w = s->camera->width, h = s->camera->height;
-  tt_film_resolve(s->film, c->post_in);
-  tt_post_frame f;
-  memset(&f, 0, sizeof f);
-  f.struct_size = sizeof f;
-  f.width = w;
-  f.height = h;
-  f.color = c->post_in;
-  f.frame_index = frame_index;
-  uint64_t t0 = s->host->clock_ns();
-  tt_status st = c->pi->process(c->post, &f, c->post_out);
-  double ms = (s->host->clock_ns() - t0) * 1e-6;
-  return st == TT_OK ? ms : -1.0;
-}
-
-/* Copies the film's accumulators before a measurement pass. */
-static void tt__snapshot(tt__tune_ctx *c) {
-  tt_film *f = c->s->film;
-  size_t n = (size_t)tt_film_width(f) * tt_film_height(f);
-  memcpy(c->snap, tt_film_sum_rgb(f), 3 * n * sizeof(float));
-  memcpy(c->snap + 3 * n, tt_film_sum_weight(f), n * sizeof(float));
-  memcpy(c->snap + 4 * n, tt_film_splat_rgb(f), 3 * n * sizeof(float));
-  c->snap_scale = tt_film_splat_scale(f);
-}
-
-/* The image the last pass alone renders (c->pass_rgb), from the accumulators before
- * (c->snap) and after it. The tuning passes still accumulate into the film; this only
- * separates the pass's share:
- *  - per-pixel samples: (sum_wL after - before) / (sum_w after - before);
- *  - splats (film.h: resolved = splat * scale, scale = c / N for N units so far, as
- *    PSSMLT's b * pixels / mutations): the pass's splats times c / (N_after - N_before),
- *    i.e. 1 / (1/scale_after - 1/scale_before). An unchanged scale means splats that add
- *    up: the pass's splats times that scale. A film without splats before the pass, or a
- *    scale that grew (the integrator restarted its estimate and cleared the splats), leaves
- *    the splat buffer to this pass alone: splats after times scale after. */
-static void tt__pass_image(tt__tune_ctx *c) {
-  tt_film *f = c->s->film;
-  size_t n = (size_t)tt_film_width(f) * tt_film_height(f);
-  const float *sr = tt_film_sum_rgb(f), *sw = tt_film_sum_weight(f), *sp = tt_film_splat_rgb(f);
-  const float *br = c->snap, *bw = c->snap + 3 * n, *bp = c->snap + 4 * n;
-  double ka = tt_film_splat_scale(f), kb = c->snap_scale;
-  int splats_before = 0;
-  for (size_t i = 0; i < 3 * n && !splats_before; i++) splats_before = bp[i] != 0.0f;
-  double inv = 1.0 / ka - 1.0 / kb;
-  int fresh = !splats_before || (ka != kb && (!(inv > 0) || !isfinite(inv)));
-  double k = fresh || ka == kb ? ka : 1.0 / inv;
-  for (size_t i = 0; i < n; i++) {
-    double dw = (double)sw[i] - bw[i];
-    for (int ch = 0; ch < 3; ch++) {
-      size_t j = 3 * i + ch;
-      double v = dw > 0 ? ((double)sr[j] - br[j]) / dw : 0.0;
-      v += (fresh ? (double)sp[j] : (double)sp[j] - bp[j]) * k;
-      c->pass_rgb[j] = (float)v;
-    }
-  }
-}
-
-/* tt_tuning_target.render: one pass into the film (+ the post filter of a post target),
- * keeping the pass's own image when one is wanted. `m` NULL: a warm-up pass. */
-static tt_status tt__target_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
-  tt__tune_ctx *c = user;
-  tt__session *s = c->s;
-  double ms = 0;
-  if (!m) return tt__session_render_pass(s, spp, &c->ps, &ms);
-  if (c->want_pass) tt__snapshot(c);
-  tt_status st = tt__session_render_pass(s, spp, &c->ps, &ms);
-  m->render_ms = ms;
-  m->pass = &c->ps;
-  if (st != TT_OK) return st;
-  if (c->want_pass) {
-    tt__pass_image(c);
-    m->image = c->pass_rgb;
-  }
-  if (c->target_kind == TT_KIND_POST) {
-    double pms = tt__run_post(c, s->pass);
-    if (pms < 0) return TT_ERR_INTERNAL;
-    m->render_ms += pms;
-  }
-  return TT_OK;
+/* Registry index of a loaded plugin (its configs[] slot). */
+static size_t tt__index_of(const tt__session *s, const tt_loaded_plugin *p) {
+  return (size_t)tt_session_plugin_index(s->lib, tt_loaded_plugin_entry(p)->name);
 }
 
 /* tt_tuning_desc.on_sample: writes the pass image of a measurement to --tune-pass-images (a
@@ -373,7 +222,7 @@ static int tt__choose(tt__tune_ctx *c) {
       return TT_EXIT_USAGE;
     }
   }
-  c->target_index = tt__session_index_of(s, c->target);
+  c->target_index = tt__index_of(s, c->target);
   c->target_kind = tt_loaded_plugin_entry(c->target)->kind;
   c->space = tt_loaded_plugin_space(c->target);
   if (tt__make_subset(c, hint)) return TT_EXIT_USAGE;
@@ -399,25 +248,6 @@ static int tt__choose(tt__tune_ctx *c) {
     return TT_EXIT_USAGE;
   }
   c->want_pass = c->objective.kind == TT_OBJECTIVE_RRMSE || dir;
-  if (c->want_pass) {
-    size_t px = (size_t)s->camera->width * s->camera->height;
-    c->snap = malloc(7 * px * sizeof(float));
-    c->pass_rgb = malloc(3 * px * sizeof(float));
-    if (!c->snap || !c->pass_rgb) {
-      fprintf(stderr, "host: tuning: out of memory\n");
-      return TT_EXIT_FAILURE;
-    }
-  }
-  if (c->target_kind == TT_KIND_POST) {
-    c->pi = tt_loaded_plugin_iface(c->target);
-    size_t px = (size_t)s->camera->width * s->camera->height * 3;
-    c->post_in = malloc(px * sizeof(float));
-    c->post_out = malloc(px * sizeof(float));
-    if (!c->post_in || !c->post_out) {
-      fprintf(stderr, "host: tuning: out of memory\n");
-      return TT_EXIT_FAILURE;
-    }
-  }
   return TT_EXIT_OK;
 }
 
@@ -445,21 +275,29 @@ static int tt__open_db(tt__tune_ctx *c) {
   return TT_EXIT_OK;
 }
 
-/* The state of every measurement of this phase (the database key besides the config). */
+/* The state of every measurement of this phase (the database key besides the config): the
+ * library's camera and context, plus what only the host knows — which camera of the path
+ * (--camera-index), the clock (CPU-time costs never answer wall-time lookups, nor the other
+ * way round) and the reference of an rRMSE cost (it means something only against it). */
 static int tt__make_state(tt__tune_ctx *c, tt_tuning_state *state) {
-  tt__session *s = c->s;
-  c->camera_json = tt__camera_json(s->camera, c->opt);
-  c->context_json = tt__context_json(c);
-  if (!c->camera_json || !c->context_json) return -1;
-  memset(state, 0, sizeof *state);
-  state->struct_size = sizeof *state;
-  state->scene_id = tt_scene_id(s->scene);
-  state->scene = tt_scene_source(s->scene);
-  state->camera = c->camera_json;
-  state->context = c->context_json;
-  if (c->db) {
-    tt_scene_indicators(s->scene, state->indicators);
-    state->has_indicators = 1;
+  char camera[64] = "", context[4600] = "{";
+  if (c->opt->camera_index_set)
+    snprintf(camera, sizeof camera, "{\"path_index\":%u}", c->opt->camera_index);
+  if (c->opt->clock_cpu) strcat(context, "\"clock\":\"cpu\"");
+  if (c->ref_lum) {
+    size_t len = strlen(context);
+    cJSON *file = cJSON_CreateString(c->opt->reference);
+    char *quoted = cJSON_PrintUnformatted(file);
+    cJSON_Delete(file);
+    snprintf(context + len, sizeof context - len, "%s\"reference\":{\"file\":%s,\"fnv1a64\":\"%s\"}",
+             len > 1 ? "," : "", quoted ? quoted : "\"\"", c->ref_hash);
+    cJSON_free(quoted);
+  }
+  strcat(context, "}");
+  if (tt_session_tuning_state(c->s->lib, c->target_index, c->spp, camera[0] ? camera : NULL,
+                              context, c->db != NULL, state) != TT_OK) {
+    fprintf(stderr, "host: tuning: %s\n", tt_last_error());
+    return -1;
   }
   return 0;
 }
@@ -585,7 +423,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
   d.search = c.subset;
   d.objective = c.objective_spec;
   d.tuner = explore ? NULL : tt_loaded_plugin_iface(tuner_p);
-  d.tuner_settings = explore ? NULL : s->configs[tt__session_index_of(s, tuner_p)];
+  d.tuner_settings = explore ? NULL : s->configs[tt__index_of(s, tuner_p)];
   d.tuner_name = t->tuner;
   d.seed = s->rec.seed;
   d.iterations = t->requested;
@@ -608,7 +446,12 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
     rc = TT_EXIT_FAILURE;
     goto done;
   }
-  tt_tuning_target target = {sizeof target, &c, tt__target_apply, tt__target_render};
+  tt_tuning_target target;
+  if (tt_session_tuning_target(s->lib, c.target_index, c.want_pass, &target) != TT_OK) {
+    fprintf(stderr, "host: tuning: %s\n", tt_last_error());
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
   uint64_t t0 = s->host->clock_ns();
   tt_status st = tt_tuning_run(t->session, &target);
   tt__progress_finish();
@@ -655,13 +498,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
 
 done:
   tt_space_destroy(c.subset);
-  free(c.camera_json);
-  free(c.context_json);
-  if (c.post) c.pi->destroy(c.post);
-  free(c.post_in);
-  free(c.post_out);
-  free(c.snap);
-  free(c.pass_rgb);
+  tt__session_sync(s);
   /* the session borrows the database and the reference: the record keeps them */
   t->db = c.db;
   t->ref_lum = c.ref_lum;

@@ -27,6 +27,7 @@ LAYERS = [
     ["io"],                        # scene.json, mesh import, image I/O, format dispatch
     ["render"],                    # camera, film, samplers, BSDFs, lights, path, textures
     ["tuning"],                    # tuning database and the tuning loop
+    ["session"],                   # the render session over all of the above
 ]
 RANK = {folder: i for i, layer in enumerate(LAYERS) for folder in layer}
 

@@ -24,5 +24,6 @@
 #include <tunetrace/tunedb.h>
 #include <tunetrace/tuning_hint.h>
 #include <tunetrace/tuning.h>
+#include <tunetrace/session.h>
 
 #endif /* TUNETRACE_TUNETRACE_H */

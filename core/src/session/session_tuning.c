@@ -1,0 +1,234 @@
+/* The session as a tuning target (tunetrace/session.h): apply a configuration, render one
+ * measurement pass into the film and separate the image that pass alone rendered; and the
+ * state (camera, context, indicators) the measurements are recorded under. */
+#include "session/session_internal.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Copies the film's accumulators before a measurement pass. */
+static void tt__snapshot(tt_session *s) {
+  tt_film *f = s->film;
+  size_t n = (size_t)tt_film_width(f) * tt_film_height(f);
+  memcpy(s->snap, tt_film_sum_rgb(f), 3 * n * sizeof(float));
+  memcpy(s->snap + 3 * n, tt_film_sum_weight(f), n * sizeof(float));
+  memcpy(s->snap + 4 * n, tt_film_splat_rgb(f), 3 * n * sizeof(float));
+  s->snap_scale = tt_film_splat_scale(f);
+}
+
+/* The image the last pass alone renders (s->pass_rgb), from the accumulators before
+ * (s->snap) and after it. The tuning passes still accumulate into the film; this only
+ * separates the pass's share:
+ *  - per-pixel samples: (sum_wL after - before) / (sum_w after - before);
+ *  - splats (film.h: resolved = splat * scale, scale = c / N for N units so far, as
+ *    PSSMLT's b * pixels / mutations): the pass's splats times c / (N_after - N_before),
+ *    i.e. 1 / (1/scale_after - 1/scale_before). An unchanged scale means splats that add
+ *    up: the pass's splats times that scale. A film without splats before the pass, or a
+ *    scale that grew (the integrator restarted its estimate and cleared the splats), leaves
+ *    the splat buffer to this pass alone: splats after times scale after. */
+static void tt__pass_image(tt_session *s) {
+  tt_film *f = s->film;
+  size_t n = (size_t)tt_film_width(f) * tt_film_height(f);
+  const float *sr = tt_film_sum_rgb(f), *sw = tt_film_sum_weight(f), *sp = tt_film_splat_rgb(f);
+  const float *br = s->snap, *bw = s->snap + 3 * n, *bp = s->snap + 4 * n;
+  double ka = tt_film_splat_scale(f), kb = s->snap_scale;
+  int splats_before = 0;
+  for (size_t i = 0; i < 3 * n && !splats_before; i++) splats_before = bp[i] != 0.0f;
+  double inv = 1.0 / ka - 1.0 / kb;
+  int fresh = !splats_before || (ka != kb && (!(inv > 0) || !isfinite(inv)));
+  double k = fresh || ka == kb ? ka : 1.0 / inv;
+  for (size_t i = 0; i < n; i++) {
+    double dw = (double)sw[i] - bw[i];
+    for (int ch = 0; ch < 3; ch++) {
+      size_t j = 3 * i + ch;
+      double v = dw > 0 ? ((double)sr[j] - br[j]) / dw : 0.0;
+      v += (fresh ? (double)sp[j] : (double)sp[j] - bp[j]) * k;
+      s->pass_rgb[j] = (float)v;
+    }
+  }
+}
+
+/* Runs the post-filter target over the film as it is; its wall ms, or a negative value on
+ * failure. */
+static double tt__run_post(tt_session *s) {
+  const tt_camera *cam = tt_scene_camera(s->scene);
+  tt_film_resolve(s->film, s->post_in);
+  tt_post_frame f;
+  memset(&f, 0, sizeof f);
+  f.struct_size = sizeof f;
+  f.width = cam->width;
+  f.height = cam->height;
+  f.color = s->post_in;
+  f.frame_index = s->pass;
+  uint64_t t0 = s->host->clock_ns();
+  tt_status st = s->pi->process(s->post, &f, s->post_out);
+  double ms = (s->host->clock_ns() - t0) * 1e-6;
+  return st == TT_OK ? ms : -1.0;
+}
+
+/* tt_tuning_target.apply */
+static tt_status tt__target_apply(void *user, const tt_config *cfg, double *build_ms) {
+  tt_session *s = user;
+  return tt_session_apply(s, s->target_index, cfg, build_ms);
+}
+
+/* tt_tuning_target.render: one pass into the film (+ the filter of a post target), keeping
+ * the pass's own image when one is wanted. `m` NULL: a warm-up pass. */
+static tt_status tt__target_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
+  tt_session *s = user;
+  s->ps.struct_size = sizeof s->ps;
+  if (!m) return tt_session_render_pass(s, spp, &s->ps);
+  if (s->want_images) tt__snapshot(s);
+  tt_status st = tt_session_render_pass(s, spp, &s->ps);
+  m->render_ms = s->ps.time_ms;
+  m->pass = &s->ps;
+  if (st != TT_OK) return st;
+  if (s->want_images) {
+    tt__pass_image(s);
+    m->image = s->pass_rgb;
+  }
+  if (s->target_kind == TT_KIND_POST) {
+    double pms = tt__run_post(s);
+    if (pms < 0) return tt__session_error(TT_ERR_INTERNAL, "post-filter target: ");
+    m->render_ms += pms;
+  }
+  return TT_OK;
+}
+
+tt_status tt_session_tuning_target(tt_session *s, size_t index, int want_images,
+                                   tt_tuning_target *out) {
+  if (!s || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_session_tuning_target: NULL");
+  if (!s->started)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "the session has not started (tt_session_start)");
+  if (index >= tt_registry_count(s->reg))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning target: no plugin at index %zu", index);
+  const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->reg, index));
+  if (e->kind != TT_KIND_ACCEL && e->kind != TT_KIND_INTEGRATOR && e->kind != TT_KIND_POST)
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: a %s plugin cannot be a tuning target (only "
+                        "accel, integrator and post plugins)", e->name, tt_plugin_kind_name(e->kind));
+  size_t px = (size_t)tt_film_width(s->film) * tt_film_height(s->film);
+  if (want_images && !s->snap) {
+    s->snap = malloc(7 * px * sizeof(float));
+    s->pass_rgb = malloc(3 * px * sizeof(float));
+  }
+  if (e->kind == TT_KIND_POST && !s->post_in) {
+    s->post_in = malloc(3 * px * sizeof(float));
+    s->post_out = malloc(3 * px * sizeof(float));
+  }
+  if ((want_images && (!s->snap || !s->pass_rgb)) ||
+      (e->kind == TT_KIND_POST && (!s->post_in || !s->post_out)))
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuning target: out of memory for %zu pixels", px);
+  if (e->kind == TT_KIND_POST) s->pi = tt_loaded_plugin_iface(tt_registry_get(s->reg, index));
+  s->target_index = index;
+  s->target_kind = e->kind;
+  s->want_images = want_images;
+  memset(out, 0, sizeof *out);
+  out->struct_size = sizeof *out;
+  out->user = s;
+  out->apply = tt__target_apply;
+  out->render = tt__target_render;
+  return TT_OK;
+}
+
+/* Adds every member of the JSON object `extra` (NULL: none) to `obj`; TT_ERR_PARSE naming
+ * `what` when it is no object. */
+static tt_status tt__add_members(cJSON *obj, const char *extra, const char *what) {
+  if (!extra) return TT_OK;
+  cJSON *e = cJSON_Parse(extra);
+  if (!e || !cJSON_IsObject(e)) {
+    cJSON_Delete(e);
+    return tt_set_error(TT_ERR_PARSE, "tuning state: %s: expected a JSON object, got \"%.80s\"",
+                        what, extra);
+  }
+  while (e->child) {
+    cJSON *item = cJSON_DetachItemViaPointer(e, e->child);
+    cJSON_AddItemToObject(obj, item->string, item);
+  }
+  cJSON_Delete(e);
+  return TT_OK;
+}
+
+/* Prints `root` compactly into a malloc'd string (the session's), deleting `root`. */
+static char *tt__print(cJSON *root) {
+  char *text = cJSON_PrintUnformatted(root);
+  cJSON_Delete(root);
+  if (!text) return NULL;
+  char *out = malloc(strlen(text) + 1);
+  if (out) strcpy(out, text);
+  cJSON_free(text);
+  return out;
+}
+
+/* %.9g of a float, as the tuning database has always stored camera numbers. */
+static cJSON *tt__num(double v) {
+  char buf[32];
+  snprintf(buf, sizeof buf, "%.9g", v);
+  return cJSON_CreateRaw(buf);
+}
+
+tt_status tt_session_tuning_state(tt_session *s, size_t index, uint32_t spp,
+                                  const char *camera_extra, const char *context_extra,
+                                  int indicators, tt_tuning_state *out) {
+  if (!s || !out || !s->scene)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning state: no scene loaded");
+  if (index >= tt_registry_count(s->reg))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning state: no plugin at index %zu", index);
+  const tt_camera *c = tt_scene_camera(s->scene);
+  /* the view: the part of the state the camera contributes */
+  cJSON *cam = cJSON_CreateObject();
+  const float *vec[3] = {c->position, c->target, c->up};
+  static const char *const vec_name[3] = {"position", "target", "up"};
+  for (int v = 0; v < 3; v++) {
+    cJSON *a = cJSON_AddArrayToObject(cam, vec_name[v]);
+    for (int k = 0; k < 3; k++) cJSON_AddItemToArray(a, tt__num(vec[v][k]));
+  }
+  cJSON_AddItemToObject(cam, "fov_y", tt__num(c->fov_y));
+  cJSON *res = cJSON_AddArrayToObject(cam, "resolution");
+  cJSON_AddItemToArray(res, cJSON_CreateNumber(c->width));
+  cJSON_AddItemToArray(res, cJSON_CreateNumber(c->height));
+  /* everything else that shapes the cost: samples per measurement, threads, and the other
+   * rendering plugins with their configurations (an accel's render time depends on the
+   * integrator's maxDepth, an integrator's on the accel). Tuners and predictors are left
+   * out: they choose configurations, they do not change what one costs. */
+  cJSON *ctx = cJSON_CreateObject();
+  cJSON_AddNumberToObject(ctx, "spp", spp ? spp : 1);
+  cJSON_AddNumberToObject(ctx, "threads", s->host->thread_count());
+  cJSON *plugins = cJSON_AddObjectToObject(ctx, "plugins");
+  for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
+    const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->reg, i));
+    if (i == index || e->kind == TT_KIND_TUNER || e->kind == TT_KIND_PREDICTOR) continue;
+    cJSON *p = cJSON_AddObjectToObject(plugins, e->name);
+    cJSON_AddStringToObject(p, "version", e->version);
+    char *cfg = s->configs[i] ? tt_config_to_json(s->configs[i]) : NULL;
+    cJSON *obj = cfg ? cJSON_Parse(cfg) : NULL;
+    tt_free(cfg);
+    cJSON_AddItemToObject(p, "config", obj ? obj : cJSON_CreateObject());
+  }
+  tt_status st = tt__add_members(cam, camera_extra, "camera_extra");
+  if (st == TT_OK) st = tt__add_members(ctx, context_extra, "context_extra");
+  if (st != TT_OK) {
+    cJSON_Delete(cam);
+    cJSON_Delete(ctx);
+    return st;
+  }
+  free(s->state_camera);
+  free(s->state_context);
+  s->state_camera = tt__print(cam);
+  s->state_context = tt__print(ctx);
+  if (!s->state_camera || !s->state_context)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuning state: out of memory");
+  memset(out, 0, sizeof *out);
+  out->struct_size = sizeof *out;
+  out->scene_id = tt_scene_id(s->scene);
+  out->scene = tt_scene_source(s->scene);
+  out->camera = s->state_camera;
+  out->context = s->state_context;
+  if (indicators) {
+    tt_scene_indicators(s->scene, out->indicators);
+    out->has_indicators = 1;
+  }
+  return TT_OK;
+}
