@@ -16,6 +16,7 @@ PACKAGES=(
   python3-matplotlib                          # tools/tuning/ charts (tests/tune_plot.sh)
   python3-numpy python3-openimageio           # tools/scenes/ generators (tests/scenes_generate.sh)
   python3-numpy python3-scipy                 # tools/tuning/analyze.py (tests/tune_analyze.sh)
+  python3-numpy                               # the Python API's arrays (tests/python_api.py)
 )
 
 missing=()

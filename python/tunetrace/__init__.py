@@ -1,0 +1,641 @@
+"""tunetrace from Python: render scenes through libtunetrace's plugins into numpy arrays,
+tune plugin parameters online (thesis ch. 3) and read the tuning database.
+
+    import tunetrace as tt
+    s = tt.Session("scenes/cornell-box/scene.json", plugins=["integrator_pt"],
+                   resolution=(128, 128), seed=7, aovs=["normal", "albedo"])
+    s.set("integrator_pt.maxDepth", 8)
+    rgb = s.render(spp=16)            # (128, 128, 3) float32, linear RGB
+    normal = s.aov("normal")          # (128, 128, 3)
+    t = s.tune("accel_embree", tuner="tuner_nm", iterations=20, db="tuning.db")
+    print(t.best_config, t.best_cost, len(t.history))
+
+Everything goes through the library's render session (tunetrace/session.h), so an image is
+the one `host` renders for the same scene, plugins, parameters and seed. Errors raise
+tunetrace.Error carrying the library's message (which names the file, the field and what
+was expected). See python/README.md for how the library is found.
+"""
+import ctypes
+import json
+import os
+
+import numpy as np
+
+from . import _lib
+from ._lib import lib, text
+
+__all__ = ["Error", "Session", "Tuning", "TuningDB", "version", "library_path",
+           "list_plugins", "describe", "read_image", "write_exr", "set_threads", "AOVS"]
+
+KINDS = {1: "accel", 2: "integrator", 3: "tuner", 4: "predictor", 5: "post", 6: "sampler"}
+# AOV name -> (tt_aov bit, channels), film.h
+AOVS = {"depth": (1, 1), "normal": (2, 3), "albedo": (4, 3), "motion": (8, 2)}
+COST_INFEASIBLE = 1e300  # TT_COST_INFEASIBLE (tuner.h)
+_STATUS_NAMES = {0: "ok", 1: "infeasible", 2: "failed"}
+
+
+class Error(Exception):
+    """A libtunetrace call failed. str(e) is the library's message; e.status the tt_status
+    code (negative), e.status_name its name ("parse error", "I/O error", ...)."""
+
+    def __init__(self, status, message):
+        super().__init__(message)
+        self.status = status
+        self.status_name = text(lib.tt_status_string(status))
+
+
+def _check(status, what=None):
+    if status < 0:
+        msg = text(lib.tt_last_error()) or text(lib.tt_status_string(status))
+        raise Error(status, f"{what}: {msg}" if what else msg)
+    return status
+
+
+def _b(s):
+    return None if s is None else str(s).encode()
+
+
+def version():
+    """The library's version string."""
+    return text(lib.tt_version())
+
+
+def library_path():
+    """The libtunetrace file this package loaded."""
+    return _lib.LIBRARY_PATH
+
+
+def set_threads(n):
+    """Worker threads of the library's default host (0: all CPUs). Before rendering."""
+    _check(lib.tt_default_host_set_threads(int(n)), "threads")
+
+
+def _extra_plugin_dirs(plugin_path):
+    dirs = list(plugin_path or [])
+    build = getattr(_lib._paths, "BUILD_PLUGIN_DIR", None) if _lib._paths else None
+    if build:  # the build tree's package also finds the build tree's plugins
+        dirs.append(build)
+    return dirs
+
+
+def _plugin_info(entry, path=None):
+    e = entry.contents if hasattr(entry, "contents") else entry
+    return {"name": text(e.name), "kind": KINDS.get(e.kind, str(e.kind)),
+            "version": text(e.version), "description": text(e.description) or "",
+            "path": path}
+
+
+class _Registry:
+    """A registry for listing and describing plugins outside a session."""
+
+    def __init__(self, plugin_path=None):
+        self.ptr = lib.tt_registry_create(lib.tt_default_host())
+        if not self.ptr:
+            _check(-2, "registry")
+        for d in _extra_plugin_dirs(plugin_path):
+            lib.tt_registry_add_dir(self.ptr, _b(d))
+
+    def close(self):
+        if self.ptr:
+            lib.tt_registry_destroy(self.ptr)
+            self.ptr = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def list_plugins(plugin_path=None):
+    """Every plugin file in the search path (first occurrence of a name wins), as dicts
+    {name, kind, version, description, path}; a file the loader rejects has name None and
+    its reason under "error"."""
+    out = []
+    with _Registry(plugin_path) as reg:
+        def one(_user, path):
+            entry = _lib.Plugin()
+            if lib.tt_registry_probe(reg.ptr, path, ctypes.byref(entry)) == 0:
+                out.append(_plugin_info(entry, path.decode()))
+            else:
+                out.append({"name": None, "path": path.decode(),
+                            "error": text(lib.tt_last_error())})
+        lib.tt_registry_list_files(reg.ptr, _lib.LIST_FN(one), None)
+    return out
+
+
+def _describe_loaded(p):
+    """Space (parameters, constraints) and options of a loaded plugin, as host --describe."""
+    entry = lib.tt_loaded_plugin_entry(p).contents
+    space = lib.tt_loaded_plugin_space(p)
+    d = json.loads(_lib.take_string(lib.tt_space_to_json(space))) if space else {
+        "plugin": text(entry.name), "version": text(entry.version), "parameters": [],
+        "constraints": []}
+    d["kind"] = KINDS.get(entry.kind, str(entry.kind))
+    d["options"] = []
+    oi = lib.tt_session_plugin_options(p)
+    if oi:
+        oi = oi.contents
+        for i in range(oi.count()):
+            info = oi.info(i)
+            if not info or not info.contents.key:
+                continue
+            key = info.contents.key
+            d["options"].append({"name": text(key),
+                                 "description": text(info.contents.description) or "",
+                                 "value": text(oi.get(key)) or ""})
+    return d
+
+
+def describe(name, plugin_path=None):
+    """The plugin's parameter space and options as a dict (host --describe NAME)."""
+    with _Registry(plugin_path) as reg:
+        p = ctypes.c_void_p()
+        _check(lib.tt_registry_load(reg.ptr, _b(name), ctypes.byref(p)), f"plugin \"{name}\"")
+        return _describe_loaded(p)
+
+
+def read_image(path):
+    """Reads an image (EXR, PNG, ... through OpenImageIO) as float32 (height, width,
+    channels)."""
+    w, h, c = ctypes.c_uint32(), ctypes.c_uint32(), ctypes.c_uint32()
+    px = ctypes.POINTER(ctypes.c_float)()
+    _check(lib.tt_image_read(_b(path), ctypes.byref(w), ctypes.byref(h), ctypes.byref(c),
+                             ctypes.byref(px)))
+    try:
+        n = w.value * h.value * c.value
+        return np.ctypeslib.as_array(px, shape=(n,)).copy().reshape(h.value, w.value, c.value)
+    finally:
+        lib.tt_free(ctypes.cast(px, ctypes.c_void_p))
+
+
+class _Meta(ctypes.Structure):  # tt_image_meta (image.h)
+    _fields_ = [("key", ctypes.c_char_p), ("value", ctypes.c_char_p)]
+
+
+def write_exr(path, pixels, channels=None, meta=None):
+    """Writes float32 pixels (height, width[, channels]) to an OpenEXR file (32-bit float,
+    bit-exact round trip) with channel names (default R,G,B[,A] or Y; layers as
+    "normal.X", ...) and metadata (a dict of strings)."""
+    a = np.ascontiguousarray(pixels, dtype=np.float32)
+    if a.ndim == 2:
+        a = a[:, :, None]
+    h, w, c = a.shape
+    names = None
+    if channels is not None:
+        if len(channels) != c:
+            raise Error(-1, f"write_exr {path}: {c} channels but {len(channels)} names")
+        names = (ctypes.c_char_p * c)(*[_b(n) for n in channels])
+    items = list((meta or {}).items())
+    m = (_Meta * max(1, len(items)))(*[_Meta(_b(k), _b(v)) for k, v in items])
+    _check(lib.tt_image_write_exr(_b(os.fspath(path)), w, h, c,
+                                  a.ctypes.data_as(ctypes.POINTER(ctypes.c_float)), names,
+                                  ctypes.cast(m, ctypes.c_void_p), len(items)))
+
+
+def _value_text(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return str(v)
+
+
+class Session:
+    """A render session: one scene, the loaded plugins with their configurations, the accel,
+    the integrator and the film. Passes accumulate progressively; render() returns the image
+    so far. Use from one thread; close() (or a with block) frees it."""
+
+    def __init__(self, scene, plugins=(), params=None, resolution=None, seed=None,
+                 aovs=(), plugin_path=None, camera_time=None, frame_interval=1.0 / 24):
+        """Loads `scene` (scene.json or .pbrt) and the `plugins` (names or paths); `params`
+        maps "plugin.param" to a value; `resolution` (width, height) and `seed` override the
+        scene's; `aovs` names the AOV planes to keep (depth, normal, albedo, motion);
+        `camera_time` (seconds) picks the pose on the scene's camera path, with the motion
+        AOV measured against the pose `frame_interval` earlier."""
+        self._ptr = None
+        ptr = ctypes.c_void_p()
+        _check(lib.tt_session_create(None, ctypes.byref(ptr)), "session")
+        self._ptr = ptr
+        self._aovs = self._aov_mask(aovs)
+        self._set = {}  # plugin -> {key: value} set explicitly (a tuning hint's setup yields)
+        for d in _extra_plugin_dirs(plugin_path):
+            _check(lib.tt_session_add_plugin_dir(self._ptr, _b(d)))
+        _check(lib.tt_session_load_scene(self._ptr, _b(os.fspath(scene))))
+        if resolution is not None:
+            w, h = resolution
+            _check(lib.tt_scene_set_resolution(lib.tt_session_scene(self._ptr), int(w), int(h)),
+                   "resolution")
+        if camera_time is not None:
+            _check(lib.tt_session_set_camera_time(self._ptr, float(camera_time),
+                                                  float(frame_interval)), "camera_time")
+        if seed is not None:
+            lib.tt_session_set_seed(self._ptr, int(seed))
+        for p in plugins:
+            self.load_plugin(p)
+        for key, value in (params or {}).items():
+            self.set(key, value)
+
+    # -- life cycle --
+    def close(self):
+        """Frees the session (plugins are unloaded; arrays and Tuning results returned
+        before stay valid)."""
+        if self._ptr:
+            lib.tt_session_destroy(self._ptr)
+            self._ptr = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        self.close()
+
+    @property
+    def _p(self):
+        if not self._ptr:
+            raise Error(-1, "the session is closed")
+        return self._ptr
+
+    @staticmethod
+    def _aov_mask(aovs):
+        mask = 0
+        for a in aovs:
+            if a not in AOVS:
+                raise Error(-1, f"AOV \"{a}\": expected one of {', '.join(AOVS)}")
+            mask |= AOVS[a][0]
+        return mask
+
+    # -- set-up --
+    def load_plugin(self, name):
+        """Loads a plugin by name or path; returns its description (name, kind, version)."""
+        p = ctypes.c_void_p()
+        _check(lib.tt_session_load_plugin(self._p, _b(name), ctypes.byref(p)), f"plugin \"{name}\"")
+        return _plugin_info(lib.tt_loaded_plugin_entry(p), text(lib.tt_loaded_plugin_path(p)))
+
+    @property
+    def plugins(self):
+        """The loaded plugins in load order (the defaults appear once the session started)."""
+        reg = lib.tt_session_registry(self._p)
+        out = []
+        for i in range(lib.tt_registry_count(reg)):
+            p = lib.tt_registry_get(reg, i)
+            out.append(_plugin_info(lib.tt_loaded_plugin_entry(p), text(lib.tt_loaded_plugin_path(p))))
+        return out
+
+    def _loaded(self, name):
+        p = lib.tt_registry_find_name(lib.tt_session_registry(self._p), _b(name))
+        if not p:
+            loaded = ", ".join(x["name"] for x in self.plugins)
+            raise Error(-1, f"no plugin \"{name}\" is loaded (loaded: {loaded})")
+        return p
+
+    def describe(self, name):
+        """Space and options of a loaded plugin (as host --describe)."""
+        return _describe_loaded(self._loaded(name))
+
+    def set(self, key, value, value2=None):
+        """Sets a parameter or option: set("plugin.param", v) or set("plugin", "param", v).
+        Raises Error with the library's message for an unknown plugin, key or bad value."""
+        if value2 is None:
+            plugin, dot, param = str(key).partition(".")
+            if not dot:
+                raise Error(-1, f"set({key!r}, ...): expected \"plugin.param\"")
+        else:
+            plugin, param, value = key, value, value2
+        _check(lib.tt_session_set(self._p, _b(plugin), _b(param), _b(_value_text(value))),
+               f"{plugin}.{param}={_value_text(value)}")
+        self._set.setdefault(plugin, {})[param] = _value_text(value)
+
+    def config(self, plugin):
+        """The plugin's configuration as a dict (parameter -> value)."""
+        cfg = lib.tt_session_config(self._p, _b(plugin))
+        if not cfg:
+            self._loaded(plugin)
+            return {}
+        return json.loads(_lib.take_string(lib.tt_config_to_json(cfg)))
+
+    # -- rendering --
+    def start(self, aovs=None):
+        """Loads the default accel and integrator, checks the configurations, builds the accel
+        and creates the film (render() does this on first use)."""
+        if aovs is not None:
+            self._aovs = self._aov_mask(aovs)
+        if not lib.tt_session_started(self._p):
+            _check(lib.tt_session_start(self._p, self._aovs))
+
+    @property
+    def resolution(self):
+        c = lib.tt_session_camera(self._p).contents
+        return c.width, c.height
+
+    def render(self, spp=1, pass_spp=1):
+        """Renders `spp` more samples per pixel in passes of `pass_spp` (host renders passes
+        of 1) and returns the accumulated image, float32 (height, width, 3)."""
+        self.start()
+        ps = _lib.PassStats(struct_size=ctypes.sizeof(_lib.PassStats))
+        done = 0
+        while done < spp:
+            n = min(pass_spp, spp - done)
+            _check(lib.tt_session_render_pass(self._p, n, ctypes.byref(ps)), "render")
+            done += n
+        return self.image()
+
+    def image(self):
+        """The film resolved to linear RGB, float32 (height, width, 3)."""
+        film = self._film()
+        w, h = lib.tt_film_width(film), lib.tt_film_height(film)
+        out = np.empty((h, w, 3), dtype=np.float32)
+        lib.tt_film_resolve(film, out.ctypes.data_as(ctypes.POINTER(ctypes.c_float)))
+        return out
+
+    def _film(self):
+        film = lib.tt_session_film(self._p)
+        if not film:
+            raise Error(-1, "the session has not rendered yet (call render() or start())")
+        return film
+
+    def aov(self, name):
+        """An AOV plane of the last pass (first hit): depth (h, w), normal and albedo
+        (h, w, 3), motion (h, w, 2) in pixels from this frame to the previous one."""
+        if name not in AOVS:
+            raise Error(-1, f"AOV \"{name}\": expected one of {', '.join(AOVS)}")
+        film = self._film()
+        bit, ch = AOVS[name]
+        ptr = lib.tt_film_aov_const(film, bit)
+        if not ptr:
+            have = [a for a, (b, _) in AOVS.items() if lib.tt_film_aov_mask(film) & b]
+            raise Error(-1, f"AOV \"{name}\" was not requested (the session keeps: "
+                            f"{', '.join(have) or 'none'}; pass aovs=[...] to Session)")
+        w, h = lib.tt_film_width(film), lib.tt_film_height(film)
+        a = np.ctypeslib.as_array(ptr, shape=(w * h * ch,)).copy()
+        return a.reshape(h, w) if ch == 1 else a.reshape(h, w, ch)
+
+    def reset(self):
+        """Clears the film and the integrator's state; the next render starts from 0 spp."""
+        if lib.tt_session_started(self._p):
+            lib.tt_session_reset(self._p)
+
+    @property
+    def stats(self):
+        """What the passes and builds measured: passes, spp, render_ms, rays, samples,
+        nonfinite, build_ms, seed, metrics (mean per pass)."""
+        st = _lib.SessionStats(struct_size=ctypes.sizeof(_lib.SessionStats))
+        lib.tt_session_get_stats(self._p, ctypes.byref(st))
+        lp = st.last_pass
+        metrics = {text(lp.metrics[m].name): st.metric_sums[m] / st.passes
+                   for m in range(min(lp.metric_count, _lib.TT_MAX_METRICS))
+                   if lp.metrics[m].name and st.passes}
+        return {"passes": st.passes, "spp": st.spp, "render_ms": st.render_ms,
+                "rays": st.rays, "samples": st.samples, "nonfinite": st.nonfinite,
+                "build_ms": st.build_ms, "seed": st.seed, "metrics": metrics}
+
+    # -- tuning --
+    def tune(self, target=None, tuner=None, iterations=50, objective=None, params=None,
+             spp=1, db=None, seed=None, warmup_passes=1, time_budget=0.0, verify=0):
+        """Tunes the plugin `target` online (thesis Fig. 3.2): the default configuration is
+        measured first, then the tuner plugin `tuner` (loaded if needed; None: random
+        exploration) proposes `iterations` configurations, each applied and rendered for one
+        pass of `spp` (the passes accumulate into the image). `target` None: an integrator
+        with a tuning hint (PSSMLT), else the accel; `objective` None: the hint's, else
+        "render"; `params`: the parameters searched (None: the hint's list, else all). `db`: a
+        TuningDB or a path (None: no database). Afterwards the target runs the best
+        configuration. `verify` > 0 measures default and best side by side that many rounds.
+        Returns a Tuning with the history."""
+        self.start()
+        reg = lib.tt_session_registry(self._p)
+        tuner_p = None
+        if tuner is not None:
+            tuner_p = lib.tt_registry_find_name(reg, _b(tuner))
+            if not tuner_p:
+                raise Error(-1, f"tuner \"{tuner}\" is not loaded: pass plugins=[\"{tuner}\", "
+                                "...] to Session (plugins load before the session starts)")
+        hint = None
+        if target is None:
+            integ = lib.tt_session_integrator_plugin(self._p)
+            hint = self._hint(integ)
+            space = lib.tt_loaded_plugin_space(integ)
+            if hint and space and lib.tt_space_count(space):
+                target_p = integ
+            else:
+                target_p, hint = lib.tt_session_accel_plugin(self._p), None
+        else:
+            target_p = self._loaded(target)
+            hint = self._hint(target_p)
+        entry = lib.tt_loaded_plugin_entry(target_p).contents
+        name = text(entry.name)
+        index = lib.tt_session_plugin_index(self._p, entry.name)
+        space = lib.tt_loaded_plugin_space(target_p)
+        if not space or not lib.tt_space_count(space):
+            raise Error(-1, f"{name}: the plugin publishes no tunable parameters")
+        current = lib.tt_session_config_at(self._p, index)
+        if hint is not None and hint.setup:  # the hint's starting values, the user's on top
+            _check(lib.tt_config_from_json(current, hint.setup, b"tuning hint setup"), name)
+            for k, v in self._set.get(name, {}).items():
+                _check(lib.tt_session_set(self._p, _b(name), _b(k), _b(v)))
+        if params is None and hint is not None and hint.tunable:
+            params, i = [], 0
+            while hint.tunable[i]:
+                params.append(text(hint.tunable[i]))
+                i += 1
+        if objective is None:
+            objective = text(hint.objective) if hint is not None else "render"
+        subset = None
+        if params:
+            names = (ctypes.c_char_p * len(params))(*[_b(p) for p in params])
+            subset = lib.tt_space_subset(space, names, len(params), current)
+            if not subset:
+                _check(-1, "params")
+        own_db = None
+        if db is not None and not isinstance(db, TuningDB):
+            db = own_db = TuningDB(db)
+        try:
+            return self._run_tuning(index, entry, space, current, subset, objective, tuner_p,
+                                    iterations, spp, db, seed, warmup_passes, time_budget,
+                                    verify)
+        finally:
+            if subset:
+                lib.tt_space_destroy(subset)
+            if own_db:
+                own_db.close()
+
+    @staticmethod
+    def _hint(p):
+        h = lib.tt_loaded_plugin_get(p, b"tt.tuning_hint/1") if p else None
+        if not h:
+            return None
+        h = ctypes.cast(h, ctypes.POINTER(_lib.TuningHint)).contents
+        return h if h.objective else None
+
+    def _run_tuning(self, index, entry, space, current, subset, objective, tuner_p, iterations,
+                    spp, db, seed, warmup_passes, time_budget, verify):
+        state = _lib.TuningState()
+        _check(lib.tt_session_tuning_state(self._p, index, spp, None, None, db is not None,
+                                           ctypes.byref(state)), "tuning state")
+        target = _lib.TuningTarget()
+        want_images = objective.startswith("rrmse")
+        _check(lib.tt_session_tuning_target(self._p, index, want_images, ctypes.byref(target)),
+               "tuning target")
+        w, h = self.resolution
+        d = _lib.TuningDesc(struct_size=ctypes.sizeof(_lib.TuningDesc))
+        d.host = lib.tt_default_host()
+        d.space, d.start, d.search = space, current, subset
+        d.objective = _b(objective)
+        if tuner_p:
+            d.tuner = lib.tt_loaded_plugin_iface(tuner_p)
+            tentry = lib.tt_loaded_plugin_entry(tuner_p).contents
+            d.tuner_settings = lib.tt_session_config_at(
+                self._p, lib.tt_session_plugin_index(self._p, tentry.name))
+            d.tuner_name = tentry.name
+        d.seed = int(seed) if seed is not None else self.stats["seed"]
+        d.iterations, d.spp, d.warmup_passes = int(iterations), int(spp), int(warmup_passes)
+        d.time_budget_s = float(time_budget)
+        d.plugin, d.plugin_version = entry.name, entry.version
+        d.db = db._ptr if db is not None else None
+        d.state = ctypes.pointer(state)
+        d.width, d.height = w, h
+        t = ctypes.c_void_p()
+        _check(lib.tt_tuning_create(ctypes.byref(d), ctypes.byref(t)), "tuning")
+        try:
+            return self._drive(t, target, current, objective, db, verify)
+        finally:
+            lib.tt_tuning_destroy(t)
+
+    def _drive(self, t, target, current, objective, db, verify):
+        verification = None
+        st = lib.tt_tuning_run(t, ctypes.byref(target))
+        if st == -8:  # TT_ERR_NO_DATA: the objective's metric is not published
+            _check(st, f"objective {objective}")
+        interrupted = st == -9
+        if st < 0 and not interrupted:
+            _check(st, "tuning")
+        if verify and not interrupted:
+            v = _lib.TuningVerification(struct_size=ctypes.sizeof(_lib.TuningVerification))
+            vst = lib.tt_tuning_verify(t, ctypes.byref(target), int(verify), ctypes.byref(v))
+            if vst < 0 and vst != -9:
+                _check(vst, "verify")
+            verification = {
+                "rounds": v.rounds, "render_ratio": v.render_ratio, "total_ratio": v.total_ratio,
+                "cost_ratio": v.cost_ratio, "median_render_ms": list(v.median_render_ms),
+                "median_total_ms": list(v.median_total_ms), "median_cost": list(v.median_cost)}
+        # keep the best: the rest of the image renders with it (as host does)
+        _check(lib.tt_config_from_json(current, lib.tt_tuning_best_json(t), b"tuning"), "best")
+        if not interrupted:
+            _check(lib.tt_tuning_apply_best(t, ctypes.byref(target), None), "apply best")
+        tuning = Tuning(t, db)
+        tuning.verification = verification
+        return tuning
+
+
+class Tuning:
+    """The result of Session.tune, read from the library's tuning session once it finished:
+    history (every sample in order: dicts {iteration (-1: the default), config (dict), cost,
+    build_ms, render_ms, status ("ok", "infeasible", "failed"), cached (answered by the
+    database)}), best_config / best_cost (lowest mean cost over repeats), default_config /
+    default_cost, mode ("tune" or "explore"), stats (requested, iterations, measured,
+    cached, infeasible, failed, converged, interrupted, tuning_ms), verification (with
+    verify > 0), db_path."""
+
+    def __init__(self, ptr, db):
+        self.history = []
+        for i in range(lib.tt_tuning_sample_count(ptr)):
+            s = lib.tt_tuning_sample_at(ptr, i).contents
+            self.history.append({
+                "iteration": s.iteration, "config": json.loads(text(s.config)), "cost": s.cost,
+                "build_ms": s.build_ms, "render_ms": s.render_ms,
+                "status": _STATUS_NAMES.get(s.status, str(s.status)), "cached": bool(s.cached)})
+        self.best_config = json.loads(text(lib.tt_tuning_best_json(ptr)))
+        self.default_config = json.loads(text(lib.tt_tuning_default_json(ptr)))
+        c = ctypes.c_double(COST_INFEASIBLE)
+        lib.tt_tuning_best(ptr, None, ctypes.byref(c))
+        self.best_cost = c.value
+        c = ctypes.c_double(COST_INFEASIBLE)
+        lib.tt_tuning_default_cost(ptr, ctypes.byref(c))
+        self.default_cost = c.value
+        self.mode = text(lib.tt_tuning_mode(ptr))
+        st = _lib.TuningStats(struct_size=ctypes.sizeof(_lib.TuningStats))
+        lib.tt_tuning_get_stats(ptr, ctypes.byref(st))
+        self.stats = {f: getattr(st, f) for f, _ in _lib.TuningStats._fields_ if f != "struct_size"}
+        self.db_path = db.path if db is not None else None
+        self.verification = None
+
+    def __repr__(self):
+        return (f"<tunetrace.Tuning {self.mode}: {len(self.history)} samples, best cost "
+                f"{self.best_cost:.6g}, default {self.default_cost:.6g}>")
+
+
+class TuningDB:
+    """The tuning database (tunetrace/tunedb.h): one SQLite file of every measured (state,
+    configuration) pair. TuningDB() opens the default one ($XDG_DATA_HOME/tunetrace/
+    tuning.db); rows() reads it through the library, so the schema is the library's."""
+
+    def __init__(self, path=None):
+        self._ptr = None
+        if path is None:
+            path = _lib.take_string(lib.tt_tunedb_default_path())
+            if path is None:
+                raise Error(-1, "no $XDG_DATA_HOME or $HOME: give the database a path")
+        ptr = ctypes.c_void_p()
+        _check(lib.tt_tunedb_open(_b(os.fspath(path)), ctypes.byref(ptr)))
+        self._ptr = ptr
+
+    @property
+    def path(self):
+        return text(lib.tt_tunedb_path(self._p))
+
+    @property
+    def _p(self):
+        if not self._ptr:
+            raise Error(-1, "the database is closed")
+        return self._ptr
+
+    def close(self):
+        if self._ptr:
+            lib.tt_tunedb_close(self._ptr)
+            self._ptr = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        self.close()
+
+    def count(self, plugin=None):
+        n = ctypes.c_uint64()
+        _check(lib.tt_tunedb_count(self._p, _b(plugin), ctypes.byref(n)), "count")
+        return n.value
+
+    def __len__(self):
+        return self.count()
+
+    def rows(self, plugin=None):
+        """Every row (of `plugin`, or all) in insertion order as dicts; camera, context,
+        config and metrics are parsed JSON, indicators a list (None when unknown)."""
+        out = []
+
+        def one(_user, rp):
+            r = rp.contents
+            row = {}
+            for f, _ in _lib.TunedbRow._fields_:
+                if f == "struct_size":
+                    continue
+                v = getattr(r, f)
+                if isinstance(v, bytes):
+                    v = v.decode()
+                row[f] = v
+            for f in ("camera", "context", "config", "metrics"):
+                if row[f]:
+                    row[f] = json.loads(row[f])
+            row["indicators"] = list(r.indicators) if r.has_indicators else None
+            del row["has_indicators"]
+            row["status"] = _STATUS_NAMES.get(r.status, str(r.status))
+            out.append(row)
+            return 0
+        _check(lib.tt_tunedb_foreach(self._p, _b(plugin), _lib.ROW_FN(one), None), "rows")
+        return out
+
+    def export_csv(self, path):
+        _check(lib.tt_tunedb_export_csv(self._p, _b(os.fspath(path))), "export")
