@@ -62,7 +62,7 @@ typedef struct tt__host_options {
   const char *post;         /* --post NAME: post-filter applied to each frame */
   const char *seq_pattern;  /* --out DIR/NAME_%04d.exr: frame file pattern (sequence) */
   int aov_set;              /* --aov given */
-  uint32_t aov_mask;        /* TT__SEQ_AOV_* bits written per frame */
+  uint32_t aov_mask;        /* TT__AOV_* bits: EXR layers of a still, files of a sequence */
   int reference_only;       /* --supersample K: the frames are the reference */
   /* camera path samples (run.c): sample I of TT_HOST_PATH_SAMPLES at t = I/(N-1) of the
    * path's time range */
@@ -79,9 +79,12 @@ int tt__run_convert(const tt__host_options *opt);
 
 #define TT_HOST_PATH_SAMPLES 100
 
-/* Per-frame AOVs of a sequence (--aov). */
-#define TT__SEQ_AOV_DEPTH 1u
-#define TT__SEQ_AOV_MOTION 2u
+/* AOVs (--aov): the film's TT_AOV_* bits. A still writes them as layers of its EXR, a
+ * sequence as one file per frame and AOV. */
+#define TT__AOV_DEPTH ((uint32_t)TT_AOV_DEPTH)
+#define TT__AOV_NORMAL ((uint32_t)TT_AOV_NORMAL)
+#define TT__AOV_ALBEDO ((uint32_t)TT_AOV_ALBEDO)
+#define TT__AOV_MOTION ((uint32_t)TT_AOV_MOTION)
 
 #define TT_HOST_DEFAULT_ITERATIONS 50
 

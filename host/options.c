@@ -87,12 +87,13 @@ void tt__print_usage(FILE *out) {
     "  --frames A:B --out DIR/frame_%04d.exr\n"
     "                         the same as a sequence of frames A..B, each written to the\n"
     "                         pattern (manifest.json in DIR); beside it: --aov depth,motion\n"
-    "                         -> frame_NNNN.depth.exr / .motion.exr; --supersample K writes\n"
+    "                         -> frame_NNNN.depth.exr / .motion.exr (.normal, .albedo too);\n"
+    "                         --supersample K writes\n"
     "                         the K x K-supersampled reference as the frame instead; a\n"
     "                         post-filter (--plugin post_taa --set post_taa.mode=network)\n"
     "                         writes the filtered frame, the rendered one as frame_NNNN.raw.exr\n"
-    "  --aov LIST             per-frame AOVs: depth, motion (default: both with --out-dir,\n"
-    "                         none with an --out pattern)\n"
+    "  --aov LIST             per-frame AOVs: depth, normal, albedo, motion (default: depth\n"
+    "                         and motion with --out-dir, none with an --out pattern)\n"
     "  --supersample K        write only the reference (K x K the resolution, Blackman-Harris)\n"
     "  --set NAME.KEY=VALUE   also sets a plugin's options (not tuned; host --describe NAME),\n"
     "                         e.g. --set post_taa.weights=FILE.ttw\n"
@@ -106,6 +107,8 @@ void tt__print_usage(FILE *out) {
     "Output:\n"
     "  --out FILE.exr         linear EXR; a display-referred PNG is written next to it\n"
     "                         (default: <scene folder>.exr in the current directory)\n"
+    "  --aov LIST             also write AOVs as layers of the EXR: depth (depth.Z), normal\n"
+    "                         (normal.X/Y/Z), albedo (albedo.R/G/B), motion (motion.X/Y)\n"
     "  --stats FILE.json      machine-readable record of the run\n"
     "  --convert              write the loaded scene (scene.json or .pbrt) as scene.json v1\n"
     "                         to --out FILE.json, meshes as PLY in meshes/ next to it; no render\n"
@@ -157,20 +160,24 @@ static int tt__push(const char **list, int *count, const char *opt, const char *
   return 0;
 }
 
-/* Parses --aov "depth,motion" into TT__SEQ_AOV_* bits ("none" = no AOV). */
+/* Parses --aov "depth,normal,albedo,motion" into TT__AOV_* bits ("none" = no AOV). */
 static int tt__parse_aovs(const char *text, uint32_t *mask) {
+  static const struct { const char *name; uint32_t bit; } aovs[] = {
+    {"depth", TT__AOV_DEPTH}, {"normal", TT__AOV_NORMAL}, {"albedo", TT__AOV_ALBEDO},
+    {"motion", TT__AOV_MOTION}};
   *mask = 0;
   if (!strcmp(text, "none")) return 0;
   const char *p = text;
   while (*p) {
-    size_t len = strcspn(p, ",");
-    if (len == 5 && !strncmp(p, "depth", 5)) {
-      *mask |= TT__SEQ_AOV_DEPTH;
-    } else if (len == 6 && !strncmp(p, "motion", 6)) {
-      *mask |= TT__SEQ_AOV_MOTION;
+    size_t len = strcspn(p, ","), k = 0;
+    while (k < sizeof aovs / sizeof aovs[0] &&
+           (strlen(aovs[k].name) != len || strncmp(p, aovs[k].name, len)))
+      k++;
+    if (k < sizeof aovs / sizeof aovs[0]) {
+      *mask |= aovs[k].bit;
     } else {
-      fprintf(stderr, "host: --aov: expected a comma-separated list of depth, motion (or "
-              "none), got \"%.*s\" in \"%s\"\n", (int)len, p, text);
+      fprintf(stderr, "host: --aov: expected a comma-separated list of depth, normal, albedo, "
+              "motion (or none), got \"%.*s\" in \"%s\"\n", (int)len, p, text);
       return -1;
     }
     p += len;
@@ -259,8 +266,8 @@ static int tt__check_sequence_options(tt__host_options *opt) {
     opt->frames_first = f0;
     opt->frames_end = f1;
   }
-  if (!opt->sequence && (opt->aov_set || opt->reference_only)) {
-    fprintf(stderr, "host: --aov and --supersample apply to sequences: give --frames A:B "
+  if (!opt->sequence && opt->reference_only) {
+    fprintf(stderr, "host: --supersample applies to sequences: give --frames A:B "
             "with --out DIR/frame_%%04d.exr, or --sequence\n");
     return -1;
   }
@@ -274,7 +281,7 @@ static int tt__check_sequence_options(tt__host_options *opt) {
     return -1;
   }
   if (opt->sequence && !opt->aov_set)  /* --out-dir sequences keep writing both AOVs */
-    opt->aov_mask = opt->seq_pattern ? 0 : TT__SEQ_AOV_DEPTH | TT__SEQ_AOV_MOTION;
+    opt->aov_mask = opt->seq_pattern ? 0 : TT__AOV_DEPTH | TT__AOV_MOTION;
   return 0;
 }
 

@@ -142,15 +142,54 @@ static void tt__default_out(const char *scene, char *buf, size_t n) {
   }
 }
 
-/* Writes EXR + PNG with the run's metadata. */
+/* The EXR's pixels: RGB, then every AOV plane of the film as a named layer, in the channel
+ * names external denoisers and compositors read (depth.Z, normal.X/Y/Z, albedo.R/G/B,
+ * motion.X/Y). Returns the channel count; `names` receives them (static strings). */
+static uint32_t tt__exr_layers(const tt_film *film, const float *rgb, float *out,
+                               const char **names) {
+  static const struct { tt_aov aov; const char *names[3]; } layers[] = {
+    {TT_AOV_DEPTH, {"depth.Z"}},
+    {TT_AOV_NORMAL, {"normal.X", "normal.Y", "normal.Z"}},
+    {TT_AOV_ALBEDO, {"albedo.R", "albedo.G", "albedo.B"}},
+    {TT_AOV_MOTION, {"motion.X", "motion.Y"}},
+  };
+  size_t n = (size_t)tt_film_width(film) * tt_film_height(film);
+  uint32_t ch = 3;
+  names[0] = "R", names[1] = "G", names[2] = "B";
+  for (size_t l = 0; l < sizeof layers / sizeof layers[0]; l++) {
+    if (!(tt_film_aov_mask(film) & layers[l].aov)) continue;
+    for (uint32_t c = 0; c < tt_aov_channels(layers[l].aov); c++) names[ch + c] = layers[l].names[c];
+    ch += tt_aov_channels(layers[l].aov);
+  }
+  for (size_t i = 0; i < n; i++) {
+    float *px = out + i * ch;
+    memcpy(px, rgb + 3 * i, 3 * sizeof(float));
+    uint32_t c = 3;
+    for (size_t l = 0; l < sizeof layers / sizeof layers[0]; l++) {
+      const float *plane = tt_film_aov_const(film, layers[l].aov);
+      if (!plane) continue;
+      uint32_t k = tt_aov_channels(layers[l].aov);
+      memcpy(px + c, plane + i * k, k * sizeof(float));
+      c += k;
+    }
+  }
+  return ch;
+}
+
+/* Writes EXR (RGB and the requested AOVs as layers) + PNG with the run's metadata. */
 static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char *png) {
   uint32_t w = tt_film_width(film), h = tt_film_height(film);
   float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
-  if (!rgb) {
+  float *layers = tt_film_aov_mask(film) ? malloc((size_t)w * h * 12 * sizeof(float)) : NULL;
+  if (!rgb || (tt_film_aov_mask(film) && !layers)) {
     fprintf(stderr, "host: out of memory resolving the image\n");
+    free(rgb);
+    free(layers);
     return TT_EXIT_OUTPUT;
   }
   tt_film_resolve(film, rgb);
+  const char *names[12];
+  uint32_t channels = layers ? tt__exr_layers(film, rgb, layers, names) : 3;
   char spp[32], seed[32], ms[32], threads[32], plugins[512] = "";
   snprintf(spp, sizeof spp, "%u", rec->spp);
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)rec->seed);
@@ -165,10 +204,15 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
     {"spp", spp}, {"seed", seed}, {"render_ms", ms}, {"threads", threads},
     {"plugins", plugins}, {"scene", tt_scene_source(rec->scene)},
     {"software", "tunetrace " TT_VERSION_STRING},
+    /* what the AOV layers hold (film.h), for whoever reads them without our docs */
+    {"tunetrace:aovs", "depth: view-axis distance; normal: world-space shading normal; "
+                       "albedo: reflectance; motion: pixels to the previous frame; each the "
+                       "mean over the pixel's samples of the first hit"},
   };
-  size_t nmeta = sizeof meta / sizeof meta[0];
+  size_t nmeta = sizeof meta / sizeof meta[0] - (layers ? 0 : 1);
   int rc = TT_EXIT_OK;
-  if (tt_image_write_exr(exr, w, h, 3, rgb, NULL, meta, nmeta) != TT_OK) {
+  if (tt_image_write_exr(exr, w, h, channels, layers ? layers : rgb, layers ? names : NULL, meta,
+                         nmeta) != TT_OK) {
     fprintf(stderr, "host: cannot write %s: %s\n", exr, tt_last_error());
     rc = TT_EXIT_OUTPUT;
   }
@@ -177,6 +221,7 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
     rc = TT_EXIT_OUTPUT;
   }
   free(rgb);
+  free(layers);
   return rc;
 }
 
@@ -239,7 +284,7 @@ int tt__run_render(const tt__host_options *opt) {
             s.camera->height, target_spp == UINT32_MAX ? "time budget, up to " : "",
             target_spp == UINT32_MAX ? 0 : target_spp, (unsigned long long)rec->seed,
             rec->threads);
-  rc = tt__session_start(&s, 0);
+  rc = tt__session_start(&s, opt->aov_mask);
   if (rc != TT_EXIT_OK) goto done;
 
   /* tuning phase (when a tuner is loaded, or --tune/--explore): its passes go into the film */

@@ -95,7 +95,8 @@ typedef struct tt__seq {
 
 /* What a sequence writes per frame. */
 typedef enum tt__seq_file {
-  TT__SEQ_COLOR, TT__SEQ_DEPTH, TT__SEQ_MOTION, TT__SEQ_REFERENCE, TT__SEQ_POST
+  TT__SEQ_COLOR, TT__SEQ_DEPTH, TT__SEQ_MOTION, TT__SEQ_REFERENCE, TT__SEQ_POST,
+  TT__SEQ_NORMAL, TT__SEQ_ALBEDO
 } tt__seq_file;
 
 /* File name (inside s->dir) of frame f's `what`. --out-dir: color_0007.exr, depth_0007.exr,
@@ -104,7 +105,8 @@ typedef enum tt__seq_file {
  * and the other files sit beside it: frame_0007.raw.exr (rendered frame under a filter),
  * frame_0007.depth.exr, frame_0007.motion.exr, frame_0007.reference.exr. */
 static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *out, size_t n) {
-  static const char *const legacy[] = {"color", "depth", "motion", "reference", "post"};
+  static const char *const legacy[] = {"color", "depth", "motion", "reference", "post",
+                                       "normal", "albedo"};
   if (!s->pattern) {
     snprintf(out, n, "%s_%04u.exr", legacy[what], f);
     return;
@@ -121,7 +123,8 @@ static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *
     snprintf(out, n, "%s", name);
     return;
   }
-  static const char *const suffix[] = {"raw", "depth", "motion", "reference", "post"};
+  static const char *const suffix[] = {"raw", "depth", "motion", "reference", "post",
+                                       "normal", "albedo"};
   size_t stem = strlen(name) - 4;  /* the pattern ends in .exr */
   snprintf(out, n, "%.*s.%s.exr", (int)stem, name, suffix[what]);
 }
@@ -269,7 +272,7 @@ int tt__run_sequence(const tt__host_options *opt) {
   const tt_render_settings *settings = tt_scene_settings(s.ses.scene);
   s.seed = opt->seed_set ? opt->seed : settings->seed;
   s.spp = opt->spp ? opt->spp : settings->spp;
-  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION);
+  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION | opt->aov_mask);
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *still = s.ses.camera;
   uint32_t w = still->width, h = still->height, k = opt->reference_scale;
@@ -321,6 +324,8 @@ int tt__run_sequence(const tt__host_options *opt) {
             k ? (k == 2 ? "2" : k == 4 ? "4" : "K") : "", s.dir);
   static const char *const depth_names[] = {"Z"};
   static const char *const motion_names[] = {"X", "Y"};
+  static const char *const normal_names[] = {"X", "Y", "Z"};
+  static const char *const albedo_names[] = {"R", "G", "B"};
   uint32_t nframes = opt->seq_last - opt->seq_first + 1;
   /* the jittered frame is rendered unless only the reference is asked for */
   int render_frame = !opt->reference_only || opt->aov_mask;
@@ -363,9 +368,13 @@ int tt__run_sequence(const tt__host_options *opt) {
         const char *const *names;
       } files[] = {
         {TT__SEQ_COLOR, "color", !opt->reference_only, 3, rgb, NULL},
-        {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__SEQ_AOV_DEPTH), 1, depth, depth_names},
-        {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__SEQ_AOV_MOTION), 2, motion,
+        {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__AOV_DEPTH), 1, depth, depth_names},
+        {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__AOV_MOTION), 2, motion,
          motion_names},
+        {TT__SEQ_NORMAL, "normal", !!(opt->aov_mask & TT__AOV_NORMAL), 3,
+         tt_film_aov_const(film, TT_AOV_NORMAL), normal_names},
+        {TT__SEQ_ALBEDO, "albedo", !!(opt->aov_mask & TT__AOV_ALBEDO), 3,
+         tt_film_aov_const(film, TT_AOV_ALBEDO), albedo_names},
       };
       for (size_t i = 0; i < sizeof files / sizeof files[0] && rc == TT_EXIT_OK; i++) {
         if (!files[i].on) continue;

@@ -192,19 +192,29 @@ static float pt_source_get(void *self, uint32_t dim) {
   return s->iface->get(s->sampler, s->state, dim);
 }
 
-/* Writes the first-hit AOVs of pixel (px, py) from a path result. */
+/* Folds sample number `n` (1 for the first sample since the film was cleared) of pixel
+ * (px, py) into `ch` channels of an AOV plane: the running mean, so an AOV is anti-aliased
+ * like the colour it goes with (what denoisers expect; pbrt-v4's GBufferFilm does the same).
+ * The first sample is stored as is, so equal samples (a sequence frame's fixed jitter)
+ * give exactly that value. */
+static void pt_aov_mean(float *plane, size_t pix, uint32_t ch, const float *v, uint64_t n) {
+  float *p = plane + ch * pix;
+  for (uint32_t c = 0; c < ch; c++) p[c] = n <= 1 ? v[c] : p[c] + (v[c] - p[c]) / (float)n;
+}
+
+/* Adds the first-hit AOVs of sample `n` of pixel (px, py) from a path result. */
 static void pt_write_aovs(pt_job *job, uint32_t px, uint32_t py, float fx, float fy,
-                          const tt_ray *ray, const tt_path_result *r) {
+                          const tt_ray *ray, const tt_path_result *r, uint64_t n) {
   size_t pix = (size_t)py * job->width + px;
   if (job->aov_depth) {
     float depth = 0.0f;
     if (r->hit) tt_camera_project(&job->frame, r->position, NULL, NULL, &depth);
-    job->aov_depth[pix] = depth;
+    pt_aov_mean(job->aov_depth, pix, 1, &depth, n);
   }
-  if (job->aov_normal) memcpy(job->aov_normal + 3 * pix, r->normal, 3 * sizeof(float));
-  if (job->aov_albedo) memcpy(job->aov_albedo + 3 * pix, r->albedo, 3 * sizeof(float));
+  if (job->aov_normal) pt_aov_mean(job->aov_normal, pix, 3, r->normal, n);
+  if (job->aov_albedo) pt_aov_mean(job->aov_albedo, pix, 3, r->albedo, n);
   if (job->aov_motion) {
-    float mx = 0.0f, my = 0.0f, pfx, pfy;
+    float m[2] = {0.0f, 0.0f}, pfx, pfy;
     if (job->has_prev) {
       float target[3];
       if (r->hit) {
@@ -213,12 +223,11 @@ static void pt_write_aovs(pt_job *job, uint32_t px, uint32_t py, float fx, float
         for (int i = 0; i < 3; ++i) target[i] = job->prev_frame.origin[i] + ray->dir[i];
       }
       if (tt_camera_project(&job->prev_frame, target, &pfx, &pfy, NULL)) {
-        mx = pfx - fx;
-        my = pfy - fy;
+        m[0] = pfx - fx;
+        m[1] = pfy - fy;
       }
     }
-    job->aov_motion[2 * pix] = mx;
-    job->aov_motion[2 * pix + 1] = my;
+    pt_aov_mean(job->aov_motion, pix, 2, m, n);
   }
 }
 
@@ -269,7 +278,7 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
           rays += r.rays;
           samples++;
           nonfinite += r.nonfinite ? 1u : 0u;
-          if (s == 0) pt_write_aovs(job, px, py, fx, fy, &ray, &r);
+          pt_write_aovs(job, px, py, fx, fy, &ray, &r, ctx->sample_offset + s + 1);
         }
       }
     }

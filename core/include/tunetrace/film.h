@@ -4,8 +4,9 @@
  * pixel-parallel integrators, and a splat buffer (sum of L) scaled by a global factor for
  * MLT-style integrators that deposit contributions anywhere. The resolved image is
  *   rgb = sum_wL / sum_w + splat * splat_scale       (the first term is 0 where sum_w = 0).
- * Optional AOV planes (depth, normal, albedo, motion) are written once per pixel by the
- * first-hit of the last pass. All planes are float, row-major, y = 0 at the top.
+ * Optional AOV planes (depth, normal, albedo, motion) hold first-hit values the integrator
+ * writes per pixel (integrator_pt: the mean over the pixel's samples since the film was
+ * cleared, like the colour). All planes are float, row-major, y = 0 at the top.
  */
 #ifndef TUNETRACE_FILM_H
 #define TUNETRACE_FILM_H
