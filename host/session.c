@@ -1,15 +1,55 @@
 /* host: the session (session.h) — options mapped onto the library's render session. */
 #include "session.h"
 
+#include <limits.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#ifndef TT_HOST_BUILD_DIR
+#  define TT_HOST_BUILD_DIR ""
+#endif
+#ifndef TT_BUILD_PLUGIN_DIR
+#  define TT_BUILD_PLUGIN_DIR ""
+#endif
+
+/* Non-zero when this program runs from the build tree's host/ folder (not installed): only
+ * then are the build tree's plugins searched, after $TT_PLUGIN_PATH. An installed copy never
+ * looks into the tree it was built in. */
+static int tt__uninstalled(void) {
+  char exe[4096], dir[4096];
+  if (!TT_HOST_BUILD_DIR[0] || !realpath("/proc/self/exe", exe) || !realpath(TT_HOST_BUILD_DIR, dir))
+    return 0;
+  char *slash = strrchr(exe, '/');
+  if (!slash) return 0;
+  *slash = '\0';
+  return !strcmp(exe, dir);
+}
+
+/* The plugin folders in search order before the library's installed ones: --plugin-path,
+ * $TT_PLUGIN_PATH (the library searches it too; naming it here keeps it before the build
+ * tree), and the build tree's plugins for the uninstalled program. */
+static int tt__plugin_dirs(const tt__host_options *opt, const char **dirs, int max) {
+  static char env[8192];
+  int n = 0;
+  for (int i = 0; i < opt->plugin_path_count && n < max; i++) dirs[n++] = opt->plugin_paths[i];
+  snprintf(env, sizeof env, "%s", getenv("TT_PLUGIN_PATH") ? getenv("TT_PLUGIN_PATH") : "");
+  for (char *p = env, *colon; p && *p && n < max; p = colon ? colon + 1 : NULL) {
+    colon = strchr(p, ':');
+    if (colon) *colon = '\0';
+    if (*p) dirs[n++] = p;
+  }
+  if (n < max && tt__uninstalled()) dirs[n++] = TT_BUILD_PLUGIN_DIR;
+  return n;
+}
+
 tt_registry *tt__make_registry(const tt__host_options *opt, const tt_host *host) {
   tt_registry *reg = tt_registry_create(host);
   if (!reg) return NULL;
-  for (int i = 0; i < opt->plugin_path_count; i++) tt_registry_add_dir(reg, opt->plugin_paths[i]);
+  const char *dirs[2 * TT_HOST_MAX_LIST];
+  int n = tt__plugin_dirs(opt, dirs, 2 * TT_HOST_MAX_LIST);
+  for (int i = 0; i < n; i++) tt_registry_add_dir(reg, dirs[i]);
   return reg;
 }
 
@@ -110,8 +150,9 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
     fprintf(stderr, "host: %s\n", tt_last_error());
     return TT_EXIT_FAILURE;
   }
-  for (int i = 0; i < opt->plugin_path_count; i++)
-    tt_session_add_plugin_dir(s->lib, opt->plugin_paths[i]);
+  const char *dirs[2 * TT_HOST_MAX_LIST];
+  int ndirs = tt__plugin_dirs(opt, dirs, 2 * TT_HOST_MAX_LIST);
+  for (int i = 0; i < ndirs; i++) tt_session_add_plugin_dir(s->lib, dirs[i]);
   s->reg = tt_session_registry(s->lib);
   if (tt_session_load_scene(s->lib, opt->scene) != TT_OK) {
     fprintf(stderr, "host: %s\n", tt_last_error());

@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# SDK end to end: install the build tree into a staging directory, copy the example plugin
-# out of the source tree, build and install it with its Makefile (which knows tunetrace only
-# through pkg-config), then load it with the installed host and with a tiny loader-API
-# program. Exit 77 (skip) only when pkg-config or make is missing.
+# SDK and install end to end: install the build tree into a staging directory (meson install
+# --destdir), copy the installed example plugin (PREFIX/share/tunetrace/examples), build and
+# install it with its Makefile (which knows tunetrace only through pkg-config), then load it
+# with a tiny loader-API program and with the installed program, `tunetrace`, run from a
+# clean environment (no LD_LIBRARY_PATH, no TT_PLUGIN_PATH): --version, the plugin search
+# (its own installed folder, never the build tree), a small render with the installed
+# plugins, and the installed Python package. Exit 77 (skip) only when pkg-config or make is
+# missing.
 #
 # Environment (set by tests/meson.build): TT_SOURCE_ROOT, TT_BUILD_ROOT.
 set -euo pipefail
@@ -40,13 +44,20 @@ plugindir=$($PKG_CONFIG --variable=plugindir tunetrace)
 echo "pkg-config: cflags '$cflags' libdir $libdir plugindir $plugindir"
 case "$libdir" in "$stage"/*) ;; *) fail "libdir $libdir is not inside the staging dir";; esac
 case "$plugindir" in "$stage"/*) ;; *) fail "plugindir $plugindir is not inside the staging dir";; esac
-for h in tunetrace.h plugin.h tuner.h params.h loader.h host.h; do
+for h in tunetrace.h plugin.h tuner.h params.h loader.h host.h session.h tuning.h; do
   [ -f "$stage$prefix/include/tunetrace/$h" ] || fail "header tunetrace/$h not installed"
 done
+example="$stage$prefix/share/tunetrace/examples/tuner_random"
+for f in tuner_random.c Makefile README.md; do
+  [ -f "$example/$f" ] || fail "the SDK example's $f is not installed in $example"
+done
+bin="$stage$prefix/bin"
+[ -x "$bin/tunetrace" ] || fail "no installed program $bin/tunetrace"
+# Debian's /usr/bin/host is the DNS lookup tool: the installed name must not shadow it
+[ ! -e "$bin/host" ] || fail "$bin/host is installed (it would shadow Debian's DNS tool)"
 
-# 2. Build and install the example from a copy outside the source tree.
-cp -r "$TT_SOURCE_ROOT/examples/tuner_random" "$tmp/src"
-rm -f "$tmp/src/tuner_random.so"
+# 2. Build and install the example from the installed copy (nothing from the source tree).
+cp -r "$example" "$tmp/src"
 make -C "$tmp/src" PKG_CONFIG="$PKG_CONFIG" >"$tmp/make.log" 2>&1 ||
   { cat "$tmp/make.log" >&2; fail "make failed"; }
 cat "$tmp/make.log"
@@ -60,8 +71,6 @@ if command -v nm >/dev/null 2>&1; then
   exported=$(nm -D --defined-only "$tmp/src/tuner_random.so" | awk '$2 ~ /[A-Z]/ {print $3}' | sort)
   [ "$exported" = "tt_plugin_entry" ] || fail "tuner_random.so exports more than tt_plugin_entry: $exported"
 fi
-
-export LD_LIBRARY_PATH="$libdir${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 
 # 3. Load it through the installed library's loader API, from a program also built with
 #    pkg-config only.
@@ -108,26 +117,65 @@ EOF
 # shellcheck disable=SC2046
 cc -std=c11 -Wall -Wextra -Wno-unused-parameter -o "$tmp/check" "$tmp/check.c" \
   $($PKG_CONFIG --cflags --libs tunetrace) || fail "cannot build the loader check with pkg-config flags"
-"$tmp/check" "$plugindir" >"$tmp/check.out" 2>&1 || { cat "$tmp/check.out" >&2; fail "loader check failed"; }
+LD_LIBRARY_PATH="$libdir" "$tmp/check" "$plugindir" >"$tmp/check.out" 2>&1 || { cat "$tmp/check.out" >&2; fail "loader check failed"; }
 cat "$tmp/check.out"
 grep -q "loaded tuner_random" "$tmp/check.out" || fail "loader check did not load tuner_random"
 grep -q '"samples"' "$tmp/check.out" || fail "tuner_random space lacks \"samples\""
 grep -q '"lhs"' "$tmp/check.out" || fail "tuner_random space lacks \"lhs\""
 grep -q "ask/tell ok" "$tmp/check.out" || fail "ask/tell rounds failed"
 
-# 4. The installed host finds it through --plugin-path.
-host="$stage$prefix/bin/host"
-if [ -x "$host" ]; then
-  "$host" --list-plugins --plugin-path "$plugindir" >"$tmp/list.out" 2>&1 ||
-    { cat "$tmp/list.out" >&2; fail "host --list-plugins failed"; }
-  cat "$tmp/list.out"
-  grep -q "tuner_random" "$tmp/list.out" || fail "host --list-plugins does not mention tuner_random"
-  "$host" --describe tuner_random --plugin-path "$plugindir" >"$tmp/describe.out" 2>"$tmp/describe.err" ||
-    { cat "$tmp/describe.out" "$tmp/describe.err" >&2; fail "host --describe tuner_random failed"; }
-  cat "$tmp/describe.out"
-  grep -q "tuner_random" "$tmp/describe.out" || fail "host --describe does not mention tuner_random"
-  grep -q '"samples"' "$tmp/describe.out" || fail "host --describe does not print the space"
-else
-  echo "note: no installed host at $host; host checks not run"
+# 4. The installed program from a clean environment: no LD_LIBRARY_PATH (its RUNPATH finds
+#    the library), no TT_PLUGIN_PATH (the library finds its installed plugins beside itself).
+clean() { env -i PATH=/usr/bin:/bin HOME="$tmp/home" "$@"; }
+tunetrace="$bin/tunetrace"
+if command -v readelf >/dev/null 2>&1; then
+  readelf -d "$tunetrace" | grep -Eq 'RUNPATH.*\$ORIGIN' || fail "$tunetrace has no \$ORIGIN RUNPATH"
 fi
+clean "$tunetrace" --version >"$tmp/version.out" 2>&1 || { cat "$tmp/version.out" >&2; fail "tunetrace --version failed"; }
+cat "$tmp/version.out"
+grep -q "tunetrace host $($PKG_CONFIG --modversion tunetrace)" "$tmp/version.out" ||
+  fail "tunetrace --version does not print the installed version"
+clean "$tunetrace" --list-plugins >"$tmp/list.out" 2>&1 || { cat "$tmp/list.out" >&2; fail "tunetrace --list-plugins failed"; }
+cat "$tmp/list.out"
+for p in accel_embree integrator_pt tuner_nm tuner_random; do
+  grep -q "^$p .*$plugindir/$p.so" "$tmp/list.out" || fail "tunetrace --list-plugins does not find the installed $p in $plugindir"
+done
+if grep "search path" "$tmp/list.out" | grep -qF "$TT_BUILD_ROOT"; then
+  fail "the installed library searches the build tree: $(grep 'search path' "$tmp/list.out")"
+fi
+clean "$tunetrace" --describe tuner_random >"$tmp/describe.out" 2>"$tmp/describe.err" ||
+  { cat "$tmp/describe.out" "$tmp/describe.err" >&2; fail "tunetrace --describe tuner_random failed"; }
+grep -q '"samples"' "$tmp/describe.out" || fail "tunetrace --describe does not print the space"
+# a small render, with a short exploration by the installed third-party tuner
+scene="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
+clean "$tunetrace" --quiet --res 16x16 --spp 2 --plugin tuner_random --iterations 2 --no-db \
+  --stats "$tmp/render.json" --out "$tmp/render.exr" "$scene" >"$tmp/render.out" 2>&1 ||
+  { cat "$tmp/render.out" >&2; fail "a render with the installed program failed"; }
+[ -s "$tmp/render.exr" ] && [ -s "$tmp/render.png" ] || fail "the installed program wrote no image"
+used=$(grep -o '"path":[^,}]*' "$tmp/render.json")
+[ -n "$used" ] || fail "the run record names no plugin path"
+if echo "$used" | grep -vqF "$plugindir/"; then fail "the render used plugins outside $plugindir: $used"; fi
+echo "render: ok, plugins $(echo "$used" | tr '\n' ' ')"
+
+# 5. The installed Python package, from the same clean environment.
+pydir=$(find "$stage$prefix" -type d -name tunetrace -path '*/dist-packages/*' | head -n 1)
+[ -n "$pydir" ] && [ -f "$pydir/__init__.py" ] && [ -f "$pydir/_paths.py" ] ||
+  fail "the Python package is not installed under $stage$prefix"
+cat >"$tmp/api.py" <<'PY'
+import sys
+import tunetrace as tt
+stage, plugindir, scene = sys.argv[1:]
+assert tt.library_path().startswith(stage), f"loaded {tt.library_path()}, not the installed library"
+with tt.Session(scene, resolution=(8, 8), seed=3) as s:
+    img = s.render(spp=2)
+    paths = [p["path"] for p in s.plugins]
+assert img.shape == (8, 8, 3) and img.mean() > 0, img.shape
+assert all(p.startswith(plugindir + "/") for p in paths), f"plugins outside the install: {paths}"
+names = [p["name"] for p in tt.list_plugins()]
+assert "tuner_random" in names, names
+print("python:", tt.version(), tt.library_path(), paths)
+PY
+clean PYTHONPATH="$(dirname "$pydir")" /usr/bin/python3 "$tmp/api.py" "$stage" "$plugindir" "$scene" \
+  >"$tmp/python.out" 2>&1 || { cat "$tmp/python.out" >&2; fail "the installed Python API failed"; }
+cat "$tmp/python.out"
 echo "sdk_out_of_tree: ok"

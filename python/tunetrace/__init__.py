@@ -71,9 +71,12 @@ def set_threads(n):
 
 
 def _extra_plugin_dirs(plugin_path):
-    dirs = list(plugin_path or [])
+    """plugin_path, then $TT_PLUGIN_PATH, then (the build tree's package only) the build
+    tree's plugins; the library then searches its installed plugin folder."""
+    dirs = [os.fspath(d) for d in (plugin_path or [])]
     build = getattr(_lib._paths, "BUILD_PLUGIN_DIR", None) if _lib._paths else None
-    if build:  # the build tree's package also finds the build tree's plugins
+    if build:  # after $TT_PLUGIN_PATH, as for the uninstalled host
+        dirs += [d for d in os.environ.get("TT_PLUGIN_PATH", "").split(":") if d]
         dirs.append(build)
     return dirs
 

@@ -4,8 +4,11 @@
  * required interface, calls init() with the host services, and keeps them loaded until the
  * registry is destroyed. Plugins are named either by path (anything containing '/' or
  * ending in ".so") or by name, searched as NAME.so in: directories added with
- * tt_registry_add_dir (in order), then $TT_PLUGIN_PATH (':'-separated), then the
- * build-tree and installed plugin directories compiled into libtunetrace.
+ * tt_registry_add_dir (in order), then $TT_PLUGIN_PATH (':'-separated), then the installed
+ * plugin folder: tunetrace-1/ beside the libtunetrace file in use (so a relocated or
+ * --destdir install finds its own plugins), then the one configured at build time
+ * (`pkg-config --variable=plugindir tunetrace`). No build tree is searched: programs run
+ * from one (the uninstalled host, the build tree's Python package) add its folder.
  *
  * Every rejection is reported through tt_set_error with the file, and for version
  * mismatches both versions ("plugin ABI 2.0, host ABI 1.0"). Rejections:

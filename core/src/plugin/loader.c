@@ -19,11 +19,11 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#ifndef TT_BUILD_PLUGIN_DIR
-#  define TT_BUILD_PLUGIN_DIR ""
-#endif
 #ifndef TT_INSTALL_PLUGIN_DIR
 #  define TT_INSTALL_PLUGIN_DIR ""
+#endif
+#ifndef TT_PLUGIN_SUBDIR
+#  define TT_PLUGIN_SUBDIR "tunetrace-1"
 #endif
 
 /* The ABI 1.0 entry table ends with get_interface; anything shorter cannot be used. */
@@ -100,8 +100,33 @@ static void tt__strlist_free(tt__strlist *l) {
   l->n = l->cap = 0;
 }
 
-/* The effective search list: added dirs, $TT_PLUGIN_PATH, build dir, install dir. Built on
- * each use because the environment may change between calls. */
+/* The installed plugin folder as this copy of the library sees it: TT_PLUGIN_SUBDIR beside
+ * the library file itself (a --destdir staging copy or a moved prefix finds its own plugins),
+ * or "" when that folder does not exist (the build tree's library). */
+static const char *tt__relocated_plugin_dir(void) {
+  static char dir[4096 + sizeof TT_PLUGIN_SUBDIR + 1];
+  static int done;
+  if (done) return dir;
+  done = 1;
+  Dl_info info;
+  char real[4096];
+  if (!dladdr((void *)&tt_registry_create, &info) || !info.dli_fname ||
+      !realpath(info.dli_fname, real))
+    return dir;
+  char *slash = strrchr(real, '/');
+  if (!slash) return dir;
+  *slash = '\0';
+  snprintf(dir, sizeof dir, "%s/%s", real, TT_PLUGIN_SUBDIR);
+  struct stat st;
+  if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) dir[0] = '\0';
+  return dir;
+}
+
+/* The effective search list: added dirs, $TT_PLUGIN_PATH, the installed plugin folder (beside
+ * the library, then the configured one). The build tree's folder is not compiled in: the
+ * uninstalled host and the build tree's Python package add it themselves, so an installed
+ * library never loads a plugin from a build tree. Built on each use because the environment
+ * may change between calls. */
 static int tt__search_dirs(const tt_registry *reg, tt__strlist *out) {
   memset(out, 0, sizeof *out);
   for (size_t i = 0; i < reg->dirs.n; i++)
@@ -113,7 +138,8 @@ static int tt__search_dirs(const tt_registry *reg, tt__strlist *out) {
     if (tt__strlist_push_unique(out, env, len)) goto oom;
     env = colon ? colon + 1 : NULL;
   }
-  if (tt__strlist_push_unique(out, TT_BUILD_PLUGIN_DIR, strlen(TT_BUILD_PLUGIN_DIR))) goto oom;
+  const char *relocated = tt__relocated_plugin_dir();
+  if (tt__strlist_push_unique(out, relocated, strlen(relocated))) goto oom;
   if (tt__strlist_push_unique(out, TT_INSTALL_PLUGIN_DIR, strlen(TT_INSTALL_PLUGIN_DIR)))
     goto oom;
   return 0;
