@@ -157,8 +157,10 @@ int main(void) {
     /* A different seed gives a different image. */
   }
 
-  /* AOVs: depth along the view axis, unit normals facing the camera, albedo 0.5, motion 0
-   * against an identical previous camera and non-zero against a moved one. */
+  /* AOVs: depth along the view axis, normals facing the camera (the mean over the pixel's
+   * samples: unit inside a wall, shorter where a pixel straddles two walls at right angles,
+   * never below cos 45), albedo 0.5, motion 0 against an identical previous camera and
+   * non-zero against a moved one. */
   {
     tt_film *film = NULL;
     uint32_t mask = TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION;
@@ -166,13 +168,15 @@ int main(void) {
     CHECK(render(&rs, NULL, 2, mask, &prev, &film, NULL) == TT_OK);
     const float *d = tt_film_aov_const(film, TT_AOV_DEPTH), *n = tt_film_aov_const(film, TT_AOV_NORMAL);
     const float *al = tt_film_aov_const(film, TT_AOV_ALBEDO), *m = tt_film_aov_const(film, TT_AOV_MOTION);
-    int bad = 0;
+    int bad = 0, unit = 0;
     for (int i = 0; i < W * H; ++i) {
       float len = sqrtf(n[3 * i] * n[3 * i] + n[3 * i + 1] * n[3 * i + 1] + n[3 * i + 2] * n[3 * i + 2]);
-      bad += !(d[i] > 0.5f && d[i] < 3.0f) || fabsf(len - 1.0f) > 1e-4f || al[3 * i] != 0.5f ||
-             fabsf(m[2 * i]) > 1e-2f || fabsf(m[2 * i + 1]) > 1e-2f;
+      unit += fabsf(len - 1.0f) <= 1e-4f;
+      bad += !(d[i] > 0.5f && d[i] < 3.0f) || !(len > 0.7f && len < 1.0f + 1e-4f) ||
+             al[3 * i] != 0.5f || fabsf(m[2 * i]) > 1e-2f || fabsf(m[2 * i + 1]) > 1e-2f;
     }
     CHECK_MSG(bad == 0, "%d pixels with wrong AOVs", bad);
+    CHECK_MSG(unit >= W * H * 9 / 10, "%d of %d pixels with unit normals", unit, W * H);
     /* The centre pixel looks at the far wall z = -1: depth along the view axis ~ 1.3. */
     CHECK(d[(H / 2) * W + W / 2] > 1.0f && d[(H / 2) * W + W / 2] < 1.6f);
     tt_film_destroy(film);
