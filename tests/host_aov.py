@@ -7,8 +7,6 @@ and without AOVs; sequences keep one file per AOV; a bad name is a usage error.
 
 Reads the EXRs with OpenImageIO (python3-openimageio, tools/bootstrap.sh).
 Environment: TT_BUILD_ROOT (tests/meson.build)."""
-import json
-import math
 import os
 import subprocess
 import sys
@@ -16,6 +14,9 @@ import tempfile
 
 import numpy as np
 import OpenImageIO as oiio
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "support"))
+from plane_scene import MOVING_PATH, motion_pixels, pixel_size, plane, write  # noqa: E402
 
 HOST = os.path.join(os.environ["TT_BUILD_ROOT"], "host", "host")
 failures = checks = 0
@@ -45,29 +46,6 @@ def read(path):
     inp.close()
     meta = {a.name: a.value for a in spec.extra_attribs}
     return {n: px[:, :, i] for i, n in enumerate(spec.channelnames)}, meta
-
-
-def plane(half_width=50.0, path=None):
-    cam = {"position": [0, 0, -5], "target": [0, 0, 0], "fov": 40, "resolution": [16, 12]}
-    if path:
-        cam["path"] = path
-    return {
-        "version": 1, "camera": cam, "render": {"spp": 1, "maxDepth": 2, "seed": 3},
-        "materials": {"paint": {"type": "diffuse", "albedo": [0.2, 0.4, 0.6]}},
-        # a plane at z = 0 facing the camera, from x = -50 to x = half_width
-        "meshes": [{"name": "wall", "material": "paint",
-                    "positions": [[-50, -50, 0], [-50, 50, 0], [half_width, 50, 0],
-                                  [half_width, -50, 0]],
-                    "indices": [[0, 1, 2], [0, 2, 3]]}],
-        "lights": [{"type": "environment", "radiance": [1, 1, 1]}],
-    }
-
-
-def write(tmp, name, scene):
-    p = os.path.join(tmp, name)
-    with open(p, "w") as f:
-        json.dump(scene, f)
-    return p
 
 
 def main():
@@ -100,7 +78,7 @@ def main():
 
         # an edge through the middle of a pixel column: with 64 samples its albedo is the
         # covered fraction of the reflectance (anti-aliased), neither 0 nor 0.2
-        half = 5 * math.tan(math.radians(20)) * 2 / 12 * 0.5  # half a pixel at z = 0
+        half = 0.5 * pixel_size()  # the edge through the middle of a pixel column
         edge = write(tmp, "edge.json", plane(half_width=half))
         edge_exr = os.path.join(tmp, "edge.exr")
         rc, out = host("--aov", "albedo,depth", "--spp", "64", "--out", edge_exr, edge)
@@ -113,17 +91,14 @@ def main():
 
         # motion against the previous frame (1/24 s earlier) of a --camera-index sample: a
         # camera moving 1 unit/s along x, 5 units from the plane
-        moving = write(tmp, "moving.json", plane(path=[
-            {"time": 0, "position": [0, 0, -5], "target": [0, 0, 0]},
-            {"time": 1, "position": [1, 0, -5], "target": [1, 0, 0]}]))
+        moving = write(tmp, "moving.json", plane(path=MOVING_PATH))
         mexr = os.path.join(tmp, "moving.exr")
         rc, out = host("--aov", "motion", "--camera-index", "50", "--spp", "2", "--out", mexr, moving)
         mc, _ = read(mexr)
-        f = 6.0 / math.tan(math.radians(20))
-        want = f * (1 / 24) / 5
+        want = motion_pixels(1 / 24)
         mx = mc.get("motion.X", np.zeros((12, 16)))
-        check(rc == 0 and np.allclose(np.abs(mx), want, rtol=1e-3),
-              f"motion.X {mx[6, 8]} (expected magnitude {want})")
+        check(rc == 0 and np.allclose(mx, -want, rtol=1e-3),  # world +x is image left
+              f"motion.X {mx[6, 8]} (expected {-want})")
         check(np.allclose(mc.get("motion.Y", np.ones(1)), 0, atol=1e-4), "motion.Y 0")
 
         # sequences keep one file per frame and AOV (normal and albedo too now)

@@ -17,7 +17,6 @@
     python_api.py [PYTHON_ABI_EXE]
 Environment: TT_BUILD_ROOT, TT_SOURCE_ROOT (tests/meson.build)."""
 import json
-import math
 import os
 import subprocess
 import sys
@@ -28,6 +27,9 @@ SOURCE = os.environ["TT_SOURCE_ROOT"]
 sys.path.insert(0, os.path.join(BUILD, "python"))
 
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "support"))
+from plane_scene import MOVING_PATH, motion_pixels, plane, write  # noqa: E402
 
 import tunetrace as tt  # noqa: E402
 from tunetrace import _lib  # noqa: E402
@@ -139,28 +141,8 @@ def test_host_equal(tmp):
         check(not np.array_equal(s.render(spp=6), img), "another seed, another image")
 
 
-PLANE = {
-    "version": 1,
-    "camera": {"position": [0, 0, -5], "target": [0, 0, 0], "fov": 40, "resolution": [16, 12]},
-    "render": {"spp": 1, "maxDepth": 2, "seed": 3},
-    "materials": {"paint": {"type": "diffuse", "albedo": [0.2, 0.4, 0.6]}},
-    # a plane at z = 0 facing the camera: (v1 - v0) x (v2 - v0) = (0, 0, -1)
-    "meshes": [{"name": "wall", "material": "paint",
-                "positions": [[-50, -50, 0], [-50, 50, 0], [50, 50, 0], [50, -50, 0]],
-                "indices": [[0, 1, 2], [0, 2, 3]]}],
-    "lights": [{"type": "environment", "radiance": [1, 1, 1]}],
-}
-
-
-def write_scene(tmp, name, scene):
-    path = os.path.join(tmp, name)
-    with open(path, "w") as f:
-        json.dump(scene, f)
-    return path
-
-
 def test_aovs(tmp):
-    still = write_scene(tmp, "plane.json", PLANE)
+    still = write(tmp, "plane.json", plane())
     with tt.Session(still, aovs=["depth", "normal", "albedo", "motion"]) as s:
         rgb = s.render(spp=4)
         depth, normal, albedo, motion = (s.aov(a) for a in ("depth", "normal", "albedo", "motion"))
@@ -181,20 +163,17 @@ def test_aovs(tmp):
 
     # a camera path translating +1 world unit per second along x: at t = 0.5 with a frame
     # interval of 1/24 s the camera moved 1/24 units, i.e. f * (1/24) / 5 pixels with
-    # f = (height / 2) / tan(fov / 2); world +x is image left (right = forward x up)
-    moving = dict(PLANE, camera=dict(PLANE["camera"], path=[
-        {"time": 0, "position": [0, 0, -5], "target": [0, 0, 0]},
-        {"time": 1, "position": [1, 0, -5], "target": [1, 0, 0]}]))
-    path = write_scene(tmp, "moving.json", moving)
-    f = 6.0 / math.tan(math.radians(20))
-    expected = f * (1 / 24) / 5
+    # f = (height / 2) / tan(fov / 2); world +x is image left (right = forward x up), so a
+    # point seen one frame earlier, from 1/24 units further left, sat further left: -x
+    path = write(tmp, "moving.json", plane(path=MOVING_PATH))
+    expected = motion_pixels(1 / 24)
     with tt.Session(path, aovs=["motion", "depth"], camera_time=0.5) as s:
         s.render(spp=1)
         motion = s.aov("motion")
         depth = s.aov("depth")
     check(np.allclose(depth, 5.0, atol=1e-4), "moving camera: depth 5")
-    check(np.allclose(np.abs(motion[..., 0]), expected, rtol=1e-3),
-          f"motion x {motion[6, 8, 0]} (expected magnitude {expected})")
+    check(np.allclose(motion[..., 0], -expected, rtol=1e-3),
+          f"motion x {motion[6, 8, 0]} (expected {-expected})")
     check(np.allclose(motion[..., 1], 0, atol=1e-4), f"motion y {motion[6, 8, 1]}")
 
 

@@ -88,26 +88,48 @@ def _plugin_info(entry, path=None):
             "path": path}
 
 
-class _Registry:
-    """A registry for listing and describing plugins outside a session."""
+class _Handle:
+    """An owned library object: close() (or a with block, or garbage collection) frees it
+    once with the class's _free function; _p raises once it is closed."""
+    _ptr = None
+    _what = "object"
 
-    def __init__(self, plugin_path=None):
-        self.ptr = lib.tt_registry_create(lib.tt_default_host())
-        if not self.ptr:
-            _check(-2, "registry")
-        for d in _extra_plugin_dirs(plugin_path):
-            lib.tt_registry_add_dir(self.ptr, _b(d))
+    @staticmethod
+    def _free(ptr):
+        raise NotImplementedError
 
     def close(self):
-        if self.ptr:
-            lib.tt_registry_destroy(self.ptr)
-            self.ptr = None
+        if self._ptr:
+            self._free(self._ptr)
+            self._ptr = None
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+    def __del__(self):
+        self.close()
+
+    @property
+    def _p(self):
+        if not self._ptr:
+            raise Error(-1, f"the {self._what} is closed")
+        return self._ptr
+
+
+class _Registry(_Handle):
+    """A registry for listing and describing plugins outside a session."""
+    _what = "registry"
+    _free = staticmethod(lambda p: lib.tt_registry_destroy(p))
+
+    def __init__(self, plugin_path=None):
+        self._ptr = lib.tt_registry_create(lib.tt_default_host())
+        if not self._ptr:
+            _check(-2, "registry")
+        for d in _extra_plugin_dirs(plugin_path):
+            lib.tt_registry_add_dir(self._ptr, _b(d))
 
 
 def list_plugins(plugin_path=None):
@@ -118,12 +140,12 @@ def list_plugins(plugin_path=None):
     with _Registry(plugin_path) as reg:
         def one(_user, path):
             entry = _lib.Plugin()
-            if lib.tt_registry_probe(reg.ptr, path, ctypes.byref(entry)) == 0:
+            if lib.tt_registry_probe(reg._p, path, ctypes.byref(entry)) == 0:
                 out.append(_plugin_info(entry, path.decode()))
             else:
                 out.append({"name": None, "path": path.decode(),
                             "error": text(lib.tt_last_error())})
-        lib.tt_registry_list_files(reg.ptr, _lib.LIST_FN(one), None)
+        lib.tt_registry_list_files(reg._p, _lib.LIST_FN(one), None)
     return out
 
 
@@ -154,7 +176,7 @@ def describe(name, plugin_path=None):
     """The plugin's parameter space and options as a dict (host --describe NAME)."""
     with _Registry(plugin_path) as reg:
         p = ctypes.c_void_p()
-        _check(lib.tt_registry_load(reg.ptr, _b(name), ctypes.byref(p)), f"plugin \"{name}\"")
+        _check(lib.tt_registry_load(reg._p, _b(name), ctypes.byref(p)), f"plugin \"{name}\"")
         return _describe_loaded(p)
 
 
@@ -202,7 +224,7 @@ def _value_text(v):
     return str(v)
 
 
-class Session:
+class Session(_Handle):
     """A render session: one scene, the loaded plugins with their configurations, the accel,
     the integrator and the film. Passes accumulate progressively; render() returns the image
     so far. Use from one thread; close() (or a with block) frees it."""
@@ -214,7 +236,6 @@ class Session:
         scene's; `aovs` names the AOV planes to keep (depth, normal, albedo, motion);
         `camera_time` (seconds) picks the pose on the scene's camera path, with the motion
         AOV measured against the pose `frame_interval` earlier."""
-        self._ptr = None
         ptr = ctypes.c_void_p()
         _check(lib.tt_session_create(None, ctypes.byref(ptr)), "session")
         self._ptr = ptr
@@ -237,28 +258,10 @@ class Session:
         for key, value in (params or {}).items():
             self.set(key, value)
 
-    # -- life cycle --
-    def close(self):
-        """Frees the session (plugins are unloaded; arrays and Tuning results returned
-        before stay valid)."""
-        if self._ptr:
-            lib.tt_session_destroy(self._ptr)
-            self._ptr = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-
-    def __del__(self):
-        self.close()
-
-    @property
-    def _p(self):
-        if not self._ptr:
-            raise Error(-1, "the session is closed")
-        return self._ptr
+    # close() frees the session: plugins are unloaded; arrays and Tuning results returned
+    # before stay valid
+    _what = "session"
+    _free = staticmethod(lambda p: lib.tt_session_destroy(p))
 
     @staticmethod
     def _aov_mask(aovs):
@@ -567,13 +570,15 @@ class Tuning:
                 f"{self.best_cost:.6g}, default {self.default_cost:.6g}>")
 
 
-class TuningDB:
+class TuningDB(_Handle):
     """The tuning database (tunetrace/tunedb.h): one SQLite file of every measured (state,
     configuration) pair. TuningDB() opens the default one ($XDG_DATA_HOME/tunetrace/
     tuning.db); rows() reads it through the library, so the schema is the library's."""
 
+    _what = "database"
+    _free = staticmethod(lambda p: lib.tt_tunedb_close(p))
+
     def __init__(self, path=None):
-        self._ptr = None
         if path is None:
             path = _lib.take_string(lib.tt_tunedb_default_path())
             if path is None:
@@ -585,26 +590,6 @@ class TuningDB:
     @property
     def path(self):
         return text(lib.tt_tunedb_path(self._p))
-
-    @property
-    def _p(self):
-        if not self._ptr:
-            raise Error(-1, "the database is closed")
-        return self._ptr
-
-    def close(self):
-        if self._ptr:
-            lib.tt_tunedb_close(self._ptr)
-            self._ptr = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-
-    def __del__(self):
-        self.close()
 
     def count(self, plugin=None):
         n = ctypes.c_uint64()
