@@ -69,7 +69,8 @@ int main(void) {
   S(tt_tuning_stats); F(tt_tuning_stats, struct_size); F(tt_tuning_stats, requested);
   F(tt_tuning_stats, iterations); F(tt_tuning_stats, measured); F(tt_tuning_stats, cached);
   F(tt_tuning_stats, infeasible); F(tt_tuning_stats, failed); F(tt_tuning_stats, converged);
-  F(tt_tuning_stats, interrupted); F(tt_tuning_stats, tuning_ms); end();
+  F(tt_tuning_stats, interrupted); F(tt_tuning_stats, tuning_ms);
+  F(tt_tuning_stats, unrecorded); end();
   S(tt_tuning_verification); F(tt_tuning_verification, struct_size);
   F(tt_tuning_verification, rounds); F(tt_tuning_verification, spp);
   F(tt_tuning_verification, median_build_ms); F(tt_tuning_verification, median_render_ms);

@@ -18,6 +18,7 @@ was expected). See python/README.md for how the library is found.
 import ctypes
 import json
 import os
+import warnings
 
 import numpy as np
 
@@ -530,6 +531,9 @@ class Session(_Handle):
             _check(lib.tt_tuning_apply_best(t, ctypes.byref(target), None), "apply best")
         tuning = Tuning(t, db)
         tuning.verification = verification
+        if tuning.stats.get("unrecorded"):
+            warnings.warn(f"tuning: {tuning.stats['unrecorded']} of {tuning.stats['measured']} "
+                          f"measurements could not be recorded in the database {tuning.db_path}")
         return tuning
 
 
@@ -539,7 +543,8 @@ class Tuning:
     build_ms, render_ms, status ("ok", "infeasible", "failed"), cached (answered by the
     database)}), best_config / best_cost (lowest mean cost over repeats), default_config /
     default_cost, mode ("tune" or "explore"), stats (requested, iterations, measured,
-    cached, infeasible, failed, converged, interrupted, tuning_ms), verification (with
+    cached, infeasible, failed, converged, interrupted, tuning_ms, unrecorded: rows the
+    database failed to record, a warning is issued), verification (with
     verify > 0), db_path."""
 
     def __init__(self, ptr, db):

@@ -163,7 +163,8 @@ class TuningStats(ctypes.Structure):  # tt_tuning_stats (tuning.h)
                 ("iterations", ctypes.c_uint32), ("measured", ctypes.c_uint32),
                 ("cached", ctypes.c_uint32), ("infeasible", ctypes.c_uint32),
                 ("failed", ctypes.c_uint32), ("converged", ctypes.c_int32),
-                ("interrupted", ctypes.c_int32), ("tuning_ms", ctypes.c_double)]
+                ("interrupted", ctypes.c_int32), ("tuning_ms", ctypes.c_double),
+                ("unrecorded", ctypes.c_uint32)]
 
 
 class TuningVerification(ctypes.Structure):  # tt_tuning_verification (tuning.h)
