@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """host --aov for a still: the AOVs are named layers of the one EXR (depth.Z, normal.X/Y/Z,
 albedo.R/G/B, motion.X/Y: what denoisers and compositors read), with known values on a plane
-facing the camera, anti-aliased like the colour (an edge pixel holds the mean over its
+facing the camera (integrator_pt and integrator_pssmlt), anti-aliased like the colour (an edge pixel holds the mean over its
 samples), motion against the previous frame of --camera-index; the colour is the same with
 and without AOVs; sequences keep one file per AOV; a bad name is a usage error.
 
@@ -75,6 +75,18 @@ def main():
             check(all(np.array_equal(pc[c], ch[c]) for c in "RGB" if c in pc),
                   "AOV layers leave the colour unchanged")
         check(os.path.exists(os.path.join(tmp, "still.png")), "the PNG is still written")
+
+        # PSSMLT writes the same AOVs (a first-hit ray per pixel and pass of its own)
+        mexr = os.path.join(tmp, "mlt.exr")
+        rc, out = host("--plugin", "integrator_pssmlt", "--aov", "depth,normal,albedo", "--spp", "2",
+                       "--out", mexr, still)
+        mc, _ = read(mexr)
+        check(rc == 0 and {"depth.Z", "normal.Z", "albedo.G"} <= set(mc), f"PSSMLT --aov: exit {rc}: {out}")
+        if "depth.Z" in mc:
+            check(np.allclose(mc["depth.Z"], 5.0, atol=1e-4) and np.allclose(mc["normal.Z"], -1, atol=1e-5)
+                  and np.allclose(mc["albedo.G"], 0.4, atol=1e-6),
+                  f"PSSMLT AOVs: depth {mc['depth.Z'][6, 8]}, normal.Z {mc['normal.Z'][6, 8]}, "
+                  f"albedo.G {mc['albedo.G'][6, 8]}")
 
         # an edge through the middle of a pixel column: with 64 samples its albedo is the
         # covered fraction of the reflectance (anti-aliased), neither 0 nor 0.2

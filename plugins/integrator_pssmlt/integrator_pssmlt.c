@@ -499,6 +499,60 @@ static void mlt_write_theta(const tt_integrator *it) {
     mlt_host()->log(TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s", tt_last_error());
 }
 
+/* The film's AOV planes: PSSMLT's paths land anywhere on the film, so the AOVs come from a
+ * pass of their own, one first-hit ray per pixel per render pass (at the pass's Halton(2,3)
+ * offset, or the frame's fixed jitter), folded into the running mean as the path tracer
+ * does (tt_path_write_aovs): with N passes an AOV is the mean of N stratified samples. */
+typedef struct mlt_aov_job {
+  mlt_job *job;
+  tt_path_options opts;     /* max_depth 0: the first hit only, no light sampling */
+  tt_camera_frame prev;
+  int has_prev;
+  float jitter[2];
+  uint64_t n;               /* this pass's AOV sample number since the film was cleared */
+} mlt_aov_job;
+
+static void mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  mlt_aov_job *a = vctx;
+  mlt_job *job = a->job;
+  (void)thread_index;
+  mlt_boot_src bs = {job->it->seed, 0};  /* a depth-0 path draws no sample dimension */
+  tt_sample_source src = {mlt_boot_get, NULL, &bs};
+  uint64_t rays = 0;
+  for (uint64_t y = begin; y < end; ++y) {
+    for (uint32_t x = 0; x < job->width; ++x) {
+      float fx = (float)x + 0.5f + a->jitter[0], fy = (float)y + 0.5f + a->jitter[1];
+      tt_ray ray;
+      tt_camera_generate_ray(&job->frame, fx, fy, &ray);
+      tt_path_result r;
+      tt_path_trace(job->it->pt, &job->tracer, &a->opts, &ray, &src, &r);
+      tt_path_write_aovs(job->ctx->film, x, (uint32_t)y, &job->frame, a->has_prev ? &a->prev : NULL,
+                         fx, fy, &ray, &r, a->n);
+      rays += r.rays;
+    }
+  }
+  atomic_fetch_add(&job->rays, rays);
+}
+
+static tt_status mlt_aovs(mlt_job *job) {
+  const tt_render_ctx *ctx = job->ctx;
+  mlt_aov_job a;
+  memset(&a, 0, sizeof a);
+  a.job = job;
+  a.opts = job->it->opts;
+  a.opts.max_depth = 0;
+  a.has_prev = ctx->prev_camera && tt_camera_frame_init(&a.prev, ctx->prev_camera) == TT_OK;
+  if (ctx->prev_camera && !a.has_prev) tt_clear_error();
+  if (ctx->fixed_jitter) {
+    a.jitter[0] = ctx->jitter[0];
+    a.jitter[1] = ctx->jitter[1];
+  } else {
+    tt_jitter_halton23(ctx->pass_index, a.jitter);
+  }
+  a.n = ctx->sample_offset == 0 ? 1 : (uint64_t)ctx->pass_index + 1;
+  return mlt_host()->parallel_for(job->height, 1, mlt_aov_fn, &a);
+}
+
 static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_pass_stats *stats) {
   if (!it || !ctx || !ctx->film || !ctx->camera || !ctx->accel_iface || !ctx->accel)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, MLT_NAME ": render_pass needs film, camera and accel");
@@ -569,6 +623,7 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
       for (int i = 0; i <= TT__MLT_THETA_BINS; ++i) it->theta_hist[i] += atomic_load(&job->theta[i]);
       mlt_write_theta(it);
     }
+    if (st == TT_OK && tt_film_aov_mask(ctx->film)) st = mlt_aovs(job);
   }
 
   uint64_t t1 = host->clock_ns();

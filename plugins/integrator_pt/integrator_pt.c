@@ -175,7 +175,7 @@ typedef struct pt_job {
   int has_prev;
   tt_tracer tracer;
   uint32_t tiles_x, tile_size, width, height;
-  float *aov_depth, *aov_normal, *aov_albedo, *aov_motion;
+  uint32_t aovs;                  /* the film's AOV planes (tt_path_write_aovs fills them) */
   atomic_uint_fast64_t rays, samples, nonfinite;
   atomic_int interrupted;
 } pt_job;
@@ -190,45 +190,6 @@ typedef struct pt_source {
 static float pt_source_get(void *self, uint32_t dim) {
   pt_source *s = self;
   return s->iface->get(s->sampler, s->state, dim);
-}
-
-/* Folds sample number `n` (1 for the first sample since the film was cleared) of pixel
- * (px, py) into `ch` channels of an AOV plane: the running mean, so an AOV is anti-aliased
- * like the colour it goes with (what denoisers expect; pbrt-v4's GBufferFilm does the same).
- * The first sample is stored as is, so equal samples (a sequence frame's fixed jitter)
- * give exactly that value. */
-static void pt_aov_mean(float *plane, size_t pix, uint32_t ch, const float *v, uint64_t n) {
-  float *p = plane + ch * pix;
-  for (uint32_t c = 0; c < ch; c++) p[c] = n <= 1 ? v[c] : p[c] + (v[c] - p[c]) / (float)n;
-}
-
-/* Adds the first-hit AOVs of sample `n` of pixel (px, py) from a path result. */
-static void pt_write_aovs(pt_job *job, uint32_t px, uint32_t py, float fx, float fy,
-                          const tt_ray *ray, const tt_path_result *r, uint64_t n) {
-  size_t pix = (size_t)py * job->width + px;
-  if (job->aov_depth) {
-    float depth = 0.0f;
-    if (r->hit) tt_camera_project(&job->frame, r->position, NULL, NULL, &depth);
-    pt_aov_mean(job->aov_depth, pix, 1, &depth, n);
-  }
-  if (job->aov_normal) pt_aov_mean(job->aov_normal, pix, 3, r->normal, n);
-  if (job->aov_albedo) pt_aov_mean(job->aov_albedo, pix, 3, r->albedo, n);
-  if (job->aov_motion) {
-    float m[2] = {0.0f, 0.0f}, pfx, pfy;
-    if (job->has_prev) {
-      float target[3];
-      if (r->hit) {
-        memcpy(target, r->position, sizeof target);
-      } else {  /* a point at infinity moves with the camera's rotation only */
-        for (int i = 0; i < 3; ++i) target[i] = job->prev_frame.origin[i] + ray->dir[i];
-      }
-      if (tt_camera_project(&job->prev_frame, target, &pfx, &pfy, NULL)) {
-        m[0] = pfx - fx;
-        m[1] = pfy - fy;
-      }
-    }
-    pt_aov_mean(job->aov_motion, pix, 2, m, n);
-  }
 }
 
 /* Renders tiles [begin, end); a tile is skipped whole when a stop was requested. */
@@ -278,7 +239,10 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
           rays += r.rays;
           samples++;
           nonfinite += r.nonfinite ? 1u : 0u;
-          pt_write_aovs(job, px, py, fx, fy, &ray, &r, ctx->sample_offset + s + 1);
+          if (job->aovs)
+            tt_path_write_aovs(ctx->film, px, py, &job->frame,
+                               job->has_prev ? &job->prev_frame : NULL, fx, fy, &ray, &r,
+                               ctx->sample_offset + s + 1);
         }
       }
     }
@@ -326,10 +290,7 @@ static tt_status pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
   job->tile_size = set->tile_size;
   job->tiles_x = (job->width + job->tile_size - 1) / job->tile_size;
   uint32_t tiles_y = (job->height + job->tile_size - 1) / job->tile_size;
-  job->aov_depth = tt_film_aov(ctx->film, TT_AOV_DEPTH);
-  job->aov_normal = tt_film_aov(ctx->film, TT_AOV_NORMAL);
-  job->aov_albedo = tt_film_aov(ctx->film, TT_AOV_ALBEDO);
-  job->aov_motion = tt_film_aov(ctx->film, TT_AOV_MOTION);
+  job->aovs = tt_film_aov_mask(ctx->film);
   atomic_init(&job->rays, 0);
   atomic_init(&job->samples, 0);
   atomic_init(&job->nonfinite, 0);

@@ -23,6 +23,8 @@
 #define TUNETRACE_PATH_H
 
 #include <tunetrace/accel.h>
+#include <tunetrace/camera.h>
+#include <tunetrace/film.h>
 #include <tunetrace/scene.h>
 
 #ifdef __cplusplus
@@ -111,6 +113,19 @@ TT_API void tt_path_tracer_destroy(tt_path_tracer *pt);
 TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
                           const tt_path_options *options, const tt_ray *camera_ray,
                           const tt_sample_source *source, tt_path_result *out);
+
+/* Folds the first-hit AOVs of one camera sample (`ray` through film position (fx, fy) of
+ * `frame`, traced into `r`) into pixel (x, y) of every AOV plane `film` has, as the running
+ * mean over the pixel's samples: `n` is this sample's number since the film was cleared
+ * (1: stored as is, so equal samples, e.g. a sequence frame's fixed jitter, give exactly
+ * that value). Depth along the view axis (0 on a miss), shading normal, albedo, and motion
+ * in pixels from (fx, fy) to where `prev` (the previous frame's camera, NULL: no motion)
+ * saw the hit (a miss moves with the camera's rotation only). The integrators share it, so
+ * every one writes the same AOVs. Not thread-safe for one pixel: callers split pixels. */
+TT_API void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y,
+                               const tt_camera_frame *frame, const tt_camera_frame *prev,
+                               float fx, float fy, const tt_ray *ray,
+                               const tt_path_result *r, uint64_t n);
 
 #ifdef __cplusplus
 }

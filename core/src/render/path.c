@@ -414,3 +414,42 @@ TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
   }
   memcpy(out->L, L, sizeof out->L);
 }
+
+/* ---- AOVs ---- */
+
+/* Folds sample `n` of `ch` channels into pixel `pix` of an AOV plane (running mean). */
+static void tt__aov_mean(float *plane, size_t pix, uint32_t ch, const float *v, uint64_t n) {
+  if (!plane) return;
+  float *p = plane + ch * pix;
+  for (uint32_t c = 0; c < ch; c++) p[c] = n <= 1 ? v[c] : p[c] + (v[c] - p[c]) / (float)n;
+}
+
+void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y, const tt_camera_frame *frame,
+                        const tt_camera_frame *prev, float fx, float fy, const tt_ray *ray,
+                        const tt_path_result *r, uint64_t n) {
+  size_t pix = (size_t)y * tt_film_width(film) + x;
+  float *depth_plane = tt_film_aov(film, TT_AOV_DEPTH), *motion_plane = tt_film_aov(film, TT_AOV_MOTION);
+  if (depth_plane) {
+    float depth = 0.0f;
+    if (r->hit) tt_camera_project(frame, r->position, NULL, NULL, &depth);
+    tt__aov_mean(depth_plane, pix, 1, &depth, n);
+  }
+  tt__aov_mean(tt_film_aov(film, TT_AOV_NORMAL), pix, 3, r->normal, n);
+  tt__aov_mean(tt_film_aov(film, TT_AOV_ALBEDO), pix, 3, r->albedo, n);
+  if (motion_plane) {
+    float m[2] = {0.0f, 0.0f}, pfx, pfy;
+    if (prev) {
+      float target[3];
+      if (r->hit) {
+        memcpy(target, r->position, sizeof target);
+      } else {  /* a point at infinity moves with the camera's rotation only */
+        for (int i = 0; i < 3; ++i) target[i] = prev->origin[i] + ray->dir[i];
+      }
+      if (tt_camera_project(prev, target, &pfx, &pfy, NULL)) {
+        m[0] = pfx - fx;
+        m[1] = pfy - fy;
+      }
+    }
+    tt__aov_mean(motion_plane, pix, 2, m, n);
+  }
+}
