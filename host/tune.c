@@ -11,6 +11,9 @@
  */
 #include "tune.h"
 
+#include <tt_util/hash.h>
+#include <tt_util/strings.h>
+
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <math.h>
@@ -37,14 +40,6 @@ typedef struct tt__tune_ctx {
   double *ref_lum;              /* --reference as luminance, 1 per pixel */
   char ref_hash[17];            /* FNV-1a 64 of the reference's luminance (database context) */
 } tt__tune_ctx;
-
-/* strdup that reports failure through NULL only (callers treat NULL as "no text"). */
-static char *tt__dup(const char *s) {
-  if (!s) return NULL;
-  char *d = malloc(strlen(s) + 1);
-  if (d) strcpy(d, s);
-  return d;
-}
 
 /* Non-zero if the plugin publishes a space with at least one parameter. */
 static int tt__tunable(const tt_loaded_plugin *p) {
@@ -127,15 +122,14 @@ static int tt__load_reference(tt__tune_ctx *c) {
   }
   tt_luminance(px, ch, n, c->ref_lum);
   tt_free(px);
-  uint64_t hash = 0xcbf29ce484222325ull;
+  uint64_t hash = TT__FNV1A64_OFFSET;
   for (size_t i = 0; i < n; i++) {
     if (!isfinite(c->ref_lum[i])) {
       fprintf(stderr, "host: --reference %s: pixel (%zu, %zu) is not finite\n", path, i % w,
               i / w);
       return TT_EXIT_USAGE;
     }
-    const unsigned char *b = (const unsigned char *)&c->ref_lum[i];
-    for (size_t k = 0; k < sizeof c->ref_lum[i]; k++) hash = (hash ^ b[k]) * 0x100000001b3ull;
+    hash = tt__fnv1a64(hash, &c->ref_lum[i], sizeof c->ref_lum[i]);
   }
   snprintf(c->ref_hash, sizeof c->ref_hash, "%016llx", (unsigned long long)hash);
   return TT_EXIT_OK;
@@ -255,7 +249,7 @@ static int tt__choose(tt__tune_ctx *c) {
 static int tt__open_db(tt__tune_ctx *c) {
   const tt__host_options *opt = c->opt;
   if (opt->no_db) return TT_EXIT_OK;
-  char *path = opt->db ? tt__dup(opt->db) : tt_tunedb_default_path();
+  char *path = opt->db ? tt__strdup(opt->db) : tt_tunedb_default_path();
   if (!path) {
     c->s->host->log(TT_LOG_WARN, NULL, "tuning: no $XDG_DATA_HOME or $HOME: tuning without "
                     "a database (use --db PATH)");
@@ -329,7 +323,7 @@ static char *tt__verify_json(const tt_tuning_verification *v) {
   }
   char *text = cJSON_PrintUnformatted(root);
   cJSON_Delete(root);
-  char *out = tt__dup(text);
+  char *out = tt__strdup(text);
   cJSON_free(text);
   return out;
 }

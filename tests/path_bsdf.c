@@ -14,7 +14,7 @@
 #include <stdlib.h>
 
 #include "../core/src/render/bsdf_internal.h"
-#include "../core/src/util/rng_internal.h"
+#include <tt_util/rng.h>
 #include "tt_test.h"
 
 typedef struct named_material {

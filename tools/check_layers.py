@@ -36,8 +36,12 @@ SRC = os.path.join(ROOT, "core", "src")
 
 
 def folder_of(rel):
-    """core/src-relative path -> its folder ("io/pbrt/pbrt_parse.c" -> "io/pbrt")."""
-    return os.path.dirname(rel)
+    """core/src-relative path -> its folder, the longest one named in LAYERS
+    ("io/pbrt/pbrt_parse.c" -> "io/pbrt", "util/include/tt_util/rng.h" -> "util")."""
+    d = os.path.dirname(rel)
+    while d and d not in RANK:
+        d = os.path.dirname(d)
+    return d or os.path.dirname(rel)
 
 
 def sources():

@@ -366,7 +366,7 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
   }
   it->b = sum / (double)n;
   for (uint32_t c = 0; c < it->nchains; ++c) {  /* starts in proportion to the weights */
-    double u = tt__mlt_hash_unit(tt__mlt_hash3(it->seed, c, 0x7374617274ull)) * sum;
+    double u = tt__u64_to_unit(tt__hash3(it->seed, c, 0x7374617274ull)) * sum;
     uint64_t lo = 0, hi = n - 1;
     while (lo < hi) {  /* first i with prefix[i] > u */
       uint64_t mid = lo + (hi - lo) / 2;

@@ -13,26 +13,7 @@
 
 /* Seeds PCG32 with a state and a stream (as pcg32_srandom_r), both hashed. */
 void tt__mlt_rng_seed(tt__mlt_rng *rng, uint64_t seed, uint64_t stream) {
-  rng->state = 0u;
-  rng->inc = (tt__mlt_mix64(stream ^ 0xda3e39cb94b95bdbull) << 1u) | 1u;
-  (void)tt__mlt_rng_u32(rng);
-  rng->state += tt__mlt_mix64(seed);
-  (void)tt__mlt_rng_u32(rng);
-}
-
-/* PCG32 XSH-RR step. */
-uint32_t tt__mlt_rng_u32(tt__mlt_rng *rng) {
-  uint64_t old = rng->state;
-  rng->state = old * 6364136223846793005ull + rng->inc;
-  uint32_t xorshifted = (uint32_t)(((old >> 18u) ^ old) >> 27u);
-  uint32_t rot = (uint32_t)(old >> 59u);
-  return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
-}
-
-/* Two draws make 53 bits: the truncated normal's tails need more than 24. */
-double tt__mlt_rng_unit(tt__mlt_rng *rng) {
-  uint64_t hi = tt__mlt_rng_u32(rng), lo = tt__mlt_rng_u32(rng);
-  return (double)(((hi << 32) | lo) >> 11) * 0x1p-53;
+  tt__pcg32_seed(rng, tt__mix64(seed), tt__mix64(stream ^ 0xda3e39cb94b95bdbull));
 }
 
 /* ---- the normal and truncated normal ---- */

@@ -17,35 +17,19 @@
 #include <stdint.h>
 
 #include <tunetrace/path.h>
+#include <tt_util/rng.h>
 
 #define TT__MLT_MAX_BINS 8
 #define TT__MLT_SLOTS (TT__MLT_MAX_BINS + 1)
 
-/* PCG32 (O'Neill 2014, XSH-RR 64/32), one per chain. */
-typedef struct tt__mlt_rng {
-  uint64_t state, inc;
-} tt__mlt_rng;
-
-/* SplitMix64 finaliser. */
-static inline uint64_t tt__mlt_mix64(uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-/* Hash of three words, order-sensitive. */
-static inline uint64_t tt__mlt_hash3(uint64_t a, uint64_t b, uint64_t c) {
-  return tt__mlt_mix64(tt__mlt_mix64(tt__mlt_mix64(a + 0x9e3779b97f4a7c15ull) ^ (b + 0x632be59bd9b4e019ull)) ^
-                       (c + 0xd1b54a32d192ed03ull));
-}
-
-/* 53-bit uniform in [0, 1) from a hash: the bootstrap's counter-based primary samples. */
-static inline double tt__mlt_hash_unit(uint64_t h) { return (double)(h >> 11) * 0x1p-53; }
+/* PCG32 (O'Neill 2014, XSH-RR 64/32), one per chain: the shared generator of
+ * <tt_util/rng.h>, seeded the PSSMLT way (seed and stream hashed, tt__mlt_rng_seed). */
+typedef tt__pcg32 tt__mlt_rng;
 
 void tt__mlt_rng_seed(tt__mlt_rng *rng, uint64_t seed, uint64_t stream);
-uint32_t tt__mlt_rng_u32(tt__mlt_rng *rng);
-/* Uniform double in [0, 1) with 53 random bits. */
-double tt__mlt_rng_unit(tt__mlt_rng *rng);
+/* Uniform double in [0, 1) with 53 random bits: the truncated normal's tails need more
+ * than 24. */
+static inline double tt__mlt_rng_unit(tt__mlt_rng *rng) { return tt__pcg32_double(rng); }
 
 /* ---- the mutation kernel (derived from a configuration) ---- */
 
@@ -150,7 +134,7 @@ void tt__mlt_chain_init(tt__mlt_chain *c, void *mem, uint32_t dims, const tt__ml
 void tt__mlt_chain_start(tt__mlt_chain *c, uint64_t seed, uint64_t index, uint64_t chain_index);
 /* Primary sample `dim` of bootstrap sample `index`. */
 static inline double tt__mlt_bootstrap_value(uint64_t seed, uint64_t index, uint32_t dim) {
-  return tt__mlt_hash_unit(tt__mlt_hash3(seed, index, dim));
+  return tt__u64_to_unit(tt__hash3(seed, index, dim));
 }
 
 /* Starts an iteration: chooses small or large step. */

@@ -19,6 +19,8 @@
 
 #include "taa_internal.h"
 
+#include <tt_util/hash.h>
+
 
 /* ---- weights file ---- */
 
@@ -35,15 +37,9 @@ static float net_f32(const unsigned char *p) {
   return f;
 }
 
-/* FNV-1a 32-bit over the payload: cheap and catches torn or edited files. */
-static uint32_t net_fnv1a(const unsigned char *p, size_t n) {
-  uint32_t h = 2166136261u;
-  for (size_t i = 0; i < n; i++) {
-    h ^= p[i];
-    h *= 16777619u;
-  }
-  return h;
-}
+/* FNV-1a 32-bit over the payload (<tt_util/hash.h>): cheap and catches torn or edited
+ * files. */
+static uint32_t net_fnv1a(const unsigned char *p, size_t n) { return tt__fnv1a32(p, n); }
 
 /* 32-byte aligned zeroed floats. */
 static float *net_alloc(size_t count) {

@@ -7,6 +7,8 @@
 #include "tuner_nm_internal.h"
 
 #include <tunetrace/plugin.h>
+#include <tt_util/hash.h>
+#include <tt_util/rng.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -18,26 +20,16 @@ static tt_space *tt__nm_space;
 
 /* ---- random numbers ---- */
 
-/* SplitMix64: one 64-bit word of state, trivially saved and restored. Returns [0, 1). */
-double tt__nm_rand(uint64_t *state) {
-  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  z ^= z >> 31;
-  return (double)(z >> 11) * 0x1p-53;
-}
+/* SplitMix64 (<tt_util/rng.h>): one 64-bit word of state, trivially saved and restored.
+ * Returns [0, 1). */
+double tt__nm_rand(uint64_t *state) { return tt__u64_to_unit(tt__splitmix64(state)); }
 
 /* ---- measurement cache ---- */
 
-/* Hash of a key; -0.0 is normalised by the caller so equal values hash equally. */
+/* Hash of a key (FNV-1a 64 of its bytes, <tt_util/hash.h>), folded so the table's mask
+ * sees the high bits too; -0.0 is normalised by the caller so equal values hash equally. */
 static uint64_t tt__nm_hash(const double *key, size_t P) {
-  uint64_t h = 0x84222325cbf29ce4ull;
-  for (size_t i = 0; i < P; i++) {
-    uint64_t b;
-    memcpy(&b, &key[i], sizeof b);
-    h ^= b + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-    h *= 0x100000001b3ull;
-  }
+  uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, key, P * sizeof *key);
   return h ^ (h >> 29);
 }
 

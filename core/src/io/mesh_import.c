@@ -201,7 +201,7 @@ static tt_status tt__ply_import(const char *file, const char *base_name, int spl
     char name[512];
     if (split) snprintf(name, sizeof name, "%s/0", base_name);
     else snprintf(name, sizeof name, "%s", base_name);
-    if (!(one->name = tt__scene_strdup(name)))
+    if (!(one->name = tt__strdup(name)))
       st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
   }
   if (st != TT_OK) {
@@ -264,7 +264,7 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
       int w = list.items[i].name[0] ? snprintf(name, sizeof name, "%s/%s", base_name, list.items[i].name)
                                     : snprintf(name, sizeof name, "%s/%u", base_name, i);
       if (w < 0) name[0] = '\0';
-      parts[i].name = tt__scene_strdup(name);
+      parts[i].name = tt__strdup(name);
       if (!parts[i].name) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
     }
   }
@@ -284,7 +284,7 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
       for (uint32_t i = 0; i < list.count; i++) tt__mesh_data_free(&parts[i]);
       st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
     } else if ((st = tt__ai_merge(parts, list.count, where, one)) == TT_OK &&
-               !(one->name = tt__scene_strdup(base_name))) {
+               !(one->name = tt__strdup(base_name))) {
       tt__mesh_data_free(one);
       st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);
     }

@@ -6,6 +6,7 @@
  * its materials/meshes/lights are appended. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io_internal.h"
+#include "util/json_error.h"
 
 #include <tunetrace/file.h>
 
@@ -43,17 +44,9 @@ static const tt__range tt__unit = {0.0, 1.0, 0};
 
 /* ---- messages -------------------------------------------------------------------------- */
 
-/* One place formats "<source>: <path>: <message>" so all errors look alike. */
-static tt_status tt__jfail(const tt__jctx *c, tt_status st, const char *path, const char *fmt, ...)
-    TT_PRINTF(4, 5);
-static tt_status tt__jfail(const tt__jctx *c, tt_status st, const char *path, const char *fmt, ...) {
-  char msg[1024];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  return tt_set_error(st, "%s: %s: %s", c->src, path, msg);
-}
+/* One place formats "<source>: <path>: <message>" so all errors look alike
+ * (util/json_error.c, shared with the parameter-space reader). */
+#define tt__jfail(c, st, path, ...) tt__json_error((st), (c)->src, (path), __VA_ARGS__)
 
 /* Warnings go to stderr: the scene still loads, but typos should not pass silently. */
 static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) TT_PRINTF(3, 4);
@@ -80,16 +73,7 @@ static void tt__jidx(char *buf, size_t n, const char *prefix, unsigned i) {
 
 /* Describes a JSON value for "got ..." so the user sees what was actually there. */
 static const char *tt__jdesc(const cJSON *it, char *buf, size_t n) {
-  if (!it) snprintf(buf, n, "nothing");
-  else if (cJSON_IsNumber(it)) snprintf(buf, n, "%g", it->valuedouble);
-  else if (cJSON_IsString(it)) snprintf(buf, n, "a string \"%.60s\"", it->valuestring);
-  else if (cJSON_IsTrue(it)) snprintf(buf, n, "true");
-  else if (cJSON_IsFalse(it)) snprintf(buf, n, "false");
-  else if (cJSON_IsNull(it)) snprintf(buf, n, "null");
-  else if (cJSON_IsArray(it)) snprintf(buf, n, "an array of %d elements", cJSON_GetArraySize(it));
-  else if (cJSON_IsObject(it)) snprintf(buf, n, "an object");
-  else snprintf(buf, n, "an invalid value");
-  return buf;
+  return tt__json_describe(it, TT__JSON_SCENE, buf, n);
 }
 
 /* Formats a range as "(0, 180)" / "[1, 65536]" / "[0, inf)". */
@@ -225,7 +209,7 @@ static tt_status tt__jobject(const tt__jctx *c, const cJSON *it, const char *pat
 
 /* Absolute paths stay; relative ones are joined to the scene file's directory. */
 static char *tt__resolve(const tt__jctx *c, const char *rel) {
-  if (rel[0] == '/' || !c->base || !c->base[0]) return tt__scene_strdup(rel);
+  if (rel[0] == '/' || !c->base || !c->base[0]) return tt__strdup(rel);
   size_t n = strlen(c->base) + strlen(rel) + 2;
   char *p = malloc(n);
   if (!p) return NULL;
@@ -490,7 +474,7 @@ static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root, int import
     if ((st = tt__jmaterial(c, e, mp, &m)) != TT_OK) return st;
     tt_material *slot = tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
     if (!slot) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mp, "out of memory");
-    m.name = tt__scene_strdup(e->string);
+    m.name = tt__strdup(e->string);
     *slot = m;
     if (!m.name) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mp, "out of memory");
   }
@@ -795,7 +779,7 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
     memset(&d, 0, sizeof d);
     st = tt__jinline(c, e, mp, &d);
     if (st == TT_OK) {
-      d.name = tt__scene_strdup(name);
+      d.name = tt__strdup(name);
       if (!d.name) st = tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mp, "out of memory");
     }
     if (st == TT_OK) st = tt__jfinish_mesh(c, mp, &d, m, has_tf, mi);
@@ -979,7 +963,7 @@ tt_status tt__scene_load_json_file(const char *path, int depth, tt_scene **out) 
   size_t len = 0;
   tt_status st = tt__read_file(path, &buf, &len);
   if (st != TT_OK) return st;
-  char *dir = tt__scene_strdup(path);
+  char *dir = tt__strdup(path);
   if (!dir) {
     free(buf);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
@@ -1060,7 +1044,7 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
     return st;
   }
   free(full);
-  char *src = tt__scene_strdup(c->src);
+  char *src = tt__strdup(c->src);
   if (!src) {
     tt_scene_destroy(s);
     return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "import", "out of memory");
@@ -1073,20 +1057,6 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
 }
 
 /* ---- entry point ----------------------------------------------------------------------- */
-
-/* Line and column (1-based, bytes) of offset `at` in `text`. */
-static void tt__line_col(const char *text, size_t at, unsigned *line, unsigned *col) {
-  *line = 1;
-  *col = 1;
-  for (size_t i = 0; i < at; i++) {
-    if (text[i] == '\n') {
-      (*line)++;
-      *col = 1;
-    } else {
-      (*col)++;
-    }
-  }
-}
 
 /* Parses, validates section by section, then finishes (area lights, bounds, id). */
 tt_status tt_scene_load_json(const char *json, size_t length, const char *source,
@@ -1104,7 +1074,7 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
   const char *nul = memchr(json, '\0', length);
   if (nul) {
     unsigned line, col;
-    tt__line_col(json, (size_t)(nul - json), &line, &col);
+    tt__json_line_col(json, (size_t)(nul - json), &line, &col);
     return tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error: unexpected NUL byte", source, line, col);
   }
   /* a private NUL-terminated copy lets cJSON insist that nothing follows the value */
@@ -1119,7 +1089,7 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
     size_t at = end && end >= text + skip ? (size_t)(end - text) : length;
     if (at > length) at = length;
     unsigned line, col;
-    tt__line_col(text, at, &line, &col);
+    tt__json_line_col(text, at, &line, &col);
     char near[24];
     size_t k = 0;
     for (size_t i = at; i < length && k + 1 < sizeof near && text[i] != '\n'; i++) near[k++] = text[i];

@@ -80,7 +80,7 @@ static void tt__wvec_clamped(const tt__wctx *w, const char *what, const float *v
 /* Absolute form of an asset path (realpath when the file exists, else unchanged). */
 static char *tt__wabs(const char *path) {
   char *real = realpath(path, NULL);
-  return real ? real : tt__scene_strdup(path);
+  return real ? real : tt__strdup(path);
 }
 
 /* ---- PLY ------------------------------------------------------------------------------- */
@@ -227,7 +227,7 @@ static char **tt__material_keys(const tt_scene *s) {
       }
       n = gen;
     }
-    keys[i] = tt__scene_strdup(n);
+    keys[i] = tt__strdup(n);
     if (!keys[i]) {
       for (uint32_t j = 0; j < i; j++) free(keys[j]);
       free(keys);

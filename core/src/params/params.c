@@ -52,14 +52,6 @@ struct tt_config {
   tt_value *values;  /* one per parameter, in space order */
 };
 
-char *tt__strdup(const char *s) {
-  if (!s) return NULL;
-  size_t n = strlen(s) + 1;
-  char *d = malloc(n);
-  if (d) memcpy(d, s, n);
-  return d;
-}
-
 tt_status tt__prefix_error(tt_status status, const char *prefix) {
   /* Copy first: tt_set_error formats into the very buffer tt_last_error points to. */
   char msg[2048];

@@ -4,6 +4,7 @@
 #define TT_PARAMS_INTERNAL_H
 
 #include <tunetrace/params.h>
+#include <tt_util/strings.h>  /* tt__strdup */
 
 #include <stddef.h>
 
@@ -17,8 +18,6 @@ const char *tt__space_constraint(const tt_space *space, size_t k);
 tt_value_kind tt__space_nom_kind(const tt_space *space, size_t index);
 /* Exact bounds of INT parameter `index`; 0 (and *min, *max untouched) if not INT. */
 int tt__space_int_range(const tt_space *space, size_t index, int64_t *min, int64_t *max);
-/* malloc'ed copy of `s` (NULL stays NULL); the build is strict C11, so no strdup. */
-char *tt__strdup(const char *s);
 /* Copies tt_last_error() and re-records it with `prefix` in front (e.g. "file.json: "),
  * so lower-level messages gain the input's name; returns `status`. */
 tt_status tt__prefix_error(tt_status status, const char *prefix);

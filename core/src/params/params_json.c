@@ -2,6 +2,7 @@
  * configurations ({"name": value, ...}), with errors that name the input, the JSON path and
  * what was expected. */
 #include "params/params_internal.h"
+#include "util/json_error.h"
 
 #include <tunetrace/params.h>
 
@@ -15,54 +16,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Records a parse error "source: path: message"; returns TT_ERR_PARSE. */
-static tt_status tt__json_error(const char *source, const char *path, const char *fmt, ...)
-    TT_PRINTF(3, 4);
-static tt_status tt__json_error(const char *source, const char *path, const char *fmt, ...) {
-  char msg[1536];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  if (path && path[0]) return tt_set_error(TT_ERR_PARSE, "%s: %s: %s", source, path, msg);
-  return tt_set_error(TT_ERR_PARSE, "%s: %s", source, msg);
-}
-
-/* Short description of a JSON item for "got ..." in messages, e.g. `a string ("x")`. */
-static const char *tt__describe(const cJSON *item, char *buf, size_t size) {
-  if (!item) snprintf(buf, size, "nothing");
-  else if (cJSON_IsString(item)) snprintf(buf, size, "a string (\"%.64s\")", item->valuestring);
-  else if (cJSON_IsNumber(item)) snprintf(buf, size, "the number %.17g", item->valuedouble);
-  else if (cJSON_IsTrue(item)) snprintf(buf, size, "true");
-  else if (cJSON_IsFalse(item)) snprintf(buf, size, "false");
-  else if (cJSON_IsNull(item)) snprintf(buf, size, "null");
-  else if (cJSON_IsArray(item)) snprintf(buf, size, "an array");
-  else if (cJSON_IsObject(item)) snprintf(buf, size, "an object");
-  else snprintf(buf, size, "an unknown JSON value");
-  return buf;
-}
-
 /* Parses `json`, reporting syntax errors with line and column; NULL on error. */
 static cJSON *tt__parse(const char *json, const char *source) {
   if (!json) {
-    tt__json_error(source, NULL, "no JSON text (NULL)");
+    tt__json_error(TT_ERR_PARSE, source, NULL, "no JSON text (NULL)");
     return NULL;
   }
   const char *end = NULL;
   cJSON *root = cJSON_ParseWithOpts(json, &end, 1);
   if (!root) {
     const char *at = end ? end : json;
-    int line = 1, col = 1;
-    for (const char *c = json; c < at && *c; c++) {
-      if (*c == '\n') {
-        line++;
-        col = 1;
-      } else {
-        col++;
-      }
-    }
-    tt__json_error(source, NULL, "invalid JSON at line %d, column %d (near \"%.20s\")", line,
-                   col, at);
+    unsigned line, col;
+    tt__json_line_col(json, (size_t)(at - json), &line, &col);
+    tt__json_error(TT_ERR_PARSE, source, NULL, "invalid JSON at line %u, column %u (near \"%.20s\")",
+                   line, col, at);
   }
   return root;
 }
@@ -73,17 +40,17 @@ static int tt__get_int(const cJSON *obj, const char *key, const char *path, cons
   char p[256], got[128];
   snprintf(p, sizeof p, "%s.%s", path, key);
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
-  if (!v) return tt__json_error(source, p, "missing (expected an integer)"), -1;
+  if (!v) return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected an integer)"), -1;
   double d = v->valuedouble;
   if (!cJSON_IsNumber(v) || !isfinite(d) || d != floor(d))
-    return tt__json_error(source, p, "expected an integer, got %s",
-                          tt__describe(v, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected an integer, got %s",
+                          tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   /* INT bounds are limited to +-2^53 (see tt_space_add_int); say so here, because
    * larger JSON integers have already been rounded by the parser. */
   if (fabs(d) > 0x1p53)
-    return tt__json_error(source, p, "expected an integer within +-2^53, got %s",
-                          tt__describe(v, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected an integer within +-2^53, got %s",
+                          tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   *out = (int64_t)d;
   return 0;
@@ -95,10 +62,10 @@ static int tt__get_double(const cJSON *obj, const char *key, const char *path,
   char p[256], got[128];
   snprintf(p, sizeof p, "%s.%s", path, key);
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
-  if (!v) return tt__json_error(source, p, "missing (expected a number)"), -1;
+  if (!v) return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected a number)"), -1;
   if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
-    return tt__json_error(source, p, "expected a number, got %s",
-                          tt__describe(v, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected a number, got %s",
+                          tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   *out = v->valuedouble;
   return 0;
@@ -143,43 +110,43 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
   char path[64], p[128], got[128];
   snprintf(path, sizeof path, "parameters[%d]", i);
   if (!cJSON_IsObject(item))
-    return tt__json_error(source, path, "expected a parameter object, got %s",
-                          tt__describe(item, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, path, "expected a parameter object, got %s",
+                          tt__json_describe(item, TT__JSON_PARAMS, got, sizeof got)),
            -1;
 
   const cJSON *name = cJSON_GetObjectItemCaseSensitive(item, "name");
   snprintf(p, sizeof p, "%s.name", path);
   if (!cJSON_IsString(name) || !name->valuestring[0])
-    return tt__json_error(source, p, "expected a non-empty string, got %s",
-                          tt__describe(name, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected a non-empty string, got %s",
+                          tt__json_describe(name, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   int prev = tt_space_find(space, name->valuestring);
   if (prev >= 0)
-    return tt__json_error(source, p, "duplicate name \"%s\" (already used by parameters[%d])",
+    return tt__json_error(TT_ERR_PARSE, source, p, "duplicate name \"%s\" (already used by parameters[%d])",
                           name->valuestring, prev),
            -1;
 
   const cJSON *desc = cJSON_GetObjectItemCaseSensitive(item, "description");
   snprintf(p, sizeof p, "%s.description", path);
   if (desc && !cJSON_IsString(desc))
-    return tt__json_error(source, p, "expected a string, got %s",
-                          tt__describe(desc, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected a string, got %s",
+                          tt__json_describe(desc, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   const char *description = desc ? desc->valuestring : "";
 
   const cJSON *type = cJSON_GetObjectItemCaseSensitive(item, "type");
   snprintf(p, sizeof p, "%s.type", path);
   if (!type)
-    return tt__json_error(source, p, "missing (expected \"INT\", \"FLOAT\" or \"NOM\")"), -1;
+    return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected \"INT\", \"FLOAT\" or \"NOM\")"), -1;
   if (!cJSON_IsString(type))
-    return tt__json_error(source, p, "expected \"INT\", \"FLOAT\" or \"NOM\", got %s",
-                          tt__describe(type, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected \"INT\", \"FLOAT\" or \"NOM\", got %s",
+                          tt__json_describe(type, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   const char *t = type->valuestring;
   int is_int = strcmp(t, "INT") == 0, is_float = strcmp(t, "FLOAT") == 0,
       is_nom = strcmp(t, "NOM") == 0;
   if (!is_int && !is_float && !is_nom)
-    return tt__json_error(source, p,
+    return tt__json_error(TT_ERR_PARSE, source, p,
                           "unknown type \"%s\" (expected \"INT\", \"FLOAT\" or \"NOM\"; a "
                           "boolean is a NOM with possibleValues [false, true])",
                           t),
@@ -188,12 +155,12 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
   const cJSON *logj = cJSON_GetObjectItemCaseSensitive(item, "log");
   snprintf(p, sizeof p, "%s.log", path);
   if (logj && !cJSON_IsBool(logj))
-    return tt__json_error(source, p, "expected true or false, got %s",
-                          tt__describe(logj, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected true or false, got %s",
+                          tt__json_describe(logj, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   int log = cJSON_IsTrue(logj);
   if (log && !is_float)
-    return tt__json_error(source, p, "only FLOAT parameters may be log-scaled (type is %s)", t),
+    return tt__json_error(TT_ERR_PARSE, source, p, "only FLOAT parameters may be log-scaled (type is %s)", t),
            -1;
 
   int r;
@@ -204,14 +171,14 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
       return -1;
     if (mn > mx) {
       snprintf(p, sizeof p, "%s.max", path);
-      return tt__json_error(source, p,
+      return tt__json_error(TT_ERR_PARSE, source, p,
                             "%" PRId64 " is less than min %" PRId64 " (expected min <= max)",
                             mx, mn),
              -1;
     }
     if (def < mn || def > mx) {
       snprintf(p, sizeof p, "%s.value", path);
-      return tt__json_error(source, p,
+      return tt__json_error(TT_ERR_PARSE, source, p,
                             "default %" PRId64 " is outside [%" PRId64 ", %" PRId64 "]", def,
                             mn, mx),
              -1;
@@ -225,41 +192,41 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
       return -1;
     if (mn > mx) {
       snprintf(p, sizeof p, "%s.max", path);
-      return tt__json_error(source, p, "%g is less than min %g (expected min <= max)", mx, mn),
+      return tt__json_error(TT_ERR_PARSE, source, p, "%g is less than min %g (expected min <= max)", mx, mn),
              -1;
     }
     if (def < mn || def > mx) {
       snprintf(p, sizeof p, "%s.value", path);
-      return tt__json_error(source, p, "default %g is outside [%g, %g]", def, mn, mx), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p, "default %g is outside [%g, %g]", def, mn, mx), -1;
     }
     if (log && mn <= 0.0) {
       snprintf(p, sizeof p, "%s.log", path);
-      return tt__json_error(source, p, "log scale needs min > 0, got min %g", mn), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p, "log scale needs min > 0, got min %g", mn), -1;
     }
     r = tt_space_add_float(space, name->valuestring, mn, mx, def, log, description);
   } else {
     const cJSON *pv = cJSON_GetObjectItemCaseSensitive(item, "possibleValues");
     snprintf(p, sizeof p, "%s.possibleValues", path);
     if (!pv)
-      return tt__json_error(source, p, "missing (expected a non-empty array)"), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected a non-empty array)"), -1;
     if (!cJSON_IsArray(pv))
-      return tt__json_error(source, p, "expected a non-empty array, got %s",
-                            tt__describe(pv, got, sizeof got)),
+      return tt__json_error(TT_ERR_PARSE, source, p, "expected a non-empty array, got %s",
+                            tt__json_describe(pv, TT__JSON_PARAMS, got, sizeof got)),
              -1;
     int count = cJSON_GetArraySize(pv);
     if (count == 0)
-      return tt__json_error(source, p, "empty (expected at least one possible value)"), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p, "empty (expected at least one possible value)"), -1;
     tt_value_kind kind = tt__nom_kind_of(pv->child);
     int k = 0;
     for (const cJSON *e = pv->child; e; e = e->next, k++) {
       snprintf(p, sizeof p, "%s.possibleValues[%d]", path, k);
       tt_value_kind ek = tt__nom_kind_of(e);
       if (!ek)
-        return tt__json_error(source, p, "expected an integer, boolean or string, got %s",
-                              tt__describe(e, got, sizeof got)),
+        return tt__json_error(TT_ERR_PARSE, source, p, "expected an integer, boolean or string, got %s",
+                              tt__json_describe(e, TT__JSON_PARAMS, got, sizeof got)),
                -1;
       if (ek != kind)
-        return tt__json_error(source, p,
+        return tt__json_error(TT_ERR_PARSE, source, p,
                               "mixed value kinds (possibleValues[0] is %s, this is %s; "
                               "expected all integers, all booleans or all strings)",
                               tt__kind_name(kind), tt__kind_name(ek)),
@@ -268,23 +235,23 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
         if ((kind == TT_VALUE_STRING && strcmp(f->valuestring, e->valuestring) == 0) ||
             (kind == TT_VALUE_INT && f->valuedouble == e->valuedouble) ||
             (kind == TT_VALUE_BOOL && cJSON_IsTrue(f) == cJSON_IsTrue(e)))
-          return tt__json_error(source, p, "duplicate value %s (expected distinct values)",
-                                tt__describe(e, got, sizeof got)),
+          return tt__json_error(TT_ERR_PARSE, source, p, "duplicate value %s (expected distinct values)",
+                                tt__json_describe(e, TT__JSON_PARAMS, got, sizeof got)),
                  -1;
     }
     snprintf(p, sizeof p, "%s.possibleValues", path);
     if (kind == TT_VALUE_BOOL && (count != 2 || cJSON_IsTrue(pv->child)))
-      return tt__json_error(source, p, "boolean possible values must be [false, true]"), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p, "boolean possible values must be [false, true]"), -1;
 
     const cJSON *val = cJSON_GetObjectItemCaseSensitive(item, "value");
     snprintf(p, sizeof p, "%s.value", path);
     if (!val)
-      return tt__json_error(source, p, "missing (expected the default, one of possibleValues)"),
+      return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected the default, one of possibleValues)"),
              -1;
     int def = tt__nom_find(pv, val);
     if (def < 0)
-      return tt__json_error(source, p, "default %s is not one of possibleValues",
-                            tt__describe(val, got, sizeof got)),
+      return tt__json_error(TT_ERR_PARSE, source, p, "default %s is not one of possibleValues",
+                            tt__json_describe(val, TT__JSON_PARAMS, got, sizeof got)),
              -1;
 
     if (kind == TT_VALUE_BOOL) {
@@ -324,32 +291,32 @@ tt_space *tt_space_from_json(const char *json, const char *source) {
   char got[128];
   tt_space *space = NULL;
   if (!cJSON_IsObject(root)) {
-    tt__json_error(source, NULL, "expected a JSON object at the top level, got %s",
-                   tt__describe(root, got, sizeof got));
+    tt__json_error(TT_ERR_PARSE, source, NULL, "expected a JSON object at the top level, got %s",
+                   tt__json_describe(root, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
   const cJSON *plugin = cJSON_GetObjectItemCaseSensitive(root, "plugin");
   if (!cJSON_IsString(plugin)) {
-    tt__json_error(source, "plugin", "expected the plugin name as a string, got %s",
-                   tt__describe(plugin, got, sizeof got));
+    tt__json_error(TT_ERR_PARSE, source, "plugin", "expected the plugin name as a string, got %s",
+                   tt__json_describe(plugin, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
   const cJSON *version = cJSON_GetObjectItemCaseSensitive(root, "version");
   if (version && !cJSON_IsString(version)) {
-    tt__json_error(source, "version", "expected a version string, got %s",
-                   tt__describe(version, got, sizeof got));
+    tt__json_error(TT_ERR_PARSE, source, "version", "expected a version string, got %s",
+                   tt__json_describe(version, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
   if (!cJSON_IsArray(params)) {
-    tt__json_error(source, "parameters", "expected an array of parameter objects, got %s",
-                   tt__describe(params, got, sizeof got));
+    tt__json_error(TT_ERR_PARSE, source, "parameters", "expected an array of parameter objects, got %s",
+                   tt__json_describe(params, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
   const cJSON *cons = cJSON_GetObjectItemCaseSensitive(root, "constraints");
   if (cons && !cJSON_IsArray(cons)) {
-    tt__json_error(source, "constraints", "expected an array of {\"description\": ...}, got %s",
-                   tt__describe(cons, got, sizeof got));
+    tt__json_error(TT_ERR_PARSE, source, "constraints", "expected an array of {\"description\": ...}, got %s",
+                   tt__json_describe(cons, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
   space = tt_space_create(plugin->valuestring, version ? version->valuestring : "");
@@ -363,8 +330,8 @@ tt_space *tt_space_from_json(const char *json, const char *source) {
     if (!cJSON_IsString(d)) {
       char p[64];
       snprintf(p, sizeof p, "constraints[%d]", i);
-      tt__json_error(source, p, "expected {\"description\": \"...\"}, got %s",
-                     tt__describe(c, got, sizeof got));
+      tt__json_error(TT_ERR_PARSE, source, p, "expected {\"description\": \"...\"}, got %s",
+                     tt__json_describe(c, TT__JSON_PARAMS, got, sizeof got));
       goto fail;
     }
     tt_space_add_constraint_text(space, d->valuestring);
@@ -522,8 +489,8 @@ static int tt__config_set_json(tt_config *work, size_t idx, const cJSON *v,
   tt_value_kind kind = tt__space_nom_kind(space, idx);
   if (type == TT_PARAM_NOM && kind == TT_VALUE_BOOL) {
     if (!cJSON_IsBool(v))
-      return tt__json_error(source, path, "expected true or false, got %s",
-                            tt__describe(v, got, sizeof got)),
+      return tt__json_error(TT_ERR_PARSE, source, path, "expected true or false, got %s",
+                            tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
              -1;
     tt_config_set_index(work, idx, cJSON_IsTrue(v) ? 1 : 0);
     return 0;
@@ -544,14 +511,14 @@ static int tt__config_set_json(tt_config *work, size_t idx, const cJSON *v,
       if (n < 0) break;
       used += (size_t)n;
     }
-    return tt__json_error(source, path, "expected one of %s, got %s", list,
-                          tt__describe(v, got, sizeof got)),
+    return tt__json_error(TT_ERR_PARSE, source, path, "expected one of %s, got %s", list,
+                          tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   }
   if (!cJSON_IsNumber(v))
-    return tt__json_error(source, path, "expected %s, got %s",
+    return tt__json_error(TT_ERR_PARSE, source, path, "expected %s, got %s",
                           type == TT_PARAM_FLOAT ? "a number" : "an integer",
-                          tt__describe(v, got, sizeof got)),
+                          tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
            -1;
   if (tt_config_set_number(work, idx, v->valuedouble) != TT_OK) {
     char pre[160];
@@ -572,8 +539,8 @@ tt_status tt_config_from_json(tt_config *config, const char *json, const char *s
   /* Work on a clone so that a failure leaves `config` untouched. */
   tt_config *work = NULL;
   if (!cJSON_IsObject(root)) {
-    st = tt__json_error(source, NULL, "expected a JSON object {\"name\": value, ...}, got %s",
-                        tt__describe(root, got, sizeof got));
+    st = tt__json_error(TT_ERR_PARSE, source, NULL, "expected a JSON object {\"name\": value, ...}, got %s",
+                        tt__json_describe(root, TT__JSON_PARAMS, got, sizeof got));
     goto done;
   }
   work = tt_config_clone(config);
@@ -585,7 +552,7 @@ tt_status tt_config_from_json(tt_config *config, const char *json, const char *s
   for (const cJSON *m = root->child; m; m = m->next) {
     for (const cJSON *e = root->child; e != m; e = e->next)
       if (strcmp(e->string, m->string) == 0) {
-        st = tt__json_error(source, m->string, "appears twice (expected each name once)");
+        st = tt__json_error(TT_ERR_PARSE, source, m->string, "appears twice (expected each name once)");
         goto done;
       }
     int idx = tt_space_find(space, m->string);
@@ -599,7 +566,7 @@ tt_status tt_config_from_json(tt_config *config, const char *json, const char *s
         if (n < 0) break;
         used += (size_t)n;
       }
-      st = tt__json_error(source, NULL,
+      st = tt__json_error(TT_ERR_PARSE, source, NULL,
                           "unknown parameter \"%s\" (space %s has: %s)", m->string,
                           tt_space_plugin(space), names);
       goto done;

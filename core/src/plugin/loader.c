@@ -4,6 +4,8 @@
 
 #include "plugin/elf_check.h"
 
+#include <tt_util/strings.h>
+
 #include <tunetrace/accel.h>
 #include <tunetrace/integrator.h>
 #include <tunetrace/post.h>
@@ -50,14 +52,6 @@ struct tt_registry {
   size_t count, cap;
   char *probe_name, *probe_version, *probe_description;  /* tt_registry_probe copies */
 };
-
-/* Copies a string with malloc; the loader must not depend on POSIX strdup semantics. */
-static char *tt__strdup(const char *s) {
-  size_t n = strlen(s) + 1;
-  char *d = malloc(n);
-  if (d) memcpy(d, s, n);
-  return d;
-}
 
 /* Joins a directory and a relative name with one '/'. */
 static char *tt__join(const char *dir, const char *name) {

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "util/rng_internal.h"
+#include <tt_util/rng.h>
 
 typedef enum tt__sampler_kind {
   TT__SAMPLER_INDEPENDENT = 0,

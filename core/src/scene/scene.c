@@ -2,6 +2,8 @@
  * path evaluation. Format dispatch (tt_scene_load) is in io/scene_load.c. */
 #include "scene/scene_internal.h"
 
+#include <tt_util/hash.h>
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,7 +15,7 @@
 tt_scene *tt__scene_new(const char *source) {
   tt_scene *s = calloc(1, sizeof *s);
   if (!s) return NULL;
-  s->source = tt__scene_strdup(source ? source : "(memory)");
+  s->source = tt__strdup(source ? source : "(memory)");
   if (!s->source) {
     free(s);
     return NULL;
@@ -45,15 +47,6 @@ void *tt__scene_push(void **items, uint32_t *count, uint32_t *cap, size_t size) 
   char *slot = (char *)*items + (size_t)(*count)++ * size;
   memset(slot, 0, size);
   return slot;
-}
-
-/* Plain C11 has no strdup guarantee; this one also accepts NULL. */
-char *tt__scene_strdup(const char *s) {
-  if (!s) return NULL;
-  size_t n = strlen(s) + 1;
-  char *d = malloc(n);
-  if (d) memcpy(d, s, n);
-  return d;
 }
 
 /* Releases everything a mesh_data owns so error paths can call it unconditionally. */
@@ -153,29 +146,16 @@ tt_status tt__mesh_data_transform(tt__mesh_data *d, const double m[16]) {
 
 /* ---- content hash ---------------------------------------------------------------------- */
 
-#define TT__FNV_OFFSET 0xcbf29ce484222325ull
-#define TT__FNV_PRIME 0x100000001b3ull
-
-/* FNV-1a over raw bytes: simple, stable across platforms with the same float layout. */
-static uint64_t tt__fnv(uint64_t h, const void *data, size_t n) {
-  const unsigned char *p = data;
-  for (size_t i = 0; i < n; i++) {
-    h ^= p[i];
-    h *= TT__FNV_PRIME;
-  }
-  return h;
-}
-
 /* Hashes a string with its terminator so "ab","c" differs from "a","bc". */
 static uint64_t tt__fnv_str(uint64_t h, const char *s) {
-  return s ? tt__fnv(h, s, strlen(s) + 1) : tt__fnv(h, "", 1);
+  return s ? tt__fnv1a64(h, s, strlen(s) + 1) : tt__fnv1a64(h, "", 1);
 }
 
 /* Hashes a float array with -0 folded to +0 so equal values hash equally. */
 static uint64_t tt__fnv_floats(uint64_t h, const float *f, size_t n) {
   for (size_t i = 0; i < n; i++) {
     float v = f[i] == 0.0f ? 0.0f : f[i];
-    h = tt__fnv(h, &v, sizeof v);
+    h = tt__fnv1a64(h, &v, sizeof v);
   }
   return h;
 }
@@ -184,23 +164,23 @@ static uint64_t tt__fnv_floats(uint64_t h, const float *f, size_t n) {
  * the tuner treats as state): geometry, materials (not their names), textures and the
  * explicit lights. Names and the camera are left out on purpose. */
 static void tt__scene_compute_id(tt_scene *s) {
-  uint64_t h = TT__FNV_OFFSET;
-  h = tt__fnv(h, &s->mesh_count, sizeof s->mesh_count);
+  uint64_t h = TT__FNV1A64_OFFSET;
+  h = tt__fnv1a64(h, &s->mesh_count, sizeof s->mesh_count);
   for (uint32_t i = 0; i < s->mesh_count; i++) {
     const tt_mesh *m = &s->meshes[i];
     uint32_t hdr[5] = {m->vertex_count, m->triangle_count, m->material, m->normals != NULL,
                        m->uvs != NULL};
-    h = tt__fnv(h, hdr, sizeof hdr);
+    h = tt__fnv1a64(h, hdr, sizeof hdr);
     h = tt__fnv_floats(h, m->positions, 3 * (size_t)m->vertex_count);
     if (m->normals) h = tt__fnv_floats(h, m->normals, 3 * (size_t)m->vertex_count);
     if (m->uvs) h = tt__fnv_floats(h, m->uvs, 2 * (size_t)m->vertex_count);
-    h = tt__fnv(h, m->indices, 3 * (size_t)m->triangle_count * sizeof *m->indices);
+    h = tt__fnv1a64(h, m->indices, 3 * (size_t)m->triangle_count * sizeof *m->indices);
   }
-  h = tt__fnv(h, &s->material_count, sizeof s->material_count);
+  h = tt__fnv1a64(h, &s->material_count, sizeof s->material_count);
   for (uint32_t i = 0; i < s->material_count; i++) {
     const tt_material *m = &s->materials[i];
     int32_t ints[3] = {(int32_t)m->type, m->albedo_texture, m->two_sided};
-    h = tt__fnv(h, ints, sizeof ints);
+    h = tt__fnv1a64(h, ints, sizeof ints);
     h = tt__fnv_floats(h, m->albedo, 3);
     h = tt__fnv_floats(h, &m->roughness, 1);
     h = tt__fnv_floats(h, m->alpha, 2);
@@ -212,13 +192,13 @@ static void tt__scene_compute_id(tt_scene *s) {
   }
   for (uint32_t i = 0; i < s->texture_count; i++) {
     h = tt__fnv_str(h, s->textures[i].path);
-    h = tt__fnv(h, &s->textures[i].srgb, sizeof s->textures[i].srgb);
+    h = tt__fnv1a64(h, &s->textures[i].srgb, sizeof s->textures[i].srgb);
   }
   for (uint32_t i = 0; i < s->light_count; i++) {
     const tt_light *l = &s->lights[i];
     if (l->type == TT_LIGHT_AREA) continue; /* implied by mesh + material */
     int32_t t = (int32_t)l->type;
-    h = tt__fnv(h, &t, sizeof t);
+    h = tt__fnv1a64(h, &t, sizeof t);
     h = tt__fnv_floats(h, l->radiance, 3);
     h = tt__fnv_floats(h, l->position, 3);
     h = tt__fnv_floats(h, l->direction, 3);

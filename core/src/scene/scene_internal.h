@@ -5,6 +5,7 @@
 #define TT_SCENE_INTERNAL_H
 
 #include <tunetrace/scene.h>
+#include <tt_util/strings.h>  /* tt__strdup */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -47,8 +48,6 @@ tt_scene *tt__scene_new(const char *source);
 /* Appends one zeroed element of `size` bytes to a growable array; NULL when out of memory. */
 void *tt__scene_push(void **items, uint32_t *count, uint32_t *cap, size_t size);
 
-/* strdup that tolerates NULL (returns NULL then). */
-char *tt__scene_strdup(const char *s);
 
 /* Frees the arrays and name of a mesh_data and zeroes it. */
 void tt__mesh_data_free(tt__mesh_data *data);

@@ -10,7 +10,9 @@
  * reevaluate), and a database answer would feed it the same number back and make the
  * noise invisible. */
 #include "tuning/tuning_internal.h"
-#include "util/rng_internal.h"
+
+#include <tt_util/rng.h>
+#include <tt_util/strings.h>
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -62,19 +64,10 @@ struct tt_tuning {
   double *verify_ms;            /* rounds x 2 x 3 of the last verify */
 };
 
-/* strdup that tolerates NULL. */
-static char *tt__dup(const char *s) {
-  if (!s) return NULL;
-  size_t n = strlen(s) + 1;
-  char *d = malloc(n);
-  if (d) memcpy(d, s, n);
-  return d;
-}
-
 /* Canonical JSON of a configuration as a malloc'ed string (tt_config_to_json uses tt_free). */
 static char *tt__config_json(const tt_config *cfg) {
   char *json = tt_config_to_json(cfg);
-  char *out = tt__dup(json);
+  char *out = tt__strdup(json);
   tt_free(json);
   return out;
 }
@@ -139,14 +132,14 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
   t->next_iteration = -1;
   uint64_t seed = TT__DESC(d, seed);
   t->rng = seed ^ 0x7475756e65ull;
-  t->tuner_name = tt__dup(TT__DESC(d, tuner_name));
-  t->plugin = tt__dup(TT__DESC(d, plugin) ? TT__DESC(d, plugin) : tt_space_plugin(d->space));
-  t->plugin_version = tt__dup(TT__DESC(d, plugin_version) ? TT__DESC(d, plugin_version) : "");
+  t->tuner_name = tt__strdup(TT__DESC(d, tuner_name));
+  t->plugin = tt__strdup(TT__DESC(d, plugin) ? TT__DESC(d, plugin) : tt_space_plugin(d->space));
+  t->plugin_version = tt__strdup(TT__DESC(d, plugin_version) ? TT__DESC(d, plugin_version) : "");
   const tt_tuning_state *state = TT__DESC(d, state);
   t->state.struct_size = sizeof t->state;
   if (state) {
     const char *src[4] = {state->scene_id, state->scene, state->camera, state->context};
-    for (int i = 0; i < 4; i++) t->state_strings[i] = tt__dup(src[i]);
+    for (int i = 0; i < 4; i++) t->state_strings[i] = tt__strdup(src[i]);
     t->state.scene_id = t->state_strings[0];
     t->state.scene = t->state_strings[1];
     t->state.camera = t->state_strings[2];
@@ -164,10 +157,10 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
              (int)getpid());
     run_id = id;
   }
-  t->run_id = tt__dup(run_id);
+  t->run_id = tt__strdup(run_id);
   const tt_config *start = TT__DESC(d, start);
   t->start = start ? tt_config_clone(start) : tt_config_create(d->space);
-  if (!t->tuner_name && t->ti) t->tuner_name = tt__dup("tuner");
+  if (!t->tuner_name && t->ti) t->tuner_name = tt__strdup("tuner");
   if (!t->plugin || !t->plugin_version || !t->run_id || !t->start) {
     tt_tuning_destroy(t);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tuning_create: out of memory");
@@ -224,7 +217,7 @@ static char *tt__metrics_json(const tt_pass_stats *ps) {
       cJSON_AddNumberToObject(root, ps->metrics[m].name, ps->metrics[m].value);
   char *text = cJSON_PrintUnformatted(root);
   cJSON_Delete(root);
-  char *out = tt__dup(text);
+  char *out = tt__strdup(text);
   cJSON_free(text);
   return out;
 }
@@ -470,7 +463,7 @@ static tt_status tt__apply(tt_tuning *t, const tt_tuning_target *target, const t
   *build_ms = 0;
   tt_status st = target->apply(target->user, cfg, build_ms);
   free(t->applied);
-  t->applied = st == TT_OK ? tt__dup(json) : NULL;
+  t->applied = st == TT_OK ? tt__strdup(json) : NULL;
   return st;
 }
 
@@ -662,7 +655,7 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
   v.render_ratio = v.total_ratio = v.cost_ratio = NAN;
   tt_config *cfg[2] = {tt_config_create(t->space), tt_config_create(t->space)};
   const char *json[2] = {t->default_json, tt_tuning_best_json(t)};
-  char *best_copy = tt__dup(json[1]);  /* the sample array does not grow here, but be safe */
+  char *best_copy = tt__strdup(json[1]);  /* the sample array does not grow here, but be safe */
   json[1] = best_copy;
   free(t->verify_ms);
   t->verify_ms = calloc((size_t)rounds * 6 + 1, sizeof *t->verify_ms);  /* [r][who][3] */
@@ -747,7 +740,7 @@ tt_status tt_tuning_apply_best(tt_tuning *t, const tt_tuning_target *target, dou
   if (t->applied && !strcmp(t->applied, json)) return TT_OK;
   tt_config *cfg = tt_config_create(t->space);
   if (!cfg) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuning: out of memory");
-  char *copy = tt__dup(json);
+  char *copy = tt__strdup(json);
   tt_status st = copy ? tt_config_from_json(cfg, copy, "tuning: best configuration")
                       : tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuning: out of memory");
   if (st == TT_OK) st = tt__apply(t, target, cfg, copy, &ms);

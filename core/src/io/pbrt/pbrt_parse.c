@@ -193,7 +193,7 @@ static void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, 
     P->warned = n;
     P->capwarned = nc;
   }
-  char *dup = tt__scene_strdup(id);
+  char *dup = tt__strdup(id);
   if (!dup) return;
   P->warned[P->nwarned++] = dup;
   if (P->warnings >= TT__MAX_WARNINGS) {
@@ -229,7 +229,7 @@ static char *tt__join(const char *dir, const char *rel, size_t rel_len) {
 
 /* Directory part of a path ("." for a bare name). */
 static char *tt__dirname(const char *path) {
-  char *d = tt__scene_strdup(path);
+  char *d = tt__strdup(path);
   if (!d) return NULL;
   char *slash = strrchr(d, '/');
   if (slash == d) slash[1] = '\0';
@@ -341,7 +341,7 @@ static tt_status tt__push_file(tt__pp *P, const char *path, const tt__pfile *fro
     free(buf);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
   }
-  pf->path = tt__scene_strdup(path);
+  pf->path = tt__strdup(path);
   pf->dir = tt__dirname(path);
   pf->text = buf;
   pf->len = len;
@@ -805,7 +805,7 @@ static tt_status tt__scene_texture(tt__pp *P, const char *path, int srgb, int32_
   tt_texture *t = tt__scene_push((void **)&s->textures, &s->texture_count, &s->texture_cap, sizeof *t);
   if (!t) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   t->struct_size = sizeof *t;
-  t->path = tt__scene_strdup(path);
+  t->path = tt__strdup(path);
   t->srgb = srgb;
   if (!t->path) {
     s->texture_count--;
@@ -1137,7 +1137,7 @@ static tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *typ
     const char *base = strrchr(at->file->path, '/');
     snprintf(nm, sizeof nm, "%s@%s:%d", type, base ? base + 1 : at->file->path, at->line);
   }
-  m.name = tt__scene_strdup(nm);
+  m.name = tt__strdup(nm);
   if (!m.name) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   tt_material *slot = tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
   if (!slot) {
@@ -1177,7 +1177,7 @@ static tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out) {
   tt_material m = s->materials[base];
   char nm[600];
   snprintf(nm, sizeof nm, "%s+light%zu", m.name ? m.name : "material", P->nder);
-  m.name = tt__scene_strdup(nm);
+  m.name = tt__strdup(nm);
   if (!m.name) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   memcpy(m.emission, P->gs.L, sizeof m.emission);
   m.two_sided = P->gs.two_sided;
@@ -1437,7 +1437,7 @@ static tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__p
     if (d.normals)
       for (size_t i = 0; i < 3 * (size_t)d.vertex_count; i++) d.normals[i] = -d.normals[i];
   }
-  d.name = tt__scene_strdup(nm);
+  d.name = tt__strdup(nm);
   if (!d.name) {
     tt__mesh_data_free(&d);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -1452,7 +1452,7 @@ static int tt__mesh_copy(const tt__mesh_data *s, tt__mesh_data *d) {
   memset(d, 0, sizeof *d);
   d->vertex_count = s->vertex_count;
   d->triangle_count = s->triangle_count;
-  d->name = tt__scene_strdup(s->name);
+  d->name = tt__strdup(s->name);
   d->positions = malloc(3 * (size_t)s->vertex_count * sizeof(float) + 1);
   d->indices = malloc(3 * (size_t)s->triangle_count * sizeof(uint32_t) + 1);
   if (s->normals) d->normals = malloc(3 * (size_t)s->vertex_count * sizeof(float) + 1);
@@ -1562,7 +1562,7 @@ static tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, con
         } else {
           memcpy(f, src->rgb, sizeof f);
           if (src->image && !t.image) {
-            t.image = tt__scene_strdup(src->image);
+            t.image = tt__strdup(src->image);
             t.srgb = src->srgb;
             if (!t.image) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
           } else if (src->image) {
@@ -1608,7 +1608,7 @@ static tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, con
     for (size_t i = 0; i < pl->n; i++) pl->p[i].used = 1;
   }
   tt__unused(P, at, what, pl);
-  t.name = tt__scene_strdup(name);
+  t.name = tt__strdup(name);
   P->ntex = tt__grow(P->ntex, &P->capntex, P->nntex + 1, sizeof *P->ntex);
   if (!t.name || !P->ntex) {
     free(t.name);
@@ -1795,7 +1795,7 @@ static tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__
     }
   P->cs = tt__grow(P->cs, &P->capcs, P->ncs + 1, sizeof *P->cs);
   if (!P->cs) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
-  P->cs[P->ncs].name = tt__scene_strdup("camera");
+  P->cs[P->ncs].name = tt__strdup("camera");
   if (!P->cs[P->ncs].name) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   memcpy(P->cs[P->ncs].m, inv, sizeof inv);
   P->ncs++;
@@ -2006,7 +2006,7 @@ static tt_status tt__directive(tt__pp *P, int *done) {
     tt__ident(P->gs.ctm);
     P->cs = tt__grow(P->cs, &P->capcs, P->ncs + 1, sizeof *P->cs);
     if (!P->cs) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
-    else if (!(P->cs[P->ncs].name = tt__scene_strdup("world"))) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
+    else if (!(P->cs[P->ncs].name = tt__strdup("world"))) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
     else tt__ident(P->cs[P->ncs++].m);
   } else if (TT__IS("WorldEnd")) {
     /* pbrt-v3 leftover: harmless */

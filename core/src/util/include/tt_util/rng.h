@@ -1,8 +1,11 @@
-/* tunetrace internal: integer hashing, SplitMix64 and the PCG32 generator shared by the
- * built-in samplers, the integrators, the tuning loop and the tests. Header-only (static inline): every function is
- * pure or works on caller-owned state, so all are thread-safe and allocation-free. */
-#ifndef TT_RNG_INTERNAL_H
-#define TT_RNG_INTERNAL_H
+/* tunetrace internal: integer hashing, SplitMix64 and the PCG32 generator, written once for
+ * the library (built-in samplers, the tuning loop), the in-tree plugins (PSSMLT's chains,
+ * tuner_nm's stream) and the tests, which include it as <tt_util/rng.h> through
+ * tunetrace_util_dep (not installed: a third-party plugin carries its own, like
+ * examples/tuner_random). Header-only (static inline): every function is pure or works on
+ * caller-owned state, so all are thread-safe and allocation-free. */
+#ifndef TT_UTIL_RNG_H
+#define TT_UTIL_RNG_H
 
 #include <stdint.h>
 
@@ -24,6 +27,11 @@ static inline uint64_t tt__hash2(uint64_t a, uint64_t b) {
   return tt__mix64(tt__mix64(a + 0x9e3779b97f4a7c15ull) ^ (b + 0x632be59bd9b4e019ull));
 }
 
+/* Hashes three words, order-sensitive. */
+static inline uint64_t tt__hash3(uint64_t a, uint64_t b, uint64_t c) {
+  return tt__mix64(tt__hash2(a, b) ^ (c + 0xd1b54a32d192ed03ull));
+}
+
 /* Hashes four words (pixel x, pixel y, sample index, seed-like values). */
 static inline uint64_t tt__hash4(uint64_t a, uint64_t b, uint64_t c, uint64_t d) {
   return tt__hash2(tt__hash2(a, b), tt__hash2(c, d));
@@ -42,6 +50,11 @@ static inline uint32_t tt__mix32(uint32_t x) {
 /* Maps 32 random bits to [0, 1) with 24-bit resolution, so 1.0f is never produced. */
 static inline float tt__u32_to_unit(uint32_t x) {
   return (float)(x >> 8) * 0x1p-24f;
+}
+
+/* Maps 64 random bits to [0, 1) with 53-bit resolution (a double's mantissa). */
+static inline double tt__u64_to_unit(uint64_t x) {
+  return (double)(x >> 11) * 0x1p-53;
 }
 
 /* Largest float below 1: clamp target for values computed in double. */
@@ -78,6 +91,12 @@ static inline float tt__pcg32_float(tt__pcg32 *rng) {
   return tt__u32_to_unit(tt__pcg32_next(rng));
 }
 
+/* Uniform double in [0, 1) with 53 random bits, from two draws (the first the high word). */
+static inline double tt__pcg32_double(tt__pcg32 *rng) {
+  uint64_t hi = tt__pcg32_next(rng), lo = tt__pcg32_next(rng);
+  return tt__u64_to_unit((hi << 32) | lo);
+}
+
 /* Jumps `delta` steps ahead in O(log delta) (Brown 1994), so dimension d of a sample can be
  * read without drawing dimensions 0..d-1 first. */
 static inline void tt__pcg32_advance(tt__pcg32 *rng, uint64_t delta) {
@@ -104,4 +123,4 @@ static inline uint32_t tt__reverse_bits32(uint32_t x) {
   return (x >> 16) | (x << 16);
 }
 
-#endif /* TT_RNG_INTERNAL_H */
+#endif /* TT_UTIL_RNG_H */
