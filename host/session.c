@@ -142,6 +142,7 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
   s->opt = opt;
   s->host = tt__host_services(opt->quiet);
   if (opt->clock_cpu) tt__host_use_cpu_clock();
+  tt_set_log_host(s->host);  /* loader warnings go through the host's log */
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
     fprintf(stderr, "host: --threads: %s\n", tt_last_error());
     return TT_EXIT_USAGE;

@@ -84,6 +84,14 @@ TT_API void tt_default_host_request_stop(void);
 /* Sets the minimum level tt_default_host's log prints (default TT_LOG_INFO). */
 TT_API void tt_default_host_set_log_level(tt_log_level level);
 
+/* Routes libtunetrace's own messages (the scene loaders' warnings: unknown keys, pbrt
+ * features approximated or skipped, values clamped on write; a display config that falls
+ * back) to host->log, so an application's quiet mode and progress display treat them like
+ * its other messages. NULL (the default) sends them to tt_default_host(), which prints
+ * "tunetrace: warning: ..." on stderr. `host` must outlive its use. Not thread-safe: call
+ * at start-up, before loading scenes. */
+TT_API void tt_set_log_host(const tt_host *host);
+
 #ifdef __cplusplus
 }
 #endif

@@ -4,6 +4,8 @@
 #include <tunetrace/file.h>
 #include <tunetrace/image.h>
 
+#include "plugin/log.h"
+
 #include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -86,7 +88,7 @@ OCIO::ConstCPUProcessorRcPtr tt__make_processor(const OCIO::ConstConfigRcPtr &cf
   return proc->getDefaultCPUProcessor();
 }
 
-// Runs once: $OCIO if set and usable, else the built-in config with a warning on stderr.
+// Runs once: $OCIO if set and usable, else the built-in config with a warning (log host).
 void tt__display_init() {
   tt__display &d = tt__display_state;
   const char *env = std::getenv("OCIO");
@@ -98,9 +100,8 @@ void tt__display_init() {
       d.name = std::string(env) + " (" + dv + ")";
       return;
     } catch (const std::exception &e) {
-      std::fprintf(stderr,
-                   "tunetrace: warning: OCIO config '%s' unusable (%s); using built-in sRGB\n",
-                   env, e.what());
+      tt__log(TT_LOG_WARN, "OCIO config '%s' unusable (%s); using built-in sRGB", env,
+              e.what());
     }
   }
   try {

@@ -6,6 +6,7 @@
  * its materials/meshes/lights are appended. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io_internal.h"
+#include "plugin/log.h"
 #include "util/json_error.h"
 
 #include <tunetrace/file.h>
@@ -48,7 +49,8 @@ static const tt__range tt__unit = {0.0, 1.0, 0};
  * (util/json_error.c, shared with the parameter-space reader). */
 #define tt__jfail(c, st, path, ...) tt__json_error((st), (c)->src, (path), __VA_ARGS__)
 
-/* Warnings go to stderr: the scene still loads, but typos should not pass silently. */
+/* Warnings go to the log host (tt_set_log_host): the scene still loads, but typos should not
+ * pass silently. */
 static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) TT_PRINTF(3, 4);
 static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) {
   char msg[1024];
@@ -56,7 +58,7 @@ static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...)
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
-  fprintf(stderr, "tunetrace: warning: %s: %s: %s\n", c->src, path, msg);
+  tt__log(TT_LOG_WARN, "%s: %s: %s", c->src, path, msg);
 }
 
 /* "camera" + "fov" -> "camera.fov"; an empty prefix yields the key alone. */

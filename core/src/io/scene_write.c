@@ -4,6 +4,7 @@
  * assimp, core/src/io/mesh_import.c); textures and environment images are referenced by
  * absolute path. Used by `host --convert`. */
 #include "scene/scene_internal.h"
+#include "plugin/log.h"
 
 #include <tunetrace/file.h>
 
@@ -23,9 +24,9 @@ typedef struct tt__wctx {
   const char *path;
 } tt__wctx;
 
-/* Warns on stderr (values clamped to the loader's ranges, dropped lights). */
+/* Warns through the log host (values clamped to the loader's ranges, dropped lights). */
 static void tt__wwarn(const tt__wctx *w, const char *what, const char *why) {
-  fprintf(stderr, "tunetrace: warning: %s: %s: %s\n", w->path, what, why);
+  tt__log(TT_LOG_WARN, "%s: %s: %s", w->path, what, why);
 }
 
 /* Writes a JSON string literal with the escapes JSON requires. */

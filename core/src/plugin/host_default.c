@@ -3,6 +3,8 @@
  * log and progress to draw a progress bar); tests and embedding applications use it as is. */
 #include <tunetrace/host.h>
 
+#include "plugin/log.h"
+
 #include <pthread.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -43,6 +45,21 @@ static void tt__default_log(tt_log_level level, const char *plugin, const char *
 }
 
 void tt_default_host_set_log_level(tt_log_level level) { atomic_store(&tt__log_min, (int)level); }
+
+/* Where the library's own messages go (tt_set_log_host); NULL: the default host. */
+static const tt_host *tt__log_host;
+
+void tt_set_log_host(const tt_host *host) { tt__log_host = host; }
+
+void tt__log(tt_log_level level, const char *fmt, ...) {
+  char msg[2048];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  const tt_host *h = tt__log_host && TT_HOST_HAS(tt__log_host, log) ? tt__log_host : tt_default_host();
+  h->log(level, NULL, "%s", msg);
+}
 
 /* ---- memory and clock ---- */
 

@@ -7,7 +7,8 @@
 
 /* Loads a pbrt-v4 scene file (pbrt_parse.c; Include/Import relative to the including
  * file). Errors are TT_ERR_IO / TT_ERR_PARSE with "file:line: ..." messages; unsupported
- * features warn once per location on stderr and are approximated or skipped. */
+ * features warn once per location through the log host (tt_set_log_host) and are
+ * approximated or skipped. */
 tt_status tt__scene_load_pbrt(const char *path, tt_scene **out);
 
 #endif /* TT_IO_PBRT_H */

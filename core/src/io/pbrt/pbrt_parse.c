@@ -11,6 +11,7 @@
  * are left alone. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/pbrt/pbrt_internal.h"
+#include "plugin/log.h"
 
 #include <tunetrace/file.h>
 
@@ -178,7 +179,8 @@ static tt_status tt__perr(const tt__pfile *f, int line, const char *fmt, ...) {
   return tt_set_error(TT_ERR_PARSE, "%s:%d: %s", f ? f->path : "(pbrt)", line, msg);
 }
 
-/* One warning per (file:line, key) on stderr, so a shape included twice warns once. */
+/* One warning per (file:line, key) through the log host, so a shape included twice warns
+ * once. */
 static void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...)
     TT_PRINTF(5, 6);
 static void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...) {
@@ -206,7 +208,7 @@ static void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, 
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
-  fprintf(stderr, "tunetrace: warning: %s:%d: %s\n", f ? f->path : "(pbrt)", line, msg);
+  tt__log(TT_LOG_WARN, "%s:%d: %s", f ? f->path : "(pbrt)", line, msg);
 }
 
 /* ---- small helpers --------------------------------------------------------------------- */
@@ -2199,7 +2201,7 @@ tt_status tt__scene_load_pbrt(const char *path, tt_scene **out) {
     st = tt__scene_finish(P.scene);
   }
   if (P.suppressed)
-    fprintf(stderr, "tunetrace: warning: %s: %u more warnings suppressed\n", path, P.suppressed);
+    tt__log(TT_LOG_WARN, "%s: %u more warnings suppressed", path, P.suppressed);
   tt__pp_free(&P);
   if (st != TT_OK) {
     tt_scene_destroy(P.scene);
