@@ -1,7 +1,16 @@
-/* pbrt-v4 importer internals: the .pbrt loader (pbrt_parse.c), the PLY reader and analytic
- * shape tessellation (pbrt_shapes.c) and the spectrum-to-RGB approximations
- * (pbrt_spectrum.c). Not part of the public ABI; the mapping is documented in
- * scenes/README.md, "Importing pbrt-v4 scenes". */
+/* pbrt-v4 importer internals, split as pbrt-v4 splits its parser and scene builder:
+ *   pbrt_import.c      the entry point tt__scene_load_pbrt (pbrt.h): the directive loop
+ *   pbrt_lexer.c       the include stack, tokens, messages
+ *   pbrt_params.c      parameter lists ("type name" [values]) and their typed lookups
+ *   pbrt_directives.c  the {name, handler} table: one function per directive
+ *   pbrt_state.c       graphics state, transforms, world setup, camera, options
+ *   pbrt_materials.c   materials and textures
+ *   pbrt_geometry.c    shapes and object instances
+ *   pbrt_lights.c      light sources and area lights
+ *   pbrt_shapes.c      the PLY reader and analytic shape tessellation
+ *   pbrt_spectrum.c    spectrum-to-RGB approximations
+ * Not part of the public ABI; the mapping is documented in scenes/README.md, "Importing
+ * pbrt-v4 scenes". */
 #ifndef TT_PBRT_INTERNAL_H
 #define TT_PBRT_INTERNAL_H
 
@@ -11,6 +20,7 @@
 #include "util/mat4.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
 /* ---- shapes (pbrt_shapes.c) ------------------------------------------------------------ */
 
@@ -45,5 +55,305 @@ void tt__pbrt_sampled_spectrum(const double *pairs, size_t pair_count, tt__spect
 
 /* RGB of a blackbody at `kelvin`, normalised to luminance 1 (pbrt-v4's "blackbody"). */
 void tt__pbrt_blackbody(double kelvin, float rgb[3]);
+
+/* ---- parser state (shared by the importer's files) ------------------------------- */
+
+#define TT__PI 3.14159265358979323846
+#define TT__MAX_INCLUDE_DEPTH 64
+#define TT__MAX_WARNINGS 200
+#define TT__MAT_INTERFACE (-2)
+
+/* One source file: its text stays alive until the load ends (tokens point into it). */
+typedef struct tt__pfile {
+  char *path;               /* as named (resolved against the includer) */
+  char *dir;                /* directory for relative paths inside it */
+  char *text;
+  size_t len, pos;
+  int line;
+  struct tt__pfile *parent; /* includer while open */
+  struct tt__pfile *next;   /* list of all files, for freeing */
+} tt__pfile;
+
+enum { TK_EOF, TK_WORD, TK_STRING, TK_LBRACK, TK_RBRACK };
+
+typedef struct tt__tok {
+  int kind;
+  const char *s; /* WORD: the word; STRING: the raw content between the quotes */
+  size_t n;
+  const tt__pfile *file;
+  int line;
+} tt__tok;
+
+/* One "type name" [values] parameter; values are copied so tokens can go. */
+typedef struct tt__pparam {
+  char type[24];
+  char name[64];
+  double *num;
+  size_t nnum;
+  char **str;
+  size_t nstr;
+  int used;
+} tt__pparam;
+
+typedef struct tt__plist {
+  tt__pparam *p;
+  size_t n, cap;
+} tt__plist;
+
+/* A colour parameter's value: rgb times an optional image texture (scene index). */
+typedef struct tt__texval {
+  float rgb[3];
+  int32_t tex;
+} tt__texval;
+
+/* A named pbrt texture, resolved to a constant or to one image at definition time. */
+typedef struct tt__ntex {
+  char *name;
+  int is_float;
+  float rgb[3];
+  char *image;   /* resolved image path (NULL: constant) */
+  int srgb;
+} tt__ntex;
+
+typedef struct tt__named_mat {
+  char *name;
+  int32_t mat;  /* scene material index or TT__MAT_INTERFACE */
+} tt__named_mat;
+
+typedef struct tt__coordsys {
+  char *name;
+  double m[16];
+} tt__coordsys;
+
+/* A shape recorded inside ObjectBegin/End, already in world space of the definition. */
+typedef struct tt__objmesh {
+  tt__mesh_data d;
+  int32_t mat;
+} tt__objmesh;
+
+typedef struct tt__object {
+  char *name;
+  tt__objmesh *m;
+  size_t n, cap;
+} tt__object;
+
+/* An emissive copy of a material, shared by all shapes with the same area light. */
+typedef struct tt__derived {
+  int32_t base;
+  float L[3];
+  int two_sided;
+  int32_t mat;
+} tt__derived;
+
+/* What AttributeBegin saves. */
+typedef struct tt__gstate {
+  double ctm[16];
+  int reverse;
+  int32_t mat;        /* -1: pbrt's default diffuse (created on first use) */
+  int area;           /* an AreaLightSource is active */
+  float L[3];
+  int two_sided;
+  int kind;           /* 'A' attribute, 'T' transform, 'O' object: which End closes it */
+  const tt__pfile *file;
+  int line;
+} tt__gstate;
+
+typedef struct tt__pp {
+  tt_scene *scene;
+  tt__pfile *cur;          /* innermost open file */
+  tt__pfile *files;        /* every file read */
+  int depth;
+  tt__tok peek;
+  int has_peek;
+  char **warned;
+  size_t nwarned, capwarned;
+  unsigned warnings, suppressed;
+  tt__gstate gs;
+  tt__gstate *stack;
+  size_t nstack, capstack;
+  tt__named_mat *nmat;
+  size_t nnmat, capnmat;
+  tt__ntex *ntex;
+  size_t nntex, capntex;
+  tt__coordsys *cs;
+  size_t ncs, capcs;
+  tt__object *obj;
+  size_t nobj, capobj;
+  int cur_obj;             /* index of the object being defined, or -1 */
+  tt__derived *der;
+  size_t nder, capder;
+  int32_t default_mat;
+  int world_ready;         /* camera and mirror are fixed */
+  int in_world;
+  double W[16];            /* world mirror applied to everything */
+  int has_camera;
+  double cam_ctm[16];      /* pbrt cameraFromWorld */
+  double fov;
+  double sw[4];
+  int has_sw;
+  double frame_aspect;     /* 0: from the resolution */
+  long xres, yres;
+  int env_seen;
+  int end_only;            /* ActiveTransform EndTime: transforms are ignored */
+} tt__pp;
+
+/* ---- lexer: files, tokens, messages (pbrt_lexer.c) ------------------------------- */
+
+/* "file:line: message" as a TT_ERR_PARSE error. */
+tt_status tt__perr(const tt__pfile *f, int line, const char *fmt, ...) TT_PRINTF(3, 4);
+
+/* One warning per (file:line, key) through the log host, so a shape included twice warns
+ * once. */
+void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...)
+    TT_PRINTF(5, 6);
+
+/* Joins a relative path to a directory; absolute paths pass through. */
+char *tt__join(const char *dir, const char *rel, size_t rel_len);
+
+/* True when the path names a readable regular file (a FIFO is not probed by opening it
+ * blocking, and is not one). */
+int tt__exists(const char *path);
+
+/* Generic growth for the parser's arrays. */
+void *tt__grow(void *items, size_t *cap, size_t need, size_t size);
+
+/* Opens a file onto the include stack (parent = current file). */
+tt_status tt__push_file(tt__pp *P, const char *path, const tt__pfile *from, int from_line);
+
+/* Next token, honouring one token of lookahead. */
+tt_status tt__next(tt__pp *P, tt__tok *t);
+
+/* Looks at the next token without consuming it. */
+tt_status tt__peek(tt__pp *P, tt__tok *t);
+
+/* Copies a string token's content, resolving \" \\ \n \t escapes. */
+char *tt__tokstr(const tt__tok *t);
+
+/* Token equals a literal word. */
+int tt__is(const tt__tok *t, const char *w);
+
+/* Parses a WORD as a finite number; 0 when it is not one. */
+int tt__num(const tt__tok *t, double *v);
+
+/* Short description of a token for messages. */
+const char *tt__desc(const tt__tok *t, char *buf, size_t n);
+
+/* Reads one quoted string argument of a directive. */
+tt_status tt__arg_str(tt__pp *P, const tt__tok *dir, const char *what, char **out);
+
+/* Reads n numbers, optionally inside [ ] (Transform, ConcatTransform accept both). */
+tt_status tt__arg_nums(tt__pp *P, const tt__tok *dir, int n, double *v);
+
+/* ---- parameter lists (pbrt_params.c) --------------------------------------------- */
+
+/* Frees a parameter list's contents. */
+void tt__plist_free(tt__plist *pl);
+
+/* Reads "type name" value pairs until the next token is not a string. */
+tt_status tt__params(tt__pp *P, tt__plist *pl);
+
+/* Last parameter with this name (pbrt lets later ones win); marks it used. */
+tt__pparam *tt__find(tt__plist *pl, const char *name);
+
+/* Warns about every parameter nobody read. */
+void tt__unused(tt__pp *P, const tt__tok *at, const char *what, tt__plist *pl);
+
+/* A single float (or integer); textures are not supported for scalars. */
+tt_status tt__getf(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name, double *v);
+
+/* A bool parameter. */
+tt_status tt__getb(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name, int *v);
+
+/* A string parameter (NULL stays when absent); the pointer lives in the list. */
+tt_status tt__gets(const tt__tok *at, tt__plist *pl, const char *name, const char **v);
+
+/* A point/vector of 3 numbers. */
+tt_status tt__get3(const tt__tok *at, tt__plist *pl, const char *name, double v[3]);
+
+/* Resolves a texture name to its value; unknown names warn and keep the default. */
+const tt__ntex *tt__lookup_tex(tt__pp *P, const char *name, int is_float);
+
+/* A colour-like parameter: rgb, spectrum (named, inline pairs or .spd file), blackbody,
+ * float (grey) or texture. `found` reports whether it was given. */
+tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name, tt__spectrum_use use,
+                   int allow_tex, tt__texval *v, int *found);
+
+/* ---- graphics state, transforms, camera, options (pbrt_state.c) ------------------ */
+
+/* Identity matrix. */
+void tt__ident(double m[16]);
+
+/* Gauss-Jordan inverse with partial pivoting; 0 when singular. */
+int tt__inverse(const double m[16], double inv[16]);
+
+/* Applies M to a point. */
+void tt__xform_point(const double m[16], const double p[3], double o[3]);
+
+/* Applies M's linear part to a direction. */
+void tt__xform_vec(const double m[16], const double v[3], double o[3]);
+
+/* Normalises in place; 0 for a zero or non-finite vector. */
+int tt__norm(double v[3]);
+
+/* a x b. */
+void tt__cross(const double a[3], const double b[3], double o[3]);
+
+/* Post-multiplies the CTM, as every pbrt transform directive does. */
+void tt__concat(tt__pp *P, const double m[16]);
+
+/* Pushes the graphics state for AttributeBegin / TransformBegin / ObjectBegin. */
+tt_status tt__push(tt__pp *P, int kind, const tt__tok *at);
+
+/* Pops for the matching End; TransformEnd restores only the CTM. */
+void tt__pop(tt__pp *P, int kind, const tt__tok *at);
+
+/* Fixes the camera pose and the world mirror (at WorldBegin, or at the first world item
+ * of a file that has none). */
+void tt__world_setup(tt__pp *P);
+
+/* The world matrix of a shape: mirror * CTM. */
+void tt__world_matrix(tt__pp *P, const double ctm[16], double m[16]);
+
+/* Camera: remembers the CTM (cameraFromWorld) and the field of view. */
+tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl);
+
+/* Film / Sampler / Integrator: the few values tunetrace keeps; the rest is silent. */
+tt_status tt__option(tt__pp *P, const tt__tok *at, const char *dir, tt__plist *pl);
+
+/* ---- materials and textures (pbrt_materials.c) ----------------------------------- */
+
+/* Creates a tt_material from a pbrt material type and its parameters; *out is the scene
+ * index, or TT__MAT_INTERFACE for "interface" (no surface). */
+tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl, const char *name,
+                            int32_t *out);
+
+/* The material a shape gets: the current one (pbrt's default diffuse if none) with the
+ * active area light's emission folded into a derived copy. */
+tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out);
+
+/* Texture directive: imagemap keeps its file; scale multiplies; others become constants. */
+tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char *kind, const char *cls,
+                      tt__plist *pl);
+
+/* ---- shapes and object instances (pbrt_geometry.c) ------------------------------- */
+
+/* Shape directive: builds object-space triangles for the supported shape types. */
+tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl);
+
+/* ObjectInstance: copies the object's meshes through the current CTM. */
+tt_status tt__instance(tt__pp *P, const tt__tok *at, const char *name);
+
+/* ---- lights (pbrt_lights.c) ------------------------------------------------------ */
+
+/* LightSource: point, spot, distant and infinite map to tunetrace lights. */
+tt_status tt__light(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl);
+
+/* AreaLightSource "diffuse": emission for the shapes that follow in this attribute block. */
+tt_status tt__area_light(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl);
+
+/* ---- directives (pbrt_directives.c) ---------------------------------------------- */
+
+/* Reads one directive and applies it. *done is set at the end of input. */
+tt_status tt__directive(tt__pp *P, int *done);
 
 #endif /* TT_PBRT_INTERNAL_H */
