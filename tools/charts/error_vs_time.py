@@ -6,8 +6,9 @@ The reference is our own converged render with a deep path (default maxDepth 32,
 roulette from bounce 3), so a shallow maxDepth shows its bias as a floor that more samples
 cannot lower; pass --reference REF.exr to use another one (e.g. a Cycles reference from
 tools/cycles/compare.py, rendered at the same resolution and a large depth).
-rRMSE = sqrt(mean((img - ref)^2 / (ref^2 + 0.01))) over pixels and channels; time = the
-host's render_ms (no scene load / accel build / output).
+rRMSE = tunetrace's one definition (tools/common/images.py, tt_rrmse in C): over the
+Rec. 709 luminance, sqrt(mean((L - R)^2 / (R^2 + 1e-3))); time = the host's render_ms (no
+scene load / accel build / output).
 
 Usage (from the repository root):
   /usr/bin/python3 tools/charts/error_vs_time.py [--host build/host/host] [--res 128x128]
@@ -19,28 +20,16 @@ import argparse
 import json
 import os
 import subprocess
+import sys
 
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import OpenImageIO as oiio  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def read_rgb(path):
-    """Linear RGB float image (h, w, 3) from an EXR."""
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise SystemExit(f"cannot read {path}: {oiio.geterror()}")
-    px = inp.read_image(0, 0, 0, 3, oiio.FLOAT)
-    inp.close()
-    return np.asarray(px, dtype=np.float64).reshape(px.shape[0], px.shape[1], 3)
-
-
-def rrmse(a, b):
-    return float(np.sqrt(np.mean((a - b) ** 2 / (b * b + 1e-2))))
 
 
 def render(args, depth, spp, seed, out):
@@ -77,7 +66,7 @@ def main():
             print(f"reference: maxDepth {args.ref_depth}, {args.ref_spp} spp, {args.res} ...", flush=True)
             t = render(args, args.ref_depth, args.ref_spp, 1000, ref_path)
             print(f"reference: {t:.1f} s", flush=True)
-    ref = read_rgb(ref_path)
+    ref = images.read_rgb(ref_path)
 
     depths = [int(d) for d in args.depths.split(",")]
     spps = []
@@ -91,7 +80,7 @@ def main():
         for spp in spps:
             out = os.path.join(args.out, f"d{d}_{spp}spp.exr")
             t = render(args, d, spp, 7 + spp, out)
-            e = rrmse(read_rgb(out), ref)
+            e = images.rrmse(images.read_rgb(out), ref)
             pts.append({"spp": spp, "time_s": t, "rrmse": e})
             print(f"maxDepth {d:2d} spp {spp:4d}: {t:8.3f} s  rRMSE {e:.4f}", flush=True)
         results[d] = pts

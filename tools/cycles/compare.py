@@ -4,9 +4,9 @@ a glossy/glass variant (benchmark, not CI; issue 4). For each scene:
 
   1. high-spp references: Cycles (two seeds: their difference is the noise floor of two
      independent references) and ours;
-  2. accuracy: mean luminance of ours vs Cycles (relative difference) and relative RMSE
-     rRMSE = sqrt(mean((a - b)^2 / (b^2 + 0.01))) of ours vs the Cycles reference, next to
-     Cycles-seed-1 vs Cycles-seed-2 (what pure noise gives);
+  2. accuracy: mean luminance of ours vs Cycles (relative difference) and tunetrace's rRMSE
+     (tools/common/images.py: over luminance, sqrt(mean((L - R)^2 / (R^2 + 1e-3)))) of ours
+     vs the Cycles reference, next to Cycles-seed-1 vs Cycles-seed-2 (what pure noise gives);
   3. speed at equal spp and depth, run back to back in this one invocation (--repeat times,
      alternating, best of each kept): wall time and samples/s of ours (host --stats
      render_ms) and of Cycles (time around its render call), plus CPU seconds and samples
@@ -29,30 +29,16 @@ import subprocess
 import sys
 import time
 
-import numpy as np
-import OpenImageIO as oiio
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CYCLES_SCRIPT = os.path.join(ROOT, "tools", "cycles", "cycles_reference.py")
+sys.path.insert(0, os.path.join(ROOT, "tools", "common"))
+import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
 
 
-def read_rgb(path):
-    """Linear RGB float image (h, w, 3) from an EXR."""
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise SystemExit(f"cannot read {path}: {oiio.geterror()}")
-    px = inp.read_image(0, 0, 0, 3, oiio.FLOAT)
-    inp.close()
-    return np.asarray(px, dtype=np.float64).reshape(px.shape[0], px.shape[1], 3)
-
-
-def luminance(img):
-    return img @ np.array([0.2126, 0.7152, 0.0722])
-
-
-def rrmse(a, b):
-    """Relative RMSE of a against reference b (per channel, eps 0.01 against black)."""
-    return float(np.sqrt(np.mean((a - b) ** 2 / (b * b + 1e-2))))
+read_rgb = images.read_rgb
+luminance = images.luminance
+rrmse = images.rrmse
 
 
 def child_cpu():

@@ -6,8 +6,8 @@ a path-traced reference, as in the thesis' Fig. 4.6 (rRMSE spread over seeds).
         --ref-spp 512 --spp 16 --seeds 3 --out /tmp/cmp
 
 Each method renders with `host` (build dir via --build); the reference uses integrator_pt
-with maxDepth/rrDepth equal to PSSMLT's maxDepth. Prints rRMSE = sqrt(mean((I-R)^2 /
-(R^2 + 1e-3))) over luminance, render time and, for PSSMLT, the small-step acceptance.
+with maxDepth/rrDepth equal to PSSMLT's maxDepth. Prints tunetrace's rRMSE (over
+luminance, tools/common/images.py), render time and, for PSSMLT, the small-step acceptance.
 """
 import argparse
 import json
@@ -15,22 +15,14 @@ import os
 import subprocess
 import sys
 
-import numpy as np
-import OpenImageIO as oiio
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'common'))
+import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
 
 METHODS = {
     'pt': ['--plugin', 'integrator_pt'],
     'classic': ['--plugin', 'integrator_pssmlt'],
     'binned': ['--plugin', 'integrator_pssmlt', '--set', 'integrator_pssmlt.binning=true'],
 }
-
-
-def read_lum(path):
-    img = oiio.ImageInput.open(path)
-    px = img.read_image(format='float')
-    img.close()
-    px = np.asarray(px)[..., :3]
-    return 0.2126 * px[..., 0] + 0.7152 * px[..., 1] + 0.0722 * px[..., 2]
 
 
 def run(host, scene, args, extra, out, stats):
@@ -64,7 +56,7 @@ def main(argv=None):
     if not os.path.exists(ref):
         run(host, args.scene, args, METHODS['pt'] + pt_depth + ['--spp', str(args.ref_spp), '--seed', '999'],
             ref, os.path.join(args.out, 'reference.json'))
-    R = read_lum(ref)
+    R = images.read_luminance(ref)
     rows = []
     for m in args.methods.split(','):
         extra = list(METHODS[m])
@@ -76,8 +68,8 @@ def main(argv=None):
             out = os.path.join(args.out, f'{m}_{seed}.exr')
             st = run(host, args.scene, args, extra + ['--spp', str(args.spp), '--seed', str(seed)], out,
                      os.path.join(args.out, f'{m}_{seed}.json'))
-            img = read_lum(out)
-            rrmse = float(np.sqrt(np.mean((img - R) ** 2 / (R ** 2 + 1e-3))))
+            img = images.read_luminance(out)
+            rrmse = images.rrmse(img, R)
             met = st.get('metrics', {})
             rows.append((m, seed, rrmse, st['render_ms'], met.get('small_step_acceptance', float('nan')),
                          float(img.mean()), float(R.mean())))

@@ -27,7 +27,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from compare import read_lum  # noqa: E402
+from compare import images  # noqa: E402  (tools/common/images.py)
 
 LABELS = {'pt': 'path tracer', 'classic': 'PSSMLT classic', 'binned': 'binned untuned', 'tuned': 'binned tuned',
           'rrmse': 'binned rRMSE-tuned', 'rrmse200': 'binned rRMSE-tuned, 200 it.'}
@@ -46,10 +46,6 @@ def run(host, scene, args, extra, out, stats):
         return json.load(f), cpu
 
 
-def rrmse(img, R):
-    return float(np.sqrt(np.mean((img - R) ** 2 / (R ** 2 + 1e-3))))
-
-
 def do_scene(args, name, scene):
     host = os.path.join(args.build, 'host', 'host')
     out = os.path.join(args.out, name)
@@ -60,7 +56,7 @@ def do_scene(args, name, scene):
     ref = os.path.join(out, 'reference.exr')
     if not os.path.exists(ref):
         run(host, scene, args, pt + ['--spp', str(args.ref_spp), '--seed', '999'], ref, os.path.join(out, 'reference.json'))
-    R = read_lum(ref)
+    R = images.read_luminance(ref)
     with open(os.path.join(args.tuned_dir, f'{name}_tuned.json')) as f:
         tj = json.load(f)
     tuned_set = tj['set']
@@ -92,9 +88,9 @@ def do_scene(args, name, scene):
                 img_path = os.path.join(out, f'{m}_{spp}_{seed}.exr')
                 st, cpu = run(host, scene, args, methods[m] + ['--spp', str(spp), '--seed', str(seed)], img_path,
                               os.path.join(out, f'{m}_{spp}_{seed}.json'))
-                img = read_lum(img_path)
+                img = images.read_luminance(img_path)
                 met = st.get('metrics', {})
-                row = dict(method=m, seed=seed, spp=spp, rrmse=rrmse(img, R), render_ms=st['render_ms'], cpu_s=cpu,
+                row = dict(method=m, seed=seed, spp=spp, rrmse=images.rrmse(img, R), render_ms=st['render_ms'], cpu_s=cpu,
                            small_acc=met.get('small_step_acceptance'), mean=float(img.mean()), ref_mean=float(R.mean()))
                 rows.append(row)
                 with open(resf, 'w') as f:

@@ -29,15 +29,11 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from compare import read_lum  # noqa: E402
+from compare import images  # noqa: E402  (tools/common/images.py)
 
 LABELS = {'pt': 'path tracer', 'classic': 'PSSMLT classic', 'acc': 'binned, acceptance-tuned',
           'rrmse': 'binned, rRMSE-tuned', 'rrmse200': 'binned, rRMSE-tuned (200 it.)',
           'split': 'binned, one direction sigma (control)'}
-
-
-def rrmse(img, R):
-    return float(np.sqrt(np.mean((img - R) ** 2 / (R ** 2 + 1e-3))))
 
 
 def run(host, scene, args, extra, out, stats):
@@ -68,7 +64,7 @@ def do_scene(args, name, scene):
     host = os.path.join(args.build, 'host', 'host')
     out = os.path.join(args.out, name)
     os.makedirs(out, exist_ok=True)
-    R = read_lum(args.ref)
+    R = images.read_luminance(args.ref)
     methods = methods_for(args)
     resf = os.path.join(out, 'evt.json')
     rows = json.load(open(resf)) if os.path.exists(resf) else []
@@ -82,7 +78,7 @@ def do_scene(args, name, scene):
                 img = os.path.join(out, f'{m}_{mpp}_{seed}.exr')
                 st, cpu = run(host, scene, args, extra + ['--spp', str(mpp), '--seed', str(seed)], img,
                               os.path.join(out, f'{m}_{mpp}_{seed}.json'))
-                row = dict(method=m, seed=seed, mpp=mpp, rrmse=rrmse(read_lum(img), R), cpu_s=cpu,
+                row = dict(method=m, seed=seed, mpp=mpp, rrmse=images.rrmse(images.read_luminance(img), R), cpu_s=cpu,
                            render_ms=st['render_ms'], build_ms=st.get('build_ms'))
                 rows.append(row)
                 with open(resf, 'w') as f:

@@ -15,8 +15,8 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare import read_lum  # noqa: E402
-from compare_tuned import rrmse, run  # noqa: E402
+from compare import images  # noqa: E402  (tools/common/images.py)
+from compare_tuned import run  # noqa: E402
 
 
 def main(argv=None):
@@ -37,7 +37,7 @@ def main(argv=None):
     os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
     os.makedirs(args.out, exist_ok=True)
     host = os.path.join(args.build, 'host', 'host')
-    R = read_lum(args.ref)
+    R = images.read_luminance(args.ref)
     rows = []
     for sg in [float(s) for s in args.sigmas.split(',')]:
         for seed in range(1, args.seeds + 1):
@@ -45,7 +45,7 @@ def main(argv=None):
             st, cpu = run(host, args.scene, args, ['--plugin', 'integrator_pssmlt', '--set',
                           f'integrator_pssmlt.maxDepth={args.depth}', '--set', f'integrator_pssmlt.sigma={sg}',
                           '--spp', str(args.spp), '--seed', str(seed)], p + '.exr', p + '.json')
-            e = rrmse(read_lum(p + '.exr'), R)
+            e = images.rrmse(images.read_luminance(p + '.exr'), R)
             acc = st['metrics']['small_step_acceptance']
             rows.append(dict(sigma=sg, seed=seed, rrmse=e, small_acc=acc, cpu_s=cpu))
             print(f'sigma {sg:.3g} seed {seed}: small-step acc {acc:.3f} rRMSE {e:.4f}', flush=True)
