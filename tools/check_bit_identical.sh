@@ -17,8 +17,8 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 repo=$(pwd)
-old=${1:-main}
-new=${2:-HEAD}
+old=$(git rev-parse --verify "${1:-main}^{commit}") || exit 2
+new=$(git rev-parse --verify "${2:-HEAD}^{commit}") || exit 2
 root=${TT_BITCHECK_DIR:-/tmp/tt-bitcheck}
 shared=$(cd "${TT_SHARED:-$repo/../shared}" && pwd) || exit 2
 jobs=${TT_BITCHECK_JOBS:-2}
