@@ -8,6 +8,7 @@
 #include "util/files.h"
 
 #include <tunetrace/file.h>
+#include <tt_util/strings.h>
 
 #include <errno.h>
 #include <fcntl.h>
@@ -61,18 +62,11 @@ static int tt__cookie_close(void *cookie) {
   return 0;
 }
 
-static char *tt__dup(const char *s) {
-  size_t n = strlen(s) + 1;
-  char *d = malloc(n);
-  if (d) memcpy(d, s, n);
-  return d;
-}
-
 /* The folder of `path` ("." for a bare name) as a new string. */
 static char *tt__dirname(const char *path) {
   const char *slash = strrchr(path, '/');
-  if (!slash) return tt__dup(".");
-  if (slash == path) return tt__dup("/");
+  if (!slash) return tt__strdup(".");
+  if (slash == path) return tt__strdup("/");
   size_t n = (size_t)(slash - path);
   char *d = malloc(n + 1);
   if (d) {
@@ -161,7 +155,7 @@ tt_status tt_atomic_file_open(const char *path, tt_atomic_file **out) {
   struct stat lst, st;
   char *real = NULL;
   if (lstat(path, &lst) == 0 && S_ISLNK(lst.st_mode)) real = realpath(path, NULL);
-  f->path = real ? real : tt__dup(path);
+  f->path = real ? real : tt__strdup(path);
   int have = f->path && stat(f->path, &st) == 0;
   if (!f->path) goto oom;
   if (have && S_ISDIR(st.st_mode)) {
