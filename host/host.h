@@ -85,6 +85,9 @@ int tt__run_convert(const tt__host_options *opt);
 #define TT__AOV_NORMAL ((uint32_t)TT_AOV_NORMAL)
 #define TT__AOV_ALBEDO ((uint32_t)TT_AOV_ALBEDO)
 #define TT__AOV_MOTION ((uint32_t)TT_AOV_MOTION)
+/* Not a film AOV: the depth of each pixel's point in the previous camera, computed by the
+ * host for sequences (--aov prevdepth, tt_post_frame.prev_depth). */
+#define TT__AOV_PREVDEPTH (1u << 16)
 
 #define TT_HOST_DEFAULT_ITERATIONS 50
 

@@ -77,7 +77,8 @@ void tt__print_usage(FILE *out) {
     "  --sequence N|A:B       render frames 0..N-1 (or A..B) of the scene's camera path at\n"
     "                         --fps (default 24), each with one Halton(2,3) sub-pixel\n"
     "                         jitter of a cycle of 8 for all its samples; writes\n"
-    "                         color/depth/motion_NNNN.exr and manifest.json to --out-dir\n"
+    "                         color/depth/motion/prevdepth_NNNN.exr and manifest.json to\n"
+    "                         --out-dir\n"
     "  --out-dir DIR          folder of the sequence (created if missing)\n"
     "  --reference-scale K    also render each frame at K x K the resolution and write the\n"
     "                         Blackman-Harris-downsampled reference_NNNN.exr\n"
@@ -92,8 +93,11 @@ void tt__print_usage(FILE *out) {
     "                         the K x K-supersampled reference as the frame instead; a\n"
     "                         post-filter (--plugin post_taa --set post_taa.mode=network)\n"
     "                         writes the filtered frame, the rendered one as frame_NNNN.raw.exr\n"
-    "  --aov LIST             per-frame AOVs: depth, normal, albedo, motion (default: depth\n"
-    "                         and motion with --out-dir, none with an --out pattern)\n"
+    "  --aov LIST             per-frame AOVs: depth, normal, albedo, motion, prevdepth (the\n"
+    "                         depth of each pixel's surface point in the previous frame's\n"
+    "                         camera, for disocclusion tests; sequences only); default:\n"
+    "                         depth, motion and prevdepth with --out-dir, none with an --out\n"
+    "                         pattern\n"
     "  --supersample K        write only the reference (K x K the resolution, Blackman-Harris)\n"
     "  --set NAME.KEY=VALUE   also sets a plugin's options (not tuned; host --describe NAME),\n"
     "                         e.g. --set post_taa.weights=FILE.ttw\n"
@@ -160,11 +164,11 @@ static int tt__push(const char **list, int *count, const char *opt, const char *
   return 0;
 }
 
-/* Parses --aov "depth,normal,albedo,motion" into TT__AOV_* bits ("none" = no AOV). */
+/* Parses --aov "depth,normal,albedo,motion,prevdepth" into TT__AOV_* bits ("none" = no AOV). */
 static int tt__parse_aovs(const char *text, uint32_t *mask) {
   static const struct { const char *name; uint32_t bit; } aovs[] = {
     {"depth", TT__AOV_DEPTH}, {"normal", TT__AOV_NORMAL}, {"albedo", TT__AOV_ALBEDO},
-    {"motion", TT__AOV_MOTION}};
+    {"motion", TT__AOV_MOTION}, {"prevdepth", TT__AOV_PREVDEPTH}};
   *mask = 0;
   if (!strcmp(text, "none")) return 0;
   const char *p = text;
@@ -177,7 +181,7 @@ static int tt__parse_aovs(const char *text, uint32_t *mask) {
       *mask |= aovs[k].bit;
     } else {
       fprintf(stderr, "host: --aov: expected a comma-separated list of depth, normal, albedo, "
-              "motion (or none), got \"%.*s\" in \"%s\"\n", (int)len, p, text);
+              "motion, prevdepth (or none), got \"%.*s\" in \"%s\"\n", (int)len, p, text);
       return -1;
     }
     p += len;
@@ -271,6 +275,11 @@ static int tt__check_sequence_options(tt__host_options *opt) {
             "with --out DIR/frame_%%04d.exr, or --sequence\n");
     return -1;
   }
+  if (!opt->sequence && (opt->aov_mask & TT__AOV_PREVDEPTH)) {
+    fprintf(stderr, "host: --aov prevdepth applies to sequences (it needs the previous "
+            "frame's camera): give --frames A:B with --out DIR/frame_%%04d.exr, or --sequence\n");
+    return -1;
+  }
   if (!opt->sequence && (opt->reference_scale || opt->out_dir)) {
     fprintf(stderr, "host: --reference-scale and --out-dir apply to --sequence\n");
     return -1;
@@ -280,8 +289,8 @@ static int tt__check_sequence_options(tt__host_options *opt) {
             "(render the filtered frames in a separate run)\n");
     return -1;
   }
-  if (opt->sequence && !opt->aov_set)  /* --out-dir sequences keep writing both AOVs */
-    opt->aov_mask = opt->seq_pattern ? 0 : TT__AOV_DEPTH | TT__AOV_MOTION;
+  if (opt->sequence && !opt->aov_set)  /* --out-dir sequences: depth, motion, prevdepth */
+    opt->aov_mask = opt->seq_pattern ? 0 : TT__AOV_DEPTH | TT__AOV_MOTION | TT__AOV_PREVDEPTH;
   return 0;
 }
 

@@ -96,7 +96,7 @@ typedef struct tt__seq {
 /* What a sequence writes per frame. */
 typedef enum tt__seq_file {
   TT__SEQ_COLOR, TT__SEQ_DEPTH, TT__SEQ_MOTION, TT__SEQ_REFERENCE, TT__SEQ_POST,
-  TT__SEQ_NORMAL, TT__SEQ_ALBEDO
+  TT__SEQ_NORMAL, TT__SEQ_ALBEDO, TT__SEQ_PREVDEPTH
 } tt__seq_file;
 
 /* File name (inside s->dir) of frame f's `what`. --out-dir: color_0007.exr, depth_0007.exr,
@@ -106,7 +106,7 @@ typedef enum tt__seq_file {
  * frame_0007.depth.exr, frame_0007.motion.exr, frame_0007.reference.exr. */
 static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *out, size_t n) {
   static const char *const legacy[] = {"color", "depth", "motion", "reference", "post",
-                                       "normal", "albedo"};
+                                       "normal", "albedo", "prevdepth"};
   if (!s->pattern) {
     snprintf(out, n, "%s_%04u.exr", legacy[what], f);
     return;
@@ -124,7 +124,7 @@ static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *
     return;
   }
   static const char *const suffix[] = {"raw", "depth", "motion", "reference", "post",
-                                       "normal", "albedo"};
+                                       "normal", "albedo", "prevdepth"};
   size_t stem = strlen(name) - 4;  /* the pattern ends in .exr */
   snprintf(out, n, "%.*s.%s.exr", (int)stem, name, suffix[what]);
 }
@@ -171,6 +171,38 @@ static tt_status tt__seq_render(tt__seq *s, tt_film *film, const tt_camera *cam,
   tt_status st = tt_session_render_ctx(s->ses.lib, &ctx, &ps);
   if (st == TT_OK) tt_film_resolve(film, rgb);
   return st;
+}
+
+/* Depth, in the previous frame's camera `prev`, of the point each pixel sees: the depth
+ * its reprojected history should have (a post-filter compares it with the previous frame's
+ * depth where the motion vector points, to detect disocclusions). From the depth AOV (view
+ * depth along `cam`'s axis) and both poses: pixel (x, y)'s ray through its jittered film
+ * position -- the one every sample of the frame used -- meets its surface at that depth;
+ * that point is projected into `prev`. 0 for the sky (depth 0) and for points behind
+ * `prev`. Exact for the fixed-jitter frames of a sequence. */
+static void tt__seq_prev_depth(const tt_camera *cam, const tt_camera *prev, const float jit[2],
+                               const float *depth, uint32_t w, uint32_t h, float *out) {
+  tt_camera_frame cf, pf;
+  if (tt_camera_frame_init(&cf, cam) != TT_OK || tt_camera_frame_init(&pf, prev) != TT_OK) {
+    tt_clear_error();
+    memcpy(out, depth, (size_t)w * h * sizeof(float));  /* degenerate pose: no motion */
+    return;
+  }
+  for (uint32_t y = 0; y < h; y++)
+    for (uint32_t x = 0; x < w; x++) {
+      size_t i = (size_t)y * w + x;
+      float z = depth[i], zp = 0.0f;
+      if (z > 0.0f && isfinite(z)) {
+        tt_ray ray;
+        tt_camera_generate_ray(&cf, (float)x + 0.5f + jit[0], (float)y + 0.5f + jit[1], &ray);
+        float c = ray.dir[0] * cf.forward[0] + ray.dir[1] * cf.forward[1] +
+                  ray.dir[2] * cf.forward[2];
+        float t = z / c, p[3];
+        for (int k = 0; k < 3; k++) p[k] = ray.org[k] + t * ray.dir[k];
+        if (!tt_camera_project(&pf, p, NULL, NULL, &zp)) zp = 0.0f;
+      }
+      out[i] = zp;
+    }
 }
 
 /* Writes an EXR, reporting failures. */
@@ -230,6 +262,7 @@ int tt__run_sequence(const tt__host_options *opt) {
   int rc = TT_EXIT_OK;
   float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
   tt_film *film = NULL, *ref_film = NULL;
+  float *prev_depth = NULL;
   FILE *manifest = NULL;  /* memstream over mbuf: the manifest text so far */
   char *mbuf = NULL, mpath[4096 + 32];
   size_t mlen = 0;
@@ -272,7 +305,7 @@ int tt__run_sequence(const tt__host_options *opt) {
   const tt_render_settings *settings = tt_scene_settings(s.ses.scene);
   s.seed = opt->seed_set ? opt->seed : settings->seed;
   s.spp = opt->spp ? opt->spp : settings->spp;
-  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION | opt->aov_mask);
+  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION | (opt->aov_mask & ~TT__AOV_PREVDEPTH));
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *still = s.ses.camera;
   uint32_t w = still->width, h = still->height, k = opt->reference_scale;
@@ -281,12 +314,13 @@ int tt__run_sequence(const tt__host_options *opt) {
   rgb = malloc((size_t)w * h * 3 * sizeof(float));
   post_rgb = malloc((size_t)w * h * 3 * sizeof(float));
   motion = malloc((size_t)w * h * 2 * sizeof(float));
+  prev_depth = malloc((size_t)w * h * sizeof(float));
   if (k) {
     ref_film = tt_film_create(w * k, h * k, 0);
     ref_hi = malloc((size_t)w * k * h * k * 3 * sizeof(float));
     ref = malloc((size_t)w * h * 3 * sizeof(float));
   }
-  if (!rgb || !post_rgb || !motion || (k && (!ref_film || !ref_hi || !ref))) {
+  if (!rgb || !post_rgb || !motion || !prev_depth || (k && (!ref_film || !ref_hi || !ref))) {
     fprintf(stderr, "host: out of memory for %ux%u frames\n", w, h);
     rc = TT_EXIT_FAILURE;
     goto done;
@@ -359,6 +393,7 @@ int tt__run_sequence(const tt__host_options *opt) {
       render_ms = (host->clock_ns() - t0) * 1e-6;
       depth = tt_film_aov_const(film, TT_AOV_DEPTH);
       memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
+      tt__seq_prev_depth(&cam, &prev, jit, depth, w, h, prev_depth);
       struct {
         tt__seq_file what;
         const char *key;
@@ -375,6 +410,8 @@ int tt__run_sequence(const tt__host_options *opt) {
          tt_film_aov_const(film, TT_AOV_NORMAL), normal_names},
         {TT__SEQ_ALBEDO, "albedo", !!(opt->aov_mask & TT__AOV_ALBEDO), 3,
          tt_film_aov_const(film, TT_AOV_ALBEDO), albedo_names},
+        {TT__SEQ_PREVDEPTH, "prev_depth", !!(opt->aov_mask & TT__AOV_PREVDEPTH), 1,
+         prev_depth, depth_names},
       };
       for (size_t i = 0; i < sizeof files / sizeof files[0] && rc == TT_EXIT_OK; i++) {
         if (!files[i].on) continue;
@@ -421,6 +458,7 @@ int tt__run_sequence(const tt__host_options *opt) {
       pf.jitter[0] = jit[0];
       pf.jitter[1] = jit[1];
       pf.reset_history = f == opt->seq_first;
+      pf.prev_depth = prev_depth;
       uint64_t p0 = host->clock_ns();
       if (s.pi->process(s.post, &pf, post_rgb) != TT_OK) {
         fprintf(stderr, "host: post-filter %s: frame %u: %s\n", s.post_name, f, tt_last_error());
@@ -460,6 +498,7 @@ done:
   free(ref);
   free(post_rgb);
   free(motion);
+  free(prev_depth);
   tt__session_close(&s.ses);
   return rc;
 }

@@ -1,6 +1,7 @@
 /* host --sequence end to end: a camera sliding sideways at constant speed in front of a
  * plane gives motion vectors of exactly speed * focal / distance pixels (and depth =
- * distance); the manifest walks the Halton jitter cycle; the reference and the post_taa
+ * distance = the prevdepth AOV, the depth in the previous camera); a camera moving
+ * straight at the plane gives prevdepth = depth + the distance moved per frame; the manifest walks the Halton jitter cycle; the reference and the post_taa
  * output are written; bad options are usage errors. The issue's frame-pattern interface
  * (--frames A:B --out DIR/frame_%04d.exr --aov, --supersample K, --plugin post_taa,
  * post_taa.weights=FILE) writes exactly the same pixels as --sequence. */
@@ -29,6 +30,20 @@ static const char *k_scene =
   "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],\n"
   "   \"indices\": [[0, 1, 2], [0, 2, 3]]},\n"
   "  {\"material\": \"b\", \"positions\": [[0, -0.3, 0.01], [0.05, -0.3, 0.01], [0.6, 0.4, 0.01]]}],\n"
+  " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
+
+/* The same wall approached head-on: z from 5 to 4 in one second. */
+static const char *k_dolly =
+  "{\"version\": 1,\n"
+  " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45,\n"
+  "   \"resolution\": [32, 24], \"path\": [\n"
+  "   {\"time\": 0, \"position\": [0, 0, 5], \"target\": [0, 0, 0]},\n"
+  "   {\"time\": 1, \"position\": [0, 0, 4], \"target\": [0, 0, -1]}]},\n"
+  " \"render\": {\"spp\": 1, \"maxDepth\": 1},\n"
+  " \"materials\": {\"w\": {\"albedo\": 0.6}},\n"
+  " \"meshes\": [\n"
+  "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],\n"
+  "   \"indices\": [[0, 1, 2], [0, 2, 3]]}],\n"
   " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
 
 /* Reads a whole text file (caller frees). */
@@ -61,6 +76,25 @@ static double image_diff(const char *a, const char *b) {
   return worst;
 }
 
+/* Largest |prevdepth - depth - offset| of frame `f` of the --out-dir sequence in `dir`, or
+ * -1 when a file is missing or the shapes differ. */
+static double prev_depth_offset_error(const char *dir, int f, double offset) {
+  char a[512], b[512];
+  snprintf(a, sizeof a, "%s/depth_%04d.exr", dir, f);
+  snprintf(b, sizeof b, "%s/prevdepth_%04d.exr", dir, f);
+  uint32_t w1, h1, c1, w2, h2, c2;
+  float *d = NULL, *p = NULL;
+  double worst = -1;
+  if (tt_image_read(a, &w1, &h1, &c1, &d) == TT_OK && tt_image_read(b, &w2, &h2, &c2, &p) == TT_OK &&
+      w1 == w2 && h1 == h2 && c1 == 1 && c2 == 1) {
+    worst = 0;
+    for (size_t i = 0; i < (size_t)w1 * h1; i++) worst = fmax(worst, fabs(p[i] - d[i] - offset));
+  }
+  tt_free(d);
+  tt_free(p);
+  return worst;
+}
+
 /* Checks that DIR_A/A and DIR_B/B hold the same pixels. */
 static void check_same(const char *dir_a, const char *a, const char *dir_b, const char *b) {
   char pa[512], pb[512];
@@ -75,13 +109,14 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   char args[2048], log[16384], a[512], b[512];
   /* rendered frames + AOVs */
   snprintf(args, sizeof args, "--quiet --threads 2 --frames 24:27 --out '%s/i/frame_%%04d.exr' "
-           "--aov depth,motion --set integrator_pt.maxDepth=1 '%s'", dir, scene);
+           "--aov depth,motion,prevdepth --set integrator_pt.maxDepth=1 '%s'", dir, scene);
   int rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   snprintf(a, sizeof a, "%s/i", dir);
   check_same(a, "frame_0026.exr", seq, "color_0026.exr");
   check_same(a, "frame_0026.depth.exr", seq, "depth_0026.exr");
   check_same(a, "frame_0026.motion.exr", seq, "motion_0026.exr");
+  check_same(a, "frame_0026.prevdepth.exr", seq, "prevdepth_0026.exr");
   snprintf(a, sizeof a, "%s/i/frame_0027.raw.exr", dir);
   CHECK_MSG(access(a, F_OK) != 0, "%s written without a post-filter", a);
   snprintf(a, sizeof a, "%s/i/manifest.json", dir);
@@ -146,6 +181,7 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
            scene);
   CHECK(run_host(args, log, sizeof log) == 2);
   CHECK_CONTAINS(log, "shadow");
+  CHECK_CONTAINS(log, "prevdepth");
   snprintf(args, sizeof args, "--out '%s/x/f%%d.exr' '%s'", dir, scene);
   CHECK(run_host(args, log, sizeof log) == 2);
   CHECK_CONTAINS(log, "--frames A:B");
@@ -201,6 +237,10 @@ int main(void) {
     tt_free(px);
     px = NULL;
   }
+  /* Sliding parallel to the wall: every point had the same depth in the previous camera. */
+  double slide = prev_depth_offset_error(out, 27, 0.0);
+  printf("prevdepth, sideways slide: |prevdepth - depth| <= %.2e\n", slide);
+  CHECK_MSG(slide >= 0 && slide < 1e-4, "prevdepth - depth deviates by %g", slide);
   const char *kinds[] = {"color", "reference", "post"};
   for (int k = 0; k < 3; k++) {
     snprintf(path, sizeof path, "%s/%s_0033.exr", out, kinds[k]);
@@ -225,6 +265,22 @@ int main(void) {
   }
 
   check_pattern_interface(dir, out, scene);
+
+  /* Moving straight at the wall by 1/24 per frame: the previous camera saw every point
+   * 1/24 further away. */
+  char dolly[256], dout[256];
+  snprintf(dolly, sizeof dolly, "%s/dolly.json", dir);
+  snprintf(dout, sizeof dout, "%s/dolly", dir);
+  f = fopen(dolly, "w");
+  fputs(k_dolly, f);
+  fclose(f);
+  snprintf(args, sizeof args, "--quiet --threads 2 --sequence 4:6 --out-dir '%s' "
+           "--set integrator_pt.maxDepth=1 '%s'", dout, dolly);
+  rc = run_host(args, log, sizeof log);
+  CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
+  double dz = prev_depth_offset_error(dout, 5, 1.0 / 24.0);
+  printf("prevdepth, dolly 1/24 per frame: |prevdepth - depth - 1/24| <= %.2e\n", dz);
+  CHECK_MSG(dz >= 0 && dz < 1e-4, "prevdepth - depth - 1/24 deviates by %g", dz);
 
   /* Usage errors name the option. */
   snprintf(args, sizeof args, "--sequence 5:2 --out-dir '%s' '%s'", out, scene);

@@ -9,6 +9,8 @@
 #ifndef TUNETRACE_POST_H
 #define TUNETRACE_POST_H
 
+#include <stddef.h>
+
 #include <tunetrace/params.h>
 
 #ifdef __cplusplus
@@ -33,7 +35,17 @@ typedef struct tt_post_frame {
   uint32_t jitter_index;    /* index in the sub-pixel jitter cycle (Halton 2,3) */
   float jitter[2];          /* sub-pixel offset of this frame in pixels, in [-0.5, 0.5) */
   int32_t reset_history;    /* non-zero: a camera cut, discard temporal state first */
+  /* ---- appended (ABI 1.0 hosts may not set these: read only when struct_size covers
+   * the field, see TT_POST_FRAME_HAS) ---- */
+  const float *prev_depth;  /* 1 channel: view depth, in the previous frame's camera, of the
+                             * surface point this pixel sees (the depth its reprojected
+                             * history should have; 0 for the sky or a point behind that
+                             * camera); lets a filter detect disocclusions. NULL if unknown */
 } tt_post_frame;
+
+/* Non-zero when frame `f` (a const tt_post_frame *) was filled by a host that knows `field`. */
+#define TT_POST_FRAME_HAS(f, field)                                                        \
+  ((f)->struct_size >= offsetof(tt_post_frame, field) + sizeof((f)->field))
 
 typedef struct tt_post_iface {
   uint32_t struct_size;     /* sizeof(tt_post_iface) as the plugin was built */
