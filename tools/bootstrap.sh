@@ -1,8 +1,18 @@
 #!/usr/bin/env bash
 # Installs tunetrace's build dependencies from Debian 12 packages (when missing) and
 # builds into ./build. Safe to run again: it only installs what is missing and rebuilds.
+#   tools/bootstrap.sh             build + test dependencies (what CI and the README need)
+#   tools/bootstrap.sh --training  also TRAINING_PACKAGES: PyTorch for tools/taa/train.py
+#                                  (opt-in; no test needs it, the suite blocks it)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+training=0
+for a in "$@"; do
+  case $a in
+    --training) training=1 ;;
+    *) echo "bootstrap: unknown option $a (expected --training)" >&2; exit 2 ;;
+  esac
+done
 
 PACKAGES=(
   meson ninja-build pkg-config gcc g++ make   # build tools
@@ -18,6 +28,13 @@ PACKAGES=(
   python3-numpy python3-scipy                 # tools/tuning/analyze.py (tests/tune_analyze.sh)
   python3-numpy                               # the Python API's arrays (tests/python_api.py)
 )
+
+# Opt-in (--training): training the TAA networks (tools/taa/train.py, ablations.py,
+# export_golden.py, eval_torch.py). Never needed by a test or by the evaluation tools.
+TRAINING_PACKAGES=(
+  python3-torch                               # tools/taa/ training (CPU)
+)
+[ "$training" -eq 1 ] && PACKAGES+=("${TRAINING_PACKAGES[@]}")
 
 missing=()
 for p in "${PACKAGES[@]}"; do
