@@ -208,8 +208,13 @@ static tt_status taa_process(tt_post *p, const tt_post_frame *f, float *out_rgb)
       tt__vctaa_process(&p->vc, taa_host(), &p->vc_params, f->color, f->motion, out_rgb);
       break;
     case TAA_MODE_NETWORK:
-      tt__net_process(&p->net_state, &p->net, taa_host(), f->color, f->depth, f->motion,
-                      f->jitter_index, out_rgb);
+    {
+      tt__net_frame nf = {.color = f->color, .depth = f->depth, .motion = f->motion,
+                          .prev_depth = TT_POST_FRAME_HAS(f, prev_depth) ? f->prev_depth : NULL,
+                          .jitter_index = f->jitter_index,
+                          .jitter = {f->jitter[0], f->jitter[1]}};
+      tt__net_process_frame(&p->net_state, &p->net, taa_host(), &nf, out_rgb);
+    }
       break;
     default:
       memcpy(out_rgb, f->color, sizeof(float) * 3 * p->width * p->height);

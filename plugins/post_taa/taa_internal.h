@@ -85,10 +85,31 @@ void tt__vctaa_free(tt__vctaa *v);
 void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
                        const float *color, const float *motion, float *out_rgb);
 
+/* ---- history rejection (taa_reject.c) ---- */
+
+/* Relative depth tolerance of the disocclusion test (tools/taa/rejection.py: TOL). */
+#define TT__TAA_REJECT_TOL 0.01f
+/* Bits of the rejection mask plane. */
+#define TT__TAA_REJECT_RAW 1u    /* disoccluded or off-screen: the network's rejection input */
+#define TT__TAA_REJECT_RESET 2u  /* off-screen, or disoccluded in a region holding a 3 x 3
+                                  * square: the history is replaced by the new frame */
+
+/* Per-pixel rejection of the reprojected history (README.md, "History rejection"): from
+ * the previous frame's depth `dprev` and jitter, this frame's prevdepth AOV `zprev`, motion
+ * and jitter. `dprev` or `zprev` NULL: only the off-screen test. `motion` NULL: zero
+ * motion. Writes TT__TAA_REJECT_* bits into `mask` (width x height); `tmp` holds 2 *
+ * width * height bytes of scratch. Rows run on the host's pool; deterministic. */
+void tt__taa_reject_masks(const tt_host *host, uint32_t width, uint32_t height,
+                          const float *dprev, const float jitter_prev[2], const float *zprev,
+                          const float *motion, const float jitter[2], uint8_t *mask,
+                          uint8_t *tmp);
+
 /* ---- the kernel-prediction network (taa_net.c) ---- */
 
 #define TT__NET_MAGIC "TTAANET\0"
-#define TT__NET_VERSION 1u
+#define TT__NET_VERSION 2u           /* newest version read (1: no input flags) */
+#define TT__NET_FLAG_REJECT 1u       /* input flag: the rejection input channel (last) */
+#define TT__NET_FLAG_RESET 2u        /* input flag: history reset (needs FLAG_REJECT) */
 #define TT__NET_JITTER_SETS 8u
 #define TT__NET_MAX_LAYERS 8u
 #define TT__NET_MAX_CH 64u
@@ -117,7 +138,8 @@ typedef struct tt__net_layer {
 /* A loaded model: body layers (ReLU), then the kernel layer (softmax over 2 * 25 taps) and
  * the 1x1 hidden-state layer, both reading the last body layer. */
 typedef struct tt__net_model {
-  uint32_t in_channels;     /* 6 + 3 + hidden */
+  uint32_t in_channels;     /* 6 + 3 + hidden (+ 1 with the rejection input) */
+  uint32_t flags;           /* TT__NET_FLAG_* (file version 2; 0 for version 1) */
   uint32_t width;           /* body channels (12 or 6) */
   uint32_t hidden;          /* hidden-state channels (0..8) */
   float motion_scale;       /* motion input = pixels * motion_scale */
@@ -165,7 +187,21 @@ typedef struct tt__net_state {
   int winograd;             /* fast path (AVX2 / AVX-512): kernel layer by Winograd F(2x2, 5x5)
                              * (1) or by direct convolution (0); set at init from
                              * TT_POST_TAA_WINOGRAD (default 1), may be changed between frames */
+  /* History rejection (models with TT__NET_FLAG_REJECT): the previous frame's depth and
+   * jitter, and this frame's TT__TAA_REJECT_* mask (+ 2 planes of scratch). */
+  float *prev_depth;
+  int have_prev_depth;
+  float prev_jitter[2];
+  uint8_t *reject;          /* 3 * width * height bytes: the mask, then scratch */
+  double ms_reject;         /* wall ms of the last frame's rejection pass */
 } tt__net_state;
+
+/* One frame's inputs (as tt_post_frame; depth, motion and prev_depth may be NULL). */
+typedef struct tt__net_frame {
+  const float *color, *depth, *motion, *prev_depth;
+  uint32_t jitter_index;
+  float jitter[2];          /* sub-pixel offset of the frame's samples */
+} tt__net_frame;
 
 tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t width,
                              uint32_t height);
@@ -180,15 +216,24 @@ void tt__net_fast_free(tt__net_state *s);
 /* One frame on the fast path: input planes (tonemap + reprojection) by rows, then the
  * network, softmax, colour mix and hidden layer fused by row bands on the host's pool. */
 void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
-                          const float *color, const float *depth, const float *motion,
-                          uint32_t jitter_index, float *out_rgb);
+                          const tt__net_frame *f, float *out_rgb);
 /* The instruction set the fast path dispatches to: "avx512", "avx2" or "generic". */
 const char *tt__net_fast_isa(void);
 
-/* Filters one frame; `depth` and `motion` may be NULL (read as 0). Writes linear RGB, and
- * the tonemapped result is kept in s->state. */
+/* Filters one frame. Writes linear RGB, and the tonemapped result is kept in s->state.
+ * Models with the rejection input first compute s->reject (taa_reject.c) from the previous
+ * frame's depth and jitter kept in `s`. */
+void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                           const tt__net_frame *f, float *out_rgb);
+/* The same for a frame given by planes (`depth`, `motion` may be NULL: read as 0), without
+ * prevdepth, jittered by tt_jitter_halton23(jitter_index). */
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                      const float *color, const float *depth, const float *motion,
                      uint32_t jitter_index, float *out_rgb);
+/* Shared by both paths: the per-frame rejection pass (when the model has the input) and,
+ * after the frame, keeping its depth and jitter for the next one. */
+void tt__net_reject_begin(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                          const tt__net_frame *f);
+void tt__net_reject_end(tt__net_state *s, const tt__net_model *m, const tt__net_frame *f);
 
 #endif

@@ -17,6 +17,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <tunetrace/camera.h>
+
 #include "taa_internal.h"
 
 #include <tt_util/hash.h>
@@ -88,10 +90,10 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
                         "%s: not a post_taa weights file (bad magic; expected \"TTAANET\")",
                         src);
   uint32_t version = net_u32(p + 8);
-  if (version != TT__NET_VERSION)
+  if (version < 1 || version > TT__NET_VERSION)
     return tt_set_error(TT_ERR_UNSUPPORTED,
                         "%s: weights format version %u is not supported (this build reads "
-                        "version %u)", src, version, TT__NET_VERSION);
+                        "versions 1 to %u)", src, version, TT__NET_VERSION);
   if (size < NET_HEADER_FIXED)
     return tt_set_error(TT_ERR_PARSE, "%s: truncated header (%zu bytes, expected at least %u)",
                         src, size, NET_HEADER_FIXED);
@@ -102,15 +104,21 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
   uint32_t mix_k = net_u32(p + 28), jitter_sets = net_u32(p + 32);
   uint32_t layers = net_u32(p + 36);
   m->motion_scale = net_f32(p + 40);
-  if (mix_k != TT__NET_MIX_K || jitter_sets != TT__NET_JITTER_SETS)
+  m->flags = version >= 2 ? net_u32(p + 44) : 0;  /* reserved (ignored) in version 1 */
+  const uint32_t known = TT__NET_FLAG_REJECT | TT__NET_FLAG_RESET;
+  if ((m->flags & ~known) || ((m->flags & TT__NET_FLAG_RESET) && !(m->flags & TT__NET_FLAG_REJECT)))
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: input flags 0x%x (this build knows 0x1 "
+                        "rejection input, 0x2 history reset with it)", src, m->flags);
+  uint32_t want_in = 9 + m->hidden + ((m->flags & TT__NET_FLAG_REJECT) ? 1u : 0u);  if (mix_k != TT__NET_MIX_K || jitter_sets != TT__NET_JITTER_SETS)
     return tt_set_error(TT_ERR_PARSE, "%s: colour-mix kernel %u and jitter sets %u (expected "
                         "%u and %u)", src, mix_k, jitter_sets, TT__NET_MIX_K,
                         TT__NET_JITTER_SETS);
-  if (m->hidden > 8 || m->in_channels != 9 + m->hidden || m->width < 1 ||
+  if (m->hidden > 8 || m->in_channels != want_in || m->width < 1 ||
       m->width > TT__NET_MAX_CH || !isfinite(m->motion_scale))
-    return tt_set_error(TT_ERR_PARSE, "%s: bad model shape: in %u, width %u, hidden %u "
-                        "(in must be 9 + hidden, hidden <= 8, width in [1, %u])", src,
-                        m->in_channels, m->width, m->hidden, TT__NET_MAX_CH);
+    return tt_set_error(TT_ERR_PARSE, "%s: bad model shape: in %u, width %u, hidden %u, "
+                        "flags 0x%x (in must be 9 + hidden, + 1 with the rejection input; "
+                        "hidden <= 8, width in [1, %u])", src, m->in_channels, m->width,
+                        m->hidden, m->flags, TT__NET_MAX_CH);
   uint32_t want_layers_min = 2 + (m->hidden ? 1 : 0);
   if (layers < want_layers_min || layers > TT__NET_MAX_LAYERS)
     return tt_set_error(TT_ERR_PARSE, "%s: %u layers (expected %u to %u)", src, layers,
@@ -227,7 +235,13 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
   size_t px = (size_t)width * height;
   s->state = net_alloc(px * s->state_ch);
   s->next_state = net_alloc(px * s->state_ch);
-  if (!s->state || !s->next_state || tt__net_fast_init(s, m) != TT_OK) {
+  int rej_ok = 1;
+  if (m->flags & TT__NET_FLAG_REJECT) {
+    s->prev_depth = net_alloc(px);
+    s->reject = malloc(3 * px);
+    rej_ok = s->prev_depth && s->reject;
+  }
+  if (!s->state || !s->next_state || !rej_ok || tt__net_fast_init(s, m) != TT_OK) {
     tt__net_state_free(s);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
                         "network planes", width, height);
@@ -251,6 +265,8 @@ static tt_status net_reference_planes(tt__net_state *s) {
 }
 
 void tt__net_state_free(tt__net_state *s) {
+  free(s->prev_depth);
+  free(s->reject);
   free(s->state);
   free(s->next_state);
   free(s->planes[0]);
@@ -267,6 +283,7 @@ typedef struct net_job {
   tt__net_state *s;
   const tt__net_model *m;
   const float *color, *depth, *motion;
+  const uint8_t *reject;    /* rejection mask, or NULL (model without the input) */
   float depth_scale;
   uint32_t set;
   const tt__net_layer *layer;
@@ -296,7 +313,8 @@ static void net_input_rows(void *ctx, uint32_t y0, uint32_t y1) {
       memcpy(s->tm + 3 * pi, t, sizeof t);
       float mx = job->motion ? job->motion[2 * i] : 0.0f;
       float my = job->motion ? job->motion[2 * i + 1] : 0.0f;
-      if (s->valid) {
+      uint8_t rj = job->reject ? job->reject[i] : 0;
+      if (s->valid && !((rj & TT__TAA_REJECT_RESET) && (m->flags & TT__NET_FLAG_RESET))) {
         /* Motion points from this frame back to the previous one (film.h). */
         tt__taa_sample_catmull_rom(s->state, w, s->height, sc, (float)x + 0.5f + mx,
                                    (float)y + 0.5f + my, fb);
@@ -313,6 +331,7 @@ static void net_input_rows(void *ctx, uint32_t y0, uint32_t y1) {
       in[4] = my * m->motion_scale;
       in[5] = job->depth ? job->depth[i] * job->depth_scale : 0.0f;
       for (uint32_t c = 0; c < sc; c++) in[6 + c] = fb[c];
+      if (job->reject) in[6 + sc] = (rj & TT__TAA_REJECT_RAW) ? 1.0f : 0.0f;
       memcpy(s->reproj + 3 * pi, fb, 3 * sizeof(float));
     }
 }
@@ -381,13 +400,49 @@ static void net_ref_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
     }
 }
 
+void tt__net_reject_begin(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                          const tt__net_frame *f) {
+  if (!(m->flags & TT__NET_FLAG_REJECT)) return;
+  size_t n = (size_t)s->width * s->height;
+  uint64_t t0 = host && host->clock_ns ? host->clock_ns() : 0;
+  if (!s->valid) {
+    /* A fresh start rejects everything (the new frame stands in for the history). */
+    memset(s->reject, TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET, n);
+  } else {
+    tt__taa_reject_masks(host, s->width, s->height, s->have_prev_depth ? s->prev_depth : NULL,
+                         s->prev_jitter, f->prev_depth, f->motion, f->jitter, s->reject,
+                         s->reject + n);
+  }
+  s->ms_reject = host && host->clock_ns ? (double)(host->clock_ns() - t0) * 1e-6 : 0.0;
+}
+
+void tt__net_reject_end(tt__net_state *s, const tt__net_model *m, const tt__net_frame *f) {
+  if (!(m->flags & TT__NET_FLAG_REJECT)) return;
+  s->have_prev_depth = f->depth != NULL;
+  if (f->depth) memcpy(s->prev_depth, f->depth, (size_t)s->width * s->height * sizeof(float));
+  s->prev_jitter[0] = f->jitter[0];
+  s->prev_jitter[1] = f->jitter[1];
+}
+
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                      const float *color, const float *depth, const float *motion,
                      uint32_t jitter_index, float *out_rgb) {
+  tt__net_frame f = {.color = color, .depth = depth, .motion = motion,
+                     .jitter_index = jitter_index};
+  tt_jitter_halton23(jitter_index, f.jitter);
+  tt__net_process_frame(s, m, host, &f, out_rgb);
+}
+
+void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_host *host,
+                           const tt__net_frame *f, float *out_rgb) {
+  tt__net_reject_begin(s, m, host, f);
   if (!s->reference) {
-    tt__net_fast_process(s, m, host, color, depth, motion, jitter_index, out_rgb);
+    tt__net_fast_process(s, m, host, f, out_rgb);
+    tt__net_reject_end(s, m, f);
     return;
   }
+  const float *color = f->color, *depth = f->depth, *motion = f->motion;
+  uint32_t jitter_index = f->jitter_index;
   if (net_reference_planes(s) != TT_OK) {
     memcpy(out_rgb, color, (size_t)s->width * s->height * 3 * sizeof(float));
     return;
@@ -396,6 +451,7 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   uint64_t t0 = h && h->clock_ns ? h->clock_ns() : 0;
   double c0 = tt__taa_cpu_ms();
   net_job job = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion,
+                 .reject = (m->flags & TT__NET_FLAG_REJECT) ? s->reject : NULL,
                  .set = jitter_index % TT__NET_JITTER_SETS, .out_rgb = out_rgb};
   /* Depth enters as a fraction of the frame's farthest hit, so scenes of any scale look
    * alike to the network. */
@@ -434,4 +490,5 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
   s->ms_reproject = (double)(t1 - t0) * 1e-6;
   s->ms_network = (double)(t2 - t1) * 1e-6;
   s->ms_mix = (double)(t3 - t2) * 1e-6;
+  tt__net_reject_end(s, m, f);
 }

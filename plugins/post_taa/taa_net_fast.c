@@ -568,6 +568,7 @@ typedef struct in_job {
   tt__net_state *s;
   const tt__net_model *m;
   const float *color, *depth, *motion;
+  const uint8_t *reject;    /* rejection mask, or NULL (model without the input) */
   float depth_scale;
 } in_job;
 
@@ -600,6 +601,7 @@ AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
   const tt__net_model *m = job->m;
   uint32_t w = s->width, sc = s->state_ch, nch = 6 + sc;
   size_t cs = s->inp_cs;
+  const int reset = (m->flags & TT__NET_FLAG_RESET) != 0;
   float fb[16];
   for (uint32_t y = y0; y < y1; y++) {
     float *base = s->inp + (size_t)(y + s->halo) * s->rs + COL;
@@ -609,7 +611,8 @@ AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
       tt__taa_tonemap_inl(job->color + 3 * i, t);
       float mx = job->motion ? job->motion[2 * i] : 0.0f;
       float my = job->motion ? job->motion[2 * i + 1] : 0.0f;
-      if (s->valid) {
+      uint8_t rj = job->reject ? job->reject[i] : 0;
+      if (s->valid && !(reset && (rj & TT__TAA_REJECT_RESET))) {
         /* Motion points from this frame back to the previous one (film.h). */
         float fx = (float)x + 0.5f + mx, fy = (float)y + 0.5f + my;
         if (sc == 8) {
@@ -622,7 +625,7 @@ AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
         memset(fb, 0, sizeof fb);
         memcpy(fb, t, sizeof t);
       }
-      float v[6 + 16];
+      float v[6 + 16 + 1];
       v[0] = t[0];
       v[1] = t[1];
       v[2] = t[2];
@@ -630,7 +633,9 @@ AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
       v[4] = my * m->motion_scale;
       v[5] = job->depth ? job->depth[i] * job->depth_scale : 0.0f;
       memcpy(v + 6, fb, sc * sizeof(float));
-      for (uint32_t c = 0; c < nch; c++) base[c * cs + x] = v[c];
+      if (job->reject) v[nch] = (rj & TT__TAA_REJECT_RAW) ? 1.0f : 0.0f;
+      uint32_t nin = nch + (job->reject ? 1u : 0u);
+      for (uint32_t c = 0; c < nin; c++) base[c * cs + x] = v[c];
     }
   }
 }
@@ -1052,11 +1057,13 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
 }
 
 void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
-                          const float *color, const float *depth, const float *motion,
-                          uint32_t jitter_index, float *out_rgb) {
+                          const tt__net_frame *f, float *out_rgb) {
+  const float *color = f->color, *depth = f->depth;
+  const uint32_t jitter_index = f->jitter_index;
   const fast_isa *isa = fast_pick();
   double w0 = fast_ns() * 1e-6, c0 = tt__taa_cpu_ms();
-  in_job ij = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion};
+  in_job ij = {.s = s, .m = m, .color = color, .depth = depth, .motion = f->motion,
+               .reject = (m->flags & TT__NET_FLAG_REJECT) ? s->reject : NULL};
   float dmax = 0.0f;
   if (depth)
     for (size_t i = 0; i < (size_t)s->width * s->height; i++)

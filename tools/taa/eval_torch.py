@@ -21,12 +21,13 @@ def run_sequence(model, seq):
     c = torch.from_numpy(np.ascontiguousarray(seq.color.transpose(0, 3, 1, 2)))
     d = torch.from_numpy(np.ascontiguousarray(seq.depth_n[:, None]))
     m = torch.from_numpy(np.ascontiguousarray(seq.motion.transpose(0, 3, 1, 2)))
+    rj = torch.from_numpy(np.ascontiguousarray(seq.rej))
     outs, state = [], None
     with torch.no_grad():
         for t in range(c.shape[0]):
             fresh = t == 0 or bool(seq.reset[t])
             o, state = model.step(c[t:t + 1], d[t:t + 1], m[t:t + 1], state,
-                                  int(seq.jitter[t]), fresh)
+                                  int(seq.jitter[t]), fresh, rj[t:t + 1])
             outs.append(taa_model.untonemap(o)[0].permute(1, 2, 0).numpy())
     return np.stack(outs)
 

@@ -6,20 +6,18 @@ with 4x4 Catmull-Rom along the motion vectors (clamped taps); input = [rgb, moti
 motion_scale, depth / max depth, reprojected state]; body convolutions with ReLU and zero
 padding; kernel layer -> 50 logits, softmax per pixel; colour mix of eq. 5.3 (25 taps over
 the new frame, 25 over the reprojected output, zero padding); 1x1 hidden-state layer.
-Layers with 8 weight sets use set (jitter_index mod 8)."""
-import struct
-
+Layers with 8 weight sets use set (jitter_index mod 8). Models with the rejection input
+(flags, ttw.FLAG_REJECT) get one more input channel, the mask of rejection.py; with
+ttw.FLAG_RESET the reprojected state is replaced by the fresh-start state where the mask
+says reset (plugins/post_taa/taa_reject.c)."""
 import numpy as np
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-MAGIC = b"TTAANET\0"
-VERSION = 1
-JITTER_SETS = 8
-MIX_K = 5
-ROLE_BODY, ROLE_KERNEL, ROLE_HIDDEN = 1, 2, 3
-ACT_NONE, ACT_RELU, ACT_SOFTMAX = 0, 1, 2
+import ttw
+from ttw import (ACT_NONE, ACT_RELU, ACT_SOFTMAX, FLAG_REJECT, FLAG_RESET, JITTER_SETS,  # noqa: F401
+                 MIX_K, ROLE_BODY, ROLE_HIDDEN, ROLE_KERNEL, fnv1a)
 
 
 def tonemap(c):
@@ -88,11 +86,12 @@ class TAANet(nn.Module):
     'b1', 'b2', ..., 'k', 'h' tokens (thesis best: 2-3-K = 'b2 b3 k')."""
 
     def __init__(self, width=12, hidden=5, body=(3, 3, 5), jitter_layers="b2 b3 k",
-                 motion_scale=0.125):
+                 motion_scale=0.125, flags=0):
         super().__init__()
         self.width, self.hidden, self.motion_scale = width, hidden, motion_scale
+        self.flags = flags
         toks = set(jitter_layers.split())
-        self.in_channels = 9 + hidden
+        self.in_channels = 9 + hidden + (1 if flags & FLAG_REJECT else 0)
         layers, cin = [], self.in_channels
         for i, k in enumerate(body):
             sets = JITTER_SETS if f"b{i + 1}" in toks else 1
@@ -111,12 +110,25 @@ class TAANet(nn.Module):
         n, _, h, w = tm.shape
         return torch.cat([tm, tm.new_zeros(n, self.hidden, h, w)], 1)
 
-    def step(self, color, depth_n, motion, state, j, fresh):
+    def step(self, color, depth_n, motion, state, j, fresh, reject=None):
         """One frame. color: linear (N,3,H,W); depth_n: depth / frame max (N,1,H,W); motion
-        (N,2,H,W) pixels; state (N,3+hidden,H,W) or None; returns (out_tm, new_state)."""
+        (N,2,H,W) pixels; state (N,3+hidden,H,W) or None; reject (N,2,H,W): the rejection
+        masks [raw, reset] of rejection.py (models with the rejection input; None: nothing
+        rejected); returns (out_tm, new_state)."""
         tm = tonemap(color)
-        fb = self.init_state(tm) if fresh or state is None else catmull_rom_reproject(state, motion)
-        x = torch.cat([tm, motion * self.motion_scale, depth_n, fb], 1)
+        fresh = fresh or state is None
+        fb = self.init_state(tm) if fresh else catmull_rom_reproject(state, motion)
+        parts = [tm, motion * self.motion_scale, depth_n, fb]
+        if self.flags & FLAG_REJECT:
+            if fresh:
+                r = tm.new_ones(tm.shape[0], 1, *tm.shape[2:])
+            else:
+                r = reject[:, 0:1] if reject is not None else tm.new_zeros(tm.shape[0], 1, *tm.shape[2:])
+                if self.flags & FLAG_RESET and reject is not None:
+                    fb = torch.where(reject[:, 1:2] > 0, self.init_state(tm), fb)
+                    parts[3] = fb
+            parts.append(r)
+        x = torch.cat(parts, 1)
         if self.channels_last:
             x = x.contiguous(memory_format=torch.channels_last)
         for layer in self.body:
@@ -143,45 +155,32 @@ class TAANet(nn.Module):
         return rows
 
 
-def fnv1a(data):
-    h = 2166136261
-    for b in data:
-        h = ((h ^ b) * 16777619) & 0xFFFFFFFF
-    return h
+def to_ttw(model):
+    """The weights as a ttw.Model (numpy)."""
+    return ttw.Model(model.width, model.hidden,
+                     [ttw.Layer(l.role, l.cin, l.cout, l.k, l.sets, l.act,
+                                l.weight.detach().cpu().numpy(), l.bias.detach().cpu().numpy())
+                      for l in model.layers()], model.motion_scale, model.flags)
 
 
 def save_weights(model, path):
-    layers = model.layers()
-    header = struct.pack("<8sIIIIIIIIfI", MAGIC, VERSION, 48 + 24 * len(layers),
-                         model.in_channels, model.width, model.hidden, MIX_K, JITTER_SETS,
-                         len(layers), model.motion_scale, 0)
-    table = b"".join(struct.pack("<IIIIII", l.role, l.cin, l.cout, l.k, l.sets, l.act)
-                     for l in layers)
-    payload = b"".join(
-        l.weight.detach().cpu().numpy().astype("<f4").tobytes() +
-        l.bias.detach().cpu().numpy().astype("<f4").tobytes() for l in layers)
-    with open(path, "wb") as f:
-        f.write(header + table + payload + struct.pack("<I", fnv1a(payload)))
+    ttw.write(to_ttw(model), path)
+
+
+def from_ttw(t):
+    """A TAANet holding the weights of a ttw.Model."""
+    body = tuple(l.k for l in t.layers if l.role == ROLE_BODY)
+    toks = [f"b{i + 1}" for i, l in enumerate(l for l in t.layers if l.role == ROLE_BODY)
+            if l.sets > 1]
+    toks += ["k" for l in t.layers if l.role == ROLE_KERNEL and l.sets > 1]
+    toks += ["h" for l in t.layers if l.role == ROLE_HIDDEN and l.sets > 1]
+    m = TAANet(t.width, t.hidden, body, " ".join(toks), t.motion_scale, t.flags)
+    for dst, src in zip(m.layers(), t.layers):
+        dst.weight.data = torch.from_numpy(src.weight.copy()).view_as(dst.weight)
+        dst.bias.data = torch.from_numpy(src.bias.copy()).view_as(dst.bias)
+    return m
 
 
 def load_weights(path):
     """Reads a weights file back into a TAANet (for evaluation of exported models)."""
-    data = open(path, "rb").read()
-    (magic, version, hbytes, cin, width, hidden, mix_k, sets, nl, ms, _) = struct.unpack_from(
-        "<8sIIIIIIIIfI", data, 0)
-    if magic != MAGIC or version != VERSION:
-        raise ValueError(f"{path}: not a version {VERSION} post_taa weights file")
-    recs = [struct.unpack_from("<IIIIII", data, 48 + 24 * i) for i in range(nl)]
-    body = tuple(r[3] for r in recs if r[0] == ROLE_BODY)
-    toks = [f"b{i + 1}" for i, r in enumerate(r for r in recs if r[0] == ROLE_BODY) if r[4] > 1]
-    toks += ["k" for r in recs if r[0] == ROLE_KERNEL and r[4] > 1]
-    toks += ["h" for r in recs if r[0] == ROLE_HIDDEN and r[4] > 1]
-    m = TAANet(width, hidden, body, " ".join(toks), ms)
-    off = hbytes
-    for l in m.layers():
-        nw, nb = l.weight.numel(), l.bias.numel()
-        w = np.frombuffer(data, "<f4", nw, off); off += 4 * nw
-        b = np.frombuffer(data, "<f4", nb, off); off += 4 * nb
-        l.weight.data = torch.from_numpy(w.copy()).view_as(l.weight)
-        l.bias.data = torch.from_numpy(b.copy()).view_as(l.bias)
-    return m
+    return from_ttw(ttw.read(path))

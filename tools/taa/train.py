@@ -9,6 +9,7 @@ Exports the weights file (and optionally the golden fixture).
            [--hidden 5] [--body 3,3,5] [--jitter-layers "b2 b3 k"] [--minutes 8] [--steps N]
            [--batch 8] [--patch 64] [--threads 1] [--burn 24] [--ema 0.99] [--lr 1e-3]
            [--val pillars,...] [--ckpt-minutes M] [--cache DIR] [--init W.ttw]
+           [--reject none|input|reset]
 """
 import argparse
 import json
@@ -60,7 +61,7 @@ def loss_fn(outs, refs, inp_last):
     return sum(parts.values()), parts
 
 
-def run_window(model, c, d, mo, j0, burn=0):
+def run_window(model, c, d, mo, j0, burn=0, rej=None):
     """Unrolls the recurrent network over the window (first frame starts fresh). The first
     `burn` frames run without gradients (burn-in): the window's trained frames then start
     from the network's own state, as in a long sequence, instead of a fresh start only
@@ -70,7 +71,8 @@ def run_window(model, c, d, mo, j0, burn=0):
         with torch.set_grad_enabled(t >= burn and torch.is_grad_enabled()):
             if t == burn and state is not None:
                 state = state.detach()
-            o, state = model.step(c[:, t], d[:, t], mo[:, t], state, (j0 + t) % 8, t == 0)
+            o, state = model.step(c[:, t], d[:, t], mo[:, t], state, (j0 + t) % 8, t == 0,
+                                  None if rej is None else rej[:, t])
         if t >= burn:
             outs.append(o)
     return outs
@@ -107,10 +109,13 @@ def main():
     ap.add_argument("--ema", type=float, default=0.0,
                     help="save/evaluate an exponential moving average of the weights with "
                          "this decay (e.g. 0.99; 0: the raw weights)")
+    ap.add_argument("--reject", choices=("none", "input", "reset"), default="none",
+                    help="history rejection (rejection.py): input = the mask as an extra "
+                         "input channel; reset = also reset the history where it says so")
     ap.add_argument("--no-channels-last", action="store_true")
-    ap.add_argument("--legacy-loader", action="store_true",
-                    help="the original numpy window reader (for the throughput comparison)")
     a = ap.parse_args()
+    flags = {"none": 0, "input": taa_model.FLAG_REJECT,
+             "reset": taa_model.FLAG_REJECT | taa_model.FLAG_RESET}[a.reject]
     torch.set_num_threads(a.threads)
     torch.set_flush_denormal(True)
     torch.manual_seed(a.seed)
@@ -135,20 +140,25 @@ def main():
     print(f"loaded {len(seqs)} training, {len(vals)} validation sequences in "
           f"{time.time() - t_load:.1f} s", flush=True)
     model = taa_model.TAANet(a.width, a.hidden, tuple(int(k) for k in a.body.split(",")),
-                             a.jitter_layers)
+                             a.jitter_layers, flags=flags)
     model.channels_last = not a.no_channels_last
     if a.init:
         src = taa_model.load_weights(a.init)
         for dst_l, src_l in zip(model.layers(), src.layers()):
-            dst_l.weight.data.copy_(src_l.weight.data)
+            if dst_l.weight.shape == src_l.weight.shape:
+                dst_l.weight.data.copy_(src_l.weight.data)
+            elif dst_l.weight.shape[2] == src_l.weight.shape[2] + 1:
+                # the first layer of a model with the rejection input, from one without:
+                # the new input channel starts at zero weight (same function at first)
+                dst_l.weight.data.zero_()
+                dst_l.weight.data[:, :, :-1] = src_l.weight.data
+            else:
+                raise SystemExit(f"train.py: --init {a.init}: layer shapes differ")
             dst_l.bias.data.copy_(src_l.bias.data)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr, betas=(0.9, 0.999), eps=1e-7)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda step: 0.96 ** (step / 1000.0))
-    if a.legacy_loader:
-        gen = dataset.windows(seqs, a.batch, a.frames, a.patch, rng)
-    else:
-        gen = dataset.TensorWindows(seqs, a.batch, a.frames + a.burn, a.patch, rng,
-                                    [w for _, _, w in specs])
+    gen = dataset.TensorWindows(seqs, a.batch, a.frames + a.burn, a.patch, rng,
+                                [w for _, _, w in specs])
     t_start = time.time()
     t_end = t_start + 60 * a.minutes
     t_ckpt = t_start + 60 * a.ckpt_minutes if a.ckpt_minutes > 0 else float("inf")
@@ -183,16 +193,14 @@ def main():
         model.train()
 
     while time.time() < t_end and (a.steps <= 0 or step < a.steps):
-        c, d, mo, r, j0 = next(gen)
-        if a.legacy_loader:
-            c, d, mo, r = (torch.from_numpy(x) for x in (c, d, mo, r))
+        c, d, mo, r, j0, rj = next(gen)
         if a.burn:
             skip = a.burn - 8 * int(rng.integers(0, a.burn // 8 + 1))
-            c, d, mo, r = c[:, skip:], d[:, skip:], mo[:, skip:], r[:, skip:]
+            c, d, mo, r, rj = c[:, skip:], d[:, skip:], mo[:, skip:], r[:, skip:], rj[:, skip:]
             j0 = (j0 + skip) % 8
-            outs = run_window(model, c, d, mo, j0, c.shape[1] - a.frames)
+            outs = run_window(model, c, d, mo, j0, c.shape[1] - a.frames, rj)
         else:
-            outs = run_window(model, c, d, mo, j0)
+            outs = run_window(model, c, d, mo, j0, 0, rj)
         refs = [taa_model.tonemap(r[:, t]) for t in (-2, -1)]
         loss, parts = loss_fn(outs, refs, taa_model.tonemap(c[:, -1]))
         opt.zero_grad()
@@ -224,7 +232,8 @@ def main():
             "batch": a.batch, "patch": a.patch, "frames": a.frames, "data": a.data,
             "scenes": a.scenes, "val": a.val, "width": a.width, "hidden": a.hidden,
             "body": a.body, "jitter_layers": a.jitter_layers, "threads": a.threads,
-            "seed": a.seed, "lr": a.lr, "ema": a.ema, "burn": a.burn, "channels_last": model.channels_last,
+            "seed": a.seed, "lr": a.lr, "ema": a.ema, "burn": a.burn, "reject": a.reject,
+            "channels_last": model.channels_last,
             "evals": evals, "log": log}
     json.dump(meta, open(a.out + ".train.json", "w"), indent=1)
     print(f"wrote {a.out} after {step} steps ({step / elapsed:.3f} steps/s)")
