@@ -1,28 +1,36 @@
-/* post_taa timings (suite bench; thesis Table 5.2): ms per frame at 640x480 and 1920x1080
- * for 1 and 2 threads, split into reprojection (tonemap + Catmull-Rom of the previous state
- * into the input planes), network (body layers + kernel layer) and colour mix (softmax,
- * eq. 5.3, hidden layer, outputs), for the 12- and 6-channel shipped weights and VCTAA
- * (one fused pass: no split). Every figure is the median of >= 5 frames after a warm-up,
- * both wall time and process CPU time (on a shared machine the CPU time is the figure that
- * survives load; wall = CPU / threads only on an idle machine).
+/* post_taa timings (suite bench; thesis Table 5.2): ms per 640x480 (and 1920x1080) frame
+ * of every network and VCTAA, the whole post-process as the plugin runs it: rejection masks
+ * (networks with the rejection input), tonemap + Catmull-Rom reprojection into the input
+ * planes, network (body + kernel layer), colour mix (softmax, eq. 5.3, hidden layer,
+ * outputs). Variants are interleaved: every round runs one frame of each variant, the order
+ * rotated per round, so all see the same machine load; each figure is the median over the
+ * rounds after a warm-up round. Wall time and process CPU time (all threads); the stage
+ * split is CPU ms from the threads' own timers.
  *
  * FLOPs per pixel come from the layer shapes (2 K^2 I O + O per layer, one weight set;
- * softmax, mix and reprojection not counted). The FLOP peak is measured: a loop of
- * independent 8-wide FMAs (AVX2) gives this core's FLOP/s per CPU-second, i.e. 2 FMA units
- * x 8 floats x 2 flops x the effective clock, which is printed as the clock it implies.
+ * softmax, mix, masks and reprojection not counted); with Winograd 5x5 layers the GFLOP/s
+ * are "effective" (direct-convolution FLOPs over the time taken). The FLOP peak is measured:
+ * a loop of independent 8-wide FMAs gives this core's FLOP/s per CPU-second.
  *
- * Each network row is measured twice, alternating frames in one process: D = all layers by
- * direct convolution, W = the kernel layer and 12-channel 5x5 body layers by Winograd
- * F(2x2, 5x5) (fewer multiplies; its GFLOP/s are "effective": the direct convolution's FLOP
- * count over the time taken).
- *
- * Environment: TT_BENCH_THREADS="1 2" (thread counts), TT_BENCH_QUICK=1 (640x480 only),
- * TT_POST_TAA_ISA=avx2|generic (force a lower instruction set; generic has no Winograd). */
+ * Environment: TT_BENCH_WEIGHTS="label=FILE.ttw,..." (default: every shipped
+ * plugins/post_taa/post_taa_*.ttw), TT_BENCH_DIRECT=1 (also the direct-convolution rows,
+ * label suffix D; the default rows use the plugin's default, Winograd where it applies),
+ * TT_BENCH_THREADS="1 2", TT_BENCH_QUICK=1 (640x480 only), TT_BENCH_ROUNDS (9),
+ * TT_POST_TAA_ISA=avx2|generic. Besides the table it prints one line per row,
+ *   BENCH label WxH threads wall_ms cpu_ms reject_cpu reproj_cpu network_cpu mix_cpu
+ * which tools/taa/speed.py collects over several runs (medians of per-run medians). */
 #include "tt_test.h"
 
 #include "taa_internal.h"
 
 #include "bench_util.h"
+
+#include <dirent.h>
+
+#include <tunetrace/camera.h>
+
+#define MAX_VARIANTS 16
+#define MAX_ROUNDS 64
 
 /* FLOPs per pixel of one layer (2 K^2 I O + O, one weight set). */
 static double layer_flops(const tt__net_layer *l) {
@@ -70,27 +78,24 @@ static double measure_peak(void) {
 #endif
 }
 
-static double g_peak;  /* GFLOP/s per core */
-static char g_notes[8192];  /* per-part lines printed after the table */
-static char g_summary[4096];  /* direct vs Winograd, side by side */
-
 typedef struct frame_in {
   uint32_t w, h;
-  float *color, *depth, *motion, *out;
+  float *color, *depth, *motion, *zprev, *out;
 } frame_in;
 
-/* A moving synthetic frame: edges and gradients, motion of a slow pan. */
+/* A moving synthetic frame: edges and gradients, motion of a slow pan, prevdepth = depth
+ * (so the rejection test runs in full on every pixel). */
 static frame_in make_frame(uint32_t w, uint32_t h) {
-  frame_in f = {w, h, NULL, NULL, NULL, NULL};
+  frame_in f = {w, h, NULL, NULL, NULL, NULL, NULL};
   size_t n = (size_t)w * h;
   f.color = malloc(n * 12), f.depth = malloc(n * 4), f.motion = malloc(n * 8);
-  f.out = malloc(n * 12);
+  f.zprev = malloc(n * 4), f.out = malloc(n * 12);
   for (size_t i = 0; i < n; i++) {
     uint32_t x = (uint32_t)(i % w), y = (uint32_t)(i / w);
     f.color[3 * i] = (float)(i % 97) / 50.0f;
     f.color[3 * i + 1] = ((x / 7 + y / 5) % 2) ? 1.5f : 0.1f;
     f.color[3 * i + 2] = (float)y / (float)h;
-    f.depth[i] = 1.0f + (float)(i % 13);
+    f.depth[i] = f.zprev[i] = 1.0f + (float)(i % 13);
     f.motion[2 * i] = 0.7f;
     f.motion[2 * i + 1] = -0.3f;
   }
@@ -98,119 +103,170 @@ static frame_in make_frame(uint32_t w, uint32_t h) {
 }
 
 static void free_frame(frame_in *f) {
-  free(f->color), free(f->depth), free(f->motion), free(f->out);
+  free(f->color), free(f->depth), free(f->motion), free(f->zprev), free(f->out);
 }
 
-/* Two Table 5.2 rows of the network, the 5x5 layers (kernel layer; 12-channel 5x5 body
- * layers) by direct convolution (D) and by Winograd F(2x2, 5x5) (W)
- * (tt__net_state.winograd; TT_POST_TAA_WINOGRAD=0 selects direct in the plugin): two states
- * run alternately frame by frame in this process (the order swapped every frame), so both
- * see the same machine load; medians over `reps` frames each. */
-static void bench_net(const char *weights, const char *label, uint32_t w, uint32_t h,
-                      uint32_t threads, int reps) {
+/* One row of the table: a network (with Winograd or direct 5x5 layers) or VCTAA. */
+typedef struct variant {
+  char label[64];
+  int vctaa;
+  int winograd;    /* tt__net_state.winograd of this row */
   tt__net_model m;
-  if (tt__net_load(weights, &m) != TT_OK) {
+  tt__net_state s;
+  tt__vctaa v;
+  double wall[MAX_ROUNDS], cpu[MAX_ROUNDS], rej[MAX_ROUNDS], rep[MAX_ROUNDS],
+      net[MAX_ROUNDS], mix[MAX_ROUNDS], body[MAX_ROUNDS], kern[MAX_ROUNDS];
+} variant;
+
+static variant g_var[MAX_VARIANTS];
+static int g_nvar;
+static double g_peak;
+
+/* Adds a network variant (file, Winograd or not); 0 on failure (reported). */
+static int add_network(const char *label, const char *path, int winograd) {
+  if (g_nvar >= MAX_VARIANTS) return 0;
+  variant *v = &g_var[g_nvar];
+  memset(v, 0, sizeof *v);
+  snprintf(v->label, sizeof v->label, "%s%s", label, winograd ? "" : " D");
+  if (tt__net_load(path, &v->m) != TT_OK) {
     fprintf(stderr, "%s\n", tt_last_error());
     tt_test_failures++;
-    return;
+    return 0;
   }
-  double flops = layer_flops(&m.kernel) + (m.hidden ? layer_flops(&m.hid) : 0);
-  double body_flops = 0;
-  for (uint32_t i = 0; i < m.body_count; i++) body_flops += layer_flops(&m.body[i]);
-  flops += body_flops;
-  frame_in f = make_frame(w, h);
-  tt__net_state st[2];
-  double wall[2][64], cpu[2][64], wr[2][64], wn[2][64], wm[2][64], cr[2][64], cn[2][64],
-      cm[2][64], tb[2][64], tk[2][64];
-  for (int md = 0; md < 2; md++) {
-    CHECK(tt__net_state_init(&st[md], &m, w, h) == TT_OK);
-    st[md].winograd = md;
-  }
-  for (int r = 0; r <= reps; r++) {
-    for (int q = 0; q < 2; q++) {
-      int md = (r + q) % 2;
-      tt__net_state *s = &st[md];
-      double t0 = bench_wall_ms(), c0 = bench_cpu_ms();
-      tt__net_process(s, &m, tt_default_host(), f.color, f.depth, f.motion, (uint32_t)r, f.out);
-      double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
-      if (r == 0) continue;  /* warm-up (first frame has no history) */
-      int k = r - 1;
-      wall[md][k] = t, cpu[md][k] = c;
-      wr[md][k] = s->ms_reproject, wn[md][k] = s->ms_network, wm[md][k] = s->ms_mix;
-      cr[md][k] = s->cpu_reproject, cn[md][k] = s->cpu_network, cm[md][k] = s->cpu_mix;
-      tb[md][k] = s->ms_body, tk[md][k] = s->ms_kernel;
-    }
-  }
-  double px = (double)w * h, mcpu[2], mwall[2], mker[2];
-  for (int md = 0; md < 2; md++) {
-    char lab[64];
-    snprintf(lab, sizeof lab, "%s %s", label, md ? "W" : "D");
-    double mc = bench_median(cpu[md], reps);
-    double gf = flops * px / (bench_median(cn[md], reps) * 1e-3) * 1e-9;
-    printf("| %-12s | %4ux%-4u | %u | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f | %5.1f / %5.1f / "
-           "%5.1f | %5.1f | %3.0f%% |\n", lab, w, h, threads, bench_median(wr[md], reps),
-           bench_median(wn[md], reps), bench_median(wm[md], reps), bench_median(wall[md], reps), mc,
-           bench_median(cr[md], reps), bench_median(cn[md], reps), bench_median(cm[md], reps), gf,
-           g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
-    /* Body layers vs kernel layer: the network CPU time split by the threads' own timers. */
-    double bb = bench_median(tb[md], reps), kk = bench_median(tk[md], reps);
-    double sh = bb + kk > 0 ? bb / (bb + kk) : 0;
-    double cb = bench_median(cn[md], reps) * sh, ck = bench_median(cn[md], reps) * (1 - sh);
-    snprintf(g_notes + strlen(g_notes), sizeof g_notes - strlen(g_notes),
-             "%s %ux%u T=%u %s: body layers %.1f CPU ms (%.1f GFLOP/s%s), kernel layer %.1f "
-             "CPU ms (%.1f GFLOP/s%s); %.0f FLOP/px (direct convolution)\n", label, w, h,
-             threads, md ? "W" : "D", cb, body_flops * px / (cb * 1e-3) * 1e-9,
-             md && m.body_count > 1 && m.body[m.body_count - 1].wino ? " effective" : "", ck,
-             layer_flops(&m.kernel) * px / (ck * 1e-3) * 1e-9, md ? " effective" : "", flops);
-    mcpu[md] = mc, mwall[md] = bench_median(wall[md], reps), mker[md] = ck;
-  }
-  snprintf(g_summary + strlen(g_summary), sizeof g_summary - strlen(g_summary),
-           "| %-10s | %4ux%-4u | %u | %7.1f | %7.1f | %5.2fx | %7.1f | %7.1f | %6.1f | %6.1f |\n",
-           label, w, h, threads, mcpu[0], mcpu[1], mcpu[0] / mcpu[1], mwall[0], mwall[1],
-           mker[0], mker[1]);
-  for (int md = 0; md < 2; md++) tt__net_state_free(&st[md]);
-  tt__net_free(&m);
-  free_frame(&f);
+  v->winograd = winograd;
+  g_nvar++;
+  return 1;
 }
 
-/* VCTAA: one fused pass (history fetch + variance clip + blend). */
-static void bench_vctaa(uint32_t w, uint32_t h, uint32_t threads, int reps) {
-  frame_in f = make_frame(w, h);
-  tt__vctaa v;
-  CHECK(tt__vctaa_init(&v, w, h) == TT_OK);
-  tt__vctaa_params p = {0.1f, 1.0f, 1};
-  double wall[64], cpu[64];
-  for (int r = 0; r <= reps; r++) {
-    double t0 = bench_wall_ms(), c0 = bench_cpu_ms();
-    tt__vctaa_process(&v, tt_default_host(), &p, f.color, f.motion, f.out);
-    double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
-    if (r) wall[r - 1] = t, cpu[r - 1] = c;
+/* The weights to time: TT_BENCH_WEIGHTS, else every shipped file. */
+static void collect_networks(const char *root, int direct) {
+  const char *env = getenv("TT_BENCH_WEIGHTS");
+  char list[4096] = "";
+  if (env && *env) {
+    snprintf(list, sizeof list, "%s", env);
+  } else {
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s/plugins/post_taa", root);
+    DIR *d = opendir(dir);
+    char names[MAX_VARIANTS][256];
+    int n = 0;
+    for (struct dirent *e; d && (e = readdir(d)) && n < MAX_VARIANTS;) {
+      size_t len = strlen(e->d_name);
+      if (len > 4 && !strcmp(e->d_name + len - 4, ".ttw")) snprintf(names[n++], 256, "%s", e->d_name);
+    }
+    if (d) closedir(d);
+    qsort(names, (size_t)n, sizeof names[0], (int (*)(const void *, const void *))strcmp);
+    for (int i = 0; i < n; i++) {
+      char stem[256];
+      snprintf(stem, sizeof stem, "%.*s", (int)(strlen(names[i]) - 4), names[i]);
+      const char *lab = strncmp(stem, "post_taa_", 9) ? stem : stem + 9;
+      snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s=%s/%s", i ? "," : "", lab,
+               dir, names[i]);
+    }
   }
-  printf("| %-12s | %4ux%-4u | %u | %6s | %6s | %6s | %6.1f | %6.1f | %21s | %5s | %4s |\n",
-         "VCTAA", w, h, threads, "-", "-", "-", bench_median(wall, reps), bench_median(cpu, reps), "-", "-",
-         "-");
-  tt__vctaa_free(&v);
+  for (char *tok = strtok(list, ","); tok; tok = strtok(NULL, ",")) {
+    char *eq = strchr(tok, '=');
+    if (!eq) {
+      fprintf(stderr, "TT_BENCH_WEIGHTS: expected label=file.ttw, got \"%s\"\n", tok);
+      tt_test_failures++;
+      continue;
+    }
+    *eq = 0;
+    add_network(tok, eq + 1, 1);
+    if (direct) add_network(tok, eq + 1, 0);
+  }
+}
+
+/* All variants at w x h with `threads` threads, `rounds` interleaved rounds. */
+static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
+  tt_default_host_set_threads(threads);
+  frame_in f = make_frame(w, h);
+  for (int i = 0; i < g_nvar; i++) {
+    variant *v = &g_var[i];
+    if (v->vctaa) {
+      CHECK(tt__vctaa_init(&v->v, w, h) == TT_OK);
+    } else {
+      CHECK(tt__net_state_init(&v->s, &v->m, w, h) == TT_OK);
+      v->s.winograd = v->winograd;
+    }
+  }
+  const tt__vctaa_params vp = {0.1f, 1.0f, 1};
+  for (int r = 0; r <= rounds; r++) {
+    for (int q = 0; q < g_nvar; q++) {
+      variant *v = &g_var[(q + r) % g_nvar];
+      tt__net_frame fr = {.color = f.color, .depth = f.depth, .motion = f.motion,
+                          .prev_depth = f.zprev, .jitter_index = (uint32_t)r};
+      tt_jitter_halton23((uint32_t)r, fr.jitter);
+      double t0 = bench_wall_ms(), c0 = bench_cpu_ms();
+      if (v->vctaa) tt__vctaa_process(&v->v, tt_default_host(), &vp, f.color, f.motion, f.out);
+      else tt__net_process_frame(&v->s, &v->m, tt_default_host(), &fr, f.out);
+      double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
+      if (r == 0) continue;  /* warm-up (the first frame has no history) */
+      int k = r - 1;
+      v->wall[k] = t, v->cpu[k] = c;
+      if (!v->vctaa) {
+        /* the rejection pass is timed in wall ms inside; its CPU share ~ wall x threads */
+        v->rej[k] = v->s.ms_reject;
+        v->rep[k] = v->s.cpu_reproject, v->net[k] = v->s.cpu_network, v->mix[k] = v->s.cpu_mix;
+        v->body[k] = v->s.ms_body, v->kern[k] = v->s.ms_kernel;
+      }
+    }
+  }
+  double px = (double)w * h;
+  for (int i = 0; i < g_nvar; i++) {
+    variant *v = &g_var[i];
+    double wall = bench_median(v->wall, rounds), cpu = bench_median(v->cpu, rounds);
+    if (v->vctaa) {
+      printf("| %-16s | %4ux%-4u | %u | %7.1f | %7.1f | %25s | %6s | %23s |\n", v->label, w, h,
+             threads, wall, cpu, "-", "-", "-");
+      printf("BENCH %s %ux%u %u %.3f %.3f 0 0 0 0\n", v->label, w, h, threads, wall, cpu);
+      tt__vctaa_free(&v->v);
+      continue;
+    }
+    const tt__net_model *m = &v->m;
+    double flops = layer_flops(&m->kernel) + (m->hidden ? layer_flops(&m->hid) : 0), bf = 0;
+    for (uint32_t l = 0; l < m->body_count; l++) bf += layer_flops(&m->body[l]);
+    flops += bf;
+    double rj = bench_median(v->rej, rounds), rp = bench_median(v->rep, rounds);
+    double nt = bench_median(v->net, rounds), mx = bench_median(v->mix, rounds);
+    double bb = bench_median(v->body, rounds), kk = bench_median(v->kern, rounds);
+    double sh = bb + kk > 0 ? bb / (bb + kk) : 0;
+    double gf = flops * px / (nt * 1e-3) * 1e-9;
+    printf("| %-16s | %4ux%-4u | %u | %7.1f | %7.1f | %5.1f / %5.1f / %5.1f / %5.1f | %6.1f | "
+           "%5.1f + %5.1f = %5.0f %3.0f%% |\n", v->label, w, h, threads, wall, cpu, rj, rp, nt,
+           mx, flops, nt * sh, nt * (1 - sh), gf, g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
+    printf("BENCH %s %ux%u %u %.3f %.3f %.3f %.3f %.3f %.3f\n", v->label, w, h, threads, wall,
+           cpu, rj, rp, nt, mx);
+    tt__net_state_free(&v->s);
+  }
   free_frame(&f);
 }
 
 int main(void) {
   const char *root = getenv("TT_SOURCE_ROOT");
-  const char *tl = getenv("TT_BENCH_THREADS");
+  if (!root) root = ".";
+  const char *tl = getenv("TT_BENCH_THREADS"), *rs = getenv("TT_BENCH_ROUNDS");
   int quick = getenv("TT_BENCH_QUICK") != NULL;
-  char w12[1024], w6[1024];
-  snprintf(w12, sizeof w12, "%s/plugins/post_taa/post_taa_c12.ttw", root ? root : ".");
-  snprintf(w6, sizeof w6, "%s/plugins/post_taa/post_taa_c6.ttw", root ? root : ".");
+  const char *dr = getenv("TT_BENCH_DIRECT");
+  int rounds = rs ? atoi(rs) : 9;
+  if (rounds < 1) rounds = 1;
+  if (rounds > MAX_ROUNDS) rounds = MAX_ROUNDS;
+  collect_networks(root, dr && dr[0] == '1');
+  if (g_nvar < MAX_VARIANTS) {
+    memset(&g_var[g_nvar], 0, sizeof g_var[0]);
+    snprintf(g_var[g_nvar].label, sizeof g_var[0].label, "VCTAA");
+    g_var[g_nvar++].vctaa = 1;
+  }
   g_peak = measure_peak();
   printf("FLOP peak (measured, AVX2 FMA loop): %.1f GFLOP/s per core = 2 FMA units x 8 floats "
          "x 2 flops x %.2f GHz effective clock\n", g_peak, g_peak / 32.0);
-  printf("network instruction set: %s\n", tt__net_fast_isa());
-  printf("medians of >= 5 frames; wall ms split reprojection / network / mix; CPU ms = process "
-         "CPU time (all threads); GFLOP/s = network FLOPs per network CPU-second, FLOPs of the "
-         "direct convolutions for both D (direct) and W (Winograd F(2x2, 5x5) 5x5 layers: "
-         "'effective' GFLOP/s, it does fewer multiplies); D and W frames alternate in one "
-         "process\n\n");
-  printf("| method       | size      | T | reproj | netw.  |  mix   | total  | CPU    | CPU reproj/netw/mix   | GF/s  | peak |\n");
-  printf("|--------------|-----------|---|--------|--------|--------|--------|--------|-----------------------|-------|------|\n");
+  printf("network instruction set: %s; %d variants interleaved, medians of %d rounds after a "
+         "warm-up round\n", tt__net_fast_isa(), g_nvar, rounds);
+  printf("wall / CPU = ms per frame (CPU: process CPU time, all threads); stages: rejection "
+         "masks (wall) / reprojection / network / mix (CPU ms); FLOP/px of the direct "
+         "convolutions; body + kernel layer CPU ms = effective GFLOP/s and %% of the peak\n\n");
+  printf("| variant          | size      | T | wall    | CPU     | rej / reproj / net / mix  | FLOP/px | body + kernel = GF/s peak |\n");
+  printf("|------------------|-----------|---|---------|---------|---------------------------|--------|---------------------------|\n");
   unsigned th[4] = {1, 2, 0, 0};
   int nth = 2;
   if (tl) {
@@ -219,21 +275,9 @@ int main(void) {
   }
   for (int sz = 0; sz < (quick ? 1 : 2); sz++) {
     uint32_t w = sz ? 1920 : 640, h = sz ? 1080 : 480;
-    int reps = sz ? 5 : 7;
-    for (int t = 0; t < nth; t++) {
-      tt_default_host_set_threads(th[t]);
-      bench_net(w12, "network-12", w, h, th[t], reps);
-      bench_net(w6, "network-6", w, h, th[t], reps);
-      bench_vctaa(w, h, th[t], reps);
-    }
+    for (int t = 0; t < nth; t++) bench_size(w, h, th[t], sz ? (rounds + 1) / 2 : rounds);
   }
-  printf("\n%s", g_notes);
-  printf("\ndirect (D) vs Winograd (W) 5x5 layers, same process, alternating frames "
-         "(medians; CPU = process CPU ms per frame, wall = ms per frame; kern = kernel layer "
-         "CPU ms):\n\n");
-  printf("| network    | size      | T | CPU D   | CPU W   | D/W    | wall D  | wall W  | "
-         "kern D | kern W |\n");
-  printf("|------------|-----------|---|---------|---------|--------|---------|---------|"
-         "--------|--------|\n%s", g_summary);
+  for (int i = 0; i < g_nvar; i++)
+    if (!g_var[i].vctaa) tt__net_free(&g_var[i].m);
   return tt_test_finish("taa_bench");
 }

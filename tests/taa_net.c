@@ -136,6 +136,18 @@ static void check_fast_vs_reference(const shape *s, const char *label, int wino)
     tt_jitter_halton23(fr.jitter_index, fr.jitter);
     tt__net_process_frame(&fast, &m, tt_default_host(), &fr, o1);
     tt__net_process_frame(&ref, &m, tt_default_host(), &fr, o2);
+    if (m.flags & TT__NET_FLAG_REJECT) {
+      /* the fast path's inline (vectorised) tests == the reference path's masks, bit for bit */
+      uint32_t differ = 0, rejected = 0;
+      /* (without the reset flag the fast path does not compute the RESET bit) */
+      uint8_t bits = (m.flags & TT__NET_FLAG_RESET) ? 0xff : (uint8_t)~TT__TAA_REJECT_RESET;
+      for (size_t i = 0; i < n; i++) {
+        differ += (fast.reject[i] & bits) != (ref.reject[i] & bits);
+        rejected += (ref.reject[i] & TT__TAA_REJECT_RAW) != 0;
+      }
+      CHECK_MSG(differ == 0, "%s frame %u: rejection masks differ in %u pixels", label, f, differ);
+      if (f == 2) printf("%s: rejection masks equal (%u of %zu rejected)\n", label, rejected, n);
+    }
     for (size_t i = 0; i < n * 3; i++) worst = fmax(worst, fabs(o1[i] - o2[i]) / (1 + fabs(o2[i])));
     for (size_t i = 0; i < n * fast.state_ch; i++)
       worst_state = fmax(worst_state, fabs(fast.state[i] - ref.state[i]));
@@ -229,6 +241,7 @@ static void test_winograd_vs_direct(void) {
 static void run_threads(const tt__net_model *m, uint32_t w, uint32_t h, uint32_t threads,
                         uint32_t band_rows, uint32_t tile_cols, int wino, float **out,
                         float **state) {
+  float *zprev = malloc((size_t)w * h * 4);
   tt_default_host_set_threads(threads);
   tt__net_state s;
   CHECK(tt__net_state_init(&s, m, w, h) == TT_OK);
@@ -241,19 +254,23 @@ static void run_threads(const tt__net_model *m, uint32_t w, uint32_t h, uint32_t
   rng_state = 777;
   for (uint32_t f = 0; f < 4; f++) {
     random_frame(w, h, color, depth, motion);
-    tt__net_process(&s, m, tt_default_host(), color, depth, motion, f, *out + f * n * 3);
+    for (size_t i = 0; i < n; i++) zprev[i] = 5.0f + 4.0f * rnd();
+    tt__net_frame fr = {.color = color, .depth = depth, .motion = motion, .prev_depth = zprev,
+                        .jitter_index = f};
+    tt_jitter_halton23(f, fr.jitter);
+    tt__net_process_frame(&s, m, tt_default_host(), &fr, *out + f * n * 3);
   }
-  *state = malloc(n * s.state_ch * 4);
+  *state = malloc(n * 8 * 4);
+  memset(*state, 0, n * 8 * 4);
   memcpy(*state, s.state, n * s.state_ch * 4);
-  free(color), free(depth), free(motion);
+  free(color), free(depth), free(motion), free(zprev);
   tt__net_state_free(&s);
 }
 
 /* 1 vs 2 vs 3 threads and several band splits: bit-identical (each pixel is computed by the
  * same operations whatever band it falls in; halo rows are recomputed identically). */
-static void test_thread_invariance(void) {
-  shape thesis12 = {12, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1, 0};
-  buf b = write_model(&thesis12);
+static void thread_invariance(const shape *sh, const char *label) {
+  buf b = write_model(sh);
   tt__net_model m;
   CHECK_MSG(tt__net_parse(b.p, b.n, "threads", &m) == TT_OK, "%s", tt_last_error());
   free(b.p);
@@ -271,7 +288,7 @@ static void test_thread_invariance(void) {
       run_threads(&m, w, h, cases[k].threads, cases[k].rows, cases[k].cols, wino, &o2, &s2);
       int same_out = memcmp(o1, o2, n * 3 * 4 * 4) == 0;
       int same_state = memcmp(s1, s2, n * 8 * 4) == 0;
-      printf("%s: threads %u, band rows %u, tile columns %u vs 1 thread: %s\n",
+      printf("%s %s: threads %u, band rows %u, tile columns %u vs 1 thread: %s\n", label,
              wino ? "winograd" : "direct", cases[k].threads, cases[k].rows, cases[k].cols,
              same_out && same_state ? "bit-identical" : "DIFFERENT");
       CHECK_MSG(same_out && same_state, "%s: threads %u band rows %u tile columns %u: results "
@@ -283,6 +300,13 @@ static void test_thread_invariance(void) {
   }
   tt__net_free(&m);
   tt_default_host_set_threads(2);
+}
+
+static void test_thread_invariance(void) {
+  shape thesis12 = {12, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1, 0};
+  shape reset6 = {6, 0, 3, {3, 3, 5}, {1, 8, 8}, 8, 1, TT__NET_FLAG_REJECT | TT__NET_FLAG_RESET};
+  thread_invariance(&thesis12, "thesis-12");
+  thread_invariance(&reset6, "hidden-0-rejection-6");
 }
 
 /* Reads a whole file. */
@@ -496,7 +520,7 @@ static void test_rejection_disocclusion(void) {
       motion0[2 * i] = motion0[2 * i + 1] = 0.0f;
     }
   /* the mask alone */
-  static uint8_t mask[w * h], tmp[2 * w * h];
+  static uint8_t mask[w * h], tmp[w * h];
   const float j0[2] = {0, 0};
   tt__taa_reject_masks(tt_default_host(), w, h, depth0, j0, zprev1, motion1, j0, mask, tmp);
   uint32_t wrong_raw = 0, wrong_reset = 0, marked = 0;
@@ -522,7 +546,9 @@ static void test_rejection_disocclusion(void) {
   uint32_t off_wrong = 0;
   for (int y = 0; y < h; y++)
     for (int x = 0; x < w; x++)
-      off_wrong += (mask[(size_t)y * w + x] == (TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET)) != (x < 6);
+      off_wrong += ((mask[(size_t)y * w + x] & (TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET)) ==
+                    (TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET)) != (x < 6) ||
+                   (mask[(size_t)y * w + x] & TT__TAA_REJECT_FAR);
   CHECK_MSG(off_wrong == 0, "off-screen test wrong in %u pixels", off_wrong);
   for (size_t i = 0; i < n; i++) motion0[2 * i] = 0.0f;
 

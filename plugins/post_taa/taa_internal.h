@@ -93,16 +93,52 @@ void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params
 #define TT__TAA_REJECT_RAW 1u    /* disoccluded or off-screen: the network's rejection input */
 #define TT__TAA_REJECT_RESET 2u  /* off-screen, or disoccluded in a region holding a 3 x 3
                                   * square: the history is replaced by the new frame */
+#define TT__TAA_REJECT_FAR 4u    /* disoccluded (before the opening) */
+#define TT__TAA_REJECT_OFF 8u    /* off-screen */
 
-/* Per-pixel rejection of the reprojected history (README.md, "History rejection"): from
- * the previous frame's depth `dprev` and jitter, this frame's prevdepth AOV `zprev`, motion
- * and jitter. `dprev` or `zprev` NULL: only the off-screen test. `motion` NULL: zero
- * motion. Writes TT__TAA_REJECT_* bits into `mask` (width x height); `tmp` holds 2 *
- * width * height bytes of scratch. Rows run on the host's pool; deterministic. */
+/* The per-pixel tests of pixel (x, y) (README.md, "History rejection"): RAW | OFF when the
+ * history position q = (x, y) + 0.5 + jitter + motion lies outside the previous frame
+ * (also for NaN motion), RAW | FAR when the prevdepth z' exceeds the largest previous depth
+ * at the 2 x 2 samples around q by more than the tolerance (sky, depth <= 0 or NaN, counts
+ * as infinitely far), else 0. `dprev` NULL: only the off-screen test. Shared by every path
+ * so that they agree bit for bit. */
+static inline __attribute__((always_inline)) uint8_t tt__taa_reject_test(const float *dprev, uint32_t w, uint32_t h,
+                                          float pjx, float pjy, float zp, uint32_t x,
+                                          uint32_t y, float mx, float my, float jx, float jy) {
+  float qx = ((float)x + 0.5f + jx) + mx, qy = ((float)y + 0.5f + jy) + my;
+  if (!(qx >= 0.0f && qx < (float)w && qy >= 0.0f && qy < (float)h))
+    return TT__TAA_REJECT_RAW | TT__TAA_REJECT_OFF;
+  if (!dprev) return 0;
+  float ux = (qx - 0.5f) - pjx, uy = (qy - 0.5f) - pjy;
+  int ix = (int)__builtin_floorf(ux), iy = (int)__builtin_floorf(uy);
+  int x0 = ix < 0 ? 0 : ix >= (int)w ? (int)w - 1 : ix;
+  int x1 = ix + 1 < 0 ? 0 : ix + 1 >= (int)w ? (int)w - 1 : ix + 1;
+  int y0 = iy < 0 ? 0 : iy >= (int)h ? (int)h - 1 : iy;
+  int y1 = iy + 1 < 0 ? 0 : iy + 1 >= (int)h ? (int)h - 1 : iy + 1;
+  const float *r0 = dprev + (size_t)y0 * w, *r1 = dprev + (size_t)y1 * w;
+  float d[4] = {r0[x0], r0[x1], r1[x0], r1[x1]};
+  float hi = -__builtin_inff();
+  int sky = 0;
+  for (int k = 0; k < 4; k++) {
+    if (d[k] > 0.0f) hi = d[k] > hi ? d[k] : hi;
+    else sky = 1;
+  }
+  if (!sky && (!(zp > 0.0f) || zp > hi * (1.0f + TT__TAA_REJECT_TOL)))
+    return TT__TAA_REJECT_RAW | TT__TAA_REJECT_FAR;
+  return 0;
+}
+
+/* Per-pixel rejection of the reprojected history: the tests above into `mask` (width x
+ * height; `dprev` or `zprev` NULL: only the off-screen test; `motion` NULL: zero motion),
+ * then tt__taa_reject_open. `tmp`: width * height bytes of scratch. Rows run on the host's
+ * pool; deterministic. */
 void tt__taa_reject_masks(const tt_host *host, uint32_t width, uint32_t height,
                           const float *dprev, const float jitter_prev[2], const float *zprev,
                           const float *motion, const float jitter[2], uint8_t *mask,
                           uint8_t *tmp);
+/* Adds TT__TAA_REJECT_RESET = OFF, or FAR opened by 3 x 3 (erosion then dilation, edge
+ * pixels replicated), to a plane of test bits. `tmp`: width * height bytes. */
+void tt__taa_reject_open(uint32_t width, uint32_t height, uint8_t *mask, uint8_t *tmp);
 
 /* ---- the kernel-prediction network (taa_net.c) ---- */
 
@@ -192,7 +228,7 @@ typedef struct tt__net_state {
   float *prev_depth;
   int have_prev_depth;
   float prev_jitter[2];
-  uint8_t *reject;          /* 3 * width * height bytes: the mask, then scratch */
+  uint8_t *reject;          /* 2 * width * height bytes: the mask, then scratch */
   double ms_reject;         /* wall ms of the last frame's rejection pass */
 } tt__net_state;
 

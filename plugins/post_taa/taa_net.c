@@ -233,12 +233,14 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
   uint32_t ch = m->in_channels > m->width ? m->in_channels : m->width;
   s->plane_stride = ch;
   size_t px = (size_t)width * height;
-  s->state = net_alloc(px * s->state_ch);
-  s->next_state = net_alloc(px * s->state_ch);
+  /* + 4 floats: the fast path reads a state pixel as one 4-float vector (3 channels + the
+   * next pixel's first, unused), also for the last pixel */
+  s->state = net_alloc(px * s->state_ch + 4);
+  s->next_state = net_alloc(px * s->state_ch + 4);
   int rej_ok = 1;
   if (m->flags & TT__NET_FLAG_REJECT) {
     s->prev_depth = net_alloc(px);
-    s->reject = malloc(3 * px);
+    s->reject = malloc(2 * px);
     rej_ok = s->prev_depth && s->reject;
   }
   if (!s->state || !s->next_state || !rej_ok || tt__net_fast_init(s, m) != TT_OK) {
@@ -435,12 +437,13 @@ void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *ho
 
 void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                            const tt__net_frame *f, float *out_rgb) {
-  tt__net_reject_begin(s, m, host, f);
   if (!s->reference) {
+    /* the fast path runs the rejection tests inside its reprojection pass */
     tt__net_fast_process(s, m, host, f, out_rgb);
     tt__net_reject_end(s, m, f);
     return;
   }
+  tt__net_reject_begin(s, m, host, f);
   const float *color = f->color, *depth = f->depth, *motion = f->motion;
   uint32_t jitter_index = f->jitter_index;
   if (net_reference_planes(s) != TT_OK) {

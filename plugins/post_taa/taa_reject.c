@@ -15,109 +15,79 @@
  *   RESET = off-screen, or disoccluded in a region that holds a 3 x 3 square (3 x 3 opening,
  *           edge pixels replicated): one- or two-pixel flags on aliasing thin geometry
  *           keep their history
- * tools/taa/rejection.py computes the same masks with the same float operations (training
- * data, golden fixture). */
-#include <math.h>
+ * The per-pixel test is tt__taa_reject_test (taa_internal.h), which the fast path also
+ * runs inside its reprojection pass; tools/taa/rejection.py computes the same masks with
+ * the same float operations (training data, golden fixture). */
 #include <string.h>
 
 #include "taa_internal.h"
-
-#define FAR 4u    /* scratch bit: disoccluded (before the opening) */
-#define OFF 8u    /* scratch bit: off-screen */
 
 typedef struct reject_job {
   uint32_t w, h;
   const float *dprev, *zprev, *motion;
   float jx, jy, pjx, pjy;
-  uint8_t *mask, *a, *b;  /* output; scratch: FAR | OFF bits, eroded FAR */
+  uint8_t *mask;
 } reject_job;
 
-/* Pass 1: the per-pixel tests into a (FAR, OFF bits). */
+/* The per-pixel tests of rows [y0, y1). */
 static void reject_test_rows(void *ctx, uint32_t y0, uint32_t y1) {
   const reject_job *j = ctx;
-  const uint32_t w = j->w, h = j->h;
   for (uint32_t y = y0; y < y1; y++)
-    for (uint32_t x = 0; x < w; x++) {
-      size_t i = (size_t)y * w + x;
+    for (uint32_t x = 0; x < j->w; x++) {
+      size_t i = (size_t)y * j->w + x;
       float mx = j->motion ? j->motion[2 * i] : 0.0f, my = j->motion ? j->motion[2 * i + 1] : 0.0f;
-      float qx = ((float)x + 0.5f + j->jx) + mx, qy = ((float)y + 0.5f + j->jy) + my;
-      if (!(qx >= 0.0f && qx < (float)w && qy >= 0.0f && qy < (float)h)) {
-        j->a[i] = OFF;  /* also NaN motion */
-        continue;
-      }
-      uint8_t bits = 0;
-      if (j->dprev && j->zprev) {
-        int ix = (int)floorf((qx - 0.5f) - j->pjx), iy = (int)floorf((qy - 0.5f) - j->pjy);
-        float hi = -INFINITY;
-        int sky = 0;
-        for (int dy = 0; dy < 2; dy++)
-          for (int dx = 0; dx < 2; dx++) {
-            int tx = ix + dx, ty = iy + dy;
-            tx = tx < 0 ? 0 : tx >= (int)w ? (int)w - 1 : tx;
-            ty = ty < 0 ? 0 : ty >= (int)h ? (int)h - 1 : ty;
-            float d = j->dprev[(size_t)ty * w + (size_t)tx];
-            if (d > 0.0f) hi = d > hi ? d : hi;
-            else sky = 1;  /* sky (or a non-finite depth): farther than anything */
-          }
-        float z = j->zprev[i];
-        if (!sky && (!(z > 0.0f) || z > hi * (1.0f + TT__TAA_REJECT_TOL))) bits = FAR;
-      }
-      j->a[i] = bits;
+      j->mask[i] = tt__taa_reject_test(j->zprev ? j->dprev : NULL, j->w, j->h, j->pjx, j->pjy,
+                                       j->zprev ? j->zprev[i] : 0.0f, x, y, mx, my, j->jx, j->jy);
     }
 }
 
-/* Pass 2: 3 x 3 erosion of FAR into b (edge pixels replicated). */
-static void reject_erode_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const reject_job *j = ctx;
-  const int w = (int)j->w, h = (int)j->h;
-  for (int y = (int)y0; y < (int)y1; y++)
-    for (int x = 0; x < w; x++) {
-      uint8_t all = 1;
-      for (int dy = -1; dy <= 1 && all; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-          int tx = x + dx < 0 ? 0 : x + dx >= w ? w - 1 : x + dx;
-          int ty = y + dy < 0 ? 0 : y + dy >= h ? h - 1 : y + dy;
-          if (!(j->a[(size_t)ty * w + tx] & FAR)) {
-            all = 0;
-            break;
-          }
-        }
-      j->b[(size_t)y * w + x] = all;
+void tt__taa_reject_open(uint32_t width, uint32_t height, uint8_t *mask, uint8_t *tmp) {
+  const size_t w = width, h = height;
+  /* Separable 3 x 3 erosion of FAR into tmp (bit 0), edge pixels replicated: rows, then
+   * columns in place; then the dilation the same way into RESET. Byte loops (vectorised by
+   * the compiler); a few hundred microseconds at 640 x 480. */
+  for (size_t y = 0; y < h; y++) {
+    const uint8_t *m = mask + y * w;
+    uint8_t *t = tmp + y * w;
+    for (size_t x = 0; x < w; x++) {
+      size_t a = x ? x - 1 : 0, b = x + 1 < w ? x + 1 : w - 1;
+      t[x] = (uint8_t)((m[a] & m[x] & m[b] & TT__TAA_REJECT_FAR) ? 1 : 0);
     }
-}
-
-/* Pass 3: dilation of b, and the output bits. */
-static void reject_out_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const reject_job *j = ctx;
-  const int w = (int)j->w, h = (int)j->h;
-  for (int y = (int)y0; y < (int)y1; y++)
-    for (int x = 0; x < w; x++) {
-      size_t i = (size_t)y * w + x;
-      uint8_t any = 0;
-      for (int dy = -1; dy <= 1 && !any; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-          int tx = x + dx < 0 ? 0 : x + dx >= w ? w - 1 : x + dx;
-          int ty = y + dy < 0 ? 0 : y + dy >= h ? h - 1 : y + dy;
-          if (j->b[(size_t)ty * w + tx]) {
-            any = 1;
-            break;
-          }
+  }
+  for (int pass = 0; pass < 3; pass++) {
+    /* pass 0: erosion down the columns (tmp -> bit 1 of tmp); pass 1: dilation along the
+     * rows (bit 1 -> bit 2); pass 2: dilation down the columns (bit 2 -> RESET) */
+    for (size_t y = 0; y < h; y++) {
+      size_t ya = y ? y - 1 : 0, yb = y + 1 < h ? y + 1 : h - 1;
+      uint8_t *t = tmp + y * w;
+      if (pass == 0) {
+        const uint8_t *ta = tmp + ya * w, *tb = tmp + yb * w;
+        for (size_t x = 0; x < w; x++) t[x] |= (uint8_t)((ta[x] & t[x] & tb[x] & 1) << 1);
+      } else if (pass == 1) {
+        for (size_t x = 0; x < w; x++) {
+          size_t a = x ? x - 1 : 0, b = x + 1 < w ? x + 1 : w - 1;
+          t[x] |= (uint8_t)(((t[a] | t[x] | t[b]) & 2) << 1);
         }
-      uint8_t a = j->a[i];
-      j->mask[i] = (uint8_t)(((a & (FAR | OFF)) ? TT__TAA_REJECT_RAW : 0u) |
-                             ((any || (a & OFF)) ? TT__TAA_REJECT_RESET : 0u));
+      } else {
+        const uint8_t *ta = tmp + ya * w, *tb = tmp + yb * w;
+        uint8_t *m = mask + y * w;
+        for (size_t x = 0; x < w; x++) {
+          int d = ((ta[x] | t[x] | tb[x]) & 4) != 0;
+          m[x] = (uint8_t)(m[x] | ((d || (m[x] & TT__TAA_REJECT_OFF)) ? TT__TAA_REJECT_RESET : 0u));
+        }
+      }
     }
+  }
 }
 
 void tt__taa_reject_masks(const tt_host *host, uint32_t width, uint32_t height,
                           const float *dprev, const float jitter_prev[2], const float *zprev,
                           const float *motion, const float jitter[2], uint8_t *mask,
                           uint8_t *tmp) {
-  size_t n = (size_t)width * height;
   reject_job j = {.w = width, .h = height, .dprev = dprev, .zprev = zprev, .motion = motion,
                   .jx = jitter[0], .jy = jitter[1], .pjx = jitter_prev[0],
-                  .pjy = jitter_prev[1], .mask = mask, .a = tmp, .b = tmp + n};
+                  .pjy = jitter_prev[1], .mask = mask};
+  if (!dprev) j.zprev = NULL;
   tt__taa_parallel_rows(host, height, reject_test_rows, &j);
-  tt__taa_parallel_rows(host, height, reject_erode_rows, &j);
-  tt__taa_parallel_rows(host, height, reject_out_rows, &j);
+  tt__taa_reject_open(width, height, mask, tmp);
 }
