@@ -12,9 +12,10 @@
  * are "effective" (direct-convolution FLOPs over the time taken). The FLOP peak is measured:
  * a loop of independent 8-wide FMAs gives this core's FLOP/s per CPU-second.
  *
- * Environment: TT_BENCH_WEIGHTS="label=FILE.ttw,..." (default: every shipped
- * plugins/post_taa/post_taa_*.ttw), TT_BENCH_DIRECT=1 (also the direct-convolution rows,
- * label suffix D; the default rows use the plugin's default, Winograd where it applies),
+ * Environment: TT_BENCH_WEIGHTS="label=FILE.ttw[@LEVEL],..." (default: every shipped
+ * plugins/post_taa/post_taa_*.ttw; @0 direct convolutions, @1 Winograd F(2x2, 5x5), @2
+ * the default: F(4x4, 5x5) kernel layer), TT_BENCH_DIRECT=1 (also the direct-convolution
+ * rows of every file, label suffix D; the other rows use the plugin's default),
  * TT_BENCH_THREADS="1 2", TT_BENCH_QUICK=1 (640x480 only), TT_BENCH_ROUNDS (9),
  * TT_POST_TAA_ISA=avx2|generic. Besides the table it prints one line per row,
  *   BENCH label WxH threads wall_ms cpu_ms reject_cpu reproj_cpu network_cpu mix_cpu
@@ -110,7 +111,7 @@ static void free_frame(frame_in *f) {
 typedef struct variant {
   char label[64];
   int vctaa;
-  int winograd;    /* tt__net_state.winograd of this row */
+  int winograd;    /* tt__net_state.winograd of this row (-1: the plugin's default) */
   tt__net_model m;
   tt__net_state s;
   tt__vctaa v;
@@ -122,12 +123,14 @@ static variant g_var[MAX_VARIANTS];
 static int g_nvar;
 static double g_peak;
 
-/* Adds a network variant (file, Winograd or not); 0 on failure (reported). */
+/* Adds a network variant (file, 5x5-layer algorithm: -1 default, 0 direct, 1 Winograd
+ * F(2x2, 5x5), 2 F(4x4, 5x5) kernel layer); 0 on failure (reported). */
 static int add_network(const char *label, const char *path, int winograd) {
   if (g_nvar >= MAX_VARIANTS) return 0;
   variant *v = &g_var[g_nvar];
   memset(v, 0, sizeof *v);
-  snprintf(v->label, sizeof v->label, "%s%s", label, winograd ? "" : " D");
+  static const char *const suffix[] = {"", " D", " W2", " W4"};
+  snprintf(v->label, sizeof v->label, "%s%s", label, suffix[winograd + 1]);
   if (tt__net_load(path, &v->m) != TT_OK) {
     fprintf(stderr, "%s\n", tt_last_error());
     tt_test_failures++;
@@ -172,7 +175,13 @@ static void collect_networks(const char *root, int direct) {
       continue;
     }
     *eq = 0;
-    add_network(tok, eq + 1, 1);
+    char *at = strchr(eq + 1, '@');  /* label=file.ttw@LEVEL: that algorithm only */
+    if (at) {
+      *at = 0;
+      add_network(tok, eq + 1, atoi(at + 1) < 0 ? 0 : atoi(at + 1) > 2 ? 2 : atoi(at + 1));
+      continue;
+    }
+    add_network(tok, eq + 1, -1);
     if (direct) add_network(tok, eq + 1, 0);
   }
 }
@@ -187,7 +196,7 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
       CHECK(tt__vctaa_init(&v->v, w, h) == TT_OK);
     } else {
       CHECK(tt__net_state_init(&v->s, &v->m, w, h) == TT_OK);
-      v->s.winograd = v->winograd;
+      if (v->winograd >= 0) v->s.winograd = v->winograd;
     }
   }
   const tt__vctaa_params vp = {0.1f, 1.0f, 1};

@@ -17,6 +17,11 @@
 
 #include <tunetrace/camera.h>
 
+/* The fast path's 5x5-layer algorithms (tt__net_state.winograd). */
+static const char *wino_name(int wino) {
+  return wino == 2 ? "winograd-4x4" : wino == 1 ? "winograd-2x2" : "direct";
+}
+
 /* ---- a tiny weights writer (the format of README.md) ---- */
 
 typedef struct buf {
@@ -153,7 +158,7 @@ static void check_fast_vs_reference(const shape *s, const char *label, int wino)
       worst_state = fmax(worst_state, fabs(fast.state[i] - ref.state[i]));
   }
   printf("%s (%s, %s): fast vs reference: state %.2e, output %.2e\n", label,
-         wino ? "winograd" : "direct", tt__net_fast_isa(), worst_state, worst);
+         wino_name(wino), tt__net_fast_isa(), worst_state, worst);
   CHECK_MSG(worst_state < 1e-4, "%s: state differs by %g", label, worst_state);
   CHECK_MSG(worst < 1e-3, "%s: output differs by %g", label, worst);
   free(color), free(depth), free(motion), free(o1), free(o2), free(zprev);
@@ -177,7 +182,7 @@ static void test_fast_vs_reference(void) {
   char *saved = isa0 ? strdup(isa0) : NULL;
   for (int pass = 0; pass < 2; pass++) {
     if (pass) setenv("TT_POST_TAA_ISA", "avx2", 1);
-    for (int wino = 1; wino >= 0; wino--) {
+    for (int wino = 2; wino >= 0; wino--) {
       check_fast_vs_reference(&thesis12, "thesis-12", wino);
       check_fast_vs_reference(&thesis6, "thesis-6", wino);
       check_fast_vs_reference(&no_hidden, "hidden-0", wino);
@@ -196,11 +201,11 @@ static void test_fast_vs_reference(void) {
 /* Winograd vs direct 5x5 layers on frames with odd sizes (tiles cut by the image edge on
  * the right and bottom), several column chunks, and tiny frames (one row or column): both
  * close to each other. */
-static void winograd_vs_direct(const tt__net_model *mp, uint32_t w, uint32_t h) {
+static void winograd_vs_direct(const tt__net_model *mp, uint32_t w, uint32_t h, int level) {
   tt__net_state sw, sd;
   CHECK(tt__net_state_init(&sw, mp, w, h) == TT_OK);
   CHECK(tt__net_state_init(&sd, mp, w, h) == TT_OK);
-  sw.winograd = 1;
+  sw.winograd = level;
   sd.winograd = 0;
   size_t n = (size_t)w * h;
   float *color = malloc(n * 3 * 4), *depth = malloc(n * 4), *motion = malloc(n * 2 * 4);
@@ -214,7 +219,7 @@ static void winograd_vs_direct(const tt__net_model *mp, uint32_t w, uint32_t h) 
     for (size_t i = 0; i < n * sw.state_ch; i++)
       worst_state = fmax(worst_state, fabs(sw.state[i] - sd.state[i]));
   }
-  printf("winograd vs direct (%s, %ux%u, 4 frames): state %.2e, output %.2e\n",
+  printf("%s vs direct (%s, %ux%u, 4 frames): state %.2e, output %.2e\n", wino_name(level),
          tt__net_fast_isa(), w, h, worst_state, worst);
   CHECK_MSG(worst_state < 1e-4, "winograd vs direct %ux%u: state differs by %g", w, h,
             worst_state);
@@ -232,7 +237,7 @@ static void test_winograd_vs_direct(void) {
   free(b.p);
   const uint32_t sizes[][2] = {{157, 45}, {1, 1}, {3, 2}, {17, 1}, {2, 5}, {33, 3}};
   for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++)
-    winograd_vs_direct(&m, sizes[k][0], sizes[k][1]);
+    for (int level = 2; level >= 1; level--) winograd_vs_direct(&m, sizes[k][0], sizes[k][1], level);
   tt__net_free(&m);
 }
 
@@ -277,7 +282,7 @@ static void thread_invariance(const shape *sh, const char *label) {
   const uint32_t w = 201, h = 67;  /* not multiples of 8 or 16: column tails, uneven bands */
   size_t n = (size_t)w * h;
   /* Winograd: odd band heights start bands on odd rows (half a tile pair). */
-  for (int wino = 1; wino >= 0; wino--) {
+  for (int wino = 2; wino >= 0; wino--) {
     float *o1, *s1;
     run_threads(&m, w, h, 1, 0, 0, wino, &o1, &s1);
     struct { uint32_t threads, rows, cols; } cases[] = {
@@ -289,10 +294,10 @@ static void thread_invariance(const shape *sh, const char *label) {
       int same_out = memcmp(o1, o2, n * 3 * 4 * 4) == 0;
       int same_state = memcmp(s1, s2, n * 8 * 4) == 0;
       printf("%s %s: threads %u, band rows %u, tile columns %u vs 1 thread: %s\n", label,
-             wino ? "winograd" : "direct", cases[k].threads, cases[k].rows, cases[k].cols,
+             wino_name(wino), cases[k].threads, cases[k].rows, cases[k].cols,
              same_out && same_state ? "bit-identical" : "DIFFERENT");
       CHECK_MSG(same_out && same_state, "%s: threads %u band rows %u tile columns %u: results "
-                "differ from 1 thread", wino ? "winograd" : "direct", cases[k].threads,
+                "differ from 1 thread", wino_name(wino), cases[k].threads,
                 cases[k].rows, cases[k].cols);
       free(o2), free(s2);
     }
@@ -351,7 +356,7 @@ static void test_golden(const char *root, const char *name) {
   CHECK(sc == 3 + m.hidden);
   size_t n = (size_t)w * hh;
   const unsigned char *p = g + 28;
-  for (int wino = 1; wino >= 0; wino--) {
+  for (int wino = 2; wino >= 0; wino--) {
     p = g + 28;
     tt__net_state s;
     CHECK(tt__net_state_init(&s, &m, w, hh) == TT_OK);
@@ -379,7 +384,7 @@ static void test_golden(const char *root, const char *name) {
     }
     CHECK((size_t)(p - g) == gn);
     printf("golden %s (%s, %s): %u frames %ux%u: state %.2e (tol 1e-4), linear output rel "
-           "%.2e\n", name, wino ? "winograd" : "direct", tt__net_fast_isa(), frames, w, hh,
+           "%.2e\n", name, wino_name(wino), tt__net_fast_isa(), frames, w, hh,
            worst_state, worst_out);
     CHECK(worst_state < 1e-4);
     CHECK(worst_out < 1e-3);

@@ -169,6 +169,9 @@ typedef struct tt__net_layer {
    * [block][36 positions][in][oblk] (zero for padded outputs); NULL for other layers. They
    * live in the tail of the `wq` allocation (freed with it). */
   float *wino;
+  /* Winograd F(4x4, 5x5) weights of the kernel layer (softmax, 5x5, blocks of 10): per set
+   * [block][64 positions][in][oblk], also in the tail of `wq`; NULL for other layers. */
+  float *wino4;
 } tt__net_layer;
 
 /* A loaded model: body layers (ReLU), then the kernel layer (softmax over 2 * 25 taps) and
@@ -220,9 +223,11 @@ typedef struct tt__net_state {
   double cpu_reproject, cpu_network, cpu_mix; /* process CPU ms of the same passes */
   double ms_body, ms_kernel;  /* fast path: the network's time in body layers and kernel
                                * layer, summed over threads (thread ms, not wall) */
-  int winograd;             /* fast path (AVX2 / AVX-512): kernel layer by Winograd F(2x2, 5x5)
-                             * (1) or by direct convolution (0); set at init from
-                             * TT_POST_TAA_WINOGRAD (default 1), may be changed between frames */
+  int winograd;             /* fast path (AVX2 / AVX-512), the 5x5 layers: 0 direct convolution;
+                             * 1 Winograd F(2x2, 5x5) (kernel layer, 12-channel body layers);
+                             * 2 (default) the kernel layer by F(4x4, 5x5), body layers as 1.
+                             * Set at init from TT_POST_TAA_WINOGRAD (0, 1, 2), may be changed
+                             * between frames */
   /* History rejection (models with TT__NET_FLAG_REJECT): the previous frame's depth and
    * jitter, and this frame's TT__TAA_REJECT_* mask (+ 2 planes of scratch). */
   float *prev_depth;

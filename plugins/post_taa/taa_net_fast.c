@@ -110,6 +110,49 @@ static void wino_weights(tt__net_layer *l, size_t uper) {
       }
 }
 
+/* Winograd F(4x4, 5x5) with the points 0, 1, -1, 2, -2, 1/2, -1/2 and infinity: a 4x4
+ * output tile of a 5x5 correlation is Y = A^T [U . V] A with the 8x8 input tile d,
+ * V = B^T d B, U = G g G^T: 64 multiplies per 16 outputs and input channel (4 per output,
+ * against 9 for F(2x2, 5x5) and 25 direct). B^T (the same as F(6x6, 3x3)'s) and A^T hold
+ * small dyadic fractions, exact in float; G is applied once per weight set in double. */
+#define WINO4_POS 64u
+static const double wino4_g[8][5] = {
+    {-1, 0, 0, 0, 0},
+    {-2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9},
+    {-2.0 / 9, 2.0 / 9, -2.0 / 9, 2.0 / 9, -2.0 / 9},
+    {1.0 / 90, 1.0 / 45, 2.0 / 45, 4.0 / 45, 8.0 / 45},
+    {1.0 / 90, -1.0 / 45, 2.0 / 45, -4.0 / 45, 8.0 / 45},
+    {32.0 / 45, 16.0 / 45, 8.0 / 45, 4.0 / 45, 2.0 / 45},
+    {32.0 / 45, -16.0 / 45, 8.0 / 45, -4.0 / 45, 2.0 / 45},
+    {0, 0, 0, 0, 1}};
+
+/* U = G g G^T of every (set, output, input) filter into l->wino4, laid out
+ * [set][block][64][in][oblk] (`uper` floats per set). */
+static void wino4_weights(tt__net_layer *l, size_t uper) {
+  const uint32_t O = l->oblk, I = l->in;
+  for (uint32_t s = 0; s < l->sets; s++)
+    for (uint32_t oc = 0; oc < l->out; oc++)
+      for (uint32_t c = 0; c < I; c++) {
+        const float *g = l->w + (((size_t)s * l->out + oc) * I + c) * 25;
+        double t[8][5], u[8][8];
+        for (int i = 0; i < 8; i++)
+          for (int k = 0; k < 5; k++) {
+            double a = 0;
+            for (int j = 0; j < 5; j++) a += wino4_g[i][j] * g[j * 5 + k];
+            t[i][k] = a;
+          }
+        for (int i = 0; i < 8; i++)
+          for (int j = 0; j < 8; j++) {
+            double a = 0;
+            for (int k = 0; k < 5; k++) a += t[i][k] * wino4_g[j][k];
+            u[i][j] = a;
+          }
+        uint32_t b = oc / O, o = oc % O;
+        float *dst = l->wino4 + s * uper + (size_t)b * WINO4_POS * I * O;
+        for (int p = 0; p < 64; p++) dst[((size_t)p * I + c) * O + o] = (float)u[p / 8][p % 8];
+      }
+}
+
 tt_status tt__net_fast_pack(tt__net_layer *l) {
   uint32_t o = l->out;
   l->oblk = o % 12 == 0 ? 12 : o % 10 == 0 ? 10 : o % 8 == 0 ? 8 : o <= 6 ? 6 : 8;
@@ -121,14 +164,21 @@ tt_status tt__net_fast_pack(tt__net_layer *l) {
    * planes). */
   int wino = l->ksize == 5 && (l->oblk == 10 || l->oblk == 12);
   size_t uper = wino ? (size_t)l->nob * WINO_POS * l->in * l->oblk : 0;
-  l->wq = fz_alloc(qper * l->sets + uper * l->sets);
+  /* the kernel layer (softmax) also by F(4x4, 5x5) */
+  int wino4 = wino && l->activation == 2 && l->oblk == 10;
+  size_t u4per = wino4 ? (size_t)l->nob * WINO4_POS * l->in * l->oblk : 0;
+  l->wq = fz_alloc(qper * l->sets + (uper + u4per) * l->sets);
   l->bq = fz_alloc((size_t)l->nob * l->oblk * l->sets);
-  l->wino = NULL;
+  l->wino = l->wino4 = NULL;
   if (!l->wq || !l->bq)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for weights");
   if (wino) {
     l->wino = l->wq + qper * l->sets;
     wino_weights(l, uper);
+  }
+  if (wino4) {
+    l->wino4 = l->wq + (qper + uper) * l->sets;
+    wino4_weights(l, u4per);
   }
   for (uint32_t s = 0; s < l->sets; s++)
     for (uint32_t oc = 0; oc < o; oc++) {
@@ -154,12 +204,12 @@ static uint32_t fast_halo_after(const tt__net_model *m, uint32_t l) {
 tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
   s->halo = fast_halo_after(m, 0) + m->body[0].ksize / 2;
   if (s->halo < 2) s->halo = 2;  /* the colour mix reads 2 rows around */
-  s->vw = (s->width + 15u) & ~15u;
+  s->vw = (s->width + 31u) & ~31u;  /* F(4x4, 5x5) groups: 8 tiles of 4 columns */
   s->rs = s->vw + 2 * COL;
   s->inp_cs = (size_t)(s->height + 2 * s->halo) * s->rs;
   s->inp = fz_alloc((size_t)m->in_channels * s->inp_cs);
   const char *wg = getenv("TT_POST_TAA_WINOGRAD");
-  s->winograd = !(wg && wg[0] == '0');
+  s->winograd = wg && (wg[0] == '0' || wg[0] == '1') ? wg[0] - '0' : 2;
   if (!s->inp)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
                         "network planes", s->width, s->height);
@@ -455,6 +505,181 @@ AI void wino_dispatch(const wino_a *a, uint32_t oblk, const int wide) {
   }
 }
 
+/* ---- Winograd F(4x4, 5x5) for the kernel layer ---- */
+
+/* Four output rows p .. p + 3 (p a multiple of 4: tiles sit on absolute rows and columns
+ * that are multiples of 4, whatever the band or column tile) of columns x0 .. x0 + n (n a
+ * multiple of 32, x0 a multiple of 4, in the input rows' own coordinates as in conv_a).
+ * rowp[i]: input row p - 2 + i (i < 8). Output channel oc of row p + r, column i goes to
+ * dst[r][oc * dcs + i] (bias added; no activation: the kernel layer's logits). 8 tiles (32
+ * columns) per vector; their lanes hold tiles 0 2 4 6 1 3 5 7, the order a 4 x 4
+ * transpose inside each 128-bit half gives, undone by the same transpose at the output.
+ * Per group: the input transform fills V[64][in][8]; per block of O outputs the 64
+ * products M[pos][O][8] = U[pos][O][in] x V[pos][in][8], then the output transform. Every
+ * tile's arithmetic is the same whatever lane or group it is in. */
+typedef struct wino4_a {
+  const float *rowp[8];
+  size_t cs;
+  uint32_t in, nob, out;
+  const float *u, *b;   /* this set's transformed weights [block][64][in][O] and biases */
+  uint32_t x0, n;
+  float *dst[4];
+  size_t dcs;
+  float *vbuf, *mbuf, *ebuf;  /* scratch: 64 * in * 8, 64 * O * 8 and 64 * 8 floats */
+} wino4_a;
+
+#if FAST_X86
+/* 4 x 4 transpose inside each 128-bit half of (r0, r1, r2, r3). */
+#define WINO4_T4(r0, r1, r2, r3)                                              \
+  do {                                                                         \
+    __m256 t0_ = _mm256_unpacklo_ps(r0, r1), t1_ = _mm256_unpackhi_ps(r0, r1); \
+    __m256 t2_ = _mm256_unpacklo_ps(r2, r3), t3_ = _mm256_unpackhi_ps(r2, r3); \
+    r0 = _mm256_shuffle_ps(t0_, t2_, 0x44);                                    \
+    r1 = _mm256_shuffle_ps(t0_, t2_, 0xEE);                                    \
+    r2 = _mm256_shuffle_ps(t1_, t3_, 0x44);                                    \
+    r3 = _mm256_shuffle_ps(t1_, t3_, 0xEE);                                    \
+  } while (0)
+
+/* B^T of one 8-vector (rows: -1 0 21/4 0 -21/4 0 1 0 / 0 1 1 -17/4 -17/4 1 1 0 /
+ * 0 -1 1 17/4 -17/4 -1 1 0 / 0 1/2 1/4 -5/2 -5/4 2 1 0 / 0 -1/2 1/4 5/2 -5/4 -2 1 0 /
+ * 0 2 4 -5/2 -5 1/2 1 0 / 0 -2 4 5/2 -5 -1/2 1 0 / 0 -1 0 21/4 0 -21/4 0 1), the even and
+ * odd halves of each +-pair computed once. */
+TGT_V3 AI void wino4_bt(const __m256 d[8], __m256 v[8]) {
+  const __m256 c21 = _mm256_set1_ps(5.25f), c17 = _mm256_set1_ps(4.25f);
+  v[0] = _mm256_add_ps(_mm256_sub_ps(d[6], d[0]), _mm256_mul_ps(_mm256_sub_ps(d[2], d[4]), c21));
+  v[7] = _mm256_add_ps(_mm256_sub_ps(d[7], d[1]), _mm256_mul_ps(_mm256_sub_ps(d[3], d[5]), c21));
+  __m256 e1 = _mm256_fnmadd_ps(d[4], c17, _mm256_add_ps(d[2], d[6]));
+  __m256 o1 = _mm256_fnmadd_ps(d[3], c17, _mm256_add_ps(d[1], d[5]));
+  v[1] = _mm256_add_ps(e1, o1);
+  v[2] = _mm256_sub_ps(e1, o1);
+  __m256 e2 = _mm256_fmadd_ps(d[2], _mm256_set1_ps(0.25f),
+                              _mm256_fnmadd_ps(d[4], _mm256_set1_ps(1.25f), d[6]));
+  __m256 o2 = _mm256_fmadd_ps(d[1], _mm256_set1_ps(0.5f),
+                              _mm256_fmadd_ps(d[5], _mm256_set1_ps(2.0f),
+                                              _mm256_mul_ps(d[3], _mm256_set1_ps(-2.5f))));
+  v[3] = _mm256_add_ps(e2, o2);
+  v[4] = _mm256_sub_ps(e2, o2);
+  __m256 e3 = _mm256_fmadd_ps(d[2], _mm256_set1_ps(4.0f),
+                              _mm256_fnmadd_ps(d[4], _mm256_set1_ps(5.0f), d[6]));
+  __m256 o3 = _mm256_fmadd_ps(d[1], _mm256_set1_ps(2.0f),
+                              _mm256_fmadd_ps(d[5], _mm256_set1_ps(0.5f),
+                                              _mm256_mul_ps(d[3], _mm256_set1_ps(-2.5f))));
+  v[5] = _mm256_add_ps(e3, o3);
+  v[6] = _mm256_sub_ps(e3, o3);
+}
+
+/* A^T of one 8-vector (rows 1 1 1 1 1 1 1 0 / 0 1 -1 2 -2 1/2 -1/2 0 / 0 1 1 4 4 1/4 1/4 0 /
+ * 0 1 -1 8 -8 1/8 -1/8 1). */
+TGT_V3 AI void wino4_at(const __m256 m[8], __m256 y[4]) {
+  __m256 s1 = _mm256_add_ps(m[1], m[2]), d1 = _mm256_sub_ps(m[1], m[2]);
+  __m256 s2 = _mm256_add_ps(m[3], m[4]), d2 = _mm256_sub_ps(m[3], m[4]);
+  __m256 s3 = _mm256_add_ps(m[5], m[6]), d3 = _mm256_sub_ps(m[5], m[6]);
+  y[0] = _mm256_add_ps(_mm256_add_ps(m[0], s1), _mm256_add_ps(s2, s3));
+  y[1] = _mm256_fmadd_ps(d3, _mm256_set1_ps(0.5f), _mm256_fmadd_ps(d2, _mm256_set1_ps(2.0f), d1));
+  y[2] = _mm256_fmadd_ps(s3, _mm256_set1_ps(0.25f), _mm256_fmadd_ps(s2, _mm256_set1_ps(4.0f), s1));
+  y[3] = _mm256_add_ps(_mm256_fmadd_ps(d3, _mm256_set1_ps(0.125f),
+                                       _mm256_fmadd_ps(d2, _mm256_set1_ps(8.0f), d1)), m[7]);
+}
+
+/* One group of 8P tiles (32P columns from xl), O outputs per block; P = 2 (16 tiles)
+ * needs the 32 vector registers of AVX-512VL for its 2 O accumulators. */
+TGT_V3 AI void wino4_group_t(const wino4_a *a, uint32_t xl, const int O, const int P) {
+  const uint32_t I = a->in;
+  const int T = 8 * P;
+  float *V = a->vbuf, *M = a->mbuf, *E = a->ebuf;
+  /* lane shifts by one tile in the 0 2 4 6 1 3 5 7 order: the tile before / after */
+  const __m256i prev = _mm256_setr_epi32(0, 4, 5, 6, 0, 1, 2, 3);
+  const __m256i next = _mm256_setr_epi32(4, 5, 6, 7, 1, 2, 3, 0);
+  for (uint32_t c = 0; c < I; c++)
+    for (int j = 0; j < P; j++) {
+      for (int i = 0; i < 8; i++) {
+        const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl + 32 * j;
+        __m256 r0 = _mm256_loadu_ps(q), r1 = _mm256_loadu_ps(q + 8),
+               r2 = _mm256_loadu_ps(q + 16), r3 = _mm256_loadu_ps(q + 24);
+        WINO4_T4(r0, r1, r2, r3);  /* rk: column 4t + k of tile t */
+        __m256 d[8];
+        d[0] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r2, prev), _mm256_broadcast_ss(q - 2), 1);
+        d[1] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r3, prev), _mm256_broadcast_ss(q - 1), 1);
+        d[2] = r0, d[3] = r1, d[4] = r2, d[5] = r3;
+        d[6] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r0, next), _mm256_broadcast_ss(q + 32), 0x80);
+        d[7] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r1, next), _mm256_broadcast_ss(q + 33), 0x80);
+        __m256 e[8];
+        wino4_bt(d, e);  /* along the row: E[i][s] */
+        for (int s2 = 0; s2 < 8; s2++) _mm256_store_ps(E + (i * 8 + s2) * 8, e[s2]);
+      }
+      for (int s2 = 0; s2 < 8; s2++) {
+        __m256 col[8], v[8];
+        for (int i = 0; i < 8; i++) col[i] = _mm256_load_ps(E + (i * 8 + s2) * 8);
+        wino4_bt(col, v);  /* along the column: V[r][s2] */
+        for (int r = 0; r < 8; r++)
+          _mm256_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * T + 8 * j, v[r]);
+      }
+    }
+  for (uint32_t ob = 0; ob < a->nob; ob++) {
+    const float *u = a->u + (size_t)ob * WINO4_POS * I * O;
+    for (uint32_t pos = 0; pos < WINO4_POS; pos++) {
+      __m256 acc[12][2];
+#pragma GCC unroll 12
+      for (int o = 0; o < O; o++)
+#pragma GCC unroll 2
+        for (int j = 0; j < P; j++) acc[o][j] = _mm256_setzero_ps();
+      const float *vp = V + (size_t)pos * I * T;
+      for (uint32_t c = 0; c < I; c++) {
+        __m256 in[2];
+#pragma GCC unroll 2
+        for (int j = 0; j < P; j++) in[j] = _mm256_load_ps(vp + 8 * j);
+#pragma GCC unroll 12
+        for (int o = 0; o < O; o++) {
+          __m256 wv = _mm256_broadcast_ss(u + o);
+#pragma GCC unroll 2
+          for (int j = 0; j < P; j++) acc[o][j] = _mm256_fmadd_ps(in[j], wv, acc[o][j]);
+        }
+        u += O;
+        vp += T;
+      }
+#pragma GCC unroll 12
+      for (int o = 0; o < O; o++)
+#pragma GCC unroll 2
+        for (int j = 0; j < P; j++) _mm256_store_ps(M + ((size_t)pos * O + o) * T + 8 * j, acc[o][j]);
+    }
+    for (int o = 0; o < O; o++) {
+      uint32_t oc = ob * (uint32_t)O + (uint32_t)o;
+      if (oc >= a->out) break;
+      __m256 bias = _mm256_broadcast_ss(a->b + oc);
+      for (int j = 0; j < P; j++) {
+        __m256 t[8][4];
+        for (int i = 0; i < 8; i++) {
+          __m256 m8[8];
+          for (int k = 0; k < 8; k++)
+            m8[k] = _mm256_load_ps(M + ((size_t)(i * 8 + k) * O + o) * T + 8 * j);
+          wino4_at(m8, t[i]);  /* along the row: tile columns 0..3 */
+        }
+        __m256 y[4][4];  /* [row][column] */
+        for (int k = 0; k < 4; k++) {
+          __m256 col[8], yy[4];
+          for (int i = 0; i < 8; i++) col[i] = t[i][k];
+          wino4_at(col, yy);  /* along the column: output rows 0..3 */
+          for (int r = 0; r < 4; r++) y[r][k] = _mm256_add_ps(yy[r], bias);
+        }
+        for (int r = 0; r < 4; r++) {
+          WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
+          float *d = a->dst[r] + oc * a->dcs + xl + 32 * j;
+          for (int k = 0; k < 4; k++) _mm256_storeu_ps(d + 8 * k, y[r][k]);
+        }
+      }
+    }
+  }
+}
+
+/* All groups of a chunk; output blocks of 10 (the kernel layer's 50 outputs). */
+TGT_V3 AI void wino4_dispatch(const wino4_a *a, const int wide) {
+  for (uint32_t xl = 0; xl < a->n;) {
+    if (wide && a->n - xl >= 64) wino4_group_t(a, xl, 10, 2), xl += 64;
+    else wino4_group_t(a, xl, 10, 1), xl += 32;
+  }
+}
+#endif
+
 /* ---- softmax + colour mix + hidden layer + outputs ---- */
 
 typedef struct mix_a {
@@ -483,12 +708,19 @@ AI void mix_rows_t(const mix_a *a) {
     for (int k = 5; k < 50; k += 5)
       for (int j = 0; j < 5; j++) m5[j] = vmax(m5[j], vload(lg + (k + j) * CHUNK));
     v8f mx = vmax(vmax(vmax(m5[0], m5[1]), vmax(m5[2], m5[3])), m5[4]);
-    v8f sum = vsplat(0.0f);
-    for (int k = 0; k < 50; k++) {
-      v8f e = vexp_neg(vload(lg + k * CHUNK) - mx);
-      vstore(lg + k * CHUNK, e);
-      sum += e;
+    /* 5 independent exp chains (the polynomial's latency would serialise one chain) */
+    v8f s5[5] = {vsplat(0.0f), vsplat(0.0f), vsplat(0.0f), vsplat(0.0f), vsplat(0.0f)};
+    for (int k = 0; k < 50; k += 5) {
+      v8f e[5];
+#pragma GCC unroll 5
+      for (int j = 0; j < 5; j++) e[j] = vexp_neg(vload(lg + (k + j) * CHUNK) - mx);
+#pragma GCC unroll 5
+      for (int j = 0; j < 5; j++) {
+        vstore(lg + (k + j) * CHUNK, e[j]);
+        s5[j] += e[j];
+      }
     }
+    v8f sum = ((s5[0] + s5[1]) + (s5[2] + s5[3])) + s5[4];
     v8f o[3] = {vsplat(0.0f), vsplat(0.0f), vsplat(0.0f)};
     for (uint32_t ty = 0; ty < 5; ty++) {
       const float *row = s->inp + (size_t)(a->y + ty - 2 + s->halo) * rs + COL + x - 2;
@@ -534,24 +766,27 @@ typedef struct fast_isa {
   void (*conv)(const conv_a *);
   void (*mix)(const mix_a *);
   void (*wino)(const wino_a *, uint32_t oblk);  /* NULL: direct kernel layer only */
+  void (*wino4)(const wino4_a *);               /* NULL: no F(4x4, 5x5) */
 } fast_isa;
 
 #if FAST_X86
 TGT_V4 static void conv_v4(const conv_a *a) { conv_rows_dispatch(a, 1); }
 TGT_V4 static void mix_v4(const mix_a *a) { mix_rows_t(a); }
 TGT_V4 static void wino_v4(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 1); }
+TGT_V4 static void wino4_v4(const wino4_a *a) { wino4_dispatch(a, 1); }
 TGT_V3 static void conv_v3(const conv_a *a) { conv_rows_dispatch(a, 0); }
 TGT_V3 static void mix_v3(const mix_a *a) { mix_rows_t(a); }
 TGT_V3 static void wino_v3(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 0); }
+TGT_V3 static void wino4_v3(const wino4_a *a) { wino4_dispatch(a, 0); }
 #endif
 static void conv_generic(const conv_a *a) { conv_rows_dispatch(a, 0); }
 static void mix_generic(const mix_a *a) { mix_rows_t(a); }
 
 static const fast_isa *fast_pick(void) {
-  static const fast_isa generic = {"generic", conv_generic, mix_generic, NULL};
+  static const fast_isa generic = {"generic", conv_generic, mix_generic, NULL, NULL};
 #if FAST_X86
-  static const fast_isa v4 = {"avx512", conv_v4, mix_v4, wino_v4},
-                        v3 = {"avx2", conv_v3, mix_v3, wino_v3};
+  static const fast_isa v4 = {"avx512", conv_v4, mix_v4, wino_v4, wino4_v4},
+                        v3 = {"avx2", conv_v3, mix_v3, wino_v3, wino4_v3};
   const char *force = getenv("TT_POST_TAA_ISA");
   __builtin_cpu_init();
   int has_v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
@@ -896,8 +1131,9 @@ typedef struct band_job {
   size_t ring_off[TT__NET_MAX_LAYERS], logits_off;
   int wino;                           /* Winograd allowed this frame (5x5 body layers
                                        * after the first: rows in even pairs) */
-  int kwino;                          /* kernel layer by Winograd, rows in even pairs */
-  size_t vbuf_off, mbuf_off;          /* Winograd scratch */
+  int kwino;                          /* kernel layer by Winograd: 2 F(2x2, 5x5) rows in
+                                       * even pairs, 4 F(4x4, 5x5) rows in quads; 0 direct */
+  size_t vbuf_off, mbuf_off, ebuf_off; /* Winograd scratch */
 } band_job;
 
 /* Per-thread scratch header: accumulated ns of the stage's parts. */
@@ -944,6 +1180,7 @@ static uint32_t ring_len(const tt__net_model *m, uint32_t l) {
   int last = l + 1 >= m->body_count;
   uint32_t k = last ? m->kernel.ksize : m->body[l + 1].ksize;
   int pairs = body_wino_ok(m, l) || (last ? m->kernel.wino != NULL : body_wino_ok(m, l + 1));
+  if (last && m->kernel.wino4) return k + 3u;  /* F(4x4, 5x5) reads 8 rows per 4 */
   return k + (pairs ? 1u : 0u);
 }
 
@@ -1186,6 +1423,55 @@ static void head_pair(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
   }
 }
 
+#if FAST_X86
+/* F(4x4, 5x5) kernel layer of rows p .. p + 3 (p a multiple of 4), then the head of those
+ * in [y0, y1). */
+static void head_quad(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
+  const band_job *job = b->job;
+  const tt__net_state *s = job->s;
+  const tt__net_model *m = job->m;
+  const tt__net_layer *kl = &m->kernel;
+  uint32_t last = m->body_count - 1;
+  wino4_a a;
+  for (int i = 0; i < 8; i++) a.rowp[i] = ring_row(b, last, p - 2 + i);
+  a.cs = (size_t)b->rlen[last] * job->rrs;
+  int col0 = b->bx;
+  a.in = kl->in;
+  a.nob = kl->nob;
+  a.out = kl->out;
+  uint32_t ks = set_of(kl, job->set);
+  a.u = kl->wino4 + (size_t)ks * kl->nob * WINO4_POS * kl->in * kl->oblk;
+  a.b = kl->bq + (size_t)ks * kl->nob * kl->oblk;
+  float *lg = (float *)(b->scr + job->logits_off);
+  size_t lgn = (size_t)kl->nob * kl->oblk * CHUNK;
+  for (int r = 0; r < 4; r++) a.dst[r] = lg + r * lgn;
+  a.dcs = CHUNK;
+  a.vbuf = (float *)(b->scr + job->vbuf_off);
+  a.mbuf = (float *)(b->scr + job->mbuf_off);
+  a.ebuf = (float *)(b->scr + job->ebuf_off);
+  mix_a mx;
+  mix_setup(b, &mx);
+  for (uint32_t x0 = b->tx0; x0 < b->tx1 && x0 < s->width; x0 += CHUNK) {
+    a.x0 = (uint32_t)((int)x0 - col0);
+    mx.x0 = x0;
+    a.n = mx.n = b->tx1 - x0 < CHUNK ? b->tx1 - x0 : CHUNK;
+    double t0 = fast_ns();
+    job->isa->wino4(&a);
+    double t1 = fast_ns();
+    for (int r = 0; r < 4; r++) {
+      int y = p + r;
+      if (y < (int)y0 || y >= (int)y1 || y >= (int)s->height) continue;
+      mx.lg = a.dst[r];
+      mx.y = (uint32_t)y;
+      mx.hrow = ring_row(b, last, y);
+      job->isa->mix(&mx);
+    }
+    b->tm->kernel_ns += t1 - t0;
+    b->tm->mix_ns += fast_ns() - t1;
+  }
+}
+#endif
+
 /* Rows [y0, y1) of columns [tx0, tx1) through all layers. */
 static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t y1,
                      uint32_t tx0, uint32_t tx1) {
@@ -1201,11 +1487,23 @@ static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t
   for (uint32_t l = 0; l < m->body_count; l++) {
     b.ring[l] = (float *)(b.scr + job->ring_off[l]);
     b.rlen[l] = ring_len(m, l);
-    int v = (int)(job->kwino ? y0 & ~1u : y0) - (int)fast_halo_after(m, l);
+    uint32_t ys = job->kwino == 4 ? y0 & ~3u : job->kwino ? y0 & ~1u : y0;
+    int v = (int)ys - (int)fast_halo_after(m, l);
     if (body_pairs(job, l)) v -= v & 1;  /* first pair on an even row */
     b.next[l] = v;
   }
   int rk = (int)m->kernel.ksize / 2;
+#if FAST_X86
+  if (job->kwino == 4) {
+    /* Row quads at absolute multiples of 4; a band starting or ending inside a quad
+     * computes it whole and keeps its own rows. */
+    for (int p = (int)(y0 & ~3u); p < (int)y1; p += 4) {
+      ensure_rows(&b, m->body_count - 1, p + 3 + rk);
+      head_quad(&b, p, y0, y1);
+    }
+    return;
+  }
+#endif
   if (job->kwino) {
     /* Row pairs at absolute even rows; a band starting or ending on an odd row computes
      * its first / last pair whole and keeps its own row. */
@@ -1263,16 +1561,21 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
     off += ((size_t)m->body[l].out * R * job->rrs * sizeof(float) + 63) & ~(size_t)63;
   }
   job->logits_off = off;
-  off += 2 * (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float);  /* 2 rows */
+  off += 4 * (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float);  /* 4 rows */
   /* Winograd scratch (every such layer reads W channels, blocks of <= 12 outputs). */
-  job->vbuf_off = job->mbuf_off = 0;
+  job->vbuf_off = job->mbuf_off = job->ebuf_off = 0;
   int any = m->kernel.wino != NULL;
   for (uint32_t l = 0; l < m->body_count; l++) any |= body_wino_ok(m, l);
   if (any) {
+    /* F(2x2, 5x5): V 36 x W x 16, M 2 x 36 x 12 x 16; F(4x4, 5x5): V 64 x W x 16, M 64 x
+     * 10 x 16, E 64 x 8 (all offsets 64-byte aligned) */
+    size_t v2 = (size_t)WINO_POS * m->width * 16, v4 = (size_t)WINO4_POS * m->width * 16;
     job->vbuf_off = off;
-    off += (size_t)WINO_POS * m->width * 16 * sizeof(float);
+    off += ((v2 > v4 ? v2 : v4) * sizeof(float) + 63) & ~(size_t)63;
     job->mbuf_off = off;
-    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);
+    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);  /* >= 64 x 10 x 16 */
+    job->ebuf_off = off;
+    off += (size_t)WINO4_POS * 8 * sizeof(float);
   }
   off = (off + 4095) & ~(size_t)4095;  /* threads' blocks on separate pages */
   if (s->scratch && s->scratch_threads >= threads && s->scratch_bytes == off) return TT_OK;
@@ -1321,7 +1624,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   band_job job = {.s = s, .m = m, .isa = isa, .set = jitter_index % TT__NET_JITTER_SETS,
                   .out_rgb = out_rgb};
   job.wino = s->winograd && isa->wino;
-  job.kwino = job.wino && m->kernel.wino;
+  job.kwino = !job.wino || !m->kernel.wino ? 0 : s->winograd >= 2 && m->kernel.wino4 && isa->wino4 ? 4 : 2;
   if (fast_scratch(s, m, &job, threads) != TT_OK) {
     /* Out of memory for a few MB of scratch: leave the frame as the input. */
     memcpy(out_rgb, color, (size_t)s->width * s->height * 3 * sizeof(float));
@@ -1335,7 +1638,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   if (!rows) {
     rows = (s->height + 4 * threads - 1) / (4 * threads);
     if (rows < 16) rows = 16;
-    if (job.wino) rows = (rows + 1) & ~1u;  /* whole Winograd row pairs per band */
+    if (job.wino) rows = (rows + 3) & ~3u;  /* whole Winograd row pairs / quads per band */
   }
   job.band_rows = rows;
   job.bands = (s->height + rows - 1) / rows;
