@@ -199,7 +199,7 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
       if (v->winograd >= 0) v->s.winograd = v->winograd;
     }
   }
-  const tt__vctaa_params vp = {0.1f, 1.0f, 1};
+  const tt__vctaa_params vp = {0.1f, 1.0f, 1, 0};
   for (int r = 0; r <= rounds; r++) {
     for (int q = 0; q < g_nvar; q++) {
       variant *v = &g_var[(q + r) % g_nvar];

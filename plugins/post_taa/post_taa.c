@@ -43,6 +43,7 @@ static const tt_host *taa_host(void) { return g_host ? g_host : tt_default_host(
 static tt_status taa_build_space(void) {
   static const char *const modes[] = {"vctaa", "network", "none"};
   static const int64_t channels[] = {12, 6};
+  static const char *const resolves[] = {"tonemapped", "linear"};
   tt_space *s = tt_space_create(TT__TAA_NAME, TT__TAA_VERSION);
   if (!s) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": cannot create the space");
   int ok = 1;
@@ -59,6 +60,10 @@ static tt_status taa_build_space(void) {
                              "network: shipped model variant (body channels); the option "
                              "weights (--set post_taa.weights=FILE) or the "
                              "TT_POST_TAA_WEIGHTS environment variable names another file") >= 0;
+  /* appended in 0.2.0 */
+  ok &= tt_space_add_nom_string(s, "resolve", resolves, 2, 0,
+                                "vctaa: tonemapped (the thesis' baseline; darkens noisy "
+                                "input) or linear (energy-preserving)") >= 0;
   if (!ok) {
     tt_space_destroy(s);
     return tt_set_error(TT_ERR_INTERNAL, TT__TAA_NAME ": building the parameter space failed");
@@ -108,6 +113,8 @@ static void taa_read_config(tt_post *p, const tt_config *c) {
   p->vc_params.blend = c ? (float)tt_config_get_float(c, "blend", 0.1) : 0.1f;
   p->vc_params.gamma = c ? (float)tt_config_get_float(c, "gamma", 1.0) : 1.0f;
   p->vc_params.catmull_rom = c ? (int)tt_config_get_int(c, "catmullRom", 1) : 1;
+  const char *res = c ? tt_config_get_string(c, "resolve") : NULL;
+  p->vc_params.linear = res && !strcmp(res, "linear");
   p->channels = c ? (uint32_t)tt_config_get_int(c, "channels", 12) : 12;
 }
 

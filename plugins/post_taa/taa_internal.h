@@ -10,7 +10,7 @@
 #include <tunetrace/host.h>
 
 #define TT__TAA_NAME "post_taa"
-#define TT__TAA_VERSION "0.1.0"
+#define TT__TAA_VERSION "0.2.0"
 
 /* ---- shared image helpers (taa_image.c) ---- */
 
@@ -69,6 +69,7 @@ typedef struct tt__vctaa_params {
   float blend;      /* weight of the current frame in the exponential average */
   float gamma;      /* variance box half-size in standard deviations */
   int catmull_rom;  /* history fetch: 1 Catmull-Rom, 0 bilinear */
+  int linear;       /* resolve in linear colour (energy-preserving) instead of tonemapped */
 } tt__vctaa_params;
 
 typedef struct tt__vctaa {
@@ -77,6 +78,7 @@ typedef struct tt__vctaa {
   float *scratch;   /* next history */
   float *ycocg;     /* the new frame, tonemapped, in YCoCg */
   int valid;        /* history holds a frame */
+  int linear;       /* the history's space (tt__vctaa_params.linear when it was written) */
 } tt__vctaa;
 
 tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height);

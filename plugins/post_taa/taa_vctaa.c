@@ -1,8 +1,12 @@
 /* post_taa: variance-clipping TAA (Salvi 2016 on Karis 2014). Per pixel: fetch the
  * reprojected history, build the 3x3 neighbourhood's variance box in YCoCg (mean +- gamma
- * sigma), clip the history toward the box centre, and blend with the current pixel. The
- * whole resolve runs on tonemapped colour c / (1 + max c) so that single bright samples do
- * not dominate the average; the output is untonemapped. */
+ * sigma), clip the history toward the box centre, and blend with the current pixel. By
+ * default (the thesis' baseline) the whole resolve runs on tonemapped colour c / (1 + max c)
+ * so that single bright samples do not dominate the average; the output is untonemapped.
+ * That average of tonemapped samples is darker than the tonemapped average (the tonemap is
+ * concave: Jensen), strongly so on Monte Carlo noise; `linear` resolves in linear colour
+ * instead (energy-preserving: the running average of unbiased samples stays unbiased, up
+ * to the clipping), at the price of fireflies that fade over ~1/blend frames. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,7 +65,10 @@ static void vc_prepare_rows(void *ctx, uint32_t y0, uint32_t y1) {
   size_t w = job->v->width;
   for (size_t i = y0 * w; i < y1 * w; i++) {
     float t[3];
-    tt__taa_tonemap_inl(job->color + 3 * i, t);
+    if (job->p->linear)
+      for (int c = 0; c < 3; c++) t[c] = tt__taa_fmax(job->color[3 * i + c], 0.0f);
+    else
+      tt__taa_tonemap_inl(job->color + 3 * i, t);
     vc_to_ycocg(t, job->v->ycocg + 3 * i);
   }
 }
@@ -153,6 +160,12 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
       }
       float rgb[3];
       vc_from_ycocg(res, rgb);
+      if (p->linear) {
+        for (int c = 0; c < 3; c++) rgb[c] = tt__taa_fmax(rgb[c], 0.0f);
+        memcpy(v->scratch + 3 * i, rgb, sizeof rgb);
+        memcpy(job->out + 3 * i, rgb, sizeof rgb);
+        continue;
+      }
       for (int c = 0; c < 3; c++) rgb[c] = tt__taa_fmin(tt__taa_fmax(rgb[c], 0.0f), 0.999f);
       memcpy(v->scratch + 3 * i, rgb, sizeof rgb);
       tt__taa_untonemap_inl(rgb, job->out + 3 * i);
@@ -163,6 +176,8 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
 void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
                        const float *color, const float *motion, float *out_rgb) {
   vc_job job = {v, p, color, motion, out_rgb};
+  if (v->linear != p->linear) v->valid = 0;  /* the history is in the other space */
+  v->linear = p->linear;
   tt__taa_parallel_rows(host, v->height, vc_prepare_rows, &job);
   tt__taa_parallel_rows(host, v->height, vc_rows, &job);
   float *t = v->history;
