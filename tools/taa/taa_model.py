@@ -86,7 +86,7 @@ class TAANet(nn.Module):
     'b1', 'b2', ..., 'k', 'h' tokens (thesis best: 2-3-K = 'b2 b3 k')."""
 
     def __init__(self, width=12, hidden=5, body=(3, 3, 5), jitter_layers="b2 b3 k",
-                 motion_scale=0.125, flags=0):
+                 motion_scale=0.125, flags=0, kernel=5):
         super().__init__()
         self.width, self.hidden, self.motion_scale = width, hidden, motion_scale
         self.flags = flags
@@ -98,7 +98,9 @@ class TAANet(nn.Module):
             layers.append(SetConv(cin, width, k, sets, ROLE_BODY, ACT_RELU))
             cin = width
         self.body = nn.ModuleList(layers)
-        self.kernel = SetConv(width, 2 * MIX_K * MIX_K, MIX_K,
+        # the kernel-prediction layer: a kernel x kernel convolution (thesis: 5) to the
+        # 2 x 25 weights of the 5 x 5 colour mix
+        self.kernel = SetConv(width, 2 * MIX_K * MIX_K, kernel,
                               JITTER_SETS if "k" in toks else 1, ROLE_KERNEL, ACT_SOFTMAX)
         self.hid = (SetConv(width, hidden, 1, JITTER_SETS if "h" in toks else 1, ROLE_HIDDEN,
                             ACT_NONE) if hidden else None)
@@ -174,7 +176,8 @@ def from_ttw(t):
             if l.sets > 1]
     toks += ["k" for l in t.layers if l.role == ROLE_KERNEL and l.sets > 1]
     toks += ["h" for l in t.layers if l.role == ROLE_HIDDEN and l.sets > 1]
-    m = TAANet(t.width, t.hidden, body, " ".join(toks), t.motion_scale, t.flags)
+    kernel = next(l.k for l in t.layers if l.role == ROLE_KERNEL)
+    m = TAANet(t.width, t.hidden, body, " ".join(toks), t.motion_scale, t.flags, kernel)
     for dst, src in zip(m.layers(), t.layers):
         dst.weight.data = torch.from_numpy(src.weight.copy()).view_as(dst.weight)
         dst.bias.data = torch.from_numpy(src.bias.copy()).view_as(dst.bias)

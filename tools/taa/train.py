@@ -78,6 +78,36 @@ def run_window(model, c, d, mo, j0, burn=0, rej=None):
     return outs
 
 
+def init_from(model, src, name):
+    """Starts `model` from the weights of `src` (train.py --init): layers in order (body,
+    kernel; the hidden layer when both have one). The first layer's input channels are
+    matched by meaning ([rgb, motion, depth, state rgb] = 0..8, then the hidden channels
+    both have, then the rejection input), new inputs start at zero weight, so the network
+    first computes what `src` did; one weight set is copied into all 8 of a jitter layer."""
+    pairs = list(zip(model.body, src.body)) + [(model.kernel, src.kernel)]
+    if model.hid is not None and src.hid is not None:
+        pairs.append((model.hid, src.hid))
+    if len(model.body) != len(src.body):
+        raise SystemExit(f"train.py: --init {name}: {len(src.body)} body layers, expected "
+                         f"{len(model.body)}")
+    for i, (d, s) in enumerate(pairs):
+        if d.cout != s.cout or d.k != s.k or (i and d.cin != s.cin):
+            raise SystemExit(f"train.py: --init {name}: layer {i} is {s.cin}->{s.cout} {s.k}x{s.k}, "
+                             f"expected {d.cin}->{d.cout} {d.k}x{d.k}")
+        sets = torch.arange(d.sets) % s.sets   # 1 set -> copied into all 8
+        w = s.weight.data[sets]
+        d.bias.data.copy_(s.bias.data[sets])
+        if i == 0:   # input channels by meaning
+            d.weight.data.zero_()
+            d.weight.data[:, :, :9] = w[:, :, :9]
+            h = min(model.hidden, src.hidden)
+            d.weight.data[:, :, 9:9 + h] = w[:, :, 9:9 + h]
+            if model.flags & taa_model.FLAG_REJECT and src.flags & taa_model.FLAG_REJECT:
+                d.weight.data[:, :, -1] = w[:, :, -1]
+        else:
+            d.weight.data.copy_(w)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", required=True, help="dataset folder(s), comma-separated")
@@ -89,6 +119,8 @@ def main():
     ap.add_argument("--hidden", type=int, default=5)
     ap.add_argument("--body", default="3,3,5")
     ap.add_argument("--jitter-layers", default="b2 b3 k")
+    ap.add_argument("--kernel", type=int, default=5, help="kernel-prediction layer size "
+                    "(thesis: 5; it outputs the 2 x 25 colour-mix weights either way)")
     ap.add_argument("--minutes", type=float, default=8.0)
     ap.add_argument("--steps", type=int, default=0, help="stop after this many steps (0: none)")
     ap.add_argument("--batch", type=int, default=8)
@@ -140,21 +172,10 @@ def main():
     print(f"loaded {len(seqs)} training, {len(vals)} validation sequences in "
           f"{time.time() - t_load:.1f} s", flush=True)
     model = taa_model.TAANet(a.width, a.hidden, tuple(int(k) for k in a.body.split(",")),
-                             a.jitter_layers, flags=flags)
+                             a.jitter_layers, flags=flags, kernel=a.kernel)
     model.channels_last = not a.no_channels_last
     if a.init:
-        src = taa_model.load_weights(a.init)
-        for dst_l, src_l in zip(model.layers(), src.layers()):
-            if dst_l.weight.shape == src_l.weight.shape:
-                dst_l.weight.data.copy_(src_l.weight.data)
-            elif dst_l.weight.shape[2] == src_l.weight.shape[2] + 1:
-                # the first layer of a model with the rejection input, from one without:
-                # the new input channel starts at zero weight (same function at first)
-                dst_l.weight.data.zero_()
-                dst_l.weight.data[:, :, :-1] = src_l.weight.data
-            else:
-                raise SystemExit(f"train.py: --init {a.init}: layer shapes differ")
-            dst_l.bias.data.copy_(src_l.bias.data)
+        init_from(model, taa_model.load_weights(a.init), a.init)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr, betas=(0.9, 0.999), eps=1e-7)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda step: 0.96 ** (step / 1000.0))
     gen = dataset.TensorWindows(seqs, a.batch, a.frames + a.burn, a.patch, rng,
@@ -231,7 +252,8 @@ def main():
             "px_frames_per_s": step * a.batch * a.frames * a.patch ** 2 / elapsed,
             "batch": a.batch, "patch": a.patch, "frames": a.frames, "data": a.data,
             "scenes": a.scenes, "val": a.val, "width": a.width, "hidden": a.hidden,
-            "body": a.body, "jitter_layers": a.jitter_layers, "threads": a.threads,
+            "body": a.body, "jitter_layers": a.jitter_layers, "kernel": a.kernel,
+            "threads": a.threads,
             "seed": a.seed, "lr": a.lr, "ema": a.ema, "burn": a.burn, "reject": a.reject,
             "channels_last": model.channels_last,
             "evals": evals, "log": log}
