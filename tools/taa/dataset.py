@@ -72,8 +72,9 @@ class Sequence:
                 arrs["ref"] = self.ref
             if self.post is not None:
                 arrs["post"] = self.post
-            np.savez(cache + ".tmp.npz", **arrs)
-            os.replace(cache + ".tmp.npz", cache)
+            tmp = f"{cache}.{os.getpid()}.tmp.npz"   # runs side by side write their own
+            np.savez(tmp, **arrs)
+            os.replace(tmp, cache)
 
     def packed(self):
         """(T, 11, H, W) float32 tensor: colour, reference, motion, depth_n, rejection masks."""

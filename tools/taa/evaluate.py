@@ -1,0 +1,216 @@
+#!/usr/bin/python3
+"""The evaluation of issue #19, one command: every held-back sequence through the C plugin
+(host --sequence ... --post post_taa, the way users run it) in modes none (the raw input),
+vctaa (the thesis' baseline, tonemapped resolve), vctaa with resolve=linear, and each
+network, then RMSE / temporal error / FLIP against the references (eval.py), the mean
+brightness of each output against the reference's (the darkening of noisy input), per-frame
+curves as PNG, a markdown table with the goals of the issue, and eval.json.
+
+  evaluate.py --build BUILD --out OUT SEQ_DIR... [--net LABEL=W.ttw ...] [--default LABEL]
+              [--threads 2] [--no-flip] [--jumps pillars:80:84]
+
+SEQ_DIR: a sequence folder of render_noisy.sh (render.args replays its input) or of
+render_dataset.sh / render_real.sh (DATA/NAME with DATA/scenes/NAME/scene.json, maxDepth
+1). Folders already rendered in OUT are reused (delete them to re-render). Needs only
+bootstrap's packages (numpy, OpenImageIO, matplotlib, scipy for FLIP)."""
+import argparse
+import json
+import os
+import shlex
+import subprocess
+import sys
+
+import numpy as np
+
+here = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(here, "..", "common"))
+import eval as ev  # noqa: E402
+import flip as flipmod  # noqa: E402
+import images  # noqa: E402
+
+
+def fail(msg):
+    sys.exit(f"evaluate.py: {msg}")
+
+
+def render_args(seq):
+    """Host arguments that reproduce the sequence's input frames."""
+    ra = os.path.join(seq, "render.args")
+    if os.path.exists(ra):
+        return shlex.split(open(ra).read())
+    name = os.path.basename(os.path.normpath(seq))
+    scene = os.path.join(os.path.dirname(os.path.normpath(seq)), "scenes", name, "scene.json")
+    if not os.path.exists(scene):
+        fail(f"{seq}: no render.args and no {scene}: cannot re-render the input")
+    man = json.load(open(os.path.join(seq, "manifest.json")))
+    return ["--spp", str(man.get("spp", 1)), "--set", "integrator_pt.maxDepth=1", scene]
+
+
+def luma(x):
+    return x[..., 0] * 0.2126 + x[..., 1] * 0.7152 + x[..., 2] * 0.0722
+
+
+def run_method(a, seq, out, mode_args, nframes):
+    man = os.path.join(out, "manifest.json")
+    if os.path.exists(man) and len(json.load(open(man))["frames"]) == nframes:
+        return
+    env = dict(os.environ, TT_PLUGIN_PATH=os.path.join(a.build, "plugins"))
+    env.pop("TT_POST_TAA_WEIGHTS", None)
+    cmd = [os.path.join(a.build, "host", "host"), "--quiet", "--threads", str(a.threads),
+           "--sequence", str(nframes), "--out-dir", out, "--aov", "none", "--post", "post_taa"]
+    cmd += mode_args + render_args(seq)
+    r = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if r.returncode:
+        fail(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stdout}")
+
+
+def evaluate_seq(a, seq, methods):
+    name = os.path.basename(os.path.normpath(seq))
+    man = ev.manifest(seq)
+    n = len(man["frames"])
+    ref = ev.frames(seq, "reference", man)
+    ref_srgb = None if a.no_flip else flipmod.srgb_encode(np.stack([ev.tm(x) for x in ref[a.skip:]]))
+    ref_l = np.array([luma(x).mean() for x in ref])
+    rows = []
+    for label, margs in methods:
+        out = os.path.join(a.out, name, label)
+        run_method(a, seq, out, margs, n)
+        outs = ev.frames(out, "post")
+        rmse, tmp, per = ev.metrics(outs, ref, a.skip)
+        row = {"method": label, "rmse": rmse, "temporal": tmp,
+               "rmse_per_frame": [float(v) for v in per],
+               "brightness_per_frame": [float(luma(o).mean() / max(r, 1e-12))
+                                        for o, r in zip(outs, ref_l)]}
+        row["brightness"] = float(np.mean(row["brightness_per_frame"][a.skip:]))
+        if not a.no_flip:
+            fl = ev.flip_frames(outs, ref_srgb, a.skip, a.ppd)
+            row["flip"], row["flip_per_frame"] = float(fl.mean()), [float(v) for v in fl]
+        pm = [f.get("post_ms", 0.0) for f in json.load(open(os.path.join(out, "manifest.json")))["frames"]]
+        row["post_ms"] = float(np.median(pm))
+        rows.append(row)
+        print(f"{name:22s} {label:14s} RMSE {rmse:.5f} temporal {tmp:.5f}" +
+              ("" if a.no_flip else f" FLIP {row['flip']:.5f}") +
+              f" brightness {row['brightness']:.3f}", flush=True)
+    return {"sequence": name, "folder": os.path.abspath(seq), "frames": n, "spp": man.get("spp"),
+            "methods": rows}
+
+
+def plot_seq(a, res):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(13, 4))
+    for r in res["methods"]:
+        ls = "--" if r["method"].startswith("vctaa") else ":" if r["method"] == "input" else "-"
+        ax[0].plot(r["rmse_per_frame"], ls, label=r["method"], lw=1.2)
+        ax[1].plot(r["brightness_per_frame"], ls, label=r["method"], lw=1.2)
+    ax[0].set_title(f"{res['sequence']}: RMSE per frame (tonemapped)")
+    ax[0].set_xlabel("frame")
+    ax[0].axvline(a.skip, color="grey", lw=0.5)
+    ax[1].set_title("mean luminance / reference's")
+    ax[1].axhline(1.0, color="grey", lw=0.5)
+    ax[1].set_xlabel("frame")
+    ax[0].legend(fontsize=7)
+    fig.tight_layout()
+    path = os.path.join(a.out, res["sequence"], "curves.png")
+    fig.savefig(path + ".tmp.png", dpi=90)
+    os.replace(path + ".tmp.png", path)
+    plt.close(fig)
+    return path
+
+
+def table(a, results, nets):
+    lines = ["| sequence | spp | " + " | ".join(m for m, _ in a.methods) + " |",
+             "|---" * (2 + len(a.methods)) + "|"]
+    goals = []
+    for res in results:
+        by = {r["method"]: r for r in res["methods"]}
+        vc = by.get("vctaa")
+        cells = []
+        for m, _ in a.methods:
+            r = by[m]
+            c = f"{r['rmse']:.4f}"
+            if vc and m not in ("vctaa", "input"):
+                c += f" ({r['rmse'] / vc['rmse']:.2f}x)"
+            c += f" / {r['temporal']:.4f}"
+            if "flip" in r:
+                c += f" / {r['flip']:.4f}"
+            cells.append(c)
+        lines.append(f"| {res['sequence']} | {res['spp']} | " + " | ".join(cells) + " |")
+        if a.default and vc:
+            d = by[a.default]
+            goals.append((res["sequence"], d["rmse"] <= 0.8 * vc["rmse"], d["temporal"] <= vc["temporal"],
+                          d["rmse"] / vc["rmse"], d["temporal"] / vc["temporal"]))
+    out = "\n".join(lines) + "\n\nCells: RMSE (x VCTAA) / temporal / FLIP, frames %d.., tonemapped space.\n" % a.skip
+    if goals:
+        out += (f"\nGoals for the default network `{a.default}` (RMSE <= 0.8 x VCTAA, temporal <= "
+                "VCTAA, every held-back sequence):\n\n| sequence | RMSE / VCTAA | temporal / VCTAA | met |\n|---|---|---|---|\n")
+        for s, g1, g2, r1, r2 in goals:
+            out += f"| {s} | {r1:.3f} | {r2:.3f} | {'yes' if g1 and g2 else 'NO'} |\n"
+    return out
+
+
+def jumps(a, results):
+    """RMSE over the given frames (the pillars jump, issue #19: frames 80-84)."""
+    out = ""
+    for spec in a.jumps:
+        name, f0, f1 = spec.split(":")
+        f0, f1 = int(f0), int(f1)
+        for res in results:
+            if res["sequence"] != name and not res["sequence"].startswith(name + "-"):
+                continue
+            vals = {r["method"]: float(np.mean(r["rmse_per_frame"][f0:f1 + 1])) for r in res["methods"]}
+            out += (f"{res['sequence']} frames {f0}-{f1} mean RMSE: " +
+                    ", ".join(f"{m} {v:.4f}" for m, v in vals.items()) + "\n")
+            res["jumps"] = {"frames": [f0, f1], "rmse": vals}
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("seqs", nargs="+")
+    ap.add_argument("--build", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--net", action="append", default=[], help="LABEL=W.ttw (repeatable)")
+    ap.add_argument("--default", default=None, help="the label whose goals the table checks")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--skip", type=int, default=8)
+    ap.add_argument("--ppd", type=float, default=67.0)
+    ap.add_argument("--no-flip", action="store_true")
+    ap.add_argument("--no-linear", action="store_true", help="leave out vctaa resolve=linear")
+    ap.add_argument("--jumps", action="append", default=[], help="NAME:F0:F1 (e.g. pillars:80:84)")
+    a = ap.parse_args()
+    methods = [("input", ["--set", "post_taa.mode=none"]), ("vctaa", ["--set", "post_taa.mode=vctaa"])]
+    if not a.no_linear:
+        methods.append(("vctaa-linear", ["--set", "post_taa.mode=vctaa", "--set",
+                                         "post_taa.resolve=linear"]))
+    nets = []
+    for spec in a.net:
+        if "=" not in spec:
+            fail(f"--net {spec}: expected LABEL=FILE.ttw")
+        label, w = spec.split("=", 1)
+        if not os.path.exists(w):
+            fail(f"--net {spec}: {w} does not exist")
+        nets.append(label)
+        methods.append((label, ["--set", "post_taa.mode=network", "--set",
+                                f"post_taa.weights={os.path.abspath(w)}"]))
+    a.methods = methods
+    if a.default and a.default not in nets:
+        fail(f"--default {a.default}: not one of the --net labels ({', '.join(nets)})")
+    os.makedirs(a.out, exist_ok=True)
+    results = []
+    for seq in a.seqs:
+        res = evaluate_seq(a, seq, methods)
+        res["curves"] = plot_seq(a, res)
+        results.append(res)
+    text = table(a, results, nets) + "\n" + jumps(a, results)
+    print("\n" + text)
+    with open(os.path.join(a.out, "table.md.tmp"), "w") as f:
+        f.write(text)
+    os.replace(os.path.join(a.out, "table.md.tmp"), os.path.join(a.out, "table.md"))
+    json.dump(results, open(os.path.join(a.out, "eval.json.tmp"), "w"), indent=1)
+    os.replace(os.path.join(a.out, "eval.json.tmp"), os.path.join(a.out, "eval.json"))
+
+
+if __name__ == "__main__":
+    main()

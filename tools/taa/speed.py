@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""post_taa speed figures (issue #19 goal 3): runs tests/taa_bench several times (each run
+interleaves every variant frame by frame and prints its per-variant medians), then prints
+the median of the per-run medians and their range per variant, with the load average
+before and after each run. On this shared machine take the figures of a quiet moment:
+the load average is printed beside them.
+
+  speed.py BUILD [--runs 4] [--threads 2] [--weights label=FILE.ttw[@LEVEL],...] [--rounds 9]
+           [--json OUT.json] [--full]   (--full: also 1920x1080)
+
+Goals (640x480, 2 threads, reprojection and colour mix included): network-12 <= 40 ms,
+the default network <= 30 ms (the labels of the shipped files: c12, and the default's)."""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+
+def loadavg():
+    return tuple(float(x) for x in open("/proc/loadavg").read().split()[:3])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("build")
+    ap.add_argument("--runs", type=int, default=4)
+    ap.add_argument("--threads", default="2")
+    ap.add_argument("--weights", default=None)
+    ap.add_argument("--rounds", type=int, default=9)
+    ap.add_argument("--json", default=None)
+    ap.add_argument("--full", action="store_true")
+    ap.add_argument("--goal", action="append", default=[],
+                    help="LABEL=MS: goal per 640x480 frame (default c12=40 and, with "
+                         "--default LABEL, LABEL=30)")
+    ap.add_argument("--default", default=None)
+    a = ap.parse_args()
+    root = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+    env = dict(os.environ, TT_SOURCE_ROOT=root, TT_BENCH_THREADS=a.threads,
+               TT_BENCH_ROUNDS=str(a.rounds), TT_PLUGIN_PATH=os.path.join(a.build, "plugins"))
+    if not a.full:
+        env["TT_BENCH_QUICK"] = "1"
+    if a.weights:
+        env["TT_BENCH_WEIGHTS"] = a.weights
+    runs = []
+    for k in range(a.runs):
+        before = loadavg()
+        r = subprocess.run([os.path.join(a.build, "tests", "taa_bench")], env=env,
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        after = loadavg()
+        if r.returncode:
+            sys.exit(f"speed.py: taa_bench failed:\n{r.stdout}")
+        rows = {}
+        for line in r.stdout.splitlines():
+            if line.startswith("BENCH "):
+                f = line.split()
+                key = (f[1], f[2], int(f[3]))
+                rows[key] = {"wall": float(f[4]), "cpu": float(f[5]), "reject": float(f[6]),
+                             "reproj": float(f[7]), "network": float(f[8]), "mix": float(f[9])}
+        runs.append({"load_before": before, "load_after": after, "rows": rows})
+        print(f"run {k + 1}/{a.runs}: load {before[0]:.2f} -> {after[0]:.2f}", flush=True)
+    keys = list(runs[0]["rows"])
+    goals = {"c12": 40.0}
+    if a.default:
+        goals[a.default] = 30.0
+    for g in a.goal:
+        lab, ms = g.split("=")
+        goals[lab] = float(ms)
+    print(f"\nmedians of {a.runs} per-run medians ({a.rounds} interleaved rounds each), range in "
+          "brackets; ms per frame; CPU = process CPU time, all threads\n")
+    print("| variant | size | threads | wall ms | CPU ms | reproj + rejection CPU | network CPU | mix CPU | goal |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    out = []
+    for key in keys:
+        vals = {m: [r["rows"][key][m] for r in runs if key in r["rows"]] for m in runs[0]["rows"][key]}
+        med = {m: float(np.median(v)) for m, v in vals.items()}
+        lab, size, th = key
+        goal = goals.get(lab) if size == "640x480" and th == 2 else None
+        gtxt = "" if goal is None else f"<= {goal:.0f}: {'met' if med['wall'] <= goal else 'NOT met'}"
+        print(f"| {lab} | {size} | {th} | **{med['wall']:.1f}** ({min(vals['wall']):.1f}-"
+              f"{max(vals['wall']):.1f}) | {med['cpu']:.1f} | {med['reproj']:.1f} | "
+              f"{med['network']:.1f} | {med['mix']:.1f} | {gtxt} |")
+        out.append({"variant": lab, "size": size, "threads": th, "median": med,
+                    "runs": vals, "goal_ms": goal})
+    loads = [r["load_before"][0] for r in runs] + [r["load_after"][0] for r in runs]
+    print(f"\nload average (1 min) during the runs: {min(loads):.2f} - {max(loads):.2f}")
+    if a.json:
+        json.dump({"runs": a.runs, "rounds": a.rounds, "loads": [(r["load_before"], r["load_after"])
+                                                                 for r in runs], "rows": out},
+                  open(a.json, "w"), indent=1)
+
+
+if __name__ == "__main__":
+    main()
