@@ -708,29 +708,24 @@ AI void mix_rows_t(const mix_a *a) {
     for (int k = 5; k < 50; k += 5)
       for (int j = 0; j < 5; j++) m5[j] = vmax(m5[j], vload(lg + (k + j) * CHUNK));
     v8f mx = vmax(vmax(vmax(m5[0], m5[1]), vmax(m5[2], m5[3])), m5[4]);
-    /* 5 independent exp chains (the polynomial's latency would serialise one chain) */
-    v8f s5[5] = {vsplat(0.0f), vsplat(0.0f), vsplat(0.0f), vsplat(0.0f), vsplat(0.0f)};
-    for (int k = 0; k < 50; k += 5) {
-      v8f e[5];
-#pragma GCC unroll 5
-      for (int j = 0; j < 5; j++) e[j] = vexp_neg(vload(lg + (k + j) * CHUNK) - mx);
-#pragma GCC unroll 5
-      for (int j = 0; j < 5; j++) {
-        vstore(lg + (k + j) * CHUNK, e[j]);
-        s5[j] += e[j];
-      }
-    }
-    v8f sum = ((s5[0] + s5[1]) + (s5[2] + s5[3])) + s5[4];
+    /* The softmax weights computed where the mix uses them (no store and reload of the 50
+     * exponentials); the two kernels' sums in separate chains. */
+    v8f sa = vsplat(0.0f), sb = vsplat(0.0f);
     v8f o[3] = {vsplat(0.0f), vsplat(0.0f), vsplat(0.0f)};
     for (uint32_t ty = 0; ty < 5; ty++) {
       const float *row = s->inp + (size_t)(a->y + ty - 2 + s->halo) * rs + COL + x - 2;
+#pragma GCC unroll 5
       for (uint32_t tx = 0; tx < 5; tx++) {
-        v8f ka = vload(lg + (ty * 5 + tx) * CHUNK), kb = vload(lg + (25 + ty * 5 + tx) * CHUNK);
+        v8f ka = vexp_neg(vload(lg + (ty * 5 + tx) * CHUNK) - mx);
+        v8f kb = vexp_neg(vload(lg + (25 + ty * 5 + tx) * CHUNK) - mx);
+        sa += ka;
+        sb += kb;
 #pragma GCC unroll 3
         for (int c = 0; c < 3; c++)
           o[c] += ka * vload(row + c * cs + tx) + kb * vload(row + (6 + c) * cs + tx);
       }
     }
+    v8f sum = sa + sb;
     v8f inv = vsplat(1.0f) / sum;
     float st[8][16];
     for (int c = 0; c < 3; c++) {
