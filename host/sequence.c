@@ -305,7 +305,9 @@ int tt__run_sequence(const tt__host_options *opt) {
   const tt_render_settings *settings = tt_scene_settings(s.ses.scene);
   s.seed = opt->seed_set ? opt->seed : settings->seed;
   s.spp = opt->spp ? opt->spp : settings->spp;
-  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION | (opt->aov_mask & ~TT__AOV_PREVDEPTH));
+  /* prevdepth is the host's own (from depth and the poses), not a film AOV */
+  rc = tt__session_start(&s.ses,
+                         TT_AOV_DEPTH | TT_AOV_MOTION | (opt->aov_mask & ~TT__AOV_PREVDEPTH));
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *still = s.ses.camera;
   uint32_t w = still->width, h = still->height, k = opt->reference_scale;
