@@ -29,7 +29,8 @@ typedef struct tt__host_options {
   const char *scene;
   const char *out;          /* NULL: <scene folder>.exr in the current directory */
   const char *stats;        /* NULL: no stats file */
-  const char *describe;     /* --describe NAME */
+  const char *describe[TT_HOST_MAX_LIST];  /* --describe NAME, in order */
+  int describe_count;
   uint32_t spp;             /* 0: the scene's render.spp */
   double time_budget;       /* seconds; 0: none */
   uint64_t seed;
@@ -68,11 +69,24 @@ typedef struct tt__host_options {
    * path's time range */
   int camera_index_set;     /* --camera-index given */
   uint32_t camera_index;    /* --camera-index I, in [0, TT_HOST_PATH_SAMPLES) */
-  const char *frames_arg;   /* --frames text (meaning depends on --out, checked at the end) */
-  int frames;               /* --frames A:B given: samples A..B-1 to <out stem>_NNNN.exr */
-  uint32_t frames_first, frames_end;
+  const char *frames_arg;   /* --frames text (checked once --out is known) */
+  int frames;               /* --frames A:B without an --out pattern: frames A..B (at --fps,
+                             * both included), each a full render to <out stem>_NNNN.exr */
+  uint32_t frames_first, frames_last;
+  int camera_time_set;      /* one frame of --frames: the camera at t = camera_time */
+  double camera_time;
   int convert;              /* --convert: write the loaded scene as scene.json to --out */
+  /* the run itself, for the --stats benchmark record */
+  int argc;                 /* the command line as given */
+  char **argv;
+  int64_t started_ns;       /* wall-clock (Unix) time the options were read, in ns */
 } tt__host_options;
+
+/* Creates `dir` and its missing parents (mkdir -p); 0, or -1 with errno (output_dir.c). */
+int tt__ensure_dir(const char *dir);
+/* Creates the folder of the output file `path` if missing, before a render; on failure
+ * prints one message naming `option`, the path and the reason, and returns TT_EXIT_OUTPUT. */
+int tt__ensure_parent_dir(const char *option, const char *path);
 
 /* Runs --convert: loads the scene and writes it as scene.json v1 + PLY meshes (convert.c). */
 int tt__run_convert(const tt__host_options *opt);

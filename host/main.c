@@ -17,7 +17,7 @@ int main(int argc, char **argv) {
     return TT_EXIT_OK;
   }
   if (opt.list_plugins) return tt__run_list_plugins(&opt);
-  if (opt.describe) return tt__run_describe(&opt);
+  if (opt.describe_count) return tt__run_describe(&opt);
   if (!opt.scene) {
     fprintf(stderr, "host: no scene given (try --help)\n");
     return TT_EXIT_USAGE;

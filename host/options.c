@@ -1,14 +1,17 @@
 /* host: command-line parsing. Every error names the option and what was expected. */
 #include "host.h"
 
+#include <tunetrace/suggest.h>
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
-void tt__print_usage(FILE *out) {
-  fputs(
+/* The --help text; also the list of options that "did you mean" suggests from. */
+static const char tt__usage[] =
     "usage: host [options] [--plugin NAME]... scene.json\n"
     "\n"
     "Renders a scene with swappable plugins (defaults: accel_embree, integrator_pt).\n"
@@ -20,7 +23,8 @@ void tt__print_usage(FILE *out) {
     "                         --set accel_embree.quality=3 --set integrator_pt.maxDepth=8\n"
     "  --list-plugins         list the plugins found on the search path (exit 3 if any\n"
     "                         file there was rejected)\n"
-    "  --describe NAME        print the plugin's parameter space as JSON on stdout\n"
+    "  --describe NAME        print the plugin's parameter space as JSON on stdout (given\n"
+    "                         several times: a JSON array of the spaces, in order)\n"
     "\n"
     "Rendering:\n"
     "  --spp N                samples per pixel (default: the scene's render.spp)\n"
@@ -105,19 +109,26 @@ void tt__print_usage(FILE *out) {
     "Camera path samples (benchmark views, scenes/README.md):\n"
     "  --camera-index I       render sample I (0..99) of the scene's camera path: the pose\n"
     "                         at t = I/99 of the path's time range (no path: still camera)\n"
-    "  --frames A:B           render samples A..B-1 (0 <= A < B <= 100), each a full render,\n"
-    "                         to <out stem>_NNNN.exr/.png (default stem: <scene folder>)\n"
+    "  --frames A:B           render frames A..B (both included) of the camera path at\n"
+    "                         --fps (frame f is the pose at t = f / fps, as in sequences),\n"
+    "                         each a full render, to <out stem>_NNNN.exr/.png (default\n"
+    "                         stem: <scene folder>); with an --out pattern they are the\n"
+    "                         jittered frames of a sequence (above)\n"
     "\n"
     "Output:\n"
-    "  --out FILE.exr         linear EXR; a display-referred PNG is written next to it\n"
+    "  --out, -o FILE.exr     linear EXR; a display-referred PNG is written next to it\n"
     "                         (default: <scene folder>.exr in the current directory)\n"
     "  --aov LIST             also write AOVs as layers of the EXR: depth (depth.Z), normal\n"
     "                         (normal.X/Y/Z), albedo (albedo.R/G/B), motion (motion.X/Y)\n"
     "  --stats FILE.json      machine-readable record of the run\n"
     "  --convert              write the loaded scene (scene.json or .pbrt) as scene.json v1\n"
     "                         to --out FILE.json, meshes as PLY in meshes/ next to it; no render\n"
-    "  --quiet                no progress bar, warnings and errors only\n"
-    "  --help, --version\n"
+    "  --quiet, -q            no progress bar and no progress messages; warnings and errors\n"
+    "                         are still printed\n"
+    "  --help, -h             this text\n"
+    "  --version              the version and the plugin ABI\n"
+    "\n"
+    "An option's value may also be attached with '=': --spp=64, --out=box.exr.\n"
     "\n"
     "Environment: TT_PLUGIN_PATH (':'-separated plugin folders), OCIO (OpenColorIO config\n"
     "for the PNG display transform; built-in sRGB when unset).\n"
@@ -125,8 +136,53 @@ void tt__print_usage(FILE *out) {
     "Exit codes: 0 success, 1 runtime failure, 2 usage error, 3 plugin load failure,\n"
     "4 scene error, 5 output not written, 130 interrupted (partial image written).\n"
     "SIGINT/SIGTERM finish the current pass and write what was rendered so far; a second\n"
-    "signal exits at once.\n",
-    out);
+    "signal exits at once.\n";
+
+void tt__print_usage(FILE *out) { fputs(tt__usage, out); }
+
+/* Every long option named in the --help text, for "did you mean" (filled once). */
+static size_t tt__known_options(const char **names, size_t cap) {
+  static char words[256][32];
+  static size_t count;
+  if (!count) {
+    for (const char *p = tt__usage; (p = strstr(p, "--")) && count < 256;) {
+      const char *q = p + 2;
+      while ((*q >= 'a' && *q <= 'z') || (*q >= '0' && *q <= '9') || *q == '-') q++;
+      size_t len = (size_t)(q - p);
+      if (len > 3 && len < sizeof words[0] && p[2] != '-') {
+        char w[32];
+        snprintf(w, sizeof w, "%.*s", (int)len, p);
+        size_t k = 0;
+        while (k < count && strcmp(words[k], w)) k++;
+        if (k == count) snprintf(words[count++], sizeof words[0], "%s", w);
+      }
+      p = q;
+    }
+  }
+  size_t n = count < cap ? count : cap;
+  for (size_t k = 0; k < n; k++) names[k] = words[k];
+  return n;
+}
+
+/* Options that take no value: "--NAME=VALUE" is split into "--NAME" "VALUE" for all the
+ * others. */
+static int tt__is_flag(const char *name) {
+  static const char *const flags[] = {"--help", "--version", "--quiet", "--list-plugins",
+                                      "--convert", "--no-db"};
+  for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
+    if (!strcmp(name, flags[k])) return 1;
+  return 0;
+}
+
+/* Prints the unknown-option error, with the closest known option when one is close. */
+static void tt__unknown_option(const char *a) {
+  const char *names[256];
+  size_t n = tt__known_options(names, 256);
+  const char *near = tt_suggest(a, names, n);
+  if (near)
+    fprintf(stderr, "host: unknown option \"%s\"; did you mean %s? (try --help)\n", a, near);
+  else
+    fprintf(stderr, "host: unknown option \"%s\" (try --help)\n", a);
 }
 
 /* Parses an unsigned integer in [lo, hi] for option `name`. */
@@ -260,15 +316,15 @@ static int tt__check_sequence_options(tt__host_options *opt) {
     opt->seq_pattern = opt->out;
     opt->out = NULL;
   } else if (v) {
-    if (!(range && f0 < f1 && f1 <= TT_HOST_PATH_SAMPLES)) {
-      fprintf(stderr, "host: --frames: expected A:B with 0 <= A < B <= %d (path samples "
-              "A..B-1; for frames of a sequence give --out DIR/frame_%%04d.exr), got \"%s\"\n",
-              TT_HOST_PATH_SAMPLES, v);
+    /* the same frames as with a pattern (A..B at --fps), each a full still render */
+    if (!range || f0 > f1) {
+      fprintf(stderr, "host: --frames: expected A:B with A <= B (frames A..B of the camera "
+              "path at --fps, both included), got \"%s\"\n", v);
       return -1;
     }
     opt->frames = 1;
     opt->frames_first = f0;
-    opt->frames_end = f1;
+    opt->frames_last = f1;
   }
   if (!opt->sequence && opt->reference_only) {
     fprintf(stderr, "host: --supersample applies to sequences: give --frames A:B "
@@ -294,8 +350,51 @@ static int tt__check_sequence_options(tt__host_options *opt) {
   return 0;
 }
 
-int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
+/* argv with every "--NAME=VALUE" of an option that takes a value split in two (the value
+ * points into the original argument; the names are allocated once per process). */
+static char **tt__split_equals(int argc, char **argv, int *out_argc) {
+  char **v = calloc((size_t)argc * 2 + 1, sizeof *v);
+  if (!v) return NULL;
+  int n = 0;
+  for (int i = 0; i < argc; i++) {
+    const char *a = argv[i], *eq = a[0] == '-' && a[1] == '-' ? strchr(a, '=') : NULL;
+    if (i == 0 || !eq) {
+      v[n++] = argv[i];
+      continue;
+    }
+    char *name = malloc((size_t)(eq - a) + 1);
+    if (!name) {
+      free(v);
+      return NULL;
+    }
+    memcpy(name, a, (size_t)(eq - a));
+    name[eq - a] = '\0';
+    if (tt__is_flag(name)) {
+      v[n++] = argv[i];  /* reported below: a flag takes no value */
+      free(name);
+      continue;
+    }
+    v[n++] = name;
+    v[n++] = (char *)(eq + 1);
+  }
+  *out_argc = n;
+  return v;
+}
+
+int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
   memset(opt, 0, sizeof *opt);
+  int argc = 0;
+  char **argv = tt__split_equals(argc0, argv0, &argc);
+  if (!argv) {
+    fprintf(stderr, "host: out of memory reading the command line\n");
+    return TT_EXIT_USAGE;
+  }
+  opt->argc = argc0;
+  opt->argv = argv0;
+  struct timespec now;
+  clock_gettime(CLOCK_REALTIME, &now);
+  opt->started_ns = (int64_t)now.tv_sec * 1000000000 + now.tv_nsec;
+  /* argv lives as long as the options point into it: the whole process */
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     const char *v;
@@ -324,7 +423,8 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       }
       if (tt__push(opt->sets, &opt->set_count, a, v)) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--describe")) {
-      if (!(opt->describe = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (!(v = tt__arg(argc, argv, &i)) || tt__push(opt->describe, &opt->describe_count, a, v))
+        return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--convert")) {
       opt->convert = 1;
     } else if (!strcmp(a, "--out") || !strcmp(a, "-o")) {
@@ -470,8 +570,12 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
       if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 16, &n)) return TT_EXIT_USAGE;
       opt->reference_scale = (uint32_t)n;
       opt->reference_only = 1;
+    } else if (a[0] == '-' && a[1] == '-' && strchr(a, '=')) {
+      fprintf(stderr, "host: %.*s takes no value, got \"%s\"\n", (int)(strchr(a, '=') - a), a,
+              a);
+      return TT_EXIT_USAGE;
     } else if (a[0] == '-' && a[1] != '\0') {
-      fprintf(stderr, "host: unknown option \"%s\" (try --help)\n", a);
+      tt__unknown_option(a);
       return TT_EXIT_USAGE;
     } else {
       if (opt->scene) {

@@ -4,6 +4,7 @@
 
 #include <cjson/cJSON.h>
 #include <libgen.h>
+#include <limits.h>
 #include <stddef.h>
 #include <signal.h>
 #include <stdio.h>
@@ -74,14 +75,14 @@ int tt__run_list_plugins(const tt__host_options *opt) {
 
 /* ---- --describe ---- */
 
-int tt__run_describe(const tt__host_options *opt) {
-  tt_registry *reg = tt__make_registry(opt, tt__host_services(1));
-  if (!reg) return TT_EXIT_FAILURE;
+/* The JSON of one plugin's space and options (NULL after printing what failed); `*rc` gets
+ * the exit code of a failure. */
+static cJSON *tt__describe_one(tt_registry *reg, const char *name, int *rc) {
   tt_loaded_plugin *p = NULL;
-  if (tt_registry_load(reg, opt->describe, &p) != TT_OK) {
-    fprintf(stderr, "host: --describe \"%s\": %s\n", opt->describe, tt_last_error());
-    tt_registry_destroy(reg);
-    return TT_EXIT_PLUGIN;
+  if (tt_registry_load(reg, name, &p) != TT_OK) {
+    fprintf(stderr, "host: --describe \"%s\": %s\n", name, tt_last_error());
+    *rc = TT_EXIT_PLUGIN;
+    return NULL;
   }
   const tt_plugin *e = tt_loaded_plugin_entry(p);
   const tt_space *space = tt_loaded_plugin_space(p);
@@ -91,8 +92,8 @@ int tt__run_describe(const tt__host_options *opt) {
   if (!root) {
     fprintf(stderr, "host: --describe %s: %s\n", e->name,
             space ? tt_last_error() : "out of memory");
-    tt_registry_destroy(reg);
-    return TT_EXIT_FAILURE;
+    *rc = TT_EXIT_FAILURE;
+    return NULL;
   }
   if (!space) {
     cJSON_AddStringToObject(root, "plugin", e->name);
@@ -113,31 +114,56 @@ int tt__run_describe(const tt__host_options *opt) {
     cJSON_AddStringToObject(o, "value", v ? v : "");
     cJSON_AddItemToArray(opts, o);
   }
-  char *out = cJSON_Print(root);
-  cJSON_Delete(root);
-  if (out) printf("%s\n", out);
-  free(out);
-  tt_registry_destroy(reg);
-  return TT_EXIT_OK;
+  return root;
+}
+
+int tt__run_describe(const tt__host_options *opt) {
+  /* one NAME: its object; several: an array of them in order (every failure reported).
+   * A registry per name: two plugins of one kind cannot share one. */
+  int rc = TT_EXIT_OK;
+  cJSON *all = cJSON_CreateArray();
+  for (int k = 0; k < opt->describe_count; k++) {
+    tt_registry *reg = tt__make_registry(opt, tt__host_services(1));
+    if (!reg) {
+      rc = TT_EXIT_FAILURE;
+      break;
+    }
+    cJSON *one = tt__describe_one(reg, opt->describe[k], &rc);
+    if (one) cJSON_AddItemToArray(all, one);
+    tt_registry_destroy(reg);
+  }
+  if (rc == TT_EXIT_OK) {
+    cJSON *root = opt->describe_count == 1 ? cJSON_GetArrayItem(all, 0) : all;
+    char *out = cJSON_Print(root);
+    if (out) printf("%s\n", out);
+    free(out);
+  }
+  cJSON_Delete(all);
+  return rc;
 }
 
 /* ---- render ---- */
 
-/* Default output: <scene folder>.exr for ".../NAME/scene.json", else <file stem>.exr. */
+/* Default output: <scene folder>.exr for ".../NAME/scene.json", else <file stem>.exr. The
+ * folder's name comes from the resolved path, so "scene.json" run from its own folder (or
+ * "./scene.json", "../NAME/scene.json") is named after the folder too, never "..exr". */
 static void tt__default_out(const char *scene, char *buf, size_t n) {
   char tmp[4096];
   snprintf(tmp, sizeof tmp, "%s", scene);
   char *base = basename(tmp);
   if (!strcmp(base, "scene.json")) {
-    char tmp2[4096];
-    snprintf(tmp2, sizeof tmp2, "%s", scene);
+    char resolved[PATH_MAX], tmp2[4096];
+    snprintf(tmp2, sizeof tmp2, "%s", realpath(scene, resolved) ? resolved : scene);
     char *dir = dirname(tmp2);
     char tmp3[4096];
     snprintf(tmp3, sizeof tmp3, "%s", dir);
-    snprintf(buf, n, "%s.exr", basename(tmp3));
+    const char *name = basename(tmp3);
+    /* "/scene.json" or an unresolvable "./scene.json": no folder name to use */
+    if (!strcmp(name, "/") || !strcmp(name, ".") || !strcmp(name, "..")) name = "scene";
+    snprintf(buf, n, "%s.exr", name);
   } else {
     char *dot = strrchr(base, '.');
-    if (dot) *dot = 0;
+    if (dot && dot != base) *dot = 0;
     snprintf(buf, n, "%s.exr", base);
   }
 }
@@ -225,21 +251,45 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
   return rc;
 }
 
+/* A post-filter works on the frames of a sequence (temporal history, motion vectors); a
+ * still render would write the image unfiltered, so loading one for a still is a usage
+ * error, unless the filter is the tuning target (--tune NAME measures it on the film). */
+static int tt__check_still_post(const tt__session *s) {
+  for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
+    const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->reg, i));
+    if (e->kind != TT_KIND_POST || (s->opt->tune && !strcmp(s->opt->tune, e->name))) continue;
+    fprintf(stderr, "host: %s %s: a post-filter runs over the frames of a sequence, and this "
+            "is a still render, which it would leave unfiltered; render frames with --frames "
+            "A:B --out DIR/frame_%%04d.exr (or --sequence N --out-dir DIR), or tune the filter "
+            "with --tune %s\n", s->opt->post && strstr(s->opt->post, e->name) ? "--post" : "--plugin",
+            e->name, e->name);
+    return TT_EXIT_USAGE;
+  }
+  return TT_EXIT_OK;
+}
+
 int tt__run_render(const tt__host_options *opt) {
+  tt__install_signals();
+  /* a missing output folder is created now, not found missing after the render */
+  if (opt->out && tt__ensure_parent_dir("--out", opt->out) != TT_EXIT_OK) return TT_EXIT_OUTPUT;
+  if (opt->stats && tt__ensure_parent_dir("--stats", opt->stats) != TT_EXIT_OK)
+    return TT_EXIT_OUTPUT;
   if (opt->frames) {
-    /* --frames A:B: one full render per camera path sample, <stem>_NNNN.exr (and
-     * <stats stem>_NNNN.json); the scene is reloaded for each sample */
+    /* --frames A:B: one full render per frame f = A..B (the camera at t = f / fps, the
+     * frames of a sequence), <stem>_NNNN.exr (and <stats stem>_NNNN.json); the scene is
+     * reloaded for each frame */
     char stem[4096], name[4200], stats[4200];
     if (opt->out) snprintf(stem, sizeof stem, "%.*s", (int)(strlen(opt->out) - 4), opt->out);
     else {
       tt__default_out(opt->scene, stem, sizeof stem);
       stem[strlen(stem) - 4] = 0;
     }
-    for (uint32_t f = opt->frames_first; f < opt->frames_end; f++) {
+    double fps = opt->fps > 0 ? opt->fps : 24.0;
+    for (uint32_t f = opt->frames_first; f <= opt->frames_last; f++) {
       tt__host_options one = *opt;
       one.frames = 0;
-      one.camera_index_set = 1;
-      one.camera_index = f;
+      one.camera_time_set = 1;
+      one.camera_time = f / fps;
       snprintf(name, sizeof name, "%s_%04u.exr", stem, f);
       one.out = name;
       if (opt->stats) {
@@ -253,8 +303,6 @@ int tt__run_render(const tt__host_options *opt) {
     }
     return TT_EXIT_OK;
   }
-  tt__install_signals();
-
   /* outputs are checked before the render, not found unwritable after it */
   char exr[4096], png[4096];
   if (opt->out) snprintf(exr, sizeof exr, "%s", opt->out);
@@ -269,6 +317,8 @@ int tt__run_render(const tt__host_options *opt) {
   tt__session s;
   tt__tuning *tuning = NULL;
   int rc = tt__session_open(&s, opt);
+  if (rc != TT_EXIT_OK) goto done;
+  rc = tt__check_still_post(&s);
   if (rc != TT_EXIT_OK) goto done;
   const tt_host *host = s.host;
   tt__run_record *rec = &s.rec;
@@ -327,7 +377,7 @@ int tt__run_render(const tt__host_options *opt) {
     tt__progress_update("render", frac);
   }
   tt__progress_finish();
-  if (rec->nonfinite && !opt->quiet)
+  if (rec->nonfinite)  /* a warning: --quiet keeps it */
     fprintf(stderr, "host: warning: %llu non-finite samples were dropped\n",
             (unsigned long long)rec->nonfinite);
 

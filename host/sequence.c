@@ -65,21 +65,6 @@ void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h,
   free(tmp);
 }
 
-/* Creates `dir` and its missing parents (mkdir -p). */
-static int tt__ensure_dir(const char *dir) {
-  char tmp[4096];
-  snprintf(tmp, sizeof tmp, "%s", dir);
-  for (char *p = tmp + 1; *p; p++) {
-    if (*p != '/') continue;
-    *p = 0;
-    if (mkdir(tmp, 0777) != 0 && errno != EEXIST) return -1;
-    *p = '/';
-  }
-  if (mkdir(tmp, 0777) != 0 && errno != EEXIST) return -1;
-  struct stat st;
-  return stat(tmp, &st) == 0 && S_ISDIR(st.st_mode) ? 0 : -1;
-}
-
 /* Everything one sequence run holds besides the session. */
 typedef struct tt__seq {
   const tt__host_options *opt;

@@ -106,16 +106,20 @@ static int tt__apply_sets(tt__session *s) {
 }
 
 /* --camera-index I: the path sample I of TT_HOST_PATH_SAMPLES, t = first key + I/(N-1) of
- * the path's time range, becomes the scene's camera; the motion AOV's previous frame is one
- * frame interval (--fps, default 24) earlier. */
+ * the path's time range, becomes the scene's camera; a frame of --frames: the pose at its
+ * time (camera_time = f / fps, as the frames of a sequence). The motion AOV's previous frame
+ * is one frame interval (--fps, default 24) earlier. */
 static void tt__apply_camera_index(tt__session *s) {
   const tt__host_options *opt = s->opt;
   const tt_camera *c0 = tt_scene_camera(s->scene);
-  double t = 0;
-  if (c0->key_count > 0)
+  double t = opt->camera_time_set ? opt->camera_time : 0;
+  if (c0->key_count > 0 && !opt->camera_time_set)
     t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) *
                                (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
-  else if (!opt->quiet)
+  else if (c0->key_count == 0 && opt->camera_time_set)  /* a warning: --quiet keeps it */
+    fprintf(stderr, "host: warning: --frames: the scene has no camera path; every frame "
+            "uses its still camera\n");
+  else if (c0->key_count == 0)
     fprintf(stderr, "host: warning: --camera-index %u: the scene has no camera path; "
             "using its still camera\n", opt->camera_index);
   tt_session_set_camera_time(s->lib, t, 1.0 / (opt->fps > 0 ? opt->fps : 24.0));
@@ -155,20 +159,26 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
   int ndirs = tt__plugin_dirs(opt, dirs, 2 * TT_HOST_MAX_LIST);
   for (int i = 0; i < ndirs; i++) tt_session_add_plugin_dir(s->lib, dirs[i]);
   s->reg = tt_session_registry(s->lib);
+  /* every problem is reported before giving up: a scene that does not load still lets the
+   * plugins and --set be checked; the exit code is the first problem's (scene 4, plugin 3,
+   * --set 2) */
+  int rc = TT_EXIT_OK;
   if (tt_session_load_scene(s->lib, opt->scene) != TT_OK) {
     fprintf(stderr, "host: %s\n", tt_last_error());
-    return TT_EXIT_SCENE;
+    rc = TT_EXIT_SCENE;
+  } else {
+    s->scene = tt_session_scene(s->lib);
+    if (opt->width && tt_scene_set_resolution(s->scene, opt->width, opt->height) != TT_OK) {
+      fprintf(stderr, "host: --res: %s\n", tt_last_error());
+      return TT_EXIT_USAGE;
+    }
+    if (opt->camera_index_set || opt->camera_time_set) tt__apply_camera_index(s);
+    s->camera = tt_session_camera(s->lib);
   }
-  s->scene = tt_session_scene(s->lib);
-  if (opt->width && tt_scene_set_resolution(s->scene, opt->width, opt->height) != TT_OK) {
-    fprintf(stderr, "host: --res: %s\n", tt_last_error());
-    return TT_EXIT_USAGE;
-  }
-  if (opt->camera_index_set) tt__apply_camera_index(s);
-  s->camera = tt_session_camera(s->lib);
   if (opt->seed_set) tt_session_set_seed(s->lib, opt->seed);
-  if (tt__load_plugins(s)) return TT_EXIT_PLUGIN;
-  if (tt__apply_sets(s)) return TT_EXIT_USAGE;
+  if (tt__load_plugins(s)) return rc != TT_EXIT_OK ? rc : TT_EXIT_PLUGIN;
+  if (tt__apply_sets(s) && rc == TT_EXIT_OK) rc = TT_EXIT_USAGE;
+  if (rc != TT_EXIT_OK) return rc;
   if (tt_session_check(s->lib) != TT_OK) {
     fprintf(stderr, "host: %s\n", tt_last_error());
     return TT_EXIT_USAGE;

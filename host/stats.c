@@ -2,9 +2,12 @@
 #include "host.h"
 
 #include <cjson/cJSON.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 /* Adds the configuration of one plugin as a JSON object, or null. */
 static void tt__add_config(cJSON *parent, const char *name, const tt_config *config) {
@@ -82,9 +85,48 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
   }
 }
 
+/* What a benchmark record needs besides the figures: when, on what, with which code and
+ * command. The load average is read when the record is written (its 1-minute value covers
+ * the end of the run): on a shared machine it says how much the timings can be trusted. */
+static void tt__add_provenance(cJSON *root, const tt__run_record *rec) {
+  cJSON_AddStringToObject(root, "tunetrace_commit", tt_build_commit());
+  const tt__host_options *opt = rec->opt;
+  char stamp[64] = "";
+  if (opt && opt->started_ns) {
+    time_t secs = (time_t)(opt->started_ns / 1000000000);
+    struct tm tm;
+    if (gmtime_r(&secs, &tm))
+      snprintf(stamp, sizeof stamp, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+               tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+               (int)(opt->started_ns / 1000000 % 1000));
+  }
+  cJSON_AddStringToObject(root, "timestamp", stamp);
+  cJSON *cmd = cJSON_AddArrayToObject(root, "command_line");
+  for (int i = 0; opt && i < opt->argc; i++)
+    cJSON_AddItemToArray(cmd, cJSON_CreateString(opt->argv[i]));
+  char cwd[4096];
+  if (getcwd(cwd, sizeof cwd)) cJSON_AddStringToObject(root, "working_directory", cwd);
+  cJSON *m = cJSON_AddObjectToObject(root, "machine");
+  cJSON_AddStringToObject(m, "cpu", tt_tunedb_cpu_model());
+  cJSON_AddNumberToObject(m, "cores", (double)sysconf(_SC_NPROCESSORS_ONLN));
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0)
+    cJSON_AddNumberToObject(m, "cores_available", CPU_COUNT(&set));
+  cJSON_AddStringToObject(m, "machine_id", tt_tunedb_machine_id());
+  char name[256] = "";
+  if (gethostname(name, sizeof name - 1) == 0) cJSON_AddStringToObject(m, "hostname", name);
+  double load[3];
+  if (getloadavg(load, 3) == 3) {
+    cJSON *la = cJSON_AddArrayToObject(m, "load_average");
+    for (int i = 0; i < 3; i++) cJSON_AddItemToArray(la, cJSON_CreateNumber(load[i]));
+  }
+}
+
 tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "tunetrace", tt_version());
+  tt__add_provenance(root, rec);
   cJSON_AddStringToObject(root, "scene", tt_scene_source(rec->scene));
   cJSON_AddStringToObject(root, "scene_id", tt_scene_id(rec->scene));
   cJSON *plugins = cJSON_AddObjectToObject(root, "plugins");

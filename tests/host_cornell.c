@@ -120,6 +120,35 @@ int main(void) {
     CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "spp")) == 8);
     CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "seed")) == 7);
     CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "rays")) >= 64 * 64 * 8);
+    /* what a benchmark record needs (#17 defect 15): version and commit, when, the command
+     * line, the CPU, its cores and the load */
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(root, "tunetrace")), tt_version()));
+    const char *commit = cJSON_GetStringValue(cJSON_GetObjectItem(root, "tunetrace_commit"));
+    CHECK_MSG(commit && !strcmp(commit, tt_build_commit()) && strlen(commit) >= 7, "commit %s",
+              commit ? commit : "(none)");
+    const char *stamp = cJSON_GetStringValue(cJSON_GetObjectItem(root, "timestamp"));
+    int year = 0, mon = 0, day = 0, hh = -1, mm = -1, ss = -1;
+    CHECK_MSG(stamp && sscanf(stamp, "%4d-%2d-%2dT%2d:%2d:%2d", &year, &mon, &day, &hh, &mm, &ss) == 6 &&
+              year >= 2024 && mon >= 1 && mon <= 12 && stamp[strlen(stamp) - 1] == 'Z',
+              "timestamp %s", stamp ? stamp : "(none)");
+    if (stamp) {  /* the start of this very run: within a day of now */
+      struct tm tm = {.tm_year = year - 1900, .tm_mon = mon - 1, .tm_mday = day, .tm_hour = hh,
+                      .tm_min = mm, .tm_sec = ss};
+      double age = difftime(time(NULL), timegm(&tm));
+      CHECK_MSG(age >= -5 && age < 86400, "timestamp %s is %g s old", stamp, age);
+    }
+    cJSON *cmd = cJSON_GetObjectItem(root, "command_line");
+    CHECK(cJSON_GetArraySize(cmd) == 15);
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetArrayItem(cmd, 0)), host_path()));
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetArrayItem(cmd, 14)), scene_path));
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetArrayItem(cmd, 2)), "--res"));
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetArrayItem(cmd, 3)), "64x64"));
+    cJSON *m = cJSON_GetObjectItem(root, "machine");
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(m, "cpu")), tt_tunedb_cpu_model()));
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(m, "cores")) == sysconf(_SC_NPROCESSORS_ONLN));
+    double avail = cJSON_GetNumberValue(cJSON_GetObjectItem(m, "cores_available"));
+    CHECK(avail >= 1 && avail <= sysconf(_SC_NPROCESSORS_ONLN));
+    CHECK(cJSON_GetArraySize(cJSON_GetObjectItem(m, "load_average")) == 3);
     cJSON_Delete(root);
   }
 

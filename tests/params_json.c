@@ -108,7 +108,7 @@ static void test_config_round_trip(void) {
   /* Config JSON errors leave the configuration untouched. */
   tt_config *before = tt_config_clone(b);
   struct { const char *json, *expect; } bad[] = {
-    {"{\"maxDepth\": 6, \"bogus\": 1}", "cfg.json: unknown parameter \"bogus\" (space accel_embree has: quality"},
+    {"{\"maxDepth\": 6, \"bogus\": 1}", "cfg.json: unknown parameter \"bogus\" of accel_embree (known: quality"},
     {"{\"maxDepth\": 65}", "cfg.json: accel_embree.maxDepth: 65 is out of range [4, 64]"},
     {"{\"maxDepth\": 6.5}", "accel_embree.maxDepth: 6.5 is not an integer"},
     {"{\"maxDepth\": \"6\"}", "cfg.json: accel_embree.maxDepth: expected an integer, got a string (\"6\")"},

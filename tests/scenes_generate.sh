@@ -3,7 +3,7 @@
 # Cornell box and the committed Cornell-box variants load and render with host at 32x32 with
 # exit 0, no non-finite sample, rays > 0 and a non-black mean; the variants in
 # scenes/cornell-box-variants/ are what the generator writes today; --camera-index gives a
-# different image than index 0 on a scene with a path; --frames A:B writes B-A numbered files.
+# different image than index 0 on a scene with a path; --frames A:B writes B-A+1 numbered files.
 set -euo pipefail
 PY=/usr/bin/python3
 if ! "$PY" -c 'import numpy' 2>/dev/null; then
@@ -102,9 +102,9 @@ check 'grep -q "\"index\": 99, \"t\": 10.0, \"position\": \[278.0, 273.0, -800.0
 mkdir -p "$dir/fr"
 "$HOST" --quiet --res 8x8 --spp 1 --threads 2 --frames 97:100 --out "$dir/fr/out.exr" \
   --stats "$dir/fr/st.json" "$SCENE"
-check '[ -f "$dir/fr/out_0097.exr" ] && [ -f "$dir/fr/out_0098.png" ] && [ -f "$dir/fr/out_0099.exr" ]'
-check '[ -f "$dir/fr/st_0099.json" ] && [ ! -e "$dir/fr/out_0096.exr" ] && [ ! -e "$dir/fr/out_0100.exr" ]'
-rc=0; "$HOST" --quiet --frames 5:5 "$SCENE" 2>/dev/null || rc=$?
+check '[ -f "$dir/fr/out_0097.exr" ] && [ -f "$dir/fr/out_0098.png" ] && [ -f "$dir/fr/out_0100.exr" ]'
+check '[ -f "$dir/fr/st_0100.json" ] && [ ! -e "$dir/fr/out_0096.exr" ] && [ ! -e "$dir/fr/out_0101.exr" ]'
+rc=0; "$HOST" --quiet --frames 5:4 "$SCENE" 2>/dev/null || rc=$?
 check '[ $rc = 2 ]'
 rc=0; "$HOST" --quiet --camera-index 100 "$SCENE" 2>/dev/null || rc=$?
 check '[ $rc = 2 ]'

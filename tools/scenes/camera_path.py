@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Camera paths for benchmark scenes (thesis 3.3.5.1): a few keyframes mixing open and
 occluded views, interpolated by tt_scene_camera_at and sampled into 100 poses by
-`host --camera-index I` / `--frames A:B` (t = I/99 of the path's time range).
+`host --camera-index I` (t = I/99 of the path's time range; `--frames A:B` renders frames
+at --fps instead, t = f / fps).
 
   camera_path.py auto SOURCE [--seconds 2]         print a {"path": [...]} fragment
       SOURCE is a scene.json (bounds computed from its meshes) or one line of

@@ -101,6 +101,11 @@ TT_API void tt_free(void *ptr);
 /* Library version string, e.g. "0.1.0". */
 TT_API const char *tt_version(void);
 
+/* The git commit libtunetrace was built from (`git describe --always --dirty`, e.g.
+ * "398b3df" or "398b3df-dirty"), or "unknown" when it was not built from a git checkout.
+ * For benchmark records: a figure is reproducible only with the code that measured it. */
+TT_API const char *tt_build_commit(void);
+
 #ifdef __cplusplus
 }
 #endif

@@ -25,5 +25,6 @@
 #include <tunetrace/tuning_hint.h>
 #include <tunetrace/tuning.h>
 #include <tunetrace/session.h>
+#include <tunetrace/suggest.h>
 
 #endif /* TUNETRACE_TUNETRACE_H */

@@ -3,6 +3,7 @@
 #include "params/params_internal.h"
 
 #include <tunetrace/params.h>
+#include <tunetrace/suggest.h>
 
 #include <ctype.h>
 #include <errno.h>
@@ -387,6 +388,24 @@ int tt__space_int_range(const tt_space *space, size_t index, int64_t *min, int64
 }
 
 size_t tt_space_count(const tt_space *space) { return space ? space->count : 0; }
+
+void tt__space_unknown_hint(const tt_space *space, const char *name, char *buf, size_t n) {
+  if (!n) return;
+  buf[0] = '\0';
+  if (!space) return;
+  const char *names[256];
+  size_t count = space->count < 256 ? space->count : 256;
+  for (size_t i = 0; i < count; i++) names[i] = space->params[i].name;
+  const char *near = tt_suggest(name, names, count);
+  if (near) snprintf(buf, n, "did you mean \"%s\"? ", near);
+  size_t used = strlen(buf);
+  const char *sep = "known: ";
+  for (size_t i = 0; i < space->count && used + 1 < n; i++, sep = ", ") {
+    snprintf(buf + used, n - used, "%s%s", sep, space->params[i].name);
+    used += strlen(buf + used);
+  }
+  if (!space->count && used + 1 < n) snprintf(buf + used, n - used, "known: none");
+}
 
 int tt_space_find(const tt_space *space, const char *name) {
   if (!space || !name) return -1;
@@ -782,10 +801,12 @@ tt_status tt_config_set_string(tt_config *config, const char *name, const char *
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_string: config is NULL");
   const tt_space *s = config->space;
   int idx = tt_space_find(s, name);
-  if (idx < 0)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                        "%s: unknown parameter \"%s\" (see the plugin's parameter space)",
-                        s->plugin, name ? name : "(null)");
+  if (idx < 0) {
+    char hint[1024];
+    tt__space_unknown_hint(s, name, hint, sizeof hint);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: unknown parameter \"%s\" (%s)", s->plugin,
+                        name ? name : "(null)", hint);
+  }
   const tt__param *p = &s->params[idx];
   if (!text)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: value text is NULL", s->plugin,
@@ -959,8 +980,10 @@ tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_
   for (size_t k = 0; k < count; k++) {
     int i = tt_space_find(space, names[k]);
     if (i < 0) {
-      tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no parameter \"%s\" to tune (known: see --describe %s)",
-                   space->plugin, names[k], space->plugin);
+      char hint[1024];
+      tt__space_unknown_hint(space, names[k], hint, sizeof hint);
+      tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no parameter \"%s\" to tune (%s)",
+                   space->plugin, names[k], hint);
       tt_space_destroy(sub);
       return NULL;
     }

@@ -557,18 +557,10 @@ tt_status tt_config_from_json(tt_config *config, const char *json, const char *s
       }
     int idx = tt_space_find(space, m->string);
     if (idx < 0) {
-      char names[768];
-      size_t used = 0;
-      names[0] = '\0';
-      for (size_t i = 0; i < tt_space_count(space) && used < sizeof names; i++) {
-        int n = snprintf(names + used, sizeof names - used, "%s%s", i ? ", " : "",
-                         tt_space_name(space, i));
-        if (n < 0) break;
-        used += (size_t)n;
-      }
-      st = tt__json_error(TT_ERR_PARSE, source, NULL,
-                          "unknown parameter \"%s\" (space %s has: %s)", m->string,
-                          tt_space_plugin(space), names);
+      char hint[1024];
+      tt__space_unknown_hint(space, m->string, hint, sizeof hint);
+      st = tt__json_error(TT_ERR_PARSE, source, NULL, "unknown parameter \"%s\" of %s (%s)", m->string,
+                          tt_space_plugin(space), hint);
       goto done;
     }
     if (tt__config_set_json(work, (size_t)idx, m, source) < 0) {

@@ -1,6 +1,7 @@
 /* Plugin registry: finds plugin files, dlopen()s them, validates their ABI and keeps them
  * loaded until the registry is destroyed (see loader.h for the rules). */
 #include <tunetrace/loader.h>
+#include <tunetrace/suggest.h>
 
 #include "plugin/elf_check.h"
 
@@ -315,6 +316,9 @@ const char *tt_registry_search_path(tt_registry *reg) {
   return reg->search_path;
 }
 
+/* ' (did you mean "NAME"?)' for a plugin not found (defined below tt__list_dir). */
+static void tt__suggest_plugin(const tt__strlist *dirs, const char *name, char *buf, size_t n);
+
 char *tt_registry_resolve(tt_registry *reg, const char *name_or_path) {
   if (!reg || !name_or_path || !*name_or_path) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_registry_resolve: empty plugin name");
@@ -359,9 +363,10 @@ char *tt_registry_resolve(tt_registry *reg, const char *name_or_path) {
     }
   }
   if (!found) {
-    char *joined = tt__strlist_join(&dirs);
-    tt_set_error(TT_ERR_IO, "plugin \"%s\" not found: looked for %s.so and %s/%s.so in %s", s,
-                 s, s, s, joined && *joined ? joined : "(no directories)");
+    char *joined = tt__strlist_join(&dirs), near[160] = "";
+    tt__suggest_plugin(&dirs, s, near, sizeof near);
+    tt_set_error(TT_ERR_IO, "plugin \"%s\" not found%s: looked for %s.so and %s/%s.so in %s", s,
+                 near, s, s, s, joined && *joined ? joined : "(no directories)");
     free(joined);
   }
   free(flat);
@@ -695,6 +700,28 @@ static size_t tt__list_dir(const char *dir, tt__listed **items) {
   closedir(d);
   if (n) qsort(*items, n, sizeof **items, tt__listed_cmp);
   return n;
+}
+
+/* Writes ' (did you mean "NAME"?)' into buf when a plugin file in `dirs` has a name close
+ * to `name` (tt_suggest), else "". */
+static void tt__suggest_plugin(const tt__strlist *dirs, const char *name, char *buf, size_t n) {
+  buf[0] = '\0';
+  const char *names[256];
+  tt__listed *all[64];
+  size_t counts[64], count = 0, ndirs = dirs->n < 64 ? dirs->n : 64;
+  for (size_t i = 0; i < ndirs; i++) {
+    counts[i] = tt__list_dir(dirs->v[i], &all[i]);
+    for (size_t k = 0; k < counts[i] && count < 256; k++) names[count++] = all[i][k].name;
+  }
+  const char *near = tt_suggest(name, names, count);
+  if (near) snprintf(buf, n, " (did you mean \"%s\"?)", near);
+  for (size_t i = 0; i < ndirs; i++) {
+    for (size_t k = 0; k < counts[i]; k++) {
+      free(all[i][k].name);
+      free(all[i][k].path);
+    }
+    free(all[i]);
+  }
 }
 
 void tt_registry_list_files(tt_registry *reg, void (*fn)(void *user, const char *path),

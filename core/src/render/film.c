@@ -92,7 +92,16 @@ tt_film *tt_film_create(uint32_t width, uint32_t height, uint32_t aov_mask) {
   return film;
 oom:
   tt_film_destroy(film);
-  tt_set_error(TT_ERR_OUT_OF_MEMORY, "film: cannot allocate %ux%u film", width, height);
+  {
+    /* the size asked for, so the user sees how far off the machine it is */
+    size_t floats = 7;  /* colour sums (3), weight sums (1), splats (3) */
+    for (int i = 0; i < TT__AOV_COUNT; i++)
+      if (aov_mask & (1u << i)) floats += tt_aov_channels((tt_aov)(1u << i));
+    double bytes = (double)width * (double)height * (double)floats * sizeof(float);
+    tt_set_error(TT_ERR_OUT_OF_MEMORY, "film: cannot allocate a %ux%u film: %.0f bytes (%.1f "
+                 "GiB, %zu floats per pixel) are not available", width, height, bytes,
+                 bytes / (1024.0 * 1024.0 * 1024.0), floats);
+  }
   return NULL;
 }
 

@@ -2,6 +2,8 @@
  * integrator, film; progressive passes and their statistics. */
 #include "session/session_internal.h"
 
+#include <tunetrace/suggest.h>
+
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -64,16 +66,28 @@ tt_status tt_session_add_plugin_dir(tt_session *s, const char *dir) {
 }
 
 /* Sets the scene's render.maxDepth as the default depth of an integrator's configuration
- * (unless maxDepth was set explicitly); a value outside the space is a warning. */
+ * (unless maxDepth was set explicitly). A depth beyond the integrator's range (pbrt's
+ * maxdepth 65 of living-room, range [0, 64]) is clamped to it with a warning: falling back to
+ * the plugin's default depth would render a far darker image than the scene asks for. */
 static void tt__apply_scene_depth(tt_session *s, size_t i) {
   tt_loaded_plugin *p = tt_registry_get(s->reg, i);
   tt_config *cfg = s->configs[i];
   if (!s->scene || !cfg || s->depth_set[i] || tt_loaded_plugin_entry(p)->kind != TT_KIND_INTEGRATOR)
     return;
-  int d = tt_space_find(tt_config_space(cfg), "maxDepth");
-  if (d >= 0 && tt_config_set_number(cfg, (size_t)d, tt_scene_settings(s->scene)->max_depth) != TT_OK)
-    s->host->log(TT_LOG_WARN, NULL, "%s: render.maxDepth of the scene: %s",
-                 tt_loaded_plugin_entry(p)->name, tt_last_error());
+  const tt_space *space = tt_config_space(cfg);
+  int d = tt_space_find(space, "maxDepth");
+  if (d < 0) return;
+  double want = tt_scene_settings(s->scene)->max_depth, lo = tt_space_min(space, (size_t)d),
+         hi = tt_space_max(space, (size_t)d);
+  double depth = want < lo ? lo : want > hi ? hi : want;
+  const char *name = tt_loaded_plugin_entry(p)->name;
+  if (depth != want)
+    s->host->log(TT_LOG_WARN, NULL, "%s: the scene asks for maxDepth %g (render.maxDepth, "
+                 "pbrt's maxdepth); the plugin supports [%g, %g]: clamped to %g", name, want, lo,
+                 hi, depth);
+  if (tt_config_set_number(cfg, (size_t)d, depth) != TT_OK)
+    s->host->log(TT_LOG_WARN, NULL, "%s: render.maxDepth of the scene: %s", name,
+                 tt_last_error());
 }
 
 tt_status tt_session_load_scene(tt_session *s, const char *path) {
@@ -225,8 +239,13 @@ tt_status tt_session_set(tt_session *s, const char *plugin, const char *key, con
   if (idx < 0) {
     char names[1024];
     tt__plugin_names(s, names, sizeof names);
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "no plugin \"%s\" is loaded (loaded: %s)",
-                        plugin, names);
+    const char *loaded[256];
+    size_t nl = tt_registry_count(s->reg) < 256 ? tt_registry_count(s->reg) : 256;
+    for (size_t i = 0; i < nl; i++) loaded[i] = tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name;
+    const char *near = tt_suggest(plugin, loaded, nl);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "no plugin \"%s\" is loaded (%s%s%sloaded: %s)",
+                        plugin, near ? "did you mean \"" : "", near ? near : "",
+                        near ? "\"? " : "", names);
   }
   tt_loaded_plugin *p = tt_registry_get(s->reg, (size_t)idx);
   tt_config *cfg = s->configs[idx];

@@ -1,0 +1,41 @@
+/* host: output folders. A folder named in --out, --stats or a frame pattern that does not
+ * exist yet is created before anything renders (mkdir -p), so a render is never lost to a
+ * missing folder at the end, and one that cannot be created is reported before the render. */
+#include "host.h"
+
+#include <errno.h>
+#include <string.h>
+#include <sys/stat.h>
+
+int tt__ensure_dir(const char *dir) {
+  char tmp[4096];
+  if (snprintf(tmp, sizeof tmp, "%s", dir) >= (int)sizeof tmp) {
+    errno = ENAMETOOLONG;
+    return -1;
+  }
+  for (char *p = tmp + 1; *p; p++) {
+    if (*p != '/') continue;
+    *p = 0;
+    if (mkdir(tmp, 0777) != 0 && errno != EEXIST) return -1;
+    *p = '/';
+  }
+  if (mkdir(tmp, 0777) != 0 && errno != EEXIST) return -1;
+  struct stat st;
+  if (stat(tmp, &st) != 0) return -1;
+  if (!S_ISDIR(st.st_mode)) {
+    errno = ENOTDIR;
+    return -1;
+  }
+  return 0;
+}
+
+int tt__ensure_parent_dir(const char *option, const char *path) {
+  const char *slash = strrchr(path, '/');
+  if (!slash || slash == path) return TT_EXIT_OK;  /* the current folder, or / */
+  char dir[4096];
+  snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+  if (tt__ensure_dir(dir) == 0) return TT_EXIT_OK;
+  fprintf(stderr, "host: %s %s: cannot create the folder %s: %s\n", option, path, dir,
+          strerror(errno));
+  return TT_EXIT_OUTPUT;
+}
