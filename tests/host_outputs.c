@@ -128,9 +128,14 @@ static void test_host(void) {
   CHECK(tt_image_read(exr, &w, &h, &c, &px) == TT_OK && w == 96 && h == 96);
   tt_free(px);
 
-  /* 4: an unwritable --stats fails before rendering, with the OS reason (exit 5) */
-  char bad[300];
-  snprintf(bad, sizeof bad, "%s/no/such/dir/run.json", g_tmp);
+  /* 4: an unwritable --stats fails before rendering, with the OS reason (exit 5). A missing
+   * folder is created (#17 defect 4); one that cannot be, because a file is in the way, is
+   * the unwritable case */
+  char bad[300], in_the_way[300];
+  snprintf(in_the_way, sizeof in_the_way, "%s/a_file", g_tmp);
+  FILE *blocker = fopen(in_the_way, "w");
+  CHECK(blocker && fclose(blocker) == 0);
+  snprintf(bad, sizeof bad, "%s/a_file/dir/run.json", g_tmp);
   char *unwritable[] = {(char *)host_path(), "--spp", "1", "--res", "8x8", "--out", exr,
                         "--stats", bad, (char *)scene, NULL};
   struct timespec t0, t1;
@@ -138,7 +143,7 @@ static void test_host(void) {
   CHECK(run_limited(unwritable, 0, err, sizeof err) == 5);
   clock_gettime(CLOCK_MONOTONIC, &t1);
   CHECK_CONTAINS(err, bad);
-  CHECK_CONTAINS(err, "No such file or directory");
+  CHECK_CONTAINS(err, "Not a directory");
   CHECK_MSG(strstr(err, "render:") == NULL && strstr(err, "triangles") == NULL,
             "the scene was loaded or rendered before the check: %s", err);
   char args[512];
