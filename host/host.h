@@ -80,6 +80,8 @@ typedef struct tt__host_options {
   int argc;                 /* the command line as given */
   char **argv;
   int64_t started_ns;       /* wall-clock (Unix) time the options were read, in ns */
+  int indicators;           /* --indicators: print the scene's indicators as JSON */
+  const char *indicator_norm; /* --indicator-norm SPEC (tt_indicator_norm_parse); NULL: default */
 } tt__host_options;
 
 /* Creates `dir` and its missing parents (mkdir -p); 0, or -1 with errno (output_dir.c). */
@@ -90,6 +92,8 @@ int tt__ensure_parent_dir(const char *option, const char *path);
 
 /* Runs --convert: loads the scene and writes it as scene.json v1 + PLY meshes (convert.c). */
 int tt__run_convert(const tt__host_options *opt);
+/* Runs --indicators: prints raw and normalised indicators as JSON (indicators.c). */
+int tt__run_indicators(const tt__host_options *opt);
 
 #define TT_HOST_PATH_SAMPLES 100
 

@@ -23,6 +23,7 @@ int main(int argc, char **argv) {
     return TT_EXIT_USAGE;
   }
   if (opt.convert) return tt__run_convert(&opt);
+  if (opt.indicators) return tt__run_indicators(&opt);
   if (opt.sequence) return tt__run_sequence(&opt);
   return tt__run_render(&opt);
 }

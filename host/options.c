@@ -123,6 +123,11 @@ static const char tt__usage[] =
     "  --stats FILE.json      machine-readable record of the run\n"
     "  --convert              write the loaded scene (scene.json or .pbrt) as scene.json v1\n"
     "                         to --out FILE.json, meshes as PLY in meshes/ next to it; no render\n"
+    "  --indicators           print the scene's indicators (thesis Table 3.2) for its still\n"
+    "                         camera or --camera-index I as JSON: raw, normalised to [0,1]\n"
+    "                         (the predictors' state), bounds, what was clamped, compute ms\n"
+    "  --indicator-norm SPEC  normalisation of the indicators: camera=extent|table|text,\n"
+    "                         scale=linear|log (default camera=extent,scale=linear)\n"
     "  --quiet, -q            no progress bar and no progress messages; warnings and errors\n"
     "                         are still printed\n"
     "  --help, -h             this text\n"
@@ -427,6 +432,15 @@ int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
         return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--convert")) {
       opt->convert = 1;
+    } else if (!strcmp(a, "--indicators")) {
+      opt->indicators = 1;
+    } else if (!strcmp(a, "--indicator-norm")) {
+      tt_indicator_norm norm;
+      if (!(opt->indicator_norm = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      if (tt_indicator_norm_parse(opt->indicator_norm, &norm) != TT_OK) {
+        fprintf(stderr, "host: --indicator-norm: %s\n", tt_last_error());
+        return TT_EXIT_USAGE;
+      }
     } else if (!strcmp(a, "--out") || !strcmp(a, "-o")) {
       if (!(opt->out = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
       const char *dot = strrchr(opt->out, '.');

@@ -6,6 +6,7 @@
 #include <tunetrace/host.h>
 #include <tunetrace/params.h>
 #include <tunetrace/scene.h>
+#include <tunetrace/indicators.h>
 #include <tunetrace/ray.h>
 #include <tunetrace/camera.h>
 #include <tunetrace/film.h>
