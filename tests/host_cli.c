@@ -15,7 +15,7 @@ int main(void) {
   CHECK_CONTAINS(out, "Exit codes");
 
   CHECK(run_host("--version", out, sizeof out) == 0);
-  CHECK_CONTAINS(out, "plugin ABI 1.0");
+  CHECK_CONTAINS(out, "plugin ABI 1.1");
 
   CHECK(run_host("--frobnicate", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "unknown option \"--frobnicate\"");

@@ -158,7 +158,7 @@ static void test_good(void) {
 static void test_rejections(void) {
   char both[128];
   g_log[0] = '\0';
-  snprintf(both, sizeof both, "plugin ABI 2.0, %s", host_abi);
+  snprintf(both, sizeof both, "plugin ABI 2.%d, %s", TT_ABI_MINOR, host_abi);
   expect_reject("fixture_wrong_major", both, 1);
   expect_reject("fixture_wrong_major", "version mismatch", 1);
   expect_reject("fixture_no_entry", "no symbol \"tt_plugin_entry\"", 1);
@@ -194,6 +194,18 @@ static void test_rejections(void) {
   CHECK(log_count("deinit fixture_init_fails") == 0);
   CHECK(tt_registry_count(reg) == 0);
   CHECK(!is_mapped(path));
+  tt_registry_destroy(reg);
+}
+
+/* An ABI 1.0 plugin (minor 0, the tuner table without set_context) loads; the host sees
+ * that the 1.1 function is absent. */
+static void test_abi10(void) {
+  tt_registry *reg = tt_registry_create(&g_host);
+  tt_loaded_plugin *p = NULL;
+  CHECK_MSG(tt_registry_load(reg, fixture("fixture_abi10"), &p) == TT_OK, "%s", tt_last_error());
+  const tt_tuner_iface *t = p ? tt_loaded_plugin_iface(p) : NULL;
+  CHECK(t && t->struct_size == TT_TUNER_IFACE_SIZE_1_0 && !TT_TUNER_HAS(t, set_context));
+  CHECK(p && tt_loaded_plugin_entry(p)->abi_minor == 0);
   tt_registry_destroy(reg);
 }
 
@@ -518,6 +530,7 @@ int main(int argc, char **argv) {
   test_good();
   test_rejections();
   test_newer_minor();
+  test_abi10();
   test_bad_files(tmp);
   test_truncated(tmp);
   test_duplicates();

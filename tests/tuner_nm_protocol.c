@@ -461,6 +461,154 @@ static void test_protocol(const tt_tuner_iface *nm) {
   tt_space_destroy(s);
 }
 
+/* ---- set_context (ABI 1.1): budget, the default's cost, resume ---- */
+
+/* Unit coordinates of the INT/FLOAT parameters x, y, z of resume_space(_many). */
+static void xyz(const tt_config *c, double *out) {
+  double u[8];
+  tt_config_to_unit(c, u);
+  out[0] = u[0];
+  out[1] = u[1];
+  out[2] = u[4];
+}
+
+/* The first `k` proposals share their INT/FLOAT coordinates (probe mode) or not. */
+static int probes(const tt_tuner_iface *nm, tt_space *s, uint64_t budget, int k) {
+  tt_tuner *t = NULL;
+  CHECK(nm->create(s, NULL, 7, &t) == TT_OK);
+  if (budget) {
+    tt_tuner_context ctx = {.struct_size = sizeof ctx, .default_cost = NAN, .budget = budget};
+    CHECK_MSG(nm->set_context(t, &ctx) == TT_OK, "%s", tt_last_error());
+  }
+  tt_config *c = tt_config_create(s);
+  double first[3], cur[3];
+  int shared = 1;
+  resume_ctx rc = {0};
+  for (int i = 0; i < k; i++) {
+    CHECK(nm->next(t, c) == TT_OK);
+    xyz(c, i ? cur : first);
+    if (i && (cur[0] != first[0] || cur[1] != first[1] || cur[2] != first[2])) shared = 0;
+    nm->feedback(t, resume_cost(c, &rc));
+  }
+  tt_config_destroy(c);
+  nm->destroy(t);
+  return shared;
+}
+
+static void test_context(const tt_tuner_iface *nm) {
+  CHECK(TT_TUNER_HAS(nm, set_context));
+  tt_space *few = resume_space(), *many = resume_space_many();
+  /* 6 arms x 4 points = 24 <= 50: every simplex is built up front, unless the budget is
+   * smaller than that; 24 arms x 5 = 120 > 50: probe mode, unless the budget covers it */
+  CHECK(!probes(nm, few, 0, 6));
+  CHECK(probes(nm, few, 12, 6));
+  CHECK(probes(nm, many, 0, 24));   /* 24 arms (flag2 is folded into the simplex), n = 4 */
+  CHECK(!probes(nm, many, 400, 24));
+
+  /* the default's cost: answered from the cache, never proposed (no re-measurement here:
+   * reevaluate 0), and it competes for best(): it is this cost's optimum */
+  tt_space *grid = tt_space_create("grid", "1");
+  tt_space_add_int(grid, "a", 0, 5, 1, NULL);
+  tt_space_add_int(grid, "b", 0, 5, 2, NULL);
+  tt_config *c = tt_config_create(grid), *def = tt_config_create(grid);
+  tt_config *noreeval = tnm_settings(nm, "reevaluate", "0", NULL);
+  char *defj = tt_config_to_json(def);
+  int seen_default[2] = {0, 0};
+  for (int with = 0; with < 2; with++) {
+    for (uint64_t seed = 1; seed <= 8; seed++) {
+      tt_tuner *t = NULL;
+      CHECK(nm->create(grid, noreeval, seed, &t) == TT_OK);
+      if (with) {
+        tt_tuner_context ctx = {.struct_size = sizeof ctx, .default_cost = 1.0, .budget = 30};
+        CHECK(nm->set_context(t, &ctx) == TT_OK);
+      }
+      for (int n = 0; n < 30 && nm->next(t, c) == TT_OK; n++) {
+        char *j = tt_config_to_json(c);
+        seen_default[with] += !strcmp(j, defj);
+        tt_free(j);
+        nm->feedback(t, 1.0 + fabs(tt_config_get(c, 0).f - 1) + fabs(tt_config_get(c, 1).f - 2));
+      }
+      double best = 0;
+      CHECK(nm->best(t, c, &best) == TT_OK);
+      char *bj = tt_config_to_json(c);
+      if (with) CHECK_MSG(best == 1.0 && !strcmp(bj, defj), "seed %d: best %g %s", (int)seed, best, bj);
+      tt_free(bj);
+      nm->destroy(t);
+    }
+  }
+  printf("set_context: the default proposed %d times in 8 runs without its cost, %d with it\n",
+         seen_default[0], seen_default[1]);
+  CHECK(seen_default[0] > 0 && seen_default[1] == 0);
+  tt_config_destroy(noreeval);
+
+  /* bad contexts, and only once before the first next() */
+  tt_tuner *t = NULL;
+  CHECK(nm->create(many, NULL, 1, &t) == TT_OK);
+  double st[2] = {0.5, 0.5};
+  tt_tuner_context bad = {.struct_size = sizeof bad, .state = st, .state_dim = 0, .default_cost = NAN};
+  CHECK(nm->set_context(t, &bad) == TT_ERR_INVALID_ARGUMENT);
+  bad.state_dim = 2;
+  bad.default_cost = -1;
+  CHECK(nm->set_context(t, &bad) == TT_ERR_INVALID_ARGUMENT);
+  bad.struct_size = 8;
+  CHECK(nm->set_context(t, &bad) == TT_ERR_INVALID_ARGUMENT);
+  CHECK_CONTAINS(tt_last_error(), "shorter");
+  tt_tuner_context ok = {.struct_size = sizeof ok, .state = st, .state_dim = 2,
+                         .state_space = "test", .default_cost = 2.0, .budget = 400};
+  CHECK(nm->set_context(t, &ok) == TT_OK);
+  CHECK(nm->set_context(t, &ok) == TT_ERR_INVALID_ARGUMENT);
+  /* resume: a saved tuner keeps the context's effects without a second call */
+  resume_ctx rc = {0};
+  char *ref[60];
+  nm->destroy(t);
+  tt_config *m = tt_config_create(many);
+  CHECK(nm->create(many, NULL, 1, &t) == TT_OK);
+  CHECK(nm->set_context(t, &ok) == TT_OK);
+  for (int i = 0; i < 60; i++) {
+    CHECK(nm->next(t, m) == TT_OK);
+    ref[i] = tt_config_to_json(m);
+    nm->feedback(t, resume_cost(m, &rc));
+  }
+  nm->destroy(t);
+  rc.calls = 0;
+  CHECK(nm->create(many, NULL, 1, &t) == TT_OK);
+  CHECK(nm->set_context(t, &ok) == TT_OK);
+  char *state = NULL;
+  int same = 0;
+  for (int i = 0; i < 25; i++) {
+    nm->next(t, m);
+    char *j = tt_config_to_json(m);
+    same += !strcmp(j, ref[i]);
+    tt_free(j);
+    nm->feedback(t, resume_cost(m, &rc));
+  }
+  CHECK(nm->save_state(t, &state) == TT_OK);
+  CHECK_CONTAINS(state, "\"probe\":false");
+  CHECK_CONTAINS(state, "\"contextSet\":true");
+  nm->destroy(t);
+  CHECK(nm->create(many, NULL, 1, &t) == TT_OK);  /* created in probe mode (no context) */
+  CHECK(nm->load_state(t, state) == TT_OK);
+  CHECK(nm->set_context(t, &ok) == TT_ERR_INVALID_ARGUMENT);  /* already applied */
+  for (int i = 25; i < 60; i++) {
+    nm->next(t, m);
+    char *j = tt_config_to_json(m);
+    same += !strcmp(j, ref[i]);
+    tt_free(j);
+    nm->feedback(t, resume_cost(m, &rc));
+  }
+  CHECK_MSG(same == 60, "%d of 60 proposals identical after resuming a tuner with a context", same);
+  nm->destroy(t);
+  for (int i = 0; i < 60; i++) tt_free(ref[i]);
+  tt_free(state);
+  tt_free(defj);
+  tt_config_destroy(c);
+  tt_config_destroy(def);
+  tt_config_destroy(m);
+  tt_space_destroy(grid);
+  tt_space_destroy(few);
+  tt_space_destroy(many);
+}
+
 int main(void) {
   const tt_tuner_iface *nm = tnm_load();
   test_protocol(nm);
@@ -469,6 +617,7 @@ int main(void) {
   test_save_load(nm);
   test_duplicates(nm);
   test_nominal_only(nm);
+  test_context(nm);
   tt_registry_destroy(tnm_reg);
   return tt_test_finish("tuner_nm_protocol");
 }

@@ -216,6 +216,20 @@ void tt__nm_settings_read(const tt_config *cfg, tt__nm_settings *s) {
 
 static void tt__nm_destroy(tt_tuner *t);
 
+/* Draws the probe point: one point, uniformly in a box of side initSize/4 around the
+ * default (shifted inside [0,1]), at which every arm is probed: the arms are compared at the
+ * same INT/FLOAT values near the default, and the default itself, which the caller measures
+ * anyway, is not proposed again. */
+static void tt__nm_draw_probe(tt_tuner *t) {
+  double sz = TT__NM_PROBE_BOX * (t->set.init_size > 1.0 ? 1.0 : t->set.init_size);
+  for (size_t d = 0; d < t->n; d++) {
+    double l = t->center[d] - 0.5 * sz;
+    if (l > 1.0 - sz) l = 1.0 - sz;
+    if (l < 0.0) l = 0.0;
+    t->probe_pt[d] = l + sz * tt__nm_rand(&t->rng);
+  }
+}
+
 /* Creates a tuner; see tuner.h. */
 static tt_status tt__nm_create(const tt_space *target, const tt_config *settings,
                                uint64_t seed, tt_tuner **out) {
@@ -311,19 +325,7 @@ static tt_status tt__nm_create(const tt_space *target, const tt_config *settings
     tt__nm_destroy(t);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuner_nm: out of memory");
   }
-  if (t->probe) {
-    /* One point, drawn uniformly in a box of side initSize/4 around the default (shifted
-     * inside [0,1]), at which every arm is probed: the arms are compared at the same
-     * INT/FLOAT values near the default, and the default itself, which the caller
-     * measures anyway, is not proposed again. */
-    double sz = TT__NM_PROBE_BOX * (set.init_size > 1.0 ? 1.0 : set.init_size);
-    for (size_t d = 0; d < t->n; d++) {
-      double l = t->center[d] - 0.5 * sz;
-      if (l > 1.0 - sz) l = 1.0 - sz;
-      if (l < 0.0) l = 0.0;
-      t->probe_pt[d] = l + sz * tt__nm_rand(&t->rng);
-    }
-  }
+  if (t->probe) tt__nm_draw_probe(t);
   *out = t;
   return TT_OK;
 }
@@ -595,6 +597,48 @@ static tt_status tt__nm_feedback(tt_tuner *t, double cost) {
   return TT_OK;
 }
 
+/* What the caller knows (tuner.h, ABI 1.1): the budget decides between building every
+ * arm's simplex up front and probe mode (the fixed TT__NM_PROBE_ABOVE stands in for a budget
+ * nobody told us); the default's measured cost goes into the cache, so a vertex that rounds
+ * to the default configuration is answered without a measurement and the default competes
+ * for best(). The state is not used by a pure search. */
+static tt_status tt__nm_set_context(tt_tuner *t, const tt_tuner_context *ctx) {
+  if (!t || !ctx) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: NULL");
+  if (ctx->struct_size < offsetof(tt_tuner_context, budget) + sizeof ctx->budget)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: context of %u bytes, "
+                        "shorter than ABI 1.1's %zu", ctx->struct_size,
+                        offsetof(tt_tuner_context, budget) + sizeof ctx->budget);
+  if ((ctx->state == NULL) != (ctx->state_dim == 0))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: state %s with "
+                        "state_dim %u", ctx->state ? "given" : "NULL", ctx->state_dim);
+  if (t->evaluations || t->out_arm >= 0 || t->cache.count || t->context_set)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: only once, before the "
+                        "first next()");
+  double dc = ctx->default_cost;
+  if (!isnan(dc) && !(dc > 0))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: default cost %g is "
+                        "neither NAN nor positive", dc);
+  if (ctx->budget > 0) {
+    int probe = t->n_arms > 1 && t->n > 0 &&
+                (double)t->n_arms * (double)(t->n + 1) > (double)ctx->budget;
+    if (probe && !t->probe) tt__nm_draw_probe(t);
+    t->probe = probe;
+    t->budget = ctx->budget;
+  }
+  if (!isnan(dc)) {
+    tt_config *def = tt_config_create(t->target);
+    if (!def) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuner_nm: out of memory");
+    int32_t id;
+    tt__nm_key(t, def, t->key);
+    tt_config_destroy(def);
+    tt_status st = tt__nm_cache_insert(&t->cache, t->P, t->key,
+                                       dc > TT_COST_INFEASIBLE ? TT_COST_INFEASIBLE : dc, 1, &id);
+    if (st != TT_OK) return st;
+  }
+  t->context_set = 1;
+  return TT_OK;
+}
+
 static tt_status tt__nm_save_state(const tt_tuner *t, char **json) {
   return tt__nm_save(t, json);
 }
@@ -616,6 +660,7 @@ static const tt_tuner_iface tt__nm_iface = {
     .save_state = tt__nm_save_state,
     .load_state = tt__nm_load_state,
     .destroy = tt__nm_destroy,
+    .set_context = tt__nm_set_context,
 };
 
 /* Builds the settings space once per load. */

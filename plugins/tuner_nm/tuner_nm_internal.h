@@ -103,6 +103,8 @@ struct tt_tuner {
   size_t rr;            /* round-robin cursor for the initialisation phase */
   int probe;            /* several arms and n > 0: probe every arm once, build on demand */
   double *probe_pt;     /* n: the probe's unit coordinates, the same for every arm */
+  uint64_t budget;      /* set_context's iteration budget (0: unknown) */
+  int context_set;      /* set_context was called */
 
   /* Outstanding proposal: arm index (-1 if none), whether it is a re-measurement (then
    * reeval_id is the cache id), and the configuration. */

@@ -78,6 +78,10 @@ tt_status tt__nm_save(const tt_tuner *t, char **json) {
   cJSON_AddNumberToObject(root, "deterministic", t->deterministic);
   cJSON_AddNumberToObject(root, "roundRobin", (double)t->rr);
   cJSON_AddItemToObject(root, "probePoint", tt__nm_doubles(t->probe_pt, n));
+  /* set_context's effects (the default's cost is in the cache) */
+  cJSON_AddBoolToObject(root, "probe", t->probe);
+  tt__nm_add_u64(root, "budget", t->budget);
+  cJSON_AddBoolToObject(root, "contextSet", t->context_set);
 
   if (t->out_arm >= 0) {
     cJSON *o = cJSON_AddObjectToObject(root, "outstanding");
@@ -355,7 +359,20 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
     }
   }
 
+  /* set_context's effects (absent in states of tuners before ABI 1.1: as created) */
+  const cJSON *pr = cJSON_GetObjectItemCaseSensitive(root, "probe");
+  const cJSON *cs = cJSON_GetObjectItemCaseSensitive(root, "contextSet");
+  uint64_t budget = 0;
+  if ((pr && !cJSON_IsBool(pr)) || (cs && !cJSON_IsBool(cs)) ||
+      (cJSON_GetObjectItemCaseSensitive(root, "budget") && !tt__nm_u64(root, "budget", &budget))) {
+    st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad \"probe\", \"budget\" or \"contextSet\"");
+    goto done;
+  }
+
   /* Commit. */
+  if (pr) t->probe = cJSON_IsTrue(pr);
+  if (cs) t->context_set = cJSON_IsTrue(cs);
+  t->budget = budget;
   if (probe) memcpy(t->probe_pt, probe, n * sizeof(double));
   for (size_t ai = 0; ai < t->n_arms; ai++) {
     free(t->arms[ai].x);

@@ -25,6 +25,7 @@ extern "C" {
 #define TT_COST_INFEASIBLE 1e300
 
 typedef struct tt_tuner tt_tuner;  /* opaque, defined by the plugin */
+struct tt_tuner_context;
 
 typedef struct tt_tuner_iface {
   uint32_t struct_size;     /* sizeof(tt_tuner_iface) as the plugin was built */
@@ -61,8 +62,41 @@ typedef struct tt_tuner_iface {
   /* Destroys the tuner (NULL is ignored). */
   void (*destroy)(tt_tuner *tuner);
 
-  /* ---- appended in later ABI minors: check struct_size ---- */
+  /* ---- ABI 1.1: check with TT_TUNER_HAS; a NULL slot means "not supported" ---- */
+
+  /* Tells the tuner what the caller knows about the search (tt_tuner_context): the state it
+   * tunes for, the default configuration's measured cost and the iteration budget. Called
+   * after create and before the first next(), at most once; a tuner may ignore any field.
+   * The context is copied. TT_ERR_INVALID_ARGUMENT for a malformed context (e.g. a state
+   * pointer with state_dim 0). save_state records what the tuner keeps of it, so a resumed
+   * tuner needs no second call. */
+  tt_status (*set_context)(tt_tuner *tuner, const struct tt_tuner_context *context);
 } tt_tuner_iface;
+
+/* What a caller knows about a search (set_context). Fields are only appended. */
+typedef struct tt_tuner_context {
+  uint32_t struct_size;      /* sizeof(tt_tuner_context) as the caller was built */
+  const double *state;       /* the state tuned for (e.g. normalised indicators), or NULL */
+  uint32_t state_dim;        /* values in `state` (0 with NULL) */
+  const char *state_space;   /* what the state means (tt_indicator_norm_id), or NULL */
+  /* Cost the caller measured for the target's default configuration (the configuration the
+   * space's defaults describe) in this state, or NAN if it did not measure it. A tuner that
+   * would propose the default may use this value instead (the host does not measure the
+   * default twice). */
+  double default_cost;
+  /* Measurements the caller will ask for at most (its --iterations), 0 if unknown. A tuner
+   * can size its initial design to it (tuner_nm: probe mode when building every arm's
+   * simplex would not fit). */
+  uint64_t budget;
+} tt_tuner_context;
+
+/* Bytes of the ABI 1.0 table: the shortest table a host accepts. */
+#define TT_TUNER_IFACE_SIZE_1_0 offsetof(tt_tuner_iface, set_context)
+
+/* True if the plugin's table provides `field` (it may be older than the host). */
+#define TT_TUNER_HAS(iface, field) \
+  ((iface)->struct_size >= offsetof(tt_tuner_iface, field) + sizeof((iface)->field) && \
+   (iface)->field)
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,446 @@
+/* Model files of the predictor plugins: see model_file.h for the layout. */
+#define _POSIX_C_SOURCE 200809L
+#include "model_file.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- writer ---- */
+
+static void ttpm_put(ttpm_writer *w, const void *p, size_t n) {
+  if (w->failed) return;
+  if (w->len + n > w->cap) {
+    size_t cap = w->cap ? w->cap : 4096;
+    while (cap < w->len + n) cap *= 2;
+    unsigned char *d = realloc(w->data, cap);
+    if (!d) {
+      w->failed = 1;
+      return;
+    }
+    w->data = d;
+    w->cap = cap;
+  }
+  memcpy(w->data + w->len, p, n);
+  w->len += n;
+}
+
+void ttpm_put_u32(ttpm_writer *w, uint32_t v) {
+  unsigned char b[4];
+  for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+  ttpm_put(w, b, 4);
+}
+
+void ttpm_put_u64(ttpm_writer *w, uint64_t v) {
+  unsigned char b[8];
+  for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
+  ttpm_put(w, b, 8);
+}
+
+void ttpm_put_f64(ttpm_writer *w, double v) {
+  uint64_t u;
+  memcpy(&u, &v, 8);
+  ttpm_put_u64(w, u);
+}
+
+void ttpm_put_f64s(ttpm_writer *w, const double *v, size_t n) {
+  for (size_t i = 0; i < n; i++) ttpm_put_f64(w, v[i]);
+}
+
+void ttpm_put_str(ttpm_writer *w, const char *s) {
+  size_t n = s ? strlen(s) : 0;
+  ttpm_put_u32(w, (uint32_t)n);
+  if (n) ttpm_put(w, s, n);
+}
+
+/* ---- reader ---- */
+
+void ttpm_fail(ttpm_reader *r, const char *fmt, ...) {
+  if (r->err[0]) return;
+  char msg[400];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  snprintf(r->err, sizeof r->err, "%s: %s (payload offset %zu)", r->path, msg, r->pos);
+}
+
+static const unsigned char *ttpm_take(ttpm_reader *r, size_t n, const char *what) {
+  if (r->err[0]) return NULL;
+  if (r->len - r->pos < n) {
+    ttpm_fail(r, "file cut short: %s needs %zu bytes, %zu left", what, n, r->len - r->pos);
+    return NULL;
+  }
+  const unsigned char *p = r->data + r->pos;
+  r->pos += n;
+  return p;
+}
+
+uint32_t ttpm_get_u32(ttpm_reader *r, const char *what) {
+  const unsigned char *b = ttpm_take(r, 4, what);
+  uint32_t v = 0;
+  for (int i = 0; b && i < 4; i++) v |= (uint32_t)b[i] << (8 * i);
+  return v;
+}
+
+uint64_t ttpm_get_u64(ttpm_reader *r, const char *what) {
+  const unsigned char *b = ttpm_take(r, 8, what);
+  uint64_t v = 0;
+  for (int i = 0; b && i < 8; i++) v |= (uint64_t)b[i] << (8 * i);
+  return v;
+}
+
+double ttpm_get_f64(ttpm_reader *r, const char *what) {
+  uint64_t u = ttpm_get_u64(r, what);
+  double v;
+  memcpy(&v, &u, 8);
+  return v;
+}
+
+void ttpm_get_f64s(ttpm_reader *r, double *v, size_t n, const char *what) {
+  for (size_t i = 0; i < n; i++) v[i] = ttpm_get_f64(r, what);
+}
+
+uint64_t ttpm_get_count(ttpm_reader *r, uint64_t max, size_t elem, const char *what) {
+  uint64_t n = ttpm_get_u64(r, what);
+  if (r->err[0]) return 0;
+  if (n > max) {
+    ttpm_fail(r, "%s is %llu, more than the %llu this format allows", what,
+              (unsigned long long)n, (unsigned long long)max);
+    return 0;
+  }
+  if (elem && n > (r->len - r->pos) / elem) {
+    ttpm_fail(r, "file cut short: %llu %s need %llu bytes, %zu left", (unsigned long long)n,
+              what, (unsigned long long)(n * elem), r->len - r->pos);
+    return 0;
+  }
+  return n;
+}
+
+char *ttpm_get_str(ttpm_reader *r, size_t max, const char *what) {
+  uint32_t n = ttpm_get_u32(r, what);
+  if (r->err[0]) return NULL;
+  if (n > max) {
+    ttpm_fail(r, "%s is %u bytes long, more than %zu", what, n, max);
+    return NULL;
+  }
+  const unsigned char *p = ttpm_take(r, n, what);
+  if (!p) return NULL;
+  if (memchr(p, 0, n)) {
+    ttpm_fail(r, "%s contains a NUL byte", what);
+    return NULL;
+  }
+  char *s = malloc((size_t)n + 1);
+  if (!s) {
+    ttpm_fail(r, "out of memory reading %s", what);
+    return NULL;
+  }
+  memcpy(s, p, n);
+  s[n] = 0;
+  return s;
+}
+
+/* ---- common header ---- */
+
+#define TTPM_MAX_TEXT (1u << 20)
+#define TTPM_MAX_STATE_DIM 4096u
+
+void ttpm_header_free(ttpm_header *h) {
+  if (!h) return;
+  free(h->kind);
+  free(h->plugin_version);
+  free(h->state_space);
+  if (h->state_names)
+    for (uint32_t i = 0; i < h->state_dim; i++) free(h->state_names[i]);
+  free(h->state_names);
+  free(h->target);
+  free(h->settings);
+  memset(h, 0, sizeof *h);
+}
+
+void ttpm_put_header(ttpm_writer *w, const ttpm_header *h) {
+  ttpm_put_str(w, h->kind);
+  ttpm_put_str(w, h->plugin_version);
+  ttpm_put_str(w, h->state_space);
+  ttpm_put_u32(w, h->state_dim);
+  ttpm_put_u32(w, h->state_names ? 1u : 0u);
+  for (uint32_t i = 0; h->state_names && i < h->state_dim; i++) ttpm_put_str(w, h->state_names[i]);
+  ttpm_put_str(w, h->target);
+  ttpm_put_str(w, h->settings);
+}
+
+int ttpm_get_header(ttpm_reader *r, ttpm_header *h) {
+  memset(h, 0, sizeof *h);
+  h->kind = ttpm_get_str(r, 256, "the model kind");
+  h->plugin_version = ttpm_get_str(r, 256, "the plugin version");
+  h->state_space = ttpm_get_str(r, TTPM_MAX_TEXT, "the state space");
+  h->state_dim = ttpm_get_u32(r, "the state dimension");
+  if (!r->err[0] && (h->state_dim < 1 || h->state_dim > TTPM_MAX_STATE_DIM))
+    ttpm_fail(r, "state dimension %u outside [1, %u]", h->state_dim, TTPM_MAX_STATE_DIM);
+  uint32_t names = ttpm_get_u32(r, "the state-names flag");
+  if (!r->err[0] && names > 1) ttpm_fail(r, "state-names flag %u is neither 0 nor 1", names);
+  if (!r->err[0] && names) {
+    h->state_names = calloc(h->state_dim, sizeof *h->state_names);
+    if (!h->state_names) ttpm_fail(r, "out of memory");
+    for (uint32_t i = 0; !r->err[0] && i < h->state_dim; i++)
+      h->state_names[i] = ttpm_get_str(r, 256, "a state name");
+  }
+  h->target = ttpm_get_str(r, TTPM_MAX_TEXT, "the target space");
+  h->settings = ttpm_get_str(r, TTPM_MAX_TEXT, "the settings");
+  if (r->err[0]) {
+    ttpm_header_free(h);
+    return -1;
+  }
+  return 0;
+}
+
+/* ---- spaces and configurations ---- */
+
+/* Appends printf output to a malloc'ed string; returns it (NULL on failure, freeing). */
+static char *ttpm_cat(char *s, size_t *len, size_t *cap, const char *fmt, ...) {
+  if (!s) return NULL;
+  for (;;) {
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(s + *len, *cap - *len, fmt, ap);
+    va_end(ap);
+    if (n < 0) {
+      free(s);
+      return NULL;
+    }
+    if ((size_t)n < *cap - *len) {
+      *len += (size_t)n;
+      return s;
+    }
+    size_t cap2 = *cap * 2 + (size_t)n;
+    char *t = realloc(s, cap2);
+    if (!t) {
+      free(s);
+      return NULL;
+    }
+    s = t;
+    *cap = cap2;
+  }
+}
+
+char *ttpm_space_signature(const tt_space *space) {
+  size_t len = 0, cap = 256;
+  char *s = malloc(cap);
+  if (!s) return NULL;
+  s[0] = 0;
+  s = ttpm_cat(s, &len, &cap, "%s:", tt_space_plugin(space) ? tt_space_plugin(space) : "");
+  for (size_t i = 0; s && i < tt_space_count(space); i++) {
+    const char *name = tt_space_name(space, i);
+    switch (tt_space_type(space, i)) {
+      case TT_PARAM_INT:
+        s = ttpm_cat(s, &len, &cap, "%s %s INT[%.17g,%.17g]", i ? ";" : "", name,
+                     tt_space_min(space, i), tt_space_max(space, i));
+        break;
+      case TT_PARAM_FLOAT:
+        s = ttpm_cat(s, &len, &cap, "%s %s FLOAT[%.17g,%.17g]%s", i ? ";" : "", name,
+                     tt_space_min(space, i), tt_space_max(space, i),
+                     tt_space_is_log(space, i) ? " log" : "");
+        break;
+      case TT_PARAM_NOM: {
+        s = ttpm_cat(s, &len, &cap, "%s %s NOM{", i ? ";" : "", name);
+        for (size_t k = 0; s && k < tt_space_nom_count(space, i); k++) {
+          tt_value v = tt_space_nom_value(space, i, k);
+          const char *sep = k ? "," : "";
+          if (v.kind == TT_VALUE_STRING) s = ttpm_cat(s, &len, &cap, "%s%s", sep, v.s);
+          else if (v.kind == TT_VALUE_BOOL) s = ttpm_cat(s, &len, &cap, "%s%s", sep, v.i ? "true" : "false");
+          else if (v.kind == TT_VALUE_INT) s = ttpm_cat(s, &len, &cap, "%s%lld", sep, (long long)v.i);
+          else s = ttpm_cat(s, &len, &cap, "%s%.17g", sep, v.f);
+        }
+        s = ttpm_cat(s, &len, &cap, "}");
+        break;
+      }
+    }
+  }
+  return s;
+}
+
+void ttpm_signature_diff(const char *a, const char *b, char *buf, size_t n) {
+  /* compare parameter by parameter (';'-separated) */
+  const char *pa = a, *pb = b;
+  for (;;) {
+    size_t la = strcspn(pa, ";"), lb = strcspn(pb, ";");
+    if (la != lb || strncmp(pa, pb, la)) {
+      snprintf(buf, n, "\"%.*s\" vs \"%.*s\"", (int)(la < 120 ? la : 120), pa,
+               (int)(lb < 120 ? lb : 120), pb);
+      return;
+    }
+    if (!pa[la] || !pb[lb]) {
+      snprintf(buf, n, "%s", !pa[la] && !pb[lb] ? "(same)" : !pa[la] ? "the file's space has "
+               "fewer parameters" : "the file's space has more parameters");
+      return;
+    }
+    pa += la + 1;
+    pb += lb + 1;
+  }
+}
+
+void ttpm_config_values(const tt_config *c, double *out) {
+  const tt_space *s = tt_config_space(c);
+  for (size_t i = 0; i < tt_space_count(s); i++) {
+    tt_value v = tt_config_get(c, i);
+    out[i] = tt_space_type(s, i) == TT_PARAM_NOM ? (double)v.index : v.f;
+  }
+}
+
+int ttpm_config_from_values(tt_config *c, const double *v, char *why, size_t n) {
+  const tt_space *s = tt_config_space(c);
+  for (size_t i = 0; i < tt_space_count(s); i++) {
+    tt_status st;
+    if (tt_space_type(s, i) == TT_PARAM_NOM) {
+      if (!(v[i] >= 0) || v[i] >= (double)tt_space_nom_count(s, i) || v[i] != floor(v[i])) {
+        snprintf(why, n, "parameter %s: possible-value index %.17g out of range [0, %zu)",
+                 tt_space_name(s, i), v[i], tt_space_nom_count(s, i));
+        return -1;
+      }
+      st = tt_config_set_index(c, i, (size_t)v[i]);
+    } else {
+      st = tt_config_set_number(c, i, v[i]);
+    }
+    if (st != TT_OK) {
+      snprintf(why, n, "parameter %s: value %.17g: %s", tt_space_name(s, i), v[i], tt_last_error());
+      return -1;
+    }
+  }
+  return 0;
+}
+
+/* ---- files ---- */
+
+static uint64_t ttpm_fnv1a64(const unsigned char *p, size_t n) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
+  return h;
+}
+
+static int ttpm_write_all(int fd, const unsigned char *p, size_t n) {
+  while (n) {
+    ssize_t w = write(fd, p, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return -1;
+    }
+    p += w;
+    n -= (size_t)w;
+  }
+  return 0;
+}
+
+tt_status ttpm_save(const char *who, const char *path, uint32_t version, const ttpm_writer *w) {
+  if (w->failed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
+  size_t total = TTPM_HEADER_BYTES + w->len + 8;
+  unsigned char *buf = malloc(total);
+  if (!buf) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
+  memcpy(buf, TTPM_MAGIC, 8);
+  for (int i = 0; i < 4; i++) buf[8 + i] = (unsigned char)(version >> (8 * i));
+  memset(buf + 12, 0, 4);
+  for (int i = 0; i < 8; i++) buf[16 + i] = (unsigned char)((uint64_t)w->len >> (8 * i));
+  if (w->len) memcpy(buf + TTPM_HEADER_BYTES, w->data, w->len);
+  uint64_t h = ttpm_fnv1a64(buf, TTPM_HEADER_BYTES + w->len);
+  for (int i = 0; i < 8; i++) buf[TTPM_HEADER_BYTES + w->len + i] = (unsigned char)(h >> (8 * i));
+
+  size_t plen = strlen(path);
+  char *tmp = malloc(plen + 16);
+  if (!tmp) {
+    free(buf);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
+  }
+  snprintf(tmp, plen + 16, "%s.tmpXXXXXX", path);
+  int fd = mkstemp(tmp);
+  if (fd < 0) {
+    tt_status st = tt_set_error(TT_ERR_IO, "%s: cannot write model %s: %s", who, path, strerror(errno));
+    free(tmp);
+    free(buf);
+    return st;
+  }
+  /* mkstemp makes the file 0600: give it the mode of the file it replaces, else 0644 */
+  struct stat old;
+  mode_t mode = stat(path, &old) == 0 ? (old.st_mode & 07777) : 0644;
+  int bad = fchmod(fd, mode) || ttpm_write_all(fd, buf, total) || fsync(fd);
+  int err = errno;
+  if (close(fd)) bad = 1, err = errno;
+  if (bad || rename(tmp, path)) {
+    if (!bad) err = errno;
+    unlink(tmp);
+    free(tmp);
+    free(buf);
+    return tt_set_error(TT_ERR_IO, "%s: cannot write model %s: %s (an existing file was left as "
+                        "it was)", who, path, strerror(err));
+  }
+  free(tmp);
+  free(buf);
+  return TT_OK;
+}
+
+tt_status ttpm_load(const char *who, const char *who_version, const char *path,
+                    uint32_t max_version, unsigned char **payload, size_t *payload_len,
+                    uint32_t *version) {
+  *payload = NULL;
+  *payload_len = 0;
+  struct stat st;
+  if (stat(path, &st) != 0)
+    return tt_set_error(TT_ERR_IO, "%s: cannot open model %s: %s", who, path, strerror(errno));
+  if (!S_ISREG(st.st_mode))
+    return tt_set_error(TT_ERR_IO, "%s: model %s is not a regular file", who, path);
+  if (st.st_size > (off_t)1 << 34)
+    return tt_set_error(TT_ERR_PARSE, "%s: model %s is %lld bytes, larger than any model (16 GiB)",
+                        who, path, (long long)st.st_size);
+  FILE *f = fopen(path, "rb");
+  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open model %s: %s", who, path, strerror(errno));
+  size_t size = (size_t)st.st_size;
+  unsigned char *buf = malloc(size ? size : 1);
+  if (!buf) {
+    fclose(f);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading model %s", who, path);
+  }
+  size_t got = fread(buf, 1, size, f);
+  int rerr = ferror(f);
+  fclose(f);
+  tt_status rc = TT_OK;
+  if (rerr || got != size) {
+    rc = tt_set_error(TT_ERR_IO, "%s: cannot read model %s", who, path);
+  } else if (size < TTPM_HEADER_BYTES || memcmp(buf, TTPM_MAGIC, 8)) {
+    rc = tt_set_error(TT_ERR_PARSE, "%s: %s is not a tunetrace predictor model (%s)", who, path,
+                      size < 8 ? "shorter than the 8-byte magic" : "no \"TTPMODEL\" magic at the start");
+  } else {
+    uint32_t v = 0;
+    uint64_t n = 0;
+    for (int i = 0; i < 4; i++) v |= (uint32_t)buf[8 + i] << (8 * i);
+    for (int i = 0; i < 8; i++) n |= (uint64_t)buf[16 + i] << (8 * i);
+    if (v > max_version || v == 0) {
+      rc = tt_set_error(TT_ERR_UNSUPPORTED, "%s: model %s has format version %u; this %s %s reads "
+                        "versions 1 to %u%s", who, path, v, who, who_version, max_version,
+                        v > max_version ? " (written by a newer plugin: update it)" : "");
+    } else if (n > size || size - TTPM_HEADER_BYTES - 8 < n || size != TTPM_HEADER_BYTES + n + 8) {
+      rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is %zu bytes, but its header says %llu "
+                        "(file cut short or padded)", who, path, size,
+                        (unsigned long long)(TTPM_HEADER_BYTES + n + 8));
+    } else {
+      uint64_t stored = 0;
+      for (int i = 0; i < 8; i++) stored |= (uint64_t)buf[TTPM_HEADER_BYTES + n + i] << (8 * i);
+      uint64_t h = ttpm_fnv1a64(buf, TTPM_HEADER_BYTES + (size_t)n);
+      if (h != stored) {
+        rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is corrupt (checksum %016llx, computed "
+                          "%016llx)", who, path, (unsigned long long)stored, (unsigned long long)h);
+      } else {
+        memmove(buf, buf + TTPM_HEADER_BYTES, (size_t)n);
+        *payload = buf;
+        *payload_len = (size_t)n;
+        *version = v;
+        return TT_OK;
+      }
+    }
+  }
+  free(buf);
+  return rc;
+}

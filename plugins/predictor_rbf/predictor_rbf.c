@@ -1,0 +1,702 @@
+/* predictor_rbf: RBF features with myopic Greedy-GQ (thesis 3.3.2).
+ *
+ * Model: Q(s, a) = theta . phi(s, enc(a)) (rbf_model.h: features, encoding, update rule).
+ * Reward of an observation: `reward = inverse` (the thesis) R = 1 / cost; `relative`
+ * R = default_cost / cost, the speed-up over the state's default configuration, which puts
+ * cheap and expensive scenes on one scale (a sample without a known default cost is then
+ * skipped). An infeasible configuration has reward 0 in both.
+ *
+ * Exploitation = argmax_a Q(s, a) over candidate actions, in three sources:
+ *   1. the pool: the `poolSize` observed configurations with the highest reward so far
+ *      (configurations the search found good, in any state: "DB configurations");
+ *   2. `lhsCandidates` points of a Latin hypercube over the target space (drawn once from
+ *      the seed), so that the answer is not limited to what was measured;
+ *   3. local refinement: from the `refineStarts` best of 1+2, `refine` rounds of coordinate
+ *      search in the unit cube (every other value of a NOM parameter, +-step for INT/FLOAT,
+ *      step 1/8 halved each round), keeping each improvement.
+ * The default configuration of the space is always a candidate. tools/hybrid/README.md shows
+ * that more candidates than the defaults no longer change the answer.
+ *
+ * Offline data (a tuning DB: observe_ex with TT_PREDICTOR_OFFLINE) is learnt in `epochs`
+ * passes, each in a fresh order shuffled from the seed; online samples update once each.
+ * Greedy-GQ is off-policy: samples may come from any search (thesis).
+ *
+ * Model files: predictor_common/model_file.h, payload version 1 (see rbf_save).
+ */
+#include "../predictor_common/model_file.h"
+#include "rbf_model.h"
+
+#include "util/rng_internal.h"
+
+#include <tunetrace/plugin.h>
+#include <tunetrace/predictor.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RBF_NAME "predictor_rbf"
+#define RBF_VERSION "0.1.0"
+#define RBF_FORMAT 1u
+
+static tt_space *rbf_settings;
+
+enum { RBF_REWARD_INVERSE = 0, RBF_REWARD_RELATIVE = 1 };
+static const char *const rbf_reward_names[] = {"inverse", "relative"};
+
+typedef struct rbf_settings_values {
+  int64_t features;        /* 0: round(3.5 x (state dims + parameters)) */
+  double width, alpha, decay;
+  int64_t epochs, lhs, refine, starts, pool;
+  int reward;
+} rbf_settings_values;
+
+struct tt_predictor {
+  const tt_space *target;
+  size_t params;
+  uint32_t d, m;
+  char *state_space;
+  char **names;
+  char *signature;
+  uint64_t seed;
+  rbf_settings_values set;
+  rbf_model model;
+  /* LHS candidates (regenerated from the seed): values (params) and encodings (m) */
+  size_t ncand;
+  double *cand_values, *cand_enc;
+  /* pool of observed configurations, the `pool` highest rewards */
+  size_t npool;
+  double *pool_values, *pool_enc, *pool_reward;
+  uint64_t observations;
+  double *phi;              /* F scratch for updates (observe is single-threaded) */
+  double *x;                /* d + m scratch */
+};
+
+static const tt_space *rbf_space(void) { return rbf_settings; }
+
+static char *rbf_dup(const char *s) {
+  if (!s) s = "";
+  char *d = malloc(strlen(s) + 1);
+  if (d) strcpy(d, s);
+  return d;
+}
+
+/* Reads the settings (NULL: defaults) into v. */
+static void rbf_read_settings(const tt_config *c, rbf_settings_values *v) {
+  const tt_config *s = c;
+  tt_config *def = NULL;
+  if (!s) s = def = tt_config_create(rbf_settings);
+  v->features = tt_config_get_int(s, "features", 0);
+  v->width = tt_config_get_float(s, "width", 1.0);
+  v->alpha = tt_config_get_float(s, "alpha", 0.1);
+  v->decay = tt_config_get_float(s, "decay", 0.0);
+  v->epochs = tt_config_get_int(s, "epochs", 10);
+  v->lhs = tt_config_get_int(s, "lhsCandidates", 256);
+  v->refine = tt_config_get_int(s, "refine", 3);
+  v->starts = tt_config_get_int(s, "refineStarts", 4);
+  v->pool = tt_config_get_int(s, "poolSize", 256);
+  const char *r = tt_config_get_string(s, "reward");
+  v->reward = r && !strcmp(r, "relative") ? RBF_REWARD_RELATIVE : RBF_REWARD_INVERSE;
+  tt_config_destroy(def);
+}
+
+/* The settings as a configuration JSON (what the model file records). */
+static char *rbf_settings_json(const rbf_settings_values *v) {
+  tt_config *c = tt_config_create(rbf_settings);
+  if (!c) return NULL;
+  char buf[64];
+  struct { const char *name; double value; } num[] = {
+    {"features", (double)v->features}, {"width", v->width}, {"alpha", v->alpha},
+    {"decay", v->decay}, {"epochs", (double)v->epochs}, {"lhsCandidates", (double)v->lhs},
+    {"refine", (double)v->refine}, {"refineStarts", (double)v->starts},
+    {"poolSize", (double)v->pool}};
+  for (size_t i = 0; i < sizeof num / sizeof num[0]; i++)
+    tt_config_set_number(c, (size_t)tt_space_find(rbf_settings, num[i].name), num[i].value);
+  snprintf(buf, sizeof buf, "%s", rbf_reward_names[v->reward]);
+  tt_config_set_string(c, "reward", buf);
+  char *j = tt_config_to_json(c);
+  tt_config_destroy(c);
+  return j;
+}
+
+static void rbf_free_model_parts(tt_predictor *p) {
+  rbf_model_free(&p->model);
+  free(p->cand_values);
+  free(p->cand_enc);
+  free(p->pool_values);
+  free(p->pool_enc);
+  free(p->pool_reward);
+  free(p->phi);
+  free(p->x);
+  p->cand_values = p->cand_enc = p->pool_values = p->pool_enc = p->pool_reward = NULL;
+  p->phi = p->x = NULL;
+  p->ncand = p->npool = 0;
+}
+
+static void rbf_destroy(tt_predictor *p) {
+  if (!p) return;
+  rbf_free_model_parts(p);
+  free(p->state_space);
+  if (p->names)
+    for (uint32_t i = 0; i < p->d; i++) free(p->names[i]);
+  free(p->names);
+  free(p->signature);
+  free(p);
+}
+
+/* Draws the LHS candidates from the seed (every point through the space's check: repaired
+ * points kept repaired, infeasible ones dropped). 0 or -1 when out of memory. */
+static int rbf_make_candidates(tt_predictor *p) {
+  size_t n = (size_t)p->set.lhs, np = p->params ? p->params : 1;
+  p->cand_values = malloc((n ? n : 1) * np * sizeof(double));
+  p->cand_enc = malloc((n ? n : 1) * (p->m ? p->m : 1) * sizeof(double));
+  double *unit = malloc((n ? n : 1) * np * sizeof(double));
+  tt_config *c = tt_config_create(p->target);
+  if (!p->cand_values || !p->cand_enc || !unit || !c) {
+    free(unit);
+    tt_config_destroy(c);
+    return -1;
+  }
+  rbf_lhs(p->seed ^ 0x63616e646964ull, (uint32_t)n, (uint32_t)p->params, unit);
+  p->ncand = 0;
+  char why[128];
+  for (size_t k = 0; k < n; k++) {
+    tt_config_from_unit(c, unit + k * p->params);
+    if (tt_space_check(p->target, c, why, sizeof why) == TT_CHECK_INFEASIBLE) continue;
+    ttpm_config_values(c, p->cand_values + p->ncand * p->params);
+    rbf_encode_action(c, p->cand_enc + p->ncand * p->m);
+    p->ncand++;
+  }
+  free(unit);
+  tt_config_destroy(c);
+  return 0;
+}
+
+/* Allocates the model, candidates, pool and scratch for p->set; 0 or -1. */
+/* Features of a model: the setting, or 3.5 x (state values + parameters) for 0. */
+static uint32_t rbf_feature_count(const tt_predictor *p) {
+  uint32_t f = p->set.features > 0 ? (uint32_t)p->set.features
+                                   : (uint32_t)lround(3.5 * (double)(p->d + p->params));
+  return f ? f : 1;
+}
+
+static int rbf_alloc(tt_predictor *p) {
+  uint32_t f = rbf_feature_count(p);
+  if (rbf_model_init(&p->model, p->d, p->m, f, p->set.width, p->set.alpha, p->set.decay,
+                     p->seed ^ 0x63656e747265ull))
+    return -1;
+  size_t pool = (size_t)p->set.pool ? (size_t)p->set.pool : 1;
+  p->pool_values = malloc(pool * (p->params ? p->params : 1) * sizeof(double));
+  p->pool_enc = malloc(pool * (p->m ? p->m : 1) * sizeof(double));
+  p->pool_reward = malloc(pool * sizeof(double));
+  p->phi = malloc(f * sizeof(double));
+  p->x = malloc((p->d + p->m) * sizeof(double));
+  if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->phi || !p->x) return -1;
+  return rbf_make_candidates(p);
+}
+
+static tt_status rbf_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
+  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: out is NULL");
+  *out = NULL;
+  if (!su || su->struct_size < offsetof(tt_predictor_setup, seed) + sizeof su->seed || !su->target)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: no target space");
+  if (su->state_dim < 1 || su->state_dim > 4096)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: state dimension %u outside "
+                        "[1, 4096]", su->state_dim);
+  tt_predictor *p = calloc(1, sizeof *p);
+  if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  p->target = su->target;
+  p->params = tt_space_count(su->target);
+  p->d = su->state_dim;
+  p->m = rbf_action_dims(su->target);
+  p->seed = su->seed;
+  rbf_read_settings(su->settings, &p->set);
+  p->state_space = rbf_dup(su->state_space);
+  p->signature = ttpm_space_signature(su->target);
+  int bad = !p->state_space || !p->signature;
+  if (su->state_names && !bad) {
+    p->names = calloc(p->d, sizeof *p->names);
+    bad = !p->names;
+    for (uint32_t i = 0; !bad && i < p->d; i++) bad = !(p->names[i] = rbf_dup(su->state_names[i]));
+  }
+  if (bad || rbf_alloc(p)) {
+    rbf_destroy(p);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  }
+  *out = p;
+  return TT_OK;
+}
+
+static tt_status rbf_create(const tt_space *target, uint32_t state_dim, const tt_config *settings,
+                            uint64_t seed, tt_predictor **out) {
+  tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = state_dim,
+                           .settings = settings, .seed = seed};
+  return rbf_create_ex(&su, out);
+}
+
+/* The reward of a sample, or NAN when it cannot be learnt (relative without a default). */
+static double rbf_reward(const tt_predictor *p, double cost, double default_cost) {
+  if (cost >= TT_COST_INFEASIBLE) return 0.0;
+  if (p->set.reward == RBF_REWARD_INVERSE) return 1.0 / cost;
+  if (!(default_cost > 0) || default_cost >= TT_COST_INFEASIBLE || !isfinite(default_cost))
+    return NAN;
+  return default_cost / cost;
+}
+
+/* Keeps the configuration in the pool if its reward ranks among the `pool` best (an equal
+ * configuration keeps its highest reward). */
+static void rbf_pool_add(tt_predictor *p, const double *values, const double *enc, double reward) {
+  size_t np = p->params;
+  for (size_t k = 0; k < p->npool; k++)
+    if (!memcmp(p->pool_values + k * np, values, np * sizeof(double))) {
+      if (reward > p->pool_reward[k]) p->pool_reward[k] = reward;
+      return;
+    }
+  size_t slot = p->npool;
+  if (p->npool == (size_t)p->set.pool) {
+    slot = 0;  /* replace the lowest reward if this one is higher */
+    for (size_t k = 1; k < p->npool; k++)
+      if (p->pool_reward[k] < p->pool_reward[slot]) slot = k;
+    if (!(reward > p->pool_reward[slot]) || p->set.pool == 0) return;
+  } else {
+    p->npool++;
+  }
+  memcpy(p->pool_values + slot * np, values, np * sizeof(double));
+  memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
+  p->pool_reward[slot] = reward;
+}
+
+/* One validated sample: updates theta and the pool. */
+static void rbf_learn(tt_predictor *p, const tt_predictor_sample *s, double reward, double *values) {
+  memcpy(p->x, s->state, p->d * sizeof(double));
+  rbf_encode_action(s->config, p->x + p->d);
+  rbf_update(&p->model, p->x, reward, p->phi);
+  if (reward > 0) {
+    ttpm_config_values(s->config, values);
+    rbf_pool_add(p, values, p->x + p->d, reward);
+  }
+  p->observations++;
+}
+
+static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
+                                uint32_t flags) {
+  if (!p || (!s && count)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: NULL argument");
+  for (size_t i = 0; i < count; i++) {
+    if (s[i].struct_size < offsetof(tt_predictor_sample, default_cost) + sizeof s[i].default_cost)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu is too short", i);
+    if (!s[i].state || !s[i].config)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu has no state "
+                          "or configuration", i);
+    if (tt_space_count(tt_config_space(s[i].config)) != p->params)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu: the "
+                          "configuration is not of the target space", i);
+    for (uint32_t k = 0; k < p->d; k++)
+      if (!isfinite(s[i].state[k]))
+        return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu: state value "
+                            "%u is not finite", i, k);
+    if (isnan(s[i].cost) || (s[i].cost < TT_COST_INFEASIBLE && !(s[i].cost > 0)))
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu: cost %g is "
+                          "not a finite positive number", i, s[i].cost);
+  }
+  double *values = malloc((p->params ? p->params : 1) * sizeof(double));
+  size_t *order = malloc((count ? count : 1) * sizeof *order);
+  if (!values || !order) {
+    free(values);
+    free(order);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  }
+  int64_t passes = flags & TT_PREDICTOR_OFFLINE ? p->set.epochs : 1;
+  tt__pcg32 rng;
+  tt__pcg32_seed(&rng, p->seed ^ p->model.updates, 0x73687566ull); /* "shuf" */
+  for (size_t i = 0; i < count; i++) order[i] = i;
+  for (int64_t e = 0; e < passes; e++) {
+    if (flags & TT_PREDICTOR_OFFLINE)
+      for (size_t i = count; i > 1; i--) {  /* Fisher-Yates, 64-bit draws */
+        uint64_t r = ((uint64_t)tt__pcg32_next(&rng) << 32 | tt__pcg32_next(&rng)) % i;
+        size_t t = order[i - 1];
+        order[i - 1] = order[r];
+        order[r] = t;
+      }
+    for (size_t i = 0; i < count; i++) {
+      const tt_predictor_sample *x = &s[order[i]];
+      double reward = rbf_reward(p, x->cost, x->default_cost);
+      if (isnan(reward)) continue;
+      rbf_learn(p, x, reward, values);
+    }
+  }
+  free(values);
+  free(order);
+  return TT_OK;
+}
+
+static tt_status rbf_observe(tt_predictor *p, const double *state, const tt_config *config,
+                             double cost) {
+  tt_predictor_sample s = {.struct_size = sizeof s, .state = state, .config = config,
+                           .cost = cost, .default_cost = NAN};
+  return rbf_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
+}
+
+/* Expected cost of a value Q under the reward (NAN when it says nothing). */
+static double rbf_cost_of(const tt_predictor *p, double q, double default_cost) {
+  if (!(q > 0)) return NAN;
+  if (p->set.reward == RBF_REWARD_INVERSE) return 1.0 / q;
+  return default_cost > 0 && isfinite(default_cost) ? default_cost / q : NAN;
+}
+
+/* One candidate of the argmax: its values and encoding in scratch, its Q. */
+typedef struct rbf_best {
+  double q;
+  size_t src;  /* index into the candidate list of the first phase */
+} rbf_best;
+
+static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query *q, tt_config *out,
+                                tt_predictor_result *res) {
+  if (!p || !q || !q->state || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": predict: NULL argument");
+  if (!p->observations)
+    return tt_set_error(TT_ERR_NO_DATA, RBF_NAME ": predict: nothing observed yet");
+  for (uint32_t k = 0; k < p->d; k++)
+    if (!isfinite(q->state[k]))
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": predict: state value %u is not finite", k);
+  const rbf_model *r = &p->model;
+  size_t np = p->params ? p->params : 1, m = p->m ? p->m : 1;
+  size_t n1 = p->npool + p->ncand + 1, starts = (size_t)p->set.starts;
+  double *ds = malloc(r->features * sizeof(double));
+  double *vals = malloc(n1 * np * sizeof(double)), *enc = malloc(n1 * m * sizeof(double));
+  double *qs = malloc(n1 * sizeof(double)), *unit = malloc(np * sizeof(double));
+  double *best_vals = malloc(np * sizeof(double)), *try_enc = malloc(m * sizeof(double));
+  size_t *top = malloc((starts ? starts : 1) * sizeof *top);
+  tt_config *c = tt_config_create(p->target);
+  tt_status st = TT_OK;
+  if (!ds || !vals || !enc || !qs || !unit || !best_vals || !try_enc || !top || !c) {
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+    goto done;
+  }
+  rbf_state_part(r, q->state, ds);
+  /* phase 1: the pool, the LHS candidates and the default */
+  size_t n = 0;
+  memcpy(vals, p->pool_values, p->npool * p->params * sizeof(double));
+  memcpy(enc, p->pool_enc, p->npool * p->m * sizeof(double));
+  n = p->npool;
+  memcpy(vals + n * p->params, p->cand_values, p->ncand * p->params * sizeof(double));
+  memcpy(enc + n * p->m, p->cand_enc, p->ncand * p->m * sizeof(double));
+  n += p->ncand;
+  ttpm_config_values(c, vals + n * p->params);  /* c holds the defaults */
+  rbf_encode_action(c, enc + n * p->m);
+  n++;
+  for (size_t k = 0; k < n; k++) qs[k] = rbf_q_action(r, ds, enc + k * p->m);
+  uint64_t evaluated = n;
+  /* the `starts` best, highest first (ties: lowest index) */
+  size_t nt = 0;
+  for (; nt < starts && nt < n; nt++) {
+    size_t b = SIZE_MAX;
+    for (size_t k = 0; k < n; k++) {
+      int taken = 0;
+      for (size_t j = 0; j < nt && !taken; j++) taken = top[j] == k;
+      if (!taken && (b == SIZE_MAX || qs[k] > qs[b])) b = k;
+    }
+    top[nt] = b;
+  }
+  size_t bi = 0;
+  double best_q = -INFINITY;
+  for (size_t k = 0; k < n; k++)
+    if (qs[k] > best_q) best_q = qs[k], bi = k;
+  memcpy(best_vals, vals + bi * p->params, p->params * sizeof(double));
+  /* phase 2: coordinate search from each start */
+  char why[128];
+  for (size_t t = 0; t < nt && p->set.refine > 0; t++) {
+    double cur_q = qs[top[t]];
+    if (ttpm_config_from_values(c, vals + top[t] * p->params, why, sizeof why)) continue;
+    tt_config_to_unit(c, unit);
+    double step = 0.125;
+    for (int64_t round = 0; round < p->set.refine; round++, step *= 0.5) {
+      for (size_t i = 0; i < p->params; i++) {
+        size_t alts = tt_space_type(p->target, i) == TT_PARAM_NOM ? tt_space_nom_count(p->target, i) : 2;
+        double keep = unit[i], best_u = keep;
+        for (size_t a = 0; a < alts; a++) {
+          double u;
+          if (tt_space_type(p->target, i) == TT_PARAM_NOM) {
+            u = ((double)a + 0.5) / (double)alts;
+            if (fabs(u - keep) < 0.5 / (double)alts) continue;  /* the current value */
+          } else {
+            u = keep + (a ? step : -step);
+            u = u < 0 ? 0 : u > 1 ? 1 : u;
+            if (u == keep) continue;
+          }
+          unit[i] = u;
+          tt_config_from_unit(c, unit);
+          if (tt_space_check(p->target, c, why, sizeof why) == TT_CHECK_INFEASIBLE) continue;
+          rbf_encode_action(c, try_enc);
+          double qa = rbf_q_action(r, ds, try_enc);
+          evaluated++;
+          if (qa > cur_q) {
+            cur_q = qa;
+            best_u = u;
+            if (qa > best_q) {
+              best_q = qa;
+              ttpm_config_values(c, best_vals);
+            }
+          }
+        }
+        unit[i] = best_u;
+      }
+    }
+  }
+  if (ttpm_config_from_values(out, best_vals, why, sizeof why)) {
+    st = tt_set_error(TT_ERR_INTERNAL, RBF_NAME ": predict: %s", why);
+    goto done;
+  }
+  if (res && res->struct_size >= offsetof(tt_predictor_result, candidates) + sizeof res->candidates) {
+    res->expected_cost = rbf_cost_of(p, best_q, q->default_cost);
+    res->value = best_q;
+    res->distance = NAN;
+    res->candidates = evaluated;
+  }
+done:
+  free(ds);
+  free(vals);
+  free(enc);
+  free(qs);
+  free(unit);
+  free(best_vals);
+  free(try_enc);
+  free(top);
+  tt_config_destroy(c);
+  return st;
+}
+
+static tt_status rbf_predict(const tt_predictor *p, const double *state, tt_config *out,
+                             double *expected_cost) {
+  tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
+  tt_predictor_result r = {.struct_size = sizeof r};
+  tt_status st = rbf_predict_ex(p, &q, out, &r);
+  if (expected_cost) *expected_cost = st == TT_OK ? r.expected_cost : NAN;
+  return st;
+}
+
+static tt_status rbf_estimate(const tt_predictor *p, const tt_predictor_query *q,
+                              const tt_config *config, double *cost) {
+  if (!p || !q || !q->state || !config || !cost)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": estimate: NULL argument");
+  double *x = malloc((p->d + p->m) * sizeof(double));
+  if (!x) return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  memcpy(x, q->state, p->d * sizeof(double));
+  rbf_encode_action(config, x + p->d);
+  *cost = rbf_cost_of(p, rbf_q(&p->model, x), q->default_cost);
+  free(x);
+  return TT_OK;
+}
+
+static tt_status rbf_info(const tt_predictor *p, tt_predictor_info *out) {
+  if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": info: NULL argument");
+  uint64_t f = p->model.features, dim = p->model.dim, pool = (uint64_t)p->set.pool;
+  uint64_t bytes = sizeof *p + f * (dim + 2) * sizeof(double) + (p->d + p->m) * sizeof(double) +
+                   p->ncand * (p->params + p->m) * sizeof(double) +
+                   pool * (p->params + p->m + 1) * sizeof(double);
+  if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
+    out->memory_bytes = bytes;
+    out->entries = f;
+    out->observations = p->observations;
+    out->format_version = RBF_FORMAT;
+  }
+  return TT_OK;
+}
+
+/* ---- files ---- */
+
+static tt_status rbf_save(const tt_predictor *p, const char *path) {
+  if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": save: NULL argument");
+  char *settings = rbf_settings_json(&p->set);
+  ttpm_header h = {.kind = RBF_NAME, .plugin_version = RBF_VERSION, .state_space = p->state_space,
+                   .state_dim = p->d, .state_names = p->names, .target = p->signature,
+                   .settings = settings};
+  ttpm_writer w = {0};
+  const rbf_model *r = &p->model;
+  ttpm_put_header(&w, &h);
+  ttpm_put_u64(&w, p->seed);
+  ttpm_put_u64(&w, p->params);
+  ttpm_put_u64(&w, p->m);
+  ttpm_put_u64(&w, r->features);
+  ttpm_put_u64(&w, r->updates);
+  ttpm_put_u64(&w, p->observations);
+  ttpm_put_f64s(&w, r->centres, (size_t)r->features * r->dim);
+  ttpm_put_f64s(&w, r->theta, r->features);
+  ttpm_put_u64(&w, p->npool);
+  ttpm_put_f64s(&w, p->pool_values, p->npool * p->params);
+  ttpm_put_f64s(&w, p->pool_reward, p->npool);
+  tt_status st = settings ? ttpm_save(RBF_NAME, path, RBF_FORMAT, &w)
+                          : tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  tt_free(settings);
+  free(w.data);
+  return st;
+}
+
+static tt_status rbf_load(tt_predictor *p, const char *path) {
+  if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": load: NULL argument");
+  unsigned char *data;
+  size_t len;
+  uint32_t version;
+  tt_status st = ttpm_load(RBF_NAME, RBF_VERSION, path, RBF_FORMAT, &data, &len, &version);
+  if (st != TT_OK) return st;
+  ttpm_reader rd = {.data = data, .len = len, .path = path};
+  ttpm_header h;
+  if (ttpm_get_header(&rd, &h)) {
+    st = tt_set_error(TT_ERR_PARSE, RBF_NAME ": model %s", rd.err);
+    free(data);
+    return st;
+  }
+  char diff[400];
+  st = TT_OK;
+  if (strcmp(h.kind, RBF_NAME)) {
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": model %s was written by %s %s, not by "
+                      RBF_NAME " (load it with --plugin %s)", path, h.kind, h.plugin_version, h.kind);
+  } else if (h.state_dim != p->d || strcmp(h.state_space, p->state_space)) {
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": model %s is for states \"%s\" of %u "
+                      "values, but this predictor gets states \"%s\" of %u values", path,
+                      h.state_space, h.state_dim, p->state_space, p->d);
+  } else if (strcmp(h.target, p->signature)) {
+    ttpm_signature_diff(h.target, p->signature, diff, sizeof diff);
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": model %s predicts configurations of "
+                      "another parameter space: the file's %s; this one's %s (first difference: "
+                      "%s)", path, h.target, p->signature, diff);
+  }
+  if (st != TT_OK) {
+    ttpm_header_free(&h);
+    free(data);
+    return st;
+  }
+  /* build the loaded model beside the current one; swap only when all of it read */
+  tt_predictor tmp = *p;
+  tmp.cand_values = tmp.cand_enc = tmp.pool_values = tmp.pool_enc = tmp.pool_reward = NULL;
+  tmp.phi = tmp.x = NULL;
+  memset(&tmp.model, 0, sizeof tmp.model);
+  tt_config *sc = tt_config_create(rbf_settings);
+  if (!sc || tt_config_from_json(sc, h.settings, path) != TT_OK)
+    ttpm_fail(&rd, "settings: %s", sc ? tt_last_error() : "out of memory");
+  else
+    rbf_read_settings(sc, &tmp.set);
+  tt_config_destroy(sc);
+  tmp.seed = ttpm_get_u64(&rd, "the seed");
+  uint64_t params = ttpm_get_u64(&rd, "the parameter count");
+  uint64_t m = ttpm_get_u64(&rd, "the action dimension");
+  uint64_t f = ttpm_get_u64(&rd, "the feature count");
+  uint64_t updates = ttpm_get_u64(&rd, "the update count");
+  uint64_t obs = ttpm_get_u64(&rd, "the observation count");
+  if (!rd.err[0] && (params != p->params || m != p->m))
+    ttpm_fail(&rd, "%llu parameters / %llu action coordinates, the target space has %zu / %u",
+              (unsigned long long)params, (unsigned long long)m, p->params, p->m);
+  if (!rd.err[0] && f != rbf_feature_count(&tmp))
+    ttpm_fail(&rd, "feature count %llu does not match the settings (%u)", (unsigned long long)f,
+              rbf_feature_count(&tmp));
+  if (!rd.err[0] && f * (p->d + p->m + 1) * 8 > rd.len - rd.pos)
+    ttpm_fail(&rd, "file cut short: %llu features need %llu bytes, %zu left", (unsigned long long)f,
+              (unsigned long long)(f * (p->d + p->m + 1) * 8), rd.len - rd.pos);
+  if (!rd.err[0] && rbf_alloc(&tmp)) ttpm_fail(&rd, "out of memory");
+  if (!rd.err[0]) {
+    ttpm_get_f64s(&rd, tmp.model.centres, (size_t)f * tmp.model.dim, "the centres");
+    ttpm_get_f64s(&rd, tmp.model.theta, (size_t)f, "theta");
+    tmp.model.updates = updates;
+    for (size_t i = 0; !rd.err[0] && i < (size_t)f * tmp.model.dim; i++)
+      if (!isfinite(tmp.model.centres[i])) ttpm_fail(&rd, "centre coordinate %zu is not finite", i);
+    for (size_t i = 0; !rd.err[0] && i < (size_t)f; i++)
+      if (!isfinite(tmp.model.theta[i])) ttpm_fail(&rd, "theta[%zu] is not finite", i);
+  }
+  uint64_t npool = ttpm_get_count(&rd, (uint64_t)tmp.set.pool, (p->params + 1) * 8, "pool entries");
+  tt_config *c = tt_config_create(p->target);
+  char why[256];
+  for (uint64_t k = 0; !rd.err[0] && k < npool; k++) {
+    double *v = tmp.pool_values + k * p->params;
+    ttpm_get_f64s(&rd, v, p->params, "a pool configuration");
+    if (!rd.err[0] && (!c || ttpm_config_from_values(c, v, why, sizeof why)))
+      ttpm_fail(&rd, "pool configuration %llu: %s", (unsigned long long)k, c ? why : "out of memory");
+    if (!rd.err[0]) rbf_encode_action(c, tmp.pool_enc + k * p->m);
+  }
+  if (!rd.err[0]) {
+    ttpm_get_f64s(&rd, tmp.pool_reward, (size_t)npool, "the pool rewards");
+    tmp.npool = (size_t)npool;
+  }
+  tt_config_destroy(c);
+  if (!rd.err[0] && rd.pos != rd.len) ttpm_fail(&rd, "%zu bytes after the pool", rd.len - rd.pos);
+  ttpm_header_free(&h);
+  free(data);
+  if (rd.err[0]) {
+    rbf_free_model_parts(&tmp);
+    return tt_set_error(TT_ERR_PARSE, RBF_NAME ": model %s", rd.err);
+  }
+  tmp.observations = obs;
+  rbf_free_model_parts(p);
+  *p = tmp;
+  return TT_OK;
+}
+
+/* ---- plugin ---- */
+
+static const tt_predictor_iface rbf_iface = {
+  .struct_size = sizeof(tt_predictor_iface),
+  .space = rbf_space,
+  .create = rbf_create,
+  .observe = rbf_observe,
+  .predict = rbf_predict,
+  .save = rbf_save,
+  .load = rbf_load,
+  .destroy = rbf_destroy,
+  .create_ex = rbf_create_ex,
+  .observe_ex = rbf_observe_ex,
+  .predict_ex = rbf_predict_ex,
+  .info = rbf_info,
+  .estimate = rbf_estimate,
+};
+
+static tt_status rbf_init(const tt_host *host) {
+  (void)host;
+  tt_space *s = rbf_settings = tt_space_create(RBF_NAME, RBF_VERSION);
+  int ok = s != NULL;
+  ok = ok && tt_space_add_int(s, "features", 0, 1 << 20, 0, "RBF features; 0: 3.5 x (state "
+                              "values + parameters), the thesis' rule (100 for its 28)") >= 0;
+  ok = ok && tt_space_add_float(s, "width", 0.01, 100.0, 1.0, 1,
+                                "omega of phi_i(x) = exp(-omega ||x - c_i||) (thesis: 1)") >= 0;
+  ok = ok && tt_space_add_float(s, "alpha", 1e-6, 10.0, 0.1, 1, "Greedy-GQ step size") >= 0;
+  ok = ok && tt_space_add_float(s, "decay", 0.0, 1e12, 0.0, 0, "updates after which the step "
+                                "has halved, alpha / (1 + t / decay); 0: constant") >= 0;
+  ok = ok && tt_space_add_int(s, "epochs", 1, 10000, 10, "passes over offline data (a tuning "
+                              "DB), each in a fresh shuffled order") >= 0;
+  ok = ok && tt_space_add_nom_string(s, "reward", rbf_reward_names, 2, 0, "inverse: R = 1/cost "
+                                     "(thesis); relative: R = default cost / cost") >= 0;
+  ok = ok && tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 256, "Latin-hypercube candidate "
+                              "actions of the argmax") >= 0;
+  ok = ok && tt_space_add_int(s, "poolSize", 0, 1 << 20, 256, "observed configurations kept "
+                              "as candidates (the highest rewards)") >= 0;
+  ok = ok && tt_space_add_int(s, "refine", 0, 64, 3, "rounds of coordinate search around the "
+                              "best candidates") >= 0;
+  ok = ok && tt_space_add_int(s, "refineStarts", 0, 1024, 4, "candidates the coordinate search "
+                              "starts from") >= 0;
+  if (!ok) {
+    tt_space_destroy(s);
+    rbf_settings = NULL;
+    return tt_set_error(TT_ERR_INTERNAL, RBF_NAME ": cannot build the settings space");
+  }
+  return TT_OK;
+}
+
+static void rbf_deinit(void) {
+  tt_space_destroy(rbf_settings);
+  rbf_settings = NULL;
+}
+
+static const void *rbf_get_interface(const char *id) {
+  return strcmp(id, TT_PREDICTOR_INTERFACE_ID) == 0 ? &rbf_iface : NULL;
+}
+
+TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
+  .struct_size = sizeof(tt_plugin),
+  .abi_major = TT_ABI_MAJOR,
+  .abi_minor = TT_ABI_MINOR,
+  .kind = TT_KIND_PREDICTOR,
+  .name = RBF_NAME,
+  .version = RBF_VERSION,
+  .description = "RBF features with myopic Greedy-GQ: argmax_a theta.phi(s, a) (thesis 3.3.2)",
+  .init = rbf_init,
+  .deinit = rbf_deinit,
+  .get_interface = rbf_get_interface,
+};
