@@ -95,18 +95,18 @@ static void pu_write(const char *path, const unsigned char *b, long n) {
 }
 
 /* FNV-1a 64 of the model container (to forge a valid checksum on an edited file). */
-static uint64_t pu_fnv(const unsigned char *p, size_t n) {
+static inline uint64_t pu_fnv(const unsigned char *p, size_t n) {
   uint64_t h = 0xcbf29ce484222325ull;
   for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
   return h;
 }
-static void pu_reseal(unsigned char *b, long n) {
+static inline void pu_reseal(unsigned char *b, long n) {
   uint64_t h = pu_fnv(b, (size_t)n - 8);
   for (int i = 0; i < 8; i++) b[n - 8 + i] = (unsigned char)(h >> (8 * i));
 }
 
 /* Predictions of `p` for `count` pseudo-random states, as configuration JSON joined. */
-static char *pu_predictions(const tt_predictor_iface *pi, const tt_predictor *p,
+static inline char *pu_predictions(const tt_predictor_iface *pi, const tt_predictor *p,
                             const tt_space *target, uint32_t dim, int count) {
   size_t cap = 1 << 16, len = 0;
   char *out = malloc(cap);
@@ -135,7 +135,7 @@ static char *pu_predictions(const tt_predictor_iface *pi, const tt_predictor *p,
 
 /* The model-file properties: `p` (trained) saved to dir/model.ttpm; `other` is a predictor
  * plugin of another kind (its file must be refused by pi). */
-static void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p, const tt_space *target,
+static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p, const tt_space *target,
                            uint32_t dim, const char *state_space, const char *dir,
                            const tt_predictor_iface *other, const tt_config *settings) {
   char path[4200], path2[4200], bad[4200];

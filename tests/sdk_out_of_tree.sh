@@ -44,7 +44,7 @@ plugindir=$($PKG_CONFIG --variable=plugindir tunetrace)
 echo "pkg-config: cflags '$cflags' libdir $libdir plugindir $plugindir"
 case "$libdir" in "$stage"/*) ;; *) fail "libdir $libdir is not inside the staging dir";; esac
 case "$plugindir" in "$stage"/*) ;; *) fail "plugindir $plugindir is not inside the staging dir";; esac
-for h in tunetrace.h plugin.h tuner.h params.h loader.h host.h session.h tuning.h; do
+for h in tunetrace.h plugin.h tuner.h predictor.h indicators.h params.h loader.h host.h session.h tuning.h hybrid.h; do
   [ -f "$stage$prefix/include/tunetrace/$h" ] || fail "header tunetrace/$h not installed"
 done
 example="$stage$prefix/share/tunetrace/examples/tuner_random"
@@ -124,6 +124,79 @@ grep -q '"samples"' "$tmp/check.out" || fail "tuner_random space lacks \"samples
 grep -q '"lhs"' "$tmp/check.out" || fail "tuner_random space lacks \"lhs\""
 grep -q "ask/tell ok" "$tmp/check.out" || fail "ask/tell rounds failed"
 
+# 3b. The predictor example (examples/predictor_static) the same way: built out of tree with
+#     its Makefile, loaded by a pkg-config-built program that trains and queries it through
+#     the ABI 1.1 predictor table.
+pexample="$stage$prefix/share/tunetrace/examples/predictor_static"
+for f in predictor_static.c Makefile README.md; do
+  [ -f "$pexample/$f" ] || fail "the SDK predictor example's $f is not installed in $pexample"
+done
+cp -r "$pexample" "$tmp/psrc"
+make -C "$tmp/psrc" PKG_CONFIG="$PKG_CONFIG" >"$tmp/pmake.log" 2>&1 ||
+  { cat "$tmp/pmake.log" >&2; fail "make (predictor_static) failed"; }
+if grep -qi "warning" "$tmp/pmake.log"; then cat "$tmp/pmake.log" >&2; fail "predictor_static compiles with warnings"; fi
+make -C "$tmp/psrc" install PKG_CONFIG="$PKG_CONFIG" >/dev/null 2>&1 || fail "make install (predictor_static) failed"
+[ -f "$plugindir/predictor_static.so" ] || fail "predictor_static.so not installed in $plugindir"
+if command -v nm >/dev/null 2>&1; then
+  exported=$(nm -D --defined-only "$tmp/psrc/predictor_static.so" | awk '$2 ~ /[A-Z]/ {print $3}' | sort)
+  [ "$exported" = "tt_plugin_entry" ] || fail "predictor_static.so exports more than tt_plugin_entry: $exported"
+fi
+cat >"$tmp/pcheck.c" <<'PCHECK'
+#include <tunetrace/loader.h>
+#include <tunetrace/predictor.h>
+#include <math.h>
+#include <stdio.h>
+
+static void quiet(tt_log_level l, const char *p, const char *f, ...) {}
+
+int main(int argc, char **argv) {
+  tt_host host = {.struct_size = sizeof host, .abi_major = TT_ABI_MAJOR,
+                  .abi_minor = TT_ABI_MINOR, .host_name = "sdk check", .log = quiet};
+  tt_registry *reg = tt_registry_create(&host);
+  tt_registry_add_dir(reg, argv[1]);
+  tt_loaded_plugin *lp;
+  if (tt_registry_load(reg, "predictor_static", &lp) != TT_OK) {
+    fprintf(stderr, "load: %s\n", tt_last_error());
+    return 1;
+  }
+  const tt_predictor_iface *pi = tt_loaded_plugin_iface(lp);
+  if (!TT_PREDICTOR_HAS(pi, create_ex) || !TT_PREDICTOR_HAS(pi, predict_ex)) return 2;
+  tt_space *t = tt_space_create("target", "1");
+  tt_space_add_int(t, "leaf", 1, 32, 8, "leaf size");
+  tt_predictor_setup su = {.struct_size = sizeof su, .target = t, .state_dim = 1,
+                           .state_space = "sdk", .seed = 1};
+  tt_predictor *p;
+  if (pi->create_ex(&su, &p) != TT_OK) return 3;
+  tt_config *c = tt_config_create(t);
+  for (int leaf = 1; leaf <= 32; leaf++)
+    for (int s = 0; s < 4; s++) {
+      double state = s, cost = 10 + (leaf - 5) * (leaf - 5);
+      tt_config_set_number(c, 0, leaf);
+      tt_predictor_sample x = {.struct_size = sizeof x, .state = &state, .config = c,
+                               .cost = cost, .default_cost = 19};
+      if (pi->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE) != TT_OK) return 4;
+    }
+  double q0 = 0;
+  tt_predictor_query q = {.struct_size = sizeof q, .state = &q0, .default_cost = NAN};
+  if (pi->predict_ex(p, &q, c, NULL) != TT_OK) return 5;
+  printf("predicted leaf %lld\n", (long long)tt_config_get_int(c, "leaf", -1));
+  if (pi->save(p, argv[2]) != TT_OK) return 6;
+  pi->destroy(p);
+  tt_config_destroy(c);
+  tt_space_destroy(t);
+  tt_registry_destroy(reg);
+  return 0;
+}
+PCHECK
+# shellcheck disable=SC2046
+cc -std=c11 -Wall -Wextra -Wno-unused-parameter -o "$tmp/pcheck" "$tmp/pcheck.c" \
+  $($PKG_CONFIG --cflags --libs tunetrace) -lm || fail "cannot build the predictor check with pkg-config flags"
+LD_LIBRARY_PATH="$libdir" "$tmp/pcheck" "$plugindir" "$tmp/static.model" >"$tmp/pcheck.out" 2>&1 ||
+  { cat "$tmp/pcheck.out" >&2; fail "predictor check failed"; }
+cat "$tmp/pcheck.out"
+grep -q "predicted leaf 5" "$tmp/pcheck.out" || fail "predictor_static did not answer the best static leaf size"
+grep -q "^predictor_static 1" "$tmp/static.model" || fail "predictor_static wrote no versioned model file"
+
 # 4. The installed program from a clean environment: no LD_LIBRARY_PATH (its RUNPATH finds
 #    the library), no TT_PLUGIN_PATH (the library finds its installed plugins beside itself).
 clean() { env -i PATH=/usr/bin:/bin HOME="$tmp/home" "$@"; }
@@ -137,7 +210,7 @@ grep -q "tunetrace host $($PKG_CONFIG --modversion tunetrace)" "$tmp/version.out
   fail "tunetrace --version does not print the installed version"
 clean "$tunetrace" --list-plugins >"$tmp/list.out" 2>&1 || { cat "$tmp/list.out" >&2; fail "tunetrace --list-plugins failed"; }
 cat "$tmp/list.out"
-for p in accel_embree integrator_pt tuner_nm tuner_random; do
+for p in accel_embree integrator_pt tuner_nm tuner_random predictor_nn predictor_rbf predictor_static; do
   grep -q "^$p .*$plugindir/$p.so" "$tmp/list.out" || fail "tunetrace --list-plugins does not find the installed $p in $plugindir"
 done
 if grep "search path" "$tmp/list.out" | grep -qF "$TT_BUILD_ROOT"; then
@@ -146,6 +219,9 @@ fi
 clean "$tunetrace" --describe tuner_random >"$tmp/describe.out" 2>"$tmp/describe.err" ||
   { cat "$tmp/describe.out" "$tmp/describe.err" >&2; fail "tunetrace --describe tuner_random failed"; }
 grep -q '"samples"' "$tmp/describe.out" || fail "tunetrace --describe does not print the space"
+clean "$tunetrace" --describe predictor_static >"$tmp/pdescribe.out" 2>&1 ||
+  { cat "$tmp/pdescribe.out" >&2; fail "tunetrace --describe predictor_static failed"; }
+grep -q '"minShare"' "$tmp/pdescribe.out" || fail "tunetrace --describe predictor_static does not print its space"
 # a small render, with a short exploration by the installed third-party tuner
 scene="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
 clean "$tunetrace" --quiet --res 16x16 --spp 2 --plugin tuner_random --iterations 2 --no-db \
