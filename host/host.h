@@ -81,6 +81,14 @@ typedef struct tt__host_options {
   char **argv;
   int64_t started_ns;       /* wall-clock (Unix) time the options were read, in ns */
   int indicators;           /* --indicators: print the scene's indicators as JSON */
+  /* hybrid tuning (hybrid.c) */
+  int hybrid;               /* --hybrid: eps-greedy search/prediction over the camera path */
+  int predict_only;         /* --predict: print the model's predictions, render nothing */
+  double epsilon;           /* --epsilon E in [0, 1] */
+  int epsilon_set;
+  const char *model;        /* --model FILE: loaded if it exists, saved at the end */
+  const char *warm_start[TT_HOST_MAX_LIST]; /* --warm-start DB ... */
+  int warm_start_count;
   const char *indicator_norm; /* --indicator-norm SPEC (tt_indicator_norm_parse); NULL: default */
 } tt__host_options;
 
@@ -94,6 +102,13 @@ int tt__ensure_parent_dir(const char *option, const char *path);
 int tt__run_convert(const tt__host_options *opt);
 /* Runs --indicators: prints raw and normalised indicators as JSON (indicators.c). */
 int tt__run_indicators(const tt__host_options *opt);
+/* SIGINT/SIGTERM finish the current pass (tt_host.should_stop); a second one exits (run.c). */
+void tt__install_signals(void);
+/* Runs --hybrid / --predict over the scene's camera path (hybrid.c). */
+int tt__run_hybrid(const tt__host_options *opt);
+
+#define TT_HOST_DEFAULT_EPSILON 0.1
+#define TT_HOST_DEFAULT_HYBRID_ITERATIONS 40
 
 #define TT_HOST_PATH_SAMPLES 100
 

@@ -135,6 +135,19 @@ static const char tt__usage[] =
     "\n"
     "An option's value may also be attached with '=': --spp=64, --out=box.exr.\n"
     "\n"
+    "Hybrid tuning (thesis 3.3; host/README.md):\n"
+    "  --hybrid               over the camera path (--frames A:B, default all 100 samples):\n"
+    "                         per state, explore (the tuner, --iterations K, default 40)\n"
+    "                         with probability --epsilon, else exploit (one configuration\n"
+    "                         the predictor plugin predicts, built once); every cost goes\n"
+    "                         to the database and the model. --plugin predictor_nn (default)\n"
+    "                         | predictor_rbf | predictor_static, --plugin tuner_nm (default)\n"
+    "  --epsilon E            probability of exploring a state, in [0, 1] (default 0.1)\n"
+    "  --model FILE           the model: loaded when FILE exists, saved there at the end\n"
+    "  --warm-start DB        teach the model every usable row of a tuning database first\n"
+    "                         (other scenes, earlier runs; same objective, clock, spp, threads)\n"
+    "  --predict              print the model's prediction per state as JSON; render nothing\n"
+    "\n"
     "Environment: TT_PLUGIN_PATH (':'-separated plugin folders), OCIO (OpenColorIO config\n"
     "for the PNG display transform; built-in sRGB when unset).\n"
     "\n"
@@ -341,8 +354,9 @@ static int tt__check_sequence_options(tt__host_options *opt) {
             "frame's camera): give --frames A:B with --out DIR/frame_%%04d.exr, or --sequence\n");
     return -1;
   }
-  if (!opt->sequence && (opt->reference_scale || opt->out_dir)) {
-    fprintf(stderr, "host: --reference-scale and --out-dir apply to --sequence\n");
+  if (!opt->sequence && (opt->reference_scale || (opt->out_dir && !opt->hybrid))) {
+    fprintf(stderr, "host: --reference-scale and --out-dir apply to --sequence (--out-dir also "
+            "to --hybrid)\n");
     return -1;
   }
   if (opt->reference_only && opt->post) {
@@ -434,6 +448,27 @@ int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
       opt->convert = 1;
     } else if (!strcmp(a, "--indicators")) {
       opt->indicators = 1;
+    } else if (!strcmp(a, "--hybrid")) {
+      opt->hybrid = 1;
+    } else if (!strcmp(a, "--predict")) {
+      opt->predict_only = 1;
+    } else if (!strcmp(a, "--epsilon")) {
+      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      char *end = NULL;
+      double e = strtod(v, &end);
+      if (!*v || *end || !(e >= 0.0 && e <= 1.0)) {
+        fprintf(stderr, "host: --epsilon: expected the probability of exploring a state, a "
+                "number in [0, 1], got \"%s\"\n", v);
+        return TT_EXIT_USAGE;
+      }
+      opt->epsilon = e;
+      opt->epsilon_set = 1;
+    } else if (!strcmp(a, "--model")) {
+      if (!(opt->model = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--warm-start")) {
+      if (!(v = tt__arg(argc, argv, &i)) ||
+          tt__push(opt->warm_start, &opt->warm_start_count, a, v))
+        return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--indicator-norm")) {
       tt_indicator_norm norm;
       if (!(opt->indicator_norm = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;

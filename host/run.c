@@ -30,7 +30,7 @@ static void tt__on_signal(int sig) {
   (void)ignored;
 }
 
-static void tt__install_signals(void) {
+void tt__install_signals(void) {
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sa.sa_handler = tt__on_signal;
@@ -322,6 +322,11 @@ int tt__run_render(const tt__host_options *opt) {
   if (rc != TT_EXIT_OK) goto done;
   const tt_host *host = s.host;
   tt__run_record *rec = &s.rec;
+  tt_loaded_plugin *predictor = tt_registry_find_kind(s.reg, TT_KIND_PREDICTOR);
+  if (predictor && !opt->quiet)
+    host->log(TT_LOG_WARN, NULL, "%s is loaded but not used: a predictor chooses the "
+              "configuration in the hybrid loop (--hybrid over the camera path, or --predict)",
+              tt_loaded_plugin_entry(predictor)->name);
   const tt_render_settings *settings = tt_scene_settings(s.scene);
   uint32_t target_spp = opt->spp ? opt->spp : settings->spp;
   double budget_s = opt->time_budget > 0 ? opt->time_budget : settings->time_budget_s;

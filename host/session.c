@@ -74,6 +74,17 @@ static int tt__load_plugins(tt__session *s) {
     fprintf(stderr, "host: %s\n", tt_last_error());
     failures++;
   }
+  /* the hybrid loop (--hybrid, --predict) also needs a search and a model: the thesis' */
+  static const struct { uint32_t kind; const char *name; } hybrid[] = {
+    {TT_KIND_TUNER, "tuner_nm"}, {TT_KIND_PREDICTOR, "predictor_nn"}};
+  for (size_t i = 0; (opt->hybrid || opt->predict_only) && i < 2; i++) {
+    if (tt_registry_find_kind(tt_session_registry(s->lib), hybrid[i].kind)) continue;
+    if (tt_session_load_plugin(s->lib, hybrid[i].name, NULL) != TT_OK) {
+      fprintf(stderr, "host: default %s plugin \"%s\": %s\n", tt_plugin_kind_name(hybrid[i].kind),
+              hybrid[i].name, tt_last_error());
+      failures++;
+    }
+  }
   return failures;
 }
 

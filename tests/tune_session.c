@@ -306,7 +306,7 @@ static tt_status ft_feedback(tt_tuner *t, double cost) {
 }
 static void ft_destroy(tt_tuner *t) { free(t); }
 static const tt_tuner_iface g_fixed = {sizeof g_fixed, NULL, ft_create, ft_next, ft_feedback,
-                                       NULL, NULL, NULL, ft_destroy};
+                                       NULL, NULL, NULL, ft_destroy, NULL};
 
 static void test_database(const tt_space *space) {
   char path[] = "/tmp/tt_tune_session_XXXXXX";

@@ -27,5 +27,6 @@
 #include <tunetrace/tuning.h>
 #include <tunetrace/session.h>
 #include <tunetrace/suggest.h>
+#include <tunetrace/hybrid.h>
 
 #endif /* TUNETRACE_TUNETRACE_H */

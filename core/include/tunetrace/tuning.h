@@ -11,6 +11,10 @@
  * a configuration measured earlier in the same session is measured again (a tuner
  * re-measuring its incumbent against noise).
  *
+ * A tuner of ABI 1.1 (tuner.h) gets set_context before its first proposal: the state's
+ * indicators normalised as the predictors see them (tunetrace/indicators.h), the default's
+ * cost and the iteration budget.
+ *
  * Two ways to drive it:
  *  - ask/tell: tt_tuning_next gives the next configuration that needs a measurement, the
  *    caller applies it, renders, and reports what it measured with tt_tuning_report;
@@ -180,6 +184,11 @@ typedef struct tt_tuning_desc {
    * write the pass image or feed a model. NULL: none. */
   void (*on_sample)(void *user, const tt_tuning_sample *sample);
   void *user;               /* on_sample's first argument */
+  /* ---- appended for the hybrid loop (tunetrace/hybrid.h) ---- */
+  /* The database's mode column for every sample of this session (e.g. "exploit" for the
+   * one configuration a model predicted); NULL: "default" for the default and "tune" /
+   * "explore" for the proposals. */
+  const char *mode;
 } tt_tuning_desc;
 
 /* Creates a session. TT_ERR_INVALID_ARGUMENT (a missing field), TT_ERR_PARSE (objective),

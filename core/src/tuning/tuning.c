@@ -14,6 +14,8 @@
 #include <tt_util/rng.h>
 #include <tt_util/strings.h>
 
+#include <tunetrace/indicators.h>
+
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
@@ -62,6 +64,8 @@ struct tt_tuning {
   char *default_json;
   char *best_json;              /* cache of tt_tuning_best_json */
   double *verify_ms;            /* rounds x 2 x 3 of the last verify */
+  char *mode;                   /* desc->mode: the database's mode column, or NULL */
+  int context_sent;             /* the tuner's set_context was called (or cannot be) */
 };
 
 /* Canonical JSON of a configuration as a malloc'ed string (tt_config_to_json uses tt_free). */
@@ -94,6 +98,7 @@ void tt_tuning_destroy(tt_tuning *t) {
   free(t->default_json);
   free(t->best_json);
   free(t->verify_ms);
+  free(t->mode);
   free(t);
 }
 
@@ -158,6 +163,7 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
     run_id = id;
   }
   t->run_id = tt__strdup(run_id);
+    t->mode = tt__strdup(TT__DESC(d, mode));
   const tt_config *start = TT__DESC(d, start);
   t->start = start ? tt_config_clone(start) : tt_config_create(d->space);
   if (!t->tuner_name && t->ti) t->tuner_name = tt__strdup("tuner");
@@ -287,7 +293,7 @@ static void tt__record_db(tt_tuning *t, const tt_tuning_sample *s, const tt_pass
   row.render_ms = s->render_ms;
   row.cost = s->cost;
   row.status = s->status;
-  row.mode = s->iteration < 0 ? "default" : tt_tuning_mode(t);
+  row.mode = t->mode ? t->mode : s->iteration < 0 ? "default" : tt_tuning_mode(t);
   row.iteration = s->iteration;
   row.metrics = metrics;
   /* one warning with the reason (a full disk fails every later write too), then a count */
@@ -353,6 +359,35 @@ static int tt__settle(tt_tuning *t, int32_t iteration) {
   return 1;
 }
 
+/* Tells a tuner of ABI 1.1 what the session knows before its first proposal (tuner.h):
+ * the state (the indicators normalised as the predictors get them), the default's cost as
+ * measured or answered here, and the iteration budget. A tuner that refuses the context is
+ * only logged: the search works without it. */
+static void tt__send_context(tt_tuning *t) {
+  t->context_sent = 1;
+  if (!TT_TUNER_HAS(t->ti, set_context)) return;
+  tt_indicator_norm norm;
+  tt_indicator_norm_init(&norm);
+  double state[TT_SCENE_INDICATOR_COUNT];
+  char id[96];
+  tt_tuner_context ctx;
+  memset(&ctx, 0, sizeof ctx);
+  ctx.struct_size = sizeof ctx;
+  if (t->state.has_indicators) {
+    tt_indicators_normalize(&norm, t->state.indicators, state);
+    ctx.state = state;
+    ctx.state_dim = TT_SCENE_INDICATOR_COUNT;
+    ctx.state_space = tt_indicator_norm_id(&norm, id, sizeof id);
+  }
+  ctx.default_cost = NAN;
+  if (t->count && t->samples[0].iteration < 0 && t->samples[0].status != TT_TUNEDB_FAILED)
+    ctx.default_cost = t->samples[0].cost;
+  ctx.budget = t->requested;
+  if (t->ti->set_context(t->tuner, &ctx) != TT_OK)
+    t->host->log(TT_LOG_WARN, NULL, "tuning: %s: set_context: %s (searching without it)",
+                 t->tuner_name, tt_last_error());
+}
+
 tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
   if (!t || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_next: NULL argument");
   if (tt_config_space(out) != t->space)
@@ -378,6 +413,7 @@ tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
         for (size_t k = 0; k < dims; k++) t->unit[k] = (tt__splitmix64(&t->rng) >> 11) * 0x1.0p-53;
         tt_config_from_unit(t->sub, t->unit);
       } else {
+        if (!t->context_sent) tt__send_context(t);
         tt_status st = t->ti->next(t->tuner, t->sub);
         if (st == TT_DONE) {
           t->converged = 1;

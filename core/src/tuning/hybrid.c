@@ -1,0 +1,541 @@
+/* Hybrid online autotuning (tunetrace/hybrid.h): eps-greedy between a K-iteration search and
+ * one predicted configuration per state, every state a tuning session (tuning.h) over the
+ * caller's target, every cost observed by the model. */
+#define _POSIX_C_SOURCE 200809L
+#include <tunetrace/hybrid.h>
+
+#include "util/rng_internal.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+struct tt_hybrid {
+  const tt_host *host;
+  tt_host session_host;        /* host for the per-state sessions: no progress of its own */
+  const tt_space *space, *search;
+  tt_config *start;            /* the default configuration (full space) */
+  tt_objective objective;
+  const tt_tuner_iface *ti;
+  const tt_config *tuner_settings;
+  char *tuner_name, *predictor_name, *plugin, *plugin_version, *run_id;
+  const tt_predictor_iface *pi;
+  tt_predictor *model;
+  double epsilon;
+  uint32_t K, spp, warmup;
+  uint64_t seed;
+  tt__pcg32 rng;               /* the eps-greedy draws */
+  tt_tunedb *db;
+  tt_indicator_norm norm;
+  int no_exploit_feedback;
+  uint32_t states;             /* steps so far */
+  /* scratch and the current state */
+  tt_config *full, *sub;
+  double state[TT_SCENE_INDICATOR_COUNT];
+  double default_cost;         /* of the current state, once known */
+  char *config_json;           /* the last report's configuration */
+};
+
+static char *tt__hdup(const char *s) {
+  if (!s) return NULL;
+  size_t n = strlen(s) + 1;
+  char *d = malloc(n);
+  if (d) memcpy(d, s, n);
+  return d;
+}
+
+void tt_hybrid_destroy(tt_hybrid *h) {
+  if (!h) return;
+  tt_config_destroy(h->start);
+  tt_config_destroy(h->full);
+  tt_config_destroy(h->sub);
+  free(h->tuner_name);
+  free(h->predictor_name);
+  free(h->plugin);
+  free(h->plugin_version);
+  free(h->run_id);
+  free(h->config_json);
+  free(h);
+}
+
+#define TT__HDESC(d, f) \
+  ((d)->struct_size >= offsetof(tt_hybrid_desc, f) + sizeof((d)->f) ? (d)->f : 0)
+
+tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
+  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: out is NULL");
+  *out = NULL;
+  if (!d || !TT__HDESC(d, space))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: no target space");
+  if (!TT__HDESC(d, tuner))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: no tuner for exploration");
+  const tt_predictor_iface *pi = TT__HDESC(d, predictor);
+  if (!pi || !TT__HDESC(d, model))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: no predictor (table and "
+                        "model) for exploitation");
+  if (!TT_PREDICTOR_HAS(pi, observe_ex) || !TT_PREDICTOR_HAS(pi, predict_ex))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: the predictor %s serves an "
+                        "ABI 1.0 table (no observe_ex/predict_ex); the hybrid loop needs 1.1",
+                        TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name) : "");
+  double eps = TT__HDESC(d, epsilon);
+  if (!(eps >= 0.0 && eps <= 1.0))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: epsilon %g is outside "
+                        "[0, 1]", eps);
+  uint32_t K = TT__HDESC(d, explore_iterations);
+  if (K < 1)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: explore_iterations (K) "
+                        "must be at least 1");
+  tt_hybrid *h = calloc(1, sizeof *h);
+  if (!h) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_hybrid_create: out of memory");
+  const char *objective = TT__HDESC(d, objective);
+  tt_status st = tt_objective_parse(objective ? objective : "render", &h->objective);
+  if (st != TT_OK) {
+    free(h);
+    return st;
+  }
+  h->host = TT__HDESC(d, host) ? TT__HDESC(d, host) : tt_default_host();
+  /* a state's session is one step of the caller's progress, not a task of its own */
+  size_t hs = h->host->struct_size < sizeof h->session_host ? h->host->struct_size
+                                                             : sizeof h->session_host;
+  memcpy(&h->session_host, h->host, hs);
+  h->session_host.struct_size = (uint32_t)hs;
+  if (hs >= offsetof(tt_host, progress) + sizeof h->session_host.progress)
+    h->session_host.progress = NULL;
+  h->space = d->space;
+  h->search = TT__HDESC(d, search);
+  const tt_config *start = TT__HDESC(d, start);
+  h->start = start ? tt_config_clone(start) : tt_config_create(d->space);
+  h->full = tt_config_create(d->space);
+  h->sub = tt_config_create(h->search ? h->search : d->space);
+  h->ti = d->tuner;
+  h->tuner_settings = TT__HDESC(d, tuner_settings);
+  h->tuner_name = tt__hdup(TT__HDESC(d, tuner_name) ? TT__HDESC(d, tuner_name) : "tuner");
+  h->pi = pi;
+  h->model = d->model;
+  h->predictor_name = tt__hdup(TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name)
+                                                             : "predictor");
+  h->epsilon = eps;
+  h->K = K;
+  h->spp = TT__HDESC(d, spp) ? TT__HDESC(d, spp) : 1;
+  h->warmup = TT__HDESC(d, warmup_passes);
+  h->seed = TT__HDESC(d, seed);
+  tt__pcg32_seed(&h->rng, h->seed, 0x687962726964ull); /* "hybrid" */
+  h->plugin = tt__hdup(TT__HDESC(d, plugin) ? TT__HDESC(d, plugin) : tt_space_plugin(d->space));
+  h->plugin_version = tt__hdup(TT__HDESC(d, plugin_version) ? TT__HDESC(d, plugin_version) : "");
+  h->db = TT__HDESC(d, db);
+  const tt_indicator_norm *norm = TT__HDESC(d, norm);
+  tt_indicator_norm_init(&h->norm);
+  if (norm) h->norm = *norm;
+  h->no_exploit_feedback = TT__HDESC(d, no_exploit_feedback);
+  const char *run_id = TT__HDESC(d, run_id);
+  char id[64];
+  if (!run_id) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    snprintf(id, sizeof id, "hybrid-%llx-%d",
+             (unsigned long long)ts.tv_sec * 1000000000ull + (unsigned long long)ts.tv_nsec,
+             (int)getpid());
+    run_id = id;
+  }
+  h->run_id = tt__hdup(run_id);
+  if (!h->start || !h->full || !h->sub || !h->tuner_name || !h->predictor_name || !h->plugin ||
+      !h->plugin_version || !h->run_id) {
+    tt_hybrid_destroy(h);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_hybrid_create: out of memory");
+  }
+  if (tt_config_space(h->start) != d->space) {
+    tt_hybrid_destroy(h);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: the start configuration is "
+                        "not a configuration of the target space");
+  }
+  *out = h;
+  return TT_OK;
+}
+
+/* ---- the model's view of a sample ---- */
+
+/* Reads configuration JSON into h->sub (through the full space, so the searched parameters
+ * are taken from it); 0, or -1 if it does not fit the space. */
+static int tt__to_sub(tt_hybrid *h, const char *json) {
+  tt_config_copy(h->full, h->start);
+  if (tt_config_from_json(h->full, json, "tuning database") != TT_OK) return -1;
+  if (h->search) return tt_config_assign(h->sub, h->full) < 0 ? -1 : 0;
+  tt_config_copy(h->sub, h->full);
+  return 0;
+}
+
+/* Gives one sample to the model (online); failures are logged, not fatal. */
+static void tt__observe(tt_hybrid *h, const char *json, double cost, double default_cost) {
+  if (tt__to_sub(h, json)) return;
+  tt_predictor_sample s = {.struct_size = sizeof s, .state = h->state, .config = h->sub,
+                           .cost = cost, .default_cost = default_cost};
+  if (h->pi->observe_ex(h->model, &s, 1, TT_PREDICTOR_ONLINE) != TT_OK)
+    h->host->log(TT_LOG_WARN, NULL, "hybrid: %s: observe: %s", h->predictor_name, tt_last_error());
+}
+
+/* tt_tuning_desc.on_sample of an explored state: every sample goes to the model. */
+static void tt__explore_sample(void *user, const tt_tuning_sample *s) {
+  tt_hybrid *h = user;
+  if (s->status == TT_TUNEDB_FAILED) return;  /* maybe transient: says nothing of the config */
+  if (s->iteration < 0 && s->status == TT_TUNEDB_OK) h->default_cost = s->cost;
+  tt__observe(h, s->config, s->cost, h->default_cost);
+}
+
+/* The target, counting the configurations it applies (builds). */
+typedef struct tt__counting {
+  const tt_tuning_target *inner;
+  uint32_t applies;
+} tt__counting;
+
+static tt_status tt__count_apply(void *user, const tt_config *cfg, double *build_ms) {
+  tt__counting *c = user;
+  c->applies++;
+  return c->inner->apply(c->inner->user, cfg, build_ms);
+}
+
+static tt_status tt__count_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
+  tt__counting *c = user;
+  return c->inner->render(c->inner->user, spp, m);
+}
+
+/* CPU ms of this thread: what predict() costs. */
+static double tt__thread_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+/* The database's cost of the default configuration in `state`, or NAN. */
+static double tt__db_default_cost(tt_hybrid *h, const tt_tuning_state *state) {
+  if (!h->db) return NAN;
+  char *json = tt_config_to_json(h->start);
+  tt_tunedb_row key;
+  memset(&key, 0, sizeof key);
+  key.struct_size = sizeof key;
+  key.scene_id = state->scene_id;
+  key.camera = state->camera;
+  key.context = state->context;
+  key.plugin = h->plugin;
+  key.plugin_version = h->plugin_version;
+  key.config = json;
+  key.objective = h->objective.spec;
+  double cost = NAN;
+  if (!json || tt_tunedb_lookup(h->db, &key, &cost, NULL) != TT_OK || cost >= TT_COST_INFEASIBLE)
+    cost = NAN;
+  tt_free(json);
+  return cost;
+}
+
+/* A tuning session of this hybrid tuner for one state. */
+static tt_status tt__session(tt_hybrid *h, const tt_tuning_state *state, const tt_config *start,
+                             int explore, tt_tuning **out) {
+  tt_tuning_desc d;
+  memset(&d, 0, sizeof d);
+  d.struct_size = sizeof d;
+  d.host = &h->session_host;
+  d.space = h->space;
+  d.start = start;
+  d.search = h->search;
+  d.objective = h->objective.spec;
+  d.tuner = explore ? h->ti : NULL;
+  d.tuner_settings = explore ? h->tuner_settings : NULL;
+  d.tuner_name = explore ? h->tuner_name : h->predictor_name;
+  d.seed = h->seed;             /* every explored state searches as a tuning run would */
+  d.iterations = explore ? h->K : 0;
+  d.spp = h->spp;
+  d.warmup_passes = h->states == 0 ? h->warmup : 0;
+  d.plugin = h->plugin;
+  d.plugin_version = h->plugin_version;
+  d.db = h->db;
+  d.state = state;
+  d.run_id = h->run_id;
+  d.on_sample = explore ? tt__explore_sample : NULL;
+  d.user = h;
+  d.mode = explore ? NULL : "exploit";
+  return tt_tuning_create(&d, out);
+}
+
+/* Sums of a session's samples: every finite cost, and the count of cached ones. */
+static void tt__sums(const tt_tuning *t, double *cost_sum, uint32_t *cached) {
+  *cost_sum = 0;
+  *cached = 0;
+  for (size_t i = 0; i < tt_tuning_sample_count(t); i++) {
+    const tt_tuning_sample *s = tt_tuning_sample_at(t, i);
+    if (s->status == TT_TUNEDB_OK) *cost_sum += s->cost;
+    *cached += s->cached != 0;
+  }
+}
+
+tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
+                         const tt_tuning_target *target, tt_hybrid_report *out) {
+  if (!h || !state || !target || !target->apply || !target->render)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_step: NULL argument");
+  if (!state->has_indicators)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_step: the state has no indicators "
+                        "(the model's input)");
+  if (h->host->should_stop()) return TT_ERR_INTERRUPTED;
+  tt_indicators_normalize(&h->norm, state->indicators, h->state);
+  h->default_cost = NAN;
+  /* eps-greedy: one draw per state, whatever the model knows */
+  double u = (double)tt__pcg32_next(&h->rng) * 0x1.0p-32;
+  int explore = u < h->epsilon;
+  tt__counting counting = {target, 0};
+  tt_tuning_target wrapped = {sizeof wrapped, &counting, tt__count_apply, tt__count_render};
+  tt_tuning *t = NULL;
+  tt_hybrid_report r;
+  memset(&r, 0, sizeof r);
+  r.state_index = h->states;
+  r.mode = explore ? TT_HYBRID_EXPLORE : TT_HYBRID_EXPLOIT;
+  r.predicted_cost = NAN;
+  r.default_cost = NAN;
+  tt_status st;
+  const tt_config *start = h->start;
+  tt_config *predicted = NULL;
+  if (!explore) {
+    /* one configuration from the model: predicted, put into the configured values, checked */
+    double def = tt__db_default_cost(h, state);
+    tt_predictor_query q = {.struct_size = sizeof q, .state = h->state, .default_cost = def};
+    tt_predictor_result pr = {.struct_size = sizeof pr};
+    double t0 = tt__thread_ms();
+    st = h->pi->predict_ex(h->model, &q, h->sub, &pr);
+    r.predict_ms = tt__thread_ms() - t0;
+    r.default_cost = def;
+    if (st == TT_OK) {
+      predicted = tt_config_clone(h->start);
+      if (!predicted) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: out of memory");
+      if (h->search) tt_config_assign(predicted, h->sub);
+      else tt_config_copy(predicted, h->sub);
+      char why[256];
+      if (tt_space_check(h->space, predicted, why, sizeof why) == TT_CHECK_INFEASIBLE) {
+        h->host->log(TT_LOG_WARN, NULL, "hybrid: state %u: %s predicted an infeasible "
+                     "configuration (%s); using the default", h->states, h->predictor_name, why);
+        r.fallback = 1;
+      } else {
+        start = predicted;
+        r.predicted_cost = pr.expected_cost;
+      }
+    } else if (st == TT_ERR_NO_DATA) {
+      r.fallback = 1;  /* nothing learnt yet: the default, still one build */
+    } else {
+      h->host->log(TT_LOG_ERROR, NULL, "hybrid: %s: predict: %s", h->predictor_name,
+                   tt_last_error());
+      return st;
+    }
+  }
+  st = tt__session(h, state, start, explore, &t);
+  tt_config_destroy(predicted);
+  if (st != TT_OK) return st;
+  st = tt_tuning_run(t, &wrapped);
+  if (st == TT_OK) st = tt_tuning_apply_best(t, &wrapped, NULL);
+  if (st != TT_OK) {
+    tt_tuning_destroy(t);
+    return st;
+  }
+  double best = NAN;
+  tt_tuning_best(t, NULL, &best);
+  free(h->config_json);
+  h->config_json = tt__hdup(tt_tuning_best_json(t));
+  r.config = h->config_json;
+  r.cost = best;
+  tt__sums(t, &r.search_cost, &r.cached);
+  r.samples = (uint32_t)tt_tuning_sample_count(t);
+  r.builds = counting.applies;
+  if (explore) {
+    double def;
+    if (tt_tuning_default_cost(t, &def) == TT_OK && def < TT_COST_INFEASIBLE) r.default_cost = def;
+  } else if (!h->no_exploit_feedback && tt_tuning_sample_count(t)) {
+    const tt_tuning_sample *s = tt_tuning_sample_at(t, 0);
+    if (s->status != TT_TUNEDB_FAILED) tt__observe(h, s->config, s->cost, r.default_cost);
+  }
+  memcpy(r.state, h->state, sizeof r.state);
+  tt_tuning_destroy(t);
+  h->states++;
+  if (out && out->struct_size >= sizeof(uint32_t)) {
+    uint32_t size = out->struct_size < sizeof r ? out->struct_size : (uint32_t)sizeof r;
+    r.struct_size = out->struct_size;
+    memcpy(out, &r, size);
+  }
+  return TT_OK;
+}
+
+/* ---- warm start ---- */
+
+/* One usable row, kept until the batch is built. */
+typedef struct tt__warm_row {
+  double state[TT_SCENE_INDICATOR_COUNT];
+  tt_config *config;
+  double cost;
+  char *key;           /* scene id, camera, context: the state's identity */
+} tt__warm_row;
+
+typedef struct tt__default_cost {
+  char *key;
+  double sum;
+  uint32_t n;
+} tt__default_cost;
+
+typedef struct tt__warm {
+  tt_hybrid *h;
+  const tt_hybrid_warm_filter *f;
+  cJSON *context;                  /* the filter's context, parsed */
+  tt__warm_row *rows;
+  size_t n, cap;
+  tt__default_cost *defaults;
+  size_t nd, capd;
+  uint64_t skipped;
+  int oom;
+} tt__warm;
+
+static char *tt__state_key(const tt_tunedb_row *r) {
+  size_t n = strlen(r->scene_id) + (r->camera ? strlen(r->camera) : 0) +
+             (r->context ? strlen(r->context) : 0) + 3;
+  char *k = malloc(n);
+  if (k) snprintf(k, n, "%s\n%s\n%s", r->scene_id, r->camera ? r->camera : "",
+                  r->context ? r->context : "");
+  return k;
+}
+
+/* Non-zero if the row's context matches the filter's on every listed key. */
+static int tt__context_matches(const tt__warm *w, const char *context) {
+  const tt_hybrid_warm_filter *f = w->f;
+  if (!f || f->struct_size < offsetof(tt_hybrid_warm_filter, context) + sizeof f->context ||
+      !f->context_keys)
+    return 1;
+  cJSON *row = context ? cJSON_Parse(context) : NULL;
+  int ok = 1;
+  for (const char *const *k = f->context_keys; *k && ok; k++) {
+    const cJSON *a = w->context ? cJSON_GetObjectItemCaseSensitive(w->context, *k) : NULL;
+    const cJSON *b = row ? cJSON_GetObjectItemCaseSensitive(row, *k) : NULL;
+    ok = (!a && !b) || (a && b && cJSON_Compare(a, b, 1));
+  }
+  cJSON_Delete(row);
+  return ok;
+}
+
+static int tt__warm_row_fn(void *user, const tt_tunedb_row *r) {
+  tt__warm *w = user;
+  tt_hybrid *h = w->h;
+  if (!r->objective || strcmp(r->objective, h->objective.spec)) return 0;
+  if (r->status != TT_TUNEDB_OK && r->status != TT_TUNEDB_INFEASIBLE) return 0;
+  if (!r->has_indicators || !r->scene_id || !r->config) return 0;
+  const tt_hybrid_warm_filter *f = w->f;
+  if (f && f->struct_size >= offsetof(tt_hybrid_warm_filter, user) + sizeof f->user && f->keep &&
+      !f->keep(f->user, r))
+    return 0;
+  if (!tt__context_matches(w, r->context)) return 0;
+  if (tt__to_sub(h, r->config)) {
+    w->skipped++;
+    return 0;
+  }
+  char *key = tt__state_key(r);
+  if (!key) {
+    w->oom = 1;
+    return 1;
+  }
+  if (r->mode && !strcmp(r->mode, "default") && r->status == TT_TUNEDB_OK) {
+    if (w->nd == w->capd) {
+      size_t cap = w->capd ? 2 * w->capd : 256;
+      tt__default_cost *d = realloc(w->defaults, cap * sizeof *d);
+      if (!d) {
+        free(key);
+        w->oom = 1;
+        return 1;
+      }
+      w->defaults = d;
+      w->capd = cap;
+    }
+    w->defaults[w->nd++] = (tt__default_cost){tt__hdup(key), r->cost, 1};
+  }
+  if (w->n == w->cap) {
+    size_t cap = w->cap ? 2 * w->cap : 1024;
+    tt__warm_row *n = realloc(w->rows, cap * sizeof *n);
+    if (!n) {
+      free(key);
+      w->oom = 1;
+      return 1;
+    }
+    w->rows = n;
+    w->cap = cap;
+  }
+  tt__warm_row *x = &w->rows[w->n];
+  tt_indicators_normalize(&h->norm, r->indicators, x->state);
+  x->config = tt_config_clone(h->sub);
+  x->cost = r->status == TT_TUNEDB_OK ? r->cost : TT_COST_INFEASIBLE;
+  x->key = key;
+  if (!x->config) {
+    free(key);
+    w->oom = 1;
+    return 1;
+  }
+  w->n++;
+  return 0;
+}
+
+static int tt__cmp_default(const void *a, const void *b) {
+  return strcmp(((const tt__default_cost *)a)->key, ((const tt__default_cost *)b)->key);
+}
+
+tt_status tt_hybrid_warm_start(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_warm_filter *f,
+                               uint64_t *rows, uint64_t *skipped) {
+  if (rows) *rows = 0;
+  if (skipped) *skipped = 0;
+  if (!h || !db) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_warm_start: NULL argument");
+  tt__warm w;
+  memset(&w, 0, sizeof w);
+  w.h = h;
+  w.f = f;
+  if (f && f->struct_size >= offsetof(tt_hybrid_warm_filter, context) + sizeof f->context &&
+      f->context)
+    w.context = cJSON_Parse(f->context);
+  tt_status st = tt_tunedb_foreach(db, h->plugin, tt__warm_row_fn, &w);
+  if (st == TT_OK && w.oom) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
+  /* each state's default cost: the mean of its "default" rows (several runs may have one) */
+  size_t nd = 0;
+  if (st == TT_OK && w.nd) {
+    qsort(w.defaults, w.nd, sizeof *w.defaults, tt__cmp_default);
+    for (size_t i = 0; i < w.nd; i++) {
+      if (nd && !strcmp(w.defaults[nd - 1].key, w.defaults[i].key)) {
+        w.defaults[nd - 1].sum += w.defaults[i].sum;
+        w.defaults[nd - 1].n++;
+        free(w.defaults[i].key);
+      } else {
+        w.defaults[nd++] = w.defaults[i];
+      }
+    }
+  } else {
+    for (size_t i = 0; i < w.nd; i++) free(w.defaults[i].key);
+  }
+  tt_predictor_sample *batch = st == TT_OK && w.n ? malloc(w.n * sizeof *batch) : NULL;
+  if (st == TT_OK && w.n && !batch) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
+  for (size_t i = 0; st == TT_OK && i < w.n; i++) {
+    tt__default_cost probe = {w.rows[i].key, 0, 0};
+    const tt__default_cost *dc = nd ? bsearch(&probe, w.defaults, nd, sizeof *w.defaults,
+                                              tt__cmp_default) : NULL;
+    batch[i] = (tt_predictor_sample){.struct_size = sizeof batch[i], .state = w.rows[i].state,
+                                     .config = w.rows[i].config, .cost = w.rows[i].cost,
+                                     .default_cost = dc ? dc->sum / dc->n : NAN};
+  }
+  if (st == TT_OK && w.n) {
+    st = h->pi->observe_ex(h->model, batch, w.n, TT_PREDICTOR_OFFLINE);
+    if (st != TT_OK)
+      st = tt_set_error(st, "hybrid: warm start from %s: %s: %s", tt_tunedb_path(db),
+                        h->predictor_name, tt_last_error());
+  }
+  if (st == TT_OK) {
+    if (rows) *rows = w.n;
+    if (skipped) *skipped = w.skipped;
+  }
+  free(batch);
+  for (size_t i = 0; i < w.n; i++) {
+    tt_config_destroy(w.rows[i].config);
+    free(w.rows[i].key);
+  }
+  free(w.rows);
+  for (size_t i = 0; i < nd; i++) free(w.defaults[i].key);
+  free(w.defaults);
+  cJSON_Delete(w.context);
+  return st;
+}

@@ -1,0 +1,529 @@
+/* host --hybrid: hybrid online autotuning (thesis 3.3) over the scene's camera path, as
+ * option mapping over the library's hybrid tuner (tunetrace/hybrid.h); host --predict: the
+ * model's answer per state, nothing rendered.
+ *
+ * One host session (the scene is loaded once); for every path sample of --frames A:B (all
+ * 100 by default) the camera moves, the film is cleared, and tt_hybrid_step explores (the
+ * tuner, --iterations K) or exploits (the predictor's one configuration) through the same
+ * target callbacks as the tuning phase: the accel is rebuilt per applied configuration and
+ * one pass of --tune-spp is measured with the host's clock (--clock cpu for CPU time). The
+ * state then renders up to --spp passes with its configuration (--out-dir DIR writes
+ * DIR/state_NNNN.exr). --stats records every state (mode, configuration, cost, predicted
+ * cost, builds, predict ms) and the totals.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "tune.h"
+
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+typedef struct tt__hyb {
+  tt__session *s;
+  const tt__host_options *opt;
+  tt_space *subset;
+  const tt_space *space;
+  size_t accel_index;
+  const tt_predictor_iface *pi;
+  tt_predictor *model;
+  const char *predictor_name, *tuner_name;
+  tt_tunedb *db;
+  uint32_t spp;               /* spp of one measurement pass */
+  tt_pass_stats ps;
+  cJSON *warm;                /* [{db, rows, skipped}] */
+} tt__hyb;
+
+/* ---- target: the accel of the host session ---- */
+
+static tt_status tt__hyb_apply(void *user, const tt_config *cfg, double *build_ms) {
+  tt__hyb *h = user;
+  return tt__session_rebuild_accel(h->s, cfg, build_ms);
+}
+
+static tt_status tt__hyb_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
+  tt__hyb *h = user;
+  double ms = 0;
+  tt_status st = tt__session_render_pass(h->s, spp, &h->ps, &ms);
+  if (m) {
+    m->render_ms = ms;
+    m->pass = &h->ps;
+  }
+  return st;
+}
+
+/* ---- set-up ---- */
+
+/* The searched parameters (--tune-params), NULL: all of the accel's. */
+static int tt__hyb_subset(tt__hyb *h) {
+  const char *list = h->opt->tune_params;
+  if (!list) return 0;
+  const char *names[256];
+  size_t n = 0;
+  char buf[4096];
+  snprintf(buf, sizeof buf, "%s", list);
+  for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
+  h->subset = tt_space_subset(h->space, names, n, h->s->configs[h->accel_index]);
+  if (!h->subset) {
+    fprintf(stderr, "host: --tune-params: %s\n", tt_last_error());
+    return -1;
+  }
+  return 0;
+}
+
+/* Creates the model; loads --model FILE when it exists. Prints and returns an exit code. */
+static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_norm *norm) {
+  tt__session *s = h->s;
+  h->pi = tt_loaded_plugin_iface(pp);
+  h->predictor_name = tt_loaded_plugin_entry(pp)->name;
+  if (!TT_PREDICTOR_HAS(h->pi, create_ex) || !TT_PREDICTOR_HAS(h->pi, observe_ex) ||
+      !TT_PREDICTOR_HAS(h->pi, predict_ex)) {
+    fprintf(stderr, "host: --hybrid: %s serves the ABI 1.0 predictor table; the hybrid loop "
+            "needs ABI 1.1 (create_ex, observe_ex, predict_ex)\n", h->predictor_name);
+    return TT_EXIT_PLUGIN;
+  }
+  static const char *names[TT_SCENE_INDICATOR_COUNT];
+  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) names[i] = tt_scene_indicator_name(i);
+  char id[96];
+  tt_predictor_setup su;
+  memset(&su, 0, sizeof su);
+  su.struct_size = sizeof su;
+  su.target = h->subset ? h->subset : h->space;
+  su.state_dim = TT_SCENE_INDICATOR_COUNT;
+  su.state_space = tt_indicator_norm_id(norm, id, sizeof id);
+  su.state_names = names;
+  su.settings = tt__session_config_of(s, pp);
+  su.seed = s->rec.seed;
+  if (h->pi->create_ex(&su, &h->model) != TT_OK) {
+    fprintf(stderr, "host: %s: %s\n", h->predictor_name, tt_last_error());
+    h->model = NULL;
+    return TT_EXIT_FAILURE;
+  }
+  struct stat st;
+  if (h->opt->model && stat(h->opt->model, &st) == 0) {
+    if (h->pi->load(h->model, h->opt->model) != TT_OK) {
+      fprintf(stderr, "host: --model %s: %s (the file is left as it is)\n", h->opt->model,
+              tt_last_error());
+      return TT_EXIT_USAGE;
+    }
+    s->host->log(TT_LOG_INFO, NULL, "hybrid: %s: loaded the model %s", h->predictor_name,
+                 h->opt->model);
+  }
+  return TT_EXIT_OK;
+}
+
+/* --warm-start DB...: every usable row teaches the model; the clock, spp and threads of the
+ * rows' context must be this run's. */
+static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context) {
+  static const char *const keys[] = {"clock", "spp", "threads", NULL};
+  h->warm = cJSON_CreateArray();
+  for (int i = 0; i < h->opt->warm_start_count; i++) {
+    const char *path = h->opt->warm_start[i];
+    struct stat st;
+    if (stat(path, &st) != 0) {
+      fprintf(stderr, "host: --warm-start %s: %s\n", path, strerror(errno));
+      return TT_EXIT_USAGE;
+    }
+    tt_tunedb *db = NULL;
+    if (tt_tunedb_open(path, &db) != TT_OK) {
+      fprintf(stderr, "host: --warm-start %s: %s\n", path, tt_last_error());
+      return TT_EXIT_USAGE;
+    }
+    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys, .context = context};
+    uint64_t rows = 0, skipped = 0;
+    tt_status ws = tt_hybrid_warm_start(hy, db, &f, &rows, &skipped);
+    tt_tunedb_close(db);
+    if (ws != TT_OK) {
+      fprintf(stderr, "host: --warm-start %s: %s\n", path, tt_last_error());
+      return TT_EXIT_FAILURE;
+    }
+    h->s->host->log(TT_LOG_INFO, NULL, "hybrid: %s learnt %llu rows of %s%s", h->predictor_name,
+                    (unsigned long long)rows, path, skipped ? " (some rows of other spaces skipped)" : "");
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "db", path);
+    cJSON_AddNumberToObject(o, "rows", (double)rows);
+    cJSON_AddNumberToObject(o, "skipped", (double)skipped);
+    cJSON_AddItemToArray(h->warm, o);
+  }
+  return TT_EXIT_OK;
+}
+
+/* Writes `root` to `path` atomically (temporary file + rename). */
+static int tt__hyb_write_json(const char *path, cJSON *root) {
+  char *text = cJSON_Print(root);
+  char tmp[4200];
+  snprintf(tmp, sizeof tmp, "%s.tmp%d", path, (int)getpid());
+  FILE *f = text ? fopen(tmp, "w") : NULL;
+  int ok = f && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
+  if (f && fclose(f)) ok = 0;
+  cJSON_free(text);
+  if (!ok || rename(tmp, path)) {
+    fprintf(stderr, "host: --stats %s: cannot write: %s\n", path, strerror(errno));
+    remove(tmp);
+    return TT_EXIT_OUTPUT;
+  }
+  return TT_EXIT_OK;
+}
+
+/* The report of one state as JSON. */
+static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index, double total_ms,
+                                 uint32_t passes) {
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddNumberToObject(o, "state", r->state_index);
+  cJSON_AddNumberToObject(o, "path_index", path_index);
+  cJSON_AddStringToObject(o, "mode", r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit");
+  cJSON_AddBoolToObject(o, "fallback", r->fallback != 0);
+  cJSON *cfg = r->config ? cJSON_Parse(r->config) : NULL;
+  cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
+  const struct { const char *name; double v; } num[] = {
+    {"cost", r->cost}, {"predicted_cost", r->predicted_cost}, {"default_cost", r->default_cost},
+    {"search_cost", r->search_cost}, {"predict_ms", r->predict_ms}, {"total_ms", total_ms}};
+  for (size_t i = 0; i < sizeof num / sizeof num[0]; i++) {
+    if (isfinite(num[i].v) && num[i].v < TT_COST_INFEASIBLE) cJSON_AddNumberToObject(o, num[i].name, num[i].v);
+    else cJSON_AddNullToObject(o, num[i].name);
+  }
+  cJSON_AddNumberToObject(o, "samples", r->samples);
+  cJSON_AddNumberToObject(o, "builds", r->builds);
+  cJSON_AddNumberToObject(o, "cached", r->cached);
+  cJSON_AddNumberToObject(o, "passes", passes);
+  cJSON *st = cJSON_AddArrayToObject(o, "indicators");
+  for (int i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) cJSON_AddItemToArray(st, cJSON_CreateNumber(r->state[i]));
+  return o;
+}
+
+/* Moves the camera to path sample `i` (t = first key + i/99 of the time range). */
+static void tt__hyb_camera(tt__session *s, uint32_t i) {
+  const tt_camera *c0 = tt_scene_camera(s->scene);
+  double t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) *
+                                    (double)i / (TT_HOST_PATH_SAMPLES - 1.0);
+  tt_camera cam;
+  tt_scene_camera_at(s->scene, t, &cam);
+  tt_scene_set_camera(s->scene, &cam);
+}
+
+/* CPU ms of this thread, for --predict's timing. */
+static double tt__hyb_thread_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+/* --predict: the model's answer for every state as JSON on stdout. */
+static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t first, uint32_t end) {
+  tt__session *s = h->s;
+  cJSON *root = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(root, "predictions");
+  cJSON_AddStringToObject(root, "scene", s->opt->scene);
+  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(s->scene));
+  cJSON_AddStringToObject(root, "predictor", h->predictor_name);
+  tt_predictor_info info = {.struct_size = sizeof info};
+  if (TT_PREDICTOR_HAS(h->pi, info) && h->pi->info(h->model, &info) == TT_OK) {
+    cJSON_AddNumberToObject(root, "memory_bytes", (double)info.memory_bytes);
+    cJSON_AddNumberToObject(root, "entries", (double)info.entries);
+    cJSON_AddNumberToObject(root, "observations", (double)info.observations);
+  }
+  if (h->warm) cJSON_AddItemToObject(root, "warm_start", h->warm), h->warm = NULL;
+  tt_config *sub = tt_config_create(h->subset ? h->subset : h->space);
+  tt_config *full = tt_config_create(h->space);
+  int rc = TT_EXIT_OK;
+  for (uint32_t i = first; i < end && sub && full; i++) {
+    tt__hyb_camera(s, i);
+    double raw[TT_SCENE_INDICATOR_COUNT], state[TT_SCENE_INDICATOR_COUNT];
+    tt_scene_indicators(s->scene, raw);
+    tt_indicators_normalize(norm, raw, state);
+    tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
+    tt_predictor_result r = {.struct_size = sizeof r};
+    /* median of 5 calls: predict() must stay far below one frame (issue goal: < 1%) */
+    double ms[5];
+    tt_status st = TT_OK;
+    for (int k = 0; k < 5 && st == TT_OK; k++) {
+      double t0 = tt__hyb_thread_ms();
+      st = h->pi->predict_ex(h->model, &q, sub, &r);
+      ms[k] = tt__hyb_thread_ms() - t0;
+    }
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "path_index", i);
+    if (st != TT_OK) {
+      cJSON_AddStringToObject(o, "error", tt_last_error());
+      if (st != TT_ERR_NO_DATA) rc = TT_EXIT_FAILURE;
+    } else {
+      for (int a = 1; a < 5; a++)
+        for (int b = a; b > 0 && ms[b] < ms[b - 1]; b--) {
+          double t = ms[b];
+          ms[b] = ms[b - 1];
+          ms[b - 1] = t;
+        }
+      tt_config_copy(full, s->configs[h->accel_index]);
+      if (h->subset) tt_config_assign(full, sub);
+      else tt_config_copy(full, sub);
+      char *j = tt_config_to_json(full);
+      cJSON *cfg = j ? cJSON_Parse(j) : NULL;
+      tt_free(j);
+      cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
+      if (isfinite(r.expected_cost)) cJSON_AddNumberToObject(o, "expected_cost", r.expected_cost);
+      else cJSON_AddNullToObject(o, "expected_cost");
+      if (isfinite(r.value)) cJSON_AddNumberToObject(o, "value", r.value);
+      if (isfinite(r.distance)) cJSON_AddNumberToObject(o, "distance", r.distance);
+      cJSON_AddNumberToObject(o, "candidates", (double)r.candidates);
+      cJSON_AddNumberToObject(o, "predict_ms", ms[2]);
+    }
+    cJSON_AddItemToArray(arr, o);
+  }
+  tt_config_destroy(sub);
+  tt_config_destroy(full);
+  char *text = cJSON_Print(root);
+  cJSON_Delete(root);
+  if (!text || puts(text) < 0 || fflush(stdout)) rc = TT_EXIT_OUTPUT;
+  cJSON_free(text);
+  return rc;
+}
+
+/* Writes the film as DIR/state_NNNN.exr. */
+static void tt__hyb_write_state(tt__hyb *h, uint32_t index) {
+  tt__session *s = h->s;
+  uint32_t w = s->camera->width, hh = s->camera->height;
+  float *px = malloc((size_t)w * hh * 3 * sizeof *px);
+  char path[4200];
+  snprintf(path, sizeof path, "%s/state_%04u.exr", h->opt->out_dir, index);
+  if (px) tt_film_resolve(s->film, px);
+  if (!px || tt_image_write_exr(path, w, hh, 3, px, NULL, NULL, 0) != TT_OK)
+    s->host->log(TT_LOG_WARN, NULL, "hybrid: cannot write %s: %s", path, tt_last_error());
+  free(px);
+}
+
+int tt__run_hybrid(const tt__host_options *opt) {
+  tt__install_signals();
+  tt__session s;
+  tt__hyb h;
+  memset(&h, 0, sizeof h);
+  h.s = &s;
+  h.opt = opt;
+  h.spp = opt->tune_spp ? opt->tune_spp : 1;
+  tt_hybrid *hy = NULL;
+  cJSON *states = NULL;
+  char *context = NULL;
+  int rc = tt__session_open(&s, opt);
+  if (rc != TT_EXIT_OK) goto done;
+  const tt_camera *cam = tt_scene_camera(s.scene);
+  if (cam->key_count < 1) {
+    fprintf(stderr, "host: --%s: %s has no camera path (camera.path in scene.json): the hybrid "
+            "loop moves through the path's states\n", opt->hybrid ? "hybrid" : "predict", opt->scene);
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
+  if (opt->tune && strcmp(opt->tune, tt_loaded_plugin_entry(s.accel_p)->name)) {
+    fprintf(stderr, "host: --hybrid tunes the accel (%s), not --tune %s\n",
+            tt_loaded_plugin_entry(s.accel_p)->name, opt->tune);
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
+  if (opt->camera_index_set || opt->explore || opt->verify || opt->reference) {
+    fprintf(stderr, "host: --%s: %s does not apply (the states are the path samples of "
+            "--frames A:B)\n", opt->hybrid ? "hybrid" : "predict",
+            opt->camera_index_set ? "--camera-index" : opt->explore ? "--explore"
+            : opt->verify ? "--verify" : "--reference");
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
+  tt_indicator_norm norm;
+  tt_indicator_norm_init(&norm);
+  if (opt->indicator_norm) tt_indicator_norm_parse(opt->indicator_norm, &norm);  /* checked */
+  tt_objective obj;
+  const char *spec = opt->objective ? opt->objective : "render";
+  if (tt__parse_objective("--objective", spec, &obj)) {
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
+  if (obj.kind != TT_OBJECTIVE_RENDER && obj.kind != TT_OBJECTIVE_TOTAL && obj.kind != TT_OBJECTIVE_BUILD) {
+    fprintf(stderr, "host: --hybrid: --objective %s: the hybrid loop tunes the accel for time "
+            "(render, build+render, build)\n", spec);
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
+  /* the session loaded tuner_nm and predictor_nn unless --plugin named others */
+  tt_loaded_plugin *tp = tt_registry_find_kind(s.reg, TT_KIND_TUNER);
+  tt_loaded_plugin *pp = tt_registry_find_kind(s.reg, TT_KIND_PREDICTOR);
+  h.tuner_name = tt_loaded_plugin_entry(tp)->name;
+  h.accel_index = tt__session_index_of(&s, s.accel_p);
+  h.space = tt_loaded_plugin_space(s.accel_p);
+  if (tt__hyb_subset(&h)) {
+    rc = TT_EXIT_USAGE;
+    goto done;
+  }
+  rc = tt__hyb_model(&h, pp, &norm);
+  if (rc != TT_EXIT_OK) goto done;
+  if (!opt->no_db) {
+    char *path = opt->db ? strdup(opt->db) : tt_tunedb_default_path();
+    if (path && tt_tunedb_open(path, &h.db) != TT_OK) {
+      fprintf(stderr, "host: --db %s: %s\n", path, tt_last_error());
+      free(path);
+      rc = TT_EXIT_FAILURE;
+      goto done;
+    }
+    free(path);
+  }
+  context = tt__tuning_context_json(&s, h.accel_index, h.spp, NULL, NULL);
+  const tt_plugin *ae = tt_loaded_plugin_entry(s.accel_p);
+  tt_hybrid_desc d;
+  memset(&d, 0, sizeof d);
+  d.struct_size = sizeof d;
+  d.host = s.host;
+  d.space = h.space;
+  d.start = s.configs[h.accel_index];
+  d.search = h.subset;
+  d.objective = obj.spec;
+  d.tuner = tt_loaded_plugin_iface(tp);
+  d.tuner_settings = tt__session_config_of(&s, tp);
+  d.tuner_name = h.tuner_name;
+  d.predictor = h.pi;
+  d.model = h.model;
+  d.predictor_name = h.predictor_name;
+  d.epsilon = opt->epsilon_set ? opt->epsilon : TT_HOST_DEFAULT_EPSILON;
+  d.explore_iterations = opt->iterations ? opt->iterations : TT_HOST_DEFAULT_HYBRID_ITERATIONS;
+  d.spp = h.spp;
+  d.warmup_passes = 1;
+  d.seed = s.rec.seed;
+  d.plugin = ae->name;
+  d.plugin_version = ae->version;
+  d.db = h.db;
+  d.norm = &norm;
+  if (!context || tt_hybrid_create(&d, &hy) != TT_OK) {
+    fprintf(stderr, "host: --hybrid: %s\n", context ? tt_last_error() : "out of memory");
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
+  rc = tt__hyb_warm(&h, hy, context);
+  if (rc != TT_EXIT_OK) goto done;
+  uint32_t first = opt->frames ? opt->frames_first : 0;
+  uint32_t end = opt->frames ? opt->frames_end : TT_HOST_PATH_SAMPLES;
+  if (opt->predict_only) {
+    rc = tt__hyb_predict(&h, &norm, first, end);
+    goto done;
+  }
+  if (opt->out_dir && mkdir(opt->out_dir, 0777) != 0 && errno != EEXIST) {
+    fprintf(stderr, "host: --out-dir %s: %s\n", opt->out_dir, strerror(errno));
+    rc = TT_EXIT_OUTPUT;
+    goto done;
+  }
+  rc = tt__session_start(&s, 0);
+  if (rc != TT_EXIT_OK) goto done;
+  s.host->log(TT_LOG_INFO, NULL, "hybrid: %s states %u..%u, epsilon %g, explore %s for %u "
+              "iterations, exploit %s, objective %s, database %s", opt->scene, first, end - 1,
+              d.epsilon, h.tuner_name, d.explore_iterations, h.predictor_name, obj.spec,
+              h.db ? tt_tunedb_path(h.db) : "none");
+  states = cJSON_CreateArray();
+  tt_tuning_target target = {sizeof target, &h, tt__hyb_apply, tt__hyb_render};
+  uint32_t target_spp = opt->spp ? opt->spp : 1;
+  double sum_cost = 0, sum_search = 0;
+  uint32_t explored = 0, exploited = 0, builds = 0, done_states = 0;
+  int interrupted = 0;
+  for (uint32_t i = first; i < end; i++) {
+    tt__hyb_camera(&s, i);
+    tt_film_clear(s.film);
+    uint32_t pass0 = s.pass;
+    char *camera = tt__tuning_camera_json(s.camera, 1, i);
+    tt_tuning_state state;
+    memset(&state, 0, sizeof state);
+    state.struct_size = sizeof state;
+    state.scene_id = tt_scene_id(s.scene);
+    state.scene = tt_scene_source(s.scene);
+    state.camera = camera;
+    state.context = context;
+    tt_scene_indicators(s.scene, state.indicators);
+    state.has_indicators = 1;
+    uint64_t t0 = s.host->clock_ns();
+    tt_hybrid_report r = {.struct_size = sizeof r};
+    tt_status st = tt_hybrid_step(hy, &state, &target, &r);
+    free(camera);
+    if (st == TT_ERR_INTERRUPTED) {
+      interrupted = 1;
+      break;
+    }
+    if (st != TT_OK) {
+      fprintf(stderr, "host: --hybrid: state %u: %s\n", i, tt_last_error());
+      rc = TT_EXIT_FAILURE;
+      break;
+    }
+    /* the rest of the state's samples with its configuration (progressive rendering) */
+    while ((s.pass - pass0) * h.spp < target_spp && !s.host->should_stop()) {
+      double ms;
+      if (tt__session_render_pass(&s, 1, &h.ps, &ms) != TT_OK) break;
+    }
+    double total_ms = (s.host->clock_ns() - t0) * 1e-6;
+    if (opt->out_dir) tt__hyb_write_state(&h, i);
+    cJSON_AddItemToArray(states, tt__hyb_state_json(&r, i, total_ms, s.pass - pass0));
+    done_states++;
+    explored += r.mode == TT_HYBRID_EXPLORE;
+    exploited += r.mode == TT_HYBRID_EXPLOIT;
+    builds += r.builds;
+    if (r.cost < TT_COST_INFEASIBLE) sum_cost += r.cost;
+    sum_search += r.search_cost;
+    if (!opt->quiet)
+      s.host->log(TT_LOG_INFO, NULL, "hybrid: state %u (path %u): %s%s, cost %.4g%s, %u "
+                  "build%s", r.state_index, i, r.mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
+                  r.fallback ? " (default: no usable prediction)" : "", r.cost,
+                  isfinite(r.predicted_cost) ? " (predicted)" : "", r.builds, r.builds == 1 ? "" : "s");
+    tt__progress_update("hybrid", (double)(i + 1 - first) / (end - first));
+    if (s.host->should_stop()) {
+      interrupted = 1;
+      break;
+    }
+  }
+  tt__progress_finish();
+  if (opt->model && (rc == TT_EXIT_OK)) {
+    if (h.pi->save(h.model, opt->model) != TT_OK) {
+      fprintf(stderr, "host: --model %s: %s\n", opt->model, tt_last_error());
+      rc = TT_EXIT_OUTPUT;
+    }
+  }
+  if (opt->stats) {
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "scene", opt->scene);
+    cJSON_AddStringToObject(root, "scene_id", tt_scene_id(s.scene));
+    cJSON_AddStringToObject(root, "clock", opt->clock_cpu ? "cpu" : "wall");
+    cJSON_AddNumberToObject(root, "threads", s.rec.threads);
+    cJSON_AddNumberToObject(root, "seed", (double)s.rec.seed);
+    cJSON *hj = cJSON_AddObjectToObject(root, "hybrid");
+    cJSON_AddStringToObject(hj, "predictor", h.predictor_name);
+    cJSON_AddStringToObject(hj, "tuner", h.tuner_name);
+    cJSON_AddNumberToObject(hj, "epsilon", d.epsilon);
+    cJSON_AddNumberToObject(hj, "explore_iterations", d.explore_iterations);
+    cJSON_AddStringToObject(hj, "objective", obj.spec);
+    char id[96];
+    cJSON_AddStringToObject(hj, "state_space", tt_indicator_norm_id(&norm, id, sizeof id));
+    if (opt->model) cJSON_AddStringToObject(hj, "model", opt->model);
+    else cJSON_AddNullToObject(hj, "model");
+    if (h.db) cJSON_AddStringToObject(hj, "db", tt_tunedb_path(h.db));
+    else cJSON_AddNullToObject(hj, "db");
+    cJSON_AddItemToObject(hj, "warm_start", h.warm ? h.warm : cJSON_CreateArray());
+    h.warm = NULL;
+    cJSON_AddNumberToObject(hj, "states_done", done_states);
+    cJSON_AddNumberToObject(hj, "explored", explored);
+    cJSON_AddNumberToObject(hj, "exploited", exploited);
+    cJSON_AddNumberToObject(hj, "builds", builds);
+    cJSON_AddNumberToObject(hj, "sum_cost", sum_cost);
+    cJSON_AddNumberToObject(hj, "sum_search_cost", sum_search);
+    cJSON_AddBoolToObject(hj, "interrupted", interrupted);
+    cJSON_AddItemToObject(hj, "states", states);
+    states = NULL;
+    int wrc = tt__hyb_write_json(opt->stats, root);
+    cJSON_Delete(root);
+    if (wrc != TT_EXIT_OK && rc == TT_EXIT_OK) rc = wrc;
+  }
+  if (interrupted && rc == TT_EXIT_OK) rc = TT_EXIT_INTERRUPTED;
+
+done:
+  cJSON_Delete(states);
+  cJSON_Delete(h.warm);
+  free(context);
+  tt_hybrid_destroy(hy);
+  if (h.model) h.pi->destroy(h.model);
+  tt_space_destroy(h.subset);
+  tt_tunedb_close(h.db);
+  tt__session_close(&s);
+  return rc;
+}
