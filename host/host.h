@@ -89,6 +89,10 @@ typedef struct tt__host_options {
   const char *model;        /* --model FILE: loaded if it exists, saved at the end */
   const char *warm_start[TT_HOST_MAX_LIST]; /* --warm-start DB ... */
   int warm_start_count;
+  const char *states;       /* --states FILE.json: --predict for these states, not the path */
+  const char *measure;      /* --measure FILE.json: configurations measured side by side */
+  uint32_t rounds;          /* --rounds R (--measure); 0: 3 */
+  const char *resume;       /* --resume FILE: the tuning session's state, saved per sample */
   const char *indicator_norm; /* --indicator-norm SPEC (tt_indicator_norm_parse); NULL: default */
 } tt__host_options;
 
@@ -106,6 +110,8 @@ int tt__run_indicators(const tt__host_options *opt);
 void tt__install_signals(void);
 /* Runs --hybrid / --predict over the scene's camera path (hybrid.c). */
 int tt__run_hybrid(const tt__host_options *opt);
+/* Runs --measure: configurations of the accel side by side (measure.c). */
+int tt__run_measure(const tt__host_options *opt);
 
 #define TT_HOST_DEFAULT_EPSILON 0.1
 #define TT_HOST_DEFAULT_HYBRID_ITERATIONS 40

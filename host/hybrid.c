@@ -153,18 +153,13 @@ static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context) {
   return TT_EXIT_OK;
 }
 
-/* Writes `root` to `path` atomically (temporary file + rename). */
+/* Writes `root` to `path` atomically (tunetrace/file.h). */
 static int tt__hyb_write_json(const char *path, cJSON *root) {
   char *text = cJSON_Print(root);
-  char tmp[4200];
-  snprintf(tmp, sizeof tmp, "%s.tmp%d", path, (int)getpid());
-  FILE *f = text ? fopen(tmp, "w") : NULL;
-  int ok = f && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
-  if (f && fclose(f)) ok = 0;
+  tt_status st = text ? tt_file_write_atomic(path, text, strlen(text)) : TT_ERR_OUT_OF_MEMORY;
   cJSON_free(text);
-  if (!ok || rename(tmp, path)) {
-    fprintf(stderr, "host: --stats %s: cannot write: %s\n", path, strerror(errno));
-    remove(tmp);
+  if (st != TT_OK) {
+    fprintf(stderr, "host: --stats %s: %s\n", path, tt_last_error());
     return TT_EXIT_OUTPUT;
   }
   return TT_EXIT_OK;
@@ -213,6 +208,36 @@ static double tt__hyb_thread_ms(void) {
   return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
+/* --states FILE: [{"id": ..., "indicators": {name: raw value}}, ...]; NULL (printed) on error. */
+static cJSON *tt__hyb_read_states(const char *path) {
+  char *text = NULL;
+  size_t n = 0;
+  if (tt_file_read(path, "states file", 0, &text, &n) != TT_OK) {
+    fprintf(stderr, "host: --states %s\n", tt_last_error());
+    return NULL;
+  }
+  cJSON *root = cJSON_Parse(text);
+  tt_free(text);
+  int ok = cJSON_IsArray(root);
+  for (int i = 0; ok && i < cJSON_GetArraySize(root); i++) {
+    cJSON *ind = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(root, i), "indicators");
+    for (uint32_t k = 0; ok && k < TT_SCENE_INDICATOR_COUNT; k++) {
+      cJSON *v = cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k));
+      if (!cJSON_IsNumber(v)) {
+        fprintf(stderr, "host: --states %s: [%d].indicators.%s: expected a number\n", path, i,
+                tt_scene_indicator_name(k));
+        ok = 0;
+      }
+    }
+  }
+  if (!cJSON_IsArray(root)) fprintf(stderr, "host: --states %s: expected a JSON array of states\n", path);
+  if (!ok) {
+    cJSON_Delete(root);
+    return NULL;
+  }
+  return root;
+}
+
 /* --predict: the model's answer for every state as JSON on stdout. */
 static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t first, uint32_t end) {
   tt__session *s = h->s;
@@ -230,10 +255,24 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
   tt_config *sub = tt_config_create(h->subset ? h->subset : h->space);
   tt_config *full = tt_config_create(h->space);
   int rc = TT_EXIT_OK;
+  cJSON *given = NULL;
+  if (h->opt->states) {
+    given = tt__hyb_read_states(h->opt->states);
+    if (!given) rc = TT_EXIT_USAGE;
+    first = 0;
+    end = given ? (uint32_t)cJSON_GetArraySize(given) : 0;
+  }
   for (uint32_t i = first; i < end && sub && full; i++) {
-    tt__hyb_camera(s, i);
     double raw[TT_SCENE_INDICATOR_COUNT], state[TT_SCENE_INDICATOR_COUNT];
-    tt_scene_indicators(s->scene, raw);
+    cJSON *item = given ? cJSON_GetArrayItem(given, (int)i) : NULL;
+    if (item) {
+      cJSON *ind = cJSON_GetObjectItemCaseSensitive(item, "indicators");
+      for (uint32_t k = 0; k < TT_SCENE_INDICATOR_COUNT; k++)
+        raw[k] = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k)));
+    } else {
+      tt__hyb_camera(s, i);
+      tt_scene_indicators(s->scene, raw);
+    }
     tt_indicators_normalize(norm, raw, state);
     tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
     tt_predictor_result r = {.struct_size = sizeof r};
@@ -246,7 +285,9 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
       ms[k] = tt__hyb_thread_ms() - t0;
     }
     cJSON *o = cJSON_CreateObject();
-    cJSON_AddNumberToObject(o, "path_index", i);
+    cJSON *id = item ? cJSON_GetObjectItemCaseSensitive(item, "id") : NULL;
+    if (id) cJSON_AddItemToObject(o, "id", cJSON_Duplicate(id, 1));
+    else cJSON_AddNumberToObject(o, "path_index", i);
     if (st != TT_OK) {
       cJSON_AddStringToObject(o, "error", tt_last_error());
       if (st != TT_ERR_NO_DATA) rc = TT_EXIT_FAILURE;
@@ -275,6 +316,11 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
   }
   tt_config_destroy(sub);
   tt_config_destroy(full);
+  cJSON_Delete(given);
+  if (rc == TT_EXIT_USAGE) {
+    cJSON_Delete(root);
+    return rc;
+  }
   char *text = cJSON_Print(root);
   cJSON_Delete(root);
   if (!text || puts(text) < 0 || fflush(stdout)) rc = TT_EXIT_OUTPUT;
@@ -309,7 +355,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   int rc = tt__session_open(&s, opt);
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *cam = tt_scene_camera(s.scene);
-  if (cam->key_count < 1) {
+  if (cam->key_count < 1 && !(opt->predict_only && opt->states)) {
     fprintf(stderr, "host: --%s: %s has no camera path (camera.path in scene.json): the hybrid "
             "loop moves through the path's states\n", opt->hybrid ? "hybrid" : "predict", opt->scene);
     rc = TT_EXIT_USAGE;
@@ -402,6 +448,12 @@ int tt__run_hybrid(const tt__host_options *opt) {
   uint32_t end = opt->frames ? opt->frames_end : TT_HOST_PATH_SAMPLES;
   if (opt->predict_only) {
     rc = tt__hyb_predict(&h, &norm, first, end);
+    /* what a warm start taught the model is kept (--model FILE: saved atomically) */
+    if (rc == TT_EXIT_OK && opt->model && opt->warm_start_count &&
+        h.pi->save(h.model, opt->model) != TT_OK) {
+      fprintf(stderr, "host: --model %s: %s\n", opt->model, tt_last_error());
+      rc = TT_EXIT_OUTPUT;
+    }
     goto done;
   }
   if (opt->out_dir && mkdir(opt->out_dir, 0777) != 0 && errno != EEXIST) {

@@ -72,6 +72,9 @@ static const char tt__usage[] =
     "                         measured in the same state on this machine is not measured\n"
     "                         again: its stored cost is fed to the tuner\n"
     "  --no-db                no database: measure everything, record nothing\n"
+    "  --resume FILE          save the tuning session (its samples and the tuner's state) to\n"
+    "                         FILE after every sample; when FILE exists, continue from it\n"
+    "                         (kill a long tuning run, run the same command again)\n"
     "  --clock wall|cpu       what build and render times measure: wall time (default) or\n"
     "                         the process's CPU time, which other processes running on the\n"
     "                         same cores do not inflate (use it with --threads 1 on a\n"
@@ -147,6 +150,12 @@ static const char tt__usage[] =
     "  --warm-start DB        teach the model every usable row of a tuning database first\n"
     "                         (other scenes, earlier runs; same objective, clock, spp, threads)\n"
     "  --predict              print the model's prediction per state as JSON; render nothing\n"
+    "  --states FILE.json     --predict for these states ([{\"id\": ..., \"indicators\":\n"
+    "                         {name: raw value, ...}}, ...]) instead of the path samples\n"
+    "  --measure FILE.json    measure the accel configurations of FILE (a JSON array; the\n"
+    "                         first should be the default) side by side: --rounds R (3)\n"
+    "                         rounds, order alternating, medians and ratios to the first as\n"
+    "                         JSON on stdout (--camera-index I, --objective, --tune-spp)\n"
     "\n"
     "Environment: TT_PLUGIN_PATH (':'-separated plugin folders), OCIO (OpenColorIO config\n"
     "for the PNG display transform; built-in sRGB when unset).\n"
@@ -463,6 +472,16 @@ int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
       }
       opt->epsilon = e;
       opt->epsilon_set = 1;
+    } else if (!strcmp(a, "--states")) {
+      if (!(opt->states = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--measure")) {
+      if (!(opt->measure = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+    } else if (!strcmp(a, "--rounds")) {
+      if (!(v = tt__arg(argc, argv, &i)) || tt__parse_u64(a, v, 1, 10000, &n))
+        return TT_EXIT_USAGE;
+      opt->rounds = (uint32_t)n;
+    } else if (!strcmp(a, "--resume")) {
+      if (!(opt->resume = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--model")) {
       if (!(opt->model = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
     } else if (!strcmp(a, "--warm-start")) {

@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 /* Everything one tuning phase works with. */
 typedef struct tt__tune_ctx {
@@ -69,10 +70,43 @@ static size_t tt__index_of(const tt__session *s, const tt_loaded_plugin *p) {
   return (size_t)tt_session_plugin_index(s->lib, tt_loaded_plugin_entry(p)->name);
 }
 
+/* --resume FILE: the session's state after this sample, written atomically (tunetrace/
+ * file.h: a kill during the write keeps the previous state). */
+static void tt__save_resume(tt__tune_ctx *c) {
+  const char *path = c->opt->resume;
+  char *json = NULL;
+  if (tt_tuning_save_state(c->t->session, &json) != TT_OK) {
+    c->s->host->log(TT_LOG_WARN, NULL, "tuning: --resume %s: %s", path, tt_last_error());
+    return;
+  }
+  if (tt_file_write_atomic(path, json, strlen(json)) != TT_OK)
+    c->s->host->log(TT_LOG_WARN, NULL, "tuning: --resume: %s", tt_last_error());
+  free(json);
+}
+
+/* --resume FILE: continue the session saved there, if any; prints and returns an exit code. */
+static int tt__load_resume(tt__tune_ctx *c) {
+  const char *path = c->opt->resume;
+  if (access(path, F_OK) != 0) return TT_EXIT_OK;  /* a first run */
+  char *text = NULL;
+  size_t n = 0;
+  int ok = tt_file_read(path, "resume file", 0, &text, &n) == TT_OK;
+  tt_status st = ok ? tt_tuning_load_state(c->t->session, text, path) : TT_ERR_IO;
+  tt_free(text);
+  if (st != TT_OK) {
+    fprintf(stderr, "host: --resume %s: %s (the file is left as it is; remove it to start "
+            "afresh)\n", path, tt_last_error());
+    return TT_EXIT_USAGE;
+  }
+  c->s->host->log(TT_LOG_INFO, NULL, "tuning: resumed from %s", path);
+  return TT_EXIT_OK;
+}
+
 /* tt_tuning_desc.on_sample: writes the pass image of a measurement to --tune-pass-images (a
- * warning on failure). */
+ * warning on failure) and saves the session for --resume. */
 static void tt__on_sample(void *user, const tt_tuning_sample *sample) {
   tt__tune_ctx *c = user;
+  if (c->opt->resume && c->t->session) tt__save_resume(c);
   const char *dir = c->opt->tune_pass_images;
   if (!dir || !sample->image || sample->cached || sample->status != TT_TUNEDB_OK) return;
   char path[4200], it[32], cs[64];
@@ -445,6 +479,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
     rc = TT_EXIT_FAILURE;
     goto done;
   }
+  if (opt->resume && (rc = tt__load_resume(&c)) != TT_EXIT_OK) goto done;
   tt_tuning_target target;
   if (tt_session_tuning_target(s->lib, c.target_index, c.want_pass, &target) != TT_OK) {
     fprintf(stderr, "host: tuning: %s\n", tt_last_error());

@@ -253,7 +253,7 @@ static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p,
   /* saving over an existing model replaces it atomically: no temporary file is left */
   CHECK(pi->save(q, path2) == TT_OK);
   char cmd[4400];
-  snprintf(cmd, sizeof cmd, "ls '%s' | grep -c tmp >/dev/null", dir);
+  snprintf(cmd, sizeof cmd, "ls -a '%s' | grep -c tmp >/dev/null", dir);
   CHECK(system(cmd) != 0);
   free(b1);
   free(before);

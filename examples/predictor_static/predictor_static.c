@@ -16,10 +16,10 @@
  * checksummed, written to a temporary file and renamed (static_save).
  */
 #define _POSIX_C_SOURCE 200809L /* open_memstream */
+#include <tunetrace/file.h>
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
 
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -269,20 +269,17 @@ static tt_status ps_save(const tt_predictor *p, const char *path) {
     fprintf(m, "%a %llu %llu\n", p->cfgs[i].log_ratio_sum, (unsigned long long)p->cfgs[i].states,
             (unsigned long long)p->cfgs[i].last_state);
   }
+  fprintf(m, "checksum %016llx\n", 0ull);  /* placeholder, filled in below */
   fclose(m);
-  char tmp[4096];
-  snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  FILE *f = fopen(tmp, "w");
-  int ok = f && fwrite(text, 1, len, f) == len &&
-           fprintf(f, "checksum %016llx\n", (unsigned long long)ps_fnv(text, len)) > 0;
-  if (f && fclose(f)) ok = 0;
-  int err = errno;
+  if (!text) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PS_NAME ": out of memory");
+  /* the checksum covers everything before its line */
+  size_t body = len - strlen("checksum 0000000000000000\n");
+  snprintf(text + body, len - body + 1, "checksum %016llx\n", (unsigned long long)ps_fnv(text, body));
+  /* libtunetrace's atomic write (<tunetrace/file.h>): a temporary file renamed over `path`,
+   * so a failed save never destroys the previous model */
+  tt_status st = tt_file_write_atomic(path, text, len);
   free(text);
-  if (!ok || rename(tmp, path)) {
-    if (ok) err = errno;
-    remove(tmp);
-    return tt_set_error(TT_ERR_IO, PS_NAME ": cannot write model %s: %s", path, strerror(err));
-  }
+  if (st != TT_OK) return tt_set_error(st, PS_NAME ": cannot write model %s: %s", path, tt_last_error());
   return TT_OK;
 }
 
@@ -306,45 +303,25 @@ static void ps_clear(tt_predictor *p) {
   p->ncfg = p->cap = p->nstates = p->scap = 0;
 }
 
-/* Reads a whole file (at most 64 MiB) NUL-terminated; NULL with an error set. */
-static char *ps_read_file(const char *path, size_t *n) {
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    tt_set_error(TT_ERR_IO, PS_NAME ": cannot open model %s: %s", path, strerror(errno));
-    return NULL;
-  }
-  long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
-  rewind(f);
-  char *text = size >= 0 && size < (1L << 26) ? malloc((size_t)size + 1) : NULL;
-  *n = text ? fread(text, 1, (size_t)size, f) : 0;
-  fclose(f);
-  if (!text || *n != (size_t)size) {
-    free(text);
-    tt_set_error(TT_ERR_IO, PS_NAME ": cannot read model %s", path);
-    return NULL;
-  }
-  text[*n] = 0;
-  return text;
-}
-
 static tt_status ps_load(tt_predictor *p, const char *path) {
   if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": load: NULL");
   size_t n;
-  char *text = ps_read_file(path, &n);
-  if (!text) return TT_ERR_IO;
+  char *text = NULL;  /* regular files only, at most 64 MiB (<tunetrace/file.h>) */
+  if (tt_file_read(path, "model", (size_t)1 << 26, &text, &n) != TT_OK)
+    return tt_set_error(TT_ERR_IO, PS_NAME ": cannot open model %s: %s", path, tt_last_error());
   int version = 0;
   if (sscanf(text, PS_NAME " %d", &version) != 1) {
-    free(text);
+    tt_free(text);
     return tt_set_error(TT_ERR_PARSE, PS_NAME ": %s is not a " PS_NAME " model", path);
   }
   char *ck = strstr(text, "\nchecksum ");
   unsigned long long want = 0;
   if (!ck || sscanf(ck + 10, "%16llx", &want) != 1 || ps_fnv(text, (size_t)(ck + 1 - text)) != want) {
-    free(text);
+    tt_free(text);
     return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s is truncated or corrupt (checksum)", path);
   }
   if (version > PS_FORMAT) {
-    free(text);
+    tt_free(text);
     return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": model %s has format %d; this " PS_NAME " "
                         PS_VERSION " reads format %d", path, version, PS_FORMAT);
   }
@@ -365,7 +342,7 @@ static tt_status ps_load(tt_predictor *p, const char *path) {
                                 "(%u values) and %zu parameters of %s; this predictor has \"%s\" "
                                 "(%u) and %zu of %s", path, space, dim, params, plugin,
                                 p->state_space, p->dim, p->params, tt_space_plugin(p->target));
-    free(text);
+    tt_free(text);
     return st;
   }
   tt_predictor q = *p;  /* the loaded model is built aside: p stays as it was on error */
@@ -393,7 +370,7 @@ static tt_status ps_load(tt_predictor *p, const char *path) {
       q.cfgs[i].last_state = (uint64_t)c;
     }
   }
-  free(text);
+  tt_free(text);
   if (bad) {
     ps_clear(&q);
     return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s: malformed state or configuration list", path);

@@ -2,15 +2,13 @@
 #define _POSIX_C_SOURCE 200809L
 #include "model_file.h"
 
-#include <errno.h>
-#include <fcntl.h>
+#include <tunetrace/file.h>
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 /* ---- writer ---- */
 
@@ -323,19 +321,6 @@ static uint64_t ttpm_fnv1a64(const unsigned char *p, size_t n) {
   return h;
 }
 
-static int ttpm_write_all(int fd, const unsigned char *p, size_t n) {
-  while (n) {
-    ssize_t w = write(fd, p, n);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      return -1;
-    }
-    p += w;
-    n -= (size_t)w;
-  }
-  return 0;
-}
-
 tt_status ttpm_save(const char *who, const char *path, uint32_t version, const ttpm_writer *w) {
   if (w->failed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
   size_t total = TTPM_HEADER_BYTES + w->len + 8;
@@ -348,37 +333,12 @@ tt_status ttpm_save(const char *who, const char *path, uint32_t version, const t
   if (w->len) memcpy(buf + TTPM_HEADER_BYTES, w->data, w->len);
   uint64_t h = ttpm_fnv1a64(buf, TTPM_HEADER_BYTES + w->len);
   for (int i = 0; i < 8; i++) buf[TTPM_HEADER_BYTES + w->len + i] = (unsigned char)(h >> (8 * i));
-
-  size_t plen = strlen(path);
-  char *tmp = malloc(plen + 16);
-  if (!tmp) {
-    free(buf);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
-  }
-  snprintf(tmp, plen + 16, "%s.tmpXXXXXX", path);
-  int fd = mkstemp(tmp);
-  if (fd < 0) {
-    tt_status st = tt_set_error(TT_ERR_IO, "%s: cannot write model %s: %s", who, path, strerror(errno));
-    free(tmp);
-    free(buf);
-    return st;
-  }
-  /* mkstemp makes the file 0600: give it the mode of the file it replaces, else 0644 */
-  struct stat old;
-  mode_t mode = stat(path, &old) == 0 ? (old.st_mode & 07777) : 0644;
-  int bad = fchmod(fd, mode) || ttpm_write_all(fd, buf, total) || fsync(fd);
-  int err = errno;
-  if (close(fd)) bad = 1, err = errno;
-  if (bad || rename(tmp, path)) {
-    if (!bad) err = errno;
-    unlink(tmp);
-    free(tmp);
-    free(buf);
-    return tt_set_error(TT_ERR_IO, "%s: cannot write model %s: %s (an existing file was left as "
-                        "it was)", who, path, strerror(err));
-  }
-  free(tmp);
+  /* a temporary file renamed over the target: a failed save leaves an existing model */
+  tt_status st = tt_file_write_atomic(path, buf, total);
   free(buf);
+  if (st != TT_OK)
+    return tt_set_error(st, "%s: cannot write model %s: %s (an existing file was left as it was)",
+                        who, path, tt_last_error());
   return TT_OK;
 }
 
@@ -387,25 +347,20 @@ tt_status ttpm_load(const char *who, const char *who_version, const char *path,
                     uint32_t *version) {
   *payload = NULL;
   *payload_len = 0;
-  struct stat st;
-  if (stat(path, &st) != 0)
-    return tt_set_error(TT_ERR_IO, "%s: cannot open model %s: %s", who, path, strerror(errno));
-  if (!S_ISREG(st.st_mode))
-    return tt_set_error(TT_ERR_IO, "%s: model %s is not a regular file", who, path);
-  if (st.st_size > (off_t)1 << 34)
-    return tt_set_error(TT_ERR_PARSE, "%s: model %s is %lld bytes, larger than any model (16 GiB)",
-                        who, path, (long long)st.st_size);
-  FILE *f = fopen(path, "rb");
-  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open model %s: %s", who, path, strerror(errno));
-  size_t size = (size_t)st.st_size;
+  char *data = NULL;
+  size_t size = 0;
+  /* regular files only (a FIFO or /dev/zero is an error, not a hang), at most 16 GiB */
+  if (tt_file_read(path, "model", (size_t)1 << 34, &data, &size) != TT_OK)
+    return tt_set_error(TT_ERR_IO, "%s: cannot open model %s: %s", who, path, tt_last_error());
   unsigned char *buf = malloc(size ? size : 1);
   if (!buf) {
-    fclose(f);
+    tt_free(data);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading model %s", who, path);
   }
-  size_t got = fread(buf, 1, size, f);
-  int rerr = ferror(f);
-  fclose(f);
+  memcpy(buf, data, size);
+  tt_free(data);
+  int rerr = 0;
+  size_t got = size;
   tt_status rc = TT_OK;
   if (rerr || got != size) {
     rc = tt_set_error(TT_ERR_IO, "%s: cannot read model %s", who, path);

@@ -180,8 +180,9 @@ typedef struct tt_tuning_desc {
   const double *reference_luminance;  /* width x height (rrmse; borrowed) */
   int32_t want_images;      /* non-zero: ask the target for each pass's own image, given to
                                on_sample (the rrmse objective asks in any case) */
-  /* Called after every sample is recorded (measured or answered by the database), e.g. to
-   * write the pass image or feed a model. NULL: none. */
+  /* Called after every sample is recorded (measured or answered by the database) and fed
+   * to the tuner, e.g. to write the pass image, feed a model or save the session's state.
+   * NULL: none. */
   void (*on_sample)(void *user, const tt_tuning_sample *sample);
   void *user;               /* on_sample's first argument */
   /* ---- appended for the hybrid loop (tunetrace/hybrid.h) ---- */
@@ -288,6 +289,17 @@ TT_API tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, 
  * (0 when nothing was applied). */
 TT_API tt_status tt_tuning_apply_best(tt_tuning *t, const tt_tuning_target *target,
                                       double *build_ms);
+
+/* Serialises the session between samples (not while a configuration is outstanding): its
+ * samples, counters, the next iteration and the tuner's save_state, as JSON (free with
+ * free()). A session created from the same descriptor and given it with
+ * tt_tuning_load_state continues exactly where this one stopped (the host's --resume). */
+TT_API tt_status tt_tuning_save_state(const tt_tuning *t, char **json);
+
+/* Restores a state of tt_tuning_save_state into a fresh session (before its first next());
+ * errors name `source` and what differs (another target, objective, tuner, state, default,
+ * or a tuner state its tuner refuses); on error the session is left fresh. */
+TT_API tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *source);
 
 #ifdef __cplusplus
 }

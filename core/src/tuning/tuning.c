@@ -272,16 +272,18 @@ static tt_status tt__record(tt_tuning *t, tt_tuning_sample *s) {
   t->samples[t->count++] = *s;
   free(t->best_json);
   t->best_json = NULL;
-  if (t->on_sample) t->on_sample(t->user, s);
-  t->samples[t->count - 1].image = NULL;  /* valid during on_sample only */
   t->next_iteration = s->iteration + 1;
+  tt_status st = TT_OK;
   if (s->iteration >= 0 && t->tuner && t->ti->feedback(t->tuner, s->cost) != TT_OK) {
     t->host->log(TT_LOG_ERROR, NULL, "tuning: %s: feedback: %s", t->tuner_name,
                  tt_last_error());
-    return TT_ERR_INTERNAL;
+    st = TT_ERR_INTERNAL;
   }
-  tt__progress(t, s->iteration);
-  return TT_OK;
+  /* after the feedback, so that the session is consistent (tt_tuning_save_state) */
+  if (t->on_sample) t->on_sample(t->user, &t->samples[t->count - 1]);
+  t->samples[t->count - 1].image = NULL;  /* valid during on_sample only */
+  if (st == TT_OK) tt__progress(t, s->iteration);
+  return st;
 }
 
 /* Records a measured sample (OK, infeasible or failed) in the database. */
@@ -783,5 +785,184 @@ tt_status tt_tuning_apply_best(tt_tuning *t, const tt_tuning_target *target, dou
   free(copy);
   tt_config_destroy(cfg);
   if (build_ms) *build_ms = ms;
+  return st;
+}
+
+/* ---- resume ------------------------------------------------------------------------ */
+
+#define TT__STATE_FORMAT 1
+
+tt_status tt_tuning_save_state(const tt_tuning *t, char **json) {
+  if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_save_state: NULL argument");
+  *json = NULL;
+  if (t->pending)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_save_state: a configuration is "
+                        "outstanding (report it first)");
+  char *tuner = NULL;
+  if (t->tuner && t->ti->save_state(t->tuner, &tuner) != TT_OK) return TT_ERR_INTERNAL;
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddStringToObject(root, "tunetrace", "tuning session");
+  cJSON_AddNumberToObject(root, "format", TT__STATE_FORMAT);
+  cJSON_AddStringToObject(root, "plugin", t->plugin);
+  cJSON_AddStringToObject(root, "plugin_version", t->plugin_version);
+  cJSON_AddStringToObject(root, "objective", t->objective.spec);
+  cJSON_AddStringToObject(root, "tuner", t->tuner_name ? t->tuner_name : "");
+  const char *keys[4] = {"scene_id", "scene", "camera", "context"};
+  const char *vals[4] = {t->state.scene_id, t->state.scene, t->state.camera, t->state.context};
+  for (int i = 0; i < 4; i++) cJSON_AddStringToObject(root, keys[i], vals[i] ? vals[i] : "");
+  cJSON_AddStringToObject(root, "default", t->default_json);
+  cJSON_AddNumberToObject(root, "requested", t->requested);
+  cJSON_AddNumberToObject(root, "next_iteration", t->next_iteration);
+  cJSON *c = cJSON_AddObjectToObject(root, "counters");
+  cJSON_AddNumberToObject(c, "measured", t->measured);
+  cJSON_AddNumberToObject(c, "cached", t->cached);
+  cJSON_AddNumberToObject(c, "infeasible", t->infeasible);
+  cJSON_AddNumberToObject(c, "failed", t->failed);
+  cJSON_AddBoolToObject(root, "converged", t->converged);
+  cJSON_AddBoolToObject(root, "context_sent", t->context_sent);
+  char rng[32];
+  snprintf(rng, sizeof rng, "%llu", (unsigned long long)t->rng);
+  cJSON_AddStringToObject(root, "rng", rng);
+  cJSON *arr = cJSON_AddArrayToObject(root, "samples");
+  for (size_t i = 0; i < t->count; i++) {
+    const tt_tuning_sample *x = &t->samples[i];
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "iteration", x->iteration);
+    cJSON_AddStringToObject(o, "config", x->config);
+    char num[64];
+    snprintf(num, sizeof num, "%.17g", x->cost);  /* exact, and 1e300 survives */
+    cJSON_AddRawToObject(o, "cost", num);
+    snprintf(num, sizeof num, "%.17g", x->build_ms);
+    cJSON_AddRawToObject(o, "build_ms", num);
+    snprintf(num, sizeof num, "%.17g", x->render_ms);
+    cJSON_AddRawToObject(o, "render_ms", num);
+    cJSON_AddNumberToObject(o, "status", x->status);
+    cJSON_AddBoolToObject(o, "cached", x->cached);
+    cJSON_AddItemToArray(arr, o);
+  }
+  if (tuner) {
+    /* kept as the tuner wrote it: re-printing its numbers through cJSON would round them
+     * (cJSON prints 15 digits when they compare equal within an epsilon) */
+    cJSON_AddStringToObject(root, "tuner_state", tuner);
+    tt_free(tuner);
+  }
+  char *text = cJSON_PrintUnformatted(root);
+  cJSON_Delete(root);
+  if (!text) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tuning_save_state: out of memory");
+  *json = malloc(strlen(text) + 1);
+  if (*json) strcpy(*json, text);
+  cJSON_free(text);
+  return *json ? TT_OK : tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tuning_save_state: out of memory");
+}
+
+/* String field `k` of `o` equals `want` (NULL: ""). */
+static int tt__state_is(const cJSON *o, const char *k, const char *want) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
+  return cJSON_IsString(v) && !strcmp(v->valuestring, want ? want : "");
+}
+
+tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *source) {
+  if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_load_state: NULL argument");
+  if (!source) source = "tuning state";
+  if (t->count || t->started)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: a session resumes before its first sample",
+                        source);
+  cJSON *root = cJSON_Parse(json);
+  tt_status st = TT_OK;
+  const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
+  if (!root || !tt__state_is(root, "tunetrace", "tuning session") || !cJSON_IsNumber(fmt)) {
+    st = tt_set_error(TT_ERR_PARSE, "%s: not a tuning session state", source);
+    goto done;
+  }
+  if (fmt->valuedouble > TT__STATE_FORMAT) {
+    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: state format %g is newer than this library's %d",
+                      source, fmt->valuedouble, TT__STATE_FORMAT);
+    goto done;
+  }
+  /* the same search: target, objective, tuner, state and default */
+  struct { const char *key, *mine; } same[] = {
+    {"plugin", t->plugin}, {"objective", t->objective.spec},
+    {"tuner", t->tuner_name}, {"scene_id", t->state.scene_id}, {"camera", t->state.camera},
+    {"context", t->state.context}, {"default", t->default_json}};
+  for (size_t i = 0; i < sizeof same / sizeof same[0]; i++)
+    if (!tt__state_is(root, same[i].key, same[i].mine)) {
+      const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, same[i].key);
+      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: saved for another %s (\"%.200s\"; this run: "
+                        "\"%.200s\")", source, same[i].key, cJSON_IsString(v) ? v->valuestring : "?",
+                        same[i].mine ? same[i].mine : "");
+      goto done;
+    }
+  const cJSON *samples = cJSON_GetObjectItemCaseSensitive(root, "samples");
+  const cJSON *next = cJSON_GetObjectItemCaseSensitive(root, "next_iteration");
+  const cJSON *c = cJSON_GetObjectItemCaseSensitive(root, "counters");
+  const cJSON *rng = cJSON_GetObjectItemCaseSensitive(root, "rng");
+  if (!cJSON_IsArray(samples) || !cJSON_IsNumber(next) || !cJSON_IsObject(c) || !cJSON_IsString(rng)) {
+    st = tt_set_error(TT_ERR_PARSE, "%s: samples, next_iteration, counters or rng missing", source);
+    goto done;
+  }
+  const cJSON *ts = cJSON_GetObjectItemCaseSensitive(root, "tuner_state");
+  if (t->tuner) {
+    char *tj = cJSON_IsString(ts) ? NULL : cJSON_PrintUnformatted(ts);
+    const char *text = cJSON_IsString(ts) ? ts->valuestring : tj;
+    st = text ? t->ti->load_state(t->tuner, text) : tt_set_error(TT_ERR_PARSE, "%s: no tuner state", source);
+    cJSON_free(tj);
+    if (st != TT_OK) {
+      st = tt_set_error(st, "%s: %s: %s", source, t->tuner_name, tt_last_error());
+      goto done;
+    }
+  }
+  int n = cJSON_GetArraySize(samples);
+  for (int i = 0; i < n; i++) {
+    const cJSON *o = cJSON_GetArrayItem(samples, i);
+    const cJSON *cfg = cJSON_GetObjectItemCaseSensitive(o, "config");
+    if (!cJSON_IsString(cfg)) {
+      st = tt_set_error(TT_ERR_PARSE, "%s: samples[%d]: no config", source, i);
+      goto done;
+    }
+    tt_tuning_sample x;
+    memset(&x, 0, sizeof x);
+    x.struct_size = sizeof x;
+    x.iteration = (int32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "iteration"));
+    x.cost = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "cost"));
+    x.build_ms = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "build_ms"));
+    x.render_ms = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "render_ms"));
+    x.status = (int32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "status"));
+    x.cached = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(o, "cached"));
+    x.config = tt__dup(cfg->valuestring);
+    if (!x.config || isnan(x.cost)) {
+      free((char *)x.config);
+      st = tt_set_error(TT_ERR_PARSE, "%s: samples[%d]: bad cost", source, i);
+      goto done;
+    }
+    if (t->count == t->cap) {
+      size_t cap = t->cap ? 2 * t->cap : 64;
+      tt_tuning_sample *m = realloc(t->samples, cap * sizeof *m);
+      if (!m) {
+        free((char *)x.config);
+        st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", source);
+        goto done;
+      }
+      t->samples = m;
+      t->cap = cap;
+    }
+    t->samples[t->count++] = x;
+  }
+  t->next_iteration = (int32_t)next->valuedouble;
+  t->measured = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "measured"));
+  t->cached = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "cached"));
+  t->infeasible = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "infeasible"));
+  t->failed = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "failed"));
+  t->converged = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "converged"));
+  t->context_sent = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "context_sent"));
+  t->rng = strtoull(rng->valuestring, NULL, 10);
+  free(t->best_json);
+  t->best_json = NULL;
+done:
+  if (st != TT_OK) {  /* nothing half-restored: the session starts from scratch */
+    for (size_t i = 0; i < t->count; i++) free((char *)t->samples[i].config);
+    t->count = 0;
+    t->next_iteration = -1;
+  }
+  cJSON_Delete(root);
   return st;
 }

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# tools/hybrid end to end on two small scenes with camera paths (16x16, 6 cameras, 4
+# iterations): the baseline generator is resumable (stopped after 5 jobs, run again: it does
+# the rest, a third run has nothing to do) and its jobs are self-describing rows; the
+# evaluation runs every protocol and model, measures side by side and writes the summary and
+# the figures. Numbers are not asserted (a 16x16 image times noise); the pipeline is.
+set -euo pipefail
+fail() { echo "FAIL: $*" >&2; exit 1; }
+: "${TT_SOURCE_ROOT:?}" "${TT_BUILD_ROOT:?}"
+PY=/usr/bin/python3
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/tt_hybrid_tools.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+host="$TT_BUILD_ROOT/host/host"
+B=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/baseline.py" --host "$host" --db "$tmp/b.db" --work "$tmp/w"
+   --cameras 6 --iterations 4 --res 16x16
+   --scene "box=$TT_SOURCE_ROOT/scenes/cornell-box/path.json"
+   --scene "spec=$TT_SOURCE_ROOT/scenes/cornell-box-variants/specular-box/scene.json")
+
+"${B[@]}" --max-jobs 5 >"$tmp/b1.log" 2>&1 || { cat "$tmp/b1.log"; fail "baseline (first 5 jobs)"; }
+[ "$("${B[@]}" --list | grep -c '^done')" = 5 ] || fail "5 jobs should be done after --max-jobs 5"
+"${B[@]}" >"$tmp/b2.log" 2>&1 || { cat "$tmp/b2.log"; fail "baseline (resumed)"; }
+grep -q "24 jobs, 5 already in" "$tmp/b2.log" || { cat "$tmp/b2.log"; fail "the rerun did not skip the 5 jobs done"; }
+"${B[@]}" >"$tmp/b3.log" 2>&1
+grep -q "24 jobs, 24 already in .* 0 to run" "$tmp/b3.log" || { cat "$tmp/b3.log"; fail "a third run should have nothing to do"; }
+# self-describing rows: every sample row says its scene, path sample and clock
+q() { "$PY" -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute(sys.argv[2]).fetchone()[0])' "$@"; }
+n=$(q "$tmp/b.db" "SELECT count(*) FROM samples WHERE camera NOT LIKE '%\"path_index\":%' OR context NOT LIKE '%\"clock\":\"cpu\"%'")
+[ "$n" = 0 ] || fail "$n rows without path_index or clock"
+n=$(q "$tmp/b.db" "SELECT count(*) FROM hybrid_jobs WHERE iterations = 4 AND resolution = '16x16' AND history LIKE '[%'")
+[ "$n" = 24 ] || fail "hybrid_jobs has $n complete rows, expected 24"
+"${B[@]}" --job nosuch:3:render >/dev/null 2>&1 && fail "--job of an unknown scene should be refused"
+"${B[@]}" --scenes nosuch >/dev/null 2>&1 && fail "--scenes nosuch should be refused"
+
+E=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e" --out "$tmp/f"
+   --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0)
+"${E[@]}" >"$tmp/e.log" 2>&1 || { cat "$tmp/e.log"; fail "evaluate"; }
+for f in summary.json rows.json fig3_17_speedup_render.png fig3_18_roofline_render.png \
+         fig3_19_break_even_render.png fig3_20_speedup_total.png fig3_21_roofline_total.png \
+         loso_render.png; do
+  [ -s "$tmp/f/$f" ] || { cat "$tmp/e.log"; fail "evaluate did not write $f"; }
+done
+"$PY" - "$tmp/f/summary.json" <<'EOF' || fail "summary.json"
+import json, math, sys
+s = json.load(open(sys.argv[1]))
+for key in ("render/nn", "render/rbf", "render/static", "build+render/nn"):
+    t = s["table"][key]
+    assert t["n"] > 0 and math.isfinite(t["speedup"]) and t["speedup"] > 0, (key, t)
+    assert math.isfinite(t["roofline"]) and math.isfinite(t["loso_speedup"]), (key, t)
+assert s["scenes"] == {"box": 6, "spec": 6}, s["scenes"]
+EOF
+# a second run measures nothing new (cached)
+"${E[@]}" >"$tmp/e2.log" 2>&1 || fail "evaluate (cached)"
+if grep -q "measuring" "$tmp/e2.log"; then cat "$tmp/e2.log"; fail "the second evaluation measured again"; fi
+# too few cameras for the protocol: a clear error
+if "$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e3" --host "$host" \
+     --min-cameras 50 >"$tmp/e3.log" 2>&1; then fail "evaluate with too few cameras should fail"; fi
+grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "message"; }
+echo "hybrid_tools: ok"

@@ -1,0 +1,303 @@
+#!/usr/bin/python3
+"""Baseline data for hybrid autotuning (thesis 3.3.5.1): one Nelder-Mead search per
+(scene, camera of the scene's path, objective), every measurement into one tuning DB.
+
+A job is one search: `host --plugin tuner_nm --camera-index I --objective O --iterations N
+--tune-spp 1 --clock cpu --threads 1 --db DB scene`. Every measurement is a DB row (scene id,
+camera JSON with "path_index": I, context with spp/threads/clock/other plugins, indicators,
+configuration, build/render ms, cost); the job itself is recorded in the table hybrid_jobs of
+the same file when it finishes (its settings, the run's trajectory, CPU and wall seconds, the
+load average). Jobs already in hybrid_jobs are skipped, so the command is resumable: kill it
+and run it again. An interrupted search is not lost either: its measured rows are in the DB,
+and the rerun's tuner (same seed) is answered from them until it reaches new configurations.
+
+Costs are CPU time of the host process (--clock cpu) with one thread: on a shared machine the
+wall time of a pass mostly measures who else ran (living-room, load 6-10: wall 380 ms vs
+52 ms CPU per build); see tools/hybrid/README.md.
+
+Jobs run in an order that keeps the finished set useful at any time: cameras by bit-reversed
+rank (0, the middle, the quarters, ...), scenes and objectives interleaved within a camera.
+
+  baseline.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/work            # all jobs
+  baseline.py --db DB --work W --list                        # jobs, one per line, done or not
+  baseline.py --db DB --work W --job bmw-m6:16:build+render  # one job (what an MPI rank runs)
+  baseline.py --db DB --work W --cameras 100 --iterations 80 # the thesis' full size
+  baseline.py --db DB --work W --shard 0/2 & baseline.py --db DB --work W --shard 1/2  # 2 workers
+"""
+import argparse
+import json
+import os
+import resource
+import shutil
+import sqlite3
+import subprocess
+import sys
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "scenes"))
+
+# name -> scene file (relative to the repository) or a generator command (tools/scenes).
+SCENES = {
+    "bmw-m6": "scenes/bmw-m6/scene.json",
+    "living-room": "scenes/living-room/scene.json",
+    "staircase": "scenes/staircase/scene.json",
+    "bathroom": "scenes/bathroom/scene.json",
+    "veach-ajar": "scenes/veach-ajar/scene.json",
+    "killeroos": "scenes/killeroos/scene.json",
+    "voxel": ("voxel", "scene.json"),           # vokselia stand-in, 1.27M triangles
+    "tessellated": ("tessellated", "far.json"),  # buddha stand-in, 1.31M triangles
+}
+DEFAULT_SCENES = list(SCENES)
+OBJECTIVES = ["render", "build+render"]
+# The searched parameters: Table 3.1's eleven and our backend choice. `counters` (traversal
+# statistics, a diagnostic that only slows rendering) is left at its default.
+TUNE_PARAMS = ("quality,branchingFactor,maxDepth,sahBlockSize,minLeafSize,maxLeafSize,travcost,"
+               "intcost,static,compact,robust,backend")
+
+JOBS_SCHEMA = """CREATE TABLE IF NOT EXISTS hybrid_jobs (
+  job TEXT PRIMARY KEY,       -- scene:path_index:objective:settings
+  scene TEXT NOT NULL,        -- short name (SCENES)
+  scene_file TEXT NOT NULL,   -- the file given to host
+  scene_id TEXT,              -- tt_scene_id of the rows
+  path_index INTEGER NOT NULL,-- --camera-index
+  objective TEXT NOT NULL,
+  iterations INTEGER NOT NULL,
+  tune_spp INTEGER NOT NULL,
+  resolution TEXT NOT NULL,
+  threads INTEGER NOT NULL,
+  clock TEXT NOT NULL,
+  seed INTEGER NOT NULL,
+  tuner TEXT NOT NULL,
+  tune_params TEXT NOT NULL,
+  default_cost REAL,
+  best_cost REAL,
+  best_config TEXT,
+  converged INTEGER,
+  history TEXT,               -- JSON: per iteration {iteration, cost, cached, config}
+  measured INTEGER,           -- measurements taken by the finishing run (rest: from the DB)
+  wall_s REAL, cpu_s REAL,    -- of the finishing run
+  load1 REAL,                 -- 1-minute load average when it finished
+  host_version TEXT,
+  finished TEXT               -- ISO 8601 UTC
+)"""
+
+
+def bit_reversed_order(n):
+    """0..n-1 in an order whose every prefix is spread over the range (bit-reversal)."""
+    bits = max(1, (n - 1).bit_length())
+    keys = sorted(range(n), key=lambda i: int(format(i, "0%db" % bits)[::-1], 2))
+    return keys
+
+
+def camera_indices(n, samples=100):
+    """n path samples spread evenly over 0..samples-1 (the host's --camera-index)."""
+    if n >= samples:
+        return list(range(samples))
+    if n == 1:
+        return [0]
+    return [round(i * (samples - 1) / (n - 1)) for i in range(n)]
+
+
+def settings_tag(a):
+    tag = f"{a.iterations}it:{a.res}:{a.tune_spp}spp:{a.threads}t:{a.clock}:seed{a.seed}"
+    return tag if a.tune_params == TUNE_PARAMS else tag + ":params=" + a.tune_params
+
+
+def scene_file(a, name):
+    """The scene file of `name`, generating the procedural scenes into --work once."""
+    spec = SCENES[name]
+    if isinstance(spec, str):
+        path = spec if os.path.isabs(spec) else os.path.join(ROOT, spec)
+        if not os.path.exists(path):
+            sys.exit(f"baseline: {name}: {path} does not exist")
+        return path
+    kind, file = spec
+    out = os.path.join(a.work, "scenes", kind)
+    path = os.path.join(out, file)
+    if not os.path.exists(path):
+        tmp = out + ".tmp"
+        shutil.rmtree(tmp, ignore_errors=True)
+        print(f"baseline: generating the {kind} scene into {out}", flush=True)
+        subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "scenes", "generate.py"),
+                        kind, tmp], check=True)
+        os.rename(tmp, out)
+    return path
+
+
+def all_jobs(a):
+    cams = camera_indices(a.cameras)
+    order = [cams[k] for k in bit_reversed_order(len(cams))]
+    jobs = []
+    for cam in order:
+        for scene in a.scenes:
+            for obj in a.objectives:
+                jobs.append((scene, cam, obj))
+    return jobs
+
+
+def job_id(a, scene, cam, obj):
+    return f"{scene}:{cam}:{obj}:{settings_tag(a)}"
+
+
+def open_db(path):
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    con = sqlite3.connect(path, timeout=30)
+    con.execute("PRAGMA journal_mode=WAL")
+    con.execute(JOBS_SCHEMA)
+    con.commit()
+    return con
+
+
+def done_jobs(con):
+    return {r[0] for r in con.execute("SELECT job FROM hybrid_jobs")}
+
+
+def host_version(a):
+    r = subprocess.run([a.host, "--version"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                       text=True)
+    return r.stdout.strip().splitlines()[0] if r.stdout.strip() else "unknown"
+
+
+def run_job(a, con, scene, cam, obj, version):
+    jid = job_id(a, scene, cam, obj)
+    path = scene_file(a, scene)
+    jdir = os.path.join(a.work, "jobs", scene)
+    os.makedirs(jdir, exist_ok=True)
+    stem = os.path.join(jdir, f"cam{cam:02d}_{obj.replace('+', '_')}")
+    stats = stem + ".json"
+    cmd = [a.host, "--quiet", "--plugin", a.tuner, "--tune", "accel_embree",
+           "--tune-params", a.tune_params, "--camera-index", str(cam), "--objective", obj, "--iterations", str(a.iterations),
+           "--tune-spp", str(a.tune_spp), "--spp", "1", "--res", a.res,
+           "--threads", str(a.threads), "--clock", a.clock, "--seed", str(a.seed),
+           "--db", a.db, "--stats", stats + ".tmp", "--out", stem + ".exr", path]
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.time()
+    with open(stem + ".log", "w") as log:
+        r = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT)
+    wall = time.time() - t0
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    for ext in (".exr", ".png"):  # the image of 1-spp tuning passes is of no use here
+        if os.path.exists(stem + ext):
+            os.remove(stem + ext)
+    if r.returncode != 0:
+        with open(stem + ".log") as log:
+            tail = log.read()[-2000:]
+        print(f"baseline: job {jid} failed (exit {r.returncode}): {' '.join(cmd)}\n{tail}",
+              file=sys.stderr, flush=True)
+        return False
+    os.replace(stats + ".tmp", stats)
+    with open(stats) as f:
+        st = json.load(f)
+    t = st["tuning"]
+    hist = [{"iteration": h["iteration"], "cost": h["cost"], "cached": h["cached"],
+             "build_ms": h["build_ms"], "render_ms": h["render_ms"], "config": h["config"]}
+            for h in t["history"]]
+    scene_id = st.get("scene_id")
+    con.execute("INSERT OR REPLACE INTO hybrid_jobs VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,"
+                "?,?,?,?,?)",
+                (jid, scene, path, scene_id, cam, obj, a.iterations, a.tune_spp, a.res,
+                 a.threads, a.clock, a.seed, a.tuner, a.tune_params, t["default_cost"], t["best_cost"],
+                 json.dumps(t["best_config"], sort_keys=True), int(bool(t["converged"])),
+                 json.dumps(hist), t["measured"], wall, cpu, os.getloadavg()[0], version,
+                 time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())))
+    con.commit()
+    return True
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
+    ap.add_argument("--db", required=True, help="tuning database (created if missing)")
+    ap.add_argument("--work", required=True, help="folder for job stats/logs and generated scenes")
+    ap.add_argument("--scenes", default=",".join(DEFAULT_SCENES),
+                    help="comma-separated names of " + ", ".join(SCENES))
+    ap.add_argument("--scene", action="append", default=[], metavar="NAME=FILE",
+                    help="another scene with a camera path (repeatable); --scenes then defaults "
+                         "to these")
+    ap.add_argument("--objectives", default=",".join(OBJECTIVES))
+    ap.add_argument("--cameras", type=int, default=30, help="path samples per scene (thesis 100)")
+    ap.add_argument("--iterations", type=int, default=40, help="Nelder-Mead iterations (thesis 80)")
+    ap.add_argument("--res", default="128x128")
+    ap.add_argument("--tune-spp", type=int, default=1)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--clock", default="cpu", choices=["cpu", "wall"])
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--tuner", default="tuner_nm")
+    ap.add_argument("--tune-params", default=TUNE_PARAMS, help="searched accel_embree parameters")
+    ap.add_argument("--list", action="store_true", help="print the jobs (done/todo) and exit")
+    ap.add_argument("--job", action="append", default=[],
+                    help="run only this job SCENE:CAMERA:OBJECTIVE (repeatable)")
+    ap.add_argument("--max-jobs", type=int, default=0, help="stop after this many new jobs")
+    ap.add_argument("--shard", default="0/1", help="K/N: run only the jobs whose index in the "
+                    "job order is K modulo N (N workers share one DB)")
+    a = ap.parse_args()
+    for spec in a.scene:
+        name, _, path = spec.partition("=")
+        if not name or not path or not os.path.exists(path):
+            ap.error(f"--scene {spec!r}: expected NAME=FILE of an existing scene")
+        SCENES[name] = os.path.abspath(path)
+    if a.scene and a.scenes == ",".join(DEFAULT_SCENES):
+        a.scenes = ",".join(spec.partition("=")[0] for spec in a.scene)
+    a.scenes = [s for s in a.scenes.split(",") if s]
+    a.objectives = [o for o in a.objectives.split(",") if o]
+    for s in a.scenes:
+        if s not in SCENES:
+            ap.error(f"--scenes: unknown scene {s!r} (known: {', '.join(SCENES)})")
+    for o in a.objectives:
+        if o not in OBJECTIVES:
+            ap.error(f"--objectives: unknown objective {o!r} (known: {', '.join(OBJECTIVES)})")
+    if not 1 <= a.cameras <= 100:
+        ap.error("--cameras: expected 1..100 (the host's path samples)")
+    if a.iterations < 1:
+        ap.error("--iterations: expected >= 1")
+    jobs = all_jobs(a)
+    if a.job:
+        want = []
+        for spec in a.job:
+            parts = spec.split(":")
+            if len(parts) != 3 or parts[0] not in SCENES or parts[2] not in a.objectives or \
+                    not parts[1].isdigit() or not 0 <= int(parts[1]) < 100:
+                ap.error(f"--job {spec!r}: expected SCENE:CAMERA:OBJECTIVE, CAMERA in 0..99, "
+                         f"SCENE one of {', '.join(SCENES)}, OBJECTIVE one of {', '.join(OBJECTIVES)}")
+            want.append((parts[0], int(parts[1]), parts[2]))
+        jobs = want
+    os.makedirs(a.work, exist_ok=True)
+    con = open_db(a.db)
+    done = done_jobs(con)
+    if a.list:
+        for s, c, o in jobs:
+            print(("done " if job_id(a, s, c, o) in done else "todo ") + f"{s}:{c}:{o}")
+        return 0
+    try:
+        k, nsh = (int(x) for x in a.shard.split("/"))
+        assert nsh >= 1 and 0 <= k < nsh
+    except (ValueError, AssertionError):
+        ap.error(f"--shard {a.shard!r}: expected K/N with 0 <= K < N")
+    per = len(a.objectives)  # both objectives of a (scene, camera) go to one worker
+    jobs = [j for i, j in enumerate(jobs) if (i // per) % nsh == k]
+    todo = [j for j in jobs if job_id(a, *j) not in done]
+    print(f"baseline: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {a.db}, {len(todo)} to run "
+          f"({settings_tag(a)})", flush=True)
+    if not os.access(a.host, os.X_OK):
+        sys.exit(f"baseline: --host {a.host} is not an executable (build first: ninja -C build)")
+    version = host_version(a)
+    for s in dict.fromkeys(s for s, _, _ in todo):
+        scene_file(a, s)
+    t0 = time.time()
+    failed = 0
+    for k, (s, c, o) in enumerate(todo):
+        if a.max_jobs and k >= a.max_jobs:
+            break
+        ok = run_job(a, con, s, c, o, version)
+        failed += not ok
+        el = time.time() - t0
+        eta = el / (k + 1) * (len(todo) - k - 1)
+        print(f"[{k + 1}/{len(todo)}] {s}:{c}:{o} {'ok' if ok else 'FAILED'}  elapsed {el / 60:.1f} min, "
+              f"eta {eta / 60:.0f} min, load {os.getloadavg()[0]:.1f}", flush=True)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

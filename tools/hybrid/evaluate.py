@@ -1,0 +1,490 @@
+#!/usr/bin/python3
+"""Evaluation of hybrid autotuning's prediction (thesis 3.3.5) on the baseline database of
+tools/hybrid/baseline.py: predictors against the Nelder-Mead search, the search's best (the
+"roofline") and the best static configuration, per scene and camera.
+
+Protocols:
+  split K   per scene a random 80/20 split of its cameras (K = 0 .. --splits-1, seeded); the
+            models learn from the training cameras of every scene (thesis: "80 * 7"), and
+            predict the validation cameras;
+  loso S    leave one scene out: the models learn from every other scene and predict all
+            cameras of S.
+Models (host --predict through the plugins, warm-started from a database holding only the
+training rows): nn (predictor_nn), rbf (predictor_rbf), static (predictor_static: the one
+configuration with the best geometric-mean speed-up over the default on the training states).
+
+Costs: every configuration a model predicts for a validation camera is measured at that camera
+side by side with the default and the search's best (host --measure, --rounds R, alternating
+order), as a ratio to the default measured in the same process; the search's trajectory (its
+default and 40 iterations) comes from the baseline, as ratios to the baseline's default. So
+figures compare ratios taken in one process each, whatever the machine's load was between
+the baseline and the evaluation. Per validation camera, with n = the search's samples, S =
+sum of their costs / default, p = predicted / default, b = roofline / default (measured):
+  speed-up over search (Fig. 3.17, 3.20)   S / (n p)
+  fraction of the roofline (Fig. 3.18, 3.21) b / p
+  break-even iterations (Fig. 3.19)        (S - n b) / (p - b): after that many iterations the
+                                           search (then at its best) would have paid back
+                                           what it lost; negative = prediction beat the search
+  overhead reduction                       1 - n (p - v) / (S - n v), v = min(b, p)
+
+Stages are cached in --work (predictions, measurements), so a rerun continues; --no-measure
+reports with what is measured. Figures (matplotlib PNG) and a JSON/Markdown summary go to
+--out.
+
+  evaluate.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/eval --out tools/hybrid/figures
+  evaluate.py ... --variants norm,reward,features,table,candidates   # the studies of the README
+"""
+import argparse
+import hashlib
+import json
+import math
+import os
+import random
+import sqlite3
+import subprocess
+import sys
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+INDICATORS = ["meshes", "triangles", "lights", "camera_x", "camera_y", "camera_z", "target_x",
+              "target_y", "target_z", "fov_y", "diffuse_ratio", "extent", "total_area",
+              "light_area", "area_per_mesh", "mean_var_tri_size", "var_var_tri_size"]
+MODELS = {"nn": "predictor_nn", "rbf": "predictor_rbf", "static": "predictor_static"}
+# thesis 3.3.5 (render only / build+render): geo-means over its seven scenes
+THESIS = {
+    "render": {"speedup": {"nn": 1.05, "rbf": 1.04}, "roofline": {"nn": 0.95, "rbf": 0.95},
+               "overhead_max": {"nn": 0.875, "rbf": 0.792}, "break_even_mean": {"nn": 1771, "rbf": 362}},
+    "build+render": {"speedup": {"nn": 1.12, "rbf": None}, "roofline": {"nn": 0.92, "rbf": 0.83},
+                     "overhead_max": {"nn": 0.893, "rbf": 0.534}},
+}
+
+
+def geomean(xs):
+    xs = [x for x in xs if x is not None and x > 0 and math.isfinite(x)]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
+
+
+def canon(cfg):
+    """A configuration's key: numbers as floats (the host prints 1.0 as 1), keys sorted."""
+    norm = {k: (v if isinstance(v, (bool, str)) else float(v)) for k, v in cfg.items()}
+    return json.dumps(norm, sort_keys=True, separators=(",", ":"))
+
+
+def load_jobs(db, objectives):
+    """{(scene, cam, obj): job} of finished baseline jobs, and each scene's file and id."""
+    con = sqlite3.connect(db)
+    con.row_factory = sqlite3.Row
+    jobs, scenes = {}, {}
+    for r in con.execute("SELECT * FROM hybrid_jobs"):
+        if r["objective"] not in objectives:
+            continue
+        hist = json.loads(r["history"])
+        jobs[(r["scene"], r["path_index"], r["objective"])] = {
+            "default_cost": r["default_cost"], "best_cost": r["best_cost"],
+            "best_config": json.loads(r["best_config"]), "history": hist,
+            "scene_id": r["scene_id"], "tune_params": r["tune_params"], "res": r["resolution"],
+            "threads": r["threads"], "clock": r["clock"], "spp": r["tune_spp"], "seed": r["seed"],
+            "iterations": r["iterations"]}
+        scenes[r["scene"]] = (r["scene_file"], r["scene_id"])
+    con.close()
+    return jobs, scenes
+
+
+def cameras(jobs, objectives, min_cameras):
+    """Per scene the cameras with every objective done; scenes with too few are dropped."""
+    per = {}
+    for (s, c, o) in jobs:
+        per.setdefault(s, {}).setdefault(c, set()).add(o)
+    out = {}
+    for s, cams in per.items():
+        ok = sorted(c for c, objs in cams.items() if all(o in objs for o in objectives))
+        if len(ok) >= min_cameras:
+            out[s] = ok
+    return out
+
+
+def camera_indicators(db, jobs, cams):
+    """Raw indicators of every (scene, camera) from its rows."""
+    con = sqlite3.connect(db)
+    out = {}
+    for s, cs in cams.items():
+        for c in cs:
+            sid = next(j["scene_id"] for (ss, cc, _), j in jobs.items() if ss == s and cc == c)
+            row = con.execute("SELECT indicators FROM samples WHERE scene_id = ? AND camera LIKE ? "
+                              "AND indicators IS NOT NULL LIMIT 1",
+                              (sid, f'%"path_index":{c}}}')).fetchone()
+            out[(s, c)] = json.loads(row[0])
+    con.close()
+    return out
+
+
+def protocols(cams, n_splits, val_share, loso, seed):
+    """[(name, {scene: train cams}, {scene: val cams})]."""
+    out = []
+    for k in range(n_splits):
+        rng = random.Random(seed * 1000 + k)
+        train, val = {}, {}
+        for s in sorted(cams):
+            cs = list(cams[s])
+            rng.shuffle(cs)
+            nv = max(1, round(val_share * len(cs)))
+            val[s], train[s] = sorted(cs[:nv]), sorted(cs[nv:])
+        out.append((f"split{k}", train, val))
+    if loso:
+        for s in sorted(cams):
+            out.append((f"loso-{s}", {t: cams[t] for t in cams if t != s}, {s: cams[s]}))
+    return out
+
+
+def training_db(a, jobs, train, obj, path):
+    """A database with only the training cameras' rows of the objective (what the model sees)."""
+    if os.path.exists(path):
+        return path
+    tmp = path + ".tmp"
+    if os.path.exists(tmp):
+        os.remove(tmp)
+    src = sqlite3.connect(a.db)
+    schema = src.execute("SELECT sql FROM sqlite_master WHERE name = 'samples'").fetchone()[0]
+    version = src.execute("PRAGMA user_version").fetchone()[0]
+    dst = sqlite3.connect(tmp)
+    dst.execute(schema)
+    dst.execute(f"PRAGMA user_version = {version}")
+    cols = [r[1] for r in src.execute("PRAGMA table_info(samples)")]
+    q = f"INSERT INTO samples ({','.join(cols)}) VALUES ({','.join('?' * len(cols))})"
+    for s, cs in train.items():
+        sid = next(j["scene_id"] for (ss, _, _), j in jobs.items() if ss == s)
+        for c in cs:
+            rows = src.execute(f"SELECT {','.join(cols)} FROM samples WHERE scene_id = ? AND "
+                               "objective = ? AND camera LIKE ?", (sid, obj, f'%"path_index":{c}}}'))
+            dst.executemany(q, rows.fetchall())
+    dst.commit()
+    dst.close()
+    src.close()
+    os.replace(tmp, path)
+    return path
+
+
+def host_common(job):
+    return ["--quiet", "--res", job["res"], "--threads", str(job["threads"]), "--clock", job["clock"],
+            "--tune-spp", str(job["spp"]), "--tune-params", job["tune_params"], "--seed", str(job["seed"])]
+
+
+def predict(a, job, model, variant, train_db, states, obj, path):
+    """host --predict for `states` ([(scene, cam, indicators)]), cached in `path`."""
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    sfile = path + ".states.json"
+    with open(sfile, "w") as f:
+        json.dump([{"id": f"{s}:{c}", "indicators": ind} for s, c, ind in states], f)
+    cmd = [a.host, "--predict", "--plugin", MODELS[model], "--warm-start", train_db, "--states", sfile,
+           "--objective", obj, "--no-db"] + host_common(job) + variant.get("args", [])
+    cmd.append(os.path.join(ROOT, "scenes", "cornell-box", "path.json"))
+    t0 = time.time()
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        sys.exit(f"evaluate: {' '.join(cmd)}\nexit {r.returncode}\n{r.stderr[-3000:]}")
+    out = json.loads(r.stdout[r.stdout.index("{"):])
+    out["wall_s"] = time.time() - t0
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(out, f)
+    os.replace(tmp, path)
+    os.remove(sfile)
+    return out
+
+
+class Measurements:
+    """Ratios to the default of configurations measured side by side, per (scene, cam, obj),
+    kept in one JSON file per camera: {canonical config: [ratio, ...]}."""
+
+    def __init__(self, a, jobs, scenes):
+        self.a, self.jobs, self.scenes = a, jobs, scenes
+        self.dir = os.path.join(a.work, "measure")
+        os.makedirs(self.dir, exist_ok=True)
+        self.cache = {}
+
+    def _path(self, s, c, o):
+        return os.path.join(self.dir, f"{s}_{c:02d}_{o.replace('+', '_')}.json")
+
+    def get(self, s, c, o):
+        k = (s, c, o)
+        if k not in self.cache:
+            p = self._path(s, c, o)
+            self.cache[k] = json.load(open(p)) if os.path.exists(p) else {"ratios": {}, "runs": []}
+        return self.cache[k]
+
+    def ratio(self, s, c, o, cfg):
+        rs = self.get(s, c, o)["ratios"].get(canon(cfg))
+        return None if not rs else sorted(rs)[len(rs) // 2]
+
+    def missing(self, s, c, o, cfgs):
+        have = self.get(s, c, o)["ratios"]
+        return [cfg for cfg in cfgs if canon(cfg) not in have]
+
+    def measure(self, s, c, o, cfgs):
+        """Measures default, roofline and `cfgs` side by side; appends their ratios."""
+        job = self.jobs[(s, c, o)]
+        todo = [self.a.default_config, job["best_config"]] + cfgs
+        seen, uniq = set(), []
+        for cfg in todo:
+            if canon(cfg) not in seen:
+                seen.add(canon(cfg))
+                uniq.append(cfg)
+        f = os.path.join(self.dir, f"todo_{os.getpid()}.json")
+        with open(f, "w") as fh:
+            json.dump(uniq, fh)
+        cmd = [self.a.host, "--measure", f, "--rounds", str(self.a.rounds), "--camera-index", str(c),
+               "--objective", o, "--no-db"] + host_common(job) + [self.scenes[s][0]]
+        cmd = ["nice", "-n", str(self.a.nice)] + cmd
+        t0 = time.time()
+        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        os.remove(f)
+        if r.returncode != 0:
+            print(f"evaluate: measure {s}:{c}:{o} failed (exit {r.returncode}): {r.stderr[-1500:]}",
+                  file=sys.stderr, flush=True)
+            return False
+        res = json.loads(r.stdout[r.stdout.index("{"):])
+        d = self.get(s, c, o)
+        # keyed by the configuration asked for: the host measures it as the space's check
+        # repairs it (sahBlockSize to a power of two), as the tuning loop did
+        for asked, item in zip(uniq, res["configs"]):
+            if item.get("ratio_to_first") is not None:
+                d["ratios"].setdefault(canon(asked), []).append(item["ratio_to_first"])
+        d["runs"].append({"configs": len(uniq), "rounds": res["rounds"], "wall_s": time.time() - t0,
+                          "load1": os.getloadavg()[0],
+                          "default_ms": res["configs"][0].get("median_cost")})
+        tmp = self._path(s, c, o) + ".tmp"
+        with open(tmp, "w") as fh:
+            json.dump(d, fh)
+        os.replace(tmp, self._path(s, c, o))
+        return True
+
+
+def default_config(a):
+    """The accel's default configuration (host --describe)."""
+    r = subprocess.run([a.host, "--describe", "accel_embree"], stdout=subprocess.PIPE, text=True)
+    space = json.loads(r.stdout)
+    return {p["name"]: p["value"] for p in space["parameters"]}
+
+
+VARIANTS = {
+    "default": {"args": []},
+    # camera bound and scale of the state (README: "Indicators")
+    "norm-table": {"args": ["--indicator-norm", "camera=table"], "study": "norm"},
+    "norm-text": {"args": ["--indicator-norm", "camera=text"], "study": "norm"},
+    "norm-log": {"args": ["--indicator-norm", "scale=log"], "study": "norm"},
+    "norm-text-log": {"args": ["--indicator-norm", "camera=text,scale=log"], "study": "norm"},
+    # RBF reward
+    "reward-relative": {"args": ["--set", "predictor_rbf.reward=relative"], "study": "reward", "models": ["rbf"]},
+    # RBF feature count (default: 3.5 x 29 = 102)
+    **{f"features-{f}": {"args": ["--set", f"predictor_rbf.features={f}"], "study": "features",
+                          "models": ["rbf"]} for f in (10, 25, 50, 200, 400)},
+    # NN table size (training states kept)
+    **{f"table-{n}": {"args": ["--set", f"predictor_nn.maxStates={n}"], "study": "table",
+                       "models": ["nn"]} for n in (8, 16, 32, 64)},
+    # RBF argmax candidates
+    **{f"cand-{l}-{r}": {"args": ["--set", f"predictor_rbf.lhsCandidates={l}", "--set",
+                                  f"predictor_rbf.refine={r}"], "study": "candidates", "models": ["rbf"]}
+       for l, r in ((0, 0), (64, 0), (256, 0), (1024, 3), (4096, 3))},
+}
+
+
+def metrics(job, p, b):
+    """Per-camera figures from the search trajectory (baseline) and measured ratios p, b."""
+    d = job["default_cost"]
+    costs = [d] + [h["cost"] for h in job["history"] if h["cost"] < 1e299]
+    n = len(costs)
+    S = sum(costs) / d
+    out = {"speedup": S / (n * p), "roofline": b / p, "n": n}
+    out["break_even"] = (S - n * b) / (p - b) if p != b else float("inf")
+    v = min(b, p)
+    over = S - n * v
+    out["overhead_reduction"] = 1.0 - n * (p - v) / over if over > 0 else float("nan")
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--db", required=True, help="baseline database (tools/hybrid/baseline.py)")
+    ap.add_argument("--work", required=True, help="cache of training DBs, predictions, measurements")
+    ap.add_argument("--out", default=None, help="folder for figures and summary.json/.md")
+    ap.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
+    ap.add_argument("--objectives", default="render,build+render")
+    ap.add_argument("--models", default="nn,rbf,static")
+    ap.add_argument("--splits", type=int, default=15)
+    ap.add_argument("--val", type=float, default=0.2)
+    ap.add_argument("--no-loso", action="store_true", help="skip leave-one-scene-out")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--min-cameras", type=int, default=5)
+    ap.add_argument("--scenes", default=None, help="comma-separated subset")
+    ap.add_argument("--variants", default="", help="studies to run besides the default models: "
+                    "norm, reward, features, table, candidates")
+    ap.add_argument("--variant-splits", type=int, default=5, help="splits used by the studies")
+    ap.add_argument("--rounds", type=int, default=2, help="side-by-side rounds per measurement")
+    ap.add_argument("--nice", type=int, default=19)
+    ap.add_argument("--no-measure", action="store_true", help="report with what is measured")
+    a = ap.parse_args()
+    objectives = a.objectives.split(",")
+    models = a.models.split(",")
+    os.makedirs(a.work, exist_ok=True)
+    jobs, scenes = load_jobs(a.db, objectives)
+    cams = cameras(jobs, objectives, a.min_cameras)
+    if a.scenes:
+        cams = {s: c for s, c in cams.items() if s in a.scenes.split(",")}
+    if not cams:
+        sys.exit(f"evaluate: no scene has {a.min_cameras} cameras with every objective done in {a.db}")
+    print("evaluate: " + ", ".join(f"{s} {len(c)} cameras" for s, c in sorted(cams.items())), flush=True)
+    a.default_config = default_config(a)
+    inds = camera_indicators(a.db, jobs, cams)
+    prots = protocols(cams, a.splits, a.val, not a.no_loso, a.seed)
+    studies = [v for v in a.variants.split(",") if v]
+    runs = [("default", m, p) for p in prots for m in models]
+    for name, v in VARIANTS.items():
+        if v.get("study") in studies:
+            for m in v.get("models", ["nn", "rbf"]):
+                runs += [(name, m, p) for p in prots[:a.variant_splits]]
+
+    # 1. predictions (cheap: no rendering)
+    preds = {}  # (variant, model, protocol, obj) -> {(scene, cam): (config, info)}
+    pdir = os.path.join(a.work, "predict")
+    tdir = os.path.join(a.work, "train")
+    os.makedirs(pdir, exist_ok=True)
+    os.makedirs(tdir, exist_ok=True)
+    t0 = time.time()
+    for k, (vname, m, (pname, train, val)) in enumerate(runs):
+        for o in objectives:
+            some = next(j for (s, _, oo), j in jobs.items() if oo == o)
+            tdb = training_db(a, jobs, train, o, os.path.join(tdir, f"{pname}_{o.replace('+', '_')}.db"))
+            states = [(s, c, inds[(s, c)]) for s in sorted(val) for c in val[s]]
+            out = predict(a, some, m, VARIANTS[vname], tdb, states, o,
+                          os.path.join(pdir, f"{vname}_{m}_{pname}_{o.replace('+', '_')}.json"))
+            d = {}
+            for item in out["predictions"]:
+                s, c = item["id"].split(":")
+                d[(s, int(c))] = (item.get("config"), item)
+            preds[(vname, m, pname, o)] = (d, out)
+        if (k + 1) % 10 == 0:
+            print(f"  predictions {k + 1}/{len(runs)} ({time.time() - t0:.0f} s)", flush=True)
+
+    # 2. measurements: every predicted configuration at its camera, with default and roofline
+    meas = Measurements(a, jobs, scenes)
+    need = {}
+    for (vname, m, pname, o), (d, _) in preds.items():
+        for (s, c), (cfg, _) in d.items():
+            if cfg is not None:
+                need.setdefault((s, c, o), {})[canon(cfg)] = cfg
+    todo = [(k, meas.missing(*k, list(v.values()))) for k, v in sorted(need.items())]
+    todo = [(k, v) for k, v in todo if v]
+    if todo and not a.no_measure:
+        print(f"evaluate: measuring {sum(len(v) for _, v in todo)} configurations at {len(todo)} "
+              f"cameras ({a.rounds} rounds side by side)", flush=True)
+        t0 = time.time()
+        for i, ((s, c, o), cfgs) in enumerate(todo):
+            meas.measure(s, c, o, cfgs)
+            el = time.time() - t0
+            print(f"  [{i + 1}/{len(todo)}] {s}:{c}:{o} {len(cfgs)} configs, elapsed {el / 60:.1f} min, "
+                  f"eta {el / (i + 1) * (len(todo) - i - 1) / 60:.0f} min, load {os.getloadavg()[0]:.1f}",
+                  flush=True)
+
+    # 3. figures per camera
+    rows = []  # dicts: variant, model, protocol, obj, scene, cam, metrics
+    for (vname, m, pname, o), (d, out) in preds.items():
+        for (s, c), (cfg, item) in d.items():
+            job = jobs[(s, c, o)]
+            p = meas.ratio(s, c, o, cfg) if cfg else None
+            b = meas.ratio(s, c, o, job["best_config"])
+            if p is None or b is None:
+                continue
+            r = {"variant": vname, "model": m, "protocol": pname, "objective": o, "scene": s,
+                 "camera": c, "p": p, "b": b, "predict_ms": item.get("predict_ms"),
+                 "memory_bytes": out.get("memory_bytes"), "entries": out.get("entries"),
+                 "default_ms": job["default_cost"]}
+            r.update(metrics(job, p, b))
+            rows.append(r)
+    summary = summarize(rows, cams, objectives, models)
+    summary["scenes"] = {s: len(c) for s, c in cams.items()}
+    summary["measured_configs"] = sum(len(meas.get(s, c, o)["ratios"]) for s in cams for c in cams[s] for o in objectives)
+    summary["load_during_measurement"] = [r["load1"] for s in cams for c in cams[s] for o in objectives
+                                          for r in meas.get(s, c, o)["runs"]]
+    if a.out:
+        os.makedirs(a.out, exist_ok=True)
+        with open(os.path.join(a.out, "rows.json"), "w") as f:
+            json.dump(rows, f)
+        with open(os.path.join(a.out, "summary.json"), "w") as f:
+            json.dump(summary, f, indent=1, sort_keys=True)
+        import figures
+        figures.draw(rows, summary, a.out)
+    print(json.dumps(summary["table"], indent=1))
+    return 0
+
+
+def summarize(rows, cams, objectives, models):
+    out = {"table": {}, "per_scene": {}, "studies": {}}
+    for o in objectives:
+        for m in models:
+            sel = [r for r in rows if r["variant"] == "default" and r["model"] == m and r["objective"] == o
+                   and r["protocol"].startswith("split")]
+            loso = [r for r in rows if r["variant"] == "default" and r["model"] == m and r["objective"] == o
+                    and r["protocol"].startswith("loso")]
+            if not sel:
+                continue
+            be = [r["break_even"] for r in sel if math.isfinite(r["break_even"])]
+            pos = sorted(x for x in be if 0 < x < 10000)
+            per_scene = {}
+            for s in sorted(cams):
+                ss = [r for r in sel if r["scene"] == s]
+                ls = [r for r in loso if r["scene"] == s]
+                per_scene[s] = {"speedup": geomean(r["speedup"] for r in ss),
+                                "roofline": geomean(r["roofline"] for r in ss),
+                                "overhead_reduction": geomean(max(1e-9, r["overhead_reduction"]) for r in ss
+                                                              if math.isfinite(r["overhead_reduction"])),
+                                "loso_speedup": geomean(r["speedup"] for r in ls),
+                                "loso_roofline": geomean(r["roofline"] for r in ls), "n": len(ss)}
+            out["per_scene"][f"{o}/{m}"] = per_scene
+            pm = [r["predict_ms"] for r in sel if r["predict_ms"] is not None]
+            frames = [r["default_ms"] for r in sel]
+            out["table"][f"{o}/{m}"] = {
+                "speedup": geomean(r["speedup"] for r in sel),
+                "roofline": geomean(r["roofline"] for r in sel),
+                "overhead_reduction_geomean_of_scenes": geomean(v["overhead_reduction"] for v in per_scene.values()),
+                "overhead_reduction_max_scene": max((v["overhead_reduction"] for v in per_scene.values()
+                                                     if math.isfinite(v["overhead_reduction"])), default=float("nan")),
+                "break_even_mean_positive": sum(pos) / len(pos) if pos else float("nan"),
+                "break_even_median_positive": pos[len(pos) // 2] if pos else float("nan"),
+                "break_even_negative": sum(1 for x in be if x < 0), "break_even_points": len(be),
+                "loso_speedup": geomean(r["speedup"] for r in loso),
+                "loso_roofline": geomean(r["roofline"] for r in loso),
+                "beats_static": None,
+                "predict_ms_median": sorted(pm)[len(pm) // 2] if pm else None,
+                "frame_ms_median": sorted(frames)[len(frames) // 2] if frames else None,
+                "memory_bytes": sel[0]["memory_bytes"], "entries": sel[0]["entries"], "n": len(sel)}
+    for o in objectives:
+        st = out["table"].get(f"{o}/static")
+        for m in models:
+            t = out["table"].get(f"{o}/{m}")
+            if t and st and m != "static":
+                t["beats_static"] = t["speedup"] / st["speedup"]
+    # studies: geo-means per variant over the splits they ran on, against the default on the
+    # same splits
+    for v in sorted({r["variant"] for r in rows} - {"default"}):
+        for o in objectives:
+            for m in models:
+                sel = [r for r in rows if r["variant"] == v and r["model"] == m and r["objective"] == o]
+                if not sel:
+                    continue
+                keys = {(r["protocol"], r["scene"], r["camera"]) for r in sel}
+                base = [r for r in rows if r["variant"] == "default" and r["model"] == m and
+                        r["objective"] == o and (r["protocol"], r["scene"], r["camera"]) in keys]
+                out["studies"][f"{v}/{o}/{m}"] = {
+                    "speedup": geomean(r["speedup"] for r in sel), "roofline": geomean(r["roofline"] for r in sel),
+                    "default_speedup": geomean(r["speedup"] for r in base),
+                    "default_roofline": geomean(r["roofline"] for r in base),
+                    "memory_bytes": sel[0]["memory_bytes"], "entries": sel[0]["entries"],
+                    "predict_ms_median": sorted(r["predict_ms"] for r in sel)[len(sel) // 2], "n": len(sel)}
+    return out
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    sys.exit(main())
