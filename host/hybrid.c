@@ -35,29 +35,8 @@ typedef struct tt__hyb {
   const char *predictor_name, *tuner_name;
   tt_tunedb *db;
   uint32_t spp;               /* spp of one measurement pass */
-  tt_pass_stats ps;
   cJSON *warm;                /* [{db, rows, skipped}] */
 } tt__hyb;
-
-/* ---- target: the accel of the host session ---- */
-
-static tt_status tt__hyb_apply(void *user, const tt_config *cfg, double *build_ms) {
-  tt__hyb *h = user;
-  return tt__session_rebuild_accel(h->s, cfg, build_ms);
-}
-
-static tt_status tt__hyb_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
-  tt__hyb *h = user;
-  double ms = 0;
-  tt_status st = tt__session_render_pass(h->s, spp, &h->ps, &ms);
-  if (m) {
-    m->render_ms = ms;
-    m->pass = &h->ps;
-  }
-  return st;
-}
-
-/* ---- set-up ---- */
 
 /* The searched parameters (--tune-params), NULL: all of the accel's. */
 static int tt__hyb_subset(tt__hyb *h) {
@@ -97,7 +76,7 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_no
   su.state_dim = TT_SCENE_INDICATOR_COUNT;
   su.state_space = tt_indicator_norm_id(norm, id, sizeof id);
   su.state_names = names;
-  su.settings = tt__session_config_of(s, pp);
+  su.settings = tt_session_config(s->lib, h->predictor_name);
   su.seed = s->rec.seed;
   if (h->pi->create_ex(&su, &h->model) != TT_OK) {
     fprintf(stderr, "host: %s: %s\n", h->predictor_name, tt_last_error());
@@ -191,14 +170,13 @@ static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index,
   return o;
 }
 
-/* Moves the camera to path sample `i` (t = first key + i/99 of the time range). */
+/* Moves the camera to path sample `i` (t = first key + i/99 of the time range; the motion
+ * AOV's previous frame one --fps interval earlier). */
 static void tt__hyb_camera(tt__session *s, uint32_t i) {
   const tt_camera *c0 = tt_scene_camera(s->scene);
   double t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) *
                                     (double)i / (TT_HOST_PATH_SAMPLES - 1.0);
-  tt_camera cam;
-  tt_scene_camera_at(s->scene, t, &cam);
-  tt_scene_set_camera(s->scene, &cam);
+  tt_session_set_camera_time(s->lib, t, 1.0 / (s->opt->fps > 0 ? s->opt->fps : 24.0));
 }
 
 /* CPU ms of this thread, for --predict's timing. */
@@ -394,7 +372,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   tt_loaded_plugin *tp = tt_registry_find_kind(s.reg, TT_KIND_TUNER);
   tt_loaded_plugin *pp = tt_registry_find_kind(s.reg, TT_KIND_PREDICTOR);
   h.tuner_name = tt_loaded_plugin_entry(tp)->name;
-  h.accel_index = tt__session_index_of(&s, s.accel_p);
+  h.accel_index = (size_t)tt_session_plugin_index(s.lib, tt_loaded_plugin_entry(s.accel_p)->name);
   h.space = tt_loaded_plugin_space(s.accel_p);
   if (tt__hyb_subset(&h)) {
     rc = TT_EXIT_USAGE;
@@ -412,7 +390,12 @@ int tt__run_hybrid(const tt__host_options *opt) {
     }
     free(path);
   }
-  context = tt__tuning_context_json(&s, h.accel_index, h.spp, NULL, NULL);
+  /* the state's context: as the tuning phase's (spp, threads, the other plugins), plus the
+   * clock; the camera gets "path_index" per state */
+  const char *context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
+  tt_tuning_state st0;
+  if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, NULL, context_extra, 0, &st0) == TT_OK)
+    context = strdup(st0.context);
   const tt_plugin *ae = tt_loaded_plugin_entry(s.accel_p);
   tt_hybrid_desc d;
   memset(&d, 0, sizeof d);
@@ -423,7 +406,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   d.search = h.subset;
   d.objective = obj.spec;
   d.tuner = tt_loaded_plugin_iface(tp);
-  d.tuner_settings = tt__session_config_of(&s, tp);
+  d.tuner_settings = tt_session_config(s.lib, h.tuner_name);
   d.tuner_name = h.tuner_name;
   d.predictor = h.pi;
   d.model = h.model;
@@ -468,29 +451,34 @@ int tt__run_hybrid(const tt__host_options *opt) {
               d.epsilon, h.tuner_name, d.explore_iterations, h.predictor_name, obj.spec,
               h.db ? tt_tunedb_path(h.db) : "none");
   states = cJSON_CreateArray();
-  tt_tuning_target target = {sizeof target, &h, tt__hyb_apply, tt__hyb_render};
+  tt_tuning_target target;
+  if (tt_session_tuning_target(s.lib, h.accel_index, 0, &target) != TT_OK) {
+    fprintf(stderr, "host: --hybrid: %s\n", tt_last_error());
+    rc = TT_EXIT_FAILURE;
+    goto done;
+  }
   uint32_t target_spp = opt->spp ? opt->spp : 1;
   double sum_cost = 0, sum_search = 0;
   uint32_t explored = 0, exploited = 0, builds = 0, done_states = 0;
   int interrupted = 0;
   for (uint32_t i = first; i < end; i++) {
     tt__hyb_camera(&s, i);
-    tt_film_clear(s.film);
-    uint32_t pass0 = s.pass;
-    char *camera = tt__tuning_camera_json(s.camera, 1, i);
+    tt_session_reset(s.lib);  /* a new view: the film starts over */
+    tt_session_stats ss = {.struct_size = sizeof ss};
+    tt_session_get_stats(s.lib, &ss);
+    uint32_t pass0 = ss.passes;
+    char camera_extra[48];
+    snprintf(camera_extra, sizeof camera_extra, "{\"path_index\":%u}", i);
     tt_tuning_state state;
-    memset(&state, 0, sizeof state);
-    state.struct_size = sizeof state;
-    state.scene_id = tt_scene_id(s.scene);
-    state.scene = tt_scene_source(s.scene);
-    state.camera = camera;
-    state.context = context;
-    tt_scene_indicators(s.scene, state.indicators);
-    state.has_indicators = 1;
+    if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, camera_extra, context_extra, 1,
+                                &state) != TT_OK) {
+      fprintf(stderr, "host: --hybrid: state %u: %s\n", i, tt_last_error());
+      rc = TT_EXIT_FAILURE;
+      break;
+    }
     uint64_t t0 = s.host->clock_ns();
     tt_hybrid_report r = {.struct_size = sizeof r};
     tt_status st = tt_hybrid_step(hy, &state, &target, &r);
-    free(camera);
     if (st == TT_ERR_INTERRUPTED) {
       interrupted = 1;
       break;
@@ -501,13 +489,17 @@ int tt__run_hybrid(const tt__host_options *opt) {
       break;
     }
     /* the rest of the state's samples with its configuration (progressive rendering) */
-    while ((s.pass - pass0) * h.spp < target_spp && !s.host->should_stop()) {
+    for (;;) {
+      tt_session_get_stats(s.lib, &ss);
+      if ((ss.passes - pass0) * h.spp >= target_spp || s.host->should_stop()) break;
       double ms;
-      if (tt__session_render_pass(&s, 1, &h.ps, &ms) != TT_OK) break;
+      tt_pass_stats ps;
+      if (tt__session_render_pass(&s, 1, &ps, &ms) != TT_OK) break;
     }
+    tt_session_get_stats(s.lib, &ss);
     double total_ms = (s.host->clock_ns() - t0) * 1e-6;
     if (opt->out_dir) tt__hyb_write_state(&h, i);
-    cJSON_AddItemToArray(states, tt__hyb_state_json(&r, i, total_ms, s.pass - pass0));
+    cJSON_AddItemToArray(states, tt__hyb_state_json(&r, i, total_ms, ss.passes - pass0));
     done_states++;
     explored += r.mode == TT_HYBRID_EXPLORE;
     exploited += r.mode == TT_HYBRID_EXPLOIT;

@@ -89,7 +89,7 @@ int tt__run_measure(const tt__host_options *opt) {
     rc = TT_EXIT_USAGE;
     goto done;
   }
-  size_t ai = tt__session_index_of(&s, s.accel_p);
+  size_t ai = (size_t)tt_session_plugin_index(s.lib, tt_loaded_plugin_entry(s.accel_p)->name);
   const tt_space *space = tt_loaded_plugin_space(s.accel_p);
   rc = tt__measure_read(opt->measure, s.configs[ai], &cfgs, &n);
   if (rc != TT_EXIT_OK) goto done;
@@ -116,7 +116,7 @@ int tt__run_measure(const tt__host_options *opt) {
       size_t i = r % 2 ? n - 1 - k : k;
       if (!ok[i]) continue;
       double build_ms = 0, render_ms = 0;
-      if (tt__session_rebuild_accel(&s, cfgs[i], &build_ms) != TT_OK ||
+      if (tt_session_rebuild_accel(s.lib, cfgs[i], &build_ms) != TT_OK ||
           tt__session_render_pass(&s, spp, &ps, &render_ms) != TT_OK) {
         if (s.host->should_stop()) break;
         ok[i] = 0;

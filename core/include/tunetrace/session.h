@@ -75,7 +75,9 @@ TT_API tt_scene *tt_session_scene(tt_session *s);
 
 /* Sets the camera to the pose of the scene's camera path at time `t` (seconds) and, for the
  * motion AOV, the previous frame to the pose at `t - frame_interval` (a scene without a path
- * keeps its still camera: motion is zero). Before tt_session_start. */
+ * keeps its still camera: motion is zero). After tt_session_start too, between passes (the
+ * hybrid loop's states): the film keeps its size (a path camera of another resolution is
+ * TT_ERR_INVALID_ARGUMENT) and keeps what it holds (tt_session_reset for a new view). */
 TT_API tt_status tt_session_set_camera_time(tt_session *s, double t, double frame_interval);
 
 /* The camera the session renders (the scene's, after tt_session_set_camera_time); NULL

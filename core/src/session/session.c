@@ -113,8 +113,6 @@ const tt_camera *tt_session_camera(const tt_session *s) {
 
 tt_status tt_session_set_camera_time(tt_session *s, double t, double frame_interval) {
   if (!s || !s->scene) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera time: no scene loaded");
-  if (s->started)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera time: set it before the session starts");
   const tt_camera *c0 = tt_scene_camera(s->scene);
   if (c0->key_count == 0) {
     s->has_prev = 0;
@@ -122,6 +120,13 @@ tt_status tt_session_set_camera_time(tt_session *s, double t, double frame_inter
   }
   tt_camera cam;
   tt_scene_camera_at(s->scene, t, &cam);
+  /* a started session moves along the path (the hybrid loop's states), but its film keeps
+   * its size */
+  if (s->started && s->film && (cam.width != tt_film_width(s->film) ||
+                                cam.height != tt_film_height(s->film)))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera time: the path's camera at %g s is "
+                        "%ux%u, the started session's film %ux%u", t, cam.width, cam.height,
+                        tt_film_width(s->film), tt_film_height(s->film));
   tt_scene_camera_at(s->scene, t - frame_interval, &s->prev_camera);
   s->prev_camera.width = cam.width;
   s->prev_camera.height = cam.height;
