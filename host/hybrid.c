@@ -428,7 +428,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   rc = tt__hyb_warm(&h, hy, context);
   if (rc != TT_EXIT_OK) goto done;
   uint32_t first = opt->frames ? opt->frames_first : 0;
-  uint32_t end = opt->frames ? opt->frames_end : TT_HOST_PATH_SAMPLES;
+  uint32_t end = opt->frames ? opt->frames_last + 1 : TT_HOST_PATH_SAMPLES;  /* A..B inclusive */
   if (opt->predict_only) {
     rc = tt__hyb_predict(&h, &norm, first, end);
     /* what a warm start taught the model is kept (--model FILE: saved atomically) */

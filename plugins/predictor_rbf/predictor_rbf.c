@@ -26,7 +26,7 @@
 #include "../predictor_common/model_file.h"
 #include "rbf_model.h"
 
-#include "util/rng_internal.h"
+#include <tt_util/rng.h>
 
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>

@@ -1,7 +1,7 @@
 /* The RBF value function and its Greedy-GQ update (rbf_model.h). */
 #include "rbf_model.h"
 
-#include "util/rng_internal.h"
+#include <tt_util/rng.h>
 
 #include <math.h>
 #include <stdlib.h>

@@ -4,7 +4,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include <tunetrace/hybrid.h>
 
-#include "util/rng_internal.h"
+#include <tt_util/rng.h>
+#include <tt_util/strings.h>
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -40,13 +41,6 @@ struct tt_hybrid {
   char *config_json;           /* the last report's configuration */
 };
 
-static char *tt__hdup(const char *s) {
-  if (!s) return NULL;
-  size_t n = strlen(s) + 1;
-  char *d = malloc(n);
-  if (d) memcpy(d, s, n);
-  return d;
-}
 
 void tt_hybrid_destroy(tt_hybrid *h) {
   if (!h) return;
@@ -112,10 +106,10 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   h->sub = tt_config_create(h->search ? h->search : d->space);
   h->ti = d->tuner;
   h->tuner_settings = TT__HDESC(d, tuner_settings);
-  h->tuner_name = tt__hdup(TT__HDESC(d, tuner_name) ? TT__HDESC(d, tuner_name) : "tuner");
+  h->tuner_name = tt__strdup(TT__HDESC(d, tuner_name) ? TT__HDESC(d, tuner_name) : "tuner");
   h->pi = pi;
   h->model = d->model;
-  h->predictor_name = tt__hdup(TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name)
+  h->predictor_name = tt__strdup(TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name)
                                                              : "predictor");
   h->epsilon = eps;
   h->K = K;
@@ -123,8 +117,8 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   h->warmup = TT__HDESC(d, warmup_passes);
   h->seed = TT__HDESC(d, seed);
   tt__pcg32_seed(&h->rng, h->seed, 0x687962726964ull); /* "hybrid" */
-  h->plugin = tt__hdup(TT__HDESC(d, plugin) ? TT__HDESC(d, plugin) : tt_space_plugin(d->space));
-  h->plugin_version = tt__hdup(TT__HDESC(d, plugin_version) ? TT__HDESC(d, plugin_version) : "");
+  h->plugin = tt__strdup(TT__HDESC(d, plugin) ? TT__HDESC(d, plugin) : tt_space_plugin(d->space));
+  h->plugin_version = tt__strdup(TT__HDESC(d, plugin_version) ? TT__HDESC(d, plugin_version) : "");
   h->db = TT__HDESC(d, db);
   const tt_indicator_norm *norm = TT__HDESC(d, norm);
   tt_indicator_norm_init(&h->norm);
@@ -140,7 +134,7 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
              (int)getpid());
     run_id = id;
   }
-  h->run_id = tt__hdup(run_id);
+  h->run_id = tt__strdup(run_id);
   if (!h->start || !h->full || !h->sub || !h->tuner_name || !h->predictor_name || !h->plugin ||
       !h->plugin_version || !h->run_id) {
     tt_hybrid_destroy(h);
@@ -337,7 +331,7 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
   double best = NAN;
   tt_tuning_best(t, NULL, &best);
   free(h->config_json);
-  h->config_json = tt__hdup(tt_tuning_best_json(t));
+  h->config_json = tt__strdup(tt_tuning_best_json(t));
   r.config = h->config_json;
   r.cost = best;
   tt__sums(t, &r.search_cost, &r.cached);
@@ -447,7 +441,7 @@ static int tt__warm_row_fn(void *user, const tt_tunedb_row *r) {
       w->defaults = d;
       w->capd = cap;
     }
-    w->defaults[w->nd++] = (tt__default_cost){tt__hdup(key), r->cost, 1};
+    w->defaults[w->nd++] = (tt__default_cost){tt__strdup(key), r->cost, 1};
   }
   if (w->n == w->cap) {
     size_t cap = w->cap ? 2 * w->cap : 1024;

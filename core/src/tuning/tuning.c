@@ -928,7 +928,7 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
     x.render_ms = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "render_ms"));
     x.status = (int32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "status"));
     x.cached = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(o, "cached"));
-    x.config = tt__dup(cfg->valuestring);
+    x.config = tt__strdup(cfg->valuestring);
     if (!x.config || isnan(x.cost)) {
       free((char *)x.config);
       st = tt_set_error(TT_ERR_PARSE, "%s: samples[%d]: bad cost", source, i);
