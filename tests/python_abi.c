@@ -65,7 +65,8 @@ int main(void) {
   F(tt_tuning_desc, plugin); F(tt_tuning_desc, plugin_version); F(tt_tuning_desc, db);
   F(tt_tuning_desc, state); F(tt_tuning_desc, run_id); F(tt_tuning_desc, width);
   F(tt_tuning_desc, height); F(tt_tuning_desc, reference_luminance);
-  F(tt_tuning_desc, want_images); F(tt_tuning_desc, on_sample); F(tt_tuning_desc, user); end();
+  F(tt_tuning_desc, want_images); F(tt_tuning_desc, on_sample); F(tt_tuning_desc, user);
+  F(tt_tuning_desc, mode); end();
   S(tt_tuning_stats); F(tt_tuning_stats, struct_size); F(tt_tuning_stats, requested);
   F(tt_tuning_stats, iterations); F(tt_tuning_stats, measured); F(tt_tuning_stats, cached);
   F(tt_tuning_stats, infeasible); F(tt_tuning_stats, failed); F(tt_tuning_stats, converged);

@@ -155,7 +155,8 @@ class TuningDesc(ctypes.Structure):  # tt_tuning_desc (tuning.h)
                 ("state", ctypes.POINTER(TuningState)), ("run_id", c_u8p),
                 ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
                 ("reference_luminance", ctypes.POINTER(ctypes.c_double)),
-                ("want_images", ctypes.c_int32), ("on_sample", ON_SAMPLE_FN), ("user", c_vp)]
+                ("want_images", ctypes.c_int32), ("on_sample", ON_SAMPLE_FN), ("user", c_vp),
+                ("mode", c_u8p)]  # appended for the hybrid loop
 
 
 class TuningStats(ctypes.Structure):  # tt_tuning_stats (tuning.h)
