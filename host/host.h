@@ -68,7 +68,9 @@ typedef struct tt__host_options {
   /* camera path samples (run.c): sample I of TT_HOST_PATH_SAMPLES at t = I/(N-1) of the
    * path's time range */
   int camera_index_set;     /* --camera-index given */
-  uint32_t camera_index;    /* --camera-index I, in [0, TT_HOST_PATH_SAMPLES) */
+  uint32_t camera_index;    /* --camera-index I (or A of A:B), in [0, TT_HOST_PATH_SAMPLES) */
+  uint32_t camera_index_last; /* B of --camera-index A:B (--hybrid, --predict); I otherwise */
+  int camera_index_range;   /* --camera-index A:B given (a range: --hybrid and --predict) */
   const char *frames_arg;   /* --frames text (checked once --out is known) */
   int frames;               /* --frames A:B without an --out pattern: frames A..B (at --fps,
                              * both included), each a full render to <out stem>_NNNN.exr */

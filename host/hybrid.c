@@ -2,7 +2,7 @@
  * option mapping over the library's hybrid tuner (tunetrace/hybrid.h); host --predict: the
  * model's answer per state, nothing rendered.
  *
- * One host session (the scene is loaded once); for every path sample of --frames A:B (all
+ * One host session (the scene is loaded once); for every path sample of --camera-index A:B (all
  * 100 by default) the camera moves, the film is cleared, and tt_hybrid_step explores (the
  * tuner, --iterations K) or exploits (the predictor's one configuration) through the same
  * target callbacks as the tuning phase: the accel is rebuilt per applied configuration and
@@ -345,11 +345,11 @@ int tt__run_hybrid(const tt__host_options *opt) {
     rc = TT_EXIT_USAGE;
     goto done;
   }
-  if (opt->camera_index_set || opt->explore || opt->verify || opt->reference) {
+  if (opt->explore || opt->verify || opt->reference || (opt->states && opt->camera_index_set)) {
     fprintf(stderr, "host: --%s: %s does not apply (the states are the path samples of "
-            "--frames A:B)\n", opt->hybrid ? "hybrid" : "predict",
-            opt->camera_index_set ? "--camera-index" : opt->explore ? "--explore"
-            : opt->verify ? "--verify" : "--reference");
+            "--camera-index A:B)\n", opt->hybrid ? "hybrid" : "predict",
+            opt->explore ? "--explore" : opt->verify ? "--verify"
+            : opt->reference ? "--reference" : "--camera-index with --states");
     rc = TT_EXIT_USAGE;
     goto done;
   }
@@ -427,8 +427,9 @@ int tt__run_hybrid(const tt__host_options *opt) {
   }
   rc = tt__hyb_warm(&h, hy, context);
   if (rc != TT_EXIT_OK) goto done;
-  uint32_t first = opt->frames ? opt->frames_first : 0;
-  uint32_t end = opt->frames ? opt->frames_last + 1 : TT_HOST_PATH_SAMPLES;  /* A..B inclusive */
+  /* --camera-index A:B (or I): path samples A..B, both included; default all of them */
+  uint32_t first = opt->camera_index_set ? opt->camera_index : 0;
+  uint32_t end = opt->camera_index_set ? opt->camera_index_last + 1 : TT_HOST_PATH_SAMPLES;
   if (opt->predict_only) {
     rc = tt__hyb_predict(&h, &norm, first, end);
     /* what a warm start taught the model is kept (--model FILE: saved atomically) */

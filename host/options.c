@@ -139,7 +139,8 @@ static const char tt__usage[] =
     "An option's value may also be attached with '=': --spp=64, --out=box.exr.\n"
     "\n"
     "Hybrid tuning (thesis 3.3; host/README.md):\n"
-    "  --hybrid               over the camera path (--frames A:B, default all 100 samples):\n"
+    "  --hybrid               over the camera path (--camera-index A:B: samples A..B, both\n"
+    "                         included; default all 100):\n"
     "                         per state, explore (the tuner, --iterations K, default 40)\n"
     "                         with probability --epsilon, else exploit (one configuration\n"
     "                         the predictor plugin predicts, built once); every cost goes\n"
@@ -623,10 +624,24 @@ int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
       }
       opt->fps = fps;
     } else if (!strcmp(a, "--camera-index")) {
-      if (!(v = tt__arg(argc, argv, &i)) ||
-          tt__parse_u64(a, v, 0, TT_HOST_PATH_SAMPLES - 1, &n))
-        return TT_EXIT_USAGE;
-      opt->camera_index = (uint32_t)n;
+      /* I, or A:B (samples A..B, both included: the states of --hybrid and --predict) */
+      if (!(v = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
+      unsigned c0 = 0, c1 = 0;
+      char extra;
+      if (strchr(v, ':')) {
+        if (!(v[0] >= '0' && v[0] <= '9') || sscanf(v, "%u:%u%c", &c0, &c1, &extra) != 2 ||
+            c0 > c1 || c1 >= TT_HOST_PATH_SAMPLES) {
+          fprintf(stderr, "host: --camera-index: expected I or A:B with A <= B <= %d (path "
+                  "samples A..B, both included), got \"%s\"\n", TT_HOST_PATH_SAMPLES - 1, v);
+          return TT_EXIT_USAGE;
+        }
+        opt->camera_index_range = 1;
+      } else {
+        if (tt__parse_u64(a, v, 0, TT_HOST_PATH_SAMPLES - 1, &n)) return TT_EXIT_USAGE;
+        c0 = c1 = (unsigned)n;
+      }
+      opt->camera_index = c0;
+      opt->camera_index_last = c1;
       opt->camera_index_set = 1;
     } else if (!strcmp(a, "--frames")) {
       if (!(opt->frames_arg = tt__arg(argc, argv, &i))) return TT_EXIT_USAGE;
@@ -675,6 +690,19 @@ int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
   }
   if ((opt->frames || opt->camera_index_set) && opt->sequence) {
     fprintf(stderr, "host: --camera-index/--frames and --sequence exclude each other\n");
+    return TT_EXIT_USAGE;
+  }
+  if ((opt->hybrid || opt->predict_only) && opt->frames_arg) {
+    fprintf(stderr, "host: --%s: the states are camera path samples (of %d over the path's "
+            "time range): give them with --camera-index A:B (samples A..B, both included); "
+            "--frames A:B means frames at --fps\n", opt->hybrid ? "hybrid" : "predict",
+            TT_HOST_PATH_SAMPLES);
+    return TT_EXIT_USAGE;
+  }
+  if (opt->camera_index_range && !opt->hybrid && !opt->predict_only) {
+    fprintf(stderr, "host: --camera-index A:B (a range of path samples) applies to --hybrid "
+            "and --predict; render one sample with --camera-index I, or frames with "
+            "--frames A:B\n");
     return TT_EXIT_USAGE;
   }
   if (opt->frames && opt->camera_index_set) {

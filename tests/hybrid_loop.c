@@ -83,7 +83,7 @@ int main(void) {
   }
   /* epsilon 1: the same searches, every proposal answered by the database */
   snprintf(stats, sizeof stats, "%s/eps1.json", dir);
-  snprintf(args, sizeof args, "%s --hybrid --epsilon 1 --iterations 6 --frames 2:4 --db '%s' "
+  snprintf(args, sizeof args, "%s --hybrid --epsilon 1 --iterations 6 --camera-index 2:4 --db '%s' "
            "--stats '%s' '%s'", common, db, stats, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   cJSON *root = read_json(stats);
@@ -110,7 +110,7 @@ int main(void) {
   snprintf(model, sizeof model, "%s/nn.ttpm", dir);
   char db2[512];
   snprintf(db2, sizeof db2, "%s/exploit.db", dir);
-  snprintf(args, sizeof args, "%s --hybrid --epsilon 0 --frames 10:15 --warm-start '%s' --db '%s' "
+  snprintf(args, sizeof args, "%s --hybrid --epsilon 0 --camera-index 10:15 --warm-start '%s' --db '%s' "
            "--model '%s' --stats '%s' '%s'", common, db, db2, model, stats, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats);
@@ -133,7 +133,7 @@ int main(void) {
 
   /* the saved model predicts for another scene's states without a database */
   snprintf(args, sizeof args, "--quiet --res 24x24 --tune-params quality,branchingFactor,maxDepth,"
-           "maxLeafSize,travcost --predict --frames 0:3 --model '%s' '%s'", model, scene);
+           "maxLeafSize,travcost --predict --camera-index 0:3 --model '%s' '%s'", model, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = cJSON_Parse(strchr(out, '{'));
   CHECK(root && cJSON_GetArraySize(cJSON_GetObjectItem(root, "predictions")) == 4);
@@ -152,7 +152,7 @@ int main(void) {
   char *best = tj ? cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "best_config")) : NULL;
   cJSON_Delete(root);
   snprintf(args, sizeof args, "--quiet --res 24x24 --threads 1 --spp 1 --tune-params quality,"
-           "branchingFactor,maxDepth,maxLeafSize,travcost --predict --frames 0:2 --warm-start '%s' "
+           "branchingFactor,maxDepth,maxLeafSize,travcost --predict --camera-index 0:2 --warm-start '%s' "
            "'%s'", db3, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = cJSON_Parse(strchr(out, '{'));
@@ -172,7 +172,12 @@ int main(void) {
     {"--hybrid --epsilon 1.5", scene, "--epsilon: expected"},
     {"--hybrid --epsilon -0.1", scene, "--epsilon: expected"},
     {"--hybrid --iterations 0", scene, "--iterations"},
-    {"--hybrid --camera-index 3", scene, "--camera-index"},
+    /* the states are path samples (--camera-index A:B); --frames means frames at --fps */
+    {"--hybrid --frames 0:3", scene, "give them with --camera-index A:B"},
+    {"--predict --frames 0:3", scene, "give them with --camera-index A:B"},
+    {"--hybrid --camera-index 4:3", scene, "--camera-index: expected I or A:B"},
+    {"--hybrid --camera-index 0:100", scene, "--camera-index: expected I or A:B"},
+    {"--camera-index 0:3", scene, "applies to --hybrid and --predict"},
     {"--hybrid --objective metric:rays_per_s", scene, "for time"},
     {"--hybrid --warm-start /nonexistent/x.db", scene, "/nonexistent/x.db"},
   };
@@ -188,13 +193,13 @@ int main(void) {
   FILE *f = fopen(junk, "w");
   fputs("not a model", f);
   fclose(f);
-  snprintf(args, sizeof args, "%s --hybrid --no-db --frames 0:1 --model '%s' '%s'", common, junk, scene);
+  snprintf(args, sizeof args, "%s --hybrid --no-db --camera-index 0:1 --model '%s' '%s'", common, junk, scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, junk);
   CHECK_CONTAINS(out, "left as it is");
   CHECK(stat(junk, &st) == 0 && st.st_size == 11);
   /* an NN model loaded into RBF: refused naming both */
-  snprintf(args, sizeof args, "%s --hybrid --plugin predictor_rbf --no-db --frames 0:1 --model '%s' '%s'",
+  snprintf(args, sizeof args, "%s --hybrid --plugin predictor_rbf --no-db --camera-index 0:1 --model '%s' '%s'",
            common, model, scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "written by predictor_nn");
