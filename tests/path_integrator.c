@@ -92,10 +92,12 @@ int main(void) {
   rs.it = tt_loaded_plugin_iface(p);
   rs.space = rs.it->space();
   CHECK(rs.space != NULL);
-  CHECK(tt_space_count(rs.space) == 7);
-  const char *names[7] = {"maxDepth", "rrDepth", "mis", "heuristic", "sampler", "filter", "tileSize"};
-  for (int i = 0; i < 7; ++i) CHECK_MSG(tt_space_find(rs.space, names[i]) >= 0, "missing %s", names[i]);
+  CHECK(tt_space_count(rs.space) == 8);
+  const char *names[8] = {"maxDepth", "rrDepth", "mis", "heuristic", "sampler", "filter", "tileSize",
+                          "wavefront"};
+  for (int i = 0; i < 8; ++i) CHECK_MSG(tt_space_find(rs.space, names[i]) >= 0, "missing %s", names[i]);
   tt_config *def = tt_config_create(rs.space);
+  CHECK(tt_config_get_int(def, "wavefront", -1) == 1);
   CHECK(tt_config_get_int(def, "maxDepth", -1) == 3);
   CHECK(tt_config_get_int(def, "tileSize", -1) == 32);
   CHECK(strcmp(tt_config_get_string(def, "sampler"), "independent") == 0);
@@ -151,9 +153,16 @@ int main(void) {
     render(&rs, "{\"maxDepth\": 5, \"tileSize\": 5, \"sampler\": \"sobol\"}", 4, 0, NULL, &c, NULL);
     CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
     CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(c), 3 * sizeof(float) * W * H) == 0);
-    tt_film_destroy(a);
     tt_film_destroy(b);
     tt_film_destroy(c);
+    /* One path at a time (intersect1 / occluded1) and the wavefront (streams, several
+     * samples of a pixel in one wave) give the same image, bit for bit. */
+    b = NULL;
+    render(&rs, "{\"maxDepth\": 5, \"tileSize\": 8, \"sampler\": \"sobol\", \"wavefront\": false}", 4,
+           0, NULL, &b, NULL);
+    CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
+    tt_film_destroy(a);
+    tt_film_destroy(b);
     /* A different seed gives a different image. */
   }
 

@@ -20,6 +20,9 @@
 #define PT_MAX_STATE 256
 #define PT_BH_RADIUS 1.5f
 #define PT_BH_TABLE 512
+/* Paths in flight per thread in wavefront mode: one stream call traces up to this many
+ * rays. A 32x32 tile at 1 spp is one wave. */
+#define PT_WAVE 1024
 
 static const tt_host *g_host;
 static tt_space *g_space;
@@ -30,6 +33,7 @@ typedef struct pt_settings {
   tt_path_options path;
   const tt_sampler_iface *sampler;
   int filter_bh;
+  int wavefront;
   uint32_t tile_size;
 } pt_settings;
 
@@ -60,6 +64,10 @@ static tt_status pt_build_space(void) {
   ok &= tt_space_add_nom_string(s, "filter", filters, 2, 0,
                                 "pixel filter, importance-sampled (blackman-harris: radius 1.5 px)") >= 0;
   ok &= tt_space_add_int(s, "tileSize", 4, 256, 32, "side of the square tiles handed to worker threads") >= 0;
+  ok &= tt_space_add_nom_bool(s, "wavefront", 1,
+                              "trace each tile's rays bounce by bounce as streams (intersect_stream / "
+                              "occluded_stream); false: one path at a time with intersect1 / "
+                              "occluded1. Same image either way") >= 0;
   if (!ok) {
     tt_space_destroy(s);
     return tt_set_error(TT_ERR_INTERNAL, PT_NAME ": building the parameter space failed");
@@ -124,6 +132,7 @@ static tt_status pt_read_config(const tt_config *config, pt_settings *out) {
   if (!out->sampler)
     st = tt_set_error(TT_ERR_INVALID_ARGUMENT, PT_NAME ": unknown sampler '%s'", s ? s : "");
   out->filter_bh = f && strcmp(f, "blackman-harris") == 0;
+  out->wavefront = (int)tt_config_get_int(config, "wavefront", 1) != 0;
   int64_t ts = tt_config_get_int(config, "tileSize", 32);
   out->tile_size = (uint32_t)(ts < 4 ? 4 : ts > 256 ? 256 : ts);
   if (out->path.max_depth > 64) out->path.max_depth = 64;
@@ -176,8 +185,11 @@ typedef struct pt_job {
   tt_tracer tracer;
   uint32_t tiles_x, tile_size, width, height;
   uint32_t aovs;                  /* the film's AOV planes (tt_path_write_aovs fills them) */
+  struct pt_wave **waves;        /* wavefront mode: per-thread scratch, made on first use */
+  uint32_t wave_count;
   atomic_uint_fast64_t rays, samples, nonfinite;
   atomic_int interrupted;
+  atomic_int failed;             /* a wave's scratch could not be allocated */
 } pt_job;
 
 /* Sample source over the sampler's per-thread state. */
@@ -192,6 +204,158 @@ static float pt_source_get(void *self, uint32_t dim) {
   return s->iface->get(s->sampler, s->state, dim);
 }
 
+/* Starts sample `s` of pixel (px, py) in sampler `state`: the film position (fx, fy) from
+ * dimensions 0-1 (or the fixed jitter) and the camera ray through it. */
+static void pt_camera_sample(const pt_job *job, void *state, uint32_t px, uint32_t py,
+                             uint32_t s, float *fx, float *fy, tt_ray *ray) {
+  const tt_render_ctx *ctx = job->ctx;
+  const pt_settings *set = &job->it->settings;
+  set->sampler->start(job->sampler, state, px, py, ctx->sample_offset + s);
+  float jx, jy;
+  if (ctx->fixed_jitter) {
+    jx = ctx->jitter[0];
+    jy = ctx->jitter[1];
+  } else {
+    float u0 = set->sampler->get(job->sampler, state, TT_PATH_DIM_FILM);
+    float u1 = set->sampler->get(job->sampler, state, TT_PATH_DIM_FILM + 1);
+    if (set->filter_bh) {
+      jx = pt_bh_sample(u0);
+      jy = pt_bh_sample(u1);
+    } else {
+      jx = u0 - 0.5f;
+      jy = u1 - 0.5f;
+    }
+  }
+  *fx = (float)px + 0.5f + jx;
+  *fy = (float)py + 0.5f + jy;
+  tt_camera_generate_ray(&job->frame, *fx, *fy, ray);
+}
+
+/* Wavefront scratch of one thread: up to PT_WAVE paths of a tile, each with its path state
+ * and sampler state, and the compacted ray/hit arrays the stream calls take. */
+typedef struct pt_wave {
+  size_t state_stride, sampler_stride;
+  unsigned char *states;     /* PT_WAVE path states */
+  unsigned char *samplers;   /* PT_WAVE sampler states */
+  float (*film_pos)[2];      /* per path: fx, fy */
+  tt_path_result *results;
+  tt_ray *rays, *next_rays, *shadows;
+  tt_hit *hits;
+  uint8_t *occluded;
+  uint32_t *active, *next_active, *shadow_of;
+  void *block;
+} pt_wave;
+
+static size_t pt_align16(size_t n) { return (n + 15) & ~(size_t)15; }
+static size_t pt_align64(size_t n) { return (n + 63) & ~(size_t)63; }
+
+/* One allocation for all of a wave's arrays; NULL on failure. */
+static pt_wave *pt_wave_create(size_t sampler_state) {
+  pt_wave *w = calloc(1, sizeof *w);
+  if (!w) return NULL;
+  w->state_stride = pt_align16(tt_path_state_size());
+  w->sampler_stride = pt_align16(sampler_state ? sampler_state : 1);
+  const size_t n = PT_WAVE;
+  size_t sizes[] = {n * w->state_stride, n * w->sampler_stride, n * sizeof *w->film_pos,
+                    n * sizeof *w->results, n * sizeof(tt_ray), n * sizeof(tt_ray),
+                    n * sizeof(tt_ray), n * sizeof(tt_hit), n, n * 4, n * 4, n * 4};
+  size_t total = 0;
+  for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) total += pt_align64(sizes[i]);
+  unsigned char *p = aligned_alloc(64, total);
+  if (!p) {
+    free(w);
+    return NULL;
+  }
+  w->block = p;
+  void **dst[] = {(void **)&w->states, (void **)&w->samplers, (void **)&w->film_pos,
+                  (void **)&w->results, (void **)&w->rays, (void **)&w->next_rays,
+                  (void **)&w->shadows, (void **)&w->hits, (void **)&w->occluded,
+                  (void **)&w->active, (void **)&w->next_active, (void **)&w->shadow_of};
+  for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+    *dst[i] = p;
+    p += pt_align64(sizes[i]);  /* each array on its own cache lines */
+  }
+  return w;
+}
+
+static void pt_wave_destroy(pt_wave *w) {
+  if (!w) return;
+  free(w->block);
+  free(w);
+}
+
+/* Renders paths [first, first + count) of a tile, path k being sample k % spp of pixel
+ * k / spp in row-major order within the tile, as waves: all camera rays with one
+ * intersect_stream call, then per bounce the shading of every hit, one occluded_stream
+ * call for the shadow rays and one intersect_stream call for the continuations. Results
+ * go to the film in path order, so the image is the scalar loop's, bit for bit. */
+static void pt_wave_run(pt_job *job, pt_wave *w, uint32_t x0, uint32_t y0, uint32_t tw,
+                        uint64_t first, uint32_t count, uint64_t *rays, uint64_t *samples,
+                        uint64_t *nonfinite) {
+  const tt_render_ctx *ctx = job->ctx;
+  const pt_settings *set = &job->it->settings;
+  const tt_accel_iface *A = job->tracer.iface;
+  const tt_path_tracer *pt = job->it->pt;
+  const uint32_t spp = ctx->spp;
+#define PT_STATE(k) ((tt_path_state *)(w->states + (size_t)(k) * w->state_stride))
+#define PT_SSTATE(k) ((void *)(w->samplers + (size_t)(k) * w->sampler_stride))
+  uint32_t n = 0;
+  for (uint32_t k = 0; k < count; k++) {
+    uint64_t q = first + k;
+    uint32_t px = x0 + (uint32_t)((q / spp) % tw), py = y0 + (uint32_t)((q / spp) / tw);
+    tt_ray ray;
+    pt_camera_sample(job, PT_SSTATE(k), px, py, (uint32_t)(q % spp), &w->film_pos[k][0],
+                     &w->film_pos[k][1], &ray);
+    if (tt_path_begin(pt, &set->path, &ray, PT_STATE(k), &w->rays[n])) w->active[n++] = k;
+  }
+  while (n > 0) {
+    for (uint32_t j = 0; j < n; j++) {
+      w->hits[j].geom_id = TT_INVALID_ID;
+      w->hits[j].prim_id = TT_INVALID_ID;
+    }
+    A->intersect_stream(job->tracer.accel, w->rays, w->hits, n);
+    uint32_t next = 0, shadows = 0;
+    for (uint32_t j = 0; j < n; j++) {
+      const uint32_t k = w->active[j];
+      pt_source src = {set->sampler, job->sampler, PT_SSTATE(k)};
+      tt_sample_source source = {pt_source_get, NULL, &src};
+      int has_shadow = 0;
+      if (tt_path_hit(pt, PT_STATE(k), &w->rays[j], &w->hits[j], &source, &w->shadows[shadows],
+                      &has_shadow, &w->next_rays[next]))
+        w->next_active[next++] = k;
+      if (has_shadow) w->shadow_of[shadows++] = k;
+    }
+    if (shadows > 0) {
+      A->occluded_stream(job->tracer.accel, w->shadows, w->occluded, shadows);
+      for (uint32_t j = 0; j < shadows; j++) tt_path_shadow(PT_STATE(w->shadow_of[j]), w->occluded[j]);
+    }
+    tt_ray *tr = w->rays;
+    w->rays = w->next_rays, w->next_rays = tr;
+    uint32_t *ta = w->active;
+    w->active = w->next_active, w->next_active = ta;
+    n = next;
+  }
+  for (uint32_t k = 0; k < count; k++) {
+    uint64_t q = first + k;
+    uint32_t px = x0 + (uint32_t)((q / spp) % tw), py = y0 + (uint32_t)((q / spp) / tw);
+    tt_path_result *r = &w->results[k];
+    tt_path_finish(PT_STATE(k), r);
+    tt_film_add_sample(ctx->film, px, py, r->L, 1.0f);
+    *rays += r->rays;
+    (*samples)++;
+    *nonfinite += r->nonfinite ? 1u : 0u;
+    if (job->aovs) {
+      tt_ray ray;  /* the camera ray again (motion of a miss uses its direction) */
+      tt_camera_generate_ray(&job->frame, w->film_pos[k][0], w->film_pos[k][1], &ray);
+      tt_path_write_aovs(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL,
+                         w->film_pos[k][0], w->film_pos[k][1], &ray, r,
+                         ctx->sample_offset + q % spp + 1);
+    }
+  }
+#undef PT_STATE
+#undef PT_SSTATE
+}
+
 /* Renders tiles [begin, end); a tile is skipped whole when a stop was requested. */
 static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
   pt_job *job = vctx;
@@ -202,6 +366,16 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
   pt_source src = {set->sampler, job->sampler, state};
   tt_sample_source source = {pt_source_get, NULL, &src};
   uint64_t rays = 0, samples = 0, nonfinite = 0;
+  pt_wave *wave = NULL;
+  if (set->wavefront && thread_index < job->wave_count) {
+    if (!job->waves[thread_index])
+      job->waves[thread_index] = pt_wave_create(set->sampler->state_size(job->sampler));
+    wave = job->waves[thread_index];
+    if (!wave) {
+      atomic_store(&job->failed, 1);
+      return;
+    }
+  }
   for (uint64_t tile = begin; tile < end; ++tile) {
     if (host->should_stop && host->should_stop()) {
       atomic_store(&job->interrupted, 1);
@@ -211,28 +385,20 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
     uint32_t y0 = (uint32_t)(tile / job->tiles_x) * job->tile_size;
     uint32_t x1 = x0 + job->tile_size < job->width ? x0 + job->tile_size : job->width;
     uint32_t y1 = y0 + job->tile_size < job->height ? y0 + job->tile_size : job->height;
+    if (wave) {
+      const uint64_t paths = (uint64_t)(x1 - x0) * (y1 - y0) * ctx->spp;
+      for (uint64_t first = 0; first < paths; first += PT_WAVE) {
+        uint32_t count = (uint32_t)(paths - first < PT_WAVE ? paths - first : PT_WAVE);
+        pt_wave_run(job, wave, x0, y0, x1 - x0, first, count, &rays, &samples, &nonfinite);
+      }
+      continue;
+    }
     for (uint32_t py = y0; py < y1; ++py) {
       for (uint32_t px = x0; px < x1; ++px) {
         for (uint32_t s = 0; s < ctx->spp; ++s) {
-          set->sampler->start(job->sampler, state, px, py, ctx->sample_offset + s);
-          float jx, jy;
-          if (ctx->fixed_jitter) {
-            jx = ctx->jitter[0];
-            jy = ctx->jitter[1];
-          } else {
-            float u0 = set->sampler->get(job->sampler, state, TT_PATH_DIM_FILM);
-            float u1 = set->sampler->get(job->sampler, state, TT_PATH_DIM_FILM + 1);
-            if (set->filter_bh) {
-              jx = pt_bh_sample(u0);
-              jy = pt_bh_sample(u1);
-            } else {
-              jx = u0 - 0.5f;
-              jy = u1 - 0.5f;
-            }
-          }
-          float fx = (float)px + 0.5f + jx, fy = (float)py + 0.5f + jy;
+          float fx, fy;
           tt_ray ray;
-          tt_camera_generate_ray(&job->frame, fx, fy, &ray);
+          pt_camera_sample(job, state, px, py, s, &fx, &fy, &ray);
           tt_path_result r;
           tt_path_trace(job->it->pt, &job->tracer, &set->path, &ray, &source, &r);
           tt_film_add_sample(ctx->film, px, py, r.L, 1.0f);
@@ -295,10 +461,25 @@ static tt_status pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
   atomic_init(&job->samples, 0);
   atomic_init(&job->nonfinite, 0);
   atomic_init(&job->interrupted, 0);
+  atomic_init(&job->failed, 0);
+  if (set->wavefront) {
+    job->wave_count = host->thread_count ? host->thread_count() : 1;
+    if (job->wave_count < 1) job->wave_count = 1;
+    job->waves = calloc(job->wave_count, sizeof *job->waves);
+    if (!job->waves) {
+      set->sampler->destroy(sampler);
+      free(job);
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": out of memory");
+    }
+  }
 
   tt_status pst = host->parallel_for((uint64_t)job->tiles_x * tiles_y, 1, pt_tile_fn, job);
   if (pst == TT_ERR_INTERRUPTED || atomic_load(&job->interrupted)) st = TT_ERR_INTERRUPTED;
   else if (pst != TT_OK) st = pst;
+  if (atomic_load(&job->failed) && st == TT_OK)
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": cannot allocate the wavefront buffers");
+  for (uint32_t i = 0; i < job->wave_count; i++) pt_wave_destroy(job->waves[i]);
+  free(job->waves);
 
   uint64_t t1 = host->clock_ns ? host->clock_ns() : 0;
   if (stats) {

@@ -127,6 +127,50 @@ TT_API void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y,
                                float fx, float fy, const tt_ray *ray,
                                const tt_path_result *r, uint64_t n);
 
+/* ---- the same path, one step at a time (wavefront integrators) ----
+ *
+ * tt_path_trace is exactly this loop, so both forms give identical results (same random
+ * dimensions, same arithmetic, same order of additions):
+ *
+ *   more = tt_path_begin(pt, options, camera_ray, st, &ray);
+ *   while (more) {
+ *     intersect ray -> hit;
+ *     more = tt_path_hit(pt, st, &ray, &hit, source, &shadow, &has_shadow, &ray);
+ *     if (has_shadow) tt_path_shadow(st, occluded(shadow));
+ *   }
+ *   tt_path_finish(st, &result);
+ *
+ * A wavefront integrator keeps many states, traces the rays of all of them with one
+ * intersect_stream call and the shadow rays with one occluded_stream call per bounce, and
+ * so lets the accel trace many rays back to back (its tree stays in cache; stream kernels
+ * can overlap the memory latency of several rays). Each state must see its shadow result
+ * before its next tt_path_hit. States are plain memory of tt_path_state_size() bytes,
+ * 16-byte aligned, owned by the caller; a state is used by one thread at a time. */
+typedef struct tt_path_state tt_path_state;
+
+/* Bytes of one tt_path_state (fixed for a given libtunetrace). */
+TT_API size_t tt_path_state_size(void);
+
+/* Starts a path at `camera_ray`: writes the first ray to intersect to *ray and returns 1,
+ * or returns 0 when there is nothing to trace (zero direction; finish at once). */
+TT_API int tt_path_begin(const tt_path_tracer *pt, const tt_path_options *options,
+                         const tt_ray *camera_ray, tt_path_state *st, tt_ray *ray);
+
+/* Consumes the closest hit of `traced` (hit->geom_id == TT_INVALID_ID: a miss). May ask
+ * for a shadow ray (*has_shadow = 1, ray in *shadow): pass its occlusion to tt_path_shadow
+ * before the next tt_path_hit, whether or not the path goes on. Returns 1 with the next
+ * ray in *next (which may alias `traced`), or 0 when the path ended. Thread-safe for
+ * distinct states. */
+TT_API int tt_path_hit(const tt_path_tracer *pt, tt_path_state *st, const tt_ray *traced,
+                       const tt_hit *hit, const tt_sample_source *source, tt_ray *shadow,
+                       int *has_shadow, tt_ray *next);
+
+/* Adds the pending next-event contribution unless `occluded`. */
+TT_API void tt_path_shadow(tt_path_state *st, int occluded);
+
+/* The path's result (as tt_path_trace's). */
+TT_API void tt_path_finish(const tt_path_state *st, tt_path_result *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -222,197 +222,250 @@ static inline void tt__offset(const float p[3], const float ng[3], const float w
   for (int i = 0; i < 3; ++i) out[i] = p[i] + eps * ng[i];
 }
 
-TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
-                          const tt_path_options *options, const tt_ray *camera_ray,
-                          const tt_sample_source *source, tt_path_result *out) {
-  memset(out, 0, sizeof *out);
-  out->distance = INFINITY;
+/* A path between steps (tt_path_begin / tt_path_hit / tt_path_shadow / tt_path_finish).
+ * Everything tt_path_trace kept in locals across bounces lives here, so a wavefront
+ * integrator can hold many paths at once and trace their rays in streams. */
+struct tt_path_state {
   tt_path_options o;
-  tt_path_options_default(&o);
+  float L[3], beta[3];
+  float pending[3];          /* next-event contribution, added if its shadow ray is free */
+  float prev_pdf, prev_p[3], prev_n[3];
+  int32_t prev_delta;
+  int32_t has_pending;
+  uint32_t bounce;           /* index of the surface interaction the next hit is */
+  uint32_t max_dim;
+  tt_path_result out;        /* first-hit data, ray and bounce counts so far */
+};
+
+TT_API size_t tt_path_state_size(void) { return sizeof(tt_path_state); }
+
+TT_API int tt_path_begin(const tt_path_tracer *pt, const tt_path_options *options,
+                         const tt_ray *camera_ray, tt_path_state *st, tt_ray *ray) {
+  (void)pt;
+  memset(st, 0, sizeof *st);
+  st->out.distance = INFINITY;
+  tt_path_options_default(&st->o);
   if (options) {
-    size_t n = options->struct_size < sizeof o ? options->struct_size : sizeof o;
-    if (n > 0) memcpy(&o, options, n);
+    size_t n = options->struct_size < sizeof st->o ? options->struct_size : sizeof st->o;
+    if (n > 0) memcpy(&st->o, options, n);
   }
+  for (int i = 0; i < 3; ++i) st->beta[i] = 1.0f;
+  st->prev_delta = 1;
+  st->prev_n[2] = 1.0f;
+  *ray = *camera_ray;
+  float dlen = tt__normalize3(ray->dir);
+  if (!(dlen > 0.0f)) return 0;
+  ray->tnear *= dlen;
+  ray->tfar *= dlen;
+  return 1;
+}
+
+TT_API int tt_path_hit(const tt_path_tracer *pt, tt_path_state *st, const tt_ray *traced,
+                       const tt_hit *hitp, const tt_sample_source *source, tt_ray *shadow,
+                       int *has_shadow, tt_ray *next) {
+  const tt_path_options o = st->o;
   const tt__lights *lights = &pt->lights;
   const int use_nee = o.strategy != TT_STRATEGY_BSDF;
   /* Emission found by BSDF sampling after bounce 0 counts fully (BSDF), not at all (light
    * only), or MIS-weighted. */
   const int mis_on = o.strategy == TT_STRATEGY_MIS && o.heuristic != TT_MIS_NONE;
   const int count_bsdf_hits = o.strategy == TT_STRATEGY_BSDF || mis_on;
+  tt_path_result *out = &st->out;
+  float *L = st->L, *beta = st->beta;
+  const uint32_t b = st->bounce;
+  const tt_hit hit = *hitp;
+  *has_shadow = 0;
+  out->rays++;
+  if (hit.geom_id == TT_INVALID_ID) {
+    float Le[3];
+    if (tt__lights_env(lights, traced->dir, Le) && (b == 0 || st->prev_delta || count_bsdf_hits)) {
+      float w = 1.0f;
+      if (b > 0 && !st->prev_delta && mis_on)
+        w = tt__mis(o.heuristic, st->prev_pdf, tt__lights_pdf_env(lights, st->prev_n, traced->dir));
+      for (int i = 0; i < 3; ++i) L[i] += beta[i] * Le[i] * w;
+    }
+    return 0;
+  }
 
-  float L[3] = {0.0f, 0.0f, 0.0f}, beta[3] = {1.0f, 1.0f, 1.0f};
-  tt_ray ray = *camera_ray;
-  float dlen = tt__normalize3(ray.dir);
-  if (!(dlen > 0.0f)) return;
-  ray.tnear *= dlen;
-  ray.tfar *= dlen;
-  int prev_delta = 1;
-  float prev_pdf = 0.0f, prev_p[3] = {0, 0, 0}, prev_n[3] = {0, 0, 1};
-  uint32_t max_dim = 0;
+  /* Surface geometry: position from barycentrics, winding normal, shading normal. */
+  const tt_mesh *mesh = tt_scene_mesh(pt->scene, hit.geom_id);
+  const uint32_t *idx = mesh->indices + 3 * (size_t)hit.prim_id;
+  const float *p0 = mesh->positions + 3 * (size_t)idx[0];
+  const float *p1 = mesh->positions + 3 * (size_t)idx[1];
+  const float *p2 = mesh->positions + 3 * (size_t)idx[2];
+  float w0 = 1.0f - hit.u - hit.v, p[3], e1[3], e2[3], ng_w[3], ng[3], ns[3], wo[3];
+  for (int i = 0; i < 3; ++i) {
+    p[i] = w0 * p0[i] + hit.u * p1[i] + hit.v * p2[i];
+    e1[i] = p1[i] - p0[i];
+    e2[i] = p2[i] - p0[i];
+    wo[i] = -traced->dir[i];
+  }
+  tt__cross3(e1, e2, ng_w);
+  if (tt__normalize3(ng_w) == 0.0f) return 0;  /* degenerate triangle */
+  memcpy(ng, ng_w, sizeof ng);
+  if (mesh->normals) {
+    const float *n0 = mesh->normals + 3 * (size_t)idx[0];
+    const float *n1 = mesh->normals + 3 * (size_t)idx[1];
+    const float *n2 = mesh->normals + 3 * (size_t)idx[2];
+    for (int i = 0; i < 3; ++i) ns[i] = w0 * n0[i] + hit.u * n1[i] + hit.v * n2[i];
+    if (tt__normalize3(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
+    else if (tt__dot3(ns, ng) < 0.0f)
+      for (int i = 0; i < 3; ++i) ns[i] = -ns[i];  /* to the geometric side */
+  } else {
+    memcpy(ns, ng, sizeof ns);
+  }
+  const tt__bsdf *bsdf = &pt->bsdfs[mesh->material];
+  tt__bsdf textured;
+  int32_t tex = pt->material_texture[mesh->material];
+  if (tex >= 0 && mesh->uvs) {  /* albedo modulated by the texture at the hit's uv */
+    const float *t0 = mesh->uvs + 2 * (size_t)idx[0], *t1 = mesh->uvs + 2 * (size_t)idx[1],
+                *t2 = mesh->uvs + 2 * (size_t)idx[2];
+    float tc[3];
+    tt__texture_lookup(&pt->textures[tex], w0 * t0[0] + hit.u * t1[0] + hit.v * t2[0],
+                       w0 * t0[1] + hit.u * t1[1] + hit.v * t2[1], tc);
+    textured = *bsdf;
+    for (int i = 0; i < 3; ++i) textured.albedo[i] *= fminf(fmaxf(tc[i], 0.0f), 1.0f);
+    bsdf = &textured;
+  }
+  /* Opaque surfaces are two-sided: orient both normals towards the viewer. */
+  if (!tt__bsdf_transmissive(bsdf) && tt__dot3(wo, ng) < 0.0f)
+    for (int i = 0; i < 3; ++i) { ng[i] = -ng[i]; ns[i] = -ns[i]; }
 
-  for (uint32_t b = 0;; ++b) {
+  if (b == 0) {
+    out->hit = 1;
+    out->distance = hit.t;
+    memcpy(out->position, p, sizeof out->position);
+    float s = tt__dot3(ns, wo) < 0.0f ? -1.0f : 1.0f;
+    for (int i = 0; i < 3; ++i) out->normal[i] = s * ns[i];
+    tt__bsdf_albedo(bsdf, out->albedo);
+  }
+
+  /* Emission (one-sided lights emit along the winding normal only). */
+  if (mesh->light >= 0 && (b == 0 || st->prev_delta || count_bsdf_hits)) {
+    float Le[3];
+    if (tt__lights_emitted(lights, hit.geom_id, ng_w, wo, Le)) {
+      float w = 1.0f;
+      if (b > 0 && !st->prev_delta && mis_on)
+        w = tt__mis(o.heuristic, st->prev_pdf,
+                    tt__lights_pdf_area(lights, hit.geom_id, st->prev_p, p, ng_w));
+      for (int i = 0; i < 3; ++i) L[i] += beta[i] * Le[i] * w;
+    }
+  }
+  if (b >= o.max_depth) return 0;
+  out->bounces++;
+
+  const uint32_t base = TT_PATH_DIM_FIRST_BOUNCE + TT_PATH_DIMS_PER_BOUNCE * b;
+  tt__frame fr;
+  tt__frame_from(&fr, ns, e1);
+  float wo_l[3];
+  tt__to_local(&fr, wo, wo_l);
+
+  /* Next-event estimation: the shadow ray and, should it be free, its contribution. */
+  if (use_nee && !bsdf->delta && lights->count > 0) {
+    float u_sel = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_SELECT, &st->max_dim);
+    float u1 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS, &st->max_dim);
+    float u2 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS + 1, &st->max_dim);
+    tt__light_sample ls;
+    if (tt__lights_sample(lights, p, ns, u_sel, u1, u2, &ls)) {
+      float wi_l[3], f[3] = {0.0f, 0.0f, 0.0f};
+      tt__to_local(&fr, ls.wi, wi_l);
+      /* The light must lie on the geometric side the shading frame says (opaque surfaces
+       * face the viewer, so only the front; rough glass may also transmit). */
+      float side = tt__dot3(ls.wi, ng);
+      int side_ok = tt__bsdf_transmissive(bsdf) ? side != 0.0f && (side > 0.0f) == (wi_l[2] > 0.0f)
+                                                : side > 0.0f;
+      if (side_ok) tt__bsdf_eval(bsdf, wo_l, wi_l, f);
+      if (tt__max3(f) > 0.0f) {
+        tt__offset(p, ng, ls.wi, shadow->org);
+        memcpy(shadow->dir, ls.wi, sizeof shadow->dir);
+        shadow->tnear = 0.0f;
+        shadow->tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-3f);
+        out->rays++;
+        float w = 1.0f;
+        if (!ls.delta && mis_on) w = tt__mis(o.heuristic, ls.pdf, tt__bsdf_pdf(bsdf, wo_l, wi_l));
+        float scale = fabsf(wi_l[2]) * w / ls.pdf;
+        for (int i = 0; i < 3; ++i) st->pending[i] = beta[i] * f[i] * ls.L[i] * scale;
+        st->has_pending = 1;
+        *has_shadow = 1;
+      }
+    }
+  }
+
+  /* BSDF sampling continues the path. */
+  float u_lobe = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_LOBE, &st->max_dim);
+  float u1 = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_DIR, &st->max_dim);
+  float u2 = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_DIR + 1, &st->max_dim);
+  tt__bsdf_result bs;
+  if (!tt__bsdf_sample(bsdf, wo_l, u_lobe, u1, u2, &bs)) return 0;
+  if (source->report_pdf)
+    source->report_pdf(source->self, base + TT_PATH_BOUNCE_BSDF_DIR, bs.delta ? 0.0f : bs.pdf);
+  float wi[3];
+  tt__to_world(&fr, bs.wi, wi);
+  tt__normalize3(wi);
+  /* Shading normals must not send the path through the geometric surface (light leaks). */
+  float side = tt__dot3(wi, ng);
+  if (side == 0.0f || (side > 0.0f) != (bs.wi[2] > 0.0f)) return 0;
+  float scale = fabsf(bs.wi[2]) / bs.pdf;
+  for (int i = 0; i < 3; ++i) beta[i] *= bs.f[i] * scale;
+  if (!(tt__max3(beta) > 0.0f)) return 0;
+  st->prev_delta = bs.delta;
+  st->prev_pdf = bs.pdf;
+  memcpy(st->prev_p, p, sizeof st->prev_p);
+  memcpy(st->prev_n, ns, sizeof st->prev_n);
+
+  /* Russian roulette: survive with probability min(1, max throughput). */
+  if (b >= o.rr_depth) {
+    float q = fminf(1.0f, tt__max3(beta));
+    float u = tt__dim(source, base + TT_PATH_BOUNCE_RR, &st->max_dim);
+    if (!(u < q)) return 0;
+    for (int i = 0; i < 3; ++i) beta[i] /= q;
+  }
+
+  tt__offset(p, ng, wi, next->org);
+  memcpy(next->dir, wi, sizeof next->dir);
+  next->tnear = 0.0f;
+  next->tfar = INFINITY;
+  st->bounce = b + 1;
+  return 1;
+}
+
+TT_API void tt_path_shadow(tt_path_state *st, int occluded) {
+  if (!st->has_pending) return;
+  st->has_pending = 0;
+  if (occluded) return;
+  for (int i = 0; i < 3; ++i) st->L[i] += st->pending[i];
+}
+
+TT_API void tt_path_finish(const tt_path_state *st, tt_path_result *out) {
+  *out = st->out;
+  out->max_dim = st->max_dim;
+  const float *L = st->L;
+  if (!isfinite(L[0]) || !isfinite(L[1]) || !isfinite(L[2])) {
+    out->nonfinite = 1;
+    out->L[0] = out->L[1] = out->L[2] = 0.0f;
+  } else {
+    memcpy(out->L, L, sizeof out->L);
+  }
+}
+
+TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
+                          const tt_path_options *options, const tt_ray *camera_ray,
+                          const tt_sample_source *source, tt_path_result *out) {
+  _Alignas(16) tt_path_state st;
+  tt_ray ray, shadow;
+  int more = tt_path_begin(pt, options, camera_ray, &st, &ray);
+  while (more) {
     tt_hit hit;
     hit.geom_id = TT_INVALID_ID;
     hit.prim_id = TT_INVALID_ID;
     tracer->iface->intersect1(tracer->accel, &ray, &hit);
-    out->rays++;
-    if (hit.geom_id == TT_INVALID_ID) {
-      float Le[3];
-      if (tt__lights_env(lights, ray.dir, Le) && (b == 0 || prev_delta || count_bsdf_hits)) {
-        float w = 1.0f;
-        if (b > 0 && !prev_delta && mis_on)
-          w = tt__mis(o.heuristic, prev_pdf, tt__lights_pdf_env(lights, prev_n, ray.dir));
-        for (int i = 0; i < 3; ++i) L[i] += beta[i] * Le[i] * w;
-      }
-      break;
-    }
-
-    /* Surface geometry: position from barycentrics, winding normal, shading normal. */
-    const tt_mesh *mesh = tt_scene_mesh(pt->scene, hit.geom_id);
-    const uint32_t *idx = mesh->indices + 3 * (size_t)hit.prim_id;
-    const float *p0 = mesh->positions + 3 * (size_t)idx[0];
-    const float *p1 = mesh->positions + 3 * (size_t)idx[1];
-    const float *p2 = mesh->positions + 3 * (size_t)idx[2];
-    float w0 = 1.0f - hit.u - hit.v, p[3], e1[3], e2[3], ng_w[3], ng[3], ns[3], wo[3];
-    for (int i = 0; i < 3; ++i) {
-      p[i] = w0 * p0[i] + hit.u * p1[i] + hit.v * p2[i];
-      e1[i] = p1[i] - p0[i];
-      e2[i] = p2[i] - p0[i];
-      wo[i] = -ray.dir[i];
-    }
-    tt__cross3(e1, e2, ng_w);
-    if (tt__normalize3(ng_w) == 0.0f) break;  /* degenerate triangle */
-    memcpy(ng, ng_w, sizeof ng);
-    if (mesh->normals) {
-      const float *n0 = mesh->normals + 3 * (size_t)idx[0];
-      const float *n1 = mesh->normals + 3 * (size_t)idx[1];
-      const float *n2 = mesh->normals + 3 * (size_t)idx[2];
-      for (int i = 0; i < 3; ++i) ns[i] = w0 * n0[i] + hit.u * n1[i] + hit.v * n2[i];
-      if (tt__normalize3(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
-      else if (tt__dot3(ns, ng) < 0.0f)
-        for (int i = 0; i < 3; ++i) ns[i] = -ns[i];  /* to the geometric side */
-    } else {
-      memcpy(ns, ng, sizeof ns);
-    }
-    const tt__bsdf *bsdf = &pt->bsdfs[mesh->material];
-    tt__bsdf textured;
-    int32_t tex = pt->material_texture[mesh->material];
-    if (tex >= 0 && mesh->uvs) {  /* albedo modulated by the texture at the hit's uv */
-      const float *t0 = mesh->uvs + 2 * (size_t)idx[0], *t1 = mesh->uvs + 2 * (size_t)idx[1],
-                  *t2 = mesh->uvs + 2 * (size_t)idx[2];
-      float tc[3];
-      tt__texture_lookup(&pt->textures[tex], w0 * t0[0] + hit.u * t1[0] + hit.v * t2[0],
-                         w0 * t0[1] + hit.u * t1[1] + hit.v * t2[1], tc);
-      textured = *bsdf;
-      for (int i = 0; i < 3; ++i) textured.albedo[i] *= fminf(fmaxf(tc[i], 0.0f), 1.0f);
-      bsdf = &textured;
-    }
-    /* Opaque surfaces are two-sided: orient both normals towards the viewer. */
-    if (!tt__bsdf_transmissive(bsdf) && tt__dot3(wo, ng) < 0.0f)
-      for (int i = 0; i < 3; ++i) { ng[i] = -ng[i]; ns[i] = -ns[i]; }
-
-    if (b == 0) {
-      out->hit = 1;
-      out->distance = hit.t;
-      memcpy(out->position, p, sizeof out->position);
-      float s = tt__dot3(ns, wo) < 0.0f ? -1.0f : 1.0f;
-      for (int i = 0; i < 3; ++i) out->normal[i] = s * ns[i];
-      tt__bsdf_albedo(bsdf, out->albedo);
-    }
-
-    /* Emission (one-sided lights emit along the winding normal only). */
-    if (mesh->light >= 0 && (b == 0 || prev_delta || count_bsdf_hits)) {
-      float Le[3];
-      if (tt__lights_emitted(lights, hit.geom_id, ng_w, wo, Le)) {
-        float w = 1.0f;
-        if (b > 0 && !prev_delta && mis_on)
-          w = tt__mis(o.heuristic, prev_pdf, tt__lights_pdf_area(lights, hit.geom_id, prev_p, p, ng_w));
-        for (int i = 0; i < 3; ++i) L[i] += beta[i] * Le[i] * w;
-      }
-    }
-    if (b >= o.max_depth) break;
-    out->bounces++;
-
-    const uint32_t base = TT_PATH_DIM_FIRST_BOUNCE + TT_PATH_DIMS_PER_BOUNCE * b;
-    tt__frame fr;
-    tt__frame_from(&fr, ns, e1);
-    float wo_l[3];
-    tt__to_local(&fr, wo, wo_l);
-
-    /* Next-event estimation. */
-    if (use_nee && !bsdf->delta && lights->count > 0) {
-      float u_sel = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_SELECT, &max_dim);
-      float u1 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS, &max_dim);
-      float u2 = tt__dim(source, base + TT_PATH_BOUNCE_LIGHT_POS + 1, &max_dim);
-      tt__light_sample ls;
-      if (tt__lights_sample(lights, p, ns, u_sel, u1, u2, &ls)) {
-        float wi_l[3], f[3] = {0.0f, 0.0f, 0.0f};
-        tt__to_local(&fr, ls.wi, wi_l);
-        /* The light must lie on the geometric side the shading frame says (opaque surfaces
-         * face the viewer, so only the front; rough glass may also transmit). */
-        float side = tt__dot3(ls.wi, ng);
-        int side_ok = tt__bsdf_transmissive(bsdf) ? side != 0.0f && (side > 0.0f) == (wi_l[2] > 0.0f)
-                                                  : side > 0.0f;
-        if (side_ok) tt__bsdf_eval(bsdf, wo_l, wi_l, f);
-        if (tt__max3(f) > 0.0f) {
-          tt_ray sh;
-          tt__offset(p, ng, ls.wi, sh.org);
-          memcpy(sh.dir, ls.wi, sizeof sh.dir);
-          sh.tnear = 0.0f;
-          sh.tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-3f);
-          out->rays++;
-          if (!tracer->iface->occluded1(tracer->accel, &sh)) {
-            float w = 1.0f;
-            if (!ls.delta && mis_on) w = tt__mis(o.heuristic, ls.pdf, tt__bsdf_pdf(bsdf, wo_l, wi_l));
-            float scale = fabsf(wi_l[2]) * w / ls.pdf;
-            for (int i = 0; i < 3; ++i) L[i] += beta[i] * f[i] * ls.L[i] * scale;
-          }
-        }
-      }
-    }
-
-    /* BSDF sampling continues the path. */
-    float u_lobe = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_LOBE, &max_dim);
-    float u1 = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_DIR, &max_dim);
-    float u2 = tt__dim(source, base + TT_PATH_BOUNCE_BSDF_DIR + 1, &max_dim);
-    tt__bsdf_result bs;
-    if (!tt__bsdf_sample(bsdf, wo_l, u_lobe, u1, u2, &bs)) break;
-    if (source->report_pdf)
-      source->report_pdf(source->self, base + TT_PATH_BOUNCE_BSDF_DIR, bs.delta ? 0.0f : bs.pdf);
-    float wi[3];
-    tt__to_world(&fr, bs.wi, wi);
-    tt__normalize3(wi);
-    /* Shading normals must not send the path through the geometric surface (light leaks). */
-    float side = tt__dot3(wi, ng);
-    if (side == 0.0f || (side > 0.0f) != (bs.wi[2] > 0.0f)) break;
-    float scale = fabsf(bs.wi[2]) / bs.pdf;
-    for (int i = 0; i < 3; ++i) beta[i] *= bs.f[i] * scale;
-    if (!(tt__max3(beta) > 0.0f)) break;
-    prev_delta = bs.delta;
-    prev_pdf = bs.pdf;
-    memcpy(prev_p, p, sizeof prev_p);
-    memcpy(prev_n, ns, sizeof prev_n);
-
-    /* Russian roulette: survive with probability min(1, max throughput). */
-    if (b >= o.rr_depth) {
-      float q = fminf(1.0f, tt__max3(beta));
-      float u = tt__dim(source, base + TT_PATH_BOUNCE_RR, &max_dim);
-      if (!(u < q)) break;
-      for (int i = 0; i < 3; ++i) beta[i] /= q;
-    }
-
-    tt__offset(p, ng, wi, ray.org);
-    memcpy(ray.dir, wi, sizeof ray.dir);
-    ray.tnear = 0.0f;
-    ray.tfar = INFINITY;
+    int has_shadow;
+    tt_ray next;
+    more = tt_path_hit(pt, &st, &ray, &hit, source, &shadow, &has_shadow, &next);
+    if (has_shadow) tt_path_shadow(&st, tracer->iface->occluded1(tracer->accel, &shadow));
+    if (more) ray = next;
   }
-
-  out->max_dim = max_dim;
-  if (!isfinite(L[0]) || !isfinite(L[1]) || !isfinite(L[2])) {
-    out->nonfinite = 1;
-    L[0] = L[1] = L[2] = 0.0f;
-  }
-  memcpy(out->L, L, sizeof out->L);
+  tt_path_finish(&st, out);
 }
 
 /* ---- AOVs ---- */
