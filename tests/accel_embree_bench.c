@@ -260,6 +260,37 @@ static double rate_occl(const tt_accel_iface *A, const tt_accel *acc, const tt_r
   return median(v, runs);
 }
 
+/* Stream chunk: rays per intersect_stream / occluded_stream call (a 32x32 tile's worth, as
+ * integrator_pt's wavefront passes them). */
+#define STREAM_CHUNK 1024
+
+/* Single-thread Mrays/s of intersect_stream in chunks of STREAM_CHUNK: median of `runs`. */
+static double rate_isect_stream(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
+                                tt_ray *work, tt_hit *hits, int runs) {
+  double v[16];
+  for (int k = 0; k < runs; k++) {
+    memcpy(work, rays, NRAYS * sizeof *rays);
+    double t0 = cpu_s();
+    for (size_t i = 0; i < NRAYS; i += STREAM_CHUNK)
+      A->intersect_stream(acc, &work[i], &hits[i], NRAYS - i < STREAM_CHUNK ? NRAYS - i : STREAM_CHUNK);
+    v[k] = (double)NRAYS / (cpu_s() - t0) * 1e-6;
+  }
+  return median(v, runs);
+}
+
+/* Single-thread Mrays/s of occluded_stream in chunks of STREAM_CHUNK: median of `runs`. */
+static double rate_occl_stream(const tt_accel_iface *A, const tt_accel *acc, const tt_ray *rays,
+                               uint8_t *occ, int runs) {
+  double v[16];
+  for (int k = 0; k < runs; k++) {
+    double t0 = cpu_s();
+    for (size_t i = 0; i < NRAYS; i += STREAM_CHUNK)
+      A->occluded_stream(acc, &rays[i], &occ[i], NRAYS - i < STREAM_CHUNK ? NRAYS - i : STREAM_CHUNK);
+    v[k] = (double)NRAYS / (cpu_s() - t0) * 1e-6;
+  }
+  return median(v, runs);
+}
+
 /* ---- all threads: the same ray set split in chunks over one pthread per CPU ---- */
 
 static int g_threads = 1;
@@ -331,6 +362,7 @@ static int g_ratio_n;
 /* Per configuration: log of its ratio to native default (prim, bounce, occl-p, occl-b,
  * all-threads prim, all-threads bounce) summed over scenes, and the scene count. */
 static double g_cfg_log[16][6];
+static double g_cfg_slog[16][4];  /* the same for the stream rates (vs native's streams) */
 static int g_cfg_n[16], g_cfg_mt_n[16];
 static int g_scene_n;
 
@@ -347,6 +379,7 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
          "MiB", "nodes", "depth", "SAH", "prim", "bounce", "occl-p", "occl-b");
   const tt_space *space = A->space();
   double native_rate[2] = {0, 0}, native_all[4] = {0, 0, 0, 0}, native_mt[2] = {0, 0};
+  double native_stream[4] = {0, 0, 0, 0};
   g_scene_n++;
   for (size_t ci = 0; ci < NCFG; ci++) {
     if (ci > 0 && g_cfg_filter && !strstr(g_cfgs[ci].label, g_cfg_filter)) continue;
@@ -374,6 +407,8 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
       bounce_rays(scene, prim, ref_hits, bounce);
     }
     double rp = rate_isect(A, acc, prim, work, hits, runs);
+    tt_hit *prim_hits = malloc(NRAYS * sizeof *prim_hits);
+    memcpy(prim_hits, hits, NRAYS * sizeof *hits);
     size_t differ = 0;
     for (size_t i = 0; i < NRAYS; i++)
       differ += (hits[i].geom_id != ref_hits[i].geom_id) || (hits[i].prim_id != ref_hits[i].prim_id);
@@ -383,6 +418,43 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
     printf("%-24s %9.2f %8.2f %7llu %7u %8.2f | %8.2f %8.2f | %8.2f %8.2f\n", g_cfgs[ci].label,
            median(bms, runs), (double)st.memory_bytes / (1024.0 * 1024.0),
            (unsigned long long)st.nodes, st.max_depth, st.sah_cost, rp, rb, op, ob);
+    /* Streams (chunks of STREAM_CHUNK): rates, and the same answers as the single-ray calls
+     * (exactly for backend custom, whose stream kernels run the single-ray arithmetic). */
+    {
+      tt_hit *sh = malloc(NRAYS * sizeof *sh);
+      uint8_t *so = malloc(NRAYS), *o1 = malloc(NRAYS);
+      double sp = rate_isect_stream(A, acc, prim, work, sh, runs);
+      size_t sdiff = 0, sties = 0;
+      for (size_t i = 0; i < NRAYS; i++) {
+        int d = sh[i].geom_id != prim_hits[i].geom_id || sh[i].prim_id != prim_hits[i].prim_id ||
+                (sh[i].geom_id != TT_INVALID_ID && sh[i].t != prim_hits[i].t);
+        /* a different triangle at a distance within rounding: a tie the order decides */
+        int tie = d && sh[i].geom_id != TT_INVALID_ID && prim_hits[i].geom_id != TT_INVALID_ID &&
+                  fabsf(sh[i].t - prim_hits[i].t) <= 1e-5f * fabsf(prim_hits[i].t);
+        sdiff += d && !tie;
+        sties += tie;
+      }
+      double sb = rate_isect_stream(A, acc, bounce, work, sh, runs);
+      double sop = rate_occl_stream(A, acc, prim, so, runs);
+      for (size_t i = 0; i < NRAYS; i++) o1[i] = (uint8_t)A->occluded1(acc, &prim[i]);
+      size_t odiff = 0;
+      for (size_t i = 0; i < NRAYS; i++) odiff += so[i] != o1[i];
+      double sob = rate_occl_stream(A, acc, bounce, so, runs);
+      printf("%-24s   streams of %d: %8.2f %8.2f | %8.2f %8.2f   (x single: %.2f %.2f | %.2f "
+             "%.2f)\n", "", STREAM_CHUNK, sp, sb, sop, sob, sp / rp, sb / rb, sop / op, sob / ob);
+      int custom = strstr(g_cfgs[ci].settings, "backend=custom") != NULL;
+      CHECK_MSG(sdiff <= (custom ? 0 : NRAYS / 10000) && odiff <= (custom ? 0 : NRAYS / 10000) &&
+                sties <= NRAYS / 10000,
+                "%s [%s]: streams differ from single rays on %zu hits, %zu occlusions", name,
+                g_cfgs[ci].label, sdiff, odiff);
+      double sall[4] = {sp, sb, sop, sob};
+      if (ci == 0) memcpy(native_stream, sall, sizeof sall);
+      else if (native_stream[0] > 0 && ci < 16) {
+        for (int k = 0; k < 4; k++) g_cfg_slog[ci][k] += log(sall[k] / native_stream[k]);
+      }
+      free(sh), free(so), free(o1);
+    }
+    free(prim_hits);
     CHECK_MSG(differ <= NRAYS / 10000, "%s [%s]: %zu primary hits differ from native", name,
               g_cfgs[ci].label, differ);
     double mp = 0, mb = 0;
@@ -442,6 +514,16 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
         }
         printf("%-24s   per ray: primary %.1f nodes %.1f triangles, bounce %.1f nodes %.1f "
                "triangles\n", "", per[0][0], per[0][1], per[1][0], per[1][1]);
+        for (int set = 0; set < 2; set++) {
+          const tt_ray *rs = set ? bounce : prim;
+          for (size_t i = 0; i < NRAYS; i++) occ[i] = (uint8_t)A->occluded1(acc, &rs[i]);
+          tt_accel_counters cnt = {.struct_size = sizeof cnt};
+          CHECK(A->counters(acc, &cnt, 1) == TT_OK && cnt.rays == NRAYS);
+          per[set][0] = (double)cnt.nodes_visited / (double)NRAYS;
+          per[set][1] = (double)cnt.triangles_tested / (double)NRAYS;
+        }
+        printf("%-24s   per occlusion ray: primary %.1f nodes %.1f triangles, bounce %.1f nodes "
+               "%.1f triangles\n", "", per[0][0], per[0][1], per[1][0], per[1][1]);
         A->destroy(acc);
       }
       tt_config_destroy(cc);
@@ -536,6 +618,8 @@ int main(int argc, char **argv) {
     double n = g_cfg_n[ci];
     printf("%-24s %6.2fx %6.2fx %6.2fx %6.2fx |", g_cfgs[ci].label, exp(g_cfg_log[ci][0] / n),
            exp(g_cfg_log[ci][1] / n), exp(g_cfg_log[ci][2] / n), exp(g_cfg_log[ci][3] / n));
+    printf(" streams %5.2fx %5.2fx %5.2fx %5.2fx |", exp(g_cfg_slog[ci][0] / n),
+           exp(g_cfg_slog[ci][1] / n), exp(g_cfg_slog[ci][2] / n), exp(g_cfg_slog[ci][3] / n));
     if (g_cfg_mt_n[ci])
       printf(" %7.2fx %7.2fx", exp(g_cfg_log[ci][4] / g_cfg_mt_n[ci]),
              exp(g_cfg_log[ci][5] / g_cfg_mt_n[ci]));

@@ -97,6 +97,66 @@ static inline int check_hit(const rayset *rs, size_t i, const tt_ray *after, con
   return bad || sqrt(err) > 1e-3 * len;
 }
 
+/* Camera rays alone form a stream from one origin, which backend custom traces in packets
+ * (its AVX2 / AVX-512 kernels). Against intersect1 / occluded1 on the same rays: the same
+ * occlusion answers; the same distance (a different triangle only on a tie, at most a few
+ * ulps apart); and every hit is right by the reference. Some rays get other [tnear, tfar]
+ * intervals, some a non-finite direction or origin, and the stream is cut at odd lengths
+ * (packets with empty lanes, and fewer rays than a packet) to exercise the lane masks. */
+static inline long check_one_origin_streams(const tt_accel_iface *A, const tt_accel *acc,
+                                            const rayset *rs, size_t n, const char *name) {
+  if (n <= NRAYS) return 0;
+  const size_t m = n - NRAYS;
+  const tt_ray *cam = rs->rays + NRAYS;
+  tt_ray *r = malloc(m * sizeof *r), *w1 = malloc(m * sizeof *w1), *w2 = malloc(m * sizeof *w2);
+  tt_hit *h1 = malloc(m * sizeof *h1), *h2 = malloc(m * sizeof *h2);
+  uint8_t *o2 = malloc(m);
+  long wrong = 0;
+  for (int variant = 0; variant < 2; variant++) {
+    memcpy(r, cam, m * sizeof *r);
+    if (variant == 1)
+      for (size_t i = 0; i < m; i++) {
+        if (i % 5 == 1) r[i].tnear = 3.0f + 0.001f * (float)(i % 17);
+        if (i % 7 == 2) r[i].tfar = 3.5f + 0.01f * (float)(i % 13);
+        if (i % 11 == 3) r[i].tfar = r[i].tnear - 1.0f;  /* empty interval */
+        if (i % 97 == 4) r[i].dir[1] = NAN;
+        if (i % 89 == 5) r[i].dir[0] = INFINITY;
+      }
+    memcpy(w1, r, m * sizeof *r);
+    memcpy(w2, r, m * sizeof *r);
+    for (size_t i = 0; i < m; i++) A->intersect1(acc, &w1[i], &h1[i]);
+    /* odd pieces: a long run, a 1-ray and a 2-ray call, the rest */
+    size_t cuts[] = {0, m / 2 + 3, m / 2 + 4, m / 2 + 6, m};
+    for (int c = 0; c < 4; c++) {
+      A->intersect_stream(acc, w2 + cuts[c], h2 + cuts[c], cuts[c + 1] - cuts[c]);
+      A->occluded_stream(acc, r + cuts[c], o2 + cuts[c], cuts[c + 1] - cuts[c]);
+    }
+    size_t ties = 0;
+    for (size_t i = 0; i < m; i++) {
+      const int miss1 = h1[i].geom_id == TT_INVALID_ID, miss2 = h2[i].geom_id == TT_INVALID_ID;
+      int bad = miss1 != miss2 || (!miss1 && fabsf(h1[i].t - h2[i].t) > 4e-7f * fabsf(h1[i].t)) ||
+                (!miss2 && w2[i].tfar != h2[i].t) || (miss2 && w2[i].tfar != r[i].tfar);
+      int same_tri = h1[i].geom_id == h2[i].geom_id && h1[i].prim_id == h2[i].prim_id;
+      if (!bad && !miss1 && !same_tri) ties++;
+      if (!bad && !miss1 && same_tri)
+        bad = h1[i].t != h2[i].t || h1[i].u != h2[i].u || h1[i].v != h2[i].v ||
+              memcmp(h1[i].ng, h2[i].ng, sizeof h1[i].ng) != 0;
+      CHECK_MSG(!bad, "one-origin stream ray %zu (variant %d) [%s]: %u/%u t=%.9g vs intersect1 "
+                "%u/%u t=%.9g", i, variant, name, h2[i].geom_id, h2[i].prim_id, (double)h2[i].t,
+                h1[i].geom_id, h1[i].prim_id, (double)h1[i].t);
+      wrong += bad;
+      if (variant == 0) wrong += check_hit(rs, NRAYS + i, &w2[i], &h2[i], "one-origin stream", name);
+      int o1 = A->occluded1(acc, &r[i]);
+      CHECK_MSG(o1 == o2[i], "one-origin occluded_stream ray %zu (variant %d) [%s]: %d vs %d", i,
+                variant, name, o2[i], o1);
+      wrong += o1 != o2[i];
+    }
+    CHECK_MSG(ties <= m / 200, "[%s]: %zu ties of %zu one-origin rays", name, ties, m);
+  }
+  free(r), free(w1), free(w2), free(h1), free(h2), free(o2);
+  return wrong;
+}
+
 /* Status of the last build check_config ran. */
 static tt_status ae_last_build_status;
 
@@ -137,6 +197,7 @@ static inline long check_config(const tt_accel_iface *A, const tt_config *cfg, c
       wrong += o1 != expect || occ[i] != expect;
     }
   }
+  wrong += check_one_origin_streams(A, acc, rs, n, name);
   free(w1), free(w2), free(h1), free(h2), free(occ);
   A->destroy(acc);
   return wrong;

@@ -392,9 +392,7 @@ static enum RTCIntersectContextFlags tt__chunk_coherence(const tt_ray *rays, siz
 static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_hit *hits,
                                         size_t count) {
   if (accel->bvh) {
-    /* Our kernels are single-ray; a stream is a loop without any conversion. */
-    const tt__isect_fn fn = accel->kernels.intersect;
-    for (size_t i = 0; i < count; i++) fn(accel->bvh, &rays[i], &hits[i]);
+    accel->kernels.intersect_stream(accel->bvh, rays, hits, count);
     return;
   }
   struct RTCRayHit buf[TT__CHUNK];
@@ -416,8 +414,7 @@ static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_
 static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays,
                                        uint8_t *occluded, size_t count) {
   if (accel->bvh) {
-    const tt__occl_fn fn = accel->kernels.occluded;
-    for (size_t i = 0; i < count; i++) occluded[i] = (uint8_t)fn(accel->bvh, &rays[i]);
+    accel->kernels.occluded_stream(accel->bvh, rays, occluded, count);
     return;
   }
   struct RTCRay buf[TT__CHUNK];

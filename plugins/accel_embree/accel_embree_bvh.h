@@ -15,18 +15,18 @@
 #include <tunetrace/ray.h>
 
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdint.h>
 
 /* Child references (32 bits):
- *   inner node: bit 31 clear, bits 0..30 = node index;
+ *   inner node: bit 31 clear, bits 0..30 = node index (BVH2: the node's line);
  *   leaf:       bit 31 set, bits 27..30 = triangle pairs - 1 (1..16 pairs, 2..32 triangle
- *               slots), bits 0..26 = index of the leaf's first triangle slot.
+ *               slots), bits 0..26 = the leaf block's first line in the arena.
  * TT__REF_NONE marks "no tree" (a scene whose triangles are all invalid). */
 #define TT__REF_LEAF 0x80000000u
 #define TT__REF_NONE 0xFFFFFFFFu
 #define TT__LEAF_SHIFT 27
 #define TT__LEAF_MAX_PAIRS 16u
-#define TT__LEAF_MAX_FIRST ((1u << TT__LEAF_SHIFT) - 1u)
 #define TT__NODE_MAX_INDEX 0x7FFFFFFEu
 
 /* Box rows of a BVH4/BVH8 node: lower x, upper x, lower y, upper y, lower z, upper z (so
@@ -59,31 +59,30 @@ typedef struct tt__node8 {
   uint32_t pad[8];
 } tt__node8; /* 256 bytes */
 
-/* Leaf triangles live in one pool of 48-byte slots (12 floats, one triangle each), grouped
- * into SoA packets: a leaf of n triangles has ceil(n/2) pairs of slots, i.e. floor(pairs/2)
- * packets of width W = 4 (192 bytes) followed, when pairs is odd, by one packet of width
- * W = 2 (96 bytes). A BVH2 leaf of 1-2 triangles thus takes 96 bytes, not a 4-wide
- * packet's 192. Packet rows (W floats each, row r lane l at float r * W + l; 16-byte
- * aligned): 0-2 v0; 3-5 / 6-8 e1 = v0 - v1 and e2 = v2 - v0 (fast Moller-Trumbore test),
- * or v1 and v2 themselves when the tree is robust (the watertight test must see the
- * original vertices: reconstructing them from edges would round and open cracks); 9-11
- * Ng = cross(v1 - v0, v2 - v0). Unused lanes have all-zero geometry (determinant 0: never
- * hit). Triangle j of a leaf is in slot first + j whatever its packet; its ids are in a
- * parallel array (read once per ray, for the final hit, so a leaf test touches no line it
- * does not use). */
+/* Leaf triangles live in 48-byte slots (12 floats, one triangle each), grouped into SoA
+ * packets: a leaf of n triangles has ceil(n/2) pairs of slots, i.e. floor(pairs/2) packets
+ * of width W = 4 (192 bytes) followed, when pairs is odd, by one packet of width W = 2 (96
+ * bytes). A leaf of 1-2 triangles thus takes 96 bytes, not a 4-wide packet's 192. Packet
+ * rows (W floats each, row r lane l at float r * W + l; 16-byte aligned): 0-2 v0; 3-5 / 6-8
+ * e1 = v0 - v1 and e2 = v2 - v0 (fast Moller-Trumbore test), or v1 and v2 themselves when
+ * the tree is robust (the watertight test must see the original vertices: reconstructing
+ * them from edges would round and open cracks); 9-11 Ng = cross(v1 - v0, v2 - v0). Unused
+ * lanes have all-zero geometry (determinant 0: never hit). Triangle j of a leaf is slot j
+ * whatever its packet; its ids follow the packets (below). */
 #define TT__SLOT_FLOATS 12
 typedef struct tt__id {
   uint32_t geom, prim;  /* TT_INVALID_ID for an unused slot */
 } tt__id;
 
-/* BVH2 layout: one arena of 64-byte lines holding nodes and leaves interleaved in
- * pre-order (a node, then its first child's subtree, then its second's), so a leaf child
- * sits next to its parent and every reference - node, leaf, or grand[] hint - is a line
- * index: inner: bit 31 clear, bits 0..26 the node's line; leaf: bit 31 set, bits 27..30
- * pairs - 1, bits 0..26 the leaf block's first line. A leaf block of p triangle pairs is
- * its packets (as above: floor(p/2) 4-wide, one 2-wide when p is odd; p * 96 bytes) then
- * its 2p ids (p * 16 bytes), padded to whole lines: a 1-2 triangle leaf is exactly two
- * lines, and the hit's ids come from a line the test already read. */
+/* Leaf blocks live in an arena of 64-byte lines: a leaf of p triangle pairs is its packets
+ * (as above: floor(p/2) 4-wide, one 2-wide when p is odd; p * 96 bytes) then its 2p ids
+ * (p * 16 bytes), padded to whole lines: a 1-2 triangle leaf is exactly two lines, and the
+ * hit's ids come from a line the leaf test already read (a separate id array cost one more
+ * cache miss per ray: 8% of the BVH8 kernel's time in a render profile). BVH2 keeps its
+ * nodes in the same arena, interleaved with the leaves in pre-order (a node, then its first
+ * child's subtree, then its second's), so a leaf child sits next to its parent and every
+ * reference - node, leaf, or grand[] hint - is a line index. BVH4/8 nodes are in their own
+ * array (node index * 32 * N bytes). */
 #define TT__LINE2_MASK ((1u << TT__LEAF_SHIFT) - 1u)
 
 /* A built tree. */
@@ -91,13 +90,11 @@ typedef struct tt__bvh {
   int width;             /* 2, 4 or 8 */
   int robust;            /* packets hold vertices; watertight test, conservative boxes */
   uint32_t root;         /* a child reference, or TT__REF_NONE */
-  void *arena;           /* BVH2: nodes and leaves (above), 64-byte aligned; else NULL */
-  void *nodes;           /* BVH4/8: tt__node{4,8}[node_count], 64-byte aligned */
-  float *slots;          /* BVH4/8: slot_count triangle slots of 12 floats, 64-byte aligned */
-  tt__id *ids;           /* BVH4/8: slot_count ids, parallel to slots */
+  void *arena;           /* leaf blocks (BVH2: and nodes), 64-byte lines, 64-byte aligned */
+  void *nodes;           /* BVH4/8: tt__node{4,8}[node_count], 64-byte aligned; else NULL */
   uint64_t arena_lines;
   uint64_t node_count;
-  uint64_t slot_count;
+  uint64_t slot_count;   /* triangle slots (2 per pair) */
   /* Traversal counters, updated (relaxed, once per ray) only by the counting kernels. */
   _Atomic uint64_t c_rays, c_nodes, c_tris;
 } tt__bvh;
@@ -106,9 +103,17 @@ typedef struct tt__bvh {
 typedef void (*tt__isect_fn)(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit);
 typedef int (*tt__occl_fn)(const tt__bvh *bvh, const tt_ray *ray);
 
+/* Stream query kernels: per ray the same answers (see accel_embree_trav.c, packets). */
+typedef void (*tt__isect_stream_fn)(const tt__bvh *bvh, tt_ray *rays, tt_hit *hits,
+                                    size_t count);
+typedef void (*tt__occl_stream_fn)(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occluded,
+                                   size_t count);
+
 typedef struct tt__kernels {
   tt__isect_fn intersect;
   tt__occl_fn occluded;
+  tt__isect_stream_fn intersect_stream;
+  tt__occl_stream_fn occluded_stream;
 } tt__kernels;
 
 /* Kernel tables, indexed [width index (2,4,8 -> 0,1,2)][robust][counters]. One per

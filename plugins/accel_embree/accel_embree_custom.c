@@ -148,18 +148,11 @@ static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim,
 typedef struct tt__flat {
   const tt_scene *scene;
   int N, robust;
-  char *arena;                  /* BVH2: capacity arena_cap lines (accel_embree_bvh.h) */
+  char *arena;                  /* lines: leaf blocks (BVH2: and nodes), accel_embree_bvh.h */
   uint64_t arena_lines, arena_cap;
   char *nodes;                  /* BVH4/8: capacity node_cap nodes of 32 * N bytes */
   uint64_t node_count, node_cap;
-  float *slots;                 /* triangle slots (accel_embree_bvh.h) */
-  tt__id *ids;                  /* parallel to slots */
-  uint64_t slot_count, slot_cap;  /* slots used (incl. gaps) and allocated */
-  /* 4-wide packets start on a slot index divisible by 4 (192-byte multiples: cache-line
-   * aligned). Aligning a leaf may skip 2 slots; such gaps are filled by later leaves of
-   * 1-2 triangles (a single 2-wide packet), LIFO, up to 64 pending. */
-  uint64_t gaps[64];
-  int ngaps;
+  uint64_t slot_count;          /* triangle slots used (2 per pair) */
   uint64_t leaves;
   double area_inner, area_leaf_tris;
   uint32_t max_depth;
@@ -222,47 +215,17 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
       f->error = "a leaf holds more than 32 triangles";
       return TT__REF_NONE;
     }
-    if (f->N == 2) {
-      /* BVH2: a leaf block in the arena, packets then ids, whole lines. */
-      const uint64_t line = f->arena_lines, lines = (112u * pairs + 63u) / 64u;
-      if (line + lines > f->arena_cap || line + lines - 1 > TT__LINE2_MASK) {
-        f->error = line + lines > f->arena_cap ? "more BVH2 lines than counted"
-                                               : "BVH2 arena too large for 27-bit lines";
-        return TT__REF_NONE;
-      }
-      f->arena_lines += lines;
-      float *base = (float *)(f->arena + line * 64u);
-      tt__id *id = (tt__id *)((char *)base + (size_t)pairs * 96u);
-      for (uint32_t i = 0; i < nslots; i++) id[i].geom = id[i].prim = TT_INVALID_ID;
-      for (uint32_t j = 0; j < l->count; j++) {
-        int W = j < 4 * wide ? 4 : 2;
-        uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;
-        tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j],
-                     l->ids[2 * j], l->ids[2 * j + 1]);
-      }
-      f->slot_count += nslots;
-      f->leaves++;
-      f->area_leaf_tris += tt__area(lower, upper) * l->count;
-      return TT__REF_LEAF | ((pairs - 1) << TT__LEAF_SHIFT) | (uint32_t)line;
-    }
-    uint64_t first;
-    if (wide == 0 && f->ngaps > 0) {
-      first = f->gaps[--f->ngaps];
-    } else {
-      if (wide > 0 && f->slot_count % 4 != 0) {  /* slot counts are even: it is 2 */
-        if (f->ngaps < 64) f->gaps[f->ngaps++] = f->slot_count;
-        f->slot_count += 2;
-      }
-      first = f->slot_count;
-      f->slot_count += nslots;
-    }
-    if (f->slot_count > f->slot_cap || first + nslots - 1 > TT__LEAF_MAX_FIRST) {
-      f->error = f->slot_count > f->slot_cap ? "more triangle slots than counted"
-                                             : "too many triangle slots for 27-bit indices";
+    /* A leaf block in the arena: packets then ids, whole lines (accel_embree_bvh.h), so the
+     * hit's ids come from lines the leaf test already read. */
+    const uint64_t line = f->arena_lines, lines = (112u * pairs + 63u) / 64u;
+    if (line + lines > f->arena_cap || line + lines - 1 > TT__LINE2_MASK) {
+      f->error = line + lines > f->arena_cap ? "more leaf lines than counted"
+                                             : "leaf arena too large for 27-bit lines";
       return TT__REF_NONE;
     }
-    float *base = f->slots + first * TT__SLOT_FLOATS;
-    tt__id *id = f->ids + first;
+    f->arena_lines += lines;
+    float *base = (float *)(f->arena + line * 64u);
+    tt__id *id = (tt__id *)((char *)base + (size_t)pairs * 96u);
     for (uint32_t i = 0; i < nslots; i++) id[i].geom = id[i].prim = TT_INVALID_ID;
     for (uint32_t j = 0; j < l->count; j++) {
       /* Slot j: lane j % 4 of 4-wide packet j / 4, or lane j - 4 * wide of the 2-wide
@@ -272,9 +235,10 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
       tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j],
                    l->ids[2 * j], l->ids[2 * j + 1]);
     }
+    f->slot_count += nslots;
     f->leaves++;
     f->area_leaf_tris += tt__area(lower, upper) * l->count;
-    return TT__REF_LEAF | ((pairs - 1) << TT__LEAF_SHIFT) | (uint32_t)first;
+    return TT__REF_LEAF | ((pairs - 1) << TT__LEAF_SHIFT) | (uint32_t)line;
   }
   const tt__tmp_inner *n = tmp;
   if (f->node_count >= f->node_cap || f->node_count > TT__NODE_MAX_INDEX) {
@@ -297,13 +261,29 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
    * recursion keeps the code obviously independent of it. */
   uint32_t refs[8];
   float box[8][6];
+  /* Children in order of decreasing surface area (the builder gives them by primitive
+   * count). Closest-hit traversal orders hit children by distance whatever their lanes, so
+   * this only decides occlusion, which visits children in lane order and stops at the
+   * first hit: the child a random ray most likely hits (large triangles high in the tree,
+   * a floor, a wall) goes first. The tree itself is unchanged. */
+  int order[8];
+  double area[8];
+  const int kids = n->count < 8 ? (int)n->count : 8;
+  for (int i = 0; i < kids; i++) {
+    const struct RTCBounds *b = &n->bounds[i];
+    const float lo[3] = {b->lower_x, b->lower_y, b->lower_z}, hi[3] = {b->upper_x, b->upper_y, b->upper_z};
+    area[i] = tt__area(lo, hi);
+    int j = i;
+    for (; j > 0 && area[order[j - 1]] < area[i]; j--) order[j] = order[j - 1];
+    order[j] = i;
+  }
   for (int i = 0; i < N; i++) {
     refs[i] = TT__REF_NONE;
-    if ((uint32_t)i < n->count) {
-      const struct RTCBounds *b = &n->bounds[i];
+    if (i < kids) {
+      const struct RTCBounds *b = &n->bounds[order[i]];
       box[i][0] = b->lower_x, box[i][1] = b->lower_y, box[i][2] = b->lower_z;
       box[i][3] = b->upper_x, box[i][4] = b->upper_y, box[i][5] = b->upper_z;
-      refs[i] = tt__flatten(f, n->child[i], depth + 1, box[i], box[i] + 3);
+      refs[i] = tt__flatten(f, n->child[order[i]], depth + 1, box[i], box[i] + 3);
     }
   }
   float *rows = (float *)(N == 2 ? f->arena + index * 64u : f->nodes + index * (uint64_t)(32 * N));
@@ -342,8 +322,6 @@ void tt__custom_free(tt__bvh *bvh) {
   if (!bvh) return;
   free(bvh->arena);
   free(bvh->nodes);
-  free(bvh->slots);
-  free(bvh->ids);
   free(bvh);
 }
 
@@ -550,92 +528,46 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   f.N = bf;
   f.robust = bvh->robust;
   f.node_cap = atomic_load(&ctx.inner);
-  if (bf == 2) {
-    /* Nodes, then leaf blocks of ceil(112 * pairs / 64) lines (at most 63 bytes of
-     * padding each); the exact size is known after the layout pass. */
-    const uint64_t pairs = atomic_load(&ctx.slots) / 2, leaves = atomic_load(&ctx.leaves);
-    f.arena_cap = f.node_cap + (112u * pairs + 63u * leaves) / 64u + 1u;
-    size_t cap_bytes = (size_t)f.arena_cap * 64u;
-    f.arena = tt__tree_alloc(cap_bytes);
-    if (!f.arena) {
-      rtcReleaseBVH(args.bvh);
-      tt__custom_free(bvh);
-      return tt_set_error(TT_ERR_OUT_OF_MEMORY,
-                          "accel_embree: cannot allocate the BVH (%zu bytes)", cap_bytes);
-    }
-    memset(f.arena, 0, cap_bytes);
-    bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
-    rtcReleaseBVH(args.bvh);
-    size_t bytes = (size_t)f.arena_lines * 64u;
-    if (!f.error && f.arena_lines < f.arena_cap) {  /* exact-size copy */
-      char *a = tt__tree_alloc(bytes);
-      if (a) {
-        memcpy(a, f.arena, bytes);
-        free(f.arena);
-        f.arena = a;
-      } else {
-        bytes = cap_bytes;
-      }
-    }
-    bvh->arena = f.arena;
-    bvh->arena_lines = f.arena_lines;
-    bvh->node_count = f.node_count;
-    bvh->slot_count = f.slot_count;
-    if (f.error) {
-      tt__custom_free(bvh);
-      return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
-    }
-    stats->memory_bytes = sizeof *bvh + bytes;
-  } else {
-  f.slot_cap = atomic_load(&ctx.slots) + 2 * atomic_load(&ctx.leaves);  /* + alignment gaps */
-  size_t node_bytes = (size_t)f.node_cap * (size_t)(32 * bf);
-  size_t slot_bytes = (size_t)f.slot_cap * TT__SLOT_FLOATS * sizeof(float);
-  size_t id_bytes = (size_t)f.slot_cap * sizeof(tt__id);
-  f.nodes = tt__tree_alloc(node_bytes);
-  f.slots = tt__tree_alloc(slot_bytes);
-  f.ids = tt__tree_alloc(id_bytes);
-  if ((node_bytes && !f.nodes) || (slot_bytes && !f.slots) || (id_bytes && !f.ids)) {
+  /* Leaf blocks of ceil(112 * pairs / 64) lines (at most 63 bytes of padding each), after
+   * the nodes for BVH2; the exact size is known after the layout pass. */
+  const uint64_t pairs = atomic_load(&ctx.slots) / 2, leaves = atomic_load(&ctx.leaves);
+  f.arena_cap = (bf == 2 ? f.node_cap : 0) + (112u * pairs + 63u * leaves) / 64u + 1u;
+  size_t cap_bytes = (size_t)f.arena_cap * 64u;
+  size_t node_bytes = bf == 2 ? 0 : (size_t)f.node_cap * (size_t)(32 * bf);
+  f.arena = tt__tree_alloc(cap_bytes);
+  f.nodes = node_bytes ? tt__tree_alloc(node_bytes) : NULL;
+  if (!f.arena || (node_bytes && !f.nodes)) {
+    free(f.arena);
     free(f.nodes);
-    free(f.slots);
-    free(f.ids);
     rtcReleaseBVH(args.bvh);
     tt__custom_free(bvh);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot allocate the BVH (%zu bytes)",
-                        node_bytes + slot_bytes + id_bytes);
+                        cap_bytes + node_bytes);
   }
-  if (slot_bytes) memset(f.slots, 0, slot_bytes);
-  if (id_bytes) memset(f.ids, 0xFF, id_bytes);  /* TT_INVALID_ID, also in alignment gaps */
+  memset(f.arena, 0, cap_bytes);
   bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
   rtcReleaseBVH(args.bvh);
-  bvh->nodes = f.nodes;
-  if (!f.error && f.slot_count < f.slot_cap) {
-    /* Give back the unused capacity (reserved for alignment gaps): exact-size copies. */
-    size_t sb = (size_t)f.slot_count * TT__SLOT_FLOATS * sizeof(float);
-    size_t ib = (size_t)f.slot_count * sizeof(tt__id);
-    float *ns = tt__tree_alloc(sb);
-    tt__id *ni = tt__tree_alloc(ib);
-    if ((!sb || ns) && (!ib || ni)) {
-      if (sb) memcpy(ns, f.slots, sb);
-      if (ib) memcpy(ni, f.ids, ib);
-      free(f.slots);
-      free(f.ids);
-      f.slots = ns, f.ids = ni;
-      slot_bytes = sb, id_bytes = ib;
-    } else {  /* keep the larger arrays */
-      free(ns);
-      free(ni);
+  size_t bytes = (size_t)f.arena_lines * 64u;
+  if (!f.error && f.arena_lines < f.arena_cap) {  /* exact-size copy */
+    char *a = tt__tree_alloc(bytes);
+    if (a) {
+      memcpy(a, f.arena, bytes);
+      free(f.arena);
+      f.arena = a;
+    } else {
+      bytes = cap_bytes;
     }
   }
-  bvh->slots = f.slots;
-  bvh->ids = f.ids;
+  bvh->arena = f.arena;
+  bvh->nodes = f.nodes;
+  bvh->arena_lines = f.arena_lines;
   bvh->node_count = f.node_count;
   bvh->slot_count = f.slot_count;
   if (f.error) {
     tt__custom_free(bvh);
     return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
   }
-  stats->memory_bytes = sizeof *bvh + node_bytes + slot_bytes + id_bytes;
-  }
+  stats->memory_bytes = sizeof *bvh + bytes + node_bytes;
 
   double root_area = tt__area(root_lo, root_hi);
   stats->nodes = f.node_count;

@@ -217,20 +217,10 @@ TT__INLINE void tt__prefetch(const tt__bvh *bvh, uint32_t ref, int N) {
   const char *p;
   int lines;
   if (ref & TT__REF_LEAF) {
-    /* The leaf's first packet, 3 lines from its line (a 4-wide packet is line aligned, a
-     * 2-wide one of 96 bytes starts at a 32-byte boundary), and the second one of a leaf
-     * of 7-8 triangles (leaves tuned to maxLeafSize 8). */
-    p = (const char *)((uintptr_t)(bvh->slots + (size_t)(ref & TT__LEAF_MAX_FIRST) *
-                                                    TT__SLOT_FLOATS) & ~(uintptr_t)63);
-    _mm_prefetch(p, _MM_HINT_T0);
-    _mm_prefetch(p + 64, _MM_HINT_T0);
-    _mm_prefetch(p + 128, _MM_HINT_T0);
-    if (((ref >> TT__LEAF_SHIFT) & 0xFu) >= 3u) {  /* 4+ pairs: the second packet too */
-      _mm_prefetch(p + 192, _MM_HINT_T0);
-      _mm_prefetch(p + 256, _MM_HINT_T0);
-      _mm_prefetch(p + 320, _MM_HINT_T0);
-    }
-    return;
+    /* The leaf block, up to 8 lines (a 1-2 triangle leaf is 2 lines, 8 triangles 7). */
+    p = (const char *)bvh->arena + ((size_t)(ref & TT__LINE2_MASK) << 6);
+    lines = (int)((112u * (((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u) + 63u) / 64u);
+    if (lines > 8) lines = 8;
   } else {
     p = (const char *)bvh->nodes + (size_t)ref * (size_t)(32 * N);
     lines = N / 2;
@@ -390,13 +380,13 @@ TT__INLINE int tt__leaf_any(const float *pk, uint32_t pairs, const tt__rc *r,
   return q < pairs && tt__tri_test(pk, 2, r, robust, &T, &U, &V, &den, &valid);
 }
 
-/* Leaf fields of a reference (wide trees: slots and ids arrays). */
+/* Leaf fields of a reference: its pairs, its block's packets and ids. */
 TT__INLINE uint32_t tt__leaf_pairs(uint32_t ref) { return ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u; }
 TT__INLINE const float *tt__leaf_pk(const tt__bvh *bvh, uint32_t ref) {
-  return bvh->slots + (size_t)(ref & TT__LEAF_MAX_FIRST) * TT__SLOT_FLOATS;
+  return (const float *)((const char *)bvh->arena + ((size_t)(ref & TT__LINE2_MASK) << 6));
 }
 TT__INLINE const tt__id *tt__leaf_ids(const tt__bvh *bvh, uint32_t ref) {
-  return bvh->ids + (ref & TT__LEAF_MAX_FIRST);
+  return (const tt__id *)(tt__leaf_pk(bvh, ref) + tt__leaf_pairs(ref) * (2 * TT__SLOT_FLOATS));
 }
 
 /* Writes the final hit (or the miss) of a closest-hit query. */
@@ -770,9 +760,12 @@ TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
           tt__prefetch_children(bvh, child, mask, N);
           ref = child[__builtin_ctz((unsigned)mask)];
           mask &= mask - 1;
+          /* The rest pushed from the last lane down, so they are popped in lane order
+           * (the builder's layout puts the child a ray most likely hits first). */
           while (mask) {
-            stack[sp++] = child[__builtin_ctz((unsigned)mask)];
-            mask &= mask - 1;
+            const int i = 31 - __builtin_clz((unsigned)mask);
+            stack[sp++] = child[i];
+            mask &= ~(1 << i);
           }
           continue;
         }
@@ -793,7 +786,426 @@ done:
   return result;
 }
 
+/* ---- packets: 8 rays of one octant traverse together (AVX2 and AVX-512 builds) ----
+ *
+ * Rays that start close together and point the same way (camera rays, shadow rays from a
+ * tile toward a light) visit nearly the same nodes. A packet of 8 such rays fetches each
+ * node once and tests it against all of them with 8-wide operations (one SIMD lane per
+ * ray), so the node's load and the loop around it are paid once for 8 rays. All rays of a
+ * packet share the octant (direction signs), hence the near/far plane of every axis.
+ *
+ * Per ray, the box and triangle tests are the single-ray kernels' arithmetic operation by
+ * operation (same formulas, same order, FMA exactly where they use it), and a lane enters a
+ * node only when its ray hit every box on the way down, as in single-ray traversal; so
+ * occlusion answers are identical, and a closest hit can differ from intersect1's only when
+ * two triangles are hit at distances within rounding of each other (the visiting order
+ * decides such ties). The robust (watertight) and counting kernels have no packet form:
+ * their streams run the single-ray kernels. */
+#if TT__HAVE_AVX2
+#define TT__K 8
+#define TT__PSTACK (TT__STACK + 8)
+
+typedef struct tt__pkt {
+  __m256 o[3], d[3], rd[3], ord[3];
+  __m256 tnear, tfar;    /* tfar: each lane's closest hit so far */
+  int near[3];           /* near-plane row per axis: 2k + sign (the packet's octant) */
+  int n;                 /* lanes holding a ray (the rest never hit anything) */
+  size_t index[TT__K];   /* the lanes' positions in the stream */
+  /* closest hit per lane, as tt__best */
+  float u[TT__K], v[TT__K];
+  const float *pk[TT__K];
+  int W[TT__K], lane[TT__K];
+  const tt__id *id[TT__K];
+} tt__pkt;
+
+/* Loads `n` rays (indices idx[0..n), all finite with tnear <= tfar and direction signs
+ * `octant`) into a packet, with tt__setup's constants lane by lane. */
+TT__INLINE void tt__pkt_setup(tt__pkt *P, const tt_ray *rays, const size_t *idx, int n,
+                              int octant) {
+  _Alignas(32) float v[14][TT__K];
+  for (int l = 0; l < TT__K; l++) {
+    if (l < n) {
+      const tt_ray *ray = &rays[idx[l]];
+      for (int k = 0; k < 3; k++) {
+        float o = ray->org[k], d = ray->dir[k];
+        float dk = fabsf(d) < 1e-18f ? copysignf(1e-18f, d) : d;
+        float rk = 1.0f / dk;
+        v[k][l] = o, v[3 + k][l] = d, v[6 + k][l] = rk, v[9 + k][l] = o * rk;
+      }
+      v[12][l] = ray->tnear, v[13][l] = ray->tfar;
+      P->index[l] = idx[l];
+    } else {  /* empty lane: an interval no box or triangle passes */
+      for (int k = 0; k < 12; k++) v[k][l] = 0.0f;
+      for (int k = 6; k < 9; k++) v[k][l] = 1.0f;
+      v[12][l] = INFINITY, v[13][l] = -INFINITY;
+      P->index[l] = 0;
+    }
+    P->pk[l] = NULL;
+    P->u[l] = P->v[l] = 0.0f;
+  }
+  for (int k = 0; k < 3; k++) {
+    P->o[k] = _mm256_load_ps(v[k]);
+    P->d[k] = _mm256_load_ps(v[3 + k]);
+    P->rd[k] = _mm256_load_ps(v[6 + k]);
+    P->ord[k] = _mm256_load_ps(v[9 + k]);
+    P->near[k] = 2 * k + ((octant >> k) & 1);
+  }
+  P->tnear = _mm256_load_ps(v[12]);
+  P->tfar = _mm256_load_ps(v[13]);
+  P->n = n;
+}
+
+/* One child box (near/far plane values per axis for the packet's octant) against the
+ * packet: entry distances, +inf where a lane misses (or is not in `lanes`). As tt__box8. */
+TT__INLINE __m256 tt__pbox(const float *pn[3], const float *pf[3], const tt__pkt *P,
+                           __m256 lanes) {
+  __m256 tn[3], tf[3];
+  for (int k = 0; k < 3; k++) {
+    tn[k] = _mm256_fmsub_ps(_mm256_broadcast_ss(pn[k]), P->rd[k], P->ord[k]);
+    tf[k] = _mm256_fmsub_ps(_mm256_broadcast_ss(pf[k]), P->rd[k], P->ord[k]);
+  }
+  __m256 tmin = _mm256_max_ps(_mm256_max_ps(tn[0], tn[1]), _mm256_max_ps(tn[2], P->tnear));
+  __m256 tmax = _mm256_min_ps(_mm256_min_ps(tf[0], tf[1]), tf[2]);
+  tmax = _mm256_min_ps(tmax, P->tfar);
+  __m256 hit = _mm256_and_ps(_mm256_cmp_ps(tmin, tmax, _CMP_LE_OQ), lanes);
+  return _mm256_blendv_ps(_mm256_set1_ps(INFINITY), tmin, hit);
+}
+
+/* Entry distances of child c of a width-N node for the packet (+inf: missed). */
+TT__INLINE __m256 tt__pchild(const void *node, int c, const tt__pkt *P, int N, __m256 lanes) {
+  const float *pn[3], *pf[3];
+  if (N == 2) {
+    const tt__node2 *n = node;  /* row k: lower c0, lower c1, upper c0, upper c1 */
+    for (int k = 0; k < 3; k++) {
+      const int neg = P->near[k] & 1;
+      pn[k] = &n->b[k][c + 2 * neg];
+      pf[k] = &n->b[k][c + 2 * (neg ^ 1)];
+    }
+  } else {
+    const float *rows = node;
+    for (int k = 0; k < 3; k++) {
+      pn[k] = rows + (size_t)P->near[k] * N + c;
+      pf[k] = rows + (size_t)(P->near[k] ^ 1) * N + c;
+    }
+  }
+  return tt__pbox(pn, pf, P, lanes);
+}
+
+/* Children references of a node (BVH2 nodes keep them after their three rows). */
+TT__INLINE const uint32_t *tt__pchildren(const void *node, int N) {
+  return N == 2 ? ((const tt__node2 *)node)->child : tt__children(node, N);
+}
+
+TT__INLINE const void *tt__pnode(const tt__bvh *bvh, uint32_t ref, int N) {
+  return N == 2 ? (const void *)tt__line2(bvh, ref) : tt__node_at(bvh, ref, N);
+}
+
+/* Prefetch of a child about to be visited or pushed. */
+TT__INLINE void tt__pprefetch(const tt__bvh *bvh, const void *node, int c, int N) {
+  if (N == 2) {
+    const tt__node2 *n = node;
+    tt__pf2(bvh, n->child[c]);
+    tt__pf2(bvh, n->grand[c]);
+  } else {
+    tt__prefetch(bvh, tt__children(node, N)[c], N);
+  }
+}
+
+/* Triangle j of a width-W slot packet against every lane: T, U, V, |det| and validity, as
+ * tt__tri_test computes them for one ray (non-robust). */
+TT__INLINE __m256 tt__ptri(const float *pk, int W, int j, const tt__pkt *P, __m256 lanes,
+                           __m256 *T_out, __m256 *U_out, __m256 *V_out, __m256 *den_out) {
+  const __m256 sign = _mm256_set1_ps(-0.0f), zero = _mm256_setzero_ps();
+#define TT__R(r) _mm256_broadcast_ss(pk + (r) * W + j)
+  __m256 cx = _mm256_sub_ps(TT__R(0), P->o[0]);
+  __m256 cy = _mm256_sub_ps(TT__R(1), P->o[1]);
+  __m256 cz = _mm256_sub_ps(TT__R(2), P->o[2]);
+  __m256 rx = _mm256_sub_ps(_mm256_mul_ps(cy, P->d[2]), _mm256_mul_ps(cz, P->d[1]));
+  __m256 ry = _mm256_sub_ps(_mm256_mul_ps(cz, P->d[0]), _mm256_mul_ps(cx, P->d[2]));
+  __m256 rz = _mm256_sub_ps(_mm256_mul_ps(cx, P->d[1]), _mm256_mul_ps(cy, P->d[0]));
+  __m256 nx = TT__R(9), ny = TT__R(10), nz = TT__R(11);
+  __m256 den = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, P->d[0]), _mm256_mul_ps(ny, P->d[1])),
+                             _mm256_mul_ps(nz, P->d[2]));
+  __m256 sgn = _mm256_and_ps(den, sign);
+  __m256 absden = _mm256_xor_ps(den, sgn);
+  __m256 U = _mm256_xor_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(rx, TT__R(6)),
+                                                       _mm256_mul_ps(ry, TT__R(7))),
+                                         _mm256_mul_ps(rz, TT__R(8))), sgn);
+  __m256 V = _mm256_xor_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(rx, TT__R(3)),
+                                                       _mm256_mul_ps(ry, TT__R(4))),
+                                         _mm256_mul_ps(rz, TT__R(5))), sgn);
+  __m256 valid = _mm256_and_ps(_mm256_cmp_ps(U, zero, _CMP_GE_OQ), _mm256_cmp_ps(V, zero, _CMP_GE_OQ));
+  valid = _mm256_and_ps(valid, _mm256_cmp_ps(_mm256_add_ps(U, V), absden, _CMP_LE_OQ));
+  valid = _mm256_and_ps(valid, _mm256_cmp_ps(absden, zero, _CMP_GT_OQ));
+  valid = _mm256_and_ps(valid, lanes);
+  __m256 T = _mm256_xor_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, cx), _mm256_mul_ps(ny, cy)),
+                                         _mm256_mul_ps(nz, cz)), sgn);
+#undef TT__R
+  valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, P->tnear), _CMP_GE_OQ));
+  valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, P->tfar), _CMP_LE_OQ));
+  *T_out = T, *U_out = U, *V_out = V, *den_out = absden;
+  return valid;
+}
+
+/* One slot packet of a leaf for a closer hit, lane by lane as tt__leaf_packet: the nearest
+ * valid triangle (the first on ties) wins if not beyond the lane's hit so far. */
+TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids, tt__pkt *P,
+                                 __m256 lanes) {
+  _Alignas(32) float tv[4][TT__K], U[4][TT__K], V[4][TT__K], D[4][TT__K];
+  __m256 any = _mm256_setzero_ps(), mn = _mm256_set1_ps(INFINITY);
+  for (int j = 0; j < W; j++) {
+    __m256 T, u, v, den;
+    __m256 valid = tt__ptri(pk, W, j, P, lanes, &T, &u, &v, &den);
+    __m256 t = _mm256_blendv_ps(_mm256_set1_ps(INFINITY), _mm256_div_ps(T, den), valid);
+    _mm256_store_ps(tv[j], t);
+    _mm256_store_ps(U[j], u);
+    _mm256_store_ps(V[j], v);
+    _mm256_store_ps(D[j], den);
+    mn = _mm256_min_ps(mn, t);
+    any = _mm256_or_ps(any, valid);
+  }
+  int acc = _mm256_movemask_ps(_mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
+  if (!acc) return;
+  _Alignas(32) float m8[TT__K];
+  _mm256_store_ps(m8, mn);
+  for (; acc; acc &= acc - 1) {
+    const int l = __builtin_ctz((unsigned)acc);
+    int j = 0;
+    while (j < W - 1 && tv[j][l] != m8[l]) j++;
+    P->u[l] = U[j][l] / D[j][l];
+    P->v[l] = V[j][l] / D[j][l];
+    P->pk[l] = pk;
+    P->W[l] = W;
+    P->lane[l] = j;
+    P->id[l] = ids + j;
+  }
+  P->tfar = _mm256_blendv_ps(P->tfar, mn,
+                             _mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
+}
+
+/* Closest hits of one packet in a width-N tree (non-robust). Stack entries carry each
+ * lane's entry distance; a popped entry continues with the lanes it can still improve. */
+TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
+  uint32_t sref[TT__PSTACK];
+  _Alignas(32) float sdist[TT__PSTACK][TT__K];
+  int sp = 0;
+  uint32_t ref = bvh->root;
+  __m256 cur = P->tnear;  /* lanes in this subtree: entry distance, +inf if not */
+  for (;;) {
+    __m256 lanes = _mm256_cmp_ps(cur, P->tfar, _CMP_LE_OQ);
+    if (!(ref & TT__REF_LEAF)) {
+      const void *node = tt__pnode(bvh, ref, N);
+      const uint32_t *child = tt__pchildren(node, N);
+      uint32_t next = TT__REF_NONE;
+      __m256 nextd = cur;
+      for (int c = 0; c < N; c++) {
+        __m256 dc = tt__pchild(node, c, P, N, lanes);
+        __m256 hit = _mm256_cmp_ps(dc, _mm256_set1_ps(INFINITY), _CMP_LT_OQ);
+        if (!_mm256_movemask_ps(hit)) continue;
+        tt__pprefetch(bvh, node, c, N);
+        if (next == TT__REF_NONE) {
+          next = child[c], nextd = dc;
+        } else if (_mm256_movemask_ps(_mm256_cmp_ps(dc, nextd, _CMP_LT_OQ))) {
+          sref[sp] = next;  /* the new child is nearer for some lane: visit it first */
+          _mm256_store_ps(sdist[sp], nextd);
+          sp++;
+          next = child[c], nextd = dc;
+        } else {
+          sref[sp] = child[c];
+          _mm256_store_ps(sdist[sp], dc);
+          sp++;
+        }
+      }
+      if (next != TT__REF_NONE) {
+        ref = next, cur = nextd;
+        continue;
+      }
+    } else {
+      const uint32_t pairs = tt__leaf_pairs(ref);
+      const float *pk;
+      const tt__id *ids;
+      if (N == 2) {
+        pk = (const float *)tt__line2(bvh, ref);
+        ids = (const tt__id *)(pk + pairs * (2 * TT__SLOT_FLOATS));
+      } else {
+        pk = tt__leaf_pk(bvh, ref);
+        ids = tt__leaf_ids(bvh, ref);
+      }
+      uint32_t q = 0;
+      for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
+        tt__pleaf_packet(pk, 4, ids + 2 * q, P, lanes);
+      if (q < pairs) tt__pleaf_packet(pk, 2, ids + 2 * q, P, lanes);
+    }
+    for (;;) {  /* pop the next entry some lane can still improve on */
+      if (sp == 0) return;
+      --sp;
+      __m256 d = _mm256_load_ps(sdist[sp]);
+      if (_mm256_movemask_ps(_mm256_cmp_ps(d, P->tfar, _CMP_LE_OQ))) {
+        ref = sref[sp], cur = d;
+        break;
+      }
+    }
+  }
+}
+
+/* Occlusion of one packet: children in lane order, a lane retires at its first hit. */
+TT__INLINE int tt__poccluded(const tt__bvh *bvh, const tt__pkt *P, const int N) {
+  uint32_t sref[TT__PSTACK];
+  int smask[TT__PSTACK];
+  int sp = 0;
+  const int all = (1 << P->n) - 1;
+  int done = 0;
+  uint32_t ref = bvh->root;
+  int lanes = all;
+  for (;;) {
+    if (!(ref & TT__REF_LEAF)) {
+      const void *node = tt__pnode(bvh, ref, N);
+      const uint32_t *child = tt__pchildren(node, N);
+      const __m256 lv = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+          _mm256_and_si256(_mm256_set1_epi32(lanes), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+          _mm256_setzero_si256()));
+      uint32_t next = TT__REF_NONE;
+      int nextm = 0;
+      for (int c = N - 1; c >= 0; c--) {  /* pushed last to first: lane order is visit order */
+        __m256 dc = tt__pchild(node, c, P, N, lv);
+        int m = _mm256_movemask_ps(_mm256_cmp_ps(dc, _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
+        if (!m) continue;
+        tt__pprefetch(bvh, node, c, N);
+        if (next != TT__REF_NONE) {
+          sref[sp] = next, smask[sp] = nextm;
+          sp++;
+        }
+        next = child[c], nextm = m;
+      }
+      if (next != TT__REF_NONE) {
+        ref = next, lanes = nextm;
+        continue;
+      }
+    } else {
+      const uint32_t pairs = tt__leaf_pairs(ref);
+      const float *pk = N == 2 ? (const float *)tt__line2(bvh, ref) : tt__leaf_pk(bvh, ref);
+      const __m256 lv = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+          _mm256_and_si256(_mm256_set1_epi32(lanes), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+          _mm256_setzero_si256()));
+      __m256 hitv = _mm256_setzero_ps();
+      uint32_t q = 0;
+      for (; q < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS) {
+        const int W = q + 1 < pairs ? 4 : 2;
+        for (int j = 0; j < W; j++) {
+          __m256 T, U, V, den;
+          hitv = _mm256_or_ps(hitv, tt__ptri(pk, W, j, P, lv, &T, &U, &V, &den));
+        }
+      }
+      done |= _mm256_movemask_ps(hitv);
+      if (done == all) return done;
+    }
+    for (;;) {
+      if (sp == 0) return done;
+      --sp;
+      lanes = smask[sp] & ~done;
+      if (lanes) {
+        ref = sref[sp];
+        break;
+      }
+    }
+  }
+}
+
+/* Streams through packets: rays are bucketed by octant (in chunks of 256, in stream order
+ * within an octant) and traced 8 at a time; rays that can hit nothing get their miss from
+ * the single-ray kernel, which handles them in its setup. */
+#define TT__PCHUNK 256
+
+TT__INLINE int tt__ray_octant(const tt_ray *r) {
+  for (int k = 0; k < 3; k++)
+    if (!isfinite(r->org[k]) || !isfinite(r->dir[k])) return -1;
+  if (!(r->tnear <= r->tfar)) return -1;
+  int o = 0;
+  for (int k = 0; k < 3; k++) {
+    float d = r->dir[k];
+    float dk = fabsf(d) < 1e-18f ? copysignf(1e-18f, d) : d;
+    o |= (signbit(dk) ? 1 : 0) << k;
+  }
+  return o;
+}
+
+/* Buckets rays [base, base + n) by octant into `idx`; returns the bucket ends in `end`.
+ * Rays with no octant (invalid) go to bucket 8. */
+TT__INLINE void tt__bucket(const tt_ray *rays, size_t base, int n, size_t *idx, int end[9]) {
+  signed char oct[TT__PCHUNK];
+  int cnt[9] = {0};
+  for (int i = 0; i < n; i++) {
+    int o = tt__ray_octant(&rays[base + i]);
+    oct[i] = (signed char)(o < 0 ? 8 : o);
+    cnt[oct[i]]++;
+  }
+  int start[9], acc = 0;
+  for (int b = 0; b < 9; b++) start[b] = acc, acc += cnt[b], end[b] = acc;
+  for (int i = 0; i < n; i++) idx[start[oct[i]]++] = base + (size_t)i;
+}
+
+TT__INLINE void tt__pintersect_stream(const tt__bvh *bvh, tt_ray *rays, tt_hit *hits,
+                                      size_t count, const int N, tt__isect_fn single) {
+  size_t idx[TT__PCHUNK];
+  for (size_t base = 0; base < count; base += TT__PCHUNK) {
+    const int n = (int)(count - base < TT__PCHUNK ? count - base : TT__PCHUNK);
+    int end[9];
+    tt__bucket(rays, base, n, idx, end);
+    for (int i = end[7]; i < end[8]; i++) single(bvh, &rays[idx[i]], &hits[idx[i]]);
+    for (int b = 0, first = 0; b < 8; first = end[b], b++) {
+      for (int i = first; i < end[b]; i += TT__K) {
+        const int m = end[b] - i < TT__K ? end[b] - i : TT__K;
+        if (m < 3 || bvh->root == TT__REF_NONE) {  /* too few rays for a packet */
+          for (int l = 0; l < m; l++) single(bvh, &rays[idx[i + l]], &hits[idx[i + l]]);
+          continue;
+        }
+        tt__pkt P;
+        tt__pkt_setup(&P, rays, idx + i, m, b);
+        tt__pintersect(bvh, &P, N);
+        for (int l = 0; l < m; l++) {
+          tt__best best = {0.0f, P.u[l], P.v[l], P.pk[l], P.W[l], P.lane[l], P.id[l]};
+          _Alignas(32) float tf[TT__K];
+          _mm256_store_ps(tf, P.tfar);
+          best.t = tf[l];
+          const size_t r = P.index[l];
+          tt__finish(bvh, &best, &rays[r], &hits[r]);
+        }
+      }
+    }
+  }
+}
+
+TT__INLINE void tt__poccluded_stream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ,
+                                     size_t count, const int N, tt__occl_fn single) {
+  size_t idx[TT__PCHUNK];
+  for (size_t base = 0; base < count; base += TT__PCHUNK) {
+    const int n = (int)(count - base < TT__PCHUNK ? count - base : TT__PCHUNK);
+    int end[9];
+    tt__bucket(rays, base, n, idx, end);
+    for (int i = end[7]; i < end[8]; i++) occ[idx[i]] = (uint8_t)single(bvh, &rays[idx[i]]);
+    for (int b = 0, first = 0; b < 8; first = end[b], b++) {
+      for (int i = first; i < end[b]; i += TT__K) {
+        const int m = end[b] - i < TT__K ? end[b] - i : TT__K;
+        if (m < 3 || bvh->root == TT__REF_NONE) {
+          for (int l = 0; l < m; l++) occ[idx[i + l]] = (uint8_t)single(bvh, &rays[idx[i + l]]);
+          continue;
+        }
+        tt__pkt P;
+        tt__pkt_setup(&P, rays, idx + i, m, b);
+        int hit = tt__poccluded(bvh, &P, N);
+        for (int l = 0; l < m; l++) occ[P.index[l]] = (uint8_t)((hit >> l) & 1);
+      }
+    }
+  }
+}
+#endif /* TT__HAVE_AVX2 */
+
 /* One intersect/occluded pair per (width, robust, counting). */
+#if TT__HAVE_AVX2
+#  define TT__PACKETS(R, C) (!(R) && !(C))
+#else
+#  define TT__PACKETS(R, C) 0
+#endif
 #define TT__DEF(N, R, C)                                                                    \
   static void tt__isect_##N##_##R##_##C(const tt__bvh *b, tt_ray *ray, tt_hit *h) {         \
     if (N == 2)                                                                             \
@@ -803,13 +1215,50 @@ done:
   }                                                                                         \
   static int tt__occl_##N##_##R##_##C(const tt__bvh *b, const tt_ray *ray) {                \
     return N == 2 ? tt__occluded2(b, ray, R, C) : tt__occluded(b, ray, N, R, C);            \
+  }                                                                                         \
+  static void tt__isects_##N##_##R##_##C(const tt__bvh *b, tt_ray *rays, tt_hit *h,         \
+                                         size_t n) {                                        \
+    TT__PSTREAM_I(N, R, C)                                                                  \
+    for (size_t i = 0; i < n; i++) tt__isect_##N##_##R##_##C(b, &rays[i], &h[i]);           \
+  }                                                                                         \
+  static void tt__occls_##N##_##R##_##C(const tt__bvh *b, const tt_ray *rays, uint8_t *o,   \
+                                        size_t n) {                                         \
+    TT__PSTREAM_O(N, R, C)                                                                  \
+    for (size_t i = 0; i < n; i++) o[i] = (uint8_t)tt__occl_##N##_##R##_##C(b, &rays[i]);   \
   }
+/* Packets pay for coherent streams only (measured: 1.4-2.1x on camera rays, 0.6-1.0x on
+ * diffuse-bounce and occlusion rays of the same scenes, bench: "streams of 1024"); rays
+ * from one origin (camera rays) are the coherent streams integrators make. */
+TT__INLINE int tt__one_origin(const tt_ray *rays, size_t n) {
+  for (size_t i = 1; i < n; i++)
+    if (rays[i].org[0] != rays[0].org[0] || rays[i].org[1] != rays[0].org[1] ||
+        rays[i].org[2] != rays[0].org[2])
+      return 0;
+  return 1;
+}
+#if TT__HAVE_AVX2
+#  define TT__PSTREAM_I(N, R, C)                                                            \
+    if (TT__PACKETS(R, C) && tt__one_origin(rays, n)) {                                     \
+      tt__pintersect_stream(b, rays, h, n, N, tt__isect_##N##_##R##_##C);                   \
+      return;                                                                               \
+    }
+#  define TT__PSTREAM_O(N, R, C)                                                            \
+    if (TT__PACKETS(R, C) && tt__one_origin(rays, n)) {                                     \
+      tt__poccluded_stream(b, rays, o, n, N, tt__occl_##N##_##R##_##C);                     \
+      return;                                                                               \
+    }
+#else
+#  define TT__PSTREAM_I(N, R, C)
+#  define TT__PSTREAM_O(N, R, C)
+#endif
 #define TT__DEF_N(N) TT__DEF(N, 0, 0) TT__DEF(N, 0, 1) TT__DEF(N, 1, 0) TT__DEF(N, 1, 1)
 TT__DEF_N(2)
 TT__DEF_N(4)
 TT__DEF_N(8)
 
-#define TT__ENT(N, R, C) {tt__isect_##N##_##R##_##C, tt__occl_##N##_##R##_##C}
+#define TT__ENT(N, R, C)                                                   \
+  {tt__isect_##N##_##R##_##C, tt__occl_##N##_##R##_##C,                    \
+   tt__isects_##N##_##R##_##C, tt__occls_##N##_##R##_##C}
 #define TT__ENT_N(N) \
   {{TT__ENT(N, 0, 0), TT__ENT(N, 0, 1)}, {TT__ENT(N, 1, 0), TT__ENT(N, 1, 1)}}
 static const tt__kernel_table g_table = {TT__ENT_N(2), TT__ENT_N(4), TT__ENT_N(8)};
