@@ -240,9 +240,26 @@ static void test_counters_and_fallback(const tt_accel_iface *A, const rayset *rs
   A->intersect_stream(acc, w, h, rs->n);
   size_t occluded = 0;
   for (size_t i = 0; i < 100; i++) occluded += (size_t)A->occluded1(acc, &rs->rays[i]);
+  /* occlusion streams walk the tree in groups of rays: still one count per ray, and the
+   * same work per ray as occluded1 (a ray visits the same nodes in the same order, up to
+   * its first hit) */
+  uint8_t *occ = malloc(rs->n);
+  tt_accel_counters c1 = {.struct_size = sizeof c1}, c2 = {.struct_size = sizeof c2};
+  CHECK(A->counters(acc, &c1, 1) == TT_OK);
+  for (size_t i = 0; i < rs->n; i++) occ[i] = (uint8_t)A->occluded1(acc, &rs->rays[i]);
+  CHECK(A->counters(acc, &c1, 1) == TT_OK && c1.rays == rs->n);
+  A->occluded_stream(acc, rs->rays, occ, rs->n);
+  CHECK(A->counters(acc, &c2, 0) == TT_OK && c2.rays == rs->n);
+  CHECK_MSG(c2.nodes_visited == c1.nodes_visited && c2.triangles_tested == c1.triangles_tested,
+            "occlusion work: stream %llu nodes %llu triangles, single %llu / %llu",
+            (unsigned long long)c2.nodes_visited, (unsigned long long)c2.triangles_tested,
+            (unsigned long long)c1.nodes_visited, (unsigned long long)c1.triangles_tested);
+  free(occ);
+  A->intersect_stream(acc, w, h, rs->n);
+  for (size_t i = 0; i < 100; i++) occluded += (size_t)A->occluded1(acc, &rs->rays[i]);
   tt_accel_counters cnt = {.struct_size = sizeof cnt};
   CHECK(A->counters(acc, &cnt, 1) == TT_OK);
-  CHECK(cnt.rays == rs->n + 100);
+  CHECK(cnt.rays == rs->n + rs->n + 100);
   CHECK(cnt.nodes_visited > rs->n && cnt.triangles_tested > 0);
   printf("counters: %llu rays, %.2f nodes and %.2f triangles per ray\n",
          (unsigned long long)cnt.rays, (double)cnt.nodes_visited / (double)cnt.rays,
