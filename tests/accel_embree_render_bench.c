@@ -10,7 +10,8 @@
  * machine's load hits every configuration alike); the figure of a render is the CPU time
  * of the rendering threads (each chunk of host->parallel_for timed with the thread's CPU
  * clock: time spent preempted by other jobs on this shared machine is not counted) summed
- * over its passes, and its wall time. Tables give medians, ratios to native default (CPU
+ * over its passes, and its wall time. Tables give medians (and min, spread), ratios to native
+ * default (the median over rounds of the ratio within a round, so drift cancels; CPU
  * time), build ms, memory, and end with geometric means over the scenes and the goals of
  * issue 16 marked met / not met (printed, never asserted: figures depend on the machine).
  *
@@ -169,6 +170,7 @@ typedef struct scene_result {
   int have[MAX_CFG];
   double cpu[MAX_MODES][MAX_CFG];   /* median CPU ms */
   double wall[MAX_MODES][MAX_CFG];  /* median wall ms */
+  double ratio[MAX_MODES][MAX_CFG]; /* median over rounds of native CPU ms / this CPU ms */
   double mib[MAX_CFG];
 } scene_result;
 static scene_result g_res[MAX_SCENES];
@@ -302,8 +304,8 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
     for (int c = 0; c < g_ncfg; c++) P->I->destroy(it[c]);
     printf("  threads %d, maxDepth %d: %.2f Mrays per image\n", md->threads, md->depth,
            1e-6 * (double)rays[0]);
-    printf("  %-28s %10s %10s %8s | %10s %7s\n", "configuration", "CPU ms", "wall ms",
-           "on-CPU", "vs native", "rays");
+    printf("  %-28s %9s %9s %7s %9s %7s | %10s %9s %7s\n", "configuration", "CPU ms", "min",
+           "spread", "wall ms", "on-CPU", "vs native", "(of mins)", "rays");
     for (int c = 0; c < g_ncfg; c++) {
       if (!acc[c] || !it[c]) {
         printf("  %-28s (build failed)\n", g_cfgs[c].label);
@@ -311,10 +313,19 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
       }
       res->cpu[m][c] = bench_median(cpu[c], g_runs);
       res->wall[m][c] = bench_median(wall[c], g_runs);
+      double mn = cpu[c][0], mx = cpu[c][0], q[MAX_RUNS];
+      for (int r = 0; r < g_runs; r++) {
+        mn = cpu[c][r] < mn ? cpu[c][r] : mn, mx = cpu[c][r] > mx ? cpu[c][r] : mx;
+        /* paired: native's render and this one's in the same round (drift cancels) */
+        q[r] = acc[0] && cpu[c][r] > 0 ? cpu[0][r] / cpu[c][r] : 0.0;
+      }
+      double mn0 = cpu[0][0];
+      for (int r = 0; r < g_runs; r++) mn0 = cpu[0][r] < mn0 ? cpu[0][r] : mn0;
+      res->ratio[m][c] = bench_median(q, g_runs);
       double share = res->cpu[m][c] / (res->wall[m][c] * md->threads);
-      double ratio = res->cpu[m][0] > 0 ? res->cpu[m][0] / res->cpu[m][c] : 0.0;
-      printf("  %-28s %10.1f %10.1f %7.0f%% | %9.3fx %+6.2f%%\n", g_cfgs[c].label,
-             res->cpu[m][c], res->wall[m][c], 100.0 * share, ratio,
+      printf("  %-28s %9.1f %9.1f %6.1f%% %9.1f %6.0f%% | %9.3fx %8.3fx %+6.2f%%\n",
+             g_cfgs[c].label, res->cpu[m][c], mn, 100.0 * (mx - mn) / res->cpu[m][c],
+             res->wall[m][c], 100.0 * share, res->ratio[m][c], mn0 / mn,
              rays[0] ? 100.0 * ((double)rays[c] - (double)rays[0]) / (double)rays[0] : 0.0);
       /* Same seed, same samples: the images may differ only where a hit differs by
        * round-off (a handful of paths). */
@@ -379,8 +390,8 @@ static double geomean_ratio(int m, int c, int *n_out, double *min_out) {
   int n = 0;
   for (int s = 0; s < g_nres; s++) {
     const scene_result *r = &g_res[s];
-    if (!r->have[0] || !r->have[c] || r->cpu[m][c] <= 0) continue;
-    double q = r->cpu[m][0] / r->cpu[m][c];
+    if (!r->have[0] || !r->have[c] || r->ratio[m][c] <= 0) continue;
+    double q = r->ratio[m][c];
     lg += log(q);
     if (q < mn) mn = q;
     n++;
@@ -391,8 +402,8 @@ static double geomean_ratio(int m, int c, int *n_out, double *min_out) {
 }
 
 static void summary(void) {
-  printf("\nratios to native default (render speed = native CPU ms / CPU ms), per scene and "
-         "geometric mean\n");
+  printf("\nratios to native default (render speed: median over rounds of native CPU ms / CPU ms "
+         "of the same round), per scene and geometric mean\n");
   printf("%-28s %-8s", "configuration", "mode");
   for (int s = 0; s < g_nres; s++) printf(" %11.11s", g_res[s].name);
   printf(" %9s %7s\n", "geomean", "min");
@@ -405,8 +416,8 @@ static void summary(void) {
              g_modes[m].depth);
       for (int s = 0; s < g_nres; s++) {
         const scene_result *r = &g_res[s];
-        if (r->have[0] && r->have[c] && r->cpu[m][c] > 0)
-          printf(" %10.3fx", r->cpu[m][0] / r->cpu[m][c]);
+        if (r->have[0] && r->have[c] && r->ratio[m][c] > 0)
+          printf(" %10.3fx", r->ratio[m][c]);
         else
           printf(" %11s", "-");
       }
