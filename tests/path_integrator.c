@@ -163,6 +163,21 @@ int main(void) {
     CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
     tt_film_destroy(a);
     tt_film_destroy(b);
+    /* ... AOVs included (running means over the samples, added in the same order) */
+    const uint32_t all = TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION;
+    tt_camera moved = *tt_scene_camera(rs.scene);
+    moved.position[0] += 0.05f;
+    a = b = NULL;
+    render(&rs, "{\"maxDepth\": 4, \"tileSize\": 8}", 3, all, &moved, &a, NULL);
+    render(&rs, "{\"maxDepth\": 4, \"tileSize\": 8, \"wavefront\": false}", 3, all, &moved, &b, NULL);
+    const tt_aov planes[4] = {TT_AOV_DEPTH, TT_AOV_NORMAL, TT_AOV_ALBEDO, TT_AOV_MOTION};
+    CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
+    for (int i = 0; i < 4; ++i)
+      CHECK_MSG(memcmp(tt_film_aov_const(a, planes[i]), tt_film_aov_const(b, planes[i]),
+                       tt_aov_channels(planes[i]) * sizeof(float) * W * H) == 0,
+                "AOV %d differs between wavefront and one path at a time", i);
+    tt_film_destroy(a);
+    tt_film_destroy(b);
     /* A different seed gives a different image. */
   }
 
