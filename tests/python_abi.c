@@ -86,7 +86,8 @@ int main(void) {
   F(tt_tunedb_row, cost); F(tt_tunedb_row, status); F(tt_tunedb_row, mode);
   F(tt_tunedb_row, iteration); F(tt_tunedb_row, run_id); F(tt_tunedb_row, tuner);
   F(tt_tunedb_row, metrics); F(tt_tunedb_row, machine); F(tt_tunedb_row, cpu);
-  F(tt_tunedb_row, timestamp); end();
+  F(tt_tunedb_row, timestamp); F(tt_tunedb_row, host); F(tt_tunedb_row, has_rank);
+  F(tt_tunedb_row, rank); end();
   S(tt_tuning_hint); F(tt_tuning_hint, struct_size); F(tt_tuning_hint, objective);
   F(tt_tuning_hint, tunable); F(tt_tuning_hint, setup); end();
   S(tt_option_info); F(tt_option_info, key); F(tt_option_info, description); end();

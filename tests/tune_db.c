@@ -93,7 +93,7 @@ int main(void) {
   CHECK(atoi(buf) == TT_TUNEDB_SCHEMA_VERSION);
   const char *cols[] = {"scene_id", "camera", "context", "indicators", "plugin", "plugin_version",
                         "config", "objective", "build_ms", "render_ms", "cost", "status",
-                        "machine", "cpu", "timestamp"};
+                        "machine", "cpu", "timestamp", "host", "rank"};
   for (size_t i = 0; i < sizeof cols / sizeof cols[0]; i++) {
     char sql[256];
     snprintf(sql, sizeof sql, "SELECT count(*) FROM pragma_table_info('samples') WHERE name='%s'",
@@ -172,7 +172,7 @@ int main(void) {
       else if (*p == ',' && !quoted && records == 0) fields_first++;
     }
     CHECK_MSG(records == 5, "%d CSV records", records);
-    CHECK(fields_first == 21 + TT_SCENE_INDICATOR_COUNT);
+    CHECK(fields_first == 23 + TT_SCENE_INDICATOR_COUNT);
     CHECK_CONTAINS(text, "id,scene_id,scene,camera,context,plugin,");
     CHECK_CONTAINS(text, ",ind_meshes,");
     CHECK_CONTAINS(text, "\"{\"\"name\"\":\"\"a,");

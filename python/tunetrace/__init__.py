@@ -624,6 +624,8 @@ class TuningDB(_Handle):
                     row[f] = json.loads(row[f])
             row["indicators"] = list(r.indicators) if r.has_indicators else None
             del row["has_indicators"]
+            row["rank"] = r.rank if r.has_rank else None  # the MPI rank (host-mpi rows)
+            del row["has_rank"]
             row["status"] = _STATUS_NAMES.get(r.status, str(r.status))
             out.append(row)
             return 0

@@ -187,7 +187,8 @@ class TunedbRow(ctypes.Structure):  # tt_tunedb_row (tunedb.h)
                 ("render_ms", ctypes.c_double), ("cost", ctypes.c_double),
                 ("status", ctypes.c_int32), ("mode", c_u8p), ("iteration", ctypes.c_int32),
                 ("run_id", c_u8p), ("tuner", c_u8p), ("metrics", c_u8p), ("machine", c_u8p),
-                ("cpu", c_u8p), ("timestamp", c_u8p)]
+                ("cpu", c_u8p), ("timestamp", c_u8p), ("host", c_u8p),
+                ("has_rank", ctypes.c_int32), ("rank", ctypes.c_int32)]
 
 
 class TuningHint(ctypes.Structure):  # tt_tuning_hint (tuning_hint.h)

@@ -16,8 +16,12 @@
  * Default location: $XDG_DATA_HOME/tunetrace/tuning.db, else
  * ~/.local/share/tunetrace/tuning.db (tt_tunedb_default_path).
  *
+ * Every row also names the host and, for a row of an MPI run (host-mpi), the rank that
+ * measured it. A database can also be served elsewhere (tt_tunedb_open_backend): an MPI rank
+ * records into and looks up in the file that rank 0 owns.
+ *
  * Threads: a tt_tunedb handle is used by one thread at a time; several processes may share
- * one file (SQLite locking, 5 s busy timeout).
+ * one file (SQLite locking, 60 s busy timeout).
  */
 #ifndef TUNETRACE_TUNEDB_H
 #define TUNETRACE_TUNEDB_H
@@ -30,8 +34,9 @@
 extern "C" {
 #endif
 
-/* Schema version stored in PRAGMA user_version. */
-#define TT_TUNEDB_SCHEMA_VERSION 1
+/* Schema version stored in PRAGMA user_version. 2 added the columns host and rank (a file of
+ * version 1 is upgraded when opened). */
+#define TT_TUNEDB_SCHEMA_VERSION 2
 
 typedef struct tt_tunedb tt_tunedb;  /* opaque database handle */
 
@@ -71,6 +76,11 @@ typedef struct tt_tunedb_row {
   const char *machine;       /* NULL on record: tt_tunedb_machine_id() */
   const char *cpu;           /* NULL on record: tt_tunedb_cpu_model() */
   const char *timestamp;     /* ISO 8601 UTC; NULL on record: now */
+  /* ---- appended in schema 2; read on record only when struct_size covers them ---- */
+  const char *host;          /* host name of the machine that measured; NULL on record: this
+                                one's (gethostname) */
+  int32_t has_rank;          /* non-zero: rank is set (a row of an MPI run, host-mpi) */
+  int32_t rank;              /* MPI rank that measured; stored as NULL when has_rank is 0 */
 } tt_tunedb_row;
 
 /* Default database path (see above). Free with tt_free; NULL if neither $XDG_DATA_HOME
@@ -113,6 +123,51 @@ TT_API tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path);
  * /proc/cpuinfo ("unknown" if absent). Static strings. */
 TT_API const char *tt_tunedb_machine_id(void);
 TT_API const char *tt_tunedb_cpu_model(void);
+
+/* ---- appended for distributed runs (host-mpi, issue 18) ---- */
+
+/* This machine's host name (gethostname; "unknown" if none). Static string. */
+TT_API const char *tt_tunedb_host_name(void);
+
+/* The id of the newest row (0 for an empty database): a snapshot for tt_tunedb_lookup_view. */
+TT_API tt_status tt_tunedb_last_id(tt_tunedb *db, int64_t *id);
+
+/* What tt_tunedb_lookup_view answers from: the rows with id <= max_id (the database as it was
+ * at a tt_tunedb_last_id snapshot) and the rows whose run_id is `run_id` (NULL: none). A driver
+ * of many runs gives each the database as it was when they all started plus its own rows, so
+ * the results do not depend on which run finished first. */
+typedef struct tt_tunedb_view {
+  uint32_t struct_size;      /* sizeof(tt_tunedb_view) */
+  int64_t max_id;
+  const char *run_id;
+} tt_tunedb_view;
+
+/* tt_tunedb_lookup restricted to `view` (NULL: every row, as tt_tunedb_lookup). */
+TT_API tt_status tt_tunedb_lookup_view(tt_tunedb *db, const tt_tunedb_view *view,
+                                       const tt_tunedb_row *key, double *cost,
+                                       uint32_t *count);
+
+/* A database whose rows live elsewhere (another process, an MPI rank, a service): a handle
+ * opened with tt_tunedb_open_backend passes tt_tunedb_record and tt_tunedb_lookup to these
+ * functions, after filling in what the measuring machine knows (machine, cpu, host and a
+ * NULL timestamp: now), so the row is complete when it leaves. tt_tunedb_foreach, _count,
+ * _export_csv, _last_id and _lookup_view answer TT_ERR_UNSUPPORTED. Called on the thread
+ * that uses the handle. */
+typedef struct tt_tunedb_backend {
+  uint32_t struct_size;      /* sizeof(tt_tunedb_backend) */
+  void *user;                /* first argument of every function */
+  /* Stores `row` (strings borrowed for the call); `*id` receives its id where known. */
+  tt_status (*record)(void *user, const tt_tunedb_row *row, int64_t *id);
+  /* As tt_tunedb_lookup; TT_ERR_NO_DATA when nothing matches. */
+  tt_status (*lookup)(void *user, const tt_tunedb_row *key, double *cost, uint32_t *count);
+  /* Called once by tt_tunedb_close (may be NULL). */
+  void (*close)(void *user);
+} tt_tunedb_backend;
+
+/* Opens a handle over `backend` (copied; record and lookup required). `name` is what
+ * tt_tunedb_path returns and messages show (e.g. "rank 0: /scratch/tuning.db"). */
+TT_API tt_status tt_tunedb_open_backend(const tt_tunedb_backend *backend, const char *name,
+                                        tt_tunedb **out);
 
 #ifdef __cplusplus
 }

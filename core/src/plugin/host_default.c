@@ -6,6 +6,7 @@
 #include "plugin/log.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdatomic.h>
@@ -152,7 +153,12 @@ static void *tt__worker_main(void *arg_) {
   return NULL;
 }
 
+/* The CPUs this process may run on: its affinity mask (mpirun --bind-to core, taskset, a
+ * cgroup cpuset), else the online CPUs. */
 static uint32_t tt__cpu_count(void) {
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+    return (uint32_t)CPU_COUNT(&set);
   long n = sysconf(_SC_NPROCESSORS_ONLN);
   return n > 0 ? (uint32_t)n : 1u;
 }

@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <sqlite3.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,8 +18,17 @@ struct tt_tunedb {
   sqlite3 *sql;
   sqlite3_stmt *insert;
   sqlite3_stmt *lookup;
+  sqlite3_stmt *lookup_view;    /* lookup restricted to id <= ?10 OR run_id = ?11 */
+  sqlite3_stmt *last_id;
   char *path;
+  int has_backend;              /* served elsewhere (tt_tunedb_open_backend): no sql */
+  tt_tunedb_backend backend;
 };
+
+/* Fields of a caller's row beyond the ones its struct_size covers read as absent (rows of
+ * callers built before schema 2; a struct_size of 0 is taken as the first layout). */
+#define TT__ROW_HAS(row, field) \
+  ((row)->struct_size >= offsetof(tt_tunedb_row, field) + sizeof((row)->field))
 
 /* Version 1 schema. Indicators are a JSON object so the row stays one table when
  * TT_SCENE_INDICATOR_COUNT grows; the CSV export spreads them into columns. */
@@ -49,10 +59,22 @@ static const char tt__schema_v1[] =
   "CREATE INDEX IF NOT EXISTS samples_key ON samples"
   " (scene_id, plugin, plugin_version, objective, config);";
 
+/* Version 2: who measured (host name; MPI rank of host-mpi runs, else NULL). */
+static const char tt__schema_v2[] =
+  "ALTER TABLE samples ADD COLUMN host TEXT;"
+  "ALTER TABLE samples ADD COLUMN rank INTEGER;";
+
 static const char tt__columns[] =
   "id, scene_id, scene, camera, context, indicators, plugin, plugin_version, config,"
   " objective, build_ms, render_ms, cost, status, mode, iteration, run_id, tuner, metrics,"
-  " machine, cpu, timestamp";
+  " machine, cpu, timestamp, host, rank";
+
+/* The lookup key; ?10/?11 restrict it to a view (tt_tunedb_lookup_view). */
+static const char tt__lookup_sql[] =
+  "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
+  " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
+  " AND config = ?6 AND objective = ?7 AND machine = ?8 AND cpu = ?9"
+  " AND status IN (0, 1)";
 
 /* Records an SQLite failure with the database path and SQLite's own message. */
 static tt_status tt__sql_error(const tt_tunedb *db, sqlite3 *sql, const char *what) {
@@ -79,6 +101,13 @@ const char *tt_tunedb_machine_id(void) {
   if (!id[0] && gethostname(id, sizeof id - 1) != 0) id[0] = 0;
   if (!id[0]) snprintf(id, sizeof id, "unknown");
   return id;
+}
+
+const char *tt_tunedb_host_name(void) {
+  static char name[256];
+  if (name[0]) return name;
+  if (gethostname(name, sizeof name - 1) != 0 || !name[0]) snprintf(name, sizeof name, "unknown");
+  return name;
 }
 
 const char *tt_tunedb_cpu_model(void) {
@@ -152,10 +181,29 @@ static int tt__user_version(tt_tunedb *db) {
   return v;
 }
 
+/* Creates the schema or upgrades an older one, in one transaction that re-reads the version
+ * (two processes opening a new or old file at once: the second finds the work done). */
+static int tt__upgrade(tt_tunedb *db) {
+  if (tt__exec(db, "BEGIN IMMEDIATE", "upgrading the schema")) return -1;
+  int version = tt__user_version(db);
+  if (version < 0) return -1;
+  if (version < 1 && tt__exec(db, tt__schema_v1, "creating the schema")) return -1;
+  if (version < 2 && tt__exec(db, tt__schema_v2, "upgrading the schema to version 2")) return -1;
+  if (version < TT_TUNEDB_SCHEMA_VERSION) {
+    char sql[64];
+    snprintf(sql, sizeof sql, "PRAGMA user_version=%d", TT_TUNEDB_SCHEMA_VERSION);
+    if (tt__exec(db, sql, "upgrading the schema")) return -1;
+  }
+  return tt__exec(db, "COMMIT", "upgrading the schema");
+}
+
 void tt_tunedb_close(tt_tunedb *db) {
   if (!db) return;
+  if (db->has_backend && db->backend.close) db->backend.close(db->backend.user);
   sqlite3_finalize(db->insert);
   sqlite3_finalize(db->lookup);
+  sqlite3_finalize(db->lookup_view);
+  sqlite3_finalize(db->last_id);
   sqlite3_close(db->sql);
   free(db->path);
   free(db);
@@ -202,26 +250,20 @@ tt_status tt_tunedb_open(const char *path, tt_tunedb **out) {
     tt_tunedb_close(db);
     return TT_ERR_UNSUPPORTED;
   }
-  if (version < TT_TUNEDB_SCHEMA_VERSION) {
-    char sql[sizeof tt__schema_v1 + 128];
-    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE; %s PRAGMA user_version=%d; COMMIT;",
-             tt__schema_v1, TT_TUNEDB_SCHEMA_VERSION);
-    if (tt__exec(db, sql, "creating the schema")) {
-      sqlite3_exec(db->sql, "ROLLBACK", NULL, NULL, NULL);
-      tt_tunedb_close(db);
-      return TT_ERR_IO;
-    }
+  if (version < TT_TUNEDB_SCHEMA_VERSION && tt__upgrade(db)) {
+    sqlite3_exec(db->sql, "ROLLBACK", NULL, NULL, NULL);
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
   }
-  char sql[1024];
+  char sql[1024], view_sql[sizeof tt__lookup_sql + 64];
   snprintf(sql, sizeof sql, "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
-           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
+           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
+  snprintf(view_sql, sizeof view_sql, "%s AND (id <= ?10 OR run_id = ?11)", tt__lookup_sql);
   if (sqlite3_prepare_v2(db->sql, sql, -1, &db->insert, NULL) != SQLITE_OK ||
-      sqlite3_prepare_v2(db->sql,
-                         "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
-                         " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
-                         " AND config = ?6 AND objective = ?7 AND machine = ?8 AND cpu = ?9"
-                         " AND status IN (0, 1)",
-                         -1, &db->lookup, NULL) != SQLITE_OK) {
+      sqlite3_prepare_v2(db->sql, tt__lookup_sql, -1, &db->lookup, NULL) != SQLITE_OK ||
+      sqlite3_prepare_v2(db->sql, view_sql, -1, &db->lookup_view, NULL) != SQLITE_OK ||
+      sqlite3_prepare_v2(db->sql, "SELECT coalesce(max(id), 0) FROM samples", -1, &db->last_id,
+                         NULL) != SQLITE_OK) {
     tt__sql_error(db, db->sql, "preparing statements");
     tt_tunedb_close(db);
     return TT_ERR_IO;
@@ -282,7 +324,27 @@ static void tt__now_iso(char *buf, size_t n) {
   snprintf(buf, n, "%s.%03ldZ", base, ts.tv_nsec / 1000000L);
 }
 
-tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *row) {
+/* `row` as the caller built it, with the fields of schema 2 its struct_size does not cover
+ * absent and the machine, cpu, host and timestamp (`now`) of this process where NULL. */
+static tt_tunedb_row tt__complete_row(const tt_tunedb_row *row, const char *now) {
+  tt_tunedb_row r;
+  memset(&r, 0, sizeof r);
+  memcpy(&r, row, offsetof(tt_tunedb_row, host));
+  r.struct_size = sizeof r;
+  if (TT__ROW_HAS(row, host)) r.host = row->host;
+  if (TT__ROW_HAS(row, rank)) {
+    r.has_rank = row->has_rank;
+    r.rank = row->rank;
+  }
+  if (!r.machine) r.machine = tt_tunedb_machine_id();
+  if (!r.cpu) r.cpu = tt_tunedb_cpu_model();
+  if (!r.host) r.host = tt_tunedb_host_name();
+  if (!r.timestamp) r.timestamp = now;
+  return r;
+}
+
+tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *caller_row) {
+  tt_tunedb_row *row = caller_row;
   if (!db || !row || !row->scene_id || !row->plugin || !row->plugin_version || !row->config ||
       !row->objective)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_record: scene_id, plugin, "
@@ -292,6 +354,14 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *row) {
                         "finite (use TT_COST_INFEASIBLE for failures)");
   char now[64];
   tt__now_iso(now, sizeof now);
+  tt_tunedb_row full = tt__complete_row(row, now);
+  if (db->has_backend) {
+    int64_t id = 0;
+    tt_status st = db->backend.record(db->backend.user, &full, &id);
+    if (st == TT_OK) caller_row->id = id;
+    return st;
+  }
+  row = &full;
   char *ind = tt__indicators_json(row);
   sqlite3_stmt *st = db->insert;
   sqlite3_reset(st);
@@ -315,27 +385,24 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *row) {
   tt__bind_text(st, i++, row->run_id);
   tt__bind_text(st, i++, row->tuner);
   tt__bind_text(st, i++, row->metrics);
-  tt__bind_text(st, i++, row->machine ? row->machine : tt_tunedb_machine_id());
-  tt__bind_text(st, i++, row->cpu ? row->cpu : tt_tunedb_cpu_model());
-  tt__bind_text(st, i++, row->timestamp ? row->timestamp : now);
+  tt__bind_text(st, i++, row->machine);
+  tt__bind_text(st, i++, row->cpu);
+  tt__bind_text(st, i++, row->timestamp);
+  tt__bind_text(st, i++, row->host);
+  if (row->has_rank) sqlite3_bind_int(st, i++, row->rank);
+  else sqlite3_bind_null(st, i++);
   /* autocommit: the insert is its own transaction, durable when step returns */
   int rc = sqlite3_step(st);
   free(ind);
   sqlite3_reset(st);
   if (rc != SQLITE_DONE) return tt__sql_error(db, db->sql, "recording a measurement");
-  row->id = sqlite3_last_insert_rowid(db->sql);
+  caller_row->id = sqlite3_last_insert_rowid(db->sql);
   return TT_OK;
 }
 
-tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
-                           uint32_t *count) {
-  if (!db || !key || !key->scene_id || !key->plugin || !key->plugin_version || !key->config ||
-      !key->objective)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_lookup: scene_id, plugin, "
-                        "plugin_version, config and objective are required");
-  sqlite3_stmt *st = db->lookup;
-  sqlite3_reset(st);
-  sqlite3_clear_bindings(st);
+/* tt_tunedb_lookup with the statement `st` (the view's parameters already bound). */
+static tt_status tt__lookup(tt_tunedb *db, sqlite3_stmt *st, const tt_tunedb_row *key,
+                            double *cost, uint32_t *count) {
   tt__bind_text(st, 1, key->scene_id);
   tt__bind_text(st, 2, key->camera ? key->camera : "{}");
   tt__bind_text(st, 3, key->context ? key->context : "{}");
@@ -356,6 +423,90 @@ tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost
   if (n <= 0) return TT_ERR_NO_DATA;
   if (cost) *cost = mean;
   if (count) *count = (uint32_t)n;
+  return TT_OK;
+}
+
+/* Checks a lookup's arguments; TT_OK or the error (named after `fn`). */
+static tt_status tt__check_key(const tt_tunedb *db, const tt_tunedb_row *key, const char *fn) {
+  if (!db || !key || !key->scene_id || !key->plugin || !key->plugin_version || !key->config ||
+      !key->objective)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: scene_id, plugin, plugin_version, config "
+                        "and objective are required", fn);
+  return TT_OK;
+}
+
+tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
+                           uint32_t *count) {
+  tt_status st = tt__check_key(db, key, "tt_tunedb_lookup");
+  if (st != TT_OK) return st;
+  if (db->has_backend) {
+    tt_tunedb_row full;
+    memset(&full, 0, sizeof full);
+    memcpy(&full, key, offsetof(tt_tunedb_row, host));  /* the key fields */
+    full.struct_size = sizeof full;
+    if (!full.machine) full.machine = tt_tunedb_machine_id();
+    if (!full.cpu) full.cpu = tt_tunedb_cpu_model();
+    return db->backend.lookup(db->backend.user, &full, cost, count);
+  }
+  sqlite3_reset(db->lookup);
+  sqlite3_clear_bindings(db->lookup);
+  return tt__lookup(db, db->lookup, key, cost, count);
+}
+
+/* TT_ERR_UNSUPPORTED for what a database served elsewhere cannot do. */
+static tt_status tt__served(const tt_tunedb *db, const char *fn) {
+  return tt_set_error(TT_ERR_UNSUPPORTED, "%s: the tuning database %s is served by another "
+                      "process (records and lookups only)", fn, db->path);
+}
+
+tt_status tt_tunedb_lookup_view(tt_tunedb *db, const tt_tunedb_view *view,
+                                const tt_tunedb_row *key, double *cost, uint32_t *count) {
+  if (!view) return tt_tunedb_lookup(db, key, cost, count);
+  tt_status st = tt__check_key(db, key, "tt_tunedb_lookup_view");
+  if (st != TT_OK) return st;
+  if (db->has_backend) return tt__served(db, "tt_tunedb_lookup_view");
+  sqlite3_stmt *q = db->lookup_view;
+  sqlite3_reset(q);
+  sqlite3_clear_bindings(q);
+  sqlite3_bind_int64(q, 10, view->max_id);
+  tt__bind_text(q, 11, view->run_id);
+  return tt__lookup(db, q, key, cost, count);
+}
+
+tt_status tt_tunedb_last_id(tt_tunedb *db, int64_t *id) {
+  if (!db || !id) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_last_id: db, id");
+  if (db->has_backend) return tt__served(db, "tt_tunedb_last_id");
+  sqlite3_stmt *st = db->last_id;
+  sqlite3_reset(st);
+  if (sqlite3_step(st) != SQLITE_ROW) {
+    sqlite3_reset(st);
+    return tt__sql_error(db, db->sql, "reading the newest row id");
+  }
+  *id = sqlite3_column_int64(st, 0);
+  sqlite3_reset(st);
+  return TT_OK;
+}
+
+tt_status tt_tunedb_open_backend(const tt_tunedb_backend *backend, const char *name,
+                                 tt_tunedb **out) {
+  if (!out || !backend || backend->struct_size < offsetof(tt_tunedb_backend, close) ||
+      !backend->record || !backend->lookup)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_open_backend: a backend with "
+                        "record and lookup, and out, are required");
+  *out = NULL;
+  tt_tunedb *db = calloc(1, sizeof *db);
+  const char *n = name ? name : "(served)";
+  if (db) db->path = malloc(strlen(n) + 1);
+  if (!db || !db->path) {
+    free(db);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open_backend: out of memory");
+  }
+  strcpy(db->path, n);
+  db->has_backend = 1;
+  memcpy(&db->backend, backend,
+         backend->struct_size < sizeof db->backend ? backend->struct_size : sizeof db->backend);
+  db->backend.struct_size = sizeof db->backend;
+  *out = db;
   return TT_OK;
 }
 
@@ -387,11 +538,15 @@ static void tt__read_row(sqlite3_stmt *st, tt_tunedb_row *row) {
   row->machine = (const char *)sqlite3_column_text(st, i++);
   row->cpu = (const char *)sqlite3_column_text(st, i++);
   row->timestamp = (const char *)sqlite3_column_text(st, i++);
+  row->host = (const char *)sqlite3_column_text(st, i++);
+  row->has_rank = sqlite3_column_type(st, i) != SQLITE_NULL;
+  row->rank = sqlite3_column_int(st, i++);
 }
 
 tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
                             int (*fn)(void *user, const tt_tunedb_row *row), void *user) {
   if (!db || !fn) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_foreach: db and fn");
+  if (db->has_backend) return tt__served(db, "tt_tunedb_foreach");
   char sql[1024];
   snprintf(sql, sizeof sql, "SELECT %s FROM samples%s ORDER BY id", tt__columns,
            plugin ? " WHERE plugin = ?1" : "");
@@ -415,6 +570,7 @@ tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
 
 tt_status tt_tunedb_count(tt_tunedb *db, const char *plugin, uint64_t *count) {
   if (!db || !count) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_count: db, count");
+  if (db->has_backend) return tt__served(db, "tt_tunedb_count");
   sqlite3_stmt *st = NULL;
   const char *sql = plugin ? "SELECT count(*) FROM samples WHERE plugin = ?1"
                            : "SELECT count(*) FROM samples";
@@ -473,6 +629,10 @@ static int tt__csv_row(void *user, const tt_tunedb_row *r) {
   tt__csv_text(f, r->cpu);
   fputc(',', f);
   tt__csv_text(f, r->timestamp);
+  fputc(',', f);
+  tt__csv_text(f, r->host);
+  fputc(',', f);
+  if (r->has_rank) fprintf(f, "%d", r->rank);
   for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) {
     fputc(',', f);
     if (r->has_indicators && isfinite(r->indicators[i])) fprintf(f, "%.17g", r->indicators[i]);
@@ -483,11 +643,13 @@ static int tt__csv_row(void *user, const tt_tunedb_row *r) {
 
 tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
   if (!db || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_export_csv: db, path");
+  if (db->has_backend) return tt__served(db, "tt_tunedb_export_csv");
   tt_atomic_file *af;
   if (tt_atomic_file_open(path, &af) != TT_OK) return TT_ERR_IO;
   FILE *f = tt_atomic_file_stream(af);
   fputs("id,scene_id,scene,camera,context,plugin,plugin_version,config,objective,build_ms,"
-        "render_ms,cost,status,mode,iteration,run_id,tuner,metrics,machine,cpu,timestamp", f);
+        "render_ms,cost,status,mode,iteration,run_id,tuner,metrics,machine,cpu,timestamp,host,rank",
+        f);
   for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++)
     fprintf(f, ",ind_%s", tt_scene_indicator_name(i));
   fputc('\n', f);
