@@ -16,9 +16,9 @@
  * Default location: $XDG_DATA_HOME/tunetrace/tuning.db, else
  * ~/.local/share/tunetrace/tuning.db (tt_tunedb_default_path).
  *
- * Every row also names the host and, for a row of an MPI run (host-mpi), the rank that
- * measured it. A database can also be served elsewhere (tt_tunedb_open_backend): an MPI rank
- * records into and looks up in the file that rank 0 owns.
+ * Every row also names the host and, for a row of an MPI run (tunetrace-mpi), the rank that
+ * measured it. Databases merge idempotently by tag (tt_tunedb_merge): how the rows of many
+ * processes or machines end in one file without loss or duplicates.
  *
  * Threads: a tt_tunedb handle is used by one thread at a time; several processes may share
  * one file (SQLite locking, 60 s busy timeout).
@@ -34,8 +34,8 @@
 extern "C" {
 #endif
 
-/* Schema version stored in PRAGMA user_version. 2 added the columns host and rank (a file of
- * version 1 is upgraded when opened). */
+/* Schema version stored in PRAGMA user_version. 2 added the columns host and rank and the
+ * table merges (a file of version 1 is upgraded when opened, its rows kept). */
 #define TT_TUNEDB_SCHEMA_VERSION 2
 
 typedef struct tt_tunedb tt_tunedb;  /* opaque database handle */
@@ -79,7 +79,7 @@ typedef struct tt_tunedb_row {
   /* ---- appended in schema 2; read on record only when struct_size covers them ---- */
   const char *host;          /* host name of the machine that measured; NULL on record: this
                                 one's (gethostname) */
-  int32_t has_rank;          /* non-zero: rank is set (a row of an MPI run, host-mpi) */
+  int32_t has_rank;          /* non-zero: rank is set (a row of an MPI run, tunetrace-mpi) */
   int32_t rank;              /* MPI rank that measured; stored as NULL when has_rank is 0 */
 } tt_tunedb_row;
 
@@ -124,50 +124,24 @@ TT_API tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path);
 TT_API const char *tt_tunedb_machine_id(void);
 TT_API const char *tt_tunedb_cpu_model(void);
 
-/* ---- appended for distributed runs (host-mpi, issue 18) ---- */
+/* ---- appended for distributed runs (tunetrace-mpi, issue 18) ---- */
 
 /* This machine's host name (gethostname; "unknown" if none). Static string. */
 TT_API const char *tt_tunedb_host_name(void);
 
-/* The id of the newest row (0 for an empty database): a snapshot for tt_tunedb_lookup_view. */
-TT_API tt_status tt_tunedb_last_id(tt_tunedb *db, int64_t *id);
+/* Merges the rows of the tuning database file `source` into `db`, once per `tag`. In one
+ * transaction: if `tag` is not in db's table `merges` yet, every row of `source` is copied
+ * (new ids; the rank column set to `rank` where `rank >= 0`, else kept) and the tag is
+ * recorded with the number of rows, `source` and `note` (free text, e.g. a job's JSON; may be
+ * NULL). A tag merged before copies nothing and sets *already = 1, so merging a source twice,
+ * or redoing a job whose rows already arrived, never duplicates a row; a crash leaves either
+ * all of a tag's rows or none. `source` NULL records the tag alone (work without rows).
+ * `source` may be of schema 1 (its rows get NULL host and rank). rows/already may be NULL. */
+TT_API tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag,
+                                 int32_t rank, const char *note, uint64_t *rows, int *already);
 
-/* What tt_tunedb_lookup_view answers from: the rows with id <= max_id (the database as it was
- * at a tt_tunedb_last_id snapshot) and the rows whose run_id is `run_id` (NULL: none). A driver
- * of many runs gives each the database as it was when they all started plus its own rows, so
- * the results do not depend on which run finished first. */
-typedef struct tt_tunedb_view {
-  uint32_t struct_size;      /* sizeof(tt_tunedb_view) */
-  int64_t max_id;
-  const char *run_id;
-} tt_tunedb_view;
-
-/* tt_tunedb_lookup restricted to `view` (NULL: every row, as tt_tunedb_lookup). */
-TT_API tt_status tt_tunedb_lookup_view(tt_tunedb *db, const tt_tunedb_view *view,
-                                       const tt_tunedb_row *key, double *cost,
-                                       uint32_t *count);
-
-/* A database whose rows live elsewhere (another process, an MPI rank, a service): a handle
- * opened with tt_tunedb_open_backend passes tt_tunedb_record and tt_tunedb_lookup to these
- * functions, after filling in what the measuring machine knows (machine, cpu, host and a
- * NULL timestamp: now), so the row is complete when it leaves. tt_tunedb_foreach, _count,
- * _export_csv, _last_id and _lookup_view answer TT_ERR_UNSUPPORTED. Called on the thread
- * that uses the handle. */
-typedef struct tt_tunedb_backend {
-  uint32_t struct_size;      /* sizeof(tt_tunedb_backend) */
-  void *user;                /* first argument of every function */
-  /* Stores `row` (strings borrowed for the call); `*id` receives its id where known. */
-  tt_status (*record)(void *user, const tt_tunedb_row *row, int64_t *id);
-  /* As tt_tunedb_lookup; TT_ERR_NO_DATA when nothing matches. */
-  tt_status (*lookup)(void *user, const tt_tunedb_row *key, double *cost, uint32_t *count);
-  /* Called once by tt_tunedb_close (may be NULL). */
-  void (*close)(void *user);
-} tt_tunedb_backend;
-
-/* Opens a handle over `backend` (copied; record and lookup required). `name` is what
- * tt_tunedb_path returns and messages show (e.g. "rank 0: /scratch/tuning.db"). */
-TT_API tt_status tt_tunedb_open_backend(const tt_tunedb_backend *backend, const char *name,
-                                        tt_tunedb **out);
+/* *merged = 1 if `tag` was merged into `db` (tt_tunedb_merge), else 0. */
+TT_API tt_status tt_tunedb_merged(tt_tunedb *db, const char *tag, int *merged);
 
 #ifdef __cplusplus
 }

@@ -18,11 +18,7 @@ struct tt_tunedb {
   sqlite3 *sql;
   sqlite3_stmt *insert;
   sqlite3_stmt *lookup;
-  sqlite3_stmt *lookup_view;    /* lookup restricted to id <= ?10 OR run_id = ?11 */
-  sqlite3_stmt *last_id;
   char *path;
-  int has_backend;              /* served elsewhere (tt_tunedb_open_backend): no sql */
-  tt_tunedb_backend backend;
 };
 
 /* Fields of a caller's row beyond the ones its struct_size covers read as absent (rows of
@@ -59,17 +55,23 @@ static const char tt__schema_v1[] =
   "CREATE INDEX IF NOT EXISTS samples_key ON samples"
   " (scene_id, plugin, plugin_version, objective, config);";
 
-/* Version 2: who measured (host name; MPI rank of host-mpi runs, else NULL). */
+/* Version 2: who measured (host name; MPI rank of tunetrace-mpi runs, else NULL) and the
+ * tags merged into the file (tt_tunedb_merge: one row per tag, in the rows' transaction). */
 static const char tt__schema_v2[] =
   "ALTER TABLE samples ADD COLUMN host TEXT;"
-  "ALTER TABLE samples ADD COLUMN rank INTEGER;";
+  "ALTER TABLE samples ADD COLUMN rank INTEGER;"
+  "CREATE TABLE IF NOT EXISTS merges ("
+  " tag TEXT PRIMARY KEY,"      /* the caller's name of what was merged (e.g. a job id) */
+  " rows INTEGER NOT NULL,"     /* rows copied */
+  " source TEXT,"               /* the file they came from */
+  " note TEXT,"                 /* free text (a job's JSON) */
+  " timestamp TEXT NOT NULL);"; /* ISO 8601 UTC */
 
 static const char tt__columns[] =
   "id, scene_id, scene, camera, context, indicators, plugin, plugin_version, config,"
   " objective, build_ms, render_ms, cost, status, mode, iteration, run_id, tuner, metrics,"
   " machine, cpu, timestamp, host, rank";
 
-/* The lookup key; ?10/?11 restrict it to a view (tt_tunedb_lookup_view). */
 static const char tt__lookup_sql[] =
   "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
   " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
@@ -199,11 +201,8 @@ static int tt__upgrade(tt_tunedb *db) {
 
 void tt_tunedb_close(tt_tunedb *db) {
   if (!db) return;
-  if (db->has_backend && db->backend.close) db->backend.close(db->backend.user);
   sqlite3_finalize(db->insert);
   sqlite3_finalize(db->lookup);
-  sqlite3_finalize(db->lookup_view);
-  sqlite3_finalize(db->last_id);
   sqlite3_close(db->sql);
   free(db->path);
   free(db);
@@ -255,15 +254,11 @@ tt_status tt_tunedb_open(const char *path, tt_tunedb **out) {
     tt_tunedb_close(db);
     return TT_ERR_IO;
   }
-  char sql[1024], view_sql[sizeof tt__lookup_sql + 64];
+  char sql[1024];
   snprintf(sql, sizeof sql, "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
            " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
-  snprintf(view_sql, sizeof view_sql, "%s AND (id <= ?10 OR run_id = ?11)", tt__lookup_sql);
   if (sqlite3_prepare_v2(db->sql, sql, -1, &db->insert, NULL) != SQLITE_OK ||
-      sqlite3_prepare_v2(db->sql, tt__lookup_sql, -1, &db->lookup, NULL) != SQLITE_OK ||
-      sqlite3_prepare_v2(db->sql, view_sql, -1, &db->lookup_view, NULL) != SQLITE_OK ||
-      sqlite3_prepare_v2(db->sql, "SELECT coalesce(max(id), 0) FROM samples", -1, &db->last_id,
-                         NULL) != SQLITE_OK) {
+      sqlite3_prepare_v2(db->sql, tt__lookup_sql, -1, &db->lookup, NULL) != SQLITE_OK) {
     tt__sql_error(db, db->sql, "preparing statements");
     tt_tunedb_close(db);
     return TT_ERR_IO;
@@ -355,12 +350,6 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *caller_row) {
   char now[64];
   tt__now_iso(now, sizeof now);
   tt_tunedb_row full = tt__complete_row(row, now);
-  if (db->has_backend) {
-    int64_t id = 0;
-    tt_status st = db->backend.record(db->backend.user, &full, &id);
-    if (st == TT_OK) caller_row->id = id;
-    return st;
-  }
   row = &full;
   char *ind = tt__indicators_json(row);
   sqlite3_stmt *st = db->insert;
@@ -400,9 +389,15 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *caller_row) {
   return TT_OK;
 }
 
-/* tt_tunedb_lookup with the statement `st` (the view's parameters already bound). */
-static tt_status tt__lookup(tt_tunedb *db, sqlite3_stmt *st, const tt_tunedb_row *key,
-                            double *cost, uint32_t *count) {
+tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
+                           uint32_t *count) {
+  if (!db || !key || !key->scene_id || !key->plugin || !key->plugin_version || !key->config ||
+      !key->objective)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_lookup: scene_id, plugin, "
+                        "plugin_version, config and objective are required");
+  sqlite3_stmt *st = db->lookup;
+  sqlite3_reset(st);
+  sqlite3_clear_bindings(st);
   tt__bind_text(st, 1, key->scene_id);
   tt__bind_text(st, 2, key->camera ? key->camera : "{}");
   tt__bind_text(st, 3, key->context ? key->context : "{}");
@@ -423,90 +418,6 @@ static tt_status tt__lookup(tt_tunedb *db, sqlite3_stmt *st, const tt_tunedb_row
   if (n <= 0) return TT_ERR_NO_DATA;
   if (cost) *cost = mean;
   if (count) *count = (uint32_t)n;
-  return TT_OK;
-}
-
-/* Checks a lookup's arguments; TT_OK or the error (named after `fn`). */
-static tt_status tt__check_key(const tt_tunedb *db, const tt_tunedb_row *key, const char *fn) {
-  if (!db || !key || !key->scene_id || !key->plugin || !key->plugin_version || !key->config ||
-      !key->objective)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: scene_id, plugin, plugin_version, config "
-                        "and objective are required", fn);
-  return TT_OK;
-}
-
-tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
-                           uint32_t *count) {
-  tt_status st = tt__check_key(db, key, "tt_tunedb_lookup");
-  if (st != TT_OK) return st;
-  if (db->has_backend) {
-    tt_tunedb_row full;
-    memset(&full, 0, sizeof full);
-    memcpy(&full, key, offsetof(tt_tunedb_row, host));  /* the key fields */
-    full.struct_size = sizeof full;
-    if (!full.machine) full.machine = tt_tunedb_machine_id();
-    if (!full.cpu) full.cpu = tt_tunedb_cpu_model();
-    return db->backend.lookup(db->backend.user, &full, cost, count);
-  }
-  sqlite3_reset(db->lookup);
-  sqlite3_clear_bindings(db->lookup);
-  return tt__lookup(db, db->lookup, key, cost, count);
-}
-
-/* TT_ERR_UNSUPPORTED for what a database served elsewhere cannot do. */
-static tt_status tt__served(const tt_tunedb *db, const char *fn) {
-  return tt_set_error(TT_ERR_UNSUPPORTED, "%s: the tuning database %s is served by another "
-                      "process (records and lookups only)", fn, db->path);
-}
-
-tt_status tt_tunedb_lookup_view(tt_tunedb *db, const tt_tunedb_view *view,
-                                const tt_tunedb_row *key, double *cost, uint32_t *count) {
-  if (!view) return tt_tunedb_lookup(db, key, cost, count);
-  tt_status st = tt__check_key(db, key, "tt_tunedb_lookup_view");
-  if (st != TT_OK) return st;
-  if (db->has_backend) return tt__served(db, "tt_tunedb_lookup_view");
-  sqlite3_stmt *q = db->lookup_view;
-  sqlite3_reset(q);
-  sqlite3_clear_bindings(q);
-  sqlite3_bind_int64(q, 10, view->max_id);
-  tt__bind_text(q, 11, view->run_id);
-  return tt__lookup(db, q, key, cost, count);
-}
-
-tt_status tt_tunedb_last_id(tt_tunedb *db, int64_t *id) {
-  if (!db || !id) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_last_id: db, id");
-  if (db->has_backend) return tt__served(db, "tt_tunedb_last_id");
-  sqlite3_stmt *st = db->last_id;
-  sqlite3_reset(st);
-  if (sqlite3_step(st) != SQLITE_ROW) {
-    sqlite3_reset(st);
-    return tt__sql_error(db, db->sql, "reading the newest row id");
-  }
-  *id = sqlite3_column_int64(st, 0);
-  sqlite3_reset(st);
-  return TT_OK;
-}
-
-tt_status tt_tunedb_open_backend(const tt_tunedb_backend *backend, const char *name,
-                                 tt_tunedb **out) {
-  if (!out || !backend || backend->struct_size < offsetof(tt_tunedb_backend, close) ||
-      !backend->record || !backend->lookup)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_open_backend: a backend with "
-                        "record and lookup, and out, are required");
-  *out = NULL;
-  tt_tunedb *db = calloc(1, sizeof *db);
-  const char *n = name ? name : "(served)";
-  if (db) db->path = malloc(strlen(n) + 1);
-  if (!db || !db->path) {
-    free(db);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open_backend: out of memory");
-  }
-  strcpy(db->path, n);
-  db->has_backend = 1;
-  memcpy(&db->backend, backend,
-         backend->struct_size < sizeof db->backend ? backend->struct_size : sizeof db->backend);
-  db->backend.struct_size = sizeof db->backend;
-  *out = db;
   return TT_OK;
 }
 
@@ -546,7 +457,6 @@ static void tt__read_row(sqlite3_stmt *st, tt_tunedb_row *row) {
 tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
                             int (*fn)(void *user, const tt_tunedb_row *row), void *user) {
   if (!db || !fn) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_foreach: db and fn");
-  if (db->has_backend) return tt__served(db, "tt_tunedb_foreach");
   char sql[1024];
   snprintf(sql, sizeof sql, "SELECT %s FROM samples%s ORDER BY id", tt__columns,
            plugin ? " WHERE plugin = ?1" : "");
@@ -570,7 +480,6 @@ tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
 
 tt_status tt_tunedb_count(tt_tunedb *db, const char *plugin, uint64_t *count) {
   if (!db || !count) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_count: db, count");
-  if (db->has_backend) return tt__served(db, "tt_tunedb_count");
   sqlite3_stmt *st = NULL;
   const char *sql = plugin ? "SELECT count(*) FROM samples WHERE plugin = ?1"
                            : "SELECT count(*) FROM samples";
@@ -643,7 +552,6 @@ static int tt__csv_row(void *user, const tt_tunedb_row *r) {
 
 tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
   if (!db || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_export_csv: db, path");
-  if (db->has_backend) return tt__served(db, "tt_tunedb_export_csv");
   tt_atomic_file *af;
   if (tt_atomic_file_open(path, &af) != TT_OK) return TT_ERR_IO;
   FILE *f = tt_atomic_file_stream(af);
@@ -662,4 +570,138 @@ tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
     return tt_set_error(st, "%s", why);
   }
   return tt_atomic_file_commit(af);  /* the previous export stays if this one fails */
+}
+
+/* ---- merging (issue 18) ---- */
+
+/* The samples columns (without id) in the order of tt__columns. */
+static const char *const tt__merge_columns[] = {
+  "scene_id", "scene", "camera", "context", "indicators", "plugin", "plugin_version", "config",
+  "objective", "build_ms", "render_ms", "cost", "status", "mode", "iteration", "run_id", "tuner",
+  "metrics", "machine", "cpu", "timestamp", "host", "rank"};
+
+/* 1 if the attached schema src's table samples has column `name`, 0 if not, -1 on error. */
+static int tt__src_has_column(tt_tunedb *db, const char *name) {
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(db->sql, "SELECT count(*) FROM pragma_table_info('samples', 'src')"
+                         " WHERE name = ?1", -1, &st, NULL) != SQLITE_OK)
+    return -1;
+  tt__bind_text(st, 1, name);
+  int has = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int(st, 0) > 0 : -1;
+  sqlite3_finalize(st);
+  return has;
+}
+
+tt_status tt_tunedb_merged(tt_tunedb *db, const char *tag, int *merged) {
+  if (!db || !tag || !merged)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merged: db, tag, merged");
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(db->sql, "SELECT count(*) FROM merges WHERE tag = ?1", -1, &st, NULL) !=
+      SQLITE_OK)
+    return tt__sql_error(db, db->sql, "reading the merged tags");
+  tt__bind_text(st, 1, tag);
+  int rc = sqlite3_step(st);
+  *merged = rc == SQLITE_ROW && sqlite3_column_int(st, 0) > 0;
+  sqlite3_finalize(st);
+  return rc == SQLITE_ROW ? TT_OK : tt__sql_error(db, db->sql, "reading the merged tags");
+}
+
+/* The copy of tt_tunedb_merge inside its transaction; *rows = rows copied. */
+static tt_status tt__merge_rows(tt_tunedb *db, const char *source, int32_t rank, uint64_t *rows) {
+  int version = -1;
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(db->sql, "PRAGMA src.user_version", -1, &st, NULL) == SQLITE_OK &&
+      sqlite3_step(st) == SQLITE_ROW)
+    version = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  int has_samples = tt__src_has_column(db, "config");
+  if (version < 1 || version > TT_TUNEDB_SCHEMA_VERSION || has_samples != 1)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: %s is not a tuning database "
+                        "of schema 1..%d (user_version %d%s)", source,
+                        TT_TUNEDB_SCHEMA_VERSION, version,
+                        has_samples == 1 ? "" : ", no table samples");
+  char sql[2048];
+  size_t n = (size_t)snprintf(sql, sizeof sql, "INSERT INTO main.samples (");
+  const size_t ncol = sizeof tt__merge_columns / sizeof tt__merge_columns[0];
+  for (size_t i = 0; i < ncol; i++)
+    n += (size_t)snprintf(sql + n, sizeof sql - n, "%s%s", i ? ", " : "", tt__merge_columns[i]);
+  n += (size_t)snprintf(sql + n, sizeof sql - n, ") SELECT ");
+  for (size_t i = 0; i < ncol; i++) {
+    const char *c = tt__merge_columns[i];
+    int has = tt__src_has_column(db, c);
+    if (has < 0) return tt__sql_error(db, db->sql, "reading the columns of the merged file");
+    const char *expr = !strcmp(c, "rank") && rank >= 0 ? "?1" : has ? c : "NULL";
+    n += (size_t)snprintf(sql + n, sizeof sql - n, "%s%s", i ? ", " : "", expr);
+  }
+  snprintf(sql + n, sizeof sql - n, " FROM src.samples ORDER BY id");
+  if (sqlite3_prepare_v2(db->sql, sql, -1, &st, NULL) != SQLITE_OK)
+    return tt__sql_error(db, db->sql, "preparing the merge");
+  if (rank >= 0) sqlite3_bind_int(st, 1, rank);
+  int rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  if (rc != SQLITE_DONE) return tt__sql_error(db, db->sql, "copying the merged rows");
+  *rows = (uint64_t)sqlite3_changes(db->sql);
+  return TT_OK;
+}
+
+tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag, int32_t rank,
+                          const char *note, uint64_t *rows, int *already) {
+  uint64_t copied = 0;
+  if (rows) *rows = 0;
+  if (already) *already = 0;
+  if (!db || !tag || !tag[0])
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: db and a non-empty tag");
+  if (source && access(source, R_OK) != 0)  /* ATTACH would create a missing file */
+    return tt_set_error(TT_ERR_IO, "tt_tunedb_merge: cannot read %s: %s", source,
+                        strerror(errno));
+  if (source) {
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(db->sql, "ATTACH DATABASE ?1 AS src", -1, &st, NULL);
+    if (rc == SQLITE_OK) {
+      tt__bind_text(st, 1, source);
+      rc = sqlite3_step(st) == SQLITE_DONE ? SQLITE_OK : SQLITE_ERROR;
+    }
+    sqlite3_finalize(st);
+    if (rc != SQLITE_OK) return tt__sql_error(db, db->sql, "attaching the merged file");
+  }
+  tt_status status = TT_OK;
+  int merged = 0;
+  if (tt__exec(db, "BEGIN IMMEDIATE", "starting a merge")) {
+    status = TT_ERR_IO;
+  } else if ((status = tt_tunedb_merged(db, tag, &merged)) == TT_OK && !merged) {
+    if (source) status = tt__merge_rows(db, source, rank, &copied);
+    if (status == TT_OK) {
+      char now[64];
+      tt__now_iso(now, sizeof now);
+      sqlite3_stmt *st = NULL;
+      if (sqlite3_prepare_v2(db->sql, "INSERT INTO merges (tag, rows, source, note, timestamp)"
+                             " VALUES (?1, ?2, ?3, ?4, ?5)", -1, &st, NULL) != SQLITE_OK) {
+        status = tt__sql_error(db, db->sql, "recording a merge");
+      } else {
+        tt__bind_text(st, 1, tag);
+        sqlite3_bind_int64(st, 2, (sqlite3_int64)copied);
+        tt__bind_text(st, 3, source);
+        tt__bind_text(st, 4, note);
+        tt__bind_text(st, 5, now);
+        if (sqlite3_step(st) != SQLITE_DONE) status = tt__sql_error(db, db->sql, "recording a merge");
+        sqlite3_finalize(st);
+      }
+    }
+  }
+  if (status == TT_OK) {
+    if (tt__exec(db, "COMMIT", "committing a merge")) status = TT_ERR_IO;
+  }
+  if (status != TT_OK) {
+    char why[1024];
+    snprintf(why, sizeof why, "%s", tt_last_error());
+    sqlite3_exec(db->sql, "ROLLBACK", NULL, NULL, NULL);
+    tt_set_error(status, "%s", why);
+    copied = 0;
+  }
+  if (source) sqlite3_exec(db->sql, "DETACH DATABASE src", NULL, NULL, NULL);
+  if (status == TT_OK) {
+    if (rows) *rows = copied;
+    if (already) *already = merged;
+  }
+  return status;
 }
