@@ -364,10 +364,16 @@ typedef struct wino_a {
   float *vbuf, *mbuf;   /* scratch: 36 * in * 16 and 2 * 36 * O * 16 floats */
 } wino_a;
 
+/* A constant shuffle of the 16 lanes a:b into 8: GCC spells it __builtin_shuffle, clang
+ * (the sanitizer and fuzzing builds) __builtin_shufflevector; same code either way. */
+#if defined(__clang__)
+#  define WINO_SHUF8(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
+#else
+#  define WINO_SHUF8(a, b, ...) __builtin_shuffle(a, b, (v8i){__VA_ARGS__})
+#endif
+
 /* Even lanes of the 16 floats a:b (stride-2 gather of 8 tiles' column). */
-AI v8f wino_even(v8f a, v8f b) {
-  return __builtin_shuffle(a, b, (v8i){0, 2, 4, 6, 8, 10, 12, 14});
-}
+AI v8f wino_even(v8f a, v8f b) { return WINO_SHUF8(a, b, 0, 2, 4, 6, 8, 10, 12, 14); }
 
 /* B^T of one 6-vector (rows of B^T: 4 0 -5 0 1 0 / 0 4 4 -1 -1 0 / 0 -4 4 1 -1 0 /
  * 0 -2 -1 2 1 0 / 0 2 -1 -2 1 0 / 0 4 0 -5 0 1). */
@@ -477,13 +483,12 @@ AI void wino_group_t(const wino_a *a, uint32_t xl, const int O, const int P) {
         y10 = vsel(y10 > z, y10, z), y11 = vsel(y11 > z, y11, z);
       }
       /* Tile t's columns 2t, 2t + 1: interleave the column-0 and column-1 vectors. */
-      const v8i ilo = {0, 8, 1, 9, 2, 10, 3, 11}, ihi = {4, 12, 5, 13, 6, 14, 7, 15};
       float *d0 = a->dst[0] + oc * a->dcs + xl + 16 * j;
       float *d1 = a->dst[1] + oc * a->dcs + xl + 16 * j;
-      vstore(d0, __builtin_shuffle(y00, y01, ilo));
-      vstore(d0 + 8, __builtin_shuffle(y00, y01, ihi));
-      vstore(d1, __builtin_shuffle(y10, y11, ilo));
-      vstore(d1 + 8, __builtin_shuffle(y10, y11, ihi));
+      vstore(d0, WINO_SHUF8(y00, y01, 0, 8, 1, 9, 2, 10, 3, 11));
+      vstore(d0 + 8, WINO_SHUF8(y00, y01, 4, 12, 5, 13, 6, 14, 7, 15));
+      vstore(d1, WINO_SHUF8(y10, y11, 0, 8, 1, 9, 2, 10, 3, 11));
+      vstore(d1 + 8, WINO_SHUF8(y10, y11, 4, 12, 5, 13, 6, 14, 7, 15));
     }
   }
 }
