@@ -532,6 +532,63 @@ static void test_subset(const tt_space *space) {
   tt_config_destroy(ts.applied);
 }
 
+/* A copy of `s` with the first `from` replaced by `to` (free it). */
+static char *replaced(const char *s, const char *from, const char *to) {
+  const char *at = strstr(s, from);
+  CHECK_MSG(at != NULL, "no %s in the saved state", from);
+  if (!at) return NULL;
+  size_t n = strlen(s) - strlen(from) + strlen(to);
+  char *r = malloc(n + 1);
+  snprintf(r, n + 1, "%.*s%s%s", (int)(at - s), s, to, at + strlen(from));
+  return r;
+}
+
+/* A resume file with a field missing, not finite or out of range is refused naming the
+ * field, and the session stays fresh. Before: a missing build_ms loaded as NaN and the next
+ * save printed "nan", a resume file that no longer parsed (found by tests/fuzz/
+ * fuzz_tuning_state); a huge next_iteration or a negative counter was cast to an integer. */
+static void test_state_fields(const tt_space *space) {
+  target_state ts = {0};
+  tt_tuning_desc d = base_desc(space, NULL);
+  d.iterations = 4;
+  tt_tuning *t = NULL;
+  CHECK(tt_tuning_create(&d, &t) == TT_OK);
+  tt_tuning_target tg = target_of(&ts);
+  CHECK(tt_tuning_run(t, &tg) == TT_OK);
+  char *good = NULL;
+  CHECK(tt_tuning_save_state(t, &good) == TT_OK && good);
+  tt_tuning_destroy(t);
+  tt_config_destroy(ts.applied);
+  if (!good) return;
+  static const struct { const char *from, *to, *field; } bad[] = {
+      {"\"build_ms\":", "\"bulid_ms\":", "build_ms"},
+      {"\"render_ms\":", "\"render_ms\":\"x\",\"r\":", "render_ms"},
+      {"\"cost\":", "\"cost\":1e999,\"c\":", "cost"},
+      {"\"iteration\":", "\"iteration\":-5,\"i\":", "iteration"},
+      {"\"status\":", "\"status\":7,\"s\":", "status"},
+      {"\"next_iteration\":", "\"next_iteration\":1e300,\"n\":", "next_iteration"},
+      {"\"measured\":", "\"measured\":-1,\"m\":", "measured"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    char *json = replaced(good, bad[i].from, bad[i].to);
+    if (!json) continue;
+    tt_tuning *u = NULL;
+    CHECK(tt_tuning_create(&d, &u) == TT_OK);
+    CHECK_MSG(tt_tuning_load_state(u, json, "resume.json") == TT_ERR_PARSE, "%s accepted",
+              bad[i].field);
+    CHECK_CONTAINS(tt_last_error(), "resume.json");
+    CHECK_CONTAINS(tt_last_error(), bad[i].field);
+    CHECK(tt_tuning_sample_count(u) == 0);
+    CHECK_MSG(tt_tuning_load_state(u, good, "resume.json") == TT_OK, "%s", tt_last_error());
+    char *again = NULL;
+    CHECK(tt_tuning_save_state(u, &again) == TT_OK && again && !strcmp(again, good));
+    free(again);
+    tt_tuning_destroy(u);
+    free(json);
+  }
+  free(good);
+}
+
 int main(void) {
   g_host = *tt_default_host();
   g_host.log = quiet_log;
@@ -552,6 +609,7 @@ int main(void) {
   test_objectives(space);
   test_interrupt(space);
   test_subset(space);
+  test_state_fields(space);
   tt_space_destroy(space);
   tt_registry_destroy(reg);
   return tt_test_finish("tune_session");

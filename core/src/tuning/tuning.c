@@ -17,7 +17,9 @@
 #include <tunetrace/indicators.h>
 
 #include <cjson/cJSON.h>
+#include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -861,6 +863,21 @@ static int tt__state_is(const cJSON *o, const char *k, const char *want) {
   return cJSON_IsString(v) && !strcmp(v->valuestring, want ? want : "");
 }
 
+/* Number field `k` of `o` into *out: present, finite and within [lo, hi]; else an error
+ * naming `source`, `where` and the field (a NaN or an out-of-range number would otherwise be
+ * cast to an integer, or printed as "nan" into the next saved state, which then does not
+ * parse: found by tests/fuzz/fuzz_tuning_state). */
+static tt_status tt__state_num(const cJSON *o, const char *k, double lo, double hi,
+                               const char *source, const char *where, double *out) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
+  if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < lo ||
+      v->valuedouble > hi)
+    return tt_set_error(TT_ERR_PARSE, "%s: %s%s: expected a number in [%g, %g]", source, where,
+                        k, lo, hi);
+  *out = v->valuedouble;
+  return TT_OK;
+}
+
 tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *source) {
   if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_load_state: NULL argument");
   if (!source) source = "tuning state";
@@ -922,16 +939,21 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
     tt_tuning_sample x;
     memset(&x, 0, sizeof x);
     x.struct_size = sizeof x;
-    x.iteration = (int32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "iteration"));
-    x.cost = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "cost"));
-    x.build_ms = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "build_ms"));
-    x.render_ms = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "render_ms"));
-    x.status = (int32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(o, "status"));
+    char where[48];
+    snprintf(where, sizeof where, "samples[%d].", i);
+    double it, status;
+    if ((st = tt__state_num(o, "iteration", -1, INT32_MAX, source, where, &it)) != TT_OK ||
+        (st = tt__state_num(o, "cost", -DBL_MAX, DBL_MAX, source, where, &x.cost)) != TT_OK ||
+        (st = tt__state_num(o, "build_ms", 0, DBL_MAX, source, where, &x.build_ms)) != TT_OK ||
+        (st = tt__state_num(o, "render_ms", 0, DBL_MAX, source, where, &x.render_ms)) != TT_OK ||
+        (st = tt__state_num(o, "status", TT_TUNEDB_OK, TT_TUNEDB_FAILED, source, where, &status)) != TT_OK)
+      goto done;
+    x.iteration = (int32_t)it;
+    x.status = (int32_t)status;
     x.cached = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(o, "cached"));
     x.config = tt__strdup(cfg->valuestring);
-    if (!x.config || isnan(x.cost)) {
-      free((char *)x.config);
-      st = tt_set_error(TT_ERR_PARSE, "%s: samples[%d]: bad cost", source, i);
+    if (!x.config) {
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", source);
       goto done;
     }
     if (t->count == t->cap) {
@@ -947,11 +969,18 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
     }
     t->samples[t->count++] = x;
   }
-  t->next_iteration = (int32_t)next->valuedouble;
-  t->measured = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "measured"));
-  t->cached = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "cached"));
-  t->infeasible = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "infeasible"));
-  t->failed = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(c, "failed"));
+  double nx, cnt[4];
+  static const char *const counters[4] = {"measured", "cached", "infeasible", "failed"};
+  if ((st = tt__state_num(root, "next_iteration", -1, INT32_MAX, source, "", &nx)) != TT_OK)
+    goto done;
+  for (int i = 0; i < 4; i++)
+    if ((st = tt__state_num(c, counters[i], 0, UINT32_MAX, source, "counters.", &cnt[i])) != TT_OK)
+      goto done;
+  t->next_iteration = (int32_t)nx;
+  t->measured = (uint32_t)cnt[0];
+  t->cached = (uint32_t)cnt[1];
+  t->infeasible = (uint32_t)cnt[2];
+  t->failed = (uint32_t)cnt[3];
   t->converged = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "converged"));
   t->context_sent = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "context_sent"));
   t->rng = strtoull(rng->valuestring, NULL, 10);
