@@ -27,6 +27,9 @@ PACKAGES=(
   python3-numpy python3-openimageio           # tools/scenes/ generators (tests/scenes_generate.sh)
   python3-numpy python3-scipy                 # tools/tuning/analyze.py (tests/tune_analyze.sh)
   python3-numpy                               # the Python API's arrays (tests/python_api.py)
+  clang libclang-rt-14-dev                    # the ASan+UBSan build and the libFuzzer harnesses
+                                              # (tools/test_sanitized.sh, tests/fuzz; .ci/run)
+  llvm-14                                     # llvm-symbolizer: sanitizer reports with lines
 )
 
 # Opt-in (--training): training the TAA networks (tools/taa/train.py, ablations.py,

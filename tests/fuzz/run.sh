@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# Runs libFuzzer harnesses of tests/fuzz on their committed corpora and reports, per harness,
+# the executions and what was found (crashes, leaks, timeouts, out-of-memory), one line each:
+#   tests/fuzz/run.sh --time SECONDS HARNESS...   smoke run (the 'fuzz' meson suite: 30 s)
+#   tests/fuzz/run.sh --runs N HARNESS...         long run: N executions each
+# Options: --jobs J (harnesses run side by side, default 1), --work DIR (keep the grown
+# corpora, logs and artifacts there; default a temporary folder, removed unless something
+# was found). HARNESS is a built executable (BUILD/tests/fuzz/fuzz_NAME). Exit 0 only if
+# nothing was found. Long runs belong under `nice -n 19` in the background.
+set -uo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+mode="" limit="" jobs=1 work="" keep=0
+harnesses=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --time) mode=time limit=$2; shift 2 ;;
+    --runs) mode=runs limit=$2; shift 2 ;;
+    --jobs) jobs=$2; shift 2 ;;
+    --work) work=$2 keep=1; shift 2 ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    *) # a glob over the build folder also matches meson's NAME.p object folders: skip them
+       if [ -f "$1" ] && [ -x "$1" ]; then harnesses+=("$1"); fi; shift ;;
+  esac
+done
+if [ -z "$mode" ] || [ ${#harnesses[@]} -eq 0 ]; then
+  echo "usage: $0 (--time SECONDS | --runs N) [--jobs J] [--work DIR] HARNESS..." >&2
+  exit 2
+fi
+[ -n "$work" ] || work=$(mktemp -d "${TMPDIR:-/tmp}/tt_fuzz_run.XXXXXX")
+mkdir -p "$work"
+
+# Sanitizer settings (leaks on, UBSan stops at its first report, third-party suppressions)
+source "$here/../support/sanitizers/env.sh"
+
+run_one() {
+  local exe=$1 name corpus dir log rc
+  name=$(basename "$exe")
+  corpus="$here/corpus/${name#fuzz_}"
+  dir="$work/$name"
+  mkdir -p "$dir/corpus" "$dir/artifacts" "$dir/tmp"
+  log="$dir/log.txt"
+  local args=(-timeout=25 -rss_limit_mb=3072 -malloc_limit_mb=3072 -close_fd_mask=2
+              -print_final_stats=1 -artifact_prefix="$dir/artifacts/")
+  [ -f "$here/$name.dict" ] && args+=(-dict="$here/$name.dict")
+  if [ "$mode" = time ]; then args+=(-max_total_time="$limit"); else args+=(-runs="$limit"); fi
+  # the grown corpus goes to the work folder; the committed one is only read
+  TT_FUZZ_TMP="$dir/tmp" "$exe" "${args[@]}" "$dir/corpus" "$corpus" >"$log" 2>&1
+  rc=$?
+  local execs crashes leaks timeouts ooms
+  execs=$(awk '/stat::number_of_executed_units:/ {print $2}' "$log" | tail -n 1)
+  crashes=$(find "$dir/artifacts" -name 'crash-*' | wc -l)
+  leaks=$(find "$dir/artifacts" -name 'leak-*' | wc -l)
+  timeouts=$(find "$dir/artifacts" -name 'timeout-*' | wc -l)
+  ooms=$(find "$dir/artifacts" -name 'oom-*' | wc -l)
+  local secs
+  secs=$(awk '/stat::.*time|Done [0-9]+ runs in/ {for (i = 1; i <= NF; i++) if ($i == "in") print $(i + 1)}' "$log" | tail -n 1)
+  printf '%-18s %12s executions %6s s  crashes %s  leaks %s  timeouts %s  oom %s  exit %s\n' \
+    "$name" "${execs:-?}" "${secs:-?}" "$crashes" "$leaks" "$timeouts" "$ooms" "$rc" \
+    | tee "$dir/summary.txt"
+  # 72: libFuzzer's exit after SIGINT/SIGTERM (a long run stopped early): its counts stand
+  if [ "$rc" -eq 72 ] && [ $((crashes + leaks + timeouts + ooms)) -eq 0 ]; then
+    echo "$name: stopped early (signal); the figures above are what it ran"
+    return 0
+  fi
+  if [ "$rc" -ne 0 ] || [ $((crashes + leaks + timeouts + ooms)) -ne 0 ]; then
+    echo "--- $name: log tail ($log) ---"
+    tail -n 60 "$log"
+    return 1
+  fi
+  rm -rf "$dir/tmp"
+  return 0
+}
+
+for exe in "${harnesses[@]}"; do
+  run_one "$exe" &
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
+done
+wait
+found=$(cat "$work"/*/summary.txt 2>/dev/null | awk '{s += $7 + $9 + $11 + $13} END {print s + 0}')
+bad=$(cat "$work"/*/summary.txt 2>/dev/null | awk '$15 != 0 && $15 != 72' | wc -l)
+ran=$(cat "$work"/*/summary.txt 2>/dev/null | wc -l)
+[ "$ran" -eq ${#harnesses[@]} ] || bad=$((bad + ${#harnesses[@]} - ran))
+echo "fuzz: ${#harnesses[@]} harness(es), $found finding(s), $bad failed run(s); work folder $work"
+if [ "$found" -eq 0 ] && [ "$bad" -eq 0 ]; then
+  [ "$keep" -eq 1 ] || rm -rf "$work"
+  exit 0
+fi
+exit 1

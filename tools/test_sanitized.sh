@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# The unit and render suites again, in a second build (build-san/) compiled by clang with
+# AddressSanitizer + UndefinedBehaviorSanitizer, leak checking on, then a smoke run of every
+# libFuzzer harness (the 'fuzz' suite, tests/fuzz). .ci/run runs this after tools/test.sh;
+# bootstrap (tools/bootstrap.sh) installs clang and its run-time libraries. Any report fails
+# the test that produced it. Ends with "sanitized tests: N passed, N failed, N skipped".
+set -uo pipefail
+cd "$(dirname "$0")/.."
+bash tools/bootstrap.sh >/dev/null || exit 1
+dir=build-san
+if [ ! -f "$dir/build.ninja" ]; then
+  CC=clang CXX=clang++ meson setup "$dir" -Db_sanitize=address,undefined -Db_lundef=false \
+    -Dfuzzing=true || exit 1
+fi
+ninja -C "$dir" || exit 1
+source tests/support/sanitizers/env.sh
+# instrumented code runs 2-5x slower: the timeouts stretch (taa_net needs > 60 s here)
+meson test -C "$dir" --suite unit --suite render --suite fuzz --print-errorlogs \
+  --timeout-multiplier 5 --num-processes "$(nproc)" 2>&1 | tee "$dir/test-output.txt"
+rc=${PIPESTATUS[0]}
+count() { awk -v k="$1" '$1 == k":" {print $2}' "$dir/test-output.txt" | tail -n 1; }
+ok=$(count Ok); fail=$(count Fail); skip=$(count Skipped); timeout=$(count Timeout)
+echo
+echo "sanitized tests: ${ok:-0} passed, $(( ${fail:-0} + ${timeout:-0} )) failed, ${skip:-0} skipped"
+exit "$rc"
