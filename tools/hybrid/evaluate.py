@@ -35,7 +35,7 @@ reports with what is measured. Figures (matplotlib PNG) and a JSON/Markdown summ
   evaluate.py ... --variants norm,reward,features,table,candidates   # the studies of the README
 """
 import argparse
-import hashlib
+import concurrent.futures
 import json
 import math
 import os
@@ -136,32 +136,39 @@ def protocols(cams, n_splits, val_share, loso, seed):
     return out
 
 
-def training_db(a, jobs, train, obj, path):
-    """A database with only the training cameras' rows of the objective (what the model sees)."""
+def copy_samples(src_path, path, selections):
+    """A tuning database at `path` (atomically, kept if it exists) holding the rows of the
+    samples table of `src_path` that match any (WHERE clause, parameters) of `selections`."""
     if os.path.exists(path):
         return path
     tmp = path + ".tmp"
     if os.path.exists(tmp):
         os.remove(tmp)
-    src = sqlite3.connect(a.db)
+    src = sqlite3.connect(src_path)
     schema = src.execute("SELECT sql FROM sqlite_master WHERE name = 'samples'").fetchone()[0]
     version = src.execute("PRAGMA user_version").fetchone()[0]
     dst = sqlite3.connect(tmp)
     dst.execute(schema)
     dst.execute(f"PRAGMA user_version = {version}")
-    cols = [r[1] for r in src.execute("PRAGMA table_info(samples)")]
-    q = f"INSERT INTO samples ({','.join(cols)}) VALUES ({','.join('?' * len(cols))})"
-    for s, cs in train.items():
-        sid = next(j["scene_id"] for (ss, _, _), j in jobs.items() if ss == s)
-        for c in cs:
-            rows = src.execute(f"SELECT {','.join(cols)} FROM samples WHERE scene_id = ? AND "
-                               "objective = ? AND camera LIKE ?", (sid, obj, f'%"path_index":{c}}}'))
-            dst.executemany(q, rows.fetchall())
+    cols = ",".join(r[1] for r in src.execute("PRAGMA table_info(samples)"))
+    q = f"INSERT INTO samples ({cols}) VALUES ({','.join('?' * len(cols.split(',')))})"
+    for where, params in selections:
+        dst.executemany(q, src.execute(f"SELECT {cols} FROM samples WHERE {where}", params).fetchall())
     dst.commit()
     dst.close()
     src.close()
     os.replace(tmp, path)
     return path
+
+
+def training_db(a, jobs, train, obj, path):
+    """A database with only the training cameras' rows of the objective (what the model sees)."""
+    sel = []
+    for s, cs in train.items():
+        sid = next(j["scene_id"] for (ss, _, _), j in jobs.items() if ss == s)
+        sel += [("scene_id = ? AND objective = ? AND camera LIKE ?", (sid, obj, f'%"path_index":{c}}}'))
+                for c in cs]
+    return copy_samples(a.db, path, sel)
 
 
 def host_common(job):
@@ -231,7 +238,7 @@ class Measurements:
             if canon(cfg) not in seen:
                 seen.add(canon(cfg))
                 uniq.append(cfg)
-        f = os.path.join(self.dir, f"todo_{os.getpid()}.json")
+        f = os.path.join(self.dir, f"todo_{s}_{c}_{o.replace('+', '_')}_{os.getpid()}.json")
         with open(f, "w") as fh:
             json.dump(uniq, fh)
         cmd = [self.a.host, "--measure", f, "--rounds", str(self.a.rounds), "--camera-index", str(c),
@@ -323,6 +330,7 @@ def main():
     ap.add_argument("--variant-splits", type=int, default=5, help="splits used by the studies")
     ap.add_argument("--rounds", type=int, default=2, help="side-by-side rounds per measurement")
     ap.add_argument("--nice", type=int, default=19)
+    ap.add_argument("--jobs", type=int, default=1, help="measuring host processes at a time")
     ap.add_argument("--no-measure", action="store_true", help="report with what is measured")
     a = ap.parse_args()
     objectives = a.objectives.split(",")
@@ -380,12 +388,18 @@ def main():
         print(f"evaluate: measuring {sum(len(v) for _, v in todo)} configurations at {len(todo)} "
               f"cameras ({a.rounds} rounds side by side)", flush=True)
         t0 = time.time()
-        for i, ((s, c, o), cfgs) in enumerate(todo):
-            meas.measure(s, c, o, cfgs)
-            el = time.time() - t0
-            print(f"  [{i + 1}/{len(todo)}] {s}:{c}:{o} {len(cfgs)} configs, elapsed {el / 60:.1f} min, "
-                  f"eta {el / (i + 1) * (len(todo) - i - 1) / 60:.0f} min, load {os.getloadavg()[0]:.1f}",
-                  flush=True)
+        # --jobs host processes at a time (each camera's file is its own: no two share one);
+        # costs are CPU time of one thread, ratios taken within one process
+        with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+            futs = {pool.submit(meas.measure, s, c, o, cfgs): (s, c, o, len(cfgs))
+                    for (s, c, o), cfgs in todo}
+            for i, fut in enumerate(concurrent.futures.as_completed(futs)):
+                s, c, o, n = futs[fut]
+                fut.result()
+                el = time.time() - t0
+                print(f"  [{i + 1}/{len(todo)}] {s}:{c}:{o} {n} configs, elapsed {el / 60:.1f} min, "
+                      f"eta {el / (i + 1) * (len(todo) - i - 1) / 60:.0f} min, load "
+                      f"{os.getloadavg()[0]:.1f}", flush=True)
 
     # 3. figures per camera
     rows = []  # dicts: variant, model, protocol, obj, scene, cam, metrics
@@ -404,6 +418,7 @@ def main():
             rows.append(r)
     summary = summarize(rows, cams, objectives, models)
     summary["scenes"] = {s: len(c) for s, c in cams.items()}
+    summary["example"] = example(rows, jobs)
     summary["measured_configs"] = sum(len(meas.get(s, c, o)["ratios"]) for s in cams for c in cams[s] for o in objectives)
     summary["load_during_measurement"] = [r["load1"] for s in cams for c in cams[s] for o in objectives
                                           for r in meas.get(s, c, o)["runs"]]
@@ -413,10 +428,88 @@ def main():
             json.dump(rows, f)
         with open(os.path.join(a.out, "summary.json"), "w") as f:
             json.dump(summary, f, indent=1, sort_keys=True)
+        with open(os.path.join(a.out, "summary.md"), "w") as f:
+            f.write(markdown(summary, a))
         import figures
         figures.draw(rows, summary, a.out)
     print(json.dumps(summary["table"], indent=1))
     return 0
+
+
+def example(rows, jobs, scene="bmw-m6", objective="render"):
+    """Fig. 3.16's data: the first validation camera of split 0 in `scene` (the thesis' car),
+    its search curve as ratios to the default, the roofline and each model's prediction."""
+    sel = [r for r in rows if r["variant"] == "default" and r["protocol"] == "split0" and
+           r["objective"] == objective]
+    if not any(r["scene"] == scene for r in sel):
+        scene = sorted({r["scene"] for r in sel})[0] if sel else None
+    cams = sorted(r["camera"] for r in sel if r["scene"] == scene)
+    if not cams:
+        return None
+    c = cams[0]
+    job = jobs[(scene, c, objective)]
+    d = job["default_cost"]
+    search = [1.0] + [h["cost"] / d for h in job["history"] if h["cost"] < 1e299]
+    pick = {r["model"]: r for r in sel if r["scene"] == scene and r["camera"] == c}
+    return {"scene": scene, "camera": c, "objective": objective, "protocol": "split0",
+            "default_ms": d, "search": search, "roofline": next(iter(pick.values()))["b"],
+            "predicted": {m: r["p"] for m, r in pick.items()}}
+
+
+def markdown(summary, a):
+    """summary.md: the README's tables (geo-means beside the thesis' figures)."""
+    def f(x, fmt="{:.3f}"):
+        return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else fmt.format(x)
+    t = summary["table"]
+    cams = summary["scenes"]
+    loads = summary["load_during_measurement"]
+    out = [f"Protocol: {len(cams)} scenes ({', '.join(f'{s} {n}' for s, n in sorted(cams.items()))} "
+           f"cameras), 80/20 camera splits x {a.splits} (per scene, seeded), leave-one-scene-out; "
+           f"measurements side by side, {a.rounds} rounds alternating, CPU time of one thread; "
+           f"load average during the measurements {f(min(loads) if loads else None, '{:.1f}')}-"
+           f"{f(max(loads) if loads else None, '{:.1f}')}.", ""]
+    for o in ("render", "build+render"):
+        th = THESIS.get(o, {})
+        out += [f"**{o}**", "",
+                "| model | speed-up over search (thesis) | fraction of roofline (thesis) | overhead "
+                "reduction: geo-mean of scenes / best scene (thesis best) | break-even: mean of "
+                "positive / negative of all | leave-one-scene-out speed-up / roofline | vs best "
+                "static | predict ms / frame ms |", "|---|---|---|---|---|---|---|---|"]
+        for m in ("nn", "rbf", "static"):
+            r = t.get(f"{o}/{m}")
+            if not r:
+                continue
+            out.append(
+                f"| {m} | {f(r['speedup'])} ({f(th.get('speedup', {}).get(m), '{:.2f}')}) | "
+                f"{f(r['roofline'])} ({f(th.get('roofline', {}).get(m), '{:.2f}')}) | "
+                f"{f(r['overhead_reduction_geomean_of_scenes'])} / {f(r['overhead_reduction_max_scene'])} "
+                f"({f(th.get('overhead_max', {}).get(m), '{:.3f}')}) | "
+                f"{f(r['break_even_mean_positive'], '{:.0f}')} / {r['break_even_negative']} of "
+                f"{r['break_even_points']} | {f(r['loso_speedup'])} / {f(r['loso_roofline'])} | "
+                f"{f(r['beats_static'])} | {f(r['predict_ms_median'], '{:.3g}')} / "
+                f"{f(r['frame_ms_median'], '{:.3g}')} |")
+        out.append("")
+        ps = summary["per_scene"]
+        models = [m for m in ("nn", "rbf", "static") if f"{o}/{m}" in ps]
+        if models:
+            out += ["| scene | " + " | ".join(f"{m} speed-up (LOSO)" for m in models) + " | " +
+                    " | ".join(f"{m} roofline" for m in models) + " |",
+                    "|---|" + "---|" * (2 * len(models))]
+            for sc in sorted(cams):
+                out.append(f"| {sc} | " + " | ".join(
+                    f"{f(ps[f'{o}/{m}'][sc]['speedup'])} ({f(ps[f'{o}/{m}'][sc]['loso_speedup'])})"
+                    for m in models) + " | " + " | ".join(f(ps[f"{o}/{m}"][sc]["roofline"]) for m in models) + " |")
+            out.append("")
+    st = summary.get("studies", {})
+    if st:
+        out += ["| study / objective / model | speed-up | roofline | same splits, default: speed-up "
+                "/ roofline | entries | memory KiB | predict ms |", "|---|---|---|---|---|---|---|"]
+        for k in sorted(st):
+            v = st[k]
+            out.append(f"| {k} | {f(v['speedup'])} | {f(v['roofline'])} | {f(v['default_speedup'])} / "
+                       f"{f(v['default_roofline'])} | {v['entries']} | {f((v['memory_bytes'] or 0) / 1024, '{:.0f}')} | "
+                       f"{f(v['predict_ms_median'], '{:.3g}')} |")
+    return "\n".join(out) + "\n"
 
 
 def summarize(rows, cams, objectives, models):

@@ -1,4 +1,4 @@
-"""Charts of tools/hybrid/evaluate.py (thesis Figures 3.17-3.21, leave-one-scene-out, the
+"""Charts of tools/hybrid/evaluate.py (thesis Figures 3.16-3.21, leave-one-scene-out, the
 model studies) from its per-camera rows. matplotlib only; PNGs into the output folder."""
 import math
 import os
@@ -82,6 +82,31 @@ def draw(rows, summary, out):
                      fontsize=10)
         ax.legend(fontsize=8)
         _save(fig, out, fr)
+    # Fig. 3.16: one camera's search curve, its roofline and the predictions (render time)
+    ex = summary.get("example")
+    if ex:
+        fig, ax = plt.subplots(figsize=(8, 4))
+        d = ex["default_ms"]
+        ys = [c * d for c in ex["search"]]
+        xs = list(range(len(ys)))
+        b = ex["roofline"] * d
+        ax.plot(xs, ys, color="k", lw=1.2, label="Nelder-Mead search (measured per iteration)")
+        ax.fill_between(xs, [b] * len(xs), ys, where=[y > b for y in ys], color="#ff7f0e", alpha=0.35,
+                        label=f"search overhead over its best: {sum(y - b for y in ys if y > b) / d:.1f} default frames")
+        ax.axhline(b, color="#9467bd", ls="--", lw=1.5, label="roofline (the search's best)")
+        for m, p in sorted(ex["predicted"].items()):
+            if p is None:
+                continue
+            ax.axhline(p * d, color=COLORS[m], lw=1.5, label=f"{LABELS[m]} prediction ({ex['roofline'] / p:.2f} of the roofline)")
+            if m == "nn":
+                ax.fill_between(xs, [b] * len(xs), [p * d] * len(xs), facecolor="none", hatch="//",
+                                edgecolor=COLORS[m], lw=0)
+        ax.set_xlabel("iteration (frame)")
+        ax.set_ylabel(f"{OBJ[ex['objective']]} per frame (ms, CPU)")
+        ax.set_title(f"Tuning vs prediction at {ex['scene']} camera {ex['camera']} ({ex['protocol']}: "
+                     f"camera not in the training set)", fontsize=9)
+        ax.legend(fontsize=7)
+        _save(fig, out, "fig3_16_example.png")
     # Fig. 3.19: break-even iterations (render)
     sel = _sel(rows, "render")
     if sel:

@@ -1,0 +1,238 @@
+#!/usr/bin/python3
+"""Hybrid autotuning along camera paths (thesis 3.3, Figure 3.14's loop) for several epsilon:
+`host --hybrid` itself, end to end, against pure search (epsilon 1).
+
+Per scene and objective, one run of `host --hybrid --epsilon E --iterations K --camera-index
+A:B` per epsilon and predictor: the camera moves through the path samples A..B (consecutive
+states, as a camera moving along its path); at each state the loop explores (a K-iteration
+Nelder-Mead search, every sample observed by the model) with probability E, else exploits
+(one predicted configuration, built once). The model is warm-started from the baseline
+database *without the scene's own rows* (what a renderer shipping a model trained elsewhere
+would have) and learns online along the path; every run writes a fresh database, so no
+search is answered from an earlier one. Each state renders F frames (--spp F, default K + 1:
+the search's default + K iterations, so an explored state is exactly its search).
+
+Time for F frames per state (thesis 3.3.5: the area under the cost curve):
+  explore state  sum of the search's sample costs + (F - samples) x the best's cost
+  exploit state  F x the predicted configuration's measured cost
+  speed-up over pure search = T(epsilon = 1) / T(epsilon)
+The objective's cost per frame is what the loop measured (render: the pass; build+render:
+rebuild + pass, the real-time case, where every frame pays the build). For `render` the
+host's own per-state clock (--clock cpu) over the state's F passes, predictor calls and
+searches included, is reported beside it (`measured`), and the CPU seconds of each host
+process (scene loading and warm start included).
+
+  epsilon.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/epsilon --out tools/hybrid/figures
+"""
+import argparse
+import json
+import os
+import resource
+import sqlite3
+import subprocess
+import sys
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from baseline import TUNE_PARAMS  # noqa: E402
+from evaluate import copy_samples  # noqa: E402
+
+MODELS = {"nn": "predictor_nn", "rbf": "predictor_rbf", "static": "predictor_static"}
+
+
+def scene_files(db):
+    """{name: (scene file, scene id)} of the baseline's finished jobs."""
+    con = sqlite3.connect(db)
+    out = {r[0]: (r[1], r[2]) for r in con.execute(
+        "SELECT scene, scene_file, scene_id FROM hybrid_jobs GROUP BY scene")}
+    con.close()
+    return out
+
+
+def db_without(src_path, scene_id, path):
+    """A copy of the baseline's samples without one scene's rows (the warm start)."""
+    return copy_samples(src_path, path, [("scene_id <> ?", (scene_id,))])
+
+
+def run(a, scene, sfile, warm, obj, eps, model, path):
+    """One host --hybrid run, cached in `path` (its --stats plus the process' CPU seconds)."""
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    db = path[:-5] + ".db"
+    for p in (db, db + "-wal", db + "-shm"):
+        if os.path.exists(p):
+            os.remove(p)
+    stats = path + ".stats.tmp"
+    cmd = ["nice", "-n", str(a.nice), a.host, "--quiet", "--hybrid", "--plugin", MODELS[model],
+           "--epsilon", f"{eps:g}", "--iterations", str(a.iterations), "--camera-index", a.states,
+           "--objective", obj, "--tune-spp", "1", "--spp", str(a.frames), "--res", a.res,
+           "--threads", "1", "--clock", "cpu", "--seed", str(a.seed), "--tune-params", a.tune_params,
+           "--warm-start", warm, "--db", db, "--stats", stats, sfile]
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.time()
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if r.returncode != 0:
+        sys.exit(f"epsilon: {' '.join(cmd)}\nexit {r.returncode}\n{r.stdout[-3000:]}")
+    with open(stats) as f:
+        st = json.load(f)
+    os.remove(stats)
+    out = {"scene": scene, "objective": obj, "epsilon": eps, "model": model, "command": cmd[3:],
+           "wall_s": time.time() - t0, "load1": os.getloadavg()[0],
+           "cpu_s": (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime),
+           "hybrid": st["hybrid"]}
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(out, f)
+    os.replace(tmp, path)
+    return out
+
+
+def totals(res, frames):
+    """Time for `frames` frames per state: modelled from the costs, and the host's clock."""
+    T = measured = 0.0
+    n = {"explore": 0, "exploit": 0, "fallback": 0}
+    for s in res["hybrid"]["states"]:
+        # an infeasible or failed measurement leaves no cost: the state then ran its default
+        cost = s["cost"] if s["cost"] is not None else s["default_cost"] or 0.0
+        if s["mode"] == "explore":
+            T += s["search_cost"] + max(0, frames - s["samples"]) * cost
+        else:
+            T += frames * cost
+        n[s["mode"]] += 1
+        n["fallback"] += bool(s.get("fallback"))
+        measured += s["total_ms"]
+    return {"T": T, "measured": measured, "states": len(res["hybrid"]["states"]), **n,
+            "cpu_s": res["cpu_s"], "load1": res["load1"]}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--db", required=True, help="baseline database (tools/hybrid/baseline.py)")
+    ap.add_argument("--work", required=True, help="warm-start DBs and the runs (cached: reruns continue)")
+    ap.add_argument("--out", default=None, help="folder for epsilon.json/.md and the chart")
+    ap.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
+    ap.add_argument("--scenes", default="killeroos,living-room")
+    ap.add_argument("--objectives", default="render,build+render")
+    ap.add_argument("--epsilons", default="0,0.1,0.3,1")
+    ap.add_argument("--models", default="nn,rbf")
+    ap.add_argument("--states", default="40:59", help="path samples A:B (both included)")
+    ap.add_argument("--iterations", type=int, default=40, help="K, the search's iterations")
+    ap.add_argument("--frames", type=int, default=0, help="frames per state (default K + 1)")
+    ap.add_argument("--res", default="128x128")
+    ap.add_argument("--tune-params", default=TUNE_PARAMS)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--nice", type=int, default=19)
+    ap.add_argument("--no-run", action="store_true", help="report the cached runs only")
+    a = ap.parse_args()
+    a.frames = a.frames or a.iterations + 1
+    eps = sorted({float(e) for e in a.epsilons.split(",")}, reverse=True)
+    if 1.0 not in eps:
+        eps.insert(0, 1.0)
+    files = scene_files(a.db)
+    os.makedirs(os.path.join(a.work, "runs"), exist_ok=True)
+    results = []
+    t0 = time.time()
+    todo = [(s, o, e, m) for s in a.scenes.split(",") for o in a.objectives.split(",") for e in eps
+            for m in (a.models.split(",")[:1] if e == 1.0 else a.models.split(","))]
+    for k, (s, o, e, m) in enumerate(todo):
+        if s not in files:
+            sys.exit(f"epsilon: {s} has no finished job in {a.db}")
+        sfile, sid = files[s]
+        warm = os.path.join(a.work, f"without_{s}.db")
+        if not a.no_run:
+            warm = db_without(a.db, sid, warm)
+        name = f"{s}_{o.replace('+', '_')}_eps{e:g}_{m}.json"
+        path = os.path.join(a.work, "runs", name)
+        if a.no_run and not os.path.exists(path):
+            continue
+        r = run(a, s, sfile, warm, o, e, m, path)
+        results.append(r)
+        el = time.time() - t0
+        print(f"[{k + 1}/{len(todo)}] {s} {o} eps {e:g} {m}: {r['hybrid']['explored']} explored, "
+              f"{r['cpu_s']:.0f} CPU s, elapsed {el / 60:.1f} min, load {os.getloadavg()[0]:.1f}", flush=True)
+    rows = []
+    for r in results:
+        t = totals(r, a.frames)
+        base = next((x for x in results if x["scene"] == r["scene"] and x["objective"] == r["objective"]
+                     and x["epsilon"] == 1.0), None)
+        if base is None:
+            continue
+        b = totals(base, a.frames)
+        # what epsilon-greedy would give without online learning: a mix of the epsilon 1 run
+        # and the same model's epsilon 0 run, state by state in expectation
+        zero = next((x for x in results if x["scene"] == r["scene"] and x["objective"] == r["objective"]
+                     and x["epsilon"] == 0.0 and x["model"] == r["model"]), None)
+        mix = None
+        if zero is not None:
+            t0 = totals(zero, a.frames)["T"]
+            mix = b["T"] / (r["epsilon"] * b["T"] + (1 - r["epsilon"]) * t0)
+        d = sum(a.frames * st["default_cost"] for st in base["hybrid"]["states"] if st["default_cost"])
+        rows.append({"scene": r["scene"], "objective": r["objective"], "epsilon": r["epsilon"],
+                     "model": r["model"], **t, "speedup": b["T"] / t["T"],
+                     "speedup_measured": b["measured"] / t["measured"], "speedup_cpu": b["cpu_s"] / t["cpu_s"],
+                     "speedup_over_default": d / t["T"], "speedup_mix": mix})
+    if a.out:
+        os.makedirs(a.out, exist_ok=True)
+        meta = {"states": a.states, "iterations": a.iterations, "frames_per_state": a.frames,
+                "res": a.res, "seed": a.seed, "warm_start": "baseline rows of the other scenes"}
+        with open(os.path.join(a.out, "epsilon.json"), "w") as f:
+            json.dump({"settings": meta, "rows": rows}, f, indent=1)
+        with open(os.path.join(a.out, "epsilon.md"), "w") as f:
+            f.write(table(rows))
+        draw(rows, a)
+    print(table(rows))
+    return 0
+
+
+def table(rows):
+    lines = ["| scene | objective | epsilon | model | explored/states | speed-up over search | "
+             "(host clock, render) | over default | host CPU s |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in sorted(rows, key=lambda r: (r["scene"], r["objective"], -r["epsilon"], r["model"])):
+        meas = f"{r['speedup_measured']:.2f}" if r["objective"] == "render" else ""
+        lines.append(f"| {r['scene']} | {r['objective']} | {r['epsilon']:g} | "
+                     f"{r['model'] if r['epsilon'] < 1 else 'search'} | {r['explore']}/{r['states']} | "
+                     f"{r['speedup']:.2f} | {meas} | {r['speedup_over_default']:.2f} | {r['cpu_s']:.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def draw(rows, a):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    objs = sorted({r["objective"] for r in rows}, key=lambda o: o != "render")
+    fig, axes = plt.subplots(1, len(objs), figsize=(5.2 * len(objs), 3.8), squeeze=False)
+    colors = {"nn": "#1f77b4", "rbf": "#2ca02c", "static": "#7f7f7f"}
+    marks = ["o", "s", "^", "D", "v"]
+    scenes = sorted({r["scene"] for r in rows})
+    for ax, o in zip(axes[0], objs):
+        for si, s in enumerate(scenes):
+            for m in sorted({r["model"] for r in rows if r["epsilon"] < 1}):
+                pts = sorted((r["epsilon"], r["speedup"]) for r in rows if r["scene"] == s and
+                             r["objective"] == o and (r["model"] == m or r["epsilon"] == 1.0))
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marks[si % len(marks)],
+                        color=colors.get(m, "k"), alpha=0.75, label=f"{s}, {m}")
+                mx = sorted((r["epsilon"], r["speedup_mix"]) for r in rows if r["scene"] == s and
+                            r["objective"] == o and r["model"] == m and r["speedup_mix"])
+                grid = [k / 20 for k in range(21)]
+                if len(mx) >= 2 and mx[0][0] == 0.0:
+                    # the mix curve through epsilon 0 and 1: T1 / (e T1 + (1 - e) T0)
+                    s0 = mx[0][1]
+                    ax.plot(grid, [1 / (e + (1 - e) / s0) for e in grid], ls=":", color=colors.get(m, "k"),
+                            alpha=0.6)
+        ax.axhline(1.0, color="k", lw=0.8, ls="--")
+        ax.set_xlabel("epsilon (probability of exploring a state)")
+        ax.set_ylabel("speed-up over pure search (epsilon 1)")
+        ax.set_yscale("log")
+        ax.set_title(f"{o}: {a.frames} frames per state, path samples {a.states}\n(dotted: the mix "
+                     f"of epsilon 0 and 1 without online learning)", fontsize=9)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "hybrid_epsilon.png"), dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
