@@ -32,9 +32,9 @@ n=$(q "$tmp/b.db" "SELECT count(*) FROM hybrid_jobs WHERE iterations = 4 AND res
 "${B[@]}" --scenes nosuch >/dev/null 2>&1 && fail "--scenes nosuch should be refused"
 
 E=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e" --out "$tmp/f"
-   --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0)
+   --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0 --jobs 2)
 "${E[@]}" >"$tmp/e.log" 2>&1 || { cat "$tmp/e.log"; fail "evaluate"; }
-for f in summary.json rows.json fig3_17_speedup_render.png fig3_18_roofline_render.png \
+for f in summary.json summary.md rows.json fig3_16_example.png fig3_17_speedup_render.png fig3_18_roofline_render.png \
          fig3_19_break_even_render.png fig3_20_speedup_total.png fig3_21_roofline_total.png \
          loso_render.png; do
   [ -s "$tmp/f/$f" ] || { cat "$tmp/e.log"; fail "evaluate did not write $f"; }
@@ -55,4 +55,22 @@ if grep -q "measuring" "$tmp/e2.log"; then cat "$tmp/e2.log"; fail "the second e
 if "$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e3" --host "$host" \
      --min-cameras 50 >"$tmp/e3.log" 2>&1; then fail "evaluate with too few cameras should fail"; fi
 grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "message"; }
+# epsilon.py: host --hybrid along the path at epsilon 0 and 1, warm-started without the
+# scene's own rows: epsilon 1 explores every state, epsilon 0 none (one build each)
+EP=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/epsilon.py" --db "$tmp/b.db" --work "$tmp/eps" --out "$tmp/fe"
+    --host "$host" --scenes box --objectives render --epsilons 0,1 --models nn --states 3:5
+    --iterations 3 --res 16x16 --nice 0)
+"${EP[@]}" >"$tmp/ep.log" 2>&1 || { cat "$tmp/ep.log"; fail "epsilon.py"; }
+[ -s "$tmp/fe/hybrid_epsilon.png" ] || fail "epsilon.py did not write its chart"
+"$PY" - "$tmp/fe/epsilon.json" "$tmp/eps" <<'EOF' || fail "epsilon.json"
+import json, math, sqlite3, sys
+rows = {r["epsilon"]: r for r in json.load(open(sys.argv[1]))["rows"]}
+assert rows[1.0]["explore"] == 3 and rows[1.0]["exploit"] == 0 and rows[1.0]["speedup"] == 1.0, rows
+assert rows[0.0]["explore"] == 0 and rows[0.0]["exploit"] == 3, rows
+assert math.isfinite(rows[0.0]["speedup"]) and rows[0.0]["speedup"] > 0, rows
+# the warm start holds the other scene's rows only
+n = sqlite3.connect(sys.argv[2] + "/without_box.db").execute(
+    "SELECT count(DISTINCT scene_id) FROM samples").fetchone()[0]
+assert n == 1, n
+EOF
 echo "hybrid_tools: ok"
