@@ -14,6 +14,10 @@
 #define _POSIX_C_SOURCE 200809L
 #include "tune.h"
 
+#include <tt_util/clock.h>
+#include <tt_util/stats.h>
+#include <tt_util/strings.h>
+
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <math.h>
@@ -179,13 +183,6 @@ static void tt__hyb_camera(tt__session *s, uint32_t i) {
   tt_session_set_camera_time(s->lib, t, 1.0 / (s->opt->fps > 0 ? s->opt->fps : 24.0));
 }
 
-/* CPU ms of this thread, for --predict's timing. */
-static double tt__hyb_thread_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 /* --states FILE: [{"id": ..., "indicators": {name: raw value}}, ...]; NULL (printed) on error. */
 static cJSON *tt__hyb_read_states(const char *path) {
   char *text = NULL;
@@ -258,9 +255,9 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
     double ms[5];
     tt_status st = TT_OK;
     for (int k = 0; k < 5 && st == TT_OK; k++) {
-      double t0 = tt__hyb_thread_ms();
+      double t0 = tt__thread_cpu_ms();
       st = h->pi->predict_ex(h->model, &q, sub, &r);
-      ms[k] = tt__hyb_thread_ms() - t0;
+      ms[k] = tt__thread_cpu_ms() - t0;
     }
     cJSON *o = cJSON_CreateObject();
     cJSON *id = item ? cJSON_GetObjectItemCaseSensitive(item, "id") : NULL;
@@ -270,12 +267,6 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
       cJSON_AddStringToObject(o, "error", tt_last_error());
       if (st != TT_ERR_NO_DATA) rc = TT_EXIT_FAILURE;
     } else {
-      for (int a = 1; a < 5; a++)
-        for (int b = a; b > 0 && ms[b] < ms[b - 1]; b--) {
-          double t = ms[b];
-          ms[b] = ms[b - 1];
-          ms[b - 1] = t;
-        }
       tt_config_copy(full, s->configs[h->accel_index]);
       if (h->subset) tt_config_assign(full, sub);
       else tt_config_copy(full, sub);
@@ -288,7 +279,7 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
       if (isfinite(r.value)) cJSON_AddNumberToObject(o, "value", r.value);
       if (isfinite(r.distance)) cJSON_AddNumberToObject(o, "distance", r.distance);
       cJSON_AddNumberToObject(o, "candidates", (double)r.candidates);
-      cJSON_AddNumberToObject(o, "predict_ms", ms[2]);
+      cJSON_AddNumberToObject(o, "predict_ms", tt__median(ms, 5));
     }
     cJSON_AddItemToArray(arr, o);
   }
@@ -381,7 +372,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   rc = tt__hyb_model(&h, pp, &norm);
   if (rc != TT_EXIT_OK) goto done;
   if (!opt->no_db) {
-    char *path = opt->db ? strdup(opt->db) : tt_tunedb_default_path();
+    char *path = opt->db ? tt__strdup(opt->db) : tt_tunedb_default_path();
     if (path && tt_tunedb_open(path, &h.db) != TT_OK) {
       fprintf(stderr, "host: --db %s: %s\n", path, tt_last_error());
       free(path);
@@ -395,7 +386,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   const char *context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
   tt_tuning_state st0;
   if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, NULL, context_extra, 0, &st0) == TT_OK)
-    context = strdup(st0.context);
+    context = tt__strdup(st0.context);
   const tt_plugin *ae = tt_loaded_plugin_entry(s.accel_p);
   tt_hybrid_desc d;
   memset(&d, 0, sizeof d);

@@ -2,22 +2,13 @@
  * normalised to [0, 1] (tunetrace/indicators.h), as JSON on stdout. */
 #include "session.h"
 
+#include <tt_util/clock.h>
+#include <tt_util/stats.h>
+
 #include <cjson/cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
-
-/* Wall-clock ms of the thread's CPU time: what the indicators cost this process. */
-static double tt__thread_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-static int tt__cmp(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
 
 int tt__run_indicators(const tt__host_options *opt) {
   tt_indicator_norm norm;
@@ -38,11 +29,11 @@ int tt__run_indicators(const tt__host_options *opt) {
    * triangles; the camera entries alone cost nothing) */
   double raw[TT_SCENE_INDICATOR_COUNT], unit[TT_SCENE_INDICATOR_COUNT], ms[5];
   for (int r = 0; r < 5; r++) {
-    double t0 = tt__thread_ms();
+    double t0 = tt__thread_cpu_ms();
     tt_scene_indicators(scene, raw);
-    ms[r] = tt__thread_ms() - t0;
+    ms[r] = tt__thread_cpu_ms() - t0;
   }
-  qsort(ms, 5, sizeof ms[0], tt__cmp);
+  double compute_ms = tt__median(ms, 5);
   uint32_t clamped = tt_indicators_normalize(&norm, raw, unit);
 
   char id[96];
@@ -76,7 +67,7 @@ int tt__run_indicators(const tt__host_options *opt) {
   }
   (void)clamped;
   cJSON_AddNumberToObject(root, "triangles", (double)tt_scene_triangle_count(scene));
-  cJSON_AddNumberToObject(root, "compute_ms", ms[2]);
+  cJSON_AddNumberToObject(root, "compute_ms", compute_ms);
   cJSON *v = cJSON_AddObjectToObject(root, "camera");
   cJSON *pos = cJSON_AddArrayToObject(v, "position"), *tgt = cJSON_AddArrayToObject(v, "target");
   for (int a = 0; a < 3; a++) {

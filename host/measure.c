@@ -14,22 +14,13 @@
 #define _POSIX_C_SOURCE 200809L
 #include "session.h"
 
+#include <tt_util/stats.h>
+
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int tt__mcmp(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
-static double tt__median(double *v, size_t n) {
-  if (!n) return NAN;
-  qsort(v, n, sizeof *v, tt__mcmp);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* Reads the configurations of FILE into `cfgs` (clones of `base`); prints and returns an
  * exit code. */

@@ -6,11 +6,9 @@
 
 #include "taa_internal.h"
 
-double tt__taa_cpu_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
+#include <tt_util/clock.h>
+
+double tt__taa_cpu_ms(void) { return tt__process_cpu_ms(); }
 
 typedef struct taa_rows_job {
   tt__taa_rows_fn fn;

@@ -4,6 +4,8 @@
 
 #include <tunetrace/file.h>
 
+#include <tt_util/hash.h>
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -315,12 +317,6 @@ int ttpm_config_from_values(tt_config *c, const double *v, char *why, size_t n) 
 
 /* ---- files ---- */
 
-static uint64_t ttpm_fnv1a64(const unsigned char *p, size_t n) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
-  return h;
-}
-
 tt_status ttpm_save(const char *who, const char *path, uint32_t version, const ttpm_writer *w) {
   if (w->failed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
   size_t total = TTPM_HEADER_BYTES + w->len + 8;
@@ -331,7 +327,7 @@ tt_status ttpm_save(const char *who, const char *path, uint32_t version, const t
   memset(buf + 12, 0, 4);
   for (int i = 0; i < 8; i++) buf[16 + i] = (unsigned char)((uint64_t)w->len >> (8 * i));
   if (w->len) memcpy(buf + TTPM_HEADER_BYTES, w->data, w->len);
-  uint64_t h = ttpm_fnv1a64(buf, TTPM_HEADER_BYTES + w->len);
+  uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TTPM_HEADER_BYTES + w->len);
   for (int i = 0; i < 8; i++) buf[TTPM_HEADER_BYTES + w->len + i] = (unsigned char)(h >> (8 * i));
   /* a temporary file renamed over the target: a failed save leaves an existing model */
   tt_status st = tt_file_write_atomic(path, buf, total);
@@ -383,7 +379,7 @@ tt_status ttpm_load(const char *who, const char *who_version, const char *path,
     } else {
       uint64_t stored = 0;
       for (int i = 0; i < 8; i++) stored |= (uint64_t)buf[TTPM_HEADER_BYTES + n + i] << (8 * i);
-      uint64_t h = ttpm_fnv1a64(buf, TTPM_HEADER_BYTES + (size_t)n);
+      uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TTPM_HEADER_BYTES + (size_t)n);
       if (h != stored) {
         rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is corrupt (checksum %016llx, computed "
                           "%016llx)", who, path, (unsigned long long)stored, (unsigned long long)h);

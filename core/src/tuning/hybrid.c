@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <tunetrace/hybrid.h>
 
+#include <tt_util/clock.h>
 #include <tt_util/rng.h>
 #include <tt_util/strings.h>
 
@@ -195,13 +196,6 @@ static tt_status tt__count_render(void *user, uint32_t spp, tt_tuning_measuremen
   return c->inner->render(c->inner->user, spp, m);
 }
 
-/* CPU ms of this thread: what predict() costs. */
-static double tt__thread_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 /* The database's cost of the default configuration in `state`, or NAN. */
 static double tt__db_default_cost(tt_hybrid *h, const tt_tuning_state *state) {
   if (!h->db) return NAN;
@@ -293,9 +287,9 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
     double def = tt__db_default_cost(h, state);
     tt_predictor_query q = {.struct_size = sizeof q, .state = h->state, .default_cost = def};
     tt_predictor_result pr = {.struct_size = sizeof pr};
-    double t0 = tt__thread_ms();
+    double t0 = tt__thread_cpu_ms();
     st = h->pi->predict_ex(h->model, &q, h->sub, &pr);
-    r.predict_ms = tt__thread_ms() - t0;
+    r.predict_ms = tt__thread_cpu_ms() - t0;
     r.default_cost = def;
     if (st == TT_OK) {
       predicted = tt_config_clone(h->start);

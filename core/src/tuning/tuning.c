@@ -12,6 +12,7 @@
 #include "tuning/tuning_internal.h"
 
 #include <tt_util/rng.h>
+#include <tt_util/stats.h>
 #include <tt_util/strings.h>
 
 #include <tunetrace/indicators.h>
@@ -653,18 +654,6 @@ const char *tt_tuning_mode(const tt_tuning *t) { return t && t->ti ? "tune" : "e
 const tt_objective *tt_tuning_objective(const tt_tuning *t) { return t ? &t->objective : NULL; }
 
 /* ---- verification ------------------------------------------------------------------- */
-
-static int tt__cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
-/* Median of n values (sorts them in place); NaN for n = 0. */
-static double tt__median(double *v, size_t n) {
-  if (!n) return NAN;
-  qsort(v, n, sizeof *v, tt__cmp_double);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* One verification measurement: applies `cfg` and renders one pass. 0 on success, 1 when
  * interrupted, -1 when the configuration fails. */
