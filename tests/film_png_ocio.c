@@ -159,16 +159,12 @@ static int run_child(const char *self, const char *mode, const char *ocio, const
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-/* Reads a small text file into a static buffer ("" on failure). */
+/* The text of a file, valid until the next call ("" on failure). */
 static const char *slurp(const char *path) {
-  static char buf[8192];
-  buf[0] = '\0';
-  FILE *f = fopen(path, "r");
-  if (!f) return buf;
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
-  buf[n] = '\0';
-  fclose(f);
-  return buf;
+  static char *text;
+  free(text);
+  text = tt_test_read_file(path, NULL);
+  return text ? text : "";
 }
 
 /* Child body: a bogus $OCIO falls back to the built-in sRGB transform. */

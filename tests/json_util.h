@@ -2,18 +2,16 @@
 #ifndef TT_JSON_UTIL_H
 #define TT_JSON_UTIL_H
 
-#include <cjson/cJSON.h>
-#include <stdio.h>
+#include "tt_test.h"
 
-/* Reads and parses a JSON file of up to 4 MiB (NULL on failure). Not reentrant. */
+#include <cjson/cJSON.h>
+
+/* Reads and parses a JSON file (NULL when it cannot be read or parsed). */
 static cJSON *read_json(const char *path) {
-  static char text[1 << 22];
-  FILE *f = fopen(path, "r");
-  if (!f) return NULL;
-  size_t len = fread(text, 1, sizeof text - 1, f);
-  text[len] = 0;
-  fclose(f);
-  return cJSON_Parse(text);
+  char *text = tt_test_read_file(path, NULL);
+  cJSON *root = text ? cJSON_Parse(text) : NULL;
+  free(text);
+  return root;
 }
 
 /* Number member `key` of `o` (NaN if absent). */

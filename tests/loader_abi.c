@@ -226,17 +226,6 @@ static void test_newer_minor(void) {
   tt_registry_destroy(reg);
 }
 
-/* Reads a whole small file; aborts the test on failure. */
-static unsigned char *slurp(const char *path, long *size) {
-  FILE *f = fopen(path, "rb");
-  if (!f || fseek(f, 0, SEEK_END) != 0 || (*size = ftell(f)) <= 0) exit(1);
-  unsigned char *b = malloc((size_t)*size);
-  rewind(f);
-  if (!b || fread(b, 1, (size_t)*size, f) != (size_t)*size) exit(1);
-  fclose(f);
-  return b;
-}
-
 /* Runs load and probe of `path` in a child, so that a SIGBUS fails a check instead of the
  * whole test. Returns 0 loaded, 2 rejected with the file named, 3 rejected without it,
  * 128+N killed by signal N. */
@@ -269,8 +258,10 @@ static void write_prefix(const char *path, const unsigned char *b, long n) {
  * on with SIGBUS, exit 135 before the fix) are rejected by load and by probe with the file
  * named; cut anywhere else they are rejected or load, never crash. */
 static void test_truncated(const char *tmp) {
-  long size;
-  unsigned char *b = slurp(fixture("fixture_good"), &size);
+  size_t n = 0;
+  unsigned char *b = (unsigned char *)tt_test_read_file(fixture("fixture_good"), &n);
+  if (!b || n == 0) exit(1); /* the fixture is built with the test */
+  long size = (long)n;
   const Elf64_Ehdr *eh = (const Elf64_Ehdr *)b;
   CHECK(size > (long)sizeof *eh && memcmp(eh->e_ident, ELFMAG, SELFMAG) == 0);
   char path[512];

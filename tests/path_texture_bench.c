@@ -30,20 +30,6 @@ static double now_s(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Reads a whole file (malloc'd, NUL-terminated) or NULL. */
-static char *slurp(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  if (s && fread(s, 1, (size_t)n, f) != (size_t)n) { free(s); s = NULL; }
-  if (s) s[n] = 0;
-  fclose(f);
-  return s;
-}
-
 /* Writes a 1024^2 colourful noise-over-checker PNG (display-encoded, i.e. sRGB). */
 static int write_texture(const char *path) {
   const uint32_t n = 1024;
@@ -66,7 +52,7 @@ static int write_texture(const char *path) {
 /* The Cornell box with uvs (the two largest extents of each mesh / 100 mm) and textured
  * diffuse materials; returns malloc'd JSON. */
 static char *textured_cornell(const char *scene_path, const char *texture) {
-  char *src = slurp(scene_path);
+  char *src = tt_test_read_file(scene_path, NULL);
   cJSON *root = src ? cJSON_Parse(src) : NULL;
   free(src);
   if (!root) return NULL;

@@ -68,21 +68,11 @@ static tt_predictor *pu_create(const tt_predictor_iface *pi, const tt_space *tar
   return p;
 }
 
-static long pu_file_size(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return -1;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fclose(f);
-  return n;
-}
-
+/* The bytes of a model file (free()), their count in *n; -1 when it cannot be read. */
 static unsigned char *pu_read(const char *path, long *n) {
-  *n = pu_file_size(path);
-  FILE *f = fopen(path, "rb");
-  unsigned char *b = malloc(*n > 0 ? (size_t)*n : 1);
-  if (f && b && fread(b, 1, (size_t)*n, f) != (size_t)*n) *n = -1;
-  if (f) fclose(f);
+  size_t len = 0;
+  unsigned char *b = (unsigned char *)tt_test_read_file(path, &len);
+  *n = b ? (long)len : -1;
   return b;
 }
 

@@ -17,24 +17,6 @@ static const char *src_path(const char *rel, char *buf, size_t n) {
   return buf;
 }
 
-/* Reads a whole file (NUL-terminated) for the in-memory loader tests. */
-static char *read_all(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *buf = malloc((size_t)n + 1);
-  if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
-    free(buf);
-    buf = NULL;
-  }
-  fclose(f);
-  if (buf) buf[n] = '\0';
-  if (len) *len = (size_t)n;
-  return buf;
-}
-
 /* Loads JSON text from memory, reporting the error if it fails. */
 static tt_scene *load_text(const char *json, const char *base) {
   tt_scene *s = NULL;
@@ -348,7 +330,7 @@ static void test_scene_id(void) {
   CHECK(tt_scene_load(path, &a) == TT_OK);
   CHECK(tt_scene_load(path, &b) == TT_OK);
   size_t len;
-  char *text = read_all(path, &len);
+  char *text = tt_test_read_file(path, &len);
   CHECK(text != NULL);
   if (!a || !b || !text) goto done;
   CHECK(strlen(tt_scene_id(a)) == 16);

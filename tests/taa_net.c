@@ -314,22 +314,6 @@ static void test_thread_invariance(void) {
   thread_invariance(&reset6, "hidden-0-rejection-6");
 }
 
-/* Reads a whole file. */
-static unsigned char *slurp(const char *path, size_t *n) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  *n = (size_t)ftell(f);
-  rewind(f);
-  unsigned char *p = malloc(*n);
-  if (fread(p, 1, *n, f) != *n) {
-    free(p);
-    p = NULL;
-  }
-  fclose(f);
-  return p;
-}
-
 /* The shipped weights `name`.ttw reproduce the PyTorch outputs of
  * tools/taa/export_golden.py (tests/data/taa/golden_`name`.bin). */
 static void test_golden(const char *root, const char *name) {
@@ -337,7 +321,8 @@ static void test_golden(const char *root, const char *name) {
   snprintf(wpath, sizeof wpath, "%s/plugins/post_taa/post_taa_%s.ttw", root, name);
   snprintf(gpath, sizeof gpath, "%s/tests/data/taa/golden_%s.bin", root, name);
   size_t wn = 0, gn = 0;
-  unsigned char *wdata = slurp(wpath, &wn), *g = slurp(gpath, &gn);
+  unsigned char *wdata = (unsigned char *)tt_test_read_file(wpath, &wn),
+                *g = (unsigned char *)tt_test_read_file(gpath, &gn);
   CHECK_MSG(wdata && g, "cannot read %s or %s", wpath, gpath);
   if (!wdata || !g) return;
   CHECK(gn > 28 && memcmp(g, "TTAAGLD2", 8) == 0);

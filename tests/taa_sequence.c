@@ -46,20 +46,6 @@ static const char *k_dolly =
   "   \"indices\": [[0, 1, 2], [0, 2, 3]]}],\n"
   " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
 
-/* Reads a whole text file (caller frees). */
-static char *slurp_text(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  rewind(f);
-  char *s = malloc((size_t)n + 1);
-  size_t r = fread(s, 1, (size_t)n, f);
-  s[r] = 0;
-  fclose(f);
-  return s;
-}
-
 /* Largest |a - b| over two EXRs of the same shape; -1 if either is unreadable or the
  * shapes differ. */
 static double image_diff(const char *a, const char *b) {
@@ -120,7 +106,7 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   snprintf(a, sizeof a, "%s/i/frame_0027.raw.exr", dir);
   CHECK_MSG(access(a, F_OK) != 0, "%s written without a post-filter", a);
   snprintf(a, sizeof a, "%s/i/manifest.json", dir);
-  char *man = slurp_text(a);
+  char *man = tt_test_read_file(a, NULL);
   CHECK(man && strstr(man, "\"color\": \"frame_0025.exr\", \"depth\": \"frame_0025.depth.exr\""));
   free(man);
 
@@ -247,7 +233,7 @@ int main(void) {
     CHECK_MSG(access(path, R_OK) == 0, "missing %s", path);
   }
   snprintf(path, sizeof path, "%s/manifest.json", out);
-  char *man = slurp_text(path);
+  char *man = tt_test_read_file(path, NULL);
   CHECK(man != NULL);
   if (man) {
     CHECK_CONTAINS(man, "\"jitter_cycle\": 8");

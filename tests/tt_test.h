@@ -63,6 +63,38 @@ static int tt_test_checks = 0;
     exit(77);                                                                          \
   } while (0)
 
+/* The whole content of `path` (malloc'ed and NUL-terminated: free it with free()), its
+ * length in *len when len is not NULL; NULL when the file cannot be read. The tests' one
+ * file reader (read in chunks, so pipes and files that grow work too). */
+static inline char *tt_test_read_file(const char *path, size_t *len) {
+  if (len) *len = 0;
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  char *buf = NULL;
+  size_t n = 0, cap = 0;
+  for (;;) {
+    if (n + 1 >= cap) {
+      size_t ncap = cap ? 2 * cap : 65536;
+      char *nb = (char *)realloc(buf, ncap);
+      if (!nb) break;
+      buf = nb;
+      cap = ncap;
+    }
+    size_t got = fread(buf + n, 1, cap - n - 1, f);
+    n += got;
+    if (got == 0) break;
+  }
+  int failed = ferror(f) || !buf || n + 1 > cap;
+  fclose(f);
+  if (failed) {
+    free(buf);
+    return NULL;
+  }
+  buf[n] = '\0';
+  if (len) *len = n;
+  return buf;
+}
+
 /* Prints a summary and returns the process exit code. */
 static inline int tt_test_finish(const char *name) {
   printf("%s: %d checks, %d failed\n", name, tt_test_checks, tt_test_failures);
