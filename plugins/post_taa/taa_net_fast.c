@@ -164,8 +164,9 @@ tt_status tt__net_fast_pack(tt__net_layer *l) {
    * planes). */
   int wino = l->ksize == 5 && (l->oblk == 10 || l->oblk == 12);
   size_t uper = wino ? (size_t)l->nob * WINO_POS * l->in * l->oblk : 0;
-  /* the kernel layer (softmax) also by F(4x4, 5x5) */
-  int wino4 = wino && l->activation == 2 && l->oblk == 10;
+  /* F(4x4, 5x5) for 5x5 layers with output blocks of 6, 10 or 12 (the kernel layer, body
+   * layers after the first) */
+  int wino4 = l->ksize == 5 && (l->oblk == 6 || l->oblk == 10 || l->oblk == 12);
   size_t u4per = wino4 ? (size_t)l->nob * WINO4_POS * l->in * l->oblk : 0;
   l->wq = fz_alloc(qper * l->sets + (uper + u4per) * l->sets);
   l->bq = fz_alloc((size_t)l->nob * l->oblk * l->sets);
@@ -530,7 +531,8 @@ typedef struct wino4_a {
   uint32_t x0, n;
   float *dst[4];
   size_t dcs;
-  float *vbuf, *mbuf, *ebuf;  /* scratch: 64 * in * 8, 64 * O * 8 and 64 * 8 floats */
+  int relu;
+  float *vbuf, *mbuf, *ebuf;  /* scratch: 64 * in * 16, 64 * O * 16 and 64 * 8 floats */
 } wino4_a;
 
 #if FAST_X86
@@ -664,7 +666,10 @@ TGT_V3 AI void wino4_group_t(const wino4_a *a, uint32_t xl, const int O, const i
           __m256 col[8], yy[4];
           for (int i = 0; i < 8; i++) col[i] = t[i][k];
           wino4_at(col, yy);  /* along the column: output rows 0..3 */
-          for (int r = 0; r < 4; r++) y[r][k] = _mm256_add_ps(yy[r], bias);
+          for (int r = 0; r < 4; r++) {
+            y[r][k] = _mm256_add_ps(yy[r], bias);
+            if (a->relu) y[r][k] = _mm256_max_ps(y[r][k], _mm256_setzero_ps());
+          }
         }
         for (int r = 0; r < 4; r++) {
           WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
@@ -676,11 +681,21 @@ TGT_V3 AI void wino4_group_t(const wino4_a *a, uint32_t xl, const int O, const i
   }
 }
 
-/* All groups of a chunk; output blocks of 10 (the kernel layer's 50 outputs). */
-TGT_V3 AI void wino4_dispatch(const wino4_a *a, const int wide) {
-  for (uint32_t xl = 0; xl < a->n;) {
-    if (wide && a->n - xl >= 64) wino4_group_t(a, xl, 10, 2), xl += 64;
-    else wino4_group_t(a, xl, 10, 1), xl += 32;
+/* All groups of a chunk; output blocks of 10 (the kernel layer's 50 outputs), 12 or 6
+ * (12- and 6-channel body layers). */
+#define WINO4_CASE(O_) \
+  case O_: \
+    for (uint32_t xl = 0; xl < a->n;) { \
+      if (wide && a->n - xl >= 64) wino4_group_t(a, xl, O_, 2), xl += 64; \
+      else wino4_group_t(a, xl, O_, 1), xl += 32; \
+    } \
+    break;
+TGT_V3 AI void wino4_dispatch(const wino4_a *a, uint32_t oblk, const int wide) {
+  switch (oblk) {
+    WINO4_CASE(6)
+    WINO4_CASE(10)
+    WINO4_CASE(12)
+    default: break;
   }
 }
 #endif
@@ -766,18 +781,18 @@ typedef struct fast_isa {
   void (*conv)(const conv_a *);
   void (*mix)(const mix_a *);
   void (*wino)(const wino_a *, uint32_t oblk);  /* NULL: direct kernel layer only */
-  void (*wino4)(const wino4_a *);               /* NULL: no F(4x4, 5x5) */
+  void (*wino4)(const wino4_a *, uint32_t oblk); /* NULL: no F(4x4, 5x5) */
 } fast_isa;
 
 #if FAST_X86
 TGT_V4 static void conv_v4(const conv_a *a) { conv_rows_dispatch(a, 1); }
 TGT_V4 static void mix_v4(const mix_a *a) { mix_rows_t(a); }
 TGT_V4 static void wino_v4(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 1); }
-TGT_V4 static void wino4_v4(const wino4_a *a) { wino4_dispatch(a, 1); }
+TGT_V4 static void wino4_v4(const wino4_a *a, uint32_t oblk) { wino4_dispatch(a, oblk, 1); }
 TGT_V3 static void conv_v3(const conv_a *a) { conv_rows_dispatch(a, 0); }
 TGT_V3 static void mix_v3(const mix_a *a) { mix_rows_t(a); }
 TGT_V3 static void wino_v3(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 0); }
-TGT_V3 static void wino4_v3(const wino4_a *a) { wino4_dispatch(a, 0); }
+TGT_V3 static void wino4_v3(const wino4_a *a, uint32_t oblk) { wino4_dispatch(a, oblk, 0); }
 #endif
 static void conv_generic(const conv_a *a) { conv_rows_dispatch(a, 0); }
 static void mix_generic(const mix_a *a) { mix_rows_t(a); }
@@ -1129,8 +1144,9 @@ typedef struct band_job {
   uint32_t lw, rrs;                   /* ring row: columns computed, stride */
   float *out_rgb;
   size_t ring_off[TT__NET_MAX_LAYERS], logits_off;
-  int wino;                           /* Winograd allowed this frame (5x5 body layers
-                                       * after the first: rows in even pairs) */
+  int wino;                           /* tt__net_state.winograd this frame (0 on the
+                                       * portable path): 5x5 body layers after the first in
+                                       * row pairs (1) or quads (2) */
   int kwino;                          /* kernel layer by Winograd: 2 F(2x2, 5x5) rows in
                                        * even pairs, 4 F(4x4, 5x5) rows in quads; 0 direct */
   size_t vbuf_off, mbuf_off, ebuf_off; /* Winograd scratch */
@@ -1173,15 +1189,28 @@ static inline int body_wino_ok(const tt__net_model *m, uint32_t l) {
   return l >= 1 && l < m->body_count && m->body[l].wino != NULL;
 }
 
+/* The same for F(4x4, 5x5) row quads. */
+static inline int body_wino4_ok(const tt__net_model *m, uint32_t l) {
+  return l >= 1 && l < m->body_count && m->body[l].wino4 != NULL;
+}
+
+/* Rows body layer l (or, l == body_count, the kernel layer) produces at once with the
+ * most capable algorithm: 4 (F(4x4, 5x5)), 2 (F(2x2, 5x5)) or 1. */
+static uint32_t max_step(const tt__net_model *m, uint32_t l) {
+  if (l >= m->body_count) return m->kernel.wino4 ? 4u : m->kernel.wino ? 2u : 1u;
+  return body_wino4_ok(m, l) ? 4u : body_wino_ok(m, l) ? 2u : 1u;
+}
+
 /* Rows in the ring of body layer l: what its consumer reads (the next body layer's or the
  * kernel layer's kernel size), one more when Winograd row pairs write or read it. The same
  * for both algorithms, so switching between frames keeps the scratch layout. */
 static uint32_t ring_len(const tt__net_model *m, uint32_t l) {
   int last = l + 1 >= m->body_count;
   uint32_t k = last ? m->kernel.ksize : m->body[l + 1].ksize;
-  int pairs = body_wino_ok(m, l) || (last ? m->kernel.wino != NULL : body_wino_ok(m, l + 1));
-  if (last && m->kernel.wino4) return k + 3u;  /* F(4x4, 5x5) reads 8 rows per 4 */
-  return k + (pairs ? 1u : 0u);
+  (void)last;
+  /* the consumer's step S_c reads k + S_c - 1 rows; this layer, producing S_l rows at a
+   * time, may be up to S_l - 1 rows ahead */
+  return k + (max_step(m, l + 1) - 1u) + (max_step(m, l) - 1u);
 }
 
 /* Layer index of a set: the jitter set for 8-set layers. */
@@ -1304,20 +1333,73 @@ static void body_pair(band_ctx *b, uint32_t l, int q) {
       for (uint32_t c = 0; c < ly->out; c++) memset(dst[r] + c * dcs, 0, rrs * sizeof(float));
 }
 
-/* Body layer l computes row pairs this frame. */
-static inline int body_pairs(const band_job *job, uint32_t l) {
-  return job->wino && body_wino_ok(job->m, l);
+#if FAST_X86
+/* Rows q .. q + 3 (q a multiple of 4) of 5x5 body layer l >= 1 by F(4x4, 5x5) into its
+ * ring (zeros outside the image). */
+static void body_quad(band_ctx *b, uint32_t l, int q) {
+  const band_job *job = b->job;
+  const tt__net_state *s = job->s;
+  const tt__net_layer *ly = &job->m->body[l];
+  size_t rrs = job->rrs, dcs = (size_t)b->rlen[l] * rrs;
+  float *dst[4];
+  int h = (int)s->height, inside[4], any = 0;
+  for (int r = 0; r < 4; r++) {
+    dst[r] = ring_row(b, l, q + r);
+    inside[r] = q + r >= 0 && q + r < h;
+    any |= inside[r];
+  }
+  if (any) {
+    double t0 = fast_ns();
+    wino4_a a;
+    for (int i = 0; i < 8; i++) a.rowp[i] = ring_row(b, l - 1, q - 2 + i);
+    a.cs = (size_t)b->rlen[l - 1] * rrs;
+    a.in = ly->in;
+    a.nob = ly->nob;
+    a.out = ly->out;
+    uint32_t st = set_of(ly, job->set);
+    a.u = ly->wino4 + (size_t)st * ly->nob * WINO4_POS * ly->in * ly->oblk;
+    a.b = ly->bq + (size_t)st * ly->nob * ly->oblk;
+    a.dcs = dcs;
+    a.relu = 1;
+    a.vbuf = (float *)(b->scr + job->vbuf_off);
+    a.mbuf = (float *)(b->scr + job->mbuf_off);
+    a.ebuf = (float *)(b->scr + job->ebuf_off);
+    int bx = b->bx, xs, xe;
+    band_image_cols(b, &xs, &xe);
+    for (int x0 = xs; x0 < xe; x0 += (int)CHUNK) {
+      a.x0 = (uint32_t)(x0 - bx);
+      a.n = xe - x0 < (int)CHUNK ? (uint32_t)(xe - x0) : CHUNK;
+      for (int r = 0; r < 4; r++) a.dst[r] = dst[r] + COL + (x0 - bx);
+      job->isa->wino4(&a, ly->oblk);
+    }
+    for (int r = 0; r < 4; r++) zero_pad_cols(b, dst[r], dcs, ly->out, xs);
+    b->tm->body_ns += fast_ns() - t0;
+  }
+  for (int r = 0; r < 4; r++)
+    if (!inside[r])
+      for (uint32_t c = 0; c < ly->out; c++) memset(dst[r] + c * dcs, 0, rrs * sizeof(float));
+}
+#endif
+
+/* Rows body layer l computes at once this frame: 4 (F(4x4, 5x5)), 2 (F(2x2, 5x5)) or 1. */
+static inline int body_step(const band_job *job, uint32_t l) {
+  if (job->wino >= 2 && job->isa->wino4 && body_wino4_ok(job->m, l)) return 4;
+  return job->wino && body_wino_ok(job->m, l) ? 2 : 1;
 }
 
 /* Makes body layer l hold rows up to y (computing the inputs first). */
 static void ensure_rows(band_ctx *b, uint32_t l, int y) {
-  int pair = body_pairs(b->job, l);
+  int step = body_step(b->job, l);
   while (b->next[l] <= y) {
     int yy = b->next[l];
-    if (l > 0) ensure_rows(b, l - 1, yy + pair + (int)b->job->m->body[l].ksize / 2);
-    if (pair) body_pair(b, l, yy);
+    if (l > 0) ensure_rows(b, l - 1, yy + step - 1 + (int)b->job->m->body[l].ksize / 2);
+#if FAST_X86
+    if (step == 4) body_quad(b, l, yy);
+    else
+#endif
+    if (step == 2) body_pair(b, l, yy);
     else body_row(b, l, yy);
-    b->next[l] += 1 + pair;
+    b->next[l] += step;
   }
 }
 
@@ -1446,6 +1528,7 @@ static void head_quad(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
   size_t lgn = (size_t)kl->nob * kl->oblk * CHUNK;
   for (int r = 0; r < 4; r++) a.dst[r] = lg + r * lgn;
   a.dcs = CHUNK;
+  a.relu = 0;
   a.vbuf = (float *)(b->scr + job->vbuf_off);
   a.mbuf = (float *)(b->scr + job->mbuf_off);
   a.ebuf = (float *)(b->scr + job->ebuf_off);
@@ -1456,7 +1539,7 @@ static void head_quad(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
     mx.x0 = x0;
     a.n = mx.n = b->tx1 - x0 < CHUNK ? b->tx1 - x0 : CHUNK;
     double t0 = fast_ns();
-    job->isa->wino4(&a);
+    job->isa->wino4(&a, kl->oblk);
     double t1 = fast_ns();
     for (int r = 0; r < 4; r++) {
       int y = p + r;
@@ -1484,15 +1567,21 @@ static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t
   b.scr = (unsigned char *)job->s->scratch + (size_t)thread * job->s->scratch_bytes;
   b.tm = (band_times *)b.scr;
   const tt__net_model *m = job->m;
-  for (uint32_t l = 0; l < m->body_count; l++) {
+  int rk = (int)m->kernel.ksize / 2;
+  /* First row of each layer, from the kernel layer back: the first row its consumer's
+   * first step reads, rounded down to the layer's own step (pairs on even rows, quads on
+   * multiples of 4). Every row a Winograd tile reads is then computed in this band: the
+   * tile's transforms mix all of its input rows (exact only in exact arithmetic), so a
+   * stale ring row would change its outputs in the last bits. */
+  uint32_t ys = job->kwino == 4 ? y0 & ~3u : job->kwino ? y0 & ~1u : y0;
+  int need = (int)ys - rk;
+  for (uint32_t l = m->body_count; l-- > 0;) {
     b.ring[l] = (float *)(b.scr + job->ring_off[l]);
     b.rlen[l] = ring_len(m, l);
-    uint32_t ys = job->kwino == 4 ? y0 & ~3u : job->kwino ? y0 & ~1u : y0;
-    int v = (int)ys - (int)fast_halo_after(m, l);
-    if (body_pairs(job, l)) v -= v & 1;  /* first pair on an even row */
+    int v = need & ~(body_step(job, l) - 1);
     b.next[l] = v;
+    need = v - (int)m->body[l].ksize / 2;
   }
-  int rk = (int)m->kernel.ksize / 2;
 #if FAST_X86
   if (job->kwino == 4) {
     /* Row quads at absolute multiples of 4; a band starting or ending inside a quad
@@ -1565,15 +1654,15 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
   /* Winograd scratch (every such layer reads W channels, blocks of <= 12 outputs). */
   job->vbuf_off = job->mbuf_off = job->ebuf_off = 0;
   int any = m->kernel.wino != NULL;
-  for (uint32_t l = 0; l < m->body_count; l++) any |= body_wino_ok(m, l);
+  for (uint32_t l = 0; l < m->body_count; l++) any |= body_wino_ok(m, l) | body_wino4_ok(m, l);
   if (any) {
     /* F(2x2, 5x5): V 36 x W x 16, M 2 x 36 x 12 x 16; F(4x4, 5x5): V 64 x W x 16, M 64 x
-     * 10 x 16, E 64 x 8 (all offsets 64-byte aligned) */
+     * 12 x 16, E 64 x 8 (all offsets 64-byte aligned) */
     size_t v2 = (size_t)WINO_POS * m->width * 16, v4 = (size_t)WINO4_POS * m->width * 16;
     job->vbuf_off = off;
     off += ((v2 > v4 ? v2 : v4) * sizeof(float) + 63) & ~(size_t)63;
     job->mbuf_off = off;
-    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);  /* >= 64 x 10 x 16 */
+    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);  /* >= 64 x 12 x 16 */
     job->ebuf_off = off;
     off += (size_t)WINO4_POS * 8 * sizeof(float);
   }
@@ -1623,7 +1712,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   if (threads < 1) threads = 1;
   band_job job = {.s = s, .m = m, .isa = isa, .set = jitter_index % TT__NET_JITTER_SETS,
                   .out_rgb = out_rgb};
-  job.wino = s->winograd && isa->wino;
+  job.wino = isa->wino ? s->winograd : 0;
   job.kwino = !job.wino || !m->kernel.wino ? 0 : s->winograd >= 2 && m->kernel.wino4 && isa->wino4 ? 4 : 2;
   if (fast_scratch(s, m, &job, threads) != TT_OK) {
     /* Out of memory for a few MB of scratch: leave the frame as the input. */

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Thesis 5.6 ablations at reduced scale: trains each variant with train.py from scratch for
-each seed (same data, steps, batch, patch, burn-in), evaluates it in PyTorch on the
+"""Thesis 5.6 ablations at reduced scale: trains each variant with train.py from scratch (or,
+--init, from given weights of its width) for each seed (same data, steps, batch, patch, burn-in), evaluates it in PyTorch on the
 held-back sequences, and prints a markdown table with the per-seed and mean scores, the
 parameter count and FLOP/px; picks the smallest variant (FLOP/px, then parameters) whose
 mean score is within 1% of the best. The score of a run is the geometric mean of its
@@ -9,7 +9,8 @@ arithmetic mean would only rank the noisiest one).
 
   ablations.py --data D1,D2 --scenes ... --val ... --out DIR [--steps 1000] [--batch 4]
                [--patch 32] [--burn 16] [--seeds 1,2,3] [--jobs 2]
-               [--variants h5,h0,h0-in,h0-reset,...] [--cache DIR]
+               [--variants h5,h0,h0-in,h0-reset,...] [--cache DIR] [--lr 1e-3]
+               [--init 12=W12.ttw,6=W6.ttw]
 
 Runs already in DIR (their .train.json) are kept: the command resumes."""
 import argparse
@@ -59,7 +60,11 @@ def command(a, v, seed, out):
            "--body", body, "--jitter-layers", jit, "--kernel", str(k), "--reject", rej,
            "--steps", str(a.steps), "--minutes", "100000", "--batch", str(a.batch),
            "--patch", str(a.patch), "--burn", str(a.burn), "--threads", "1",
-           "--seed", str(seed)]
+           "--seed", str(seed), "--lr", str(a.lr)]
+    if a.init:
+        inits = dict(x.split("=", 1) for x in a.init.split(","))
+        if str(width) in inits:
+            cmd += ["--init", inits[str(width)]]
     if a.cache:
         cmd += ["--cache", a.cache]
     return cmd
@@ -80,6 +85,11 @@ def main():
     ap.add_argument("--variants", default="h5,h0,h0-in,h0-reset")
     ap.add_argument("--cache", default=None)
     ap.add_argument("--nice", type=int, default=19)
+    ap.add_argument("--lr", type=float, default=1e-3)
+    ap.add_argument("--init", default=None,
+                    help="WIDTH=W.ttw,...: fine-tune the variants of that width from W.ttw "
+                         "(train.py --init: inputs mapped by meaning, 1 set -> 8) instead of "
+                         "training them from scratch")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     variants = a.variants.split(",")
