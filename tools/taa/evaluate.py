@@ -4,7 +4,8 @@
 vctaa (the thesis' baseline, tonemapped resolve), vctaa with resolve=linear, and each
 network, then RMSE / temporal error / FLIP against the references (eval.py), the mean
 brightness of each output against the reference's (the darkening of noisy input), per-frame
-curves as PNG, a markdown table with the goals of the issue, and eval.json.
+curves as PNG, a markdown table with the goals of the issue, eval.json and summary.png (every
+method's RMSE and temporal error relative to VCTAA's per sequence, and the jump frames).
 
   evaluate.py --build BUILD --out OUT SEQ_DIR... [--net LABEL=W.ttw ...] [--default LABEL]
               [--threads 2] [--no-flip] [--jumps pillars:80:84]
@@ -119,6 +120,50 @@ def plot_seq(a, res):
     return path
 
 
+def plot_summary(a, results):
+    """summary.png: RMSE and temporal error of every method relative to VCTAA's, per
+    sequence (grouped bars; the goal lines at 0.8 and 1.0), and the jump frames' RMSE."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    labels = [m for m, _ in a.methods if m != "vctaa"]
+    seqs = [r["sequence"] for r in results]
+    panels = [("rmse", "RMSE / VCTAA's", 0.8), ("temporal", "temporal error / VCTAA's", 1.0)]
+    has_jumps = any("jumps" in r for r in results)
+    fig, ax = plt.subplots(1, len(panels) + has_jumps, figsize=(5.2 * (len(panels) + has_jumps), 4.2))
+    w = 0.8 / max(1, len(labels))
+    x = np.arange(len(seqs))
+    for k, (key, title, goal) in enumerate(panels):
+        for i, m in enumerate(labels):
+            vals = []
+            for r in results:
+                by = {q["method"]: q for q in r["methods"]}
+                vals.append(by[m][key] / by["vctaa"][key])
+            ax[k].bar(x + (i - (len(labels) - 1) / 2) * w, vals, w, label=m)
+        ax[k].axhline(1.0, color="k", lw=0.8)
+        if goal != 1.0:
+            ax[k].axhline(goal, color="r", lw=0.8, ls="--", label=f"goal {goal}x")
+        ax[k].set_xticks(x, seqs, rotation=20, fontsize=8)
+        ax[k].set_title(title + " (lower is better)", fontsize=10)
+    if has_jumps:
+        jr = [r for r in results if "jumps" in r]
+        xj = np.arange(len(jr))
+        ms = [m for m, _ in a.methods]
+        wj = 0.8 / len(ms)
+        for i, m in enumerate(ms):
+            ax[-1].bar(xj + (i - (len(ms) - 1) / 2) * wj, [r["jumps"]["rmse"][m] for r in jr], wj, label=m)
+        f0, f1 = jr[0]["jumps"]["frames"]
+        ax[-1].set_xticks(xj, [r["sequence"] for r in jr], rotation=20, fontsize=8)
+        ax[-1].set_title(f"camera jump: mean RMSE of frames {f0}-{f1}", fontsize=10)
+    ax[0].legend(fontsize=7)
+    fig.tight_layout()
+    path = os.path.join(a.out, "summary.png")
+    fig.savefig(path + ".tmp.png", dpi=90)
+    os.replace(path + ".tmp.png", path)
+    plt.close(fig)
+    return path
+
+
 def table(a, results, nets):
     lines = ["| sequence | spp | " + " | ".join(m for m, _ in a.methods) + " |",
              "|---" * (2 + len(a.methods)) + "|"]
@@ -205,6 +250,7 @@ def main():
         results.append(res)
     text = table(a, results, nets) + "\n" + jumps(a, results)
     print("\n" + text)
+    print(f"chart: {plot_summary(a, results)}")
     with open(os.path.join(a.out, "table.md.tmp"), "w") as f:
         f.write(text)
     os.replace(os.path.join(a.out, "table.md.tmp"), os.path.join(a.out, "table.md"))

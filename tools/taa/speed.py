@@ -6,7 +6,7 @@ before and after each run. On this shared machine take the figures of a quiet mo
 the load average is printed beside them.
 
   speed.py BUILD [--runs 4] [--threads 2] [--weights label=FILE.ttw[@LEVEL],...] [--rounds 9]
-           [--json OUT.json] [--full]   (--full: also 1920x1080)
+           [--json OUT.json] [--png OUT.png] [--full]   (--full: also 1920x1080)
 
 Goals (640x480, 2 threads, reprojection and colour mix included): network-12 <= 40 ms,
 the default network <= 30 ms (the labels of the shipped files: c12, and the default's)."""
@@ -23,6 +23,40 @@ def loadavg():
     return tuple(float(x) for x in open("/proc/loadavg").read().split()[:3])
 
 
+def chart(path, rows, lo, hi, threads):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = [r for r in rows if r["size"] == "640x480"]
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    x = np.arange(len(rows))
+    names = [f"{r['variant']} T{r['threads']}" for r in rows]
+    wall = [r["median"]["wall"] for r in rows]
+    err = [[w - min(r["runs"]["wall"]) for w, r in zip(wall, rows)],
+           [max(r["runs"]["wall"]) - w for w, r in zip(wall, rows)]]
+    ax[0].bar(x, wall, yerr=err, capsize=3, color="tab:blue")
+    for i, r in enumerate(rows):
+        if r["goal_ms"]:
+            ax[0].plot([i - 0.4, i + 0.4], [r["goal_ms"]] * 2, "r--", lw=1.2)
+    ax[0].set_xticks(x, names, rotation=25, fontsize=8)
+    ax[0].set_title(f"640x480 wall ms per frame (median, run range; red: goal)\n"
+                    f"load average {lo:.1f}-{hi:.1f} on 2 cores", fontsize=9)
+    bottom = np.zeros(len(rows))
+    for part, col in (("reproj", "tab:green"), ("network", "tab:orange"), ("mix", "tab:purple")):
+        v = np.array([r["median"][part] for r in rows])
+        ax[1].bar(x, v, bottom=bottom, label=part if part != "reproj" else "reprojection + rejection",
+                  color=col)
+        bottom += v
+    ax[1].plot(x, [r["median"]["cpu"] for r in rows], "k_", ms=18, label="process CPU")
+    ax[1].set_xticks(x, names, rotation=25, fontsize=8)
+    ax[1].set_title("CPU ms per frame (all threads), by stage", fontsize=9)
+    ax[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path + ".tmp.png", dpi=90)
+    os.replace(path + ".tmp.png", path)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("build")
@@ -36,6 +70,8 @@ def main():
                     help="LABEL=MS: goal per 640x480 frame (default c12=40 and, with "
                          "--default LABEL, LABEL=30)")
     ap.add_argument("--default", default=None)
+    ap.add_argument("--png", default=None, help="chart: 640x480 wall ms per variant (median, "
+                    "range) beside the CPU ms split into reprojection / network / mix")
     a = ap.parse_args()
     root = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
     env = dict(os.environ, TT_SOURCE_ROOT=root, TT_BENCH_THREADS=a.threads,
@@ -86,6 +122,8 @@ def main():
                     "runs": vals, "goal_ms": goal})
     loads = [r["load_before"][0] for r in runs] + [r["load_after"][0] for r in runs]
     print(f"\nload average (1 min) during the runs: {min(loads):.2f} - {max(loads):.2f}")
+    if a.png:
+        chart(a.png, out, min(loads), max(loads), a.threads)
     if a.json:
         json.dump({"runs": a.runs, "rounds": a.rounds, "loads": [(r["load_before"], r["load_after"])
                                                                  for r in runs], "rows": out},
