@@ -76,6 +76,12 @@ int main(void) {
   CHECK(tt_set_error(TT_ERR_PARSE, "file.json: %s", "bad") == TT_ERR_PARSE);
   CHECK(strcmp(tt_last_error(), "file.json: bad") == 0);
   CHECK(error_calls == 1 && last_status == TT_ERR_PARSE);
+  /* prefixing the previous message with itself as an argument (the message came out garbled:
+   * vsnprintf into the buffer it read from, #13) */
+  CHECK(tt_set_error(TT_ERR_PARSE, "%s: %s: %s", "resume.json", "tuner_nm", tt_last_error()) ==
+        TT_ERR_PARSE);
+  CHECK_MSG(strcmp(tt_last_error(), "resume.json: tuner_nm: file.json: bad") == 0, "%s",
+            tt_last_error());
   tt_clear_error();
   CHECK(tt_last_error()[0] == 0);
   tt_set_error_callback(NULL, NULL);

@@ -6,6 +6,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define TT__ERROR_MAX 2048
 
@@ -34,10 +35,15 @@ const char *tt_status_string(tt_status status) {
 }
 
 tt_status tt_set_error(tt_status status, const char *fmt, ...) {
+  /* formatted aside first: callers pass tt_last_error() itself as an argument to prefix
+   * it ("%s: %s", source, tt_last_error()), and vsnprintf into the buffer it reads from is
+   * undefined (the message came out garbled: found by tests/fuzz/fuzz_tuning_state) */
+  char msg[TT__ERROR_MAX];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(tt__last_error, sizeof tt__last_error, fmt, ap);
+  vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  memcpy(tt__last_error, msg, sizeof msg);
   if (tt__error_fn) tt__error_fn(tt__error_user, status, tt__last_error);
   return status;
 }
