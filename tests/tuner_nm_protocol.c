@@ -247,6 +247,32 @@ static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void),
   CHECK(nm->save_state(b, &s2) == TT_OK);
   CHECK_CONTAINS(s2, "\"tuner\":\"tuner_nm\"");
   tt_free(s2);
+
+  /* An arm whose pending point disagrees with its phase (waiting for a reflection, pending
+   * vertex 0) is refused: such a state loaded, ran on and saved one that no longer loaded
+   * (found by tests/fuzz/fuzz_tuning_state, #13). */
+  {
+    const char *arm = strstr(state, "\"armStates\":[{");
+    const char *ph = arm ? strstr(arm, "\"phase\":") : NULL;
+    const char *pe = ph ? strstr(ph, "\"pend\":") : NULL;
+    CHECK(ph && pe);
+    if (ph && pe) {
+      const char *ph_end = ph + strlen("\"phase\":"), *pe_end = pe + strlen("\"pend\":");
+      ph_end += strspn(ph_end, "-0123456789.e");
+      pe_end += strspn(pe_end, "-0123456789.e");
+      size_t n = strlen(state) + 64;
+      char *bad = malloc(n);
+      snprintf(bad, n, "%.*s\"phase\":3%.*s\"pend\":0%s", (int)(ph - state), state,
+               (int)(pe - ph_end), ph_end, pe_end);
+      tt_tuner *w = NULL;
+      CHECK(nm->create(s, set, 42, &w) == TT_OK);
+      CHECK(nm->load_state(w, bad) == TT_ERR_PARSE);
+      CHECK_CONTAINS(tt_last_error(), "arm state 0");
+      CHECK_MSG(nm->load_state(w, state) == TT_OK, "%s", tt_last_error());  /* left usable */
+      nm->destroy(w);
+      free(bad);
+    }
+  }
   if (!checks_mismatch) {
     tt_free(state);
     for (int k = 0; k < n_ref; k++) tt_free(ref[k]);

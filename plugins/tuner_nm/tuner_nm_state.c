@@ -189,6 +189,23 @@ static tt_status tt__nm_expect(const cJSON *root, const char *name, double want)
   return TT_OK;
 }
 
+/* The point an arm waits for agrees with its phase (tt__nm_arm_receive's invariants): a
+ * state that breaks them loads, runs on and saves a state that no longer loads (WAIT_INIT
+ * with k = n + 1 moves k to n + 2; found by tests/fuzz/fuzz_tuning_state). */
+static int tt__nm_phase_consistent(int phase, int pend, int k, size_t n) {
+  const int N = (int)n;
+  switch (phase) {
+    /* (n = 0: a restart keeping the best vertex waits for point 1) */
+    case TT__NM_WAIT_INIT: return (k <= N || (N == 0 && k == 1)) && pend == k;
+    case TT__NM_WAIT_SHRINK: return k >= 1 && k <= N && pend == k;
+    case TT__NM_WAIT_REEVAL: case TT__NM_WAIT_PROBE: return pend == 0;
+    case TT__NM_WAIT_REFLECT: return pend == N + 1;
+    case TT__NM_WAIT_EXPAND: return pend == N + 2;
+    case TT__NM_WAIT_CONTRACT_OUT: case TT__NM_WAIT_CONTRACT_IN: return pend == N + 3;
+    default: return 1;  /* FRESH, DONE, PROBED: nothing pending */
+  }
+}
+
 /* Parses and validates the whole state into fresh arrays, then swaps them in, so a failed
  * load leaves the tuner untouched. */
 tt_status tt__nm_load(tt_tuner *t, const char *json) {
@@ -304,7 +321,9 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
                                    (n + 4) * n) &&
                tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "id"), ids, n + 4) &&
                ph >= TT__NM_FRESH && ph <= TT__NM_PROBED && pend >= 0 &&
-               pend < (double)(n + 4) && k >= 0 && k <= (double)(n + 1);
+               pend < (double)(n + 4) && k >= 0 && k <= (double)(n + 1) &&
+               ph == (int)ph && pend == (int)pend && k == (int)k &&
+               tt__nm_phase_consistent((int)ph, (int)pend, (int)k, n);
       for (size_t i = 0; ok && i < n + 4; i++) {
         if (ids[i] < -2 || ids[i] >= (double)cache.count) ok = 0;
         else a->id[i] = (int32_t)ids[i];
