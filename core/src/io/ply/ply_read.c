@@ -355,6 +355,9 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
           list_prop = i;
     if (is_face && list_prop < 0) TT__PLY_FAIL("%s: \"%s\": PLY face element has no vertex_indices list", where, path);
     if (is_face && !have_vertex) TT__PLY_FAIL("%s: \"%s\": PLY faces come before the vertices", where, path);
+    /* rows of an element without properties hold no bytes: nothing to read, and counting
+     * through up to 2^64 of them one by one was a hang (found by tests/fuzz/fuzz_ply) */
+    if (el->prop_count == 0) continue;
     for (uint64_t f = 0; f < el->count; f++) {
       for (int i = 0; i < el->prop_count; i++) {
         const tt__ply_prop *pr = &el->props[i];
