@@ -2,7 +2,8 @@
  * dlopen. The dynamic loader mmap()s every PT_LOAD segment as the program headers describe
  * it; a segment that runs past the end of a truncated file is mapped all the same, and the
  * first touch of a page beyond EOF raises SIGBUS inside dlopen, where no caller can recover.
- * Reading the headers ourselves turns that into an error that names the file. */
+ * Reading the headers ourselves turns that into an error that names the file. The section
+ * headers are checked too: a file cut past its last segment would load and run. */
 #include "plugin/elf_check.h"
 
 #include <elf.h>
@@ -134,9 +135,56 @@ tt_status tt__elf_check_plugin(const char *path) {
       goto done;
     }
   }
-  if (loads == 0)
+  if (loads == 0) {
     st = tt_set_error(TT_ERR_ABI, "cannot load plugin %s: corrupt ELF file: no PT_LOAD segment",
                       path);
+    goto done;
+  }
+  /* The section headers (and what they describe) are not mapped, so a file cut anywhere
+   * past its last segment still loaded and ran: a plugin half copied by an interrupted
+   * install or download. Linkers write the section header table last, so checking that it
+   * and every section with file bytes are inside the file finds a file cut short anywhere. */
+  if (eh.e_shoff != 0) {
+    uint64_t shnum = eh.e_shnum;
+    if (eh.e_shentsize != sizeof(ElfW(Shdr))) {
+      st = tt_set_error(TT_ERR_ABI, "cannot load plugin %s: corrupt ELF header (section headers "
+                        "of %u bytes)", path, (unsigned)eh.e_shentsize);
+      goto done;
+    }
+    ElfW(Shdr) sh0;
+    if (eh.e_shoff > size || sizeof sh0 > size - (uint64_t)eh.e_shoff ||
+        tt__pread_all(fd, &sh0, sizeof sh0, (off_t)eh.e_shoff) != 0) {
+      st = tt_set_error(TT_ERR_ABI, "cannot load plugin %s: truncated ELF file: the section "
+                        "headers start at byte %llu, the file has %llu bytes", path,
+                        (unsigned long long)eh.e_shoff, (unsigned long long)size);
+      goto done;
+    }
+    if (shnum == 0) shnum = sh0.sh_size;  /* extended numbering (SHN_LORESERVE or more) */
+    const uint64_t sh_end = (uint64_t)eh.e_shoff + shnum * sizeof(ElfW(Shdr));
+    if (shnum > (size / sizeof(ElfW(Shdr))) || sh_end > size) {
+      st = tt_set_error(TT_ERR_ABI, "cannot load plugin %s: truncated ELF file: section headers "
+                        "end at byte %llu, the file has %llu bytes", path,
+                        (unsigned long long)sh_end, (unsigned long long)size);
+      goto done;
+    }
+    for (uint64_t i = 1; i < shnum; i++) {
+      ElfW(Shdr) sh;
+      if (tt__pread_all(fd, &sh, sizeof sh, (off_t)(eh.e_shoff + i * sizeof sh)) != 0) {
+        st = tt_set_error(TT_ERR_IO, "cannot load plugin %s: read error in the section headers",
+                          path);
+        goto done;
+      }
+      if (sh.sh_type == SHT_NOBITS || sh.sh_type == SHT_NULL) continue;
+      if ((uint64_t)sh.sh_offset > size || (uint64_t)sh.sh_size > size - (uint64_t)sh.sh_offset) {
+        st = tt_set_error(TT_ERR_ABI, "cannot load plugin %s: truncated ELF file: section %llu "
+                          "ends at byte %llu, the file has %llu bytes", path,
+                          (unsigned long long)i,
+                          (unsigned long long)((uint64_t)sh.sh_offset + (uint64_t)sh.sh_size),
+                          (unsigned long long)size);
+        goto done;
+      }
+    }
+  }
 done:
   close(fd);
   return st;

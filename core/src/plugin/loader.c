@@ -635,7 +635,19 @@ static int tt__listed_cmp(const void *a, const void *b) {
   return c ? c : x->nested - y->nested;
 }
 
-/* Collects NAME.so and NAME/NAME.so entries of one directory into `*items`. */
+/* NAME of a file name NAME.so (`len` its length, > 3), malloc'ed; NULL without memory. */
+static char *tt__so_stem(const char *fn, size_t len) {
+  char *name = malloc(len - 2);
+  if (name) {
+    memcpy(name, fn, len - 3);
+    name[len - 3] = '\0';
+  }
+  return name;
+}
+
+/* Collects NAME.so and NAME/NAME.so entries of one directory into `*items`; a NAME.so that
+ * is not a regular file (nor a folder holding NAME.so.so) is collected too, to be rejected
+ * by name. */
 static size_t tt__list_dir(const char *dir, tt__listed **items) {
   *items = NULL;
   DIR *d = opendir(dir);
@@ -652,11 +664,7 @@ static size_t tt__list_dir(const char *dir, tt__listed **items) {
     size_t len = strlen(fn);
     if (len > 3 && tt__ends_with(fn, ".so") && tt__is_file(full)) {
       path = full;
-      name = malloc(len - 2);
-      if (name) {
-        memcpy(name, fn, len - 3);
-        name[len - 3] = '\0';
-      }
+      name = tt__so_stem(fn, len);
     } else if (tt__is_dir(full)) {
       char *so = malloc(len + 4);
       if (so) {
@@ -672,7 +680,17 @@ static size_t tt__list_dir(const char *dir, tt__listed **items) {
         }
         free(so);
       }
-      free(full);
+      if (!path && len > 3 && tt__ends_with(fn, ".so")) {  /* a folder named NAME.so */
+        path = full;
+        name = tt__so_stem(fn, len);
+      } else {
+        free(full);
+      }
+    } else if (len > 3 && tt__ends_with(fn, ".so")) {
+      /* NAME.so that is not a regular file (a FIFO, a device, a dangling link): listed, so
+       * the probe rejects it with the reason instead of the file silently not being there */
+      path = full;
+      name = tt__so_stem(fn, len);
     } else {
       free(full);
     }
