@@ -2,7 +2,7 @@
 """Crash safety, measured (#13): kills `host` with SIGKILL at random moments of a render and
 of a tuning run, and checks what a kill may leave behind.
 
-  tools/crash_safety.py [--build build] [--kills 100] [--part render|tune|both] [--seed 1]
+  tools/crash_safety.py [--build build] [--kills 100] [--part render|tune|signal|both|all] [--seed 1]
 
 Render: the host renders the Cornell box over the EXR, PNG and --stats record of the
 previous trial, and is killed at a random moment (half of the kills uniform over a whole
@@ -16,6 +16,12 @@ moment; just before the kill the script reads the ids of the rows committed so f
 connection, WAL). Afterwards PRAGMA integrity_check must say ok and every id read before
 the kill must still be there. At the end one more tuning run into the same file must
 succeed.
+
+Signal (--part signal or all): SIGINT or SIGTERM at a random moment of a render, in a third
+of the trials a second one 0-50 ms later. The host must exit 130 (0 if it finished first;
+killed by the signal only before its handlers exist, while it loads the plugins and the scene), and every
+output must be the previous one or a complete new one; after one signal and exit 130 the
+image and record rendered so far must have been written.
 
 Prints one summary line per part and exits 1 on any failure. meson runs a
 short version (3 kills per part) in the render suite (test crash_safety)."""
@@ -204,11 +210,88 @@ def tune_part(host, scene, work, kills, rng):
     return 1 if failures else 0
 
 
+def signal_part(host, scene, work, kills, rng):
+    """SIGINT/SIGTERM at random moments of a render, a second one soon after in a third of
+    the trials: the host must exit 130 having written what it rendered (or 0 if it finished
+    first); every output is the previous one or a complete new one."""
+    size = 96
+    outs = {"exr": os.path.join(work, "sig.exr"), "stats": os.path.join(work, "sig.json")}
+
+    def args(seed):
+        return [host, "--quiet", "--spp", "64", "--res", "%dx%d" % (size, size), "--seed",
+                str(seed), "--out", outs["exr"], "--stats", outs["stats"], scene]
+
+    first = subprocess.run(args(1), capture_output=True, text=True)
+    if first.returncode != 0:
+        print("signal: the first run failed: " + first.stdout + first.stderr)
+        return 1
+    duration = statistics.median(timed_run(args(2)) for _ in range(3))
+    codes = {}
+    states = {k: {"old": 0, "new": 0, "lost": 0, "corrupt": 0} for k in outs}
+    doubles = 0
+    failures = []
+    for trial in range(kills):
+        before = {k: digest(p) for k, p in outs.items()}
+        sig = signal.SIGINT if trial % 2 == 0 else signal.SIGTERM
+        double = trial % 3 == 2
+        doubles += double
+        delay = duration * rng.uniform(0.0, 1.05)
+        p = subprocess.Popen(args(200 + trial), stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+        time.sleep(delay)
+        if p.poll() is None:
+            p.send_signal(sig)
+            if double:
+                time.sleep(rng.uniform(0.0, 0.05))
+                if p.poll() is None:
+                    p.send_signal(sig)
+        try:
+            rc = p.wait(timeout=120)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            rc = "hang"
+            failures.append("trial %d: no exit 120 s after the signal" % trial)
+        codes[rc] = codes.get(rc, 0) + 1
+        # exit 130 or 0; a signal before the handlers are installed (plugin and scene loading)
+        # ends the process by the default action, which writes nothing (-SIGNAL)
+        if rc not in (0, 130, -int(sig)):
+            failures.append("trial %d (signal at %.3f s): exit %s" % (trial, delay, rc))
+        for k, path in outs.items():
+            now = digest(path)
+            if now is None:
+                state = "lost"
+            elif now == before[k]:
+                state = "old"
+            elif k == "stats":
+                state = "new" if stats_complete(path) else "corrupt"
+            else:
+                ok = image_complete(path, size, size)
+                state = "new" if ok or ok is None else "corrupt"
+            states[k][state] += 1
+            if state in ("lost", "corrupt"):
+                failures.append("trial %d (signal at %.3f s): %s is %s" % (trial, delay, path, state))
+            # one signal and exit 130: what was rendered so far must have been written
+            if rc == 130 and not double and state == "old":
+                failures.append("trial %d: exit 130 after one signal but %s was not written"
+                                % (trial, path))
+    for f in failures:
+        print("FAIL signal: " + f)
+    print("signal: %d runs signalled (SIGINT/SIGTERM alternately, %d with a second signal; a run "
+          "takes %.2f s): exit codes %s; %s; %d temporaries left behind" % (
+              kills, doubles, duration,
+              ", ".join("%s: %d" % (k, v) for k, v in sorted(codes.items(), key=str)),
+              "; ".join("%s old %d, new %d, lost %d, corrupt %d" % (
+                  k, c["old"], c["new"], c["lost"], c["corrupt"]) for k, c in states.items()),
+              len(temporaries(work))))
+    return 1 if failures else 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.environ.get("TT_BUILD_ROOT", "build"))
     ap.add_argument("--kills", type=int, default=100, help="kills per part")
-    ap.add_argument("--part", choices=("render", "tune", "both"), default="both")
+    ap.add_argument("--part", choices=("render", "tune", "signal", "both", "all"), default="both",
+                    help="both: render and tune; all: also signal")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--keep", help="work folder to keep (default: a temporary one)")
     a = ap.parse_args()
@@ -221,10 +304,12 @@ def main():
         work = a.keep or tmp
         os.makedirs(work, exist_ok=True)
         rc = 0
-        if a.part in ("render", "both"):
+        if a.part in ("render", "both", "all"):
             rc |= render_part(host, scene, work, a.kills, rng)
-        if a.part in ("tune", "both"):
+        if a.part in ("tune", "both", "all"):
             rc |= tune_part(host, scene, work, a.kills, rng)
+        if a.part in ("signal", "all"):
+            rc |= signal_part(host, scene, work, a.kills, rng)
     return rc
 
 

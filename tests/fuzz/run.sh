@@ -37,14 +37,25 @@ run_one() {
   name=$(basename "$exe")
   corpus="$here/corpus/${name#fuzz_}"
   dir="$work/$name"
-  mkdir -p "$dir/corpus" "$dir/artifacts" "$dir/tmp"
+  mkdir -p "$dir/corpus" "$dir/artifacts"
+  rm -f "$dir/summary.txt"
+  # scratch files of the harnesses that read paths (and fsync what they save): on tmpfs when
+  # there is one, or a disk's fsync paces the run
+  local scratch
+  if [ -d /dev/shm ] && [ -w /dev/shm ]; then
+    scratch=$(mktemp -d /dev/shm/tt_fuzz_run.XXXXXX)
+  else
+    scratch="$dir/tmp"
+    mkdir -p "$scratch"
+  fi
   log="$dir/log.txt"
   local args=(-timeout=25 -rss_limit_mb=3072 -malloc_limit_mb=3072 -close_fd_mask=2
               -print_final_stats=1 -artifact_prefix="$dir/artifacts/")
   [ -f "$here/$name.dict" ] && args+=(-dict="$here/$name.dict")
   if [ "$mode" = time ]; then args+=(-max_total_time="$limit"); else args+=(-runs="$limit"); fi
   # the grown corpus goes to the work folder; the committed one is only read
-  TT_FUZZ_TMP="$dir/tmp" "$exe" "${args[@]}" "$dir/corpus" "$corpus" >"$log" 2>&1
+  local t0=$SECONDS
+  TT_FUZZ_TMP="$scratch" "$exe" "${args[@]}" "$dir/corpus" "$corpus" >"$log" 2>&1
   rc=$?
   local execs crashes leaks timeouts ooms
   execs=$(awk '/stat::number_of_executed_units:/ {print $2}' "$log" | tail -n 1)
@@ -52,22 +63,23 @@ run_one() {
   leaks=$(find "$dir/artifacts" -name 'leak-*' | wc -l)
   timeouts=$(find "$dir/artifacts" -name 'timeout-*' | wc -l)
   ooms=$(find "$dir/artifacts" -name 'oom-*' | wc -l)
-  local secs
-  secs=$(awk '/stat::.*time|Done [0-9]+ runs in/ {for (i = 1; i <= NF; i++) if ($i == "in") print $(i + 1)}' "$log" | tail -n 1)
+  local secs=$((SECONDS - t0))
   printf '%-18s %12s executions %6s s  crashes %s  leaks %s  timeouts %s  oom %s  exit %s\n' \
     "$name" "${execs:-?}" "${secs:-?}" "$crashes" "$leaks" "$timeouts" "$ooms" "$rc" \
     | tee "$dir/summary.txt"
   # 72: libFuzzer's exit after SIGINT/SIGTERM (a long run stopped early): its counts stand
   if [ "$rc" -eq 72 ] && [ $((crashes + leaks + timeouts + ooms)) -eq 0 ]; then
     echo "$name: stopped early (signal); the figures above are what it ran"
+    rm -rf "$scratch"
     return 0
   fi
   if [ "$rc" -ne 0 ] || [ $((crashes + leaks + timeouts + ooms)) -ne 0 ]; then
     echo "--- $name: log tail ($log) ---"
     tail -n 60 "$log"
+    rm -rf "$scratch"
     return 1
   fi
-  rm -rf "$dir/tmp"
+  rm -rf "$scratch"
   return 0
 }
 
@@ -76,10 +88,19 @@ for exe in "${harnesses[@]}"; do
   while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
 done
 wait
-found=$(cat "$work"/*/summary.txt 2>/dev/null | awk '{s += $7 + $9 + $11 + $13} END {print s + 0}')
-bad=$(cat "$work"/*/summary.txt 2>/dev/null | awk '$15 != 0 && $15 != 72' | wc -l)
-ran=$(cat "$work"/*/summary.txt 2>/dev/null | wc -l)
-[ "$ran" -eq ${#harnesses[@]} ] || bad=$((bad + ${#harnesses[@]} - ran))
+# the summaries of this invocation's harnesses (a --work folder may hold older ones)
+summaries=()
+for exe in "${harnesses[@]}"; do
+  f="$work/$(basename "$exe")/summary.txt"
+  [ -f "$f" ] && summaries+=("$f")
+done
+ran=${#summaries[@]}
+found=0 bad=0
+if [ "$ran" -gt 0 ]; then
+  found=$(cat "${summaries[@]}" | awk '{s += $7 + $9 + $11 + $13} END {print s + 0}')
+  bad=$(cat "${summaries[@]}" | awk '$15 != 0 && $15 != 72' | wc -l)
+fi
+bad=$((bad + ${#harnesses[@]} - ran))
 echo "fuzz: ${#harnesses[@]} harness(es), $found finding(s), $bad failed run(s); work folder $work"
 if [ "$found" -eq 0 ] && [ "$bad" -eq 0 ]; then
   [ "$keep" -eq 1 ] || rm -rf "$work"
