@@ -19,6 +19,7 @@ succeed.
 
 Signal (--part signal or all): SIGINT or SIGTERM at a random moment of a render, in a third
 of the trials a second one 0-50 ms later. The host must exit 130 (0 if it finished first;
+128 + the signal when a second one made it exit at once;
 killed by the signal only before its handlers exist, while it loads the plugins and the scene), and every
 output must be the previous one or a complete new one; after one signal and exit 130 the
 image and record rendered so far must have been written.
@@ -254,7 +255,9 @@ def signal_part(host, scene, work, kills, rng):
         codes[rc] = codes.get(rc, 0) + 1
         # exit 130 or 0; a signal before the handlers are installed (plugin and scene loading)
         # ends the process by the default action, which writes nothing (-SIGNAL)
-        if rc not in (0, 130, -int(sig)):
+        # a second signal exits at once: 128 + the signal (130 for SIGINT, 143 for SIGTERM)
+        allowed = (0, 130, -int(sig)) + ((128 + int(sig),) if double else ())
+        if rc not in allowed:
             failures.append("trial %d (signal at %.3f s): exit %s" % (trial, delay, rc))
         for k, path in outs.items():
             now = digest(path)
