@@ -14,8 +14,12 @@ if [ ! -f "$dir/build.ninja" ]; then
 fi
 ninja -C "$dir" || exit 1
 source tests/support/sanitizers/env.sh
-# instrumented code runs 2-5x slower: the timeouts stretch (taa_net needs > 60 s here)
-meson test -C "$dir" --suite unit --suite render --suite fuzz --print-errorlogs \
+# instrumented code runs 2-5x slower: the timeouts stretch (taa_net needs > 60 s here).
+# Suite 'ctypes' (tools_rrmse, python_api) is left out: the Python interpreter is not
+# instrumented and cannot load the instrumented libtunetrace.so (the sanitizer run-time lives
+# in the executables); preloading the run-time into Python makes LeakSanitizer report
+# Python's own exit-time allocations. The C paths they call are covered by the C tests here.
+meson test -C "$dir" --suite unit --suite render --suite fuzz --no-suite ctypes --print-errorlogs \
   --timeout-multiplier 5 --num-processes "$(nproc)" 2>&1 | tee "$dir/test-output.txt"
 rc=${PIPESTATUS[0]}
 count() { awk -v k="$1" '$1 == k":" {print $2}' "$dir/test-output.txt" | tail -n 1; }
