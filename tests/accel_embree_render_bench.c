@@ -438,31 +438,54 @@ static void summary(void) {
         printf(" %11s", "-");
     printf("\n");
   }
-  /* Issue 16's goals, printed (never asserted). */
+  /* Issue 16's goals, printed (never asserted): each with its figure and met / NOT met. */
   printf("\ngoals (issue 16), CPU-time ratios to native default over %d scenes:\n", g_nres);
   int custom_default = -1;
   for (int c = 0; c < g_ncfg; c++)
     if (!strcmp(g_cfgs[c].label, "custom default (bf2)")) custom_default = c;
   if (best_c > 0) {
+    /* "best" = the custom row with the highest geometric mean over all modes; picked on
+     * the same rounds it is judged on, so with k candidate rows it is biased upwards by
+     * about the noise of one row (see the spread column). */
+    int all_met = 1;
     for (int m = 0; m < g_nmodes; m++) {
       int n;
       double mn, g = geomean_ratio(m, best_c, &n, &mn);
+      all_met &= g >= 1.10 && mn >= 1.0;
       printf("  best custom (%s) t%d d%d: geomean %.3fx (goal >= 1.10: %s), min %.3fx "
              "(goal >= 1.0: %s)\n", g_cfgs[best_c].label, g_modes[m].threads, g_modes[m].depth,
              g, g >= 1.10 ? "met" : "NOT met", mn, mn >= 1.0 ? "met" : "NOT met");
     }
-    int mem_ok = 1;
-    for (int s = 0; s < g_nres; s++)
-      if (g_res[s].have[best_c] && g_res[s].mib[best_c] > g_res[s].mib[0]) mem_ok = 0;
-    printf("  best custom memory <= native on every scene: %s\n", mem_ok ? "met" : "NOT met");
+    printf("  => best custom >= 1.10x geomean, none below 1.0x, in every mode: %s\n",
+           all_met ? "met" : "NOT met");
   }
-  if (custom_default > 0)
+  if (custom_default > 0) {
+    int all_met = 1;
     for (int m = 0; m < g_nmodes; m++) {
       int n;
       double mn, g = geomean_ratio(m, custom_default, &n, &mn);
-      printf("  custom default t%d d%d: geomean %.3fx (goal >= 0.95: %s)\n", g_modes[m].threads,
-             g_modes[m].depth, g, g >= 0.95 ? "met" : "NOT met");
+      all_met &= g >= 0.95;
+      printf("  custom default t%d d%d: geomean %.3fx (goal >= 0.95: %s), min %.3fx\n",
+             g_modes[m].threads, g_modes[m].depth, g, g >= 0.95 ? "met" : "NOT met", mn);
     }
+    printf("  => custom default >= 0.95x in every mode: %s\n", all_met ? "met" : "NOT met");
+  }
+  /* Memory: every custom row against native default, scene by scene. */
+  for (int c = 1; c < g_ncfg; c++) {
+    double worst = 0.0;
+    int n = 0;
+    for (int s = 0; s < g_nres; s++)
+      if (g_res[s].have[c] && g_res[s].mib[0] > 0) {
+        double q = g_res[s].mib[c] / g_res[s].mib[0];
+        worst = q > worst ? q : worst;
+        n++;
+      }
+    if (n)
+      printf("  memory of %s <= native on every scene: %s (largest %.2fx native)\n",
+             g_cfgs[c].label, worst <= 1.0 ? "met" : "NOT met", worst);
+  }
+  printf("  verified render-time tuning gain >= 8%% median: not measured by this bench "
+         "(tools/tuning/gains.py --verify; plugins/accel_embree/README.md)\n");
 }
 
 int main(int argc, char **argv) {

@@ -48,7 +48,10 @@ def run_one(a, scene, objective, seed, extra, tag):
            objective, "--iterations", str(a.iterations), "--verify", str(a.verify),
            "--tune-spp", str(a.tune_spp), "--spp", "1", "--res", a.res, "--threads",
            str(a.threads), "--seed", str(seed), "--db", os.path.join(a.out_dir, name + ".db"),
-           "--out", os.path.join(a.out_dir, name + ".exr"), "--stats", stats] + extra + [scene]
+           "--out", os.path.join(a.out_dir, name + ".exr"), "--stats", stats, "--clock", a.clock]
+    if a.tune_params:
+        cmd += ["--tune-params", a.tune_params]
+    cmd += extra + [scene]
     t0 = time.time()
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if r.returncode != 0:
@@ -146,6 +149,11 @@ def main():
     ap.add_argument("--tuner", default="tuner_nm")
     ap.add_argument("--set", action="append", default=[], help="extra --set for the host "
                     "(e.g. accel_embree.backend=custom)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="what the host's build and render times measure (cpu: the process's "
+                    "CPU time, for a shared machine; with --threads 1)")
+    ap.add_argument("--tune-params", help="the host's --tune-params (default: every parameter "
+                    "of the target's space)")
     ap.add_argument("--tag", default="native", help="label of the starting configuration")
     ap.add_argument("--out-dir", default="gains")
     ap.add_argument("--force", action="store_true", help="rerun runs whose stats exist")
