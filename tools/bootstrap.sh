@@ -30,6 +30,8 @@ PACKAGES=(
   clang libclang-rt-14-dev                    # the ASan+UBSan build and the libFuzzer harnesses
                                               # (tools/test_sanitized.sh, tests/fuzz; .ci/run)
   llvm-14                                     # llvm-symbolizer: sanitizer reports with lines
+  openmpi-bin libopenmpi-dev                  # mpi/ tunetrace-mpi (meson -Dmpi=auto finds it);
+                                              # tests/mpi_driver.sh, mpi_baseline.sh, tools/mpi/
 )
 
 # Opt-in (--training): training the TAA networks (tools/taa/train.py, ablations.py,

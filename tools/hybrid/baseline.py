@@ -23,6 +23,14 @@ rank (0, the middle, the quarters, ...), scenes and objectives interleaved withi
   baseline.py --db DB --work W --job bmw-m6:16:build+render  # one job (what an MPI rank runs)
   baseline.py --db DB --work W --cameras 100 --iterations 80 # the thesis' full size
   baseline.py --db DB --work W --shard 0/2 & baseline.py --db DB --work W --shard 1/2  # 2 workers
+  baseline.py --db DB --work W --mpi 4            # the jobs on 4 MPI ranks (tunetrace-mpi)
+  baseline.py --db DB --work W --emit-jobs J.json # tunetrace-mpi's job list (srun/mpirun it)
+  baseline.py --db DB --work W --import-mpi       # jobs merged by tunetrace-mpi -> hybrid_jobs
+
+With MPI (issue 18, mpi/README.md) every job runs the same host command on some rank and
+tunetrace-mpi merges its rows into --db; the jobs it merged (table merges, their notes hold
+the host's stats) become hybrid_jobs rows on import, which --mpi does when the run ends and
+every run does at its start, so the two ways share one resumable job set.
 """
 import argparse
 import json
@@ -159,6 +167,86 @@ def host_version(a):
     return r.stdout.strip().splitlines()[0] if r.stdout.strip() else "unknown"
 
 
+def search_args(a):
+    """The host arguments of a job besides its camera, objective and files."""
+    return ["--plugin", a.tuner, "--tune", "accel_embree", "--tune-params", a.tune_params,
+            "--iterations", str(a.iterations), "--tune-spp", str(a.tune_spp), "--spp", "1",
+            "--res", a.res, "--threads", str(a.threads), "--clock", a.clock,
+            "--seed", str(a.seed)]
+
+
+def record_job(con, a, scene, path, cam, obj, st, wall, cpu, load1, version, finished):
+    """The finished job's row of hybrid_jobs from the host's --stats JSON `st`."""
+    t = st["tuning"]
+    hist = [{"iteration": h["iteration"], "cost": h["cost"], "cached": h["cached"],
+             "build_ms": h["build_ms"], "render_ms": h["render_ms"], "config": h["config"]}
+            for h in t["history"]]
+    con.execute("INSERT OR REPLACE INTO hybrid_jobs VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,"
+                "?,?,?,?,?)",
+                (job_id(a, scene, cam, obj), scene, path, st.get("scene_id"), cam, obj,
+                 a.iterations, a.tune_spp, a.res, a.threads, a.clock, a.seed, a.tuner,
+                 a.tune_params, t["default_cost"], t["best_cost"],
+                 json.dumps(t["best_config"], sort_keys=True), int(bool(t["converged"])),
+                 json.dumps(hist), t["measured"], wall, cpu, load1, version, finished))
+
+
+def mpi_job_list(a, jobs):
+    """tunetrace-mpi's job list (mpi/README.md) for `jobs`: one item per job."""
+    return {"jobs": [{"kind": "tune", "scene": scene_file(a, s), "camera": c, "objective": o,
+                      "args": search_args(a)} for s, c, o in jobs]}
+
+
+def import_mpi(a, con, version):
+    """hybrid_jobs rows for the jobs tunetrace-mpi merged into --db with these settings."""
+    if not con.execute("SELECT count(*) FROM sqlite_master WHERE name = 'merges'").fetchone()[0]:
+        return 0
+    names = {}
+    for name in a.scenes:  # the paths scene_file gives, without generating anything
+        spec = SCENES[name]
+        path = (spec if os.path.isabs(spec) else os.path.join(ROOT, spec)) if isinstance(spec, str) \
+            else os.path.join(a.work, "scenes", spec[0], spec[1])
+        names[path] = name
+    done = done_jobs(con)
+    n = 0
+    for note, finished in con.execute("SELECT note, timestamp FROM merges").fetchall():
+        try:
+            nt = json.loads(note)
+            job = nt["job"]
+        except (TypeError, ValueError, KeyError):
+            continue
+        scene = names.get(job.get("scene"))
+        if job.get("kind") != "tune" or scene is None or job.get("args") != search_args(a) or \
+                "stats" not in nt or job.get("objective") not in a.objectives:
+            continue
+        if job_id(a, scene, job["camera"], job["objective"]) in done:
+            continue
+        record_job(con, a, scene, job["scene"], job["camera"], job["objective"], nt["stats"],
+                   nt.get("wall_s"), nt.get("cpu_s"), nt.get("load1"), version, finished)
+        n += 1
+    con.commit()
+    return n
+
+
+def run_mpi(a, jobs):
+    """Runs `jobs` on a.mpi ranks: mpirun tunetrace-mpi over their job list."""
+    path = os.path.join(a.work, "mpi_jobs.json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(mpi_job_list(a, jobs), f, indent=1)
+    os.replace(path + ".tmp", path)
+    cmd = a.mpirun.split() + ["-np", str(a.mpi), "--bind-to", "core"]
+    if os.geteuid() == 0:  # containers: Open MPI refuses root unless told
+        cmd += ["--allow-run-as-root"]
+    if a.mpi > (os.cpu_count() or 1):
+        cmd += ["--oversubscribe"]
+    scratch = os.path.join(a.work, "scratch")
+    os.makedirs(scratch, exist_ok=True)
+    cmd += [a.mpi_driver, "--jobs", path, "--db", a.db, "--host", a.host, "--scratch", scratch]
+    if a.max_jobs:
+        cmd += ["--max-jobs", str(a.max_jobs)]
+    print("baseline: " + " ".join(cmd), flush=True)
+    return subprocess.run(cmd).returncode
+
+
 def run_job(a, con, scene, cam, obj, version):
     jid = job_id(a, scene, cam, obj)
     path = scene_file(a, scene)
@@ -166,11 +254,8 @@ def run_job(a, con, scene, cam, obj, version):
     os.makedirs(jdir, exist_ok=True)
     stem = os.path.join(jdir, f"cam{cam:02d}_{obj.replace('+', '_')}")
     stats = stem + ".json"
-    cmd = [a.host, "--quiet", "--plugin", a.tuner, "--tune", "accel_embree",
-           "--tune-params", a.tune_params, "--camera-index", str(cam), "--objective", obj, "--iterations", str(a.iterations),
-           "--tune-spp", str(a.tune_spp), "--spp", "1", "--res", a.res,
-           "--threads", str(a.threads), "--clock", a.clock, "--seed", str(a.seed),
-           "--db", a.db, "--stats", stats + ".tmp", "--out", stem + ".exr", path]
+    cmd = [a.host, "--quiet", "--camera-index", str(cam), "--objective", obj] + search_args(a) + \
+          ["--db", a.db, "--stats", stats + ".tmp", "--out", stem + ".exr", path]
     ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
     with open(stem + ".log", "w") as log:
@@ -190,18 +275,8 @@ def run_job(a, con, scene, cam, obj, version):
     os.replace(stats + ".tmp", stats)
     with open(stats) as f:
         st = json.load(f)
-    t = st["tuning"]
-    hist = [{"iteration": h["iteration"], "cost": h["cost"], "cached": h["cached"],
-             "build_ms": h["build_ms"], "render_ms": h["render_ms"], "config": h["config"]}
-            for h in t["history"]]
-    scene_id = st.get("scene_id")
-    con.execute("INSERT OR REPLACE INTO hybrid_jobs VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,"
-                "?,?,?,?,?)",
-                (jid, scene, path, scene_id, cam, obj, a.iterations, a.tune_spp, a.res,
-                 a.threads, a.clock, a.seed, a.tuner, a.tune_params, t["default_cost"], t["best_cost"],
-                 json.dumps(t["best_config"], sort_keys=True), int(bool(t["converged"])),
-                 json.dumps(hist), t["measured"], wall, cpu, os.getloadavg()[0], version,
-                 time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())))
+    record_job(con, a, scene, path, cam, obj, st, wall, cpu, os.getloadavg()[0], version,
+               time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     con.commit()
     return True
 
@@ -232,6 +307,14 @@ def main():
     ap.add_argument("--max-jobs", type=int, default=0, help="stop after this many new jobs")
     ap.add_argument("--shard", default="0/1", help="K/N: run only the jobs whose index in the "
                     "job order is K modulo N (N workers share one DB)")
+    ap.add_argument("--mpi", type=int, default=0, metavar="N",
+                    help="run the jobs on N MPI ranks (tunetrace-mpi, one merged --db)")
+    ap.add_argument("--mpirun", default="mpirun", help="the MPI launcher command (--mpi)")
+    ap.add_argument("--mpi-driver", default=os.path.join(ROOT, "build", "mpi", "tunetrace-mpi"))
+    ap.add_argument("--emit-jobs", metavar="FILE",
+                    help="write tunetrace-mpi's job list of the jobs to run and exit")
+    ap.add_argument("--import-mpi", action="store_true",
+                    help="record the jobs tunetrace-mpi merged into --db in hybrid_jobs, exit")
     a = ap.parse_args()
     for spec in a.scene:
         name, _, path = spec.partition("=")
@@ -263,8 +346,18 @@ def main():
                          f"SCENE one of {', '.join(SCENES)}, OBJECTIVE one of {', '.join(OBJECTIVES)}")
             want.append((parts[0], int(parts[1]), parts[2]))
         jobs = want
+    if a.mpi < 0:
+        ap.error("--mpi: expected a number of ranks >= 1")
     os.makedirs(a.work, exist_ok=True)
     con = open_db(a.db)
+    if not os.access(a.host, os.X_OK):
+        sys.exit(f"baseline: --host {a.host} is not an executable (build first: ninja -C build)")
+    version = host_version(a)
+    imported = import_mpi(a, con, version)
+    if imported:
+        print(f"baseline: {imported} jobs merged by tunetrace-mpi recorded in hybrid_jobs", flush=True)
+    if a.import_mpi:
+        return 0
     done = done_jobs(con)
     if a.list:
         for s, c, o in jobs:
@@ -280,11 +373,24 @@ def main():
     todo = [j for j in jobs if job_id(a, *j) not in done]
     print(f"baseline: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {a.db}, {len(todo)} to run "
           f"({settings_tag(a)})", flush=True)
-    if not os.access(a.host, os.X_OK):
-        sys.exit(f"baseline: --host {a.host} is not an executable (build first: ninja -C build)")
-    version = host_version(a)
     for s in dict.fromkeys(s for s, _, _ in todo):
         scene_file(a, s)
+    if a.emit_jobs:
+        with open(a.emit_jobs + ".tmp", "w") as f:
+            json.dump(mpi_job_list(a, todo), f, indent=1)
+        os.replace(a.emit_jobs + ".tmp", a.emit_jobs)
+        print(f"baseline: {len(todo)} jobs written to {a.emit_jobs}; then --import-mpi", flush=True)
+        return 0
+    if a.mpi:
+        if not todo:
+            return 0
+        if not os.access(a.mpi_driver, os.X_OK):
+            sys.exit(f"baseline: --mpi-driver {a.mpi_driver} is not an executable (tunetrace-mpi "
+                     "is built when MPI is found: tools/bootstrap.sh installs Open MPI)")
+        rc = run_mpi(a, todo)
+        n = import_mpi(a, con, version)
+        print(f"baseline: {n} jobs of this MPI run recorded in hybrid_jobs", flush=True)
+        return rc
     t0 = time.time()
     failed = 0
     for k, (s, c, o) in enumerate(todo):

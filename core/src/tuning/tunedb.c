@@ -580,16 +580,25 @@ static const char *const tt__merge_columns[] = {
   "objective", "build_ms", "render_ms", "cost", "status", "mode", "iteration", "run_id", "tuner",
   "metrics", "machine", "cpu", "timestamp", "host", "rank"};
 
-/* 1 if the attached schema src's table samples has column `name`, 0 if not, -1 on error. */
-static int tt__src_has_column(tt_tunedb *db, const char *name) {
+#define TT__MERGE_NCOL (sizeof tt__merge_columns / sizeof tt__merge_columns[0])
+
+/* has[i] = 1 where the attached schema src's table samples has tt__merge_columns[i]; the
+ * number of its columns (0: no table samples), -1 on error. One query for all. */
+static int tt__src_columns(tt_tunedb *db, int has[TT__MERGE_NCOL]) {
   sqlite3_stmt *st = NULL;
-  if (sqlite3_prepare_v2(db->sql, "SELECT count(*) FROM pragma_table_info('samples', 'src')"
-                         " WHERE name = ?1", -1, &st, NULL) != SQLITE_OK)
+  memset(has, 0, TT__MERGE_NCOL * sizeof *has);
+  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM pragma_table_info('samples', 'src')", -1,
+                         &st, NULL) != SQLITE_OK)
     return -1;
-  tt__bind_text(st, 1, name);
-  int has = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int(st, 0) > 0 : -1;
+  int n = 0, rc;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+    const char *name = (const char *)sqlite3_column_text(st, 0);
+    n++;
+    for (size_t i = 0; name && i < TT__MERGE_NCOL; i++)
+      if (!strcmp(name, tt__merge_columns[i])) has[i] = 1;
+  }
   sqlite3_finalize(st);
-  return has;
+  return rc == SQLITE_DONE ? n : -1;
 }
 
 tt_status tt_tunedb_merged(tt_tunedb *db, const char *tag, int *merged) {
@@ -614,23 +623,24 @@ static tt_status tt__merge_rows(tt_tunedb *db, const char *source, int32_t rank,
       sqlite3_step(st) == SQLITE_ROW)
     version = sqlite3_column_int(st, 0);
   sqlite3_finalize(st);
-  int has_samples = tt__src_has_column(db, "config");
-  if (version < 1 || version > TT_TUNEDB_SCHEMA_VERSION || has_samples != 1)
+  int has[TT__MERGE_NCOL];
+  int ncols = tt__src_columns(db, has);
+  if (ncols < 0) return tt__sql_error(db, db->sql, "reading the columns of the merged file");
+  int has_samples = ncols > 0 && has[7];  /* config */
+  if (version < 1 || version > TT_TUNEDB_SCHEMA_VERSION || !has_samples)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: %s is not a tuning database "
                         "of schema 1..%d (user_version %d%s)", source,
                         TT_TUNEDB_SCHEMA_VERSION, version,
-                        has_samples == 1 ? "" : ", no table samples");
+                        has_samples ? "" : ", no table samples");
   char sql[2048];
   size_t n = (size_t)snprintf(sql, sizeof sql, "INSERT INTO main.samples (");
-  const size_t ncol = sizeof tt__merge_columns / sizeof tt__merge_columns[0];
+  const size_t ncol = TT__MERGE_NCOL;
   for (size_t i = 0; i < ncol; i++)
     n += (size_t)snprintf(sql + n, sizeof sql - n, "%s%s", i ? ", " : "", tt__merge_columns[i]);
   n += (size_t)snprintf(sql + n, sizeof sql - n, ") SELECT ");
   for (size_t i = 0; i < ncol; i++) {
     const char *c = tt__merge_columns[i];
-    int has = tt__src_has_column(db, c);
-    if (has < 0) return tt__sql_error(db, db->sql, "reading the columns of the merged file");
-    const char *expr = !strcmp(c, "rank") && rank >= 0 ? "?1" : has ? c : "NULL";
+    const char *expr = !strcmp(c, "rank") && rank >= 0 ? "?1" : has[i] ? c : "NULL";
     n += (size_t)snprintf(sql + n, sizeof sql - n, "%s%s", i ? ", " : "", expr);
   }
   snprintf(sql + n, sizeof sql - n, " FROM src.samples ORDER BY id");

@@ -1,0 +1,32 @@
+/* tunetrace-mpi: one job's host process. Started with fork/exec (no shell), its output into
+ * a log file, killed with its rank (PR_SET_PDEATHSIG: mpirun tearing a run down leaves no
+ * orphan rendering on). */
+#ifndef TT_MPI_CHILD_H
+#define TT_MPI_CHILD_H
+
+#include <sys/types.h>
+
+typedef struct tt_mpi_child {
+  pid_t pid;          /* 0: none running */
+  double t0;          /* start (monotonic seconds) */
+  double wall_s, cpu_s;
+  int exit_code;      /* exit status, 128 + signal if killed, -1 if it could not start */
+} tt_mpi_child;
+
+/* Monotonic seconds. */
+double tt_mpi_now(void);
+
+/* Starts argv[0] with argv, stdout and stderr into `log`. 0, or -1 (message in err). */
+int tt_mpi_child_start(tt_mpi_child *c, char **argv, const char *log, char *err, size_t n);
+
+/* Waits for the child (block != 0) or checks it; 1 when it has ended (exit_code, wall_s,
+ * cpu_s filled, pid 0), 0 while it runs. */
+int tt_mpi_child_poll(tt_mpi_child *c, int block);
+
+/* Sends `sig` to a running child. Async-signal-safe on the pid it is given. */
+void tt_mpi_child_kill(pid_t pid, int sig);
+
+/* The last `max` bytes of the file `path` (a job's log) into buf. */
+void tt_mpi_file_tail(const char *path, char *buf, size_t max);
+
+#endif /* TT_MPI_CHILD_H */

@@ -1,0 +1,204 @@
+#!/usr/bin/env bash
+# tunetrace-mpi (issue 18) with 2 ranks on a tiny scene (16x16, 1 spp): tuning searches,
+# explorations and a frame sequence cut into ranges.
+#  - every job done once: the merged DB holds one tag per job and exactly the rows of the
+#    tags (no row outside a job, no row twice); the frames are complete;
+#  - the result equals single-process runs: the rows of the explorations (everything but
+#    timings, machine and run ids) equal those of the same host commands run one by one, the
+#    searches have the same number of rows per camera, and every frame has the pixels of one
+#    host --sequence over the whole range (and the manifest its entries);
+#  - a rank killed mid-run (SIGKILL) loses only jobs in flight: the DB holds whole jobs only,
+#    and a rerun of the same command completes the set (a third run has nothing to do);
+#  - Ctrl-C (SIGINT to mpirun) stops every rank, keeps the finished jobs, leaves no process;
+#  - bad job lists (unknown scene, empty range, a --post in a frame range, an unknown key)
+#    are refused before any rank starts work, naming the item, and create nothing.
+set -euo pipefail
+fail() { echo "FAIL: $*" >&2; exit 1; }
+: "${TT_SOURCE_ROOT:?}" "${TT_BUILD_ROOT:?}"
+PY=/usr/bin/python3
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/tt_mpi_driver.XXXXXX")
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null || true; done; rm -rf "$tmp"; }
+trap cleanup EXIT
+host="$TT_BUILD_ROOT/host/host"
+drv="${TT_MPI_DRIVER:-$TT_BUILD_ROOT/mpi/tunetrace-mpi}"
+scene="$TT_SOURCE_ROOT/scenes/cornell-box/path.json"
+MPIRUN=("${MPIRUN:-mpirun}" --allow-run-as-root --oversubscribe)
+common=(--res 16x16 --threads 1 --spp 1 --clock cpu)
+tune_args=(--plugin tuner_nm --tune accel_embree --iterations 4 --tune-spp 1 --seed 1)
+explore_args=(--tune accel_embree)
+
+jobs() {  # $1: the sequence folder
+  cat <<JSON
+{"host_args": ["--res", "16x16", "--threads", "1", "--spp", "1", "--clock", "cpu"],
+ "jobs": [
+  {"kind": "tune", "scene": "$scene", "cameras": [0, 40], "objective": "render",
+   "args": ["--plugin", "tuner_nm", "--tune", "accel_embree", "--iterations", "4", "--tune-spp", "1", "--seed", "1"]},
+  {"kind": "explore", "scene": "$scene", "cameras": [10, 20, 30], "samples": 3, "seed": 7,
+   "args": ["--tune", "accel_embree"]},
+  {"kind": "frames", "scene": "$scene", "range": "0:5", "chunk": 2, "out_dir": "$1"}
+ ]}
+JSON
+}
+jobs "$tmp/seq2" >"$tmp/jobs2.json"
+jobs "$tmp/seq1" >"$tmp/jobs1.json"
+jobs "$tmp/seqk" >"$tmp/jobsk.json"
+
+q() { "$PY" -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute(sys.argv[2]).fetchone()[0])' "$@"; }
+# the rows of the cameras of mode $2 (their defaults included), without timings, ids, machine and time: one line per row, sorted
+content() {
+  "$PY" - "$1" "$2" <<'PYEOF'
+import json, sqlite3, sys
+con = sqlite3.connect(sys.argv[1])
+rows = con.execute("SELECT scene_id, camera, context, plugin, plugin_version, config, objective,"
+                   " status, mode, iteration FROM samples WHERE camera IN (SELECT camera FROM samples"
+                   " WHERE mode = ?)", (sys.argv[2],)).fetchall()
+for r in sorted(json.dumps(r) for r in rows):
+    print(r)
+PYEOF
+}
+check_complete() {  # $1: DB, $2: sequence folder, $3: label
+  local db=$1
+  [ "$(q "$db" "SELECT count(*) FROM merges")" = 8 ] || fail "$3: $(q "$db" "SELECT count(*) FROM merges") tags, expected 8 jobs"
+  [ "$(q "$db" "SELECT count(*) FROM samples")" = "$(q "$db" "SELECT sum(rows) FROM merges")" ] ||
+    fail "$3: rows outside the jobs' tags"
+  # no row twice: (camera, objective, mode, iteration) is unique per job and cameras differ
+  [ "$(q "$db" "SELECT count(*) FROM (SELECT DISTINCT camera, objective, mode, iteration FROM samples)")" = \
+    "$(q "$db" "SELECT count(*) FROM samples")" ] || fail "$3: a row is in the DB twice"
+  [ "$(q "$db" "SELECT count(*) FROM samples WHERE rank IS NULL OR host IS NULL")" = 0 ] ||
+    fail "$3: rows without rank or host"
+  [ "$(q "$db" "SELECT count(*) FROM samples WHERE mode = 'explore'")" = 9 ] || fail "$3: explore rows"
+  for f in 0 1 2 3 4 5; do
+    [ -s "$2/color_000$f.exr" ] || fail "$3: frame $f missing"
+  done
+  [ -s "$2/manifest.json" ] || fail "$3: no manifest"
+  [ ! -e "$2/.tunetrace-mpi/0-1" ] || fail "$3: a range's work folder was left"
+}
+
+# --- 2 ranks, then 1 rank, then the single-process runs ---
+"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobs2.json" --db "$tmp/np2.db" --host "$host" \
+  --scratch "$tmp" >"$tmp/np2.log" 2>&1 || { cat "$tmp/np2.log"; fail "mpirun -np 2"; }
+check_complete "$tmp/np2.db" "$tmp/seq2" "np 2"
+[ "$(q "$tmp/np2.db" "SELECT count(DISTINCT rank) FROM samples")" = 2 ] || echo "note: one rank did every tuning job"
+"${MPIRUN[@]}" -np 1 "$drv" --jobs "$tmp/jobs1.json" --db "$tmp/np1.db" --host "$host" \
+  --scratch "$tmp" >"$tmp/np1.log" 2>&1 || { cat "$tmp/np1.log"; fail "mpirun -np 1"; }
+check_complete "$tmp/np1.db" "$tmp/seq1" "np 1"
+for cam in 10 20 30; do
+  "$host" --quiet "${common[@]}" "${explore_args[@]}" --camera-index $cam --explore 3 --seed 7 \
+    --db "$tmp/single.db" --out "$tmp/single.exr" "$scene" || fail "single explore $cam"
+done
+"$host" --quiet "${common[@]}" --sequence 0:5 --out-dir "$tmp/seqs" "$scene" || fail "single sequence"
+content "$tmp/single.db" explore >"$tmp/single.txt"
+content "$tmp/np2.db" explore >"$tmp/np2.txt"
+content "$tmp/np1.db" explore >"$tmp/np1.txt"
+[ -s "$tmp/single.txt" ] || fail "no single-process rows"
+cmp -s "$tmp/single.txt" "$tmp/np2.txt" || { diff "$tmp/single.txt" "$tmp/np2.txt" | head; fail "np 2 explore rows differ from single-process runs"; }
+cmp -s "$tmp/np1.txt" "$tmp/np2.txt" || fail "np 1 and np 2 explore rows differ"
+per_cam="SELECT group_concat(n) FROM (SELECT camera, count(*) n FROM samples WHERE mode = 'tune' GROUP BY camera ORDER BY camera)"
+[ "$(q "$tmp/np2.db" "$per_cam")" = "$(q "$tmp/np1.db" "$per_cam")" ] || fail "tune rows per camera differ"
+[ "$(q "$tmp/np2.db" "SELECT count(*) FROM samples WHERE mode = 'tune'")" = 8 ] || fail "tune rows: 4 per camera"
+"$PY" - "$tmp/seqs" "$tmp/seq2" "$tmp/seq1" <<'PYEOF' || fail "frames differ from one host --sequence"
+import glob, json, os, sys
+import numpy as np
+import OpenImageIO as oiio
+ref, outs = sys.argv[1], sys.argv[2:]
+def px(p):
+    i = oiio.ImageInput.open(p)
+    assert i, p
+    a = i.read_image("float")
+    i.close()
+    return a
+def entries(d):
+    m = json.load(open(os.path.join(d, "manifest.json")))
+    for f in m["frames"]:
+        for k in ("render_ms", "reference_ms", "post_ms"):
+            f.pop(k, None)
+    return m
+files = sorted(os.path.basename(p) for p in glob.glob(os.path.join(ref, "*.exr")))
+assert len(files) == 24, files
+for out in outs:
+    got = sorted(os.path.basename(p) for p in glob.glob(os.path.join(out, "*.exr")))
+    assert got == files, (out, got)
+    for f in files:
+        assert np.array_equal(px(os.path.join(ref, f)), px(os.path.join(out, f))), (out, f)
+    assert entries(ref) == entries(out), out
+PYEOF
+
+# --- a rank killed mid-run, then reruns ---
+"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" \
+  --scratch "$tmp" >"$tmp/k1.log" 2>&1 &
+mp=$!
+pids+=("$mp")
+victim=""
+for _ in $(seq 1 600); do
+  if [ -z "$victim" ]; then
+    for p in $(pgrep -f -- "--db $tmp/k.db" || true); do
+      if tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1'; then victim=$p; fi
+    done
+  fi
+  n=$(q "$tmp/k.db" "SELECT count(*) FROM merges" 2>/dev/null || echo 0)
+  [ -n "$victim" ] && [ "${n:-0}" -ge 3 ] && break
+  sleep 0.1
+done
+[ -n "$victim" ] || fail "rank 1 not found"
+kill -9 "$victim"
+rc=0; wait "$mp" || rc=$?
+[ "$rc" != 0 ] || fail "mpirun should fail when a rank is killed"
+done1=$(q "$tmp/k.db" "SELECT count(*) FROM merges")
+[ "$done1" -ge 3 ] && [ "$done1" -lt 8 ] || fail "$done1 jobs done before the kill (expected 3..7)"
+[ "$(q "$tmp/k.db" "SELECT count(*) FROM samples")" = "$(q "$tmp/k.db" "SELECT sum(rows) FROM merges")" ] ||
+  fail "the killed run left rows of an unfinished job"
+sleep 1
+if pgrep -f -- "$tmp/k.db" >/dev/null; then pgrep -af -- "$tmp/k.db"; fail "processes of the killed run remain"; fi
+"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" \
+  --scratch "$tmp" >"$tmp/k2.log" 2>&1 || { cat "$tmp/k2.log"; fail "rerun after the kill"; }
+grep -q "8 jobs in .*, $done1 already in" "$tmp/k2.log" || { cat "$tmp/k2.log"; fail "the rerun did not skip the $done1 jobs done"; }
+check_complete "$tmp/k.db" "$tmp/seqk" "after the kill"
+content "$tmp/k.db" explore >"$tmp/k.txt"
+cmp -s "$tmp/single.txt" "$tmp/k.txt" || fail "explore rows after kill+rerun differ from single-process runs"
+"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" \
+  --scratch "$tmp" >"$tmp/k3.log" 2>&1 || { cat "$tmp/k3.log"; fail "third run"; }
+grep -q "8 already in .* 0 to run" "$tmp/k3.log" || { cat "$tmp/k3.log"; fail "a third run should have nothing to do"; }
+"$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" --list | grep -c '^done ' | grep -qx 8 ||
+  fail "--list (one process, no mpirun) should show 8 jobs done"
+
+# --- Ctrl-C (SIGINT to mpirun): every rank stops, finished jobs saved, no process left ---
+jobs "$tmp/seqi" >"$tmp/jobsi.json"
+"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsi.json" --db "$tmp/i.db" --host "$host" \
+  --scratch "$tmp" >"$tmp/i.log" 2>&1 &
+mp=$!
+pids+=("$mp")
+for _ in $(seq 1 600); do
+  n=$(q "$tmp/i.db" "SELECT count(*) FROM merges" 2>/dev/null || echo 0)
+  [ "${n:-0}" -ge 2 ] && break
+  sleep 0.1
+done
+kill -INT "$mp"
+rc=0; wait "$mp" || rc=$?
+[ "$rc" != 0 ] || fail "an interrupted run should not exit 0"
+grep -q "jobs done, 0 failed in this run (run the same command again" "$tmp/i.log" || { cat "$tmp/i.log"; fail "rank 0 did not stop cleanly"; }
+[ "$(q "$tmp/i.db" "SELECT count(*) FROM samples")" = "$(q "$tmp/i.db" "SELECT sum(rows) FROM merges")" ] ||
+  fail "the interrupted run left rows of an unfinished job"
+sleep 1
+if pgrep -f -- "$tmp/i.db" >/dev/null; then pgrep -af -- "$tmp/i.db"; fail "processes of the interrupted run remain"; fi
+
+# --- bad job lists: refused before any work, naming the item ---
+bad() {  # $1: label, $2: expected text, $3: JSON
+  printf '%s\n' "$3" >"$tmp/bad.json"
+  rc=0
+  "${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/bad.json" --db "$tmp/bad.db" --host "$host" \
+    --scratch "$tmp" >"$tmp/bad.log" 2>&1 || rc=$?
+  [ "$rc" != 0 ] || fail "$1: accepted"
+  grep -qF -- "$2" "$tmp/bad.log" || { cat "$tmp/bad.log"; fail "$1: message should contain: $2"; }
+  [ ! -e "$tmp/bad.db" ] && [ ! -e "$tmp/badseq" ] || fail "$1: work started (DB or folder created)"
+}
+ok_item='{"kind": "tune", "scene": "'"$scene"'", "camera": 1, "args": ["--plugin", "tuner_nm", "--tune", "accel_embree"]}'
+bad "unknown scene" 'jobs[1].scene: ' '{"jobs": ['"$ok_item"', {"kind": "explore", "scene": "'"$tmp"'/nosuch.json", "camera": 2, "samples": 2}]}'
+grep -q "nosuch.json" "$tmp/bad.log" || fail "the unknown scene's path is not named"
+bad "empty range" 'jobs[1].range: expected frames "A:B" with A <= B' '{"jobs": ['"$ok_item"', {"kind": "frames", "scene": "'"$scene"'", "range": "5:3", "out_dir": "'"$tmp"'/badseq"}]}'
+bad "post-filter" 'jobs[0].args: --post' '{"jobs": [{"kind": "frames", "scene": "'"$scene"'", "range": "0:3", "out_dir": "'"$tmp"'/badseq", "args": ["--post", "post_taa"]}]}'
+bad "unknown key" 'jobs[0].cam: unknown key' '{"jobs": [{"kind": "tune", "scene": "'"$scene"'", "cam": 1}]}'
+bad "camera range" 'jobs[0].cameras: [1]: expected an integer in 0..99' '{"jobs": [{"kind": "tune", "scene": "'"$scene"'", "cameras": [1, 100]}]}'
+bad "repeated job" 'jobs[1]: repeats a job of jobs[0]' '{"jobs": ['"$ok_item"', '"$ok_item"']}'
+bad "not JSON" 'not valid JSON (line 1' '{"jobs": [}'
+echo "mpi_driver: ok"

@@ -1,0 +1,105 @@
+#!/usr/bin/python3
+"""Parallel efficiency of tunetrace-mpi on the hybrid baseline (issue 18's goal: >= 0.9 at 2
+ranks). The same job list (tools/hybrid/baseline.py --emit-jobs) runs on 1 and on 2 ranks
+(more with --ranks) into fresh databases, the variants interleaved per round (1 2 | 2 1 |
+...), and the medians give efficiency(n) = T(1) / (n T(n)). Prints the figures, the job
+count, the CPU seconds of the jobs (the same work on every variant) and the load average
+before and after: on a shared machine the wall times measure who else ran too.
+
+  nice -n 19 tools/mpi/scaling.py --rounds 3 --cameras 4 --iterations 10 --res 32x32
+"""
+import argparse
+import json
+import os
+import sqlite3
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--ranks", default="1,2", help="comma-separated rank counts (first: the reference)")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--cameras", type=int, default=4)
+    ap.add_argument("--iterations", type=int, default=10)
+    ap.add_argument("--res", default="32x32")
+    ap.add_argument("--scene", action="append", default=[], metavar="NAME=FILE",
+                    help="baseline scenes (default: the Cornell box path and the specular box)")
+    ap.add_argument("--mpirun", default="mpirun")
+    ap.add_argument("--out", help="write the figures as JSON here")
+    a = ap.parse_args()
+    ranks = [int(r) for r in a.ranks.split(",")]
+    scenes = a.scene or [f"box={ROOT}/scenes/cornell-box/path.json",
+                         f"spec={ROOT}/scenes/cornell-box-variants/specular-box/scene.json"]
+    host = os.path.join(a.build, "host", "host")
+    drv = os.path.join(a.build, "mpi", "tunetrace-mpi")
+    for exe in (host, drv):
+        if not os.access(exe, os.X_OK):
+            sys.exit(f"scaling: {exe} is not built (tunetrace-mpi needs Open MPI: tools/bootstrap.sh)")
+    work = tempfile.mkdtemp(prefix="tt_mpi_scaling.")
+    jobs = os.path.join(work, "jobs.json")
+    cmd = ["/usr/bin/python3", os.path.join(ROOT, "tools", "hybrid", "baseline.py"), "--host", host,
+           "--db", os.path.join(work, "list.db"), "--work", os.path.join(work, "w"),
+           "--cameras", str(a.cameras), "--iterations", str(a.iterations), "--res", a.res,
+           "--emit-jobs", jobs]
+    for s in scenes:
+        cmd += ["--scene", s]
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    njobs = len(json.load(open(jobs))["jobs"])
+    walls = {n: [] for n in ranks}
+    cpus = {n: [] for n in ranks}
+    load0 = os.getloadavg()
+    for r in range(a.rounds):
+        order = ranks if r % 2 == 0 else ranks[::-1]
+        for n in order:
+            db = os.path.join(work, f"r{r}_np{n}.db")
+            mp = a.mpirun.split() + ["-np", str(n), "--bind-to", "core"]
+            if os.geteuid() == 0:
+                mp.append("--allow-run-as-root")
+            if n > (os.cpu_count() or 1):
+                mp.append("--oversubscribe")
+            t0 = time.time()
+            p = subprocess.run(mp + [drv, "--jobs", jobs, "--db", db, "--host", host, "--scratch", work],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            wall = time.time() - t0
+            if p.returncode != 0:
+                sys.exit(f"scaling: -np {n} failed:\n{p.stderr[-3000:]}")
+            con = sqlite3.connect(db)
+            notes = [json.loads(x[0]) for x in con.execute("SELECT note FROM merges")]
+            con.close()
+            if len(notes) != njobs:
+                sys.exit(f"scaling: -np {n}: {len(notes)} of {njobs} jobs merged")
+            walls[n].append(wall)
+            cpus[n].append(sum(x["cpu_s"] for x in notes))
+            print(f"round {r + 1}: -np {n}: {wall:.2f} s wall, jobs' CPU {cpus[n][-1]:.2f} s, "
+                  f"load {os.getloadavg()[0]:.1f}", flush=True)
+    load1 = os.getloadavg()
+    ref = statistics.median(walls[ranks[0]])
+    res = {"jobs": njobs, "rounds": a.rounds, "cameras": a.cameras, "iterations": a.iterations,
+           "res": a.res, "load_before": load0[0], "load_after": load1[0], "cpus": os.cpu_count(),
+           "variants": {}}
+    print(f"\n{njobs} baseline jobs ({a.cameras} cameras x {len(scenes)} scenes x 2 objectives, "
+          f"{a.iterations} iterations, {a.res}), {a.rounds} interleaved rounds, medians; "
+          f"load {load0[0]:.1f} before, {load1[0]:.1f} after, {os.cpu_count()} CPUs")
+    print("ranks  wall_s  jobs_cpu_s  speed-up  efficiency")
+    for n in ranks:
+        w = statistics.median(walls[n])
+        eff = ref * ranks[0] / (n * w)
+        res["variants"][n] = {"wall_s": walls[n], "median_wall_s": w, "cpu_s": cpus[n],
+                              "speedup": ref / w, "efficiency": eff}
+        print(f"{n:5d}  {w:6.2f}  {statistics.median(cpus[n]):10.2f}  {ref / w:8.2f}  {eff:10.2f}")
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(res, f, indent=1)
+    subprocess.run(["rm", "-rf", work])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
