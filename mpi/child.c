@@ -1,6 +1,7 @@
 /* tunetrace-mpi: a job's host process (see child.h). */
 #include "child.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -89,4 +90,18 @@ void tt_mpi_file_tail(const char *path, char *buf, size_t max) {
   size_t got = fread(buf, 1, max - 1, f);
   buf[got] = 0;
   fclose(f);
+}
+
+void tt_mpi_remove_folder(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return;
+  struct dirent *e;
+  char path[8192];
+  while ((e = readdir(d))) {
+    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+    snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+    unlink(path);
+  }
+  closedir(d);
+  rmdir(dir);
 }

@@ -29,4 +29,8 @@ void tt_mpi_child_kill(pid_t pid, int sig);
 /* The last `max` bytes of the file `path` (a job's log) into buf. */
 void tt_mpi_file_tail(const char *path, char *buf, size_t max);
 
+/* Removes the files in the folder `dir` (it holds files only: a rank's scratch folder, a
+ * frame range's work folder) and the folder. */
+void tt_mpi_remove_folder(const char *dir);
+
 #endif /* TT_MPI_CHILD_H */

@@ -1,6 +1,8 @@
 /* tunetrace-mpi: frame ranges of a sequence (see frames.h). */
 #include "frames.h"
 
+#include "child.h"
+
 #include <tunetrace/file.h>
 #include <tunetrace/tunetrace.h>
 
@@ -42,21 +44,6 @@ static int tt__mkdirs(const char *path, char *err, size_t n) {
   return tt__mkdir(buf, err, n);
 }
 
-/* Removes the files in `dir` (a range's work folder holds files only) and the folder. */
-static void tt__rm_flat(const char *dir) {
-  DIR *d = opendir(dir);
-  if (!d) return;
-  struct dirent *e;
-  char path[8192];
-  while ((e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-    unlink(path);
-  }
-  closedir(d);
-  rmdir(dir);
-}
-
 static void tt__range_paths(const tt_mpi_job *job, char *dir, size_t dn, char *json, size_t jn) {
   if (dir) snprintf(dir, dn, "%s/" TT__WORK "/%u-%u", job->out_dir, job->first, job->last);
   if (json) snprintf(json, jn, "%s/" TT__WORK "/%u-%u.json", job->out_dir, job->first, job->last);
@@ -67,7 +54,7 @@ int tt_mpi_frames_prepare(const tt_mpi_job *job, char *dir, size_t dn, char *err
   snprintf(work, sizeof work, "%s/" TT__WORK, job->out_dir);
   if (tt__mkdirs(work, err, n)) return -1;
   tt__range_paths(job, dir, dn, NULL, 0);
-  tt__rm_flat(dir);  /* what a killed run of this range left */
+  tt_mpi_remove_folder(dir);  /* what a killed run of this range left */
   return tt__mkdir(dir, err, n);
 }
 
@@ -106,7 +93,7 @@ int tt_mpi_frames_finish(const tt_mpi_job *job, const char *dir, char **manifest
     rc = -1;
   }
   if (!rc) {
-    tt__rm_flat(dir);
+    tt_mpi_remove_folder(dir);
     *manifest = malloc(size + 1);
     if (*manifest) memcpy(*manifest, text, size + 1);
   }

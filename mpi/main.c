@@ -535,16 +535,7 @@ int main(int argc, char **argv) {
       rc = tt__work(&o, &jobs, rank, scratch);
     }
   }
-  if (have_scratch) {
-    const char *names[] = {"job.db", "job.db-wal", "job.db-shm", "job.stats.json",
-                           "job.stats.json.exr", "job.log", NULL};
-    for (const char **n = names; *n; n++) {
-      char p[4300];
-      snprintf(p, sizeof p, "%s/%s", scratch, *n);
-      unlink(p);
-    }
-    rmdir(scratch);
-  }
+  if (have_scratch) tt_mpi_remove_folder(scratch);
   tt_tunedb_close(c.db);
   free(c.done);
   free(c.given);
