@@ -331,8 +331,16 @@ def main():
     ap.add_argument("--rounds", type=int, default=2, help="side-by-side rounds per measurement")
     ap.add_argument("--nice", type=int, default=19)
     ap.add_argument("--jobs", type=int, default=1, help="measuring host processes at a time")
+    ap.add_argument("--shard", default=None, help="K/N: measure only the K-th of N interleaved "
+                    "parts of the cameras (N evaluations side by side; then --no-measure reports)")
     ap.add_argument("--no-measure", action="store_true", help="report with what is measured")
     a = ap.parse_args()
+    if a.shard:
+        try:
+            a.shard = tuple(int(x) for x in a.shard.split("/"))
+            assert len(a.shard) == 2 and 0 <= a.shard[0] < a.shard[1]
+        except (ValueError, AssertionError):
+            ap.error(f"--shard: expected K/N with 0 <= K < N, got {a.shard!r}")
     objectives = a.objectives.split(",")
     models = a.models.split(",")
     os.makedirs(a.work, exist_ok=True)
@@ -384,6 +392,11 @@ def main():
                 need.setdefault((s, c, o), {})[canon(cfg)] = cfg
     todo = [(k, meas.missing(*k, list(v.values()))) for k, v in sorted(need.items())]
     todo = [(k, v) for k, v in todo if v]
+    if a.shard:
+        # K/N: the K-th of N interleaved parts, for N processes beside each other (each
+        # camera's file is written by one of them); report afterwards with --no-measure
+        k, n = a.shard
+        todo = todo[k::n]
     if todo and not a.no_measure:
         print(f"evaluate: measuring {sum(len(v) for _, v in todo)} configurations at {len(todo)} "
               f"cameras ({a.rounds} rounds side by side)", flush=True)

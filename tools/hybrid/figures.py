@@ -37,9 +37,17 @@ def _boxes(ax, rows, key, scenes, models, log=False):
     ax.set_xticks(range(len(scenes)))
     ax.set_xticklabels(scenes, rotation=30, ha="right")
     if log:
-        ax.set_yscale("log")
+        _log_y(ax)
     ax.axhline(1.0, color="k", lw=0.8, ls="--")
     ax.legend(fontsize=8)
+
+
+def _log_y(ax):
+    """A log y axis labelled in plain numbers (0.9, 1, 1.5 rather than 9 x 10^-1)."""
+    from matplotlib.ticker import ScalarFormatter
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(ScalarFormatter())
+    ax.yaxis.set_minor_formatter(ScalarFormatter())
 
 
 def _save(fig, out, name):
@@ -75,8 +83,8 @@ def draw(rows, summary, out):
         ax.axhline(1.0, color="k", lw=0.8, ls="--")
         ax.set_xticks(range(len(scenes)))
         ax.set_xticklabels(scenes, rotation=30, ha="right")
-        ax.set_yscale("log")
-        ax.set_ylabel("roofline / predicted cost (1 = as good as the search's best)")
+        _log_y(ax)
+        ax.set_ylabel("roofline / predicted cost\n(1: as good as the search's best)")
         ax.set_title(f"Fraction of the roofline per camera, {OBJ[o]} (geo-means: " +
                      ", ".join(f"{m} {t[f'{o}/{m}']['roofline']:.3f}" for m in models if f"{o}/{m}" in t) + ")",
                      fontsize=10)
