@@ -14,6 +14,17 @@
 #include "host_util.h"
 #include "tt_test.h"
 
+#if defined(__SANITIZE_ADDRESS__)
+#  define TT_TEST_ASAN 1
+#elif defined(__has_feature)
+#  if __has_feature(address_sanitizer)
+#    define TT_TEST_ASAN 1
+#  endif
+#endif
+#ifndef TT_TEST_ASAN
+#  define TT_TEST_ASAN 0
+#endif
+
 /* Runs `cd DIR && [PREFIX] host ARGS` with stdout+stderr in `out`; returns the exit code. */
 static int run_in(const char *dir, const char *prefix, const char *args, char *out, size_t n) {
   char cmd[16384];
@@ -171,10 +182,14 @@ int main(void) {
 
   /* 18: the film that cannot be allocated: its size in bytes, the prefix once (the address
    * space is capped so no machine can allocate the 112 GiB) */
+  /* (not in the AddressSanitizer build: its shadow memory needs terabytes of address space,
+   * so an instrumented host cannot start under ulimit -v) */
+#if !TT_TEST_ASAN
   snprintf(args, sizeof args, "--res 65536x65536 --spp 1 --out %s/big.exr '%s'", dir, scene);
   CHECK(run_in(dir, "ulimit -v 8000000;", args, out, sizeof out) == 1);
   CHECK_CONTAINS(out, "film: cannot allocate a 65536x65536 film: 120259084288 bytes (112.0 GiB");
   CHECK(!strstr(out, "film: film:"));
+#endif
 
   /* 4: a missing output folder is created before the render; one that cannot be (a file
    * in the way) fails at once, exit 5, the path named once, nothing rendered */
