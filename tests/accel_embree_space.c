@@ -131,6 +131,32 @@ static void test_space(const tt_space *space) {
   CHECK(cn == 12);
   CHECK(tt_space_type(space, (size_t)cn) == TT_PARAM_NOM && tt_space_nom_count(space, (size_t)cn) == 2);
   CHECK(tt_space_default(space, (size_t)cn).i == 0);
+  /* what tuners may change (#17 defect 9): counters is a setting; the custom builder's
+   * parameters act only with backend custom and compact false; the rest always act */
+  CHECK(!tt_space_is_tunable(space, (size_t)cn));
+  const cJSON *cp = find_param(root, "counters");
+  CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(cp, "tunable")));
+  static const char *const custom_only[] = {"branchingFactor", "maxDepth", "sahBlockSize",
+                                            "minLeafSize", "maxLeafSize", "travcost", "intcost"};
+  tt_config *cc = tt_config_create(space);
+  for (size_t k = 0; k < 7; k++) {
+    size_t i = (size_t)tt_space_find(space, custom_only[k]);
+    CHECK_MSG(tt_space_is_tunable(space, i) && tt_space_condition_count(space, i) == 2,
+              "%s: %zu conditions", custom_only[k], tt_space_condition_count(space, i));
+    CHECK(tt_config_set_string(cc, "backend", "native") == TT_OK && !tt_config_is_active(cc, i));
+    CHECK(tt_config_set_string(cc, "backend", "custom") == TT_OK && tt_config_is_active(cc, i));
+    CHECK(tt_config_set_string(cc, "compact", "true") == TT_OK && !tt_config_is_active(cc, i));
+    CHECK(tt_config_set_string(cc, "compact", "false") == TT_OK);
+    const cJSON *when = cJSON_GetObjectItemCaseSensitive(find_param(root, custom_only[k]), "activeWhen");
+    const cJSON *wb = cJSON_GetObjectItemCaseSensitive(when, "backend");
+    CHECK(cJSON_GetArraySize(wb) == 1 && !strcmp(cJSON_GetArrayItem(wb, 0)->valuestring, "custom"));
+  }
+  static const char *const always[] = {"quality", "static", "compact", "robust", "backend"};
+  for (size_t k = 0; k < 5; k++) {
+    size_t i = (size_t)tt_space_find(space, always[k]);
+    CHECK(tt_space_is_tunable(space, i) && tt_space_condition_count(space, i) == 0);
+  }
+  tt_config_destroy(cc);
   /* constraint texts are published */
   CHECK_CONTAINS(json, "minLeafSize <= maxLeafSize");
   CHECK_CONTAINS(json, "Morton");

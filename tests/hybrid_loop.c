@@ -63,7 +63,7 @@ static long rows_where(const char *db_path, const char *where) {
 
 static const char *common =
     "--quiet --res 24x24 --spp 1 --threads 1 --tune-params quality,branchingFactor,maxDepth,"
-    "maxLeafSize,travcost --set tuner_nm.reevaluate=0";
+    "maxLeafSize,travcost --set tuner_nm.reevaluate=0 --set accel_embree.backend=custom";
 
 int main(void) {
   if (!mkdtemp(dir)) return 1;
@@ -152,7 +152,8 @@ int main(void) {
   char *best = tj ? cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "best_config")) : NULL;
   cJSON_Delete(root);
   snprintf(args, sizeof args, "--quiet --res 24x24 --threads 1 --spp 1 --tune-params quality,"
-           "branchingFactor,maxDepth,maxLeafSize,travcost --predict --camera-index 0:2 --warm-start '%s' "
+           "branchingFactor,maxDepth,maxLeafSize,travcost --set accel_embree.backend=custom --predict "
+           "--camera-index 0:2 --warm-start '%s' "
            "'%s'", db3, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = cJSON_Parse(strchr(out, '{'));

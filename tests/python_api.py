@@ -181,7 +181,9 @@ def test_tuning(tmp):
     box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
     db_path = os.path.join(tmp, "tuning.db")
     kw = dict(plugins=["integrator_pt", "tuner_nm"], resolution=(16, 16), seed=5)
-    with tt.Session(box, **kw) as s:
+    with tt.Session(box, **dict(kw, plugins=["accel_embree"] + kw["plugins"])) as s:
+        # maxLeafSize acts only with backend custom (with native it is not searched)
+        s.set("accel_embree.backend", "custom")
         t = s.tune("accel_embree", tuner="tuner_nm", iterations=6, db=db_path,
                    params=["maxLeafSize", "quality"])
         after = s.config("accel_embree")
@@ -208,7 +210,8 @@ def test_tuning(tmp):
         check(rows[0]["context"]["spp"] == 1 and "integrator_pt" in rows[0]["context"]["plugins"],
               f"context {rows[0]['context']}")
     # the same session again: every configuration is answered by the database
-    with tt.Session(box, **kw) as s:
+    with tt.Session(box, **dict(kw, plugins=["accel_embree"] + kw["plugins"])) as s:
+        s.set("accel_embree.backend", "custom")
         t2 = s.tune("accel_embree", tuner="tuner_nm", iterations=6, db=db_path,
                     params=["maxLeafSize", "quality"])
     check(t2.stats["cached"] >= 1 and all(x["cached"] for x in t2.history[1:] if x["status"] == "ok"),

@@ -5,8 +5,10 @@
  * unit cube (every parameter's range is cut into `samples` strata and each stratum is hit
  * exactly once), which covers the space evenly with few measurements; afterwards, or with
  * lhs=false from the start, proposals are uniform random points. Every proposal is mapped
- * to a configuration with tt_config_from_unit and passed through tt_space_check: a repaired
- * configuration is proposed as repaired, an infeasible one is re-drawn (up to 100 draws).
+ * to a configuration with tt_config_from_unit, canonicalised (parameters marked not tunable
+ * or inactive keep their defaults: tunetrace/params.h) and passed through tt_space_check: a
+ * repaired configuration is proposed as repaired, an infeasible one is re-drawn (up to 100
+ * draws).
  *
  * Determinism: all randomness comes from xoshiro256** seeded from the create() seed, so a
  * seed and a cost sequence give the same proposals on every machine; save_state stores the
@@ -164,11 +166,15 @@ static tt_status tr_create(const tt_space *target, const tt_config *settings, ui
   return TT_OK;
 }
 
-/* Maps a drawn unit point to the configuration it proposes: from_unit, then the space's
- * check. Deterministic, so a saved point always gives back the same configuration. */
+/* Maps a drawn unit point to the configuration it proposes: from_unit, then what the space
+ * marks (tunetrace/params.h): parameters not tunable, or inactive under the point's own
+ * values, go back to their defaults (tt_config_canonicalize; the session passes the
+ * configured values as defaults), then the space's check. Deterministic, so a saved point
+ * always gives back the same configuration. */
 static tt_check_result tr_realize(const tt_tuner *t, const double *unit, tt_config *cfg,
                                   char *why, size_t why_size) {
   tt_config_from_unit(cfg, unit);
+  tt_config_canonicalize(cfg, NULL);
   return tt_space_check(t->target, cfg, why, why_size);
 }
 

@@ -148,6 +148,19 @@ tt_space *tt__embree_space_create(void) {
   ok &= tt_space_add_nom_bool(s, "counters", 0,
                               "instrumentation, not a tuning parameter: count rays, nodes "
                               "visited and triangles tested (custom backend; slows queries)") >= 0;
+  /* What tuners may change (tunetrace/params.h): counters is instrumentation, not a tuning
+   * parameter; the custom builder's settings act only with backend custom and compact false
+   * (compact=true builds with native). "static" acts with native and with custom+compact
+   * (a disjunction the conditions cannot say), so it stays unconditional: searching a
+   * parameter that sometimes does nothing wastes measurements, marking one inactive that
+   * acts would lose configurations. */
+  static const char *const custom[] = {"custom"}, *const no[] = {"false"};
+  if (ok) ok &= tt_space_set_tunable(s, (size_t)tt_space_find(s, "counters"), 0) == TT_OK;
+  for (size_t i = 0; ok && i < sizeof tt__custom_only / sizeof tt__custom_only[0]; i++) {
+    size_t k = (size_t)tt_space_find(s, tt__custom_only[i].name);
+    ok &= tt_space_add_condition(s, k, "backend", custom, 1) == TT_OK &&
+          tt_space_add_condition(s, k, "compact", no, 1) == TT_OK;
+  }
   if (!ok) {
     tt_space_destroy(s);
     tt_set_error(TT_ERR_INTERNAL, "accel_embree: could not build the parameter space");

@@ -273,19 +273,37 @@ static tt_status tt__nm_create(const tt_space *target, const tt_config *settings
     tt__nm_destroy(t);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuner_nm: out of memory");
   }
-  /* NOM parameters become arms, in space order, while the number of combinations stays
-   * within TT__NM_MAX_ARMS; the rest join INT and FLOAT as simplex dimensions. */
-  size_t arms = 1;
-  for (size_t i = 0; i < P; i++) {
-    size_t c = tt_space_nom_count(target, i);
-    if (tt_space_type(target, i) == TT_PARAM_NOM && arms * c <= TT__NM_MAX_ARMS) {
-      t->armnom_param[t->n_armnom] = i;
-      t->armnom_count[t->n_armnom++] = c;
-      arms *= c;
-    } else {
-      t->dim_param[t->n++] = i;
-    }
+  /* NOM parameters become arms while the number of combinations stays within
+   * TT__NM_MAX_ARMS; the rest join INT and FLOAT as simplex dimensions. Parents of
+   * conditions (tunetrace/params.h: "activeWhen") come first, in space order, then the other
+   * NOM parameters in space order: an arm then fixes whether its dependent parameters act,
+   * and the proposals' canonicalisation (tt__nm_next) collapses its simplex onto the
+   * parameters that do. Parameters marked not tunable are never searched: they keep their
+   * default (the session passes the configured value as the default). */
+  unsigned char *parent = calloc(P + 1, 1);
+  if (!parent) {
+    tt__nm_destroy(t);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuner_nm: out of memory");
   }
+  for (size_t i = 0; i < P; i++)
+    for (size_t k = 0; k < tt_space_condition_count(target, i); k++) {
+      int q = tt_space_condition_parent(target, i, k);
+      if (q >= 0 && tt_space_is_tunable(target, (size_t)q)) parent[q] = 1;
+    }
+  size_t arms = 1;
+  for (int pass = 0; pass < 2; pass++)
+    for (size_t i = 0; i < P; i++) {
+      size_t c = tt_space_nom_count(target, i);
+      if (!tt_space_is_tunable(target, i) || parent[i] != (pass == 0)) continue;
+      if (tt_space_type(target, i) == TT_PARAM_NOM && arms * c <= TT__NM_MAX_ARMS) {
+        t->armnom_param[t->n_armnom] = i;
+        t->armnom_count[t->n_armnom++] = c;
+        arms *= c;
+      } else {
+        t->dim_param[t->n++] = i;
+      }
+    }
+  free(parent);
   t->n_arms = arms;
   for (size_t d = 0; d < t->n; d++) {
     /* A restart simplex narrower than two grid steps of an INT (or folded NOM) dimension
@@ -521,8 +539,12 @@ static tt_status tt__nm_next(tt_tuner *t, tt_config *out) {
       }
       tt__nm_point_config(t, (size_t)ai);
       tt_config_copy(t->work2, t->work);
+      /* Parameters the point's own values leave inactive take their defaults: points that
+       * differ only there are one configuration (one cache entry, measured once), and the
+       * vertex moves there too, so each arm's simplex spans only what acts in it. */
+      int canonical = tt_config_canonicalize(t->work, NULL) > 0;
       tt_check_result r = tt_space_check(t->target, t->work, why, sizeof why);
-      if (r == TT_CHECK_REPAIRED) {
+      if (r == TT_CHECK_REPAIRED || canonical) {
         /* Move the vertex to the repaired point, but only along the dimensions the repair
          * changed, so INT rounding does not snap the continuous simplex to the grid. */
         tt_config_to_unit(t->work, t->unit);
@@ -538,7 +560,8 @@ static tt_status tt__nm_next(tt_tuner *t, tt_config *out) {
         }
         /* A repair must yield a feasible configuration; do not trust one that does not. */
         tt_config_copy(t->work2, t->work);
-        if (tt_space_check(t->target, t->work2, why, sizeof why) != TT_CHECK_OK)
+        if (r == TT_CHECK_REPAIRED &&
+            tt_space_check(t->target, t->work2, why, sizeof why) != TT_CHECK_OK)
           r = TT_CHECK_INFEASIBLE;
       }
       steps++;

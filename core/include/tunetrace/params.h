@@ -183,6 +183,53 @@ TT_API tt_space *tt_space_subset(const tt_space *space, const char *const *names
  * copied, or -1 if a value does not fit (nothing is rolled back). */
 TT_API int tt_config_assign(tt_config *dst, const tt_config *src);
 
+/* ---- what a tuner may change: settings that are not tunable, parameters that act only
+ *      under a condition ----
+ *
+ * A parameter marked not tunable is a setting (instrumentation, a debug switch) that a
+ * tuner leaves at its configured value; --set still sets it. A parameter with conditions
+ * acts only while every condition holds: condition k says that the NOM parameter `parent`
+ * takes one of a list of its possible values (accel_embree: maxLeafSize acts only with
+ * backend "custom"); a parameter whose parent is inactive is inactive too. JSON (Fig. 3.1
+ * extended): "tunable": false, "activeWhen": {"backend": ["custom"], "quality": [2, 3]};
+ * both are absent when the parameter is tunable and unconditional.
+ *
+ * How a tuner honours them (tuner_nm, tuner_random and the host's --explore do):
+ *  - never search a parameter that is not tunable;
+ *  - treat a parameter inactive under a configuration's values as absent from it: call
+ *    tt_config_canonicalize on every proposal, so configurations that differ only in
+ *    parameters that do nothing are the same configuration, measured once;
+ *  - optionally (tuner_nm) search the inactive parameters of a branch not at all, e.g. one
+ *    simplex over the active parameters per value of the parent.
+ * The marking is published with the space and must be set before the first configuration
+ * of the space is created, like the parameters themselves. */
+
+/* Marks parameter `index` as not tunable (tunable = 0) or tunable (the default). */
+TT_API tt_status tt_space_set_tunable(tt_space *space, size_t index, int tunable);
+/* Non-zero if tuners may change parameter `index` (0 for an index out of range). */
+TT_API int tt_space_is_tunable(const tt_space *space, size_t index);
+/* Adds a condition to parameter `index`: it acts only while the NOM parameter `parent`
+ * holds one of `values` (count >= 1, written as --set would: "custom", "2", "true"). A
+ * parameter may not be its own ancestor. Errors name the parameter and the value. */
+TT_API tt_status tt_space_add_condition(tt_space *space, size_t index, const char *parent,
+                                        const char *const *values, size_t count);
+/* Number of conditions of parameter `index`. */
+TT_API size_t tt_space_condition_count(const tt_space *space, size_t index);
+/* Index of the parent parameter of condition `k` of parameter `index`, or -1. */
+TT_API int tt_space_condition_parent(const tt_space *space, size_t index, size_t k);
+/* Non-zero if condition `k` of parameter `index` holds when its parent takes possible value
+ * `nom_index`. */
+TT_API int tt_space_condition_allows(const tt_space *space, size_t index, size_t k,
+                                     size_t nom_index);
+/* Non-zero if parameter `index` acts under the values of `config`: every condition holds
+ * and every parent is active itself. Says nothing about tunable. */
+TT_API int tt_config_is_active(const tt_config *config, size_t index);
+/* Sets every parameter of `config` that is not tunable, or inactive under the
+ * configuration's own values, to its value in `base` (a configuration of the same space,
+ * e.g. the configured start; NULL: the space's defaults). Returns how many values changed.
+ * Tuners call it on each proposal (see above). */
+TT_API int tt_config_canonicalize(tt_config *config, const tt_config *base);
+
 #ifdef __cplusplus
 }
 #endif

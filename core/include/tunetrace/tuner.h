@@ -9,6 +9,14 @@
  * Threads: a tuner object is used by one thread at a time; distinct tuners are independent.
  * The tuner never proposes a configuration outside its space: proposals pass
  * tt_space_check, repaired if the check repairs them.
+ *
+ * What a tuner may change (tunetrace/params.h, "not tunable" and "activeWhen"): never
+ * search a parameter for which tt_space_is_tunable is 0, and pass every proposal through
+ * tt_config_canonicalize(proposal, NULL) before the check, so proposals that differ only in
+ * parameters that do nothing under their own values are one configuration. The tuning
+ * session (tunetrace/tuning.h) gives the tuner a space without the parameters that are not
+ * tunable, with the configured values as defaults, and canonicalises again; a tuner used
+ * outside a session must do both itself.
  */
 #ifndef TUNETRACE_TUNER_H
 #define TUNETRACE_TUNER_H

@@ -31,6 +31,12 @@ typedef struct tt__param {
   int64_t *nom_ints;       /* NOM int and bool values (bool: 0, 1) */
   char **nom_strings;      /* NOM string values */
   size_t nom_def;
+  int untunable;           /* tt_space_set_tunable(..., 0): tuners leave it alone */
+  size_t ncond;            /* tt_space_add_condition: acts only while all hold */
+  struct tt__cond {
+    size_t parent;         /* a NOM parameter of the same space */
+    unsigned char *allowed;  /* one flag per possible value of the parent */
+  } *conds;
 } tt__param;
 
 struct tt_space {
@@ -81,6 +87,8 @@ tt_space *tt_space_create(const char *plugin_name, const char *plugin_version) {
 
 /* Frees what a parameter owns (not the struct itself, which lives in the array). */
 static void tt__param_free(tt__param *p) {
+  for (size_t k = 0; k < p->ncond; k++) free(p->conds[k].allowed);
+  free(p->conds);
   free(p->name);
   free(p->description);
   free(p->nom_ints);
@@ -967,6 +975,9 @@ static int tt__copy_param(tt_space *dst, const tt_space *src, size_t i, tt_value
   return -1;
 }
 
+static tt_status tt__copy_marking(tt_space *sub, const tt_space *space,
+                                  const char *const *names, size_t count, const tt_config *base);
+
 tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_t count,
                           const tt_config *base) {
   if (!space || (count && !names))
@@ -995,6 +1006,10 @@ tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_
   }
   for (size_t k = 0; k < tt__space_constraint_count(space); k++)
     tt_space_add_constraint_text(sub, tt__space_constraint(space, k));
+  if (tt__copy_marking(sub, space, names, count, base) != TT_OK) {
+    tt_space_destroy(sub);
+    return NULL;
+  }
   return sub;
 }
 
@@ -1012,4 +1027,233 @@ int tt_config_assign(tt_config *dst, const tt_config *src) {
     copied++;
   }
   return copied;
+}
+
+/* ---- not tunable, active only under a condition ---- */
+
+/* Refuses changes to a published space (configurations exist): they size and read it. */
+static tt_status tt__check_mutable(const tt_space *space, size_t index, const char *fn) {
+  if (!space) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: space is NULL", fn);
+  if (index >= space->count)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: %s: parameter index %zu is out of range "
+                        "(the space has %zu parameters)", fn, space->plugin, index, space->count);
+  if (atomic_load_explicit(&space->frozen, memory_order_relaxed))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: %s.%s: configurations already exist (a "
+                        "space is immutable once published)", fn, space->plugin,
+                        space->params[index].name);
+  return TT_OK;
+}
+
+tt_status tt_space_set_tunable(tt_space *space, size_t index, int tunable) {
+  tt_status st = tt__check_mutable(space, index, "tt_space_set_tunable");
+  if (st != TT_OK) return st;
+  space->params[index].untunable = !tunable;
+  return TT_OK;
+}
+
+int tt_space_is_tunable(const tt_space *space, size_t index) {
+  const tt__param *p = tt__param_at(space, index);
+  return p && !p->untunable;
+}
+
+/* Non-zero if `anc` is `index` or one of its ancestors through conditions. */
+static int tt__is_ancestor(const tt_space *space, size_t anc, size_t index, unsigned depth) {
+  if (anc == index) return 1;
+  if (depth > space->count) return 1;  /* a cycle already: refuse anything more */
+  const tt__param *p = &space->params[index];
+  for (size_t k = 0; k < p->ncond; k++)
+    if (tt__is_ancestor(space, anc, p->conds[k].parent, depth + 1)) return 1;
+  return 0;
+}
+
+/* Appends a condition with an `allowed` mask of the parent's possible values (copied). */
+static tt_status tt__push_condition(tt_space *space, size_t index, size_t parent,
+                                    const unsigned char *allowed) {
+  tt__param *p = &space->params[index];
+  size_t n = space->params[parent].nom_count;
+  for (size_t k = 0; k < p->ncond; k++)  /* a second condition on one parent: both hold */
+    if (p->conds[k].parent == parent) {
+      for (size_t v = 0; v < n; v++) p->conds[k].allowed[v] &= allowed[v];
+      return TT_OK;
+    }
+  struct tt__cond *nc = realloc(p->conds, (p->ncond + 1) * sizeof *nc);
+  if (!nc) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", space->plugin);
+  p->conds = nc;
+  unsigned char *mask = malloc(n);
+  if (!mask) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", space->plugin);
+  memcpy(mask, allowed, n);
+  p->conds[p->ncond].parent = parent;
+  p->conds[p->ncond].allowed = mask;
+  p->ncond++;
+  return TT_OK;
+}
+
+/* Possible-value index of `text` in NOM parameter `p` (as tt_config_set_string reads it), or
+ * -1. */
+static int tt__nom_index_of(const tt__param *p, const char *text) {
+  for (size_t k = 0; k < p->nom_count; k++) {
+    if (p->nom_kind == TT_VALUE_STRING) {
+      if (!strcmp(p->nom_strings[k], text)) return (int)k;
+    } else if (p->nom_kind == TT_VALUE_BOOL) {
+      int b = !strcmp(text, "true") || !strcmp(text, "1") ? 1
+              : !strcmp(text, "false") || !strcmp(text, "0") ? 0 : -1;
+      if (b >= 0 && p->nom_ints[k] == b) return (int)k;
+    } else {
+      char *end;
+      errno = 0;
+      long long v = strtoll(text, &end, 10);
+      if (*text && !*end && !errno && p->nom_ints[k] == v) return (int)k;
+    }
+  }
+  return -1;
+}
+
+tt_status tt_space_add_condition(tt_space *space, size_t index, const char *parent,
+                                 const char *const *values, size_t count) {
+  tt_status st = tt__check_mutable(space, index, "tt_space_add_condition");
+  if (st != TT_OK) return st;
+  const char *child = space->params[index].name;
+  int q = tt_space_find(space, parent);
+  if (q < 0) {
+    char hint[1024];
+    tt__space_unknown_hint(space, parent, hint, sizeof hint);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: no parameter "
+                        "\"%s\" to depend on (%s)", space->plugin, child,
+                        parent ? parent : "(null)", hint);
+  }
+  const tt__param *pp = &space->params[q];
+  if (pp->type != TT_PARAM_NOM)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: the parent %s "
+                        "is not a NOM parameter (conditions name possible values)",
+                        space->plugin, child, pp->name);
+  if (tt__is_ancestor(space, index, (size_t)q, 0))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: depending on "
+                        "%s would make the parameter its own ancestor", space->plugin, child,
+                        pp->name);
+  if (!values || !count)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: no values of "
+                        "%s given (expected at least one)", space->plugin, child, pp->name);
+  unsigned char *allowed = calloc(pp->nom_count, 1);
+  if (!allowed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", space->plugin);
+  for (size_t k = 0; k < count; k++) {
+    int v = values[k] ? tt__nom_index_of(pp, values[k]) : -1;
+    if (v < 0) {
+      char what[1024];
+      tt__format_nom_values(pp, what, sizeof what);
+      free(allowed);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: \"%s\" is "
+                          "not a value of %s (expected one of %s)", space->plugin, child,
+                          values[k] ? values[k] : "(null)", pp->name, what);
+    }
+    allowed[v] = 1;
+  }
+  st = tt__push_condition(space, index, (size_t)q, allowed);
+  free(allowed);
+  return st;
+}
+
+size_t tt_space_condition_count(const tt_space *space, size_t index) {
+  const tt__param *p = tt__param_at(space, index);
+  return p ? p->ncond : 0;
+}
+
+int tt_space_condition_parent(const tt_space *space, size_t index, size_t k) {
+  const tt__param *p = tt__param_at(space, index);
+  return p && k < p->ncond ? (int)p->conds[k].parent : -1;
+}
+
+int tt_space_condition_allows(const tt_space *space, size_t index, size_t k, size_t nom_index) {
+  const tt__param *p = tt__param_at(space, index);
+  if (!p || k >= p->ncond) return 0;
+  const tt__param *pp = &space->params[p->conds[k].parent];
+  return nom_index < pp->nom_count && p->conds[k].allowed[nom_index];
+}
+
+/* Active under the values of `c`: every condition holds and every parent is active. */
+static int tt__active(const tt_config *c, size_t index, unsigned depth) {
+  const tt__param *p = &c->space->params[index];
+  if (depth > c->space->count) return 1;  /* cycles are refused at add time */
+  for (size_t k = 0; k < p->ncond; k++) {
+    size_t q = p->conds[k].parent;
+    int32_t v = c->values[q].index;
+    if (v < 0 || (size_t)v >= c->space->params[q].nom_count || !p->conds[k].allowed[v]) return 0;
+    if (!tt__active(c, q, depth + 1)) return 0;
+  }
+  return 1;
+}
+
+int tt_config_is_active(const tt_config *config, size_t index) {
+  if (!config || index >= config->space->count) return 0;
+  return tt__active(config, index, 0);
+}
+
+/* Same value of parameter `p` (as tt_config_equal compares). */
+static int tt__same_value(const tt__param *p, const tt_value *a, const tt_value *b) {
+  switch (p->type) {
+    case TT_PARAM_INT: return a->i == b->i;
+    case TT_PARAM_FLOAT: return a->f == b->f;
+    default: return a->index == b->index;
+  }
+}
+
+int tt_config_canonicalize(tt_config *config, const tt_config *base) {
+  if (!config) return 0;
+  const tt_space *s = config->space;
+  if (base && base->space != s) base = NULL;
+  int changed = 0;
+  /* settings first: an inactive child of a reset setting is judged on the reset value */
+  for (size_t i = 0; i < s->count; i++) {
+    const tt__param *p = &s->params[i];
+    if (!p->untunable) continue;
+    tt_value v = base ? base->values[i] : tt__param_default(p);
+    if (!tt__same_value(p, &config->values[i], &v)) config->values[i] = v, changed++;
+  }
+  /* then what the values leave inactive: judged all at once, before any is reset (a reset
+   * parent is inactive itself, so its children stay inactive) */
+  unsigned char local[256], *inactive = s->count <= sizeof local ? local : malloc(s->count);
+  if (!inactive) return changed;
+  for (size_t i = 0; i < s->count; i++)
+    inactive[i] = s->params[i].ncond && !tt__active(config, i, 0);
+  for (size_t i = 0; i < s->count; i++) {
+    if (!inactive[i]) continue;
+    const tt__param *p = &s->params[i];
+    tt_value v = base ? base->values[i] : tt__param_default(p);
+    if (!tt__same_value(p, &config->values[i], &v)) config->values[i] = v, changed++;
+  }
+  if (inactive != local) free(inactive);
+  return changed;
+}
+
+/* A subset keeps what the full space says about its parameters: not tunable stays so; a
+ * condition on a parameter of the subset is copied, one on a parameter left out is decided
+ * by that parameter's fixed value in `base` (or its default): it holds, and is dropped, or
+ * it fails, and the parameter can never act in the subset, so it is marked not tunable. */
+static tt_status tt__copy_marking(tt_space *sub, const tt_space *space,
+                                  const char *const *names, size_t count, const tt_config *base) {
+  tt_config *fixed = NULL;
+  tt_status st = TT_OK;
+  for (size_t k = 0; k < count && st == TT_OK; k++) {
+    size_t i = (size_t)tt_space_find(space, names[k]);
+    const tt__param *p = &space->params[i];
+    int never = p->untunable;
+    for (size_t c = 0; c < p->ncond && st == TT_OK; c++) {
+      size_t q = p->conds[c].parent;
+      int qs = tt_space_find(sub, space->params[q].name);
+      if (qs >= 0) {
+        st = tt__push_condition(sub, k, (size_t)qs, p->conds[c].allowed);
+        continue;
+      }
+      if (!fixed) {
+        fixed = base ? tt_config_clone(base) : tt_config_create(space);
+        if (!fixed) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", space->plugin);
+      }
+      if (fixed) {
+        int32_t v = fixed->values[q].index;
+        if (v < 0 || !p->conds[c].allowed[v] || !tt__active(fixed, q, 0)) never = 1;
+      }
+    }
+    sub->params[k].untunable = never;
+  }
+  tt_config_destroy(fixed);
+  return st;
 }

@@ -284,6 +284,52 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
   return 0;
 }
 
+/* "tunable": false and "activeWhen": {"PARENT": [values...], ...} of parameters[i]. */
+static int tt__parse_marking(tt_space *space, const cJSON *item, int i, const char *source) {
+  char path[64], p[256], got[128];
+  snprintf(path, sizeof path, "parameters[%d]", i);
+  const cJSON *tun = cJSON_GetObjectItemCaseSensitive(item, "tunable");
+  if (tun) {
+    snprintf(p, sizeof p, "%s.tunable", path);
+    if (!cJSON_IsBool(tun))
+      return tt__json_error(TT_ERR_PARSE, source, p, "expected true or false, got %s",
+                            tt__json_describe(tun, TT__JSON_PARAMS, got, sizeof got)), -1;
+    tt_space_set_tunable(space, (size_t)i, cJSON_IsTrue(tun));
+  }
+  const cJSON *when = cJSON_GetObjectItemCaseSensitive(item, "activeWhen");
+  if (!when) return 0;
+  snprintf(p, sizeof p, "%s.activeWhen", path);
+  if (!cJSON_IsObject(when))
+    return tt__json_error(TT_ERR_PARSE, source, p, "expected {\"PARAMETER\": [values...]}, got %s",
+                          tt__json_describe(when, TT__JSON_PARAMS, got, sizeof got)), -1;
+  for (const cJSON *c = when->child; c; c = c->next) {
+    snprintf(p, sizeof p, "%s.activeWhen.%s", path, c->string);
+    if (!cJSON_IsArray(c) || !c->child)
+      return tt__json_error(TT_ERR_PARSE, source, p, "expected a non-empty array of the parameter's values, "
+                            "got %s", tt__json_describe(c, TT__JSON_PARAMS, got, sizeof got)), -1;
+    char texts[64][64];
+    const char *vals[64];
+    size_t n = 0;
+    for (const cJSON *v = c->child; v && n < 64; v = v->next, n++) {
+      if (cJSON_IsString(v)) snprintf(texts[n], sizeof texts[n], "%s", v->valuestring);
+      else if (cJSON_IsBool(v)) snprintf(texts[n], sizeof texts[n], "%s", cJSON_IsTrue(v) ? "true" : "false");
+      else if (cJSON_IsNumber(v) && v->valuedouble == (double)(long long)v->valuedouble)
+        snprintf(texts[n], sizeof texts[n], "%lld", (long long)v->valuedouble);
+      else
+        return tt__json_error(TT_ERR_PARSE, source, p, "expected possible values (strings, booleans or "
+                              "integers), got %s", tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)), -1;
+      vals[n] = texts[n];
+    }
+    if (tt_space_add_condition(space, (size_t)i, c->string, vals, n) != TT_OK) {
+      char pre[300];
+      snprintf(pre, sizeof pre, "%s: %s: ", source, p);
+      tt__prefix_error(TT_ERR_PARSE, pre);
+      return -1;
+    }
+  }
+  return 0;
+}
+
 tt_space *tt_space_from_json(const char *json, const char *source) {
   if (!source) source = "(space JSON)";
   cJSON *root = tt__parse(json, source);
@@ -324,6 +370,10 @@ tt_space *tt_space_from_json(const char *json, const char *source) {
   int i = 0;
   for (const cJSON *item = params->child; item; item = item->next, i++)
     if (tt__parse_param(space, item, i, source) < 0) goto fail;
+  /* conditions once every parameter exists: a parent may come after its child */
+  i = 0;
+  for (const cJSON *item = params->child; item; item = item->next, i++)
+    if (tt__parse_marking(space, item, i, source) < 0) goto fail;
   i = 0;
   for (const cJSON *c = cons ? cons->child : NULL; c; c = c->next, i++) {
     const cJSON *d = cJSON_IsObject(c) ? cJSON_GetObjectItemCaseSensitive(c, "description") : c;
@@ -439,6 +489,19 @@ char *tt_space_to_json(const tt_space *space) {
     const char *d = tt_space_description(space, i);
     if (d && d[0]) cJSON_AddItemToObject(p, "description", cJSON_CreateString(d));
     if (tt_space_is_log(space, i)) cJSON_AddItemToObject(p, "log", cJSON_CreateTrue());
+    if (!tt_space_is_tunable(space, i)) cJSON_AddItemToObject(p, "tunable", cJSON_CreateFalse());
+    size_t nc = tt_space_condition_count(space, i);
+    cJSON *when = nc ? cJSON_CreateObject() : NULL;
+    if (when) cJSON_AddItemToObject(p, "activeWhen", when);
+    for (size_t k = 0; when && k < nc; k++) {
+      size_t q = (size_t)tt_space_condition_parent(space, i, k);
+      cJSON *vals = cJSON_CreateArray();
+      if (!vals) break;
+      cJSON_AddItemToObject(when, tt_space_name(space, q), vals);
+      for (size_t v = 0; v < tt_space_nom_count(space, q); v++)
+        if (tt_space_condition_allows(space, i, k, v))
+          cJSON_AddItemToArray(vals, tt__json_value(tt_space_nom_value(space, q, v)));
+    }
   }
   cJSON *cons = ok ? cJSON_CreateArray() : NULL;
   if (cons) {

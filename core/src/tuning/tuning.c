@@ -31,6 +31,7 @@ struct tt_tuning {
   const tt_host *host;
   const tt_space *space;        /* the target's full space: what is measured and checked */
   const tt_space *search;       /* the searched parameters, or NULL to search all of space */
+  tt_space *own_search;         /* search without the parameters tuners leave alone */
   tt_config *start;             /* the configured values (the default configuration) */
   tt_config *cand;              /* the proposal being settled */
   tt_config *sub;               /* a config of the searched space (tuner / draws) */
@@ -88,6 +89,7 @@ void tt_tuning_destroy(tt_tuning *t) {
   tt_config_destroy(t->cand);
   tt_config_destroy(t->sub);
   tt_config_destroy(t->work);
+  tt_space_destroy(t->own_search);
   free(t->unit);
   free(t->tuner_name);
   free(t->plugin);
@@ -108,6 +110,55 @@ void tt_tuning_destroy(tt_tuning *t) {
 /* Field `f` of a descriptor the caller built with struct_size `size`, or 0/NULL. */
 #define TT__DESC(d, f) \
   ((d)->struct_size >= offsetof(tt_tuning_desc, f) + sizeof((d)->f) ? (d)->f : 0)
+
+/* Searches only what tuners may change (tunetrace/params.h): a parameter marked not
+ * tunable, or one that can never act because a condition names a parameter left out of the
+ * search whose fixed value fails it, is dropped from the searched space (t->own_search,
+ * which keeps the conditions among the rest), and said once. No parameter left: an error. */
+static tt_status tt__drop_untunable(tt_tuning *t) {
+  const tt_space *searched = t->search ? t->search : t->space;
+  char dropped[512] = "";
+  size_t used = 0;
+  for (int pass = 0; pass < 4; pass++) {
+    size_t n = tt_space_count(searched), keep = 0;
+    const char **names = malloc((n ? n : 1) * sizeof *names);
+    if (!names) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tuning_create: out of memory");
+    for (size_t i = 0; i < n; i++) {
+      if (tt_space_is_tunable(searched, i)) {
+        names[keep++] = tt_space_name(searched, i);
+      } else if (used < sizeof dropped) {
+        int w = snprintf(dropped + used, sizeof dropped - used, "%s%s", used ? ", " : "",
+                         tt_space_name(searched, i));
+        if (w > 0) used += (size_t)w;
+      }
+    }
+    if (keep == n) {
+      free(names);
+      break;
+    }
+    if (!keep) {
+      free(names);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning %s: nothing to search: %s %s not "
+                          "tunable or cannot act with the values the others are fixed at "
+                          "(host --describe %s shows \"tunable\" and \"activeWhen\")",
+                          tt_space_plugin(t->space), dropped, strchr(dropped, ',') ? "are" : "is",
+                          tt_space_plugin(t->space));
+    }
+    tt_space *sub = tt_space_subset(searched, names, keep,
+                                    searched == t->space ? t->start : NULL);
+    free(names);
+    if (!sub) return TT_ERR_INVALID_ARGUMENT;  /* tt_space_subset set the message */
+    tt_space_destroy(t->own_search);
+    t->own_search = sub;
+    searched = sub;
+  }
+  if (t->own_search) {
+    t->search = t->own_search;
+    t->host->log(TT_LOG_INFO, NULL, "tuning: not searched: %s (not tunable, or cannot act "
+                 "with the values the other parameters are fixed at)", dropped);
+  }
+  return TT_OK;
+}
 
 tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: out is NULL");
@@ -185,6 +236,10 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
                         "image (reference_luminance, width, height)");
   }
   t->search = TT__DESC(d, search);
+  if ((st = tt__drop_untunable(t)) != TT_OK) {
+    tt_tuning_destroy(t);
+    return st;
+  }
   const tt_space *searched = t->search ? t->search : d->space;
   size_t dims = tt_space_count(searched);
   t->cand = tt_config_create(d->space);
@@ -393,6 +448,45 @@ static void tt__send_context(tt_tuning *t) {
                  t->tuner_name, tt_last_error());
 }
 
+/* t->cand from t->sub: every candidate is the configured values with the searched ones put
+ * in; then the parameters the candidate's own values leave inactive take the configured
+ * values (tt_config_canonicalize), so proposals that differ only in what does nothing are
+ * one configuration: one JSON in the database, answered instead of measured again. */
+static void tt__candidate(tt_tuning *t) {
+  tt_config_copy(t->cand, t->start);
+  tt_config_assign(t->cand, t->sub);
+  tt_config_canonicalize(t->cand, t->start);
+}
+
+/* Non-zero if this run already has a sample of `json` (measured or answered). */
+static int tt__seen(const tt_tuning *t, const char *json) {
+  for (size_t i = 0; i < t->count; i++)
+    if (!strcmp(t->samples[i].config, json)) return 1;
+  return 0;
+}
+
+/* Exploration: a uniform draw of the searched parameters into t->cand. A repairable draw is
+ * measured as repaired; an infeasible one is recorded as such (settle checks again), since
+ * where the constraints bite is part of the map. A draw that canonicalises to a
+ * configuration this run already has (the native backend has 24 distinct configurations of
+ * accel_embree) is drawn again, up to 64 times, then measured again. */
+static tt_status tt__draw(tt_tuning *t) {
+  size_t dims = tt_space_count(tt_config_space(t->sub));
+  for (int attempt = 0; attempt < 64; attempt++) {
+    for (size_t k = 0; k < dims; k++) t->unit[k] = (tt__splitmix64(&t->rng) >> 11) * 0x1.0p-53;
+    tt_config_from_unit(t->sub, t->unit);
+    tt__candidate(t);
+    char why[256];
+    tt_space_check(t->space, t->cand, why, sizeof why);
+    char *json = tt__config_json(t->cand);
+    if (!json) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuning: out of memory");
+    int seen = tt__seen(t, json);
+    free(json);
+    if (!seen) break;
+  }
+  return TT_OK;
+}
+
 tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
   if (!t || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_next: NULL argument");
   if (tt_config_space(out) != t->space)
@@ -414,9 +508,8 @@ tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
       }
       if (t->budget_s > 0 && (tt__now(t) - t->t0) * 1e-9 >= t->budget_s) return TT_DONE;
       if (!t->tuner) {
-        size_t dims = tt_space_count(tt_config_space(t->sub));
-        for (size_t k = 0; k < dims; k++) t->unit[k] = (tt__splitmix64(&t->rng) >> 11) * 0x1.0p-53;
-        tt_config_from_unit(t->sub, t->unit);
+        tt_status st = tt__draw(t);
+        if (st != TT_OK) return st;
       } else {
         if (!t->context_sent) tt__send_context(t);
         tt_status st = t->ti->next(t->tuner, t->sub);
@@ -432,15 +525,7 @@ tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
           return st;
         }
       }
-      /* every candidate is the configured values with the searched ones put in */
-      tt_config_copy(t->cand, t->start);
-      tt_config_assign(t->cand, t->sub);
-      if (!t->tuner) {
-        /* a repairable draw is measured as repaired; an infeasible one is recorded as such
-         * (settle checks again), since where the constraints bite is part of the map */
-        char why[256];
-        tt_space_check(t->space, t->cand, why, sizeof why);
-      }
+      if (t->tuner) tt__candidate(t);
     }
     int r = tt__settle(t, it);
     if (r < 0) return (tt_status)r;
