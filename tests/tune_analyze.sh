@@ -18,11 +18,12 @@ fail=0
 check() { if ! eval "$1"; then echo "FAIL: $1"; fail=1; fi; }
 is_png() { [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] && [ "$(stat -c %s "$1")" -gt 5000 ]; }
 
-"$HOST" --quiet --explore 12 --objective build+render --res 24x24 --spp 1 --threads 2 \
+"$HOST" --quiet --explore 12 --objective build+render --set accel_embree.backend=custom \
+  --res 24x24 --spp 1 --threads 2 \
   --db "$dir/e.db" --out "$dir/e.exr" --stats "$dir/e.json" "$SCENE"
 for mode in render build+render; do
   "$HOST" --quiet --plugin tuner_random --tune accel_embree --objective "$mode" --iterations 6 \
-    --verify 3 --res 24x24 --spp 1 --threads 2 --no-db --out "$dir/t.exr" \
+    --verify 3 --res 24x24 --spp 1 --threads 2 --db "$dir/t.db" --out "$dir/t.exr" \
     --stats "$dir/$mode.json" "$SCENE"
 done
 
@@ -32,7 +33,21 @@ done
 "$PY" "$TOOL" costs --db "$dir/e.db" --metric total -o "$dir/costs.png"
 "$PY" "$TOOL" blocksize --db "$dir/e.db" -o "$dir/block.png"
 "$PY" "$TOOL" convergence "$dir/render.json" "$dir/build+render.json" -o "$dir/conv.png" | tee "$dir/conv.txt"
-for png in corr leaf costs block conv; do check "is_png '$dir/$png.png'"; done
+# convergence from the database too (#17 defect 17): one line per run, each labelled with
+# what it was tuned for
+"$PY" "$TOOL" convergence --db "$dir/t.db" -o "$dir/convdb.png" | tee "$dir/convdb.txt"
+for png in corr leaf costs block conv convdb; do check "is_png '$dir/$png.png'"; done
+for f in conv convdb; do
+  check "grep -q 'tuner_random, tuned for render' '$dir/$f.txt'"
+  check "grep -q 'tuner_random, tuned for build+render' '$dir/$f.txt'"
+  check "[ \"\$(grep -c 'tuned for' '$dir/$f.txt')\" = 2 ]"
+done
+check '! "$PY" "$TOOL" convergence --db "$dir/t.db" "$dir/render.json" -o "$dir/x.png" 2>"$dir/err"'
+check 'grep -q "not both" "$dir/err"'
+check '! "$PY" "$TOOL" convergence --db "$dir/e.db" --mode tune -o "$dir/x.png" 2>"$dir/err"'
+check 'grep -q "no rows match" "$dir/err"'
+check '"$PY" "$TOOL" --help | grep -q "Input, for every subcommand"'
+
 
 # the table: the accel's parameters + render_ms, build_ms, total_ms; r and p for each
 nparams=$("$HOST" --describe accel_embree | "$PY" -c 'import json,sys; print(len(json.load(sys.stdin)["parameters"]))')

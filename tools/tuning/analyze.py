@@ -1,10 +1,11 @@
 #!/usr/bin/python3
 """Parameter analysis of tuning-database rows (thesis 3.2, Figs. 3.3, 3.5, 3.6, 3.8, 3.10-3.12).
 
-Input: a tuning database (--db, the SQLite file host writes) or a CSV with the columns of
-tt_tunedb_export_csv (--csv; a CSV without a `config` column is read as one column per
-parameter plus build_ms/render_ms). Rows can be filtered by plugin, mode, scene, run and
-parameter values; only status-ok rows are used.
+Input, for every subcommand: a tuning database (--db, the SQLite file host writes) or a CSV
+with the columns of tt_tunedb_export_csv (--csv; a CSV without a `config` column is read as
+one column per parameter plus build_ms/render_ms). Rows can be filtered by plugin, mode,
+scene, run and parameter values; only status-ok rows are used. convergence also reads host
+--stats files (then one line per file).
 
   analyze.py correlation --db t.db --mode explore -o corr.png --table corr.csv   # Fig. 3.5
   analyze.py leafsize    --db t.db --where quality=1 -o leaf.png                 # Fig. 3.6
@@ -12,9 +13,12 @@ parameter values; only status-ok rows are used.
   analyze.py costs       --db t.db --mode tune --metric total -o costs.png       # Figs. 3.11/3.12
   analyze.py blocksize   --db t.db -o block.png                                  # Fig. 3.8
   analyze.py convergence render.json total.json -o conv.png                      # Fig. 3.3
+  analyze.py convergence --db t.db --scene cornell -o conv.png                   # every run
 
-Gathering the data: `host --explore N --objective build+render --db t.db scene.json` draws N
-random configurations (correlation, leaf size, block size maps); tuning runs
+Gathering the data: `host --explore N --objective build+render --set accel_embree.backend=custom
+--db t.db scene.json` draws N random configurations (correlation, leaf size, block size
+maps; the builder's parameters act only with backend custom, and with native they are left
+at their configured values, host --describe accel_embree "activeWhen"); tuning runs
 (`host --plugin tuner_nm ...`) give the converging distributions of Figs. 3.10-3.12.
 Needs python3-numpy, python3-scipy and python3-matplotlib (Debian packages).
 """
@@ -66,15 +70,15 @@ def load_rows(a):
         try:
             db = sqlite3.connect(f"file:{a.db}?mode=ro", uri=True)
             cur = db.execute("SELECT scene, plugin, mode, run_id, objective, iteration, build_ms, "
-                             "render_ms, cost, status, config FROM samples ORDER BY id")
+                             "render_ms, cost, status, config, tuner FROM samples ORDER BY id")
         except sqlite3.Error as e:
             die(f"{a.db}: {e}")
-        for scene, plugin, mode, run_id, objective, it, b, r, c, status, config in cur:
+        for scene, plugin, mode, run_id, objective, it, b, r, c, status, config, tuner in cur:
             if status != 0:
                 continue
             rows.append(dict(scene=scene or "", plugin=plugin, mode=mode, run_id=run_id,
                              objective=objective, iteration=it, build_ms=b, render_ms=r,
-                             cost=c, config=json.loads(config)))
+                             cost=c, config=json.loads(config), tuner=tuner))
     else:
         with open(a.csv, newline="") as f:
             rd = csv.DictReader(f)
@@ -82,7 +86,7 @@ def load_rows(a):
                 die(f"{a.csv}: empty CSV")
             has_config = "config" in rd.fieldnames
             fixed = {"build_ms", "render_ms", "total_ms", "cost", "status", "scene", "plugin",
-                     "mode", "run_id", "objective", "iteration"}
+                     "mode", "run_id", "objective", "iteration", "tuner"}
             for rec in rd:
                 if rec.get("status", "0") not in ("0", ""):
                     continue
@@ -103,6 +107,7 @@ def load_rows(a):
                 rows.append(dict(scene=rec.get("scene", ""), plugin=rec.get("plugin", ""),
                                  mode=rec.get("mode", ""), run_id=rec.get("run_id", ""),
                                  objective=rec.get("objective", ""),
+                                 tuner=rec.get("tuner") or None,
                                  iteration=int(float(rec.get("iteration") or 0)),
                                  build_ms=b, render_ms=r,
                                  cost=float(rec.get("cost") or (b + r)), config=config))
@@ -375,11 +380,10 @@ def cmd_blocksize(a):
 # ---------------------------------------------------------------- convergence (Fig. 3.3)
 
 
-def cmd_convergence(a):
-    """Render time and total time per iteration of tuning runs (host --stats files), one
-    panel each, with the default's level: default vs tuned-for-render vs tuned-for-total."""
+def _runs_from_stats(paths):
+    """(name, objective, tuner, history, verify, default_cost) per host --stats file."""
     runs = []
-    for path in a.stats:
+    for path in paths:
         try:
             with open(path) as f:
                 t = json.load(f).get("tuning")
@@ -387,41 +391,86 @@ def cmd_convergence(a):
             die(f"{path}: {e}")
         if not t:
             die(f"{path}: no \"tuning\" object (was a tuner loaded?)")
-        runs.append((path, t))
+        hist = [h for h in t.get("history", []) if h.get("status") in (None, "ok", 0)]
+        if not hist:
+            die(f"{path}: no history")
+        runs.append(dict(name=os.path.basename(path), objective=t.get("objective", "?"),
+                         tuner=t.get("tuner") or t.get("mode", "tune"), history=hist,
+                         verify=t.get("verify"), default_cost=t.get("default_cost")))
+    return runs
+
+
+def _runs_from_rows(rows):
+    """The same per run_id of database/CSV rows (the default row is iteration -1)."""
+    by = {}
+    for r in rows:
+        by.setdefault(r["run_id"] or "", []).append(r)
+    runs = []
+    for run_id, rs in by.items():
+        rs.sort(key=lambda r: r["iteration"])
+        if not any(r["mode"] in ("tune", "explore") for r in rs):
+            continue
+        tuner = next((r.get("tuner") for r in rs if r.get("tuner")), None)
+        mode = next(r["mode"] for r in rs if r["mode"] in ("tune", "explore"))
+        default = next((r for r in rs if r["iteration"] < 0), None)
+        runs.append(dict(name=f"run {run_id}", objective=rs[0]["objective"] or "?",
+                         tuner=tuner or mode, history=rs, verify=None,
+                         default_cost=None, default=default))
+    if not runs:
+        die("no tuning runs among the matching rows (rows of mode tune or explore; check "
+            "--mode/--run)")
+    return runs
+
+
+def cmd_convergence(a):
+    """Render time and total time per iteration of tuning runs (host --stats files, or the
+    runs of a tuning database/CSV, one per run_id), one panel each, with the default's level:
+    default vs tuned-for-render vs tuned-for-total."""
+    if a.stats and (a.db or a.csv):
+        die("convergence: give host --stats files or --db/--csv, not both")
+    if a.stats:
+        runs = _runs_from_stats(a.stats)
+    elif a.db or a.csv:
+        runs = _runs_from_rows(load_rows(a))
+    else:
+        die("convergence: give host --stats files or --db/--csv")
+    # one label per run: what it was tuned for and with which tuner; runs that would share a
+    # label are told apart by their file or run id
+    labels = [f"{r['tuner']}, tuned for {r['objective']}" for r in runs]
+    for k, r in enumerate(runs):
+        if labels.count(labels[k]) > 1:
+            labels[k] += f" ({r['name']})"
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, (path, t) in enumerate(runs):
-        hist = [h for h in t.get("history", []) if h.get("status") in (None, "ok", 0)]
+    for k, r in enumerate(runs):
         color = colors[k % len(colors)]
-        label = f"tuned for {t['objective']}"
+        hist = r["history"]
         for ax, key in zip(axes, ("render", "total")):
             ys = [h["render_ms"] if key == "render" else h["render_ms"] + h["build_ms"]
                   for h in hist]
             ax.plot([h["iteration"] for h in hist], ys, "-", color=color, lw=1, alpha=0.8,
-                    label=label)
-        v = t.get("verify")
+                    label=labels[k])
+        v = r["verify"]
         if v:
-            print(f"{path}: {t['objective']}: verify render ratio {v.get('render_ratio'):.4f}, "
+            print(f"{r['name']}: {labels[k]}: verify render ratio {v.get('render_ratio'):.4f}, "
                   f"total ratio {v.get('total_ratio'):.4f} over {v.get('rounds')} rounds")
-    # the default: the first run's default measurement (and its verify median if present)
-    t0 = runs[0][1]
-    v0 = t0.get("verify") or {}
-    d = v0.get("default", {})
-    hist0 = t0.get("history", [])
+        else:
+            print(f"{r['name']}: {labels[k]}: {len(hist)} samples")
+    # the default: the first run's verify medians, else its default measurement
+    r0 = runs[0]
+    d = (r0["verify"] or {}).get("default", {})
+    dflt = r0.get("default") or next((h for h in r0["history"] if h["iteration"] < 0), None)
     for ax, key, title in zip(axes, ("render", "total"), ("render time", "build + render time")):
         level = d.get("median_render_ms" if key == "render" else "median_total_ms")
-        if level is None and t0["objective"] in ("render", "build+render"):
-            level = t0["default_cost"] if (key == "render") == (t0["objective"] == "render") \
-                else None
+        if level is None and dflt is not None:
+            level = dflt["render_ms"] if key == "render" else dflt["render_ms"] + dflt["build_ms"]
         if level is not None:
             ax.axhline(level, color="k", lw=1.5, label="default")
         ax.set_title(title)
         ax.set_xlabel("iteration")
         ax.set_ylabel("ms")
         ax.legend(fontsize=8)
-    if not hist0:
-        die(f"{runs[0][0]}: no history")
     fig.suptitle("Tuning convergence (thesis Fig. 3.3)")
     fig.tight_layout()
     fig.savefig(a.out, dpi=100)
@@ -434,8 +483,8 @@ def main():
                                  epilog="\n".join(__doc__.splitlines()[1:]))
     sub = ap.add_subparsers(dest="cmd", required=True)
 
-    def data_args(p):
-        src = p.add_mutually_exclusive_group(required=True)
+    def data_args(p, required=True):
+        src = p.add_mutually_exclusive_group(required=required)
         src.add_argument("--db", help="tuning database (SQLite)")
         src.add_argument("--csv", help="CSV (tt_tunedb_export_csv columns, or one per parameter)")
         p.add_argument("--plugin", default="accel_embree", help="rows of this plugin "
@@ -470,18 +519,22 @@ def main():
     data_args(p)
     p.set_defaults(fn=cmd_blocksize)
 
-    p = sub.add_parser("convergence", help="render/total time per iteration (Fig. 3.3)")
-    p.add_argument("stats", nargs="+", help="host --stats files of tuning runs (e.g. one "
-                   "tuned for render, one for build+render)")
-    p.add_argument("-o", "--out", required=True, help="PNG to write")
+    p = sub.add_parser("convergence", help="render/total time per iteration (Fig. 3.3)",
+                       description="Render and build+render time per iteration of tuning "
+                       "runs: host --stats files, or every run (run_id) of a database or CSV "
+                       "(--db/--csv with the filters; --mode defaults to default,tune).")
+    data_args(p, required=False)
+    p.add_argument("stats", nargs="*", help="host --stats files of tuning runs (e.g. one "
+                   "tuned for render, one for build+render), instead of --db/--csv")
     p.set_defaults(fn=cmd_convergence)
 
     a = ap.parse_args()
-    if a.cmd != "convergence":
-        if a.plugin == "":
-            a.plugin = None
-        if a.cmd != "correlation" and not a.out:
-            ap.error(f"{a.cmd} needs -o/--out PNG")
+    if a.plugin == "":
+        a.plugin = None
+    if a.cmd == "convergence" and (a.db or a.csv) and not a.mode:
+        a.mode = "default,tune"
+    if a.cmd != "correlation" and not a.out:
+        ap.error(f"{a.cmd} needs -o/--out PNG")
     try:
         import numpy  # noqa: F401
         import matplotlib  # noqa: F401
