@@ -8,7 +8,8 @@
 int tt__run_convert(const tt__host_options *opt) {
   tt_set_log_host(tt__host_services(opt->quiet));  /* loader and writer warnings */
   tt_scene *scene = NULL;
-  if (tt_scene_load(opt->scene, &scene) != TT_OK) {
+  if (tt_scene_load_ex(opt->scene, opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT,
+                       &scene) != TT_OK) {
     fprintf(stderr, "host: %s\n", tt_last_error());
     return TT_EXIT_SCENE;
   }

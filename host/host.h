@@ -39,6 +39,8 @@ typedef struct tt__host_options {
   uint32_t width, height;   /* 0: the scene's resolution */
   int list_plugins;
   int quiet;
+  int png;                  /* --png: a PNG preview of every sequence frame */
+  int strict;               /* --strict: pbrt input as strictly as pbrt-v4 reads it */
   /* tuning (tune.c) */
   const char *tune;         /* --tune PLUGIN; NULL: automatic when a tuner is loaded */
   const char *objective;    /* --objective SPEC; NULL: the target's natural objective */

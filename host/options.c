@@ -28,6 +28,9 @@ static const char tt__usage[] =
     "\n"
     "Rendering:\n"
     "  --spp N                samples per pixel (default: the scene's render.spp)\n"
+    "  --strict               pbrt-v4 scenes as strictly as pbrt-v4 reads them: an unknown\n"
+    "                         directive or parameter (\"WorldBgin\", \"rgb reflectanse\") is\n"
+    "                         an error naming file:line, not a warning (exit 4)\n"
     "  --time SECONDS         time budget: stop after the pass that exceeds it\n"
     "  --res WxH              override the scene's resolution\n"
     "  --seed N               random seed (default: the scene's render.seed)\n"
@@ -106,6 +109,10 @@ static const char tt__usage[] =
     "                         depth, motion and prevdepth with --out-dir, none with an --out\n"
     "                         pattern\n"
     "  --supersample K        write only the reference (K x K the resolution, Blackman-Harris)\n"
+    "  --png                  also write a display-referred PNG preview of every frame (of\n"
+    "                         the frame the pattern names: filtered, or the reference with\n"
+    "                         --supersample) beside its EXR, listed in the manifest as \"png\"\n"
+    "                         (a still always gets its PNG)\n"
     "  --set NAME.KEY=VALUE   also sets a plugin's options (not tuned; host --describe NAME),\n"
     "                         e.g. --set post_taa.weights=FILE.ttw\n"
     "\n"
@@ -196,7 +203,7 @@ static size_t tt__known_options(const char **names, size_t cap) {
  * others. */
 static int tt__is_flag(const char *name) {
   static const char *const flags[] = {"--help", "--version", "--quiet", "--list-plugins",
-                                      "--convert", "--no-db"};
+                                      "--convert", "--no-db", "--strict", "--png"};
   for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
     if (!strcmp(name, flags[k])) return 1;
   return 0;
@@ -437,6 +444,10 @@ int tt__parse_options(int argc0, char **argv0, tt__host_options *opt) {
       opt->help = 1;
     } else if (!strcmp(a, "--version")) {
       opt->version = 1;
+    } else if (!strcmp(a, "--png")) {
+      opt->png = 1;
+    } else if (!strcmp(a, "--strict")) {
+      opt->strict = 1;
     } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
       opt->quiet = 1;
     } else if (!strcmp(a, "--list-plugins")) {

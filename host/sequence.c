@@ -461,6 +461,24 @@ int tt__run_sequence(const tt__host_options *opt) {
       }
       fprintf(manifest, ", \"post\": \"%s\", \"post_ms\": %.3f", name, post_ms);
     }
+    if (opt->png) {
+      /* the frame the pattern names (tt__seq_name), through the display transform of stills */
+      tt__seq_file main = opt->reference_only ? TT__SEQ_REFERENCE
+                          : s.post                ? TT__SEQ_POST
+                                                  : TT__SEQ_COLOR;
+      const float *px = main == TT__SEQ_REFERENCE ? ref : main == TT__SEQ_POST ? post_rgb : rgb;
+      tt__seq_name(&s, main, f, name, sizeof name);
+      size_t len = strlen(name);
+      if (len > 4) memcpy(name + len - 4, ".png", 4);  /* every frame name ends in .exr */
+      snprintf(path, sizeof path, "%s/%s", s.dir, name);
+      tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
+      if (tt_image_write_png_display(path, w, h, px, 0.0f, meta, 1) != TT_OK) {
+        fprintf(stderr, "host: cannot write %s: %s\n", path, tt_last_error());
+        rc = TT_EXIT_OUTPUT;
+        break;
+      }
+      fprintf(manifest, ", \"png\": \"%s\"", name);
+    }
     fprintf(manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", render_ms, ref_ms);
     entry_open = 0;
     if (tt__seq_manifest_commit(mpath, manifest, &mbuf, &mlen)) rc = TT_EXIT_OUTPUT;

@@ -174,7 +174,8 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
    * plugins and --set be checked; the exit code is the first problem's (scene 4, plugin 3,
    * --set 2) */
   int rc = TT_EXIT_OK;
-  if (tt_session_load_scene(s->lib, opt->scene) != TT_OK) {
+  if (tt_session_load_scene_ex(s->lib, opt->scene,
+                               opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT) != TT_OK) {
     fprintf(stderr, "host: %s\n", tt_last_error());
     rc = TT_EXIT_SCENE;
   } else {

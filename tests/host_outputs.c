@@ -296,6 +296,51 @@ static void test_helpers(void) {
   unlink(path);
 }
 
+/* Width and height from a PNG's IHDR (0 if the file is not a PNG). */
+static void png_size(const char *path, uint32_t *w, uint32_t *h) {
+  size_t n = 0;
+  unsigned char *d = (unsigned char *)slurp(path, &n);
+  *w = *h = 0;
+  if (d && n >= 24 && !memcmp(d, "\x89PNG\r\n\x1a\n", 8) && !memcmp(d + 12, "IHDR", 4)) {
+    *w = (uint32_t)d[16] << 24 | (uint32_t)d[17] << 16 | (uint32_t)d[18] << 8 | d[19];
+    *h = (uint32_t)d[20] << 24 | (uint32_t)d[21] << 16 | (uint32_t)d[22] << 8 | d[23];
+  }
+  free(d);
+}
+
+/* #17 defect 16: --png writes a PNG preview of every sequence frame (the frame the pattern
+ * names), listed in the manifest; without it a sequence writes EXR only, as before. */
+static void test_sequence_png(void) {
+  char pattern[256], err[1 << 16], path[300];
+  snprintf(pattern, sizeof pattern, "%s/seq/f_%%04d.exr", g_tmp);
+  char *argv[] = {(char *)host_path(), "--quiet", "--res", "12x8", "--spp", "1", "--frames",
+                  "2:4", "--png", "--out", pattern,
+                  (char *)source_path("scenes/cornell-box/path.json"), NULL};
+  int rc = run_limited(argv, 0, err, sizeof err);
+  CHECK_MSG(rc == 0, "exit %d: %s", rc, err);
+  for (int f = 2; f <= 4; f++) {
+    uint32_t w, h;
+    snprintf(path, sizeof path, "%s/seq/f_%04d.png", g_tmp, f);
+    png_size(path, &w, &h);
+    CHECK_MSG(w == 12 && h == 8, "%s: %ux%u", path, w, h);
+  }
+  snprintf(path, sizeof path, "%s/seq/f_0005.png", g_tmp);
+  CHECK(access(path, F_OK) != 0);  /* frames 2..4 inclusive */
+  snprintf(path, sizeof path, "%s/seq/manifest.json", g_tmp);
+  char *m = slurp(path, &(size_t){0});
+  CHECK_CONTAINS(m, "\"png\": \"f_0003.png\"");
+  free(m);
+  /* no --png: no previews */
+  snprintf(pattern, sizeof pattern, "%s/seq2/f_%%04d.exr", g_tmp);
+  argv[8] = "--quiet";
+  rc = run_limited(argv, 0, err, sizeof err);
+  CHECK_MSG(rc == 0, "exit %d: %s", rc, err);
+  snprintf(path, sizeof path, "%s/seq2/f_0003.exr", g_tmp);
+  CHECK(access(path, F_OK) == 0);
+  snprintf(path, sizeof path, "%s/seq2/f_0003.png", g_tmp);
+  CHECK(access(path, F_OK) != 0);
+}
+
 int main(void) {
   if (!mkdtemp(g_tmp)) return 1;
   test_helpers();
@@ -303,6 +348,7 @@ int main(void) {
   test_host();
   test_db_full();
   test_black_pssmlt();
+  test_sequence_png();
   char cmd[300];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_tmp);
   if (system(cmd) != 0) fprintf(stderr, "cannot remove %s\n", g_tmp);

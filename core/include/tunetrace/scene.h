@@ -124,6 +124,21 @@ typedef struct tt_render_settings {
  * expected. `*out` is owned by the caller: free with tt_scene_destroy. Thread-safe. */
 TT_API tt_status tt_scene_load(const char *path, tt_scene **out);
 
+/* Flags of tt_scene_load_ex. */
+typedef enum tt_scene_load_flags {
+  TT_SCENE_LOAD_DEFAULT = 0,
+  /* pbrt-v4 input as pbrt-v4 reads it: an unknown directive, or a parameter the importer
+   * does not read (a misspelt "rgb reflectanse", a parameter of another material), is an
+   * error naming file:line (with "did you mean" when a known name is close), not a warning
+   * and a guess. Every such problem is logged; the load fails with the first. Features
+   * the importer knows but approximates (media, displacement, ...) still only warn. Also
+   * applies to pbrt files a scene.json imports. */
+  TT_SCENE_LOAD_STRICT = 1u << 0
+} tt_scene_load_flags;
+
+/* tt_scene_load with `flags` (tt_scene_load_flags, or-ed). Thread-safe. */
+TT_API tt_status tt_scene_load_ex(const char *path, uint32_t flags, tt_scene **out);
+
 /* Loads scene JSON from memory; `source` names it in messages; relative asset paths are
  * resolved against `base_dir` (NULL = current directory). */
 TT_API tt_status tt_scene_load_json(const char *json, size_t length, const char *source,

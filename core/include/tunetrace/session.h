@@ -68,6 +68,9 @@ TT_API tt_status tt_session_add_plugin_dir(tt_session *s, const char *dir);
  * session (TT_ERR_INVALID_ARGUMENT on a second). Errors are tt_scene_load's, naming the file,
  * the field and what was expected. */
 TT_API tt_status tt_session_load_scene(tt_session *s, const char *path);
+/* tt_session_load_scene with tt_scene_load_flags (TT_SCENE_LOAD_STRICT: pbrt-v4 input is
+ * read as strictly as pbrt-v4 reads it). */
+TT_API tt_status tt_session_load_scene_ex(tt_session *s, const char *path, uint32_t flags);
 
 /* The session's scene (NULL before one is loaded). The camera and the resolution may be
  * changed (tt_scene_set_camera, tt_scene_set_resolution) until tt_session_start. */

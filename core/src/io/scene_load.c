@@ -3,6 +3,18 @@
 
 #include <tunetrace/scene.h>
 
+/* The flags of the tt_scene_load_ex call running on this thread: the pbrt importer reads
+ * them, also when a scene.json imports the pbrt file (io_internal.h). */
+_Thread_local uint32_t tt__scene_load_flags;
+
+tt_status tt_scene_load_ex(const char *path, uint32_t flags, tt_scene **out) {
+  uint32_t saved = tt__scene_load_flags;
+  tt__scene_load_flags = flags;
+  tt_status st = tt_scene_load(path, out);
+  tt__scene_load_flags = saved;
+  return st;
+}
+
 /* Reads the file and hands it to the JSON loader with its directory as the asset base. */
 tt_status tt_scene_load(const char *path, tt_scene **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: out is NULL");

@@ -91,11 +91,15 @@ static void tt__apply_scene_depth(tt_session *s, size_t i) {
 }
 
 tt_status tt_session_load_scene(tt_session *s, const char *path) {
+  return tt_session_load_scene_ex(s, path, TT_SCENE_LOAD_DEFAULT);
+}
+
+tt_status tt_session_load_scene_ex(tt_session *s, const char *path, uint32_t flags) {
   if (!s || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_session_load_scene: NULL");
   if (s->scene)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the session already has a scene (%s); "
                         "one scene per session", path, tt_scene_source(s->scene));
-  tt_status st = tt_scene_load(path, &s->scene);
+  tt_status st = tt_scene_load_ex(path, flags, &s->scene);
   if (st != TT_OK) {
     s->scene = NULL;
     return st;

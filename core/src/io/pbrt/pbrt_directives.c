@@ -512,7 +512,11 @@ tt_status tt__directive(tt__pp *P, int *done) {
   snprintf(name, sizeof name, "%.*s", (int)(t.n < 39 ? t.n : 39), t.s);
   const tt__directive_entry *e = tt__lookup_directive(&t);
   if (!e) {
-    tt__pwarn(P, t.file, t.line, name, "unknown directive \"%s\" (skipped with its arguments)", name);
+    const char *names[sizeof tt__directives / sizeof tt__directives[0]];
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) names[i] = tt__directives[i].name;
+    const char *near = tt_suggest(name, names, sizeof names / sizeof names[0]);
+    tt__pstrict(P, t.file, t.line, name, "unknown directive \"%s\"%s%s%s", name,
+                near ? " (did you mean \"" : "", near ? near : "", near ? "\"?)" : "");
     return tt__skip_args(P);
   }
   double saved[16];

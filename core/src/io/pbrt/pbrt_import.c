@@ -79,10 +79,12 @@ tt_status tt__scene_load_pbrt(const char *path, tt_scene **out) {
   P.cur_obj = -1;
   P.default_mat = -1;
   P.gs.mat = -1;
+  P.strict = (tt__scene_load_flags & TT_SCENE_LOAD_STRICT) != 0;
   tt__ident(P.gs.ctm);
   tt_status st = tt__push_file(&P, path, NULL, 0);
   int done = 0;
   while (st == TT_OK && !done) st = tt__directive(&P, &done);
+  if (st == TT_OK) st = tt__pstrict_result(&P);
   if (st == TT_OK && P.cur_obj >= 0)
     st = tt__perr(P.files, P.files ? P.files->line : 0, "ObjectBegin \"%s\" is never closed", P.obj[P.cur_obj].name);
   if (st == TT_OK) {

@@ -14,6 +14,7 @@
 #ifndef TT_PBRT_INTERNAL_H
 #define TT_PBRT_INTERNAL_H
 
+#include <tunetrace/suggest.h>
 #include "io/pbrt/pbrt.h"
 #include "scene/scene_internal.h"
 #include "util/files.h"
@@ -98,6 +99,9 @@ typedef struct tt__pparam {
 typedef struct tt__plist {
   tt__pparam *p;
   size_t n, cap;
+  /* names the importer asked for (tt__find), for "did you mean" about the others */
+  char asked[48][40];
+  unsigned nasked;
 } tt__plist;
 
 /* A colour parameter's value: rgb times an optional image texture (scene index). */
@@ -168,6 +172,9 @@ typedef struct tt__pp {
   char **warned;
   size_t nwarned, capwarned;
   unsigned warnings, suppressed;
+  int strict;              /* TT_SCENE_LOAD_STRICT: unknown input is an error */
+  unsigned strict_errors;  /* such errors seen (each logged) */
+  char strict_first[1100]; /* "file:line: message" of the first */
   tt__gstate gs;
   tt__gstate *stack;
   size_t nstack, capstack;
@@ -206,6 +213,15 @@ tt_status tt__perr(const tt__pfile *f, int line, const char *fmt, ...) TT_PRINTF
  * once. */
 void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...)
     TT_PRINTF(5, 6);
+
+/* Input pbrt-v4 itself rejects (an unknown directive or parameter): with P->strict an
+ * error (logged; the load fails with the first, tt__pstrict_result), else a warning as
+ * tt__pwarn that says --strict would refuse it. */
+void tt__pstrict(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...)
+    TT_PRINTF(5, 6);
+
+/* TT_OK, or TT_ERR_PARSE with the first strict error (and how many more were logged). */
+tt_status tt__pstrict_result(const tt__pp *P);
 
 /* Joins a relative path to a directory; absolute paths pass through. */
 char *tt__join(const char *dir, const char *rel, size_t rel_len);

@@ -31,6 +31,28 @@ tt_status tt__perr(const tt__pfile *f, int line, const char *fmt, ...) {
  * once. */
 void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...)
     TT_PRINTF(5, 6);
+void tt__pstrict(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...) {
+  char msg[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  if (!P->strict) {
+    tt__pwarn(P, f, line, key, "%s (skipped; host --strict refuses it, as pbrt-v4 does)", msg);
+    return;
+  }
+  if (!P->strict_errors++)
+    snprintf(P->strict_first, sizeof P->strict_first, "%s:%d: %s", f ? f->path : "(pbrt)", line, msg);
+  tt__log(TT_LOG_ERROR, "%s:%d: %s", f ? f->path : "(pbrt)", line, msg);
+}
+
+tt_status tt__pstrict_result(const tt__pp *P) {
+  if (!P->strict_errors) return TT_OK;
+  if (P->strict_errors == 1) return tt_set_error(TT_ERR_PARSE, "%s (strict)", P->strict_first);
+  return tt_set_error(TT_ERR_PARSE, "%s (strict; and %u more errors, logged above)",
+                      P->strict_first, P->strict_errors - 1);
+}
+
 void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...) {
   char id[1200];
   snprintf(id, sizeof id, "%s:%d:%s", f ? f->path : "", line, key ? key : "");

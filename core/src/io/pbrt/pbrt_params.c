@@ -148,8 +148,14 @@ tt_status tt__params(tt__pp *P, tt__plist *pl) {
   }
 }
 
-/* Last parameter with this name (pbrt lets later ones win); marks it used. */
+/* Last parameter with this name (pbrt lets later ones win); marks it used and remembers
+ * the name as one the importer reads (for "did you mean"). */
 tt__pparam *tt__find(tt__plist *pl, const char *name) {
+  size_t len = strlen(name);
+  int known = 0;
+  for (unsigned k = 0; k < pl->nasked && !known; k++) known = !strcmp(pl->asked[k], name);
+  if (!known && len < sizeof pl->asked[0] && pl->nasked < sizeof pl->asked / sizeof pl->asked[0])
+    memcpy(pl->asked[pl->nasked++], name, len + 1);
   for (size_t i = pl->n; i-- > 0;)
     if (strcmp(pl->p[i].name, name) == 0) {
       for (size_t k = 0; k < pl->n; k++)
@@ -159,12 +165,21 @@ tt__pparam *tt__find(tt__plist *pl, const char *name) {
   return NULL;
 }
 
-/* Warns about every parameter nobody read. */
+/* Every parameter nobody read: pbrt-v4 rejects unused parameters, so under --strict an
+ * error; a name close to one the importer read is a likely typo and gets "did you mean". */
 void tt__unused(tt__pp *P, const tt__tok *at, const char *what, tt__plist *pl) {
+  const char *asked[sizeof pl->asked / sizeof pl->asked[0]];
+  for (unsigned k = 0; k < pl->nasked; k++) asked[k] = pl->asked[k];
   for (size_t i = 0; i < pl->n; i++)
-    if (!pl->p[i].used)
-      tt__pwarn(P, at->file, at->line, pl->p[i].name, "%s: parameter \"%s %s\" is not supported (ignored)", what,
-                pl->p[i].type, pl->p[i].name);
+    if (!pl->p[i].used) {
+      const char *near = tt_suggest(pl->p[i].name, asked, pl->nasked);
+      if (near)
+        tt__pstrict(P, at->file, at->line, pl->p[i].name, "%s: unknown parameter \"%s %s\" "
+                    "(did you mean \"%s\"?)", what, pl->p[i].type, pl->p[i].name, near);
+      else
+        tt__pstrict(P, at->file, at->line, pl->p[i].name, "%s: parameter \"%s %s\" is not "
+                    "used by the importer", what, pl->p[i].type, pl->p[i].name);
+    }
 }
 
 /* A single float (or integer); textures are not supported for scalars. */
