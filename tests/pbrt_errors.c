@@ -136,13 +136,14 @@ static void test_errors(void) {
 }
 
 /* Runs tt_scene_load with stderr captured into `err` (n bytes); returns its status. */
-static tt_status load_capturing(const char *path, tt_scene **s, char *err, size_t n) {
+static tt_status load_capturing_ex(const char *path, uint32_t flags, tt_scene **s, char *err,
+                                   size_t n) {
   char cap[4400];
   snprintf(cap, sizeof cap, "%s/stderr.txt", g_tmp);
   fflush(stderr);
   int saved = dup(2), fd = open(cap, O_WRONLY | O_CREAT | O_TRUNC, 0644);
   dup2(fd, 2);
-  tt_status st = tt_scene_load(path, s);
+  tt_status st = tt_scene_load_ex(path, flags, s);
   fflush(stderr);
   dup2(saved, 2);
   close(saved);
@@ -152,6 +153,15 @@ static tt_status load_capturing(const char *path, tt_scene **s, char *err, size_
   err[got] = '\0';
   if (f) fclose(f);
   return st;
+}
+
+static tt_status load_capturing(const char *path, tt_scene **s, char *err, size_t n) {
+  return load_capturing_ex(path, TT_SCENE_LOAD_DEFAULT, s, err, n);
+}
+
+/* Writes `text` as <name> and loads it with TT_SCENE_LOAD_STRICT. */
+static tt_status load_strict(const char *name, const char *text, tt_scene **s) {
+  return tt_scene_load_ex(write_file(name, text, strlen(text)), TT_SCENE_LOAD_STRICT, s);
 }
 
 /* Regressions of issue #13: a PLY with two vertex elements (the second without normals)
@@ -354,31 +364,17 @@ static void test_strict(void) {
   CHECK_CONTAINS(err, "--strict refuses it");
   tt_scene_destroy(s);
   s = NULL;
-  fflush(stderr);
-  char cap[4400];
-  snprintf(cap, sizeof cap, "%s/stderr.txt", g_tmp);
-  int saved = dup(2), fd = open(cap, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  dup2(fd, 2);
-  st = tt_scene_load_ex(path, TT_SCENE_LOAD_STRICT, &s);
-  fflush(stderr);
-  dup2(saved, 2);
-  close(saved);
-  close(fd);
+  st = load_capturing_ex(path, TT_SCENE_LOAD_STRICT, &s, err, sizeof err);
   CHECK(st == TT_ERR_PARSE && s == NULL);
   CHECK_CONTAINS(tt_last_error(), "typos.pbrt:3: unknown directive \"WorldBgin\" (did you mean \"WorldBegin\"?)");
   CHECK_CONTAINS(tt_last_error(), "and 1 more error");
-  FILE *f = fopen(cap, "rb");
-  size_t got = f ? fread(err, 1, sizeof err - 1, f) : 0;
-  err[got] = '\0';
-  if (f) fclose(f);
   CHECK_CONTAINS(err, "typos.pbrt:4: Material \"diffuse\": unknown parameter \"rgb reflectanse\"");
   /* a parameter far from every name read: "not used by the importer" */
   static const char *const unused =
       "WorldBegin\n"
       "Material \"diffuse\" \"float glitter\" 2\n"
       "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n";
-  path = write_file("unused.pbrt", unused, strlen(unused));
-  st = tt_scene_load_ex(path, TT_SCENE_LOAD_STRICT, &s);
+  st = load_strict("unused.pbrt", unused, &s);
   CHECK(st == TT_ERR_PARSE && s == NULL);
   CHECK_CONTAINS(tt_last_error(), "unused.pbrt:2: Material \"diffuse\": parameter \"float glitter\" "
                                   "is not used by the importer (strict)");
@@ -387,16 +383,12 @@ static void test_strict(void) {
       "WorldBegin\n"
       "Material \"thindielectric\" \"float eta\" 1.5\n"
       "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n";
-  path = write_file("clean.pbrt", clean, strlen(clean));
-  st = tt_scene_load_ex(path, TT_SCENE_LOAD_STRICT, &s);
+  st = load_strict("clean.pbrt", clean, &s);
   CHECK_MSG(st == TT_OK && s, "strict, clean file: %s", tt_last_error());
   tt_scene_destroy(s);
   /* the flag also reaches a pbrt file a scene.json imports */
-  char json[4600];
-  snprintf(json, sizeof json, "{\"version\": 1, \"import\": \"typos.pbrt\"}");
-  path = write_file("imports.json", json, strlen(json));
   s = NULL;
-  st = tt_scene_load_ex(path, TT_SCENE_LOAD_STRICT, &s);
+  st = load_strict("imports.json", "{\"version\": 1, \"import\": \"typos.pbrt\"}", &s);
   CHECK_MSG(st != TT_OK && s == NULL, "strict import accepted");
   CHECK_CONTAINS(tt_last_error(), "WorldBgin");
 }
