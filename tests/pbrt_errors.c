@@ -382,7 +382,10 @@ static void test_strict(void) {
   static const char *const clean =
       "WorldBegin\n"
       "Material \"thindielectric\" \"float eta\" 1.5\n"
-      "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n";
+      "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
+      "Texture \"bump\" \"float\" \"constant\" \"float value\" 0.1\n"
+      "Material \"diffuse\" \"texture displacement\" \"bump\"\n"  /* pbrt-v4, not rendered */
+      "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 1 1 0 1 0 1 1 ]\n";
   st = load_strict("clean.pbrt", clean, &s);
   CHECK_MSG(st == TT_OK && s, "strict, clean file: %s", tt_last_error());
   tt_scene_destroy(s);

@@ -49,8 +49,8 @@ void tt__pstrict(tt__pp *P, const tt__pfile *f, int line, const char *key, const
 tt_status tt__pstrict_result(const tt__pp *P) {
   if (!P->strict_errors) return TT_OK;
   if (P->strict_errors == 1) return tt_set_error(TT_ERR_PARSE, "%s (strict)", P->strict_first);
-  return tt_set_error(TT_ERR_PARSE, "%s (strict; and %u more errors, logged above)",
-                      P->strict_first, P->strict_errors - 1);
+  return tt_set_error(TT_ERR_PARSE, "%s (strict; and %u more error%s, logged above)",
+                      P->strict_first, P->strict_errors - 1, P->strict_errors == 2 ? "" : "s");
 }
 
 void tt__pwarn(tt__pp *P, const tt__pfile *f, int line, const char *key, const char *fmt, ...) {

@@ -91,6 +91,13 @@ tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__
   int remap = 1;
   if ((st = tt__getb(P, at, pl, "remaproughness", &remap)) != TT_OK) return st;
   for (int i = 0; quiet[i]; i++) tt__find(pl, quiet[i]);
+  /* pbrt-v4 material parameters tunetrace does not render: known (a warning, not an error
+   * under --strict: the bathroom and staircase scenes of ../shared use displacement) */
+  static const char *const unrendered[] = {"displacement", "normalmap", NULL};
+  for (int i = 0; unrendered[i]; i++)
+    if (tt__find(pl, unrendered[i]))
+      tt__pwarn(P, at->file, at->line, unrendered[i], "%s: \"%s\" is not supported (ignored)", what,
+                unrendered[i]);
   if (strcmp(type, "interface") == 0 || strcmp(type, "none") == 0 || strcmp(type, "") == 0) {
     *out = TT__MAT_INTERFACE;
     tt__unused(P, at, what, pl);
