@@ -214,7 +214,11 @@ def test_tuning(tmp):
         s.set("accel_embree.backend", "custom")
         t2 = s.tune("accel_embree", tuner="tuner_nm", iterations=6, db=db_path,
                     params=["maxLeafSize", "quality"])
-    check(t2.stats["cached"] >= 1 and all(x["cached"] for x in t2.history[1:] if x["status"] == "ok"),
+    # (the default is measured again, and its noisy cost may steer the search elsewhere: a
+    # configuration the first run measured must be answered, a new one may be measured)
+    seen = {json.dumps(x["config"], sort_keys=True) for x in h if x["status"] == "ok"}
+    check(t2.stats["cached"] >= 1 and all(x["cached"] for x in t2.history[1:] if x["status"] == "ok"
+                                          and json.dumps(x["config"], sort_keys=True) in seen),
           f"second run answered from the database ({t2.stats})")
     with tt.TuningDB(db_path) as db:
         check(len(db) == len(h) + t2.stats["measured"], f"only new measurements are recorded ({len(db)})")

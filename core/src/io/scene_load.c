@@ -3,10 +3,9 @@
 
 #include <tunetrace/scene.h>
 
-/* The flags of the tt_scene_load_ex call running on this thread: the pbrt importer reads
- * them, also when a scene.json imports the pbrt file (io_internal.h). */
-_Thread_local uint32_t tt__scene_load_flags;
-
+/* tt__scene_load_flags (defined by the pbrt importer, the layer below, which reads it:
+ * io/pbrt/pbrt.h) holds the flags of the tt_scene_load_ex call running on this thread, also
+ * when a scene.json imports the pbrt file. */
 tt_status tt_scene_load_ex(const char *path, uint32_t flags, tt_scene **out) {
   uint32_t saved = tt__scene_load_flags;
   tt__scene_load_flags = flags;

@@ -11,7 +11,8 @@
  * approximated or skipped. */
 tt_status tt__scene_load_pbrt(const char *path, tt_scene **out);
 
-/* tt_scene_load_flags of the tt_scene_load_ex call running on this thread (scene_load.c);
+/* tt_scene_load_flags of the tt_scene_load_ex call running on this thread (set by
+ * tt_scene_load_ex in io/scene_load.c, defined in pbrt_import.c);
  * 0 outside one. */
 extern _Thread_local uint32_t tt__scene_load_flags;
 

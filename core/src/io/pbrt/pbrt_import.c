@@ -16,6 +16,10 @@
 #include <string.h>
 #include <strings.h>
 
+/* The flags of the tt_scene_load_ex call running on this thread (pbrt.h): set by
+ * tt_scene_load_ex (io/scene_load.c), defined here, in the layer that reads them. */
+_Thread_local uint32_t tt__scene_load_flags;
+
 /* ---- entry point ----------------------------------------------------------------------- */
 
 /* Frees the parser's own state (never the scene). */
