@@ -675,10 +675,21 @@ static long tt__best_index(const tt_tuning *t, double *mean_out) {
   return best;
 }
 
+/* The mean over every measurement of the default's configuration, as tt__best_index averages
+ * repeats: a search that proposes the default again (canonical configurations make that
+ * common) must not compare its best mean against the default's first measurement alone. */
 tt_status tt_tuning_default_cost(const tt_tuning *t, double *cost) {
   for (size_t i = 0; t && i < t->count; i++)
     if (t->samples[i].iteration < 0) {
-      if (cost) *cost = t->samples[i].cost;
+      const char *cfg = t->samples[i].config;
+      double sum = 0;
+      uint32_t n = 0;
+      for (size_t j = i; j < t->count; j++) {
+        if (strcmp(t->samples[j].config, cfg) || t->samples[j].status == TT_TUNEDB_FAILED) continue;
+        sum += t->samples[j].cost;
+        n++;
+      }
+      if (cost) *cost = n ? sum / n : t->samples[i].cost;
       return TT_OK;
     }
   if (cost) *cost = TT_COST_INFEASIBLE;
