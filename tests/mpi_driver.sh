@@ -28,9 +28,9 @@ common=(--res 16x16 --threads 1 --spp 1 --clock cpu)
 tune_args=(--plugin tuner_nm --tune accel_embree --iterations 4 --tune-spp 1 --seed 1)
 explore_args=(--tune accel_embree)
 
-jobs() {  # $1: the sequence folder
+jobs() {  # $1: the sequence folder; $2: the image size (default 16x16)
   cat <<JSON
-{"host_args": ["--res", "16x16", "--threads", "1", "--spp", "1", "--clock", "cpu"],
+{"host_args": ["--res", "${2:-16x16}", "--threads", "1", "--spp", "1", "--clock", "cpu"],
  "jobs": [
   {"kind": "tune", "scene": "$scene", "cameras": [0, 40], "objective": "render",
    "args": ["--plugin", "tuner_nm", "--tune", "accel_embree", "--iterations", "4", "--tune-spp", "1", "--seed", "1"]},
@@ -163,7 +163,9 @@ grep -q "8 already in .* 0 to run" "$tmp/k3.log" || { cat "$tmp/k3.log"; fail "a
   fail "--list (one process, no mpirun) should show 8 jobs done"
 
 # --- Ctrl-C (SIGINT to mpirun): every rank stops, finished jobs saved, no process left ---
-jobs "$tmp/seqi" >"$tmp/jobsi.json"
+# (larger images: jobs of ~0.3 s could all finish before the signal arrived, as they did in
+# the sanitizer build)
+jobs "$tmp/seqi" 160x160 >"$tmp/jobsi.json"
 "${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsi.json" --db "$tmp/i.db" --host "$host" \
   --scratch "$tmp" >"$tmp/i.log" 2>&1 &
 mp=$!
