@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "tt_test.h"
+#include "tt_test_sqlite.h"
 
 static tt_tunedb_row make_row(const char *config, double cost, const char *run_id) {
   tt_tunedb_row r;
@@ -32,19 +33,7 @@ static tt_tunedb_row make_row(const char *config, double cost, const char *run_i
 }
 
 static int query1(const char *path, const char *sql, char *buf, size_t n) {
-  sqlite3 *db = NULL;
-  sqlite3_stmt *st = NULL;
-  int ok = 0;
-  buf[0] = 0;
-  if (sqlite3_open_v2(path, &db, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
-      sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW) {
-    const unsigned char *t = sqlite3_column_text(st, 0);
-    snprintf(buf, n, "%s", t ? (const char *)t : "NULL");
-    ok = 1;
-  }
-  sqlite3_finalize(st);
-  sqlite3_close(db);
-  return ok;
+  return tt_test_query1(path, sql, buf, n, "NULL");
 }
 
 static int count_rows(void *user, const tt_tunedb_row *r) {
