@@ -39,6 +39,12 @@ int main(void) {
   /* scene errors: exit 4 with the file named */
   CHECK(run_host("/nonexistent/scene.json", out, sizeof out) == 4);
   CHECK_CONTAINS(out, "/nonexistent/scene.json");
+  /* (#13) a corrupt PLY named .gltf (found by fuzz_mesh) spun forever inside assimp: exit 4
+   * at once, saying what a .gltf must be (137 here means it hung and was killed) */
+  snprintf(args, sizeof args, "'%s'", source_path("tests/data/scenes/ply-as-gltf.json"));
+  CHECK(run_host_timeout(60, args, out, sizeof out) == 4);
+  CHECK_CONTAINS(out, "ply-as-gltf.json: meshes[0].file: mesh file");
+  CHECK_CONTAINS(out, "ply-as-gltf.gltf\" is not a glTF file: expected a JSON object, got a PLY file");
 
   /* plugin errors: exit 3, every failure reported */
   snprintf(args, sizeof args, "--plugin no_such_plugin --plugin also_missing '%s'", scene);

@@ -15,11 +15,14 @@ static const char *host_path(void) {
   return path;
 }
 
-/* Runs `host ARGS` with stdout+stderr captured into `out` (size n); returns the exit code
- * (or 128+signal). */
-static int run_host(const char *args, char *out, size_t n) {
+/* Runs `host ARGS` with stdout+stderr captured into `out` (size n), killed (SIGKILL) after
+ * `seconds` if that is > 0; returns the exit code (or 128+signal: 137 when killed). */
+static int run_host_timeout(int seconds, const char *args, char *out, size_t n) {
   char cmd[8192];
-  snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", host_path(), args);
+  if (seconds > 0)
+    snprintf(cmd, sizeof cmd, "timeout -s KILL %d '%s' %s 2>&1", seconds, host_path(), args);
+  else
+    snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", host_path(), args);
   FILE *p = popen(cmd, "r");
   if (!p) return -1;
   size_t len = 0;
@@ -35,6 +38,11 @@ static int run_host(const char *args, char *out, size_t n) {
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return -1;
+}
+
+/* Runs `host ARGS` as run_host_timeout without a time limit. */
+static int run_host(const char *args, char *out, size_t n) {
+  return run_host_timeout(0, args, out, n);
 }
 
 /* Path of a file in the source tree. */

@@ -237,6 +237,93 @@ static void test_files(void) {
   tt_scene_destroy(NULL);
 }
 
+/* Writes `n` bytes of `data` to DIR/NAME; returns 0 on success. */
+static int put_file(const char *dir, const char *name, const void *data, size_t n) {
+  char path[1400];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "wb");
+  if (!f) return -1;
+  size_t w = fwrite(data, 1, n, f);
+  return fclose(f) == 0 && w == n ? 0 : -1;
+}
+
+/* Reads DIR/NAME whole into buf (at most n bytes); returns its size, or 0. */
+static size_t get_file(const char *dir, const char *name, char *buf, size_t n) {
+  char path[1400];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "rb");
+  if (!f) return 0;
+  size_t r = fread(buf, 1, n, f);
+  fclose(f);
+  return r;
+}
+
+/* Loads a one-mesh scene whose "file" is NAME in DIR; expects `status` and both substrings
+ * (NULL: none) in the message, which must name the entry and the file. */
+static void mesh_file_fails(const char *dir, const char *name, tt_status status, const char *expect,
+                            const char *expect2) {
+  char json[512];
+  int n = snprintf(json, sizeof json, "{\"version\": 1, \"camera\": " CAM_OK ", \"materials\": "
+                   "{\"w\": {}}, \"meshes\": [{\"material\": \"w\", \"file\": \"%s\"}]}", name);
+  tt_scene *s = NULL;
+  tt_status st = tt_scene_load_json(json, (size_t)n, "mesh.json", dir, &s);
+  CHECK_MSG(st == status && s == NULL, "%s: status %d: %s", name, (int)st, tt_last_error());
+  if (s) tt_scene_destroy(s);
+  CHECK_CONTAINS(tt_last_error(), "mesh.json: meshes[0].file");
+  CHECK_CONTAINS(tt_last_error(), name);
+  if (expect) CHECK_CONTAINS(tt_last_error(), expect);
+  if (expect2) CHECK_CONTAINS(tt_last_error(), expect2);
+}
+
+/* (#13) A mesh file is read only as the format its name says. A 132-byte corrupt PLY named
+ * .gltf (found by fuzz_mesh) made assimp 5.2.5, once both glTF readers had refused it, guess
+ * the format from the content and spin forever in its PLY parser; now a .gltf must be a JSON
+ * object and a .glb a whole GLB container, and assimp runs only the readers of the file's
+ * extension. Each case must fail at once (alarm) with what was expected. */
+static void test_mesh_format_mismatch(void) {
+  char data[1200], dir[] = "/tmp/tt_scene_errors_XXXXXX";
+  snprintf(data, sizeof data, "%s/tests/data/scenes", g_root);
+  alarm(60);
+  mesh_file_fails(data, "ply-as-gltf.gltf", TT_ERR_PARSE,
+                  "is not a glTF file: expected a JSON object, got a PLY file", NULL);
+  CHECK(mkdtemp(dir) != NULL);
+  static char ply[4096], glb[4096], gltf[4096];
+  size_t nply = get_file(data, "ply-as-gltf.gltf", ply, sizeof ply);
+  size_t nglb = get_file(data, "tri.glb", glb, sizeof glb);
+  size_t ngltf = get_file(data, "tri.gltf", gltf, sizeof gltf);
+  CHECK(nply == 132 && nglb > 100 && ngltf > 100);
+  CHECK(put_file(dir, "ply.glb", ply, nply) == 0);
+  mesh_file_fails(dir, "ply.glb", TT_ERR_PARSE, "is not a GLB file: expected the 12-byte GLB header",
+                  "got a PLY file");
+  CHECK(put_file(dir, "glb.gltf", glb, nglb) == 0);
+  mesh_file_fails(dir, "glb.gltf", TT_ERR_PARSE, "expected a JSON object, got a GLB (binary glTF) file", NULL);
+  CHECK(put_file(dir, "json.glb", gltf, ngltf) == 0);
+  mesh_file_fails(dir, "json.glb", TT_ERR_PARSE, "is not a GLB file", "got other bytes");
+  CHECK(put_file(dir, "cut.glb", glb, 100) == 0);
+  mesh_file_fails(dir, "cut.glb", TT_ERR_PARSE, "the GLB header declares", "the file has 100 (cut short?)");
+  CHECK(put_file(dir, "cut.gltf", gltf, 200) == 0);
+  mesh_file_fails(dir, "cut.gltf", TT_ERR_PARSE, "expected a JSON object, got a JSON syntax error at", NULL);
+  CHECK(put_file(dir, "array.gltf", "[1, 2]", 6) == 0);
+  mesh_file_fails(dir, "array.gltf", TT_ERR_PARSE, "expected a JSON object, got an array of 2 elements", NULL);
+  /* a JSON object that neither glTF reader accepts: refused by them, not handed on */
+  static const char not_gltf[] = "{\"asset\": {\"version\": \"9.0\"}, \"x\": \"\nply\nformat ascii 1.0\n\"}";
+  CHECK(put_file(dir, "v9.gltf", not_gltf, sizeof not_gltf - 1) == 0);
+  mesh_file_fails(dir, "v9.gltf", TT_ERR_PARSE, "cannot import mesh file", NULL);
+  /* content assimp would have recognised, under a name no reader claims */
+  CHECK(put_file(dir, "tri.tt-unknown", gltf, ngltf) == 0);
+  mesh_file_fails(dir, "tri.tt-unknown", TT_ERR_UNSUPPORTED, "unknown mesh format (expected .ply, .obj, .gltf",
+                  NULL);
+  alarm(0);
+  static const char *const made[] = {"ply.glb", "glb.gltf", "json.glb", "cut.glb", "cut.gltf",
+                                     "array.gltf", "v9.gltf", "tri.tt-unknown"};
+  for (size_t i = 0; i < sizeof made / sizeof made[0]; i++) {
+    char path[1400];
+    snprintf(path, sizeof path, "%s/%s", dir, made[i]);
+    unlink(path);
+  }
+  rmdir(dir);
+}
+
 /* Every prefix of the Cornell box and a few thousand single-byte corruptions either load
  * or fail with a message; under ASan/valgrind this doubles as a memory-safety check. */
 static void test_no_crash(void) {
@@ -287,6 +374,7 @@ int main(void) {
   snprintf(g_root, sizeof g_root, "%s", root ? root : "..");
   test_cases();
   test_files();
+  test_mesh_format_mismatch();
   test_no_crash();
   return tt_test_finish("scene_errors");
 }

@@ -204,6 +204,36 @@ static void test_obj_transform(void) {
   tt_scene_destroy(s);
 }
 
+/* glTF 2.0 as JSON with an embedded buffer and as GLB: one triangle (0,0,0) (2,0,0) (0,1,0)
+ * of area 1, placed by its node's translation to z = 3, named by its mesh in split mode
+ * (tests/data/scenes/tri.gltf and tri.glb hold the same asset). */
+static void test_gltf(void) {
+  char base[1200];
+  src_path("tests/data/scenes", base, sizeof base);
+  static const char *const files[] = {"tri.gltf", "tri.glb"};
+  for (int i = 0; i < 2; i++) {
+    char json[512];
+    snprintf(json, sizeof json,
+             "{\"version\": 1, \"camera\": {\"position\": [0, 0, 10], \"target\": [0, 0, 0]},"
+             " \"materials\": {\"m\": {}}, \"meshes\": [{\"name\": \"g\", \"material\": \"m\","
+             " \"file\": \"%s\", \"split\": true}]}",
+             files[i]);
+    tt_scene *s = load_text(json, base);
+    if (!s) continue;
+    CHECK_MSG(tt_scene_triangle_count(s) == 1, "%s", files[i]);
+    CHECK(tt_scene_mesh_count(s) == 1);
+    CHECK_MSG(strcmp(tt_scene_mesh(s, 0)->name, "g/tri") == 0, "%s: %s", files[i], tt_scene_mesh(s, 0)->name);
+    float lo[3], hi[3];
+    tt_scene_bounds(s, lo, hi);
+    CHECK_NEAR(lo[0], 0.0, 1e-6);
+    CHECK_NEAR(hi[0], 2.0, 1e-6);
+    CHECK_NEAR(hi[1], 1.0, 1e-6);
+    CHECK_NEAR(lo[2], 3.0, 1e-6);
+    CHECK_NEAR(hi[2], 3.0, 1e-6);
+    tt_scene_destroy(s);
+  }
+}
+
 static void test_inline_transform_normals(void) {
   /* a unit right triangle in the xy plane with +z normals, scaled non-uniformly and
    * rotated; shading normals must stay perpendicular to the surface */
@@ -449,6 +479,7 @@ int main(void) {
   snprintf(g_root, sizeof g_root, "%s", root ? root : "..");
   test_cornell();
   test_obj_transform();
+  test_gltf();
   test_inline_transform_normals();
   test_camera_path();
   test_scene_id();

@@ -1,14 +1,16 @@
 /* libFuzzer: scene.json mesh files through tt__mesh_import, the path of a "file" entry:
- * the first byte picks the format (OBJ or glTF through assimp, PLY through io/ply) and
- * split or merged parts; the rest is the file. Oracle: indices within each part. */
+ * the first byte picks the format by its low two bits (OBJ, glTF JSON, GLB through assimp,
+ * PLY through io/ply) and split or merged parts by bit 2; the rest is the file, under the
+ * name of that format (content of another format must be refused, never guessed from).
+ * Oracle: indices within each part. */
 #include "io/io_internal.h"
 
 #include "fuzz_util.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (size < 1) return 0;
-  static const char *const names[3] = {"in.obj", "in.gltf", "in.ply"};
-  const char *path = fuzz_write(names[data[0] % 3], data + 1, size - 1);
+  static const char *const names[4] = {"in.obj", "in.gltf", "in.ply", "in.glb"};
+  const char *path = fuzz_write(names[data[0] & 3], data + 1, size - 1);
   tt__mesh_data *parts = NULL;
   uint32_t count = 0;
   if (tt__mesh_import(path, "m", (data[0] >> 2) & 1, "fuzz", &parts, &count) == TT_OK) {

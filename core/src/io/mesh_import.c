@@ -1,25 +1,24 @@
 /* Mesh files flattened to triangle arrays: PLY through the library's own reader (io/ply),
- * OBJ, glTF and whatever else assimp reads through assimp. Materials in the file are
- * ignored: the scene.json entry chooses the material. */
+ * OBJ, glTF and whatever else assimp reads through assimp, each file only as the format its
+ * extension names (io/assimp_read.h). Materials in the file are ignored: the scene.json
+ * entry chooses the material. */
+#include "io/assimp_read.h"
 #include "io/io_internal.h"
 #include "io/ply/ply.h"
+#include "util/json_error.h"
 
 #include <tunetrace/file.h>
 
-#include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cjson/cJSON.h>
+
 #include <errno.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* aiGetErrorString reads a process-wide buffer: serialise imports so the message we report
- * belongs to our call. */
-static pthread_mutex_t tt__assimp_lock = PTHREAD_MUTEX_INITIALIZER;
 
 /* One placement of an assimp mesh by the node hierarchy. */
 typedef struct tt__ai_instance {
@@ -214,9 +213,83 @@ static tt_status tt__ply_import(const char *file, const char *base_name, int spl
   return TT_OK;
 }
 
+/* What a file's first bytes look like, for a message about content that does not match
+ * its name; NULL if nothing is recognised. */
+static const char *tt__mesh_sniff(const unsigned char *b, size_t n) {
+  if (n >= 4 && memcmp(b, "glTF", 4) == 0) return "a GLB (binary glTF) file";
+  if (n >= 4 && memcmp(b, "ply", 3) == 0 && (b[3] == '\n' || b[3] == '\r')) return "a PLY file";
+  if (n >= 4 && memcmp(b, "\x89PNG", 4) == 0) return "a PNG image";
+  if (n >= 4 && memcmp(b, "\x76\x2f\x31\x01", 4) == 0) return "an OpenEXR image";
+  return NULL;
+}
+
+/* A .glb must start with the GLB header (magic "glTF", version, total length) and hold the
+ * length it declares. */
+static tt_status tt__glb_check(const char *file, const char *where) {
+  FILE *f = fopen(file, "rb");
+  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, strerror(errno));
+  unsigned char h[12];
+  size_t got = fread(h, 1, sizeof h, f);
+  long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+  fclose(f);
+  if (got < sizeof h || memcmp(h, "glTF", 4) != 0) {
+    const char *looks = tt__mesh_sniff(h, got);
+    return tt_set_error(TT_ERR_PARSE,
+                        "%s: mesh file \"%s\" is not a GLB file: expected the 12-byte GLB header "
+                        "starting with \"glTF\", got %s",
+                        where, file, looks ? looks : got < sizeof h ? "a file shorter than that" : "other bytes");
+  }
+  uint32_t version = h[4] | (uint32_t)h[5] << 8 | (uint32_t)h[6] << 16 | (uint32_t)h[7] << 24;
+  uint32_t length = h[8] | (uint32_t)h[9] << 8 | (uint32_t)h[10] << 16 | (uint32_t)h[11] << 24;
+  if (version != 1 && version != 2)
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh file \"%s\": GLB version %u (expected 2, or 1)",
+                        where, file, version);
+  if (length < sizeof h || size < 0 || (uint64_t)length > (uint64_t)size)
+    return tt_set_error(TT_ERR_PARSE,
+                        "%s: mesh file \"%s\": the GLB header declares %u bytes, the file has %ld "
+                        "(cut short?)",
+                        where, file, length, size);
+  return TT_OK;
+}
+
+/* A .gltf must be a JSON object (glTF's top level); a .glb a GLB container. Checked before
+ * assimp so that content of another format gets a message saying what was expected (the
+ * glTF readers then check the rest). */
+static tt_status tt__gltf_check(const char *file, const char *where) {
+  if (tt__has_ext(file, ".glb")) return tt__glb_check(file, where);
+  if (!tt__has_ext(file, ".gltf")) return TT_OK;
+  char *text = NULL;
+  size_t len = 0;
+  tt_status st = tt_file_read(file, "mesh file", 0, &text, &len);
+  if (st != TT_OK) return tt_set_error(st, "%s: %s", where, tt_last_error());
+  size_t skip = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0;  /* a UTF-8 BOM */
+  const char *end = NULL;
+  cJSON *root = cJSON_ParseWithLengthOpts(text + skip, len - skip, &end, 0);
+  if (!root || !cJSON_IsObject(root)) {
+    char got[96];
+    const char *looks = tt__mesh_sniff((const unsigned char *)text, len);
+    if (looks) {
+      snprintf(got, sizeof got, "%s", looks);
+    } else if (!root) {
+      unsigned line, col;
+      size_t at = end && end >= text + skip ? (size_t)(end - text) : skip;
+      tt__json_line_col(text, at, &line, &col);
+      snprintf(got, sizeof got, "a JSON syntax error at %u:%u", line, col);
+    } else {
+      tt__json_describe(root, TT__JSON_SCENE, got, sizeof got);
+    }
+    st = tt_set_error(TT_ERR_PARSE, "%s: mesh file \"%s\" is not a glTF file: expected a JSON object, got %s",
+                      where, file, got);
+  }
+  cJSON_Delete(root);
+  tt_free(text);
+  return st;
+}
+
 /* Imports, then builds one part per placed mesh and either returns them (split) or merges
  * them into one. PLY files go to the library's fuzzed reader; assimp reads the formats only
- * it reads (OBJ, glTF, FBX, ...), with its data-structure validation step on. */
+ * it reads (OBJ, glTF, FBX, ...), with its data-structure validation step on, and only with
+ * the readers of the file's extension. */
 tt_status tt__mesh_import(const char *file, const char *base_name, int split, const char *where,
                           tt__mesh_data **out, uint32_t *count) {
   *out = NULL;
@@ -227,18 +300,28 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
     return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, why);
   if (tt__has_ext(file, ".ply") || tt__has_ext(file, ".ply.gz"))
     return tt__ply_import(file, base_name, split, where, out, count);
-  pthread_mutex_lock(&tt__assimp_lock);
+  tt_status gst = tt__gltf_check(file, where);
+  if (gst != TT_OK) return gst;
   /* ValidateDataStructure rejects out-of-range indices and inconsistent arrays that a
    * corrupt file makes assimp's importers produce, before we walk them */
-  const struct aiScene *sc = aiImportFile(
-      file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure);
-  if (!sc) {
-    tt_status st = tt_set_error(TT_ERR_PARSE, "%s: cannot import mesh file \"%s\": %s", where, file,
-                                aiGetErrorString());
-    pthread_mutex_unlock(&tt__assimp_lock);
-    return st;
+  tt__assimp *ai = NULL;
+  const struct aiScene *sc = NULL;
+  char reason[512];
+  switch (tt__assimp_read(file,
+                          aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure,
+                          &ai, &sc, reason, sizeof reason)) {
+  case TT__ASSIMP_OK:
+    break;
+  case TT__ASSIMP_UNKNOWN_EXTENSION:
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "%s: mesh file \"%s\": unknown mesh format (expected .ply, .obj, .gltf, .glb "
+                        "or another extension assimp reads, such as .fbx, .dae, .stl)",
+                        where, file);
+  case TT__ASSIMP_OUT_OF_MEMORY:
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: mesh file \"%s\": out of memory", where, file);
+  default:
+    return tt_set_error(TT_ERR_PARSE, "%s: cannot import mesh file \"%s\": %s", where, file, reason);
   }
-  pthread_mutex_unlock(&tt__assimp_lock);
 
   static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   tt__ai_list list = {NULL, 0, 0};
@@ -298,6 +381,6 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
 done:
   free(parts);
   free(list.items);
-  aiReleaseImport(sc);
+  tt__assimp_free(ai);
   return st;
 }
