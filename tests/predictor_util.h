@@ -15,6 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <tt_util/hash.h>
+#include <tt_util/rng.h>
 
 static void pu_quiet(tt_log_level level, const char *plugin, const char *fmt, ...) {
   (void)level, (void)plugin, (void)fmt;
@@ -86,9 +88,7 @@ static void pu_write(const char *path, const unsigned char *b, long n) {
 
 /* FNV-1a 64 of the model container (to forge a valid checksum on an edited file). */
 static inline uint64_t pu_fnv(const unsigned char *p, size_t n) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
-  return h;
+  return tt__fnv1a64(TT__FNV1A64_OFFSET, p, n);
 }
 static inline void pu_reseal(unsigned char *b, long n) {
   uint64_t h = pu_fnv(b, (size_t)n - 8);
@@ -106,8 +106,7 @@ static inline char *pu_predictions(const tt_predictor_iface *pi, const tt_predic
   tt_config *c = tt_config_create(target);
   for (int k = 0; k < count; k++) {
     for (uint32_t i = 0; i < dim; i++) {
-      x = x * 6364136223846793005ull + 1442695040888963407ull;
-      state[i] = (x >> 11) * 0x1.0p-53;
+      state[i] = tt__u64_to_unit(tt__splitmix64(&x));
     }
     tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = 10.0};
     tt_predictor_result r = {.struct_size = sizeof r};

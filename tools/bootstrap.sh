@@ -23,15 +23,15 @@ PACKAGES=(
   libassimp-dev                               # OBJ/PLY/glTF mesh import
   libsqlite3-dev                              # tuning database
   zlib1g-dev                                  # .ply.gz meshes in the pbrt importer
-  python3-matplotlib                          # tools/tuning/ charts (tests/tune_plot.sh)
-  python3-numpy python3-openimageio           # tools/scenes/ generators (tests/scenes_generate.sh)
-  python3-numpy python3-scipy                 # tools/tuning/analyze.py (tests/tune_analyze.sh)
-  python3-numpy                               # the Python API's arrays (tests/python_api.py)
+  python3-matplotlib                          # tools/tuning/ charts (tools/tests/tune_plot.sh)
+  python3-numpy python3-openimageio           # tools/scenes/ generators (tools/tests/scenes_generate.sh)
+  python3-numpy python3-scipy                 # tools/tuning/analyze.py (tools/tests/tune_analyze.sh)
+  python3-numpy                               # the Python API's arrays (python/tests/python_api.py)
   clang libclang-rt-14-dev                    # the ASan+UBSan build and the libFuzzer harnesses
                                               # (tools/test_sanitized.sh, tests/fuzz; .ci/run)
   llvm-14                                     # llvm-symbolizer: sanitizer reports with lines
   openmpi-bin libopenmpi-dev                  # mpi/ tunetrace-mpi (meson -Dmpi=auto finds it);
-                                              # tests/mpi_driver.sh, mpi_baseline.sh, tools/mpi/
+                                              # mpi/tests/mpi_driver.sh, mpi_baseline.sh, tools/mpi/
 )
 
 # Opt-in (--training): training the TAA networks (tools/taa/train.py, ablations.py,

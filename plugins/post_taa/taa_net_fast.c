@@ -17,7 +17,7 @@
  * weight is a broadcast operand, each input vector serves the whole block. Every output
  * channel and pixel is computed by the same operations in the same order whatever the band
  * split or thread count, so results do not depend on the number of threads (bit-identical;
- * tests/taa_net.c checks it). The instruction set is chosen at run time (AVX-512VL, AVX2+FMA,
+ * plugins/post_taa/tests/taa_net.c checks it). The instruction set is chosen at run time (AVX-512VL, AVX2+FMA,
  * or the portable vector-extension code); TT_POST_TAA_ISA=avx2|generic forces a lower one.
  *
  * On AVX2 / AVX-512 the 5x5 layers with output blocks of 10 or 12 (the kernel layer, and
@@ -25,7 +25,7 @@
  * absolute even rows and columns, so those layers produce rows in pairs (a band starting or
  * ending on an odd row computes the whole pair and keeps its row; rings hold one row more).
  * 36 instead of 100 multiplies per 2x2 outputs and input channel; the transforms add
- * rounding of ~1e-7 relative (tests/taa_net.c). TT_POST_TAA_WINOGRAD=0 (read at state init,
+ * rounding of ~1e-7 relative (plugins/post_taa/tests/taa_net.c). TT_POST_TAA_WINOGRAD=0 (read at state init,
  * tt__net_state.winograd) selects the direct convolutions; the portable path has only those. */
 #include <math.h>
 #include <stdlib.h>

@@ -1,8 +1,8 @@
 """ctypes bindings of libtunetrace: finding the library, the C structs, the prototypes.
 
 Internal: the public API is in tunetrace/__init__.py. Structs mirror the public headers
-field by field (core/include/tunetrace/*.h); tests/python_abi.c prints the C layout and the
-suite compares it with these (tests/python_api.py), so a header change that is not made
+field by field (core/include/tunetrace/*.h); python/tests/python_abi.c prints the C layout and the
+suite compares it with these (python/tests/python_api.py), so a header change that is not made
 here too fails a test instead of corrupting memory.
 
 The library is looked for, in order:
@@ -208,7 +208,7 @@ class OptionsIface(ctypes.Structure):  # tt_options_iface (options.h)
                 ("get", ctypes.CFUNCTYPE(c_u8p, c_u8p))]
 
 
-# Structs whose layout tests/python_abi.c reports: C name -> ctypes class.
+# Structs whose layout python/tests/python_abi.c reports: C name -> ctypes class.
 LAYOUTS = {
     "tt_plugin": Plugin, "tt_camera": Camera, "tt_pass_stats": PassStats,
     "tt_accel_build_stats": AccelBuildStats, "tt_session_stats": SessionStats,

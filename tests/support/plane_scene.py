@@ -1,4 +1,4 @@
-"""The AOV tests' scene (tests/host_aov.py, tests/python_api.py): a diffuse plane at z = 0
+"""The AOV tests' scene (host/tests/host_aov.py, python/tests/python_api.py): a diffuse plane at z = 0
 facing a camera 5 units away (16x12, fov 40), lit by a white environment, so every AOV has a
 known value: depth 5, normal (0, 0, -1), albedo (0.2, 0.4, 0.6), no motion for a still."""
 import json

@@ -19,7 +19,7 @@ at the end, with the load average at the start and at the end.
 
 Configurations are "label=name=value,..." of accel_embree's parameters (the first is the
 reference; default: native default, custom default, bf4/bf8 with sahBlockSize 4 and
-maxLeafSize 8, the rows of tests/accel_embree_render_bench).
+maxLeafSize 8, the rows of plugins/accel_embree/tests/accel_embree_render_bench).
 """
 import argparse
 import json

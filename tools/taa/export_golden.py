@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Writes the golden fixture the C test (tests/taa_net.c) checks the plugin's inference
+"""Writes the golden fixture the C test (plugins/post_taa/tests/taa_net.c) checks the plugin's inference
 against: small random inputs, run through the PyTorch model loaded from a weights file.
 
   export_golden.py WEIGHTS.ttw OUT.bin

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""post_taa speed figures (issue #19 goal 3): runs tests/taa_bench several times (each run
+"""post_taa speed figures (issue #19 goal 3): runs plugins/post_taa/tests/taa_bench several times (each run
 interleaves every variant frame by frame and prints its per-variant medians), then prints
 the median of the per-run medians and their range per variant, with the load average
 before and after each run. On this shared machine take the figures of a quiet moment:
@@ -83,7 +83,7 @@ def main():
     runs = []
     for k in range(a.runs):
         before = loadavg()
-        r = subprocess.run([os.path.join(a.build, "tests", "taa_bench")], env=env,
+        r = subprocess.run([os.path.join(a.build, "plugins", "post_taa", "tests", "taa_bench")], env=env,
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         after = loadavg()
         if r.returncode:

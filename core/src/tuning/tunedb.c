@@ -229,7 +229,7 @@ tt_status tt_tunedb_open(const char *path, tt_tunedb **out) {
   }
   /* several hosts may tune into one file: wait for a writer instead of failing. A write
    * holds the lock for one small insert, but on a loaded machine a checkpoint can take
-   * seconds: a minute before "database is locked" (tests/tune_concurrency.py). */
+   * seconds: a minute before "database is locked" (host/tests/tune_concurrency.py). */
   sqlite3_busy_timeout(db->sql, 60000);
   /* WAL: readers never block the loop; synchronous=NORMAL keeps every commit across a
    * process kill (only a power loss can drop the last transactions) */

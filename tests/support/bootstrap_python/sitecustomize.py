@@ -3,7 +3,7 @@ the packages tools/bootstrap.sh installs, even on a machine where more were inst
 (CI runs on such a machine; a fresh one has only bootstrap's). Importing a blocked module
 raises ImportError naming it, so a tool that needs one fails its test everywhere, not only on
 fresh machines. Training needs torch and the Cycles reference needs Blender's bpy: those tools
-are not run by the suite (tests/tools_imports.py checks every other tool imports without them).
+are not run by the suite (tools/tests/tools_imports.py checks every other tool imports without them).
 """
 import sys
 

@@ -1,0 +1,243 @@
+/* predictor_rbf (thesis 3.3.2) through the plugin ABI:
+ *  - argmax: a model whose Q is one feature centred on a known (state, action) answers that
+ *    action (NOM values exactly, INT/FLOAT within the coordinate search's last step);
+ *  - learning: trained offline on samples of a synthetic cost with a known optimum per state,
+ *    the predicted configuration costs within a few percent of the optimum, with the right
+ *    nominal values, for inverse and relative rewards;
+ *  - relative reward skips samples without a default cost; predict is deterministic and the
+ *    candidates are counted; model files round-trip bit-exactly, bad files are refused. */
+#include "../../predictor_common/model_file.h"
+#include "predictor_util.h"
+
+#include <stdlib.h>
+#include <tt_util/rng.h>
+
+static const tt_predictor_iface *P, *NN;
+static tt_space *target;
+
+static double uni(uint64_t *x) {
+  return tt__u64_to_unit(tt__splitmix64(x));
+}
+
+/* Synthetic cost: the optimum of state (s0, s1) is leaf-unit = s0, cost-unit = s1, quality
+ * index 1, fast false; every step away costs more. */
+static double synth_cost(const double *s, const tt_config *c) {
+  double u[4];
+  tt_config_to_unit(c, u);
+  double q = tt_config_get(c, 2).index != 1 ? 0.6 : 0.0;
+  double f = tt_config_get(c, 3).index ? 0.4 : 0.0;
+  return 10.0 * (1.0 + 2.0 * (u[0] - s[0]) * (u[0] - s[0]) + 2.0 * (u[1] - s[1]) * (u[1] - s[1]) + q + f);
+}
+
+/* Writes a one-feature model file whose Q is maximal at (state, enc(best)). */
+static void write_bump(const char *path, const tt_predictor *like, const double *state,
+                       const tt_config *best, double width) {
+  (void)like;
+  char *sig = ttpm_space_signature(target);
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "features", "1");
+  char wb[32];
+  snprintf(wb, sizeof wb, "%g", width);
+  tt_config_set_string(set, "width", wb);
+  char *settings = tt_config_to_json(set);
+  ttpm_header h = {.kind = "predictor_rbf", .plugin_version = "0.1.0",
+                   .state_space = "synthetic", .state_dim = 2, .target = sig,
+                   .settings = settings};
+  ttpm_writer w = {0};
+  ttpm_put_header(&w, &h);
+  ttpm_put_u64(&w, 7);                 /* seed */
+  ttpm_put_u64(&w, tt_space_count(target));
+  uint32_t m = 1 + 1 + 3 + 1;          /* leaf, cost, quality one-hot, fast */
+  ttpm_put_u64(&w, m);
+  ttpm_put_u64(&w, 1);                 /* features */
+  ttpm_put_u64(&w, 0);                 /* updates */
+  ttpm_put_u64(&w, 1);                 /* observations */
+  double enc[8], u[4];
+  tt_config_to_unit(best, u);
+  enc[0] = u[0];
+  enc[1] = u[1];
+  for (int k = 0; k < 3; k++) enc[2 + k] = tt_config_get(best, 2).index == k;
+  enc[5] = tt_config_get(best, 3).index;
+  ttpm_put_f64s(&w, state, 2);
+  ttpm_put_f64s(&w, enc, m);
+  ttpm_put_f64(&w, 1.0);               /* theta */
+  ttpm_put_u64(&w, 0);                 /* pool */
+  CHECK(ttpm_save("test", path, 1, &w) == TT_OK);
+  free(w.data);
+  free(sig);
+  tt_free(settings);
+  tt_config_destroy(set);
+}
+
+static void argmax_of_a_known_q(const char *dir) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/bump.ttpm", dir);
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "features", "1");
+  for (int trial = 0; trial < 6; trial++) {
+    double s[2] = {0.1 + 0.15 * trial, 0.9 - 0.13 * trial};
+    tt_config *best = pu_config(target, 3 + 5 * trial, 0.2 + 1.5 * trial, trial % 3, trial % 2);
+    write_bump(path, NULL, s, best, 2.0);
+    tt_config_set_string(set, "width", "2");
+    tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 1);
+    CHECK_MSG(P->load(p, path) == TT_OK, "%s", tt_last_error());
+    tt_config *out = tt_config_create(target);
+    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
+    tt_predictor_result r = {.struct_size = sizeof r};
+    CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
+    double ub[4], uo[4];
+    tt_config_to_unit(best, ub);
+    tt_config_to_unit(out, uo);
+    CHECK_MSG(tt_config_get(out, 2).index == trial % 3 && tt_config_get(out, 3).index == trial % 2,
+              "trial %d: nominal values %d %d", trial, tt_config_get(out, 2).index,
+              tt_config_get(out, 3).index);
+    /* the last coordinate step is 1/32 of the unit range; INT rounding adds 1/62 */
+    CHECK_MSG(fabs(uo[0] - ub[0]) <= 1.0 / 32 + 1.0 / 62 + 1e-9 && fabs(uo[1] - ub[1]) <= 1.0 / 32 + 1e-9,
+              "trial %d: leaf %g vs %g, cost %g vs %g", trial, uo[0], ub[0], uo[1], ub[1]);
+    CHECK(r.value > 0.9 && r.value <= 1.0 && r.candidates > 256);
+    CHECK_NEAR(r.expected_cost, 1.0 / r.value, 1e-12);  /* inverse reward: cost = 1/Q */
+    tt_config_destroy(out);
+    tt_config_destroy(best);
+    P->destroy(p);
+  }
+  tt_config_destroy(set);
+}
+
+/* Trains on n samples of the synthetic cost and returns the mean relative excess cost of
+ * the predictions over 40 test states (0 = always optimal); wrong nominal values counted. */
+static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_predictor **keep) {
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "reward", reward);
+  tt_config_set_string(set, "features", "200");
+  tt_config_set_string(set, "width", "3");
+  tt_config_set_string(set, "epochs", "40");
+  tt_config_set_string(set, "alpha", "0.3");
+  tt_config_set_string(set, "decay", "20000");
+  tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 3);
+  tt_predictor_sample *samples = calloc((size_t)n, sizeof *samples);
+  double (*states)[2] = calloc((size_t)n, sizeof *states);
+  tt_config **cfgs = calloc((size_t)n, sizeof *cfgs);
+  tt_config *def = tt_config_create(target);
+  uint64_t x = 11;
+  for (int i = 0; i < n; i++) {
+    states[i][0] = uni(&x);
+    states[i][1] = uni(&x);
+    double u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
+    cfgs[i] = tt_config_create(target);
+    tt_config_from_unit(cfgs[i], u);
+    samples[i] = (tt_predictor_sample){.struct_size = sizeof samples[i], .state = states[i],
+                                       .config = cfgs[i], .cost = synth_cost(states[i], cfgs[i]),
+                                       .default_cost = synth_cost(states[i], def)};
+  }
+  CHECK_MSG(P->observe_ex(p, samples, (size_t)n, TT_PREDICTOR_OFFLINE) == TT_OK, "%s", tt_last_error());
+  double excess = 0;
+  *wrong_nom = 0;
+  tt_config *out = tt_config_create(target);
+  for (int t = 0; t < 40; t++) {
+    double s[2] = {0.15 + 0.7 * uni(&x), 0.15 + 0.7 * uni(&x)};
+    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = synth_cost(s, def)};
+    tt_predictor_result r = {.struct_size = sizeof r};
+    CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
+    double c = synth_cost(s, out);
+    excess += c / 10.0 - 1.0;  /* the optimum costs 10 */
+    *wrong_nom += tt_config_get(out, 2).index != 1 || tt_config_get(out, 3).index != 0;
+  }
+  excess /= 40;
+  for (int i = 0; i < n; i++) tt_config_destroy(cfgs[i]);
+  free(cfgs);
+  free(states);
+  free(samples);
+  tt_config_destroy(out);
+  tt_config_destroy(def);
+  tt_config_destroy(set);
+  if (keep) *keep = p;
+  else P->destroy(p);
+  return excess;
+}
+
+static void relative_reward(void) {
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "reward", "relative");
+  tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 3);
+  double s[2] = {0.5, 0.5};
+  tt_config *c = pu_config(target, 4, 1.0, 1, 0);
+  tt_predictor_sample x = {.struct_size = sizeof x, .state = s, .config = c, .cost = 5.0,
+                           .default_cost = NAN};
+  CHECK(P->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE) == TT_OK);
+  tt_predictor_info info = {.struct_size = sizeof info};
+  P->info(p, &info);
+  CHECK(info.observations == 0);  /* no default cost: no relative reward */
+  x.default_cost = 10.0;
+  for (int k = 0; k < 400; k++) CHECK(P->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE) == TT_OK);
+  P->info(p, &info);
+  CHECK(info.observations == 400 && info.entries == 21);  /* round(3.5 x (2 + 4)) */
+  /* Q -> the speed-up 2; the expected cost needs the query's default cost */
+  tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = 8.0};
+  double ec;
+  CHECK(P->estimate(p, &q, c, &ec) == TT_OK);
+  CHECK_NEAR(ec, 4.0, 0.05);
+  q.default_cost = NAN;
+  CHECK(P->estimate(p, &q, c, &ec) == TT_OK && isnan(ec));
+  x.cost = NAN;
+  CHECK(P->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE) == TT_ERR_INVALID_ARGUMENT);
+  tt_config_destroy(c);
+  tt_config_destroy(set);
+  P->destroy(p);
+}
+
+int main(int argc, char **argv) {
+  (void)argc, (void)argv;
+  char tmp[] = "/tmp/tt_prbf_XXXXXX";
+  const char *dir = mkdtemp(tmp);
+  tt_registry *reg, *reg2;
+  P = pu_load(&reg, "predictor_rbf");
+  NN = pu_load(&reg2, "predictor_nn");
+  target = pu_target("target");
+
+  tt_predictor *e = pu_create(P, target, 2, "synthetic", NULL, 1);
+  double s0[2] = {0.5, 0.5};
+  tt_config *out = tt_config_create(target);
+  double ec;
+  CHECK(P->predict(e, s0, out, &ec) == TT_ERR_NO_DATA);
+  P->destroy(e);
+
+  argmax_of_a_known_q(dir);
+  relative_reward();
+
+  int wrong;
+  tt_predictor *trained = NULL;
+  double ex = learn_synthetic("inverse", 3000, &wrong, &trained);
+  printf("synthetic, inverse reward: mean excess cost %.4f, wrong nominal values %d/40\n", ex, wrong);
+  CHECK_MSG(ex < 0.05 && wrong <= 2, "inverse: excess %g, wrong %d", ex, wrong);
+  ex = learn_synthetic("relative", 3000, &wrong, NULL);
+  printf("synthetic, relative reward: mean excess cost %.4f, wrong nominal values %d/40\n", ex, wrong);
+  CHECK_MSG(ex < 0.05 && wrong <= 2, "relative: excess %g, wrong %d", ex, wrong);
+
+  /* deterministic: the same seed and data give the same predictions */
+  tt_predictor *again = NULL;
+  learn_synthetic("inverse", 3000, &wrong, &again);
+  char *a = pu_predictions(P, trained, target, 2, 50), *b = pu_predictions(P, again, target, 2, 50);
+  CHECK(!strcmp(a, b));
+  free(a);
+  free(b);
+  P->destroy(again);
+
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "features", "200");
+  tt_config_set_string(set, "width", "3");
+  tt_config_set_string(set, "epochs", "40");
+  tt_config_set_string(set, "alpha", "0.3");
+  tt_config_set_string(set, "decay", "20000");
+  pu_check_files(P, trained, target, 2, "synthetic", dir, NN, set);
+  tt_config_destroy(set);
+
+  P->destroy(trained);
+  tt_config_destroy(out);
+  tt_space_destroy(target);
+  tt_registry_destroy(reg);
+  tt_registry_destroy(reg2);
+  char cmd[256];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
+  if (system(cmd)) {}
+  return tt_test_finish("predictor_rbf");
+}

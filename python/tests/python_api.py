@@ -1,0 +1,259 @@
+#!/usr/bin/python3
+"""The Python API (python/tunetrace) end to end, from the build tree's package:
+
+  - the ctypes structs have the C layout (python/tests/python_abi prints it);
+  - errors raise tunetrace.Error carrying the library's message (file, field, expected);
+  - plugins are listed and described as host --list-plugins / --describe do;
+  - the numpy image equals, bit for bit, the EXR host writes for the same scene, plugins,
+    parameters and seed;
+  - AOVs at known pixels of a plane facing the camera: depth = distance along the view axis,
+    normal = the plane's, albedo = its reflectance, motion = 0 for a still camera and the
+    camera's translation (pixels) for a camera path;
+  - a tuning session: history length = 1 + iterations, the database holds one row per
+    sample with the same configurations and costs, and the same session again is answered
+    from the database;
+  - the example script (python/examples/render_and_tune.py) runs.
+
+    python_api.py [PYTHON_ABI_EXE]
+Environment: TT_BUILD_ROOT, TT_SOURCE_ROOT (tests/meson.build)."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+BUILD = os.environ["TT_BUILD_ROOT"]
+SOURCE = os.environ["TT_SOURCE_ROOT"]
+sys.path.insert(0, os.path.join(BUILD, "python"))
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests", "support"))
+from plane_scene import MOVING_PATH, motion_pixels, plane, write  # noqa: E402
+
+import tunetrace as tt  # noqa: E402
+from tunetrace import _lib  # noqa: E402
+
+failures = 0
+checks = 0
+
+
+def check(cond, what):
+    global failures, checks
+    checks += 1
+    if not cond:
+        failures += 1
+        print(f"FAIL: {what}", file=sys.stderr)
+
+
+def raises(fn, *needles):
+    """Calls fn, expects tunetrace.Error whose message contains every needle."""
+    try:
+        fn()
+    except tt.Error as e:
+        msg = str(e)
+        for n in needles:
+            check(n in msg, f"error message {msg!r} contains {n!r}")
+        check(e.status < 0 and e.status_name, f"error has a status ({e.status}, {e.status_name})")
+        return msg
+    check(False, f"expected tunetrace.Error with {needles}")
+    return ""
+
+
+def test_layout(abi_exe):
+    c = json.loads(subprocess.run([abi_exe], check=True, capture_output=True, text=True).stdout)
+    for name, cls in _lib.LAYOUTS.items():
+        check(name in c, f"python_abi reports {name}")
+        if name not in c:
+            continue
+        check(c[name]["size"] == __import__("ctypes").sizeof(cls),
+              f"sizeof({name}) C {c[name]['size']} vs ctypes {__import__('ctypes').sizeof(cls)}")
+        fields = {f: getattr(cls, f).offset for f, _ in cls._fields_}
+        check(set(fields) == set(c[name]["fields"]),
+              f"{name} fields: ctypes {sorted(fields)} vs C {sorted(c[name]['fields'])}")
+        for f, off in c[name]["fields"].items():
+            check(fields.get(f) == off, f"offsetof({name}, {f}) C {off} vs ctypes {fields.get(f)}")
+    k = c["constants"]
+    check(k["TT_MAX_METRICS"] == _lib.TT_MAX_METRICS, "TT_MAX_METRICS")
+    check(k["TT_SCENE_INDICATOR_COUNT"] == _lib.TT_SCENE_INDICATOR_COUNT, "indicator count")
+    check(k["TT_COST_INFEASIBLE"] == tt.COST_INFEASIBLE, "TT_COST_INFEASIBLE")
+
+
+def test_errors(tmp):
+    check(tt.library_path().startswith(BUILD), f"loaded the build tree's library ({tt.library_path()})")
+    check(tt.version().count(".") == 2, "version")
+    raises(lambda: tt.Session(os.path.join(tmp, "missing.json")), "missing.json")
+    bad = os.path.join(tmp, "bad.json")
+    with open(bad, "w") as f:
+        f.write('{"version": 1, "camera": {"position": [0, 0, 0], "target": [0, 0, 1], '
+                '"fov": 200}, "meshes": []}')
+    raises(lambda: tt.Session(bad), "bad.json", "camera.fov", "(0, 180)")
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    raises(lambda: tt.Session(box, plugins=["integrator_nope"]), "integrator_nope")
+    with tt.Session(box, plugins=["integrator_pt"]) as s:
+        raises(lambda: s.set("accel_nope.quality", 3), "no plugin \"accel_nope\" is loaded",
+               "integrator_pt")
+        raises(lambda: s.set("integrator_pt.maxDepth", "deep"), "maxDepth")
+        raises(lambda: s.set("integrator_pt.noSuchParam", 1), "noSuchParam")
+        raises(lambda: s.aov("normal"), "not rendered")
+        s.set("integrator_pt.maxDepth", 5)
+        check(s.config("integrator_pt")["maxDepth"] == 5, "set() changes the configuration")
+
+
+def test_plugins():
+    names = {p["name"]: p for p in tt.list_plugins() if p["name"]}
+    for n, kind in [("accel_embree", "accel"), ("integrator_pt", "integrator"),
+                    ("integrator_pssmlt", "integrator"), ("tuner_nm", "tuner")]:
+        check(n in names and names[n]["kind"] == kind, f"list_plugins has {n} ({kind})")
+    d = tt.describe("accel_embree")
+    params = {p["name"] for p in d["parameters"]}
+    check({"quality", "maxLeafSize"} <= params, f"describe(accel_embree) parameters {params}")
+    raises(lambda: tt.describe("accel_nope"), "accel_nope")
+    # the same JSON as host --describe
+    host = subprocess.run([os.path.join(BUILD, "host/host"), "--describe", "accel_embree"],
+                          capture_output=True, text=True, check=True).stdout
+    hd = json.loads(host)
+    check(hd["parameters"] == d["parameters"], "describe() = host --describe (parameters)")
+
+
+def test_host_equal(tmp):
+    """The numpy image is the EXR host writes, bit for bit."""
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    exr = os.path.join(tmp, "host.exr")
+    subprocess.run([os.path.join(BUILD, "host/host"), "--quiet", "--no-db", "--res", "32x24",
+                    "--spp", "6", "--seed", "11", "--set", "integrator_pt.maxDepth=4",
+                    "--out", exr, box], check=True)
+    ref = tt.read_image(exr)
+    with tt.Session(box, plugins=["integrator_pt"], params={"integrator_pt.maxDepth": 4},
+                    resolution=(32, 24), seed=11) as s:
+        img = s.render(spp=6)
+        st = s.stats
+    check(img.shape == (24, 32, 3) and img.dtype == np.float32, f"image shape {img.shape}")
+    check(ref.shape == img.shape, f"host EXR shape {ref.shape}")
+    check(ref.shape == img.shape and np.array_equal(ref, img),
+          f"numpy image == host EXR (max diff "
+          f"{np.abs(ref - img).max() if ref.shape == img.shape else 'n/a'})")
+    check(float(img.mean()) > 0.01, f"the image is not black ({img.mean()})")
+    check(st["spp"] == 6 and st["passes"] == 6 and st["seed"] == 11 and st["rays"] >= 32 * 24 * 6,
+          f"stats {st}")
+    # another seed gives another image (the seed reaches the passes)
+    with tt.Session(box, resolution=(32, 24), seed=12) as s:
+        check(not np.array_equal(s.render(spp=6), img), "another seed, another image")
+
+
+def test_aovs(tmp):
+    still = write(tmp, "plane.json", plane())
+    with tt.Session(still, aovs=["depth", "normal", "albedo", "motion"]) as s:
+        rgb = s.render(spp=4)
+        depth, normal, albedo, motion = (s.aov(a) for a in ("depth", "normal", "albedo", "motion"))
+    check(depth.shape == (12, 16) and normal.shape == (12, 16, 3) and motion.shape == (12, 16, 2),
+          f"AOV shapes {depth.shape} {normal.shape} {motion.shape}")
+    for y, x in [(0, 0), (6, 8), (11, 15), (3, 12)]:
+        check(abs(depth[y, x] - 5.0) < 1e-4, f"depth at ({x}, {y}) = {depth[y, x]}, expected 5")
+        check(np.allclose(normal[y, x], [0, 0, -1], atol=1e-5), f"normal at ({x}, {y}) = {normal[y, x]}")
+        check(np.allclose(albedo[y, x], [0.2, 0.4, 0.6], atol=1e-6), f"albedo at ({x}, {y}) = {albedo[y, x]}")
+        check(np.allclose(motion[y, x], 0, atol=1e-6), f"still camera: motion at ({x}, {y}) = {motion[y, x]}")
+    # a lit Lambertian plane under a white environment: radiance = albedo (furnace-like)
+    check(np.allclose(rgb.mean(axis=(0, 1)), [0.2, 0.4, 0.6], rtol=0.15),
+          f"mean colour {rgb.mean(axis=(0, 1))} ~ albedo")
+    raises(lambda: tt.Session(still, aovs=["shadow"]), "shadow", "depth, normal")
+    with tt.Session(still, aovs=["depth"]) as s:
+        s.render(spp=1)
+        raises(lambda: s.aov("normal"), "not requested", "depth")
+
+    # a camera path translating +1 world unit per second along x: at t = 0.5 with a frame
+    # interval of 1/24 s the camera moved 1/24 units, i.e. f * (1/24) / 5 pixels with
+    # f = (height / 2) / tan(fov / 2); world +x is image left (right = forward x up), so a
+    # point seen one frame earlier, from 1/24 units further left, sat further left: -x
+    path = write(tmp, "moving.json", plane(path=MOVING_PATH))
+    expected = motion_pixels(1 / 24)
+    with tt.Session(path, aovs=["motion", "depth"], camera_time=0.5) as s:
+        s.render(spp=1)
+        motion = s.aov("motion")
+        depth = s.aov("depth")
+    check(np.allclose(depth, 5.0, atol=1e-4), "moving camera: depth 5")
+    check(np.allclose(motion[..., 0], -expected, rtol=1e-3),
+          f"motion x {motion[6, 8, 0]} (expected {-expected})")
+    check(np.allclose(motion[..., 1], 0, atol=1e-4), f"motion y {motion[6, 8, 1]}")
+
+
+def test_tuning(tmp):
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    db_path = os.path.join(tmp, "tuning.db")
+    kw = dict(plugins=["integrator_pt", "tuner_nm"], resolution=(16, 16), seed=5)
+    with tt.Session(box, **dict(kw, plugins=["accel_embree"] + kw["plugins"])) as s:
+        # maxLeafSize acts only with backend custom (with native it is not searched)
+        s.set("accel_embree.backend", "custom")
+        t = s.tune("accel_embree", tuner="tuner_nm", iterations=6, db=db_path,
+                   params=["maxLeafSize", "quality"])
+        after = s.config("accel_embree")
+        img = s.render(spp=2)
+        spp = s.stats["spp"]
+    h = t.history
+    check(len(h) == 7 and h[0]["iteration"] == -1, f"history: 1 default + 6 ({len(h)})")
+    check(all(x["status"] in ("ok", "infeasible") for x in h), "samples measured")
+    check(t.mode == "tune" and t.stats["requested"] == 6, f"stats {t.stats}")
+    check(t.best_config == after, "the session keeps the best configuration")
+    check(t.best_cost <= t.default_cost or t.best_config == t.default_config, "best <= default")
+    # warm-up + 7 measurement passes + 2 = 10 spp in the film
+    check(spp == 10 and img.shape == (16, 16, 3), f"tuning passes accumulate ({spp} spp)")
+    with tt.TuningDB(db_path) as db:
+        rows = db.rows("accel_embree")
+        check(len(db) == len(rows) == len(h), f"database rows {len(rows)} = samples {len(h)}")
+        check([r["config"] for r in rows] == [x["config"] for x in h], "rows' configs = history")
+        check([r["iteration"] for r in rows] == [x["iteration"] for x in h], "rows' iterations")
+        ok = [(r["cost"], x["cost"]) for r, x in zip(rows, h) if x["status"] == "ok"]
+        check(all(abs(a - b) <= 1e-9 * max(1, abs(b)) for a, b in ok), "rows' costs = history")
+        check(all(r["indicators"] and len(r["indicators"]) == 17 for r in rows), "indicators")
+        check(all(r["mode"] in ("default", "tune") and r["tuner"] in (None, "tuner_nm")
+                  for r in rows), "mode and tuner")
+        check(rows[0]["context"]["spp"] == 1 and "integrator_pt" in rows[0]["context"]["plugins"],
+              f"context {rows[0]['context']}")
+    # the same session again: every configuration is answered by the database
+    with tt.Session(box, **dict(kw, plugins=["accel_embree"] + kw["plugins"])) as s:
+        s.set("accel_embree.backend", "custom")
+        t2 = s.tune("accel_embree", tuner="tuner_nm", iterations=6, db=db_path,
+                    params=["maxLeafSize", "quality"])
+    # (the default is measured again, and its noisy cost may steer the search elsewhere: a
+    # configuration the first run measured must be answered, a new one may be measured)
+    seen = {json.dumps(x["config"], sort_keys=True) for x in h if x["status"] == "ok"}
+    check(t2.stats["cached"] >= 1 and all(x["cached"] for x in t2.history[1:] if x["status"] == "ok"
+                                          and json.dumps(x["config"], sort_keys=True) in seen),
+          f"second run answered from the database ({t2.stats})")
+    with tt.TuningDB(db_path) as db:
+        check(len(db) == len(h) + t2.stats["measured"], f"only new measurements are recorded ({len(db)})")
+    # exploration without a tuner, PSSMLT's hint (target and objective from the plugin)
+    with tt.Session(box, plugins=["integrator_pssmlt", "tuner_nm"], resolution=(16, 16)) as s:
+        t3 = s.tune(tuner="tuner_nm", iterations=3, spp=1)
+        check(t3.history and "sigma0" in json.dumps(t3.best_config) or "a1" in json.dumps(t3.best_config),
+              f"PSSMLT's hint chooses the target ({list(t3.best_config)[:4]})")
+    with tt.Session(box, resolution=(16, 16)) as s:
+        t4 = s.tune("accel_embree", iterations=3)
+        check(t4.mode == "explore" and len(t4.history) == 4, f"exploration ({t4.mode}, {len(t4.history)})")
+        raises(lambda: s.tune("accel_embree", tuner="tuner_nm"), "tuner_nm", "not loaded")
+
+
+def test_example(tmp):
+    script = os.path.join(SOURCE, "python/examples/render_and_tune.py")
+    env = dict(os.environ, PYTHONPATH=os.path.join(BUILD, "python"))
+    r = subprocess.run([sys.executable, script, "--res", "24x24", "--spp", "2", "--iterations",
+                        "3", "--out", os.path.join(tmp, "example")], capture_output=True,
+                       text=True, env=env, cwd=SOURCE)
+    check(r.returncode == 0, f"example script: {r.stderr}")
+    check(os.path.exists(os.path.join(tmp, "example.exr")), "example wrote its EXR")
+
+
+def main():
+    abi = sys.argv[1] if len(sys.argv) > 1 else os.path.join(BUILD, "python/tests/python_abi")
+    with tempfile.TemporaryDirectory() as tmp:
+        os.environ["XDG_DATA_HOME"] = tmp  # never the user's database
+        for test in (lambda: test_layout(abi), lambda: test_errors(tmp), test_plugins,
+                     lambda: test_host_equal(tmp), lambda: test_aovs(tmp),
+                     lambda: test_tuning(tmp), lambda: test_example(tmp)):
+            test()
+    print(f"python_api: {checks} checks, {failures} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
