@@ -110,8 +110,13 @@ int tt__ensure_parent_dir(const char *option, const char *path);
 int tt__run_convert(const tt__host_options *opt);
 /* Runs --indicators: prints raw and normalised indicators as JSON (indicators.c). */
 int tt__run_indicators(const tt__host_options *opt);
-/* SIGINT/SIGTERM finish the current pass (tt_host.should_stop); a second one exits (run.c). */
+/* SIGINT/SIGTERM finish the current pass (tt_host.should_stop); a second one exits
+ * (signals.c). */
 void tt__install_signals(void);
+/* Brackets the writing of the final outputs: a second signal meanwhile waits for the writes,
+ * and tt__outputs_end then exits 130 (signals.c). */
+void tt__outputs_begin(void);
+void tt__outputs_end(void);
 /* Runs --hybrid / --predict over the scene's camera path (hybrid.c). */
 int tt__run_hybrid(const tt__host_options *opt);
 /* Runs --measure: configurations of the accel side by side (measure.c). */

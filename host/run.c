@@ -6,38 +6,10 @@
 #include <libgen.h>
 #include <limits.h>
 #include <stddef.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-
-/* ---- signals: the first SIGINT/SIGTERM asks for a clean stop, the second exits ---- */
-
-static volatile sig_atomic_t tt__signals;
-/* Set while the final outputs are written: a second signal then waits for the writes (which
- * are atomic anyway) and the host exits 130 right after them. */
-static volatile sig_atomic_t tt__writing_outputs;
-
-static void tt__on_signal(int sig) {
-  if (tt__signals++) {
-    if (tt__writing_outputs) return;
-    _exit(128 + sig);
-  }
-  tt_default_host_request_stop();
-  static const char msg[] = "\nhost: interrupted: finishing the current pass (again to abort)\n";
-  ssize_t ignored = write(2, msg, sizeof msg - 1);
-  (void)ignored;
-}
-
-void tt__install_signals(void) {
-  struct sigaction sa;
-  memset(&sa, 0, sizeof sa);
-  sa.sa_handler = tt__on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
-}
 
 /* ---- --list-plugins ---- */
 
@@ -387,8 +359,8 @@ int tt__run_render(const tt__host_options *opt) {
             (unsigned long long)rec->nonfinite);
 
   /* write what was rendered, even when interrupted or a later pass failed; a second
-   * signal during the writes waits for them (tt__on_signal) */
-  tt__writing_outputs = 1;
+   * signal during the writes waits for them (signals.c) */
+  tt__outputs_begin();
   rec->out_exr = exr;
   rec->out_png = png;
   if (rec->spp > 0) {
@@ -405,8 +377,7 @@ int tt__run_render(const tt__host_options *opt) {
     fprintf(stderr, "host: cannot write %s: %s\n", opt->stats, tt_last_error());
     if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
   }
-  tt__writing_outputs = 0;
-  if (tt__signals > 1) _exit(TT_EXIT_INTERRUPTED);  /* the deferred second signal */
+  tt__outputs_end();
   if (rec->interrupted && rc == TT_EXIT_OK) rc = TT_EXIT_INTERRUPTED;
 
 done:
