@@ -22,6 +22,7 @@
 
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
+#include <tt_util/strings.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -85,13 +86,6 @@ static void nn_destroy(tt_predictor *p) {
   free(p);
 }
 
-static char *nn_dup(const char *s) {
-  if (!s) s = "";
-  char *d = malloc(strlen(s) + 1);
-  if (d) strcpy(d, s);
-  return d;
-}
-
 static const tt_space *nn_space(void) { return nn_settings; }
 
 static tt_status nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
@@ -109,13 +103,16 @@ static tt_status nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) 
   p->params = tt_space_count(su->target);
   p->dim = su->state_dim;
   p->max_states = max_states;
-  p->state_space = nn_dup(su->state_space);
+  p->state_space = tt__strdup(su->state_space ? su->state_space : "");
   p->signature = ttpm_space_signature(su->target);
   int bad = !p->state_space || !p->signature;
   if (su->state_names && !bad) {
     p->names = calloc(p->dim, sizeof *p->names);
     bad = !p->names;
-    for (uint32_t i = 0; !bad && i < p->dim; i++) bad = !(p->names[i] = nn_dup(su->state_names[i]));
+    for (uint32_t i = 0; !bad && i < p->dim; i++) {
+      const char *name = su->state_names[i] ? su->state_names[i] : "";  /* unnamed: "" */
+      bad = !(p->names[i] = tt__strdup(name));
+    }
   }
   if (bad) {
     nn_destroy(p);

@@ -30,6 +30,7 @@
 
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
+#include <tt_util/strings.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -74,13 +75,6 @@ struct tt_predictor {
 };
 
 static const tt_space *rbf_space(void) { return rbf_settings; }
-
-static char *rbf_dup(const char *s) {
-  if (!s) s = "";
-  char *d = malloc(strlen(s) + 1);
-  if (d) strcpy(d, s);
-  return d;
-}
 
 /* Reads the settings (NULL: defaults) into v. */
 static void rbf_read_settings(const tt_config *c, rbf_settings_values *v) {
@@ -212,13 +206,16 @@ static tt_status rbf_create_ex(const tt_predictor_setup *su, tt_predictor **out)
   p->m = rbf_action_dims(su->target);
   p->seed = su->seed;
   rbf_read_settings(su->settings, &p->set);
-  p->state_space = rbf_dup(su->state_space);
+  p->state_space = tt__strdup(su->state_space ? su->state_space : "");
   p->signature = ttpm_space_signature(su->target);
   int bad = !p->state_space || !p->signature;
   if (su->state_names && !bad) {
     p->names = calloc(p->d, sizeof *p->names);
     bad = !p->names;
-    for (uint32_t i = 0; !bad && i < p->d; i++) bad = !(p->names[i] = rbf_dup(su->state_names[i]));
+    for (uint32_t i = 0; !bad && i < p->d; i++) {
+      const char *name = su->state_names[i] ? su->state_names[i] : "";  /* unnamed: "" */
+      bad = !(p->names[i] = tt__strdup(name));
+    }
   }
   if (bad || rbf_alloc(p)) {
     rbf_destroy(p);
