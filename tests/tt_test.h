@@ -72,11 +72,15 @@ static inline char *tt_test_read_file(const char *path, size_t *len) {
   if (!f) return NULL;
   char *buf = NULL;
   size_t n = 0, cap = 0;
+  int oom = 0;  /* out of memory with the buffer full: the file is not read whole */
   for (;;) {
     if (n + 1 >= cap) {
       size_t ncap = cap ? 2 * cap : 65536;
       char *nb = (char *)realloc(buf, ncap);
-      if (!nb) break;
+      if (!nb) {
+        oom = 1;
+        break;
+      }
       buf = nb;
       cap = ncap;
     }
@@ -84,7 +88,7 @@ static inline char *tt_test_read_file(const char *path, size_t *len) {
     n += got;
     if (got == 0) break;
   }
-  int failed = ferror(f) || !buf || n + 1 > cap;
+  int failed = oom || ferror(f) || !buf;
   fclose(f);
   if (failed) {
     free(buf);
