@@ -25,6 +25,8 @@ process (scene loading and warm start included).
   epsilon.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/epsilon --out tools/hybrid/figures
 """
 import argparse
+import hashlib
+import math
 import json
 import os
 import resource
@@ -55,7 +57,27 @@ def db_without(src_path, scene_id, path):
     return copy_samples(src_path, path, [("scene_id <> ?", (scene_id,))])
 
 
-def run(a, scene, sfile, warm, obj, eps, model, path):
+def model_sets(a, model):
+    """The --set arguments of `a.set` that name this model's plugin (PLUGIN.KEY=VALUE)."""
+    out = []
+    for kv in a.set:
+        if kv.split(".", 1)[0] == MODELS[model]:
+            out += ["--set", kv]
+    return out
+
+
+def run_name(a, scene, obj, eps, model, seed):
+    """A run's cache file name: seed 1 and no --set keep the names of the first runs."""
+    name = f"{scene}_{obj.replace('+', '_')}_eps{eps:g}_{model}"
+    sets = model_sets(a, model) if eps < 1.0 else []
+    if sets:
+        name += "_" + hashlib.sha1(" ".join(sets).encode()).hexdigest()[:8]
+    if seed != 1:
+        name += f"_seed{seed}"
+    return name + ".json"
+
+
+def run(a, scene, sfile, warm, obj, eps, model, seed, path):
     """One host --hybrid run, cached in `path` (its --stats plus the process' CPU seconds)."""
     if os.path.exists(path):
         with open(path) as f:
@@ -68,8 +90,8 @@ def run(a, scene, sfile, warm, obj, eps, model, path):
     cmd = ["nice", "-n", str(a.nice), a.host, "--quiet", "--hybrid", "--plugin", MODELS[model],
            "--epsilon", f"{eps:g}", "--iterations", str(a.iterations), "--camera-index", a.states,
            "--objective", obj, "--tune-spp", "1", "--spp", str(a.frames), "--res", a.res,
-           "--threads", "1", "--clock", "cpu", "--seed", str(a.seed), "--tune-params", a.tune_params,
-           "--warm-start", warm, "--db", db, "--stats", stats, sfile]
+           "--threads", "1", "--clock", "cpu", "--seed", str(seed), "--tune-params", a.tune_params,
+           "--warm-start", warm, "--db", db, "--stats", stats] + (model_sets(a, model) if eps < 1.0 else []) + [sfile]
     ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -79,7 +101,7 @@ def run(a, scene, sfile, warm, obj, eps, model, path):
     with open(stats) as f:
         st = json.load(f)
     os.remove(stats)
-    out = {"scene": scene, "objective": obj, "epsilon": eps, "model": model, "command": cmd[3:],
+    out = {"scene": scene, "objective": obj, "epsilon": eps, "model": model, "seed": seed, "command": cmd[3:],
            "wall_s": time.time() - t0, "load1": os.getloadavg()[0],
            "cpu_s": (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime),
            "hybrid": st["hybrid"]}
@@ -123,7 +145,10 @@ def main():
     ap.add_argument("--frames", type=int, default=0, help="frames per state (default K + 1)")
     ap.add_argument("--res", default="128x128")
     ap.add_argument("--tune-params", default=TUNE_PARAMS)
-    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--seeds", default="1", help="comma-separated seeds (the epsilon draws and the "
+                    "search's): every run is repeated per seed")
+    ap.add_argument("--set", action="append", default=[], metavar="PLUGIN.KEY=VALUE",
+                    help="a predictor setting for the runs of that predictor (repeatable)")
     ap.add_argument("--nice", type=int, default=19)
     ap.add_argument("--no-run", action="store_true", help="report the cached runs only")
     a = ap.parse_args()
@@ -135,51 +160,54 @@ def main():
     os.makedirs(os.path.join(a.work, "runs"), exist_ok=True)
     results = []
     t0 = time.time()
-    todo = [(s, o, e, m) for s in a.scenes.split(",") for o in a.objectives.split(",") for e in eps
-            for m in (a.models.split(",")[:1] if e == 1.0 else a.models.split(","))]
-    for k, (s, o, e, m) in enumerate(todo):
+    seeds = [int(x) for x in a.seeds.split(",")]
+    # seeds innermost but one: whenever the run stops, every scene has its first seeds done
+    todo = [(s, o, e, m, sd) for sd in seeds for s in a.scenes.split(",") for o in a.objectives.split(",")
+            for e in eps for m in (a.models.split(",")[:1] if e == 1.0 else a.models.split(","))]
+    for k, (s, o, e, m, sd) in enumerate(todo):
         if s not in files:
             sys.exit(f"epsilon: {s} has no finished job in {a.db}")
         sfile, sid = files[s]
         warm = os.path.join(a.work, f"without_{s}.db")
         if not a.no_run:
             warm = db_without(a.db, sid, warm)
-        name = f"{s}_{o.replace('+', '_')}_eps{e:g}_{m}.json"
-        path = os.path.join(a.work, "runs", name)
+        path = os.path.join(a.work, "runs", run_name(a, s, o, e, m, sd))
         if a.no_run and not os.path.exists(path):
             continue
-        r = run(a, s, sfile, warm, o, e, m, path)
+        r = run(a, s, sfile, warm, o, e, m, sd, path)
+        r.setdefault("seed", sd)
         results.append(r)
         el = time.time() - t0
-        print(f"[{k + 1}/{len(todo)}] {s} {o} eps {e:g} {m}: {r['hybrid']['explored']} explored, "
+        print(f"[{k + 1}/{len(todo)}] {s} {o} eps {e:g} {m} seed {sd}: {r['hybrid']['explored']} explored, "
               f"{r['cpu_s']:.0f} CPU s, elapsed {el / 60:.1f} min, load {os.getloadavg()[0]:.1f}", flush=True)
     rows = []
     for r in results:
         t = totals(r, a.frames)
-        base = next((x for x in results if x["scene"] == r["scene"] and x["objective"] == r["objective"]
-                     and x["epsilon"] == 1.0), None)
+        same = [x for x in results if x["scene"] == r["scene"] and x["objective"] == r["objective"]
+                and x["seed"] == r["seed"]]
+        base = next((x for x in same if x["epsilon"] == 1.0), None)
         if base is None:
             continue
         b = totals(base, a.frames)
         # what epsilon-greedy would give without online learning: a mix of the epsilon 1 run
         # and the same model's epsilon 0 run, state by state in expectation
-        zero = next((x for x in results if x["scene"] == r["scene"] and x["objective"] == r["objective"]
-                     and x["epsilon"] == 0.0 and x["model"] == r["model"]), None)
+        zero = next((x for x in same if x["epsilon"] == 0.0 and x["model"] == r["model"]), None)
         mix = None
         if zero is not None:
             t0 = totals(zero, a.frames)["T"]
             mix = b["T"] / (r["epsilon"] * b["T"] + (1 - r["epsilon"]) * t0)
         d = sum(a.frames * st["default_cost"] for st in base["hybrid"]["states"] if st["default_cost"])
         rows.append({"scene": r["scene"], "objective": r["objective"], "epsilon": r["epsilon"],
-                     "model": r["model"], **t, "speedup": b["T"] / t["T"],
+                     "model": r["model"], "seed": r["seed"], **t, "speedup": b["T"] / t["T"],
                      "speedup_measured": b["measured"] / t["measured"], "speedup_cpu": b["cpu_s"] / t["cpu_s"],
                      "speedup_over_default": d / t["T"], "speedup_mix": mix})
     if a.out:
         os.makedirs(a.out, exist_ok=True)
         meta = {"states": a.states, "iterations": a.iterations, "frames_per_state": a.frames,
-                "res": a.res, "seed": a.seed, "warm_start": "baseline rows of the other scenes"}
+                "res": a.res, "seeds": seeds, "set": a.set,
+                "warm_start": "baseline rows of the other scenes"}
         with open(os.path.join(a.out, "epsilon.json"), "w") as f:
-            json.dump({"settings": meta, "rows": rows}, f, indent=1)
+            json.dump({"settings": meta, "rows": rows, "mean_over_seeds": over_seeds(rows)}, f, indent=1)
         with open(os.path.join(a.out, "epsilon.md"), "w") as f:
             f.write(table(rows))
         draw(rows, a)
@@ -187,14 +215,43 @@ def main():
     return 0
 
 
+def geomean(xs):
+    xs = [x for x in xs if x and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else None
+
+
+def over_seeds(rows):
+    """Per scene, objective, epsilon and model: geo-means over the seeds, min and max."""
+    keys = sorted({(r["scene"], r["objective"], r["epsilon"], r["model"] if r["epsilon"] < 1 else "search")
+                   for r in rows}, key=lambda k: (k[0], k[1], -k[2], k[3]))
+    out = []
+    for s, o, e, m in keys:
+        sel = [r for r in rows if (r["scene"], r["objective"], r["epsilon"]) == (s, o, e) and
+               (e == 1.0 or r["model"] == m)]
+        if e == 1.0:  # one search run per seed, whatever model its row was filed under
+            sel = list({r["seed"]: r for r in sel}.values())
+        out.append({"scene": s, "objective": o, "epsilon": e, "model": m, "seeds": sorted(r["seed"] for r in sel),
+                    "explored": sum(r["explore"] for r in sel), "states": sum(r["states"] for r in sel),
+                    **{k: geomean(r[k] for r in sel) for k in ("speedup", "speedup_measured", "speedup_over_default")},
+                    "speedup_min": min(r["speedup"] for r in sel), "speedup_max": max(r["speedup"] for r in sel),
+                    "measured_min": min(r["speedup_measured"] for r in sel),
+                    "measured_max": max(r["speedup_measured"] for r in sel),
+                    "cpu_s": sum(r["cpu_s"] for r in sel) / len(sel),
+                    "load1": [r["load1"] for r in sel]})
+    return out
+
+
 def table(rows):
-    lines = ["| scene | objective | epsilon | model | explored/states | speed-up over search | "
-             "(host clock, render) | over default | host CPU s |", "|---|---|---|---|---|---|---|---|---|"]
-    for r in sorted(rows, key=lambda r: (r["scene"], r["objective"], -r["epsilon"], r["model"])):
-        meas = f"{r['speedup_measured']:.2f}" if r["objective"] == "render" else ""
-        lines.append(f"| {r['scene']} | {r['objective']} | {r['epsilon']:g} | "
-                     f"{r['model'] if r['epsilon'] < 1 else 'search'} | {r['explore']}/{r['states']} | "
-                     f"{r['speedup']:.2f} | {meas} | {r['speedup_over_default']:.2f} | {r['cpu_s']:.0f} |")
+    lines = ["| scene | objective | epsilon | model | seeds | explored/states | speed-up over search: "
+             "geo-mean (min-max) | render, host clock: geo-mean (min-max) | over default | host CPU s "
+             "per run |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in over_seeds(rows):
+        meas = (f"{r['speedup_measured']:.2f} ({r['measured_min']:.2f}-{r['measured_max']:.2f})"
+                if r["objective"] == "render" else "")
+        lines.append(f"| {r['scene']} | {r['objective']} | {r['epsilon']:g} | {r['model']} | "
+                     f"{len(r['seeds'])} | {r['explored']}/{r['states']} | {r['speedup']:.2f} "
+                     f"({r['speedup_min']:.2f}-{r['speedup_max']:.2f}) | {meas} | "
+                     f"{r['speedup_over_default']:.2f} | {r['cpu_s']:.0f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -210,20 +267,24 @@ def draw(rows, a):
     fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 3.9), squeeze=False)
     colors = {"nn": "#1f77b4", "rbf": "#2ca02c", "static": "#7f7f7f"}
     marks = ["o", "s", "^", "D", "v"]
-    scenes = sorted({r["scene"] for r in rows})
+    agg = over_seeds(rows)
+    nseeds = max(len(r["seeds"]) for r in agg)
+    scenes = sorted({r["scene"] for r in agg})
+    lo = {"speedup": "speedup_min", "speedup_measured": "measured_min"}
+    hi = {"speedup": "speedup_max", "speedup_measured": "measured_max"}
     for ax, (o, key) in zip(axes[0], panels):
         for si, s in enumerate(scenes):
-            for m in sorted({r["model"] for r in rows if r["epsilon"] < 1}):
-                pts = sorted((r["epsilon"], r[key]) for r in rows if r["scene"] == s and
-                             r["objective"] == o and (r["model"] == m or r["epsilon"] == 1.0))
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marks[si % len(marks)],
-                        color=colors.get(m, "k"), alpha=0.75, label=f"{s}, {m}")
-                mx = sorted((r["epsilon"], r["speedup_mix"]) for r in rows if r["scene"] == s and
-                            r["objective"] == o and r["model"] == m and r["speedup_mix"])
+            for m in sorted({r["model"] for r in agg if r["epsilon"] < 1}):
+                pts = sorted((r["epsilon"], r[key], r[lo[key]], r[hi[key]]) for r in agg if r["scene"] == s
+                             and r["objective"] == o and (r["model"] == m or r["epsilon"] == 1.0))
+                ax.errorbar([p[0] for p in pts], [p[1] for p in pts],
+                            yerr=[[max(0.0, p[1] - p[2]) for p in pts], [max(0.0, p[3] - p[1]) for p in pts]],
+                            marker=marks[si % len(marks)], color=colors.get(m, "k"), alpha=0.75,
+                            capsize=2, label=f"{s}, {m}")
                 grid = [k / 20 for k in range(21)]
-                if key == "speedup" and len(mx) >= 2 and mx[0][0] == 0.0:
+                if key == "speedup" and pts and pts[0][0] == 0.0:
                     # the mix curve through epsilon 0 and 1: T1 / (e T1 + (1 - e) T0)
-                    s0 = mx[0][1]
+                    s0 = pts[0][1]
                     ax.plot(grid, [1 / (e + (1 - e) / s0) for e in grid], ls=":", color=colors.get(m, "k"),
                             alpha=0.6)
         ax.axhline(1.0, color="k", lw=0.8, ls="--")
@@ -233,8 +294,9 @@ def draw(rows, a):
         ax.yaxis.set_major_formatter(ScalarFormatter())
         ax.yaxis.set_minor_formatter(ScalarFormatter())
         if key == "speedup":
-            ax.set_title(f"{o} (the objective): {a.frames} frames per state, path samples {a.states}\n"
-                         f"(dotted: the mix of epsilon 0 and 1 without online learning)", fontsize=8)
+            ax.set_title(f"{o} (the objective): {a.frames} frames per state, path samples {a.states},\n"
+                         f"geo-mean of {nseeds} seeds (bars: min-max; dotted: the mix of epsilon 0 "
+                         f"and 1 without online learning)", fontsize=8)
         else:
             ax.set_title(f"{o}, end to end on the host's clock: {a.frames} passes per state,\n"
                          f"the search's builds and the predictor's calls included", fontsize=8)

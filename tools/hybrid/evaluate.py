@@ -289,12 +289,89 @@ VARIANTS = {
                           "models": ["rbf"]} for f in (10, 25, 50, 200, 400)},
     # NN table size (training states kept)
     **{f"table-{n}": {"args": ["--set", f"predictor_nn.maxStates={n}"], "study": "table",
-                       "models": ["nn"]} for n in (8, 16, 32, 64)},
-    # RBF argmax candidates
+                       "models": ["nn"]} for n in (1, 2, 4, 8, 16, 32)},
+    # the relative reward with the argmax limited to configurations the search found good
+    # (pool only), and with the default candidates
+    "reward-relative-pool": {"args": ["--set", "predictor_rbf.reward=relative", "--set",
+                                      "predictor_rbf.lhsCandidates=0", "--set", "predictor_rbf.refine=0"],
+                             "study": "reward", "models": ["rbf"]},
+    # RBF argmax candidates: a question about the argmax of one trained model (the candidates
+    # do not change the training), so answered from the predictions alone: does the answer
+    # still change with more candidates? (summary "candidates"); the pool alone (0-0, only
+    # configurations the searches measured) is measured too
     **{f"cand-{l}-{r}": {"args": ["--set", f"predictor_rbf.lhsCandidates={l}", "--set",
-                                  f"predictor_rbf.refine={r}"], "study": "candidates", "models": ["rbf"]}
+                                  f"predictor_rbf.refine={r}"], "study": "candidates", "models": ["rbf"],
+                         "measure": (l, r) == (0, 0)}
        for l, r in ((0, 0), (64, 0), (256, 0), (1024, 3), (4096, 3))},
 }
+
+
+def reward_spread(db, jobs, cams, objectives):
+    """Why a reward scale matters (issue 15 item 3): over the baseline's samples of every
+    state (scene, camera) of the protocol, the share of the reward's variance that lies
+    within the states, i.e. the most the action (configuration) can explain, for R = 1/cost
+    and for R = default / cost; and how far a state's best sample is below its default."""
+    con = sqlite3.connect(db)
+    out = {}
+    for o in objectives:
+        inv, rel, gain = {}, {}, []
+        for s, cs in cams.items():
+            for c in cs:
+                job = jobs.get((s, c, o))
+                if not job:
+                    continue
+                costs = [r[0] for r in con.execute(
+                    "SELECT cost FROM samples WHERE scene_id = ? AND objective = ? AND camera LIKE ? "
+                    "AND status = 0 AND cost > 0 AND cost < 1e299", (job["scene_id"], o, f'%"path_index":{c}}}'))]
+                if len(costs) < 2:
+                    continue
+                inv[(s, c)] = [1.0 / x for x in costs]
+                rel[(s, c)] = [job["default_cost"] / x for x in costs]
+                gain.append(job["best_cost"] / job["default_cost"])
+
+        def within(groups):
+            allv = [x for g in groups.values() for x in g]
+            mean = sum(allv) / len(allv)
+            tot = sum((x - mean) ** 2 for x in allv)
+            win = sum(sum((x - sum(g) / len(g)) ** 2 for x in g) for g in groups.values())
+            return win / tot if tot > 0 else float("nan")
+        if inv:
+            means = [sum(g) / len(g) for g in inv.values()]
+            gain.sort()
+            out[o] = {"states": len(inv), "samples": sum(len(g) for g in inv.values()),
+                      "within_share_inverse": within(inv), "within_share_relative": within(rel),
+                      "inverse_state_mean_min": min(means), "inverse_state_mean_max": max(means),
+                      "best_over_default_median": gain[len(gain) // 2]}
+    con.close()
+    return out
+
+
+def candidates_study(preds, objectives, largest="cand-4096-3"):
+    """Per candidate set of the RBF's argmax, against the largest one (same trained model:
+    the candidates do not change the training): the share of states answered with the same
+    configuration, and the median and worst shortfall of its Q below the largest set's."""
+    out = {}
+    for (vname, m, pname, o), (d, _) in preds.items():
+        if m != "rbf" or not (vname.startswith("cand-") or vname == "default"):
+            continue
+        ref = preds.get((largest, m, pname, o))
+        if not ref:
+            continue
+        for key, (cfg, item) in d.items():
+            rcfg, ritem = ref[0].get(key, (None, None))
+            if cfg is None or rcfg is None or not ritem.get("value"):
+                continue
+            e = out.setdefault(f"{vname}/{o}", {"same": 0, "n": 0, "gaps": [], "candidates": [], "ms": []})
+            e["n"] += 1
+            e["same"] += canon(cfg) == canon(rcfg)
+            e["gaps"].append((ritem["value"] - item["value"]) / abs(ritem["value"]))
+            e["candidates"].append(item.get("candidates") or 0)
+            e["ms"].append(item.get("predict_ms") or 0.0)
+    for e in out.values():
+        g, c, ms = sorted(e.pop("gaps")), sorted(e.pop("candidates")), sorted(e.pop("ms"))
+        e.update({"same_share": e["same"] / e["n"], "q_gap_median": g[len(g) // 2], "q_gap_max": g[-1],
+                  "candidates_median": c[len(c) // 2], "predict_ms_median": ms[len(ms) // 2]})
+    return out
 
 
 def metrics(job, p, b):
@@ -387,6 +464,8 @@ def main():
     meas = Measurements(a, jobs, scenes)
     need = {}
     for (vname, m, pname, o), (d, _) in preds.items():
+        if not VARIANTS[vname].get("measure", True):
+            continue
         for (s, c), (cfg, _) in d.items():
             if cfg is not None:
                 need.setdefault((s, c, o), {})[canon(cfg)] = cfg
@@ -432,6 +511,8 @@ def main():
     summary = summarize(rows, cams, objectives, models)
     summary["scenes"] = {s: len(c) for s, c in cams.items()}
     summary["example"] = example(rows, jobs)
+    summary["reward_spread"] = reward_spread(a.db, jobs, cams, objectives)
+    summary["candidates"] = candidates_study(preds, objectives)
     summary["measured_configs"] = sum(len(meas.get(s, c, o)["ratios"]) for s in cams for c in cams[s] for o in objectives)
     summary["load_during_measurement"] = [r["load1"] for s in cams for c in cams[s] for o in objectives
                                           for r in meas.get(s, c, o)["runs"]]
@@ -513,6 +594,33 @@ def markdown(summary, a):
                     f"{f(ps[f'{o}/{m}'][sc]['speedup'])} ({f(ps[f'{o}/{m}'][sc]['loso_speedup'])})"
                     for m in models) + " | " + " | ".join(f(ps[f"{o}/{m}"][sc]["roofline"]) for m in models) + " |")
             out.append("")
+    rs = summary.get("reward_spread", {})
+    if rs:
+        out += ["Reward scale (item 3): share of the reward's variance within a state (the most "
+                "the configuration can explain; the rest is which state it is), over the baseline's "
+                "samples; and the search's best sample / the default, median of the states.", "",
+                "| objective | states / samples | R = 1/cost: within states | state means of 1/cost (1/ms) "
+                "| R = default/cost: within states | best / default (median) |", "|---|---|---|---|---|---|"]
+        for o in ("render", "build+render"):
+            v = rs.get(o)
+            if v:
+                out.append(f"| {o} | {v['states']} / {v['samples']} | {f(v['within_share_inverse'])} | "
+                           f"{f(v['inverse_state_mean_min'], '{:.4f}')}-{f(v['inverse_state_mean_max'], '{:.4f}')} | "
+                           f"{f(v['within_share_relative'])} | {f(v['best_over_default_median'])} |")
+        out.append("")
+    cs = summary.get("candidates", {})
+    if cs:
+        out += ["Argmax candidates (RBF, item 3), from the predictions of one trained model per split "
+                "against the largest set (4096 Latin-hypercube points + 3 refinement rounds): same "
+                "answer, and Q's shortfall below the largest set's answer.", "",
+                "| candidates: LHS-refine / objective | states | same answer | Q shortfall median / max "
+                "| candidates compared (median) | predict ms |", "|---|---|---|---|---|---|"]
+        for k in sorted(cs, key=lambda k: (k.split("/")[1], k)):
+            v = cs[k]
+            out.append(f"| {k} | {v['n']} | {f(v['same_share'])} | {f(v['q_gap_median'], '{:.2%}')} / "
+                       f"{f(v['q_gap_max'], '{:.2%}')} | {v['candidates_median']} | "
+                       f"{f(v['predict_ms_median'], '{:.3g}')} |")
+        out.append("")
     st = summary.get("studies", {})
     if st:
         out += ["| study / objective / model | speed-up | roofline | same splits, default: speed-up "

@@ -2,8 +2,9 @@
 # tools/hybrid end to end on two small scenes with camera paths (16x16, 6 cameras, 4
 # iterations): the baseline generator is resumable (stopped after 5 jobs, run again: it does
 # the rest, a third run has nothing to do) and its jobs are self-describing rows; the
-# evaluation runs every protocol and model, measures side by side and writes the summary and
-# the figures. Numbers are not asserted (a 16x16 image times noise); the pipeline is.
+# evaluation runs every protocol and model and two studies (the RBF's reward, its argmax
+# candidates), measures side by side and writes the summary and the figures; epsilon.py runs
+# two seeds. Numbers are not asserted (a 16x16 image times noise); the pipeline is.
 set -euo pipefail
 fail() { echo "FAIL: $*" >&2; exit 1; }
 : "${TT_SOURCE_ROOT:?}" "${TT_BUILD_ROOT:?}"
@@ -32,7 +33,8 @@ n=$(q "$tmp/b.db" "SELECT count(*) FROM hybrid_jobs WHERE iterations = 4 AND res
 "${B[@]}" --scenes nosuch >/dev/null 2>&1 && fail "--scenes nosuch should be refused"
 
 E=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e" --out "$tmp/f"
-   --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0 --jobs 2)
+   --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0 --jobs 2
+   --variants reward,candidates --variant-splits 1)
 "${E[@]}" >"$tmp/e.log" 2>&1 || { cat "$tmp/e.log"; fail "evaluate"; }
 for f in summary.json summary.md rows.json fig3_16_example.png fig3_17_speedup_render.png fig3_18_roofline_render.png \
          fig3_19_break_even_render.png fig3_20_speedup_total.png fig3_21_roofline_total.png \
@@ -47,7 +49,18 @@ for key in ("render/nn", "render/rbf", "render/static", "build+render/nn"):
     assert t["n"] > 0 and math.isfinite(t["speedup"]) and t["speedup"] > 0, (key, t)
     assert math.isfinite(t["roofline"]) and math.isfinite(t["loso_speedup"]), (key, t)
 assert s["scenes"] == {"box": 6, "spec": 6}, s["scenes"]
+# the studies: the relative reward measured beside the default on the same split, the
+# argmax candidates compared against the largest set from the predictions alone
+st = s["studies"]["reward-relative/render/rbf"]
+assert st["n"] > 0 and math.isfinite(st["speedup"]) and math.isfinite(st["default_speedup"]), st
+c = s["candidates"]["cand-4096-3/render"]
+assert c["same_share"] == 1.0 and c["q_gap_max"] == 0.0, c
+assert 0.0 <= s["candidates"]["cand-0-0/render"]["same_share"] <= 1.0
+for o in ("render", "build+render"):
+    r = s["reward_spread"][o]
+    assert r["states"] == 12 and 0.0 <= r["within_share_inverse"] <= 1.0, r
 EOF
+grep -q "Argmax candidates" "$tmp/f/summary.md" || fail "summary.md has no candidates table"
 # a second run measures nothing new (cached)
 "${E[@]}" >"$tmp/e2.log" 2>&1 || fail "evaluate (cached)"
 if grep -q "measuring" "$tmp/e2.log"; then cat "$tmp/e2.log"; fail "the second evaluation measured again"; fi
@@ -59,15 +72,19 @@ grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "me
 # scene's own rows: epsilon 1 explores every state, epsilon 0 none (one build each)
 EP=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/epsilon.py" --db "$tmp/b.db" --work "$tmp/eps" --out "$tmp/fe"
     --host "$host" --scenes box --objectives render --epsilons 0,1 --models nn --states 3:5
-    --iterations 3 --res 16x16 --nice 0)
+    --iterations 3 --res 16x16 --nice 0 --seeds 1,2)
 "${EP[@]}" >"$tmp/ep.log" 2>&1 || { cat "$tmp/ep.log"; fail "epsilon.py"; }
 [ -s "$tmp/fe/hybrid_epsilon.png" ] || fail "epsilon.py did not write its chart"
 "$PY" - "$tmp/fe/epsilon.json" "$tmp/eps" <<'EOF' || fail "epsilon.json"
 import json, math, sqlite3, sys
-rows = {r["epsilon"]: r for r in json.load(open(sys.argv[1]))["rows"]}
-assert rows[1.0]["explore"] == 3 and rows[1.0]["exploit"] == 0 and rows[1.0]["speedup"] == 1.0, rows
-assert rows[0.0]["explore"] == 0 and rows[0.0]["exploit"] == 3, rows
-assert math.isfinite(rows[0.0]["speedup"]) and rows[0.0]["speedup"] > 0, rows
+e = json.load(open(sys.argv[1]))
+for seed in (1, 2):  # every seed's runs, each against its own epsilon-1 run
+    rows = {r["epsilon"]: r for r in e["rows"] if r["seed"] == seed}
+    assert rows[1.0]["explore"] == 3 and rows[1.0]["exploit"] == 0 and rows[1.0]["speedup"] == 1.0, rows
+    assert rows[0.0]["explore"] == 0 and rows[0.0]["exploit"] == 3, rows
+    assert math.isfinite(rows[0.0]["speedup"]) and rows[0.0]["speedup"] > 0, rows
+m = {r["epsilon"]: r for r in e["mean_over_seeds"]}
+assert m[0.0]["seeds"] == [1, 2] and m[0.0]["speedup_min"] <= m[0.0]["speedup"] <= m[0.0]["speedup_max"], m
 # the warm start holds the other scene's rows only
 n = sqlite3.connect(sys.argv[2] + "/without_box.db").execute(
     "SELECT count(DISTINCT scene_id) FROM samples").fetchone()[0]
