@@ -7,6 +7,8 @@
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
+#include <poll.h>
+#include <sys/pidfd.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -48,6 +50,7 @@ int tt_mpi_child_start(tt_mpi_child *c, char **argv, const char *log, char *err,
   }
   close(fd);
   c->pid = pid;
+  c->pidfd = pidfd_open(pid, 0);
   c->t0 = tt_mpi_now();
   c->exit_code = -1;
   return 0;
@@ -72,7 +75,23 @@ int tt_mpi_child_poll(tt_mpi_child *c, int block) {
                ru.ru_stime.tv_usec * 1e-6;
   }
   c->pid = 0;
+  if (c->pidfd >= 0) close(c->pidfd);
+  c->pidfd = -1;
   return 1;
+}
+
+int tt_mpi_child_wait(tt_mpi_child *c, double timeout_s) {
+  if (!c->pid) return 1;
+  if (c->pidfd >= 0) {
+    struct pollfd p = {c->pidfd, POLLIN, 0};
+    poll(&p, 1, timeout_s > 0 ? (int)(timeout_s * 1000) : 0);
+  } else {
+    for (double t0 = tt_mpi_now(); tt_mpi_now() - t0 < timeout_s;) {
+      if (tt_mpi_child_poll(c, 0)) return 1;
+      usleep(2000);
+    }
+  }
+  return tt_mpi_child_poll(c, 0);
 }
 
 void tt_mpi_child_kill(pid_t pid, int sig) {

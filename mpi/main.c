@@ -40,7 +40,7 @@
 #define TT_MPI_DEFAULT_HOST "tunetrace"
 #endif
 
-enum { TAG_JOB = 1, TAG_RESULT = 2 };
+enum { TAG_JOB = 1, TAG_RESULT = 2, TAG_ALIVE = 3 };
 enum { EXIT_OK = 0, EXIT_FAILED = 1, EXIT_USAGE = 2, EXIT_INTERRUPTED = 130 };
 
 /* The fixed head of a result message; the payload (the job's database file, or nothing)
@@ -55,8 +55,10 @@ typedef struct tt_mpi_result_head {
 
 typedef struct tt_mpi_opts {
   const char *jobs, *db, *host, *scratch;
-  int list;
+  int list, check;
   long max_jobs;
+  double liveness;   /* seconds of silence after which a peer is taken as dead */
+  double heartbeat;  /* seconds between heartbeats (liveness / 10, within 0.1..5) */
 } tt_mpi_opts;
 
 static volatile sig_atomic_t g_stop;
@@ -70,15 +72,22 @@ static void tt__on_signal(int sig) {
 static int tt__usage(int rank, const char *msg) {
   if (rank == 0) {
     if (msg) fprintf(stderr, "tunetrace-mpi: %s\n", msg);
-    fprintf(stderr, "usage: mpirun -np N tunetrace-mpi --jobs FILE --db DB [--host PATH] "
-            "[--scratch DIR] [--max-jobs N] [--list]\n"
+    fprintf(stderr, "usage: mpirun [--enable-recovery] -np N tunetrace-mpi --jobs FILE --db DB "
+            "[--host PATH] [--scratch DIR] [--max-jobs N] [--liveness S] [--list | --check]\n"
             "  --jobs FILE   the job list (JSON; mpi/README.md)\n"
             "  --db DB       the merged tuning database (created; rank 0 writes it)\n"
             "  --host PATH   the host program the jobs run (default %s)\n"
             "  --scratch DIR node-local folder for the jobs' own databases (default $TMPDIR "
             "or /tmp)\n"
             "  --max-jobs N  hand out at most N new jobs, then stop (a rerun continues)\n"
-            "  --list        print every job as done or todo and exit\n",
+            "  --liveness S  a rank silent for S seconds is taken as dead (default 60): its "
+            "job is lost,\n"
+            "                the others go on (needs mpirun --enable-recovery; else Open MPI "
+            "ends the run)\n"
+            "  --list        print every job as done or todo and exit\n"
+            "  --check       print the jobs still todo; exit 0 when none is, 1 otherwise (the "
+            "exit status\n"
+            "                of mpirun --enable-recovery is 0 whatever the ranks return)\n",
             TT_MPI_DEFAULT_HOST);
   }
   return EXIT_USAGE;
@@ -179,7 +188,7 @@ typedef struct tt_mpi_coord {
   unsigned char *done;   /* per job: merged (before or in this run) */
   unsigned char *given;  /* per job: handed out in this run */
   size_t next;           /* first job maybe not handed out */
-  long handed, todo, finished, failed;
+  long handed, todo, finished, failed, lost;
   double t0;
   char scratch[4200];
 } tt_mpi_coord;
@@ -295,8 +304,90 @@ static unsigned char *tt__pack(const tt_mpi_run *r, int ok, const char *note, in
   return m;
 }
 
+/* ---- liveness: how rank 0 and the workers notice that the other side died ----
+ * Open MPI 4 has no ULFM: a peer's death is not reported to MPI calls (a send to a dead
+ * rank over shared memory just succeeds). Under `mpirun --enable-recovery` the other ranks
+ * keep running when one dies, so each side watches the other: a worker sends rank 0 a
+ * heartbeat while its job runs, rank 0 sends one to every worker it waits for, and a peer
+ * silent for --liveness seconds is taken as dead. Every wait is a non-blocking test, so no
+ * rank ever blocks on a dead peer. */
+static const int64_t g_alive = 0;  /* a heartbeat's body (buffer of requests freed at once) */
+
+/* The reply to a worker's request: a job index >= 0, or the end of the run. Rank 0 answers
+ * a request it has no job for only when the whole run is over, so that every rank knows
+ * whether a rank was lost: Open MPI 4.1's MPI_Finalize is a PMIx fence over every process
+ * of the run and hangs, more often than not, when one of them died; then the survivors exit
+ * without it (under --enable-recovery mpirun accepts that). */
+enum { REPLY_FINALIZE = -1, REPLY_EXIT = -2 };
+static int g_skip_finalize;  /* a rank was lost: end without MPI_Finalize */
+
+static void tt__send_alive(int to) {
+  MPI_Request q;
+  MPI_Isend(&g_alive, 1, MPI_INT64_T, to, TAG_ALIVE, MPI_COMM_WORLD, &q);
+  MPI_Request_free(&q);
+}
+
+/* rank 0's view of a worker */
+enum { PEER_WORKING, PEER_WAITING, PEER_LOST };  /* WAITING: asked, no job left for it */
+typedef struct tt_mpi_peer {
+  int state;
+  double seen;          /* the last message from it (monotonic s) */
+  long job;             /* the job it runs (-1: none) */
+  int job_lost;         /* its job was counted lost */
+  MPI_Request recv;     /* a result being received (MPI_REQUEST_NULL: none) */
+  unsigned char *buf;
+  int len;
+  int64_t reply;        /* the job number last sent to it (the buffer of that send) */
+} tt_mpi_peer;
+
+static void tt__reply(tt_mpi_peer *p, int rank, int64_t v) {
+  p->reply = v;
+  MPI_Request q;
+  MPI_Isend(&p->reply, 1, MPI_INT64_T, rank, TAG_JOB, MPI_COMM_WORLD, &q);
+  MPI_Request_free(&q);
+}
+
+/* A worker's result (or first request) has arrived: merges it, hands out the next job. */
+static void tt__peer_result(tt_mpi_coord *c, tt_mpi_peer *p, int rank, int *active) {
+  int was_lost = p->state == PEER_LOST;
+  if (was_lost) {
+    fprintf(stderr, "tunetrace-mpi: rank %d answered again after being taken as lost; its "
+            "result is taken, and it gets no new job\n", rank);
+    if (p->job_lost) {
+      c->finished--;
+      c->lost--;
+    }
+  }
+  if (p->len >= (int)sizeof(tt_mpi_result_head)) {
+    tt_mpi_result_head h;
+    memcpy(&h, p->buf, sizeof h);
+    if (h.job >= 0) {
+      if (g_stop && h.exit_code != 0) c->finished++;  /* interrupted: redone by a rerun */
+      else tt__receive(c, rank, p->buf, p->len);
+    }
+  }
+  free(p->buf);
+  p->buf = NULL;
+  p->job_lost = 0;
+  int64_t next = was_lost ? -1 : tt__next_job(c);
+  p->job = (long)next;
+  if (next < 0) {  /* answered when the run is over (tt__coordinate) */
+    if (!was_lost) (*active)--;
+    p->state = PEER_WAITING;
+    return;
+  }
+  tt__reply(p, rank, next);
+}
+
 static int tt__coordinate(tt_mpi_coord *c, int size, const char *scratch) {
-  int active = size - 1;         /* workers not yet told to stop */
+  int active = size - 1;         /* workers not yet told to stop, nor lost */
+  tt_mpi_peer *peers = calloc((size_t)size, sizeof *peers);
+  double now = tt_mpi_now(), last_alive = now;
+  for (int r = 1; r < size; r++) {
+    peers[r].seen = now;
+    peers[r].job = -1;
+    peers[r].recv = MPI_REQUEST_NULL;
+  }
   tt_mpi_run own;
   int own_running = 0;
   for (;;) {
@@ -313,7 +404,13 @@ static int tt__coordinate(tt_mpi_coord *c, int size, const char *scratch) {
         }
         progressed = 1;
       } else if (active == 0) {
-        break;
+        /* the end: every rank still here asked for a job lately (a waiting rank that died
+         * must not be told to finalize), then all of them are told how to end */
+        int fresh = 1;
+        for (int r = 1; r < size; r++)
+          if (peers[r].state == PEER_WAITING && now - peers[r].seen > 3 * c->o->heartbeat)
+            fresh = 0;
+        if (fresh) break;
       }
     }
     if (own_running && tt_mpi_child_poll(&own.child, 0)) {
@@ -326,52 +423,163 @@ static int tt__coordinate(tt_mpi_coord *c, int size, const char *scratch) {
       own_running = 0;
       progressed = 1;
     }
-    int flag = 0;
-    MPI_Status st;
-    MPI_Iprobe(MPI_ANY_SOURCE, TAG_RESULT, MPI_COMM_WORLD, &flag, &st);
-    if (flag) {
+    now = tt_mpi_now();
+    /* messages: heartbeats, and results (received without blocking: a sender that dies
+     * half-way must not hang rank 0) */
+    for (int m = 0; m < 256; m++) {
+      int flag = 0;
+      MPI_Message msg;
+      MPI_Status st;
+      MPI_Improbe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &msg, &st);
+      if (!flag) break;
+      tt_mpi_peer *p = &peers[st.MPI_SOURCE];
+      p->seen = now;
       int len = 0;
       MPI_Get_count(&st, MPI_BYTE, &len);
-      unsigned char *msg = malloc(len > 0 ? (size_t)len : 1);
-      MPI_Recv(msg, len, MPI_BYTE, st.MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-      if (len > 0) {
-        tt_mpi_result_head h;
-        memcpy(&h, msg, sizeof h);
-        if (h.job >= 0) {
-          if (g_stop && h.exit_code != 0) c->finished++;
-          else tt__receive(c, st.MPI_SOURCE, msg, len);
-        }
+      if (st.MPI_TAG == TAG_RESULT && p->recv == MPI_REQUEST_NULL) {
+        p->buf = malloc(len > 0 ? (size_t)len : 1);
+        p->len = len;
+        MPI_Imrecv(p->buf, len, MPI_BYTE, &msg, &p->recv);
+      } else {  /* a heartbeat (or a message out of turn): read and dropped */
+        unsigned char *junk = malloc(len > 0 ? (size_t)len : 1);
+        MPI_Mrecv(junk, len, MPI_BYTE, &msg, MPI_STATUS_IGNORE);
+        free(junk);
       }
-      free(msg);
-      int64_t next = tt__next_job(c);
-      MPI_Send(&next, 1, MPI_INT64_T, st.MPI_SOURCE, TAG_JOB, MPI_COMM_WORLD);
-      if (next < 0) active--;
       progressed = 1;
+    }
+    for (int r = 1; r < size; r++) {
+      tt_mpi_peer *p = &peers[r];
+      int done = 0;
+      if (p->recv != MPI_REQUEST_NULL) MPI_Test(&p->recv, &done, MPI_STATUS_IGNORE);
+      if (done) {
+        p->seen = now;
+        tt__peer_result(c, p, r, &active);
+        progressed = 1;
+      } else if (p->state != PEER_LOST && now - p->seen > c->o->liveness) {
+        if (p->state == PEER_WORKING) active--;
+        p->state = PEER_LOST;
+        if (p->job >= 0) {
+          const tt_mpi_job *j = &c->jobs->jobs[p->job];
+          fprintf(stderr, "tunetrace-mpi: rank %d silent for %.0f s: taken as dead; its job "
+                  "%s (jobs[%zu]) is lost (the same command redoes it), the other ranks go "
+                  "on\n", r, now - p->seen, j->tag, j->item);
+          p->job_lost = 1;
+          c->finished++;
+          c->lost++;
+        } else {
+          fprintf(stderr, "tunetrace-mpi: rank %d silent for %.0f s: taken as dead (it held "
+                  "no job)\n", r, now - p->seen);
+        }
+        progressed = 1;
+      }
+    }
+    if (now - last_alive >= c->o->heartbeat) {
+      for (int r = 1; r < size; r++)
+        if (peers[r].state != PEER_LOST) tt__send_alive(r);
+      last_alive = now;
     }
     if (!progressed) usleep(2000);
   }
-  return g_stop ? EXIT_INTERRUPTED : c->failed ? EXIT_FAILED : EXIT_OK;
+  int lost = 0;
+  for (int r = 1; r < size; r++) lost |= peers[r].state == PEER_LOST;
+  g_skip_finalize = lost;
+  for (int r = 1; r < size; r++)
+    if (peers[r].state == PEER_WAITING) tt__reply(&peers[r], r, lost ? REPLY_EXIT : REPLY_FINALIZE);
+  if (lost)
+    fprintf(stderr, "tunetrace-mpi: a rank was lost: the ranks end without MPI_Finalize (Open "
+            "MPI 4.1's would wait for the dead one)\n");
+  /* receives still open belong to lost ranks: their buffers stay with MPI */
+  free(peers);
+  return g_stop ? EXIT_INTERRUPTED : (c->failed || c->lost) ? EXIT_FAILED : EXIT_OK;
+}
+
+/* A worker: drains rank 0's heartbeats; 0 while rank 0 has been heard from within
+ * --liveness seconds, -1 once it has been silent longer (taken as dead). */
+static int tt__rank0_alive(const tt_mpi_opts *o, double *seen) {
+  double now = tt_mpi_now();
+  for (;;) {
+    int flag = 0;
+    MPI_Status st;
+    MPI_Iprobe(0, TAG_ALIVE, MPI_COMM_WORLD, &flag, &st);
+    if (!flag) break;
+    int64_t x;
+    MPI_Recv(&x, 1, MPI_INT64_T, 0, TAG_ALIVE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    *seen = now;
+  }
+  return now - *seen > o->liveness ? -1 : 0;
+}
+
+/* A worker: completes request q (a send to rank 0 or a receive from it) without blocking on
+ * a dead rank 0, sending heartbeats meanwhile (rank 0 may hold a request until the run
+ * ends). 0 when done, -1 when rank 0 fell silent first. */
+static int tt__finish(const tt_mpi_opts *o, MPI_Request *q, double *seen) {
+  double last = tt_mpi_now();
+  for (;;) {
+    int done = 0;
+    MPI_Test(q, &done, MPI_STATUS_IGNORE);
+    if (done) {
+      *seen = tt_mpi_now();
+      return 0;
+    }
+    if (tt__rank0_alive(o, seen)) return -1;
+    if (tt_mpi_now() - last >= o->heartbeat) {
+      tt__send_alive(0);
+      last = tt_mpi_now();
+    }
+    usleep(1000);
+  }
+}
+
+static int tt__rank0_lost(int rank, const tt_mpi_opts *o) {
+  g_skip_finalize = 1;
+  fprintf(stderr, "tunetrace-mpi: rank %d: rank 0 silent for %.0f s: taken as dead; this rank "
+          "stops (every job rank 0 merged is in the database: the same command completes "
+          "the set)\n", rank, o->liveness);
+  return EXIT_FAILED;
 }
 
 static int tt__work(const tt_mpi_opts *o, const tt_mpi_jobs *jobs, int rank,
                     const char *scratch) {
+  double seen = tt_mpi_now();
+  MPI_Request q;
   /* the first request carries no result */
   tt_mpi_result_head none = {-1, 0, 0, 0, 0, 0};
-  MPI_Send(&none, (int)sizeof none, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD);
+  MPI_Isend(&none, (int)sizeof none, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD, &q);
+  if (tt__finish(o, &q, &seen)) return tt__rank0_lost(rank, o);
   for (;;) {
     int64_t k = -1;
-    MPI_Recv(&k, 1, MPI_INT64_T, 0, TAG_JOB, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    if (k < 0) return EXIT_OK;
+    MPI_Irecv(&k, 1, MPI_INT64_T, 0, TAG_JOB, MPI_COMM_WORLD, &q);
+    if (tt__finish(o, &q, &seen)) return tt__rank0_lost(rank, o);
+    if (k < 0) {
+      g_skip_finalize = k == REPLY_EXIT;
+      return EXIT_OK;
+    }
     tt_mpi_run r;
-    if (tt__run_start(&r, o, scratch, jobs, (long)k) == 0) tt_mpi_child_poll(&r.child, 1);
+    if (tt__run_start(&r, o, scratch, jobs, (long)k) == 0) {
+      double last = tt_mpi_now();
+      while (!tt_mpi_child_wait(&r.child, o->heartbeat)) {
+        if (tt_mpi_now() - last >= o->heartbeat) {
+          tt__send_alive(0);
+          last = tt_mpi_now();
+        }
+        if (tt__rank0_alive(o, &seen)) {
+          tt_mpi_child_kill(r.child.pid, SIGTERM);
+          tt_mpi_child_poll(&r.child, 1);
+          g_child = 0;
+          return tt__rank0_lost(rank, o);
+        }
+      }
+    }
     g_child = 0;
     int ok = 0;
     char *note = tt__run_note(&r, rank, &ok);
     int len = 0;
     unsigned char *m = tt__pack(&r, ok, note, &len);
-    MPI_Send(m, len, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD);
-    free(m);
+    MPI_Isend(m, len, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD, &q);
+    int lost = tt__finish(o, &q, &seen);
     free(note);
+    if (lost) return tt__rank0_lost(rank, o);  /* m stays with the request */
+    free(m);
   }
 }
 
@@ -386,7 +594,7 @@ int main(int argc, char **argv) {
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
 
-  tt_mpi_opts o = {NULL, NULL, TT_MPI_DEFAULT_HOST, NULL, 0, 0};
+  tt_mpi_opts o = {NULL, NULL, TT_MPI_DEFAULT_HOST, NULL, 0, 0, 0, 60, 0};
   const char *tmp = getenv("TMPDIR");
   o.scratch = tmp && tmp[0] ? tmp : "/tmp";
   int bad = 0;
@@ -396,12 +604,20 @@ int main(int argc, char **argv) {
     const char **val = !strcmp(a, "--jobs") ? &o.jobs : !strcmp(a, "--db") ? &o.db
                        : !strcmp(a, "--host") ? &o.host : !strcmp(a, "--scratch") ? &o.scratch
                                                                                  : NULL;
-    if (val || !strcmp(a, "--max-jobs")) {
+    if (val || !strcmp(a, "--max-jobs") || !strcmp(a, "--liveness")) {
       if (i + 1 >= argc) {
         snprintf(msg, sizeof msg, "%s needs a value", a);
         bad = 1;
       } else if (val) {
         *val = argv[++i];
+      } else if (!strcmp(a, "--liveness")) {
+        char *end = NULL;
+        o.liveness = strtod(argv[++i], &end);
+        if (!*argv[i] || *end || !(o.liveness >= 1 && o.liveness <= 86400)) {
+          snprintf(msg, sizeof msg, "--liveness: expected seconds in 1..86400, got \"%s\"",
+                   argv[i]);
+          bad = 1;
+        }
       } else {
         char *end = NULL;
         o.max_jobs = strtol(argv[++i], &end, 10);
@@ -412,6 +628,8 @@ int main(int argc, char **argv) {
       }
     } else if (!strcmp(a, "--list")) {
       o.list = 1;
+    } else if (!strcmp(a, "--check")) {
+      o.check = 1;
     } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       tt__usage(rank, NULL);
       MPI_Finalize();
@@ -425,6 +643,11 @@ int main(int argc, char **argv) {
     snprintf(msg, sizeof msg, "--jobs FILE and --db DB are required");
     bad = 1;
   }
+  if (!bad && o.list && o.check) {
+    snprintf(msg, sizeof msg, "--list and --check: give one of them");
+    bad = 1;
+  }
+  o.heartbeat = o.liveness / 10 < 0.1 ? 0.1 : o.liveness / 10 > 5 ? 5 : o.liveness / 10;
   if (bad) {
     tt__usage(rank, msg);
     MPI_Finalize();
@@ -504,11 +727,18 @@ int main(int argc, char **argv) {
   int ready = opened && have_scratch, all_ready = 0;
   MPI_Allreduce(&ready, &all_ready, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
   int rc = EXIT_USAGE;
-  if (all_ready && o.list) {
-    if (rank == 0)
-      for (size_t i = 0; i < jobs.count; i++)
-        printf("%s %s\n", c.done[i] ? "done" : "todo", jobs.jobs[i].tag);
+  if (all_ready && (o.list || o.check)) {
     rc = EXIT_OK;
+    if (rank == 0) {
+      for (size_t i = 0; i < jobs.count; i++)
+        if (o.list || !c.done[i])
+          printf("%s %s\n", c.done[i] ? "done" : "todo", jobs.jobs[i].tag);
+      if (o.check) {
+        fprintf(stderr, "tunetrace-mpi: %s: %zu of %zu jobs of %s done\n", o.db,
+                jobs.count - (size_t)c.todo, jobs.count, o.jobs);
+        if (c.todo) rc = EXIT_FAILED;
+      }
+    }
   } else if (all_ready) {
     if (rank == 0) {
       fprintf(stderr, "tunetrace-mpi: %zu jobs in %s, %zu already in %s, %ld to run on %d "
@@ -516,6 +746,12 @@ int main(int argc, char **argv) {
               size == 1 ? "" : "s");
       snprintf(c.scratch, sizeof c.scratch, "%s", scratch);
       c.t0 = tt_mpi_now();
+      const char *rec = getenv("OMPI_MCA_orte_enable_recovery");
+      if (size > 1 && getenv("OMPI_COMM_WORLD_SIZE") && !(rec && (!strcmp(rec, "1") ||
+                                                           !strcmp(rec, "true"))))
+        fprintf(stderr, "tunetrace-mpi: note: mpirun without --enable-recovery: a rank that "
+                "dies ends the whole run (Open MPI stops every rank; their jobs in flight are "
+                "lost); with it, only the dead rank's job is lost\n");
       if (o.max_jobs && o.max_jobs < c.todo) c.todo = o.max_jobs;
       rc = tt__coordinate(&c, size, scratch);
       /* sequences finished by earlier runs whose manifest is missing */
@@ -527,8 +763,9 @@ int main(int argc, char **argv) {
         }
       long left = 0;
       for (size_t i = 0; i < jobs.count; i++) left += !c.done[i];
-      fprintf(stderr, "tunetrace-mpi: %s: %zu of %zu jobs done, %ld failed in this run%s\n",
-              o.db, jobs.count - (size_t)left, jobs.count, c.failed,
+      fprintf(stderr, "tunetrace-mpi: %s: %zu of %zu jobs done, %ld failed and %ld lost with "
+              "their rank in this run%s\n",
+              o.db, jobs.count - (size_t)left, jobs.count, c.failed, c.lost,
               left ? " (run the same command again to continue)" : "");
       if (rc == EXIT_OK && left && !o.max_jobs) rc = EXIT_FAILED;
     } else {
@@ -540,6 +777,10 @@ int main(int argc, char **argv) {
   free(c.done);
   free(c.given);
   tt_mpi_jobs_free(&jobs);
+  if (g_skip_finalize) {  /* see REPLY_EXIT */
+    fflush(NULL);
+    _exit(rc);
+  }
   MPI_Finalize();
   return rc;
 }
