@@ -7,8 +7,12 @@
 #    timings, machine and run ids) equal those of the same host commands run one by one, the
 #    searches have the same number of rows per camera, and every frame has the pixels of one
 #    host --sequence over the whole range (and the manifest its entries);
-#  - a rank killed mid-run (SIGKILL) loses only jobs in flight: the DB holds whole jobs only,
-#    and a rerun of the same command completes the set (a third run has nothing to do);
+#  - a rank killed mid-run (SIGKILL of the rank process itself, while its job runs): under
+#    mpirun --enable-recovery only that job is lost, the other rank finishes every other job
+#    (7 of 8), --check names the lost one and exits 1, and a rerun completes the set; rank 0
+#    killed: the worker stops within --liveness, nothing is left running, a rerun completes
+#    it; without --enable-recovery Open MPI ends the run, the DB holds whole jobs only, and a
+#    rerun completes the set (a third run has nothing to do);
 #  - Ctrl-C (SIGINT to mpirun) stops every rank, keeps the finished jobs, leaves no process;
 #  - bad job lists (unknown scene, empty range, a --post in a frame range, an unknown key)
 #    are refused before any rank starts work, naming the item, and create nothing.
@@ -125,39 +129,99 @@ for out in outs:
 PYEOF
 
 # --- a rank killed mid-run, then reruns ---
-"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" \
-  --scratch "$tmp" >"$tmp/k1.log" 2>&1 &
+# (64x64 jobs for the recovery cases: each runs long enough for the kill to land while it
+# renders)
+jobs "$tmp/seqk" >"$tmp/jobsk.json"
+jobs "$tmp/seqr" 64x64 >"$tmp/jobsr.json"
+jobs "$tmp/seq0" 64x64 >"$tmp/jobs0.json"
+# rank $2's process of the run on DB $1, once it runs a job (its host child exists) and at
+# least $3 jobs are merged; killed with SIGKILL
+kill_rank() {
+  local victim="" n
+  for _ in $(seq 1 1200); do
+    victim=""
+    for p in $(pgrep -f -- "--db $1" || true); do
+      [ "$(cat "/proc/$p/comm" 2>/dev/null)" = tunetrace-mpi ] || continue
+      tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$2" || continue
+      pgrep -P "$p" >/dev/null && victim=$p
+    done
+    n=$(q "$1" "SELECT count(*) FROM merges" 2>/dev/null || echo 0)
+    [ -n "$victim" ] && [ "${n:-0}" -ge "$3" ] && break
+    victim=""
+    sleep 0.05
+  done
+  [ -n "$victim" ] || fail "rank $2 of $1 not found running a job"
+  kill -9 "$victim"
+}
+no_leftovers() {
+  sleep 1
+  if pgrep -f -- "$1" >/dev/null; then pgrep -af -- "$1"; fail "$2: processes of the run remain"; fi
+}
+whole_jobs() {
+  [ "$(q "$1" "SELECT count(*) FROM samples")" = "$(q "$1" "SELECT sum(rows) FROM merges")" ] ||
+    fail "$2: rows of an unfinished job in the DB"
+}
+DRV=("$drv" --host "$host" --scratch "$tmp")
+
+# (a) mpirun --enable-recovery: only the dead rank's job is lost, the other rank goes on
+"${MPIRUN[@]}" --enable-recovery -np 2 "${DRV[@]}" --jobs "$tmp/jobsr.json" --db "$tmp/r.db" \
+  --liveness 10 >"$tmp/r1.log" 2>&1 &
 mp=$!
 pids+=("$mp")
-victim=""
-for _ in $(seq 1 600); do
-  if [ -z "$victim" ]; then
-    for p in $(pgrep -f -- "--db $tmp/k.db" || true); do
-      if tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1'; then victim=$p; fi
-    done
-  fi
-  n=$(q "$tmp/k.db" "SELECT count(*) FROM merges" 2>/dev/null || echo 0)
-  [ -n "$victim" ] && [ "${n:-0}" -ge 3 ] && break
-  sleep 0.1
-done
-[ -n "$victim" ] || fail "rank 1 not found"
-kill -9 "$victim"
+kill_rank "$tmp/r.db" 1 1
 rc=0; wait "$mp" || rc=$?
-[ "$rc" != 0 ] || fail "mpirun should fail when a rank is killed"
+[ "$rc" = 0 ] || { cat "$tmp/r1.log"; fail "recovery: mpirun exit $rc (Open MPI 4.1 exits 0 under --enable-recovery)"; }
+grep -q "rank 1 silent for [0-9]* s: taken as dead; its job .* is lost" "$tmp/r1.log" ||
+  { cat "$tmp/r1.log"; fail "recovery: rank 0 did not report rank 1's job lost"; }
+grep -q "7 of 8 jobs done, 0 failed and 1 lost with their rank" "$tmp/r1.log" ||
+  { cat "$tmp/r1.log"; fail "recovery: the other jobs should all be done (7 of 8)"; }
+[ "$(q "$tmp/r.db" "SELECT count(*) FROM merges")" = 7 ] || fail "recovery: expected 7 jobs merged"
+whole_jobs "$tmp/r.db" recovery
+no_leftovers "$tmp/r.db" recovery
+rc=0; "${DRV[@]}" --jobs "$tmp/jobsr.json" --db "$tmp/r.db" --check >"$tmp/rc.log" 2>&1 || rc=$?
+[ "$rc" = 1 ] && [ "$(grep -c '^todo ' "$tmp/rc.log")" = 1 ] || { cat "$tmp/rc.log"; fail "--check should exit 1 naming the one lost job"; }
+"${MPIRUN[@]}" --enable-recovery -np 2 "${DRV[@]}" --jobs "$tmp/jobsr.json" --db "$tmp/r.db" \
+  >"$tmp/r2.log" 2>&1 || { cat "$tmp/r2.log"; fail "recovery: rerun"; }
+grep -q "8 jobs in .*, 7 already in .* 1 to run" "$tmp/r2.log" || { cat "$tmp/r2.log"; fail "recovery: the rerun should run the lost job only"; }
+"${DRV[@]}" --jobs "$tmp/jobsr.json" --db "$tmp/r.db" --check >"$tmp/rc.log" 2>&1 || { cat "$tmp/rc.log"; fail "--check after the rerun"; }
+check_complete "$tmp/r.db" "$tmp/seqr" "recovery rerun"
+
+# (b) rank 0 killed (under --enable-recovery): the worker notices within --liveness, stops its
+#     job and exits; the DB holds whole jobs; a rerun completes the set
+"${MPIRUN[@]}" --enable-recovery -np 2 "${DRV[@]}" --jobs "$tmp/jobs0.json" --db "$tmp/z.db" \
+  --liveness 5 >"$tmp/z1.log" 2>&1 &
+mp=$!
+pids+=("$mp")
+kill_rank "$tmp/z.db" 0 1
+for _ in $(seq 1 300); do kill -0 "$mp" 2>/dev/null || break; sleep 0.1; done
+kill -0 "$mp" 2>/dev/null && { cat "$tmp/z1.log"; fail "rank 0 killed: the run did not end within 30 s"; }
+wait "$mp" || true
+grep -q "rank 1: rank 0 silent for 5 s: taken as dead; this rank stops" "$tmp/z1.log" ||
+  { cat "$tmp/z1.log"; fail "rank 0 killed: rank 1 did not notice"; }
+whole_jobs "$tmp/z.db" "rank 0 killed"
+no_leftovers "$tmp/z.db" "rank 0 killed"
+"${MPIRUN[@]}" --enable-recovery -np 2 "${DRV[@]}" --jobs "$tmp/jobs0.json" --db "$tmp/z.db" \
+  >"$tmp/z2.log" 2>&1 || { cat "$tmp/z2.log"; fail "rank 0 killed: rerun"; }
+check_complete "$tmp/z.db" "$tmp/seq0" "rank 0 killed, rerun"
+
+# (c) plain mpirun: Open MPI ends the whole run; finished jobs are kept, reruns complete it
+"${MPIRUN[@]}" -np 2 "${DRV[@]}" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" >"$tmp/k1.log" 2>&1 &
+mp=$!
+pids+=("$mp")
+kill_rank "$tmp/k.db" 1 3
+rc=0; wait "$mp" || rc=$?
+[ "$rc" != 0 ] || fail "mpirun (no recovery) should fail when a rank is killed"
+grep -q "note: mpirun without --enable-recovery" "$tmp/k1.log" || fail "no note about --enable-recovery"
 done1=$(q "$tmp/k.db" "SELECT count(*) FROM merges")
 [ "$done1" -ge 3 ] && [ "$done1" -lt 8 ] || fail "$done1 jobs done before the kill (expected 3..7)"
-[ "$(q "$tmp/k.db" "SELECT count(*) FROM samples")" = "$(q "$tmp/k.db" "SELECT sum(rows) FROM merges")" ] ||
-  fail "the killed run left rows of an unfinished job"
-sleep 1
-if pgrep -f -- "$tmp/k.db" >/dev/null; then pgrep -af -- "$tmp/k.db"; fail "processes of the killed run remain"; fi
-"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" \
-  --scratch "$tmp" >"$tmp/k2.log" 2>&1 || { cat "$tmp/k2.log"; fail "rerun after the kill"; }
+whole_jobs "$tmp/k.db" "killed run"
+no_leftovers "$tmp/k.db" "killed run"
+"${MPIRUN[@]}" -np 2 "${DRV[@]}" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" >"$tmp/k2.log" 2>&1 ||
+  { cat "$tmp/k2.log"; fail "rerun after the kill"; }
 grep -q "8 jobs in .*, $done1 already in" "$tmp/k2.log" || { cat "$tmp/k2.log"; fail "the rerun did not skip the $done1 jobs done"; }
 check_complete "$tmp/k.db" "$tmp/seqk" "after the kill"
-content "$tmp/k.db" explore >"$tmp/k.txt"
-cmp -s "$tmp/single.txt" "$tmp/k.txt" || fail "explore rows after kill+rerun differ from single-process runs"
-"${MPIRUN[@]}" -np 2 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" \
-  --scratch "$tmp" >"$tmp/k3.log" 2>&1 || { cat "$tmp/k3.log"; fail "third run"; }
+"${MPIRUN[@]}" -np 2 "${DRV[@]}" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" >"$tmp/k3.log" 2>&1 ||
+  { cat "$tmp/k3.log"; fail "third run"; }
 grep -q "8 already in .* 0 to run" "$tmp/k3.log" || { cat "$tmp/k3.log"; fail "a third run should have nothing to do"; }
 "$drv" --jobs "$tmp/jobsk.json" --db "$tmp/k.db" --host "$host" --list | grep -c '^done ' | grep -qx 8 ||
   fail "--list (one process, no mpirun) should show 8 jobs done"
@@ -178,7 +242,7 @@ done
 kill -INT "$mp"
 rc=0; wait "$mp" || rc=$?
 [ "$rc" != 0 ] || fail "an interrupted run should not exit 0"
-grep -q "jobs done, 0 failed in this run (run the same command again" "$tmp/i.log" || { cat "$tmp/i.log"; fail "rank 0 did not stop cleanly"; }
+grep -q "jobs done, 0 failed and 0 lost with their rank in this run (run the same command again" "$tmp/i.log" || { cat "$tmp/i.log"; fail "rank 0 did not stop cleanly"; }
 [ "$(q "$tmp/i.db" "SELECT count(*) FROM samples")" = "$(q "$tmp/i.db" "SELECT sum(rows) FROM merges")" ] ||
   fail "the interrupted run left rows of an unfinished job"
 sleep 1
