@@ -131,7 +131,6 @@ PYEOF
 # --- a rank killed mid-run, then reruns ---
 # (64x64 jobs for the recovery cases: each runs long enough for the kill to land while it
 # renders)
-jobs "$tmp/seqk" >"$tmp/jobsk.json"
 jobs "$tmp/seqr" 64x64 >"$tmp/jobsr.json"
 jobs "$tmp/seq0" 64x64 >"$tmp/jobs0.json"
 # rank $2's process of the run on DB $1, once it runs a job (its host child exists) and at
