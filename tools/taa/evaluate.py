@@ -127,6 +127,8 @@ def plot_summary(a, results):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     labels = [m for m, _ in a.methods if m != "vctaa"]
+    # one colour per method in every panel (the jump panel also shows VCTAA itself)
+    colour = {m: f"C{i}" for i, (m, _) in enumerate(a.methods)}
     seqs = [r["sequence"] for r in results]
     panels = [("rmse", "RMSE / VCTAA's", 0.8), ("temporal", "temporal error / VCTAA's", 1.0)]
     has_jumps = any("jumps" in r for r in results)
@@ -139,7 +141,7 @@ def plot_summary(a, results):
             for r in results:
                 by = {q["method"]: q for q in r["methods"]}
                 vals.append(by[m][key] / by["vctaa"][key])
-            ax[k].bar(x + (i - (len(labels) - 1) / 2) * w, vals, w, label=m)
+            ax[k].bar(x + (i - (len(labels) - 1) / 2) * w, vals, w, label=m, color=colour[m])
         ax[k].axhline(1.0, color="k", lw=0.8)
         if goal != 1.0:
             ax[k].axhline(goal, color="r", lw=0.8, ls="--", label=f"goal {goal}x")
@@ -151,10 +153,13 @@ def plot_summary(a, results):
         ms = [m for m, _ in a.methods]
         wj = 0.8 / len(ms)
         for i, m in enumerate(ms):
-            ax[-1].bar(xj + (i - (len(ms) - 1) / 2) * wj, [r["jumps"]["rmse"][m] for r in jr], wj, label=m)
+            ax[-1].bar(xj + (i - (len(ms) - 1) / 2) * wj, [r["jumps"]["rmse"][m] for r in jr], wj,
+                       label=m, color=colour[m])
         f0, f1 = jr[0]["jumps"]["frames"]
         ax[-1].set_xticks(xj, [r["sequence"] for r in jr], rotation=20, fontsize=8)
-        ax[-1].set_title(f"camera jump: mean RMSE of frames {f0}-{f1}", fontsize=10)
+        ax[-1].set_title(f"camera jump: mean RMSE of frames {f0}-{f1} (lower is better)",
+                         fontsize=10)
+        ax[-1].legend(fontsize=7)
     ax[0].legend(fontsize=7)
     fig.tight_layout()
     path = os.path.join(a.out, "summary.png")
@@ -213,8 +218,10 @@ def jumps(a, results):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("seqs", nargs="+")
-    ap.add_argument("--build", required=True)
+    ap.add_argument("seqs", nargs="*")
+    ap.add_argument("--build")
+    ap.add_argument("--replot", action="store_true",
+                    help="redraw OUT/summary.png from OUT/eval.json (no rendering)")
     ap.add_argument("--out", required=True)
     ap.add_argument("--net", action="append", default=[], help="LABEL=W.ttw (repeatable)")
     ap.add_argument("--default", default=None, help="the label whose goals the table checks")
@@ -225,6 +232,16 @@ def main():
     ap.add_argument("--no-linear", action="store_true", help="leave out vctaa resolve=linear")
     ap.add_argument("--jumps", action="append", default=[], help="NAME:F0:F1 (e.g. pillars:80:84)")
     a = ap.parse_args()
+    if a.replot:
+        try:
+            results = json.load(open(os.path.join(a.out, "eval.json")))
+            a.methods = [(q["method"], None) for q in results[0]["methods"]]
+        except (OSError, ValueError, KeyError, IndexError) as e:
+            fail(f"--replot: {os.path.join(a.out, 'eval.json')}: {e}")
+        print(f"chart: {plot_summary(a, results)}")
+        return
+    if not a.seqs or not a.build:
+        fail("expected SEQ_DIR... and --build BUILD (or --replot --out OUT)")
     methods = [("input", ["--set", "post_taa.mode=none"]), ("vctaa", ["--set", "post_taa.mode=vctaa"])]
     if not a.no_linear:
         methods.append(("vctaa-linear", ["--set", "post_taa.mode=vctaa", "--set",
