@@ -714,9 +714,54 @@ typedef struct mix_a {
   float *out_rgb;
 } mix_a;
 
-AI void mix_rows_t(const mix_a *a) {
+/* 8 lanes of three vectors interleaved into 24 floats r0 g0 b0 r1 g1 b1 ... (the linear
+ * output's pixel order). */
+AI void store_rgb8(float *dst, v8f r, v8f g, v8f b) {
+  v8f rg0 = WINO_SHUF8(r, g, 0, 8, 0, 1, 9, 0, 2, 10);
+  v8f rg1 = WINO_SHUF8(r, g, 0, 3, 11, 0, 4, 12, 0, 5);
+  v8f rg2 = WINO_SHUF8(r, g, 13, 0, 6, 14, 0, 7, 15, 0);
+  vstore(dst, WINO_SHUF8(rg0, b, 0, 1, 8, 3, 4, 9, 6, 7));
+  vstore(dst + 8, WINO_SHUF8(rg1, b, 10, 1, 2, 11, 4, 5, 12, 7));
+  vstore(dst + 16, WINO_SHUF8(rg2, b, 0, 13, 2, 3, 14, 5, 6, 15));
+}
+
+/* 8 x 8 transpose: t[l][c] = v[c][l] (channel vectors of 8 pixels <-> the pixels' 8
+ * channels). */
+AI void t8x8(const v8f v[8], v8f t[8]) {
+  v8f a[8], b[8];
+#pragma GCC unroll 4
+  for (int k = 0; k < 8; k += 2) {  /* a[k]: lanes 0 1 | 4 5 of rows k, k + 1 interleaved */
+    a[k] = WINO_SHUF8(v[k], v[k + 1], 0, 8, 1, 9, 4, 12, 5, 13);
+    a[k + 1] = WINO_SHUF8(v[k], v[k + 1], 2, 10, 3, 11, 6, 14, 7, 15);
+  }
+#pragma GCC unroll 2
+  for (int k = 0; k < 8; k += 4)  /* b[k + i]: lanes (0 2 1 3)[i] | + 4 of rows k..k + 3 */
+#pragma GCC unroll 2
+    for (int j = 0; j < 2; j++) {
+      b[k + j] = WINO_SHUF8(a[k + j], a[k + j + 2], 0, 1, 8, 9, 4, 5, 12, 13);
+      b[k + j + 2] = WINO_SHUF8(a[k + j], a[k + j + 2], 2, 3, 10, 11, 6, 7, 14, 15);
+    }
+  static const int lane[4] = {0, 2, 1, 3};
+#pragma GCC unroll 4
+  for (int k = 0; k < 4; k++) {
+    t[lane[k]] = WINO_SHUF8(b[k], b[k + 4], 0, 1, 2, 3, 8, 9, 10, 11);
+    t[lane[k] + 4] = WINO_SHUF8(b[k], b[k + 4], 4, 5, 6, 7, 12, 13, 14, 15);
+  }
+}
+
+/* The 8 channel vectors v of 8 pixels to dst in pixel-major order (8 floats per pixel). */
+AI void store_t8x8(float *dst, const v8f v[8]) {
+  v8f t[8];
+  t8x8(v, t);
+#pragma GCC unroll 8
+  for (int l = 0; l < 8; l++) vstore(dst + 8 * l, t[l]);
+}
+
+/* `hidden`: the model's hidden channels, a constant in the dispatch's common cases (the
+ * hidden layer's sums then stay in registers). */
+AI void mix_rows_t(const mix_a *a, const uint32_t hidden) {
   const tt__net_state *s = a->s;
-  const uint32_t hidden = a->m->hidden, hin = a->m->hid.in, sc = s->state_ch;
+  const uint32_t hin = a->m->hid.in, sc = s->state_ch;
   const size_t rs = s->rs, cs = s->inp_cs;
   for (uint32_t xl = 0; xl < a->n; xl += 8) {
     uint32_t x = a->x0 + xl;
@@ -724,20 +769,24 @@ AI void mix_rows_t(const mix_a *a) {
     float *lg = a->lg + xl;
     /* Max in 5 independent chains (the same value as one chain: max is exact). */
     v8f m5[5];
+#pragma GCC unroll 5
     for (int k = 0; k < 5; k++) m5[k] = vload(lg + k * CHUNK);
+#pragma GCC unroll 9
     for (int k = 5; k < 50; k += 5)
+#pragma GCC unroll 5
       for (int j = 0; j < 5; j++) m5[j] = vmax(m5[j], vload(lg + (k + j) * CHUNK));
     v8f mx = vmax(vmax(vmax(m5[0], m5[1]), vmax(m5[2], m5[3])), m5[4]);
     /* The softmax weights computed where the mix uses them (no store and reload of the 50
      * exponentials); the two kernels' sums in separate chains. */
     v8f sa = vsplat(0.0f), sb = vsplat(0.0f);
     v8f o[3] = {vsplat(0.0f), vsplat(0.0f), vsplat(0.0f)};
-    for (uint32_t ty = 0; ty < 5; ty++) {
-      const float *row = s->inp + (size_t)(a->y + ty - 2 + s->halo) * rs + COL + x - 2;
+    const float *row = s->inp + (size_t)(a->y - 2 + s->halo) * rs + COL + x - 2;
+    for (uint32_t ty = 0; ty < 5; ty++, row += rs) {
+      const float *lt = lg + ty * 5 * CHUNK;
 #pragma GCC unroll 5
       for (uint32_t tx = 0; tx < 5; tx++) {
-        v8f ka = vexp_neg(vload(lg + (ty * 5 + tx) * CHUNK) - mx);
-        v8f kb = vexp_neg(vload(lg + (25 + ty * 5 + tx) * CHUNK) - mx);
+        v8f ka = vexp_neg(vload(lt + tx * CHUNK) - mx);
+        v8f kb = vexp_neg(vload(lt + (25 + tx) * CHUNK) - mx);
         sa += ka;
         sb += kb;
 #pragma GCC unroll 3
@@ -747,16 +796,18 @@ AI void mix_rows_t(const mix_a *a) {
     }
     v8f sum = sa + sb;
     v8f inv = vsplat(1.0f) / sum;
-    float st[8][16];
-    for (int c = 0; c < 3; c++) {
-      o[c] = o[c] * inv;
-      for (int l = 0; l < 8; l++) st[l][c] = o[c][l];
-    }
-    for (uint32_t k = 0; k < hidden; k++) {
-      v8f h = vsplat(a->hb[k]);
-      for (uint32_t c = 0; c < hin; c++)
-        h += vload(a->hrow + c * a->hcs + (int)(COL + x) - a->hx) * a->hw[k * hin + c];
-      for (int l = 0; l < 8; l++) st[l][3 + k] = h[l];
+    v8f st[16];
+#pragma GCC unroll 3
+    for (int c = 0; c < 3; c++) st[c] = o[c] = o[c] * inv;
+    /* Hidden layer (1x1): each input vector loaded once for all outputs; every output's
+     * sum runs over the inputs in order. */
+    const float *hp = a->hrow + (int)(COL + x) - a->hx;
+#pragma GCC unroll 8
+    for (uint32_t k = 0; k < hidden; k++) st[3 + k] = vsplat(a->hb[k]);
+    for (uint32_t c = 0; c < hin; c++) {
+      v8f xin = vload(hp + c * a->hcs);
+#pragma GCC unroll 8
+      for (uint32_t k = 0; k < hidden; k++) st[3 + k] += xin * a->hw[k * hin + c];
     }
     /* Linear output: the inverse tonemap of taa_image.c on 8 lanes. */
     v8f z = vsplat(0.0f);
@@ -767,10 +818,26 @@ AI void mix_rows_t(const mix_a *a) {
     uint32_t lanes = s->width - x < 8 ? s->width - x : 8;
     size_t i = (size_t)a->y * s->width + x;
     float *ns = s->next_state + i * sc, *out = a->out_rgb + i * 3;
-    for (uint32_t l = 0; l < lanes; l++) {
-      for (uint32_t c = 0; c < sc; c++) ns[l * sc + c] = st[l][c];
-      for (int c = 0; c < 3; c++) out[l * 3 + c] = lin[c][l];
+    if (lanes == 8) {
+      store_rgb8(out, lin[0], lin[1], lin[2]);
+      if (hidden == 5) {  /* 8 state channels */
+        store_t8x8(ns, st);
+        continue;
+      }
+    } else {
+      for (uint32_t l = 0; l < lanes; l++)
+        for (int c = 0; c < 3; c++) out[l * 3 + c] = lin[c][l];
     }
+    for (uint32_t l = 0; l < lanes; l++)
+      for (uint32_t c = 0; c < sc; c++) ns[l * sc + c] = st[c][l];
+  }
+}
+
+AI void mix_dispatch(const mix_a *a) {
+  switch (a->m->hidden) {
+    case 0: mix_rows_t(a, 0); break;
+    case 5: mix_rows_t(a, 5); break;
+    default: mix_rows_t(a, a->m->hidden); break;
   }
 }
 
@@ -786,16 +853,16 @@ typedef struct fast_isa {
 
 #if FAST_X86
 TGT_V4 static void conv_v4(const conv_a *a) { conv_rows_dispatch(a, 1); }
-TGT_V4 static void mix_v4(const mix_a *a) { mix_rows_t(a); }
+TGT_V4 static void mix_v4(const mix_a *a) { mix_dispatch(a); }
 TGT_V4 static void wino_v4(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 1); }
 TGT_V4 static void wino4_v4(const wino4_a *a, uint32_t oblk) { wino4_dispatch(a, oblk, 1); }
 TGT_V3 static void conv_v3(const conv_a *a) { conv_rows_dispatch(a, 0); }
-TGT_V3 static void mix_v3(const mix_a *a) { mix_rows_t(a); }
+TGT_V3 static void mix_v3(const mix_a *a) { mix_dispatch(a); }
 TGT_V3 static void wino_v3(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 0); }
 TGT_V3 static void wino4_v3(const wino4_a *a, uint32_t oblk) { wino4_dispatch(a, oblk, 0); }
 #endif
 static void conv_generic(const conv_a *a) { conv_rows_dispatch(a, 0); }
-static void mix_generic(const mix_a *a) { mix_rows_t(a); }
+static void mix_generic(const mix_a *a) { mix_dispatch(a); }
 
 static const fast_isa *fast_pick(void) {
   static const fast_isa generic = {"generic", conv_generic, mix_generic, NULL, NULL};
@@ -949,13 +1016,14 @@ AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
 }
 
 #if FAST_X86
-/* 8 pixels x .. x + 7 of row y at once (AVX2 gathers), for a 3-channel state (hidden 0):
- * the same steps as input_pixel. The Catmull-Rom weights may round differently from the
- * scalar code in the last bit (a pixel always takes the same path, whatever the threads);
- * the rejection test uses the same float operations as tt__taa_reject_test, bit for bit. */
-TGT_V3 static inline __attribute__((always_inline)) void input8_sc3(const in_job *job,
-                                                                    uint32_t x, uint32_t y,
-                                                                    float *base) {
+/* 8 pixels x .. x + 7 of row y at once (AVX2 gathers), for a state of SC = 3 (hidden 0) or
+ * 8 (hidden 5) channels: the same steps as input_pixel. The Catmull-Rom weights may round
+ * differently from the scalar code in the last bit (a pixel always takes the same path,
+ * whatever the threads); the rejection test uses the same float operations as
+ * tt__taa_reject_test, bit for bit. */
+TGT_V3 static inline __attribute__((always_inline)) void input8_t(const in_job *job,
+                                                                  uint32_t x, uint32_t y,
+                                                                  float *base, const int SC) {
   const tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   const int w = (int)s->width, h = (int)s->height;
@@ -1035,7 +1103,7 @@ TGT_V3 static inline __attribute__((always_inline)) void input8_sc3(const in_job
       raw = _mm256_and_ps(_mm256_or_ps(_mm256_xor_ps(in, _mm256_castsi256_ps(_mm256_set1_epi32(-1))), far), one);
     }
   }
-  __m256 fb[3] = {t[0], t[1], t[2]};
+  __m256 fb[8] = {t[0], t[1], t[2], zero, zero, zero, zero, zero};
   if (s->valid) {
     __m256 ux = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(xf, half), mx), half);
     __m256 uy = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(yf, half), my), half);
@@ -1049,8 +1117,7 @@ TGT_V3 static inline __attribute__((always_inline)) void input8_sc3(const in_job
       o[2] = _mm256_mul_ps(f, _mm256_fmadd_ps(f, _mm256_fnmadd_ps(_mm256_set1_ps(1.5f), f, _mm256_set1_ps(2.0f)), half));
       o[3] = _mm256_mul_ps(_mm256_mul_ps(f, f), _mm256_fmadd_ps(half, f, _mm256_set1_ps(-0.5f)));
     }
-    /* Per pixel: each tap's 3 channels as one 4-float load (the 4th, the next pixel's
-     * red, is unused); rows of taps weighted by wx, then the rows by wy. bx, by: floors of
+    /* Per pixel: rows of taps weighted by wx, then the rows by wy. bx, by: floors of
      * finite positions (huge motion still gives clamped taps). */
     const __m256i z = _mm256_setzero_si256(), wm = _mm256_set1_epi32(w - 1),
                   hm = _mm256_set1_epi32(h - 1);
@@ -1060,51 +1127,78 @@ TGT_V3 static inline __attribute__((always_inline)) void input8_sc3(const in_job
     for (int k = 0; k < 4; k++) {
       __m256i o = _mm256_set1_epi32(k - 1);
       _mm256_storeu_si256((__m256i *)xi[k], _mm256_mullo_epi32(
-          _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(bxi, o), z), wm), _mm256_set1_epi32(3)));
+          _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(bxi, o), z), wm), _mm256_set1_epi32(SC)));
       _mm256_storeu_si256((__m256i *)yo[k], _mm256_mullo_epi32(
-          _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(byi, o), z), hm), _mm256_set1_epi32(3 * w)));
+          _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(byi, o), z), hm), _mm256_set1_epi32(SC * w)));
       _mm256_storeu_ps(wxs[k], wx[k]);
       _mm256_storeu_ps(wys[k], wy[k]);
     }
-    __m128 px[8];
-    for (int l = 0; l < 8; l++) {
-      __m128 acc = _mm_setzero_ps();
-      for (int j = 0; j < 4; j++) {
-        const float *row = s->state + yo[j][l];
-        __m128 r = _mm_mul_ps(_mm_loadu_ps(row + xi[0][l]), _mm_set1_ps(wxs[0][l]));
-        r = _mm_fmadd_ps(_mm_loadu_ps(row + xi[1][l]), _mm_set1_ps(wxs[1][l]), r);
-        r = _mm_fmadd_ps(_mm_loadu_ps(row + xi[2][l]), _mm_set1_ps(wxs[2][l]), r);
-        r = _mm_fmadd_ps(_mm_loadu_ps(row + xi[3][l]), _mm_set1_ps(wxs[3][l]), r);
-        acc = _mm_fmadd_ps(r, _mm_set1_ps(wys[j][l]), acc);
+    if (SC == 8) {
+      /* one 8-float vector per tap (all state channels), then the 8 x 8 transpose */
+      v8f px[8];
+      for (int l = 0; l < 8; l++) {
+        __m256 acc = _mm256_setzero_ps();
+        for (int j = 0; j < 4; j++) {
+          const float *row = s->state + yo[j][l];
+          __m256 r = _mm256_mul_ps(_mm256_loadu_ps(row + xi[0][l]), _mm256_set1_ps(wxs[0][l]));
+          r = _mm256_fmadd_ps(_mm256_loadu_ps(row + xi[1][l]), _mm256_set1_ps(wxs[1][l]), r);
+          r = _mm256_fmadd_ps(_mm256_loadu_ps(row + xi[2][l]), _mm256_set1_ps(wxs[2][l]), r);
+          r = _mm256_fmadd_ps(_mm256_loadu_ps(row + xi[3][l]), _mm256_set1_ps(wxs[3][l]), r);
+          acc = _mm256_fmadd_ps(r, _mm256_set1_ps(wys[j][l]), acc);
+        }
+        px[l] = acc;
       }
-      px[l] = acc;
+      v8f ch[8];
+      t8x8(px, ch);
+      for (int k = 0; k < 8; k++) fb[k] = ch[k];
+    } else {
+      /* each tap's 3 channels as one 4-float load (the 4th, the next pixel's red, is
+       * unused) */
+      __m128 px[8];
+      for (int l = 0; l < 8; l++) {
+        __m128 acc = _mm_setzero_ps();
+        for (int j = 0; j < 4; j++) {
+          const float *row = s->state + yo[j][l];
+          __m128 r = _mm_mul_ps(_mm_loadu_ps(row + xi[0][l]), _mm_set1_ps(wxs[0][l]));
+          r = _mm_fmadd_ps(_mm_loadu_ps(row + xi[1][l]), _mm_set1_ps(wxs[1][l]), r);
+          r = _mm_fmadd_ps(_mm_loadu_ps(row + xi[2][l]), _mm_set1_ps(wxs[2][l]), r);
+          r = _mm_fmadd_ps(_mm_loadu_ps(row + xi[3][l]), _mm_set1_ps(wxs[3][l]), r);
+          acc = _mm_fmadd_ps(r, _mm_set1_ps(wys[j][l]), acc);
+        }
+        px[l] = acc;
+      }
+      /* [r g b -] of pixels l and l + 4 in the two halves, then a 4 x 4 transpose per half */
+      __m256 q0 = _mm256_set_m128(px[4], px[0]), q1 = _mm256_set_m128(px[5], px[1]),
+             q2 = _mm256_set_m128(px[6], px[2]), q3 = _mm256_set_m128(px[7], px[3]);
+      __m256 t0 = _mm256_unpacklo_ps(q0, q1), t1 = _mm256_unpackhi_ps(q0, q1);
+      __m256 t2 = _mm256_unpacklo_ps(q2, q3), t3 = _mm256_unpackhi_ps(q2, q3);
+      fb[0] = _mm256_shuffle_ps(t0, t2, 0x44);
+      fb[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
+      fb[2] = _mm256_shuffle_ps(t1, t3, 0x44);
     }
-    /* [r g b -] of pixels l and l + 4 in the two halves, then a 4 x 4 transpose per half */
-    __m256 q0 = _mm256_set_m128(px[4], px[0]), q1 = _mm256_set_m128(px[5], px[1]),
-           q2 = _mm256_set_m128(px[6], px[2]), q3 = _mm256_set_m128(px[7], px[3]);
-    __m256 t0 = _mm256_unpacklo_ps(q0, q1), t1 = _mm256_unpackhi_ps(q0, q1);
-    __m256 t2 = _mm256_unpacklo_ps(q2, q3), t3 = _mm256_unpackhi_ps(q2, q3);
-    fb[0] = _mm256_shuffle_ps(t0, t2, 0x44);
-    fb[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
-    fb[2] = _mm256_shuffle_ps(t1, t3, 0x44);
   }
   const __m256 ms = _mm256_set1_ps(m->motion_scale);
-  __m256 v[10] = {t[0], t[1], t[2], _mm256_mul_ps(mx, ms), _mm256_mul_ps(my, ms), dep,
-                  fb[0], fb[1], fb[2], raw};
-  int nin = job->reject ? 10 : 9;
-  for (int k = 0; k < nin; k++) _mm256_storeu_ps(base + (size_t)k * cs + x, v[k]);
+  __m256 v[6] = {t[0], t[1], t[2], _mm256_mul_ps(mx, ms), _mm256_mul_ps(my, ms), dep};
+  for (int k = 0; k < 6; k++) _mm256_storeu_ps(base + (size_t)k * cs + x, v[k]);
+  for (int k = 0; k < SC; k++) _mm256_storeu_ps(base + (size_t)(6 + k) * cs + x, fb[k]);
+  if (job->reject) _mm256_storeu_ps(base + (size_t)(6 + SC) * cs + x, raw);
 }
 
-/* Rows with a 3-channel state: groups of 8 pixels by AVX2, the rest pixel by pixel. */
-TGT_V3 static void input_rows_sc3_v3(void *ctx, uint32_t y0, uint32_t y1) {
-  const in_job *job = ctx;
+/* Rows with a 3- or 8-channel state: groups of 8 pixels by AVX2, the rest pixel by pixel. */
+TGT_V3 AI void input_rows8_t(const in_job *job, uint32_t y0, uint32_t y1, const int SC) {
   const tt__net_state *s = job->s;
   for (uint32_t y = y0; y < y1; y++) {
     float *base = s->inp + (size_t)(y + s->halo) * s->rs + COL;
     uint32_t x = 0;
-    for (; x + 8 <= s->width; x += 8) input8_sc3(job, x, y, base);
+    for (; x + 8 <= s->width; x += 8) input8_t(job, x, y, base, SC);
     for (; x < s->width; x++) input_pixel(job, x, y, base);
   }
+}
+TGT_V3 static void input_rows_sc3_v3(void *ctx, uint32_t y0, uint32_t y1) {
+  input_rows8_t(ctx, y0, y1, 3);
+}
+TGT_V3 static void input_rows_sc8_v3(void *ctx, uint32_t y0, uint32_t y1) {
+  input_rows8_t(ctx, y0, y1, 8);
 }
 
 TGT_V3 static void input_rows_v3(void *ctx, uint32_t y0, uint32_t y1) {
@@ -1699,7 +1793,9 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   ij.depth_scale = dmax > 0.0f ? 1.0f / dmax : 0.0f;
 #if FAST_X86
   tt__taa_rows_fn in_rows = input_rows_generic;
-  if (strcmp(isa->name, "generic")) in_rows = s->state_ch == 3 ? input_rows_sc3_v3 : input_rows_v3;
+  if (strcmp(isa->name, "generic"))
+    in_rows = s->state_ch == 3 ? input_rows_sc3_v3
+              : s->state_ch == 8 ? input_rows_sc8_v3 : input_rows_v3;
   tt__taa_parallel_rows(host, s->height, in_rows, &ij);
 #else
   tt__taa_parallel_rows(host, s->height, input_rows_generic, &ij);

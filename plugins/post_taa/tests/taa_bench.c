@@ -17,6 +17,8 @@
  * the default: F(4x4, 5x5) kernel layer), TT_BENCH_DIRECT=1 (also the direct-convolution
  * rows of every file, label suffix D; the other rows use the plugin's default),
  * TT_BENCH_THREADS="1 2", TT_BENCH_QUICK=1 (640x480 only), TT_BENCH_ROUNDS (9),
+ * TT_BENCH_BAND_ROWS / TT_BENCH_TILE_COLS (the fast path's band height and column tile
+ * width, tt__net_state.band_rows / tile_cols; 0 or unset: the plugin's automatic choice),
  * TT_POST_TAA_ISA=avx2|generic. Besides the table it prints one line per row,
  *   BENCH label WxH threads wall_ms cpu_ms reject_cpu reproj_cpu network_cpu mix_cpu
  * which tools/taa/speed.py collects over several runs (medians of per-run medians). */
@@ -122,6 +124,7 @@ typedef struct variant {
 static variant g_var[MAX_VARIANTS];
 static int g_nvar;
 static double g_peak;
+static uint32_t g_band_rows, g_tile_cols;  /* TT_BENCH_BAND_ROWS, TT_BENCH_TILE_COLS (0: auto) */
 
 /* Adds a network variant (file, 5x5-layer algorithm: -1 default, 0 direct, 1 Winograd
  * F(2x2, 5x5), 2 F(4x4, 5x5) kernel layer); 0 on failure (reported). */
@@ -197,6 +200,8 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
     } else {
       CHECK(tt__net_state_init(&v->s, &v->m, w, h) == TT_OK);
       if (v->winograd >= 0) v->s.winograd = v->winograd;
+      v->s.band_rows = g_band_rows;
+      v->s.tile_cols = g_tile_cols;
     }
   }
   const tt__vctaa_params vp = {0.1f, 1.0f, 1, 0};
@@ -261,6 +266,9 @@ int main(void) {
   if (rounds < 1) rounds = 1;
   if (rounds > MAX_ROUNDS) rounds = MAX_ROUNDS;
   collect_networks(root, dr && dr[0] == '1');
+  const char *br = getenv("TT_BENCH_BAND_ROWS"), *tc = getenv("TT_BENCH_TILE_COLS");
+  g_band_rows = br ? (uint32_t)atoi(br) : 0;
+  g_tile_cols = tc ? (uint32_t)atoi(tc) : 0;
   if (g_nvar < MAX_VARIANTS) {
     memset(&g_var[g_nvar], 0, sizeof g_var[0]);
     snprintf(g_var[g_nvar].label, sizeof g_var[0].label, "VCTAA");
