@@ -1232,6 +1232,17 @@ TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids
                              _mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
 }
 
+/* Lanes of a packet that enter a subtree with entry distances `d`: those that hit its box
+ * (a finite distance; +inf marks a lane that missed it) no farther than their closest hit
+ * so far. `d <= tfar` alone is not enough: a lane with no hit yet has tfar = +inf, and
+ * +inf <= +inf would let it into every box the packet visits, including boxes its ray
+ * missed, where a triangle test can accept a hit within rounding of an edge that
+ * intersect1 never tests (found on the voxel monument: a different, nearer triangle). */
+TT__INLINE __m256 tt__plive(__m256 d, __m256 tfar) {
+  return _mm256_and_ps(_mm256_cmp_ps(d, tfar, _CMP_LE_OQ),
+                       _mm256_cmp_ps(d, _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
+}
+
 /* Closest hits of one packet in a width-N tree (non-robust). Stack entries carry each
  * lane's entry distance; a popped entry continues with the lanes it can still improve. */
 TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
@@ -1241,7 +1252,7 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
   uint32_t ref = bvh->root;
   __m256 cur = P->tnear;  /* lanes in this subtree: entry distance, +inf if not */
   for (;;) {
-    __m256 lanes = _mm256_cmp_ps(cur, P->tfar, _CMP_LE_OQ);
+    __m256 lanes = tt__plive(cur, P->tfar);
     if (!(ref & TT__REF_LEAF)) {
       const void *node = tt__pnode(bvh, ref, N);
       const uint32_t *child = tt__pchildren(node, N);
@@ -1289,7 +1300,7 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
       if (sp == 0) return;
       --sp;
       __m256 d = _mm256_load_ps(sdist[sp]);
-      if (_mm256_movemask_ps(_mm256_cmp_ps(d, P->tfar, _CMP_LE_OQ))) {
+      if (_mm256_movemask_ps(tt__plive(d, P->tfar))) {
         ref = sref[sp], cur = d;
         break;
       }
