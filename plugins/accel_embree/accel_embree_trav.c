@@ -69,7 +69,7 @@ typedef __m128 tt__vreg;
 typedef struct tt__rc {
   tt__vreg o[3], d[3];     /* origin, direction */
   tt__vreg rd[3], ord[3];  /* 1/dir (zero guarded) and org * rd */
-  tt__vreg tnear, tfar;
+  tt__vreg tnear, tfar;    /* closest hit: tfar is tt__tfar_slack(the closest hit so far) */
   int near[3];             /* near-plane row per axis: 2k + signbit(dir[k]) */
   /* Watertight test (Woop, Benthin, Wald 2013): axes permuted so that kz has the largest
    * |dir| and the shear constants. */
@@ -84,6 +84,18 @@ typedef struct tt__best {
   int W, lane;      /* its width and the hit's lane */
   const tt__id *id; /* the hit triangle's ids */
 } tt__best;
+
+/* The far limit of closest-hit box and triangle tests: a little beyond the closest hit so
+ * far. The triangle test compares T <= |det| * tfar before dividing, and a box's entry
+ * distance is rounded otherwise than a triangle's t = T / |det| in it: when tfar is another
+ * triangle's t, a triangle at exactly that distance (a ray through the edge two triangles
+ * share) could fail either test by a rounding, in one order of visit and not in the other,
+ * and the tie (tt__id_less) was decided by the order. With the slack (2^-20 relative, far
+ * more than those roundings where the box is not much farther from the origin than its
+ * size) such a triangle is tested; the decision is taken on the divided t (the nearest
+ * lane, t <= the best t, which starts as the ray's own tfar), so no hit beyond tfar is
+ * reported. Occlusion keeps the exact limit. */
+TT__INLINE float tt__tfar_slack(float t) { return t + fabsf(t) * 0x1p-20f; }
 
 /* Prepares the ray; returns 0 when no hit is possible (NaN/inf input, empty interval). */
 TT__INLINE int tt__setup(tt__rc *r, const tt_ray *ray, int robust) {
@@ -124,8 +136,8 @@ TT__INLINE int tt__setup(tt__rc *r, const tt_ray *ray, int robust) {
   return 1;
 }
 
-/* Sets the current far distance in every register that uses it. */
-TT__INLINE void tt__set_tfar(tt__rc *r, float t) { r->tfar = TT__SET1(t); }
+/* Sets the far limit of a closest-hit query to just beyond t (tt__tfar_slack). */
+TT__INLINE void tt__set_tfar(tt__rc *r, float t) { r->tfar = TT__SET1(tt__tfar_slack(t)); }
 
 /* Slab distance of 4 planes on one axis. FMA form (b*rd - o*rd, one rounding) where
  * available and not robust; otherwise (b - o) * rd, whose error pbrt's bound covers. */
@@ -319,8 +331,18 @@ TT__INLINE uint64_t tt__leaf_tris(const tt__id *id, uint32_t n) {
   return c;
 }
 
+/* Ties: of two hits at exactly the same distance (a ray through the edge two triangles
+ * share, common in voxel and architectural meshes), the one with the smaller (geomID,
+ * primID) wins, whatever the order in which they were found. Packets visit leaves in
+ * another order than single rays; with "the last one found wins" they answered such rays
+ * with the other triangle (kernel bench, voxel monument: 1-3 camera rays of 262,144). The
+ * ids are read only on a tie, from lines the leaf test has just read. */
+TT__INLINE int tt__id_less(const tt__id *a, const tt__id *b) {
+  return a->geom < b->geom || (a->geom == b->geom && a->prim < b->prim);
+}
+
 /* Tests one width-W packet (ids of its lanes at `ids`) for a closer hit; updates `best`
- * and the ray's tfar. Returns 1 when the hit became closer. */
+ * and the ray's tfar. Returns 1 when the hit became closer (or won a tie). */
 TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids,
                                tt__rc *restrict r, const int robust,
                                tt__best *restrict best) {
@@ -334,13 +356,17 @@ TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids,
     __m128 tv = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, valid);
     __m128 mn = _mm_min_ps(tv, _mm_shuffle_ps(tv, tv, _MM_SHUFFLE(2, 3, 0, 1)));
     mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(1, 0, 3, 2)));
-    lane = __builtin_ctz((unsigned)(_mm_movemask_ps(_mm_cmpeq_ps(tv, mn)) & m));
+    int eq = _mm_movemask_ps(_mm_cmpeq_ps(tv, mn)) & m;
+    lane = __builtin_ctz((unsigned)eq);
+    for (eq &= eq - 1; eq; eq &= eq - 1)  /* a tie within the packet (rare) */
+      if (tt__id_less(&ids[__builtin_ctz((unsigned)eq)], &ids[lane])) lane = __builtin_ctz((unsigned)eq);
   } else {
     lane = __builtin_ctz((unsigned)m);
   }
   _Alignas(16) float t4[4], u4[4], v4[4], d4[4];
   _mm_store_ps(t4, t);
   if (!(t4[lane] <= best->t)) return 0;
+  if (t4[lane] == best->t && best->pk && !tt__id_less(&ids[lane], best->id)) return 0;
   _mm_store_ps(u4, U);
   _mm_store_ps(v4, V);
   _mm_store_ps(d4, den);
@@ -517,6 +543,8 @@ TT__INLINE void tt__intersect2(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, con
   uint32_t ref = bvh->root;
   if (ref != TT__REF_NONE && tt__setup(&r, ray, robust)) {
     tt__setup2(&q, ray, robust);
+    tt__set_tfar(&r, ray->tfar);
+    tt__set_tfar2(&q, ray->tnear, tt__tfar_slack(ray->tfar));
     const float tnear = ray->tnear;
     const char *nodes = (const char *)bvh->arena;
     struct {
@@ -567,13 +595,13 @@ TT__INLINE void tt__intersect2(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, con
         const tt__id *ids = (const tt__id *)(pk + pairs * (2 * TT__SLOT_FLOATS));
         if (counting) c_tris += tt__leaf_tris(ids, 2 * pairs);
         if (tt__leaf_closest(pk, ids, pairs, &r, robust, &best))
-          tt__set_tfar2(&q, tnear, best.t);
+          tt__set_tfar2(&q, tnear, tt__tfar_slack(best.t));
       }
     pop:
       for (;;) {
         if (sp == 0) goto done;
         --sp;
-        if (stack[sp].dist <= best.t) break;
+        if (stack[sp].dist <= tt__tfar_slack(best.t)) break;
       }
       ref = stack[sp].ref;
     }
@@ -652,6 +680,7 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
   tt__rc r;
   uint32_t ref = bvh->root;
   if (ref != TT__REF_NONE && tt__setup(&r, ray, robust)) {
+    tt__set_tfar(&r, ray->tfar);
     struct {
       uint32_t ref;
       float dist;
@@ -724,11 +753,11 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
         if (counting) c_tris += tt__leaf_tris(ids, 2 * pairs);
         tt__leaf_closest(tt__leaf_pk(bvh, ref), ids, pairs, &r, robust, &best);
       }
-      /* Pop the next entry that can still hold a closer hit. */
+      /* Pop the next entry that can still hold a closer hit (or an equal one). */
       for (;;) {
         if (sp == 0) goto done;
         --sp;
-        if (stack[sp].dist <= best.t) break;
+        if (stack[sp].dist <= tt__tfar_slack(best.t)) break;
       }
       ref = stack[sp].ref;
     }
@@ -1046,9 +1075,10 @@ TT__INLINE void tt__ostream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ
  * Per ray, the box and triangle tests are the single-ray kernels' arithmetic operation by
  * operation (same formulas, same order, FMA exactly where they use it), and a lane enters a
  * node only when its ray hit every box on the way down, as in single-ray traversal; so
- * occlusion answers are identical, and a closest hit can differ from intersect1's only when
- * two triangles are hit at distances within rounding of each other (the visiting order
- * decides such ties). The robust (watertight) and counting kernels have no packet form:
+ * occlusion answers are identical, and so are closest hits (exact ties go to the smaller ids
+ * in both, tt__id_less), except where two triangles are hit at distances within rounding
+ * of each other but not equal and rounding of a box test culls one of them in one order
+ * of visit and not in the other (never seen on the bench's scenes). The robust (watertight) and counting kernels have no packet form:
  * their streams run the single-ray kernels. */
 #if TT__HAVE_AVX2
 #define TT__K 8
@@ -1057,6 +1087,7 @@ TT__INLINE void tt__ostream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ
 typedef struct tt__pkt {
   __m256 o[3], d[3], rd[3], ord[3];
   __m256 tnear, tfar;    /* tfar: each lane's closest hit so far */
+  __m256 tfar_s;         /* tt__tfar_slack(tfar), lane by lane */
   int near[3];           /* near-plane row per axis: 2k + sign (the packet's octant) */
   int n;                 /* lanes holding a ray (the rest never hit anything) */
   size_t index[TT__K];   /* the lanes' positions in the stream */
@@ -1066,6 +1097,12 @@ typedef struct tt__pkt {
   int W[TT__K], lane[TT__K];
   const tt__id *id[TT__K];
 } tt__pkt;
+
+/* tt__tfar_slack lane by lane (-inf, an empty lane, gives NaN: no test passes). */
+TT__INLINE __m256 tt__ptfar_slack(__m256 t) {
+  const __m256 abs = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t);
+  return _mm256_add_ps(t, _mm256_mul_ps(abs, _mm256_set1_ps(0x1p-20f)));
+}
 
 /* Loads `n` rays (indices idx[0..n), all finite with tnear <= tfar and direction signs
  * `octant`) into a packet, with tt__setup's constants lane by lane. */
@@ -1101,13 +1138,14 @@ TT__INLINE void tt__pkt_setup(tt__pkt *P, const tt_ray *rays, const size_t *idx,
   }
   P->tnear = _mm256_load_ps(v[12]);
   P->tfar = _mm256_load_ps(v[13]);
+  P->tfar_s = tt__ptfar_slack(P->tfar);
   P->n = n;
 }
 
 /* One child box (near/far plane values per axis for the packet's octant) against the
  * packet: entry distances, +inf where a lane misses (or is not in `lanes`). As tt__box8. */
 TT__INLINE __m256 tt__pbox(const float *pn[3], const float *pf[3], const tt__pkt *P,
-                           __m256 lanes) {
+                           __m256 lanes, __m256 tfar) {
   __m256 tn[3], tf[3];
   for (int k = 0; k < 3; k++) {
     tn[k] = _mm256_fmsub_ps(_mm256_broadcast_ss(pn[k]), P->rd[k], P->ord[k]);
@@ -1115,13 +1153,14 @@ TT__INLINE __m256 tt__pbox(const float *pn[3], const float *pf[3], const tt__pkt
   }
   __m256 tmin = _mm256_max_ps(_mm256_max_ps(tn[0], tn[1]), _mm256_max_ps(tn[2], P->tnear));
   __m256 tmax = _mm256_min_ps(_mm256_min_ps(tf[0], tf[1]), tf[2]);
-  tmax = _mm256_min_ps(tmax, P->tfar);
+  tmax = _mm256_min_ps(tmax, tfar);
   __m256 hit = _mm256_and_ps(_mm256_cmp_ps(tmin, tmax, _CMP_LE_OQ), lanes);
   return _mm256_blendv_ps(_mm256_set1_ps(INFINITY), tmin, hit);
 }
 
 /* Entry distances of child c of a width-N node for the packet (+inf: missed). */
-TT__INLINE __m256 tt__pchild(const void *node, int c, const tt__pkt *P, int N, __m256 lanes) {
+TT__INLINE __m256 tt__pchild(const void *node, int c, const tt__pkt *P, int N, __m256 lanes,
+                             const int closest) {
   const float *pn[3], *pf[3];
   if (N == 2) {
     const tt__node2 *n = node;  /* row k: lower c0, lower c1, upper c0, upper c1 */
@@ -1137,7 +1176,7 @@ TT__INLINE __m256 tt__pchild(const void *node, int c, const tt__pkt *P, int N, _
       pf[k] = rows + (size_t)(P->near[k] ^ 1) * N + c;
     }
   }
-  return tt__pbox(pn, pf, P, lanes);
+  return tt__pbox(pn, pf, P, lanes, closest ? P->tfar_s : P->tfar);
 }
 
 /* Children references of a node (BVH2 nodes keep them after their three rows). */
@@ -1163,7 +1202,8 @@ TT__INLINE void tt__pprefetch(const tt__bvh *bvh, const void *node, int c, int N
 /* Triangle j of a width-W slot packet against every lane: T, U, V, |det| and validity, as
  * tt__tri_test computes them for one ray (non-robust). */
 TT__INLINE __m256 tt__ptri(const float *pk, int W, int j, const tt__pkt *P, __m256 lanes,
-                           __m256 *T_out, __m256 *U_out, __m256 *V_out, __m256 *den_out) {
+                           const int closest, __m256 *T_out, __m256 *U_out, __m256 *V_out,
+                           __m256 *den_out) {
   const __m256 sign = _mm256_set1_ps(-0.0f), zero = _mm256_setzero_ps();
 #define TT__R(r) _mm256_broadcast_ss(pk + (r) * W + j)
   __m256 cx = _mm256_sub_ps(TT__R(0), P->o[0]);
@@ -1191,20 +1231,20 @@ TT__INLINE __m256 tt__ptri(const float *pk, int W, int j, const tt__pkt *P, __m2
                                          _mm256_mul_ps(nz, cz)), sgn);
 #undef TT__R
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, P->tnear), _CMP_GE_OQ));
-  valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, P->tfar), _CMP_LE_OQ));
+  valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, closest ? P->tfar_s : P->tfar), _CMP_LE_OQ));
   *T_out = T, *U_out = U, *V_out = V, *den_out = absden;
   return valid;
 }
 
 /* One slot packet of a leaf for a closer hit, lane by lane as tt__leaf_packet: the nearest
- * valid triangle (the first on ties) wins if not beyond the lane's hit so far. */
+ * valid triangle wins if closer than the lane's hit so far, or as far with smaller ids. */
 TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids, tt__pkt *P,
                                  __m256 lanes) {
   _Alignas(32) float tv[4][TT__K], U[4][TT__K], V[4][TT__K], D[4][TT__K];
   __m256 any = _mm256_setzero_ps(), mn = _mm256_set1_ps(INFINITY);
   for (int j = 0; j < W; j++) {
     __m256 T, u, v, den;
-    __m256 valid = tt__ptri(pk, W, j, P, lanes, &T, &u, &v, &den);
+    __m256 valid = tt__ptri(pk, W, j, P, lanes, 1, &T, &u, &v, &den);
     __m256 t = _mm256_blendv_ps(_mm256_set1_ps(INFINITY), _mm256_div_ps(T, den), valid);
     _mm256_store_ps(tv[j], t);
     _mm256_store_ps(U[j], u);
@@ -1215,12 +1255,16 @@ TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids
   }
   int acc = _mm256_movemask_ps(_mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
   if (!acc) return;
-  _Alignas(32) float m8[TT__K];
+  _Alignas(32) float m8[TT__K], f8[TT__K];
   _mm256_store_ps(m8, mn);
+  _mm256_store_ps(f8, P->tfar);
   for (; acc; acc &= acc - 1) {
     const int l = __builtin_ctz((unsigned)acc);
-    int j = 0;
+    int j = 0;  /* the nearest triangle; on a tie the smaller ids, as tt__leaf_packet */
     while (j < W - 1 && tv[j][l] != m8[l]) j++;
+    for (int k = j + 1; k < W; k++)
+      if (tv[k][l] == m8[l] && tt__id_less(&ids[k], &ids[j])) j = k;
+    if (m8[l] == f8[l] && P->pk[l] && !tt__id_less(&ids[j], P->id[l])) continue;
     P->u[l] = U[j][l] / D[j][l];
     P->v[l] = V[j][l] / D[j][l];
     P->pk[l] = pk;
@@ -1230,6 +1274,7 @@ TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids
   }
   P->tfar = _mm256_blendv_ps(P->tfar, mn,
                              _mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
+  P->tfar_s = tt__ptfar_slack(P->tfar);
 }
 
 /* Lanes of a packet that enter a subtree with entry distances `d`: those that hit its box
@@ -1252,14 +1297,14 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
   uint32_t ref = bvh->root;
   __m256 cur = P->tnear;  /* lanes in this subtree: entry distance, +inf if not */
   for (;;) {
-    __m256 lanes = tt__plive(cur, P->tfar);
+    __m256 lanes = tt__plive(cur, P->tfar_s);
     if (!(ref & TT__REF_LEAF)) {
       const void *node = tt__pnode(bvh, ref, N);
       const uint32_t *child = tt__pchildren(node, N);
       uint32_t next = TT__REF_NONE;
       __m256 nextd = cur;
       for (int c = 0; c < N; c++) {
-        __m256 dc = tt__pchild(node, c, P, N, lanes);
+        __m256 dc = tt__pchild(node, c, P, N, lanes, 1);
         __m256 hit = _mm256_cmp_ps(dc, _mm256_set1_ps(INFINITY), _CMP_LT_OQ);
         if (!_mm256_movemask_ps(hit)) continue;
         tt__pprefetch(bvh, node, c, N);
@@ -1300,7 +1345,7 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
       if (sp == 0) return;
       --sp;
       __m256 d = _mm256_load_ps(sdist[sp]);
-      if (_mm256_movemask_ps(tt__plive(d, P->tfar))) {
+      if (_mm256_movemask_ps(tt__plive(d, P->tfar_s))) {
         ref = sref[sp], cur = d;
         break;
       }
@@ -1327,7 +1372,7 @@ TT__INLINE int tt__poccluded(const tt__bvh *bvh, const tt__pkt *P, const int N) 
       uint32_t next = TT__REF_NONE;
       int nextm = 0;
       for (int c = N - 1; c >= 0; c--) {  /* pushed last to first: lane order is visit order */
-        __m256 dc = tt__pchild(node, c, P, N, lv);
+        __m256 dc = tt__pchild(node, c, P, N, lv, 0);
         int m = _mm256_movemask_ps(_mm256_cmp_ps(dc, _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
         if (!m) continue;
         tt__pprefetch(bvh, node, c, N);
@@ -1353,7 +1398,7 @@ TT__INLINE int tt__poccluded(const tt__bvh *bvh, const tt__pkt *P, const int N) 
         const int W = q + 1 < pairs ? 4 : 2;
         for (int j = 0; j < W; j++) {
           __m256 T, U, V, den;
-          hitv = _mm256_or_ps(hitv, tt__ptri(pk, W, j, P, lv, &T, &U, &V, &den));
+          hitv = _mm256_or_ps(hitv, tt__ptri(pk, W, j, P, lv, 0, &T, &U, &V, &den));
         }
       }
       done |= _mm256_movemask_ps(hitv);
