@@ -443,10 +443,11 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
       printf("%-24s   streams of %d: %8.2f %8.2f | %8.2f %8.2f   (x single: %.2f %.2f | %.2f "
              "%.2f)\n", "", STREAM_CHUNK, sp, sb, sop, sob, sp / rp, sb / rb, sop / op, sob / ob);
       int custom = strstr(g_cfgs[ci].settings, "backend=custom") != NULL;
+      /* custom: exactly (ties go to the smaller ids whatever the order of visit) */
       CHECK_MSG(sdiff <= (custom ? 0 : NRAYS / 10000) && odiff <= (custom ? 0 : NRAYS / 10000) &&
-                sties <= NRAYS / 10000,
-                "%s [%s]: streams differ from single rays on %zu hits, %zu occlusions", name,
-                g_cfgs[ci].label, sdiff, odiff);
+                sties <= (custom ? 0 : NRAYS / 10000),
+                "%s [%s]: streams differ from single rays on %zu hits (%zu of them ties), %zu "
+                "occlusions", name, g_cfgs[ci].label, sdiff + sties, sties, odiff);
       double sall[4] = {sp, sb, sop, sob};
       if (ci == 0) memcpy(native_stream, sall, sizeof sall);
       else if (native_stream[0] > 0 && ci < 16) {

@@ -7,6 +7,7 @@
  *   watertightness) for the AVX2 and SSE4.1 kernels (TT_ACCEL_EMBREE_ISA=avx2 / sse41,
  *   plugin reloaded);
  * - the rotating thin cylinder of thesis 3.2.3 under every quality;
+ * - the voxel monument's camera ray that an 8-ray packet answered unlike intersect1;
  * - watertightness of robust=true on a closed mesh (rays through shared vertices/edges);
  * - build statistics, counters, compact -> native fallback, degenerate inputs. */
 #include "accel_embree_check.h"
@@ -380,6 +381,83 @@ static void test_infeasible(const tt_accel_iface *A, const tt_scene *scene) {
   tt_config_destroy(c);
 }
 
+/* A camera ray of the voxel monument (kernel bench, 1 of 262,144) whose 8-ray packet answer
+ * differed from intersect1: it passes 7e-6 below the edge y = 29 of the unit quad at z = 0,
+ * whose leaf box it misses, and hits the ground y = 0 behind it. The packet's other rays
+ * hit the quad, so the packet enters the quad's leaf first (the larger ground is the first
+ * child, and the quad is nearer for those lanes); the ray has no hit yet, tfar = +inf, and
+ * a lane that missed a box (entry +inf) counted as live there (+inf <= +inf), so its
+ * triangle test ran and accepted the quad within rounding of the edge, at t = 0x1.503aaep+7
+ * as on the monument. The quad and the ray are the monument's, bit for bit (the same
+ * vertex order, hence the same precomputed edges). Every width, leaves of 1 and 2 and the
+ * defaults: stream answers equal intersect1's exactly, and ray 0 never hits the quad. */
+static void test_packet_missed_box(const tt_accel_iface *A) {
+  static const float pos[] = {31, 29, 0, 32, 29, 0, 32, 30, 0, 31, 30, 0,       /* quad */
+                              40, 0, -20, 60, 0, -40, 60, 0, -20, 40, 0, -40};  /* ground */
+  static const uint32_t idx[] = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 7, 5};
+  ae_buf buf = {0};
+  ae_scene_begin(&buf);
+  ae_scene_mesh(&buf, 1, "voxel faces", pos, 8, idx, 4);
+  tt_scene *scene = ae_scene_end(&buf, "voxel monument ray 243996");
+  enum { NR = 8 };
+  tt_ray rays[NR];
+  for (int i = 0; i < NR; i++) {
+    tt_ray *r = &rays[i];
+    r->org[0] = -40.0f, r->org[1] = 132.0f, r->org[2] = 112.0f;
+    r->tnear = 0.0f;
+    r->tfar = INFINITY;
+    if (i == 0) {  /* the monument's ray, exactly */
+      r->dir[0] = 0x1.b36568p-2f, r->dir[1] = -0x1.39b0d8p-1f, r->dir[2] = -0x1.5519c4p-1f;
+      continue;
+    }
+    /* the others through the quad's interior */
+    const float target[3] = {31.1f + 0.11f * (float)i, 29.9f - 0.12f * (float)i, 0.0f};
+    float len = 0.0f;
+    for (int k = 0; k < 3; k++) r->dir[k] = target[k] - r->org[k], len += r->dir[k] * r->dir[k];
+    for (int k = 0; k < 3; k++) r->dir[k] /= sqrtf(len);
+  }
+  ae_ref ref0 = ae_brute(scene, &rays[0]);
+  CHECK_MSG(ref0.geom == 0 && ref0.prim >= 2,
+            "monument ray: the reference hits %u/%u (expected the ground quad)", ref0.geom,
+            ref0.prim);
+  static const char *const cfgs[] = {"", "maxLeafSize=2", "minLeafSize=1,maxLeafSize=1"};
+  for (int bf = 2; bf <= 8; bf *= 2)
+    for (size_t v = 0; v < sizeof cfgs / sizeof cfgs[0]; v++) {
+      char name[160];
+      snprintf(name, sizeof name, "backend=custom,branchingFactor=%d,%s", bf, cfgs[v]);
+      tt_config *c = tt_config_create(A->space());
+      set_all(c, name);
+      tt_accel *acc = NULL;
+      tt_status s = A->build(scene, c, &acc, NULL);
+      CHECK_MSG(s == TT_OK, "monument ray [%s]: build: %s", name, tt_last_error());
+      tt_config_destroy(c);
+      if (s != TT_OK) continue;
+      tt_ray w1[NR], w2[NR];
+      tt_hit h1[NR], h2[NR];
+      uint8_t o2[NR];
+      memcpy(w1, rays, sizeof rays);
+      memcpy(w2, rays, sizeof rays);
+      for (int i = 0; i < NR; i++) A->intersect1(acc, &w1[i], &h1[i]);
+      A->intersect_stream(acc, w2, h2, NR);
+      A->occluded_stream(acc, rays, o2, NR);
+      for (int i = 0; i < NR; i++) {
+        int same = h1[i].geom_id == h2[i].geom_id && h1[i].prim_id == h2[i].prim_id &&
+                   memcmp(&h1[i].t, &h2[i].t, sizeof h1[i].t) == 0 && h1[i].u == h2[i].u &&
+                   h1[i].v == h2[i].v && w1[i].tfar == w2[i].tfar;
+        CHECK_MSG(same, "monument ray %d [%s]: stream %u/%u t=%a, intersect1 %u/%u t=%a", i,
+                  name, h2[i].geom_id, h2[i].prim_id, (double)h2[i].t, h1[i].geom_id,
+                  h1[i].prim_id, (double)h1[i].t);
+        CHECK_MSG(o2[i] == (uint8_t)A->occluded1(acc, &rays[i]),
+                  "monument ray %d [%s]: occluded_stream differs", i, name);
+      }
+      CHECK_MSG(h2[0].prim_id != 0 && h2[0].prim_id != 1,
+                "monument ray [%s]: the stream hits the quad it passes below (t=%a)", name,
+                (double)h2[0].t);
+      A->destroy(acc);
+    }
+  tt_scene_destroy(scene);
+}
+
 int main(void) {
   g_host = *tt_default_host();
   g_host.log = test_log;
@@ -390,6 +468,7 @@ int main(void) {
   tt_scene *scene = ae_random_scene(0x5eed1234abcdull, 3, tris);
   rayset rs = make_rayset(scene, 4242);
 
+  test_packet_missed_box(A);
   run_matrix(A, &rs, 0, "default ISA");
   test_cylinder(A);
   test_watertight(A);
@@ -402,6 +481,7 @@ int main(void) {
    * where the CPU has it): reload the plugin. */
   setenv("TT_ACCEL_EMBREE_ISA", "avx2", 1);
   pl = ae_load(&g_host);
+  test_packet_missed_box(pl.accel);
   run_matrix(pl.accel, &rs, 1, "avx2");
   test_watertight(pl.accel);
   tt_registry_destroy(pl.reg);
