@@ -8,14 +8,18 @@
  *
  * Exploitation = argmax_a Q(s, a) over candidate actions, in three sources:
  *   1. the pool: the `poolSize` observed configurations with the highest reward so far
- *      (configurations the search found good, in any state: "DB configurations");
+ *      (configurations the search found good, in any state: "DB configurations"). By
+ *      default the pool alone (and the default configuration): the thesis' actions are
+ *      "the configurations investigated by the tuning search", and on the baseline of
+ *      tools/hybrid/README.md ("Studies") the argmax over points nobody measured found the
+ *      model's errors, not faster configurations (render 0.77x -> 1.0x over the search);
  *   2. `lhsCandidates` points of a Latin hypercube over the target space (drawn once from
- *      the seed), so that the answer is not limited to what was measured;
+ *      the seed), so that the answer is not limited to what was measured (default 0);
  *   3. local refinement: from the `refineStarts` best of 1+2, `refine` rounds of coordinate
  *      search in the unit cube (every other value of a NOM parameter, +-step for INT/FLOAT,
- *      step 1/8 halved each round), keeping each improvement.
+ *      step 1/8 halved each round), keeping each improvement (default 0 rounds).
  * The default configuration of the space is always a candidate. tools/hybrid/README.md shows
- * that more candidates than the defaults no longer change the answer.
+ * that beyond 256 LHS points + 3 rounds more candidates no longer change the answer.
  *
  * Offline data (a tuning DB: observe_ex with TT_PREDICTOR_OFFLINE) is learnt in `epochs`
  * passes, each in a fresh order shuffled from the seed; online samples update once each.
@@ -86,8 +90,8 @@ static void rbf_read_settings(const tt_config *c, rbf_settings_values *v) {
   v->alpha = tt_config_get_float(s, "alpha", 0.1);
   v->decay = tt_config_get_float(s, "decay", 0.0);
   v->epochs = tt_config_get_int(s, "epochs", 10);
-  v->lhs = tt_config_get_int(s, "lhsCandidates", 256);
-  v->refine = tt_config_get_int(s, "refine", 3);
+  v->lhs = tt_config_get_int(s, "lhsCandidates", 0);
+  v->refine = tt_config_get_int(s, "refine", 0);
   v->starts = tt_config_get_int(s, "refineStarts", 4);
   v->pool = tt_config_get_int(s, "poolSize", 256);
   const char *r = tt_config_get_string(s, "reward");
@@ -660,12 +664,12 @@ static tt_status rbf_init(const tt_host *host) {
                               "DB), each in a fresh shuffled order") >= 0;
   ok = ok && tt_space_add_nom_string(s, "reward", rbf_reward_names, 2, 0, "inverse: R = 1/cost "
                                      "(thesis); relative: R = default cost / cost") >= 0;
-  ok = ok && tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 256, "Latin-hypercube candidate "
-                              "actions of the argmax") >= 0;
+  ok = ok && tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 0, "Latin-hypercube candidate "
+                              "actions of the argmax (0: the pool only, the validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "poolSize", 0, 1 << 20, 256, "observed configurations kept "
                               "as candidates (the highest rewards)") >= 0;
-  ok = ok && tt_space_add_int(s, "refine", 0, 64, 3, "rounds of coordinate search around the "
-                              "best candidates") >= 0;
+  ok = ok && tt_space_add_int(s, "refine", 0, 64, 0, "rounds of coordinate search around the "
+                              "best candidates (0: none, the validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "refineStarts", 0, 1024, 4, "candidates the coordinate search "
                               "starts from") >= 0;
   if (!ok) {

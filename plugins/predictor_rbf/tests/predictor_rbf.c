@@ -39,6 +39,8 @@ static void write_bump(const char *path, const tt_predictor *like, const double 
   char wb[32];
   snprintf(wb, sizeof wb, "%g", width);
   tt_config_set_string(set, "width", wb);
+  tt_config_set_string(set, "lhsCandidates", "256");  /* an empty pool: the argmax searches */
+  tt_config_set_string(set, "refine", "3");
   char *settings = tt_config_to_json(set);
   ttpm_header h = {.kind = "predictor_rbf", .plugin_version = "0.1.0",
                    .state_space = "synthetic", .state_dim = 2, .target = sig,
@@ -74,6 +76,8 @@ static void argmax_of_a_known_q(const char *dir) {
   snprintf(path, sizeof path, "%s/bump.ttpm", dir);
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "features", "1");
+  tt_config_set_string(set, "lhsCandidates", "256");
+  tt_config_set_string(set, "refine", "3");
   for (int trial = 0; trial < 6; trial++) {
     double s[2] = {0.1 + 0.15 * trial, 0.9 - 0.13 * trial};
     tt_config *best = pu_config(target, 3 + 5 * trial, 0.2 + 1.5 * trial, trial % 3, trial % 2);
@@ -108,6 +112,9 @@ static void argmax_of_a_known_q(const char *dir) {
 static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_predictor **keep) {
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "reward", reward);
+  /* the argmax over the whole space (the samples are uniform, none near an optimum) */
+  tt_config_set_string(set, "lhsCandidates", "256");
+  tt_config_set_string(set, "refine", "3");
   tt_config_set_string(set, "features", "200");
   tt_config_set_string(set, "width", "3");
   tt_config_set_string(set, "epochs", "40");
@@ -153,6 +160,48 @@ static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_pred
   if (keep) *keep = p;
   else P->destroy(p);
   return excess;
+}
+
+/* The default argmax (the pool alone) answers a configuration it observed, or the default. */
+static void pool_only_answers_observed(void) {
+  tt_predictor *p = pu_create(P, target, 2, "synthetic", NULL, 5);
+  enum { N = 60 };
+  tt_config *cfgs[N];
+  double states[N][2];
+  uint64_t x = 23;
+  for (int i = 0; i < N; i++) {
+    states[i][0] = uni(&x);
+    states[i][1] = uni(&x);
+    double u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
+    cfgs[i] = tt_config_create(target);
+    tt_config_from_unit(cfgs[i], u);
+    tt_predictor_sample smp = {.struct_size = sizeof smp, .state = states[i], .config = cfgs[i],
+                               .cost = synth_cost(states[i], cfgs[i]), .default_cost = NAN};
+    CHECK(P->observe_ex(p, &smp, 1, TT_PREDICTOR_OFFLINE) == TT_OK);
+  }
+  tt_config *def = tt_config_create(target), *out = tt_config_create(target);
+  char *dj = tt_config_to_json(def);
+  for (int t = 0; t < 10; t++) {
+    double s[2] = {uni(&x), uni(&x)};
+    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
+    tt_predictor_result r = {.struct_size = sizeof r};
+    CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
+    CHECK(r.candidates <= N + 1);  /* the pool and the default, nothing else */
+    char *oj = tt_config_to_json(out);
+    int seen = !strcmp(oj, dj);
+    for (int i = 0; i < N && !seen; i++) {
+      char *cj = tt_config_to_json(cfgs[i]);
+      seen = !strcmp(oj, cj);
+      tt_free(cj);
+    }
+    CHECK_MSG(seen, "state %d: %s was never observed", t, oj);
+    tt_free(oj);
+  }
+  tt_free(dj);
+  for (int i = 0; i < N; i++) tt_config_destroy(cfgs[i]);
+  tt_config_destroy(def);
+  tt_config_destroy(out);
+  P->destroy(p);
 }
 
 static void relative_reward(void) {
@@ -202,6 +251,7 @@ int main(int argc, char **argv) {
   P->destroy(e);
 
   argmax_of_a_known_q(dir);
+  pool_only_answers_observed();
   relative_reward();
 
   int wrong;
@@ -228,6 +278,8 @@ int main(int argc, char **argv) {
   tt_config_set_string(set, "epochs", "40");
   tt_config_set_string(set, "alpha", "0.3");
   tt_config_set_string(set, "decay", "20000");
+  tt_config_set_string(set, "lhsCandidates", "256");
+  tt_config_set_string(set, "refine", "3");
   pu_check_files(P, trained, target, 2, "synthetic", dir, NN, set);
   tt_config_destroy(set);
 
