@@ -28,10 +28,17 @@ static void quiet(tt_log_level level, const char *plugin, const char *fmt, ...) 
 /* the library's default host (clock, allocator, threads) with a quiet log */
 static tt_host g_host;
 
+/* The predictor's settings: its defaults, but predictor_rbf's candidate set cut from 256
+ * to 16 points (lhsCandidates), which the seed files record too: building 256 candidates at
+ * every create and load was 40% of the harness's time, and the count changes no code path
+ * the file reaches. */
+static tt_config *g_settings;
+
 static tt_predictor *create(void) {
   static const char *const names[DIM] = {"a", "b", "c"};
   tt_predictor_setup su = {.struct_size = sizeof su, .target = g_target, .state_dim = DIM,
-                           .state_space = "fuzz/1", .state_names = names, .seed = 3};
+                           .state_space = "fuzz/1", .state_names = names, .settings = g_settings,
+                           .seed = 3};
   tt_predictor *p = NULL;
   if (g_pi->create_ex(&su, &p) != TT_OK || !p) abort();
   return p;
@@ -75,6 +82,13 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
   tt_space_add_float(g_target, "cost", 0.1, 10.0, 1.0, 1, "");
   tt_space_add_nom_int(g_target, "quality", q, 3, 1, "");
   tt_space_add_nom_bool(g_target, "fast", 0, "");
+  const tt_space *settings = g_pi->space ? g_pi->space() : NULL;
+  if (settings) {
+    g_settings = tt_config_create(settings);
+    if (!g_settings) abort();
+    int lhs = tt_space_find(settings, "lhsCandidates");
+    if (lhs >= 0 && tt_config_set_number(g_settings, (size_t)lhs, 16) != TT_OK) abort();
+  }
   const char *seeds = getenv("TT_FUZZ_WRITE_SEEDS");
   if (seeds && *seeds) {
     write_seeds(seeds);
