@@ -154,6 +154,13 @@ static int tt__nm_num(const cJSON *o, const char *name, double *v) {
   return 1;
 }
 
+/* 1 if a count read from a state is an integer in [lo, 2^53]: it then converts to int64_t
+ * exactly; a larger value (whose cast is undefined beyond INT64_MAX: 1e91 evaluations, found
+ * by fuzz_tuning_state) or a fraction is a corrupt file. */
+static int tt__nm_count_ok(double v, double lo) {  /* lo: 0, 1, or -1 for "none" */
+  return v >= lo && v <= 9007199254740992.0 && v == floor(v);
+}
+
 /* Reads a hex 64-bit word; 0 on failure. */
 static int tt__nm_u64(const cJSON *o, const char *name, uint64_t *v) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(o, name);
@@ -256,7 +263,8 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
   double evals, det, rr;
   if (!tt__nm_u64(root, "rng", &rng) || !tt__nm_num(root, "evaluations", &evals) ||
       !tt__nm_num(root, "deterministic", &det) || !tt__nm_num(root, "roundRobin", &rr) ||
-      rr < 0 || rr >= (double)t->n_arms || evals < 0) {
+      !tt__nm_count_ok(rr, 0) || rr >= (double)t->n_arms || !tt__nm_count_ok(evals, 0) ||
+      (det != 0 && det != 1 && det != -1)) {  /* unknown, identical, noisy */
     st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad rng/evaluations/roundRobin");
     goto done;
   }
@@ -282,7 +290,7 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
     for (; k && s && c; k = k->next, s = s->next, c = c->next) {
       int32_t id;
       if (!tt__nm_read_doubles(k, key, P) || !cJSON_IsNumber(s) || !cJSON_IsNumber(c) ||
-          c->valuedouble < 1) {
+          !tt__nm_count_ok(c->valuedouble, 1)) {
         st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad cache entry %zu",
                           cache.count);
         goto done;
@@ -316,7 +324,8 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
                tt__nm_num(o, "pend", &pend) && tt__nm_num(o, "k", &k) &&
                tt__nm_num(o, "iter", &iter) && tt__nm_num(o, "reevalIter", &ri) &&
                tt__nm_num(o, "restarts", &rs) && tt__nm_num(o, "size", &size) &&
-               tt__nm_num(o, "evals", &ev) &&
+               tt__nm_num(o, "evals", &ev) && tt__nm_count_ok(iter, 0) &&
+               tt__nm_count_ok(ri, -1) && tt__nm_count_ok(rs, 0) && tt__nm_count_ok(ev, 0) &&
                tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "x"), a->x,
                                    (n + 4) * n) &&
                tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "id"), ids, n + 4) &&

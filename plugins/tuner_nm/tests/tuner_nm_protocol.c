@@ -274,6 +274,33 @@ static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void),
       free(bad);
     }
   }
+  /* Counts beyond what an int64_t holds (a cache entry measured 1.1e91 times, found by
+   * tests/fuzz/fuzz_tuning_state: the cast was undefined behaviour) or fractional ones are
+   * refused; the tuner is left usable. */
+  {
+    static const char *const keys[][2] = {{"\"cache\":", "\"n\":["}, {"\"armStates\":[{", "\"iter\":"},
+                                          {"\"armStates\":[{", "\"evals\":"}, {"{", "\"evaluations\":"},
+                                          {"{", "\"deterministic\":"}};
+    static const char *const values[] = {"1.1e91", "2.5"};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++)
+      for (int v = 0; v < 2; v++) {
+        const char *at = strstr(state, keys[i][0]);
+        const char *num = at ? strstr(at, keys[i][1]) : NULL;
+        CHECK_MSG(num != NULL, "%s in the saved state", keys[i][1]);
+        if (!num) continue;
+        num += strlen(keys[i][1]);
+        const char *end = num + strspn(num, "-0123456789.e+");
+        size_t n = strlen(state) + 64;
+        char *bad = malloc(n);
+        snprintf(bad, n, "%.*s%s%s", (int)(num - state), state, values[v], end);
+        tt_tuner *w = NULL;
+        CHECK(nm->create(s, set, 42, &w) == TT_OK);
+        CHECK_MSG(nm->load_state(w, bad) == TT_ERR_PARSE, "%s%s accepted", keys[i][1], values[v]);
+        CHECK_MSG(nm->load_state(w, state) == TT_OK, "%s", tt_last_error());
+        nm->destroy(w);
+        free(bad);
+      }
+  }
   if (!checks_mismatch) {
     tt_free(state);
     for (int k = 0; k < n_ref; k++) tt_free(ref[k]);
