@@ -36,9 +36,30 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#ifndef TT_MPI_DEFAULT_HOST
-#define TT_MPI_DEFAULT_HOST "tunetrace"
+#ifndef TT_MPI_BUILD_DIR
+#define TT_MPI_BUILD_DIR ""
 #endif
+#ifndef TT_MPI_BUILD_HOST
+#define TT_MPI_BUILD_HOST ""
+#endif
+#define TT_MPI_INSTALLED_HOST "tunetrace"
+
+/* The host program jobs run by default: in the build tree (this program runs from the build
+ * tree's mpi/ folder) the build tree's host; installed, the `tunetrace` installed beside this
+ * program (PREFIX/bin), found relative to itself so a --destdir staging copy or a moved
+ * prefix runs its own. An installed copy never runs the tree it was built in. */
+static const char *tt__default_host(void) {
+  static char host[4200];
+  char exe[4096], dir[4096];
+  if (!realpath("/proc/self/exe", exe)) return TT_MPI_INSTALLED_HOST;
+  char *slash = strrchr(exe, '/');
+  if (!slash) return TT_MPI_INSTALLED_HOST;
+  *slash = '\0';
+  if (TT_MPI_BUILD_DIR[0] && realpath(TT_MPI_BUILD_DIR, dir) && !strcmp(exe, dir))
+    return TT_MPI_BUILD_HOST;
+  snprintf(host, sizeof host, "%s/%s", exe, TT_MPI_INSTALLED_HOST);
+  return host;
+}
 
 enum { TAG_JOB = 1, TAG_RESULT = 2, TAG_ALIVE = 3 };
 enum { EXIT_OK = 0, EXIT_FAILED = 1, EXIT_USAGE = 2, EXIT_INTERRUPTED = 130 };
@@ -88,7 +109,7 @@ static int tt__usage(int rank, const char *msg) {
             "  --check       print the jobs still todo; exit 0 when none is, 1 otherwise (the "
             "exit status\n"
             "                of mpirun --enable-recovery is 0 whatever the ranks return)\n",
-            TT_MPI_DEFAULT_HOST);
+            tt__default_host());
   }
   return EXIT_USAGE;
 }
@@ -594,7 +615,7 @@ int main(int argc, char **argv) {
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
 
-  tt_mpi_opts o = {NULL, NULL, TT_MPI_DEFAULT_HOST, NULL, 0, 0, 0, 60, 0};
+  tt_mpi_opts o = {NULL, NULL, tt__default_host(), NULL, 0, 0, 0, 60, 0};
   const char *tmp = getenv("TMPDIR");
   o.scratch = tmp && tmp[0] ? tmp : "/tmp";
   int bad = 0;

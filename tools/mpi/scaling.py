@@ -6,6 +6,13 @@ ranks). The same job list (tools/hybrid/baseline.py --emit-jobs) runs on 1 and o
 count, the CPU seconds of the jobs (the same work on every variant) and the load average
 before and after: on a shared machine the wall times measure who else ran too.
 
+Where the time goes, per variant (medians):
+  fixed   the same command again on the finished database (every job done, nothing to run):
+          mpirun's start and end, MPI_Init, reading and checking the list: the serial part
+  busy    per rank, the wall seconds of the jobs it ran (max and min over the ranks: their
+          difference is the tail, a rank waiting for the last job of the other)
+  work efficiency  (T(1) - F(1)) / (n (T(n) - F(n))): the efficiency without the fixed part
+
   nice -n 19 tools/mpi/scaling.py --rounds 3 --cameras 4 --iterations 10 --res 32x32
 """
 import argparse
@@ -54,6 +61,9 @@ def main():
     njobs = len(json.load(open(jobs))["jobs"])
     walls = {n: [] for n in ranks}
     cpus = {n: [] for n in ranks}
+    fixed = {n: [] for n in ranks}
+    busy_max = {n: [] for n in ranks}
+    busy_min = {n: [] for n in ranks}
     load0 = os.getloadavg()
     for r in range(a.rounds):
         order = ranks if r % 2 == 0 else ranks[::-1]
@@ -64,12 +74,17 @@ def main():
                 mp.append("--allow-run-as-root")
             if n > (os.cpu_count() or 1):
                 mp.append("--oversubscribe")
+            run = mp + [drv, "--jobs", jobs, "--db", db, "--host", host, "--scratch", work]
             t0 = time.time()
-            p = subprocess.run(mp + [drv, "--jobs", jobs, "--db", db, "--host", host, "--scratch", work],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            p = subprocess.run(run, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
             wall = time.time() - t0
             if p.returncode != 0:
                 sys.exit(f"scaling: -np {n} failed:\n{p.stderr[-3000:]}")
+            t0 = time.time()  # again: nothing left to run, the fixed part alone
+            p = subprocess.run(run, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            fixed[n].append(time.time() - t0)
+            if p.returncode != 0 or " 0 to run" not in p.stderr:
+                sys.exit(f"scaling: -np {n}: the rerun should have nothing to do:\n{p.stderr[-3000:]}")
             con = sqlite3.connect(db)
             notes = [json.loads(x[0]) for x in con.execute("SELECT note FROM merges")]
             con.close()
@@ -77,23 +92,34 @@ def main():
                 sys.exit(f"scaling: -np {n}: {len(notes)} of {njobs} jobs merged")
             walls[n].append(wall)
             cpus[n].append(sum(x["cpu_s"] for x in notes))
-            print(f"round {r + 1}: -np {n}: {wall:.2f} s wall, jobs' CPU {cpus[n][-1]:.2f} s, "
-                  f"load {os.getloadavg()[0]:.1f}", flush=True)
+            per_rank = [sum(x["wall_s"] for x in notes if x["rank"] == k) for k in range(n)]
+            busy_max[n].append(max(per_rank))
+            busy_min[n].append(min(per_rank))
+            print(f"round {r + 1}: -np {n}: {wall:.2f} s wall, fixed {fixed[n][-1]:.2f} s, jobs' "
+                  f"wall per rank {' '.join(f'{b:.2f}' for b in per_rank)} s, jobs' CPU "
+                  f"{cpus[n][-1]:.2f} s, load {os.getloadavg()[0]:.1f}", flush=True)
     load1 = os.getloadavg()
     ref = statistics.median(walls[ranks[0]])
+    ref_fixed = statistics.median(fixed[ranks[0]])
     res = {"jobs": njobs, "rounds": a.rounds, "cameras": a.cameras, "iterations": a.iterations,
            "res": a.res, "load_before": load0[0], "load_after": load1[0], "cpus": os.cpu_count(),
            "variants": {}}
     print(f"\n{njobs} baseline jobs ({a.cameras} cameras x {len(scenes)} scenes x 2 objectives, "
           f"{a.iterations} iterations, {a.res}), {a.rounds} interleaved rounds, medians; "
           f"load {load0[0]:.1f} before, {load1[0]:.1f} after, {os.cpu_count()} CPUs")
-    print("ranks  wall_s  jobs_cpu_s  speed-up  efficiency")
+    print("ranks  wall_s  fixed_s  busy_max_s  busy_min_s  jobs_cpu_s  speed-up  efficiency  work_efficiency")
     for n in ranks:
         w = statistics.median(walls[n])
+        f = statistics.median(fixed[n])
         eff = ref * ranks[0] / (n * w)
+        weff = (ref - ref_fixed) * ranks[0] / (n * (w - f)) if w > f else float("nan")
         res["variants"][n] = {"wall_s": walls[n], "median_wall_s": w, "cpu_s": cpus[n],
-                              "speedup": ref / w, "efficiency": eff}
-        print(f"{n:5d}  {w:6.2f}  {statistics.median(cpus[n]):10.2f}  {ref / w:8.2f}  {eff:10.2f}")
+                              "fixed_s": fixed[n], "busy_max_s": busy_max[n],
+                              "busy_min_s": busy_min[n], "speedup": ref / w, "efficiency": eff,
+                              "work_efficiency": weff}
+        print(f"{n:5d}  {w:6.2f}  {f:7.2f}  {statistics.median(busy_max[n]):10.2f}  "
+              f"{statistics.median(busy_min[n]):10.2f}  {statistics.median(cpus[n]):10.2f}  "
+              f"{ref / w:8.2f}  {eff:10.2f}  {weff:15.2f}")
     if a.out:
         with open(a.out, "w") as f:
             json.dump(res, f, indent=1)
