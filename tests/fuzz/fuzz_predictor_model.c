@@ -11,6 +11,7 @@
 #include <tunetrace/host.h>
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
+#include <tt_util/hash.h>
 
 #include "fuzz_util.h"
 
@@ -110,11 +111,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (size >= 32) {  /* the checksum of bytes [0, 24 + payload) follows them */
     uint64_t n = get_u64(c + 16);
     if (n <= size - 32) {
-      uint64_t h = 14695981039346656037ull;
-      for (size_t i = 0; i < 24 + n; i++) {
-        h ^= c[i];
-        h *= 1099511628211ull;
-      }
+      uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, c, 24 + n);
       for (int k = 0; k < 8; k++) c[24 + n + k] = (uint8_t)(h >> (8 * k));
     }
   }

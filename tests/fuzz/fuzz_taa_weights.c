@@ -6,6 +6,7 @@
 #include "fuzz_util.h"
 
 #include <tunetrace/host.h>
+#include <tt_util/hash.h>
 
 /* The file ends with an FNV-1a checksum of the payload (after header_bytes, the u32 at 12):
  * recomputed here on the mutated input so the fuzzer reaches the shapes and weights behind
@@ -17,11 +18,7 @@ static uint8_t *fix_checksum(const uint8_t *data, size_t size) {
   if (size < 20) return c;
   uint32_t hb = (uint32_t)c[12] | (uint32_t)c[13] << 8 | (uint32_t)c[14] << 16 | (uint32_t)c[15] << 24;
   if (hb > size - 4) return c;
-  uint32_t h = 2166136261u;
-  for (size_t i = hb; i < size - 4; i++) {
-    h ^= c[i];
-    h *= 16777619u;
-  }
+  uint32_t h = tt__fnv1a32(c + hb, size - 4 - hb);
   for (int k = 0; k < 4; k++) c[size - 4 + k] = (uint8_t)(h >> (8 * k));
   return c;
 }
