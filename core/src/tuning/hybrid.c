@@ -4,6 +4,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include <tunetrace/hybrid.h>
 
+#include "tuning/tuning_internal.h"
+
 #include <tt_util/clock.h>
 #include <tt_util/rng.h>
 #include <tt_util/strings.h>
@@ -14,7 +16,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 struct tt_hybrid {
   const tt_host *host;
@@ -128,11 +129,7 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   const char *run_id = TT__HDESC(d, run_id);
   char id[64];
   if (!run_id) {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    snprintf(id, sizeof id, "hybrid-%llx-%d",
-             (unsigned long long)ts.tv_sec * 1000000000ull + (unsigned long long)ts.tv_nsec,
-             (int)getpid());
+    tt__default_run_id(id, sizeof id, "hybrid-");
     run_id = id;
   }
   h->run_id = tt__strdup(run_id);

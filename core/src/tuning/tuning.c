@@ -160,6 +160,14 @@ static tt_status tt__drop_untunable(tt_tuning *t) {
   return TT_OK;
 }
 
+void tt__default_run_id(char *buf, size_t n, const char *prefix) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  snprintf(buf, n, "%s%llx-%d", prefix,
+           (unsigned long long)ts.tv_sec * 1000000000ull + (unsigned long long)ts.tv_nsec,
+           (int)getpid());
+}
+
 tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: out is NULL");
   *out = NULL;
@@ -209,11 +217,7 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
   const char *run_id = TT__DESC(d, run_id);
   char id[64];
   if (!run_id) {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    snprintf(id, sizeof id, "%llx-%d",
-             (unsigned long long)ts.tv_sec * 1000000000ull + (unsigned long long)ts.tv_nsec,
-             (int)getpid());
+    tt__default_run_id(id, sizeof id, "");
     run_id = id;
   }
   t->run_id = tt__strdup(run_id);

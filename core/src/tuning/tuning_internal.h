@@ -1,5 +1,5 @@
-/* Tuning internals shared by the session (tuning.c) and the objectives (objective.c). Not
- * part of the public ABI. */
+/* Tuning internals shared by the session (tuning.c), the objectives (objective.c) and the
+ * hybrid loop (hybrid.c). Not part of the public ABI. */
 #ifndef TT_TUNING_INTERNAL_H
 #define TT_TUNING_INTERNAL_H
 
@@ -12,5 +12,9 @@
  * image or reference; `ref` holds `pixels` reference luminances. */
 tt_status tt__objective_cost(const tt_objective *o, const tt_tuning_measurement *m,
                              const double *ref, size_t pixels, double *cost);
+
+/* Writes a run id unique to this process and moment, "<prefix><ns since epoch, hex>-<pid>",
+ * into buf (n >= 64): the database's run_id when the caller names none. */
+void tt__default_run_id(char *buf, size_t n, const char *prefix);
 
 #endif /* TT_TUNING_INTERNAL_H */
