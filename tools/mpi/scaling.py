@@ -13,7 +13,11 @@ Where the time goes, per variant (medians):
           difference is the tail, a rank waiting for the last job of the other)
   work efficiency  (T(1) - F(1)) / (n (T(n) - F(n))): the efficiency without the fixed part
 
-  nice -n 19 tools/mpi/scaling.py --rounds 3 --cameras 4 --iterations 10 --res 32x32
+  nice -n -5 tools/mpi/scaling.py --rounds 5     (defaults: 4 cameras, 20 iterations, 64x64)
+
+The defaults are 16 jobs of ~0.35 s of CPU each: long enough that mpirun's start-up (the fixed
+part, ~0.6 s) does not dominate, short enough for a bench (~1 min). A real baseline job is
+15-100x longer. On a quiet machine: efficiency 0.97 at 2 ranks (docs/mpi.md).
 """
 import argparse
 import json
@@ -34,8 +38,8 @@ def main():
     ap.add_argument("--ranks", default="1,2", help="comma-separated rank counts (first: the reference)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--cameras", type=int, default=4)
-    ap.add_argument("--iterations", type=int, default=10)
-    ap.add_argument("--res", default="32x32")
+    ap.add_argument("--iterations", type=int, default=20)
+    ap.add_argument("--res", default="64x64")
     ap.add_argument("--scene", action="append", default=[], metavar="NAME=FILE",
                     help="baseline scenes (default: the Cornell box path and the specular box)")
     ap.add_argument("--mpirun", default="mpirun")
@@ -120,6 +124,13 @@ def main():
         print(f"{n:5d}  {w:6.2f}  {f:7.2f}  {statistics.median(busy_max[n]):10.2f}  "
               f"{statistics.median(busy_min[n]):10.2f}  {statistics.median(cpus[n]):10.2f}  "
               f"{ref / w:8.2f}  {eff:10.2f}  {weff:15.2f}")
+    if 2 in res["variants"] and ranks[0] == 1:
+        e2 = res["variants"][2]["efficiency"]
+        busy = max(load0[0], load1[0]) > 0.5 * (os.cpu_count() or 1)
+        print(f"goal (issue 18): efficiency >= 0.9 at 2 ranks: {e2:.2f}, "
+              f"{'met' if e2 >= 0.9 else 'NOT met'}"
+              + (f" (load {max(load0[0], load1[0]):.1f} on {os.cpu_count()} CPUs: the second rank "
+                 "had no free core; rerun on a quiet machine)" if busy else ""))
     if a.out:
         with open(a.out, "w") as f:
             json.dump(res, f, indent=1)
