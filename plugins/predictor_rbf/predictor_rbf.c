@@ -67,12 +67,14 @@ struct tt_predictor {
   uint64_t seed;
   rbf_settings_values set;
   rbf_model model;
-  /* LHS candidates (regenerated from the seed): values (params) and encodings (m) */
+  /* LHS candidates (regenerated from the seed): values (params), encodings (m) and the
+   * action parts of their distances to the centres (F, rbf_action_part) */
   size_t ncand;
-  double *cand_values, *cand_enc;
-  /* pool of observed configurations, the `pool` highest rewards */
+  double *cand_values, *cand_enc, *cand_da;
+  /* pool of observed configurations, the `pool` highest rewards; pool_da as cand_da, kept
+   * with each entry so that predict() does not recompute F x m sums per candidate */
   size_t npool;
-  double *pool_values, *pool_enc, *pool_reward;
+  double *pool_values, *pool_enc, *pool_reward, *pool_da;
   uint64_t observations;
   double *phi;              /* F scratch for updates (observe is single-threaded) */
   double *x;                /* d + m scratch */
@@ -122,12 +124,15 @@ static void rbf_free_model_parts(tt_predictor *p) {
   rbf_model_free(&p->model);
   free(p->cand_values);
   free(p->cand_enc);
+  free(p->cand_da);
   free(p->pool_values);
   free(p->pool_enc);
   free(p->pool_reward);
+  free(p->pool_da);
   free(p->phi);
   free(p->x);
-  p->cand_values = p->cand_enc = p->pool_values = p->pool_enc = p->pool_reward = NULL;
+  p->cand_values = p->cand_enc = p->cand_da = NULL;
+  p->pool_values = p->pool_enc = p->pool_reward = p->pool_da = NULL;
   p->phi = p->x = NULL;
   p->ncand = p->npool = 0;
 }
@@ -149,9 +154,10 @@ static int rbf_make_candidates(tt_predictor *p) {
   size_t n = (size_t)p->set.lhs, np = p->params ? p->params : 1;
   p->cand_values = malloc((n ? n : 1) * np * sizeof(double));
   p->cand_enc = malloc((n ? n : 1) * (p->m ? p->m : 1) * sizeof(double));
+  p->cand_da = malloc((n ? n : 1) * p->model.features * sizeof(double));
   double *unit = malloc((n ? n : 1) * np * sizeof(double));
   tt_config *c = tt_config_create(p->target);
-  if (!p->cand_values || !p->cand_enc || !unit || !c) {
+  if (!p->cand_values || !p->cand_enc || !p->cand_da || !unit || !c) {
     free(unit);
     tt_config_destroy(c);
     return -1;
@@ -164,6 +170,8 @@ static int rbf_make_candidates(tt_predictor *p) {
     if (tt_space_check(p->target, c, why, sizeof why) == TT_CHECK_INFEASIBLE) continue;
     ttpm_config_values(c, p->cand_values + p->ncand * p->params);
     rbf_encode_action(c, p->cand_enc + p->ncand * p->m);
+    rbf_action_part(&p->model, p->cand_enc + p->ncand * p->m,
+                    p->cand_da + p->ncand * p->model.features);
     p->ncand++;
   }
   free(unit);
@@ -188,9 +196,11 @@ static int rbf_alloc(tt_predictor *p) {
   p->pool_values = malloc(pool * (p->params ? p->params : 1) * sizeof(double));
   p->pool_enc = malloc(pool * (p->m ? p->m : 1) * sizeof(double));
   p->pool_reward = malloc(pool * sizeof(double));
+  p->pool_da = malloc(pool * f * sizeof(double));
   p->phi = malloc(f * sizeof(double));
   p->x = malloc((p->d + p->m) * sizeof(double));
-  if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->phi || !p->x) return -1;
+  if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->pool_da || !p->phi || !p->x)
+    return -1;
   return rbf_make_candidates(p);
 }
 
@@ -265,6 +275,7 @@ static void rbf_pool_add(tt_predictor *p, const double *values, const double *en
   }
   memcpy(p->pool_values + slot * np, values, np * sizeof(double));
   memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
+  rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
   p->pool_reward[slot] = reward;
 }
 
@@ -363,7 +374,7 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   const rbf_model *r = &p->model;
   size_t np = p->params ? p->params : 1, m = p->m ? p->m : 1;
   size_t n1 = p->npool + p->ncand + 1, starts = (size_t)p->set.starts;
-  double *ds = malloc(r->features * sizeof(double));
+  double *ds = malloc(2 * (size_t)r->features * sizeof(double)), *dd = ds + r->features;
   double *vals = malloc(n1 * np * sizeof(double)), *enc = malloc(n1 * m * sizeof(double));
   double *qs = malloc(n1 * sizeof(double)), *unit = malloc(np * sizeof(double));
   double *best_vals = malloc(np * sizeof(double)), *try_enc = malloc(m * sizeof(double));
@@ -386,11 +397,16 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   ttpm_config_values(c, vals + n * p->params);  /* c holds the defaults */
   rbf_encode_action(c, enc + n * p->m);
   n++;
-  for (size_t k = 0; k < n; k++) qs[k] = rbf_q_action(r, ds, enc + k * p->m);
+  /* the action parts: cached per pool entry and LHS candidate, computed for the default */
+  for (size_t k = 0; k < p->npool; k++) qs[k] = rbf_q_parts(r, ds, p->pool_da + k * r->features);
+  for (size_t k = 0; k < p->ncand; k++)
+    qs[p->npool + k] = rbf_q_parts(r, ds, p->cand_da + k * r->features);
+  rbf_action_part(r, enc + (n - 1) * p->m, dd);
+  qs[n - 1] = rbf_q_parts(r, ds, dd);
   uint64_t evaluated = n;
-  /* the `starts` best, highest first (ties: lowest index) */
+  /* the `starts` best, highest first (ties: lowest index); only the refinement needs them */
   size_t nt = 0;
-  for (; nt < starts && nt < n; nt++) {
+  for (; p->set.refine > 0 && nt < starts && nt < n; nt++) {
     size_t b = SIZE_MAX;
     for (size_t k = 0; k < n; k++) {
       int taken = 0;
@@ -493,8 +509,8 @@ static tt_status rbf_info(const tt_predictor *p, tt_predictor_info *out) {
   if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": info: NULL argument");
   uint64_t f = p->model.features, dim = p->model.dim, pool = (uint64_t)p->set.pool;
   uint64_t bytes = sizeof *p + f * (dim + 2) * sizeof(double) + (p->d + p->m) * sizeof(double) +
-                   p->ncand * (p->params + p->m) * sizeof(double) +
-                   pool * (p->params + p->m + 1) * sizeof(double);
+                   p->ncand * (p->params + p->m + f) * sizeof(double) +
+                   pool * (p->params + p->m + 1 + f) * sizeof(double);
   if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
     out->memory_bytes = bytes;
     out->entries = f;
@@ -569,7 +585,8 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
   }
   /* build the loaded model beside the current one; swap only when all of it read */
   tt_predictor tmp = *p;
-  tmp.cand_values = tmp.cand_enc = tmp.pool_values = tmp.pool_enc = tmp.pool_reward = NULL;
+  tmp.cand_values = tmp.cand_enc = tmp.cand_da = NULL;
+  tmp.pool_values = tmp.pool_enc = tmp.pool_reward = tmp.pool_da = NULL;
   tmp.phi = tmp.x = NULL;
   memset(&tmp.model, 0, sizeof tmp.model);
   tt_config *sc = tt_config_create(rbf_settings);
@@ -602,6 +619,8 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
       if (!isfinite(tmp.model.centres[i])) ttpm_fail(&rd, "centre coordinate %zu is not finite", i);
     for (size_t i = 0; !rd.err[0] && i < (size_t)f; i++)
       if (!isfinite(tmp.model.theta[i])) ttpm_fail(&rd, "theta[%zu] is not finite", i);
+    for (size_t k = 0; !rd.err[0] && k < tmp.ncand; k++)  /* the file's centres */
+      rbf_action_part(&tmp.model, tmp.cand_enc + k * p->m, tmp.cand_da + k * f);
   }
   uint64_t npool = ttpm_get_count(&rd, (uint64_t)tmp.set.pool, (p->params + 1) * 8, "pool entries");
   tt_config *c = tt_config_create(p->target);
@@ -611,7 +630,10 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
     ttpm_get_f64s(&rd, v, p->params, "a pool configuration");
     if (!rd.err[0] && (!c || ttpm_config_from_values(c, v, why, sizeof why)))
       ttpm_fail(&rd, "pool configuration %llu: %s", (unsigned long long)k, c ? why : "out of memory");
-    if (!rd.err[0]) rbf_encode_action(c, tmp.pool_enc + k * p->m);
+    if (!rd.err[0]) {
+      rbf_encode_action(c, tmp.pool_enc + k * p->m);
+      rbf_action_part(&tmp.model, tmp.pool_enc + k * p->m, tmp.pool_da + k * f);
+    }
   }
   if (!rd.err[0]) {
     ttpm_get_f64s(&rd, tmp.pool_reward, (size_t)npool, "the pool rewards");

@@ -139,13 +139,28 @@ void rbf_state_part(const rbf_model *r, const double *state, double *ds) {
   }
 }
 
-double rbf_q_action(const rbf_model *r, const double *ds, const double *a) {
-  double q = 0;
+void rbf_action_part(const rbf_model *r, const double *a, double *da) {
   for (uint32_t i = 0; i < r->features; i++) {
     const double *c = r->centres + (size_t)i * r->dim + r->d;
-    double s = ds[i];
+    double s = 0;
     for (uint32_t k = 0; k < r->m; k++) s += (a[k] - c[k]) * (a[k] - c[k]);
-    q += r->theta[i] * exp(-r->width * sqrt(s));
+    da[i] = s;
+  }
+}
+
+double rbf_q_parts(const rbf_model *r, const double *ds, const double *da) {
+  double q = 0, nw = -r->width;
+  for (uint32_t i = 0; i < r->features; i++) q += r->theta[i] * exp(nw * sqrt(ds[i] + da[i]));
+  return q;
+}
+
+double rbf_q_action(const rbf_model *r, const double *ds, const double *a) {
+  double q = 0, nw = -r->width;
+  for (uint32_t i = 0; i < r->features; i++) {
+    const double *c = r->centres + (size_t)i * r->dim + r->d;
+    double s = 0;
+    for (uint32_t k = 0; k < r->m; k++) s += (a[k] - c[k]) * (a[k] - c[k]);
+    q += r->theta[i] * exp(nw * sqrt(ds[i] + s));
   }
   return q;
 }

@@ -55,10 +55,19 @@ double rbf_q(const rbf_model *r, const double *x);
 /* One update towards reward R at x; `phi` is F scratch values. */
 void rbf_update(rbf_model *r, const double *x, double reward, double *phi);
 
-/* Squared distances of the state part of x to every centre: ds[i] (F values), so that the
- * Q of many actions in one state costs F x m per action (rbf_q_action). */
+/* The argmax's split of ||x - c_i||^2 = ds[i] + da[i] into the state part ds (once per
+ * predict) and the action part da (once per candidate action, kept with the candidate:
+ * predictor_rbf caches it per pool entry, so that a predict over the pool costs one sqrt and
+ * one exp per candidate and feature, not the m-term sums too). rbf_q_action and rbf_q_parts
+ * sum in the same order, so they agree bit for bit; rbf_q sums all d + m terms in one chain,
+ * so it agrees with them within a few ulp of each distance. */
+/* Squared distances of the state part of x to every centre: ds[i] (F values). */
 void rbf_state_part(const rbf_model *r, const double *state, double *ds);
-/* Q of the action coordinates `a` given the state part ds. */
+/* Squared distances of the action coordinates `a` to every centre's action part: da[i]. */
+void rbf_action_part(const rbf_model *r, const double *a, double *da);
+/* Q given the state part ds and the action part da. */
+double rbf_q_parts(const rbf_model *r, const double *ds, const double *da);
+/* Q of the action coordinates `a` given the state part ds (rbf_q_parts with da computed). */
 double rbf_q_action(const rbf_model *r, const double *ds, const double *a);
 
 /* n points of a Latin hypercube in [0,1]^dim into out (n x dim), from `seed`. */

@@ -5,7 +5,9 @@
  *    the predicted configuration costs within a few percent of the optimum, with the right
  *    nominal values, for inverse and relative rewards;
  *  - relative reward skips samples without a default cost; predict is deterministic and the
- *    candidates are counted; model files round-trip bit-exactly, bad files are refused. */
+ *    candidates are counted; model files round-trip bit-exactly, bad files are refused;
+ *  - the pool argmax (cached action distances) is the exact argmax over the pool's entries,
+ *    after slots were replaced and after a load. */
 #include "../../predictor_common/model_file.h"
 #include "predictor_util.h"
 
@@ -204,6 +206,78 @@ static void pool_only_answers_observed(void) {
   P->destroy(p);
 }
 
+/* The pool argmax with its cached action distances (pool_da) answers the exact argmax over
+ * what the pool must hold: with poolSize 16 and 60 distinct observed configurations (so slots
+ * are replaced), the 16 highest rewards (lowest costs) and the default. estimate() is the
+ * reference Q (rbf_q, every distance summed afresh); the answer must be one of those 17 and
+ * within 1e-12 of their lowest expected cost. A stale cached distance (a replaced slot, a
+ * loaded file) moves Q far more than that. */
+static void pool_argmax_is_exact(const char *dir) {
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "poolSize", "16");
+  tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 8);
+  enum { N = 60, K = 16 };
+  tt_config *cfgs[N + 1];
+  double cost[N];
+  uint64_t x = 41;
+  for (int i = 0; i < N; i++) {
+    double st[2] = {uni(&x), uni(&x)}, u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
+    cfgs[i] = tt_config_create(target);
+    tt_config_from_unit(cfgs[i], u);
+    cost[i] = synth_cost(st, cfgs[i]);
+    tt_predictor_sample smp = {.struct_size = sizeof smp, .state = st, .config = cfgs[i],
+                               .cost = cost[i], .default_cost = NAN};
+    CHECK(P->observe_ex(p, &smp, 1, i % 2 ? TT_PREDICTOR_ONLINE : TT_PREDICTOR_OFFLINE) == TT_OK);
+  }
+  /* the K lowest costs, and the default */
+  int in[N + 1] = {0};
+  for (int k = 0; k < K; k++) {
+    int b = -1;
+    for (int i = 0; i < N; i++)
+      if (!in[i] && (b < 0 || cost[i] < cost[b])) b = i;
+    in[b] = 1;
+  }
+  cfgs[N] = tt_config_create(target);
+  in[N] = 1;
+  char path[4200];
+  snprintf(path, sizeof path, "%s/pool.ttpm", dir);
+  CHECK_MSG(P->save(p, path) == TT_OK, "%s", tt_last_error());
+  tt_predictor *loaded = pu_create(P, target, 2, "synthetic", set, 99);
+  CHECK_MSG(P->load(loaded, path) == TT_OK, "%s", tt_last_error());
+  tt_config *out = tt_config_create(target);
+  for (int t = 0; t < 20; t++) {
+    double s[2] = {uni(&x), uni(&x)};
+    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
+    for (int which = 0; which < 2; which++) {
+      tt_predictor *m = which ? loaded : p;
+      tt_predictor_result r = {.struct_size = sizeof r};
+      CHECK(P->predict_ex(m, &q, out, &r) == TT_OK);
+      CHECK(r.candidates == K + 1);
+      double best = INFINITY, got = NAN;
+      char *oj = tt_config_to_json(out);
+      for (int i = 0; i <= N; i++) {
+        if (!in[i]) continue;
+        double ec;
+        CHECK(P->estimate(m, &q, cfgs[i], &ec) == TT_OK);
+        if (ec < best) best = ec;
+        char *cj = tt_config_to_json(cfgs[i]);
+        if (!strcmp(cj, oj)) got = ec;
+        tt_free(cj);
+      }
+      CHECK_MSG(isfinite(got), "state %d: %s is not in the pool", t, oj);
+      CHECK_MSG(got <= best * (1 + 1e-12), "state %d (%s): expected cost %.17g, the pool's best "
+                "%.17g", t, which ? "loaded" : "trained", got, best);
+      CHECK_NEAR(r.expected_cost, got, 1e-12 * got);
+      tt_free(oj);
+    }
+  }
+  for (int i = 0; i <= N; i++) tt_config_destroy(cfgs[i]);
+  tt_config_destroy(out);
+  tt_config_destroy(set);
+  P->destroy(p);
+  P->destroy(loaded);
+}
+
 static void relative_reward(void) {
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "reward", "relative");
@@ -252,6 +326,7 @@ int main(int argc, char **argv) {
 
   argmax_of_a_known_q(dir);
   pool_only_answers_observed();
+  pool_argmax_is_exact(dir);
   relative_reward();
 
   int wrong;

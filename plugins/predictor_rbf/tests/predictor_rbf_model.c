@@ -142,6 +142,15 @@ static void features_and_split(void) {
   }
   rbf_state_part(&r, xv, ds);
   CHECK_NEAR(rbf_q_action(&r, ds, xv + 2), rbf_q(&r, xv), 1e-13);
+  /* the argmax's cached action part: the same sums in the same order, the same bits */
+  double da[17];
+  rbf_action_part(&r, xv + 2, da);
+  for (uint32_t i = 0; i < r.features; i++) {
+    double s = 0;
+    for (uint32_t k = 2; k < r.dim; k++) s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
+    CHECK(da[i] == s);
+  }
+  CHECK(rbf_q_parts(&r, ds, da) == rbf_q_action(&r, ds, xv + 2));
   rbf_model_free(&r);
 }
 
