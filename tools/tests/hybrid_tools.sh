@@ -4,7 +4,8 @@
 # the rest, a third run has nothing to do) and its jobs are self-describing rows; the
 # evaluation runs every protocol and model and two studies (the RBF's reward, its argmax
 # candidates), measures side by side and writes the summary and the figures; epsilon.py runs
-# two seeds. Numbers are not asserted (a 16x16 image times noise); the pipeline is.
+# two seeds; predict_cost.py times predict() on the protocols and compares two hosts' answers.
+# Numbers are not asserted (a 16x16 image times noise); the pipeline is.
 set -euo pipefail
 fail() { echo "FAIL: $*" >&2; exit 1; }
 : "${TT_SOURCE_ROOT:?}" "${TT_BUILD_ROOT:?}"
@@ -68,6 +69,24 @@ if grep -q "measuring" "$tmp/e2.log"; then cat "$tmp/e2.log"; fail "the second e
 if "$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e3" --host "$host" \
      --min-cameras 50 >"$tmp/e3.log" 2>&1; then fail "evaluate with too few cameras should fail"; fi
 grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "message"; }
+# predict_cost.py: predict() against the frame on the same protocols, and a reference host's
+# answers compared (the same host here: every answer the same, exit 0)
+PC=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/predict_cost.py" --db "$tmp/b.db" --work "$tmp/pc" --out "$tmp/fp"
+    --host "$host" --reference-host "$host" --splits 1 --min-cameras 4 --models rbf,nn)
+"${PC[@]}" >"$tmp/pc.log" 2>&1 || { cat "$tmp/pc.log"; fail "predict_cost.py"; }
+"$PY" - "$tmp/fp/predict_cost.json" <<'EOF' || fail "predict_cost.json"
+import json, math, sys
+s = json.load(open(sys.argv[1]))["summary"]
+for key in ("render/rbf", "build+render/rbf", "render/nn"):
+    t = s["table"][key]
+    assert t["n"] == 2 + 12, (key, t)  # split 0: 2 scenes x 1 camera (20% of 6); LOSO: 12
+    assert t["same_config"] == t["n"], (key, t)
+    assert t["value_rel_diff_max"] == (0.0 if key.endswith("rbf") else None), (key, t)
+    assert 0 < t["predict_ms_median"] and math.isfinite(t["share_of_frame"]), (key, t)
+EOF
+"$PY" "$TT_SOURCE_ROOT/tools/hybrid/predict_cost.py" --db "$tmp/b.db" --work "$tmp/pc" --models nosuch \
+  >"$tmp/pc2.log" 2>&1 && fail "predict_cost.py --models nosuch should be refused"
+grep -q "unknown model 'nosuch'" "$tmp/pc2.log" || { cat "$tmp/pc2.log"; fail "message"; }
 # epsilon.py: host --hybrid along the path at epsilon 0 and 1, warm-started without the
 # scene's own rows: epsilon 1 explores every state, epsilon 0 none (one build each)
 EP=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/epsilon.py" --db "$tmp/b.db" --work "$tmp/eps" --out "$tmp/fe"
