@@ -17,7 +17,7 @@
  *
  *   meson test -C build --suite bench accel_embree_render_bench -v
  *   TT_PLUGIN_PATH=build/plugins TT_SOURCE_ROOT=. build/plugins/accel_embree/tests/accel_embree_render_bench \
- *       [runs] [scene filter] [configuration filter]
+ *       [runs] [scene filter, e.g. "living,bmw"] [configuration filter]
  * Environment: TT_BENCH_RES (WxH, default 320x240), TT_BENCH_SPP (8), TT_BENCH_THREADS
  * ("1,2"), TT_BENCH_DEPTHS ("3,8"), TT_BENCH_CONFIGS (extra "label=settings;..." rows,
  * settings as "name=value,..."), TT_BENCH_PT (integrator_pt settings, e.g. "wavefront=false"),
@@ -123,6 +123,17 @@ static void split_settings(const char *settings, char *accel, char *pt, size_t s
     size_t len = strlen(dst);
     snprintf(dst + len, size - len, "%s%s", len ? "," : "", t);
   }
+}
+
+/* Whether scene `name` passes the scene filter: NULL, or a comma-separated list of which
+ * one item is a substring of the name ("living,bmw" runs a two-scene subset). */
+static int scene_wanted(const char *name, const char *filter) {
+  if (!filter || !filter[0]) return 1;
+  char buf[256];
+  snprintf(buf, sizeof buf, "%s", filter);
+  for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save))
+    if (strstr(name, tok)) return 1;
+  return 0;
 }
 
 /* Built-in rows (filtered by label), then TT_BENCH_CONFIGS "label=settings;...". */
@@ -545,14 +556,14 @@ int main(int argc, char **argv) {
       {"killeroos", "killeroos/killeroo-simple.pbrt"},
   };
   for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
-    if (only && !strstr(scenes[i][0], only)) continue;
+    if (!scene_wanted(scenes[i][0], only)) continue;
     snprintf(path, sizeof path, "%s/%s", sdir, scenes[i][1]);
     tt_scene *s = load_scene(path);
     if (!s) continue;
     bench_scene(&P, scenes[i][0], s);
     tt_scene_destroy(s);
   }
-  if (!only || strstr("voxel-world", only)) {
+  if (scene_wanted("voxel-world", only)) {
     tt_scene *s = voxel_world(root);
     if (s) {
       bench_scene(&P, "voxel-world", s);
