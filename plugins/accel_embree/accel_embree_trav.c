@@ -223,21 +223,23 @@ TT__INLINE const uint32_t *tt__children(const void *node, int N) {
 }
 
 /* Prefetches what visiting `ref` reads first: the node (32 * N bytes) or the leaf's first
- * packet. Traversal is bound by memory latency, and the hit children are known one box
- * test before they are visited (or much longer, for the ones pushed on the stack). */
+ * lines. Traversal is bound by memory latency, and the hit children are known one box
+ * test before they are visited (or much longer, for the ones pushed on the stack).
+ * Branch-free and a fixed number of prefetches (BVH8: 4 lines, a node or a leaf of up to 4
+ * triangles; BVH4: 3): the address is selected arithmetically from the leaf / node bit,
+ * so a mix of leaf and node children costs no mispredicted branch and no loop whose trip
+ * count depends on the leaf's size. The lines of a larger leaf's later packets are not
+ * prefetched (they are read one packet test later); a prefetch beyond a small leaf's
+ * block reads a neighbour's line (harmless: hints never fault or change a result). */
 TT__INLINE void tt__prefetch(const tt__bvh *bvh, uint32_t ref, int N) {
-  const char *p;
-  int lines;
-  if (ref & TT__REF_LEAF) {
-    /* The leaf block, up to 8 lines (a 1-2 triangle leaf is 2 lines, 8 triangles 7). */
-    p = (const char *)bvh->arena + ((size_t)(ref & TT__LINE2_MASK) << 6);
-    lines = (int)((112u * (((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u) + 63u) / 64u);
-    if (lines > 8) lines = 8;
-  } else {
-    p = (const char *)bvh->nodes + (size_t)ref * (size_t)(32 * N);
-    lines = N / 2;
-  }
-  for (int i = 0; i < lines; i++) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
+  const uintptr_t leaf = (uintptr_t)bvh->arena + ((uintptr_t)(ref & TT__LINE2_MASK) << 6);
+  const uintptr_t node = (uintptr_t)bvh->nodes + (uintptr_t)ref * (uintptr_t)(32 * N);
+  const uintptr_t is_leaf = (uintptr_t)0 - (uintptr_t)(ref >> 31);
+  const char *p = (const char *)((leaf & is_leaf) | (node & ~is_leaf));
+  _mm_prefetch(p, _MM_HINT_T0);
+  _mm_prefetch(p + 64, _MM_HINT_T0);
+  _mm_prefetch(p + 128, _MM_HINT_T0);
+  if (N == 8) _mm_prefetch(p + 192, _MM_HINT_T0);
 }
 
 /* Prefetches the hit children of a BVH4/8 node (BVH2: tt__pf2). */
