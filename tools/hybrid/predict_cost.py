@@ -18,6 +18,9 @@ faster predict() is shown to answer what the earlier one answered.
 
   predict_cost.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/pc --models rbf \\
       --reference-host OLD_HOST --out tools/hybrid/figures/predict_cost
+
+The training databases and predictions are cached in --work (per host, not per --set: give
+each set of --set its own --work).
 """
 import argparse
 import json
@@ -46,6 +49,10 @@ def main():
     ap.add_argument("--val", type=float, default=0.2)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--min-cameras", type=int, default=5)
+    ap.add_argument("--set", action="append", default=[], metavar="PLUGIN.KEY=VALUE",
+                    help="a predictor setting for that predictor's runs (both hosts), e.g. "
+                         "predictor_rbf.lhsCandidates=210: an argmax over about 260 candidates "
+                         "on a baseline whose pool is not full yet")
     a = ap.parse_args()
     objectives = a.objectives.split(",")
     models = a.models.split(",")
@@ -57,6 +64,11 @@ def main():
     if not cams:
         sys.exit(f"predict_cost: {a.db}: no scene has {a.min_cameras} cameras with every objective done")
     ind = ev.camera_indicators(a.db, jobs, cams)
+    args = {m: [x for kv in a.set if kv.split(".")[0] == ev.MODELS[m] for x in ("--set", kv)]
+            for m in models}
+    for kv in a.set:
+        if kv.split(".")[0] not in (ev.MODELS[m] for m in models):
+            sys.exit(f"predict_cost: --set {kv}: no model of --models is that plugin")
     hosts = [("new", a.host)] + ([("ref", a.reference_host)] if a.reference_host else [])
     for d in ("train",) + tuple(f"pred_{h}" for h, _ in hosts):
         os.makedirs(os.path.join(a.work, d), exist_ok=True)
@@ -70,7 +82,7 @@ def main():
                 got = {}
                 for h, path in hosts:  # interleaved: both hosts at the same load
                     a.host = path
-                    p = ev.predict(a, job, m, {}, tdb, states, o,
+                    p = ev.predict(a, job, m, {"args": args[m]}, tdb, states, o,
                                    os.path.join(a.work, f"pred_{h}", f"{name}_{o}_{m}.json"))
                     got[h] = {item["id"]: item for item in p["predictions"]}
                 a.host = hosts[0][1]

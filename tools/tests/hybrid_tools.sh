@@ -72,9 +72,10 @@ grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "me
 # predict_cost.py: predict() against the frame on the same protocols, and a reference host's
 # answers compared (the same host here: every answer the same, exit 0)
 PC=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/predict_cost.py" --db "$tmp/b.db" --work "$tmp/pc" --out "$tmp/fp"
-    --host "$host" --reference-host "$host" --splits 1 --min-cameras 4 --models rbf,nn)
+    --host "$host" --reference-host "$host" --splits 1 --min-cameras 4 --models rbf,nn
+    --set predictor_rbf.poolSize=1)
 "${PC[@]}" >"$tmp/pc.log" 2>&1 || { cat "$tmp/pc.log"; fail "predict_cost.py"; }
-"$PY" - "$tmp/fp/predict_cost.json" <<'EOF' || fail "predict_cost.json"
+"$PY" - "$tmp/fp/predict_cost.json" "$tmp/pc" <<'EOF' || fail "predict_cost.json"
 import json, math, sys
 s = json.load(open(sys.argv[1]))["summary"]
 for key in ("render/rbf", "build+render/rbf", "render/nn"):
@@ -83,6 +84,10 @@ for key in ("render/rbf", "build+render/rbf", "render/nn"):
     assert t["same_config"] == t["n"], (key, t)
     assert t["value_rel_diff_max"] == (0.0 if key.endswith("rbf") else None), (key, t)
     assert 0 < t["predict_ms_median"] and math.isfinite(t["share_of_frame"]), (key, t)
+# --set reached the RBF's runs: a pool of 1 and the default are its argmax's candidates
+import glob
+for f in glob.glob(sys.argv[2] + "/pred_*/*_rbf.json"):
+    assert all(x["candidates"] == 2 for x in json.load(open(f))["predictions"]), f
 EOF
 "$PY" "$TT_SOURCE_ROOT/tools/hybrid/predict_cost.py" --db "$tmp/b.db" --work "$tmp/pc" --models nosuch \
   >"$tmp/pc2.log" 2>&1 && fail "predict_cost.py --models nosuch should be refused"
