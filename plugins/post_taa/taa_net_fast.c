@@ -12,7 +12,8 @@
  *    to a small scratch buffer and the softmax, colour mix (eq. 5.3), hidden layer, state
  *    and linear output follow at once on the same chunk.
  *
- * Convolutions vectorise over pixels: 8 (AVX2) or 16 (AVX-512 registers) neighbouring
+ * Convolutions vectorise over pixels: 8 or 16 (AVX2: 8-lane vectors) or 16 or 32 (AVX-512:
+ * 16-lane vectors, whose FMA peak is twice the 8-lane one on this machine) neighbouring
  * output pixels times a block of 6 to 12 output channels accumulate in registers; each
  * weight is a broadcast operand, each input vector serves the whole block. Every output
  * channel and pixel is computed by the same operations in the same order whatever the band
@@ -341,6 +342,78 @@ AI void conv_rows_dispatch(const conv_a *a, const int wide) {
   }
 }
 
+#if FAST_X86
+/* conv_rows_t on 16-lane vectors (AVX-512): 16 or 32 output pixels per block, the same
+ * multiply-adds per pixel in the same order as the 8-lane code (bit-identical results). */
+typedef float v16f __attribute__((vector_size(64)));
+typedef float v16fu __attribute__((vector_size(64), aligned(4)));
+/* One block of 16 P output pixels from column xl, output block ob. */
+TGT_V4 AI void conv16_block(const conv_a *a, uint32_t ob, uint32_t xl, const int K,
+                            const int O, const int P) {
+  const uint32_t I = a->in, r = (uint32_t)K / 2;
+  const float *wp = a->w + (size_t)ob * I * K * K * O;
+  const float *bb = a->b + (size_t)ob * O;
+  v16f acc[12][2];
+#pragma GCC unroll 12
+  for (int o = 0; o < O; o++)
+#pragma GCC unroll 2
+    for (int j = 0; j < P; j++) acc[o][j] = (v16f)_mm512_set1_ps(bb[o]);
+  size_t col = COL + a->x0 + xl - r;
+  for (uint32_t c = 0; c < I; c++) {
+#pragma GCC unroll 5
+    for (int ky = 0; ky < K; ky++) {
+      const float *q = a->rowp[ky] + c * a->cs + col;
+#pragma GCC unroll 5
+      for (int kx = 0; kx < K; kx++) {
+        v16f in[2];
+#pragma GCC unroll 2
+        for (int j = 0; j < P; j++) in[j] = *(const v16fu *)(q + kx + 16 * j);
+#pragma GCC unroll 12
+        for (int o = 0; o < O; o++) {
+          float wv = wp[o];
+#pragma GCC unroll 2
+          for (int j = 0; j < P; j++) acc[o][j] += in[j] * wv;
+        }
+        wp += O;
+      }
+    }
+  }
+#pragma GCC unroll 12
+  for (int o = 0; o < O; o++) {
+    uint32_t oc = ob * O + (uint32_t)o;
+    if (oc >= a->out) break;
+    float *d = a->dst + oc * a->dcs + xl;
+#pragma GCC unroll 2
+    for (int j = 0; j < P; j++) {
+      v16f v = acc[o][j];
+      if (a->relu) v = (v16f)_mm512_max_ps((__m512)v, _mm512_setzero_ps());  /* NaN -> 0 */
+      *(v16fu *)(d + 16 * j) = v;
+    }
+  }
+}
+
+/* 32 pixels per block while more than 16 remain, then 16 (n rounded up to 16, as the
+ * 8-lane code's blocks of 16 round it). */
+TGT_V4 AI void conv_rows16_t(const conv_a *a, const int K, const int O) {
+  for (uint32_t ob = 0; ob < a->nob; ob++)
+    for (uint32_t xl = 0; xl < a->n;) {
+      if (a->n - xl > 16) conv16_block(a, ob, xl, K, O, 2), xl += 32;
+      else conv16_block(a, ob, xl, K, O, 1), xl += 16;
+    }
+}
+
+#define CONV16_CASE(O_, K_) case (O_) * 8 + (K_): conv_rows16_t(a, K_, O_); break;
+TGT_V4 AI void conv_rows16_dispatch(const conv_a *a) {
+  switch (a->oblk * 8 + a->ksize) {
+    CONV16_CASE(6, 1) CONV16_CASE(6, 3) CONV16_CASE(6, 5)
+    CONV16_CASE(8, 1) CONV16_CASE(8, 3) CONV16_CASE(8, 5)
+    CONV16_CASE(10, 1) CONV16_CASE(10, 3) CONV16_CASE(10, 5)
+    CONV16_CASE(12, 1) CONV16_CASE(12, 3) CONV16_CASE(12, 5)
+    default: break;
+  }
+}
+#endif
+
 /* ---- Winograd F(2x2, 5x5) for the kernel layer and 5x5 body layers ---- */
 
 /* Two output rows p, p + 1 (p even: tiles sit on absolute even rows and columns, whatever
@@ -532,7 +605,7 @@ typedef struct wino4_a {
   float *dst[4];
   size_t dcs;
   int relu;
-  float *vbuf, *mbuf, *ebuf;  /* scratch: 64 * in * 16, 64 * O * 16 and 64 * 8 floats */
+  float *vbuf, *mbuf, *ebuf;  /* scratch: 64 * in * 16, 64 * O * 16 and 64 * 16 floats */
 } wino4_a;
 
 #if FAST_X86
@@ -698,6 +771,157 @@ TGT_V3 AI void wino4_dispatch(const wino4_a *a, uint32_t oblk, const int wide) {
     default: break;
   }
 }
+
+/* ---- F(4x4, 5x5) on 16-lane (AVX-512) vectors ---- */
+
+/* With AVX-512 the same tiles run 16 per vector (64 columns): twice the FMAs per
+ * instruction of the 8-lane code above (this machine's zmm peak is twice its ymm one). The
+ * lanes hold tiles 0 4 8 12 1 5 9 13 2 6 10 14 3 7 11 15 (the 4 x 4 transpose inside each
+ * 128-bit quarter of 4 vectors), undone at the output. Every step mirrors the 8-lane
+ * code's operation for operation (same expressions, so the same contractions and
+ * roundings): a tile's results do not depend on which of the two codes ran it, so column
+ * tiles and chunk tails that mix them stay bit-identical. */
+#define WINO4_T4_16(r0, r1, r2, r3)                                           \
+  do {                                                                         \
+    __m512 t0_ = _mm512_unpacklo_ps(r0, r1), t1_ = _mm512_unpackhi_ps(r0, r1); \
+    __m512 t2_ = _mm512_unpacklo_ps(r2, r3), t3_ = _mm512_unpackhi_ps(r2, r3); \
+    r0 = _mm512_shuffle_ps(t0_, t2_, 0x44);                                    \
+    r1 = _mm512_shuffle_ps(t0_, t2_, 0xEE);                                    \
+    r2 = _mm512_shuffle_ps(t1_, t3_, 0x44);                                    \
+    r3 = _mm512_shuffle_ps(t1_, t3_, 0xEE);                                    \
+  } while (0)
+
+/* wino4_bt on 16 lanes. */
+TGT_V4 AI void wino4_bt16(const __m512 d[8], __m512 v[8]) {
+  const __m512 c21 = _mm512_set1_ps(5.25f), c17 = _mm512_set1_ps(4.25f);
+  v[0] = _mm512_add_ps(_mm512_sub_ps(d[6], d[0]), _mm512_mul_ps(_mm512_sub_ps(d[2], d[4]), c21));
+  v[7] = _mm512_add_ps(_mm512_sub_ps(d[7], d[1]), _mm512_mul_ps(_mm512_sub_ps(d[3], d[5]), c21));
+  __m512 e1 = _mm512_fnmadd_ps(d[4], c17, _mm512_add_ps(d[2], d[6]));
+  __m512 o1 = _mm512_fnmadd_ps(d[3], c17, _mm512_add_ps(d[1], d[5]));
+  v[1] = _mm512_add_ps(e1, o1);
+  v[2] = _mm512_sub_ps(e1, o1);
+  __m512 e2 = _mm512_fmadd_ps(d[2], _mm512_set1_ps(0.25f),
+                              _mm512_fnmadd_ps(d[4], _mm512_set1_ps(1.25f), d[6]));
+  __m512 o2 = _mm512_fmadd_ps(d[1], _mm512_set1_ps(0.5f),
+                              _mm512_fmadd_ps(d[5], _mm512_set1_ps(2.0f),
+                                              _mm512_mul_ps(d[3], _mm512_set1_ps(-2.5f))));
+  v[3] = _mm512_add_ps(e2, o2);
+  v[4] = _mm512_sub_ps(e2, o2);
+  __m512 e3 = _mm512_fmadd_ps(d[2], _mm512_set1_ps(4.0f),
+                              _mm512_fnmadd_ps(d[4], _mm512_set1_ps(5.0f), d[6]));
+  __m512 o3 = _mm512_fmadd_ps(d[1], _mm512_set1_ps(2.0f),
+                              _mm512_fmadd_ps(d[5], _mm512_set1_ps(0.5f),
+                                              _mm512_mul_ps(d[3], _mm512_set1_ps(-2.5f))));
+  v[5] = _mm512_add_ps(e3, o3);
+  v[6] = _mm512_sub_ps(e3, o3);
+}
+
+/* wino4_at on 16 lanes. */
+TGT_V4 AI void wino4_at16(const __m512 m[8], __m512 y[4]) {
+  __m512 s1 = _mm512_add_ps(m[1], m[2]), d1 = _mm512_sub_ps(m[1], m[2]);
+  __m512 s2 = _mm512_add_ps(m[3], m[4]), d2 = _mm512_sub_ps(m[3], m[4]);
+  __m512 s3 = _mm512_add_ps(m[5], m[6]), d3 = _mm512_sub_ps(m[5], m[6]);
+  y[0] = _mm512_add_ps(_mm512_add_ps(m[0], s1), _mm512_add_ps(s2, s3));
+  y[1] = _mm512_fmadd_ps(d3, _mm512_set1_ps(0.5f), _mm512_fmadd_ps(d2, _mm512_set1_ps(2.0f), d1));
+  y[2] = _mm512_fmadd_ps(s3, _mm512_set1_ps(0.25f), _mm512_fmadd_ps(s2, _mm512_set1_ps(4.0f), s1));
+  y[3] = _mm512_add_ps(_mm512_fmadd_ps(d3, _mm512_set1_ps(0.125f),
+                                       _mm512_fmadd_ps(d2, _mm512_set1_ps(8.0f), d1)), m[7]);
+}
+
+/* One group of 16 tiles (64 columns from xl), O outputs per block: wino4_group_t's steps
+ * with T = 16 lanes. */
+TGT_V4 AI void wino4_group16_t(const wino4_a *a, uint32_t xl, const int O) {
+  const uint32_t I = a->in;
+  float *V = a->vbuf, *M = a->mbuf, *E = a->ebuf;
+  /* lane shifts by one tile in the lane order above: the tile before / after */
+  const __m512i prev = _mm512_setr_epi32(0, 12, 13, 14, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11);
+  const __m512i next = _mm512_setr_epi32(4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 1, 2, 3, 0);
+  for (uint32_t c = 0; c < I; c++) {
+    for (int i = 0; i < 8; i++) {
+      const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl;
+      __m512 r0 = _mm512_loadu_ps(q), r1 = _mm512_loadu_ps(q + 16),
+             r2 = _mm512_loadu_ps(q + 32), r3 = _mm512_loadu_ps(q + 48);
+      WINO4_T4_16(r0, r1, r2, r3);  /* rk: column 4t + k of tile t */
+      __m512 d[8];
+      d[0] = _mm512_mask_blend_ps(0x0001, _mm512_permutexvar_ps(prev, r2), _mm512_set1_ps(q[-2]));
+      d[1] = _mm512_mask_blend_ps(0x0001, _mm512_permutexvar_ps(prev, r3), _mm512_set1_ps(q[-1]));
+      d[2] = r0, d[3] = r1, d[4] = r2, d[5] = r3;
+      d[6] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r0), _mm512_set1_ps(q[64]));
+      d[7] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r1), _mm512_set1_ps(q[65]));
+      __m512 e[8];
+      wino4_bt16(d, e);  /* along the row: E[i][s] */
+      for (int s2 = 0; s2 < 8; s2++) _mm512_store_ps(E + (i * 8 + s2) * 16, e[s2]);
+    }
+    for (int s2 = 0; s2 < 8; s2++) {
+      __m512 col[8], v[8];
+      for (int i = 0; i < 8; i++) col[i] = _mm512_load_ps(E + (i * 8 + s2) * 16);
+      wino4_bt16(col, v);  /* along the column: V[r][s2] */
+      for (int r = 0; r < 8; r++) _mm512_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * 16, v[r]);
+    }
+  }
+  for (uint32_t ob = 0; ob < a->nob; ob++) {
+    const float *u = a->u + (size_t)ob * WINO4_POS * I * O;
+    for (uint32_t pos = 0; pos < WINO4_POS; pos++) {
+      __m512 acc[12];
+#pragma GCC unroll 12
+      for (int o = 0; o < O; o++) acc[o] = _mm512_setzero_ps();
+      const float *vp = V + (size_t)pos * I * 16;
+      for (uint32_t c = 0; c < I; c++) {
+        __m512 in = _mm512_load_ps(vp);
+#pragma GCC unroll 12
+        for (int o = 0; o < O; o++) acc[o] = _mm512_fmadd_ps(in, _mm512_set1_ps(u[o]), acc[o]);
+        u += O;
+        vp += 16;
+      }
+#pragma GCC unroll 12
+      for (int o = 0; o < O; o++) _mm512_store_ps(M + ((size_t)pos * O + o) * 16, acc[o]);
+    }
+    for (int o = 0; o < O; o++) {
+      uint32_t oc = ob * (uint32_t)O + (uint32_t)o;
+      if (oc >= a->out) break;
+      __m512 bias = _mm512_set1_ps(a->b[oc]);
+      __m512 t[8][4];
+      for (int i = 0; i < 8; i++) {
+        __m512 m8[8];
+        for (int k = 0; k < 8; k++) m8[k] = _mm512_load_ps(M + ((size_t)(i * 8 + k) * O + o) * 16);
+        wino4_at16(m8, t[i]);  /* along the row: tile columns 0..3 */
+      }
+      __m512 y[4][4];  /* [row][column] */
+      for (int k = 0; k < 4; k++) {
+        __m512 col[8], yy[4];
+        for (int i = 0; i < 8; i++) col[i] = t[i][k];
+        wino4_at16(col, yy);  /* along the column: output rows 0..3 */
+        for (int r = 0; r < 4; r++) {
+          y[r][k] = _mm512_add_ps(yy[r], bias);
+          if (a->relu) y[r][k] = _mm512_max_ps(y[r][k], _mm512_setzero_ps());
+        }
+      }
+      for (int r = 0; r < 4; r++) {
+        WINO4_T4_16(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
+        float *d = a->dst[r] + oc * a->dcs + xl;
+        for (int k = 0; k < 4; k++) _mm512_storeu_ps(d + 16 * k, y[r][k]);
+      }
+    }
+  }
+}
+
+/* All groups of a chunk on AVX-512: 64 columns per 16-lane group, a 32-column tail by the
+ * 8-lane code. */
+#define WINO4_CASE16(O_) \
+  case O_: \
+    for (uint32_t xl = 0; xl < a->n;) { \
+      if (a->n - xl >= 64) wino4_group16_t(a, xl, O_), xl += 64; \
+      else wino4_group_t(a, xl, O_, 1), xl += 32; \
+    } \
+    break;
+TGT_V4 AI void wino4_dispatch16(const wino4_a *a, uint32_t oblk) {
+  switch (oblk) {
+    WINO4_CASE16(6)
+    WINO4_CASE16(10)
+    WINO4_CASE16(12)
+    default: break;
+  }
+}
 #endif
 
 /* ---- softmax + colour mix + hidden layer + outputs ---- */
@@ -841,6 +1065,122 @@ AI void mix_dispatch(const mix_a *a) {
   }
 }
 
+#if FAST_X86
+/* ---- the colour mix on 16-lane vectors (AVX-512) ---- */
+
+/* v16f copies of vmax / vmin / vexp_neg: the same operations per lane (MAXPS / MINPS are
+ * vsel(a > b, a, b) / vsel(a < b, a, b), NaN included), so the same results bit for bit. */
+typedef int32_t v16i __attribute__((vector_size(64)));
+TGT_V4 AI v16f vmax16(v16f a, v16f b) { return (v16f)_mm512_max_ps((__m512)a, (__m512)b); }
+TGT_V4 AI v16f vmin16(v16f a, v16f b) { return (v16f)_mm512_min_ps((__m512)a, (__m512)b); }
+TGT_V4 AI v16f vload16(const float *p) { return *(const v16fu *)p; }
+TGT_V4 AI v16f vsplat16(float f) { return (v16f)_mm512_set1_ps(f); }
+TGT_V4 AI v16f vexp_neg16(v16f x) {
+  x = vmax16(x, vsplat16(-87.0f));
+  v16f t = x * 1.44269504088896341f;
+  v16f n = (t + 12582912.0f) - 12582912.0f;
+  v16f r = x - n * 0.693145751953125f - n * 1.428606765330187045e-06f;
+  v16f p = r * (1.0f / 720.0f) + 1.0f / 120.0f;
+  p = p * r + 1.0f / 24.0f;
+  p = p * r + 1.0f / 6.0f;
+  p = p * r + 0.5f;
+  p = p * r + 1.0f;
+  p = p * r + 1.0f;
+  v16i e = (__builtin_convertvector(n, v16i) + 127) << 23;
+  v16f scale;
+  memcpy(&scale, &e, sizeof scale);
+  return p * scale;
+}
+
+/* mix_rows_t on 16 pixels per step: the same steps; the stores go out as two 8-pixel
+ * halves by the 8-lane helpers. */
+TGT_V4 AI void mix_rows16_t(const mix_a *a, const uint32_t hidden) {
+  const tt__net_state *s = a->s;
+  const uint32_t hin = a->m->hid.in, sc = s->state_ch;
+  const size_t rs = s->rs, cs = s->inp_cs;
+  for (uint32_t xl = 0; xl < a->n; xl += 16) {
+    uint32_t x = a->x0 + xl;
+    if (x >= s->width) break;
+    float *lg = a->lg + xl;
+    v16f m5[5];
+#pragma GCC unroll 5
+    for (int k = 0; k < 5; k++) m5[k] = vload16(lg + k * CHUNK);
+#pragma GCC unroll 9
+    for (int k = 5; k < 50; k += 5)
+#pragma GCC unroll 5
+      for (int j = 0; j < 5; j++) m5[j] = vmax16(m5[j], vload16(lg + (k + j) * CHUNK));
+    v16f mx = vmax16(vmax16(vmax16(m5[0], m5[1]), vmax16(m5[2], m5[3])), m5[4]);
+    v16f sa = vsplat16(0.0f), sb = vsplat16(0.0f);
+    v16f o[3] = {vsplat16(0.0f), vsplat16(0.0f), vsplat16(0.0f)};
+    const float *row = s->inp + (size_t)(a->y - 2 + s->halo) * rs + COL + x - 2;
+    for (uint32_t ty = 0; ty < 5; ty++, row += rs) {
+      const float *lt = lg + ty * 5 * CHUNK;
+#pragma GCC unroll 5
+      for (uint32_t tx = 0; tx < 5; tx++) {
+        v16f ka = vexp_neg16(vload16(lt + tx * CHUNK) - mx);
+        v16f kb = vexp_neg16(vload16(lt + (25 + tx) * CHUNK) - mx);
+        sa += ka;
+        sb += kb;
+#pragma GCC unroll 3
+        for (int c = 0; c < 3; c++)
+          o[c] += ka * vload16(row + c * cs + tx) + kb * vload16(row + (6 + c) * cs + tx);
+      }
+    }
+    v16f sum = sa + sb;
+    v16f inv = vsplat16(1.0f) / sum;
+    v16f st[16];
+#pragma GCC unroll 3
+    for (int c = 0; c < 3; c++) st[c] = o[c] = o[c] * inv;
+    const float *hp = a->hrow + (int)(COL + x) - a->hx;
+#pragma GCC unroll 8
+    for (uint32_t k = 0; k < hidden; k++) st[3 + k] = vsplat16(a->hb[k]);
+    for (uint32_t c = 0; c < hin; c++) {
+      v16f xin = vload16(hp + c * a->hcs);
+#pragma GCC unroll 8
+      for (uint32_t k = 0; k < hidden; k++) st[3 + k] += xin * a->hw[k * hin + c];
+    }
+    v16f z = vsplat16(0.0f);
+    v16f mm = vmin16(vmax16(vmax16(o[0], o[1]), vmax16(o[2], z)), vsplat16(0.999f));
+    v16f scale = vsplat16(1.0f) / (vsplat16(1.0f) - mm);
+    v16f lin[3];
+    for (int c = 0; c < 3; c++) lin[c] = vmax16(o[c], z) * scale;
+    uint32_t lanes = s->width - x < 16 ? s->width - x : 16;
+    size_t i = (size_t)a->y * s->width + x;
+    float *ns = s->next_state + i * sc, *out = a->out_rgb + i * 3;
+    if (lanes == 16) {
+      v8f l8[3][2];
+      for (int c = 0; c < 3; c++) memcpy(l8[c], &lin[c], sizeof lin[c]);
+      store_rgb8(out, l8[0][0], l8[1][0], l8[2][0]);
+      store_rgb8(out + 24, l8[0][1], l8[1][1], l8[2][1]);
+      if (hidden == 5) {  /* 8 state channels */
+        v8f s8[2][8];
+        for (int c = 0; c < 8; c++) {
+          v8f h[2];
+          memcpy(h, &st[c], sizeof h);
+          s8[0][c] = h[0], s8[1][c] = h[1];
+        }
+        store_t8x8(ns, s8[0]);
+        store_t8x8(ns + 64, s8[1]);
+        continue;
+      }
+    } else {
+      for (uint32_t l = 0; l < lanes; l++)
+        for (int c = 0; c < 3; c++) out[l * 3 + c] = lin[c][l];
+    }
+    for (uint32_t l = 0; l < lanes; l++)
+      for (uint32_t c = 0; c < sc; c++) ns[l * sc + c] = st[c][l];
+  }
+}
+
+TGT_V4 AI void mix16_dispatch(const mix_a *a) {
+  switch (a->m->hidden) {
+    case 0: mix_rows16_t(a, 0); break;
+    case 5: mix_rows16_t(a, 5); break;
+    default: mix_rows16_t(a, a->m->hidden); break;
+  }
+}
+#endif
+
 /* ---- per-ISA entry points ---- */
 
 typedef struct fast_isa {
@@ -852,10 +1192,10 @@ typedef struct fast_isa {
 } fast_isa;
 
 #if FAST_X86
-TGT_V4 static void conv_v4(const conv_a *a) { conv_rows_dispatch(a, 1); }
-TGT_V4 static void mix_v4(const mix_a *a) { mix_dispatch(a); }
+TGT_V4 static void conv_v4(const conv_a *a) { conv_rows16_dispatch(a); }
+TGT_V4 static void mix_v4(const mix_a *a) { mix16_dispatch(a); }
 TGT_V4 static void wino_v4(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 1); }
-TGT_V4 static void wino4_v4(const wino4_a *a, uint32_t oblk) { wino4_dispatch(a, oblk, 1); }
+TGT_V4 static void wino4_v4(const wino4_a *a, uint32_t oblk) { wino4_dispatch16(a, oblk); }
 TGT_V3 static void conv_v3(const conv_a *a) { conv_rows_dispatch(a, 0); }
 TGT_V3 static void mix_v3(const mix_a *a) { mix_dispatch(a); }
 TGT_V3 static void wino_v3(const wino_a *a, uint32_t oblk) { wino_dispatch(a, oblk, 0); }
@@ -1751,14 +2091,14 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
   for (uint32_t l = 0; l < m->body_count; l++) any |= body_wino_ok(m, l) | body_wino4_ok(m, l);
   if (any) {
     /* F(2x2, 5x5): V 36 x W x 16, M 2 x 36 x 12 x 16; F(4x4, 5x5): V 64 x W x 16, M 64 x
-     * 12 x 16, E 64 x 8 (all offsets 64-byte aligned) */
+     * 12 x 16, E 64 x 16 (all offsets 64-byte aligned) */
     size_t v2 = (size_t)WINO_POS * m->width * 16, v4 = (size_t)WINO4_POS * m->width * 16;
     job->vbuf_off = off;
     off += ((v2 > v4 ? v2 : v4) * sizeof(float) + 63) & ~(size_t)63;
     job->mbuf_off = off;
     off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);  /* >= 64 x 12 x 16 */
     job->ebuf_off = off;
-    off += (size_t)WINO4_POS * 8 * sizeof(float);
+    off += (size_t)WINO4_POS * 16 * sizeof(float);
   }
   off = (off + 4095) & ~(size_t)4095;  /* threads' blocks on separate pages */
   if (s->scratch && s->scratch_threads >= threads && s->scratch_bytes == off) return TT_OK;
