@@ -210,12 +210,13 @@ typedef struct tt__net_state {
   float *reproj;            /* padded reprojected rgb of the previous output, 3 ch */
   int valid;
   int reference;            /* use the plain scalar loops (tests) */
-  /* Fast path (taa_net_fast.c): planar input planes [in_channels][height + 2 halo][rs],
+  /* Fast path (taa_net_fast.c): input planes [height + 2 halo][in_channels][rs],
    * column x at index x + TT__NET_COL_OFF, zero outside the image; per-thread band scratch
    * (ring buffers of the body layers and the kernel layer's logits). */
   float *inp;
   uint32_t rs, halo, vw;    /* row stride, zero rows above/below, width rounded to 16 */
-  size_t inp_cs;            /* channel stride of inp */
+  size_t inp_cs;            /* channel stride of inp (= rs: a row's channels side by side) */
+  size_t inp_ys;            /* row stride of inp (in_channels * rs) */
   void *scratch;            /* per-thread band scratch, scratch_threads * scratch_bytes */
   uint32_t scratch_threads;
   size_t scratch_bytes;
@@ -230,6 +231,8 @@ typedef struct tt__net_state {
                              * 2 (default) the kernel layer by F(4x4, 5x5), body layers as 1.
                              * Set at init from TT_POST_TAA_WINOGRAD (0, 1, 2), may be changed
                              * between frames */
+  int prefetch;             /* fast path: software prefetch of the first layer's input rows
+                             * (TT_POST_TAA_PREFETCH=0 turns it off, for A/B timings) */
   /* History rejection (models with TT__NET_FLAG_REJECT): the previous frame's depth and
    * jitter, and this frame's TT__TAA_REJECT_* mask (+ 2 planes of scratch). */
   float *prev_depth;

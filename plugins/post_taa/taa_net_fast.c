@@ -2,8 +2,9 @@
  * reference loops, reordered for speed).
  *
  * 1. Input planes, by rows: tonemap, motion, depth and the Catmull-Rom reprojection of the
- *    previous state (one 8-float vector per tap when the state has 8 channels) into planar
- *    (CHW) planes with zero rows above/below and zero columns left/right of the image.
+ *    previous state (one 8-float vector per tap when the state has 8 channels) into planes
+ *    (per row, each channel's columns in turn) with zero rows above/below and zero columns
+ *    left/right of the image.
  * 2. Network, by row bands on the host's pool: each band streams its rows through all
  *    layers; a body layer keeps only the K rows its consumer reads, in a ring buffer per
  *    thread (cache resident), so nothing but the input planes and the outputs touches the
@@ -208,10 +209,15 @@ tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
   if (s->halo < 2) s->halo = 2;  /* the colour mix reads 2 rows around */
   s->vw = (s->width + 31u) & ~31u;  /* F(4x4, 5x5) groups: 8 tiles of 4 columns */
   s->rs = s->vw + 2 * COL;
-  s->inp_cs = (size_t)(s->height + 2 * s->halo) * s->rs;
-  s->inp = fz_alloc((size_t)m->in_channels * s->inp_cs);
+  /* Rows of all channels side by side: the first layer reads one contiguous stream per
+   * row (the hardware prefetcher follows it) instead of one short stream per channel. */
+  s->inp_cs = s->rs;
+  s->inp_ys = (size_t)m->in_channels * s->rs;
+  s->inp = fz_alloc((size_t)(s->height + 2 * s->halo) * s->inp_ys);
   const char *wg = getenv("TT_POST_TAA_WINOGRAD");
   s->winograd = wg && (wg[0] == '0' || wg[0] == '1') ? wg[0] - '0' : 2;
+  const char *pf = getenv("TT_POST_TAA_PREFETCH");
+  s->prefetch = !(pf && pf[0] == '0');
   if (!s->inp)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
                         "network planes", s->width, s->height);
@@ -278,6 +284,9 @@ typedef struct conv_a {
   float *dst;
   size_t dcs;
   int relu;
+  size_t pf;  /* AVX-512 code: floats from an input row to the row the next output row adds
+               * (the first layer, reading the full-frame input planes), prefetched into L2
+               * while this row computes; 0: none (ring rows are cache resident) */
 } conv_a;
 
 AI void conv_rows_t(const conv_a *a, const int K, const int O, const int P) {
@@ -360,6 +369,11 @@ TGT_V4 AI void conv16_block(const conv_a *a, uint32_t ob, uint32_t xl, const int
     for (int j = 0; j < P; j++) acc[o][j] = (v16f)_mm512_set1_ps(bb[o]);
   size_t col = COL + a->x0 + xl - r;
   for (uint32_t c = 0; c < I; c++) {
+    if (a->pf) {
+      const float *q = a->rowp[K - 1] + c * a->cs + col + a->pf;
+#pragma GCC unroll 3
+      for (int k = 0; k < P + 1; k++) _mm_prefetch((const char *)(q + 16 * k), _MM_HINT_T1);
+    }
 #pragma GCC unroll 5
     for (int ky = 0; ky < K; ky++) {
       const float *q = a->rowp[ky] + c * a->cs + col;
@@ -986,7 +1000,7 @@ AI void store_t8x8(float *dst, const v8f v[8]) {
 AI void mix_rows_t(const mix_a *a, const uint32_t hidden) {
   const tt__net_state *s = a->s;
   const uint32_t hin = a->m->hid.in, sc = s->state_ch;
-  const size_t rs = s->rs, cs = s->inp_cs;
+  const size_t rs = s->inp_ys, cs = s->inp_cs;
   for (uint32_t xl = 0; xl < a->n; xl += 8) {
     uint32_t x = a->x0 + xl;
     if (x >= s->width) break;
@@ -1097,7 +1111,7 @@ TGT_V4 AI v16f vexp_neg16(v16f x) {
 TGT_V4 AI void mix_rows16_t(const mix_a *a, const uint32_t hidden) {
   const tt__net_state *s = a->s;
   const uint32_t hin = a->m->hid.in, sc = s->state_ch;
-  const size_t rs = s->rs, cs = s->inp_cs;
+  const size_t rs = s->inp_ys, cs = s->inp_cs;
   for (uint32_t xl = 0; xl < a->n; xl += 16) {
     uint32_t x = a->x0 + xl;
     if (x >= s->width) break;
@@ -1350,7 +1364,7 @@ AI void input_pixel(const in_job *job, uint32_t x, uint32_t y, float *base) {
 AI void input_rows_t(const in_job *job, uint32_t y0, uint32_t y1) {
   const tt__net_state *s = job->s;
   for (uint32_t y = y0; y < y1; y++) {
-    float *base = s->inp + (size_t)(y + s->halo) * s->rs + COL;
+    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + COL;
     for (uint32_t x = 0; x < s->width; x++) input_pixel(job, x, y, base);
   }
 }
@@ -1528,7 +1542,7 @@ TGT_V3 static inline __attribute__((always_inline)) void input8_t(const in_job *
 TGT_V3 AI void input_rows8_t(const in_job *job, uint32_t y0, uint32_t y1, const int SC) {
   const tt__net_state *s = job->s;
   for (uint32_t y = y0; y < y1; y++) {
-    float *base = s->inp + (size_t)(y + s->halo) * s->rs + COL;
+    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + COL;
     uint32_t x = 0;
     for (; x + 8 <= s->width; x += 8) input8_t(job, x, y, base, SC);
     for (; x < s->width; x++) input_pixel(job, x, y, base);
@@ -1557,7 +1571,7 @@ static void fast_reject_reset(tt__net_state *s, const tt__net_model *m) {
   tt__taa_reject_open(s->width, s->height, s->reject, s->reject + n);
   for (uint32_t y = 0; y < s->height; y++) {
     const uint8_t *r = s->reject + (size_t)y * s->width;
-    float *base = s->inp + (size_t)(y + s->halo) * s->rs + COL;
+    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + COL;
     for (uint32_t x = 0; x < s->width; x++) {
       if (!(r[x] & TT__TAA_REJECT_RESET)) continue;
       for (uint32_t c = 0; c < 3; c++) base[(6 + c) * cs + x] = base[c * cs + x];
@@ -1660,7 +1674,7 @@ static size_t layer_rows(const band_ctx *b, uint32_t l, uint32_t ksize, int y,
   int r = (int)ksize / 2;
   if (l == 0) {
     for (int ky = 0; ky < (int)ksize; ky++)
-      rowp[ky] = s->inp + (size_t)(y + ky - r + (int)s->halo) * s->rs;
+      rowp[ky] = s->inp + (size_t)(y + ky - r + (int)s->halo) * s->inp_ys;
     *col0 = 0;
     return s->inp_cs;
   }
@@ -1714,6 +1728,7 @@ static void body_row(band_ctx *b, uint32_t l, int y) {
   a.b = ly->bq + (size_t)st * ly->nob * ly->oblk;
   a.dcs = dcs;
   a.relu = 1;
+  a.pf = l == 0 && s->prefetch ? s->inp_ys : 0;
   int xs, xe;
   band_image_cols(b, &xs, &xe);
   for (int x0 = xs; x0 < xe; x0 += (int)CHUNK) {
@@ -1873,6 +1888,7 @@ static void head_row(band_ctx *b, int y) {
   a.b = kl->bq + (size_t)ks * kl->nob * kl->oblk;
   a.dcs = CHUNK;
   a.relu = 0;
+  a.pf = 0;
   a.dst = (float *)(b->scr + job->logits_off);
   mix_a mx;
   mix_setup(b, &mx);

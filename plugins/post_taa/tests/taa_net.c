@@ -561,7 +561,7 @@ static void test_rejection_disocclusion(void) {
     uint32_t reset_ok = 0, red_hist = 0, flag_wrong = 0;
     for (int y = 8; y < 19; y++)
       for (int x = 12; x < 18; x++) {
-        size_t i = (size_t)y * w + x, pi = (size_t)(y + s.halo) * s.rs + TT__NET_COL_OFF + x;
+        size_t i = (size_t)y * w + x, pi = (size_t)(y + s.halo) * s.inp_ys + TT__NET_COL_OFF + x;
         float t[3];
         tt__taa_tonemap(color1 + 3 * i, t);
         int same = 1;
@@ -573,7 +573,7 @@ static void test_rejection_disocclusion(void) {
     if (!k)
       for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
-          size_t pi = (size_t)(y + s.halo) * s.rs + TT__NET_COL_OFF + x;
+          size_t pi = (size_t)(y + s.halo) * s.inp_ys + TT__NET_COL_OFF + x;
           int want = x >= 12 && x < 18 && y >= 8 && y < 19;
           flag_wrong += s.inp[14 * s.inp_cs + pi] != (want ? 1.0f : 0.0f);
         }
