@@ -353,6 +353,21 @@ int tt__run_render(const tt__host_options *opt) {
     }
     tt__progress_update("render", frac);
   }
+  /* a signal before any pass was done (the scene loading, the accel building, the first pass
+   * cut short) would leave nothing to write while exit 130 promises the image rendered so
+   * far: one pass is completed with the stop held back (a second signal still exits) */
+  if (rc == TT_EXIT_OK && rec->interrupted && rec->spp == 0) {
+    tt_default_host_hold_stop(1);
+    tt_pass_stats ps;
+    double ms = 0;
+    tt_status st = tt__session_render_pass(&s, 1, &ps, &ms);
+    tt_default_host_hold_stop(0);
+    if (st != TT_OK) {
+      fprintf(stderr, "host: %s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
+              rec->passes, tt_last_error());
+      rc = TT_EXIT_FAILURE;
+    }
+  }
   tt__progress_finish();
   if (rec->nonfinite)  /* a warning: --quiet keeps it */
     fprintf(stderr, "host: warning: %llu non-finite samples were dropped\n",

@@ -1,6 +1,9 @@
 /* host: SIGINT/SIGTERM. The first asks for a clean stop (the current pass finishes, outputs
  * are written); the second exits at once, except while the final outputs are written, when
- * it waits for the writes (atomic anyway) and the host exits 130 right after them. */
+ * it waits for the writes (atomic anyway) and the host exits 130 right after them.
+ * A first signal before any pass is done (the scene loading, the accel building, the first
+ * pass cut short) still ends with an image: run.c then completes one pass with the stop held
+ * back (tt_default_host_hold_stop), during which a second signal exits at once. */
 #include "host.h"
 
 #include <signal.h>

@@ -95,6 +95,15 @@ int main(void) {
   atomic_long calls = 0;
   CHECK(host->parallel_for(1000, 1, count_calls, &calls) == TT_ERR_INTERRUPTED);
   CHECK(atomic_load(&calls) == 0);
+  /* held back (the host's one pass of an interrupted render with none done): no stop is
+   * seen and every chunk runs; released, the stop requested meanwhile is back */
+  tt_default_host_hold_stop(1);
+  CHECK(host->should_stop() == 0);
+  CHECK(host->parallel_for(1000, 1, count_calls, &calls) == TT_OK);
+  CHECK(atomic_load(&calls) == 1000);
+  tt_default_host_hold_stop(0);
+  CHECK(host->should_stop() != 0);
+  CHECK(host->parallel_for(1000, 1, count_calls, &calls) == TT_ERR_INTERRUPTED);
 
   return tt_test_finish("core_host");
 }

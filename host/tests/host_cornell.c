@@ -27,6 +27,68 @@ static size_t read_exr(const char *path, float **px, uint32_t *w, uint32_t *h) {
   return c == 3 ? (size_t)*w * *h : 0;
 }
 
+/* Starts the host with argv, sends SIGINT once `trigger` appears on its stderr, and returns
+ * its wait status (-1 if the trigger never came). */
+static int interrupt_at(char *const argv[], const char *trigger) {
+  int fds[2];
+  if (pipe(fds) != 0) return -1;
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_adddup2(&fa, fds[1], 2);
+  posix_spawn_file_actions_addclose(&fa, fds[0]);
+  pid_t pid;
+  int spawned = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ) == 0;
+  posix_spawn_file_actions_destroy(&fa);
+  close(fds[1]);
+  if (!spawned) {
+    close(fds[0]);
+    return -1;
+  }
+  static char log[8192];
+  size_t got = 0;
+  ssize_t r;
+  log[0] = '\0';
+  while (got + 1 < sizeof log && (r = read(fds[0], log + got, sizeof log - 1 - got)) > 0) {
+    got += (size_t)r;
+    log[got] = '\0';
+    if (strstr(log, trigger)) break;
+  }
+  int seen = strstr(log, trigger) != NULL;
+  if (!seen) fprintf(stderr, "no \"%s\" before EOF: %s\n", trigger, log);
+  kill(pid, SIGINT);
+  char sink[4096];
+  while (read(fds[0], sink, sizeof sink) > 0) {}
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return seen ? status : -1;
+}
+
+/* The spp an EXR records (its "spp" or "tunetrace:spp" attribute), -1 if it does not read
+ * back whole with `pixels` pixels. */
+static long exr_spp(const char *path, size_t pixels) {
+  float *px = NULL;
+  uint32_t w = 0, h = 0;
+  size_t n = read_exr(path, &px, &w, &h);
+  tt_free(px);
+  if (n != pixels) return -1;
+  char meta[64] = "";
+  if (tt_image_read_meta(path, "spp", meta, sizeof meta) != TT_OK)
+    tt_image_read_meta(path, "tunetrace:spp", meta, sizeof meta);
+  return strtol(meta, NULL, 10);
+}
+
+/* A JSON file parsed (NULL if unreadable or not JSON). */
+static cJSON *read_json_file(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  static char text[1 << 16];
+  size_t n = fread(text, 1, sizeof text - 1, f);
+  fclose(f);
+  text[n] = '\0';
+  return cJSON_Parse(text);
+}
+
 int main(void) {
   static char out[1 << 16];
   char dir[] = "/tmp/tt_host_cornellXXXXXX";
@@ -160,39 +222,30 @@ int main(void) {
   /* the signal goes once the first pass is done (its "render:" progress line is out), not
    * after a fixed sleep: on a loaded machine the program may take seconds to start, and a
    * SIGINT before the handler is installed kills it */
-  int fds[2];
-  CHECK(pipe(fds) == 0);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_adddup2(&fa, fds[1], 2);
-  posix_spawn_file_actions_addclose(&fa, fds[0]);
-  pid_t pid;
-  CHECK(posix_spawn(&pid, host_path(), &fa, NULL, argv, environ) == 0);
-  posix_spawn_file_actions_destroy(&fa);
-  close(fds[1]);
-  char log[8192];
-  size_t got = 0;
-  ssize_t r;
-  while (got + 1 < sizeof log && (r = read(fds[0], log + got, sizeof log - 1 - got)) > 0) {
-    got += (size_t)r;
-    log[got] = '\0';
-    if (strstr(log, "render:")) break;
-  }
-  CHECK_MSG(strstr(log, "render:") != NULL, "no progress line before EOF: %s", log);
-  kill(pid, SIGINT);
-  char sink[4096];
-  while (read(fds[0], sink, sizeof sink) > 0) {}
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
+  int status = interrupt_at(argv, "render:");
   CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
-  float *d = NULL;
-  CHECK(read_exr(d_exr, &d, &w, &h) == 64 * 64);
-  if (tt_image_read_meta(d_exr, "spp", meta, sizeof meta) != TT_OK)
-    tt_image_read_meta(d_exr, "tunetrace:spp", meta, sizeof meta);
-  long spp = strtol(meta, NULL, 10);
+  long spp = exr_spp(d_exr, 64 * 64);
   CHECK_MSG(spp >= 1 && spp < 1000000, "interrupted render has %ld spp", spp);
-  tt_free(d);
+
+  /* SIGINT before any pass is done (sent when the scene's summary line is out: the handlers
+   * are installed, the accel is not built yet, and a 512x512 pass takes far longer than the
+   * signal): exit 130 still comes with an image, one pass completed with the stop held back,
+   * not "no pass completed: nothing to write" (#13, tools/crash_safety.py --part signal) */
+  char e_exr[4200], e_stats[4200];
+  snprintf(e_exr, sizeof e_exr, "%s/e.exr", dir);
+  snprintf(e_stats, sizeof e_stats, "%s/e.json", dir);
+  char *argv_e[] = {(char *)host_path(), "--res", "512x512", "--spp", "1000000",
+                    "--out", e_exr, "--stats", e_stats, (char *)scene_path, NULL};
+  status = interrupt_at(argv_e, "triangles,");
+  CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
+  spp = exr_spp(e_exr, 512 * 512);
+  CHECK_MSG(spp >= 1 && spp < 1000000, "render interrupted before its first pass: %ld spp "
+            "in %s", spp, e_exr);
+  cJSON *e_rec = read_json_file(e_stats);
+  CHECK_MSG(e_rec && cJSON_IsTrue(cJSON_GetObjectItem(e_rec, "interrupted")) &&
+            cJSON_GetNumberValue(cJSON_GetObjectItem(e_rec, "spp")) == spp,
+            "the record of %s says interrupted with the image's spp", e_stats);
+  cJSON_Delete(e_rec);
 
   char cmd[4200];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);

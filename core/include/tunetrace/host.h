@@ -81,6 +81,13 @@ TT_API tt_status tt_default_host_set_threads(uint32_t threads);
 /* Requests a stop on tt_default_host (should_stop() becomes non-zero). Async-signal-safe. */
 TT_API void tt_default_host_request_stop(void);
 
+/* Holds a requested stop back while `hold` is non-zero: should_stop() reads 0 and
+ * parallel_for runs every chunk; releasing it lets a stop requested meanwhile through. For
+ * the work a program must finish even when asked to stop (host: the one pass an interrupted
+ * render completes when none was done, so that it has an image to write). Main thread,
+ * not while a parallel_for runs. */
+TT_API void tt_default_host_hold_stop(int hold);
+
 /* Sets the minimum level tt_default_host's log prints (default TT_LOG_INFO). */
 TT_API void tt_default_host_set_log_level(tt_log_level level);
 

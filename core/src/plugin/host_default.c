@@ -83,10 +83,17 @@ static uint64_t tt__default_clock_ns(void) {
 /* ---- stop request ---- */
 
 static volatile sig_atomic_t tt__stop_requested;
+/* tt_default_host_hold_stop; read by the pool's workers too */
+static atomic_int tt__stop_held;
 
 void tt_default_host_request_stop(void) { tt__stop_requested = 1; }
 
-static int tt__default_should_stop(void) { return tt__stop_requested != 0; }
+void tt_default_host_hold_stop(int hold) { atomic_store(&tt__stop_held, hold != 0); }
+
+/* a requested stop, unless it is held back */
+static int tt__stop_now(void) { return tt__stop_requested != 0 && !atomic_load(&tt__stop_held); }
+
+static int tt__default_should_stop(void) { return tt__stop_now(); }
 
 /* ---- thread pool ---- */
 
@@ -116,7 +123,7 @@ static uint32_t tt__thread_setting;  /* 0 = number of CPUs */
 /* Claims and runs chunks until the job is exhausted or a stop is requested. */
 static void tt__pool_run_chunks(tt__pool *pool, uint32_t thread_index) {
   for (;;) {
-    if (tt__stop_requested) {
+    if (tt__stop_now()) {
       atomic_store(&pool->interrupted, 1);
       return;
     }
@@ -217,7 +224,7 @@ static void tt__pool_atexit(void) { tt__pool_stop(); }
 static tt_status tt__default_parallel_for(uint64_t count, uint64_t grain, tt_parallel_fn fn,
                                           void *ctx) {
   if (!fn) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "parallel_for: no function");
-  if (count == 0) return tt__stop_requested ? TT_ERR_INTERRUPTED : TT_OK;
+  if (count == 0) return tt__stop_now() ? TT_ERR_INTERRUPTED : TT_OK;
   if (!tt__pool_started) {
     tt_status st = tt__pool_start();
     if (st != TT_OK) return st;
