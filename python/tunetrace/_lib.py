@@ -238,7 +238,7 @@ _PROTOTYPES = {
     "tt_status_string": (_S, [_I]), "tt_free": (None, [_P]),
     # host.h
     "tt_default_host": (_P, []), "tt_default_host_set_threads": (_I, [_U32]),
-    "tt_default_host_request_stop": (None, []),
+    "tt_default_host_request_stop": (None, []), "tt_default_host_hold_stop": (None, [_I]),
     "tt_default_host_set_log_level": (None, [_I]),
     # plugin.h, loader.h
     "tt_plugin_kind_name": (_S, [_U32]),

@@ -45,8 +45,15 @@ const char *tt_suggest(const char *word, const char *const *candidates, size_t c
     if (!strcmp(c, word)) return NULL;  /* not a typo: the caller failed for another reason */
     size_t cl = strlen(c), longer = cl > wl ? cl : wl;
     unsigned limit = longer <= 5 ? 1u : longer / 3 < 2 ? (unsigned)(longer / 3) : 2u;
-    unsigned d = tt_edit_distance(word, c);
-    if (d <= limit && d < best_d) best = c, best_d = d;
+    /* the distance is at least the difference in length: a name longer or shorter than the
+     * candidate by more than the limit cannot be its typo, and its distance matrix (up to
+     * 255 x 255 cells, most of the parameter fuzzer's time on long unknown names) is not
+     * needed */
+    size_t gap = cl > wl ? cl - wl : wl - cl;
+    if (gap <= limit) {
+      unsigned d = tt_edit_distance(word, c);
+      if (d <= limit && d < best_d) best = c, best_d = d;
+    }
     if (wl >= 3 && cl > wl && !strncmp(c, word, wl)) prefix = c, prefixes++;
   }
   if (best) return best;
