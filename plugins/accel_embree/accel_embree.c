@@ -501,7 +501,8 @@ static tt_status tt__embree_init(const tt_host *host) {
   const char *isa = getenv("TT_ACCEL_EMBREE_ISA");
   g_kernels = NULL;
   g_kernels_isa = "none";
-  const int avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  const int avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                   __builtin_cpu_supports("popcnt");
   if (avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
       __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
       !(isa && (strcmp(isa, "sse41") == 0 || strcmp(isa, "avx2") == 0))) {

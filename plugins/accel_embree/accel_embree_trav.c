@@ -688,7 +688,8 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
       float dist;
     } stack[TT__STACK];
     int sp = 0;
-    _Alignas(32) float dist[8];
+    /* Zeroed: BVH4 nodes write 4 lanes, the hit ordering reads 8 (and masks the rest). */
+    _Alignas(32) float dist[8] = {0};
     for (;;) {
       if (!(ref & TT__REF_LEAF)) {
         const void *node = tt__node_at(bvh, ref, N);
@@ -730,8 +731,28 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
             ref = child[i0];
             continue;
           }
-          /* Three or more: push all, sort them so the nearest is on top, take it. */
+          /* Three or more: push all, sorted so that the nearest is on top, take it. */
           int base = sp;
+#if TT__HAVE_AVX2
+          /* Each hit child goes straight to its sorted slot: its rank is the number of
+           * hit children that belong below it (farther, or as far and in a lower lane:
+           * the order the insertion sort below gives), one 8-wide compare per child.
+           * No data-dependent branch: the insertion sort's shifts mispredicted (in a
+           * living-room render, ~6% of the BVH8 closest-hit kernel's samples). */
+          {
+            const unsigned all = (unsigned)mask | 1u << i0 | 1u << i1;
+            const __m256 dv = _mm256_load_ps(dist);
+            for (unsigned mm = all; mm; mm &= mm - 1) {
+              const int i = __builtin_ctz(mm);
+              const __m256 di = _mm256_broadcast_ss(&dist[i]);
+              const unsigned gt = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(dv, di, _CMP_GT_OQ));
+              const unsigned eq = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(dv, di, _CMP_EQ_OQ));
+              const int slot = base + __builtin_popcount((gt | (eq & ((1u << i) - 1u))) & all);
+              stack[slot].ref = child[i], stack[slot].dist = dist[i];
+            }
+            sp = base + __builtin_popcount(all);
+          }
+#else
           stack[sp].ref = child[i0], stack[sp].dist = dist[i0], sp++;
           stack[sp].ref = child[i1], stack[sp].dist = dist[i1], sp++;
           do {
@@ -746,6 +767,7 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
             for (; j > base && stack[j - 1].dist < cd; j--) stack[j] = stack[j - 1];
             stack[j].ref = cr, stack[j].dist = cd;
           }
+#endif
           ref = stack[--sp].ref;
           continue;
         }
