@@ -301,6 +301,18 @@ static void test_mesh_format_mismatch(void) {
   mesh_file_fails(dir, "json.glb", TT_ERR_PARSE, "is not a GLB file", "got other bytes");
   CHECK(put_file(dir, "cut.glb", glb, 100) == 0);
   mesh_file_fails(dir, "cut.glb", TT_ERR_PARSE, "the GLB header declares", "the file has 100 (cut short?)");
+  /* (#13, found by fuzz_mesh in CI) a GLB whose JSON chunk declares ~4 GiB: assimp 5.2.5
+   * allocated and zero-filled it before reading; now every chunk must fit the container */
+  static char big[4096];
+  memcpy(big, glb, nglb);
+  big[12] = (char)0xF8, big[13] = 0x01, big[14] = (char)0xFF, big[15] = (char)0xFF;
+  CHECK(put_file(dir, "chunk.glb", big, nglb) == 0);
+  mesh_file_fails(dir, "chunk.glb", TT_ERR_PARSE, "GLB chunk 0 at byte 12 declares 4294902264 bytes",
+                  "remain of the declared");
+  memcpy(big, glb, nglb);
+  big[16] = 'B';  /* the JSON chunk's type */
+  CHECK(put_file(dir, "type.glb", big, nglb) == 0);
+  mesh_file_fails(dir, "type.glb", TT_ERR_PARSE, "GLB chunk 0 must be the JSON chunk", NULL);
   CHECK(put_file(dir, "cut.gltf", gltf, 200) == 0);
   mesh_file_fails(dir, "cut.gltf", TT_ERR_PARSE, "expected a JSON object, got a JSON syntax error at", NULL);
   CHECK(put_file(dir, "array.gltf", "[1, 2]", 6) == 0);
@@ -314,7 +326,7 @@ static void test_mesh_format_mismatch(void) {
   mesh_file_fails(dir, "tri.tt-unknown", TT_ERR_UNSUPPORTED, "unknown mesh format (expected .ply, .obj, .gltf",
                   NULL);
   alarm(0);
-  static const char *const made[] = {"ply.glb", "glb.gltf", "json.glb", "cut.glb", "cut.gltf",
+  static const char *const made[] = {"ply.glb", "glb.gltf", "json.glb", "cut.glb", "chunk.glb", "type.glb", "cut.gltf",
                                      "array.gltf", "v9.gltf", "tri.tt-unknown"};
   for (size_t i = 0; i < sizeof made / sizeof made[0]; i++) {
     char path[1400];

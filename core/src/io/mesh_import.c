@@ -223,33 +223,75 @@ static const char *tt__mesh_sniff(const unsigned char *b, size_t n) {
   return NULL;
 }
 
-/* A .glb must start with the GLB header (magic "glTF", version, total length) and hold the
- * length it declares. */
+static uint32_t tt__le32(const unsigned char *b) {
+  return b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* Every chunk of a GLB 2 container (8-byte header: length, type) must lie inside the
+ * declared length, the first one JSON. assimp 5.2.5 allocates and zero-fills a chunk's
+ * declared length before it reads it: a 577-byte file declaring a 4 GiB JSON chunk made it
+ * take 4 GiB (found by fuzz_mesh in CI). */
+static tt_status tt__glb_chunks_check(FILE *f, const char *file, const char *where, uint32_t length) {
+  uint64_t at = 12;
+  for (unsigned i = 0; at < length; i++) {
+    unsigned char c[8];
+    if (length - at < 8 || fseek(f, (long)at, SEEK_SET) != 0 || fread(c, 1, 8, f) != 8)
+      return tt_set_error(TT_ERR_PARSE,
+                          "%s: mesh file \"%s\": GLB chunk %u at byte %llu: expected an 8-byte chunk "
+                          "header inside the declared %u bytes",
+                          where, file, i, (unsigned long long)at, length);
+    uint32_t clen = tt__le32(c), type = tt__le32(c + 4);
+    if (i == 0 && type != 0x4E4F534Au)  /* "JSON" */
+      return tt_set_error(TT_ERR_PARSE,
+                          "%s: mesh file \"%s\": GLB chunk 0 must be the JSON chunk (type 0x4E4F534A), "
+                          "got type 0x%08X",
+                          where, file, type);
+    if ((uint64_t)clen > length - at - 8)
+      return tt_set_error(TT_ERR_PARSE,
+                          "%s: mesh file \"%s\": GLB chunk %u at byte %llu declares %u bytes, only %llu "
+                          "remain of the declared %u (corrupt or cut short?)",
+                          where, file, i, (unsigned long long)at, clen,
+                          (unsigned long long)(length - at - 8), length);
+    at += 8 + (uint64_t)clen;
+  }
+  return TT_OK;
+}
+
+/* A .glb must start with the GLB header (magic "glTF", version, total length), hold the
+ * length it declares, and its chunks (GLB 2) or its JSON content (GLB 1) must fit in it. */
 static tt_status tt__glb_check(const char *file, const char *where) {
   FILE *f = fopen(file, "rb");
   if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, strerror(errno));
-  unsigned char h[12];
+  unsigned char h[20];
   size_t got = fread(h, 1, sizeof h, f);
   long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
-  fclose(f);
-  if (got < sizeof h || memcmp(h, "glTF", 4) != 0) {
+  uint32_t version = got >= 12 ? tt__le32(h + 4) : 0, length = got >= 12 ? tt__le32(h + 8) : 0;
+  tt_status st = TT_OK;
+  if (got < 12 || memcmp(h, "glTF", 4) != 0) {
     const char *looks = tt__mesh_sniff(h, got);
-    return tt_set_error(TT_ERR_PARSE,
-                        "%s: mesh file \"%s\" is not a GLB file: expected the 12-byte GLB header "
-                        "starting with \"glTF\", got %s",
-                        where, file, looks ? looks : got < sizeof h ? "a file shorter than that" : "other bytes");
+    st = tt_set_error(TT_ERR_PARSE,
+                      "%s: mesh file \"%s\" is not a GLB file: expected the 12-byte GLB header "
+                      "starting with \"glTF\", got %s",
+                      where, file, looks ? looks : got < 12 ? "a file shorter than that" : "other bytes");
+  } else if (version != 1 && version != 2) {
+    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh file \"%s\": GLB version %u (expected 2, or 1)", where,
+                      file, version);
+  } else if (length < (version == 1 ? 20u : 12u) || size < 0 || (uint64_t)length > (uint64_t)size) {
+    st = tt_set_error(TT_ERR_PARSE,
+                      "%s: mesh file \"%s\": the GLB header declares %u bytes, the file has %ld "
+                      "(cut short?)",
+                      where, file, length, size);
+  } else if (version == 2) {
+    st = tt__glb_chunks_check(f, file, where, length);
+  } else if (tt__le32(h + 12) > length - 20) {
+    /* GLB 1: a 20-byte header whose content length (the JSON scene) follows the length */
+    st = tt_set_error(TT_ERR_PARSE,
+                      "%s: mesh file \"%s\": the GLB 1 header declares %u bytes of content, only %u "
+                      "follow the header (corrupt or cut short?)",
+                      where, file, tt__le32(h + 12), length - 20);
   }
-  uint32_t version = h[4] | (uint32_t)h[5] << 8 | (uint32_t)h[6] << 16 | (uint32_t)h[7] << 24;
-  uint32_t length = h[8] | (uint32_t)h[9] << 8 | (uint32_t)h[10] << 16 | (uint32_t)h[11] << 24;
-  if (version != 1 && version != 2)
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh file \"%s\": GLB version %u (expected 2, or 1)",
-                        where, file, version);
-  if (length < sizeof h || size < 0 || (uint64_t)length > (uint64_t)size)
-    return tt_set_error(TT_ERR_PARSE,
-                        "%s: mesh file \"%s\": the GLB header declares %u bytes, the file has %ld "
-                        "(cut short?)",
-                        where, file, length, size);
-  return TT_OK;
+  fclose(f);
+  return st;
 }
 
 /* A .gltf must be a JSON object (glTF's top level); a .glb a GLB container. Checked before
