@@ -110,9 +110,9 @@ int tt__ensure_parent_dir(const char *option, const char *path);
 int tt__run_convert(const tt__host_options *opt);
 /* Runs --indicators: prints raw and normalised indicators as JSON (indicators.c). */
 int tt__run_indicators(const tt__host_options *opt);
-/* SIGINT/SIGTERM finish the current pass (tt_host.should_stop); a second one exits
- * (signals.c). */
-void tt__install_signals(void);
+/* SIGINT/SIGTERM finish the current `unit` ("pass", "frame", ...: named in the message;
+ * tt_host.should_stop); a second one exits (signals.c). */
+void tt__install_signals(const char *unit);
 /* Brackets the writing of the final outputs: a second signal meanwhile waits for the writes,
  * and tt__outputs_end then exits 130 (signals.c). */
 void tt__outputs_begin(void);

@@ -311,7 +311,7 @@ static void tt__hyb_write_state(tt__hyb *h, uint32_t index) {
 }
 
 int tt__run_hybrid(const tt__host_options *opt) {
-  tt__install_signals();
+  tt__install_signals("pass");
   tt__session s;
   tt__hyb h;
   memset(&h, 0, sizeof h);

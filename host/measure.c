@@ -61,7 +61,7 @@ static int tt__measure_read(const char *path, const tt_config *base, tt_config *
 }
 
 int tt__run_measure(const tt__host_options *opt) {
-  tt__install_signals();
+  tt__install_signals("round");
   tt__session s;
   tt_config **cfgs = NULL;
   size_t n = 0;

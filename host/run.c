@@ -241,7 +241,7 @@ static int tt__check_still_post(const tt__session *s) {
 }
 
 int tt__run_render(const tt__host_options *opt) {
-  tt__install_signals();
+  tt__install_signals("pass");
   /* a missing output folder is created now, not found missing after the render */
   if (opt->out && tt__ensure_parent_dir("--out", opt->out) != TT_EXIT_OK) return TT_EXIT_OUTPUT;
   if (opt->stats && tt__ensure_parent_dir("--stats", opt->stats) != TT_EXIT_OK)

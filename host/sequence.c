@@ -225,6 +225,9 @@ int tt__run_sequence(const tt__host_options *opt) {
     fprintf(stderr, "host: --sequence needs --out-dir DIR (or --out DIR/frame_%%04d.exr)\n");
     return TT_EXIT_USAGE;
   }
+  /* SIGINT/SIGTERM: the current frame finishes and stays in the manifest (it is committed
+   * after every frame); a second signal exits at once, leaving the frames committed so far */
+  tt__install_signals("frame");
   tt__seq s;
   memset(&s, 0, sizeof s);
   s.opt = opt;
@@ -351,11 +354,16 @@ int tt__run_sequence(const tt__host_options *opt) {
   /* the jittered frame is rendered unless only the reference is asked for */
   int render_frame = !opt->reference_only || opt->aov_mask;
   int entry_open = 0;  /* a frame's manifest entry is started but not closed */
+  uint32_t done_frames = 0;
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
-    if (host->should_stop()) {
+    /* a stop asked for during the frame before (or, for the first frame, during the scene
+     * loading and accel build) ends the sequence here; the first frame is always completed,
+     * as a still completes its first pass: exit 130 comes with what was rendered so far */
+    if (f > opt->seq_first && host->should_stop()) {
       rc = TT_EXIT_INTERRUPTED;
       break;
     }
+    tt_default_host_hold_stop(1);
     tt_camera cam, prev;
     tt_scene_camera_at(s.ses.scene, f / fps, &cam);
     tt_scene_camera_at(s.ses.scene, (f - 1.0) / fps, &prev);
@@ -482,8 +490,11 @@ int tt__run_sequence(const tt__host_options *opt) {
     fprintf(manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", render_ms, ref_ms);
     entry_open = 0;
     if (tt__seq_manifest_commit(mpath, manifest, &mbuf, &mlen)) rc = TT_EXIT_OUTPUT;
+    tt_default_host_hold_stop(0);
+    done_frames++;
     tt__progress_update("sequence", (double)(f - opt->seq_first + 1) / nframes);
   }
+  tt_default_host_hold_stop(0);
   /* a frame that failed half-way still closes its manifest entry */
   if (entry_open) fprintf(manifest, ", \"incomplete\": true}\n");
   tt__progress_finish();
@@ -493,6 +504,9 @@ int tt__run_sequence(const tt__host_options *opt) {
   manifest = NULL;
   if (!opt->quiet && rc == TT_EXIT_OK)
     fprintf(stderr, "host: wrote %u frames to %s\n", nframes, s.dir);
+  else if (rc == TT_EXIT_INTERRUPTED)
+    fprintf(stderr, "host: interrupted: %u of %u frames written to %s (manifest.json lists them)\n",
+            done_frames, nframes, s.dir);
 done:
   if (manifest) fclose(manifest);
   free(mbuf);

@@ -12,6 +12,8 @@
 
 static volatile sig_atomic_t tt__signals;
 static volatile sig_atomic_t tt__writing_outputs;
+static char tt__stop_msg[96];  /* set before the handlers are installed, read in them */
+static size_t tt__stop_len;
 
 static void tt__on_signal(int sig) {
   if (tt__signals++) {
@@ -19,12 +21,14 @@ static void tt__on_signal(int sig) {
     _exit(128 + sig);
   }
   tt_default_host_request_stop();
-  static const char msg[] = "\nhost: interrupted: finishing the current pass (again to abort)\n";
-  ssize_t ignored = write(2, msg, sizeof msg - 1);
+  ssize_t ignored = write(2, tt__stop_msg, tt__stop_len);
   (void)ignored;
 }
 
-void tt__install_signals(void) {
+void tt__install_signals(const char *unit) {
+  int n = snprintf(tt__stop_msg, sizeof tt__stop_msg,
+                   "\nhost: interrupted: finishing the current %s (again to abort)\n", unit);
+  tt__stop_len = n > 0 && (size_t)n < sizeof tt__stop_msg ? (size_t)n : 0;
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sa.sa_handler = tt__on_signal;

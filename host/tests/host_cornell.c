@@ -1,7 +1,8 @@
 /* End to end: render the default Cornell box through the host and check the image:
  * finite and non-negative, directly visible light pixels show the emitted radiance,
  * mean in physically sensible bounds, bit-identical pixels for a fixed seed whatever the
- * thread count, the run record's keys, PNG written, and SIGINT writing a partial image. */
+ * thread count, the run record's keys, PNG written, and SIGINT writing a partial image (of a still
+ * and of a sequence). */
 #include <tunetrace/tunetrace.h>
 
 #include <cjson/cJSON.h>
@@ -246,6 +247,43 @@ int main(void) {
             cJSON_GetNumberValue(cJSON_GetObjectItem(e_rec, "spp")) == spp,
             "the record of %s says interrupted with the image's spp", e_stats);
   cJSON_Delete(e_rec);
+
+  /* (#13) a sequence: SIGINT once the first frame's progress line is out, and SIGINT while
+   * frame 0 is set up (the "host: sequence" line): the frame being rendered finishes,
+   * exit 130, and manifest.json lists every frame on disk, each whole, none "incomplete"
+   * (the sequence mode had no handlers: SIGTERM killed it without its manifest) */
+  const char *triggers[] = {"sequence:", "host: sequence"};
+  for (int t = 0; t < 2; t++) {
+    char pattern[4200], mpath[4200];
+    snprintf(pattern, sizeof pattern, "%s/seq%d/f_%%04d.exr", dir, t);
+    snprintf(mpath, sizeof mpath, "%s/seq%d/manifest.json", dir, t);
+    char *argv_s[] = {(char *)host_path(), "--res", "96x96", "--spp", "4", "--frames", "0:100000",
+                      "--out", pattern, (char *)scene_path, NULL};
+    status = interrupt_at(argv_s, triggers[t]);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "sequence, signal at \"%s\": status %d",
+              triggers[t], status);
+    cJSON *man = read_json_file(mpath);
+    cJSON *frames = cJSON_GetObjectItem(man, "frames");
+    int nf = cJSON_GetArraySize(frames);
+    CHECK_MSG(cJSON_IsArray(frames) && nf >= 1 && nf < 100000, "%s lists %d frames", mpath, nf);
+    for (int i = 0; i < nf; i++) {
+      cJSON *fr = cJSON_GetArrayItem(frames, i);
+      CHECK(cJSON_GetObjectItem(fr, "incomplete") == NULL);
+      CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(fr, "index")) == i);
+      char fpath[4300];
+      snprintf(fpath, sizeof fpath, "%s/seq%d/%s", dir, t,
+               cJSON_GetStringValue(cJSON_GetObjectItem(fr, "color")));
+      float *px = NULL;
+      uint32_t w = 0, h = 0;
+      CHECK_MSG(read_exr(fpath, &px, &w, &h) == 96 * 96, "%s reads back whole", fpath);
+      tt_free(px);
+    }
+    /* nothing on disk beyond what the manifest lists */
+    char next[4300];
+    snprintf(next, sizeof next, "%s/seq%d/f_%04d.exr", dir, t, nf);
+    CHECK_MSG(access(next, F_OK) != 0, "%s exists but is not in the manifest", next);
+    cJSON_Delete(man);
+  }
 
   char cmd[4200];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
