@@ -28,6 +28,7 @@
  * Model files: predictor_common/model_file.h, payload version 1 (see rbf_save).
  */
 #include "../predictor_common/model_file.h"
+#include "rbf_argmax.h"
 #include "rbf_model.h"
 
 #include <tt_util/rng.h>
@@ -374,55 +375,74 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   const rbf_model *r = &p->model;
   size_t np = p->params ? p->params : 1, m = p->m ? p->m : 1;
   size_t n1 = p->npool + p->ncand + 1, starts = (size_t)p->set.starts;
+  int refine = p->set.refine > 0;
   double *ds = malloc(2 * (size_t)r->features * sizeof(double)), *dd = ds + r->features;
-  double *vals = malloc(n1 * np * sizeof(double)), *enc = malloc(n1 * m * sizeof(double));
-  double *qs = malloc(n1 * sizeof(double)), *unit = malloc(np * sizeof(double));
+  double *defv = malloc(np * sizeof(double)), *defe = malloc(m * sizeof(double));
+  double *unit = malloc(np * sizeof(double));
   double *best_vals = malloc(np * sizeof(double)), *try_enc = malloc(m * sizeof(double));
-  size_t *top = malloc((starts ? starts : 1) * sizeof *top);
+  /* without refinement: the bounded argmax's rows and scratch; with it: every candidate's
+   * values, encoding and Q (the starts and the coordinate search need them) */
+  const double **rows = refine ? NULL : malloc(n1 * sizeof *rows);
+  double *work = refine ? NULL : malloc((r->features + 2 * n1) * sizeof(double));
+  double *vals = refine ? malloc(n1 * np * sizeof(double)) : NULL;
+  double *enc = refine ? malloc(n1 * m * sizeof(double)) : NULL;
+  double *qs = refine ? malloc(n1 * sizeof(double)) : NULL;
+  size_t *top = refine ? malloc((starts ? starts : 1) * sizeof *top) : NULL;
   tt_config *c = tt_config_create(p->target);
   tt_status st = TT_OK;
-  if (!ds || !vals || !enc || !qs || !unit || !best_vals || !try_enc || !top || !c) {
+  if (!ds || !defv || !defe || !unit || !best_vals || !try_enc || !c ||
+      (refine ? !vals || !enc || !qs || !top : !rows || !work)) {
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
     goto done;
   }
   rbf_state_part(r, q->state, ds);
-  /* phase 1: the pool, the LHS candidates and the default */
-  size_t n = 0;
-  memcpy(vals, p->pool_values, p->npool * p->params * sizeof(double));
-  memcpy(enc, p->pool_enc, p->npool * p->m * sizeof(double));
-  n = p->npool;
-  memcpy(vals + n * p->params, p->cand_values, p->ncand * p->params * sizeof(double));
-  memcpy(enc + n * p->m, p->cand_enc, p->ncand * p->m * sizeof(double));
-  n += p->ncand;
-  ttpm_config_values(c, vals + n * p->params);  /* c holds the defaults */
-  rbf_encode_action(c, enc + n * p->m);
-  n++;
-  /* the action parts: cached per pool entry and LHS candidate, computed for the default */
-  for (size_t k = 0; k < p->npool; k++) qs[k] = rbf_q_parts(r, ds, p->pool_da + k * r->features);
-  for (size_t k = 0; k < p->ncand; k++)
-    qs[p->npool + k] = rbf_q_parts(r, ds, p->cand_da + k * r->features);
-  rbf_action_part(r, enc + (n - 1) * p->m, dd);
-  qs[n - 1] = rbf_q_parts(r, ds, dd);
-  uint64_t evaluated = n;
-  /* the `starts` best, highest first (ties: lowest index); only the refinement needs them */
-  size_t nt = 0;
-  for (; p->set.refine > 0 && nt < starts && nt < n; nt++) {
-    size_t b = SIZE_MAX;
-    for (size_t k = 0; k < n; k++) {
-      int taken = 0;
-      for (size_t j = 0; j < nt && !taken; j++) taken = top[j] == k;
-      if (!taken && (b == SIZE_MAX || qs[k] > qs[b])) b = k;
-    }
-    top[nt] = b;
-  }
-  size_t bi = 0;
+  /* phase 1: the pool, the LHS candidates and the default (the last candidate). The action
+   * parts are cached per pool entry and LHS candidate, computed here for the default. */
+  size_t n = n1, bi = 0, nt = 0;
   double best_q = -INFINITY;
-  for (size_t k = 0; k < n; k++)
-    if (qs[k] > best_q) best_q = qs[k], bi = k;
-  memcpy(best_vals, vals + bi * p->params, p->params * sizeof(double));
+  ttpm_config_values(c, defv);  /* c holds the defaults */
+  rbf_encode_action(c, defe);
+  rbf_action_part(r, defe, dd);
+  if (!refine) {
+    /* the first maximum of rbf_q_parts over the candidates, bit for bit, with Q evaluated
+     * exactly only where the approximate bounds cannot decide (rbf_argmax.h) */
+    for (size_t k = 0; k < p->npool; k++) rows[k] = p->pool_da + k * r->features;
+    for (size_t k = 0; k < p->ncand; k++) rows[p->npool + k] = p->cand_da + k * r->features;
+    rows[n - 1] = dd;
+    bi = rbf_argmax_bounded(r, ds, rows, n, NULL, work, &best_q, NULL);
+    const double *v = bi < p->npool ? p->pool_values + bi * p->params
+                      : bi < p->npool + p->ncand ? p->cand_values + (bi - p->npool) * p->params
+                      : defv;
+    memcpy(best_vals, v, p->params * sizeof(double));
+  } else {
+    memcpy(vals, p->pool_values, p->npool * p->params * sizeof(double));
+    memcpy(enc, p->pool_enc, p->npool * p->m * sizeof(double));
+    memcpy(vals + p->npool * p->params, p->cand_values, p->ncand * p->params * sizeof(double));
+    memcpy(enc + p->npool * p->m, p->cand_enc, p->ncand * p->m * sizeof(double));
+    memcpy(vals + (n - 1) * p->params, defv, p->params * sizeof(double));
+    memcpy(enc + (n - 1) * p->m, defe, p->m * sizeof(double));
+    for (size_t k = 0; k < p->npool; k++) qs[k] = rbf_q_parts(r, ds, p->pool_da + k * r->features);
+    for (size_t k = 0; k < p->ncand; k++)
+      qs[p->npool + k] = rbf_q_parts(r, ds, p->cand_da + k * r->features);
+    qs[n - 1] = rbf_q_parts(r, ds, dd);
+    /* the `starts` best, highest first (ties: lowest index) */
+    for (; nt < starts && nt < n; nt++) {
+      size_t b = SIZE_MAX;
+      for (size_t k = 0; k < n; k++) {
+        int taken = 0;
+        for (size_t j = 0; j < nt && !taken; j++) taken = top[j] == k;
+        if (!taken && (b == SIZE_MAX || qs[k] > qs[b])) b = k;
+      }
+      top[nt] = b;
+    }
+    for (size_t k = 0; k < n; k++)
+      if (qs[k] > best_q) best_q = qs[k], bi = k;
+    memcpy(best_vals, vals + bi * p->params, p->params * sizeof(double));
+  }
+  uint64_t evaluated = n;
   /* phase 2: coordinate search from each start */
   char why[128];
-  for (size_t t = 0; t < nt && p->set.refine > 0; t++) {
+  for (size_t t = 0; t < nt; t++) {
     double cur_q = qs[top[t]];
     if (ttpm_config_from_values(c, vals + top[t] * p->params, why, sizeof why)) continue;
     tt_config_to_unit(c, unit);
@@ -472,6 +492,10 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   }
 done:
   free(ds);
+  free(defv);
+  free(defe);
+  free(rows);
+  free(work);
   free(vals);
   free(enc);
   free(qs);

@@ -7,7 +7,9 @@
  *  - relative reward skips samples without a default cost; predict is deterministic and the
  *    candidates are counted; model files round-trip bit-exactly, bad files are refused;
  *  - the pool argmax (cached action distances) is the exact argmax over the pool's entries,
- *    after slots were replaced and after a load. */
+ *    after slots were replaced and after a load;
+ *  - the default argmax (bounded, rbf_argmax.h) answers bit for bit what the reference loop
+ *    answers, on full-size argmaxes, trained and loaded. */
 #include "../../predictor_common/model_file.h"
 #include "predictor_util.h"
 
@@ -278,6 +280,68 @@ static void pool_argmax_is_exact(const char *dir) {
   P->destroy(loaded);
 }
 
+/* The default argmax (no refinement: rbf_argmax_bounded, Q approximated with bounds and
+ * evaluated exactly only where they cannot decide) answers exactly what the reference loop
+ * answers (rbf_q_parts for every candidate, taken with refine 1 and refineStarts 0, which
+ * computes every Q and refines nothing): the same configuration and the same bits of Q, on
+ * full-size argmaxes (a pool of up to 256 with slots replaced, 200 LHS points, the default),
+ * for a trained model and the same model loaded from its file. */
+static void bounded_argmax_matches_reference(const char *dir) {
+  tt_config *fast = tt_config_create(P->space()), *ref = tt_config_create(P->space());
+  tt_config_set_string(fast, "lhsCandidates", "200");
+  tt_config_set_string(ref, "lhsCandidates", "200");
+  tt_config_set_string(ref, "refine", "1");
+  tt_config_set_string(ref, "refineStarts", "0");
+  tt_predictor *a = pu_create(P, target, 2, "synthetic", fast, 5);
+  tt_predictor *b = pu_create(P, target, 2, "synthetic", ref, 5);
+  uint64_t x = 77;
+  tt_config *c = tt_config_create(target);
+  for (int i = 0; i < 400; i++) {
+    double st[2] = {uni(&x), uni(&x)}, u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
+    tt_config_from_unit(c, u);
+    tt_predictor_sample smp = {.struct_size = sizeof smp, .state = st, .config = c,
+                               .cost = synth_cost(st, c), .default_cost = NAN};
+    uint32_t fl = i % 3 ? TT_PREDICTOR_ONLINE : TT_PREDICTOR_OFFLINE;
+    CHECK(P->observe_ex(a, &smp, 1, fl) == TT_OK && P->observe_ex(b, &smp, 1, fl) == TT_OK);
+  }
+  char path[4200];
+  snprintf(path, sizeof path, "%s/bounded.ttpm", dir);
+  CHECK_MSG(P->save(a, path) == TT_OK, "%s", tt_last_error());
+  tt_predictor *loaded = pu_create(P, target, 2, "synthetic", fast, 99);
+  CHECK_MSG(P->load(loaded, path) == TT_OK, "%s", tt_last_error());
+  tt_config *oa = tt_config_create(target), *ob = tt_config_create(target);
+  int differ = 0;
+  for (int t = 0; t < 200; t++) {
+    double s[2] = {uni(&x), uni(&x)};
+    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
+    tt_predictor_result rb = {.struct_size = sizeof rb};
+    CHECK(P->predict_ex(b, &q, ob, &rb) == TT_OK);
+    char *jb = tt_config_to_json(ob);
+    for (int which = 0; which < 2; which++) {
+      tt_predictor_result ra = {.struct_size = sizeof ra};
+      CHECK(P->predict_ex(which ? loaded : a, &q, oa, &ra) == TT_OK);
+      char *ja = tt_config_to_json(oa);
+      int same = !strcmp(ja, jb) && !memcmp(&ra.value, &rb.value, sizeof ra.value) &&
+                 ra.candidates == rb.candidates;
+      if (!same && differ++ < 3)
+        fprintf(stderr, "state %d (%s): %s Q %.17g, reference %s Q %.17g\n", t,
+                which ? "loaded" : "trained", ja, ra.value, jb, rb.value);
+      tt_free(ja);
+    }
+    CHECK(rb.candidates > 200);  /* the pool, the LHS points that passed the check, the default */
+    tt_free(jb);
+  }
+  CHECK_MSG(differ == 0, "%d of 400 predictions differ from the reference loop's", differ);
+  tt_config_destroy(c);
+  tt_config_destroy(oa);
+  tt_config_destroy(ob);
+  tt_config_destroy(fast);
+  tt_config_destroy(ref);
+  P->destroy(a);
+  P->destroy(b);
+  P->destroy(loaded);
+}
+
 static void relative_reward(void) {
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "reward", "relative");
@@ -327,6 +391,7 @@ int main(int argc, char **argv) {
   argmax_of_a_known_q(dir);
   pool_only_answers_observed();
   pool_argmax_is_exact(dir);
+  bounded_argmax_matches_reference(dir);
   relative_reward();
 
   int wrong;
