@@ -21,7 +21,10 @@
  * width, tt__net_state.band_rows / tile_cols; 0 or unset: the plugin's automatic choice),
  * TT_POST_TAA_ISA=avx2|generic. Besides the table it prints one line per row,
  *   BENCH label WxH threads wall_ms cpu_ms reject_cpu reproj_cpu network_cpu mix_cpu
- * which tools/taa/speed.py collects over several runs (medians of per-run medians). */
+ * which tools/taa/speed.py collects over several runs (medians of per-run medians).
+ * TT_BENCH_DIGEST=1 adds, per row, "DIGEST label WxH threads HEX": FNV-1a 64 of every
+ * frame's output (after the timer stops), so two builds, or two thread counts, can be
+ * compared bit for bit on the bench's own frames (the same for the same rounds). */
 #include "tt_test.h"
 
 #include "taa_internal.h"
@@ -29,6 +32,8 @@
 #include "bench_util.h"
 
 #include <dirent.h>
+
+#include <tt_util/hash.h>
 
 #include <tunetrace/camera.h>
 
@@ -119,12 +124,14 @@ typedef struct variant {
   tt__vctaa v;
   double wall[MAX_ROUNDS], cpu[MAX_ROUNDS], rej[MAX_ROUNDS], rep[MAX_ROUNDS],
       net[MAX_ROUNDS], mix[MAX_ROUNDS], body[MAX_ROUNDS], kern[MAX_ROUNDS];
+  uint64_t digest;  /* TT_BENCH_DIGEST: FNV-1a 64 of all frames' outputs */
 } variant;
 
 static variant g_var[MAX_VARIANTS];
 static int g_nvar;
 static double g_peak;
 static uint32_t g_band_rows, g_tile_cols;  /* TT_BENCH_BAND_ROWS, TT_BENCH_TILE_COLS (0: auto) */
+static int g_digest;                       /* TT_BENCH_DIGEST=1 */
 
 /* Adds a network variant (file, 5x5-layer algorithm: -1 default, 0 direct, 1 Winograd
  * F(2x2, 5x5), 2 F(4x4, 5x5) kernel layer); 0 on failure (reported). */
@@ -203,6 +210,7 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
       v->s.band_rows = g_band_rows;
       v->s.tile_cols = g_tile_cols;
     }
+    v->digest = TT__FNV1A64_OFFSET;
   }
   const tt__vctaa_params vp = {0.1f, 1.0f, 1, 0};
   for (int r = 0; r <= rounds; r++) {
@@ -215,6 +223,7 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
       if (v->vctaa) tt__vctaa_process(&v->v, tt_default_host(), &vp, f.color, f.motion, f.out);
       else tt__net_process_frame(&v->s, &v->m, tt_default_host(), &fr, f.out);
       double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
+      if (g_digest) v->digest = tt__fnv1a64(v->digest, f.out, (size_t)w * h * 3 * sizeof(float));
       if (r == 0) continue;  /* warm-up (the first frame has no history) */
       int k = r - 1;
       v->wall[k] = t, v->cpu[k] = c;
@@ -234,6 +243,8 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
       printf("| %-16s | %4ux%-4u | %u | %7.1f | %7.1f | %25s | %6s | %23s |\n", v->label, w, h,
              threads, wall, cpu, "-", "-", "-");
       printf("BENCH %s %ux%u %u %.3f %.3f 0 0 0 0\n", v->label, w, h, threads, wall, cpu);
+      if (g_digest) printf("DIGEST %s %ux%u %u %016llx\n", v->label, w, h, threads,
+                           (unsigned long long)v->digest);
       tt__vctaa_free(&v->v);
       continue;
     }
@@ -251,6 +262,8 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
            mx, flops, nt * sh, nt * (1 - sh), gf, g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
     printf("BENCH %s %ux%u %u %.3f %.3f %.3f %.3f %.3f %.3f\n", v->label, w, h, threads, wall,
            cpu, rj, rp, nt, mx);
+    if (g_digest) printf("DIGEST %s %ux%u %u %016llx\n", v->label, w, h, threads,
+                         (unsigned long long)v->digest);
     tt__net_state_free(&v->s);
   }
   free_frame(&f);
@@ -269,6 +282,8 @@ int main(void) {
   const char *br = getenv("TT_BENCH_BAND_ROWS"), *tc = getenv("TT_BENCH_TILE_COLS");
   g_band_rows = br ? (uint32_t)atoi(br) : 0;
   g_tile_cols = tc ? (uint32_t)atoi(tc) : 0;
+  const char *dg = getenv("TT_BENCH_DIGEST");
+  g_digest = dg && dg[0] == '1';
   if (g_nvar < MAX_VARIANTS) {
     memset(&g_var[g_nvar], 0, sizeof g_var[0]);
     snprintf(g_var[g_nvar].label, sizeof g_var[0].label, "VCTAA");
