@@ -895,21 +895,27 @@ TGT_V4 AI void wino4_group16_t(const wino4_a *a, uint32_t xl, const int O) {
       if (oc >= a->out) break;
       __m512 bias = _mm512_set1_ps(a->b[oc]);
       __m512 t[8][4];
+#pragma GCC unroll 8
       for (int i = 0; i < 8; i++) {
         __m512 m8[8];
+#pragma GCC unroll 8
         for (int k = 0; k < 8; k++) m8[k] = _mm512_load_ps(M + ((size_t)(i * 8 + k) * O + o) * 16);
         wino4_at16(m8, t[i]);  /* along the row: tile columns 0..3 */
       }
       __m512 y[4][4];  /* [row][column] */
+#pragma GCC unroll 4
       for (int k = 0; k < 4; k++) {
         __m512 col[8], yy[4];
+#pragma GCC unroll 8
         for (int i = 0; i < 8; i++) col[i] = t[i][k];
         wino4_at16(col, yy);  /* along the column: output rows 0..3 */
+#pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
           y[r][k] = _mm512_add_ps(yy[r], bias);
           if (a->relu) y[r][k] = _mm512_max_ps(y[r][k], _mm512_setzero_ps());
         }
       }
+#pragma GCC unroll 4
       for (int r = 0; r < 4; r++) {
         WINO4_T4_16(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
         float *d = a->dst[r] + oc * a->dcs + xl;
