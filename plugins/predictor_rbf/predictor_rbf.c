@@ -72,10 +72,12 @@ struct tt_predictor {
    * action parts of their distances to the centres (F, rbf_action_part) */
   size_t ncand;
   double *cand_values, *cand_enc, *cand_da;
+  float *cand_daf;          /* cand_da in float, rows of rbf_f8(F): the argmax's coarse level */
   /* pool of observed configurations, the `pool` highest rewards; pool_da as cand_da, kept
    * with each entry so that predict() does not recompute F x m sums per candidate */
   size_t npool;
   double *pool_values, *pool_enc, *pool_reward, *pool_da;
+  float *pool_daf;          /* as cand_daf */
   uint64_t observations;
   double *phi;              /* F scratch for updates (observe is single-threaded) */
   double *x;                /* d + m scratch */
@@ -126,14 +128,17 @@ static void rbf_free_model_parts(tt_predictor *p) {
   free(p->cand_values);
   free(p->cand_enc);
   free(p->cand_da);
+  free(p->cand_daf);
   free(p->pool_values);
   free(p->pool_enc);
   free(p->pool_reward);
   free(p->pool_da);
+  free(p->pool_daf);
   free(p->phi);
   free(p->x);
   p->cand_values = p->cand_enc = p->cand_da = NULL;
   p->pool_values = p->pool_enc = p->pool_reward = p->pool_da = NULL;
+  p->cand_daf = p->pool_daf = NULL;
   p->phi = p->x = NULL;
   p->ncand = p->npool = 0;
 }
@@ -156,9 +161,10 @@ static int rbf_make_candidates(tt_predictor *p) {
   p->cand_values = malloc((n ? n : 1) * np * sizeof(double));
   p->cand_enc = malloc((n ? n : 1) * (p->m ? p->m : 1) * sizeof(double));
   p->cand_da = malloc((n ? n : 1) * p->model.features * sizeof(double));
+  p->cand_daf = malloc((n ? n : 1) * rbf_f8(p->model.features) * sizeof(float));
   double *unit = malloc((n ? n : 1) * np * sizeof(double));
   tt_config *c = tt_config_create(p->target);
-  if (!p->cand_values || !p->cand_enc || !p->cand_da || !unit || !c) {
+  if (!p->cand_values || !p->cand_enc || !p->cand_da || !p->cand_daf || !unit || !c) {
     free(unit);
     tt_config_destroy(c);
     return -1;
@@ -173,6 +179,8 @@ static int rbf_make_candidates(tt_predictor *p) {
     rbf_encode_action(c, p->cand_enc + p->ncand * p->m);
     rbf_action_part(&p->model, p->cand_enc + p->ncand * p->m,
                     p->cand_da + p->ncand * p->model.features);
+    rbf_action_part_float(p->model.features, p->cand_da + p->ncand * p->model.features,
+                          p->cand_daf + p->ncand * rbf_f8(p->model.features));
     p->ncand++;
   }
   free(unit);
@@ -198,9 +206,11 @@ static int rbf_alloc(tt_predictor *p) {
   p->pool_enc = malloc(pool * (p->m ? p->m : 1) * sizeof(double));
   p->pool_reward = malloc(pool * sizeof(double));
   p->pool_da = malloc(pool * f * sizeof(double));
+  p->pool_daf = malloc(pool * rbf_f8(f) * sizeof(float));
   p->phi = malloc(f * sizeof(double));
   p->x = malloc((p->d + p->m) * sizeof(double));
-  if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->pool_da || !p->phi || !p->x)
+  if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->pool_da || !p->pool_daf ||
+      !p->phi || !p->x)
     return -1;
   return rbf_make_candidates(p);
 }
@@ -277,6 +287,8 @@ static void rbf_pool_add(tt_predictor *p, const double *values, const double *en
   memcpy(p->pool_values + slot * np, values, np * sizeof(double));
   memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
   rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
+  rbf_action_part_float(p->model.features, p->pool_da + slot * p->model.features,
+                        p->pool_daf + slot * rbf_f8(p->model.features));
   p->pool_reward[slot] = reward;
 }
 
@@ -382,8 +394,11 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   double *best_vals = malloc(np * sizeof(double)), *try_enc = malloc(m * sizeof(double));
   /* without refinement: the bounded argmax's rows and scratch; with it: every candidate's
    * values, encoding and Q (the starts and the coordinate search need them) */
+  uint32_t f8 = rbf_f8(r->features);
   const double **rows = refine ? NULL : malloc(n1 * sizeof *rows);
-  double *work = refine ? NULL : malloc((r->features + 2 * n1) * sizeof(double));
+  const float **frows = refine ? NULL : malloc(n1 * sizeof *frows);
+  float *ddf = refine ? NULL : malloc(f8 * sizeof(float));
+  double *work = refine ? NULL : malloc(rbf_argmax_work(r->features, n1) * sizeof(double));
   double *vals = refine ? malloc(n1 * np * sizeof(double)) : NULL;
   double *enc = refine ? malloc(n1 * m * sizeof(double)) : NULL;
   double *qs = refine ? malloc(n1 * sizeof(double)) : NULL;
@@ -391,7 +406,7 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   tt_config *c = tt_config_create(p->target);
   tt_status st = TT_OK;
   if (!ds || !defv || !defe || !unit || !best_vals || !try_enc || !c ||
-      (refine ? !vals || !enc || !qs || !top : !rows || !work)) {
+      (refine ? !vals || !enc || !qs || !top : !rows || !frows || !ddf || !work)) {
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
     goto done;
   }
@@ -406,10 +421,18 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   if (!refine) {
     /* the first maximum of rbf_q_parts over the candidates, bit for bit, with Q evaluated
      * exactly only where the approximate bounds cannot decide (rbf_argmax.h) */
-    for (size_t k = 0; k < p->npool; k++) rows[k] = p->pool_da + k * r->features;
-    for (size_t k = 0; k < p->ncand; k++) rows[p->npool + k] = p->cand_da + k * r->features;
+    for (size_t k = 0; k < p->npool; k++) {
+      rows[k] = p->pool_da + k * r->features;
+      frows[k] = p->pool_daf + k * f8;
+    }
+    for (size_t k = 0; k < p->ncand; k++) {
+      rows[p->npool + k] = p->cand_da + k * r->features;
+      frows[p->npool + k] = p->cand_daf + k * f8;
+    }
+    rbf_action_part_float(r->features, dd, ddf);
     rows[n - 1] = dd;
-    bi = rbf_argmax_bounded(r, ds, rows, n, NULL, work, &best_q, NULL);
+    frows[n - 1] = ddf;
+    bi = rbf_argmax_bounded(r, ds, rows, frows, n, NULL, work, &best_q, NULL);
     const double *v = bi < p->npool ? p->pool_values + bi * p->params
                       : bi < p->npool + p->ncand ? p->cand_values + (bi - p->npool) * p->params
                       : defv;
@@ -495,6 +518,8 @@ done:
   free(defv);
   free(defe);
   free(rows);
+  free(frows);
+  free(ddf);
   free(work);
   free(vals);
   free(enc);
@@ -534,7 +559,8 @@ static tt_status rbf_info(const tt_predictor *p, tt_predictor_info *out) {
   uint64_t f = p->model.features, dim = p->model.dim, pool = (uint64_t)p->set.pool;
   uint64_t bytes = sizeof *p + f * (dim + 2) * sizeof(double) + (p->d + p->m) * sizeof(double) +
                    p->ncand * (p->params + p->m + f) * sizeof(double) +
-                   pool * (p->params + p->m + 1 + f) * sizeof(double);
+                   pool * (p->params + p->m + 1 + f) * sizeof(double) +
+                   (p->ncand + pool) * rbf_f8((uint32_t)f) * sizeof(float);
   if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
     out->memory_bytes = bytes;
     out->entries = f;
@@ -611,6 +637,7 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
   tt_predictor tmp = *p;
   tmp.cand_values = tmp.cand_enc = tmp.cand_da = NULL;
   tmp.pool_values = tmp.pool_enc = tmp.pool_reward = tmp.pool_da = NULL;
+  tmp.cand_daf = tmp.pool_daf = NULL;
   tmp.phi = tmp.x = NULL;
   memset(&tmp.model, 0, sizeof tmp.model);
   tt_config *sc = tt_config_create(rbf_settings);
@@ -643,8 +670,10 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
       if (!isfinite(tmp.model.centres[i])) ttpm_fail(&rd, "centre coordinate %zu is not finite", i);
     for (size_t i = 0; !rd.err[0] && i < (size_t)f; i++)
       if (!isfinite(tmp.model.theta[i])) ttpm_fail(&rd, "theta[%zu] is not finite", i);
-    for (size_t k = 0; !rd.err[0] && k < tmp.ncand; k++)  /* the file's centres */
+    for (size_t k = 0; !rd.err[0] && k < tmp.ncand; k++) {  /* the file's centres */
       rbf_action_part(&tmp.model, tmp.cand_enc + k * p->m, tmp.cand_da + k * f);
+      rbf_action_part_float((uint32_t)f, tmp.cand_da + k * f, tmp.cand_daf + k * rbf_f8((uint32_t)f));
+    }
   }
   uint64_t npool = ttpm_get_count(&rd, (uint64_t)tmp.set.pool, (p->params + 1) * 8, "pool entries");
   tt_config *c = tt_config_create(p->target);
@@ -657,6 +686,7 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
     if (!rd.err[0]) {
       rbf_encode_action(c, tmp.pool_enc + k * p->m);
       rbf_action_part(&tmp.model, tmp.pool_enc + k * p->m, tmp.pool_da + k * f);
+      rbf_action_part_float((uint32_t)f, tmp.pool_da + k * f, tmp.pool_daf + k * rbf_f8((uint32_t)f));
     }
   }
   if (!rd.err[0]) {

@@ -3,11 +3,34 @@
 
 #include <math.h>
 
-rbf_qbound_fn *rbf_qbound_pick(void) {
+rbf_kernels rbf_kernels_pick(void) {
+  rbf_kernels k = {NULL, rbf_qbound_base};
 #ifdef RBF_HAVE_AVX2
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return rbf_qbound_avx2;
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+    k.coarse = rbf_qcoarse_avx2, k.fine = rbf_qbound_avx2;
 #endif
-  return rbf_qbound_base;
+  return k;
+}
+
+size_t rbf_argmax_work(uint32_t features, size_t n) {
+  /* e (F), qa and tol (2n), the survivors' indices (n), theta and ds as floats (2 x F8) */
+  return (size_t)features + 3 * n + rbf_f8(features) + 1;
+}
+
+void rbf_action_part_float(uint32_t features, const double *da, float *daf) {
+  uint32_t i = 0;
+  for (; i < features; i++) daf[i] = (float)da[i];
+  for (; i < rbf_f8(features); i++) daf[i] = 0.0f;
+}
+
+double rbf_fine_tol(uint32_t features, double qabs, double theta_abs) {
+  return (1e-11 + 4.0 * (double)features * 0x1p-53) * qabs + 1e-300 * theta_abs +
+         (2.0 * features + 16.0) * 0x1p-1021;
+}
+
+double rbf_coarse_tol(uint32_t features, double qabs, double qx, double theta_abs) {
+  return (2e-6 + 1.2e-7 * ((double)features / 8.0 + 4.0)) * qabs + 5e-7 * qx +
+         1e-37 * theta_abs + (3.0 * features + 16.0) * 0x1p-125;
 }
 
 size_t rbf_argmax_reference(const rbf_model *r, const double *ds, const double *const *da,
@@ -23,37 +46,62 @@ size_t rbf_argmax_reference(const rbf_model *r, const double *ds, const double *
 }
 
 size_t rbf_argmax_bounded(const rbf_model *r, const double *ds, const double *const *da,
-                          size_t n, rbf_qbound_fn *fn, double *work, double *best_q,
-                          size_t *exact) {
-  if (!fn) fn = rbf_qbound_pick();
+                          const float *const *daf, size_t n, const rbf_kernels *kernels,
+                          double *work, double *best_q, rbf_argmax_stats *stats) {
+  rbf_kernels kk = kernels ? *kernels : rbf_kernels_pick();
   uint32_t f = r->features;
   double *e = work, *qa = work + f, *tol = qa + n;
+  size_t *live = (size_t *)(tol + n);
+  uint32_t f8 = rbf_f8(f);
+  float *thf = (float *)(live + n), *dsf = thf + f8;
   double tabs = 0;
   for (uint32_t i = 0; i < f; i++) tabs += fabs(r->theta[i]);
-  const double rel = 1e-11 + 4.0 * (double)f * 0x1p-53;
-  const double floor_abs = 1e-300 * tabs + (2.0 * f + 16.0) * 0x1p-1021;
-  double lower = -INFINITY;
   int finite = isfinite(tabs);
-  for (size_t k = 0; k < n && finite; k++) {
+  size_t nlive = 0;
+  /* level 1, single precision: only where its bound is valid (theta and every sum within
+   * the float range, the float sums' error bound below 1e-4) */
+  int coarse = finite && kk.coarse && daf && f <= 8192 && tabs < 1e34;
+  if (coarse) {
+    rbf_action_part_float(f, r->theta, thf);  /* the same conversion and padding */
+    rbf_action_part_float(f, ds, dsf);
+    double lower = -INFINITY;
+    for (size_t k = 0; k < n && coarse; k++) {
+      double qabs, qx;
+      kk.coarse(thf, dsf, daf[k], f8, (float)-r->width, &qa[k], &qabs, &qx);
+      tol[k] = rbf_coarse_tol(f, qabs, qx, tabs);
+      coarse = isfinite(qa[k]) && isfinite(tol[k]);
+      if (qa[k] - tol[k] > lower) lower = qa[k] - tol[k];
+    }
+    for (size_t k = 0; k < n && coarse; k++)
+      if (qa[k] + tol[k] >= lower) live[nlive++] = k;  /* else Q_k < lower <= the best Q */
+  }
+  if (!coarse)
+    for (nlive = 0; nlive < n; nlive++) live[nlive] = nlive;
+  /* level 2, the polynomial kernel, on what level 1 kept */
+  double lower = -INFINITY;
+  for (size_t j = 0; j < nlive && finite; j++) {
+    size_t k = live[j];
     double qabs;
-    fn(r->theta, ds, da[k], f, -r->width, e, &qa[k], &qabs);
-    tol[k] = rel * qabs + floor_abs;
+    kk.fine(r->theta, ds, da[k], f, -r->width, e, &qa[k], &qabs);
+    tol[k] = rbf_fine_tol(f, qabs, tabs);
     finite = isfinite(qa[k]) && isfinite(tol[k]);
     if (qa[k] - tol[k] > lower) lower = qa[k] - tol[k];
   }
-  size_t bi = 0, evaluated = 0;
+  /* level 3, rbf_q_parts itself, in candidate order (live is increasing) */
+  size_t bi = 0, exact = 0;
   double b = -INFINITY;
-  for (size_t k = 0; k < n && finite; k++) {
-    if (!(qa[k] + tol[k] >= lower)) continue;  /* Q_k < lower <= the best Q */
+  for (size_t j = 0; j < nlive && finite; j++) {
+    size_t k = live[j];
+    if (!(qa[k] + tol[k] >= lower)) continue;
     double q = rbf_q_parts(r, ds, da[k]);
-    evaluated++;
+    exact++;
     if (q > b) b = q, bi = k;
   }
   if (!finite || !isfinite(b)) {
-    if (exact) *exact = n;
+    if (stats) stats->fine = 0, stats->exact = n;
     return rbf_argmax_reference(r, ds, da, n, best_q);
   }
-  if (exact) *exact = evaluated;
+  if (stats) stats->fine = nlive, stats->exact = exact;
   *best_q = b;
   return bi;
 }

@@ -15,8 +15,17 @@ typedef void rbf_qbound_fn(const double *theta, const double *ds, const double *
                            double nw, double *e, double *q, double *qabs);
 
 rbf_qbound_fn rbf_qbound_base;
+/* The coarse level before it (rbf_qcoarse_avx2.c): single precision, about 1e-6 relative
+ * where the polynomial kernel is 1e-14, at a third of its cost. Float copies of theta, ds and
+ * da, f8 values each, a multiple of 8 (padded with zeros: theta 0 adds nothing);
+ * *qx ~ sum_i |theta_i e_i| |x_i|, x_i = nw sqrt(ds_i + da_i). */
+typedef void rbf_qcoarse_fn(const float *thetaf, const float *dsf, const float *daf, uint32_t f8,
+                            float nw, double *q, double *qabs, double *qx);
+
 #ifdef RBF_HAVE_AVX2
-rbf_qbound_fn rbf_qbound_avx2;  /* runs only where the CPU has AVX2 and FMA */
+/* run only where the CPU has AVX2 and FMA */
+rbf_qbound_fn rbf_qbound_avx2;
+rbf_qcoarse_fn rbf_qcoarse_avx2;
 #endif
 
 #endif /* TT_PREDICTOR_RBF_QBOUND_H */

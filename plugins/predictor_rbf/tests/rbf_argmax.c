@@ -7,10 +7,11 @@
  * unit cube (exponents below -708: the polynomial's clamp), theta of mixed sign over 30
  * decades, exact ties (repeated candidates: the first must win) and near-ties (candidates
  * 1e-15 apart, where the approximation cannot separate them and the exact values must).
- * Also: the kernel is within 1e-13 of rbf_q_parts relative to sum |theta e| (the bound
- * assumes 1e-11: a kernel that lost its accuracy fails here before the argmax could), the
- * argmax evaluates few candidates exactly on distinct candidates (else it is no faster), and
- * a model whose sums overflow takes the reference loop and still agrees. */
+ * Also: every kernel is within half its bound of rbf_q_parts on every candidate (the fine
+ * kernels within 1e-13 relative to sum |theta e|, the bound assumes 1e-11; a kernel that lost
+ * its accuracy fails here before an argmax could), the argmax takes few candidates to the
+ * fine level and one to rbf_q_parts on distinct candidates (else it is no faster), and a
+ * model whose sums overflow takes the reference loop and still agrees. */
 #include "rbf_argmax.h"
 
 #include "tt_test.h"
@@ -22,17 +23,22 @@
 
 static double uni(uint64_t *x) { return tt__u64_to_unit(tt__splitmix64(x)); }
 
-typedef struct kernel { const char *name; rbf_qbound_fn *fn; } kernel;
+typedef struct kernel { const char *name; rbf_kernels k; } kernel;
 
 static int kernels(kernel *out) {
   int n = 0;
-  out[n++] = (kernel){"base", rbf_qbound_base};
+  out[n++] = (kernel){"base", {NULL, rbf_qbound_base}};
 #ifdef RBF_HAVE_AVX2
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
-    out[n++] = (kernel){"avx2", rbf_qbound_avx2};
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    out[n++] = (kernel){"avx2", {NULL, rbf_qbound_avx2}};
+    out[n++] = (kernel){"coarse avx2 + avx2", {rbf_qcoarse_avx2, rbf_qbound_avx2}};
+    out[n++] = (kernel){"coarse avx2 + base", {rbf_qcoarse_avx2, rbf_qbound_base}};
+  }
 #endif
   return n;
 }
+
+static size_t last_fine = SIZE_MAX;  /* candidates the coarse level kept, last case */
 
 /* One random model and candidate set; checks every kernel against the reference. Returns
  * the candidates evaluated exactly by the last kernel. */
@@ -52,9 +58,15 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
   double *state = malloc(d * sizeof(double)), *ds = malloc(f * sizeof(double));
   double *acts = malloc(n * m * sizeof(double)), *da = malloc(n * f * sizeof(double));
   const double **rows = malloc(n * sizeof *rows);
-  double *work = malloc((f + 2 * n) * sizeof(double));
+  double *work = malloc(rbf_argmax_work(f, n) * sizeof(double));
+  uint32_t f8 = rbf_f8(f);
+  float *thf = malloc(f8 * sizeof(float)), *dsf = malloc(f8 * sizeof(float));
+  float *daf = malloc(n * f8 * sizeof(float));
+  const float **frows = malloc(n * sizeof *frows);
   for (uint32_t k = 0; k < d; k++) state[k] = uni(x);
   rbf_state_part(&r, state, ds);
+  rbf_action_part_float(f, r.theta, thf);
+  rbf_action_part_float(f, ds, dsf);
   for (size_t k = 0; k < n; k++) {
     for (uint32_t j = 0; j < m; j++) acts[k * m + j] = uni(x) < 0.3 ? (double)(uni(x) < 0.5) : uni(x);
     if (ties && k > 0 && uni(x) < 0.3) {  /* a repeat of an earlier candidate, or 1e-15 from it */
@@ -63,25 +75,37 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
       if (uni(x) < 0.5) acts[k * m] += 1e-15;
     }
     rbf_action_part(&r, acts + k * m, da + k * f);
+    rbf_action_part_float(f, da + k * f, daf + k * f8);
     rows[k] = da + k * f;
+    frows[k] = daf + k * f8;
   }
   double qref;
   size_t iref = rbf_argmax_reference(&r, ds, rows, n, &qref);
-  kernel ks[2];
+  kernel ks[4];
   int nk = kernels(ks);
   size_t exact = 0;
   for (int kk = 0; kk < nk; kk++) {
     double q;
-    size_t i = rbf_argmax_bounded(&r, ds, rows, n, ks[kk].fn, work, &q, &exact);
+    rbf_argmax_stats st;
+    size_t i = rbf_argmax_bounded(&r, ds, rows, frows, n, &ks[kk].k, work, &q, &st);
     CHECK_MSG(i == iref && memcmp(&q, &qref, sizeof q) == 0,
               "%s, f %u width %g spread %g theta %g n %zu: index %zu Q %.17g, reference %zu %.17g",
               ks[kk].name, f, width, spread, theta_scale, n, i, q, iref, qref);
-    CHECK(exact >= 1 && exact <= n);
-    /* the kernel's own accuracy, 100x inside what the bound assumes */
+    CHECK(st.exact >= 1 && st.exact <= n && st.fine <= n);
+    if (ks[kk].k.coarse) last_fine = st.fine;
+    exact = st.exact;
+    /* each kernel's own accuracy, within half its bound */
     double e_scratch[300];
     for (size_t k = 0; k < n && f <= 300 && isfinite(tabs); k++) {
-      double qa, qabs, qe = rbf_q_parts(&r, ds, rows[k]);
-      ks[kk].fn(r.theta, ds, rows[k], f, -width, e_scratch, &qa, &qabs);
+      double qa, qabs, qx, qe = rbf_q_parts(&r, ds, rows[k]);
+      if (ks[kk].k.coarse && tabs < 1e34) {
+        ks[kk].k.coarse(thf, dsf, frows[k], f8, (float)-width, &qa, &qabs, &qx);
+        double tol = rbf_coarse_tol(f, qabs, qx, tabs);
+        CHECK_MSG(fabs(qa - qe) <= 0.5 * tol, "%s (coarse): f %u width %g spread %g theta %g "
+                  "candidate %zu: %.9g vs %.17g, bound %g", ks[kk].name, f, width, spread,
+                  theta_scale, k, qa, qe, tol);
+      }
+      ks[kk].k.fine(r.theta, ds, rows[k], f, -width, e_scratch, &qa, &qabs);
       /* exponents below -708: both below 3.4e-308 */
       CHECK_MSG(fabs(qa - qe) <= 1e-13 * qabs + 4e-308 * tabs, "%s: candidate %zu: %.17g vs %.17g (sum |theta e| %g)",
                 ks[kk].name, k, qa, qe, qabs);
@@ -93,6 +117,10 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
   free(da);
   free(rows);
   free(work);
+  free(thf);
+  free(dsf);
+  free(daf);
+  free(frows);
   rbf_model_free(&r);
   return exact;
 }
@@ -114,12 +142,20 @@ int main(void) {
             if (!ties && spreads[c] == 1.0 && fs[a] >= 8) distinct_cases++, distinct_exact += ex;
           }
   /* the predictor's shape: 17 state values, 16 action coordinates, 102 features, 257 candidates */
+  size_t shape_cases = 0, shape_fine = 0;
   for (int t = 0; t < 200; t++) {
+    last_fine = SIZE_MAX;
     size_t ex = one_case(&x, 17, 16, 102, 1.0, 1.0, 1.0, 257, t % 2);
     if (t % 2 == 0) distinct_cases++, distinct_exact += ex;
+    if (t % 2 == 0 && last_fine != SIZE_MAX) shape_cases++, shape_fine += last_fine;
   }
   printf("distinct candidates: %.2f evaluated exactly per argmax (%zu argmaxes)\n",
          (double)distinct_exact / (double)distinct_cases, distinct_cases);
+  if (shape_cases) {  /* the coarse level ran: it must leave few of the 257 to the fine one */
+    printf("coarse level: %.2f of 257 candidates reach the fine level (%zu argmaxes)\n",
+           (double)shape_fine / (double)shape_cases, shape_cases);
+    CHECK_MSG(shape_fine <= 16 * shape_cases, "%zu in %zu argmaxes", shape_fine, shape_cases);
+  }
   CHECK_MSG(distinct_exact <= 2 * distinct_cases, "%zu exact evaluations in %zu argmaxes",
             distinct_exact, distinct_cases);
   /* sums beyond the double range: the reference loop, the same answer */
