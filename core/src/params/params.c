@@ -697,56 +697,74 @@ static void tt__format_range(const tt__param *p, char *buf, size_t size) {
 
 /* Sets parameter `index` to the number `value`; `shown` is how the value is named in
  * errors (the user's text, or NULL to print the number). */
+/* The value as tt__set_number's errors show it: the caller's text in quotes, else %g when
+ * it reads back exactly (or is not finite), else %.17g. */
+static void tt__shown_number(double value, const char *shown, char *num, size_t n) {
+  if (shown) {
+    snprintf(num, n, "\"%s\"", shown);
+    return;
+  }
+  snprintf(num, n, "%g", value);
+  if (strtod(num, NULL) != value && isfinite(value)) snprintf(num, n, "%.17g", value);
+}
+
+/* Sets parameter `index` to the number `value` (`shown`: how the caller wrote it, for the
+ * messages; NULL: the number). The messages are formatted only on error: this is every
+ * predictor's and tuner's way of setting a configuration, and formatting them up front (two
+ * snprintf, a strtod and the range) cost about 1 us per parameter on every call. */
 static tt_status tt__set_number(tt_config *config, size_t index, double value,
                                 const char *shown) {
   const tt_space *s = config->space;
   const tt__param *p = &s->params[index];
   char num[64], what[1024];
-  if (shown)
-    snprintf(num, sizeof num, "\"%s\"", shown);
-  else
-    snprintf(num, sizeof num, "%.17g", value);
-  if (!shown) {
-    char g[64];
-    snprintf(g, sizeof g, "%g", value);
-    if (strtod(g, NULL) == value || !isfinite(value)) snprintf(num, sizeof num, "%s", g);
-  }
   switch (p->type) {
     case TT_PARAM_INT:
-      tt__format_range(p, what, sizeof what);
-      if (!isfinite(value) || value != floor(value))
+      if (!isfinite(value) || value != floor(value)) {
+        tt__shown_number(value, shown, num, sizeof num);
+        tt__format_range(p, what, sizeof what);
         return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not an integer in %s",
                             s->plugin, p->name, num, what);
+      }
       /* Compare as doubles first so the int64 conversion below cannot overflow (2^63
        * itself is not representable), then exactly as integers. */
       if (value < (double)p->imin || value > (double)p->imax || value >= 0x1p63 ||
-          (int64_t)value < p->imin || (int64_t)value > p->imax)
+          (int64_t)value < p->imin || (int64_t)value > p->imax) {
+        tt__shown_number(value, shown, num, sizeof num);
+        tt__format_range(p, what, sizeof what);
         return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is out of range %s",
                             s->plugin, p->name, num, what);
+      }
       config->values[index] = tt__int_value((int64_t)value);
       return TT_OK;
     case TT_PARAM_FLOAT:
-      tt__format_range(p, what, sizeof what);
-      if (!isfinite(value))
+      if (!isfinite(value)) {
+        tt__shown_number(value, shown, num, sizeof num);
+        tt__format_range(p, what, sizeof what);
         return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not a finite number in %s",
                             s->plugin, p->name, num, what);
-      if (value < p->fmin || value > p->fmax)
+      }
+      if (value < p->fmin || value > p->fmax) {
+        tt__shown_number(value, shown, num, sizeof num);
+        tt__format_range(p, what, sizeof what);
         return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is out of range %s",
                             s->plugin, p->name, num, what);
+      }
       config->values[index] = tt__float_value(value);
       return TT_OK;
     default:
+      if (p->nom_kind != TT_VALUE_STRING)
+        for (size_t k = 0; k < p->nom_count; k++)
+          if ((double)p->nom_ints[k] == value) {
+            config->values[index] = tt__nom_value(p, k);
+            return TT_OK;
+          }
+      tt__shown_number(value, shown, num, sizeof num);
       tt__format_nom_values(p, what, sizeof what);
       if (p->nom_kind == TT_VALUE_STRING)
         return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                             "%s.%s: %s is not one of %s (a string parameter; set it by "
                             "name or by index)",
                             s->plugin, p->name, num, what);
-      for (size_t k = 0; k < p->nom_count; k++)
-        if ((double)p->nom_ints[k] == value) {
-          config->values[index] = tt__nom_value(p, k);
-          return TT_OK;
-        }
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not one of %s", s->plugin,
                           p->name, num, what);
   }
