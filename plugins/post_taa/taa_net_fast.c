@@ -851,6 +851,7 @@ TGT_V4 AI void wino4_group16_t(const wino4_a *a, uint32_t xl, const int O) {
   const __m512i prev = _mm512_setr_epi32(0, 12, 13, 14, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11);
   const __m512i next = _mm512_setr_epi32(4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 1, 2, 3, 0);
   for (uint32_t c = 0; c < I; c++) {
+#pragma GCC unroll 8
     for (int i = 0; i < 8; i++) {
       const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl;
       __m512 r0 = _mm512_loadu_ps(q), r1 = _mm512_loadu_ps(q + 16),
@@ -864,12 +865,16 @@ TGT_V4 AI void wino4_group16_t(const wino4_a *a, uint32_t xl, const int O) {
       d[7] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r1), _mm512_set1_ps(q[65]));
       __m512 e[8];
       wino4_bt16(d, e);  /* along the row: E[i][s] */
+#pragma GCC unroll 8
       for (int s2 = 0; s2 < 8; s2++) _mm512_store_ps(E + (i * 8 + s2) * 16, e[s2]);
     }
+#pragma GCC unroll 8
     for (int s2 = 0; s2 < 8; s2++) {
       __m512 col[8], v[8];
+#pragma GCC unroll 8
       for (int i = 0; i < 8; i++) col[i] = _mm512_load_ps(E + (i * 8 + s2) * 16);
       wino4_bt16(col, v);  /* along the column: V[r][s2] */
+#pragma GCC unroll 8
       for (int r = 0; r < 8; r++) _mm512_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * 16, v[r]);
     }
   }
