@@ -685,7 +685,9 @@ TGT_V3 AI void wino4_group_t(const wino4_a *a, uint32_t xl, const int O, const i
   const __m256i prev = _mm256_setr_epi32(0, 4, 5, 6, 0, 1, 2, 3);
   const __m256i next = _mm256_setr_epi32(4, 5, 6, 7, 1, 2, 3, 0);
   for (uint32_t c = 0; c < I; c++)
+#pragma GCC unroll 2
     for (int j = 0; j < P; j++) {
+#pragma GCC unroll 8
       for (int i = 0; i < 8; i++) {
         const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl + 32 * j;
         __m256 r0 = _mm256_loadu_ps(q), r1 = _mm256_loadu_ps(q + 8),
@@ -699,12 +701,16 @@ TGT_V3 AI void wino4_group_t(const wino4_a *a, uint32_t xl, const int O, const i
         d[7] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r1, next), _mm256_broadcast_ss(q + 33), 0x80);
         __m256 e[8];
         wino4_bt(d, e);  /* along the row: E[i][s] */
+#pragma GCC unroll 8
         for (int s2 = 0; s2 < 8; s2++) _mm256_store_ps(E + (i * 8 + s2) * 8, e[s2]);
       }
+#pragma GCC unroll 8
       for (int s2 = 0; s2 < 8; s2++) {
         __m256 col[8], v[8];
+#pragma GCC unroll 8
         for (int i = 0; i < 8; i++) col[i] = _mm256_load_ps(E + (i * 8 + s2) * 8);
         wino4_bt(col, v);  /* along the column: V[r][s2] */
+#pragma GCC unroll 8
         for (int r = 0; r < 8; r++)
           _mm256_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * T + 8 * j, v[r]);
       }
@@ -740,24 +746,31 @@ TGT_V3 AI void wino4_group_t(const wino4_a *a, uint32_t xl, const int O, const i
       uint32_t oc = ob * (uint32_t)O + (uint32_t)o;
       if (oc >= a->out) break;
       __m256 bias = _mm256_broadcast_ss(a->b + oc);
+#pragma GCC unroll 2
       for (int j = 0; j < P; j++) {
         __m256 t[8][4];
+#pragma GCC unroll 8
         for (int i = 0; i < 8; i++) {
           __m256 m8[8];
+#pragma GCC unroll 8
           for (int k = 0; k < 8; k++)
             m8[k] = _mm256_load_ps(M + ((size_t)(i * 8 + k) * O + o) * T + 8 * j);
           wino4_at(m8, t[i]);  /* along the row: tile columns 0..3 */
         }
         __m256 y[4][4];  /* [row][column] */
+#pragma GCC unroll 4
         for (int k = 0; k < 4; k++) {
           __m256 col[8], yy[4];
+#pragma GCC unroll 8
           for (int i = 0; i < 8; i++) col[i] = t[i][k];
           wino4_at(col, yy);  /* along the column: output rows 0..3 */
+#pragma GCC unroll 4
           for (int r = 0; r < 4; r++) {
             y[r][k] = _mm256_add_ps(yy[r], bias);
             if (a->relu) y[r][k] = _mm256_max_ps(y[r][k], _mm256_setzero_ps());
           }
         }
+#pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
           WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
           float *d = a->dst[r] + oc * a->dcs + xl + 32 * j;
