@@ -6,7 +6,9 @@
   ValueError naming the file;
 - rejection.py: the synthetic disocclusion of plugins/post_taa/tests/taa_net.c (a square at depth 4 moving 6
   pixels right over a plane at depth 10) marks exactly the disoccluded rectangle, as the C
-  plugin does; off-screen history is rejected; without prevdepth only off-screen is."""
+  plugin does; off-screen history is rejected; without prevdepth only off-screen is;
+- blend_weights.py: 0 and 1 give the two files back bit for bit, 0.5 their mean; files of
+  different shapes are refused."""
 import os
 import sys
 
@@ -14,6 +16,7 @@ import numpy as np
 
 root = os.environ.get("TT_SOURCE_ROOT", ".")
 sys.path.insert(0, os.path.join(root, "tools", "taa"))
+import blend_weights  # noqa: E402
 import rejection  # noqa: E402
 import ttw  # noqa: E402
 
@@ -130,9 +133,25 @@ def test_rejection():
           f"pixels, reset {int(reset.sum())}")
 
 
+def test_blend():
+    a, b = random_model(6, 5, 8, 0, 11), random_model(6, 5, 8, 0, 12)
+    check(same(blend_weights.blend(a, b, 0.0), a) and same(blend_weights.blend(a, b, 1.0), b),
+          "blend 0 / 1: the two files bit for bit")
+    m = blend_weights.blend(a, b, 0.5)
+    check(all(np.allclose(x.weight, 0.5 * (y.weight + z.weight), atol=1e-6)
+              and np.allclose(x.bias, 0.5 * (y.bias + z.bias), atol=1e-6)
+              for x, y, z in zip(m.layers, a.layers, b.layers)), "blend 0.5: the mean")
+    try:
+        blend_weights.blend(a, random_model(12, 5, 8, 0, 13), 0.5)
+        check(False, "blend of different shapes: accepted")
+    except SystemExit as e:
+        check("different shapes" in str(e), f"blend of different shapes refused: {e}")
+
+
 def main():
     test_format()
     test_rejection()
+    test_blend()
     print(f"taa_weights: {failures} failed")
     return 1 if failures else 0
 

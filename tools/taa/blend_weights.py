@@ -1,0 +1,38 @@
+#!/usr/bin/python3
+"""Linear interpolation of two weights files of the same shape (numpy only):
+OUT = (1 - A) * FROM + A * TO, layer by layer (weights and biases). With TO fine-tuned from
+FROM (train.py --init FROM), A between 0 and 1 walks the straight line from the original to
+the fine-tuned network, trading what the fine-tuning gained against what it lost
+(issue #19, session 6).
+
+  blend_weights.py FROM.ttw TO.ttw A OUT.ttw"""
+import sys
+
+import numpy as np
+
+import ttw
+
+
+def blend(a_model, b_model, alpha):
+    if (a_model.width, a_model.hidden, a_model.flags, len(a_model.layers)) != \
+            (b_model.width, b_model.hidden, b_model.flags, len(b_model.layers)):
+        raise SystemExit("blend_weights.py: the two files have different shapes")
+    out = []
+    for la, lb in zip(a_model.layers, b_model.layers):
+        if la.weight.shape != lb.weight.shape or (la.role, la.act) != (lb.role, lb.act):
+            raise SystemExit("blend_weights.py: layers differ in shape")
+        w = ((1.0 - alpha) * la.weight.astype(np.float64) + alpha * lb.weight).astype(np.float32)
+        b = ((1.0 - alpha) * la.bias.astype(np.float64) + alpha * lb.bias).astype(np.float32)
+        out.append(ttw.Layer(la.role, la.cin, la.cout, la.k, la.sets, la.act, w, b))
+    return ttw.Model(a_model.width, a_model.hidden, out, a_model.motion_scale, a_model.flags)
+
+
+def main():
+    if len(sys.argv) != 5:
+        raise SystemExit(__doc__)
+    src, dst, alpha, out = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+    ttw.write(blend(ttw.read(src), ttw.read(dst), alpha), out)
+
+
+if __name__ == "__main__":
+    main()
