@@ -26,6 +26,13 @@ rank (0, the middle, the quarters, ...), scenes and objectives interleaved withi
   baseline.py --db DB --work W --mpi 4            # the jobs on 4 MPI ranks (tunetrace-mpi)
   baseline.py --db DB --work W --emit-jobs J.json # tunetrace-mpi's job list (srun/mpirun it)
   baseline.py --db DB --work W --import-mpi       # jobs merged by tunetrace-mpi -> hybrid_jobs
+  baseline.py --db DB --work W --dump D.sql.xz    # the DB as a compressed SQL dump (for git)
+  baseline.py --db DB --work W --restore D.sql.xz # a new DB from it, scene files of this checkout
+
+A dump keeps a baseline beyond the machine it ran on: --restore loads it into a new --db,
+points hybrid_jobs.scene_file at this checkout's scenes (generating voxel and tessellated
+into --work), checks that each scene's tt_scene_id is still the recorded one (host, 4x4),
+and exits; then baseline.py with the same settings continues it and evaluate.py reads it.
 
 With MPI (issue 18, mpi/README.md) every job runs the same host command on some rank and
 tunetrace-mpi merges its rows into --db; the jobs it merged (table merges, their notes hold
@@ -34,6 +41,7 @@ every run does at its start, so the two ways share one resumable job set.
 """
 import argparse
 import json
+import lzma
 import os
 import resource
 import shutil
@@ -159,6 +167,61 @@ def open_db(path):
 
 def done_jobs(con):
     return {r[0] for r in con.execute("SELECT job FROM hybrid_jobs")}
+
+
+def dump_db(path, out):
+    """--db as an xz-compressed SQL dump (sqlite3 iterdump), written atomically; the schema
+    version (PRAGMA user_version, which iterdump leaves out) first, or the host would
+    create the schema again in the restored file."""
+    con = sqlite3.connect(path, timeout=30)
+    with lzma.open(out + ".tmp", "wt", preset=9 | lzma.PRESET_EXTREME) as f:
+        f.write("PRAGMA user_version=%d;\n" % con.execute("PRAGMA user_version").fetchone()[0])
+        for line in con.iterdump():
+            f.write(line + "\n")
+    n = con.execute("SELECT count(*) FROM hybrid_jobs").fetchone()[0]
+    con.close()
+    os.replace(out + ".tmp", out)
+    return n
+
+
+def restore_db(a, dump):
+    """A new --db from dump_db's file; hybrid_jobs.scene_file made this checkout's paths."""
+    if os.path.exists(a.db):
+        sys.exit(f"baseline: --restore: {a.db} exists (restore into a new file)")
+    tmp = a.db + ".restore"
+    for ext in ("", "-wal", "-shm"):
+        if os.path.exists(tmp + ext):
+            os.remove(tmp + ext)
+    con = sqlite3.connect(tmp)
+    with lzma.open(dump, "rt") as f:
+        con.executescript(f.read())
+    bad = []
+    for name, old, sid in con.execute("SELECT scene, scene_file, scene_id FROM hybrid_jobs "
+                                      "GROUP BY scene").fetchall():
+        if name not in SCENES:
+            bad.append(f"{name}: not a scene of this checkout (--scene {name}=FILE)")
+            continue
+        path = scene_file(a, name)
+        st = os.path.join(a.work, f"restore_{name}.json")
+        r = subprocess.run([a.host, "--quiet", "--res", "4x4", "--spp", "1", "--threads", "1",
+                            "--stats", st, "--out", st[:-5] + ".exr", path],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+        got = json.load(open(st)).get("scene_id") if r.returncode == 0 else None
+        for f in (st, st[:-5] + ".exr"):
+            if os.path.exists(f):
+                os.remove(f)
+        if got != sid:
+            bad.append(f"{name}: {path} has scene id {got}, the dump's rows {sid}")
+        con.execute("UPDATE hybrid_jobs SET scene_file = ? WHERE scene = ?", (path, name))
+    con.commit()
+    n = con.execute("SELECT count(*) FROM hybrid_jobs").fetchone()[0]
+    m = con.execute("SELECT count(*) FROM samples").fetchone()[0]
+    con.close()
+    if bad:
+        os.remove(tmp)
+        sys.exit("baseline: --restore: " + "; ".join(bad))
+    os.replace(tmp, a.db)
+    return n, m
 
 
 def host_version(a):
@@ -323,6 +386,10 @@ def main():
                     help="write tunetrace-mpi's job list of the jobs to run and exit")
     ap.add_argument("--import-mpi", action="store_true",
                     help="record the jobs tunetrace-mpi merged into --db in hybrid_jobs, exit")
+    ap.add_argument("--dump", metavar="FILE.sql.xz",
+                    help="write --db as an xz-compressed SQL dump and exit")
+    ap.add_argument("--restore", metavar="FILE.sql.xz",
+                    help="create --db (a new file) from a --dump, scene files of this checkout, exit")
     a = ap.parse_args()
     for spec in a.scene:
         name, _, path = spec.partition("=")
@@ -357,9 +424,18 @@ def main():
     if a.mpi < 0:
         ap.error("--mpi: expected a number of ranks >= 1")
     os.makedirs(a.work, exist_ok=True)
-    con = open_db(a.db)
+    if a.dump:
+        if not os.path.exists(a.db):
+            sys.exit(f"baseline: --dump: {a.db} does not exist")
+        print(f"baseline: {dump_db(a.db, a.dump)} jobs of {a.db} dumped to {a.dump}", flush=True)
+        return 0
     if not os.access(a.host, os.X_OK):
         sys.exit(f"baseline: --host {a.host} is not an executable (build first: ninja -C build)")
+    if a.restore:
+        n, m = restore_db(a, a.restore)
+        print(f"baseline: {a.db} restored from {a.restore}: {n} jobs, {m} samples", flush=True)
+        return 0
+    con = open_db(a.db)
     version = host_version(a)
     imported = import_mpi(a, con, version)
     if imported:

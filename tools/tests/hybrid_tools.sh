@@ -32,6 +32,20 @@ n=$(q "$tmp/b.db" "SELECT count(*) FROM hybrid_jobs WHERE iterations = 4 AND res
 [ "$n" = 24 ] || fail "hybrid_jobs has $n complete rows, expected 24"
 "${B[@]}" --job nosuch:3:render >/dev/null 2>&1 && fail "--job of an unknown scene should be refused"
 "${B[@]}" --scenes nosuch >/dev/null 2>&1 && fail "--scenes nosuch should be refused"
+# --dump / --restore: the same jobs and rows in a new file (schema version kept: the host
+# adds to it), refused over an existing file or where a scene is not the recorded one
+"${B[@]}" --dump "$tmp/b.sql.xz" >/dev/null || fail "--dump"
+R=("${B[@]}" --db "$tmp/r.db")
+"${R[@]}" --restore "$tmp/b.sql.xz" >"$tmp/r.log" 2>&1 || { cat "$tmp/r.log"; fail "--restore"; }
+grep -q "24 jobs, $(q "$tmp/b.db" "SELECT count(*) FROM samples") samples" "$tmp/r.log" || { cat "$tmp/r.log"; fail "restored counts"; }
+[ "$("${R[@]}" --list | grep -c '^done')" = 24 ] || fail "the restored DB should have its 24 jobs done"
+[ "$(q "$tmp/r.db" "PRAGMA user_version")" = "$(q "$tmp/b.db" "PRAGMA user_version")" ] || fail "user_version"
+"${R[@]}" --restore "$tmp/b.sql.xz" >/dev/null 2>&1 && fail "--restore over an existing file should be refused"
+"${R[@]}" --cameras 7 --max-jobs 1 >"$tmp/r2.log" 2>&1 || { cat "$tmp/r2.log"; fail "a job into the restored DB"; }
+[ "$(q "$tmp/r.db" "SELECT count(*) FROM hybrid_jobs")" = 25 ] || fail "the restored DB did not take a new job"
+if "${B[@]}" --db "$tmp/r3.db" --scene "box=$TT_SOURCE_ROOT/scenes/cornell-box-variants/specular-box/scene.json" \
+     --restore "$tmp/b.sql.xz" >"$tmp/r3.log" 2>&1; then fail "--restore with another scene should fail"; fi
+grep -q "box: .* has scene id" "$tmp/r3.log" && [ ! -e "$tmp/r3.db" ] || { cat "$tmp/r3.log"; fail "scene id check"; }
 
 E=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e" --out "$tmp/f"
    --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0 --jobs 2
