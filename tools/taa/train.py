@@ -9,7 +9,7 @@ Exports the weights file (and optionally the golden fixture).
            [--hidden 5] [--body 3,3,5] [--jitter-layers "b2 b3 k"] [--minutes 8] [--steps N]
            [--batch 8] [--patch 64] [--threads 1] [--burn 24] [--ema 0.99] [--lr 1e-3]
            [--val pillars,...] [--ckpt-minutes M] [--cache DIR] [--init W.ttw]
-           [--reject none|input|reset]
+           [--reject none|input|reset] [--w-tmp 6]
 """
 import argparse
 import json
@@ -109,6 +109,7 @@ def init_from(model, src, name):
 
 
 def main():
+    global W_TMP
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", required=True, help="dataset folder(s), comma-separated")
     ap.add_argument("--scenes", default="stairs,fence",
@@ -145,7 +146,10 @@ def main():
                     help="history rejection (rejection.py): input = the mask as an extra "
                          "input channel; reset = also reset the history where it says so")
     ap.add_argument("--no-channels-last", action="store_true")
+    ap.add_argument("--w-tmp", type=float, default=W_TMP,
+                    help=f"weight of the temporal loss terms (thesis 5.5.3: {W_TMP})")
     a = ap.parse_args()
+    W_TMP = a.w_tmp
     flags = {"none": 0, "input": taa_model.FLAG_REJECT,
              "reset": taa_model.FLAG_REJECT | taa_model.FLAG_RESET}[a.reject]
     torch.set_num_threads(a.threads)
@@ -254,7 +258,7 @@ def main():
             "scenes": a.scenes, "val": a.val, "width": a.width, "hidden": a.hidden,
             "body": a.body, "jitter_layers": a.jitter_layers, "kernel": a.kernel,
             "threads": a.threads,
-            "seed": a.seed, "lr": a.lr, "ema": a.ema, "burn": a.burn, "reject": a.reject,
+            "seed": a.seed, "lr": a.lr, "w_tmp": a.w_tmp, "ema": a.ema, "burn": a.burn, "reject": a.reject,
             "channels_last": model.channels_last,
             "evals": evals, "log": log}
     json.dump(meta, open(a.out + ".train.json", "w"), indent=1)
