@@ -249,7 +249,11 @@ done
 kill -INT "$mp"
 rc=0; wait "$mp" || rc=$?
 [ "$rc" != 0 ] || fail "an interrupted run should not exit 0"
-grep -q "jobs done, 0 failed and 0 lost with their rank in this run (run the same command again" "$tmp/i.log" || { cat "$tmp/i.log"; fail "rank 0 did not stop cleanly"; }
+# rank 0's summary: 0 lost, and "run again" while jobs are left. On a loaded machine the last
+# jobs can finish between the signal and its handling (seen: 8 of 8 done, exit non-zero);
+# then there is nothing left and no hint, which is also a clean stop.
+grep -qE "jobs done, 0 failed and 0 lost with their rank in this run( \(run the same command again|\$)" "$tmp/i.log" ||
+  { cat "$tmp/i.log"; fail "rank 0 did not stop cleanly"; }
 [ "$(q "$tmp/i.db" "SELECT count(*) FROM samples")" = "$(q "$tmp/i.db" "SELECT sum(rows) FROM merges")" ] ||
   fail "the interrupted run left rows of an unfinished job"
 sleep 1
