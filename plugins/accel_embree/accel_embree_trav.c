@@ -115,7 +115,9 @@ TT__INLINE int tt__setup(tt__rc *r, const tt_ray *ray, int robust) {
     r->ord[k] = TT__SET1(o[k] * rk);
     r->near[k] = 2 * k + (signbit(dk) ? 1 : 0);
   }
-  r->tnear = TT__SET1(ray->tnear);
+  /* + 0.0f turns a tnear of -0 into +0 (the same interval; the integer box test below
+   * needs the bits of a non-negative tnear to be non-negative). */
+  r->tnear = TT__SET1(ray->tnear + 0.0f);
   r->tfar = TT__SET1(ray->tfar);
   if (robust) {
     int kz = 0;
@@ -150,10 +152,41 @@ TT__INLINE __m128 tt__slab4(__m128 b, const tt__rc *r, int k, int robust) {
   return _mm_mul_ps(_mm_sub_ps(b, TT__V4(r->o[k])), TT__V4(r->rd[k]));
 }
 
+/* Integer min/max of slab distances (Embree's maxi/mini, node_intersector1.h). For floats
+ * whose bits are non-negative (+0 up to +inf), the order of the bits read as signed integers
+ * is the order of the values, and every negative float (or -0) reads as a negative integer.
+ * With tnear >= +0 (tt__ray_ibox; tt__setup makes -0 into +0):
+ *   tmin = maxi(near distances, tnear) is the float max exactly (the max is >= tnear >= 0,
+ *     and negative candidates lose in both orders);
+ *   tmax = mini(far distances, tfar) is the float min exactly when no far distance is
+ *     negative; otherwise both are <= 0 and the integer compare tmin <= tmax says "missed",
+ *     as the float compare does, except where tmin = tmax = 0 (a box the ray's interval
+ *     touches in the single point t = tnear = 0): such a box is skipped, as Embree skips it.
+ * So the boxes hit are the float test's (that one point aside) and the entry distances are
+ * the same values. Why: an integer max/min/compare has 1 cycle of latency, a float one 3-4
+ * on Intel cores (1-2 on AMD Zen), and the box test's max/min chain is on the path from a
+ * node's load to the branch that picks the next node. Not robust only: the robust test
+ * keeps the float form (its far distances are scaled after the min). */
+#define TT__IMAX4(a, b) _mm_castsi128_ps(_mm_max_epi32(_mm_castps_si128(a), _mm_castps_si128(b)))
+#define TT__IMIN4(a, b) _mm_castsi128_ps(_mm_min_epi32(_mm_castps_si128(a), _mm_castps_si128(b)))
+TT__INLINE int tt__ile4(__m128 a, __m128 b) {
+#ifdef __AVX512VL__
+  return (int)_mm_cmple_epi32_mask(_mm_castps_si128(a), _mm_castps_si128(b));
+#else
+  return _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a), _mm_castps_si128(b)))) ^ 0xF;
+#endif
+}
+
+/* Whether a ray's box tests may use the integer form: not robust and tnear >= 0. */
+TT__INLINE int tt__ray_ibox(const tt_ray *ray, const int robust) {
+  return !robust && ray->tnear >= 0.0f;
+}
+
 /* Tests 4 boxes given as row pointers (stride between rows `stride` floats); writes entry
- * distances and returns the hit mask. `two` loads only 2 lanes (BVH2 nodes). */
+ * distances and returns the hit mask. `two` loads only 2 lanes (BVH2 nodes). `ib`: integer
+ * max/min (see above; the caller checked tt__ray_ibox). */
 TT__INLINE int tt__box4(const float *rows, size_t stride, const tt__rc *r, int robust,
-                        int two, float *dist) {
+                        int two, float *dist, const int ib) {
   __m128 tn[3], tf[3];
   for (int k = 0; k < 3; k++) {
     const float *pn = rows + (size_t)r->near[k] * stride;
@@ -169,6 +202,13 @@ TT__INLINE int tt__box4(const float *rows, size_t stride, const tt__rc *r, int r
     tn[k] = tt__slab4(bn, r, k, robust);
     tf[k] = tt__slab4(bf, r, k, robust);
   }
+  if (ib && !robust) {
+    __m128 tmin = TT__IMAX4(TT__IMAX4(tn[0], tn[1]), TT__IMAX4(tn[2], TT__V4(r->tnear)));
+    __m128 tmax = TT__IMIN4(TT__IMIN4(tf[0], tf[1]), TT__IMIN4(tf[2], TT__V4(r->tfar)));
+    _mm_storeu_ps(dist, tmin);
+    int m = tt__ile4(tmin, tmax);
+    return two ? m & 3 : m;
+  }
   __m128 tmin = _mm_max_ps(_mm_max_ps(tn[0], tn[1]), _mm_max_ps(tn[2], TT__V4(r->tnear)));
   __m128 tmax = _mm_min_ps(_mm_min_ps(tf[0], tf[1]), tf[2]);
   if (robust) tmax = _mm_mul_ps(tmax, _mm_set1_ps(TT__ROBUST_FAR));
@@ -179,7 +219,8 @@ TT__INLINE int tt__box4(const float *rows, size_t stride, const tt__rc *r, int r
 }
 
 /* Tests the 8 boxes of a BVH8 node: one AVX pass, or two SSE halves on the baseline. */
-TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *dist) {
+TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *dist,
+                        const int ib) {
 #if TT__HAVE_AVX2
   __m256 tn[3], tf[3];
   for (int k = 0; k < 3; k++) {
@@ -192,6 +233,24 @@ TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *
       tf[k] = _mm256_fmsub_ps(bf, r->rd[k], r->ord[k]);
     }
   }
+  if (ib && !robust) {
+#define TT__IMAX8(a, b) _mm256_max_epi32(a, b)
+#define TT__IMIN8(a, b) _mm256_min_epi32(a, b)
+#define TT__I8(v) _mm256_castps_si256(v)
+    __m256i tmin = TT__IMAX8(TT__IMAX8(TT__I8(tn[0]), TT__I8(tn[1])),
+                             TT__IMAX8(TT__I8(tn[2]), TT__I8(r->tnear)));
+    __m256i tmax = TT__IMIN8(TT__IMIN8(TT__I8(tf[0]), TT__I8(tf[1])),
+                             TT__IMIN8(TT__I8(tf[2]), TT__I8(r->tfar)));
+#undef TT__I8
+#undef TT__IMIN8
+#undef TT__IMAX8
+    _mm256_storeu_si256((__m256i *)dist, tmin);
+#ifdef __AVX512VL__
+    return (int)_mm256_cmple_epi32_mask(tmin, tmax);
+#else
+    return _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(tmin, tmax))) ^ 0xFF;
+#endif
+  }
   __m256 tmin = _mm256_max_ps(_mm256_max_ps(tn[0], tn[1]), _mm256_max_ps(tn[2], r->tnear));
   __m256 tmax = _mm256_min_ps(_mm256_min_ps(tf[0], tf[1]), tf[2]);
   if (robust) tmax = _mm256_mul_ps(tmax, _mm256_set1_ps(TT__ROBUST_FAR));
@@ -199,17 +258,17 @@ TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *
   _mm256_storeu_ps(dist, tmin);
   return _mm256_movemask_ps(_mm256_cmp_ps(tmin, tmax, _CMP_LE_OQ));
 #else
-  int lo = tt__box4(&n->b[0][0], 8, r, robust, 0, dist);
-  int hi = tt__box4(&n->b[0][4], 8, r, robust, 0, dist + 4);
+  int lo = tt__box4(&n->b[0][0], 8, r, robust, 0, dist, ib);
+  int hi = tt__box4(&n->b[0][4], 8, r, robust, 0, dist + 4, ib);
   return lo | hi << 4;
 #endif
 }
 
 /* Tests one inner node of width N; returns the hit mask, distances in `dist`. */
 TT__INLINE int tt__node_test(const void *node, const tt__rc *r, int N, int robust,
-                             float *dist) {
-  if (N == 4) return tt__box4(&((const tt__node4 *)node)->b[0][0], 4, r, robust, 0, dist);
-  return tt__box8((const tt__node8 *)node, r, robust, dist);
+                             float *dist, const int ib) {
+  if (N == 4) return tt__box4(&((const tt__node4 *)node)->b[0][0], 4, r, robust, 0, dist, ib);
+  return tt__box8((const tt__node8 *)node, r, robust, dist, ib);
 }
 
 /* Address of node `index` of a width-N tree (node sizes are 32 * N bytes). */
@@ -676,7 +735,7 @@ done:
 /* Closest-hit traversal, specialised by width N (4 or 8), robust and counting after
  * inlining. */
 TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, const int N,
-                              const int robust, const int counting) {
+                              const int robust, const int counting, const int ib) {
   tt__best best = {ray->tfar, 0.0f, 0.0f, NULL, 4, 0, NULL};
   uint64_t c_nodes = 0, c_tris = 0;
   tt__rc r;
@@ -693,7 +752,7 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
     for (;;) {
       if (!(ref & TT__REF_LEAF)) {
         const void *node = tt__node_at(bvh, ref, N);
-        int mask = tt__node_test(node, &r, N, robust, dist);
+        int mask = tt__node_test(node, &r, N, robust, dist, ib);
         if (counting) c_nodes++;
         if (mask) {
           const uint32_t *child = tt__children(node, N);
@@ -794,7 +853,7 @@ done:
 /* Any-hit traversal: children in node order (sorting does not pay when the first hit
  * ends the ray), returns at the first triangle inside [tnear, tfar]. */
 TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
-                            const int robust, const int counting) {
+                            const int robust, const int counting, const int ib) {
   uint64_t c_nodes = 0, c_tris = 0;
   int result = 0;
   tt__rc r;
@@ -806,7 +865,7 @@ TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
     for (;;) {
       if (!(ref & TT__REF_LEAF)) {
         const void *node = tt__node_at(bvh, ref, N);
-        int mask = tt__node_test(node, &r, N, robust, dist);
+        int mask = tt__node_test(node, &r, N, robust, dist, ib);
         if (counting) c_nodes++;
         if (mask) {
           const uint32_t *child = tt__children(node, N);
@@ -1507,11 +1566,15 @@ TT__INLINE void tt__poccluded_stream(const tt__bvh *bvh, const tt_ray *rays, uin
   static void tt__isect_##N##_##R##_##C(const tt__bvh *b, tt_ray *ray, tt_hit *h) {         \
     if (N == 2)                                                                             \
       tt__intersect2(b, ray, h, R, C);                                                      \
+    else if (tt__ray_ibox(ray, R))                                                          \
+      tt__intersect(b, ray, h, N, R, C, 1);                                                 \
     else                                                                                    \
-      tt__intersect(b, ray, h, N, R, C);                                                    \
+      tt__intersect(b, ray, h, N, R, C, 0);                                                 \
   }                                                                                         \
   static int tt__occl_##N##_##R##_##C(const tt__bvh *b, const tt_ray *ray) {                \
-    return N == 2 ? tt__occluded2(b, ray, R, C) : tt__occluded(b, ray, N, R, C);            \
+    if (N == 2) return tt__occluded2(b, ray, R, C);                                         \
+    return tt__ray_ibox(ray, R) ? tt__occluded(b, ray, N, R, C, 1)                          \
+                                : tt__occluded(b, ray, N, R, C, 0);                         \
   }                                                                                         \
   static void tt__isects_##N##_##R##_##C(const tt__bvh *b, tt_ray *rays, tt_hit *h,         \
                                          size_t n) {                                        \
