@@ -299,6 +299,16 @@ VARIANTS = {
     "reward-relative-pool": {"args": ["--set", "predictor_rbf.reward=relative", "--set",
                                       "predictor_rbf.lhsCandidates=0", "--set", "predictor_rbf.refine=0"],
                              "study": "reward", "models": ["rbf"]},
+    # session 7 (issue 15, RBF on render): the relative reward with a small pool (the
+    # configurations with the highest speed-up over their state's default anywhere), feature
+    # widths, and a converged Greedy-GQ (more passes, decaying step)
+    **{f"rel-pool{k}": {"args": ["--set", "predictor_rbf.reward=relative", "--set",
+                                 f"predictor_rbf.poolSize={k}"], "study": "rbf7-pool", "models": ["rbf"]}
+       for k in (4, 8, 16)},
+    **{f"width-{w}": {"args": ["--set", f"predictor_rbf.width={w}"], "study": "rbf7-width", "models": ["rbf"]}
+       for w in (0.3, 3)},
+    "converged": {"args": ["--set", "predictor_rbf.epochs=200", "--set", "predictor_rbf.decay=20000"],
+                  "study": "rbf7-converged", "models": ["rbf"]},
     # RBF argmax candidates: a question about the argmax of one trained model (the candidates
     # do not change the training), so answered from the predictions alone: does the answer
     # still change with more candidates? (summary "candidates"); the pool alone (0-0, only
