@@ -326,6 +326,30 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
     __m128 cx = _mm_sub_ps(tt__row(pk, W, 0), TT__V4(r->o[0]));
     __m128 cy = _mm_sub_ps(tt__row(pk, W, 1), TT__V4(r->o[1]));
     __m128 cz = _mm_sub_ps(tt__row(pk, W, 2), TT__V4(r->o[2]));
+#if TT__HAVE_AVX2
+    /* FMA builds: Embree's cross and dot (common/math/vec3.h: msub(a.y, b.z, a.z * b.y),
+     * madd(a.x, b.x, madd(a.y, b.y, a.z * b.z))), 11 operations fewer per packet; the
+     * packet kernels (tt__ptri) use the same forms, lane by lane. */
+    const __m128 dx = TT__V4(r->d[0]), dy = TT__V4(r->d[1]), dz = TT__V4(r->d[2]);
+    __m128 rx = _mm_fmsub_ps(cy, dz, _mm_mul_ps(cz, dy));
+    __m128 ry = _mm_fmsub_ps(cz, dx, _mm_mul_ps(cx, dz));
+    __m128 rz = _mm_fmsub_ps(cx, dy, _mm_mul_ps(cy, dx));
+    __m128 nx = tt__row(pk, W, 9), ny = tt__row(pk, W, 10), nz = tt__row(pk, W, 11);
+    __m128 den = _mm_fmadd_ps(nx, dx, _mm_fmadd_ps(ny, dy, _mm_mul_ps(nz, dz)));
+    __m128 sgn = _mm_and_ps(den, sign);
+    absden = _mm_xor_ps(den, sgn);
+    U = _mm_xor_ps(_mm_fmadd_ps(rx, tt__row(pk, W, 6),
+                                _mm_fmadd_ps(ry, tt__row(pk, W, 7), _mm_mul_ps(rz, tt__row(pk, W, 8)))),
+                   sgn);
+    V = _mm_xor_ps(_mm_fmadd_ps(rx, tt__row(pk, W, 3),
+                                _mm_fmadd_ps(ry, tt__row(pk, W, 4), _mm_mul_ps(rz, tt__row(pk, W, 5)))),
+                   sgn);
+    valid = _mm_and_ps(_mm_cmpge_ps(U, zero), _mm_cmpge_ps(V, zero));
+    valid = _mm_and_ps(valid, _mm_cmple_ps(_mm_add_ps(U, V), absden));
+    valid = _mm_and_ps(valid, _mm_cmpgt_ps(absden, zero));
+    if (!_mm_movemask_ps(valid)) return 0;
+    T = _mm_xor_ps(_mm_fmadd_ps(nx, cx, _mm_fmadd_ps(ny, cy, _mm_mul_ps(nz, cz))), sgn);
+#else
     __m128 rx = _mm_sub_ps(_mm_mul_ps(cy, TT__V4(r->d[2])), _mm_mul_ps(cz, TT__V4(r->d[1])));
     __m128 ry = _mm_sub_ps(_mm_mul_ps(cz, TT__V4(r->d[0])), _mm_mul_ps(cx, TT__V4(r->d[2])));
     __m128 rz = _mm_sub_ps(_mm_mul_ps(cx, TT__V4(r->d[1])), _mm_mul_ps(cy, TT__V4(r->d[0])));
@@ -346,6 +370,7 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
     if (!_mm_movemask_ps(valid)) return 0;
     T = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, cx), _mm_mul_ps(ny, cy)),
                               _mm_mul_ps(nz, cz)), sgn);
+#endif
   } else {
     /* Watertight: vertices relative to the origin, sheared so the ray is the +z axis;
      * U, V, W are 2D edge functions, evaluated identically for a shared edge. */
@@ -966,6 +991,12 @@ typedef __m256 tt__gv;  /* up to 8 children */
 #  define TT__GAND _mm256_and_ps
 #  define TT__GZERO _mm256_setzero_ps()
 #  define TT__GBITS(x) _mm256_castsi256_ps(_mm256_set1_epi32((int)(x)))
+#  define TT__GI(v) _mm256_castps_si256(v)
+#  define TT__GF(v) _mm256_castsi256_ps(v)
+#  define TT__GIMAX(a, b) TT__GF(_mm256_max_epi32(TT__GI(a), TT__GI(b)))
+#  define TT__GIMIN(a, b) TT__GF(_mm256_min_epi32(TT__GI(a), TT__GI(b)))
+#  define TT__GIGT(a, b) TT__GF(_mm256_cmpgt_epi32(TT__GI(a), TT__GI(b)))
+#  define TT__GANDNOT _mm256_andnot_ps
 #else
 typedef __m128 tt__gv;  /* up to 4 children (BVH8: two halves) */
 #  define TT__GLOAD(p, N) ((N) >= 4 ? _mm_load_ps(p) : _mm_castpd_ps(_mm_load_sd((const double *)(p))))
@@ -980,13 +1011,18 @@ typedef __m128 tt__gv;  /* up to 4 children (BVH8: two halves) */
 #  define TT__GAND _mm_and_ps
 #  define TT__GZERO _mm_setzero_ps()
 #  define TT__GBITS(x) _mm_castsi128_ps(_mm_set1_epi32((int)(x)))
+#  define TT__GIMAX TT__IMAX4
+#  define TT__GIMIN TT__IMIN4
+#  define TT__GIGT(a, b) _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a), _mm_castps_si128(b)))
+#  define TT__GANDNOT _mm_andnot_ps
 #endif
 
 /* Rays of `m` against up to G children whose near/far planes per axis are `bn`/`bf`: for
  * each child the mask of rays that hit it (as floats' bits), with the single-ray kernels'
- * arithmetic per ray (FMA where they use it, the robust far scale where they use it). */
+ * arithmetic per ray (FMA where they use it, the robust far scale where they use it; `ib`:
+ * integer max/min as tt__box8, when every ray of the group has tnear >= 0). */
 TT__INLINE tt__gv tt__ogroup_test(const tt__ogroup *g, uint32_t m, const tt__gv bn[3],
-                                  const tt__gv bf[3], const int robust) {
+                                  const tt__gv bf[3], const int robust, const int ib) {
   tt__gv acc = TT__GZERO;
   for (; m; m &= m - 1) {
     const int i = __builtin_ctz(m);
@@ -1002,6 +1038,12 @@ TT__INLINE tt__gv tt__ogroup_test(const tt__ogroup *g, uint32_t m, const tt__gv 
 #endif
       tn[k] = TT__GMUL(TT__GSUB(bn[k], ob), rd);
       tf[k] = TT__GMUL(TT__GSUB(bf[k], ob), rd);
+    }
+    if (ib && !robust) {
+      tt__gv tmin = TT__GIMAX(TT__GIMAX(tn[0], tn[1]), TT__GIMAX(tn[2], TT__GSET1(g->tnear[i])));
+      tt__gv tmax = TT__GIMIN(TT__GIMIN(tf[0], tf[1]), TT__GIMIN(tf[2], TT__GSET1(g->tfar[i])));
+      acc = TT__GOR(acc, TT__GANDNOT(TT__GIGT(tmin, tmax), TT__GBITS(1u << i)));
+      continue;
     }
     tt__gv tmin = TT__GMAX(TT__GMAX(tn[0], tn[1]), TT__GMAX(tn[2], TT__GSET1(g->tnear[i])));
     tt__gv tmax = TT__GMIN(TT__GMIN(tf[0], tf[1]), tf[2]);
@@ -1032,7 +1074,7 @@ TT__INLINE void tt__ogroup_planes(const void *node, const int near[3], const int
 
 TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const size_t *idx,
                                   int n, uint8_t *occ, const int N, const int robust,
-                                  const int counting) {
+                                  const int counting, const int ib) {
   tt__rc r[TT__OS];
   tt__ogroup g;
   uint64_t c_nodes[TT__OS], c_tris[TT__OS];
@@ -1053,7 +1095,7 @@ TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const 
         g.ob[k][i] = rays[idx[i]].org[k];
 #endif
       }
-      g.tnear[i] = rays[idx[i]].tnear;
+      g.tnear[i] = rays[idx[i]].tnear + 0.0f;  /* -0 -> +0, as tt__setup */
       g.tfar[i] = rays[idx[i]].tfar;
     } else {
       occ[idx[i]] = 0;
@@ -1072,12 +1114,12 @@ TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const 
       tt__gv bn[3], bf[3];
       tt__ogroup_planes(node, near, N, 0, bn, bf);
 #if TT__HAVE_AVX2
-      _mm256_store_ps((float *)cm, tt__ogroup_test(&g, m, bn, bf, robust));
+      _mm256_store_ps((float *)cm, tt__ogroup_test(&g, m, bn, bf, robust, ib));
 #else
-      _mm_store_ps((float *)cm, tt__ogroup_test(&g, m, bn, bf, robust));
+      _mm_store_ps((float *)cm, tt__ogroup_test(&g, m, bn, bf, robust, ib));
       if (N == 8) {
         tt__ogroup_planes(node, near, N, 1, bn, bf);
-        _mm_store_ps((float *)cm + 4, tt__ogroup_test(&g, m, bn, bf, robust));
+        _mm_store_ps((float *)cm + 4, tt__ogroup_test(&g, m, bn, bf, robust, ib));
       }
 #endif
       if (counting)
@@ -1142,7 +1184,12 @@ TT__INLINE void tt__ostream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ
           occ[idx[i]] = (uint8_t)single(bvh, &rays[idx[i]]);
           continue;
         }
-        tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting);
+        int ib = !robust;  /* integer box tests when every ray has tnear >= 0 */
+        for (int j = 0; j < m && ib; j++) ib = tt__ray_ibox(&rays[idx[i + j]], robust);
+        if (ib)
+          tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting, 1);
+        else
+          tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting, 0);
       }
   }
 }
@@ -1292,26 +1339,21 @@ TT__INLINE __m256 tt__ptri(const float *pk, int W, int j, const tt__pkt *P, __m2
   __m256 cx = _mm256_sub_ps(TT__R(0), P->o[0]);
   __m256 cy = _mm256_sub_ps(TT__R(1), P->o[1]);
   __m256 cz = _mm256_sub_ps(TT__R(2), P->o[2]);
-  __m256 rx = _mm256_sub_ps(_mm256_mul_ps(cy, P->d[2]), _mm256_mul_ps(cz, P->d[1]));
-  __m256 ry = _mm256_sub_ps(_mm256_mul_ps(cz, P->d[0]), _mm256_mul_ps(cx, P->d[2]));
-  __m256 rz = _mm256_sub_ps(_mm256_mul_ps(cx, P->d[1]), _mm256_mul_ps(cy, P->d[0]));
+  /* tt__tri_test's FMA forms, lane by lane */
+  __m256 rx = _mm256_fmsub_ps(cy, P->d[2], _mm256_mul_ps(cz, P->d[1]));
+  __m256 ry = _mm256_fmsub_ps(cz, P->d[0], _mm256_mul_ps(cx, P->d[2]));
+  __m256 rz = _mm256_fmsub_ps(cx, P->d[1], _mm256_mul_ps(cy, P->d[0]));
   __m256 nx = TT__R(9), ny = TT__R(10), nz = TT__R(11);
-  __m256 den = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, P->d[0]), _mm256_mul_ps(ny, P->d[1])),
-                             _mm256_mul_ps(nz, P->d[2]));
+  __m256 den = _mm256_fmadd_ps(nx, P->d[0], _mm256_fmadd_ps(ny, P->d[1], _mm256_mul_ps(nz, P->d[2])));
   __m256 sgn = _mm256_and_ps(den, sign);
   __m256 absden = _mm256_xor_ps(den, sgn);
-  __m256 U = _mm256_xor_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(rx, TT__R(6)),
-                                                       _mm256_mul_ps(ry, TT__R(7))),
-                                         _mm256_mul_ps(rz, TT__R(8))), sgn);
-  __m256 V = _mm256_xor_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(rx, TT__R(3)),
-                                                       _mm256_mul_ps(ry, TT__R(4))),
-                                         _mm256_mul_ps(rz, TT__R(5))), sgn);
+  __m256 U = _mm256_xor_ps(_mm256_fmadd_ps(rx, TT__R(6), _mm256_fmadd_ps(ry, TT__R(7), _mm256_mul_ps(rz, TT__R(8)))), sgn);
+  __m256 V = _mm256_xor_ps(_mm256_fmadd_ps(rx, TT__R(3), _mm256_fmadd_ps(ry, TT__R(4), _mm256_mul_ps(rz, TT__R(5)))), sgn);
   __m256 valid = _mm256_and_ps(_mm256_cmp_ps(U, zero, _CMP_GE_OQ), _mm256_cmp_ps(V, zero, _CMP_GE_OQ));
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(_mm256_add_ps(U, V), absden, _CMP_LE_OQ));
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(absden, zero, _CMP_GT_OQ));
   valid = _mm256_and_ps(valid, lanes);
-  __m256 T = _mm256_xor_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, cx), _mm256_mul_ps(ny, cy)),
-                                         _mm256_mul_ps(nz, cz)), sgn);
+  __m256 T = _mm256_xor_ps(_mm256_fmadd_ps(nx, cx, _mm256_fmadd_ps(ny, cy, _mm256_mul_ps(nz, cz))), sgn);
 #undef TT__R
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, P->tnear), _CMP_GE_OQ));
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, closest ? P->tfar_s : P->tfar), _CMP_LE_OQ));
