@@ -123,10 +123,12 @@ static inline char *pu_predictions(const tt_predictor_iface *pi, const tt_predic
 }
 
 /* The model-file properties: `p` (trained) saved to dir/model.ttpm; `other` is a predictor
- * plugin of another kind (its file must be refused by pi). */
+ * plugin of another kind (its file must be refused by pi); pi reads format versions 1 to
+ * `max_version`. */
 static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p, const tt_space *target,
                            uint32_t dim, const char *state_space, const char *dir,
-                           const tt_predictor_iface *other, const tt_config *settings) {
+                           const tt_predictor_iface *other, const tt_config *settings,
+                           unsigned max_version) {
   char path[4200], path2[4200], bad[4200];
   snprintf(path, sizeof path, "%s/model.ttpm", dir);
   snprintf(path2, sizeof path2, "%s/model2.ttpm", dir);
@@ -176,7 +178,9 @@ static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p,
     pu_write(bad, c, n1);
     CHECK(pi->load(q, bad) == TT_ERR_UNSUPPORTED);
     CHECK_CONTAINS(tt_last_error(), "format version 77");
-    CHECK_CONTAINS(tt_last_error(), "versions 1 to 1");
+    char range[64];
+    snprintf(range, sizeof range, "versions 1 to %u", max_version);
+    CHECK_CONTAINS(tt_last_error(), range);
     CHECK_CONTAINS(tt_last_error(), "newer");
     free(c);
   }

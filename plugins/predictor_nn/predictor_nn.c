@@ -19,6 +19,7 @@
  * Model files: predictor_common/model_file.h, payload version 1 (see nn_save).
  */
 #include "../predictor_common/model_file.h"
+#include "../predictor_common/state_table.h"
 
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
@@ -35,19 +36,6 @@
 
 static tt_space *nn_settings;
 
-typedef struct nn_cfg {
-  double *values;     /* ttpm_config_values of the configuration */
-  double sum;         /* sum of its costs */
-  uint64_t count;
-} nn_cfg;
-
-typedef struct nn_entry {
-  double *state;      /* dim values */
-  nn_cfg *cfgs;
-  size_t ncfg, cap;
-  size_t best;        /* index of the lowest mean cost */
-} nn_entry;
-
 struct tt_predictor {
   const tt_space *target;
   size_t params;            /* parameters of target */
@@ -55,23 +43,14 @@ struct tt_predictor {
   char *state_space;
   char **names;             /* dim names or NULL */
   char *signature;          /* ttpm_space_signature(target) */
-  int64_t max_states;
-  nn_entry *entries;
-  size_t n, cap;
+  ttpm_table table;         /* the stored states (predictor_common/state_table.h) */
   uint64_t observations;
 };
 
 /* ---- model ---- */
 
 static void nn_clear(tt_predictor *p) {
-  for (size_t i = 0; i < p->n; i++) {
-    for (size_t k = 0; k < p->entries[i].ncfg; k++) free(p->entries[i].cfgs[k].values);
-    free(p->entries[i].cfgs);
-    free(p->entries[i].state);
-  }
-  free(p->entries);
-  p->entries = NULL;
-  p->n = p->cap = 0;
+  ttpm_table_clear(&p->table);
   p->observations = 0;
 }
 
@@ -102,7 +81,7 @@ static tt_status nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) 
   p->target = su->target;
   p->params = tt_space_count(su->target);
   p->dim = su->state_dim;
-  p->max_states = max_states;
+  ttpm_table_init(&p->table, p->dim, p->params, max_states);
   p->state_space = tt__strdup(su->state_space ? su->state_space : "");
   p->signature = ttpm_space_signature(su->target);
   int bad = !p->state_space || !p->signature;
@@ -129,87 +108,10 @@ static tt_status nn_create(const tt_space *target, uint32_t state_dim, const tt_
   return nn_create_ex(&su, out);
 }
 
-/* Squared Euclidean distance. */
-static double nn_dist2(const double *a, const double *b, uint32_t n) {
-  double d = 0;
-  for (uint32_t i = 0; i < n; i++) d += (a[i] - b[i]) * (a[i] - b[i]);
-  return d;
-}
-
-/* Index of the nearest stored state (first on ties), or SIZE_MAX when empty. */
-static size_t nn_nearest(const tt_predictor *p, const double *state, double *dist2) {
-  size_t best = SIZE_MAX;
-  double bd = INFINITY;
-  for (size_t i = 0; i < p->n; i++) {
-    double d = nn_dist2(p->entries[i].state, state, p->dim);
-    if (d < bd) {
-      bd = d;
-      best = i;
-    }
-  }
-  if (dist2) *dist2 = bd;
-  return best;
-}
-
-/* Index of an entry whose state equals `state` exactly, or SIZE_MAX. */
-static size_t nn_find(const tt_predictor *p, const double *state) {
-  for (size_t i = 0; i < p->n; i++) {
-    uint32_t k = 0;
-    while (k < p->dim && p->entries[i].state[k] == state[k]) k++;
-    if (k == p->dim) return i;
-  }
-  return SIZE_MAX;
-}
-
-static double nn_mean(const nn_cfg *c) { return c->sum / (double)c->count; }
-
-static void nn_update_best(nn_entry *e) {
-  size_t b = 0;
-  for (size_t k = 1; k < e->ncfg; k++)
-    if (nn_mean(&e->cfgs[k]) < nn_mean(&e->cfgs[b])) b = k;
-  e->best = b;
-}
-
-/* Adds one validated observation; TT_OK or out of memory (nothing changed then). */
+/* Adds one validated observation; TT_OK or out of memory. */
 static tt_status nn_add(tt_predictor *p, const double *state, const double *values, double cost) {
-  size_t i = nn_find(p, state);
-  if (i == SIZE_MAX && p->max_states > 0 && p->n >= (size_t)p->max_states)
-    i = nn_nearest(p, state, NULL);
-  if (i == SIZE_MAX) {
-    if (p->n == p->cap) {
-      size_t cap = p->cap ? 2 * p->cap : 64;
-      nn_entry *e = realloc(p->entries, cap * sizeof *e);
-      if (!e) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
-      p->entries = e;
-      p->cap = cap;
-    }
-    nn_entry *e = &p->entries[p->n];
-    memset(e, 0, sizeof *e);
-    e->state = malloc(p->dim * sizeof(double));
-    if (!e->state) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
-    memcpy(e->state, state, p->dim * sizeof(double));
-    i = p->n++;
-  }
-  nn_entry *e = &p->entries[i];
-  size_t k = 0;
-  while (k < e->ncfg && memcmp(e->cfgs[k].values, values, p->params * sizeof(double))) k++;
-  if (k == e->ncfg) {
-    if (e->ncfg == e->cap) {
-      size_t cap = e->cap ? 2 * e->cap : 8;
-      nn_cfg *c = realloc(e->cfgs, cap * sizeof *c);
-      if (!c) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
-      e->cfgs = c;
-      e->cap = cap;
-    }
-    double *v = malloc((p->params ? p->params : 1) * sizeof(double));
-    if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
-    memcpy(v, values, p->params * sizeof(double));
-    e->cfgs[k] = (nn_cfg){v, 0.0, 0};
-    e->ncfg++;
-  }
-  e->cfgs[k].sum += cost;
-  e->cfgs[k].count++;
-  nn_update_best(e);
+  if (ttpm_table_add(&p->table, state, values, cost) == SIZE_MAX)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
   p->observations++;
   return TT_OK;
 }
@@ -270,20 +172,21 @@ static tt_status nn_predict_ex(const tt_predictor *p, const tt_predictor_query *
                                tt_predictor_result *res) {
   if (!p || !q || !q->state || !out)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: NULL argument");
-  if (!p->n) return tt_set_error(TT_ERR_NO_DATA, NN_NAME ": predict: the table is empty (nothing observed)");
+  if (!p->table.n)
+    return tt_set_error(TT_ERR_NO_DATA, NN_NAME ": predict: the table is empty (nothing observed)");
   double d2;
-  size_t i = nn_nearest(p, q->state, &d2);
+  size_t i = ttpm_table_nearest(&p->table, q->state, &d2);
   if (i == SIZE_MAX)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: the state is not finite");
-  const nn_entry *e = &p->entries[i];
+  const ttpm_table_cfg *best = ttpm_table_best(&p->table, i);
   char why[256];
-  if (ttpm_config_from_values(out, e->cfgs[e->best].values, why, sizeof why))
+  if (ttpm_config_from_values(out, best->values, why, sizeof why))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: %s", why);
   if (res && res->struct_size >= offsetof(tt_predictor_result, candidates) + sizeof res->candidates) {
-    res->expected_cost = nn_mean(&e->cfgs[e->best]);
+    res->expected_cost = ttpm_table_mean(best);
     res->value = NAN;
     res->distance = sqrt(d2);
-    res->candidates = p->n;
+    res->candidates = p->table.n;
   }
   return TT_OK;
 }
@@ -302,28 +205,23 @@ static tt_status nn_estimate(const tt_predictor *p, const tt_predictor_query *q,
   if (!p || !q || !q->state || !config || !cost)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": estimate: NULL argument");
   *cost = NAN;
-  size_t i = nn_nearest(p, q->state, NULL);
+  size_t i = ttpm_table_nearest(&p->table, q->state, NULL);
   if (i == SIZE_MAX) return TT_OK;
   double *v = malloc((p->params ? p->params : 1) * sizeof(double));
   if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
   ttpm_config_values(config, v);
-  const nn_entry *e = &p->entries[i];
-  for (size_t k = 0; k < e->ncfg; k++)
-    if (!memcmp(e->cfgs[k].values, v, p->params * sizeof(double))) *cost = nn_mean(&e->cfgs[k]);
+  size_t k = ttpm_table_find_cfg(&p->table, i, v);
+  if (k != SIZE_MAX) *cost = ttpm_table_mean(&p->table.entries[i].cfgs[k]);
   free(v);
   return TT_OK;
 }
 
 static tt_status nn_info(const tt_predictor *p, tt_predictor_info *out) {
   if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": info: NULL argument");
-  uint64_t bytes = sizeof *p + p->cap * sizeof(nn_entry);
-  for (size_t i = 0; i < p->n; i++) {
-    bytes += p->dim * sizeof(double) + p->entries[i].cap * sizeof(nn_cfg);
-    bytes += p->entries[i].ncfg * p->params * sizeof(double);
-  }
+  uint64_t bytes = sizeof *p + ttpm_table_bytes(&p->table);
   if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
     out->memory_bytes = bytes;
-    out->entries = p->n;
+    out->entries = p->table.n;
     out->observations = p->observations;
     out->format_version = NN_FORMAT;
   }
@@ -335,7 +233,7 @@ static tt_status nn_info(const tt_predictor *p, tt_predictor_info *out) {
 static char *nn_settings_json(const tt_predictor *p) {
   tt_config *c = tt_config_create(nn_settings);
   if (!c) return NULL;
-  tt_config_set_number(c, (size_t)tt_space_find(nn_settings, "maxStates"), (double)p->max_states);
+  tt_config_set_number(c, (size_t)tt_space_find(nn_settings, "maxStates"), (double)p->table.max_states);
   char *j = tt_config_to_json(c);
   tt_config_destroy(c);
   return j;
@@ -351,17 +249,7 @@ static tt_status nn_save(const tt_predictor *p, const char *path) {
   ttpm_put_header(&w, &h);
   ttpm_put_u64(&w, p->params);
   ttpm_put_u64(&w, p->observations);
-  ttpm_put_u64(&w, p->n);
-  for (size_t i = 0; i < p->n; i++) {
-    const nn_entry *e = &p->entries[i];
-    ttpm_put_f64s(&w, e->state, p->dim);
-    ttpm_put_u64(&w, e->ncfg);
-    for (size_t k = 0; k < e->ncfg; k++) {
-      ttpm_put_f64s(&w, e->cfgs[k].values, p->params);
-      ttpm_put_f64(&w, e->cfgs[k].sum);
-      ttpm_put_u64(&w, e->cfgs[k].count);
-    }
-  }
+  ttpm_table_put(&w, &p->table);
   tt_status st = settings ? ttpm_save(NN_NAME, path, NN_FORMAT, &w)
                           : tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
   tt_free(settings);
@@ -415,10 +303,7 @@ static tt_status nn_load(tt_predictor *p, const char *path) {
   }
   /* into a fresh model: on any error the loaded-into one is left as it was */
   tt_predictor tmp = *p;
-  tmp.entries = NULL;
-  tmp.n = tmp.cap = 0;
   tmp.observations = 0;
-  tmp.max_states = 0; /* no merging while the stored table is rebuilt */
   int64_t max_states = 0;
   tt_config *s = tt_config_create(nn_settings);
   if (!s || tt_config_from_json(s, h.settings, path) != TT_OK)
@@ -426,70 +311,21 @@ static tt_status nn_load(tt_predictor *p, const char *path) {
   else
     max_states = tt_config_get_int(s, "maxStates", 0);
   tt_config_destroy(s);
+  ttpm_table_init(&tmp.table, p->dim, p->params, max_states);
   uint64_t params = ttpm_get_u64(&r, "the parameter count");
   if (!r.err[0] && params != p->params)
     ttpm_fail(&r, "%llu parameters per configuration, the target space has %zu",
               (unsigned long long)params, p->params);
   uint64_t obs = ttpm_get_u64(&r, "the observation count");
-  size_t per_state = p->dim * 8 + 8;
-  uint64_t n = ttpm_get_count(&r, UINT32_MAX, per_state, "states");
-  double *v = malloc((p->params ? p->params : 1) * sizeof(double));
-  double *state = malloc(p->dim * sizeof(double));
-  if (!v || !state) ttpm_fail(&r, "out of memory");
-  char why[256];
-  tt_config *check = tt_config_create(p->target);
-  for (uint64_t i = 0; !r.err[0] && i < n; i++) {
-    ttpm_get_f64s(&r, state, p->dim, "a state");
-    for (uint32_t k = 0; !r.err[0] && k < p->dim; k++)
-      if (!isfinite(state[k])) ttpm_fail(&r, "state %llu has a non-finite value", (unsigned long long)i);
-    if (!r.err[0] && nn_find(&tmp, state) != SIZE_MAX)
-      ttpm_fail(&r, "state %llu is stored twice", (unsigned long long)i);
-    uint64_t ncfg = ttpm_get_count(&r, UINT32_MAX, p->params * 8 + 16, "configurations");
-    if (!r.err[0] && ncfg == 0) ttpm_fail(&r, "state %llu has no configuration", (unsigned long long)i);
-    for (uint64_t k = 0; !r.err[0] && k < ncfg; k++) {
-      ttpm_get_f64s(&r, v, p->params, "a configuration");
-      double sum = ttpm_get_f64(&r, "a cost sum");
-      uint64_t count = ttpm_get_u64(&r, "a cost count");
-      if (r.err[0]) break;
-      if (!check || ttpm_config_from_values(check, v, why, sizeof why)) {
-        ttpm_fail(&r, "state %llu, configuration %llu: %s", (unsigned long long)i,
-                  (unsigned long long)k, check ? why : "out of memory");
-        break;
-      }
-      if (!(sum > 0) || !isfinite(sum) || count == 0) {
-        ttpm_fail(&r, "state %llu, configuration %llu: cost sum %g over %llu measurements is not "
-                  "a positive finite mean", (unsigned long long)i, (unsigned long long)k, sum,
-                  (unsigned long long)count);
-        break;
-      }
-      /* rebuild exactly: one add with the whole sum, then the count */
-      if (nn_add(&tmp, state, v, sum) != TT_OK) {
-        ttpm_fail(&r, "out of memory");
-        break;
-      }
-      nn_entry *e = &tmp.entries[tmp.n - 1];
-      size_t j = e->ncfg - 1;
-      if (memcmp(e->state, state, p->dim * sizeof(double)) || e->cfgs[j].count != 1) {
-        ttpm_fail(&r, "state %llu: configuration %llu is stored twice", (unsigned long long)i,
-                  (unsigned long long)k);
-        break;
-      }
-      e->cfgs[j].count = count;
-      nn_update_best(e);
-    }
-  }
+  if (!r.err[0]) ttpm_table_get(&r, &tmp.table, p->target);
   if (!r.err[0] && r.pos != r.len) ttpm_fail(&r, "%zu bytes after the last state", r.len - r.pos);
-  tt_config_destroy(check);
-  free(v);
-  free(state);
   ttpm_header_free(&h);
   free(data);
   if (r.err[0]) {
-    nn_clear(&tmp);
+    ttpm_table_clear(&tmp.table);
     return tt_set_error(TT_ERR_PARSE, NN_NAME ": model %s", r.err);
   }
   tmp.observations = obs;
-  tmp.max_states = max_states;
   nn_clear(p);
   *p = tmp;
   return TT_OK;

@@ -155,8 +155,8 @@ int main(int argc, char **argv) {
   tt_free(ja);
 
   /* model files */
-  pu_check_files(P, p, target, DIM, space, dir, RBF, NULL);
-  pu_check_files(P, m, target, DIM, space, dir, RBF, set);
+  pu_check_files(P, p, target, DIM, space, dir, RBF, NULL, 1);
+  pu_check_files(P, m, target, DIM, space, dir, RBF, set, 1);
 
   for (int i = 0; i < NS; i++) tt_free(best[i]);
   tt_free(jb);
