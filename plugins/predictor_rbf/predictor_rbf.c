@@ -1,18 +1,21 @@
 /* predictor_rbf: RBF features with myopic Greedy-GQ (thesis 3.3.2).
  *
  * Model: Q(s, a) = theta . phi(s, enc(a)) (rbf_model.h: features, encoding, update rule).
- * Reward of an observation: `reward = inverse` (the thesis) R = 1 / cost; `relative`
- * R = default_cost / cost, the speed-up over the state's default configuration, which puts
- * cheap and expensive scenes on one scale (a sample without a known default cost is then
- * skipped). An infeasible configuration has reward 0 in both.
+ * Reward of an observation: `reward = relative` (the default) R = default_cost / cost, the
+ * speed-up over the state's default configuration, which puts cheap and expensive scenes on
+ * one scale (a sample without a known default cost is then skipped); `inverse` (the thesis)
+ * R = 1 / cost. An infeasible configuration has reward 0 in both.
  *
  * Exploitation = argmax_a Q(s, a) over candidate actions, in three sources:
- *   1. the pool: the `poolSize` observed configurations with the highest reward so far
- *      (configurations the search found good, in any state: "DB configurations"). By
- *      default the pool alone (and the default configuration): the thesis' actions are
- *      "the configurations investigated by the tuning search", and on the baseline of
- *      tools/hybrid/README.md ("Studies") the argmax over points nobody measured found the
- *      model's errors, not faster configurations (render 0.77x -> 1.0x over the search);
+ *   1. the pool of observed configurations ("DB configurations"), at most `poolSize`:
+ *      `poolSource = states` (the default) every observed state's best configuration by
+ *      mean cost (predictor_common/state_table.h), those best in the most states first;
+ *      `rewards` the configurations with the highest single reward so far, in any state,
+ *      which on the baseline were mostly configurations measured once whose one sample was
+ *      lucky (README: "Why the states' bests"). By default the pool alone (and the default
+ *      configuration): the thesis' actions are "the configurations investigated by the
+ *      tuning search", and on the baseline of tools/hybrid/README.md ("Studies") the argmax
+ *      over points nobody measured found the model's errors, not faster configurations;
  *   2. `lhsCandidates` points of a Latin hypercube over the target space (drawn once from
  *      the seed), so that the answer is not limited to what was measured (default 0);
  *   3. local refinement: from the `refineStarts` best of 1+2, `refine` rounds of coordinate
@@ -25,9 +28,11 @@
  * passes, each in a fresh order shuffled from the seed; online samples update once each.
  * Greedy-GQ is off-policy: samples may come from any search (thesis).
  *
- * Model files: predictor_common/model_file.h, payload version 1 (see rbf_save).
+ * Model files: predictor_common/model_file.h, payload version 2 (see rbf_save; version 1,
+ * without the state table, still loads as a `poolSource = rewards` model).
  */
 #include "../predictor_common/model_file.h"
+#include "../predictor_common/state_table.h"
 #include "rbf_argmax.h"
 #include "rbf_model.h"
 
@@ -44,18 +49,21 @@
 
 #define RBF_NAME "predictor_rbf"
 #define RBF_VERSION "0.1.0"
-#define RBF_FORMAT 1u
+#define RBF_FORMAT 2u /* 2: the state table after the pool (poolSource = states) */
 
 static tt_space *rbf_settings;
 
 enum { RBF_REWARD_INVERSE = 0, RBF_REWARD_RELATIVE = 1 };
 static const char *const rbf_reward_names[] = {"inverse", "relative"};
+enum { RBF_POOL_REWARDS = 0, RBF_POOL_STATES = 1 };
+static const char *const rbf_pool_names[] = {"rewards", "states"};
 
 typedef struct rbf_settings_values {
   int64_t features;        /* 0: round(3.5 x (state dims + parameters)) */
   double width, alpha, decay;
   int64_t epochs, lhs, refine, starts, pool;
   int reward;
+  int pool_source;         /* RBF_POOL_REWARDS or RBF_POOL_STATES */
 } rbf_settings_values;
 
 struct tt_predictor {
@@ -78,6 +86,9 @@ struct tt_predictor {
   size_t npool;
   double *pool_values, *pool_enc, *pool_reward, *pool_da;
   float *pool_daf;          /* as cand_daf */
+  /* poolSource = states: every observed state's configurations and mean costs; the pool is
+   * the states' best configurations (rbf_pool_from_states) */
+  ttpm_table table;
   uint64_t observations;
   double *phi;              /* F scratch for updates (observe is single-threaded) */
   double *x;                /* d + m scratch */
@@ -101,6 +112,8 @@ static void rbf_read_settings(const tt_config *c, rbf_settings_values *v) {
   v->pool = tt_config_get_int(s, "poolSize", 256);
   const char *r = tt_config_get_string(s, "reward");
   v->reward = r && !strcmp(r, "relative") ? RBF_REWARD_RELATIVE : RBF_REWARD_INVERSE;
+  const char *ps = tt_config_get_string(s, "poolSource");
+  v->pool_source = ps && !strcmp(ps, "states") ? RBF_POOL_STATES : RBF_POOL_REWARDS;
   tt_config_destroy(def);
 }
 
@@ -118,6 +131,8 @@ static char *rbf_settings_json(const rbf_settings_values *v) {
     tt_config_set_number(c, (size_t)tt_space_find(rbf_settings, num[i].name), num[i].value);
   snprintf(buf, sizeof buf, "%s", rbf_reward_names[v->reward]);
   tt_config_set_string(c, "reward", buf);
+  snprintf(buf, sizeof buf, "%s", rbf_pool_names[v->pool_source]);
+  tt_config_set_string(c, "poolSource", buf);
   char *j = tt_config_to_json(c);
   tt_config_destroy(c);
   return j;
@@ -136,6 +151,7 @@ static void rbf_free_model_parts(tt_predictor *p) {
   free(p->pool_daf);
   free(p->phi);
   free(p->x);
+  ttpm_table_clear(&p->table);
   p->cand_values = p->cand_enc = p->cand_da = NULL;
   p->pool_values = p->pool_enc = p->pool_reward = p->pool_da = NULL;
   p->cand_daf = p->pool_daf = NULL;
@@ -209,6 +225,7 @@ static int rbf_alloc(tt_predictor *p) {
   p->pool_daf = malloc(pool * rbf_f8(f) * sizeof(float));
   p->phi = malloc(f * sizeof(double));
   p->x = malloc((p->d + p->m) * sizeof(double));
+  ttpm_table_init(&p->table, p->d, p->params, 0);
   if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->pool_da || !p->pool_daf ||
       !p->phi || !p->x)
     return -1;
@@ -266,8 +283,20 @@ static double rbf_reward(const tt_predictor *p, double cost, double default_cost
   return default_cost / cost;
 }
 
-/* Keeps the configuration in the pool if its reward ranks among the `pool` best (an equal
- * configuration keeps its highest reward). */
+/* Puts a configuration (its values and encoding) into pool slot `slot` with the cached action
+ * parts of its distances to the centres. */
+static void rbf_pool_put(tt_predictor *p, size_t slot, const double *values, const double *enc,
+                         double reward) {
+  memcpy(p->pool_values + slot * p->params, values, p->params * sizeof(double));
+  memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
+  rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
+  rbf_action_part_float(p->model.features, p->pool_da + slot * p->model.features,
+                        p->pool_daf + slot * rbf_f8(p->model.features));
+  p->pool_reward[slot] = reward;
+}
+
+/* poolSource = rewards: keeps the configuration in the pool if its reward ranks among the
+ * `pool` best (an equal configuration keeps its highest reward). */
 static void rbf_pool_add(tt_predictor *p, const double *values, const double *enc, double reward) {
   size_t np = p->params;
   for (size_t k = 0; k < p->npool; k++)
@@ -284,12 +313,59 @@ static void rbf_pool_add(tt_predictor *p, const double *values, const double *en
   } else {
     p->npool++;
   }
-  memcpy(p->pool_values + slot * np, values, np * sizeof(double));
-  memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
-  rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
-  rbf_action_part_float(p->model.features, p->pool_da + slot * p->model.features,
-                        p->pool_daf + slot * rbf_f8(p->model.features));
-  p->pool_reward[slot] = reward;
+  rbf_pool_put(p, slot, values, enc, reward);
+}
+
+/* A distinct best configuration of the state table: the first state it is best in and how
+ * many states it is best in. */
+typedef struct rbf_state_best {
+  size_t first, states;
+} rbf_state_best;
+
+static int rbf_state_best_order(const void *a, const void *b) {
+  const rbf_state_best *x = a, *y = b;
+  if (x->states != y->states) return x->states > y->states ? -1 : 1;
+  return x->first < y->first ? -1 : x->first > y->first;
+}
+
+/* poolSource = states: the pool becomes the distinct best configurations of the observed
+ * states (each state's lowest mean cost, i.e. what a search there found), those that are
+ * best in the most states first (ties: the state observed first), at most poolSize of them;
+ * pool_reward holds the number of states each is best in. Deterministic in the table, so a
+ * loaded model rebuilds the same pool. 0, or -1 when out of memory. */
+static int rbf_pool_from_states(tt_predictor *p) {
+  const ttpm_table *t = &p->table;
+  rbf_state_best *d = malloc((t->n ? t->n : 1) * sizeof *d);
+  double *enc = malloc((p->m ? p->m : 1) * sizeof(double));
+  tt_config *c = tt_config_create(p->target);
+  if (!d || !enc || !c) {
+    free(d);
+    free(enc);
+    tt_config_destroy(c);
+    return -1;
+  }
+  size_t nd = 0;
+  for (size_t i = 0; i < t->n; i++) {
+    const double *v = ttpm_table_best(t, i)->values;
+    size_t k = 0;
+    while (k < nd && memcmp(ttpm_table_best(t, d[k].first)->values, v, p->params * sizeof(double))) k++;
+    if (k == nd) d[nd++] = (rbf_state_best){i, 0};
+    d[k].states++;
+  }
+  qsort(d, nd, sizeof *d, rbf_state_best_order);
+  size_t keep = nd < (size_t)p->set.pool ? nd : (size_t)p->set.pool;
+  char why[128];
+  p->npool = 0;
+  for (size_t k = 0; k < keep; k++) {
+    const double *v = ttpm_table_best(t, d[k].first)->values;
+    if (ttpm_config_from_values(c, v, why, sizeof why)) continue;  /* checked when added */
+    rbf_encode_action(c, enc);
+    rbf_pool_put(p, p->npool++, v, enc, (double)d[k].states);
+  }
+  free(d);
+  free(enc);
+  tt_config_destroy(c);
+  return 0;
 }
 
 /* One validated sample: updates theta and the pool. */
@@ -297,7 +373,7 @@ static void rbf_learn(tt_predictor *p, const tt_predictor_sample *s, double rewa
   memcpy(p->x, s->state, p->d * sizeof(double));
   rbf_encode_action(s->config, p->x + p->d);
   rbf_update(&p->model, p->x, reward, p->phi);
-  if (reward > 0) {
+  if (reward > 0 && p->set.pool_source == RBF_POOL_REWARDS) {
     ttpm_config_values(s->config, values);
     rbf_pool_add(p, values, p->x + p->d, reward);
   }
@@ -330,6 +406,25 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
     free(values);
     free(order);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  }
+  if (p->set.pool_source == RBF_POOL_STATES) {
+    /* the table learns each sample once, whatever the passes of the update below */
+    size_t added = 0;
+    for (size_t i = 0; i < count; i++) {
+      if (s[i].cost >= TT_COST_INFEASIBLE) continue;
+      ttpm_config_values(s[i].config, values);
+      if (ttpm_table_add(&p->table, s[i].state, values, s[i].cost) == SIZE_MAX) {
+        free(values);
+        free(order);
+        return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+      }
+      added++;
+    }
+    if (added && rbf_pool_from_states(p)) {
+      free(values);
+      free(order);
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+    }
   }
   int64_t passes = flags & TT_PREDICTOR_OFFLINE ? p->set.epochs : 1;
   tt__pcg32 rng;
@@ -560,7 +655,8 @@ static tt_status rbf_info(const tt_predictor *p, tt_predictor_info *out) {
   uint64_t bytes = sizeof *p + f * (dim + 2) * sizeof(double) + (p->d + p->m) * sizeof(double) +
                    p->ncand * (p->params + p->m + f) * sizeof(double) +
                    pool * (p->params + p->m + 1 + f) * sizeof(double) +
-                   (p->ncand + pool) * rbf_f8((uint32_t)f) * sizeof(float);
+                   (p->ncand + pool) * rbf_f8((uint32_t)f) * sizeof(float) +
+                   ttpm_table_bytes(&p->table);
   if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
     out->memory_bytes = bytes;
     out->entries = f;
@@ -589,9 +685,14 @@ static tt_status rbf_save(const tt_predictor *p, const char *path) {
   ttpm_put_u64(&w, p->observations);
   ttpm_put_f64s(&w, r->centres, (size_t)r->features * r->dim);
   ttpm_put_f64s(&w, r->theta, r->features);
-  ttpm_put_u64(&w, p->npool);
-  ttpm_put_f64s(&w, p->pool_values, p->npool * p->params);
-  ttpm_put_f64s(&w, p->pool_reward, p->npool);
+  if (p->set.pool_source == RBF_POOL_STATES) {
+    ttpm_put_u64(&w, 0);  /* the pool is rebuilt from the table on load */
+    ttpm_table_put(&w, &p->table);
+  } else {
+    ttpm_put_u64(&w, p->npool);
+    ttpm_put_f64s(&w, p->pool_values, p->npool * p->params);
+    ttpm_put_f64s(&w, p->pool_reward, p->npool);
+  }
   tt_status st = settings ? ttpm_save(RBF_NAME, path, RBF_FORMAT, &w)
                           : tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
   tt_free(settings);
@@ -639,6 +740,7 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
   tmp.pool_values = tmp.pool_enc = tmp.pool_reward = tmp.pool_da = NULL;
   tmp.cand_daf = tmp.pool_daf = NULL;
   tmp.phi = tmp.x = NULL;
+  ttpm_table_init(&tmp.table, p->d, p->params, 0);
   memset(&tmp.model, 0, sizeof tmp.model);
   tt_config *sc = tt_config_create(rbf_settings);
   if (!sc || tt_config_from_json(sc, h.settings, path) != TT_OK)
@@ -646,6 +748,7 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
   else
     rbf_read_settings(sc, &tmp.set);
   tt_config_destroy(sc);
+  if (version < 2) tmp.set.pool_source = RBF_POOL_REWARDS;  /* version 1 had no state table */
   tmp.seed = ttpm_get_u64(&rd, "the seed");
   uint64_t params = ttpm_get_u64(&rd, "the parameter count");
   uint64_t m = ttpm_get_u64(&rd, "the action dimension");
@@ -693,8 +796,16 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
     ttpm_get_f64s(&rd, tmp.pool_reward, (size_t)npool, "the pool rewards");
     tmp.npool = (size_t)npool;
   }
+  if (!rd.err[0] && tmp.set.pool_source == RBF_POOL_STATES) {
+    if (npool) ttpm_fail(&rd, "%llu pool entries stored beside the state table (poolSource states "
+                         "stores none)", (unsigned long long)npool);
+    if (!rd.err[0] && !ttpm_table_get(&rd, &tmp.table, p->target) && rbf_pool_from_states(&tmp))
+      ttpm_fail(&rd, "out of memory");
+  }
   tt_config_destroy(c);
-  if (!rd.err[0] && rd.pos != rd.len) ttpm_fail(&rd, "%zu bytes after the pool", rd.len - rd.pos);
+  if (!rd.err[0] && rd.pos != rd.len)
+    ttpm_fail(&rd, "%zu bytes after the %s", rd.len - rd.pos,
+              tmp.set.pool_source == RBF_POOL_STATES ? "state table" : "pool");
   ttpm_header_free(&h);
   free(data);
   if (rd.err[0]) {
@@ -738,12 +849,18 @@ static tt_status rbf_init(const tt_host *host) {
                                 "has halved, alpha / (1 + t / decay); 0: constant") >= 0;
   ok = ok && tt_space_add_int(s, "epochs", 1, 10000, 10, "passes over offline data (a tuning "
                               "DB), each in a fresh shuffled order") >= 0;
-  ok = ok && tt_space_add_nom_string(s, "reward", rbf_reward_names, 2, 0, "inverse: R = 1/cost "
-                                     "(thesis); relative: R = default cost / cost") >= 0;
+  ok = ok && tt_space_add_nom_string(s, "reward", rbf_reward_names, 2, 1, "inverse: R = 1/cost "
+                                     "(thesis); relative: R = default cost / cost (the "
+                                     "validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 0, "Latin-hypercube candidate "
                               "actions of the argmax (0: the pool only, the validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "poolSize", 0, 1 << 20, 256, "observed configurations kept "
-                              "as candidates (the highest rewards)") >= 0;
+                              "as candidates") >= 0;
+  ok = ok && tt_space_add_nom_string(s, "poolSource", rbf_pool_names, 2, 1, "rewards: the "
+                                     "poolSize configurations with the highest single reward; "
+                                     "states: each observed state's best configuration (lowest "
+                                     "mean cost), those best in most states first (the "
+                                     "validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "refine", 0, 64, 0, "rounds of coordinate search around the "
                               "best candidates (0: none, the validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "refineStarts", 0, 1024, 4, "candidates the coordinate search "

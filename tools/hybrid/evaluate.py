@@ -279,6 +279,9 @@ def default_config(a):
     return {p["name"]: p["value"] for p in space["parameters"]}
 
 
+# Every variant's --set lands on top of the plugins' current defaults (since session 8:
+# predictor_rbf poolSource=states, reward=relative), so a study re-run today answers its
+# question against today's default; the README's tables say which defaults each ran with.
 VARIANTS = {
     "default": {"args": []},
     # camera bound and scale of the state (README: "Indicators")
@@ -309,6 +312,19 @@ VARIANTS = {
        for w in (0.3, 3)},
     "converged": {"args": ["--set", "predictor_rbf.epochs=200", "--set", "predictor_rbf.decay=20000"],
                   "study": "rbf7-converged", "models": ["rbf"]},
+    # session 8 (issue 15, RBF on render): the candidates are the training states' best
+    # configurations (poolSource=states, what each search found, by mean cost) instead of the
+    # highest single rewards, with either reward (states + relative became the default)
+    "states": {"args": ["--set", "predictor_rbf.poolSource=states"], "study": "rbf8-states",
+               "models": ["rbf"]},
+    "states-relative": {"args": ["--set", "predictor_rbf.poolSource=states", "--set",
+                                 "predictor_rbf.reward=relative"], "study": "rbf8-states", "models": ["rbf"]},
+    # ... and the earlier default (session 6: the highest single rewards, R = 1/cost)
+    "rewards-inverse": {"args": ["--set", "predictor_rbf.poolSource=rewards", "--set",
+                                 "predictor_rbf.reward=inverse"], "study": "rbf8-states", "models": ["rbf"]},
+    # item 7 again under the default (states pool, relative reward): the feature count
+    **{f"states-features-{f}": {"args": ["--set", f"predictor_rbf.features={f}"],
+                                "study": "rbf8-features", "models": ["rbf"]} for f in (10, 25, 50, 200, 400)},
     # RBF argmax candidates: a question about the argmax of one trained model (the candidates
     # do not change the training), so answered from the predictions alone: does the answer
     # still change with more candidates? (summary "candidates"); the pool alone (0-0, only

@@ -44,6 +44,7 @@ static void write_bump(const char *path, const tt_predictor *like, const double 
   snprintf(wb, sizeof wb, "%g", width);
   tt_config_set_string(set, "width", wb);
   tt_config_set_string(set, "lhsCandidates", "256");  /* an empty pool: the argmax searches */
+  tt_config_set_string(set, "reward", "inverse");      /* Q = 1 / cost */
   tt_config_set_string(set, "refine", "3");
   char *settings = tt_config_to_json(set);
   ttpm_header h = {.kind = "predictor_rbf", .plugin_version = "0.1.0",
@@ -82,6 +83,7 @@ static void argmax_of_a_known_q(const char *dir) {
   tt_config_set_string(set, "features", "1");
   tt_config_set_string(set, "lhsCandidates", "256");
   tt_config_set_string(set, "refine", "3");
+  tt_config_set_string(set, "reward", "inverse");
   for (int trial = 0; trial < 6; trial++) {
     double s[2] = {0.1 + 0.15 * trial, 0.9 - 0.13 * trial};
     tt_config *best = pu_config(target, 3 + 5 * trial, 0.2 + 1.5 * trial, trial % 3, trial % 2);
@@ -166,9 +168,14 @@ static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_pred
   return excess;
 }
 
-/* The default argmax (the pool alone) answers a configuration it observed, or the default. */
-static void pool_only_answers_observed(void) {
-  tt_predictor *p = pu_create(P, target, 2, "synthetic", NULL, 5);
+/* The default argmax (the pool alone) answers a configuration it observed, or the default:
+ * with either pool source. */
+static void pool_only_answers_observed(const char *source) {
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "reward", "inverse");  /* the samples have no default cost */
+  tt_config_set_string(set, "poolSource", source);
+  tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 5);
+  tt_config_destroy(set);
   enum { N = 60 };
   tt_config *cfgs[N];
   double states[N][2];
@@ -208,6 +215,90 @@ static void pool_only_answers_observed(void) {
   P->destroy(p);
 }
 
+/* poolSource = states: the candidates are the observed states' best configurations by mean
+ * cost (a lucky single sample does not make a configuration best), those best in most
+ * states first, and the default; online observations update them; a saved model keeps its
+ * state table, so a loaded copy goes on learning exactly as the original. */
+static void state_pool(const char *dir) {
+  tt_config *set = tt_config_create(P->space());
+  tt_config_set_string(set, "poolSource", "states");
+  tt_config_set_string(set, "reward", "inverse");  /* the samples have no default cost */
+  tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 3);
+  tt_config *a = pu_config(target, 4, 0.5, 0, 1), *b = pu_config(target, 20, 3.0, 2, 0);
+  tt_config *c = pu_config(target, 30, 6.0, 1, 1), *def = tt_config_create(target);
+  double st[4][2] = {{0.1, 0.2}, {0.8, 0.3}, {0.4, 0.9}, {0.6, 0.6}};
+  /* state 0: A 10, B 12, C 15; state 1: A 9, B 11, C 30; state 2: A 14, B 10 and 11, C 5
+   * and 20 (C's single 5 is the lowest cost seen, its mean 12.5 loses to B's 10.5) */
+  struct { int s; tt_config *cfg; double cost; } obs[] = {
+    {0, a, 10}, {0, b, 12}, {0, c, 15}, {1, a, 9}, {1, b, 11}, {1, c, 30},
+    {2, a, 14}, {2, b, 10}, {2, c, 5}, {2, b, 11}, {2, c, 20}};
+  enum { NO = sizeof obs / sizeof obs[0] };
+  tt_predictor_sample smp[NO];
+  for (int i = 0; i < NO; i++)
+    smp[i] = (tt_predictor_sample){.struct_size = sizeof smp[i], .state = st[obs[i].s],
+                                   .config = obs[i].cfg, .cost = obs[i].cost, .default_cost = NAN};
+  CHECK(P->observe_ex(p, smp, NO, TT_PREDICTOR_OFFLINE) == TT_OK);
+  char *aj = tt_config_to_json(a), *bj = tt_config_to_json(b), *cj = tt_config_to_json(c);
+  char *dj = tt_config_to_json(def);
+  tt_config *out = tt_config_create(target);
+  uint64_t x = 77;
+  for (int t = 0; t < 20; t++) {
+    double s[2] = {uni(&x), uni(&x)};
+    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
+    tt_predictor_result r = {.struct_size = sizeof r};
+    CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
+    CHECK_MSG(r.candidates == 3, "%llu candidates: the pool must be A and B (the states' "
+              "bests) and the default", (unsigned long long)r.candidates);
+    char *oj = tt_config_to_json(out);
+    CHECK_MSG(!strcmp(oj, aj) || !strcmp(oj, bj) || !strcmp(oj, dj), "answer %s is no state's best", oj);
+    /* the answer is the argmax of estimate() over the three candidates */
+    double ca, cb, cd, co;
+    CHECK(P->estimate(p, &q, a, &ca) == TT_OK && P->estimate(p, &q, b, &cb) == TT_OK &&
+          P->estimate(p, &q, def, &cd) == TT_OK && P->estimate(p, &q, out, &co) == TT_OK);
+    CHECK_MSG(co <= ca * (1 + 1e-12) && co <= cb * (1 + 1e-12) && co <= cd * (1 + 1e-12),
+              "answer's expected cost %g, A %g, B %g, default %g", co, ca, cb, cd);
+    tt_free(oj);
+  }
+  /* saved and loaded: the same answers; both learn one more state (C best there) alike */
+  char path[4200];
+  snprintf(path, sizeof path, "%s/states.ttpm", dir);
+  CHECK_MSG(P->save(p, path) == TT_OK, "%s", tt_last_error());
+  tt_predictor *l = pu_create(P, target, 2, "synthetic", set, 99);
+  CHECK_MSG(P->load(l, path) == TT_OK, "%s", tt_last_error());
+  char *pa = pu_predictions(P, p, target, 2, 100), *pb = pu_predictions(P, l, target, 2, 100);
+  CHECK(!strcmp(pa, pb));
+  free(pa);
+  free(pb);
+  tt_predictor_sample more = {.struct_size = sizeof more, .state = st[3], .config = c, .cost = 2,
+                              .default_cost = NAN};
+  CHECK(P->observe(p, st[3], c, 2.0) == TT_OK);
+  CHECK(P->observe_ex(l, &more, 1, TT_PREDICTOR_ONLINE) == TT_OK);
+  pa = pu_predictions(P, p, target, 2, 100);
+  pb = pu_predictions(P, l, target, 2, 100);
+  CHECK_MSG(!strcmp(pa, pb), "the loaded model learnt differently: its state table was not kept");
+  free(pa);
+  free(pb);
+  tt_predictor_query q = {.struct_size = sizeof q, .state = st[3], .default_cost = NAN};
+  tt_predictor_result r = {.struct_size = sizeof r};
+  CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
+  CHECK_MSG(r.candidates == 4, "%llu candidates after C became a state's best",
+            (unsigned long long)r.candidates);
+  /* the file properties of a states model (cut short, corrupt, other spaces, newer format) */
+  pu_check_files(P, p, target, 2, "synthetic", dir, NN, set, 2);
+  tt_free(aj);
+  tt_free(bj);
+  tt_free(cj);
+  tt_free(dj);
+  tt_config_destroy(a);
+  tt_config_destroy(b);
+  tt_config_destroy(c);
+  tt_config_destroy(def);
+  tt_config_destroy(out);
+  tt_config_destroy(set);
+  P->destroy(p);
+  P->destroy(l);
+}
+
 /* The pool argmax with its cached action distances (pool_da) answers the exact argmax over
  * what the pool must hold: with poolSize 16 and 60 distinct observed configurations (so slots
  * are replaced), the 16 highest rewards (lowest costs) and the default. estimate() is the
@@ -217,6 +308,8 @@ static void pool_only_answers_observed(void) {
 static void pool_argmax_is_exact(const char *dir) {
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "poolSize", "16");
+  tt_config_set_string(set, "poolSource", "rewards");
+  tt_config_set_string(set, "reward", "inverse");
   tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 8);
   enum { N = 60, K = 16 };
   tt_config *cfgs[N + 1];
@@ -290,6 +383,8 @@ static void bounded_argmax_matches_reference(const char *dir) {
   tt_config *fast = tt_config_create(P->space()), *ref = tt_config_create(P->space());
   tt_config_set_string(fast, "lhsCandidates", "200");
   tt_config_set_string(ref, "lhsCandidates", "200");
+  tt_config_set_string(fast, "reward", "inverse");  /* its samples have no default cost */
+  tt_config_set_string(ref, "reward", "inverse");
   tt_config_set_string(ref, "refine", "1");
   tt_config_set_string(ref, "refineStarts", "0");
   tt_predictor *a = pu_create(P, target, 2, "synthetic", fast, 5);
@@ -389,7 +484,9 @@ int main(int argc, char **argv) {
   P->destroy(e);
 
   argmax_of_a_known_q(dir);
-  pool_only_answers_observed();
+  pool_only_answers_observed("rewards");
+  pool_only_answers_observed("states");
+  state_pool(dir);
   pool_argmax_is_exact(dir);
   bounded_argmax_matches_reference(dir);
   relative_reward();
@@ -420,7 +517,7 @@ int main(int argc, char **argv) {
   tt_config_set_string(set, "decay", "20000");
   tt_config_set_string(set, "lhsCandidates", "256");
   tt_config_set_string(set, "refine", "3");
-  pu_check_files(P, trained, target, 2, "synthetic", dir, NN, set);
+  pu_check_files(P, trained, target, 2, "synthetic", dir, NN, set, 2);
   tt_config_destroy(set);
 
   P->destroy(trained);
