@@ -368,15 +368,15 @@ tt_status ttpm_load(const char *who, const char *who_version, const char *path,
     uint64_t n = 0;
     for (int i = 0; i < 4; i++) v |= (uint32_t)buf[8 + i] << (8 * i);
     for (int i = 0; i < 8; i++) n |= (uint64_t)buf[16 + i] << (8 * i);
-    /* the model kind (the payload's first string) where it can be read: a file of another
-     * predictor is named as such, whatever its format version */
+    /* a newer version: the model kind (the payload's first string, u32 length + bytes)
+     * where it can be read, so that a file of another predictor is named as such */
     uint32_t kl = 0;
-    for (int i = 0; i < 4 && size >= TTPM_HEADER_BYTES + 4; i++)
-      kl |= (uint32_t)buf[TTPM_HEADER_BYTES + i] << (8 * i);
+    if (v > max_version && size >= TTPM_HEADER_BYTES + 4)
+      for (int i = 0; i < 4; i++) kl |= (uint32_t)buf[TTPM_HEADER_BYTES + i] << (8 * i);
     int other_kind = kl > 0 && kl < 256 && size >= TTPM_HEADER_BYTES + 4 + (size_t)kl &&
                      (strlen(who) != kl || memcmp(buf + TTPM_HEADER_BYTES + 4, who, kl)) &&
                      !memchr(buf + TTPM_HEADER_BYTES + 4, 0, kl);
-    if (v > max_version && other_kind) {
+    if (other_kind) {
       rc = tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: model %s was written by %.*s (format "
                         "version %u), not by %s (load it with --plugin %.*s)", who, path, (int)kl,
                         (const char *)buf + TTPM_HEADER_BYTES + 4, v, who, (int)kl,

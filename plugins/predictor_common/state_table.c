@@ -66,7 +66,8 @@ static void tt__update_best(ttpm_table_entry *e) {
   e->best = b;
 }
 
-size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, double cost) {
+size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, double cost,
+                      int *best_changed) {
   size_t i = ttpm_table_find(t, state);
   if (i == SIZE_MAX && t->max_states > 0 && t->n >= (size_t)t->max_states)
     i = ttpm_table_nearest(t, state, NULL);
@@ -86,6 +87,8 @@ size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, 
     i = t->n++;
   }
   ttpm_table_entry *e = &t->entries[i];
+  int fresh = e->ncfg == 0;
+  size_t best = e->best;
   size_t k = ttpm_table_find_cfg(t, i, values);
   if (k == SIZE_MAX) {
     if (e->ncfg == e->cap) {
@@ -104,6 +107,7 @@ size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, 
   e->cfgs[k].sum += cost;
   e->cfgs[k].count++;
   tt__update_best(e);
+  if (best_changed && (fresh || e->best != best)) *best_changed = 1;
   return i;
 }
 
@@ -165,7 +169,7 @@ int ttpm_table_get(ttpm_reader *r, ttpm_table *t, const tt_space *target) {
         break;
       }
       /* rebuild exactly: one add with the whole sum, then the count */
-      size_t e_i = ttpm_table_add(t, state, v, sum);
+      size_t e_i = ttpm_table_add(t, state, v, sum, NULL);
       if (e_i == SIZE_MAX) {
         ttpm_fail(r, "out of memory");
         break;

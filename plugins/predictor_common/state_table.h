@@ -62,8 +62,11 @@ size_t ttpm_table_find_cfg(const ttpm_table *t, size_t i, const double *values);
 
 /* Adds one observation (a finite positive cost; the caller checks it). Returns the index of
  * the entry it joined, or SIZE_MAX when out of memory (the table unchanged then but for a
- * new empty entry's state). */
-size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, double cost);
+ * new empty entry's state). *best_changed (when not NULL) is set to 1 if the entry is new or
+ * its best configuration is now another one, else left as it was, so a caller can collect
+ * over a batch whether anything derived from the states' bests must be recomputed. */
+size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, double cost,
+                      int *best_changed);
 
 /* Heap bytes the table holds (what info() reports). */
 uint64_t ttpm_table_bytes(const ttpm_table *t);

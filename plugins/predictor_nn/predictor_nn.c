@@ -110,7 +110,7 @@ static tt_status nn_create(const tt_space *target, uint32_t state_dim, const tt_
 
 /* Adds one validated observation; TT_OK or out of memory. */
 static tt_status nn_add(tt_predictor *p, const double *state, const double *values, double cost) {
-  if (ttpm_table_add(&p->table, state, values, cost) == SIZE_MAX)
+  if (ttpm_table_add(&p->table, state, values, cost, NULL) == SIZE_MAX)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
   p->observations++;
   return TT_OK;

@@ -408,19 +408,19 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
   }
   if (p->set.pool_source == RBF_POOL_STATES) {
-    /* the table learns each sample once, whatever the passes of the update below */
-    size_t added = 0;
+    /* the table learns each sample once, whatever the passes of the update below; the
+     * pool is rebuilt only when a state's best changed (a new state, another best) */
+    int changed = 0;
     for (size_t i = 0; i < count; i++) {
       if (s[i].cost >= TT_COST_INFEASIBLE) continue;
       ttpm_config_values(s[i].config, values);
-      if (ttpm_table_add(&p->table, s[i].state, values, s[i].cost) == SIZE_MAX) {
+      if (ttpm_table_add(&p->table, s[i].state, values, s[i].cost, &changed) == SIZE_MAX) {
         free(values);
         free(order);
         return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
       }
-      added++;
     }
-    if (added && rbf_pool_from_states(p)) {
+    if (changed && rbf_pool_from_states(p)) {
       free(values);
       free(order);
       return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
