@@ -219,6 +219,9 @@ static const bench_cfg g_cfgs[] = {
     {"custom bf8 blk4 leaf16", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=16"},
     {"custom bf8 blk4 t2", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8,travcost=2"},
     {"custom bf4 robust", "backend=custom,branchingFactor=4,robust=true"},
+    /* Embree's own scene arguments (BVH8Triangle4SceneBuilderSAH): native's tree exactly,
+     * so this row against native default compares the kernels alone */
+    {"custom as native", "backend=custom,branchingFactor=8,sahBlockSize=4,minLeafSize=4,maxLeafSize=32"},
 };
 #define NCFG (sizeof g_cfgs / sizeof g_cfgs[0])
 

@@ -14,6 +14,11 @@
  * default (the median over rounds of the ratio within a round, so drift cancels; CPU
  * time), build ms, memory, and end with geometric means over the scenes and the goals of
  * issue 16 marked met / not met (printed, never asserted: figures depend on the machine).
+ * Each render is also split into traversal (CPU time inside the accel's stream calls, by
+ * kind: camera rays, other closest hits, shadow rays) and the rest (shading, sampling, the
+ * integrator), with the same paired ratios to native, and the summary says what share of
+ * native's render traversal is and how much faster than native's it would have to be for a
+ * render 1.10x native's (so a kernel figure can be read as a render figure).
  *
  *   meson test -C build --suite bench accel_embree_render_bench -v
  *   TT_PLUGIN_PATH=build/plugins TT_SOURCE_ROOT=. build/plugins/accel_embree/tests/accel_embree_render_bench \
@@ -78,6 +83,56 @@ static tt_status timed_parallel_for(uint64_t count, uint64_t grain, tt_parallel_
   return tt_default_host()->parallel_for(count, grain, timed_chunk, NULL);
 }
 
+/* ---- an accel table whose queries time themselves, to split a render into traversal and
+ * the rest (shading, sampling, the integrator) ----
+ *
+ * The integrator calls the accel through ctx.accel_iface, so the bench hands it a copy of
+ * the plugin's table whose query entries forward to the plugin's and add the calling
+ * thread's CPU time to a counter. Streams (what integrator_pt's wavefront calls: up to 1024
+ * rays per call, ~0.1 ms) are timed per call, which costs two clock reads per call (well
+ * under 1% of a call); single-ray calls are counted but not timed (a clock read per ray
+ * would cost as much as the ray), so a render that makes them shows them in the "1-ray"
+ * column and its traversal figure leaves them out. */
+static const tt_accel_iface *g_real;
+static tt_accel_iface g_timed;
+static _Atomic long long g_trav_ns[3];  /* closest-hit streams, occlusion streams, and of
+                                         * the first those from one origin (camera rays) */
+static _Atomic long long g_single_calls;
+
+static void timed_intersect1(const tt_accel *a, tt_ray *ray, tt_hit *hit) {
+  atomic_fetch_add_explicit(&g_single_calls, 1, memory_order_relaxed);
+  g_real->intersect1(a, ray, hit);
+}
+static int timed_occluded1(const tt_accel *a, const tt_ray *ray) {
+  atomic_fetch_add_explicit(&g_single_calls, 1, memory_order_relaxed);
+  return g_real->occluded1(a, ray);
+}
+static void timed_intersect_stream(const tt_accel *a, tt_ray *rays, tt_hit *hits, size_t n) {
+  const int camera = n > 1 && !memcmp(rays[0].org, rays[n - 1].org, sizeof rays[0].org);
+  long long c0 = thread_cpu_ns();
+  g_real->intersect_stream(a, rays, hits, n);
+  long long dt = thread_cpu_ns() - c0;
+  atomic_fetch_add_explicit(&g_trav_ns[0], dt, memory_order_relaxed);
+  if (camera) atomic_fetch_add_explicit(&g_trav_ns[2], dt, memory_order_relaxed);
+}
+static void timed_occluded_stream(const tt_accel *a, const tt_ray *rays, uint8_t *occ,
+                                  size_t n) {
+  long long c0 = thread_cpu_ns();
+  g_real->occluded_stream(a, rays, occ, n);
+  atomic_fetch_add_explicit(&g_trav_ns[1], thread_cpu_ns() - c0, memory_order_relaxed);
+}
+
+/* The timed copy of `real` (kept for the whole run). */
+static const tt_accel_iface *timed_accel(const tt_accel_iface *real) {
+  g_real = real;
+  g_timed = *real;
+  g_timed.intersect1 = timed_intersect1;
+  g_timed.occluded1 = timed_occluded1;
+  g_timed.intersect_stream = timed_intersect_stream;
+  g_timed.occluded_stream = timed_occluded_stream;
+  return &g_timed;
+}
+
 /* ---- configurations ---- */
 
 typedef struct bench_cfg {
@@ -91,6 +146,13 @@ static const bench_cfg g_builtin[] = {
     {"custom default (bf2)", "backend=custom"},
     {"custom bf4 blk4 leaf8", "backend=custom,branchingFactor=4,sahBlockSize=4,maxLeafSize=8"},
     {"custom bf8 blk4 leaf8", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"},
+    /* Embree's own scene arguments (BVH8Triangle4SceneBuilderSAH): native's tree exactly,
+     * so against native default this row compares the traversal kernels alone */
+    {"custom as native", "backend=custom,branchingFactor=8,sahBlockSize=4,minLeafSize=4,"
+                         "maxLeafSize=32"},
+    /* Embree's best tree for rendering (spatial splits, static scene): how much any tree
+     * can give over native default, i.e. the ceiling of render-time tuning from it */
+    {"native q3 static", "backend=native,quality=3,static=true"},
 };
 static bench_cfg g_cfgs[MAX_CFG];
 static int g_ncfg;
@@ -182,6 +244,9 @@ typedef struct scene_result {
   double cpu[MAX_MODES][MAX_CFG];   /* median CPU ms */
   double wall[MAX_MODES][MAX_CFG];  /* median wall ms */
   double ratio[MAX_MODES][MAX_CFG]; /* median over rounds of native CPU ms / this CPU ms */
+  double trav[MAX_MODES][MAX_CFG];  /* median CPU ms in the accel's streams */
+  double trav_ratio[MAX_MODES][MAX_CFG]; /* median over rounds of native's / this one's */
+  double rest_ratio[MAX_MODES][MAX_CFG]; /* the same for the rest of the render */
   double mib[MAX_CFG];
 } scene_result;
 static scene_result g_res[MAX_SCENES];
@@ -191,6 +256,7 @@ static int g_nres;
 
 typedef struct plugins {
   const tt_accel_iface *A;
+  const tt_accel_iface *Aq;  /* A's copy whose queries time themselves (timed_accel) */
   const tt_integrator_iface *I;
 } plugins;
 
@@ -199,9 +265,14 @@ static int g_runs, g_spp, g_w, g_h;
 /* Renders one image (g_spp passes of 1 spp, as the host does) into `film`; returns CPU
  * ms of the rendering threads, wall ms in *wall, rays in *rays. */
 static double render_once(const plugins *P, tt_integrator *it, const tt_scene *scene,
-                          const tt_accel *acc, tt_film *film, double *wall, uint64_t *rays) {
+                          const tt_accel *acc, tt_film *film, double *wall, uint64_t *rays,
+                          double *trav, double *occl, double *cam, long long *singles) {
   tt_film_clear(film);
   atomic_store(&g_chunk_cpu_ns, 0);
+  atomic_store(&g_trav_ns[0], 0);
+  atomic_store(&g_trav_ns[1], 0);
+  atomic_store(&g_trav_ns[2], 0);
+  atomic_store(&g_single_calls, 0);
   uint64_t r = 0;
   double w0 = bench_wall_ms();
   for (int p = 0; p < g_spp; p++) {
@@ -209,7 +280,7 @@ static double render_once(const plugins *P, tt_integrator *it, const tt_scene *s
     memset(&ctx, 0, sizeof ctx);
     ctx.struct_size = sizeof ctx;
     ctx.scene = scene;
-    ctx.accel_iface = P->A;
+    ctx.accel_iface = P->Aq;
     ctx.accel = acc;
     ctx.film = film;
     ctx.camera = tt_scene_camera(scene);
@@ -226,6 +297,10 @@ static double render_once(const plugins *P, tt_integrator *it, const tt_scene *s
   }
   *wall = bench_wall_ms() - w0;
   *rays = r;
+  *trav = 1e-6 * (double)(atomic_load(&g_trav_ns[0]) + atomic_load(&g_trav_ns[1]));
+  *occl = 1e-6 * (double)atomic_load(&g_trav_ns[1]);
+  *cam = 1e-6 * (double)atomic_load(&g_trav_ns[2]);
+  *singles = atomic_load(&g_single_calls);
   return 1e-6 * (double)atomic_load(&g_chunk_cpu_ns);
 }
 
@@ -294,15 +369,18 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
       CHECK_MSG(s == TT_OK, "integrator_pt create: %s", tt_last_error());
       if (s != TT_OK) it[c] = NULL;
     }
-    double cpu[MAX_CFG][MAX_RUNS], wall[MAX_CFG][MAX_RUNS], mean[MAX_CFG];
+    double cpu[MAX_CFG][MAX_RUNS], wall[MAX_CFG][MAX_RUNS], trav[MAX_CFG][MAX_RUNS];
+    double occl[MAX_CFG][MAX_RUNS], cam[MAX_CFG][MAX_RUNS];
+    double mean[MAX_CFG];
+    long long singles[MAX_CFG];
     uint64_t rays[MAX_CFG];
     memset(mean, 0, sizeof mean);
     memset(rays, 0, sizeof rays);
     /* Warm-up: one render of each, not counted (first touch of the tree's pages). */
     for (int c = 0; c < g_ncfg; c++)
       if (acc[c] && it[c]) {
-        double w;
-        render_once(P, it[c], scene, acc[c], film, &w, &rays[c]);
+        double w, t, o, k;
+        render_once(P, it[c], scene, acc[c], film, &w, &rays[c], &t, &o, &k, &singles[c]);
         mean[c] = film_mean(film);
       }
     for (int r = 0; r < g_runs; r++)
@@ -310,13 +388,17 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
         int c = (k + r) % g_ncfg;  /* rotate the order */
         if (!acc[c] || !it[c]) continue;
         uint64_t rr;
-        cpu[c][r] = render_once(P, it[c], scene, acc[c], film, &wall[c][r], &rr);
+        long long sg;
+        cpu[c][r] = render_once(P, it[c], scene, acc[c], film, &wall[c][r], &rr, &trav[c][r],
+                                &occl[c][r], &cam[c][r], &sg);
       }
     for (int c = 0; c < g_ncfg; c++) P->I->destroy(it[c]);
     printf("  threads %d, maxDepth %d: %.2f Mrays per image\n", md->threads, md->depth,
            1e-6 * (double)rays[0]);
-    printf("  %-28s %9s %9s %7s %9s %7s | %10s %9s %7s\n", "configuration", "CPU ms", "min",
-           "spread", "wall ms", "on-CPU", "vs native", "(of mins)", "rays");
+    printf("  %-28s %9s %9s %7s %9s %7s | %10s %9s %7s | %8s %6s %9s %9s %6s | %6s %6s %6s\n",
+           "configuration", "CPU ms", "min", "spread", "wall ms", "on-CPU", "vs native",
+           "(of mins)", "rays", "trav ms", "share", "trav/nat", "rest/nat", "1-ray", "camera",
+           "bounce", "shadow");
     for (int c = 0; c < g_ncfg; c++) {
       if (!acc[c] || !it[c]) {
         printf("  %-28s (build failed)\n", g_cfgs[c].label);
@@ -324,20 +406,31 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
       }
       res->cpu[m][c] = bench_median(cpu[c], g_runs);
       res->wall[m][c] = bench_median(wall[c], g_runs);
-      double mn = cpu[c][0], mx = cpu[c][0], q[MAX_RUNS];
+      double mn = cpu[c][0], mx = cpu[c][0], q[MAX_RUNS], qt[MAX_RUNS], qr[MAX_RUNS];
       for (int r = 0; r < g_runs; r++) {
         mn = cpu[c][r] < mn ? cpu[c][r] : mn, mx = cpu[c][r] > mx ? cpu[c][r] : mx;
         /* paired: native's render and this one's in the same round (drift cancels) */
         q[r] = acc[0] && cpu[c][r] > 0 ? cpu[0][r] / cpu[c][r] : 0.0;
+        qt[r] = acc[0] && trav[c][r] > 0 ? trav[0][r] / trav[c][r] : 0.0;
+        double rest0 = cpu[0][r] - trav[0][r], rest = cpu[c][r] - trav[c][r];
+        qr[r] = acc[0] && rest > 0 ? rest0 / rest : 0.0;
       }
+      res->trav[m][c] = bench_median(trav[c], g_runs);
+      double occl_ms = bench_median(occl[c], g_runs), cam_ms = bench_median(cam[c], g_runs);
+      res->trav_ratio[m][c] = bench_median(qt, g_runs);
+      res->rest_ratio[m][c] = bench_median(qr, g_runs);
       double mn0 = cpu[0][0];
       for (int r = 0; r < g_runs; r++) mn0 = cpu[0][r] < mn0 ? cpu[0][r] : mn0;
       res->ratio[m][c] = bench_median(q, g_runs);
       double share = res->cpu[m][c] / (res->wall[m][c] * md->threads);
-      printf("  %-28s %9.1f %9.1f %6.1f%% %9.1f %6.0f%% | %9.3fx %8.3fx %+6.2f%%\n",
+      printf("  %-28s %9.1f %9.1f %6.1f%% %9.1f %6.0f%% | %9.3fx %8.3fx %+6.2f%% | %8.1f %5.0f%% "
+             "%8.3fx %8.3fx %6lld | %6.1f %6.1f %6.1f\n",
              g_cfgs[c].label, res->cpu[m][c], mn, 100.0 * (mx - mn) / res->cpu[m][c],
              res->wall[m][c], 100.0 * share, res->ratio[m][c], mn0 / mn,
-             rays[0] ? 100.0 * ((double)rays[c] - (double)rays[0]) / (double)rays[0] : 0.0);
+             rays[0] ? 100.0 * ((double)rays[c] - (double)rays[0]) / (double)rays[0] : 0.0,
+             res->trav[m][c], 100.0 * res->trav[m][c] / res->cpu[m][c], res->trav_ratio[m][c],
+             res->rest_ratio[m][c], singles[c], cam_ms, res->trav[m][c] - occl_ms - cam_ms,
+             occl_ms);
       /* Same seed, same samples: the images may differ only where a hit differs by
        * round-off (a handful of paths). */
       if (acc[0] && mean[0] > 0)
@@ -412,6 +505,9 @@ static double geomean_ratio(int m, int c, int *n_out, double *min_out) {
   return n ? exp(lg / n) : 0.0;
 }
 
+/* Whether row c builds the custom backend (the goals' "best custom" is chosen among these). */
+static int is_custom(int c) { return strstr(g_cfgs[c].settings, "backend=custom") != NULL; }
+
 static void summary(void) {
   printf("\nratios to native default (render speed: median over rounds of native CPU ms / CPU ms "
          "of the same round), per scene and geometric mean\n");
@@ -437,7 +533,7 @@ static void summary(void) {
       printf(" %8.3fx %6.3fx\n", g, n ? mn : 0.0);
       score += log(g > 0 ? g : 1e-9);
     }
-    if (c > 1 && (best_c < 0 || score > best_score)) best_c = c, best_score = score;
+    if (c > 1 && is_custom(c) && (best_c < 0 || score > best_score)) best_c = c, best_score = score;
   }
   printf("\nmemory (MiB) / native default's\n");
   for (int c = 1; c < g_ncfg; c++) {
@@ -447,6 +543,40 @@ static void summary(void) {
         printf(" %10.2fx", g_res[s].mib[c] / g_res[s].mib[0]);
       else
         printf(" %11s", "-");
+    printf("\n");
+  }
+  printf("\ntraversal speed / native default's (median over rounds of native's stream CPU ms "
+         "/ this row's), and the same for the rest of the render\n");
+  for (int c = 1; c < g_ncfg; c++)
+    for (int m = 0; m < g_nmodes; m++) {
+      printf("%-28s t%d d%-4d", m == 0 ? g_cfgs[c].label : "", g_modes[m].threads,
+             g_modes[m].depth);
+      for (int s = 0; s < g_nres; s++) {
+        const scene_result *r = &g_res[s];
+        if (r->have[0] && r->have[c] && r->trav_ratio[m][c] > 0)
+          printf(" %5.3f %5.3f", r->trav_ratio[m][c], r->rest_ratio[m][c]);
+        else
+          printf(" %11s", "-");
+      }
+      printf("\n");
+    }
+  /* Where the render's time goes: native's traversal share, and what a render 1.10x
+   * native's would ask of traversal if the rest (shading, sampling) stayed as fast. */
+  printf("\ntraversal (the accel's streams) in native default's render, and the traversal "
+         "speed (x native's) that a 1.10x render needs with the rest unchanged\n");
+  for (int m = 0; m < g_nmodes; m++) {
+    printf("%-28s t%d d%-4d", m == 0 ? "share / needed" : "", g_modes[m].threads,
+           g_modes[m].depth);
+    for (int s = 0; s < g_nres; s++) {
+      const scene_result *r = &g_res[s];
+      const double T = r->cpu[m][0], t = r->trav[m][0], cut = T - T / 1.10;
+      if (!r->have[0] || T <= 0 || t <= 0)
+        printf(" %11s", "-");
+      else if (t <= cut)
+        printf(" %4.0f%% never", 100.0 * t / T);
+      else
+        printf(" %4.0f%% %4.2fx", 100.0 * t / T, t / (t - cut));
+    }
     printf("\n");
   }
   /* Issue 16's goals, printed (never asserted): each with its figure and met / NOT met. */
@@ -483,6 +613,7 @@ static void summary(void) {
   }
   /* Memory: every custom row against native default, scene by scene. */
   for (int c = 1; c < g_ncfg; c++) {
+    if (!is_custom(c)) continue;
     double worst = 0.0;
     int n = 0;
     for (int s = 0; s < g_nres; s++)
@@ -533,7 +664,8 @@ int main(int argc, char **argv) {
     fprintf(stderr, "loading %s failed: %s\n", path, tt_last_error());
     return 1;
   }
-  plugins P = {tt_loaded_plugin_iface(la), tt_loaded_plugin_iface(li)};
+  plugins P = {tt_loaded_plugin_iface(la), NULL, tt_loaded_plugin_iface(li)};
+  P.Aq = timed_accel(P.A);
 
   double load[3] = {0, 0, 0};
   if (getloadavg(load, 3) < 0) load[0] = load[1] = load[2] = -1;
