@@ -66,19 +66,26 @@ static void tt__update_best(ttpm_table_entry *e) {
   e->best = b;
 }
 
+/* Room for one more item in `items` (*cap items of `elem` bytes, n of them used): the array
+ * itself, or when full a copy with twice the capacity (`first` for an empty one) and *cap
+ * updated. NULL when out of memory (the old array is kept and still owned by the caller). */
+static void *tt__reserve(void *items, size_t *cap, size_t n, size_t elem, size_t first) {
+  if (n < *cap) return items;
+  size_t c = *cap ? 2 * *cap : first;
+  void *p = realloc(items, c * elem);
+  if (p) *cap = c;
+  return p;
+}
+
 size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, double cost,
                       int *best_changed) {
   size_t i = ttpm_table_find(t, state);
   if (i == SIZE_MAX && t->max_states > 0 && t->n >= (size_t)t->max_states)
     i = ttpm_table_nearest(t, state, NULL);
   if (i == SIZE_MAX) {
-    if (t->n == t->cap) {
-      size_t cap = t->cap ? 2 * t->cap : 64;
-      ttpm_table_entry *e = realloc(t->entries, cap * sizeof *e);
-      if (!e) return SIZE_MAX;
-      t->entries = e;
-      t->cap = cap;
-    }
+    ttpm_table_entry *grown = tt__reserve(t->entries, &t->cap, t->n, sizeof *grown, 64);
+    if (!grown) return SIZE_MAX;
+    t->entries = grown;
     ttpm_table_entry *e = &t->entries[t->n];
     memset(e, 0, sizeof *e);
     e->state = malloc((t->dim ? t->dim : 1) * sizeof(double));
@@ -91,13 +98,9 @@ size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, 
   size_t best = e->best;
   size_t k = ttpm_table_find_cfg(t, i, values);
   if (k == SIZE_MAX) {
-    if (e->ncfg == e->cap) {
-      size_t cap = e->cap ? 2 * e->cap : 8;
-      ttpm_table_cfg *c = realloc(e->cfgs, cap * sizeof *c);
-      if (!c) return SIZE_MAX;
-      e->cfgs = c;
-      e->cap = cap;
-    }
+    ttpm_table_cfg *grown = tt__reserve(e->cfgs, &e->cap, e->ncfg, sizeof *grown, 8);
+    if (!grown) return SIZE_MAX;
+    e->cfgs = grown;
     double *v = malloc((t->params ? t->params : 1) * sizeof(double));
     if (!v) return SIZE_MAX;
     memcpy(v, values, t->params * sizeof(double));

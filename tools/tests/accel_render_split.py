@@ -15,7 +15,14 @@ sys.path.insert(0, os.path.join(ROOT, "tools", "accel"))
 import render_split  # noqa: E402
 
 DATA = os.path.join(ROOT, "tools", "accel", "data", "render_bench_session9.txt")
+TOOL = os.path.join(ROOT, "tools", "accel", "render_split.py")
 fails = 0
+
+
+def run(*args):
+    """The tool as a user runs it: returncode, stdout, stderr."""
+    r = subprocess.run([sys.executable, TOOL, *args], capture_output=True, text=True)
+    return r.returncode, r.stdout, r.stderr
 
 
 def check(cond, what):
@@ -47,9 +54,8 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "split.png")
-        r = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "accel", "render_split.py"),
-                            DATA, "--mode", "t2 d8", "--out", out], capture_output=True, text=True)
-        check(r.returncode == 0 and "custom as native" in r.stdout, f"run: {r.returncode} {r.stderr}")
+        rc, out_text, err = run(DATA, "--mode", "t2 d8", "--out", out)
+        check(rc == 0 and "custom as native" in out_text, f"run: {rc} {err}")
         with open(out, "rb") as f:
             check(f.read(8) == b"\x89PNG\r\n\x1a\n", "the chart is a PNG")
 
@@ -59,24 +65,20 @@ def main():
         short = os.path.join(tmp, "short.txt")
         with open(short, "w") as f:
             f.write("\n".join(lines[:cut]) + "\n" + lines[cut][:50])
-        r = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "accel", "render_split.py"),
-                            short], capture_output=True, text=True)
-        check(r.returncode != 0 and f"short.txt:{cut + 1}:" in r.stderr and
-              "Traceback" not in r.stderr, f"cut short: {r.returncode} {r.stderr!r}")
+        rc, _, err = run(short)
+        check(rc != 0 and f"short.txt:{cut + 1}:" in err and "Traceback" not in err,
+              f"cut short: {rc} {err!r}")
         # An older bench output without the traversal columns.
         old = os.path.join(tmp, "old.txt")
         with open(old, "w") as f:
             f.write("living-room: 143163 triangles, 160x120, 4 spp\n  threads 1, maxDepth 3: 0.48\n"
                     "  configuration  CPU ms  min  spread  wall ms  on-CPU |  vs native\n")
-        r = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "accel", "render_split.py"),
-                            old], capture_output=True, text=True)
-        check(r.returncode != 0 and "no traversal split" in r.stderr and "old.txt:3" in r.stderr,
-              f"old output: {r.stderr!r}")
+        rc, _, err = run(old)
+        check(rc != 0 and "no traversal split" in err and "old.txt:3" in err,
+              f"old output: {err!r}")
         # A mode the file does not have.
-        r = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "accel", "render_split.py"),
-                            DATA, "--mode", "t4 d3"], capture_output=True, text=True)
-        check(r.returncode != 0 and "it has: t1 d3, t1 d8, t2 d3, t2 d8" in r.stderr,
-              f"unknown mode: {r.stderr!r}")
+        rc, _, err = run(DATA, "--mode", "t4 d3")
+        check(rc != 0 and "it has: t1 d3, t1 d8, t2 d3, t2 d8" in err, f"unknown mode: {err!r}")
     print("accel_render_split:", "FAILED" if fails else "passed", f"({fails} failures)")
     return 1 if fails else 0
 

@@ -95,8 +95,9 @@ static tt_status timed_parallel_for(uint64_t count, uint64_t grain, tt_parallel_
  * column and its traversal figure leaves them out. */
 static const tt_accel_iface *g_real;
 static tt_accel_iface g_timed;
-static _Atomic long long g_trav_ns[3];  /* closest-hit streams, occlusion streams, and of
-                                         * the first those from one origin (camera rays) */
+static _Atomic long long g_hit_ns;     /* closest-hit streams */
+static _Atomic long long g_cam_ns;     /* of those, the streams from one origin (camera) */
+static _Atomic long long g_occl_ns;    /* occlusion streams */
 static _Atomic long long g_single_calls;
 
 static void timed_intersect1(const tt_accel *a, tt_ray *ray, tt_hit *hit) {
@@ -108,18 +109,20 @@ static int timed_occluded1(const tt_accel *a, const tt_ray *ray) {
   return g_real->occluded1(a, ray);
 }
 static void timed_intersect_stream(const tt_accel *a, tt_ray *rays, tt_hit *hits, size_t n) {
+  /* camera streams share one origin; the first and last rays stand for the stream (bounce
+   * streams start at n different surface points) */
   const int camera = n > 1 && !memcmp(rays[0].org, rays[n - 1].org, sizeof rays[0].org);
   long long c0 = thread_cpu_ns();
   g_real->intersect_stream(a, rays, hits, n);
   long long dt = thread_cpu_ns() - c0;
-  atomic_fetch_add_explicit(&g_trav_ns[0], dt, memory_order_relaxed);
-  if (camera) atomic_fetch_add_explicit(&g_trav_ns[2], dt, memory_order_relaxed);
+  atomic_fetch_add_explicit(&g_hit_ns, dt, memory_order_relaxed);
+  if (camera) atomic_fetch_add_explicit(&g_cam_ns, dt, memory_order_relaxed);
 }
 static void timed_occluded_stream(const tt_accel *a, const tt_ray *rays, uint8_t *occ,
                                   size_t n) {
   long long c0 = thread_cpu_ns();
   g_real->occluded_stream(a, rays, occ, n);
-  atomic_fetch_add_explicit(&g_trav_ns[1], thread_cpu_ns() - c0, memory_order_relaxed);
+  atomic_fetch_add_explicit(&g_occl_ns, thread_cpu_ns() - c0, memory_order_relaxed);
 }
 
 /* The timed copy of `real` (kept for the whole run). */
@@ -262,16 +265,23 @@ typedef struct plugins {
 
 static int g_runs, g_spp, g_w, g_h;
 
-/* Renders one image (g_spp passes of 1 spp, as the host does) into `film`; returns CPU
- * ms of the rendering threads, wall ms in *wall, rays in *rays. */
-static double render_once(const plugins *P, tt_integrator *it, const tt_scene *scene,
-                          const tt_accel *acc, tt_film *film, double *wall, uint64_t *rays,
-                          double *trav, double *occl, double *cam, long long *singles) {
+/* The figures of one render (ms are CPU ms of the rendering threads). */
+typedef struct render_fig {
+  double cpu, wall;      /* the whole render; wall: wall-clock ms */
+  double trav;           /* in the accel's streams (closest hit + occlusion) */
+  double occl, cam;      /* of trav: occlusion streams; camera (one-origin) streams */
+  uint64_t rays;
+  long long singles;     /* single-ray calls (counted, not timed) */
+} render_fig;
+
+/* Renders one image (g_spp passes of 1 spp, as the host does) into `film`. */
+static render_fig render_once(const plugins *P, tt_integrator *it, const tt_scene *scene,
+                              const tt_accel *acc, tt_film *film) {
   tt_film_clear(film);
   atomic_store(&g_chunk_cpu_ns, 0);
-  atomic_store(&g_trav_ns[0], 0);
-  atomic_store(&g_trav_ns[1], 0);
-  atomic_store(&g_trav_ns[2], 0);
+  atomic_store(&g_hit_ns, 0);
+  atomic_store(&g_cam_ns, 0);
+  atomic_store(&g_occl_ns, 0);
   atomic_store(&g_single_calls, 0);
   uint64_t r = 0;
   double w0 = bench_wall_ms();
@@ -295,13 +305,15 @@ static double render_once(const plugins *P, tt_integrator *it, const tt_scene *s
     CHECK_MSG(s == TT_OK, "render_pass: %s", tt_last_error());
     r += ps.rays;
   }
-  *wall = bench_wall_ms() - w0;
-  *rays = r;
-  *trav = 1e-6 * (double)(atomic_load(&g_trav_ns[0]) + atomic_load(&g_trav_ns[1]));
-  *occl = 1e-6 * (double)atomic_load(&g_trav_ns[1]);
-  *cam = 1e-6 * (double)atomic_load(&g_trav_ns[2]);
-  *singles = atomic_load(&g_single_calls);
-  return 1e-6 * (double)atomic_load(&g_chunk_cpu_ns);
+  render_fig f;
+  f.wall = bench_wall_ms() - w0;
+  f.cpu = 1e-6 * (double)atomic_load(&g_chunk_cpu_ns);
+  f.occl = 1e-6 * (double)atomic_load(&g_occl_ns);
+  f.cam = 1e-6 * (double)atomic_load(&g_cam_ns);
+  f.trav = 1e-6 * (double)atomic_load(&g_hit_ns) + f.occl;
+  f.rays = r;
+  f.singles = atomic_load(&g_single_calls);
+  return f;
 }
 
 /* Mean of the film's resolved RGB (for the same-image check). */
@@ -369,32 +381,30 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
       CHECK_MSG(s == TT_OK, "integrator_pt create: %s", tt_last_error());
       if (s != TT_OK) it[c] = NULL;
     }
+    /* per round, as columns for bench_median */
     double cpu[MAX_CFG][MAX_RUNS], wall[MAX_CFG][MAX_RUNS], trav[MAX_CFG][MAX_RUNS];
     double occl[MAX_CFG][MAX_RUNS], cam[MAX_CFG][MAX_RUNS];
     double mean[MAX_CFG];
-    long long singles[MAX_CFG];
-    uint64_t rays[MAX_CFG];
+    render_fig warm[MAX_CFG];  /* rays and single-ray calls (the same every round) */
     memset(mean, 0, sizeof mean);
-    memset(rays, 0, sizeof rays);
+    memset(warm, 0, sizeof warm);
     /* Warm-up: one render of each, not counted (first touch of the tree's pages). */
     for (int c = 0; c < g_ncfg; c++)
       if (acc[c] && it[c]) {
-        double w, t, o, k;
-        render_once(P, it[c], scene, acc[c], film, &w, &rays[c], &t, &o, &k, &singles[c]);
+        warm[c] = render_once(P, it[c], scene, acc[c], film);
         mean[c] = film_mean(film);
       }
     for (int r = 0; r < g_runs; r++)
       for (int k = 0; k < g_ncfg; k++) {
         int c = (k + r) % g_ncfg;  /* rotate the order */
         if (!acc[c] || !it[c]) continue;
-        uint64_t rr;
-        long long sg;
-        cpu[c][r] = render_once(P, it[c], scene, acc[c], film, &wall[c][r], &rr, &trav[c][r],
-                                &occl[c][r], &cam[c][r], &sg);
+        const render_fig f = render_once(P, it[c], scene, acc[c], film);
+        cpu[c][r] = f.cpu, wall[c][r] = f.wall, trav[c][r] = f.trav;
+        occl[c][r] = f.occl, cam[c][r] = f.cam;
       }
     for (int c = 0; c < g_ncfg; c++) P->I->destroy(it[c]);
     printf("  threads %d, maxDepth %d: %.2f Mrays per image\n", md->threads, md->depth,
-           1e-6 * (double)rays[0]);
+           1e-6 * (double)warm[0].rays);
     printf("  %-28s %9s %9s %7s %9s %7s | %10s %9s %7s | %8s %6s %9s %9s %6s | %6s %6s %6s\n",
            "configuration", "CPU ms", "min", "spread", "wall ms", "on-CPU", "vs native",
            "(of mins)", "rays", "trav ms", "share", "trav/nat", "rest/nat", "1-ray", "camera",
@@ -427,9 +437,10 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
              "%8.3fx %8.3fx %6lld | %6.1f %6.1f %6.1f\n",
              g_cfgs[c].label, res->cpu[m][c], mn, 100.0 * (mx - mn) / res->cpu[m][c],
              res->wall[m][c], 100.0 * share, res->ratio[m][c], mn0 / mn,
-             rays[0] ? 100.0 * ((double)rays[c] - (double)rays[0]) / (double)rays[0] : 0.0,
+             warm[0].rays ? 100.0 * ((double)warm[c].rays - (double)warm[0].rays) /
+                                (double)warm[0].rays : 0.0,
              res->trav[m][c], 100.0 * res->trav[m][c] / res->cpu[m][c], res->trav_ratio[m][c],
-             res->rest_ratio[m][c], singles[c], cam_ms, res->trav[m][c] - occl_ms - cam_ms,
+             res->rest_ratio[m][c], warm[c].singles, cam_ms, res->trav[m][c] - occl_ms - cam_ms,
              occl_ms);
       /* Same seed, same samples: the images may differ only where a hit differs by
        * round-off (a handful of paths). */
