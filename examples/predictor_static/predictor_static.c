@@ -20,7 +20,10 @@
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
 
+#include <errno.h>
+#include <float.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -71,8 +74,11 @@ static tt_status ps_create_ex(const tt_predictor_setup *su, tt_predictor **out) 
   if (!out || !su || !su->target || su->state_dim < 1)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": create: bad arguments");
   *out = NULL;
-  tt_predictor *p = calloc(1, sizeof *p);
   const char *ss = su->state_space ? su->state_space : "";
+  if (strchr(ss, '\n'))  /* it is one line of the model file */
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": create: the state space holds a "
+                        "newline");
+  tt_predictor *p = calloc(1, sizeof *p);
   if (p) p->state_space = malloc(strlen(ss) + 1);
   if (!p || !p->state_space) {
     ps_destroy(p);
@@ -143,11 +149,22 @@ static tt_status ps_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
   if (!p || (n && !s)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: NULL");
   double v[256];
   if (p->params > 256) return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": more than 256 parameters");
+  /* the whole batch is checked first: a bad sample leaves the model unchanged */
   for (size_t k = 0; k < n; k++) {
     double cost = s[k].cost;
     if (!s[k].state || !s[k].config || isnan(cost) || !(cost > 0))
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: sample %zu: no state, no "
                           "configuration or a cost that is not positive", k);
+    if (tt_space_count(tt_config_space(s[k].config)) != p->params)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: sample %zu: the "
+                          "configuration is not of the target space", k);
+    for (uint32_t i = 0; i < p->dim; i++)  /* the model file holds finite states only */
+      if (!isfinite(s[k].state[i]))
+        return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: sample %zu: state "
+                            "value %u is not finite", k, i);
+  }
+  for (size_t k = 0; k < n; k++) {
+    double cost = s[k].cost;
     if (cost >= TT_COST_INFEASIBLE) continue;  /* never a static answer */
     double def = s[k].default_cost;
     size_t si = ps_state_index(p, s[k].state, def > 0 && isfinite(def) ? def : cost);
@@ -155,7 +172,9 @@ static tt_status ps_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
     size_t ci = si == SIZE_MAX ? SIZE_MAX : ps_config_index(p, v);
     if (ci == SIZE_MAX) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PS_NAME ": out of memory");
     ps_config *c = &p->cfgs[ci];
-    c->log_ratio_sum += log(cost / p->states[si].reference);
+    /* (the difference of the logs stays finite where the ratio of two extreme costs would
+     * not, and the model file holds finite sums only) */
+    c->log_ratio_sum += log(cost) - log(p->states[si].reference);
     if (c->last_state != si + 1) c->states++;  /* repeats in one state count once */
     c->last_state = si + 1;
     p->observations++;
@@ -196,9 +215,12 @@ static tt_status ps_predict_ex(const tt_predictor *p, const tt_predictor_query *
   size_t b = ps_best(p, &m);
   if (b == SIZE_MAX) return tt_set_error(TT_ERR_NO_DATA, PS_NAME ": predict: nothing observed");
   for (size_t i = 0; i < p->params; i++) {
-    tt_status st = tt_space_type(p->target, i) == TT_PARAM_NOM
-                       ? tt_config_set_index(out, i, (size_t)p->cfgs[b].values[i])
-                       : tt_config_set_number(out, i, p->cfgs[b].values[i]);
+    double v = p->cfgs[b].values[i];  /* checked by observe and load; cast only when in range */
+    int nom = tt_space_type(p->target, i) == TT_PARAM_NOM;
+    if (nom && !(v >= 0 && v < (double)tt_space_nom_count(p->target, i)))
+      return tt_set_error(TT_ERR_INTERNAL, PS_NAME ": predict: possible-value index %g of %s "
+                          "out of range", v, tt_space_name(p->target, i));
+    tt_status st = nom ? tt_config_set_index(out, i, (size_t)v) : tt_config_set_number(out, i, v);
     if (st != TT_OK) return st;
   }
   if (res && res->struct_size >= offsetof(tt_predictor_result, candidates) + sizeof res->candidates) {
@@ -242,7 +264,24 @@ static tt_status ps_info(const tt_predictor *p, tt_predictor_info *out) {
   return TT_OK;
 }
 
-/* ---- files: "predictor_static FORMAT\n" then lines, then "checksum HEX\n" over all before ---- */
+/* ---- files ----
+ * Text, one record a line, numbers as C99 hex floats ("%a": exact) or decimal integers:
+ *   predictor_static 1
+ *   state_space TEXT
+ *   dim D
+ *   params P PLUGIN
+ *   minShare S
+ *   states N            then N lines: the D state values and the state's reference cost
+ *   configs C OBS       then C lines: the P values (FLOAT/INT value, NOM index), the sum of
+ *                       log cost ratios, the states it was seen in, the last of them (1-based)
+ *   checksum HEX        FNV-1a 64 of every byte before this line; the file's last line
+ * A model file is input like any other: the reader checks the checksum first, then reads
+ * only the text it covers, and range-checks every number against the model's own counts and
+ * the target space before using it, so a crafted or damaged file is an error naming the file,
+ * the line and what was expected, never a crash or a silently wrong answer. */
+
+#define PS_CHECKSUM_LINE 26 /* "checksum " + 16 hex digits + "\n" */
+#define PS_MAX_FILE ((size_t)1 << 26)
 
 static uint64_t ps_fnv(const char *s, size_t n) {
   uint64_t h = 0xcbf29ce484222325ull;
@@ -273,7 +312,7 @@ static tt_status ps_save(const tt_predictor *p, const char *path) {
   fclose(m);
   if (!text) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PS_NAME ": out of memory");
   /* the checksum covers everything before its line */
-  size_t body = len - strlen("checksum 0000000000000000\n");
+  size_t body = len - PS_CHECKSUM_LINE;
   snprintf(text + body, len - body + 1, "checksum %016llx\n", (unsigned long long)ps_fnv(text, body));
   /* libtunetrace's atomic write (<tunetrace/file.h>): a temporary file renamed over `path`,
    * so a failed save never destroys the previous model */
@@ -281,15 +320,6 @@ static tt_status ps_save(const tt_predictor *p, const char *path) {
   free(text);
   if (st != TT_OK) return tt_set_error(st, PS_NAME ": cannot write model %s: %s", path, tt_last_error());
   return TT_OK;
-}
-
-/* Reads one number ("%a" or decimal) at *s and advances; -1 if there is none. */
-static int ps_num(char **s, double *v) {
-  char *end;
-  *v = strtod(*s, &end);
-  if (end == *s) return -1;
-  *s = end;
-  return 0;
 }
 
 /* Frees the lists of a model (not the struct). */
@@ -303,80 +333,333 @@ static void ps_clear(tt_predictor *p) {
   p->ncfg = p->cap = p->nstates = p->scap = 0;
 }
 
+/* The checksummed text of a model file, line by line. The first error is kept (in the
+ * library's last error, and `failed`); later calls do nothing. */
+typedef struct ps_reader {
+  char *next;        /* the next line; the checksummed text ends with '\0' */
+  const char *end;   /* that '\0' */
+  const char *path;
+  unsigned line;     /* number of the current line, 1-based */
+  char item[64];     /* the state or configuration the line holds, "" for the others */
+  int failed;
+} ps_reader;
+
+static int ps_fail(ps_reader *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int ps_fail(ps_reader *r, const char *fmt, ...) {
+  if (r->failed) return -1;
+  char msg[512];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s, line %u: %s%s%s", r->path, r->line, r->item,
+               r->item[0] ? ": " : "", msg);
+  r->failed = 1;
+  return -1;
+}
+
+/* The next line (NUL-terminated in place) if it begins with `key` and a space: what follows
+ * them; NULL (an error) otherwise. `what` says what the line should hold. */
+static char *ps_line(ps_reader *r, const char *key, const char *what) {
+  if (r->failed) return NULL;
+  r->line++;
+  if (r->next >= r->end) {
+    ps_fail(r, "the file ends before %s", what);
+    return NULL;
+  }
+  char *s = r->next, *nl = strchr(s, '\n');  /* the text ends with '\n' (checked) */
+  *nl = '\0';
+  r->next = nl + 1;
+  size_t k = strlen(key);
+  if (k && (strncmp(s, key, k) || s[k] != ' ')) {
+    ps_fail(r, "expected %s (\"%s ...\"), got \"%.60s\"", what, key, s);
+    return NULL;
+  }
+  return s + (k ? k + 1 : 0);
+}
+
+/* One space-separated field at *s; advances past it and its separator. */
+static char *ps_field(char **s) {
+  char *f = *s;
+  size_t n = strcspn(f, " ");
+  *s = f + n + (f[n] == ' ');
+  if (f[n]) f[n] = '\0';
+  return f;
+}
+
+/* A decimal integer field in [lo, hi]. */
+static int ps_u64(ps_reader *r, char **s, uint64_t lo, uint64_t hi, const char *what,
+                  uint64_t *out) {
+  if (r->failed) return -1;
+  char *f = ps_field(s), *end;
+  errno = 0;
+  unsigned long long v = f[0] >= '0' && f[0] <= '9' ? strtoull(f, &end, 10) : 0;
+  if (f[0] < '0' || f[0] > '9' || *end || errno == ERANGE || v < lo || v > hi)
+    return ps_fail(r, "%s: expected an integer in [%llu, %llu], got \"%.40s\"", what,
+                   (unsigned long long)lo, (unsigned long long)hi, f);
+  *out = v;
+  return 0;
+}
+
+/* A finite number field ("%a" or decimal) in [lo, hi]. */
+static int ps_f64(ps_reader *r, char **s, double lo, double hi, const char *what, double *out) {
+  if (r->failed) return -1;
+  char *f = ps_field(s), *end;
+  double v = strtod(f, &end);
+  if (end == f || *end || !isfinite(v) || v < lo || v > hi) {
+    if (lo == -DBL_MAX && hi == DBL_MAX)
+      return ps_fail(r, "%s: expected a finite number, got \"%.40s\"", what, f);
+    return ps_fail(r, "%s: expected a number in [%g, %g], got \"%.40s\"", what, lo, hi, f);
+  }
+  *out = v;
+  return 0;
+}
+
+/* A finite number field that must be positive. */
+static int ps_positive(ps_reader *r, char **s, const char *what, double *out) {
+  if (ps_f64(r, s, -DBL_MAX, DBL_MAX, what, out)) return -1;
+  if (!(*out > 0)) return ps_fail(r, "%s: expected a positive number, got %g", what, *out);
+  return 0;
+}
+
+/* The end of a line: nothing may follow its last field. */
+static int ps_eol(ps_reader *r, const char *s, const char *what) {
+  if (r->failed) return -1;
+  if (*s) return ps_fail(r, "unexpected \"%.40s\" after %s", s, what);
+  return 0;
+}
+
+/* A value of parameter `i` of the target, as this predictor stores it (ps_values), checked
+ * through the target space: an INT or FLOAT in its range, a NOM index below its count. */
+static int ps_value(ps_reader *r, const tt_predictor *p, tt_config *scratch, size_t i, double v) {
+  tt_status st;
+  if (tt_space_type(p->target, i) == TT_PARAM_NOM) {
+    size_t n = tt_space_nom_count(p->target, i);
+    if (!(v >= 0) || v >= (double)n || v != floor(v))
+      return ps_fail(r, "%s.%s: possible-value index %.17g is not an integer in [0, %zu)",
+                     tt_space_plugin(p->target), tt_space_name(p->target, i), v, n);
+    st = tt_config_set_index(scratch, i, (size_t)v);
+  } else {
+    st = tt_config_set_number(scratch, i, v);  /* INT: an integer in range; FLOAT: in range */
+  }
+  if (st != TT_OK) {
+    char why[400];
+    snprintf(why, sizeof why, "%s", tt_last_error());
+    return ps_fail(r, "%s", why);
+  }
+  return 0;
+}
+
+/* Rows of doubles compared bytewise (the way ps_state_index and ps_config_index find them),
+ * sorted to find one stored twice in O(n log n): a crafted file of millions of rows must
+ * not take hours. */
+typedef struct ps_row {
+  const double *x;
+  size_t n, index;
+} ps_row;
+
+static int ps_row_cmp(const void *a, const void *b) {
+  const ps_row *u = a, *v = b;
+  int c = memcmp(u->x, v->x, u->n * sizeof(double));
+  return c ? c : (u->index > v->index) - (u->index < v->index);
+}
+
+/* 0, or -1 with *first < *second the indices of two equal rows. */
+static int ps_twice(ps_row *rows, size_t n, size_t *first, size_t *second) {
+  if (n < 2) return 0;
+  qsort(rows, n, sizeof *rows, ps_row_cmp);
+  for (size_t i = 1; i < n; i++)
+    if (!memcmp(rows[i - 1].x, rows[i].x, rows[i].n * sizeof(double))) {
+      *first = rows[i - 1].index;
+      *second = rows[i].index;
+      return -1;
+    }
+  return 0;
+}
+
+/* Locates the checksum line and checks it. TT_OK and *body (the bytes it covers), or an
+ * error: not a model, corrupt or cut short, or bytes after the checksum line. */
+static tt_status ps_checksum(const char *text, size_t n, const char *path, size_t *body) {
+  const char *nul = memchr(text, '\0', n);
+  if (nul)
+    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s holds a NUL byte at offset %zu (a "
+                        "model is text)", path, (size_t)(nul - text));
+  /* the last "\nchecksum " line, wherever it is, to tell data after it from damage */
+  const char *ck = NULL;
+  for (size_t i = n; i-- > 0 && !ck;)
+    if (text[i] == '\n' && n - i - 1 >= 9 && !memcmp(text + i + 1, "checksum ", 9)) ck = text + i + 1;
+  int digits = 0;
+  uint64_t want = 0;
+  for (; ck && digits < 16 && (size_t)(ck + 9 + digits - text) < n; digits++) {
+    char c = ck[9 + digits];
+    int d = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10
+          : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+    if (d < 0) break;
+    want = want << 4 | (uint64_t)d;
+  }
+  size_t covered = ck ? (size_t)(ck - text) : 0;
+  if (!ck || digits != 16 || ps_fnv(text, covered) != want)
+    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s is truncated or corrupt (%s)", path,
+                        !ck ? "no \"checksum\" line" : digits != 16
+                        ? "the checksum line does not hold 16 hexadecimal digits"
+                        : "the checksum does not match the text before it");
+  size_t line_end = covered + PS_CHECKSUM_LINE;
+  if (line_end > n || text[line_end - 1] != '\n')
+    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s: the checksum line is not "
+                        "\"checksum\", 16 hexadecimal digits and a newline", path);
+  if (line_end != n)
+    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s has %zu bytes after its checksum line "
+                        "(a model ends there; was something appended to it?)", path, n - line_end);
+  *body = covered;
+  return TT_OK;
+}
+
+/* Reads the checksummed text into q (fresh lists): the header lines are checked against p
+ * (another state space, dimension or target: TT_ERR_INVALID_ARGUMENT), then the lists. */
+static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
+  uint64_t version = 0, dim = 0, params = 0, ns = 0, nc = 0, obs = 0;
+  char *s = ps_line(r, PS_NAME, "the format line");
+  if (s && ps_u64(r, &s, 0, UINT32_MAX, "the format version", &version) == 0 &&
+      ps_eol(r, s, "the format version") == 0) {
+    if (version > PS_FORMAT)
+      return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": model %s has format %llu; this " PS_NAME
+                          " " PS_VERSION " reads format %d", r->path, (unsigned long long)version,
+                          PS_FORMAT);
+    if (version < 1) ps_fail(r, "format version 0 does not exist (1 to %d)", PS_FORMAT);
+  }
+  const char *space = ps_line(r, "state_space", "the state space");
+  s = ps_line(r, "dim", "the state dimension");
+  if (s && !ps_u64(r, &s, 1, UINT32_MAX, "dim", &dim)) ps_eol(r, s, "dim");
+  s = ps_line(r, "params", "the parameter count and target");
+  const char *plugin = "";
+  if (s && !ps_u64(r, &s, 0, SIZE_MAX, "params", &params)) plugin = s;
+  if (!r->failed && (strcmp(space, p->state_space) || dim != p->dim || params != p->params ||
+                     strcmp(plugin, tt_space_plugin(p->target))))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": model %s is for states \"%s\" "
+                        "(%u values) and %llu parameters of %s; this predictor has \"%s\" "
+                        "(%u) and %zu of %s", r->path, space, (unsigned)dim,
+                        (unsigned long long)params, plugin, p->state_space, p->dim, p->params,
+                        tt_space_plugin(p->target));
+  s = ps_line(r, "minShare", "the minShare setting");
+  if (s && !ps_f64(r, &s, 0.0, 1.0, "minShare", &q->min_share)) ps_eol(r, s, "minShare");
+  /* every state line holds dim + 1 numbers of at least one character and a separator */
+  s = ps_line(r, "states", "the state count");
+  if (s && !ps_u64(r, &s, 0, (uint64_t)(r->end - r->next) / (2 * (p->dim + 1ull)),
+                   "the state count (at most what the rest of the file can hold)", &ns))
+    ps_eol(r, s, "the state count");
+  double *x = r->failed ? NULL : malloc((p->dim + 1ull) * sizeof(double));
+  double *v = r->failed ? NULL : malloc((p->params + 1) * sizeof(double));
+  tt_config *scratch = r->failed ? NULL : tt_config_create(p->target);
+  ps_row *rows = NULL;
+  if (!r->failed && (!x || !v || !scratch)) ps_fail(r, "out of memory");
+  if (!r->failed && ns) {
+    q->states = malloc(ns * sizeof *q->states);
+    rows = malloc(ns * sizeof *rows);
+    if (!q->states || !rows) ps_fail(r, "out of memory");
+    q->scap = ns;
+  }
+  unsigned first = r->line + 1;  /* the line of state 0 */
+  for (uint64_t i = 0; !r->failed && i < ns; i++) {
+    snprintf(r->item, sizeof r->item, "state %llu", (unsigned long long)i);
+    s = ps_line(r, "", "a state");
+    for (uint32_t k = 0; k < p->dim; k++) ps_f64(r, &s, -DBL_MAX, DBL_MAX, "a state value", &x[k]);
+    ps_positive(r, &s, "the state's reference cost", &x[p->dim]);
+    ps_eol(r, s, "the state's reference cost");
+    double *copy = r->failed ? NULL : malloc(p->dim * sizeof(double));
+    if (!r->failed && !copy) ps_fail(r, "out of memory");
+    if (r->failed) break;
+    memcpy(copy, x, p->dim * sizeof(double));
+    q->states[q->nstates++] = (ps_state){copy, x[p->dim]};
+    rows[i] = (ps_row){copy, p->dim, i};
+  }
+  r->item[0] = '\0';
+  size_t a, b;
+  if (!r->failed && ps_twice(rows, ns, &a, &b)) {
+    r->line = first + (unsigned)b;
+    ps_fail(r, "state %zu is stored twice (states %zu and %zu are equal)", b, a, b);
+  }
+  free(rows);
+  rows = NULL;
+  /* every configuration line holds params + 3 fields */
+  s = ps_line(r, "configs", "the configuration count and observation count");
+  if (s && !ps_u64(r, &s, 0, (uint64_t)(r->end - r->next) / (2 * (p->params + 3)),
+                   "the configuration count (at most what the rest of the file can hold)", &nc) &&
+      !ps_u64(r, &s, 0, UINT64_MAX, "the observation count", &obs))
+    ps_eol(r, s, "the observation count");
+  if (!r->failed && nc) {
+    q->cfgs = malloc(nc * sizeof *q->cfgs);
+    rows = malloc(nc * sizeof *rows);
+    if (!q->cfgs || !rows) ps_fail(r, "out of memory");
+    q->cap = nc;
+  }
+  uint64_t seen = 0;  /* sum of the configurations' state counts: at most one per observation */
+  first = r->line + 1;
+  for (uint64_t i = 0; !r->failed && i < nc; i++) {
+    snprintf(r->item, sizeof r->item, "configuration %llu", (unsigned long long)i);
+    s = ps_line(r, "", "a configuration");
+    for (size_t k = 0; k < p->params && !r->failed; k++)
+      if (!ps_f64(r, &s, -DBL_MAX, DBL_MAX, "a parameter value", &v[k]))
+        ps_value(r, p, scratch, k, v[k]);
+    double sum = 0;
+    uint64_t states = 0, last = 0;
+    ps_f64(r, &s, -DBL_MAX, DBL_MAX, "the sum of log cost ratios", &sum);
+    /* invariants of every saved model: each observation adds to at most one configuration's
+     * state count, and the last state is one of the states */
+    ps_u64(r, &s, 1, obs - seen, "the number of states it was seen in (at most the "
+           "observations the configurations before it leave)", &states);
+    ps_u64(r, &s, 1, ns, "the last state it was seen in", &last);
+    ps_eol(r, s, "the last state");
+    double *copy = r->failed ? NULL : malloc((p->params ? p->params : 1) * sizeof(double));
+    if (!r->failed && !copy) ps_fail(r, "out of memory");
+    if (r->failed) break;
+    seen += states;
+    memcpy(copy, v, p->params * sizeof(double));
+    q->cfgs[q->ncfg++] = (ps_config){copy, sum, states, last};
+    rows[i] = (ps_row){copy, p->params, i};
+  }
+  r->item[0] = '\0';
+  if (!r->failed && ps_twice(rows, nc, &a, &b)) {
+    r->line = first + (unsigned)b;
+    ps_fail(r, "configuration %zu is stored twice (configurations %zu and %zu are equal)", b, a, b);
+  }
+  if (!r->failed && r->next < r->end) {
+    r->line++;
+    ps_fail(r, "unexpected text after the configurations: \"%.40s\"", r->next);
+  }
+  free(rows);
+  free(x);
+  free(v);
+  tt_config_destroy(scratch);
+  q->observations = obs;
+  return r->failed ? TT_ERR_PARSE : TT_OK;
+}
+
 static tt_status ps_load(tt_predictor *p, const char *path) {
   if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": load: NULL");
-  size_t n;
+  size_t n = 0, body = 0;
   char *text = NULL;  /* regular files only, at most 64 MiB (<tunetrace/file.h>) */
-  if (tt_file_read(path, "model", (size_t)1 << 26, &text, &n) != TT_OK)
+  if (tt_file_read(path, "model", PS_MAX_FILE, &text, &n) != TT_OK)
     return tt_set_error(TT_ERR_IO, PS_NAME ": cannot open model %s: %s", path, tt_last_error());
-  int version = 0;
-  if (sscanf(text, PS_NAME " %d", &version) != 1) {
+  if (n < sizeof PS_NAME || memcmp(text, PS_NAME " ", sizeof PS_NAME)) {
     tt_free(text);
     return tt_set_error(TT_ERR_PARSE, PS_NAME ": %s is not a " PS_NAME " model", path);
   }
-  char *ck = strstr(text, "\nchecksum ");
-  unsigned long long want = 0;
-  if (!ck || sscanf(ck + 10, "%16llx", &want) != 1 || ps_fnv(text, (size_t)(ck + 1 - text)) != want) {
-    tt_free(text);
-    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s is truncated or corrupt (checksum)", path);
-  }
-  if (version > PS_FORMAT) {
-    tt_free(text);
-    return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": model %s has format %d; this " PS_NAME " "
-                        PS_VERSION " reads format %d", path, version, PS_FORMAT);
-  }
-  char space[1024] = "", plugin[256] = "";
-  char *s = strchr(text, '\n') + 1;
-  if (!strncmp(s, "state_space ", 12)) {
-    size_t l = strcspn(s + 12, "\n");
-    snprintf(space, sizeof space, "%.*s", (int)l, s + 12);
-    s += 12 + l + (s[12 + l] ? 1 : 0);
-  }
-  unsigned dim = 0;
-  size_t params = 0;
-  double ms = 0.5;
-  int got = sscanf(s, "dim %u params %zu %255s minShare %lf", &dim, &params, plugin, &ms);
-  if (got != 4 || strcmp(space, p->state_space) || dim != p->dim || params != p->params ||
-      strcmp(plugin, tt_space_plugin(p->target))) {
-    tt_status st = tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": model %s is for states \"%s\" "
-                                "(%u values) and %zu parameters of %s; this predictor has \"%s\" "
-                                "(%u) and %zu of %s", path, space, dim, params, plugin,
-                                p->state_space, p->dim, p->params, tt_space_plugin(p->target));
+  tt_status st = ps_checksum(text, n, path, &body);
+  if (st != TT_OK) {
     tt_free(text);
     return st;
   }
+  text[body] = '\0';  /* nothing after the checksummed text is read */
+  ps_reader r = {.next = text, .end = text + body, .path = path};
   tt_predictor q = *p;  /* the loaded model is built aside: p stays as it was on error */
   q.cfgs = NULL, q.states = NULL, q.ncfg = q.cap = q.nstates = q.scap = 0;
-  q.min_share = ms;
-  unsigned long long ns = 0, nc = 0, obs = 0;
-  s = strstr(s, "\nstates ");
-  int bad = !s || sscanf(s, "\nstates %llu", &ns) != 1 || dim > 4096 || params > 256;
-  if (!bad) s = strchr(s + 1, '\n');
-  double x[4096], v[256], ref, a, b, c;
-  for (unsigned long long i = 0; !bad && i < ns; i++) {
-    for (unsigned k = 0; k < dim && !bad; k++) bad = ps_num(&s, &x[k]);
-    bad = bad || ps_num(&s, &ref) || !(ref > 0) || ps_state_index(&q, x, ref) != i;
-  }
-  char *cfgs = bad ? NULL : strstr(s, "configs ");
-  bad = bad || !cfgs || sscanf(cfgs, "configs %llu %llu", &nc, &obs) != 2;
-  if (!bad) s = strchr(cfgs, '\n');
-  for (unsigned long long i = 0; !bad && i < nc; i++) {
-    for (size_t k = 0; k < params && !bad; k++) bad = ps_num(&s, &v[k]);
-    bad = bad || ps_num(&s, &a) || ps_num(&s, &b) || ps_num(&s, &c) || !(b >= 1) ||
-          !isfinite(a) || ps_config_index(&q, v) != i;
-    if (!bad) {
-      q.cfgs[i].log_ratio_sum = a;
-      q.cfgs[i].states = (uint64_t)b;
-      q.cfgs[i].last_state = (uint64_t)c;
-    }
-  }
+  st = ps_parse(p, &q, &r);
   tt_free(text);
-  if (bad) {
+  if (st != TT_OK) {
     ps_clear(&q);
-    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s: malformed state or configuration list", path);
+    return st;
   }
   ps_clear(p);
-  q.observations = obs;
   *p = q;
   return TT_OK;
 }
