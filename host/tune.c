@@ -91,7 +91,11 @@ static int tt__load_resume(tt__tune_ctx *c) {
   char *text = NULL;
   size_t n = 0;
   int ok = tt_file_read(path, "resume file", 0, &text, &n) == TT_OK;
-  tt_status st = ok ? tt_tuning_load_state(c->t->session, text, path) : TT_ERR_IO;
+  tt_status st = !ok ? TT_ERR_IO
+                 : strlen(text) != n  /* text after a NUL would not be read: refused */
+                 ? tt_set_error(TT_ERR_PARSE, "%s: a NUL byte at offset %zu (a state is text)",
+                                path, strlen(text))
+                 : tt_tuning_load_state(c->t->session, text, path);
   tt_free(text);
   if (st != TT_OK) {
     fprintf(stderr, "host: --resume %s: %s (the file is left as it is; remove it to start "

@@ -184,6 +184,32 @@ static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p,
     CHECK_CONTAINS(tt_last_error(), "newer");
     free(c);
   }
+  /* nothing after the sealed bytes is read: bytes appended to the file (as they are, or
+   * counted in the header's payload length and resealed, so the checksum passes) */
+  {
+    static const char tail[] = "configs 1 0";
+    long m = n1 + (long)sizeof tail - 1;
+    unsigned char *c = malloc((size_t)m);
+    memcpy(c, b1, (size_t)n1);
+    memcpy(c + n1, tail, sizeof tail - 1);
+    pu_write(bad, c, m);
+    CHECK(pi->load(q, bad) == TT_ERR_PARSE);
+    CHECK_CONTAINS(tt_last_error(), bad);
+    CHECK_CONTAINS(tt_last_error(), "padded");
+    /* inside the payload: the payload grows by the tail, the checksum moves behind it */
+    memcpy(c, b1, (size_t)n1 - 8);
+    memcpy(c + n1 - 8, tail, sizeof tail - 1);
+    uint64_t len = 0;
+    for (int i = 0; i < 8; i++) len |= (uint64_t)c[16 + i] << (8 * i);
+    len += sizeof tail - 1;
+    for (int i = 0; i < 8; i++) c[16 + i] = (unsigned char)(len >> (8 * i));
+    pu_reseal(c, m);
+    pu_write(bad, c, m);
+    CHECK(pi->load(q, bad) == TT_ERR_PARSE);
+    CHECK_CONTAINS(tt_last_error(), bad);
+    CHECK_CONTAINS(tt_last_error(), "11 bytes after the");
+    free(c);
+  }
   /* valid checksum but a garbage payload (every payload byte flipped in turn, resealed):
    * refused or, where the byte is e.g. a cost bit, loaded; never a crash */
   for (long at = 24; at < n1 - 8; at += 1 + n1 / 200) {

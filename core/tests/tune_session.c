@@ -586,6 +586,20 @@ static void test_state_fields(const tt_space *space) {
     tt_tuning_destroy(u);
     free(json);
   }
+  /* nothing after the state is read: appended text (another state, say) is refused, a
+   * final newline is not */
+  size_t n = strlen(good);
+  char *longer = malloc(2 * n + 2);
+  snprintf(longer, 2 * n + 2, "%s\n%s", good, good);
+  tt_tuning *u = NULL;
+  CHECK(tt_tuning_create(&d, &u) == TT_OK);
+  CHECK_MSG(tt_tuning_load_state(u, longer, "resume.json") == TT_ERR_PARSE, "appended accepted");
+  CHECK_CONTAINS(tt_last_error(), "resume.json: unexpected text after the state");
+  CHECK(tt_tuning_sample_count(u) == 0);
+  longer[n + 1] = '\0';
+  CHECK_MSG(tt_tuning_load_state(u, longer, "resume.json") == TT_OK, "%s", tt_last_error());
+  tt_tuning_destroy(u);
+  free(longer);
   free(good);
 }
 

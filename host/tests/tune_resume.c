@@ -122,6 +122,20 @@ int main(void) {
   snprintf(args, sizeof args, "%s --iterations 4 --resume '%s' --out '%s' '%s'", common, state, img, scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "not a tuning session state");
+  /* nothing after the saved state is read: text appended to it, or behind a NUL byte */
+  size_t sn = 0;
+  char *saved = tt_test_read_file(state2, &sn);
+  CHECK(saved && sn > 0);
+  for (int k = 0; saved && k < 2; k++) {
+    f = fopen(state, "wb");
+    fwrite(saved, 1, sn, f);
+    fwrite(k ? "\0{}" : "\n{}", 1, 3, f);
+    fclose(f);
+    CHECK(run_host(args, out, sizeof out) == 2);
+    CHECK_CONTAINS(out, state);
+    CHECK_CONTAINS(out, k ? "a NUL byte at offset" : "unexpected text after the state");
+  }
+  free(saved);
 
   free(ref);
   snprintf(args, sizeof args, "rm -rf '%s'", dir);

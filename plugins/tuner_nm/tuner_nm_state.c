@@ -218,8 +218,15 @@ static int tt__nm_phase_consistent(int phase, int pend, int k, size_t n) {
 tt_status tt__nm_load(tt_tuner *t, const char *json) {
   if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: load_state: NULL");
   size_t P = t->P, n = t->n;
-  cJSON *root = cJSON_Parse(json);
+  const char *end = json;
+  cJSON *root = cJSON_ParseWithOpts(json, &end, 0);
   if (!root) return tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: malformed JSON");
+  end += strspn(end, " \t\r\n");  /* nothing may follow the state */
+  if (*end) {
+    cJSON_Delete(root);
+    return tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: unexpected text after the state, "
+                        "at byte %zu", (size_t)(end - json));
+  }
   tt_status st = TT_OK;
   tt__nm_cache cache = {0};
   tt__nm_arm *arms = NULL;

@@ -95,6 +95,7 @@ def test_format():
     bad = bytearray(data)
     bad[8], bad[44] = 2, 4
     expect_error(bytes(bad), "flags", "unknown input flag")
+    expect_error(bytes(data) + b"configs 1 0", "11 bytes after the layers", "appended bytes")
 
 
 def square_frames():

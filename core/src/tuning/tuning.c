@@ -973,11 +973,18 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
   if (t->count || t->started)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: a session resumes before its first sample",
                         source);
-  cJSON *root = cJSON_Parse(json);
+  const char *end = json;
+  cJSON *root = cJSON_ParseWithOpts(json, &end, 0);
   tt_status st = TT_OK;
   const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
   if (!root || !tt__state_is(root, "tunetrace", "tuning session") || !cJSON_IsNumber(fmt)) {
     st = tt_set_error(TT_ERR_PARSE, "%s: not a tuning session state", source);
+    goto done;
+  }
+  end += strspn(end, " \t\r\n");  /* nothing may follow the state (a file appended to) */
+  if (*end) {
+    st = tt_set_error(TT_ERR_PARSE, "%s: unexpected text after the state, at byte %zu: "
+                      "\"%.20s\"", source, (size_t)(end - json), end);
     goto done;
   }
   if (fmt->valuedouble > TT__STATE_FORMAT) {

@@ -422,6 +422,12 @@ static void test_errors(void) {
   CHECK(tt__net_load("/nonexistent/w.ttw", &m) == TT_ERR_IO);
   CHECK_CONTAINS(tt_last_error(), "/nonexistent/w.ttw");
   expect_error(b.p, b.n, TT_OK, "");  /* the intact file parses */
+  /* nothing after the checksum is read: bytes appended to a valid file are refused */
+  unsigned char *longer = malloc(b.n + 11);
+  memcpy(longer, b.p, b.n);
+  memcpy(longer + b.n, "configs 1 0", 11);
+  expect_error(longer, b.n + 11, TT_ERR_PARSE, "11 trailing bytes after the checksum");
+  free(longer);
   free(c);
   free(b.p);
 }

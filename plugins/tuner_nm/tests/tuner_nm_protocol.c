@@ -301,6 +301,20 @@ static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void),
         free(bad);
       }
   }
+  /* nothing after the state is read: appended text is refused, a final newline is not */
+  {
+    size_t n = strlen(state) + 32;
+    char *longer = malloc(n);
+    snprintf(longer, n, "%s\n{\"tuner\":\"x\"}", state);
+    tt_tuner *w = NULL;
+    CHECK(nm->create(s, set, 42, &w) == TT_OK);
+    CHECK(nm->load_state(w, longer) == TT_ERR_PARSE);
+    CHECK_CONTAINS(tt_last_error(), "unexpected text after the state");
+    longer[strlen(state) + 1] = '\0';
+    CHECK_MSG(nm->load_state(w, longer) == TT_OK, "%s", tt_last_error());
+    nm->destroy(w);
+    free(longer);
+  }
   if (!checks_mismatch) {
     tt_free(state);
     for (int k = 0; k < n_ref; k++) tt_free(ref[k]);
