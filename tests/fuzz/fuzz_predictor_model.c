@@ -1,13 +1,16 @@
 /* libFuzzer: a predictor plugin's model file (tt.predictor/1 load, the file host --model and
- * --hybrid read), compiled once per plugin (fuzz_predictor_nn, fuzz_predictor_rbf: the
- * plugin's sources are compiled in and initialised through its own entry table). A model
- * that loads must then answer predict_ex, estimate and info, save, and load its own file
- * again. The container's FNV-1a checksum (predictor_common/model_file.h) is recomputed on
- * the mutated input so the fuzzer reaches the header and the payload behind it.
+ * --hybrid read), compiled once per plugin (fuzz_predictor_nn, fuzz_predictor_rbf,
+ * fuzz_predictor_static: the plugin's sources are compiled in and initialised through its
+ * own entry table). A model that loads must then answer predict_ex, estimate and info, save,
+ * and load its own file again. The checksum is recomputed on the mutated input so the
+ * fuzzer reaches what is behind it: the binary container's FNV-1a 64
+ * (predictor_common/model_file.h), or the text format's last "checksum HEX" line
+ * (predictor_static: FNV-1a 64 of the text before the line; the bytes after its 16 digits
+ * are left, so text appended after a sealed model is tried too).
  *
  * Seeds: with TT_FUZZ_WRITE_SEEDS=DIR set, the harness trains small models (0, 1 and 40
  * observations) on its own target space, saves them into DIR and exits: that is how
- * corpus/predictor_nn and corpus/predictor_rbf were made. */
+ * corpus/predictor_nn, corpus/predictor_rbf and corpus/predictor_static were made. */
 #include <tunetrace/host.h>
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>
@@ -104,11 +107,26 @@ static uint64_t get_u64(const uint8_t *p) {
   return v;
 }
 
+/* predictor_static's text format: the last "\nchecksum " followed by 16 characters gets the
+ * FNV-1a 64 of the bytes before its line, as lowercase hex. */
+static void reseal_text(uint8_t *c, size_t size) {
+  for (size_t i = size; i-- > 0;)
+    if (c[i] == '\n' && size - i - 1 >= 9 + 16 && !memcmp(c + i + 1, "checksum ", 9)) {
+      char hex[17];
+      snprintf(hex, sizeof hex, "%016llx",
+               (unsigned long long)tt__fnv1a64(TT__FNV1A64_OFFSET, c, i + 1));
+      memcpy(c + i + 1 + 9, hex, 16);
+      return;
+    }
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   uint8_t *c = malloc(size ? size : 1);
   if (!c) abort();
   memcpy(c, data, size);
-  if (size >= 32) {  /* the checksum of bytes [0, 24 + payload) follows them */
+  if (size < 8 || memcmp(c, "TTPMODEL", 8)) {
+    reseal_text(c, size);
+  } else if (size >= 32) {  /* the checksum of bytes [0, 24 + payload) follows them */
     uint64_t n = get_u64(c + 16);
     if (n <= size - 32) {
       uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, c, 24 + n);
