@@ -795,6 +795,11 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
   if (!rd.err[0]) {
     ttpm_get_f64s(&rd, tmp.pool_reward, (size_t)npool, "the pool rewards");
     tmp.npool = (size_t)npool;
+    /* a pool holds positive rewards only (rbf_learn; +inf where a cost underflows); a NaN
+     * would never compare lower and so never leave the pool */
+    for (size_t k = 0; !rd.err[0] && k < tmp.npool; k++)
+      if (!(tmp.pool_reward[k] > 0))
+        ttpm_fail(&rd, "pool reward %zu is %g, expected a positive number", k, tmp.pool_reward[k]);
   }
   if (!rd.err[0] && tmp.set.pool_source == RBF_POOL_STATES) {
     if (npool) ttpm_fail(&rd, "%llu pool entries stored beside the state table (poolSource states "

@@ -339,6 +339,28 @@ static void pool_argmax_is_exact(const char *dir) {
   CHECK_MSG(P->save(p, path) == TT_OK, "%s", tt_last_error());
   tt_predictor *loaded = pu_create(P, target, 2, "synthetic", set, 99);
   CHECK_MSG(P->load(loaded, path) == TT_OK, "%s", tt_last_error());
+  /* a pool reward that no observation gives (NaN, 0, negative; the last 8 payload bytes,
+   * resealed): refused naming it (a NaN reward was never replaced, silently) */
+  {
+    long n;
+    unsigned char *bytes = pu_read(path, &n);
+    static const double rewards[] = {NAN, 0.0, -1.0};
+    char bad[4300];
+    snprintf(bad, sizeof bad, "%s/bad-reward.ttpm", dir);
+    for (int i = 0; bytes && i < 3; i++) {
+      uint64_t u;
+      memcpy(&u, &rewards[i], 8);
+      for (int k = 0; k < 8; k++) bytes[n - 16 + k] = (unsigned char)(u >> (8 * k));
+      pu_reseal(bytes, n);
+      pu_write(bad, bytes, n);
+      tt_predictor *z = pu_create(P, target, 2, "synthetic", set, 1);
+      CHECK(P->load(z, bad) == TT_ERR_PARSE);
+      CHECK_CONTAINS(tt_last_error(), bad);
+      CHECK_CONTAINS(tt_last_error(), "pool reward 15");
+      P->destroy(z);
+    }
+    free(bytes);
+  }
   tt_config *out = tt_config_create(target);
   for (int t = 0; t < 20; t++) {
     double s[2] = {uni(&x), uni(&x)};
