@@ -1,6 +1,8 @@
 /* tunetrace-mpi: reading, checking and expanding the job list (see jobs.h). */
 #include "jobs.h"
 
+#include "option_table.h"
+
 #include <tunetrace/file.h>
 #include <tunetrace/tunetrace.h>
 
@@ -15,15 +17,6 @@
 #include <string.h>
 
 #define TT_MPI_CAMERAS 100  /* the host's path samples (--camera-index 0..99) */
-
-/* Options the driver sets itself per job kind: a job's args may not repeat them. */
-static const char *const tt__owned_common[] = {"--db", "--no-db", "--stats", "--out", "-o",
-                                               "--out-dir", "--camera-index", "--sequence",
-                                               "--frames", "--resume", "--hybrid", NULL};
-static const char *const tt__owned_tune[] = {"--objective", "--explore", NULL};
-static const char *const tt__owned_explore[] = {"--objective", "--explore", "--seed",
-                                                "--iterations", NULL};
-static const char *const tt__owned_frames[] = {"--post", NULL};
 
 typedef struct tt__ctx {
   const char *source;
@@ -82,23 +75,34 @@ static int tt__add_args(tt__ctx *c, size_t item, const char *key, const cJSON *a
   return 0;
 }
 
-/* -1 if an argument is one the driver sets for this kind. */
+/* The TT__MPI_* bit of a job kind, and its name. */
+static unsigned tt__kind_bit(tt_mpi_kind kind) {
+  return kind == TT_MPI_TUNE ? TT__MPI_TUNE : kind == TT_MPI_EXPLORE ? TT__MPI_EXPLORE
+                                                                     : TT__MPI_FRAMES;
+}
+
+static const char *tt__kind_name(tt_mpi_kind kind) {
+  return kind == TT_MPI_TUNE ? "tune" : kind == TT_MPI_EXPLORE ? "explore" : "frames";
+}
+
+/* -1 if an argument is an option the driver sets for this kind (the host's option table
+ * says which; "--out=x.exr" and "-o" are --out). */
 static int tt__check_owned(tt__ctx *c, size_t item, tt_mpi_kind kind, char **args, size_t n) {
-  const char *const *kinds[] = {tt__owned_common,
-                                kind == TT_MPI_TUNE ? tt__owned_tune
-                                : kind == TT_MPI_EXPLORE ? tt__owned_explore
-                                                         : tt__owned_frames};
-  for (size_t i = 0; i < n; i++)
-    for (size_t k = 0; k < 2; k++)
-      for (const char *const *o = kinds[k]; *o; o++)
-        if (!strcmp(args[i], *o))
-          return tt__fail(c, item, "args", "%s is set by tunetrace-mpi for a %s job (%s)", *o,
-                          kind == TT_MPI_TUNE ? "tune" : kind == TT_MPI_EXPLORE ? "explore"
-                                                                               : "frames",
-                          !strcmp(*o, "--post")
-                              ? "a post-filter's history would cross the frame ranges; render "
-                                "the frames, then filter the whole sequence"
-                              : "use the job's own keys");
+  for (size_t i = 0; i < n; i++) {
+    const char *value;
+    const tt__option *o = tt__option_of_arg(args[i], &value);
+    if (!o) continue;
+    int as_named = !strcmp(args[i], o->name);
+    if (o->mpi & tt__kind_bit(kind))
+      return tt__fail(c, item, "args", "%s%s%s%s is set by tunetrace-mpi for a %s job (%s)",
+                      o->name, as_named ? "" : " (\"", as_named ? "" : args[i],
+                      as_named ? "" : "\")", tt__kind_name(kind),
+                      !strcmp(o->name, "--post")
+                          ? "a post-filter's history would cross the frame ranges; render "
+                            "the frames, then filter the whole sequence"
+                          : "use the job's own keys");
+    if (o->arg == TT__ARG_ONE && !value) i++;  /* its value is not an option */
+  }
   return 0;
 }
 

@@ -95,6 +95,11 @@ int main(void) {
   CHECK_CONTAINS(out, "did you mean --tune-spp?");
   CHECK(run_host("--frobnicate x.json", out, sizeof out) == 2);
   CHECK(strstr(out, "did you mean") == NULL);
+  /* other renderers' spellings: pbrt-v4's --outfile and --nthreads */
+  CHECK(run_host("--outfile a.exr x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "unknown option \"--outfile\"; did you mean --out?");
+  CHECK(run_host("--nthreads=2 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "unknown option \"--nthreads\"; did you mean --threads?");
   snprintf(args, sizeof args, "--plugin integrator_ptt --res 4x4 --spp 1 --out %s/a.exr '%s'",
            dir, scene);
   CHECK(run_host(args, out, sizeof out) == 3);

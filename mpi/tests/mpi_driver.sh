@@ -14,7 +14,8 @@
 #    it; without --enable-recovery Open MPI ends the run, the DB holds whole jobs only, and a
 #    rerun completes the set (a third run has nothing to do);
 #  - Ctrl-C (SIGINT to mpirun) stops every rank, keeps the finished jobs, leaves no process;
-#  - bad job lists (unknown scene, empty range, a --post in a frame range, an unknown key)
+#  - bad job lists (unknown scene, empty range, a --post in a frame range, an option the
+#    driver sets written --opt=value, an unknown key)
 #    are refused before any rank starts work, naming the item, and create nothing.
 set -euo pipefail
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -274,6 +275,9 @@ bad "unknown scene" 'jobs[1].scene: ' '{"jobs": ['"$ok_item"', {"kind": "explore
 grep -q "nosuch.json" "$tmp/bad.log" || fail "the unknown scene's path is not named"
 bad "empty range" 'jobs[1].range: expected frames "A:B" with A <= B' '{"jobs": ['"$ok_item"', {"kind": "frames", "scene": "'"$scene"'", "range": "5:3", "out_dir": "'"$tmp"'/badseq"}]}'
 bad "post-filter" 'jobs[0].args: --post' '{"jobs": [{"kind": "frames", "scene": "'"$scene"'", "range": "0:3", "out_dir": "'"$tmp"'/badseq", "args": ["--post", "post_taa"]}]}'
+# an option the driver sets, written --opt=value or by its short name (the host's option table)
+bad "--opt=value" 'jobs[0].args: --sequence ("--sequence=0:9") is set by tunetrace-mpi for a tune job' '{"jobs": [{"kind": "tune", "scene": "'"$scene"'", "camera": 1, "args": ["--sequence=0:9"]}]}'
+bad "short name" 'jobs[0].args: --out ("-o") is set by tunetrace-mpi' '{"jobs": [{"kind": "explore", "scene": "'"$scene"'", "camera": 1, "samples": 2, "args": ["-q", "-o", "x.exr"]}]}'
 bad "unknown key" 'jobs[0].cam: unknown key' '{"jobs": [{"kind": "tune", "scene": "'"$scene"'", "cam": 1}]}'
 bad "camera range" 'jobs[0].cameras: [1]: expected an integer in 0..99' '{"jobs": [{"kind": "tune", "scene": "'"$scene"'", "cameras": [1, 100]}]}'
 bad "repeated job" 'jobs[1]: repeats a job of jobs[0]' '{"jobs": ['"$ok_item"', '"$ok_item"']}'

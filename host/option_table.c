@@ -1,0 +1,307 @@
+/* host: the command-line options, one row each (option_table.h). A new option is one row
+ * here (and its member in tt__host_options); --help, the parser, "did you mean" and
+ * tunetrace-mpi follow. */
+#include "option_table.h"
+
+#include "host.h"
+#include "option_setters.h"
+
+#include <tunetrace/suggest.h>
+
+#include <stddef.h>
+#include <string.h>
+
+#define TT__AT(member) offsetof(tt__host_options, member)
+
+static const tt__option tt__table[] = {
+  /* --- plugins --- */
+  {"--plugin", NULL, TT__ARG_ONE, "NAME|PATH", tt__set_list, TT__AT(plugins), 0, 0,
+   TT__TOPIC_PLUGINS, 0,
+   "load a plugin by name (NAME.so on the search path) or by path;\n"
+   "a tuner (e.g. tuner_nm) turns tuning on (see Tuning)"},
+  {"--plugin-path", NULL, TT__ARG_ONE, "DIR", tt__set_list, TT__AT(plugin_paths), 0, 0,
+   TT__TOPIC_PLUGINS, 0,
+   "add DIR to the plugin search path (before $TT_PLUGIN_PATH)"},
+  {"--set", NULL, TT__ARG_ONE, "PLUGIN.PARAM=V", tt__set_plugin_param, TT__AT(sets), 0, 0,
+   TT__TOPIC_PLUGINS, 0,
+   "set a parameter of a loaded plugin, e.g.\n"
+   "--set accel_embree.quality=3 --set integrator_pt.maxDepth=8;\n"
+   "also a plugin's options (not tuned; host --describe NAME),\n"
+   "e.g. --set post_taa.weights=FILE.ttw"},
+  {"--list-plugins", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(list_plugins), 0, 0,
+   TT__TOPIC_PLUGINS, 0,
+   "list the plugins found on the search path (exit 3 if any\n"
+   "file there was rejected)"},
+  {"--describe", NULL, TT__ARG_ONE, "NAME", tt__set_list, TT__AT(describe), 0, 0,
+   TT__TOPIC_PLUGINS, 0,
+   "print the plugin's parameter space as JSON on stdout (given\n"
+   "several times: a JSON array of the spaces, in order)"},
+
+  /* --- rendering --- */
+  {"--spp", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(spp), 1, 1u << 24, TT__TOPIC_RENDER, 0,
+   "samples per pixel (default: the scene's render.spp)"},
+  {"--strict", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(strict), 0, 0, TT__TOPIC_RENDER, 0,
+   "pbrt-v4 scenes as strictly as pbrt-v4 reads them: an unknown\n"
+   "directive or parameter (\"WorldBgin\", \"rgb reflectanse\") is\n"
+   "an error naming file:line, not a warning (exit 4)"},
+  {"--time", NULL, TT__ARG_ONE, "SECONDS", tt__set_time, 0, 0, 0, TT__TOPIC_RENDER, 0,
+   "time budget: stop after the pass that exceeds it"},
+  {"--res", NULL, TT__ARG_ONE, "WxH", tt__set_res, 0, 0, 0, TT__TOPIC_RENDER, 0,
+   "override the scene's resolution"},
+  {"--seed", NULL, TT__ARG_ONE, "N", tt__set_seed, 0, 0, 0, TT__TOPIC_RENDER, TT__MPI_EXPLORE,
+   "random seed (default: the scene's render.seed)"},
+  {"--threads", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(threads), 1, 1024,
+   TT__TOPIC_RENDER, 0,
+   "worker threads (default: all CPUs)"},
+
+  /* --- tuning --- */
+  {"--tune", NULL, TT__ARG_ONE, "PLUGIN", tt__set_text, TT__AT(tune), 0, 0, TT__TOPIC_TUNE, 0,
+   "the loaded plugin whose space is tuned (accel, integrator or\n"
+   "post). Default: the integrator if it serves a tuning hint\n"
+   "(tt.tuning_hint/1), else the accel"},
+  {"--objective", NULL, TT__ARG_ONE, "SPEC", tt__set_objective, 0, 0, 0, TT__TOPIC_TUNE,
+   TT__MPI_TUNE | TT__MPI_EXPLORE,
+   "what is minimised per measurement:\n"
+   "  render         render ms of the pass (default)\n"
+   "  build          accel build ms (accel targets)\n"
+   "  build+render   both (accel targets; alias: total)\n"
+   "  metric:NAME    an integrator metric of the pass, minimised;\n"
+   "  metric:NAME:max            ... maximised\n"
+   "  metric:NAME:target=X       ... |value - X| minimised,\n"
+   "                 e.g. metric:acceptance:target=0.234\n"
+   "  rrmse          rRMSE of the pass's own image (luminance)\n"
+   "                 against --reference; any integrator"},
+  {"--reference", NULL, TT__ARG_ONE, "FILE.exr", tt__set_text, TT__AT(reference), 0, 0,
+   TT__TOPIC_TUNE, 0,
+   "the reference image of --objective rrmse (same resolution\n"
+   "as the render)"},
+  {"--tune-pass-images", NULL, TT__ARG_ONE, "DIR", tt__set_text, TT__AT(tune_pass_images), 0, 0,
+   TT__TOPIC_TUNE, 0,
+   "write each measured tuning pass's own image (not the\n"
+   "accumulated film) to DIR/pass_default.exr, pass_NNNN.exr"},
+  {"--tune-params", NULL, TT__ARG_ONE, "A,B,...", tt__set_tune_params, 0, 0, 0, TT__TOPIC_TUNE, 0,
+   "search only these parameters of the target; the others keep\n"
+   "their configured values (default: the tuning hint's list,\n"
+   "e.g. PSSMLT's a_i and sigma_i, else all)"},
+  {"--iterations", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(iterations), 1, 1000000,
+   TT__TOPIC_TUNE, TT__MPI_EXPLORE,
+   "configurations to ask the tuner for (default 50)"},
+  {"--tune-spp", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(tune_spp), 1, 1u << 16,
+   TT__TOPIC_TUNE, 0,
+   "samples per pixel of one measurement pass (default 1)"},
+  {"--explore", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(explore), 1, 1000000, TT__TOPIC_TUNE,
+   TT__MPI_TUNE | TT__MPI_EXPLORE,
+   "measure N random configurations of the target's space (no\n"
+   "tuner needed), for the analysis tools in tools/tuning/"},
+  {"--verify", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(verify), 1, 10000, TT__TOPIC_TUNE, 0,
+   "after tuning, measure the default and the best configuration\n"
+   "side by side, alternating, N rounds of one pass each; the\n"
+   "median ratios go to the log and to --stats (tuning.verify)"},
+  {"--db", NULL, TT__ARG_ONE, "PATH", tt__set_text, TT__AT(db), 0, 0, TT__TOPIC_TUNE, TT__MPI_ALL,
+   "tuning database (SQLite; default\n"
+   "$XDG_DATA_HOME/tunetrace/tuning.db, else\n"
+   "~/.local/share/tunetrace/tuning.db). A configuration already\n"
+   "measured in the same state on this machine is not measured\n"
+   "again: its stored cost is fed to the tuner"},
+  {"--no-db", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(no_db), 0, 0, TT__TOPIC_TUNE,
+   TT__MPI_ALL,
+   "no database: measure everything, record nothing"},
+  {"--resume", NULL, TT__ARG_ONE, "FILE", tt__set_text, TT__AT(resume), 0, 0, TT__TOPIC_TUNE,
+   TT__MPI_ALL,
+   "save the tuning session (its samples and the tuner's state) to\n"
+   "FILE after every sample; when FILE exists, continue from it\n"
+   "(kill a long tuning run, run the same command again)"},
+  {"--clock", NULL, TT__ARG_ONE, "wall|cpu", tt__set_clock, 0, 0, 0, TT__TOPIC_TUNE, 0,
+   "what build and render times measure: wall time (default) or\n"
+   "the process's CPU time, which other processes running on the\n"
+   "same cores do not inflate (use it with --threads 1 on a\n"
+   "shared machine); tuning rows record the clock in `context`"},
+
+  /* --- sequences --- */
+  {"--sequence", NULL, TT__ARG_ONE, "N|A:B", tt__set_sequence, 0, 0, 0, TT__TOPIC_SEQUENCE,
+   TT__MPI_ALL,
+   "render frames 0..N-1 (or A..B) of the scene's camera path at\n"
+   "--fps (default 24), each with one Halton(2,3) sub-pixel\n"
+   "jitter of a cycle of 8 for all its samples; writes\n"
+   "color/depth/motion/prevdepth_NNNN.exr and manifest.json to\n"
+   "--out-dir"},
+  {"--out-dir", NULL, TT__ARG_ONE, "DIR", tt__set_text, TT__AT(out_dir), 0, 0,
+   TT__TOPIC_SEQUENCE, TT__MPI_ALL,
+   "folder of the sequence (created if missing)"},
+  {"--reference-scale", NULL, TT__ARG_ONE, "K", tt__set_u32, TT__AT(reference_scale), 1, 16,
+   TT__TOPIC_SEQUENCE, 0,
+   "also render each frame at K x K the resolution and write the\n"
+   "Blackman-Harris-downsampled reference_NNNN.exr"},
+  {"--post", NULL, TT__ARG_ONE, "NAME", tt__set_text, TT__AT(post), 0, 0, TT__TOPIC_SEQUENCE,
+   TT__MPI_FRAMES,
+   "run the post-filter NAME (e.g. post_taa) over the frames in\n"
+   "order and write post_NNNN.exr; --set NAME.mode=network ..."},
+  {"--fps", NULL, TT__ARG_ONE, "F", tt__set_fps, 0, 0, 0, TT__TOPIC_SEQUENCE, 0,
+   "frames per second along the camera path (default 24)"},
+  {"--supersample", NULL, TT__ARG_ONE, "K", tt__set_supersample, TT__AT(reference_scale), 1, 16,
+   TT__TOPIC_SEQUENCE, 0,
+   "write only the reference (K x K the resolution, Blackman-Harris)\n"
+   "as the frames of --frames A:B --out DIR/frame_%04d.exr"},
+  {"--png", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(png), 0, 0, TT__TOPIC_SEQUENCE, 0,
+   "also write a display-referred PNG preview of every frame (of\n"
+   "the frame the pattern names: filtered, or the reference with\n"
+   "--supersample) beside its EXR, listed in the manifest as \"png\"\n"
+   "(a still always gets its PNG)"},
+
+  /* --- camera path samples --- */
+  {"--camera-index", NULL, TT__ARG_ONE, "I", tt__set_camera_index, 0, 0, 0, TT__TOPIC_CAMERA,
+   TT__MPI_ALL,
+   "render sample I (0..99) of the scene's camera path: the pose\n"
+   "at t = I/99 of the path's time range (no path: still camera);\n"
+   "A:B with --hybrid and --predict: samples A..B, both included"},
+  {"--frames", NULL, TT__ARG_ONE, "A:B", tt__set_text, TT__AT(frames_arg), 0, 0,
+   TT__TOPIC_CAMERA, TT__MPI_ALL,
+   "frames A..B (both included) of the camera path at --fps (frame\n"
+   "f is the pose at t = f / fps, as in sequences). Each is a full\n"
+   "render to <out stem>_NNNN.exr/.png (default stem: <scene folder>);\n"
+   "with --out DIR/frame_%04d.exr they are the jittered frames of a\n"
+   "sequence, written to the pattern (manifest.json in DIR):\n"
+   "--supersample K writes the K x K-supersampled reference as the\n"
+   "frame instead; a post-filter (--plugin post_taa --set\n"
+   "post_taa.mode=network) writes the filtered frame, the rendered\n"
+   "one as frame_NNNN.raw.exr"},
+
+  /* --- output --- */
+  {"--out", "-o", TT__ARG_ONE, "FILE.exr", tt__set_out, 0, 0, 0, TT__TOPIC_OUTPUT, TT__MPI_ALL,
+   "linear EXR; a display-referred PNG is written next to it\n"
+   "(default: <scene folder>.exr in the current directory)"},
+  {"--aov", NULL, TT__ARG_ONE, "LIST", tt__set_aov, 0, 0, 0, TT__TOPIC_OUTPUT, 0,
+   "AOVs: depth, normal, albedo, motion, prevdepth. A still writes\n"
+   "them as layers of its EXR: depth (depth.Z), normal\n"
+   "(normal.X/Y/Z), albedo (albedo.R/G/B), motion (motion.X/Y); a\n"
+   "sequence one file per frame and AOV (depth_NNNN.exr in\n"
+   "--out-dir, frame_NNNN.depth.exr beside an --out pattern).\n"
+   "prevdepth (sequences only): the depth of each pixel's surface\n"
+   "point in the previous frame's camera, for disocclusion tests.\n"
+   "Default: depth, motion and prevdepth with --out-dir, else none"},
+  {"--stats", NULL, TT__ARG_ONE, "FILE.json", tt__set_stats, 0, 0, 0, TT__TOPIC_OUTPUT,
+   TT__MPI_ALL,
+   "machine-readable record of the run"},
+  {"--quiet", "-q", TT__ARG_NONE, NULL, tt__set_flag, TT__AT(quiet), 0, 0, TT__TOPIC_OUTPUT, 0,
+   "no progress bar and no progress messages; warnings and errors\n"
+   "are still printed"},
+  {"--help", "-h", TT__ARG_NONE, NULL, tt__set_flag, TT__AT(help), 0, 0, TT__TOPIC_OUTPUT, 0,
+   "this text"},
+  {"--version", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(version), 0, 0, TT__TOPIC_OUTPUT,
+   0,
+   "the version and the plugin ABI"},
+
+  /* --- hybrid tuning --- */
+  {"--hybrid", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(hybrid), 0, 0, TT__TOPIC_HYBRID,
+   TT__MPI_ALL,
+   "over the camera path (--camera-index A:B: samples A..B, both\n"
+   "included; default all 100):\n"
+   "per state, explore (the tuner, --iterations K, default 40)\n"
+   "with probability --epsilon, else exploit (one configuration\n"
+   "the predictor plugin predicts, built once); every cost goes\n"
+   "to the database and the model. --plugin predictor_nn (default)\n"
+   "| predictor_rbf | predictor_static, --plugin tuner_nm (default)"},
+  {"--epsilon", NULL, TT__ARG_ONE, "E", tt__set_epsilon, 0, 0, 0, TT__TOPIC_HYBRID, 0,
+   "probability of exploring a state, in [0, 1] (default 0.1)"},
+  {"--model", NULL, TT__ARG_ONE, "FILE", tt__set_text, TT__AT(model), 0, 0, TT__TOPIC_HYBRID, 0,
+   "the model: loaded when FILE exists, saved there at the end"},
+  {"--warm-start", NULL, TT__ARG_ONE, "DB", tt__set_list, TT__AT(warm_start), 0, 0,
+   TT__TOPIC_HYBRID, 0,
+   "teach the model every usable row of a tuning database first\n"
+   "(other scenes, earlier runs; same objective, clock, spp, threads)"},
+  {"--predict", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(predict_only), 0, 0,
+   TT__TOPIC_HYBRID, 0,
+   "print the model's prediction per state as JSON; render nothing"},
+  {"--states", NULL, TT__ARG_ONE, "FILE.json", tt__set_text, TT__AT(states), 0, 0,
+   TT__TOPIC_HYBRID, 0,
+   "--predict for these states ([{\"id\": ..., \"indicators\":\n"
+   "{name: raw value, ...}}, ...]) instead of the path samples"},
+
+  /* --- scene tools and measurements --- */
+  {"--convert", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(convert), 0, 0, TT__TOPIC_TOOLS,
+   0,
+   "write the loaded scene (scene.json or .pbrt) as scene.json v1\n"
+   "to --out FILE.json, meshes as PLY in meshes/ next to it; no render"},
+  {"--indicators", NULL, TT__ARG_NONE, NULL, tt__set_flag, TT__AT(indicators), 0, 0,
+   TT__TOPIC_TOOLS, 0,
+   "print the scene's indicators (thesis Table 3.2) for its still\n"
+   "camera or --camera-index I as JSON: raw, normalised to [0,1]\n"
+   "(the predictors' state), bounds, what was clamped, compute ms"},
+  {"--indicator-norm", NULL, TT__ARG_ONE, "SPEC", tt__set_indicator_norm, 0, 0, 0,
+   TT__TOPIC_TOOLS, 0,
+   "normalisation of the indicators: camera=extent|table|text,\n"
+   "scale=linear|log (default camera=extent,scale=linear)"},
+  {"--measure", NULL, TT__ARG_ONE, "FILE.json", tt__set_text, TT__AT(measure), 0, 0,
+   TT__TOPIC_TOOLS, 0,
+   "measure the accel configurations of FILE (a JSON array; the\n"
+   "first should be the default) side by side: --rounds R (3)\n"
+   "rounds, order alternating, medians and ratios to the first as\n"
+   "JSON on stdout (--camera-index I, --objective, --tune-spp)"},
+  {"--rounds", NULL, TT__ARG_ONE, "R", tt__set_u32, TT__AT(rounds), 1, 10000, TT__TOPIC_TOOLS, 0,
+   "rounds of --measure (default 3)"},
+};
+
+#define TT__ROWS (sizeof tt__table / sizeof tt__table[0])
+
+/* Other renderers' spellings of our options, suggested for "did you mean". */
+static const struct { const char *theirs, *ours; } tt__foreign[] = {
+  {"--outfile", "--out"},       /* pbrt-v4 */
+  {"--nthreads", "--threads"},  /* pbrt-v4 */
+};
+
+const tt__option *tt__options(size_t *count) {
+  *count = TT__ROWS;
+  return tt__table;
+}
+
+const tt__option *tt__option_find(const char *name) {
+  for (size_t k = 0; k < TT__ROWS; k++) {
+    const tt__option *o = &tt__table[k];
+    if (!strcmp(name, o->name) || (o->alias && !strcmp(name, o->alias))) return o;
+  }
+  return NULL;
+}
+
+const tt__option *tt__option_of_arg(const char *arg, const char **value) {
+  const char *eq = arg[0] == '-' && arg[1] == '-' ? strchr(arg, '=') : NULL;
+  *value = eq ? eq + 1 : NULL;
+  if (!eq) return tt__option_find(arg);
+  char name[64];
+  if ((size_t)(eq - arg) >= sizeof name) return NULL;
+  memcpy(name, arg, (size_t)(eq - arg));
+  name[eq - arg] = '\0';
+  return tt__option_find(name);
+}
+
+const char *tt__option_suggest(const char *name) {
+  for (size_t k = 0; k < sizeof tt__foreign / sizeof tt__foreign[0]; k++)
+    if (!strcmp(name, tt__foreign[k].theirs)) return tt__foreign[k].ours;
+  const char *names[TT__ROWS];
+  for (size_t k = 0; k < TT__ROWS; k++) names[k] = tt__table[k].name;
+  return tt_suggest(name, names, TT__ROWS);
+}
+
+static const char *const tt__titles[TT__TOPIC_COUNT] = {
+  [TT__TOPIC_PLUGINS] = "Plugins",
+  [TT__TOPIC_RENDER] = "Rendering",
+  [TT__TOPIC_TUNE] = "Tuning (thesis Fig. 3.2; see host/README.md)",
+  [TT__TOPIC_SEQUENCE] = "Sequences (temporal filters, see tools/taa/README.md)",
+  [TT__TOPIC_CAMERA] = "Camera path samples (benchmark views, scenes/README.md)",
+  [TT__TOPIC_OUTPUT] = "Output",
+  [TT__TOPIC_HYBRID] = "Hybrid tuning (thesis 3.3; host/README.md)",
+  [TT__TOPIC_TOOLS] = "Scene tools and measurements",
+};
+
+static const char *const tt__intros[TT__TOPIC_COUNT] = {
+  [TT__TOPIC_TUNE] =
+    "Loading a tuner (--plugin tuner_nm) turns tuning on: before the final passes the\n"
+    "host measures the target's default configuration, then asks the tuner for\n"
+    "--iterations configurations, measuring each with one pass, and renders the\n"
+    "remaining spp with the best one.\n",
+};
+
+const char *tt__topic_title(tt__topic topic) { return tt__titles[topic]; }
+
+const char *tt__topic_intro(tt__topic topic) {
+  return tt__intros[topic] ? tt__intros[topic] : "";
+}
