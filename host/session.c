@@ -117,23 +117,30 @@ static int tt__apply_sets(tt__session *s) {
 }
 
 /* --camera-index I: the path sample I of TT_HOST_PATH_SAMPLES, t = first key + I/(N-1) of
- * the path's time range, becomes the scene's camera; a frame of --frames: the pose at its
- * time (camera_time = f / fps, as the frames of a sequence). The motion AOV's previous frame
- * is one frame interval (--fps, default 24) earlier. */
-static void tt__apply_camera_index(tt__session *s) {
+ * the scene's time range (camera path and animation), becomes the scene's time: the camera
+ * and the moving meshes; a frame of --frames: the pose at its time (camera_time = f / fps,
+ * as the frames of a sequence). The motion AOV's previous frame is one frame interval
+ * (--fps, default 24) earlier. */
+static int tt__apply_camera_index(tt__session *s) {
   const tt__host_options *opt = s->opt;
   const tt_camera *c0 = tt_scene_camera(s->scene);
-  double t = opt->camera_time_set ? opt->camera_time : 0;
-  if (c0->key_count > 0 && !opt->camera_time_set)
-    t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) *
-                               (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
-  else if (c0->key_count == 0 && opt->camera_time_set)  /* a warning: --quiet keeps it */
+  double t = opt->camera_time_set ? opt->camera_time : 0, t0, t1;
+  const double dt = 1.0 / (opt->fps > 0 ? opt->fps : 24.0);
+  tt_scene_time_range(s->scene, &t0, &t1);
+  int timed = c0->key_count > 0 || tt_scene_animated(s->scene);
+  if (timed && !opt->camera_time_set) t = t0 + (t1 - t0) * (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
+  if (tt_scene_animated(s->scene) && tt_scene_set_time(s->scene, t, t - dt) != TT_OK) {
+    fprintf(stderr, "host: %s\n", tt_last_error());
+    return TT_EXIT_SCENE;
+  }
+  if (!timed && opt->camera_time_set)  /* a warning: --quiet keeps it */
     fprintf(stderr, "host: warning: --frames: the scene has no camera path; every frame "
             "uses its still camera\n");
-  else if (c0->key_count == 0)
+  else if (!timed)
     fprintf(stderr, "host: warning: --camera-index %u: the scene has no camera path; "
             "using its still camera\n", opt->camera_index);
-  tt_session_set_camera_time(s->lib, t, 1.0 / (opt->fps > 0 ? opt->fps : 24.0));
+  tt_session_set_camera_time(s->lib, t, dt);
+  return TT_EXIT_OK;
 }
 
 void tt__session_sync(tt__session *s) {
@@ -184,7 +191,8 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
       fprintf(stderr, "host: --res: %s\n", tt_last_error());
       return TT_EXIT_USAGE;
     }
-    if (opt->camera_index_set || opt->camera_time_set) tt__apply_camera_index(s);
+    if ((opt->camera_index_set || opt->camera_time_set) && (rc = tt__apply_camera_index(s)) != TT_EXIT_OK)
+      return rc;
     s->camera = tt_session_camera(s->lib);
   }
   if (opt->seed_set) tt_session_set_seed(s->lib, opt->seed);

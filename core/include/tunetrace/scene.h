@@ -30,7 +30,25 @@ typedef struct tt_mesh {
   const uint32_t *indices;    /* 3 * triangle_count vertex indices */
   uint32_t material;          /* index into the scene's materials */
   int32_t light;              /* index of the area light this mesh emits as, or -1 */
+  /* ---- appended (ABI 1.2): animation; read only when struct_size covers them ---- */
+  uint32_t motion;            /* a tt_mesh_motion: how tt_scene_set_time changes the mesh */
+  const float *prev_positions;   /* 3 * vertex_count: world positions at the previous frame's
+                                    time (tt_scene_set_time); == positions when static */
+  const float *object_positions; /* TT_MESH_RIGID: 3 * vertex_count in object space; else
+                                    NULL */
+  float transform[12];        /* TT_MESH_RIGID: row-major 3x4 object-to-world matrix at the
+                                 current time (positions are it times object_positions,
+                                 computed in double and rounded); identity otherwise */
+  uint64_t revision;          /* changes whenever tt_scene_set_time rewrites the positions */
 } tt_mesh;
+
+/* How a mesh moves over the scene's time (tt_mesh.motion). */
+typedef enum tt_mesh_motion {
+  TT_MESH_STATIC = 0,         /* never changes */
+  TT_MESH_RIGID = 1,          /* placed by a keyframed transform: positions = transform *
+                                 object_positions */
+  TT_MESH_DEFORMING = 2       /* vertices move independently (morph targets, skinning) */
+} tt_mesh_motion;
 
 typedef enum tt_material_type {
   TT_MATERIAL_DIFFUSE = 1,     /* Lambert, or Oren-Nayar when roughness > 0 */
@@ -176,6 +194,27 @@ TT_API void tt_scene_set_camera(tt_scene *scene, const tt_camera *camera);
 TT_API tt_status tt_scene_set_resolution(tt_scene *scene, uint32_t width, uint32_t height);
 
 TT_API const tt_render_settings *tt_scene_settings(const tt_scene *scene);
+
+/* ---- animation (scenes/README.md, "Animation") --------------------------------------
+ * A scene's meshes may move over time (keyframed rigid transforms, morph targets,
+ * skinning); the time axis is the camera path's. A loaded scene is posed at the start of
+ * its time range (a still renders that pose). */
+
+/* Non-zero when any mesh of the scene moves (tt_mesh.motion != TT_MESH_STATIC). */
+TT_API int tt_scene_animated(const tt_scene *scene);
+/* Time range [t0, t1] of the scene: the keys of its camera path and of its animations
+ * (0, 0 for a still scene). */
+TT_API void tt_scene_time_range(const tt_scene *scene, double *t0, double *t1);
+/* The time the meshes are posed at. */
+TT_API double tt_scene_time(const tt_scene *scene);
+/* Poses every animated mesh at time `t` (positions, normals and transforms rewritten in
+ * place: views keep their pointers) and their prev_positions at `t_prev` (the previous
+ * frame, for motion vectors); updates the bounds and the areas of moving area lights.
+ * Keys are clamped outside their range. A still scene is left as it is. Not thread-safe:
+ * only between renders, and an accel built over the scene must be updated or rebuilt
+ * before the next query. TT_ERR_INVALID_ARGUMENT (naming the mesh) when a pose leaves the
+ * coordinate limit. */
+TT_API tt_status tt_scene_set_time(tt_scene *scene, double t, double t_prev);
 
 /* Scene indicators of thesis Table 3.2 (the predictors' state vector). */
 #define TT_SCENE_INDICATOR_COUNT 17

@@ -6,6 +6,7 @@
  * its materials/meshes/lights are appended. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io_internal.h"
+#include "io/scene_json_internal.h"
 #include "plugin/log.h"
 #include "util/json_error.h"
 
@@ -23,36 +24,15 @@
 
 #define TT__PI 3.14159265358979323846
 
-/* Loader state: where messages point and where relative assets are resolved. */
-typedef struct tt__jctx {
-  const char *src;
-  const char *base;   /* NULL: relative to the current directory */
-  tt_scene *scene;
-} tt__jctx;
-
-/* Range of an accepted number; flags select open ends and integers. */
-typedef struct tt__range {
-  double lo, hi;
-  unsigned flags;
-} tt__range;
-#define TT__LO_OPEN 1u
-#define TT__HI_OPEN 2u
-#define TT__INT 4u
-
-static const tt__range tt__any = {-INFINITY, INFINITY, TT__LO_OPEN | TT__HI_OPEN};
-static const tt__range tt__nonneg = {0.0, INFINITY, TT__HI_OPEN};
+const tt__range tt__any = {-INFINITY, INFINITY, TT__LO_OPEN | TT__HI_OPEN};
+const tt__range tt__nonneg = {0.0, INFINITY, TT__HI_OPEN};
 static const tt__range tt__unit = {0.0, 1.0, 0};
 
 /* ---- messages -------------------------------------------------------------------------- */
 
-/* One place formats "<source>: <path>: <message>" so all errors look alike
- * (util/json_error.c, shared with the parameter-space reader). */
-#define tt__jfail(c, st, path, ...) tt__json_error((st), (c)->src, (path), __VA_ARGS__)
-
 /* Warnings go to the log host (tt_set_log_host): the scene still loads, but typos should not
  * pass silently. */
-static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) TT_PRINTF(3, 4);
-static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) {
+void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) {
   char msg[1024];
   va_list ap;
   va_start(ap, fmt);
@@ -62,19 +42,19 @@ static void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...)
 }
 
 /* "camera" + "fov" -> "camera.fov"; an empty prefix yields the key alone. */
-static void tt__jkey(char *buf, size_t n, const char *prefix, const char *key) {
+void tt__jkey(char *buf, size_t n, const char *prefix, const char *key) {
   /* testing the result tells GCC that truncating an absurdly deep path is acceptable */
   int w = (prefix && prefix[0]) ? snprintf(buf, n, "%s.%s", prefix, key) : snprintf(buf, n, "%s", key);
   if (w < 0) buf[0] = '\0';
 }
 
 /* "meshes" + 2 -> "meshes[2]". */
-static void tt__jidx(char *buf, size_t n, const char *prefix, unsigned i) {
+void tt__jidx(char *buf, size_t n, const char *prefix, unsigned i) {
   if (snprintf(buf, n, "%s[%u]", prefix, i) < 0) buf[0] = '\0';
 }
 
 /* Describes a JSON value for "got ..." so the user sees what was actually there. */
-static const char *tt__jdesc(const cJSON *it, char *buf, size_t n) {
+const char *tt__jdesc(const cJSON *it, char *buf, size_t n) {
   return tt__json_describe(it, TT__JSON_SCENE, buf, n);
 }
 
@@ -86,7 +66,7 @@ static const char *tt__jrange_str(const tt__range *r, char *buf, size_t n) {
 }
 
 /* Warns about keys outside `known`; keys starting with '_' are comments and stay silent. */
-static void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *prefix,
+void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *prefix,
                             const char *const *known) {
   for (const cJSON *it = obj ? obj->child : NULL; it; it = it->next) {
     if (!it->string || it->string[0] == '_') continue;
@@ -103,7 +83,7 @@ static void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *pre
 /* ---- typed getters --------------------------------------------------------------------- */
 
 /* Checks a number against a range; non-finite values (1e999 parses as inf) are rejected. */
-static tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path,
+tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path,
                                const tt__range *r, double *out) {
   char got[128], rs[96];
   int integer = (r->flags & TT__INT) != 0;
@@ -122,7 +102,7 @@ static tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *p
 }
 
 /* Optional/required number under `key`; leaves *out alone when absent and optional. */
-static tt_status tt__jnum(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
+tt_status tt__jnum(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                           int required, const tt__range *r, double *out) {
   char path[512];
   tt__jkey(path, sizeof path, prefix, key);
@@ -135,7 +115,7 @@ static tt_status tt__jnum(const tt__jctx *c, const cJSON *obj, const char *key, 
 }
 
 /* An array of exactly n numbers; with allow_scalar a single number fills all n. */
-static tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *path, int n,
+tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *path, int n,
                                const tt__range *r, int allow_scalar, float *out) {
   char got[128], sub[560];
   double v;
@@ -159,7 +139,7 @@ static tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *p
 }
 
 /* Optional/required n-vector under `key`. */
-static tt_status tt__jvec(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
+tt_status tt__jvec(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                           int required, int n, const tt__range *r, int allow_scalar, float *out) {
   char path[512];
   tt__jkey(path, sizeof path, prefix, key);
@@ -172,7 +152,7 @@ static tt_status tt__jvec(const tt__jctx *c, const cJSON *obj, const char *key, 
 }
 
 /* Optional/required non-empty string under `key`; *out points into the JSON tree. */
-static tt_status tt__jstr(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
+tt_status tt__jstr(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                           int required, const char **out) {
   char path[512], got[128];
   tt__jkey(path, sizeof path, prefix, key);
@@ -189,7 +169,7 @@ static tt_status tt__jstr(const tt__jctx *c, const cJSON *obj, const char *key, 
 }
 
 /* Optional boolean under `key`. */
-static tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
+tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                            int *out) {
   char path[512], got[128];
   tt__jkey(path, sizeof path, prefix, key);
@@ -202,7 +182,7 @@ static tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key,
 }
 
 /* Objects are required where a section exists; a clear message beats a silent default. */
-static tt_status tt__jobject(const tt__jctx *c, const cJSON *it, const char *path) {
+tt_status tt__jobject(const tt__jctx *c, const cJSON *it, const char *path) {
   char got[128];
   if (!cJSON_IsObject(it))
     return tt__jfail(c, TT_ERR_PARSE, path, "expected an object, got %s", tt__jdesc(it, got, sizeof got));
@@ -225,7 +205,7 @@ static char *tt__resolve(const tt__jctx *c, const char *rel) {
 static int tt__file_exists(const char *path) { return tt_file_check_regular(path, NULL) == TT_OK; }
 
 /* 3-vector helpers for camera checks. */
-static double tt__len3(const float v[3]) {
+double tt__len3(const float v[3]) {
   return sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]);
 }
 
@@ -489,7 +469,7 @@ static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root, int import
 
 
 /* Rotation about a unit axis by `deg` degrees (Rodrigues). */
-static void tt__mat_rot(double r[16], double x, double y, double z, double deg) {
+void tt__mat_rot(double r[16], double x, double y, double z, double deg) {
   double a = deg * TT__PI / 180.0, cs = cos(a), sn = sin(a), t = 1 - cs;
   double m[16] = {t * x * x + cs,     t * x * y - sn * z, t * x * z + sn * y, 0,
                   t * x * y + sn * z, t * y * y + cs,     t * y * z - sn * x, 0,
@@ -588,7 +568,7 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
 
 /* Reads a vertex attribute given either flat ([x,y,z,x,y,z...]) or nested ([[x,y,z],...]);
  * *count receives the number of tuples. */
-static tt_status tt__jtuples(const tt__jctx *c, const cJSON *arr, const char *path, int dim,
+tt_status tt__jtuples(const tt__jctx *c, const cJSON *arr, const char *path, int dim,
                              const char *what, float **out, uint32_t *count) {
   char got[128], sub[560];
   *out = NULL;
@@ -748,7 +728,7 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
   tt__jidx(mp, sizeof mp, "meshes", index);
   if ((st = tt__jobject(c, e, mp)) != TT_OK) return st;
   static const char *const known[] = {"name", "material", "positions", "indices", "normals", "uvs",
-                                      "file", "split", "transform", "matrix", NULL};
+                                      "file", "split", "transform", "matrix", "animation", "morph", NULL};
   tt__jcheck_keys(c, e, mp, known);
   tt_scene *s = c->scene;
   const char *name = NULL, *mat = NULL, *file = NULL;
@@ -776,6 +756,7 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
   double m[16];
   int has_tf = 0;
   if ((st = tt__jtransform(c, e, mp, m, &has_tf)) != TT_OK) return st;
+  const uint32_t first = s->mesh_count;
   if (pos) {
     tt__mesh_data d;
     memset(&d, 0, sizeof d);
@@ -786,6 +767,7 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
     }
     if (st == TT_OK) st = tt__jfinish_mesh(c, mp, &d, m, has_tf, mi);
     tt__mesh_data_free(&d);
+    if (st == TT_OK) st = tt__janim_attach(c, e, mp, first, s->mesh_count - first, m, has_tf);
     return st;
   }
   int split = 0;
@@ -800,11 +782,13 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
   uint32_t np = 0;
   st = tt__mesh_import(full, name, split, where, &parts, &np);
   free(full);
+  if (st == TT_OK) st = tt__janim_check(c, e, mp, np);
   for (uint32_t i = 0; i < np; i++) {
     if (st == TT_OK) st = tt__jfinish_mesh(c, mp, &parts[i], m, has_tf, mi);
     tt__mesh_data_free(&parts[i]);
   }
   free(parts);
+  if (st == TT_OK) st = tt__janim_attach(c, e, mp, first, s->mesh_count - first, m, has_tf);
   return st;
 }
 
@@ -1137,6 +1121,7 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
   if (st == TT_OK) st = tt__jmaterials(&c, root, imp);
   if (st == TT_OK) st = tt__jmeshes(&c, root, imp);
   if (st == TT_OK) st = tt__jlights(&c, root);
+  if (st == TT_OK) st = tt__janim_check_range(&c, root);
   if (st == TT_OK) st = tt__scene_finish(c.scene);
   cJSON_Delete(root);
   if (st != TT_OK) {

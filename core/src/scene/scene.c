@@ -1,5 +1,6 @@
 /* Scenes: construction helpers shared by the loaders, the content hash, accessors, camera
  * path evaluation. Format dispatch (tt_scene_load) is in io/scene_load.c. */
+#include "scene/anim.h"
 #include "scene/scene_internal.h"
 
 #include <tt_util/hash.h>
@@ -75,6 +76,9 @@ tt_status tt__scene_add_mesh(tt_scene *scene, tt__mesh_data *d, uint32_t materia
   m->indices = d->indices;
   m->material = material;
   m->light = -1;
+  m->motion = TT_MESH_STATIC;
+  m->prev_positions = m->positions;
+  m->transform[0] = m->transform[5] = m->transform[10] = 1.0f;
   memset(d, 0, sizeof *d);
   return TT_OK;
 }
@@ -206,6 +210,7 @@ static void tt__scene_compute_id(tt_scene *s) {
     h = tt__fnv_floats(h, &l->cos_outer, 1);
     h = tt__fnv_str(h, l->image);
   }
+  h = tt__scene_anim_hash(s, h);
   snprintf(s->id, sizeof s->id, "%016llx", (unsigned long long)h);
 }
 
@@ -259,8 +264,73 @@ static tt_status tt__scene_check_range(const tt_scene *s) {
 
 /* Emissive meshes become area lights here, after all meshes exist, so every loader gets
  * the same light list (explicit lights first, then area lights in mesh order). */
+/* Camera path keys and animation keys share one time axis. */
+void tt__scene_time_range(const tt_scene *s, double *t0, double *t1) {
+  double lo, hi;
+  tt__scene_anim_range(s, &lo, &hi);
+  int any = s->anim && !(lo == 0 && hi == 0);
+  if (s->camera.key_count) {
+    double a = s->keys[0].time, b = s->keys[s->camera.key_count - 1].time;
+    if (!any || a < lo) lo = a;
+    if (!any || b > hi) hi = b;
+  }
+  *t0 = lo;
+  *t1 = hi;
+}
+
+void tt__scene_update_bounds(tt_scene *s) {
+  for (int a = 0; a < 3; a++) {
+    s->lo[a] = INFINITY;
+    s->hi[a] = -INFINITY;
+  }
+  for (uint32_t i = 0; i < s->mesh_count; i++) {
+    const tt_mesh *m = &s->meshes[i];
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+      for (int a = 0; a < 3; a++) {
+        float x = m->positions[3 * (size_t)v + a];
+        if (x < s->lo[a]) s->lo[a] = x;
+        if (x > s->hi[a]) s->hi[a] = x;
+      }
+  }
+  if (s->mesh_count == 0)
+    for (int a = 0; a < 3; a++) s->lo[a] = s->hi[a] = 0.0f;
+}
+
+/* Animated meshes get their motion kind and previous-position arrays, and the scene its
+ * start pose. */
+static tt_status tt__scene_finish_anim(tt_scene *s) {
+  tt__scene_anim *a = s->anim;
+  if (!a) return TT_OK;
+  for (uint32_t i = 0; i < a->mesh_count; i++) {
+    tt__mesh_anim *ma = &a->meshes[i];
+    tt_mesh *m = &s->meshes[ma->mesh];
+    if (ma->targets || ma->joints) {
+      m->motion = TT_MESH_DEFORMING;
+    } else {
+      m->motion = TT_MESH_RIGID;
+      m->object_positions = ma->rest_pos;
+    }
+    m->prev_positions = ma->prev;
+    if (ma->targets && !ma->morph_w) ma->morph_w = calloc(ma->targets, sizeof(float));
+    if (ma->joints && !ma->joint_mat) ma->joint_mat = malloc(sizeof(double) * 16 * ma->joints);
+    if ((ma->targets && !ma->morph_w) || (ma->joints && !ma->joint_mat))
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", s->source);
+  }
+  double t1;
+  tt__scene_time_range(s, &s->start_time, &t1);
+  a->time = NAN;  /* nothing posed yet */
+  tt_status st = tt__scene_anim_pose(s, s->start_time);
+  if (st != TT_OK) return tt_set_error(TT_ERR_PARSE, "%s", tt_last_error());
+  for (uint32_t i = 0; i < a->mesh_count; i++) {
+    const tt_mesh *m = &s->meshes[a->meshes[i].mesh];
+    memcpy(a->meshes[i].prev, m->positions, sizeof(float) * 3 * (size_t)m->vertex_count);
+  }
+  return TT_OK;
+}
+
 tt_status tt__scene_finish(tt_scene *s) {
-  tt_status range = tt__scene_check_range(s);
+  tt_status range = tt__scene_finish_anim(s);
+  if (range == TT_OK) range = tt__scene_check_range(s);
   if (range != TT_OK) return range;
   for (uint32_t i = 0; i < s->mesh_count; i++) {
     tt_mesh *m = &s->meshes[i];
@@ -276,22 +346,8 @@ tt_status tt__scene_finish(tt_scene *s) {
     m->light = (int32_t)(s->light_count - 1);
   }
   s->triangle_count = 0;
-  for (int a = 0; a < 3; a++) {
-    s->lo[a] = INFINITY;
-    s->hi[a] = -INFINITY;
-  }
-  for (uint32_t i = 0; i < s->mesh_count; i++) {
-    const tt_mesh *m = &s->meshes[i];
-    s->triangle_count += m->triangle_count;
-    for (uint32_t v = 0; v < m->vertex_count; v++)
-      for (int a = 0; a < 3; a++) {
-        float x = m->positions[3 * (size_t)v + a];
-        if (x < s->lo[a]) s->lo[a] = x;
-        if (x > s->hi[a]) s->hi[a] = x;
-      }
-  }
-  if (s->mesh_count == 0)
-    for (int a = 0; a < 3; a++) s->lo[a] = s->hi[a] = 0.0f;
+  for (uint32_t i = 0; i < s->mesh_count; i++) s->triangle_count += s->meshes[i].triangle_count;
+  tt__scene_update_bounds(s);
   s->camera.keys = s->keys;
   tt__scene_compute_id(s);
   return TT_OK;
@@ -319,6 +375,7 @@ void tt_scene_destroy(tt_scene *s) {
   free(s->lights);
   free(s->keys);
   free(s->source);
+  tt__scene_anim_free(s->anim);
   free(s);
 }
 

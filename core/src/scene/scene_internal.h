@@ -28,6 +28,8 @@ struct tt_scene {
   tt_render_settings settings;
   float lo[3], hi[3];           /* world bounds, valid after tt__scene_finish */
   uint64_t triangle_count;
+  struct tt__scene_anim *anim;  /* moving meshes (scene/anim.h), NULL for a still scene */
+  double start_time;            /* start of the time range: the pose after loading */
 };
 
 /* Geometry produced by the mesh importer or an inline definition, before it becomes a
@@ -67,8 +69,15 @@ double tt__mesh_area(const tt_mesh *mesh);
  * or not affine (the caller words the message). */
 tt_status tt__mesh_data_transform(tt__mesh_data *data, const double m[16]);
 
-/* Completes a scene after loading: creates the area lights of emissive meshes, computes
- * the bounds, the triangle count and the id. */
+/* Time range of the camera path's keys and the animation's (0, 0 without either). */
+void tt__scene_time_range(const tt_scene *scene, double *t0, double *t1);
+
+/* Recomputes the world bounds from the meshes' current positions. */
+void tt__scene_update_bounds(tt_scene *scene);
+
+/* Completes a scene after loading: poses animated meshes at the start of the time range,
+ * creates the area lights of emissive meshes, computes the bounds, the triangle count and
+ * the id. */
 tt_status tt__scene_finish(tt_scene *scene);
 
 #endif /* TT_SCENE_INTERNAL_H */
