@@ -4,36 +4,21 @@
 
 #include "host.h"
 
-#include <errno.h>
-#include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 /* The member of `opt` at the row's field offset. */
 #define TT__FIELD(type, o, opt) ((type *)(void *)((char *)(opt) + (o)->field))
 
-/* Parses an unsigned integer in [lo, hi] for option `name`. */
-static int tt__parse_u64(const char *name, const char *text, uint64_t lo, uint64_t hi,
-                         uint64_t *out) {
-  char *end = NULL;
-  errno = 0;
-  if (!text || !*text || *text == '-') goto bad;
-  unsigned long long v = strtoull(text, &end, 10);
-  if (errno || *end || v < lo || v > hi) goto bad;
-  *out = v;
-  return 0;
-bad:
-  fprintf(stderr, "host: %s: expected an integer in [%llu, %llu], got \"%s\"\n", name,
-          (unsigned long long)lo, (unsigned long long)hi, text ? text : "");
+/* Prints the library's message for option `o` (tunetrace/limits.h); returns -1. */
+static int tt__bad_value(const tt__option *o) {
+  fprintf(stderr, "host: %s: %s\n", o->name, tt_last_error());
   return -1;
 }
 
-/* A real number of the whole text `v` (no trailing characters), or NAN. */
-static double tt__real(const char *v) {
-  char *end = NULL;
-  double x = strtod(v, &end);
-  return *v && !*end ? x : NAN;
+/* The integer `v` within the row's limit. */
+static int tt__uint(const tt__option *o, const char *v, uint64_t *out) {
+  return tt_limit_parse_uint(o->limit, v, out) == TT_OK ? 0 : tt__bad_value(o);
 }
 
 int tt__set_flag(const tt__option *o, const char *v, tt__host_options *opt) {
@@ -60,8 +45,14 @@ int tt__set_list(const tt__option *o, const char *v, tt__host_options *opt) {
 
 int tt__set_u32(const tt__option *o, const char *v, tt__host_options *opt) {
   uint64_t n;
-  if (tt__parse_u64(o->name, v, o->lo, o->hi, &n)) return -1;
+  if (tt__uint(o, v, &n)) return -1;
   *TT__FIELD(uint32_t, o, opt) = (uint32_t)n;
+  return 0;
+}
+
+int tt__set_real(const tt__option *o, const char *v, tt__host_options *opt) {
+  if (tt_limit_parse_real(o->limit, v, TT__FIELD(double, o, opt)) != TT_OK)
+    return tt__bad_value(o);
   return 0;
 }
 
@@ -75,54 +66,19 @@ int tt__set_plugin_param(const tt__option *o, const char *v, tt__host_options *o
 }
 
 int tt__set_seed(const tt__option *o, const char *v, tt__host_options *opt) {
-  if (tt__parse_u64(o->name, v, 0, UINT64_MAX, &opt->seed)) return -1;
+  if (tt__uint(o, v, &opt->seed)) return -1;
   opt->seed_set = 1;
   return 0;
 }
 
-int tt__set_time(const tt__option *o, const char *v, tt__host_options *opt) {
-  double t = tt__real(v);
-  if (!(t > 0) || t > 1e7) {
-    fprintf(stderr, "host: %s: expected seconds > 0, got \"%s\"\n", o->name, v);
-    return -1;
-  }
-  opt->time_budget = t;
-  return 0;
-}
-
 int tt__set_res(const tt__option *o, const char *v, tt__host_options *opt) {
-  unsigned w = 0, h = 0;
-  char tail = 0;
-  if (sscanf(v, "%ux%u%c", &w, &h, &tail) != 2 || w == 0 || h == 0 || w > 65536 ||
-      h > 65536) {
-    fprintf(stderr, "host: %s: expected WIDTHxHEIGHT (1..65536 each), got \"%s\"\n", o->name, v);
-    return -1;
-  }
-  opt->width = w;
-  opt->height = h;
+  if (tt_limit_parse_resolution(v, &opt->width, &opt->height) != TT_OK) return tt__bad_value(o);
   return 0;
 }
 
 int tt__set_epsilon(const tt__option *o, const char *v, tt__host_options *opt) {
-  double e = tt__real(v);
-  if (!(e >= 0.0 && e <= 1.0)) {
-    fprintf(stderr, "host: %s: expected the probability of exploring a state, a number in "
-            "[0, 1], got \"%s\"\n", o->name, v);
-    return -1;
-  }
-  opt->epsilon = e;
+  if (tt__set_real(o, v, opt)) return -1;
   opt->epsilon_set = 1;
-  return 0;
-}
-
-int tt__set_fps(const tt__option *o, const char *v, tt__host_options *opt) {
-  double fps = tt__real(v);
-  if (!(fps > 0) || fps > 1000) {
-    fprintf(stderr, "host: %s: expected frames per second in (0, 1000], got \"%s\"\n", o->name,
-            v);
-    return -1;
-  }
-  opt->fps = fps;
   return 0;
 }
 
@@ -153,43 +109,36 @@ int tt__set_clock(const tt__option *o, const char *v, tt__host_options *opt) {
 
 /* "N" renders frames 0..N-1, "A:B" frames A..B inclusive (sequence.c). */
 int tt__set_sequence(const tt__option *o, const char *v, tt__host_options *opt) {
-  unsigned f0 = 0, f1 = 0;
-  char extra;
-  int digit = v[0] >= '0' && v[0] <= '9';
-  if (digit && sscanf(v, "%u:%u%c", &f0, &f1, &extra) == 2 && f0 <= f1) {
-    opt->seq_first = f0;
-    opt->seq_last = f1;
-  } else if (digit && sscanf(v, "%u%c", &f0, &extra) == 1 && f0 >= 1) {
-    opt->seq_first = 0;
-    opt->seq_last = f0 - 1;
-  } else {
-    fprintf(stderr, "host: %s: expected a frame count N >= 1 or a range A:B with A <= B, got "
-            "\"%s\"\n", o->name, v);
+  uint64_t f0 = 0, f1 = 0, n = 0;
+  int range = strchr(v, ':') != NULL;
+  int ok = range ? tt_limit_parse_span(o->limit, v, &f0, &f1) == TT_OK
+                 : tt_limit_parse_uint(o->limit, v, &n) == TT_OK && n >= 1;
+  if (!ok) {
+    fprintf(stderr, "host: %s: expected a frame count N >= 1 or a range A:B with A <= B (frame "
+            "numbers up to %u), got \"%s\"\n", o->name, UINT32_MAX - 1, v);
     return -1;
   }
+  opt->seq_first = (uint32_t)f0;
+  opt->seq_last = (uint32_t)(range ? f1 : n - 1);
   opt->sequence = 1;
   return 0;
 }
 
 /* I, or A:B (samples A..B, both included: the states of --hybrid and --predict). */
 int tt__set_camera_index(const tt__option *o, const char *v, tt__host_options *opt) {
-  unsigned c0 = 0, c1 = 0;
-  char extra;
-  uint64_t n;
-  if (strchr(v, ':')) {
-    if (!(v[0] >= '0' && v[0] <= '9') || sscanf(v, "%u:%u%c", &c0, &c1, &extra) != 2 ||
-        c0 > c1 || c1 >= TT_HOST_PATH_SAMPLES) {
-      fprintf(stderr, "host: %s: expected I or A:B with A <= B <= %d (path samples A..B, both "
-              "included), got \"%s\"\n", o->name, TT_HOST_PATH_SAMPLES - 1, v);
-      return -1;
-    }
+  uint64_t c0 = 0, c1 = 0;
+  if (!strchr(v, ':')) {
+    if (tt__uint(o, v, &c0)) return -1;
+    c1 = c0;
+  } else if (tt_limit_parse_span(o->limit, v, &c0, &c1) == TT_OK) {
     opt->camera_index_range = 1;
   } else {
-    if (tt__parse_u64(o->name, v, 0, TT_HOST_PATH_SAMPLES - 1, &n)) return -1;
-    c0 = c1 = (unsigned)n;
+    fprintf(stderr, "host: %s: expected I or A:B with A <= B <= %d (path samples A..B, both "
+            "included), got \"%s\"\n", o->name, TT_HOST_PATH_SAMPLES - 1, v);
+    return -1;
   }
-  opt->camera_index = c0;
-  opt->camera_index_last = c1;
+  opt->camera_index = (uint32_t)c0;
+  opt->camera_index_last = (uint32_t)c1;
   opt->camera_index_set = 1;
   return 0;
 }

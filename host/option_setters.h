@@ -6,19 +6,19 @@
 #include "option_table.h"
 
 /* Generic, through tt__option.field: an int set to 1, a string, an entry of a bounded list
- * (the list's count follows its array), an integer in [lo, hi] (uint32_t). */
+ * (the list's count follows its array), a number within tt__option.limit (uint32_t or
+ * double). */
 int tt__set_flag(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_text(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_list(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_u32(const tt__option *o, const char *v, struct tt__host_options *opt);
+int tt__set_real(const tt__option *o, const char *v, struct tt__host_options *opt);
 
 /* One option each (named after it). */
 int tt__set_plugin_param(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_seed(const tt__option *o, const char *v, struct tt__host_options *opt);
-int tt__set_time(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_res(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_epsilon(const tt__option *o, const char *v, struct tt__host_options *opt);
-int tt__set_fps(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_objective(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_tune_params(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_clock(const tt__option *o, const char *v, struct tt__host_options *opt);

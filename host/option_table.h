@@ -3,6 +3,8 @@
 #ifndef TT_HOST_OPTION_TABLE_H
 #define TT_HOST_OPTION_TABLE_H
 
+#include <tunetrace/limits.h>
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -48,7 +50,7 @@ typedef struct tt__option {
   const char *value;     /* the value's placeholder in --help ("N", "FILE.exr") */
   tt__option_set set;
   size_t field;          /* offsetof the tt__host_options member the generic setters write */
-  uint64_t lo, hi;       /* the range of an integer value (tt__set_u32) */
+  tt_limit limit;        /* the range of a number (tunetrace/limits.h) */
   tt__topic topic;
   unsigned mpi;          /* TT__MPI_* */
   const char *help;      /* lines of --help, '\n'-separated */

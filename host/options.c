@@ -63,17 +63,19 @@ static int tt__out_pattern(const char *out) {
   return -1;
 }
 
-/* --frames A:B as two numbers; 0 when it is not that (or A > B). */
-static int tt__frames_range(const char *v, unsigned *f0, unsigned *f1) {
-  char extra;
-  return v && v[0] >= '0' && v[0] <= '9' && sscanf(v, "%u:%u%c", f0, f1, &extra) == 2 &&
-         *f0 <= *f1;
+/* --frames A:B as two frame numbers (tunetrace/limits.h); 0 when it is not that (or A > B). */
+static int tt__frames_range(const char *v, uint32_t *f0, uint32_t *f1) {
+  uint64_t a, b;
+  if (tt_limit_parse_span(TT_LIMIT_FRAME, v, &a, &b) != TT_OK) return 0;
+  *f0 = (uint32_t)a;
+  *f1 = (uint32_t)b;
+  return 1;
 }
 
 /* --out DIR/frame_%04d.exr: the frames of a sequence (--frames A:B or --sequence) go there. */
 static int tt__use_out_pattern(tt__host_options *opt) {
   const char *v = opt->frames_arg;
-  unsigned f0 = 0, f1 = 0;
+  uint32_t f0 = 0, f1 = 0;
   if (opt->out_dir) {
     fprintf(stderr, "host: --out %s (a frame pattern) and --out-dir exclude each other\n",
             opt->out);
@@ -119,7 +121,7 @@ static int tt__check_out_pattern(tt__host_options *opt) {
 
 /* --frames A:B without a pattern: the same frames (A..B at --fps), each a full still render. */
 static int tt__use_still_frames(tt__host_options *opt) {
-  unsigned f0 = 0, f1 = 0;
+  uint32_t f0 = 0, f1 = 0;
   if (!tt__frames_range(opt->frames_arg, &f0, &f1)) {
     fprintf(stderr, "host: --frames: expected A:B with A <= B (frames A..B of the camera path "
             "at --fps, both included), got \"%s\"\n", opt->frames_arg);

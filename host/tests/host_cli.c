@@ -26,6 +26,22 @@ int main(void) {
 
   CHECK(run_host("--res 64by64 x.json", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "--res: expected WIDTHxHEIGHT");
+  /* numbers wider than 32 bits are refused, not wrapped (--res rendered 8x8 and 8x1, a
+   * sequence of 4294967297 frames was one frame) */
+  CHECK(run_host("--res 4294967304x8 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--res: expected WIDTHxHEIGHT (1..65536 each), got \"4294967304x8\"");
+  CHECK(run_host("--res 8x4294967297 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--res: expected WIDTHxHEIGHT");
+  CHECK(run_host("--sequence 4294967297 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--sequence: expected a frame count N >= 1");
+  CHECK(run_host("--frames 4294967296:4294967297 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--frames: expected A:B with A <= B");
+  CHECK(run_host("--camera-index 4294967296:4294967297 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--camera-index: expected I or A:B");
+  CHECK(run_host("--spp 1099511627776 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--spp: expected an integer in [1, 16777216], got \"1099511627776\"");
+  CHECK(run_host("--seed -1 x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--seed: expected an integer in [0, 18446744073709551615], got \"-1\"");
 
   CHECK(run_host("--out image.png x.json", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "ending in .exr");

@@ -17,6 +17,7 @@ was expected). See python/README.md for how the library is found.
 """
 import ctypes
 import json
+import operator
 import os
 import warnings
 
@@ -56,6 +57,36 @@ def _b(s):
     return None if s is None else str(s).encode()
 
 
+def _limited(limit, value, what):
+    """`value` as an integer within the library's limit `limit` (tunetrace/limits.h, which
+    the host's options use too): out of range raises, never wraps."""
+    try:
+        digits = str(operator.index(value))
+    except TypeError:
+        raise TypeError(f"{what}: expected an integer, got {value!r}") from None
+    which, out = ctypes.c_int(), ctypes.c_uint64()
+    _check(lib.tt_limit_find(_b(limit), ctypes.byref(which)), what)
+    _check(lib.tt_limit_parse_uint(which, _b(digits), ctypes.byref(out)), what)
+    return out.value
+
+
+def _resolution(resolution):
+    """(width, height) checked as the host checks --res WIDTHxHEIGHT (tunetrace/limits.h)."""
+    w, h = (operator.index(v) for v in resolution)
+    out_w, out_h = ctypes.c_uint32(), ctypes.c_uint32()
+    _check(lib.tt_limit_parse_resolution(_b(f"{w}x{h}"), ctypes.byref(out_w),
+                                         ctypes.byref(out_h)), "resolution")
+    return out_w.value, out_h.value
+
+
+def _limited_real(limit, value, what):
+    """`value` as a real number within the library's limit `limit` (tunetrace/limits.h)."""
+    which, out = ctypes.c_int(), ctypes.c_double()
+    _check(lib.tt_limit_find(_b(limit), ctypes.byref(which)), what)
+    _check(lib.tt_limit_parse_real(which, _b(repr(float(value))), ctypes.byref(out)), what)
+    return out.value
+
+
 def version():
     """The library's version string."""
     return text(lib.tt_version())
@@ -68,7 +99,8 @@ def library_path():
 
 def set_threads(n):
     """Worker threads of the library's default host (0: all CPUs). Before rendering."""
-    _check(lib.tt_default_host_set_threads(int(n)), "threads")
+    n = _limited("threads", n, "threads") if n != 0 else 0
+    _check(lib.tt_default_host_set_threads(n), "threads")
 
 
 def _extra_plugin_dirs(plugin_path):
@@ -246,14 +278,14 @@ class Session(_Handle):
             _check(lib.tt_session_add_plugin_dir(self._ptr, _b(d)))
         _check(lib.tt_session_load_scene(self._ptr, _b(os.fspath(scene))))
         if resolution is not None:
-            w, h = resolution
-            _check(lib.tt_scene_set_resolution(lib.tt_session_scene(self._ptr), int(w), int(h)),
+            w, h = _resolution(resolution)
+            _check(lib.tt_scene_set_resolution(lib.tt_session_scene(self._ptr), w, h),
                    "resolution")
         if camera_time is not None:
             _check(lib.tt_session_set_camera_time(self._ptr, float(camera_time),
                                                   float(frame_interval)), "camera_time")
         if seed is not None:
-            lib.tt_session_set_seed(self._ptr, int(seed))
+            lib.tt_session_set_seed(self._ptr, _limited("seed", seed, "seed"))
         for p in plugins:
             self.load_plugin(p)
         for key, value in (params or {}).items():
@@ -339,6 +371,7 @@ class Session(_Handle):
     def render(self, spp=1, pass_spp=1):
         """Renders `spp` more samples per pixel in passes of `pass_spp` (host renders passes
         of 1) and returns the accumulated image, float32 (height, width, 3)."""
+        spp, pass_spp = _limited("spp", spp, "spp"), _limited("spp", pass_spp, "pass_spp")
         self.start()
         ps = _lib.PassStats(struct_size=ctypes.sizeof(_lib.PassStats))
         done = 0
@@ -409,6 +442,12 @@ class Session(_Handle):
         TuningDB or a path (None: no database). Afterwards the target runs the best
         configuration. `verify` > 0 measures default and best side by side that many rounds.
         Returns a Tuning with the history."""
+        iterations = _limited("iterations", iterations, "iterations")
+        spp = _limited("tune_spp", spp, "spp")
+        seed = None if seed is None else _limited("seed", seed, "seed")
+        warmup_passes = _limited("warmup", warmup_passes, "warmup_passes")
+        time_budget = _limited_real("time", time_budget, "time_budget") if time_budget else 0.0
+        verify = _limited("verify", verify, "verify") if verify else 0
         self.start()
         reg = lib.tt_session_registry(self._p)
         tuner_p = None

@@ -310,6 +310,11 @@ _PROTOTYPES = {
     "tt_tuning_verify": (_I, [_P, ctypes.POINTER(TuningTarget), _U32,
                               ctypes.POINTER(TuningVerification)]),
     "tt_tuning_apply_best": (_I, [_P, ctypes.POINTER(TuningTarget), _PD]),
+    # limits.h
+    "tt_limit_find": (_I, [_S, ctypes.POINTER(_I)]),
+    "tt_limit_parse_uint": (_I, [_I, _S, ctypes.POINTER(_U64)]),
+    "tt_limit_parse_real": (_I, [_I, _S, _PD]),
+    "tt_limit_parse_resolution": (_I, [_S, ctypes.POINTER(_U32), ctypes.POINTER(_U32)]),
     # tunedb.h
     "tt_tunedb_default_path": (_P, []), "tt_tunedb_open": (_I, [_S, _PP]),
     "tt_tunedb_close": (None, [_P]), "tt_tunedb_path": (_S, [_P]),

@@ -27,6 +27,7 @@
 #include <tunetrace/tuning.h>
 #include <tunetrace/session.h>
 #include <tunetrace/suggest.h>
+#include <tunetrace/limits.h>
 #include <tunetrace/hybrid.h>
 
 #endif /* TUNETRACE_TUNETRACE_H */
