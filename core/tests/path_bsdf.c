@@ -10,7 +10,10 @@
  *  - delta lobes: mirror direction and weight; glass Fresnel split, Snell's law and TIR;
  *  - rough glass (GGX transmission, Walter 2007) from both sides: the same albedo, pdf and
  *    chi-square checks over the whole sphere, generalised reciprocity
- *    f(wo, wi) / eta_o^2 = f(wi, wo) / eta_i^2, and convergence to smooth glass as alpha -> 0. */
+ *    f(wo, wi) / eta_o^2 = f(wi, wo) / eta_i^2, and convergence to smooth glass as alpha -> 0;
+ *  - adjoint (importance) sampling for light subpaths: the same direction and pdf as
+ *    radiance sampling, f the adjoint f(wi, wo) for every BSDF, and glass that conserves
+ *    importance exactly (R + T = 1, where radiance carries R + T / eta'^2) from both sides. */
 #include <stdlib.h>
 
 #include "../src/render/bsdf_internal.h"
@@ -435,6 +438,50 @@ int main(void) {
            expect, refl / n, F);
     CHECK_NEAR(sum / n, expect, 0.01);
     CHECK_NEAR(refl / n, F, 0.01);
+  }
+  /* Adjoint sampling: same direction and pdf as radiance sampling, f* (wo, wi) = f(wi, wo);
+   * smooth glass's importance throughput is R + T = 1 from either side. */
+  {
+    int bad = 0;
+    for (int i = 0; i < nm; ++i) {
+      tt__bsdf b;
+      CHECK(tt__bsdf_init(&b, &mats[i].m) == TT_OK);
+      for (int k = 0; k < 2000; ++k) {
+        float wo[3], u[3] = {tt__pcg32_float(&rng), tt__pcg32_float(&rng), tt__pcg32_float(&rng)};
+        uniform_sphere(tt__pcg32_float(&rng), tt__pcg32_float(&rng), wo);
+        tt__bsdf_result r, a;
+        int okr = tt__bsdf_sample(&b, wo, u[0], u[1], u[2], &r);
+        int oka = tt__bsdf_sample_adjoint(&b, wo, u[0], u[1], u[2], &a);
+        CHECK(okr == oka);
+        if (!okr) continue;
+        float fs[3];
+        tt__bsdf_eval(&b, a.wi, wo, fs);
+        for (int c = 0; c < 3; ++c)
+          if (a.wi[c] != r.wi[c] || a.pdf != r.pdf || fabsf(a.f[c] - fs[c]) > 1e-3f * fmaxf(fs[c], 1e-3f)) bad++;
+      }
+    }
+    CHECK_MSG(bad == 0, "%d adjoint samples differ from f(wi, wo) or from radiance sampling", bad);
+    tt_material g = base_material(TT_MATERIAL_DIELECTRIC);
+    g.ior = 1.6f;
+    tt__bsdf b;
+    CHECK(tt__bsdf_init(&b, &g) == TT_OK && b.delta);
+    for (int side = 0; side < 2; ++side) {
+      float wo[3];
+      dir_from_angles(side ? (float)M_PI - 0.5f : 0.7f, 0.3f, wo);
+      double imp = 0.0, rad = 0.0;
+      int n = 20000;
+      for (int k = 0; k < n; ++k) {
+        tt__bsdf_result s;
+        float ul = tt__pcg32_float(&rng);
+        if (tt__bsdf_sample_adjoint(&b, wo, ul, 0.5f, 0.5f, &s)) imp += s.f[0] * fabsf(s.wi[2]) / s.pdf;
+        if (tt__bsdf_sample(&b, wo, ul, 0.5f, 0.5f, &s)) rad += s.f[0] * fabsf(s.wi[2]) / s.pdf;
+      }
+      float F = tt__fresnel_dielectric(wo[2], 1.6f), etap = side ? 1.0f / 1.6f : 1.6f;
+      printf("smooth glass from %s: importance %.5f (1), radiance %.5f (R + T/eta'^2 = %.5f)\n",
+             side ? "inside" : "outside", imp / n, rad / n, F + (1.0f - F) / (etap * etap));
+      CHECK_NEAR(imp / n, 1.0, 1e-4);
+      CHECK_NEAR(rad / n, F + (1.0 - F) / (etap * etap), 0.01);
+    }
   }
   return tt_test_finish("path_bsdf");
 }

@@ -14,6 +14,7 @@
 #include <tunetrace/image.h>
 #include <tunetrace/sampler.h>
 #include <tunetrace/path.h>
+#include <tunetrace/bdpt.h>
 #include <tunetrace/plugin.h>
 #include <tunetrace/accel.h>
 #include <tunetrace/integrator.h>

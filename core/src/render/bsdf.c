@@ -473,6 +473,19 @@ int tt__bsdf_sample(const tt__bsdf *b, const float wo_in[3], float u_lobe, float
   return s->pdf > 0.0f && isfinite(s->pdf);
 }
 
+int tt__bsdf_sample_adjoint(const tt__bsdf *b, const float wo[3], float u_lobe, float u1, float u2,
+                            tt__bsdf_result *s) {
+  if (!tt__bsdf_sample(b, wo, u_lobe, u1, u2, s)) return 0;
+  /* Only refraction is not symmetric: f(wi, wo) = f(wo, wi) eta'^2, eta' = eta on wi's side
+   * over eta on wo's side (the relation tt__rough_glass_eval documents; the smooth lobe
+   * divides by the same eta'^2). */
+  if (b->type == TT_MATERIAL_DIELECTRIC && wo[2] * s->wi[2] < 0.0f) {
+    float etap = wo[2] > 0.0f ? b->ior : 1.0f / b->ior, e2 = etap * etap;
+    for (int i = 0; i < 3; ++i) s->f[i] *= e2;
+  }
+  return 1;
+}
+
 void tt__bsdf_albedo(const tt__bsdf *b, float out[3]) {
   for (int i = 0; i < 3; ++i) {
     switch (b->type) {

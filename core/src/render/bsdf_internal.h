@@ -101,6 +101,12 @@ float tt__bsdf_pdf(const tt__bsdf *b, const float wo[3], const float wi[3]);
 int tt__bsdf_sample(const tt__bsdf *b, const float wo[3], float u_lobe, float u1, float u2,
                     tt__bsdf_result *s);
 
+/* tt__bsdf_sample for importance transport (light subpaths of the bidirectional methods):
+ * the same directions and pdfs, with f the adjoint f*(wo, wi) = f(wi, wo), i.e. refraction
+ * without the radiance's 1/eta'^2 (pbrt's TransportMode::Importance). */
+int tt__bsdf_sample_adjoint(const tt__bsdf *b, const float wo[3], float u_lobe, float u1, float u2,
+                            tt__bsdf_result *s);
+
 /* Reflectance for the albedo AOV. */
 void tt__bsdf_albedo(const tt__bsdf *b, float out[3]);
 

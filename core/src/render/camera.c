@@ -83,6 +83,40 @@ TT_API int tt_camera_project(const tt_camera_frame *frame, const float p[3], flo
   return 1;
 }
 
+TT_API float tt_camera_film_area(const tt_camera_frame *frame) {
+  float t = frame->tan_half_fov_y;
+  return 4.0f * t * t * frame->aspect;
+}
+
+/* cos(theta) of `dir` with the view axis and its film position; 0 outside the film. */
+static float tt__camera_cos_on_film(const tt_camera_frame *frame, const float dir[3], float *fx,
+                                    float *fy) {
+  float c = dir[0] * frame->forward[0] + dir[1] * frame->forward[1] + dir[2] * frame->forward[2];
+  if (!(c > 0.0f)) return 0.0f;
+  float x = (dir[0] * frame->right[0] + dir[1] * frame->right[1] + dir[2] * frame->right[2]) / c;
+  float y = (dir[0] * frame->up[0] + dir[1] * frame->up[1] + dir[2] * frame->up[2]) / c;
+  float px = (x / (frame->tan_half_fov_y * frame->aspect) + 1.0f) * 0.5f * (float)frame->width;
+  float py = (1.0f - y / frame->tan_half_fov_y) * 0.5f * (float)frame->height;
+  if (!(px >= 0.0f && px < (float)frame->width && py >= 0.0f && py < (float)frame->height)) return 0.0f;
+  if (fx) *fx = px;
+  if (fy) *fy = py;
+  return c;
+}
+
+TT_API float tt_camera_importance(const tt_camera_frame *frame, const float dir[3], float *fx,
+                                  float *fy) {
+  float c = tt__camera_cos_on_film(frame, dir, fx, fy);
+  if (!(c > 0.0f)) return 0.0f;
+  float c2 = c * c;
+  return 1.0f / (tt_camera_film_area(frame) * c2 * c2);
+}
+
+TT_API float tt_camera_pdf_dir(const tt_camera_frame *frame, const float dir[3]) {
+  float c = tt__camera_cos_on_film(frame, dir, NULL, NULL);
+  if (!(c > 0.0f)) return 0.0f;
+  return 1.0f / (tt_camera_film_area(frame) * c * c * c);
+}
+
 /* Radical inverse of n in an integer base (exact enough for jitter offsets). */
 static float tt__radical_inverse(uint32_t n, uint32_t base) {
   double inv = 1.0 / base, f = inv, r = 0.0;

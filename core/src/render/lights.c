@@ -30,29 +30,6 @@ static double tt__build_cdf(const double *w, uint32_t n, float *cdf) {
   return total;
 }
 
-/* Index i with cdf[i] <= u < cdf[i+1], skipping zero-width entries; u is remapped to [0, 1)
- * within the chosen entry so it can drive a second choice. */
-static uint32_t tt__cdf_pick(const float *cdf, uint32_t n, float *u) {
-  uint32_t lo = 0, hi = n;  /* invariant: cdf[lo] <= u < cdf[hi] */
-  while (hi - lo > 1) {
-    uint32_t mid = (lo + hi) / 2;
-    if (cdf[mid] <= *u) lo = mid; else hi = mid;
-  }
-  float width = cdf[lo + 1] - cdf[lo];
-  float r = width > 0.0f ? (*u - cdf[lo]) / width : 0.0f;
-  *u = r < 1.0f ? (r > 0.0f ? r : 0.0f) : 0x1.fffffep-1f;
-  return lo;
-}
-
-/* Triangle vertices of triangle `tri` of mesh m. */
-static void tt__tri_verts(const tt_mesh *m, uint32_t tri, const float **p0, const float **p1,
-                          const float **p2) {
-  const uint32_t *idx = m->indices + 3 * (size_t)tri;
-  *p0 = m->positions + 3 * (size_t)idx[0];
-  *p1 = m->positions + 3 * (size_t)idx[1];
-  *p2 = m->positions + 3 * (size_t)idx[2];
-}
-
 /* Area of triangle (p0, p1, p2) in double for a stable CDF. */
 static double tt__tri_area(const float *p0, const float *p1, const float *p2) {
   double e1[3], e2[3];
@@ -126,16 +103,6 @@ static tt_status tt__env_image_init(tt__lights *ls, uint32_t index, const tt_lig
   return TT_OK;
 }
 
-/* Texel of the image environment seen in direction dir (leaving the scene); sets sin(theta). */
-static size_t tt__env_texel(const tt__lights *ls, const float dir[3], float *sin_theta) {
-  float y = fminf(1.0f, fmaxf(-1.0f, dir[1]));
-  float u = 0.5f * (1.0f + atan2f(dir[0], -dir[2]) * TT__INV_PI), v = acosf(y) * TT__INV_PI;
-  uint32_t xi = (uint32_t)fminf(fmaxf(u, 0.0f) * (float)ls->env_w, (float)(ls->env_w - 1));
-  uint32_t yi = (uint32_t)fminf(fmaxf(v, 0.0f) * (float)ls->env_h, (float)(ls->env_h - 1));
-  *sin_theta = sqrtf(fmaxf(0.0f, 1.0f - y * y));
-  return (size_t)yi * ls->env_w + xi;
-}
-
 void tt__lights_free(tt__lights *ls) {
   if (!ls) return;
   free(ls->lights);
@@ -194,6 +161,9 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
   }
   radius = 0.5 * sqrt(radius);
   if (!(radius > 0.0)) radius = 1.0;
+  ls->radius = (float)radius;
+  for (int i = 0; i < 3; ++i)
+    ls->center[i] = isfinite(hi[i] - lo[i]) && hi[i] >= lo[i] ? 0.5f * (lo[i] + hi[i]) : 0.0f;
 
   uint32_t tri_offset = 0;
   tt_status st = TT_OK;
@@ -290,14 +260,6 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
   return st;
 }
 
-/* Smoothstep falloff of a spot light between its outer and inner cones. */
-static float tt__spot_falloff(const tt__light *l, float cos_theta) {
-  if (cos_theta >= l->cos_inner) return 1.0f;
-  if (cos_theta <= l->cos_outer) return 0.0f;
-  float t = (cos_theta - l->cos_outer) / (l->cos_inner - l->cos_outer);
-  return t * t * (3.0f - 2.0f * t);
-}
-
 int tt__lights_sample(const tt__lights *ls, const float p[3], const float n[3], float u_sel,
                       float u1, float u2, tt__light_sample *out) {
   if (ls->count == 0) return 0;
@@ -355,19 +317,11 @@ int tt__lights_sample(const tt__lights *ls, const float p[3], const float n[3], 
   }
   case TT_LIGHT_ENV_IMAGE: {
     if (!(ls->env_pdf_scale > 0.0f)) return 0;
-    float uu = u1, vv = u2;
-    uint32_t row = tt__cdf_pick(ls->env_marginal, ls->env_h, &vv);
-    uint32_t col = tt__cdf_pick(ls->env_conditional + (size_t)row * (ls->env_w + 1), ls->env_w, &uu);
-    size_t i = (size_t)row * ls->env_w + col;
-    float u = ((float)col + uu) / (float)ls->env_w, v = ((float)row + vv) / (float)ls->env_h;
-    float theta = v * TT__PI, phi = TT__PI * (2.0f * u - 1.0f), st = sinf(theta);
-    if (!(st > 0.0f)) return 0;
-    out->wi[0] = st * sinf(phi);
-    out->wi[1] = cosf(theta);
-    out->wi[2] = -st * cosf(phi);
+    float st;
+    if (!tt__env_image_dir(ls, u1, u2, out->wi, &st)) return 0;
     /* The pdf of the texel the direction rounds to (as tt__lights_pdf_env computes it). */
     float st2;
-    i = tt__env_texel(ls, out->wi, &st2);
+    size_t i = tt__env_texel(ls, out->wi, &st2);
     out->dist = INFINITY;
     out->pdf = pmf * ls->env_weight[i] * ls->env_pdf_scale / (2.0f * TT__PI * TT__PI * st);
     memcpy(out->L, ls->env_rgb + 3 * i, sizeof out->L);

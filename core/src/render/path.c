@@ -10,32 +10,7 @@
 
 #include <tunetrace/image.h>
 
-#include "render/bsdf_internal.h"
-#include "render/lights_internal.h"
-
-/* OpenImageIO TextureSystem lookups (texture_oiio.cpp), used instead of direct loading
- * when TT_TEXTURES=oiio (measured slower on the textured Cornell box: README, "Textures"). */
-typedef struct tt__oiio_tex tt__oiio_tex;
-tt_status tt__oiio_tex_open(const char *path, int srgb, tt__oiio_tex **out);
-void tt__oiio_tex_close(tt__oiio_tex *t);
-void tt__oiio_tex_lookup(const tt__oiio_tex *t, float u, float v, float out[3]);
-
-/* An albedo texture: linear RGB in memory, or an OIIO texture handle. */
-typedef struct tt__texture_data {
-  uint32_t width, height;
-  float *rgb;             /* 3 * width * height, row 0 at the top of the image */
-  tt__oiio_tex *oiio;     /* non-NULL: looked up through the TextureSystem instead */
-} tt__texture_data;
-
-struct tt_path_tracer {
-  const tt_scene *scene;
-  tt__lights lights;
-  uint32_t material_count;
-  tt__bsdf *bsdfs;
-  int32_t *material_texture;  /* per material: texture index or -1 */
-  uint32_t texture_count;
-  tt__texture_data *textures;
-};
+#include "render/path_internal.h"
 
 /* sRGB decoding of one channel. */
 static float tt__srgb_to_linear(float c) {
@@ -91,6 +66,49 @@ static void tt__texture_lookup(const tt__texture_data *t, float u, float v, floa
       const float *p = t->rgb + 3 * ((size_t)yi * t->width + (size_t)xi);
       for (int k = 0; k < 3; ++k) out[k] += wgt * p[k];
     }
+}
+
+int tt__surface_at(const tt_path_tracer *pt, const tt_hit *hitp, tt__surface *s) {
+  const tt_hit hit = *hitp;
+  const tt_mesh *mesh = tt_scene_mesh(pt->scene, hit.geom_id);
+  const uint32_t *idx = mesh->indices + 3 * (size_t)hit.prim_id;
+  const float *p0 = mesh->positions + 3 * (size_t)idx[0];
+  const float *p1 = mesh->positions + 3 * (size_t)idx[1];
+  const float *p2 = mesh->positions + 3 * (size_t)idx[2];
+  float w0 = 1.0f - hit.u - hit.v, e2[3];
+  float *p = s->p, *e1 = s->e1, *ng = s->ng_w, *ns = s->ns;
+  s->mesh = mesh;
+  for (int i = 0; i < 3; ++i) {
+    p[i] = w0 * p0[i] + hit.u * p1[i] + hit.v * p2[i];
+    e1[i] = p1[i] - p0[i];
+    e2[i] = p2[i] - p0[i];
+  }
+  tt__cross3(e1, e2, ng);
+  if (tt__normalize3(ng) == 0.0f) return 0;  /* degenerate triangle */
+  if (mesh->normals) {
+    const float *n0 = mesh->normals + 3 * (size_t)idx[0];
+    const float *n1 = mesh->normals + 3 * (size_t)idx[1];
+    const float *n2 = mesh->normals + 3 * (size_t)idx[2];
+    for (int i = 0; i < 3; ++i) ns[i] = w0 * n0[i] + hit.u * n1[i] + hit.v * n2[i];
+    if (tt__normalize3(ns) == 0.0f) memcpy(ns, ng, 3 * sizeof(float));
+    else if (tt__dot3(ns, ng) < 0.0f)
+      for (int i = 0; i < 3; ++i) ns[i] = -ns[i];  /* to the geometric side */
+  } else {
+    memcpy(ns, ng, 3 * sizeof(float));
+  }
+  s->bsdf = &pt->bsdfs[mesh->material];
+  int32_t tex = pt->material_texture[mesh->material];
+  if (tex >= 0 && mesh->uvs) {  /* albedo modulated by the texture at the hit's uv */
+    const float *t0 = mesh->uvs + 2 * (size_t)idx[0], *t1 = mesh->uvs + 2 * (size_t)idx[1],
+                *t2 = mesh->uvs + 2 * (size_t)idx[2];
+    float tc[3];
+    tt__texture_lookup(&pt->textures[tex], w0 * t0[0] + hit.u * t1[0] + hit.v * t2[0],
+                       w0 * t0[1] + hit.u * t1[1] + hit.v * t2[1], tc);
+    s->textured = *s->bsdf;
+    for (int i = 0; i < 3; ++i) s->textured.albedo[i] *= fminf(fmaxf(tc[i], 0.0f), 1.0f);
+    s->bsdf = &s->textured;
+  }
+  return 1;
 }
 
 TT_API void tt_path_options_default(tt_path_options *options) {
@@ -288,45 +306,14 @@ TT_API int tt_path_hit(const tt_path_tracer *pt, tt_path_state *st, const tt_ray
   }
 
   /* Surface geometry: position from barycentrics, winding normal, shading normal. */
-  const tt_mesh *mesh = tt_scene_mesh(pt->scene, hit.geom_id);
-  const uint32_t *idx = mesh->indices + 3 * (size_t)hit.prim_id;
-  const float *p0 = mesh->positions + 3 * (size_t)idx[0];
-  const float *p1 = mesh->positions + 3 * (size_t)idx[1];
-  const float *p2 = mesh->positions + 3 * (size_t)idx[2];
-  float w0 = 1.0f - hit.u - hit.v, p[3], e1[3], e2[3], ng_w[3], ng[3], ns[3], wo[3];
-  for (int i = 0; i < 3; ++i) {
-    p[i] = w0 * p0[i] + hit.u * p1[i] + hit.v * p2[i];
-    e1[i] = p1[i] - p0[i];
-    e2[i] = p2[i] - p0[i];
-    wo[i] = -traced->dir[i];
-  }
-  tt__cross3(e1, e2, ng_w);
-  if (tt__normalize3(ng_w) == 0.0f) return 0;  /* degenerate triangle */
+  tt__surface surf;
+  if (!tt__surface_at(pt, &hit, &surf)) return 0;  /* degenerate triangle */
+  const tt_mesh *mesh = surf.mesh;
+  float *p = surf.p, *e1 = surf.e1, *ng_w = surf.ng_w, ng[3], ns[3], wo[3];
+  for (int i = 0; i < 3; ++i) wo[i] = -traced->dir[i];
   memcpy(ng, ng_w, sizeof ng);
-  if (mesh->normals) {
-    const float *n0 = mesh->normals + 3 * (size_t)idx[0];
-    const float *n1 = mesh->normals + 3 * (size_t)idx[1];
-    const float *n2 = mesh->normals + 3 * (size_t)idx[2];
-    for (int i = 0; i < 3; ++i) ns[i] = w0 * n0[i] + hit.u * n1[i] + hit.v * n2[i];
-    if (tt__normalize3(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
-    else if (tt__dot3(ns, ng) < 0.0f)
-      for (int i = 0; i < 3; ++i) ns[i] = -ns[i];  /* to the geometric side */
-  } else {
-    memcpy(ns, ng, sizeof ns);
-  }
-  const tt__bsdf *bsdf = &pt->bsdfs[mesh->material];
-  tt__bsdf textured;
-  int32_t tex = pt->material_texture[mesh->material];
-  if (tex >= 0 && mesh->uvs) {  /* albedo modulated by the texture at the hit's uv */
-    const float *t0 = mesh->uvs + 2 * (size_t)idx[0], *t1 = mesh->uvs + 2 * (size_t)idx[1],
-                *t2 = mesh->uvs + 2 * (size_t)idx[2];
-    float tc[3];
-    tt__texture_lookup(&pt->textures[tex], w0 * t0[0] + hit.u * t1[0] + hit.v * t2[0],
-                       w0 * t0[1] + hit.u * t1[1] + hit.v * t2[1], tc);
-    textured = *bsdf;
-    for (int i = 0; i < 3; ++i) textured.albedo[i] *= fminf(fmaxf(tc[i], 0.0f), 1.0f);
-    bsdf = &textured;
-  }
+  memcpy(ns, surf.ns, sizeof ns);
+  const tt__bsdf *bsdf = surf.bsdf;
   /* Opaque surfaces are two-sided: orient both normals towards the viewer. */
   if (!tt__bsdf_transmissive(bsdf) && tt__dot3(wo, ng) < 0.0f)
     for (int i = 0; i < 3; ++i) { ng[i] = -ng[i]; ns[i] = -ns[i]; }
