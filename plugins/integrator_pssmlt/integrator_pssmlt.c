@@ -1,6 +1,9 @@
-/* integrator_pssmlt: Primary Sample Space Metropolis Light Transport (Kelemen et al. 2002,
- * after pbrt-v4's MLTIntegrator) over the core path sampler, with the thesis' sigma-binning
- * and truncated-normal small steps (chapter 4). Kind TT_KIND_INTEGRATOR.
+/* integrator_pssmlt: Metropolis light transport in primary sample space, with the thesis'
+ * sigma-binning and truncated-normal small steps (chapter 4). Kind TT_KIND_INTEGRATOR. Two
+ * modes: pssmlt, Kelemen et al. 2002's PSSMLT over the core path sampler (chain mechanics
+ * after pbrt-v4's MLTSampler); mmlt, multiplexed MLT (Hachisuka et al. 2014) over the core's
+ * bidirectional path sampler with pbrt-v3 MLTIntegrator's structure (three sample streams,
+ * one connection strategy per state, a path depth per chain, a bootstrap per depth).
  *
  * The first pass bootstraps (N independent paths give b = mean luminance and the chain
  * starts, drawn in proportion to the luminance); every pass then advances all chains by
@@ -14,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <tunetrace/bdpt.h>
 #include <tunetrace/camera.h>
 #include <tunetrace/file.h>
 #include <tunetrace/integrator.h>
@@ -35,6 +39,7 @@ static const tt_host *g_host;
 static tt_space *g_space;
 
 typedef struct mlt_settings {
+  int mmlt;                 /* multiplexed MLT over the bidirectional sampler (else PSSMLT over PT) */
   uint32_t max_depth;
   double large_step, sigma, alpha;
   int binning, bins;
@@ -49,12 +54,14 @@ struct tt_integrator {
   tt_path_tracer *pt;
   mlt_settings set;
   tt_path_options opts;
+  tt_bdpt_options bopts;    /* mmlt */
   tt__mlt_kernel kernel;
   /* chains (valid when ready) */
   int ready;
   int black;                /* ready, but the bootstrap found no light: b = 0, no chains run */
   uint32_t nchains, dims, width, height;
   tt__mlt_chain *chains;
+  uint8_t *chain_depth;     /* mmlt: each chain's path depth (bounces) */
   unsigned char *chain_mem;
   double b;
   uint64_t seed;
@@ -78,6 +85,12 @@ static tt_status mlt_build_space(void) {
   if (!s) return tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": cannot create the parameter space");
   int ok = 1;
   char name[32], desc[160];
+  static const char *const modes[] = {"pssmlt", "mmlt"};
+  ok &= tt_space_add_nom_string(s, "mode", modes, 2, 0,
+                                "pssmlt: Kelemen PSSMLT over the path tracer; mmlt: multiplexed MLT "
+                                "(Hachisuka 2014, pbrt-v3's MLTIntegrator) over the bidirectional path "
+                                "sampler, one connection strategy per state and a path depth per chain; "
+                                "changing it restarts the estimate") >= 0;
   ok &= tt_space_add_int(s, "maxDepth", 0, 64, 5, "maximum number of bounces (pbrt-v4 MLT default 5); "
                          "changing it between passes restarts the estimate") >= 0;
   ok &= tt_space_add_float(s, "largeStepProbability", 0.0, 1.0, 0.3, 0,
@@ -104,7 +117,8 @@ static tt_status mlt_build_space(void) {
   ok &= tt_space_add_int(s, "mutationsPerPixel", 1, 64, 1,
                          "mutations per pixel per pass and per --spp unit") >= 0;
   ok &= tt_space_add_int(s, "bootstrapSamples", 1000, 1000000, 100000,
-                         "bootstrap paths for b and the chain starts (restarts when changed)") >= 0;
+                         "bootstrap paths for b and the chain starts, per path depth in mmlt "
+                         "(restarts when changed)") >= 0;
   ok &= tt_space_add_int(s, "chains", 1, 100000, 1000,
                          "independent Markov chains (restarts when changed)") >= 0;
   tt_space_add_constraint_text(s, "only a_1..a_{bins+1} and sigma1..sigma{bins} are used, and only with binning");
@@ -127,6 +141,8 @@ static tt_status mlt_read_config(const tt_config *config, mlt_settings *out) {
   }
   char name[32];
   memset(out, 0, sizeof *out);
+  const char *mode = tt_config_get_string(config, "mode");
+  out->mmlt = mode && strcmp(mode, "mmlt") == 0;
   out->max_depth = (uint32_t)tt_config_get_int(config, "maxDepth", 5);
   out->large_step = tt_config_get_float(config, "largeStepProbability", 0.3);
   out->sigma = tt_config_get_float(config, "sigma", 0.01);
@@ -163,6 +179,9 @@ static void mlt_apply(tt_integrator *it, const mlt_settings *s) {
   tt_path_options_default(&it->opts);
   it->opts.max_depth = s->max_depth;
   it->opts.rr_depth = s->max_depth;
+  tt_bdpt_options_default(&it->bopts);
+  it->bopts.max_depth = s->max_depth;
+  it->bopts.rr_depth = 64;  /* off, as in pssmlt mode: the chain picks the depth */
   tt__mlt_kernel_init(&it->kernel, s->sigma, s->large_step, s->binning, s->bins, s->alpha, s->a,
                       s->bin_sigma);
 }
@@ -200,8 +219,10 @@ static tt_status mlt_create(const tt_scene *scene, const tt_config *config, tt_i
 static void mlt_drop_chains(tt_integrator *it) {
   free(it->chains);
   free(it->chain_mem);
+  free(it->chain_depth);
   it->chains = NULL;
   it->chain_mem = NULL;
+  it->chain_depth = NULL;
   it->ready = 0;
   it->black = 0;
   it->mutations_total = 0;
@@ -212,7 +233,7 @@ static tt_status mlt_configure(tt_integrator *it, const tt_config *config) {
   tt_status st = mlt_read_config(config, &s);
   if (st != TT_OK) return st;
   int restart = s.max_depth != it->set.max_depth || s.bootstrap != it->set.bootstrap ||
-                s.chains != it->set.chains;
+                s.chains != it->set.chains || s.mmlt != it->set.mmlt;
   if (restart) {
     mlt_drop_chains(it);  /* another target function or start distribution */
   } else if (it->ready) {
@@ -248,10 +269,22 @@ typedef struct mlt_job {
   uint64_t *starts;
   /* mutation quotas */
   uint64_t base, extra;
-  atomic_uint_fast64_t rays, mutations, nonfinite, small_prop, small_acc, large_prop, large_acc;
+  /* mmlt: per-thread subpaths, made on first use */
+  tt_bdpt_paths **paths;
+  uint32_t threads;
+  atomic_uint_fast64_t rays, mutations, nonfinite, small_prop, small_acc, large_prop, large_acc, vertices;
   atomic_uint_fast64_t theta[TT__MLT_THETA_BINS + 1];
-  atomic_int interrupted;
+  atomic_int interrupted, failed;
 } mlt_job;
+
+/* One evaluated state: its contribution, where it lands, what it cost. */
+typedef struct mlt_sample {
+  float L[3];
+  float fx, fy;
+  uint32_t rays;
+  uint32_t vertices;        /* surface vertices the state's path(s) traced */
+  int32_t nonfinite;
+} mlt_sample;
 
 /* Luminance (Rec. 709), the scalar contribution C. */
 static inline double mlt_lum(const float L[3]) {
@@ -275,7 +308,7 @@ static inline void mlt_film_pos(const mlt_job *job, float u0, float u1, float *f
   *fy = u1 * (float)job->height;
 }
 
-/* Traces one path from primary samples read through `src`. */
+/* Traces one path from primary samples read through `src` (pssmlt mode). */
 static void mlt_trace(const mlt_job *job, const tt_sample_source *src, tt_path_result *r,
                       float *fx, float *fy) {
   float u0 = src->get(src->self, TT_PATH_DIM_FILM), u1 = src->get(src->self, TT_PATH_DIM_FILM + 1);
@@ -285,18 +318,109 @@ static void mlt_trace(const mlt_job *job, const tt_sample_source *src, tt_path_r
   tt_path_trace(job->it->pt, &job->tracer, &job->it->opts, &ray, src, r);
 }
 
+/* ---- multiplexed MLT (pbrt-v3 MLTIntegrator::L) ----
+ * The state's primary samples are three interleaved streams (camera, light, connection:
+ * stream k's dimension d is the chain's 3 d + k), so that a change of one subpath's length
+ * never shifts another's dimensions. Connection-stream dim 0 chooses the strategy s of the
+ * chain's depth (uniformly among depth + 2), its dims 1.. feed the connection. */
+#define MLT_STREAMS 3
+#define MLT_CONNECT_BASE 1
+
+typedef struct mlt_stream {
+  const tt_sample_source *base;
+  uint32_t k;
+} mlt_stream;
+
+static float mlt_stream_get(void *self, uint32_t dim) {
+  const mlt_stream *s = self;
+  return s->base->get(s->base->self, MLT_STREAMS * dim + s->k);
+}
+
+static void mlt_stream_report(void *self, uint32_t dim, float pdf) {
+  const mlt_stream *s = self;
+  if (s->base->report_pdf) s->base->report_pdf(s->base->self, MLT_STREAMS * dim + s->k, pdf);
+}
+
+/* Dimensions of an mmlt state for paths up to `depth` bounces. */
+static uint32_t mlt_mmlt_dims(uint32_t depth) {
+  uint32_t c = TT_BDPT_CAMERA_DIM_COUNT(depth), l = TT_BDPT_LIGHT_DIM_COUNT(depth);
+  uint32_t k = MLT_CONNECT_BASE + TT_BDPT_CONNECT_DIMS, m = c > l ? c : l;
+  return MLT_STREAMS * (m > k ? m : k);
+}
+
+/* The contribution of a state of a chain of path depth `depth` (times the number of
+ * strategies, as the strategy is chosen uniformly). */
+static void mlt_trace_mmlt(const mlt_job *job, tt_bdpt_paths *paths, const tt_sample_source *src,
+                           uint32_t depth, mlt_sample *out) {
+  const tt_integrator *it = job->it;
+  mlt_stream cs = {src, 0}, ls = {src, 1}, ks = {src, 2};
+  tt_sample_source cam = {mlt_stream_get, mlt_stream_report, &cs};
+  tt_sample_source lig = {mlt_stream_get, mlt_stream_report, &ls};
+  tt_sample_source con = {mlt_stream_get, mlt_stream_report, &ks};
+  uint32_t n = depth == 0 ? 1 : depth + 2, s = 0, t = 2;
+  if (depth > 0) {
+    float u = con.get(con.self, 0);
+    s = (uint32_t)(u * (float)n);
+    if (s > n - 1) s = n - 1;
+    t = n - s;
+  }
+  mlt_film_pos(job, cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM), cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM + 1),
+               &out->fx, &out->fy);
+  uint32_t nc = tt_bdpt_camera_subpath(it->pt, &job->tracer, &it->bopts, &job->frame, out->fx, out->fy, &cam, t,
+                                       paths);
+  uint32_t nl = nc == t ? tt_bdpt_light_subpath(it->pt, &job->tracer, &it->bopts, &lig, s, paths) : 0;
+  out->vertices = (nc > 0 ? nc - 1 : 0) + (nl > 0 ? nl - 1 : 0);
+  if (nc == t && nl == s) {
+    tt_bdpt_contribution c;
+    tt_bdpt_connect(it->pt, &job->tracer, &it->bopts, &job->frame, paths, s, t, &con, MLT_CONNECT_BASE, &c);
+    for (int i = 0; i < 3; ++i) out->L[i] = c.L[i] * (float)n;
+    out->nonfinite = c.nonfinite;
+    if (t == 1) {
+      out->fx = c.fx;
+      out->fy = c.fy;
+    }
+  }
+  out->rays = tt_bdpt_rays(paths);
+}
+
+/* Evaluates the state read through `src` in the integrator's mode (`depth`: the chain's, mmlt
+ * only). Returns 0 when the thread's subpaths cannot be allocated. */
+static int mlt_eval(mlt_job *job, uint32_t thread, const tt_sample_source *src, uint32_t depth,
+                    mlt_sample *out) {
+  memset(out, 0, sizeof *out);
+  if (!job->it->set.mmlt) {
+    tt_path_result r;
+    mlt_trace(job, src, &r, &out->fx, &out->fy);
+    memcpy(out->L, r.L, sizeof out->L);
+    out->rays = r.rays;
+    out->vertices = r.bounces;
+    out->nonfinite = r.nonfinite;
+    return 1;
+  }
+  if (thread >= job->threads) return 0;
+  if (!job->paths[thread] && tt_bdpt_paths_create(job->it->set.max_depth, &job->paths[thread]) != TT_OK) return 0;
+  mlt_trace_mmlt(job, job->paths[thread], src, depth, out);
+  return 1;
+}
+
+/* Path depth of bootstrap sample i: pbrt-v3 cycles i through 0..maxDepth. */
+static inline uint32_t mlt_boot_depth(const tt_integrator *it, uint64_t i) {
+  return it->set.mmlt ? (uint32_t)(i % (it->set.max_depth + 1)) : 0;
+}
+
 /* Bootstrap paths [begin, end): their luminance, 0 for non-finite or negative. */
 static void mlt_boot_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
   mlt_job *job = vctx;
-  (void)thread_index;
   mlt_boot_src bs = {job->it->seed, 0};
   tt_sample_source src = {mlt_boot_get, NULL, &bs};
   uint64_t rays = 0;
   for (uint64_t i = begin; i < end; ++i) {
     bs.index = i;
-    tt_path_result r;
-    float fx, fy;
-    mlt_trace(job, &src, &r, &fx, &fy);
+    mlt_sample r;
+    if (!mlt_eval(job, thread_index, &src, mlt_boot_depth(job->it, i), &r)) {
+      atomic_store(&job->failed, 1);
+      return;
+    }
     double c = mlt_lum(r.L);
     job->weights[i] = (isfinite(c) && c > 0.0 && !r.nonfinite) ? c : 0.0;
     rays += r.rays;
@@ -308,42 +432,53 @@ static void mlt_boot_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t threa
 static void mlt_start_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
   mlt_job *job = vctx;
   tt_integrator *it = job->it;
-  (void)thread_index;
   for (uint64_t c = begin; c < end; ++c) {
     tt__mlt_chain *ch = &it->chains[c];
     tt__mlt_chain_init(ch, it->chain_mem + c * tt__mlt_chain_bytes(it->dims), it->dims, &it->kernel);
+    if (it->set.mmlt) ch->pair_stride = MLT_STREAMS;
     tt__mlt_chain_start(ch, it->seed, job->starts[c], c);
+    if (it->chain_depth) it->chain_depth[c] = (uint8_t)mlt_boot_depth(it, job->starts[c]);
     tt__mlt_chain_propose(ch);
     tt_sample_source src = tt__mlt_chain_source(ch);
-    tt_path_result r;
-    mlt_trace(job, &src, &r, &ch->fx, &ch->fy);
+    mlt_sample r;
+    if (!mlt_eval(job, thread_index, &src, it->chain_depth ? it->chain_depth[c] : 0, &r)) {
+      atomic_store(&job->failed, 1);
+      return;
+    }
     tt__mlt_chain_accept(ch);
     memcpy(ch->L, r.L, sizeof ch->L);
-    ch->C = mlt_lum(r.L);  /* = the bootstrap weight (> 0): tt_path_trace is deterministic */
+    ch->fx = r.fx;
+    ch->fy = r.fy;
+    ch->C = mlt_lum(r.L);  /* = the bootstrap weight (> 0): the evaluation is deterministic */
   }
 }
 
 /* Bootstraps b and the chains for the film of this pass. */
 static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
   const mlt_settings *s = &it->set;
-  uint64_t n = s->bootstrap;
+  /* mmlt: bootstrapSamples per path depth, sample i of depth i % (maxDepth + 1) (pbrt-v3) */
+  const uint64_t depths = s->mmlt ? s->max_depth + 1 : 1;
+  uint64_t n = s->bootstrap * depths;
   it->seed = job->ctx->seed;
   it->width = job->width;
   it->height = job->height;
   it->nchains = s->chains;
-  it->dims = TT_PATH_DIM_COUNT(s->max_depth);
+  it->dims = s->mmlt ? mlt_mmlt_dims(s->max_depth) : TT_PATH_DIM_COUNT(s->max_depth);
   job->weights = malloc(n * sizeof(double));
   job->starts = malloc((size_t)it->nchains * sizeof(uint64_t));
   it->chains = calloc(it->nchains, sizeof(tt__mlt_chain));
   it->chain_mem = malloc((size_t)it->nchains * tt__mlt_chain_bytes(it->dims));
+  if (s->mmlt) it->chain_depth = calloc(it->nchains, 1);
   tt_status st = TT_OK;
-  if (!job->weights || !job->starts || !it->chains || !it->chain_mem) {
+  if (!job->weights || !job->starts || !it->chains || !it->chain_mem || (s->mmlt && !it->chain_depth)) {
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for %llu bootstrap samples and %u chains",
                       (unsigned long long)n, it->nchains);
     goto done;
   }
   const tt_host *host = mlt_host();
   st = host->parallel_for(n, 256, mlt_boot_fn, job);
+  if (st == TT_OK && atomic_load(&job->failed))
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the bidirectional subpaths");
   if (st != TT_OK) goto done;
   /* Serial prefix sum: deterministic b whatever the thread count. */
   double sum = 0.0;
@@ -364,7 +499,7 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
               (unsigned long long)n);
     goto done;
   }
-  it->b = sum / (double)n;
+  it->b = sum / (double)n * (double)depths;  /* mmlt: the mean over depths of each depth's image */
   for (uint32_t c = 0; c < it->nchains; ++c) {  /* starts in proportion to the weights */
     double u = tt__u64_to_unit(tt__hash3(it->seed, c, 0x7374617274ull)) * sum;
     uint64_t lo = 0, hi = n - 1;
@@ -375,11 +510,14 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
     job->starts[c] = lo;
   }
   st = host->parallel_for(it->nchains, 1, mlt_start_fn, job);
+  if (st == TT_OK && atomic_load(&job->failed))
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the bidirectional subpaths");
   if (st == TT_OK) {
     it->ready = 1;
     it->mutations_total = 0;
-    host->log(TT_LOG_INFO, MLT_NAME, "bootstrap: %llu paths (%llu non-zero), b = %.6g, %u chains",
-              (unsigned long long)n, (unsigned long long)nonzero, it->b, it->nchains);
+    host->log(TT_LOG_INFO, MLT_NAME, "bootstrap (%s): %llu paths (%llu non-zero), b = %.6g, %u chains",
+              s->mmlt ? "mmlt" : "pssmlt", (unsigned long long)n, (unsigned long long)nonzero, it->b,
+              it->nchains);
   }
 done:
   free(job->weights);
@@ -415,8 +553,7 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
   mlt_job *job = vctx;
   tt_integrator *it = job->it;
   const tt_host *host = mlt_host();
-  (void)thread_index;
-  uint64_t rays = 0, done = 0, nonfinite = 0, sp = 0, sa = 0, lp = 0, la = 0;
+  uint64_t rays = 0, done = 0, nonfinite = 0, sp = 0, sa = 0, lp = 0, la = 0, vertices = 0;
   uint64_t theta[TT__MLT_THETA_BINS + 1];
   int dump = it->theta_dump != NULL;
   if (dump) memset(theta, 0, sizeof theta);
@@ -425,16 +562,23 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
     ch->theta_hist = dump ? theta : NULL;
     uint64_t quota = job->base + (c < job->extra ? 1 : 0);
     tt_sample_source src = tt__mlt_chain_source(ch);
+    const uint32_t depth = it->chain_depth ? it->chain_depth[c] : 0;
     for (uint64_t m = 0; m < quota; ++m) {
       if (m % MLT_STOP_CHECK == 0 && host->should_stop && host->should_stop()) {
         atomic_store(&job->interrupted, 1);
         break;
       }
       tt__mlt_chain_propose(ch);
-      tt_path_result r;
-      float fx, fy;
-      mlt_trace(job, &src, &r, &fx, &fy);
+      mlt_sample r;
+      if (!mlt_eval(job, thread_index, &src, depth, &r)) {
+        tt__mlt_chain_reject(ch);
+        atomic_store(&job->failed, 1);
+        atomic_store(&job->interrupted, 1);
+        break;
+      }
+      const float fx = r.fx, fy = r.fy;
       rays += r.rays;
+      vertices += r.vertices;
       double cy = mlt_lum(r.L);
       if (r.nonfinite || !isfinite(cy) || cy < 0.0) {  /* never splatted, never accepted */
         nonfinite++;
@@ -469,6 +613,7 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
   }
   atomic_fetch_add(&job->rays, rays);
   atomic_fetch_add(&job->mutations, done);
+  atomic_fetch_add(&job->vertices, vertices);
   atomic_fetch_add(&job->nonfinite, nonfinite);
   atomic_fetch_add(&job->small_prop, sp);
   atomic_fetch_add(&job->small_acc, sa);
@@ -572,6 +717,13 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
   job->tracer.accel = ctx->accel;
   tt_status st = tt_camera_frame_init(&job->frame, ctx->camera);
   size_t pixels = (size_t)w * h;
+  job->threads = host->thread_count ? host->thread_count() : 1;
+  if (job->threads < 1) job->threads = 1;
+  atomic_init(&job->failed, 0);
+  if (st == TT_OK && it->set.mmlt) {
+    job->paths = calloc(job->threads, sizeof *job->paths);
+    if (!job->paths) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory");
+  }
   if (st == TT_OK && it->acc_pixels != pixels) {  /* allocated once per film size */
     free((void *)it->acc);
     it->acc = calloc(3 * pixels, sizeof(int64_t));
@@ -579,6 +731,7 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
     if (!it->acc) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the splat buffer");
   }
   if (st != TT_OK) {
+    free(job->paths);
     free(job);
     return st;
   }
@@ -603,7 +756,9 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
     job->base = total / it->nchains;
     job->extra = total % it->nchains;
     tt_status pst = host->parallel_for(it->nchains, 1, mlt_mutate_fn, job);
-    if (pst == TT_ERR_INTERRUPTED || atomic_load(&job->interrupted)) st = TT_ERR_INTERRUPTED;
+    if (atomic_load(&job->failed))
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the bidirectional subpaths");
+    else if (pst == TT_ERR_INTERRUPTED || atomic_load(&job->interrupted)) st = TT_ERR_INTERRUPTED;
     else if (pst != TT_OK) st = pst;
     /* Flush the pass into the film: one splat per pixel, so the order is irrelevant. */
     for (size_t p = 0; p < pixels; ++p) {
@@ -638,12 +793,15 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
     uint64_t sp = atomic_load(&job->small_prop), sa = atomic_load(&job->small_acc);
     uint64_t lp = atomic_load(&job->large_prop), la = atomic_load(&job->large_acc);
     double small = sp ? (double)sa / sp : 0.0;
+    double nm = local.samples ? (double)local.samples : 1.0;
     const char *names[] = {"acceptance", "small_step_acceptance", "acceptance_small", "large_step_acceptance",
-                           "mutations_per_s", "mutations", "b", "rays_per_s", "bootstrap_ms"};
+                           "mutations_per_s", "mutations", "b", "rays_per_s", "bootstrap_ms",
+                           "rays_per_mutation", "mean_path_length"};
     double values[] = {sp + lp ? (double)(sa + la) / (sp + lp) : 0.0, small, small,
                        lp ? (double)la / lp : 0.0,
                        mut_s > 0.0 ? (double)local.samples / mut_s : 0.0, (double)local.samples, it->b,
-                       mut_s > 0.0 ? (double)(local.rays - boot_rays) / mut_s : 0.0, boot_ms};
+                       mut_s > 0.0 ? (double)(local.rays - boot_rays) / mut_s : 0.0, boot_ms,
+                       (double)(local.rays - boot_rays) / nm, (double)atomic_load(&job->vertices) / nm};
     local.metric_count = (uint32_t)(sizeof values / sizeof values[0]);
     for (uint32_t m = 0; m < local.metric_count; ++m) {
       local.metrics[m].name = names[m];
@@ -653,6 +811,8 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
     local.struct_size = (uint32_t)n;
     memcpy(stats, &local, n);
   }
+  for (uint32_t i = 0; job->paths && i < job->threads; ++i) tt_bdpt_paths_destroy(job->paths[i]);
+  free(job->paths);
   free(job);
   if (st == TT_ERR_INTERRUPTED)
     return tt_set_error(TT_ERR_INTERRUPTED, MLT_NAME ": pass interrupted (mutations done are in the film)");
@@ -709,7 +869,8 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
   .kind = TT_KIND_INTEGRATOR,
   .name = MLT_NAME,
   .version = MLT_VERSION,
-  .description = "PSSMLT (Kelemen 2002) with sigma-binning and truncated-normal steps (thesis ch. 4)",
+  .description = "PSSMLT over the path tracer or multiplexed MLT over BDPT, with sigma-binning and "
+                 "truncated-normal steps (thesis ch. 4)",
   .init = mlt_init,
   .deinit = mlt_deinit,
   .get_interface = mlt_get_interface,

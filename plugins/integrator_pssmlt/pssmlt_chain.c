@@ -197,6 +197,7 @@ void tt__mlt_chain_init(tt__mlt_chain *c, void *mem, uint32_t dims, const tt__ml
   memset(mem, 0, tt__mlt_chain_bytes(dims));
   c->k = k;
   c->dims = dims;
+  c->pair_stride = 1;
   c->d = mem;
   c->touched = (uint32_t *)(c->d + dims);
   c->cur_binned = c->touched + dims;
@@ -257,8 +258,8 @@ static void tt__chain_report(void *self, uint32_t dim, float pdf) {
     int b = th < 1.0 ? (int)(th * TT__MLT_THETA_BINS) : TT__MLT_THETA_BINS;
     c->theta_hist[b < 0 ? 0 : b]++;
   }
-  if (!(pdf >= 0.0f) || !isfinite(pdf) || dim + 1 >= c->dims) return;
-  for (uint32_t j = dim; j <= dim + 1; ++j) {
+  if (!(pdf >= 0.0f) || !isfinite(pdf) || dim + c->pair_stride >= c->dims) return;
+  for (uint32_t j = dim; j <= dim + c->pair_stride; j += c->pair_stride) {
     if (c->d[j].stamp != c->iter) continue;  /* not read (cannot happen in path.c) */
     if (c->d[j].pdf_new < 0.0f) c->new_binned[c->n_new++] = j;
     c->d[j].pdf_new = pdf;

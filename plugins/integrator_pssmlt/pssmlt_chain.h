@@ -105,6 +105,8 @@ typedef struct tt__mlt_chain {
   tt__mlt_rng rng;
   const tt__mlt_kernel *k;
   uint32_t dims;
+  uint32_t pair_stride;             /* a direction's second dim is its first + this (1; 3 for
+                                       MMLT's interleaved streams) */
   tt__mlt_dim *d;
   uint32_t *touched, n_touched;     /* dims the proposal read */
   uint32_t *cur_binned, n_cur;      /* dims with a reported pdf in the current state */

@@ -26,6 +26,7 @@
 #include <tunetrace/loader.h>
 #include <tunetrace/params.h>
 
+#include "caustic_scenes.h"
 #include "path_common.h"
 #include "tt_test.h"
 
@@ -83,19 +84,6 @@ static const char *DEGENERATE = HEAD "\"meshes\":[" FLOOR("white") "," WALLS ","
     "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, 0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
     "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
     "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
-/* Caustic: a spot light above a smooth glass slab over a diffuse floor (no walls). */
-#define CAUSTIC_HEAD                                                                                \
-  "{\"version\":1,\"camera\":{\"position\":[0,-0.2,2.5],\"target\":[0,-1,0],\"up\":[0,1,0],\"fov\":30,"  \
-  "\"resolution\":[16,16]},\"materials\":{\"white\":{\"type\":\"diffuse\",\"albedo\":[0.8,0.8,0.8]},"  \
-  "\"glass\":{\"type\":\"dielectric\",\"ior\":1.5}},\"lights\":[{\"type\":\"spot\",\"position\":[0,2,0],"  \
-  "\"direction\":[0,-1,0],\"intensity\":[10,10,10],\"angle\":25}],\"meshes\":["                      \
-  "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-3,-1,-3, 3,-1,-3, 3,-1,3, -3,-1,3],\"indices\":[0,2,1, 0,3,2]}"
-static const char *CAUSTIC = CAUSTIC_HEAD ","
-    "{\"name\":\"slab\",\"material\":\"glass\",\"positions\":[-1,0.5,-1, 1,0.5,-1, 1,0.5,1, -1,0.5,1,"
-    " -1,0.6,-1, 1,0.6,-1, 1,0.6,1, -1,0.6,1],\"indices\":[0,1,2, 0,2,3, 4,6,5, 4,7,6, 0,5,1, 0,4,5, 3,2,6, 3,6,7,"
-    " 0,3,7, 0,7,4, 1,5,6, 1,6,2]}]}";
-static const char *CAUSTIC_OPEN = CAUSTIC_HEAD "]}";
-
 typedef struct setup {
   const tt_integrator_iface *it;
   const tt_space *space;
@@ -340,10 +328,7 @@ static void check_strategies(setup *s) {
 static double centre_mean(const tt_film *film) {
   static float rgb[3 * W * H];
   tt_film_resolve(film, rgb);
-  double m = 0;
-  for (int y = 5; y < 11; ++y)
-    for (int x = 5; x < 11; ++x) m += lum(rgb + 3 * (y * W + x)) / 36.0;
-  return m;
+  return tt_caustic_centre(rgb);
 }
 
 int main(void) {
@@ -421,14 +406,14 @@ int main(void) {
   /* The caustic: path tracer black under the slab, BDPT about (1 - R)^2 of the open floor. */
   {
     double open_ref[W * H], se[W * H], pt_px[W * H];
-    CHECK(pt_fixture_load(&s.fx, CAUSTIC_OPEN));
+    CHECK(pt_fixture_load(&s.fx, TT_CAUSTIC_OPEN));
     tt_film *fo = NULL;
     CHECK(render(&s, "{\"maxDepth\": 4}", 1, 64, 3, 0, &fo, NULL) == TT_OK);
     double open = centre_mean(fo);
     reference(&s, 4, 64, open_ref, se);
     tt_film_destroy(fo);
     pt_fixture_free(&s.fx);
-    CHECK(pt_fixture_load(&s.fx, CAUSTIC));
+    CHECK(pt_fixture_load(&s.fx, TT_CAUSTIC));
     tt_film *fc = NULL;
     CHECK(render(&s, "{\"maxDepth\": 4}", 1, 256, 3, 0, &fc, NULL) == TT_OK);
     double caustic = centre_mean(fc);

@@ -1,9 +1,11 @@
 /* integrator_pssmlt end to end (plugin loader, brute-force accel, film): the parameter space
  * and tuning hint, statistics, unbiasedness against the path sampler driven by independent
- * samples (a diffuse box and one with a glossy floor and a mirror, classic and sigma-binned:
- * whole-image and per-region means within noise bands measured over independent seeds),
- * determinism for 1 and 2 threads, configure() between passes keeping the chains, an
- * all-black scene rendering black (b = 0), and a stop request. */
+ * samples (a diffuse box and one with a glossy floor and a mirror, classic and sigma-binned,
+ * in both modes — PSSMLT over the path tracer and multiplexed MLT over the bidirectional
+ * sampler: whole-image and per-region means within noise bands measured over independent
+ * seeds), determinism for 1 and 2 threads (both modes), configure() between passes keeping
+ * the chains (a mode change restarts), an all-black scene rendering black (b = 0), the
+ * caustic under a glass slab that mmlt renders and pssmlt cannot, and a stop request. */
 #include <stdlib.h>
 
 #include <tunetrace/film.h>
@@ -13,6 +15,7 @@
 #include <tunetrace/params.h>
 #include <tunetrace/tunedb.h>
 
+#include "caustic_scenes.h"
 #include "path_common.h"
 #include "tt_test.h"
 
@@ -216,7 +219,7 @@ int main(void) {
   CHECK(s.space != NULL);
 
   /* Parameter space: pbrt-v4's defaults in classic mode, the thesis' for binning. */
-  const char *names[] = {"maxDepth", "largeStepProbability", "sigma", "binning", "bins", "alpha", "a1", "a9",
+  const char *names[] = {"mode", "maxDepth", "largeStepProbability", "sigma", "binning", "bins", "alpha", "a1", "a9",
                          "sigma1", "sigma8", "mutationsPerPixel", "bootstrapSamples", "chains"};
   for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i)
     CHECK_MSG(tt_space_find(s.space, names[i]) >= 0, "missing %s", names[i]);
@@ -227,6 +230,7 @@ int main(void) {
   CHECK(tt_config_get_int(def, "chains", 0) == 1000);
   CHECK(tt_config_get_int(def, "maxDepth", 0) == 5);
   CHECK(tt_config_get_int(def, "binning", 1) == 0);
+  CHECK(strcmp(tt_config_get_string(def, "mode"), "pssmlt") == 0);
   CHECK_NEAR(tt_config_get_float(def, "alpha", 0), 4.0 * 3.14159265358979, 1e-9);
   int si = tt_space_find(s.space, "sigma3");
   CHECK(tt_space_min(s.space, (size_t)si) == 1e-4 && tt_space_max(s.space, (size_t)si) == 0.3);
@@ -267,10 +271,33 @@ int main(void) {
     tt_film_destroy(film);
   }
 
-  /* Determinism: 1 thread vs 2 threads, bit-identical splats (binning mode). */
+  const char *mm_cls = "{\"mode\": \"mmlt\", \"bootstrapSamples\": 5000, \"chains\": 64}";
+  const char *mm_bin = "{\"mode\": \"mmlt\", \"bootstrapSamples\": 5000, \"chains\": 64, \"binning\": true,"
+                       " \"largeStepProbability\": 0.1, \"sigma1\": 0.003, \"sigma2\": 0.01, \"sigma3\": 0.03,"
+                       " \"sigma4\": 0.06, \"sigma5\": 0.1, \"sigma6\": 0.2, \"sigma7\": 0.3}";
+  /* Statistics of an mmlt pass: six path depths bootstrapped (5000 each). */
   {
+    tt_film *film = NULL;
+    tt_pass_stats ps;
+    const char *cfgs[1] = {mm_cls};
+    CHECK(render(&s, cfgs, 1, 4, 1, &film, &ps) == TT_OK);
+    CHECK(ps.samples == 4u * W * H && ps.nonfinite == 0);
+    double sm = metric(&ps, "small_step_acceptance"), b = metric(&ps, "b");
+    printf("mmlt pass: small-step acceptance %.3f, b %.5f, %.1f rays and %.2f vertices per mutation\n", sm, b,
+           metric(&ps, "rays_per_mutation"), metric(&ps, "mean_path_length"));
+    CHECK(sm > 0.0 && sm < 1.0 && b > 0.0);
+    CHECK(metric(&ps, "rays_per_mutation") > 1.0 && metric(&ps, "mean_path_length") > 1.0);
+    const float *sp = tt_film_splat_rgb(film);
+    double lum = 0.0;
+    for (int i = 0; i < W * H; ++i) lum += 0.2126 * sp[3 * i] + 0.7152 * sp[3 * i + 1] + 0.0722 * sp[3 * i + 2];
+    CHECK_NEAR(lum, 4.0 * W * H, 1e-3 * W * H);
+    tt_film_destroy(film);
+  }
+
+  /* Determinism: 1 thread vs 2 threads, bit-identical splats (binning, both modes). */
+  for (int mode = 0; mode < 2; ++mode) {
     tt_film *a = NULL, *b = NULL, *c = NULL;
-    const char *cfgs[1] = {bin};
+    const char *cfgs[1] = {mode ? mm_bin : bin};
     CHECK(tt_default_host_set_threads(1) == TT_OK);
     CHECK(render(&s, cfgs, 1, 4, 5, &a, NULL) == TT_OK);
     CHECK(tt_default_host_set_threads(2) == TT_OK);
@@ -303,6 +330,12 @@ int main(void) {
     CHECK(metric(&ps[1], "b") < metric(&ps[0], "b"));
     CHECK_NEAR(tt_film_splat_scale(film), metric(&ps[1], "b") / 2.0, 1e-12);
     tt_film_destroy(film);
+    /* so does the mode */
+    const char *cfgs3[2] = {cls, mm_cls};
+    CHECK(render(&s, cfgs3, 2, 2, 9, &film, ps) == TT_OK);
+    CHECK(metric(&ps[1], "bootstrap_ms") > 0.0);
+    CHECK_NEAR(tt_film_splat_scale(film), metric(&ps[1], "b") / 2.0, 1e-12);
+    tt_film_destroy(film);
   }
 
   /* Unbiasedness against the path sampler with independent samples. */
@@ -311,21 +344,49 @@ int main(void) {
     reference(&s, 5, 512, ref, se);
     check_unbiased(&s, "diffuse classic", cls, ref, se);
     check_unbiased(&s, "diffuse binning", bin, ref, se);
+    check_unbiased(&s, "diffuse mmlt classic", mm_cls, ref, se);
+    check_unbiased(&s, "diffuse mmlt binning", mm_bin, ref, se);
     pt_fixture_free(&s.fx);
     CHECK(pt_fixture_load(&s.fx, GLOSSY));
     reference(&s, 5, 512, ref, se);
     check_unbiased(&s, "glossy+mirror classic", cls, ref, se);
     check_unbiased(&s, "glossy+mirror binning", bin, ref, se);
+    check_unbiased(&s, "glossy+mirror mmlt classic", mm_cls, ref, se);
+    check_unbiased(&s, "glossy+mirror mmlt binning", mm_bin, ref, se);
     pt_fixture_free(&s.fx);
+  }
+
+  /* The caustic under a glass slab: mmlt renders it (about (1 - R)^2 of the open floor),
+   * pssmlt (over the path tracer) leaves it black. */
+  {
+    double centre[3];
+    const char *scenes[3] = {TT_CAUSTIC_OPEN, TT_CAUSTIC, TT_CAUSTIC};
+    const char *modes[3] = {mm_cls, mm_cls, cls};
+    for (int k = 0; k < 3; ++k) {
+      CHECK(pt_fixture_load(&s.fx, scenes[k]));
+      tt_film *film = NULL;
+      const char *cfgs[1] = {modes[k]};
+      CHECK(render(&s, cfgs, 1, 64, 3, &film, NULL) == TT_OK);
+      static float rgb[3 * W * H];
+      tt_film_resolve(film, rgb);
+      centre[k] = tt_caustic_centre(rgb);
+      tt_film_destroy(film);
+      pt_fixture_free(&s.fx);
+    }
+    printf("caustic: floor under the slab %.4f (mmlt), %.4f (pssmlt); open floor %.4f (mmlt); ratio %.3f\n",
+           centre[1], centre[2], centre[0], centre[1] / centre[0]);
+    CHECK(centre[1] / centre[0] > 0.8 && centre[1] / centre[0] < 1.1);
+    CHECK(centre[2] < 1e-6 * centre[0]);
   }
 
   /* A scene with no light: b = 0, passes succeed with a black image (as PT's), no NaN
    * (#13: this used to fail the pass, and the host wrote no image) */
-  {
+  for (int mode = 0; mode < 2; ++mode) {
     CHECK(pt_fixture_load(&s.fx, BLACK));
     tt_film *film = NULL;
     tt_pass_stats ps[2];
-    const char *cfgs[2] = {"{\"bootstrapSamples\": 1000}", NULL};
+    const char *cfgs[2] = {mode ? "{\"mode\": \"mmlt\", \"bootstrapSamples\": 1000}" : "{\"bootstrapSamples\": 1000}",
+                           NULL};
     CHECK(render(&s, cfgs, 2, 1, 1, &film, ps) == TT_OK);
     CHECK(metric(&ps[0], "b") == 0.0 && metric(&ps[1], "mutations") == 0.0);
     float *rgb = malloc(3 * sizeof(float) * W * H);
