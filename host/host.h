@@ -203,6 +203,9 @@ typedef struct tt__tuning {
   char *verify_json;            /* --verify result (JSON object, malloc), or NULL */
   tt_tunedb *db;                /* the database the session records into, or NULL */
   double *ref_lum;              /* --reference as luminance (--objective rrmse), or NULL */
+  uint32_t answered_spp;        /* samples per pixel the database's answers did not render
+                                   (answers x --tune-spp): the render phase renders them, so
+                                   that the image is never worse than without a database */
 } tt__tuning;
 
 /* Frees the tuning record (NULL is ignored). */

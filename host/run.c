@@ -324,6 +324,14 @@ int tt__run_render(const tt__host_options *opt) {
     if (rc == TT_EXIT_USAGE || !tuning) goto done;
   }
   if (tuning && tuning->interrupted) rec->interrupted = 1;
+  /* the image holds the tuning passes; the database's answers rendered none, so their
+   * samples are rendered here (with the kept configuration): with or without a database the
+   * same command ends with at least as many samples */
+  if (tuning && tuning->answered_spp && target_spp != UINT32_MAX) {
+    uint64_t without_db = (uint64_t)rec->spp + tuning->answered_spp;
+    if (without_db > target_spp) target_spp = without_db > UINT32_MAX - 1 ? UINT32_MAX - 1
+                                                                          : (uint32_t)without_db;
+  }
 
   /* progressive passes of 1 spp each, until the target or the time budget */
   while (rc == TT_EXIT_OK && !rec->interrupted && rec->spp < target_spp) {

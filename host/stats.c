@@ -60,6 +60,18 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
   tt__add_json(o, "best_config", best_json);
   cJSON_AddStringToObject(o, "best_from", !best_json || !default_json ||
                           !strcmp(best_json, default_json) ? "default" : t->mode);
+  /* what the final passes used: the best, or the default when --verify rejected the best */
+  static const char *verdict_names[] = {"unverified", "confirmed", "rejected", "default"};
+  const char *reason = NULL;
+  tt_tuning_verdict verdict = tt_tuning_get_verdict(session, &reason);
+  const char *kept_json = tt_tuning_kept_json(session);
+  tt__add_json(o, "kept_config", kept_json);
+  cJSON_AddStringToObject(o, "kept", kept_json && best_json && strcmp(kept_json, best_json)
+                                         ? "default" : "best");
+  cJSON_AddStringToObject(o, "verdict", verdict >= 0 && verdict <= 3 ? verdict_names[verdict]
+                                                                     : "unverified");
+  if (reason) cJSON_AddStringToObject(o, "kept_reason", reason);
+  else cJSON_AddNullToObject(o, "kept_reason");
   cJSON_AddNumberToObject(o, "tuning_ms", t->ms);
   if (t->db_path[0]) cJSON_AddStringToObject(o, "db", t->db_path);
   else cJSON_AddNullToObject(o, "db");

@@ -380,14 +380,15 @@ static void tt__log_result(const tt__tune_ctx *c, const tt_tuning_verification *
   const char *best_json = tt_tuning_best_json(t->session);
   const char *from = !strcmp(best_json, tt_tuning_default_json(t->session)) ? "default" : t->mode;
   char gain[256] = "";
-  if (v && v->rounds && isfinite(v->cost_ratio) && v->median_cost[0] > 0)
-    snprintf(gain, sizeof gain, ": %.1f%% lower verified (median of %u rounds side by side)",
-             100.0 * (1.0 - v->cost_ratio), v->rounds);
+  if (v && v->rounds && isfinite(v->cost_ratio) && v->median_cost[0] > 0 && strcmp(from, "default"))
+    snprintf(gain, sizeof gain, ": %.1f%% %s when verified (median of %u rounds side by side)",
+             100.0 * fabs(1.0 - v->cost_ratio), v->cost_ratio < 1 ? "lower" : "higher",
+             v->rounds);
   else if (def > 0 && def < TT_COST_INFEASIBLE && best < TT_COST_INFEASIBLE &&
            c->objective.kind != TT_OBJECTIVE_METRIC && strcmp(from, "default"))
-    snprintf(gain, sizeof gain, ": %.1f%% lower in single tuning passes, unverified (the "
-             "best of many noisy passes looks better than it is; --verify 5 measures both side "
-             "by side)", 100.0 * (1.0 - best / def));
+    snprintf(gain, sizeof gain, ": %.1f%% %s in single tuning passes, unverified (the best of "
+             "many noisy passes looks better than it is; --verify 5 measures both side by side)",
+             100.0 * fabs(1.0 - best / def), best <= def ? "lower" : "higher");
   c->s->host->log(TT_LOG_INFO, NULL, "tuning: best cost %.6g (%s), default %.6g%s, after %u "
                   "iterations (%u measured, %u from the database): %s", best, from, def, gain,
                   st.iterations, st.measured, st.cached, best_json);
@@ -501,6 +502,13 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
   }
   t->interrupted = st == TT_ERR_INTERRUPTED;
   if (st != TT_OK && st != TT_ERR_INTERRUPTED) rc = TT_EXIT_FAILURE;
+  /* a cost the database answered rendered no pass into the image: the render phase makes
+   * up for those, so an answer from the database never leaves the image with fewer samples
+   * than the same command without one */
+  for (size_t i = 0; i < tt_tuning_sample_count(t->session); i++) {
+    const tt_tuning_sample *x = tt_tuning_sample_at(t->session, i);
+    if (x->cached && x->status == TT_TUNEDB_OK) t->answered_spp += c.spp;
+  }
 
   /* keep the best: the rest of the image renders with it */
   tt_tuning_verification v = {.struct_size = sizeof v};
@@ -515,8 +523,9 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
                    v.render_ratio, v.median_total_ms[0], v.median_total_ms[1], v.total_ratio);
     }
   }
-  if (tt_config_from_json(current, tt_tuning_best_json(t->session), "tuning") != TT_OK)
-    s->host->log(TT_LOG_ERROR, NULL, "tuning: cannot restore the best configuration: %s",
+  /* the kept configuration: the best, or the default when --verify rejected the best */
+  if (tt_config_from_json(current, tt_tuning_kept_json(t->session), "tuning") != TT_OK)
+    s->host->log(TT_LOG_ERROR, NULL, "tuning: cannot restore the kept configuration: %s",
                  tt_last_error());
   if (!t->interrupted && rc == TT_EXIT_OK &&
       tt_tuning_apply_best(t->session, &target, NULL) != TT_OK) {

@@ -9,6 +9,7 @@
  *  - objectives: build+render, metric min/max/target, a missing metric, rrmse (known
  *    value), spec parsing and canonical spelling;
  *  - verify: alternating order, exact ratios; apply_best applies only what is not applied;
+ *    a lucky best that is not faster side by side is rejected and the default applied;
  *  - warm-up passes, interruption, convergence of a tuner. */
 #include <tunetrace/loader.h>
 #include <tunetrace/tuning.h>
@@ -237,6 +238,12 @@ static void test_loop(const tt_space *space) {
   CHECK_NEAR(v.cost_ratio, v.render_ratio, 1e-12);
   CHECK_NEAR(v.rounds_ms[(3 * 2 + 1) * 3 + 1], cost_of(b), 1e-12);  /* round 3, best, render */
   CHECK(tt_tuning_sample_count(t) == n);  /* verification records nothing */
+  /* the bowl's best is faster in every round: kept, and said so */
+  const char *reason = NULL;
+  CHECK(v.verdict == TT_TUNING_CONFIRMED && v.best_faster == 4 && v.cost_difference < 0);
+  CHECK(tt_tuning_get_verdict(t, &reason) == TT_TUNING_CONFIRMED && reason == v.reason);
+  CHECK_MSG(reason && strstr(reason, "keeping the tuned configuration"), "%s", reason);
+  CHECK(!strcmp(tt_tuning_kept_json(t), tt_tuning_best_json(t)));
   tt_config_destroy(b);
   tt_config_destroy(ts.applied);
   tt_tuning_destroy(t);
@@ -309,6 +316,108 @@ static tt_status ft_feedback(tt_tuner *t, double cost) {
 static void ft_destroy(tt_tuner *t) { free(t); }
 static const tt_tuner_iface g_fixed = {sizeof g_fixed, NULL, ft_create, ft_next, ft_feedback,
                                        NULL, NULL, NULL, ft_destroy, NULL};
+
+/* A target whose costs are scripted per configuration: the default always costs 1; every
+ * other configuration costs `lucky` at its first measurement and `later` after that (a
+ * search's best is often one lucky pass). `sign` -1 measures through metric:acceptance:max
+ * instead (value 1/cost, so the objective's costs are negative and ratios mean nothing). */
+typedef struct scripted {
+  tt_config *applied;
+  const char *default_json;
+  char *seen[16];
+  int count[16], nseen;
+  double lucky, later, sign;
+  int applies;
+} scripted;
+
+static tt_status sc_apply(void *user, const tt_config *cfg, double *build_ms) {
+  scripted *sc = user;
+  if (!sc->applied) sc->applied = tt_config_clone(cfg);
+  else tt_config_copy(sc->applied, cfg);
+  sc->applies++;
+  *build_ms = 0;
+  return TT_OK;
+}
+
+static tt_status sc_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
+  (void)spp;
+  scripted *sc = user;
+  if (!m) return TT_OK;
+  char *json = tt_config_to_json(sc->applied);
+  double cost = 1.0;
+  if (strcmp(json, sc->default_json)) {
+    int k = 0;
+    while (k < sc->nseen && strcmp(sc->seen[k], json)) k++;
+    if (k == sc->nseen && k < 16) sc->seen[sc->nseen++] = strdup(json);
+    cost = k < 16 && sc->count[k]++ ? sc->later : sc->lucky;
+  }
+  tt_free(json);
+  memset(&g_ps, 0, sizeof g_ps);
+  g_ps.struct_size = sizeof g_ps;
+  g_ps.metric_count = 1;
+  g_ps.metrics[0].name = "acceptance";
+  /* metric:acceptance:max's cost is -value: -1/cost keeps the order, negative */
+  g_ps.metrics[0].value = 1.0 / cost;
+  m->render_ms = sc->sign > 0 ? cost : 1.0;
+  m->pass = &g_ps;
+  return TT_OK;
+}
+
+/* --verify keeps the default when the search's best is not faster side by side: the fixed
+ * tuner proposes A, A, B; A measures lucky then slow (mean between), B once, lucky: B is
+ * the best by its one pass. Measured again side by side it is slower than the default in
+ * every round, so the session keeps the default, applies it, says why, and still reports B
+ * as the search's best. When B really is faster, it is kept. Costs of either sign. */
+static void test_verify_keeps_default(const tt_space *space) {
+  const struct { double lucky, later, sign; const char *objective; int keep_best; } cases[] = {
+    {0.5, 1.2, 1, "render", 0},
+    {0.5, 0.8, 1, "render", 1},
+    {0.5, 1.2, -1, "metric:acceptance:max", 0},
+    {0.5, 0.8, -1, "metric:acceptance:max", 1},
+  };
+  for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    tt_tuning_desc d = base_desc(space, NULL);
+    d.tuner = &g_fixed;
+    d.tuner_name = "fixed";
+    d.objective = cases[c].objective;
+    tt_tuning *t = NULL;
+    CHECK(tt_tuning_create(&d, &t) == TT_OK);
+    scripted sc = {.default_json = tt_tuning_default_json(t), .lucky = cases[c].lucky,
+                   .later = cases[c].later, .sign = cases[c].sign};
+    tt_tuning_target tg = {sizeof tg, &sc, sc_apply, sc_render};
+    CHECK(tt_tuning_run(t, &tg) == TT_OK);
+    const char *best = tt_tuning_best_json(t);
+    CHECK_MSG(strstr(best, "\"x\":0.3") != NULL, "case %zu: best %s", c, best);
+    CHECK(tt_tuning_get_verdict(t, NULL) == TT_TUNING_UNVERIFIED);
+    CHECK(!strcmp(tt_tuning_kept_json(t), best));  /* unverified: the best, as found */
+    tt_tuning_verification v = {.struct_size = sizeof v};
+    CHECK(tt_tuning_verify(t, &tg, 5, &v) == TT_OK && v.rounds == 5);
+    CHECK(tt_tuning_apply_best(t, &tg, NULL) == TT_OK);
+    char *applied = tt_config_to_json(sc.applied);
+    const char *reason = NULL;
+    tt_tuning_verdict verdict = tt_tuning_get_verdict(t, &reason);
+    if (cases[c].keep_best) {
+      CHECK_MSG(verdict == TT_TUNING_CONFIRMED && v.best_faster == 5, "case %zu: verdict %d", c,
+                (int)verdict);
+      CHECK_MSG(!strcmp(applied, best), "case %zu: applied %s", c, applied);
+      CHECK(!strcmp(tt_tuning_kept_json(t), best));
+    } else {
+      CHECK_MSG(verdict == TT_TUNING_REJECTED && v.verdict == TT_TUNING_REJECTED &&
+                v.best_faster == 0, "case %zu: verdict %d", c, (int)verdict);
+      CHECK_MSG(!strcmp(applied, tt_tuning_default_json(t)), "case %zu: applied %s", c, applied);
+      CHECK(!strcmp(tt_tuning_kept_json(t), tt_tuning_default_json(t)));
+      CHECK(!strcmp(tt_tuning_best_json(t), best));  /* the search's best is still reported */
+      CHECK_MSG(reason && strstr(reason, "keeping the default configuration") &&
+                strstr(reason, "not faster") && !strstr(reason, "-"), "case %zu: %s", c, reason);
+    }
+    CHECK_NEAR(v.cost_difference, cases[c].sign > 0 ? cases[c].later - 1.0
+                                                    : 1.0 - 1.0 / cases[c].later, 1e-12);
+    tt_free(applied);
+    for (int k = 0; k < sc.nseen; k++) free(sc.seen[k]);
+    tt_config_destroy(sc.applied);
+    tt_tuning_destroy(t);
+  }
+}
 
 static void test_database(const tt_space *space) {
   char path[] = "/tmp/tt_tune_session_XXXXXX";
@@ -618,6 +727,7 @@ int main(void) {
   tt_space *space = make_space();
   test_loop(space);
   test_ask_tell(space);
+  test_verify_keeps_default(space);
   test_database(space);
   test_explore(space);
   test_objectives(space);

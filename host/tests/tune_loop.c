@@ -153,6 +153,13 @@ static int check_tuning(const char *stats, const char *plugin, int iterations, i
   return measured;
 }
 
+/* Occurrences of `what` in `text`. */
+static int count_of(const char *text, const char *what) {
+  int n = 0;
+  for (const char *p = strstr(text, what); p; p = strstr(p + 1, what)) n++;
+  return n;
+}
+
 /* Two identical runs tuning `plugin`: rows, then everything answered from the database. */
 static void tune_twice(const char *plugin) {
   static char out[1 << 16];
@@ -172,12 +179,23 @@ static void tune_twice(const char *plugin) {
   CHECK(db_rows(db, "mode = 'default' AND iteration = -1") == 1);
   cJSON *first = read_json(stats);
 
-  /* the same run again: the database answers every configuration, nothing is measured */
+  /* the same run again: the database answers every configuration, nothing is measured;
+   * the run says so once (which database, how many answers), not once per answer */
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   CHECK_CONTAINS(out, "from the database");
+  CHECK_MSG(count_of(out, "came from the database") == 1 &&
+            count_of(out, "earlier measurement") == 0, "one line per answer?\n%s", out);
+  CHECK_CONTAINS(out, "9 of 9 costs came from the database");
   int measured2 = check_tuning(stats, plugin, 8, &cached);
   CHECK_MSG(measured2 == 0 && cached == 9, "second run: %d measured, %d cached", measured2,
             cached);
+  /* the answers rendered no pass, the render phase did: the image has the samples of the
+   * first run (1 warm-up + 9 measurements of 1 spp, more than --spp 2) */
+  cJSON *r1 = first, *r2 = read_json(stats);
+  CHECK_MSG(num(r1, "spp") == 10 && num(r2, "spp") == num(r1, "spp"),
+            "first run %g spp, second (answered by the database) %g spp", num(r1, "spp"),
+            num(r2, "spp"));
+  cJSON_Delete(r2);
   CHECK(db_rows(db, NULL) == measured);
   cJSON *second = read_json(stats);
   cJSON *c1 = cJSON_GetObjectItem(cJSON_GetObjectItem(first, "tuning"), "costs");
@@ -212,6 +230,36 @@ int main(void) {
   tune_twice("integrator_pt");
 
   char args[16384], db[4300], stats[4300], exr[4300];
+
+  /* a tuner re-measuring its incumbent against noise: said once with the count, not once per
+   * iteration; the stats count the repeats */
+  snprintf(stats, sizeof stats, "%s/repeats.json", dir);
+  snprintf(args, sizeof args, "--plugin tuner_nm --iterations 40 --res 16x16 --spp 1 --threads 2 "
+           "--no-db --out '%s/repeats.exr' --stats '%s' '%s'", dir, stats, scene_path);
+  CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+  {
+    cJSON *rr = read_json(stats);
+    cJSON *hist = cJSON_GetObjectItem(cJSON_GetObjectItem(rr, "tuning"), "history");
+    int repeats = 0;  /* proposals of a configuration measured before in the run */
+    char *seen[64];
+    int nseen = 0;
+    seen[nseen++] = cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetObjectItem(rr, "tuning"),
+                                                               "default_config"));
+    for (int i = 0; i < cJSON_GetArraySize(hist) && nseen < 64; i++) {
+      char *c = cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetArrayItem(hist, i), "config"));
+      int k = 0;
+      while (k < nseen && strcmp(seen[k], c)) k++;
+      if (k < nseen) repeats++, free(c);
+      else seen[nseen++] = c;
+    }
+    for (int k = 0; k < nseen; k++) free(seen[k]);
+    cJSON_Delete(rr);
+    CHECK_MSG(repeats >= 2, "tuner_nm re-measured %d configurations in 40 iterations", repeats);
+    char line[128];
+    snprintf(line, sizeof line, "%d of 40 iterations measured again", repeats);
+    CHECK_MSG(count_of(out, "measuring again") == 0 && count_of(out, "measured again") == 1 &&
+              strstr(out, line), "expected one line '%s':\n%s", line, out);
+  }
 
   /* exploration: N random configurations, recorded for the analysis tools */
   snprintf(db, sizeof db, "%s/explore.db", dir);

@@ -71,13 +71,15 @@ int main(void) {
   F(tt_tuning_stats, iterations); F(tt_tuning_stats, measured); F(tt_tuning_stats, cached);
   F(tt_tuning_stats, infeasible); F(tt_tuning_stats, failed); F(tt_tuning_stats, converged);
   F(tt_tuning_stats, interrupted); F(tt_tuning_stats, tuning_ms);
-  F(tt_tuning_stats, unrecorded); end();
+  F(tt_tuning_stats, unrecorded); F(tt_tuning_stats, remeasured); end();
   S(tt_tuning_verification); F(tt_tuning_verification, struct_size);
   F(tt_tuning_verification, rounds); F(tt_tuning_verification, spp);
   F(tt_tuning_verification, median_build_ms); F(tt_tuning_verification, median_render_ms);
   F(tt_tuning_verification, median_total_ms); F(tt_tuning_verification, median_cost);
   F(tt_tuning_verification, render_ratio); F(tt_tuning_verification, total_ratio);
-  F(tt_tuning_verification, cost_ratio); F(tt_tuning_verification, rounds_ms); end();
+  F(tt_tuning_verification, cost_ratio); F(tt_tuning_verification, rounds_ms);
+  F(tt_tuning_verification, verdict); F(tt_tuning_verification, best_faster);
+  F(tt_tuning_verification, cost_difference); F(tt_tuning_verification, reason); end();
   S(tt_tunedb_row); F(tt_tunedb_row, struct_size); F(tt_tunedb_row, id);
   F(tt_tunedb_row, scene_id); F(tt_tunedb_row, scene); F(tt_tunedb_row, camera);
   F(tt_tunedb_row, context); F(tt_tunedb_row, has_indicators); F(tt_tunedb_row, indicators);

@@ -563,9 +563,13 @@ class Session(_Handle):
             verification = {
                 "rounds": v.rounds, "render_ratio": v.render_ratio, "total_ratio": v.total_ratio,
                 "cost_ratio": v.cost_ratio, "median_render_ms": list(v.median_render_ms),
-                "median_total_ms": list(v.median_total_ms), "median_cost": list(v.median_cost)}
-        # keep the best: the rest of the image renders with it (as host does)
-        _check(lib.tt_config_from_json(current, lib.tt_tuning_best_json(t), b"tuning"), "best")
+                "median_total_ms": list(v.median_total_ms), "median_cost": list(v.median_cost),
+                # the library keeps the default when the best was not faster side by side
+                "kept": "best" if v.verdict != 2 else "default",
+                "reason": text(v.reason) if v.reason else None}
+        # keep the kept configuration (the best, or the default verification chose): the
+        # rest of the image renders with it (as host does)
+        _check(lib.tt_config_from_json(current, lib.tt_tuning_kept_json(t), b"tuning"), "best")
         if not interrupted:
             _check(lib.tt_tuning_apply_best(t, ctypes.byref(target), None), "apply best")
         tuning = Tuning(t, db)

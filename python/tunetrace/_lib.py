@@ -165,7 +165,7 @@ class TuningStats(ctypes.Structure):  # tt_tuning_stats (tuning.h)
                 ("cached", ctypes.c_uint32), ("infeasible", ctypes.c_uint32),
                 ("failed", ctypes.c_uint32), ("converged", ctypes.c_int32),
                 ("interrupted", ctypes.c_int32), ("tuning_ms", ctypes.c_double),
-                ("unrecorded", ctypes.c_uint32)]
+                ("unrecorded", ctypes.c_uint32), ("remeasured", ctypes.c_uint32)]
 
 
 class TuningVerification(ctypes.Structure):  # tt_tuning_verification (tuning.h)
@@ -174,7 +174,9 @@ class TuningVerification(ctypes.Structure):  # tt_tuning_verification (tuning.h)
                 ("median_render_ms", ctypes.c_double * 2),
                 ("median_total_ms", ctypes.c_double * 2), ("median_cost", ctypes.c_double * 2),
                 ("render_ratio", ctypes.c_double), ("total_ratio", ctypes.c_double),
-                ("cost_ratio", ctypes.c_double), ("rounds_ms", ctypes.POINTER(ctypes.c_double))]
+                ("cost_ratio", ctypes.c_double), ("rounds_ms", ctypes.POINTER(ctypes.c_double)),
+                ("verdict", ctypes.c_int32), ("best_faster", ctypes.c_uint32),
+                ("cost_difference", ctypes.c_double), ("reason", c_u8p)]
 
 
 class TunedbRow(ctypes.Structure):  # tt_tunedb_row (tunedb.h)
@@ -302,6 +304,7 @@ _PROTOTYPES = {
     "tt_tuning_run": (_I, [_P, ctypes.POINTER(TuningTarget)]),
     "tt_tuning_best": (_I, [_P, _P, _PD]),
     "tt_tuning_best_json": (_S, [_P]), "tt_tuning_default_json": (_S, [_P]),
+    "tt_tuning_kept_json": (_S, [_P]),
     "tt_tuning_default_cost": (_I, [_P, _PD]),
     "tt_tuning_sample_count": (ctypes.c_size_t, [_P]),
     "tt_tuning_sample_at": (ctypes.POINTER(TuningSample), [_P, ctypes.c_size_t]),

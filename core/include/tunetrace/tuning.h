@@ -21,8 +21,8 @@
  *  - library-driven: tt_tuning_run does the whole loop through a tt_tuning_target whose
  *    callbacks apply a configuration and render one pass.
  * Then tt_tuning_best gives the winner, tt_tuning_verify measures default and best side by
- * side (alternating rounds, medians of per-round ratios), tt_tuning_apply_best leaves the
- * target running the best configuration.
+ * side (alternating rounds, medians of per-round ratios) and keeps the default when the best
+ * was not faster, tt_tuning_apply_best leaves the target running the kept configuration.
  *
  * Ownership: the session copies what it keeps from the descriptor (configurations, state,
  * strings); the space, the tuner table, the database and the reference image are borrowed
@@ -253,6 +253,8 @@ typedef struct tt_tuning_stats {
   double tuning_ms;         /* wall ms of tt_tuning_run */
   uint32_t unrecorded;      /* measurements the database failed to record (a full disk):
                              * one warning is logged, then they are only counted */
+  uint32_t remeasured;      /* proposals of a configuration already measured in this session
+                               (a tuner re-evaluating its incumbent), measured again */
 } tt_tuning_stats;
 
 /* Fills `out` up to out->struct_size. */
@@ -274,17 +276,39 @@ typedef struct tt_tuning_verification {
   double cost_ratio;        /* ... of the objective's cost */
   const double *rounds_ms;  /* rounds x 2 x {build_ms, render_ms, cost}, [r][who][k];
                                owned by the session, valid until the next verify */
+  /* ---- appended: what the rounds decided (tt_tuning_verdict) ---- */
+  int32_t verdict;          /* TT_TUNING_CONFIRMED, _REJECTED or _DEFAULT; _UNVERIFIED when no
+                               round completed */
+  uint32_t best_faster;     /* rounds in which the best's cost was lower than the default's */
+  double cost_difference;   /* median over rounds of cost best - default (NAN if none) */
+  const char *reason;       /* one plain sentence saying which configuration is kept and why
+                               (owned by the session, valid until the next verify) */
 } tt_tuning_verification;
+
+/* What paired verification (tt_tuning_verify) decided about the search's best. */
+typedef enum tt_tuning_verdict {
+  TT_TUNING_UNVERIFIED = 0, /* not verified (or the best changed since): the best is kept */
+  TT_TUNING_CONFIRMED = 1,  /* the best was faster than the default in the median round: kept */
+  TT_TUNING_REJECTED = 2,   /* it was not (or it failed): the default is kept */
+  TT_TUNING_DEFAULT = 3     /* the best is the default configuration itself */
+} tt_tuning_verdict;
 
 /* Measures the default and the best configuration side by side through `target`:
  * `rounds` rounds of one pass each, alternating the order (default first in even rounds),
  * so a drift in machine speed hits both alike. Nothing is recorded in the database (these
- * are repeats, not new states). TT_OK, TT_ERR_INTERRUPTED (out holds the rounds done), or
- * the failure of a configuration (logged). */
+ * are repeats, not new states). Then decides: the best is kept only when its cost was lower
+ * than the default's in the median round (median of the per-round differences < 0);
+ * otherwise the session keeps the default (tt_tuning_kept_json, tt_tuning_apply_best): the
+ * search's best is the luckiest of many noisy passes, and a configuration that is not faster
+ * when measured side by side must not replace the default. The decision is logged as one
+ * sentence and returned in out->verdict / out->reason. TT_OK, TT_ERR_INTERRUPTED (out holds
+ * the rounds done, judged when there is at least one), or the failure of a configuration
+ * (logged; a failing best is rejected). */
 TT_API tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_t rounds,
                                   tt_tuning_verification *out);
 
-/* Applies the best configuration through `target` unless the target already runs it (the
+/* Applies the kept configuration (tt_tuning_kept_json: the best, or the default when
+ * verification rejected the best) through `target` unless the target already runs it (the
  * last configuration the session applied); `*build_ms` (may be NULL) gets the build time
  * (0 when nothing was applied). */
 TT_API tt_status tt_tuning_apply_best(tt_tuning *t, const tt_tuning_target *target,
@@ -300,6 +324,14 @@ TT_API tt_status tt_tuning_save_state(const tt_tuning *t, char **json);
  * errors name `source` and what differs (another target, objective, tuner, state, default,
  * or a tuner state its tuner refuses); on error the session is left fresh. */
 TT_API tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *source);
+
+/* The configuration the session keeps for the target after tuning (owned by the session):
+ * the best, unless tt_tuning_verify rejected it, then the default. */
+TT_API const char *tt_tuning_kept_json(const tt_tuning *t);
+
+/* The verification's decision about the current best; `*reason` (may be NULL) gets its
+ * sentence (NULL when unverified; owned by the session). */
+TT_API tt_tuning_verdict tt_tuning_get_verdict(const tt_tuning *t, const char **reason);
 
 #ifdef __cplusplus
 }

@@ -70,6 +70,14 @@ struct tt_tuning {
   double *verify_ms;            /* rounds x 2 x 3 of the last verify */
   char *mode;                   /* desc->mode: the database's mode column, or NULL */
   int context_sent;             /* the tuner's set_context was called (or cannot be) */
+  int quiet;                    /* no per-run summaries (the hybrid loop's per-state sessions:
+                                   it says them once per run) */
+  char *dropped;                /* the parameters not searched (tt__drop_untunable), or NULL */
+  uint32_t remeasured;          /* proposals of a configuration measured earlier in the run */
+  /* the last verification's decision, about the best it verified (verified_json) */
+  tt_tuning_verdict verdict;
+  char *verified_json;
+  char reason[384];
 };
 
 /* Canonical JSON of a configuration as a malloc'ed string (tt_config_to_json uses tt_free). */
@@ -104,6 +112,8 @@ void tt_tuning_destroy(tt_tuning *t) {
   free(t->best_json);
   free(t->verify_ms);
   free(t->mode);
+  free(t->verified_json);
+  free(t->dropped);
   free(t);
 }
 
@@ -154,8 +164,10 @@ static tt_status tt__drop_untunable(tt_tuning *t) {
   }
   if (t->own_search) {
     t->search = t->own_search;
-    t->host->log(TT_LOG_INFO, NULL, "tuning: not searched: %s (not tunable, or cannot act "
-                 "with the values the other parameters are fixed at)", dropped);
+    t->dropped = tt__strdup(dropped);
+    if (!t->quiet)
+      t->host->log(TT_LOG_INFO, NULL, "tuning: not searched: %s (not tunable, or cannot act "
+                   "with the values the other parameters are fixed at)", dropped);
   }
   return TT_OK;
 }
@@ -169,6 +181,10 @@ void tt__default_run_id(char *buf, size_t n, const char *prefix) {
 }
 
 tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
+  return tt__tuning_create(d, 0, out);
+}
+
+tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: out is NULL");
   *out = NULL;
   if (!d || d->struct_size < offsetof(tt_tuning_desc, space) + sizeof d->space || !d->space)
@@ -183,6 +199,7 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
     return st;
   }
   t->host = TT__DESC(d, host) ? TT__DESC(d, host) : tt_default_host();
+  t->quiet = quiet;
   t->space = d->space;
   t->ti = TT__DESC(d, tuner);
   t->requested = TT__DESC(d, iterations);
@@ -381,7 +398,9 @@ static int tt__settle(tt_tuning *t, int32_t iteration) {
   uint32_t times = 0, here = tt__measured_before(t, json);
   tt_tunedb_row row = tt__row(t, json);
   if (here) {
-    t->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: measuring again a configuration "
+    /* a tuner re-measuring its incumbent: routine, counted and said once per run */
+    t->remeasured++;
+    t->host->log(TT_LOG_DEBUG, NULL, "tuning: iteration %d: measuring again a configuration "
                  "measured %u time%s in this run", iteration, here, here == 1 ? "" : "s");
   } else if (t->db && tt_tunedb_lookup(t->db, &row, &cached, &times) == TT_OK) {
     s.cost = cached;
@@ -389,12 +408,13 @@ static int tt__settle(tt_tuning *t, int32_t iteration) {
     s.status = cached >= TT_COST_INFEASIBLE ? TT_TUNEDB_INFEASIBLE : TT_TUNEDB_OK;
     t->cached++;
     if (s.status == TT_TUNEDB_INFEASIBLE) t->infeasible++;
+    /* one line per answer only at debug level: the run says once how many (tt_tuning_run) */
     if (iteration < 0)
-      t->host->log(TT_LOG_INFO, NULL, "tuning: default configuration: cost %.6g from the "
+      t->host->log(TT_LOG_DEBUG, NULL, "tuning: default configuration: cost %.6g from the "
                    "database (%u earlier measurement%s), not measured again", cached, times,
                    times == 1 ? "" : "s");
     else
-      t->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: cost %.6g from the database "
+      t->host->log(TT_LOG_DEBUG, NULL, "tuning: iteration %d: cost %.6g from the database "
                    "(%u earlier measurement%s), not measured again", iteration, cached, times,
                    times == 1 ? "" : "s");
     tt_status st = tt__record(t, &s);
@@ -605,6 +625,23 @@ static tt_tuning_measurement tt__measurement(void) {
   return m;
 }
 
+/* Says once per run what used to be a line per iteration: how many costs the database
+ * answered (and which database), how many proposals re-measured a configuration. */
+static void tt__log_summary(const tt_tuning *t) {
+  uint32_t samples = (uint32_t)t->count;
+  if (t->cached)
+    t->host->log(TT_LOG_INFO, NULL, "tuning: %u of %u costs came from the database %s (earlier "
+                 "runs measured those configurations in the same state; they were not measured "
+                 "again)", t->cached, samples, t->db ? tt_tunedb_path(t->db) : "");
+  uint32_t iterations = 0;
+  for (size_t i = 0; i < t->count; i++) iterations += t->samples[i].iteration >= 0;
+  if (t->remeasured)
+    t->host->log(TT_LOG_INFO, NULL, "tuning: %u of %u iterations measured again a configuration "
+                 "already measured in this run (%s re-evaluating its best against noise; a "
+                 "configuration is judged by its mean cost)", t->remeasured, iterations,
+                 t->tuner_name ? t->tuner_name : "the tuner");
+}
+
 tt_status tt_tuning_run(tt_tuning *t, const tt_tuning_target *target) {
   if (!t || !target || !target->apply || !target->render)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_run: no target callbacks");
@@ -647,6 +684,7 @@ tt_status tt_tuning_run(tt_tuning *t, const tt_tuning_target *target) {
   tt_config_destroy(cfg);
   t->ms = (tt__now(t) - t->t0) * 1e-6;
   if (rc == TT_OK && t->interrupted) rc = TT_ERR_INTERRUPTED;
+  if (!t->quiet) tt__log_summary(t);
   return rc;
 }
 
@@ -744,6 +782,7 @@ void tt_tuning_get_stats(const tt_tuning *t, tt_tuning_stats *out) {
   s.interrupted = t->interrupted;
   s.tuning_ms = t->ms;
   s.unrecorded = t->unrecorded;
+  s.remeasured = t->remeasured;
   size_t n = out->struct_size < sizeof s ? out->struct_size : sizeof s;
   memcpy(out, &s, n);
   out->struct_size = (uint32_t)n;
@@ -773,6 +812,50 @@ static int tt__verify_one(tt_tuning *t, const tt_tuning_target *target, const tt
   return 0;
 }
 
+/* Decides from the verification `v` of `best_json` which configuration the session keeps,
+ * and says it in one sentence (t->reason, logged): the best only when its cost was lower
+ * than the default's in the median round. `failed`: the best failed to render. */
+static void tt__verdict(tt_tuning *t, const tt_tuning_verification *v, const char *best_json,
+                        int failed) {
+  free(t->verified_json);
+  t->verified_json = best_json ? tt__strdup(best_json) : NULL;
+  t->verdict = TT_TUNING_UNVERIFIED;
+  t->reason[0] = 0;
+  if (!t->verified_json) return;
+  if (!strcmp(best_json, t->default_json)) {
+    t->verdict = TT_TUNING_DEFAULT;
+    snprintf(t->reason, sizeof t->reason, "keeping the default configuration: the search found "
+             "nothing better than it");
+  } else if (failed) {
+    t->verdict = TT_TUNING_REJECTED;
+    snprintf(t->reason, sizeof t->reason, "keeping the default configuration: the tuned one "
+             "failed when measured again side by side");
+  } else if (v->rounds) {
+    /* how much the cost changed, as a percentage of the default's when that is meaningful */
+    double def = v->median_cost[0];
+    char how[96];
+    if (isfinite(v->cost_ratio) && def > 0)
+      snprintf(how, sizeof how, "%.1f%% %s", 100.0 * fabs(1.0 - v->cost_ratio),
+               v->cost_ratio < 1 ? "lower" : "higher");
+    else
+      snprintf(how, sizeof how, "%.4g %s", fabs(v->cost_difference),
+               v->cost_difference < 0 ? "lower" : "higher");
+    if (v->cost_difference < 0) {
+      t->verdict = TT_TUNING_CONFIRMED;
+      snprintf(t->reason, sizeof t->reason, "keeping the tuned configuration: measured side by "
+               "side with the default in %u rounds, its cost was lower in %u, the median round "
+               "%s", v->rounds, v->best_faster, how);
+    } else {
+      t->verdict = TT_TUNING_REJECTED;
+      snprintf(t->reason, sizeof t->reason, "keeping the default configuration: measured side "
+               "by side with it in %u rounds, the tuned one was not faster (its cost was lower "
+               "in only %u, the median round %s)", v->rounds, v->best_faster, how);
+    }
+  }
+  if (t->verdict != TT_TUNING_UNVERIFIED)
+    t->host->log(TT_LOG_INFO, NULL, "tuning: %s", t->reason);
+}
+
 tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_t rounds,
                            tt_tuning_verification *out) {
   if (!t || !target || !target->apply || !target->render || !out)
@@ -791,7 +874,9 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
   double *tmp = calloc((size_t)rounds + 1, sizeof *tmp);
   tt_status rc = TT_OK;
   uint32_t done = 0;
+  int failed_best = 0;
   double *m = t->verify_ms;
+  v.cost_difference = NAN;
   if (!cfg[0] || !cfg[1] || !m || !tmp || !json[0] || !json[1] ||
       tt_config_from_json(cfg[0], json[0], "default") != TT_OK ||
       tt_config_from_json(cfg[1], json[1], "best") != TT_OK) {
@@ -812,6 +897,7 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
         t->host->log(TT_LOG_ERROR, NULL, "tuning: --verify: the %s configuration failed: %s",
                      who ? "best" : "default", tt_last_error());
         rc = TT_ERR_INTERNAL;
+        failed_best = who == 1;
         goto out;
       }
     }
@@ -847,9 +933,19 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
     if (q == 1) v.total_ratio = ratio;
     if (q == 2) v.cost_ratio = ratio;
   }
+  /* per-round differences of the objective's cost: signed costs (metric:NAME:max is -value)
+   * make ratios meaningless, differences are not */
+  for (uint32_t r = 0; r < done; r++) {
+    tmp[r] = m[((size_t)r * 2 + 1) * 3 + 2] - m[((size_t)r * 2) * 3 + 2];
+    v.best_faster += tmp[r] < 0;
+  }
+  v.cost_difference = tt__median(tmp, done);
 out:
+  tt__verdict(t, &v, json[1], rc != TT_OK && failed_best);
   v.rounds = done;
   v.rounds_ms = m;
+  v.verdict = t->verdict;
+  v.reason = t->verdict != TT_TUNING_UNVERIFIED ? t->reason : NULL;
   size_t n = out->struct_size && out->struct_size < sizeof v ? out->struct_size : sizeof v;
   memcpy(out, &v, n);
   out->struct_size = (uint32_t)n;
@@ -865,7 +961,7 @@ tt_status tt_tuning_apply_best(tt_tuning *t, const tt_tuning_target *target, dou
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_apply_best: no target callbacks");
   double ms = 0;
   if (build_ms) *build_ms = 0;
-  const char *json = tt_tuning_best_json(t);
+  const char *json = tt_tuning_kept_json(t);
   if (t->applied && !strcmp(t->applied, json)) return TT_OK;
   tt_config *cfg = tt_config_create(t->space);
   if (!cfg) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuning: out of memory");
@@ -877,6 +973,23 @@ tt_status tt_tuning_apply_best(tt_tuning *t, const tt_tuning_target *target, dou
   tt_config_destroy(cfg);
   if (build_ms) *build_ms = ms;
   return st;
+}
+
+tt_tuning_verdict tt_tuning_get_verdict(const tt_tuning *t, const char **reason) {
+  if (reason) *reason = NULL;
+  if (!t || t->verdict == TT_TUNING_UNVERIFIED || !t->verified_json ||
+      strcmp(t->verified_json, tt_tuning_best_json(t)))
+    return TT_TUNING_UNVERIFIED;  /* never verified, or the best changed since */
+  if (reason) *reason = t->reason;
+  return t->verdict;
+}
+
+const char *tt__tuning_dropped(const tt_tuning *t) { return t ? t->dropped : NULL; }
+
+const char *tt_tuning_kept_json(const tt_tuning *t) {
+  if (!t) return NULL;
+  return tt_tuning_get_verdict(t, NULL) == TT_TUNING_REJECTED ? t->default_json
+                                                               : tt_tuning_best_json(t);
 }
 
 /* ---- resume ------------------------------------------------------------------------ */

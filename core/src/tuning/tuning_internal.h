@@ -17,4 +17,13 @@ tt_status tt__objective_cost(const tt_objective *o, const tt_tuning_measurement 
  * into buf (n >= 64): the database's run_id when the caller names none. */
 void tt__default_run_id(char *buf, size_t n, const char *prefix);
 
+/* tt_tuning_create; `quiet` non-zero leaves out what is said once per run (the parameters
+ * not searched, the summary of database answers and re-measurements): the hybrid loop runs a
+ * session per state and says those once itself. */
+tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out);
+
+/* The parameters the session does not search (not tunable, or unable to act), as a list
+ * for people, or NULL when every parameter is searched. */
+const char *tt__tuning_dropped(const tt_tuning *t);
+
 #endif /* TT_TUNING_INTERNAL_H */
