@@ -100,37 +100,121 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_no
   return TT_EXIT_OK;
 }
 
+/* --warm-start DB...: each file exists, checked before the scene loads (a typo must not
+ * cost the scene's loading time). Prints and returns an exit code. */
+static int tt__hyb_warm_files(const tt__host_options *opt) {
+  for (int i = 0; i < opt->warm_start_count; i++) {
+    struct stat st;
+    if (stat(opt->warm_start[i], &st) != 0) {
+      fprintf(stderr, "host: --warm-start %s: %s\n", opt->warm_start[i], strerror(errno));
+      return TT_EXIT_USAGE;
+    }
+  }
+  return TT_EXIT_OK;
+}
+
+/* The option that sets a context or camera key, and how an absent value reads. */
+static const char *tt__hyb_key_option(const char *key) {
+  return !strcmp(key, "clock") ? "--clock" : !strcmp(key, "threads") ? "--threads"
+         : !strcmp(key, "spp") ? "--tune-spp" : !strcmp(key, "resolution") ? "--res" : key;
+}
+static const char *tt__hyb_key_value(const char *key, const char *value, char *buf, size_t n) {
+  unsigned w, h;
+  if (!strcmp(key, "clock") && !strcmp(value, "(none)")) return "wall";
+  if (!strcmp(key, "clock") && !strcmp(value, "\"cpu\"")) return "cpu";
+  if (!strcmp(key, "resolution") && sscanf(value, "[%u,%u]", &w, &h) == 2) {
+    snprintf(buf, n, "%ux%u", w, h);
+    return buf;
+  }
+  return value;
+}
+
+/* Says what a warm start learnt and, for every row it did not, why: the rows of another
+ * objective, and per key of the context (clock, threads, spp) and camera (resolution) the
+ * rows measured otherwise, with their value and this run's. A warm start that learns
+ * nothing while the database has rows is a warning. */
+static void tt__hyb_warm_log(const tt__hyb *h, const char *path, const tt_hybrid_warm_result *r,
+                             const char *objective) {
+  char why[2048] = "";
+  size_t n = 0;
+#define TT__WHY(...) \
+  do { \
+    int w_ = snprintf(why + n, n < sizeof why ? sizeof why - n : 0, __VA_ARGS__); \
+    if (w_ > 0) n += (size_t)w_; \
+  } while (0)
+  for (uint32_t k = 0; k < r->key_count; k++) {
+    if (!r->mismatch[k]) continue;
+    char a[64], b[64];
+    TT__WHY("%s%llu measured with %s %s (this run: %s %s)", n ? "; " : "",
+            (unsigned long long)r->mismatch[k], tt__hyb_key_option(r->key[k]),
+            tt__hyb_key_value(r->key[k], r->mismatch_value[k], a, sizeof a),
+            tt__hyb_key_option(r->key[k]),
+            tt__hyb_key_value(r->key[k], r->expected_value[k], b, sizeof b));
+  }
+  if (r->other_objective)
+    TT__WHY("%s%llu of another objective (this run: %s)", n ? "; " : "",
+            (unsigned long long)r->other_objective, objective);
+  if (r->other_space)
+    TT__WHY("%s%llu of another parameter space", n ? "; " : "", (unsigned long long)r->other_space);
+  if (r->failed) TT__WHY("%s%llu failed measurements", n ? "; " : "", (unsigned long long)r->failed);
+  if (r->no_indicators)
+    TT__WHY("%s%llu without indicators", n ? "; " : "", (unsigned long long)r->no_indicators);
+#undef TT__WHY
+  uint64_t left = r->considered - r->rows;
+  int none = r->rows == 0 && r->considered > 0;
+  h->s->host->log(none ? TT_LOG_WARN : TT_LOG_INFO, NULL, "hybrid: %s learnt %llu of the %llu "
+                  "rows of %s in %s%s%s%s", h->predictor_name, (unsigned long long)r->rows,
+                  (unsigned long long)r->considered, tt_loaded_plugin_entry(h->s->accel_p)->name,
+                  path, left ? "; left out: " : "", left ? why : "",
+                  none && r->other_context ? " (a warm start learns only costs measured as this "
+                  "run measures them: match those options, see host/README.md)" : "");
+}
+
 /* --warm-start DB...: every usable row teaches the model; the clock, spp and threads of the
- * rows' context must be this run's. */
-static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context) {
+ * rows' context and the resolution of their camera must be this run's. */
+static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context, const char *camera,
+                        const char *objective) {
   static const char *const keys[] = {"clock", "spp", "threads", NULL};
+  static const char *const camera_keys[] = {"resolution", NULL};
   h->warm = cJSON_CreateArray();
   for (int i = 0; i < h->opt->warm_start_count; i++) {
     const char *path = h->opt->warm_start[i];
-    struct stat st;
-    if (stat(path, &st) != 0) {
-      fprintf(stderr, "host: --warm-start %s: %s\n", path, strerror(errno));
-      return TT_EXIT_USAGE;
-    }
     tt_tunedb *db = NULL;
     if (tt_tunedb_open(path, &db) != TT_OK) {
       fprintf(stderr, "host: --warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_USAGE;
     }
-    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys, .context = context};
-    uint64_t rows = 0, skipped = 0;
-    tt_status ws = tt_hybrid_warm_start(hy, db, &f, &rows, &skipped);
+    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys, .context = context,
+                               .camera_keys = camera_keys, .camera = camera};
+    tt_hybrid_warm_result r = {.struct_size = sizeof r};
+    tt_status ws = tt_hybrid_warm_start_ex(hy, db, &f, &r);
     tt_tunedb_close(db);
     if (ws != TT_OK) {
       fprintf(stderr, "host: --warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_FAILURE;
     }
-    h->s->host->log(TT_LOG_INFO, NULL, "hybrid: %s learnt %llu rows of %s%s", h->predictor_name,
-                    (unsigned long long)rows, path, skipped ? " (some rows of other spaces skipped)" : "");
+    tt__hyb_warm_log(h, path, &r, objective);
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "db", path);
-    cJSON_AddNumberToObject(o, "rows", (double)rows);
-    cJSON_AddNumberToObject(o, "skipped", (double)skipped);
+    cJSON_AddNumberToObject(o, "rows", (double)r.rows);
+    cJSON_AddNumberToObject(o, "skipped", (double)(r.considered - r.rows));
+    cJSON_AddNumberToObject(o, "considered", (double)r.considered);
+    cJSON_AddNumberToObject(o, "exploit_rows", (double)r.exploit_rows);
+    cJSON *why = cJSON_AddObjectToObject(o, "skipped_because");
+    cJSON_AddNumberToObject(why, "other_objective", (double)r.other_objective);
+    cJSON_AddNumberToObject(why, "other_space", (double)r.other_space);
+    cJSON_AddNumberToObject(why, "failed", (double)r.failed);
+    cJSON_AddNumberToObject(why, "no_indicators", (double)r.no_indicators);
+    cJSON_AddNumberToObject(why, "other_context", (double)r.other_context);
+    cJSON *keys_o = cJSON_AddObjectToObject(o, "mismatch");
+    for (uint32_t k = 0; k < r.key_count; k++) {
+      cJSON *m = cJSON_AddObjectToObject(keys_o, r.key[k]);
+      cJSON_AddNumberToObject(m, "rows", (double)r.mismatch[k]);
+      cJSON *v = r.mismatch[k] ? cJSON_Parse(r.mismatch_value[k]) : NULL;
+      cJSON_AddItemToObject(m, "value", v ? v : cJSON_CreateNull());
+      cJSON *e = cJSON_Parse(r.expected_value[k]);
+      cJSON_AddItemToObject(m, "this_run", e ? e : cJSON_CreateNull());
+    }
     cJSON_AddItemToArray(h->warm, o);
   }
   return TT_EXIT_OK;
@@ -160,11 +244,18 @@ static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index,
   cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
   const struct { const char *name; double v; } num[] = {
     {"cost", r->cost}, {"predicted_cost", r->predicted_cost}, {"default_cost", r->default_cost},
+    {"default_distance", r->default_distance},
     {"search_cost", r->search_cost}, {"predict_ms", r->predict_ms}, {"total_ms", total_ms}};
   for (size_t i = 0; i < sizeof num / sizeof num[0]; i++) {
     if (isfinite(num[i].v) && num[i].v < TT_COST_INFEASIBLE) cJSON_AddNumberToObject(o, num[i].name, num[i].v);
     else cJSON_AddNullToObject(o, num[i].name);
   }
+  static const char *const from[] = {NULL, "measured", "database", "nearest state"};
+  if (r->default_source > 0 && r->default_source <= 3)
+    cJSON_AddStringToObject(o, "default_cost_from", from[r->default_source]);
+  else
+    cJSON_AddNullToObject(o, "default_cost_from");
+  cJSON_AddNumberToObject(o, "remeasured", r->remeasured);
   cJSON_AddNumberToObject(o, "samples", r->samples);
   cJSON_AddNumberToObject(o, "builds", r->builds);
   cJSON_AddNumberToObject(o, "cached", r->cached);
@@ -297,16 +388,20 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
   return rc;
 }
 
-/* Writes the film as DIR/state_NNNN.exr. */
+/* Writes the film as DIR/state_NNNN.exr and its display preview DIR/state_NNNN.png (as a
+ * still render writes both). */
 static void tt__hyb_write_state(tt__hyb *h, uint32_t index) {
   tt__session *s = h->s;
   uint32_t w = s->camera->width, hh = s->camera->height;
   float *px = malloc((size_t)w * hh * 3 * sizeof *px);
-  char path[4200];
+  char path[4200], png[4200];
   snprintf(path, sizeof path, "%s/state_%04u.exr", h->opt->out_dir, index);
+  snprintf(png, sizeof png, "%s/state_%04u.png", h->opt->out_dir, index);
   if (px) tt_film_resolve(s->film, px);
   if (!px || tt_image_write_exr(path, w, hh, 3, px, NULL, NULL, 0) != TT_OK)
     s->host->log(TT_LOG_WARN, NULL, "hybrid: cannot write %s: %s", path, tt_last_error());
+  else if (tt_image_write_png_display(png, w, hh, px, 0.0f, NULL, 0) != TT_OK)
+    s->host->log(TT_LOG_WARN, NULL, "hybrid: cannot write %s: %s", png, tt_last_error());
   free(px);
 }
 
@@ -320,8 +415,11 @@ int tt__run_hybrid(const tt__host_options *opt) {
   h.spp = opt->tune_spp ? opt->tune_spp : 1;
   tt_hybrid *hy = NULL;
   cJSON *states = NULL;
-  char *context = NULL;
-  int rc = tt__session_open(&s, opt);
+  char *context = NULL, *camera0 = NULL;
+  memset(&s, 0, sizeof s);
+  int rc = tt__hyb_warm_files(opt);
+  if (rc != TT_EXIT_OK) return rc;
+  rc = tt__session_open(&s, opt);
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *cam = tt_scene_camera(s.scene);
   if (cam->key_count < 1 && !(opt->predict_only && opt->states)) {
@@ -385,8 +483,10 @@ int tt__run_hybrid(const tt__host_options *opt) {
    * clock; the camera gets "path_index" per state */
   const char *context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
   tt_tuning_state st0;
-  if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, NULL, context_extra, 0, &st0) == TT_OK)
+  if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, NULL, context_extra, 0, &st0) == TT_OK) {
     context = tt__strdup(st0.context);
+    camera0 = tt__strdup(st0.camera);
+  }
   const tt_plugin *ae = tt_loaded_plugin_entry(s.accel_p);
   tt_hybrid_desc d;
   memset(&d, 0, sizeof d);
@@ -411,12 +511,12 @@ int tt__run_hybrid(const tt__host_options *opt) {
   d.plugin_version = ae->version;
   d.db = h.db;
   d.norm = &norm;
-  if (!context || tt_hybrid_create(&d, &hy) != TT_OK) {
+  if (!context || !camera0 || tt_hybrid_create(&d, &hy) != TT_OK) {
     fprintf(stderr, "host: --hybrid: %s\n", context ? tt_last_error() : "out of memory");
     rc = TT_EXIT_FAILURE;
     goto done;
   }
-  rc = tt__hyb_warm(&h, hy, context);
+  rc = tt__hyb_warm(&h, hy, context, camera0, obj.spec);
   if (rc != TT_EXIT_OK) goto done;
   /* --camera-index A:B (or I): path samples A..B, both included; default all of them */
   uint32_t first = opt->camera_index_set ? opt->camera_index : 0;
@@ -451,7 +551,8 @@ int tt__run_hybrid(const tt__host_options *opt) {
   }
   uint32_t target_spp = opt->spp ? opt->spp : 1;
   double sum_cost = 0, sum_search = 0;
-  uint32_t explored = 0, exploited = 0, builds = 0, done_states = 0;
+  uint32_t explored = 0, exploited = 0, builds = 0, done_states = 0, remeasured = 0, cached = 0;
+  uint32_t samples = 0;
   int interrupted = 0;
   for (uint32_t i = first; i < end; i++) {
     tt__hyb_camera(&s, i);
@@ -496,13 +597,27 @@ int tt__run_hybrid(const tt__host_options *opt) {
     explored += r.mode == TT_HYBRID_EXPLORE;
     exploited += r.mode == TT_HYBRID_EXPLOIT;
     builds += r.builds;
+    remeasured += r.remeasured;
+    cached += r.cached;
+    samples += r.samples;
     if (r.cost < TT_COST_INFEASIBLE) sum_cost += r.cost;
     sum_search += r.search_cost;
-    if (!opt->quiet)
+    if (!opt->quiet) {
+      /* what the state cost, what the model expected and the default's cost beside it */
+      char cmp[160] = "";
+      size_t n = 0;
+      if (isfinite(r.predicted_cost))
+        n += (size_t)snprintf(cmp, sizeof cmp, ", the model expected %.4g", r.predicted_cost);
+      if (isfinite(r.default_cost) && !r.fallback && n < sizeof cmp)
+        snprintf(cmp + n, sizeof cmp - n, ", default %s%.4g%s",
+                 r.default_source == TT_HYBRID_COST_NEAREST ? "~" : "", r.default_cost,
+                 r.default_source == TT_HYBRID_COST_NEAREST ? " (nearest measured state)"
+                 : r.default_source == TT_HYBRID_COST_DATABASE ? " (database)" : "");
       s.host->log(TT_LOG_INFO, NULL, "hybrid: state %u (path %u): %s%s, cost %.4g%s, %u "
                   "build%s", r.state_index, i, r.mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
-                  r.fallback ? " (default: no usable prediction)" : "", r.cost,
-                  isfinite(r.predicted_cost) ? " (predicted)" : "", r.builds, r.builds == 1 ? "" : "s");
+                  r.fallback ? " (default: no usable prediction)" : "", r.cost, cmp, r.builds,
+                  r.builds == 1 ? "" : "s");
+    }
     tt__progress_update("hybrid", (double)(i + 1 - first) / (end - first));
     if (s.host->should_stop()) {
       interrupted = 1;
@@ -510,6 +625,15 @@ int tt__run_hybrid(const tt__host_options *opt) {
     }
   }
   tt__progress_finish();
+  /* said once per run, not per state */
+  if (cached)
+    s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u costs came from the database %s (earlier "
+                "runs measured those configurations in the same state)", cached, samples,
+                tt_tunedb_path(h.db));
+  if (remeasured)
+    s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u samples measured again a configuration "
+                "already measured in their state (%s re-evaluating its best against noise)",
+                remeasured, samples, h.tuner_name);
   if (opt->model && (rc == TT_EXIT_OK)) {
     if (h.pi->save(h.model, opt->model) != TT_OK) {
       fprintf(stderr, "host: --model %s: %s\n", opt->model, tt_last_error());
@@ -556,6 +680,7 @@ done:
   cJSON_Delete(states);
   cJSON_Delete(h.warm);
   free(context);
+  free(camera0);
   tt_hybrid_destroy(hy);
   if (h.model) h.pi->destroy(h.model);
   tt_space_destroy(h.subset);

@@ -111,7 +111,8 @@ int main(void) {
   char db2[512];
   snprintf(db2, sizeof db2, "%s/exploit.db", dir);
   snprintf(args, sizeof args, "%s --hybrid --epsilon 0 --camera-index 10:15 --warm-start '%s' --db '%s' "
-           "--model '%s' --stats '%s' '%s'", common, db, db2, model, stats, scene);
+           "--model '%s' --stats '%s' --out-dir '%s/states' '%s'", common, db, db2, model, stats,
+           dir, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats);
   h = root ? cJSON_GetObjectItem(root, "hybrid") : NULL;
@@ -124,6 +125,19 @@ int main(void) {
     CHECK(num(s, "builds") == 1 && num(s, "samples") == 1);
     CHECK(!cJSON_IsTrue(cJSON_GetObjectItem(s, "fallback")));
     CHECK(cJSON_IsNumber(cJSON_GetObjectItem(s, "predicted_cost")) && num(s, "predict_ms") >= 0);
+    /* the default is not measured in an exploited state: its cost is that of the nearest
+     * state where it was (the warm start's searches at path samples 2-4), and says so */
+    CHECK(cJSON_IsNumber(cJSON_GetObjectItem(s, "default_cost")) && num(s, "default_cost") > 0);
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(s, "default_cost_from")),
+                  "nearest state") && num(s, "default_distance") > 0);
+    /* --out-dir: each state's image and its preview */
+    char png[600];
+    snprintf(png, sizeof png, "%s/states/state_%04d.png", dir, 10 + k);
+    struct stat ps;
+    CHECK_MSG(stat(png, &ps) == 0 && ps.st_size > 0, "%s missing", png);
+    png[strlen(png) - 3] = 0;
+    strcat(png, "exr");
+    CHECK_MSG(stat(png, &ps) == 0 && ps.st_size > 0, "%s missing", png);
   }
   cJSON_Delete(root);
   CHECK(rows_where(db2, "mode = 'exploit' AND iteration = -1") == 6);
@@ -131,13 +145,48 @@ int main(void) {
   struct stat st;
   CHECK(stat(model, &st) == 0 && st.st_size > 0);
 
+  /* a warm start from rows measured otherwise learns nothing, and names why: every row was
+   * measured with a wall clock, one thread, at 24x24 */
+  snprintf(stats, sizeof stats, "%s/mismatch.json", dir);
+  snprintf(args, sizeof args, "--quiet --res 16x16 --spp 1 --threads 2 --clock cpu --tune-params "
+           "quality,branchingFactor,maxDepth,maxLeafSize,travcost --set accel_embree.backend=custom "
+           "--hybrid --epsilon 0 --camera-index 10:10 --warm-start '%s' --no-db --stats '%s' '%s'",
+           db, stats, scene);
+  CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+  CHECK_CONTAINS(out, "learnt 0 of the 21 rows");
+  CHECK_CONTAINS(out, "21 measured with --clock wall (this run: --clock cpu)");
+  CHECK_CONTAINS(out, "21 measured with --threads 1 (this run: --threads 2)");
+  CHECK_CONTAINS(out, "21 measured with --res 24x24 (this run: --res 16x16)");
+  root = read_json(stats);
+  h = root ? cJSON_GetObjectItem(root, "hybrid") : NULL;
+  warm = h ? cJSON_GetArrayItem(cJSON_GetObjectItem(h, "warm_start"), 0) : NULL;
+  cJSON *mm = warm ? cJSON_GetObjectItem(warm, "mismatch") : NULL;
+  CHECK(warm && num(warm, "rows") == 0 && num(warm, "skipped") == 21);
+  CHECK(mm && num(cJSON_GetObjectItem(mm, "threads"), "rows") == 21 &&
+        num(cJSON_GetObjectItem(mm, "threads"), "value") == 1 &&
+        num(cJSON_GetObjectItem(mm, "threads"), "this_run") == 2);
+  CHECK(mm && num(cJSON_GetObjectItem(mm, "resolution"), "rows") == 21 &&
+        num(cJSON_GetObjectItem(mm, "spp"), "rows") == 0);
+  cJSON_Delete(root);
+
+  /* said once per run, not at every state: the parameters not searched, the re-measurements */
+  snprintf(args, sizeof args, "--res 24x24 --spp 1 --threads 1 --set accel_embree.backend=custom "
+           "--hybrid --epsilon 1 --iterations 12 --camera-index 2:4 --no-db '%s'", scene);
+  CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
+  {
+    int n = 0;
+    for (const char *p = strstr(out, "not searched"); p; p = strstr(p + 1, "not searched")) n++;
+    CHECK_MSG(n == 1 && !strstr(out, "measuring again"), "%d 'not searched' lines:\n%s", n, out);
+  }
+
   /* the saved model predicts for another scene's states without a database */
   snprintf(args, sizeof args, "--quiet --res 24x24 --tune-params quality,branchingFactor,maxDepth,"
            "maxLeafSize,travcost --predict --camera-index 0:3 --model '%s' '%s'", model, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = cJSON_Parse(strchr(out, '{'));
   CHECK(root && cJSON_GetArraySize(cJSON_GetObjectItem(root, "predictions")) == 4);
-  CHECK(root && num(root, "observations") == 3 * 7 + 6);
+  /* the exploited states are not stored: the table holds what the searches found */
+  CHECK(root && num(root, "observations") == 3 * 7);
   cJSON_Delete(root);
 
   /* a warm start reads another scene's rows: one stored state, so NN answers its best */
@@ -168,6 +217,11 @@ int main(void) {
   free(best);
 
   /* bad input: usage errors (exit 2) naming the problem */
+  char junk_scene[512];
+  snprintf(junk_scene, sizeof junk_scene, "%s/junk.json", dir);
+  FILE *js = fopen(junk_scene, "w");
+  fputs("{\"version\": 1, \"camera\": ", js);
+  fclose(js);
   struct { const char *args; const char *scene; const char *msg; } bad[] = {
     {"--hybrid", still, "has no camera path"},
     {"--hybrid --epsilon 1.5", scene, "--epsilon: expected"},
@@ -181,6 +235,8 @@ int main(void) {
     {"--camera-index 0:3", scene, "applies to --hybrid and --predict"},
     {"--hybrid --objective metric:rays_per_s", scene, "for time"},
     {"--hybrid --warm-start /nonexistent/x.db", scene, "/nonexistent/x.db"},
+    /* a missing warm start is named before the scene loads (this scene does not parse) */
+    {"--hybrid --warm-start /nonexistent/x.db", junk_scene, "--warm-start /nonexistent/x.db"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     snprintf(args, sizeof args, "%s %s --no-db --res 8x8 '%s'", common, bad[i].args, bad[i].scene);

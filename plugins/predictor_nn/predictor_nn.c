@@ -11,6 +11,10 @@
  * the state stored first); a stored state is found at distance 0 and returns exactly its
  * configuration. States are compared as given: the caller normalises them
  * (tunetrace/indicators.h). Infeasible observations are skipped: they are never an answer.
+ * The table holds what searches found (thesis 3.3.5.1): an observation of the model's own
+ * answer (TT_PREDICTOR_EXPLOIT: an exploited state of the hybrid loop) updates the costs of
+ * a state the table already holds, and is otherwise not stored, so an exploited state never
+ * becomes the nearest neighbour that answers the next one.
  *
  * maxStates (0: unbounded) caps the table: once full, a new state's observations are added
  * to its nearest stored state, so the table becomes a quantisation of the states seen first.
@@ -138,7 +142,11 @@ static int nn_check_sample(const tt_predictor *p, const double *state, const tt_
 
 static tt_status nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
                                uint32_t flags) {
-  (void)flags; /* a table learns the same from a data set and from a stream */
+  /* a table learns the same from a data set and from a stream; the model's own answers
+   * (TT_PREDICTOR_EXPLOIT) only refine states the table holds from searches: stored as
+   * states of their own they would be the nearest state of the next state along a path,
+   * which would then get the same answer again, and so on for the whole path */
+  int exploit = (flags & TT_PREDICTOR_EXPLOIT) != 0;
   if (!p || (!s && count)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: NULL argument");
   for (size_t i = 0; i < count; i++) {
     if (s[i].struct_size < offsetof(tt_predictor_sample, cost) + sizeof s[i].cost)
@@ -150,6 +158,7 @@ static tt_status nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
   if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
   for (size_t i = 0; i < count; i++) {
     if (s[i].cost >= TT_COST_INFEASIBLE) continue;
+    if (exploit && ttpm_table_find(&p->table, s[i].state) == SIZE_MAX) continue;
     ttpm_config_values(s[i].config, v);
     tt_status st = nn_add(p, s[i].state, v, s[i].cost);
     if (st != TT_OK) {

@@ -26,7 +26,9 @@
  *
  * Offline data (a tuning DB: observe_ex with TT_PREDICTOR_OFFLINE) is learnt in `epochs`
  * passes, each in a fresh order shuffled from the seed; online samples update once each.
- * Greedy-GQ is off-policy: samples may come from any search (thesis).
+ * Greedy-GQ is off-policy: samples may come from any search (thesis). The model's own answers
+ * (TT_PREDICTOR_EXPLOIT) update theta like any sample, but add no state to the table the
+ * candidate pool is drawn from (poolSource = states: what the searches found).
  *
  * Model files: predictor_common/model_file.h, payload version 2 (see rbf_save; version 1,
  * without the state table, still loads as a `poolSource = rewards` model).
@@ -413,6 +415,10 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
     int changed = 0;
     for (size_t i = 0; i < count; i++) {
       if (s[i].cost >= TT_COST_INFEASIBLE) continue;
+      /* the model's own answers (TT_PREDICTOR_EXPLOIT) train Q below, but enter the table
+       * (the candidate actions) only for states it holds from searches */
+      if ((flags & TT_PREDICTOR_EXPLOIT) && ttpm_table_find(&p->table, s[i].state) == SIZE_MAX)
+        continue;
       ttpm_config_values(s[i].config, values);
       if (ttpm_table_add(&p->table, s[i].state, values, s[i].cost, &changed) == SIZE_MAX) {
         free(values);

@@ -41,6 +41,18 @@ typedef enum tt_hybrid_mode {
   TT_HYBRID_EXPLOIT = 2    /* one predicted configuration, built once */
 } tt_hybrid_mode;
 
+/* Where a state's default cost (tt_hybrid_report.default_cost) comes from. An exploited state
+ * does not measure the default (exploitation is one build), so its default cost is the
+ * database's when an earlier run measured the default in this very state, else estimated. */
+typedef enum tt_hybrid_cost_source {
+  TT_HYBRID_COST_NONE = 0,      /* unknown (NAN) */
+  TT_HYBRID_COST_MEASURED = 1,  /* measured in this state by this run */
+  TT_HYBRID_COST_DATABASE = 2,  /* measured in this state by an earlier run (the database) */
+  TT_HYBRID_COST_NEAREST = 3    /* estimated: the default's cost in the nearest state (by the
+                                   normalised indicators) where it was measured, by this run or
+                                   a warm start; default_distance says how near */
+} tt_hybrid_cost_source;
+
 /* Everything a hybrid tuner is created from. Zero-initialise, set struct_size, fill in. */
 typedef struct tt_hybrid_desc {
   uint32_t struct_size;            /* sizeof(tt_hybrid_desc) as the caller was built */
@@ -91,6 +103,12 @@ typedef struct tt_hybrid_report {
   uint32_t cached;                 /* samples answered by the database */
   double predict_ms;               /* CPU ms of the model's predict call (exploit) */
   double state[TT_SCENE_INDICATOR_COUNT];  /* the normalised indicators */
+  /* ---- appended ---- */
+  int32_t default_source;          /* tt_hybrid_cost_source of default_cost */
+  double default_distance;         /* TT_HYBRID_COST_NEAREST: distance between the normalised
+                                      states, else 0 (NAN when unknown) */
+  uint32_t remeasured;             /* samples that measured again a configuration already
+                                      measured in this state (the tuner against noise) */
 } tt_hybrid_report;
 
 /* Creates a hybrid tuner. TT_ERR_INVALID_ARGUMENT names a missing or bad field (epsilon
@@ -109,7 +127,40 @@ typedef struct tt_hybrid_warm_filter {
   /* Called per candidate row; non-zero keeps it (e.g. leave a validation camera out). */
   int (*keep)(void *user, const tt_tunedb_row *row);
   void *user;
+  /* ---- appended ---- */
+  /* Keys of the rows' camera JSON that must equal those of `camera` (e.g. "resolution":
+   * render times at another resolution do not compare); NULL: no camera check. */
+  const char *const *camera_keys;
+  const char *camera;
 } tt_hybrid_warm_filter;
+
+/* Why a warm start learnt what it learnt (tt_hybrid_warm_start_ex). Zero-initialise, set
+ * struct_size. Counts are rows of the target plugin, each counted under the first reason
+ * that leaves it out, in this order; mismatches (rows otherwise usable) are counted per key,
+ * so a row measured with another clock and another thread count counts under both. */
+#define TT_HYBRID_WARM_MAX_KEYS 16
+typedef struct tt_hybrid_warm_result {
+  uint32_t struct_size;            /* sizeof(tt_hybrid_warm_result) */
+  uint64_t rows;                   /* rows learnt */
+  uint64_t exploit_rows;           /* of which the model's own answers (mode "exploit") */
+  uint64_t considered;             /* rows of the target plugin in the database */
+  uint64_t other_objective;        /* measured for another objective */
+  uint64_t failed;                 /* failed measurements (never learnt) */
+  uint64_t no_indicators;          /* without indicators (not a state a model can learn) */
+  uint64_t excluded;               /* left out by the filter's keep() */
+  uint64_t other_context;          /* left out by a context or camera key (mismatch[] says
+                                      which) */
+  uint64_t other_space;            /* configurations this space cannot read (another plugin
+                                      version with other parameters) */
+  /* per key, the filter's context_keys then its camera_keys: rows whose value differs, and
+   * the first such value as JSON ("(none)" when the row lacks the key); owned by the hybrid
+   * object until the next warm start */
+  uint32_t key_count;
+  const char *key[TT_HYBRID_WARM_MAX_KEYS];
+  uint64_t mismatch[TT_HYBRID_WARM_MAX_KEYS];
+  const char *mismatch_value[TT_HYBRID_WARM_MAX_KEYS];
+  const char *expected_value[TT_HYBRID_WARM_MAX_KEYS];  /* the filter's value ("(none)") */
+} tt_hybrid_warm_result;
 
 /* Teaches the model every usable row of `db` (the target plugin, the session's objective,
  * status OK or infeasible, indicators present, the filter): states normalised, configurations
@@ -127,6 +178,14 @@ TT_API tt_status tt_hybrid_warm_start(tt_hybrid *h, tt_tunedb *db, const tt_hybr
  * failure (logged). */
 TT_API tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
                                 const tt_tuning_target *target, tt_hybrid_report *out);
+
+/* tt_hybrid_warm_start, saying why rows were left out (`out`, may be NULL): a warm start
+ * that learns nothing because every row was measured with another clock, thread count,
+ * resolution or spp can then name the mismatch. Rows of mode "exploit" are learnt as the
+ * model's own answers (TT_PREDICTOR_EXPLOIT), the others as search results. */
+TT_API tt_status tt_hybrid_warm_start_ex(tt_hybrid *h, tt_tunedb *db,
+                                         const tt_hybrid_warm_filter *f,
+                                         tt_hybrid_warm_result *out);
 
 #ifdef __cplusplus
 }

@@ -63,6 +63,15 @@ typedef struct tt_predictor_sample {
 #define TT_PREDICTOR_ONLINE 0u   /* each sample once, in order: online learning */
 #define TT_PREDICTOR_OFFLINE 1u  /* a data set (e.g. a tuning DB): the model may take several
                                     seeded passes in shuffled order (RBF: `epochs`) */
+#define TT_PREDICTOR_EXPLOIT 2u  /* or'ed with either: the samples measure configurations the
+                                    model itself chose (exploitation), not what a search found.
+                                    They refine what the model knows of states it already
+                                    holds, but must not become the answer for other states: a
+                                    table model whose every exploited state became a stored
+                                    state would answer the next state of a camera path with
+                                    its own previous answer forever (thesis 3.3.5.1: the table
+                                    maps states to what the searches found). Models older than
+                                    this flag ignore it. */
 
 /* A query (predict_ex, estimate). */
 typedef struct tt_predictor_query {

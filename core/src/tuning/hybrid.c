@@ -40,7 +40,14 @@ struct tt_hybrid {
   tt_config *full, *sub;
   double state[TT_SCENE_INDICATOR_COUNT];
   double default_cost;         /* of the current state, once known */
+  int default_cached;          /* ... answered by the database (an earlier run) */
   char *config_json;           /* the last report's configuration */
+  /* the default's cost per state where it was measured (this run's states, a warm start's
+   * "default" rows): an exploited state's default cost is estimated from the nearest */
+  double *dstate, *dcost;      /* nd x TT_SCENE_INDICATOR_COUNT states, nd costs */
+  size_t nd, capd;
+  int dropped_said;            /* "not searched" was said (once per run, not per state) */
+  char *warm_strings[2 * TT_HYBRID_WARM_MAX_KEYS];  /* tt_hybrid_warm_result's values */
 };
 
 
@@ -55,7 +62,54 @@ void tt_hybrid_destroy(tt_hybrid *h) {
   free(h->plugin_version);
   free(h->run_id);
   free(h->config_json);
+  free(h->dstate);
+  free(h->dcost);
+  for (int i = 0; i < 2 * TT_HYBRID_WARM_MAX_KEYS; i++) free(h->warm_strings[i]);
   free(h);
+}
+
+/* Remembers the default's cost in a (normalised) state; an existing entry of the same state
+ * keeps the mean. Out of memory only loses the estimate. */
+static void tt__default_add(tt_hybrid *h, const double *state, double cost) {
+  if (!(cost < TT_COST_INFEASIBLE) || !isfinite(cost)) return;
+  const size_t D = TT_SCENE_INDICATOR_COUNT;
+  for (size_t i = 0; i < h->nd; i++)
+    if (!memcmp(h->dstate + i * D, state, D * sizeof *state)) {
+      h->dcost[i] = 0.5 * (h->dcost[i] + cost);
+      return;
+    }
+  if (h->nd == h->capd) {
+    size_t cap = h->capd ? 2 * h->capd : 64;
+    double *ds = realloc(h->dstate, cap * D * sizeof *ds);
+    if (!ds) return;
+    h->dstate = ds;
+    double *dc = realloc(h->dcost, cap * sizeof *dc);
+    if (!dc) return;
+    h->dcost = dc;
+    h->capd = cap;
+  }
+  memcpy(h->dstate + h->nd * D, state, D * sizeof *state);
+  h->dcost[h->nd++] = cost;
+}
+
+/* The default's cost in the nearest state where it was measured (NAN when none), and the
+ * distance to it. */
+static double tt__default_nearest(const tt_hybrid *h, const double *state, double *distance) {
+  const size_t D = TT_SCENE_INDICATOR_COUNT;
+  double best = INFINITY, cost = NAN;
+  for (size_t i = 0; i < h->nd; i++) {
+    double d2 = 0;
+    for (size_t k = 0; k < D; k++) {
+      double d = h->dstate[i * D + k] - state[k];
+      d2 += d * d;
+    }
+    if (d2 < best) {
+      best = d2;
+      cost = h->dcost[i];
+    }
+  }
+  *distance = isfinite(best) ? sqrt(best) : NAN;
+  return cost;
 }
 
 #define TT__HDESC(d, f) \
@@ -159,12 +213,14 @@ static int tt__to_sub(tt_hybrid *h, const char *json) {
   return 0;
 }
 
-/* Gives one sample to the model (online); failures are logged, not fatal. */
-static void tt__observe(tt_hybrid *h, const char *json, double cost, double default_cost) {
+/* Gives one sample to the model (online; `flags` adds TT_PREDICTOR_EXPLOIT for the model's
+ * own answer); failures are logged, not fatal. */
+static void tt__observe(tt_hybrid *h, const char *json, double cost, double default_cost,
+                        uint32_t flags) {
   if (tt__to_sub(h, json)) return;
   tt_predictor_sample s = {.struct_size = sizeof s, .state = h->state, .config = h->sub,
                            .cost = cost, .default_cost = default_cost};
-  if (h->pi->observe_ex(h->model, &s, 1, TT_PREDICTOR_ONLINE) != TT_OK)
+  if (h->pi->observe_ex(h->model, &s, 1, TT_PREDICTOR_ONLINE | flags) != TT_OK)
     h->host->log(TT_LOG_WARN, NULL, "hybrid: %s: observe: %s", h->predictor_name, tt_last_error());
 }
 
@@ -172,8 +228,12 @@ static void tt__observe(tt_hybrid *h, const char *json, double cost, double defa
 static void tt__explore_sample(void *user, const tt_tuning_sample *s) {
   tt_hybrid *h = user;
   if (s->status == TT_TUNEDB_FAILED) return;  /* maybe transient: says nothing of the config */
-  if (s->iteration < 0 && s->status == TT_TUNEDB_OK) h->default_cost = s->cost;
-  tt__observe(h, s->config, s->cost, h->default_cost);
+  if (s->iteration < 0 && s->status == TT_TUNEDB_OK) {
+    h->default_cost = s->cost;
+    h->default_cached = s->cached != 0;
+    tt__default_add(h, h->state, s->cost);
+  }
+  tt__observe(h, s->config, s->cost, h->default_cost, 0);
 }
 
 /* The target, counting the configurations it applies (builds). */
@@ -240,7 +300,17 @@ static tt_status tt__session(tt_hybrid *h, const tt_tuning_state *state, const t
   d.on_sample = explore ? tt__explore_sample : NULL;
   d.user = h;
   d.mode = explore ? NULL : "exploit";
-  return tt_tuning_create(&d, out);
+  /* what a session says once per run (the parameters not searched, its summaries) the
+   * hybrid loop says once, not per state */
+  tt_status st = tt__tuning_create(&d, 1, out);
+  if (st == TT_OK && !h->dropped_said) {
+    h->dropped_said = 1;
+    const char *dropped = tt__tuning_dropped(*out);
+    if (dropped)
+      h->host->log(TT_LOG_INFO, NULL, "hybrid: not searched in any state: %s (not tunable, or "
+                   "cannot act with the values the other parameters are fixed at)", dropped);
+  }
+  return st;
 }
 
 /* Sums of a session's samples: every finite cost, and the count of cached ones. */
@@ -264,6 +334,7 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
   if (h->host->should_stop()) return TT_ERR_INTERRUPTED;
   tt_indicators_normalize(&h->norm, state->indicators, h->state);
   h->default_cost = NAN;
+  h->default_cached = 0;
   /* eps-greedy: one draw per state, whatever the model knows */
   double u = (double)tt__pcg32_next(&h->rng) * 0x1.0p-32;
   int explore = u < h->epsilon;
@@ -276,12 +347,24 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
   r.mode = explore ? TT_HYBRID_EXPLORE : TT_HYBRID_EXPLOIT;
   r.predicted_cost = NAN;
   r.default_cost = NAN;
+  r.default_distance = NAN;
   tt_status st;
   const tt_config *start = h->start;
   tt_config *predicted = NULL;
   if (!explore) {
-    /* one configuration from the model: predicted, put into the configured values, checked */
+    /* one configuration from the model: predicted, put into the configured values, checked.
+     * The default is not measured here (exploitation is one build): its cost is an earlier
+     * run's in this very state, else that of the nearest state where it was measured, so
+     * that the report (and a relative-reward model's expected cost) can compare with it */
     double def = tt__db_default_cost(h, state);
+    if (isfinite(def)) {
+      r.default_source = TT_HYBRID_COST_DATABASE;
+      r.default_distance = 0;
+      tt__default_add(h, h->state, def);
+    } else {
+      def = tt__default_nearest(h, h->state, &r.default_distance);
+      if (isfinite(def)) r.default_source = TT_HYBRID_COST_NEAREST;
+    }
     tt_predictor_query q = {.struct_size = sizeof q, .state = h->state, .default_cost = def};
     tt_predictor_result pr = {.struct_size = sizeof pr};
     double t0 = tt__thread_cpu_ms();
@@ -328,12 +411,32 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
   tt__sums(t, &r.search_cost, &r.cached);
   r.samples = (uint32_t)tt_tuning_sample_count(t);
   r.builds = counting.applies;
+  tt_tuning_stats ts = {.struct_size = sizeof ts};
+  tt_tuning_get_stats(t, &ts);
+  r.remeasured = ts.remeasured;
   if (explore) {
     double def;
-    if (tt_tuning_default_cost(t, &def) == TT_OK && def < TT_COST_INFEASIBLE) r.default_cost = def;
-  } else if (!h->no_exploit_feedback && tt_tuning_sample_count(t)) {
+    if (tt_tuning_default_cost(t, &def) == TT_OK && def < TT_COST_INFEASIBLE) {
+      r.default_cost = def;
+      r.default_source = h->default_cached ? TT_HYBRID_COST_DATABASE : TT_HYBRID_COST_MEASURED;
+      r.default_distance = 0;
+    }
+  } else if (tt_tuning_sample_count(t)) {
     const tt_tuning_sample *s = tt_tuning_sample_at(t, 0);
-    if (s->status != TT_TUNEDB_FAILED) tt__observe(h, s->config, s->cost, r.default_cost);
+    if (r.fallback && s->status == TT_TUNEDB_OK) {
+      /* the default itself ran: its cost is measured (or the database's) here */
+      r.default_cost = s->cost;
+      r.default_source = s->cached ? TT_HYBRID_COST_DATABASE : TT_HYBRID_COST_MEASURED;
+      r.default_distance = 0;
+      tt__default_add(h, h->state, s->cost);
+    }
+    /* the model's own answer (or the default it fell back to): it refines what the model
+     * knows, but is no search result (TT_PREDICTOR_EXPLOIT); a relative reward is learnt
+     * against a default measured in this state only, never against an estimate */
+    if (!h->no_exploit_feedback && s->status != TT_TUNEDB_FAILED)
+      tt__observe(h, s->config, s->cost,
+                  r.default_source == TT_HYBRID_COST_NEAREST ? NAN : r.default_cost,
+                  TT_PREDICTOR_EXPLOIT);
   }
   memcpy(r.state, h->state, sizeof r.state);
   tt_tuning_destroy(t);
@@ -354,23 +457,26 @@ typedef struct tt__warm_row {
   tt_config *config;
   double cost;
   char *key;           /* scene id, camera, context: the state's identity */
+  int exploit;         /* mode "exploit": the model's own answer, not a search's */
 } tt__warm_row;
 
 typedef struct tt__default_cost {
   char *key;
   double sum;
   uint32_t n;
+  double state[TT_SCENE_INDICATOR_COUNT];
 } tt__default_cost;
 
 typedef struct tt__warm {
   tt_hybrid *h;
   const tt_hybrid_warm_filter *f;
-  cJSON *context;                  /* the filter's context, parsed */
+  const char *const *keys[2];      /* the filter's context keys and camera keys */
+  cJSON *expected[2];              /* the filter's context and camera, parsed */
   tt__warm_row *rows;
   size_t n, cap;
   tt__default_cost *defaults;
   size_t nd, capd;
-  uint64_t skipped;
+  tt_hybrid_warm_result res;
   int oom;
 } tt__warm;
 
@@ -383,36 +489,73 @@ static char *tt__state_key(const tt_tunedb_row *r) {
   return k;
 }
 
-/* Non-zero if the row's context matches the filter's on every listed key. */
-static int tt__context_matches(const tt__warm *w, const char *context) {
-  const tt_hybrid_warm_filter *f = w->f;
-  if (!f || f->struct_size < offsetof(tt_hybrid_warm_filter, context) + sizeof f->context ||
-      !f->context_keys)
-    return 1;
-  cJSON *row = context ? cJSON_Parse(context) : NULL;
-  int ok = 1;
-  for (const char *const *k = f->context_keys; *k && ok; k++) {
-    const cJSON *a = w->context ? cJSON_GetObjectItemCaseSensitive(w->context, *k) : NULL;
-    const cJSON *b = row ? cJSON_GetObjectItemCaseSensitive(row, *k) : NULL;
-    ok = (!a && !b) || (a && b && cJSON_Compare(a, b, 1));
+/* Field `f` of a warm filter the caller built with struct_size `size`, or 0/NULL. */
+#define TT__WF(f_, field) \
+  ((f_) && (f_)->struct_size >= offsetof(tt_hybrid_warm_filter, field) + sizeof((f_)->field) \
+       ? (f_)->field : 0)
+
+/* JSON text of `v` (malloc), "(none)" for a missing value. */
+static char *tt__json_text(const cJSON *v) {
+  if (!v) return tt__strdup("(none)");
+  char *t = cJSON_PrintUnformatted(v);
+  char *out = tt__strdup(t ? t : "?");
+  cJSON_free(t);
+  return out;
+}
+
+/* Counts the row's mismatches on the filter's keys (context, then camera); non-zero if any. */
+static int tt__mismatches(tt__warm *w, const char *context, const char *camera) {
+  const char *text[2] = {context, camera};
+  int any = 0;
+  uint32_t slot = 0;
+  for (int part = 0; part < 2; part++) {
+    if (!w->keys[part]) continue;
+    cJSON *row = text[part] ? cJSON_Parse(text[part]) : NULL;
+    for (const char *const *k = w->keys[part]; *k; k++, slot++) {
+      if (slot >= TT_HYBRID_WARM_MAX_KEYS) break;
+      const cJSON *a = w->expected[part] ? cJSON_GetObjectItemCaseSensitive(w->expected[part], *k)
+                                         : NULL;
+      const cJSON *b = row ? cJSON_GetObjectItemCaseSensitive(row, *k) : NULL;
+      if ((!a && !b) || (a && b && cJSON_Compare(a, b, 1))) continue;
+      any = 1;
+      if (w->res.mismatch[slot]++ == 0) {
+        w->h->warm_strings[slot] = tt__json_text(b);
+        w->res.mismatch_value[slot] = w->h->warm_strings[slot];
+      }
+    }
+    cJSON_Delete(row);
   }
-  cJSON_Delete(row);
-  return ok;
+  return any;
 }
 
 static int tt__warm_row_fn(void *user, const tt_tunedb_row *r) {
   tt__warm *w = user;
   tt_hybrid *h = w->h;
-  if (!r->objective || strcmp(r->objective, h->objective.spec)) return 0;
-  if (r->status != TT_TUNEDB_OK && r->status != TT_TUNEDB_INFEASIBLE) return 0;
-  if (!r->has_indicators || !r->scene_id || !r->config) return 0;
-  const tt_hybrid_warm_filter *f = w->f;
-  if (f && f->struct_size >= offsetof(tt_hybrid_warm_filter, user) + sizeof f->user && f->keep &&
-      !f->keep(f->user, r))
+  w->res.considered++;
+  if (!r->objective || strcmp(r->objective, h->objective.spec)) {
+    w->res.other_objective++;
     return 0;
-  if (!tt__context_matches(w, r->context)) return 0;
+  }
+  if (r->status != TT_TUNEDB_OK && r->status != TT_TUNEDB_INFEASIBLE) {
+    w->res.failed++;
+    return 0;
+  }
+  if (!r->has_indicators || !r->scene_id || !r->config) {
+    w->res.no_indicators++;
+    return 0;
+  }
+  const tt_hybrid_warm_filter *f = w->f;
+  int (*keep)(void *, const tt_tunedb_row *) = TT__WF(f, keep);
+  if (keep && !keep(TT__WF(f, user), r)) {
+    w->res.excluded++;
+    return 0;
+  }
+  if (tt__mismatches(w, r->context, r->camera)) {
+    w->res.other_context++;
+    return 0;
+  }
   if (tt__to_sub(h, r->config)) {
-    w->skipped++;
+    w->res.other_space++;
     return 0;
   }
   char *key = tt__state_key(r);
@@ -420,6 +563,8 @@ static int tt__warm_row_fn(void *user, const tt_tunedb_row *r) {
     w->oom = 1;
     return 1;
   }
+  double state[TT_SCENE_INDICATOR_COUNT];
+  tt_indicators_normalize(&h->norm, r->indicators, state);
   if (r->mode && !strcmp(r->mode, "default") && r->status == TT_TUNEDB_OK) {
     if (w->nd == w->capd) {
       size_t cap = w->capd ? 2 * w->capd : 256;
@@ -432,7 +577,9 @@ static int tt__warm_row_fn(void *user, const tt_tunedb_row *r) {
       w->defaults = d;
       w->capd = cap;
     }
-    w->defaults[w->nd++] = (tt__default_cost){tt__strdup(key), r->cost, 1};
+    tt__default_cost *d = &w->defaults[w->nd++];
+    *d = (tt__default_cost){tt__strdup(key), r->cost, 1, {0}};
+    memcpy(d->state, state, sizeof state);
   }
   if (w->n == w->cap) {
     size_t cap = w->cap ? 2 * w->cap : 1024;
@@ -446,10 +593,11 @@ static int tt__warm_row_fn(void *user, const tt_tunedb_row *r) {
     w->cap = cap;
   }
   tt__warm_row *x = &w->rows[w->n];
-  tt_indicators_normalize(&h->norm, r->indicators, x->state);
+  memcpy(x->state, state, sizeof state);
   x->config = tt_config_clone(h->sub);
   x->cost = r->status == TT_TUNEDB_OK ? r->cost : TT_COST_INFEASIBLE;
   x->key = key;
+  x->exploit = r->mode && !strcmp(r->mode, "exploit");
   if (!x->config) {
     free(key);
     w->oom = 1;
@@ -463,18 +611,43 @@ static int tt__cmp_default(const void *a, const void *b) {
   return strcmp(((const tt__default_cost *)a)->key, ((const tt__default_cost *)b)->key);
 }
 
-tt_status tt_hybrid_warm_start(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_warm_filter *f,
-                               uint64_t *rows, uint64_t *skipped) {
-  if (rows) *rows = 0;
-  if (skipped) *skipped = 0;
-  if (!h || !db) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_warm_start: NULL argument");
+/* The filter's keys and expected values into the result (owned strings in h). */
+static void tt__warm_keys(tt__warm *w) {
+  const tt_hybrid_warm_filter *f = w->f;
+  w->keys[0] = TT__WF(f, context_keys);
+  w->keys[1] = TT__WF(f, camera_keys);
+  const char *text[2] = {TT__WF(f, context), TT__WF(f, camera)};
+  uint32_t slot = 0;
+  for (int part = 0; part < 2; part++) {
+    w->expected[part] = text[part] ? cJSON_Parse(text[part]) : NULL;
+    if (!w->keys[part]) continue;
+    for (const char *const *k = w->keys[part]; *k && slot < TT_HYBRID_WARM_MAX_KEYS; k++, slot++) {
+      const cJSON *v = w->expected[part] ? cJSON_GetObjectItemCaseSensitive(w->expected[part], *k)
+                                         : NULL;
+      char **s = &w->h->warm_strings[TT_HYBRID_WARM_MAX_KEYS + slot];
+      free(*s);
+      *s = tt__json_text(v);
+      w->res.key[slot] = *k;
+      w->res.expected_value[slot] = *s;
+    }
+  }
+  w->res.key_count = slot;
+}
+
+tt_status tt_hybrid_warm_start_ex(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_warm_filter *f,
+                                  tt_hybrid_warm_result *out) {
+  if (!h || !db)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_warm_start: NULL argument");
   tt__warm w;
   memset(&w, 0, sizeof w);
   w.h = h;
   w.f = f;
-  if (f && f->struct_size >= offsetof(tt_hybrid_warm_filter, context) + sizeof f->context &&
-      f->context)
-    w.context = cJSON_Parse(f->context);
+  w.res.struct_size = sizeof w.res;
+  for (int i = 0; i < TT_HYBRID_WARM_MAX_KEYS; i++) {
+    free(h->warm_strings[i]);
+    h->warm_strings[i] = NULL;
+  }
+  tt__warm_keys(&w);
   tt_status st = tt_tunedb_foreach(db, h->plugin, tt__warm_row_fn, &w);
   if (st == TT_OK && w.oom) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
   /* each state's default cost: the mean of its "default" rows (several runs may have one) */
@@ -493,25 +666,39 @@ tt_status tt_hybrid_warm_start(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_warm
   } else {
     for (size_t i = 0; i < w.nd; i++) free(w.defaults[i].key);
   }
+  /* two batches: what searches found, then the model's own answers (TT_PREDICTOR_EXPLOIT) */
   tt_predictor_sample *batch = st == TT_OK && w.n ? malloc(w.n * sizeof *batch) : NULL;
   if (st == TT_OK && w.n && !batch) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
-  for (size_t i = 0; st == TT_OK && i < w.n; i++) {
-    tt__default_cost probe = {w.rows[i].key, 0, 0};
-    const tt__default_cost *dc = nd ? bsearch(&probe, w.defaults, nd, sizeof *w.defaults,
-                                              tt__cmp_default) : NULL;
-    batch[i] = (tt_predictor_sample){.struct_size = sizeof batch[i], .state = w.rows[i].state,
-                                     .config = w.rows[i].config, .cost = w.rows[i].cost,
-                                     .default_cost = dc ? dc->sum / dc->n : NAN};
-  }
-  if (st == TT_OK && w.n) {
-    st = h->pi->observe_ex(h->model, batch, w.n, TT_PREDICTOR_OFFLINE);
+  for (int exploit = 0; exploit < 2 && st == TT_OK && w.n; exploit++) {
+    size_t m = 0;
+    for (size_t i = 0; i < w.n; i++) {
+      if (w.rows[i].exploit != exploit) continue;
+      tt__default_cost probe = {w.rows[i].key, 0, 0, {0}};
+      const tt__default_cost *dc = nd ? bsearch(&probe, w.defaults, nd, sizeof *w.defaults,
+                                                tt__cmp_default) : NULL;
+      batch[m++] = (tt_predictor_sample){.struct_size = sizeof *batch, .state = w.rows[i].state,
+                                         .config = w.rows[i].config, .cost = w.rows[i].cost,
+                                         .default_cost = dc ? dc->sum / dc->n : NAN};
+    }
+    if (!m) continue;
+    st = h->pi->observe_ex(h->model, batch, m,
+                           TT_PREDICTOR_OFFLINE | (exploit ? TT_PREDICTOR_EXPLOIT : 0));
     if (st != TT_OK)
       st = tt_set_error(st, "hybrid: warm start from %s: %s: %s", tt_tunedb_path(db),
                         h->predictor_name, tt_last_error());
+    if (exploit) w.res.exploit_rows = m;
   }
   if (st == TT_OK) {
-    if (rows) *rows = w.n;
-    if (skipped) *skipped = w.skipped;
+    w.res.rows = w.n;
+    /* the states' default costs estimate an exploited state's default (tt_hybrid_report) */
+    for (size_t i = 0; i < nd; i++)
+      tt__default_add(h, w.defaults[i].state, w.defaults[i].sum / w.defaults[i].n);
+  }
+  if (out && out->struct_size >= sizeof(uint32_t)) {
+    size_t n = out->struct_size < sizeof w.res ? out->struct_size : sizeof w.res;
+    uint32_t size = out->struct_size;
+    memcpy(out, &w.res, n);
+    out->struct_size = size < sizeof w.res ? size : (uint32_t)sizeof w.res;
   }
   free(batch);
   for (size_t i = 0; i < w.n; i++) {
@@ -521,6 +708,16 @@ tt_status tt_hybrid_warm_start(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_warm
   free(w.rows);
   for (size_t i = 0; i < nd; i++) free(w.defaults[i].key);
   free(w.defaults);
-  cJSON_Delete(w.context);
+  cJSON_Delete(w.expected[0]);
+  cJSON_Delete(w.expected[1]);
+  return st;
+}
+
+tt_status tt_hybrid_warm_start(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_warm_filter *f,
+                               uint64_t *rows, uint64_t *skipped) {
+  tt_hybrid_warm_result res = {.struct_size = sizeof res};
+  tt_status st = tt_hybrid_warm_start_ex(h, db, f, &res);
+  if (rows) *rows = st == TT_OK ? res.rows : 0;
+  if (skipped) *skipped = st == TT_OK ? res.other_space : 0;
   return st;
 }
