@@ -7,6 +7,10 @@ the space the filters resolve in):
              per degree), averaged over frames; last column of each line, "--no-flip" skips it
 Frames before --skip (default 8, one jitter cycle of warm-up) are left out of all three.
 
+Each --test folder is scored on every image its manifest has: the rendered frames ("color")
+and, when a post filter ran, the filtered ones ("post"), one line each, so a filter's line
+can be read against its own input's; --key KEY scores that one key only.
+
   eval.py --ref DIR --test DIR [--key post|color]     one sequence (manifest.json in each)
   eval.py --ref DIR --test DIR1 --test DIR2 ...        several methods on one sequence
 (--json FILE also writes the numbers, per-frame RMSE / FLIP included.)"""
@@ -78,22 +82,38 @@ def flip_frames(out, ref_srgb, skip, ppd):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--ref", required=True)
-    ap.add_argument("--test", action="append", required=True)
-    ap.add_argument("--key", default=None, help="frame key in the test manifest (default: "
-                    "post if present, else color)")
-    ap.add_argument("--skip", type=int, default=8)
-    ap.add_argument("--json", default=None)
+    ap = argparse.ArgumentParser(prog="eval.py", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--ref", required=True, metavar="DIR",
+                    help="the reference sequence: a folder whose manifest.json lists "
+                    "\"reference\" frames (host --supersample K ... --out-dir DIR)")
+    ap.add_argument("--test", action="append", required=True, metavar="DIR",
+                    help="a sequence to score (repeatable): a folder of host --sequence ... "
+                    "--out-dir DIR or host --frames A:B --out DIR/frame_%%04d.exr, of the "
+                    "reference's frame count and size")
+    ap.add_argument("--key", default=None, metavar="KEY",
+                    help="score only this frame key of the test manifests (color, post, "
+                    "reference, ...); default: color and post, each that the manifest has")
+    ap.add_argument("--skip", type=int, default=8, metavar="N",
+                    help="leave out the first N frames, the warm-up (default 8)")
+    ap.add_argument("--json", default=None, metavar="FILE",
+                    help="also write the numbers to FILE, per-frame RMSE and FLIP included")
     ap.add_argument("--no-flip", action="store_true", help="skip the FLIP column (faster)")
-    ap.add_argument("--ppd", type=float, default=67.0, help="FLIP pixels per degree")
+    ap.add_argument("--ppd", type=float, default=67.0, metavar="PPD",
+                    help="FLIP pixels per degree (default 67)")
     a = ap.parse_args()
     ref = frames(a.ref, "reference")
     ref_srgb = None if a.no_flip else flipmod.srgb_encode(np.stack([tm(x) for x in ref[a.skip:]]))
     rows = []
+    jobs = []
     for t in a.test:
         man = manifest(t)
-        key = a.key or ("post" if "post" in man["frames"][0] else "color")
+        keys = [a.key] if a.key else [k for k in ("color", "post") if k in man["frames"][0]]
+        if not keys:
+            fail(f"{os.path.join(t, 'manifest.json')}: frames[0] has neither \"color\" nor "
+                 "\"post\" frames; name the key with --key")
+        jobs += [(t, man, k) for k in keys]
+    for t, man, key in jobs:
         label = f"{os.path.basename(os.path.normpath(t))}:{key}"
         if key == "post" and man.get("post"):
             label += f" ({man['post']})"

@@ -34,6 +34,21 @@ common=(--quiet --threads 2 --res 48x36 --spp 2 --frames 0:11 --set integrator_p
   --json "$dir/eval.json" | tee "$dir/eval.txt"
 check "grep -q 'raw:color .*RMSE .*temporal .*FLIP' '$dir/eval.txt'"
 check "grep -q 'vc:post (post_taa) .*FLIP' '$dir/eval.txt'"
+# by default a filtered sequence is scored on its input frames too, not only the filtered
+check "grep -q 'vc:color .*RMSE .*temporal .*FLIP' '$dir/eval.txt'"
+check "[ \$(grep -c RMSE '$dir/eval.txt') = 3 ]"
+# --help says what every option does
+"$PY" "$TOOLS/eval.py" --help > "$dir/help.txt"
+"$PY" - "$dir/help.txt" <<'PYEOF' || fail=1
+import re, sys
+text = open(sys.argv[1]).read()
+usage = text.split("\n\n")[0]
+opts = sorted(set(re.findall(r"--[a-z-]+", usage)))
+bad = [o for o in opts if not re.search(r"^  " + re.escape(o) + r"\b[^\n]*\S\s{2,}\S", text, re.M)]
+if len(opts) < 7 or bad:
+    print("FAIL: eval.py --help describes no text for", bad or opts)
+    sys.exit(1)
+PYEOF
 "$PY" - "$dir/self.json" "$dir/eval.json" <<'PYEOF' || fail=1
 import json, sys
 rows = {r["label"].split(":")[0]: r for f in sys.argv[1:] for r in json.load(open(f))}

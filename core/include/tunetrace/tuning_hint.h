@@ -2,8 +2,8 @@
  *
  * A plugin may serve TT_TUNING_HINT_ID through get_interface to tell hosts which objective
  * tuning its space should minimise by default, in the host's --objective syntax (e.g.
- * PSSMLT: "metric:acceptance:target=0.234"). A host that tunes without an explicit target
- * prefers an integrator that serves a hint. */
+ * PSSMLT: "metric:small_step_acceptance:target=0.234"). A host that tunes without an
+ * explicit target prefers an integrator that serves a hint. */
 #ifndef TUNETRACE_TUNING_HINT_H
 #define TUNETRACE_TUNING_HINT_H
 

@@ -1,0 +1,94 @@
+#!/usr/bin/python3
+"""The user docs agree with the tree: every relative link of every Markdown file in the
+repository (README.md files, docs/) names a file that exists, and every #anchor names a
+heading of its target, by GitHub's rule (lower case, punctuation dropped, spaces to '-',
+repeats numbered -1, -2, ...). Links into ../shared (the scenes beside the repository) and
+absolute URLs are not checked. Exit 1 naming each broken link with its file and line."""
+import os
+import re
+import subprocess
+import sys
+
+ROOT = os.environ.get("TT_SOURCE_ROOT") or os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                        "..", "..")
+LINK = re.compile(r"(?<!!)\[([^\]]*)\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
+IMAGE = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def markdown_files():
+    try:
+        out = subprocess.run(["git", "-C", ROOT, "ls-files", "*.md"], capture_output=True,
+                             text=True, check=True).stdout.split()
+    except (OSError, subprocess.CalledProcessError):  # not a git checkout: walk the tree
+        out = []
+        for d, subdirs, files in os.walk(ROOT):
+            subdirs[:] = [s for s in subdirs if not s.startswith(".") and s not in
+                          ("build", "subprojects")]
+            out += [os.path.relpath(os.path.join(d, f), ROOT) for f in files if f.endswith(".md")]
+    return sorted(f for f in out if not f.startswith("subprojects/"))
+
+
+def slug(heading):
+    """GitHub's anchor of a heading's text."""
+    text = re.sub(r"`([^`]*)`", r"\1", heading.strip())
+    text = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", text)  # a link keeps its text
+    text = re.sub(r"<[^>]+>", "", text).lower()
+    text = re.sub(r"[^\w\- ]", "", text, flags=re.UNICODE)
+    return text.replace(" ", "-")
+
+
+_anchors = {}
+
+
+def anchors(path):
+    if path not in _anchors:
+        seen, out, fence = {}, set(), False
+        for line in open(path, encoding="utf-8"):
+            if line.lstrip().startswith("```"):
+                fence = not fence
+            m = re.match(r"^(#{1,6})\s+(.*?)\s*#*\s*$", line)
+            if m and not fence:
+                s = slug(m.group(2))
+                n = seen.get(s, 0)
+                seen[s] = n + 1
+                out.add(s if n == 0 else f"{s}-{n}")
+            for a in re.findall(r"<a\s+(?:name|id)=\"([^\"]+)\"", line):
+                out.add(a)
+        _anchors[path] = out
+    return _anchors[path]
+
+
+def main():
+    broken = []
+    files = markdown_files()
+    for rel in files:
+        path = os.path.join(ROOT, rel)
+        fence = False
+        for no, line in enumerate(open(path, encoding="utf-8"), 1):
+            if line.lstrip().startswith("```"):
+                fence = not fence
+            if fence:
+                continue
+            line = re.sub(r"`[^`]*`", "", line)  # code spans are not links
+            for target in [m.group(2) for m in LINK.finditer(line)] + IMAGE.findall(line):
+                if re.match(r"^[a-z][a-z0-9+.-]*:", target) or target.startswith("//"):
+                    continue  # http:, https:, mailto:
+                file_part, _, anchor = target.partition("#")
+                dest = os.path.normpath(os.path.join(os.path.dirname(path), file_part)) \
+                    if file_part else path
+                if os.path.relpath(dest, ROOT).startswith(".."):
+                    continue  # ../shared: beside the repository, not in it
+                if not os.path.exists(dest):
+                    broken.append(f"{rel}:{no}: {target}: no file {os.path.relpath(dest, ROOT)}")
+                    continue
+                if anchor and dest.endswith(".md") and anchor not in anchors(dest):
+                    broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, ROOT)} has no "
+                                  f"heading #{anchor}")
+    for b in broken:
+        print("FAIL:", b)
+    print(f"docs_links: {len(files)} Markdown files, {len(broken)} broken links")
+    return 1 if broken or not files else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
