@@ -214,4 +214,9 @@ void tt__tuning_free(tt__tuning *t);
 /* Writes the --stats JSON file. */
 tt_status tt__write_stats(const char *path, const tt__run_record *rec);
 
+/* Adds "scene_id" and "scene_id_parts" (geometry, materials, textures, lights) to a JSON
+ * record, so a changed scene id can be explained. */
+struct cJSON;
+void tt__add_scene_ids(struct cJSON *root, const tt_scene *scene);
+
 #endif

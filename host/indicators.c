@@ -40,7 +40,7 @@ int tt__run_indicators(const tt__host_options *opt) {
   const tt_camera *cam = tt_scene_camera(scene);
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "scene", opt->scene);
-  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(scene));
+  tt__add_scene_ids(root, scene);
   if (opt->camera_index_set) cJSON_AddNumberToObject(root, "camera_index", opt->camera_index);
   else cJSON_AddNullToObject(root, "camera_index");
   cJSON_AddStringToObject(root, "normalization", tt_indicator_norm_id(&norm, id, sizeof id));

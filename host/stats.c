@@ -100,6 +100,14 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
 /* What a benchmark record needs besides the figures: when, on what, with which code and
  * command. The load average is read when the record is written (its 1-minute value covers
  * the end of the run): on a shared machine it says how much the timings can be trusted. */
+void tt__add_scene_ids(cJSON *root, const tt_scene *scene) {
+  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(scene));
+  cJSON *parts = cJSON_AddObjectToObject(root, "scene_id_parts");
+  for (int p = 0; p < TT_SCENE_PART_COUNT; p++)
+    cJSON_AddStringToObject(parts, tt_scene_part_name((tt_scene_part)p),
+                            tt_scene_id_part(scene, (tt_scene_part)p));
+}
+
 static void tt__add_provenance(cJSON *root, const tt__run_record *rec) {
   cJSON_AddStringToObject(root, "tunetrace_commit", tt_build_commit());
   const tt__host_options *opt = rec->opt;
@@ -140,7 +148,7 @@ tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
   cJSON_AddStringToObject(root, "tunetrace", tt_version());
   tt__add_provenance(root, rec);
   cJSON_AddStringToObject(root, "scene", tt_scene_source(rec->scene));
-  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(rec->scene));
+  tt__add_scene_ids(root, rec->scene);
   cJSON *plugins = cJSON_AddObjectToObject(root, "plugins");
   cJSON *params = cJSON_AddObjectToObject(root, "params");
   for (size_t i = 0; i < tt_registry_count(rec->reg); i++) {

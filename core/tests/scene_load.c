@@ -391,6 +391,72 @@ done:
   tt_scene_destroy(c);
 }
 
+/* Writes `n` bytes to dir/name; 0 on success. */
+static int put_file(const char *dir, const char *name, const void *data, size_t n) {
+  char path[1200];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "wb");
+  if (!f) return -1;
+  size_t w = fwrite(data, 1, n, f);
+  return fclose(f) == 0 && w == n ? 0 : -1;
+}
+
+/* A textured scene loaded from two folders (another checkout, another absolute path) has one
+ * id: textures count by content. Each change moves only its own part of the id. */
+static void test_scene_id_location(void) {
+  static const char scene[] =
+      "{\"version\": 1, \"camera\": {\"position\": [0, 0, 3], \"target\": [0, 0, 0]},"
+      " \"materials\": {\"m\": {\"albedo\": [0.5, 0.5, 0.5], \"texture\": \"tex.ppm\"}},"
+      " \"meshes\": [{\"material\": \"m\", \"positions\": [0,0,0, 1,0,0, 0,1,0],"
+      " \"uvs\": [0,0, 1,0, 0,1]}]}";
+  static const char tex_a[] = "P3\n2 1\n255\n255 0 0 0 255 0\n";
+  static const char tex_b[] = "P3\n2 1\n255\n255 0 0 0 0 255\n";
+  char d1[] = "/tmp/tt_scene_id_XXXXXX", d2[] = "/tmp/tt_scene_id_XXXXXX", p1[1200], p2[1200];
+  CHECK(mkdtemp(d1) != NULL && mkdtemp(d2) != NULL);
+  CHECK(put_file(d1, "scene.json", scene, strlen(scene)) == 0);
+  CHECK(put_file(d1, "tex.ppm", tex_a, strlen(tex_a)) == 0);
+  CHECK(put_file(d2, "scene.json", scene, strlen(scene)) == 0);
+  CHECK(put_file(d2, "tex.ppm", tex_a, strlen(tex_a)) == 0);
+  snprintf(p1, sizeof p1, "%s/scene.json", d1);
+  snprintf(p2, sizeof p2, "%s/scene.json", d2);
+  tt_scene *a = NULL, *b = NULL;
+  CHECK(tt_scene_load(p1, &a) == TT_OK);
+  CHECK(tt_scene_load(p2, &b) == TT_OK);
+  if (a && b) {
+    CHECK(tt_scene_texture_count(a) == 1);
+    CHECK_MSG(strcmp(tt_scene_id(a), tt_scene_id(b)) == 0, "same scene in two folders: %s vs %s",
+              tt_scene_id(a), tt_scene_id(b));
+    for (int p = 0; p < TT_SCENE_PART_COUNT; p++)
+      CHECK(strcmp(tt_scene_id_part(a, (tt_scene_part)p), tt_scene_id_part(b, (tt_scene_part)p)) == 0);
+  }
+  tt_scene_destroy(b);
+  b = NULL;
+  /* another texture image: the id and the textures part change, nothing else */
+  CHECK(put_file(d2, "tex.ppm", tex_b, strlen(tex_b)) == 0);
+  CHECK(tt_scene_load(p2, &b) == TT_OK);
+  if (a && b) {
+    CHECK(strcmp(tt_scene_id(a), tt_scene_id(b)) != 0);
+    for (int p = 0; p < TT_SCENE_PART_COUNT; p++) {
+      int same = strcmp(tt_scene_id_part(a, (tt_scene_part)p), tt_scene_id_part(b, (tt_scene_part)p)) == 0;
+      CHECK_MSG(same == (p != TT_SCENE_PART_TEXTURES), "part %s", tt_scene_part_name((tt_scene_part)p));
+    }
+  }
+  CHECK(tt_scene_id_part(a, TT_SCENE_PART_COUNT) == NULL);
+  CHECK(tt_scene_part_name(TT_SCENE_PART_COUNT) == NULL);
+  CHECK(strcmp(tt_scene_part_name(TT_SCENE_PART_GEOMETRY), "geometry") == 0);
+  tt_scene_destroy(a);
+  tt_scene_destroy(b);
+  char path[1200];
+  const char *dirs[2] = {d1, d2};
+  for (int i = 0; i < 2; i++) {
+    snprintf(path, sizeof path, "%s/scene.json", dirs[i]);
+    remove(path);
+    snprintf(path, sizeof path, "%s/tex.ppm", dirs[i]);
+    remove(path);
+    remove(dirs[i]);
+  }
+}
+
 static void test_materials_and_lights(void) {
   /* two unit quads of equal area: diffuse and mirror -> diffuse ratio 0.5 */
   const char *json =
@@ -483,6 +549,7 @@ int main(void) {
   test_inline_transform_normals();
   test_camera_path();
   test_scene_id();
+  test_scene_id_location();
   test_materials_and_lights();
   return tt_test_finish("scene_load");
 }

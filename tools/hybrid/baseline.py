@@ -33,6 +33,8 @@ A dump keeps a baseline beyond the machine it ran on: --restore loads it into a 
 points hybrid_jobs.scene_file at this checkout's scenes (generating voxel and tessellated
 into --work), checks that each scene's tt_scene_id is still the recorded one (host, 4x4),
 and exits; then baseline.py with the same settings continues it and evaluate.py reads it.
+A scene whose id changed is refused naming the parts that changed (hybrid_jobs.scene_parts:
+geometry, materials, textures, lights); --remap-scenes keeps its rows with a warning.
 
 With MPI (issue 18, mpi/README.md) every job runs the same host command on some rank and
 tunetrace-mpi merges its rows into --db; the jobs it merged (table merges, their notes hold
@@ -95,7 +97,8 @@ JOBS_SCHEMA = """CREATE TABLE IF NOT EXISTS hybrid_jobs (
   wall_s REAL, cpu_s REAL,    -- of the finishing run
   load1 REAL,                 -- 1-minute load average when it finished
   host_version TEXT,
-  finished TEXT               -- ISO 8601 UTC
+  finished TEXT,              -- ISO 8601 UTC
+  scene_parts TEXT            -- JSON: tt_scene_id_part of each part, to explain a changed id
 )"""
 
 
@@ -156,11 +159,19 @@ def job_id(a, scene, cam, obj):
     return f"{scene}:{cam}:{obj}:{settings_tag(a)}"
 
 
+def upgrade_jobs_table(con):
+    """Adds the columns newer than a hybrid_jobs table (of an older baseline or dump)."""
+    cols = {r[1] for r in con.execute("PRAGMA table_info(hybrid_jobs)")}
+    if cols and "scene_parts" not in cols:
+        con.execute("ALTER TABLE hybrid_jobs ADD COLUMN scene_parts TEXT")
+
+
 def open_db(path):
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     con = sqlite3.connect(path, timeout=30)
     con.execute("PRAGMA journal_mode=WAL")
     con.execute(JOBS_SCHEMA)
+    upgrade_jobs_table(con)
     con.commit()
     return con
 
@@ -184,8 +195,33 @@ def dump_db(path, out):
     return n
 
 
+def scene_ids(a, path):
+    """(tt_scene_id, {part: id}) of a scene file as this checkout's host loads it (a 4x4 render
+    with --stats), or (None, {}) when it does not load."""
+    st = os.path.join(a.work, "restore_" + str(os.getpid()) + ".json")
+    r = subprocess.run([a.host, "--quiet", "--res", "4x4", "--spp", "1", "--threads", "1",
+                        "--stats", st, "--out", st[:-5] + ".exr", path],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+    rec = json.load(open(st)) if r.returncode == 0 else {}
+    for f in (st, st[:-5] + ".exr"):
+        if os.path.exists(f):
+            os.remove(f)
+    return rec.get("scene_id"), rec.get("scene_id_parts") or {}
+
+
+def id_change(recorded, now):
+    """Why a scene id changed, from the parts recorded with the rows and this checkout's."""
+    if not recorded:
+        return ("the dump does not record the parts of the id (geometry, materials, textures, "
+                "lights), so which inputs changed is unknown")
+    changed = [k for k in now if recorded.get(k) != now[k]]
+    return "changed: " + (", ".join(changed) if changed else "none of the recorded parts")
+
+
 def restore_db(a, dump):
-    """A new --db from dump_db's file; hybrid_jobs.scene_file made this checkout's paths."""
+    """A new --db from dump_db's file; hybrid_jobs.scene_file made this checkout's paths.
+    Only the --scenes named are kept when --scenes is given. A scene whose id differs from
+    the dump's is refused with what changed, or re-mapped with a warning (--remap-scenes)."""
     if os.path.exists(a.db):
         sys.exit(f"baseline: --restore: {a.db} exists (restore into a new file)")
     tmp = a.db + ".restore"
@@ -195,31 +231,47 @@ def restore_db(a, dump):
     con = sqlite3.connect(tmp)
     with lzma.open(dump, "rt") as f:
         con.executescript(f.read())
+    upgrade_jobs_table(con)
+    if a.scenes_given:
+        drop = [r[0] for r in con.execute("SELECT DISTINCT scene FROM hybrid_jobs")
+                if r[0] not in a.scenes]
+        for name in drop:
+            sids = [r[0] for r in con.execute("SELECT DISTINCT scene_id FROM hybrid_jobs "
+                                              "WHERE scene = ?", (name,))]
+            con.executemany("DELETE FROM samples WHERE scene_id = ?", [(x,) for x in sids])
+            con.execute("DELETE FROM hybrid_jobs WHERE scene = ?", (name,))
     bad = []
-    for name, old, sid in con.execute("SELECT scene, scene_file, scene_id FROM hybrid_jobs "
-                                      "GROUP BY scene").fetchall():
+    for name, sid, parts in con.execute("SELECT scene, scene_id, scene_parts FROM hybrid_jobs "
+                                        "GROUP BY scene").fetchall():
         if name not in SCENES:
             bad.append(f"{name}: not a scene of this checkout (--scene {name}=FILE)")
             continue
         path = scene_file(a, name)
-        st = os.path.join(a.work, f"restore_{name}.json")
-        r = subprocess.run([a.host, "--quiet", "--res", "4x4", "--spp", "1", "--threads", "1",
-                            "--stats", st, "--out", st[:-5] + ".exr", path],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
-        got = json.load(open(st)).get("scene_id") if r.returncode == 0 else None
-        for f in (st, st[:-5] + ".exr"):
-            if os.path.exists(f):
-                os.remove(f)
+        got, got_parts = scene_ids(a, path)
+        if got is None:
+            bad.append(f"{name}: {path} does not load (run host on it for the message)")
+            continue
         if got != sid:
-            bad.append(f"{name}: {path} has scene id {got}, the dump's rows {sid}")
-        con.execute("UPDATE hybrid_jobs SET scene_file = ? WHERE scene = ?", (path, name))
+            why = f"{name}: {path} has scene id {got}, the dump's rows {sid} ({id_change(json.loads(parts) if parts else None, got_parts)})"
+            if not a.remap_scenes:
+                bad.append(why)
+                continue
+            print(f"baseline: warning: --remap-scenes: {why}; its rows now count as measurements "
+                  f"of the scene as this checkout has it", file=sys.stderr, flush=True)
+            con.execute("UPDATE samples SET scene_id = ? WHERE scene_id = ?", (got, sid))
+        con.execute("UPDATE hybrid_jobs SET scene_file = ?, scene_id = ?, scene_parts = ? "
+                    "WHERE scene = ?", (path, got, json.dumps(got_parts, sort_keys=True), name))
     con.commit()
     n = con.execute("SELECT count(*) FROM hybrid_jobs").fetchone()[0]
     m = con.execute("SELECT count(*) FROM samples").fetchone()[0]
     con.close()
     if bad:
         os.remove(tmp)
-        sys.exit("baseline: --restore: " + "; ".join(bad))
+        sys.exit("baseline: --restore: " + "; ".join(bad) +
+                 ("" if a.remap_scenes else
+                  ". If the scene changed on purpose, --remap-scenes keeps the rows under its new "
+                  "id (with a warning): only do so when the change cannot alter build or render "
+                  "cost"))
     os.replace(tmp, a.db)
     return n, m
 
@@ -245,12 +297,13 @@ def record_job(con, a, scene, path, cam, obj, st, wall, cpu, load1, version, fin
              "build_ms": h["build_ms"], "render_ms": h["render_ms"], "config": h["config"]}
             for h in t["history"]]
     con.execute("INSERT OR REPLACE INTO hybrid_jobs VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,"
-                "?,?,?,?,?)",
+                "?,?,?,?,?,?)",
                 (job_id(a, scene, cam, obj), scene, path, st.get("scene_id"), cam, obj,
                  a.iterations, a.tune_spp, a.res, a.threads, a.clock, a.seed, a.tuner,
                  a.tune_params, t["default_cost"], t["best_cost"],
                  json.dumps(t["best_config"], sort_keys=True), int(bool(t["converged"])),
-                 json.dumps(hist), t["measured"], wall, cpu, load1, version, finished))
+                 json.dumps(hist), t["measured"], wall, cpu, load1, version, finished,
+                 json.dumps(st.get("scene_id_parts"), sort_keys=True) if st.get("scene_id_parts") else None))
 
 
 def mpi_job_list(a, jobs):
@@ -389,7 +442,11 @@ def main():
     ap.add_argument("--dump", metavar="FILE.sql.xz",
                     help="write --db as an xz-compressed SQL dump and exit")
     ap.add_argument("--restore", metavar="FILE.sql.xz",
-                    help="create --db (a new file) from a --dump, scene files of this checkout, exit")
+                    help="create --db (a new file) from a --dump, scene files of this checkout, exit "
+                         "(with --scenes: only those scenes' rows)")
+    ap.add_argument("--remap-scenes", action="store_true",
+                    help="with --restore: keep the rows of a scene whose id differs from the dump's "
+                         "under this checkout's id (warns, naming what changed)")
     a = ap.parse_args()
     for spec in a.scene:
         name, _, path = spec.partition("=")
@@ -398,6 +455,7 @@ def main():
         SCENES[name] = os.path.abspath(path)
     if a.scene and a.scenes == ",".join(DEFAULT_SCENES):
         a.scenes = ",".join(spec.partition("=")[0] for spec in a.scene)
+    a.scenes_given = a.scenes != ",".join(DEFAULT_SCENES)
     a.scenes = [s for s in a.scenes.split(",") if s]
     a.objectives = [o for o in a.objectives.split(",") if o]
     for s in a.scenes:

@@ -167,9 +167,27 @@ TT_API void tt_scene_destroy(tt_scene *scene);
 
 /* Path (or source name) the scene was loaded from. */
 TT_API const char *tt_scene_source(const tt_scene *scene);
-/* Stable identifier of the scene content (hex hash of geometry and materials), used as the
- * scene key of tuning databases. */
+/* Stable identifier of the scene content (16 hex digits: geometry, materials, textures and
+ * environment images by content, lights; not names, file locations or the camera), used as
+ * the scene key of tuning databases. The same scene loaded from another folder has the same
+ * id. */
 TT_API const char *tt_scene_id(const tt_scene *scene);
+
+/* The parts of a scene that its id covers, each with an id of its own (tt_scene_id_part), so
+ * that a changed id can say what changed. */
+typedef enum tt_scene_part {
+  TT_SCENE_PART_GEOMETRY = 0,  /* meshes: positions, normals, uvs, indices, material slots */
+  TT_SCENE_PART_MATERIALS = 1, /* material parameters */
+  TT_SCENE_PART_TEXTURES = 2,  /* texture images by content, and their colour space */
+  TT_SCENE_PART_LIGHTS = 3,    /* lights other than emissive meshes, environment images */
+  TT_SCENE_PART_COUNT = 4
+} tt_scene_part;
+
+/* 16 hex digits of the content hash of one part of the scene; NULL for an unknown part. */
+TT_API const char *tt_scene_id_part(const tt_scene *scene, tt_scene_part part);
+
+/* The name of a part ("geometry", "materials", "textures", "lights"); NULL if unknown. */
+TT_API const char *tt_scene_part_name(tt_scene_part part);
 
 TT_API uint32_t tt_scene_mesh_count(const tt_scene *scene);
 TT_API const tt_mesh *tt_scene_mesh(const tt_scene *scene, uint32_t index);

@@ -2,6 +2,7 @@
  * path evaluation. Format dispatch (tt_scene_load) is in io/scene_load.c. */
 #include "scene/anim.h"
 #include "scene/scene_internal.h"
+#include "util/files.h"
 
 #include <tt_util/hash.h>
 
@@ -164,11 +165,26 @@ static uint64_t tt__fnv_floats(uint64_t h, const float *f, size_t n) {
   return h;
 }
 
-/* The id covers what determines rendering cost and result apart from the camera (which
- * the tuner treats as state): geometry, materials (not their names), textures and the
- * explicit lights. Names and the camera are left out on purpose. */
-static void tt__scene_compute_id(tt_scene *s) {
-  uint64_t h = TT__FNV1A64_OFFSET;
+/* Digest of a file's bytes, so that a texture or environment image counts by its content,
+ * not by where the scene was found: the same scene in another checkout (another absolute
+ * path) keeps its id. A file that cannot be read (a texture listed missing, replaced by a
+ * constant) counts by its base name. */
+static uint64_t tt__fnv_file(uint64_t h, const char *path) {
+  char why[160];
+  FILE *f = path && tt__file_regular_reason(path, why, sizeof why) == 0 ? fopen(path, "rb") : NULL;
+  if (!f) {
+    const char *base = path ? strrchr(path, '/') : NULL;
+    h = tt__fnv1a64(h, "missing:", 8);
+    return tt__fnv_str(h, base ? base + 1 : path);
+  }
+  unsigned char buf[1 << 16];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, f)) > 0) h = tt__fnv1a64(h, buf, n);
+  fclose(f);
+  return h;
+}
+
+static uint64_t tt__id_meshes(uint64_t h, const tt_scene *s) {
   h = tt__fnv1a64(h, &s->mesh_count, sizeof s->mesh_count);
   for (uint32_t i = 0; i < s->mesh_count; i++) {
     const tt_mesh *m = &s->meshes[i];
@@ -180,6 +196,10 @@ static void tt__scene_compute_id(tt_scene *s) {
     if (m->uvs) h = tt__fnv_floats(h, m->uvs, 2 * (size_t)m->vertex_count);
     h = tt__fnv1a64(h, m->indices, 3 * (size_t)m->triangle_count * sizeof *m->indices);
   }
+  return h;
+}
+
+static uint64_t tt__id_materials(uint64_t h, const tt_scene *s) {
   h = tt__fnv1a64(h, &s->material_count, sizeof s->material_count);
   for (uint32_t i = 0; i < s->material_count; i++) {
     const tt_material *m = &s->materials[i];
@@ -194,10 +214,20 @@ static void tt__scene_compute_id(tt_scene *s) {
     h = tt__fnv_floats(h, m->specular, 3);
     h = tt__fnv_floats(h, m->emission, 3);
   }
+  return h;
+}
+
+/* `digest` holds tt__fnv_file of each texture (read once for the id and its part). */
+static uint64_t tt__id_textures(uint64_t h, const tt_scene *s, const uint64_t *digest) {
   for (uint32_t i = 0; i < s->texture_count; i++) {
-    h = tt__fnv_str(h, s->textures[i].path);
+    h = tt__fnv1a64(h, &digest[i], sizeof digest[i]);
     h = tt__fnv1a64(h, &s->textures[i].srgb, sizeof s->textures[i].srgb);
   }
+  return h;
+}
+
+/* `digest` holds tt__fnv_file of each light's image (0 for a light without one). */
+static uint64_t tt__id_lights(uint64_t h, const tt_scene *s, const uint64_t *digest) {
   for (uint32_t i = 0; i < s->light_count; i++) {
     const tt_light *l = &s->lights[i];
     if (l->type == TT_LIGHT_AREA) continue; /* implied by mesh + material */
@@ -208,10 +238,41 @@ static void tt__scene_compute_id(tt_scene *s) {
     h = tt__fnv_floats(h, l->direction, 3);
     h = tt__fnv_floats(h, &l->cos_inner, 1);
     h = tt__fnv_floats(h, &l->cos_outer, 1);
-    h = tt__fnv_str(h, l->image);
+    if (l->image) {
+      h = tt__fnv1a64(h, &digest[i], sizeof digest[i]);
+    } else {
+      h = tt__fnv_str(h, NULL);
+    }
   }
+  return h;
+}
+
+/* The id covers what determines rendering cost and result apart from the camera (which
+ * the tuner treats as state): geometry, materials (not their names), textures and
+ * environment images (by content) and the explicit lights. Names, file locations and the
+ * camera are left out on purpose. Each part also gets an id of its own, so a changed id can
+ * be explained (tt_scene_id_part). */
+static tt_status tt__scene_compute_id(tt_scene *s) {
+  uint64_t *digest = malloc(((size_t)s->texture_count + s->light_count + 1) * sizeof *digest);
+  if (!digest) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "scene id: out of memory");
+  uint64_t *tex = digest, *img = digest + s->texture_count;
+  for (uint32_t i = 0; i < s->texture_count; i++)
+    tex[i] = tt__fnv_file(TT__FNV1A64_OFFSET, s->textures[i].path);
+  for (uint32_t i = 0; i < s->light_count; i++)
+    img[i] = s->lights[i].image ? tt__fnv_file(TT__FNV1A64_OFFSET, s->lights[i].image) : 0;
+  /* the id chains the parts (in the order of the first scene ids, which stay valid for
+   * scenes without images); the animation (keyframes, morph targets) counts as geometry */
+  uint64_t meshes = tt__id_meshes(TT__FNV1A64_OFFSET, s);
+  uint64_t part[TT_SCENE_PART_COUNT] = {
+      tt__scene_anim_hash(s, meshes), tt__id_materials(TT__FNV1A64_OFFSET, s),
+      tt__id_textures(TT__FNV1A64_OFFSET, s, tex), tt__id_lights(TT__FNV1A64_OFFSET, s, img)};
+  uint64_t h = tt__id_lights(tt__id_textures(tt__id_materials(meshes, s), s, tex), s, img);
   h = tt__scene_anim_hash(s, h);
+  free(digest);
   snprintf(s->id, sizeof s->id, "%016llx", (unsigned long long)h);
+  for (int p = 0; p < TT_SCENE_PART_COUNT; p++)
+    snprintf(s->part_id[p], sizeof s->part_id[p], "%016llx", (unsigned long long)part[p]);
+  return TT_OK;
 }
 
 /* Index of the first of n 3-vectors with a coordinate beyond TT_SCENE_COORD_LIMIT (or not
@@ -349,8 +410,7 @@ tt_status tt__scene_finish(tt_scene *s) {
   for (uint32_t i = 0; i < s->mesh_count; i++) s->triangle_count += s->meshes[i].triangle_count;
   tt__scene_update_bounds(s);
   s->camera.keys = s->keys;
-  tt__scene_compute_id(s);
-  return TT_OK;
+  return tt__scene_compute_id(s);
 }
 
 /* ---- public API ------------------------------------------------------------------------ */
@@ -383,6 +443,16 @@ void tt_scene_destroy(tt_scene *s) {
 const char *tt_scene_source(const tt_scene *s) { return s ? s->source : NULL; }
 /* See tt__scene_compute_id for what the id covers. */
 const char *tt_scene_id(const tt_scene *s) { return s ? s->id : NULL; }
+
+const char *tt_scene_part_name(tt_scene_part part) {
+  static const char *const names[TT_SCENE_PART_COUNT] = {"geometry", "materials", "textures",
+                                                         "lights"};
+  return part >= 0 && part < TT_SCENE_PART_COUNT ? names[part] : NULL;
+}
+
+const char *tt_scene_id_part(const tt_scene *s, tt_scene_part part) {
+  return s && part >= 0 && part < TT_SCENE_PART_COUNT ? s->part_id[part] : NULL;
+}
 /* Number of meshes. */
 uint32_t tt_scene_mesh_count(const tt_scene *s) { return s ? s->mesh_count : 0; }
 /* Mesh view, NULL when out of range. */

@@ -15,6 +15,7 @@
 struct tt_scene {
   char *source;                 /* file path or source name given to the loader */
   char id[17];                  /* 16 hex digits of the content hash, NUL-terminated */
+  char part_id[TT_SCENE_PART_COUNT][17]; /* the same of each part (tt_scene_id_part) */
   tt_mesh *meshes;
   uint32_t mesh_count, mesh_cap;
   tt_material *materials;
