@@ -10,15 +10,15 @@ int tt__run_convert(const tt__host_options *opt) {
   tt_scene *scene = NULL;
   if (tt_scene_load_ex(opt->scene, opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT,
                        &scene) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     return TT_EXIT_SCENE;
   }
   int rc = TT_EXIT_OK;
   if (tt_scene_write_json(scene, opt->out) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     rc = TT_EXIT_OUTPUT;
   } else if (!opt->quiet) {
-    fprintf(stderr, "host: wrote %s (%u meshes, %llu triangles, %u materials, %u lights)\n", opt->out,
+    tt__say("wrote %s (%u meshes, %llu triangles, %u materials, %u lights)\n", opt->out,
             tt_scene_mesh_count(scene), (unsigned long long)tt_scene_triangle_count(scene),
             tt_scene_material_count(scene), tt_scene_light_count(scene));
   }

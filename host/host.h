@@ -54,7 +54,8 @@ typedef struct tt__host_options {
   int clock_cpu;            /* --clock cpu: every timing is the process's CPU time */
   const char *reference;    /* --reference FILE: the image --objective rrmse compares with */
   const char *tune_pass_images; /* --tune-pass-images DIR: each measurement's own pass image */
-  int help;
+  int help;                 /* --help, -h, --help-all */
+  const char *help_topic;   /* --help TOPIC; "all" for --help-all; NULL: the short help */
   int version;
   /* sequence rendering (sequence.c) */
   int sequence;             /* --sequence given */
@@ -99,6 +100,14 @@ typedef struct tt__host_options {
   const char *resume;       /* --resume FILE: the tuning session's state, saved per sample */
   const char *indicator_norm; /* --indicator-norm SPEC (tt_indicator_norm_parse); NULL: default */
 } tt__host_options;
+
+/* Takes the program's name from argv[0] (its last path component; messages.c). */
+void tt__set_prog(const char *argv0);
+/* The name the program was run as: "tunetrace" installed, "host" in the build tree. */
+const char *tt__prog(void);
+/* Prints "NAME: " and the formatted text to stderr: how every message of the program
+ * starts. */
+void tt__say(const char *fmt, ...) TT_PRINTF(1, 2);
 
 /* Creates `dir` and its missing parents (mkdir -p); 0, or -1 with errno (output_dir.c). */
 int tt__ensure_dir(const char *dir);
@@ -145,8 +154,8 @@ int tt__parse_objective(const char *opt, const char *text, tt_objective *out);
 
 /* Parses argv; on error prints a message naming the option and returns TT_EXIT_USAGE. */
 int tt__parse_options(int argc, char **argv, tt__host_options *opt);
-/* Prints --help. */
-void tt__print_usage(FILE *out);
+/* Prints --help: the options by task (topic NULL), one topic's ("tune"), or all ("all"). */
+void tt__print_help(FILE *out, const char *topic);
 
 /* The host services table the program passes to plugins: the default host with a
  * progress-bar-aware log and a progress bar on stderr. */

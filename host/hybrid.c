@@ -53,7 +53,7 @@ static int tt__hyb_subset(tt__hyb *h) {
   for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
   h->subset = tt_space_subset(h->space, names, n, h->s->configs[h->accel_index]);
   if (!h->subset) {
-    fprintf(stderr, "host: --tune-params: %s\n", tt_last_error());
+    tt__say("--tune-params: %s\n", tt_last_error());
     return -1;
   }
   return 0;
@@ -66,7 +66,7 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_no
   h->predictor_name = tt_loaded_plugin_entry(pp)->name;
   if (!TT_PREDICTOR_HAS(h->pi, create_ex) || !TT_PREDICTOR_HAS(h->pi, observe_ex) ||
       !TT_PREDICTOR_HAS(h->pi, predict_ex)) {
-    fprintf(stderr, "host: --hybrid: %s serves the ABI 1.0 predictor table; the hybrid loop "
+    tt__say("--hybrid: %s serves the ABI 1.0 predictor table; the hybrid loop "
             "needs ABI 1.1 (create_ex, observe_ex, predict_ex)\n", h->predictor_name);
     return TT_EXIT_PLUGIN;
   }
@@ -83,14 +83,14 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_no
   su.settings = tt_session_config(s->lib, h->predictor_name);
   su.seed = s->rec.seed;
   if (h->pi->create_ex(&su, &h->model) != TT_OK) {
-    fprintf(stderr, "host: %s: %s\n", h->predictor_name, tt_last_error());
+    tt__say("%s: %s\n", h->predictor_name, tt_last_error());
     h->model = NULL;
     return TT_EXIT_FAILURE;
   }
   struct stat st;
   if (h->opt->model && stat(h->opt->model, &st) == 0) {
     if (h->pi->load(h->model, h->opt->model) != TT_OK) {
-      fprintf(stderr, "host: --model %s: %s (the file is left as it is)\n", h->opt->model,
+      tt__say("--model %s: %s (the file is left as it is)\n", h->opt->model,
               tt_last_error());
       return TT_EXIT_USAGE;
     }
@@ -106,7 +106,7 @@ static int tt__hyb_warm_files(const tt__host_options *opt) {
   for (int i = 0; i < opt->warm_start_count; i++) {
     struct stat st;
     if (stat(opt->warm_start[i], &st) != 0) {
-      fprintf(stderr, "host: --warm-start %s: %s\n", opt->warm_start[i], strerror(errno));
+      tt__say("--warm-start %s: %s\n", opt->warm_start[i], strerror(errno));
       return TT_EXIT_USAGE;
     }
   }
@@ -181,7 +181,7 @@ static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context, const ch
     const char *path = h->opt->warm_start[i];
     tt_tunedb *db = NULL;
     if (tt_tunedb_open(path, &db) != TT_OK) {
-      fprintf(stderr, "host: --warm-start %s: %s\n", path, tt_last_error());
+      tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_USAGE;
     }
     tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys, .context = context,
@@ -190,7 +190,7 @@ static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context, const ch
     tt_status ws = tt_hybrid_warm_start_ex(hy, db, &f, &r);
     tt_tunedb_close(db);
     if (ws != TT_OK) {
-      fprintf(stderr, "host: --warm-start %s: %s\n", path, tt_last_error());
+      tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_FAILURE;
     }
     tt__hyb_warm_log(h, path, &r, objective);
@@ -226,7 +226,7 @@ static int tt__hyb_write_json(const char *path, cJSON *root) {
   tt_status st = text ? tt_file_write_atomic(path, text, strlen(text)) : TT_ERR_OUT_OF_MEMORY;
   cJSON_free(text);
   if (st != TT_OK) {
-    fprintf(stderr, "host: --stats %s: %s\n", path, tt_last_error());
+    tt__say("--stats %s: %s\n", path, tt_last_error());
     return TT_EXIT_OUTPUT;
   }
   return TT_EXIT_OK;
@@ -279,7 +279,7 @@ static cJSON *tt__hyb_read_states(const char *path) {
   char *text = NULL;
   size_t n = 0;
   if (tt_file_read(path, "states file", 0, &text, &n) != TT_OK) {
-    fprintf(stderr, "host: --states %s\n", tt_last_error());
+    tt__say("--states %s\n", tt_last_error());
     return NULL;
   }
   cJSON *root = cJSON_Parse(text);
@@ -290,13 +290,13 @@ static cJSON *tt__hyb_read_states(const char *path) {
     for (uint32_t k = 0; ok && k < TT_SCENE_INDICATOR_COUNT; k++) {
       cJSON *v = cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k));
       if (!cJSON_IsNumber(v)) {
-        fprintf(stderr, "host: --states %s: [%d].indicators.%s: expected a number\n", path, i,
+        tt__say("--states %s: [%d].indicators.%s: expected a number\n", path, i,
                 tt_scene_indicator_name(k));
         ok = 0;
       }
     }
   }
-  if (!cJSON_IsArray(root)) fprintf(stderr, "host: --states %s: expected a JSON array of states\n", path);
+  if (!cJSON_IsArray(root)) tt__say("--states %s: expected a JSON array of states\n", path);
   if (!ok) {
     cJSON_Delete(root);
     return NULL;
@@ -423,19 +423,19 @@ int tt__run_hybrid(const tt__host_options *opt) {
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *cam = tt_scene_camera(s.scene);
   if (cam->key_count < 1 && !(opt->predict_only && opt->states)) {
-    fprintf(stderr, "host: --%s: %s has no camera path (camera.path in scene.json): the hybrid "
+    tt__say("--%s: %s has no camera path (camera.path in scene.json): the hybrid "
             "loop moves through the path's states\n", opt->hybrid ? "hybrid" : "predict", opt->scene);
     rc = TT_EXIT_USAGE;
     goto done;
   }
   if (opt->tune && strcmp(opt->tune, tt_loaded_plugin_entry(s.accel_p)->name)) {
-    fprintf(stderr, "host: --hybrid tunes the accel (%s), not --tune %s\n",
+    tt__say("--hybrid tunes the accel (%s), not --tune %s\n",
             tt_loaded_plugin_entry(s.accel_p)->name, opt->tune);
     rc = TT_EXIT_USAGE;
     goto done;
   }
   if (opt->explore || opt->verify || opt->reference || (opt->states && opt->camera_index_set)) {
-    fprintf(stderr, "host: --%s: %s does not apply (the states are the path samples of "
+    tt__say("--%s: %s does not apply (the states are the path samples of "
             "--camera-index A:B)\n", opt->hybrid ? "hybrid" : "predict",
             opt->explore ? "--explore" : opt->verify ? "--verify"
             : opt->reference ? "--reference" : "--camera-index with --states");
@@ -452,7 +452,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
     goto done;
   }
   if (obj.kind != TT_OBJECTIVE_RENDER && obj.kind != TT_OBJECTIVE_TOTAL && obj.kind != TT_OBJECTIVE_BUILD) {
-    fprintf(stderr, "host: --hybrid: --objective %s: the hybrid loop tunes the accel for time "
+    tt__say("--hybrid: --objective %s: the hybrid loop tunes the accel for time "
             "(render, build+render, build)\n", spec);
     rc = TT_EXIT_USAGE;
     goto done;
@@ -472,7 +472,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   if (!opt->no_db) {
     char *path = opt->db ? tt__strdup(opt->db) : tt_tunedb_default_path();
     if (path && tt_tunedb_open(path, &h.db) != TT_OK) {
-      fprintf(stderr, "host: --db %s: %s\n", path, tt_last_error());
+      tt__say("--db %s: %s\n", path, tt_last_error());
       free(path);
       rc = TT_EXIT_FAILURE;
       goto done;
@@ -512,7 +512,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   d.db = h.db;
   d.norm = &norm;
   if (!context || !camera0 || tt_hybrid_create(&d, &hy) != TT_OK) {
-    fprintf(stderr, "host: --hybrid: %s\n", context ? tt_last_error() : "out of memory");
+    tt__say("--hybrid: %s\n", context ? tt_last_error() : "out of memory");
     rc = TT_EXIT_FAILURE;
     goto done;
   }
@@ -526,13 +526,13 @@ int tt__run_hybrid(const tt__host_options *opt) {
     /* what a warm start taught the model is kept (--model FILE: saved atomically) */
     if (rc == TT_EXIT_OK && opt->model && opt->warm_start_count &&
         h.pi->save(h.model, opt->model) != TT_OK) {
-      fprintf(stderr, "host: --model %s: %s\n", opt->model, tt_last_error());
+      tt__say("--model %s: %s\n", opt->model, tt_last_error());
       rc = TT_EXIT_OUTPUT;
     }
     goto done;
   }
   if (opt->out_dir && mkdir(opt->out_dir, 0777) != 0 && errno != EEXIST) {
-    fprintf(stderr, "host: --out-dir %s: %s\n", opt->out_dir, strerror(errno));
+    tt__say("--out-dir %s: %s\n", opt->out_dir, strerror(errno));
     rc = TT_EXIT_OUTPUT;
     goto done;
   }
@@ -545,7 +545,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
   states = cJSON_CreateArray();
   tt_tuning_target target;
   if (tt_session_tuning_target(s.lib, h.accel_index, 0, &target) != TT_OK) {
-    fprintf(stderr, "host: --hybrid: %s\n", tt_last_error());
+    tt__say("--hybrid: %s\n", tt_last_error());
     rc = TT_EXIT_FAILURE;
     goto done;
   }
@@ -565,7 +565,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
     tt_tuning_state state;
     if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, camera_extra, context_extra, 1,
                                 &state) != TT_OK) {
-      fprintf(stderr, "host: --hybrid: state %u: %s\n", i, tt_last_error());
+      tt__say("--hybrid: state %u: %s\n", i, tt_last_error());
       rc = TT_EXIT_FAILURE;
       break;
     }
@@ -577,7 +577,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
       break;
     }
     if (st != TT_OK) {
-      fprintf(stderr, "host: --hybrid: state %u: %s\n", i, tt_last_error());
+      tt__say("--hybrid: state %u: %s\n", i, tt_last_error());
       rc = TT_EXIT_FAILURE;
       break;
     }
@@ -636,7 +636,7 @@ int tt__run_hybrid(const tt__host_options *opt) {
                 remeasured, samples, h.tuner_name);
   if (opt->model && (rc == TT_EXIT_OK)) {
     if (h.pi->save(h.model, opt->model) != TT_OK) {
-      fprintf(stderr, "host: --model %s: %s\n", opt->model, tt_last_error());
+      tt__say("--model %s: %s\n", opt->model, tt_last_error());
       rc = TT_EXIT_OUTPUT;
     }
   }

@@ -14,7 +14,7 @@ int tt__run_indicators(const tt__host_options *opt) {
   tt_indicator_norm norm;
   tt_indicator_norm_init(&norm);
   if (opt->indicator_norm && tt_indicator_norm_parse(opt->indicator_norm, &norm) != TT_OK) {
-    fprintf(stderr, "host: --indicator-norm: %s\n", tt_last_error());
+    tt__say("--indicator-norm: %s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
   /* the session's scene set-up (--res, --camera-index); its plugins are not used */
@@ -79,13 +79,13 @@ int tt__run_indicators(const tt__host_options *opt) {
   cJSON_Delete(root);
   tt__session_close(&s);
   if (!text) {
-    fprintf(stderr, "host: --indicators: out of memory\n");
+    tt__say("--indicators: out of memory\n");
     return TT_EXIT_FAILURE;
   }
   int ok = puts(text) >= 0 && fflush(stdout) == 0;
   cJSON_free(text);
   if (!ok) {
-    fprintf(stderr, "host: --indicators: cannot write to stdout\n");
+    tt__say("--indicators: cannot write to stdout\n");
     return TT_EXIT_OUTPUT;
   }
   return TT_EXIT_OK;

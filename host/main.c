@@ -9,7 +9,7 @@ int main(int argc, char **argv) {
   int rc = tt__parse_options(argc, argv, &opt);
   if (rc != TT_EXIT_OK) return rc;
   if (opt.help) {
-    tt__print_usage(stdout);
+    tt__print_help(stdout, opt.help_topic);
     return TT_EXIT_OK;
   }
   if (opt.version) {
@@ -19,7 +19,7 @@ int main(int argc, char **argv) {
   if (opt.list_plugins) return tt__run_list_plugins(&opt);
   if (opt.describe_count) return tt__run_describe(&opt);
   if (!opt.scene) {
-    fprintf(stderr, "host: no scene given (try --help)\n");
+    tt__say("no scene given (try --help)\n");
     return TT_EXIT_USAGE;
   }
   if (opt.convert) return tt__run_convert(&opt);

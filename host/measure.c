@@ -29,13 +29,13 @@ static int tt__measure_read(const char *path, const tt_config *base, tt_config *
   char *text = NULL;
   size_t size = 0;
   if (tt_file_read(path, "configurations file", 0, &text, &size) != TT_OK) {
-    fprintf(stderr, "host: --measure %s\n", tt_last_error());
+    tt__say("--measure %s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
   cJSON *root = cJSON_Parse(text);
   tt_free(text);
   if (!cJSON_IsArray(root) || cJSON_GetArraySize(root) < 1) {
-    fprintf(stderr, "host: --measure %s: expected a JSON array of configuration objects\n", path);
+    tt__say("--measure %s: expected a JSON array of configuration objects\n", path);
     cJSON_Delete(root);
     return TT_EXIT_USAGE;
   }
@@ -49,7 +49,7 @@ static int tt__measure_read(const char *path, const tt_config *base, tt_config *
     snprintf(where, sizeof where, "%s[%zu]", path, i);
     (*cfgs)[i] = tt_config_clone(base);
     if (!json || !(*cfgs)[i] || tt_config_from_json((*cfgs)[i], json, where) != TT_OK) {
-      fprintf(stderr, "host: --measure %s\n", json ? tt_last_error() : "expected an object");
+      tt__say("--measure %s\n", json ? tt_last_error() : "expected an object");
       cJSON_free(json);
       cJSON_Delete(root);
       return TT_EXIT_USAGE;
@@ -76,7 +76,7 @@ int tt__run_measure(const tt__host_options *opt) {
     goto done;
   }
   if (obj.kind != TT_OBJECTIVE_RENDER && obj.kind != TT_OBJECTIVE_TOTAL && obj.kind != TT_OBJECTIVE_BUILD) {
-    fprintf(stderr, "host: --measure: --objective %s: expected render, build or build+render\n", spec);
+    tt__say("--measure: --objective %s: expected render, build or build+render\n", spec);
     rc = TT_EXIT_USAGE;
     goto done;
   }

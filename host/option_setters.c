@@ -12,7 +12,7 @@
 
 /* Prints the library's message for option `o` (tunetrace/limits.h); returns -1. */
 static int tt__bad_value(const tt__option *o) {
-  fprintf(stderr, "host: %s: %s\n", o->name, tt_last_error());
+  tt__say("%s: %s\n", o->name, tt_last_error());
   return -1;
 }
 
@@ -36,7 +36,7 @@ int tt__set_list(const tt__option *o, const char *v, tt__host_options *opt) {
   const char **list = TT__FIELD(const char *, o, opt);
   int *count = (int *)(void *)(list + TT_HOST_MAX_LIST);
   if (*count >= TT_HOST_MAX_LIST) {
-    fprintf(stderr, "host: %s: at most %d times\n", o->name, TT_HOST_MAX_LIST);
+    tt__say("%s: at most %d times\n", o->name, TT_HOST_MAX_LIST);
     return -1;
   }
   list[(*count)++] = v;
@@ -59,7 +59,7 @@ int tt__set_real(const tt__option *o, const char *v, tt__host_options *opt) {
 int tt__set_plugin_param(const tt__option *o, const char *v, tt__host_options *opt) {
   const char *dot = strchr(v, '.'), *eq = strchr(v, '=');
   if (!dot || !eq || dot > eq || dot == v || eq == dot + 1) {
-    fprintf(stderr, "host: --set: expected PLUGIN.PARAM=VALUE, got \"%s\"\n", v);
+    tt__say("--set: expected PLUGIN.PARAM=VALUE, got \"%s\"\n", v);
     return -1;
   }
   return tt__set_list(o, v, opt);
@@ -91,7 +91,7 @@ int tt__set_objective(const tt__option *o, const char *v, tt__host_options *opt)
 
 int tt__set_tune_params(const tt__option *o, const char *v, tt__host_options *opt) {
   if (!v[0] || strstr(v, ",,") || v[0] == ',' || v[strlen(v) - 1] == ',') {
-    fprintf(stderr, "host: %s: expected NAME[,NAME...], got \"%s\"\n", o->name, v);
+    tt__say("%s: expected NAME[,NAME...], got \"%s\"\n", o->name, v);
     return -1;
   }
   opt->tune_params = v;
@@ -100,7 +100,7 @@ int tt__set_tune_params(const tt__option *o, const char *v, tt__host_options *op
 
 int tt__set_clock(const tt__option *o, const char *v, tt__host_options *opt) {
   if (strcmp(v, "cpu") && strcmp(v, "wall")) {
-    fprintf(stderr, "host: %s: expected wall or cpu, got \"%s\"\n", o->name, v);
+    tt__say("%s: expected wall or cpu, got \"%s\"\n", o->name, v);
     return -1;
   }
   opt->clock_cpu = !strcmp(v, "cpu");
@@ -114,7 +114,7 @@ int tt__set_sequence(const tt__option *o, const char *v, tt__host_options *opt) 
   int ok = range ? tt_limit_parse_span(o->limit, v, &f0, &f1) == TT_OK
                  : tt_limit_parse_uint(o->limit, v, &n) == TT_OK && n >= 1;
   if (!ok) {
-    fprintf(stderr, "host: %s: expected a frame count N >= 1 or a range A:B with A <= B (frame "
+    tt__say("%s: expected a frame count N >= 1 or a range A:B with A <= B (frame "
             "numbers up to %u), got \"%s\"\n", o->name, UINT32_MAX - 1, v);
     return -1;
   }
@@ -133,7 +133,7 @@ int tt__set_camera_index(const tt__option *o, const char *v, tt__host_options *o
   } else if (tt_limit_parse_span(o->limit, v, &c0, &c1) == TT_OK) {
     opt->camera_index_range = 1;
   } else {
-    fprintf(stderr, "host: %s: expected I or A:B with A <= B <= %d (path samples A..B, both "
+    tt__say("%s: expected I or A:B with A <= B <= %d (path samples A..B, both "
             "included), got \"%s\"\n", o->name, TT_HOST_PATH_SAMPLES - 1, v);
     return -1;
   }
@@ -162,7 +162,7 @@ int tt__set_aov(const tt__option *o, const char *v, tt__host_options *opt) {
     size_t len = strcspn(p, ",");
     uint32_t bit = tt__aov_bit(p, len);
     if (!bit) {
-      fprintf(stderr, "host: %s: expected a comma-separated list of depth, normal, albedo, "
+      tt__say("%s: expected a comma-separated list of depth, normal, albedo, "
               "motion, prevdepth (or none), got \"%.*s\" in \"%s\"\n", o->name, (int)len, p, v);
       return -1;
     }
@@ -182,7 +182,7 @@ int tt__set_supersample(const tt__option *o, const char *v, tt__host_options *op
 int tt__set_indicator_norm(const tt__option *o, const char *v, tt__host_options *opt) {
   tt_indicator_norm norm;
   if (tt_indicator_norm_parse(v, &norm) != TT_OK) {
-    fprintf(stderr, "host: %s: %s\n", o->name, tt_last_error());
+    tt__say("%s: %s\n", o->name, tt_last_error());
     return -1;
   }
   opt->indicator_norm = v;
@@ -192,7 +192,7 @@ int tt__set_indicator_norm(const tt__option *o, const char *v, tt__host_options 
 int tt__set_out(const tt__option *o, const char *v, tt__host_options *opt) {
   const char *dot = strrchr(v, '.');
   if (!dot || (strcmp(dot, ".exr") != 0 && strcmp(dot, ".json") != 0)) {
-    fprintf(stderr, "host: %s: expected a file name ending in .exr (.json with --convert), got "
+    tt__say("%s: expected a file name ending in .exr (.json with --convert), got "
             "\"%s\"\n", o->name, v);
     return -1;
   }
@@ -202,9 +202,19 @@ int tt__set_out(const tt__option *o, const char *v, tt__host_options *opt) {
 
 int tt__set_stats(const tt__option *o, const char *v, tt__host_options *opt) {
   if (!*v) {
-    fprintf(stderr, "host: %s: expected a file name, got an empty string\n", o->name);
+    tt__say("%s: expected a file name, got an empty string\n", o->name);
     return -1;
   }
   opt->stats = v;
   return 0;
+}
+
+int tt__set_help(const tt__option *o, const char *v, tt__host_options *opt) {
+  opt->help = 1;
+  opt->help_topic = !strcmp(o->name, "--help-all") ? "all" : v;
+  if (!v || !strcmp(v, "all") || tt__topic_find(v) >= 0) return 0;
+  const char *near = tt__topic_suggest(v);
+  tt__say("%s: unknown topic \"%s\"%s%s%s; the topics: %s, all\n", o->name, v,
+          near ? " (did you mean " : "", near ? near : "", near ? "?)" : "", tt__topic_list());
+  return -1;
 }

@@ -28,6 +28,8 @@ int tt__set_aov(const tt__option *o, const char *v, struct tt__host_options *opt
 int tt__set_supersample(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_indicator_norm(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_out(const tt__option *o, const char *v, struct tt__host_options *opt);
+/* --help [TOPIC] and --help-all (topic "all"). */
+int tt__set_help(const tt__option *o, const char *v, struct tt__host_options *opt);
 int tt__set_stats(const tt__option *o, const char *v, struct tt__host_options *opt);
 
 #endif

@@ -14,21 +14,31 @@ struct tt__option;
 /* What follows an option on the command line. */
 typedef enum tt__arg_kind {
   TT__ARG_NONE = 0,   /* a flag: --quiet ("--quiet=x" is refused) */
-  TT__ARG_ONE = 1     /* one value: "--spp 64" or "--spp=64" */
+  TT__ARG_ONE = 1,    /* one value: "--spp 64" or "--spp=64" */
+  TT__ARG_TOPIC = 2   /* an optional --help topic: "--help tune", "--help=tune" or none */
 } tt__arg_kind;
 
-/* The --help sections, in the order --help prints them. */
+/* The sections of --help-all, in its order; "--help TOPIC" prints one. */
 typedef enum tt__topic {
-  TT__TOPIC_PLUGINS,
   TT__TOPIC_RENDER,
+  TT__TOPIC_PLUGINS,
+  TT__TOPIC_OUTPUT,
   TT__TOPIC_TUNE,
+  TT__TOPIC_HYBRID,
   TT__TOPIC_SEQUENCE,
   TT__TOPIC_CAMERA,
-  TT__TOPIC_OUTPUT,
-  TT__TOPIC_HYBRID,
   TT__TOPIC_TOOLS,
   TT__TOPIC_COUNT
 } tt__topic;
+
+/* The sections of the short --help, one per task (an option may be in several). */
+enum {
+  TT__TASK_RENDER = 1,
+  TT__TASK_TUNE = 2,
+  TT__TASK_HYBRID = 4,
+  TT__TASK_SEQUENCE = 8,
+  TT__TASK_MORE = 16  /* the short help's last lines: --help itself, --version */
+};
 
 /* tunetrace-mpi jobs whose driver sets an option itself (a job's args may not). */
 enum {
@@ -52,8 +62,10 @@ typedef struct tt__option {
   size_t field;          /* offsetof the tt__host_options member the generic setters write */
   tt_limit limit;        /* the range of a number (tunetrace/limits.h) */
   tt__topic topic;
+  unsigned tasks;        /* TT__TASK_*: the short --help's sections that list it */
   unsigned mpi;          /* TT__MPI_* */
-  const char *help;      /* lines of --help, '\n'-separated */
+  const char *help;      /* lines of --help, '\n'-separated; the first one stands alone (the
+                          * short --help shows only it) */
 } tt__option;
 
 /* The table, `*count` rows. */
@@ -63,7 +75,15 @@ const tt__option *tt__option_find(const char *name);
 /* The row of command-line argument `arg`, with "--NAME=VALUE" looked up by NAME; `*value`
  * is then VALUE (else NULL). NULL when `arg` is not an option of the table. */
 const tt__option *tt__option_of_arg(const char *arg, const char **value);
-/* The title of a --help section. */
+/* The topic named `name` ("tune"), or -1. */
+int tt__topic_find(const char *name);
+/* The name of a topic ("tune"). */
+const char *tt__topic_name(tt__topic topic);
+/* The topic names, ", "-separated, and the closest to a mistyped `name` (or NULL). */
+const char *tt__topic_list(void);
+const char *tt__topic_suggest(const char *name);
+/* The title of a --help section ("Tuning; thesis Fig. 3.2, ...": what follows ';' says where
+ * to read more). */
 const char *tt__topic_title(tt__topic topic);
 /* Text printed under a section's title before its options ("" when none). */
 const char *tt__topic_intro(tt__topic topic);

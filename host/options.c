@@ -15,10 +15,15 @@ static int tt__unknown_option(const char *arg) {
   snprintf(name, sizeof name, "%.*s", eq ? (int)(eq - arg) : (int)strlen(arg), arg);
   const char *near = tt__option_suggest(name);
   if (near)
-    fprintf(stderr, "host: unknown option \"%s\"; did you mean %s? (try --help)\n", name, near);
+    tt__say("unknown option \"%s\"; did you mean %s? (try --help)\n", name, near);
   else
-    fprintf(stderr, "host: unknown option \"%s\" (try --help)\n", name);
+    tt__say("unknown option \"%s\" (try --help)\n", name);
   return -1;
+}
+
+/* 1 when `arg` reads as a word (a --help topic), not an option or a file name. */
+static int tt__is_word(const char *arg) {
+  return arg[0] && arg[0] != '-' && !strpbrk(arg, "./");
 }
 
 /* Reads the option at argv[*i] and its value (attached with '=' or the next argument). */
@@ -27,12 +32,14 @@ static int tt__read_option(int argc, char **argv, int *i, tt__host_options *opt)
   const tt__option *o = tt__option_of_arg(a, &value);
   if (!o) return tt__unknown_option(a);
   if (o->arg == TT__ARG_NONE && value) {
-    fprintf(stderr, "host: %.*s takes no value, got \"%s\"\n", (int)(value - 1 - a), a, a);
+    tt__say("%.*s takes no value, got \"%s\"\n", (int)(value - 1 - a), a, a);
     return -1;
   }
+  if (o->arg == TT__ARG_TOPIC && !value && *i + 1 < argc && tt__is_word(argv[*i + 1]))
+    value = argv[++*i];  /* --help TOPIC; not a scene file */
   if (o->arg == TT__ARG_ONE && !value) {
     if (*i + 1 >= argc) {
-      fprintf(stderr, "host: %s: missing value\n", a);
+      tt__say("%s: missing value\n", a);
       return -1;
     }
     value = argv[++*i];
@@ -58,7 +65,7 @@ static int tt__out_pattern(const char *out) {
   }
   if (convs == 0 && !strchr(out, '%')) return 0;
   if (convs == 1) return 1;
-  fprintf(stderr, "host: --out %s: a frame pattern needs exactly one %%d, %%4d or %%04d "
+  tt__say("--out %s: a frame pattern needs exactly one %%d, %%4d or %%04d "
           "(the frame number; %%%% for a literal %%)\n", out);
   return -1;
 }
@@ -77,16 +84,16 @@ static int tt__use_out_pattern(tt__host_options *opt) {
   const char *v = opt->frames_arg;
   uint32_t f0 = 0, f1 = 0;
   if (opt->out_dir) {
-    fprintf(stderr, "host: --out %s (a frame pattern) and --out-dir exclude each other\n",
+    tt__say("--out %s (a frame pattern) and --out-dir exclude each other\n",
             opt->out);
     return -1;
   }
   if (v && opt->sequence) {
-    fprintf(stderr, "host: --frames and --sequence exclude each other\n");
+    tt__say("--frames and --sequence exclude each other\n");
     return -1;
   }
   if (v && !tt__frames_range(v, &f0, &f1)) {
-    fprintf(stderr, "host: --frames: expected A:B with A <= B (frames A..B of the camera path, "
+    tt__say("--frames: expected A:B with A <= B (frames A..B of the camera path, "
             "written to --out %s), got \"%s\"\n", opt->out, v);
     return -1;
   }
@@ -96,7 +103,7 @@ static int tt__use_out_pattern(tt__host_options *opt) {
     opt->seq_last = f1;
   }
   if (!opt->sequence) {
-    fprintf(stderr, "host: --out %s is a frame pattern: give the frames with --frames A:B (or "
+    tt__say("--out %s is a frame pattern: give the frames with --frames A:B (or "
             "--sequence N)\n", opt->out);
     return -1;
   }
@@ -106,12 +113,12 @@ static int tt__use_out_pattern(tt__host_options *opt) {
 /* The pattern's other rules: no --camera-index, an .exr name; then it replaces --out. */
 static int tt__check_out_pattern(tt__host_options *opt) {
   if (opt->camera_index_set) {
-    fprintf(stderr, "host: --camera-index and a frame pattern in --out exclude each other\n");
+    tt__say("--camera-index and a frame pattern in --out exclude each other\n");
     return -1;
   }
   const char *dot = strrchr(opt->out, '.');
   if (!dot || strcmp(dot, ".exr")) {
-    fprintf(stderr, "host: --out %s: expected a file pattern ending in .exr\n", opt->out);
+    tt__say("--out %s: expected a file pattern ending in .exr\n", opt->out);
     return -1;
   }
   opt->seq_pattern = opt->out;
@@ -123,7 +130,7 @@ static int tt__check_out_pattern(tt__host_options *opt) {
 static int tt__use_still_frames(tt__host_options *opt) {
   uint32_t f0 = 0, f1 = 0;
   if (!tt__frames_range(opt->frames_arg, &f0, &f1)) {
-    fprintf(stderr, "host: --frames: expected A:B with A <= B (frames A..B of the camera path "
+    tt__say("--frames: expected A:B with A <= B (frames A..B of the camera path "
             "at --fps, both included), got \"%s\"\n", opt->frames_arg);
     return -1;
   }
@@ -136,22 +143,22 @@ static int tt__use_still_frames(tt__host_options *opt) {
 /* Options that only sequences take. */
 static int tt__check_sequence_only(const tt__host_options *opt) {
   if (!opt->sequence && opt->reference_only) {
-    fprintf(stderr, "host: --supersample applies to sequences: give --frames A:B with --out "
+    tt__say("--supersample applies to sequences: give --frames A:B with --out "
             "DIR/frame_%%04d.exr, or --sequence\n");
     return -1;
   }
   if (!opt->sequence && (opt->aov_mask & TT__AOV_PREVDEPTH)) {
-    fprintf(stderr, "host: --aov prevdepth applies to sequences (it needs the previous frame's "
+    tt__say("--aov prevdepth applies to sequences (it needs the previous frame's "
             "camera): give --frames A:B with --out DIR/frame_%%04d.exr, or --sequence\n");
     return -1;
   }
   if (!opt->sequence && (opt->reference_scale || (opt->out_dir && !opt->hybrid))) {
-    fprintf(stderr, "host: --reference-scale and --out-dir apply to --sequence (--out-dir also "
+    tt__say("--reference-scale and --out-dir apply to --sequence (--out-dir also "
             "to --hybrid)\n");
     return -1;
   }
   if (opt->reference_only && opt->post) {
-    fprintf(stderr, "host: --supersample writes the reference frames: no --post filter (render "
+    tt__say("--supersample writes the reference frames: no --post filter (render "
             "the filtered frames in a separate run)\n");
     return -1;
   }
@@ -177,12 +184,12 @@ static int tt__check_reference(const tt__host_options *opt) {
   int rrmse = opt->objective && !tt__parse_objective("--objective", opt->objective, &obj) &&
               obj.kind == TT_OBJECTIVE_RRMSE;
   if (rrmse && !opt->reference) {
-    fprintf(stderr, "host: --objective rrmse needs --reference FILE.exr (an image of the same "
+    tt__say("--objective rrmse needs --reference FILE.exr (an image of the same "
             "scene and resolution, e.g. a high-spp integrator_pt render)\n");
     return -1;
   }
   if (opt->reference && !rrmse) {
-    fprintf(stderr, "host: --reference %s: only --objective rrmse uses a reference\n",
+    tt__say("--reference %s: only --objective rrmse uses a reference\n",
             opt->reference);
     return -1;
   }
@@ -192,11 +199,11 @@ static int tt__check_reference(const tt__host_options *opt) {
 /* Options that exclude each other. */
 static int tt__check_exclusions(const tt__host_options *opt) {
   if (opt->db && opt->no_db) {
-    fprintf(stderr, "host: --db and --no-db exclude each other\n");
+    tt__say("--db and --no-db exclude each other\n");
     return -1;
   }
   if ((opt->frames || opt->camera_index_set) && opt->sequence) {
-    fprintf(stderr, "host: --camera-index/--frames and --sequence exclude each other\n");
+    tt__say("--camera-index/--frames and --sequence exclude each other\n");
     return -1;
   }
   return 0;
@@ -205,20 +212,20 @@ static int tt__check_exclusions(const tt__host_options *opt) {
 /* --camera-index (A:B), --frames and the states of --hybrid / --predict. */
 static int tt__check_path_states(const tt__host_options *opt) {
   if ((opt->hybrid || opt->predict_only) && opt->frames_arg) {
-    fprintf(stderr, "host: --%s: the states are camera path samples (of %d over the path's "
+    tt__say("--%s: the states are camera path samples (of %d over the path's "
             "time range): give them with --camera-index A:B (samples A..B, both included); "
             "--frames A:B means frames at --fps\n", opt->hybrid ? "hybrid" : "predict",
             TT_HOST_PATH_SAMPLES);
     return -1;
   }
   if (opt->camera_index_range && !opt->hybrid && !opt->predict_only) {
-    fprintf(stderr, "host: --camera-index A:B (a range of path samples) applies to --hybrid "
+    tt__say("--camera-index A:B (a range of path samples) applies to --hybrid "
             "and --predict; render one sample with --camera-index I, or frames with "
             "--frames A:B\n");
     return -1;
   }
   if (opt->frames && opt->camera_index_set) {
-    fprintf(stderr, "host: --camera-index and --frames exclude each other\n");
+    tt__say("--camera-index and --frames exclude each other\n");
     return -1;
   }
   return 0;
@@ -229,11 +236,11 @@ static int tt__check_convert(const tt__host_options *opt) {
   const char *odot = opt->out ? strrchr(opt->out, '.') : NULL;
   int out_json = odot && strcmp(odot, ".json") == 0;
   if (opt->convert && !out_json) {
-    fprintf(stderr, "host: --convert: expected --out FILE.json (the scene.json to write)\n");
+    tt__say("--convert: expected --out FILE.json (the scene.json to write)\n");
     return -1;
   }
   if (!opt->convert && out_json) {
-    fprintf(stderr, "host: --out: expected a file name ending in .exr, got \"%s\" (.json only "
+    tt__say("--out: expected a file name ending in .exr, got \"%s\" (.json only "
             "with --convert)\n", opt->out);
     return -1;
   }
@@ -250,6 +257,7 @@ static int tt__check_combinations(tt__host_options *opt) {
 
 int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
   memset(opt, 0, sizeof *opt);
+  tt__set_prog(argc > 0 ? argv[0] : NULL);
   opt->argc = argc;
   opt->argv = argv;
   struct timespec now;
@@ -261,7 +269,7 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
     if (a[0] == '-' && a[1] != '\0') {
       if (tt__read_option(argc, argv, &i, opt)) return TT_EXIT_USAGE;
     } else if (opt->scene) {
-      fprintf(stderr, "host: more than one scene given (\"%s\" and \"%s\")\n", opt->scene, a);
+      tt__say("more than one scene given (\"%s\" and \"%s\")\n", opt->scene, a);
       return TT_EXIT_USAGE;
     } else {
       opt->scene = a;
@@ -272,6 +280,6 @@ int tt__parse_options(int argc, char **argv, tt__host_options *opt) {
 
 int tt__parse_objective(const char *opt, const char *text, tt_objective *out) {
   if (tt_objective_parse(text, out) == TT_OK) return 0;
-  fprintf(stderr, "host: %s: %s\n", opt, tt_last_error());
+  tt__say("%s: %s\n", opt, tt_last_error());
   return -1;
 }

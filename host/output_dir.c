@@ -35,7 +35,7 @@ int tt__ensure_parent_dir(const char *option, const char *path) {
   char dir[4096];
   snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
   if (tt__ensure_dir(dir) == 0) return TT_EXIT_OK;
-  fprintf(stderr, "host: %s %s: cannot create the folder %s: %s\n", option, path, dir,
+  tt__say("%s %s: cannot create the folder %s: %s\n", option, path, dir,
           strerror(errno));
   return TT_EXIT_OUTPUT;
 }

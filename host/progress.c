@@ -1,5 +1,6 @@
-/* host: progress bar with ETA on a TTY, plain lines otherwise, and a log that does not
- * tear the bar. Both are passed to plugins through the host services table. */
+/* host: progress bar with ETA on a TTY, a line every 10 s otherwise, the estimate of long
+ * work said once its first step has ended, and a log that does not tear the bar. Progress
+ * and log are passed to plugins through the host services table. */
 #include "host.h"
 
 #include <pthread.h>
@@ -16,13 +17,17 @@ static int tt__tty;
 static int tt__bar_visible;        /* a partial bar line is on screen */
 static char tt__task[64];
 static uint64_t tt__task_start_ns;
-static uint64_t tt__last_draw_ns;
-static int tt__last_decile = -1;   /* non-TTY: last 10% step printed */
+static uint64_t tt__last_draw_ns;  /* the bar's last redraw, or the last logged line */
+static int tt__estimated;          /* the task's estimate was said (after its first step) */
 static tt_host tt__host;
 
-static uint64_t tt__now(void) { return tt_default_host()->clock_ns(); }
+#define TT__LOG_EVERY_NS 10000000000ull  /* not a terminal: one progress line per 10 s */
+#define TT__LONG_WORK_S 60.0             /* an estimate at least this long is said once */
 
-/* Formats seconds as "12.3s", "4m05s" or "1h02m". */
+static uint64_t tt__now(void) { return tt_default_host()->clock_ns(); }
+static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt, ...);
+
+/* Formats seconds as "12.3s", "4m05s" or "1h02m"; "?" while unknown. */
 static void tt__fmt_time(double s, char *buf, size_t n) {
   if (s < 0 || s != s) snprintf(buf, n, "?");
   else if (s < 60) snprintf(buf, n, "%.1fs", s);
@@ -30,44 +35,75 @@ static void tt__fmt_time(double s, char *buf, size_t n) {
   else snprintf(buf, n, "%dh%02dm", (int)(s / 3600), (int)(s / 60) % 60);
 }
 
+/* How a user shortens each task, said with a long estimate. */
+static const char *tt__shorten(const char *task) {
+  static const struct { const char *task, *how; } hints[] = {
+    {"render", "--spp or --time to shorten"},
+    {"tuning", "--iterations to shorten"},
+    {"explore", "a smaller --explore N to shorten"},
+    {"hybrid", "--camera-index A:B or --iterations to shorten"},
+    {"sequence", "fewer frames or --spp to shorten"},
+  };
+  for (size_t k = 0; k < sizeof hints / sizeof hints[0]; k++)
+    if (!strcmp(task, hints[k].task)) return hints[k].how;
+  return NULL;
+}
+
+/* Says a long task's estimate once, when its first step has ended: "render: about 48 h;
+ * --spp or --time to shorten". Called without the lock (the log takes it). */
+static void tt__say_estimate(const char *task, double eta) {
+  const char *how = tt__shorten(task);
+  double unit = eta >= 7200 ? 3600 : eta >= 120 ? 60 : 1;
+  tt__host_log(TT_LOG_INFO, NULL, "%s: about %.0f %s%s%s", task, eta / unit,
+               unit == 3600 ? "h" : unit == 60 ? "min" : "s", how ? "; " : "", how ? how : "");
+}
+
+/* Starts the progress of a new task (under the lock). */
+static void tt__begin_task(const char *task, uint64_t now) {
+  snprintf(tt__task, sizeof tt__task, "%s", task);
+  tt__task_start_ns = now;
+  tt__last_draw_ns = 0;
+  tt__estimated = 0;
+}
+
+/* The bar on a terminal, at most 10 redraws a second and always at 100%. */
+static void tt__draw_bar(double fraction, const char *el, const char *et, uint64_t now) {
+  if (fraction < 1 && tt__last_draw_ns && now - tt__last_draw_ns < 100000000ull) return;
+  tt__last_draw_ns = now;
+  char bar[31];
+  int fill = (int)(fraction * 30 + 0.5);
+  for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
+  bar[30] = 0;
+  fprintf(stderr, "\r\033[K%s [%s] %5.1f%%  elapsed %s  ETA %s", tt__task, bar, fraction * 100,
+          el, et);
+  tt__bar_visible = 1;
+}
+
+/* A line in a log (not a terminal): the first, then one per 10 s, and the last. */
+static void tt__log_line(double fraction, const char *el, const char *et, uint64_t now) {
+  if (tt__last_draw_ns && fraction < 1 && now - tt__last_draw_ns < TT__LOG_EVERY_NS) return;
+  tt__last_draw_ns = now;
+  fprintf(stderr, "%s: %5.1f%%  elapsed %s  ETA %s\n", tt__task, fraction * 100, el, et);
+}
+
 void tt__progress_update(const char *task, double fraction) {
   if (tt__quiet) return;
-  if (fraction < 0) fraction = 0;
-  if (fraction > 1) fraction = 1;
+  fraction = fraction < 0 ? 0 : fraction > 1 ? 1 : fraction;
   pthread_mutex_lock(&tt__lock);
   uint64_t now = tt__now();
-  if (strncmp(task, tt__task, sizeof tt__task - 1) != 0) {
-    snprintf(tt__task, sizeof tt__task, "%s", task);
-    tt__task_start_ns = now;
-    tt__last_decile = -1;
-    tt__last_draw_ns = 0;
-  }
+  if (strncmp(task, tt__task, sizeof tt__task - 1) != 0) tt__begin_task(task, now);
   double elapsed = (now - tt__task_start_ns) * 1e-9;
-  double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : -1;
+  double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : -1;  /* "?" until then */
+  int say = fraction > 0 && !tt__estimated && eta >= TT__LONG_WORK_S;
+  tt__estimated |= fraction > 0;
   char el[32], et[32];
   tt__fmt_time(elapsed, el, sizeof el);
   tt__fmt_time(eta, et, sizeof et);
-  if (tt__tty) {
-    /* redraw at most 10 times a second, and always at 100% */
-    if (fraction < 1 && now - tt__last_draw_ns < 100000000ull) goto out;
-    tt__last_draw_ns = now;
-    char bar[31];
-    int fill = (int)(fraction * 30 + 0.5);
-    for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
-    bar[30] = 0;
-    fprintf(stderr, "\r\033[K%s [%s] %5.1f%%  elapsed %s  ETA %s", tt__task, bar,
-            fraction * 100, el, et);
-    tt__bar_visible = 1;
-  } else {
-    int decile = (int)(fraction * 10);
-    if (decile != tt__last_decile) {
-      tt__last_decile = decile;
-      fprintf(stderr, "%s: %3d%%  elapsed %s  ETA %s\n", tt__task, decile * 10, el, et);
-    }
-  }
+  if (tt__tty) tt__draw_bar(fraction, el, et, now);
+  else tt__log_line(fraction, el, et, now);
   fflush(stderr);
-out:
   pthread_mutex_unlock(&tt__lock);
+  if (say) tt__say_estimate(task, eta);
 }
 
 void tt__progress_finish(void) {
@@ -94,7 +130,7 @@ static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt
     tt__bar_visible = 0;
     tt__last_draw_ns = 0;
   }
-  fprintf(stderr, "host: %s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
+  tt__say("%s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
           plugin ? "] " : "", names[level <= TT_LOG_ERROR ? level : TT_LOG_ERROR], msg);
   pthread_mutex_unlock(&tt__lock);
 }

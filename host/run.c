@@ -38,7 +38,7 @@ int tt__run_list_plugins(const tt__host_options *opt) {
   printf("%-22s %-10s %-8s %s\n", "NAME", "KIND", "VERSION", "PATH");
   tt_registry_list_files(reg, tt__list_one, &ctx);
   if (!opt->quiet)
-    fprintf(stderr, "host: %d plugin(s), %d rejected; search path: %s\n", ctx.found,
+    tt__say("%d plugin(s), %d rejected; search path: %s\n", ctx.found,
             ctx.rejected, tt_registry_search_path(reg));
   tt_registry_destroy(reg);
   /* everything is listed first; a rejected file is then a plugin error like --plugin's */
@@ -52,7 +52,7 @@ int tt__run_list_plugins(const tt__host_options *opt) {
 static cJSON *tt__describe_one(tt_registry *reg, const char *name, int *rc) {
   tt_loaded_plugin *p = NULL;
   if (tt_registry_load(reg, name, &p) != TT_OK) {
-    fprintf(stderr, "host: --describe \"%s\": %s\n", name, tt_last_error());
+    tt__say("--describe \"%s\": %s\n", name, tt_last_error());
     *rc = TT_EXIT_PLUGIN;
     return NULL;
   }
@@ -62,7 +62,7 @@ static cJSON *tt__describe_one(tt_registry *reg, const char *name, int *rc) {
   cJSON *root = json ? cJSON_Parse(json) : cJSON_CreateObject();
   tt_free(json);
   if (!root) {
-    fprintf(stderr, "host: --describe %s: %s\n", e->name,
+    tt__say("--describe %s: %s\n", e->name,
             space ? tt_last_error() : "out of memory");
     *rc = TT_EXIT_FAILURE;
     return NULL;
@@ -180,7 +180,7 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
   float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
   float *layers = tt_film_aov_mask(film) ? malloc((size_t)w * h * 12 * sizeof(float)) : NULL;
   if (!rgb || (tt_film_aov_mask(film) && !layers)) {
-    fprintf(stderr, "host: out of memory resolving the image\n");
+    tt__say("out of memory resolving the image\n");
     free(rgb);
     free(layers);
     return TT_EXIT_OUTPUT;
@@ -211,11 +211,11 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
   int rc = TT_EXIT_OK;
   if (tt_image_write_exr(exr, w, h, channels, layers ? layers : rgb, layers ? names : NULL, meta,
                          nmeta) != TT_OK) {
-    fprintf(stderr, "host: cannot write %s: %s\n", exr, tt_last_error());
+    tt__say("cannot write %s: %s\n", exr, tt_last_error());
     rc = TT_EXIT_OUTPUT;
   }
   if (tt_image_write_png_display(png, w, h, rgb, 0.0f, meta, nmeta) != TT_OK) {
-    fprintf(stderr, "host: cannot write %s: %s\n", png, tt_last_error());
+    tt__say("cannot write %s: %s\n", png, tt_last_error());
     rc = TT_EXIT_OUTPUT;
   }
   free(rgb);
@@ -230,7 +230,7 @@ static int tt__check_still_post(const tt__session *s) {
   for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
     const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->reg, i));
     if (e->kind != TT_KIND_POST || (s->opt->tune && !strcmp(s->opt->tune, e->name))) continue;
-    fprintf(stderr, "host: %s %s: a post-filter runs over the frames of a sequence, and this "
+    tt__say("%s %s: a post-filter runs over the frames of a sequence, and this "
             "is a still render, which it would leave unfiltered; render frames with --frames "
             "A:B --out DIR/frame_%%04d.exr (or --sequence N --out-dir DIR), or tune the filter "
             "with --tune %s\n", s->opt->post && strstr(s->opt->post, e->name) ? "--post" : "--plugin",
@@ -283,7 +283,7 @@ int tt__run_render(const tt__host_options *opt) {
   const char *outputs[3] = {exr, png, opt->stats};
   for (int i = 0; i < 3; i++)
     if (outputs[i] && tt_file_check_writable(outputs[i]) != TT_OK) {
-      fprintf(stderr, "host: %s%s\n", i == 2 ? "--stats: " : "", tt_last_error());
+      tt__say("%s%s\n", i == 2 ? "--stats: " : "", tt_last_error());
       return TT_EXIT_OUTPUT;
     }
   tt__session s;
@@ -306,7 +306,7 @@ int tt__run_render(const tt__host_options *opt) {
   if (opt->time_budget > 0 && !opt->spp) target_spp = UINT32_MAX;
 
   if (!opt->quiet)
-    fprintf(stderr, "host: %s: %llu triangles, %ux%u, %s%u spp, seed %llu, %u threads\n",
+    tt__say("%s: %llu triangles, %ux%u, %s%u spp, seed %llu, %u threads\n",
             opt->scene, (unsigned long long)tt_scene_triangle_count(s.scene), s.camera->width,
             s.camera->height, target_spp == UINT32_MAX ? "time budget, up to " : "",
             target_spp == UINT32_MAX ? 0 : target_spp, (unsigned long long)rec->seed,
@@ -333,7 +333,9 @@ int tt__run_render(const tt__host_options *opt) {
                                                                           : (uint32_t)without_db;
   }
 
-  /* progressive passes of 1 spp each, until the target or the time budget */
+  /* progressive passes of 1 spp each, until the target or the time budget; the progress
+   * shows "ETA ?" until the first pass has ended */
+  tt__progress_update("render", 0);
   while (rc == TT_EXIT_OK && !rec->interrupted && rec->spp < target_spp) {
     double elapsed = (host->clock_ns() - t0) * 1e-9;
     if (budget_s > 0 && elapsed >= budget_s) break;
@@ -349,7 +351,7 @@ int tt__run_render(const tt__host_options *opt) {
       break;
     }
     if (st != TT_OK) {
-      fprintf(stderr, "host: %s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
+      tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
               rec->passes, tt_last_error());
       rc = TT_EXIT_FAILURE;
       break;
@@ -371,14 +373,14 @@ int tt__run_render(const tt__host_options *opt) {
     tt_status st = tt__session_render_pass(&s, 1, &ps, &ms);
     tt_default_host_hold_stop(0);
     if (st != TT_OK) {
-      fprintf(stderr, "host: %s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
+      tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
               rec->passes, tt_last_error());
       rc = TT_EXIT_FAILURE;
     }
   }
   tt__progress_finish();
   if (rec->nonfinite)  /* a warning: --quiet keeps it */
-    fprintf(stderr, "host: warning: %llu non-finite samples were dropped\n",
+    tt__say("warning: %llu non-finite samples were dropped\n",
             (unsigned long long)rec->nonfinite);
 
   /* write what was rendered, even when interrupted or a later pass failed; a second
@@ -390,14 +392,14 @@ int tt__run_render(const tt__host_options *opt) {
     int wrc = tt__write_images(rec, s.film, exr, png);
     if (wrc != TT_EXIT_OK && rc == TT_EXIT_OK) rc = wrc;
     else if (!opt->quiet && wrc == TT_EXIT_OK)
-      fprintf(stderr, "host: wrote %s and %s (%u spp, %.1f ms, %.2f Mrays/s)\n", exr, png,
+      tt__say("wrote %s and %s (%u spp, %.1f ms, %.2f Mrays/s)\n", exr, png,
               rec->spp, rec->render_ms,
               rec->render_ms > 0 ? rec->rays / (rec->render_ms * 1e3) : 0.0);
   } else {
-    fprintf(stderr, "host: no pass completed: nothing to write\n");
+    tt__say("no pass completed: nothing to write\n");
   }
   if (opt->stats && tt__write_stats(opt->stats, rec) != TT_OK) {
-    fprintf(stderr, "host: cannot write %s: %s\n", opt->stats, tt_last_error());
+    tt__say("cannot write %s: %s\n", opt->stats, tt_last_error());
     if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
   }
   tt__outputs_end();

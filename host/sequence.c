@@ -195,7 +195,7 @@ static int tt__seq_write(const char *path, uint32_t w, uint32_t h, uint32_t ch,
                          const float *px, const char *const *names) {
   tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
   if (tt_image_write_exr(path, w, h, ch, px, names, meta, 1) != TT_OK) {
-    fprintf(stderr, "host: cannot write %s: %s\n", path, tt_last_error());
+    tt__say("cannot write %s: %s\n", path, tt_last_error());
     return -1;
   }
   return 0;
@@ -207,14 +207,14 @@ static int tt__seq_manifest_commit(const char *path, FILE *m, char **buf, size_t
   static const char tail[] = "  ]\n}\n";
   tt_atomic_file *f = NULL;
   if (fflush(m) != 0 || tt_atomic_file_open(path, &f) != TT_OK) {
-    fprintf(stderr, "host: cannot write %s: %s\n", path, f ? "out of memory" : tt_last_error());
+    tt__say("cannot write %s: %s\n", path, f ? "out of memory" : tt_last_error());
     return -1;
   }
   FILE *out = tt_atomic_file_stream(f);
   fwrite(*buf, 1, *len, out);
   fputs(tail, out);
   if (tt_atomic_file_commit(f) != TT_OK) {
-    fprintf(stderr, "host: cannot write %s: %s\n", path, tt_last_error());
+    tt__say("cannot write %s: %s\n", path, tt_last_error());
     return -1;
   }
   return 0;
@@ -222,7 +222,7 @@ static int tt__seq_manifest_commit(const char *path, FILE *m, char **buf, size_t
 
 int tt__run_sequence(const tt__host_options *opt) {
   if (!opt->out_dir && !opt->seq_pattern) {
-    fprintf(stderr, "host: --sequence needs --out-dir DIR (or --out DIR/frame_%%04d.exr)\n");
+    tt__say("--sequence needs --out-dir DIR (or --out DIR/frame_%%04d.exr)\n");
     return TT_EXIT_USAGE;
   }
   /* SIGINT/SIGTERM: the current frame finishes and stays in the manifest (it is committed
@@ -243,7 +243,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     snprintf(s.dir, sizeof s.dir, "%s", opt->out_dir);
   }
   if (tt__ensure_dir(s.dir) != 0) {
-    fprintf(stderr, "host: %s %s: cannot create the directory: %s\n",
+    tt__say("%s %s: cannot create the directory: %s\n",
             opt->seq_pattern ? "--out" : "--out-dir", s.dir, strerror(errno));
     return TT_EXIT_OUTPUT;
   }
@@ -266,7 +266,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     if (dot) *dot = 0;
     s.pi = tt__seq_find(&s, TT_KIND_POST, name, &pcfg);
     if (!s.pi) {
-      fprintf(stderr, "host: --post %s: not a post-filter plugin (kind post)\n", opt->post);
+      tt__say("--post %s: not a post-filter plugin (kind post)\n", opt->post);
       rc = TT_EXIT_PLUGIN;
       goto done;
     }
@@ -283,7 +283,7 @@ int tt__run_sequence(const tt__host_options *opt) {
         }
       }
       if (opt->reference_only) {
-        fprintf(stderr, "host: --supersample writes the reference frames: no post-filter "
+        tt__say("--supersample writes the reference frames: no post-filter "
                 "(%s is loaded)\n", s.post_name);
         rc = TT_EXIT_USAGE;
         goto done;
@@ -311,25 +311,25 @@ int tt__run_sequence(const tt__host_options *opt) {
     ref = malloc((size_t)w * h * 3 * sizeof(float));
   }
   if (!rgb || !post_rgb || !motion || !prev_depth || (k && (!ref_film || !ref_hi || !ref))) {
-    fprintf(stderr, "host: out of memory for %ux%u frames\n", w, h);
+    tt__say("out of memory for %ux%u frames\n", w, h);
     rc = TT_EXIT_FAILURE;
     goto done;
   }
   if (s.pi && s.pi->create(w, h, pcfg, &s.post) != TT_OK) {
-    fprintf(stderr, "host: post-filter %s: %s\n", s.post_name, tt_last_error());
+    tt__say("post-filter %s: %s\n", s.post_name, tt_last_error());
     rc = TT_EXIT_FAILURE;
     goto done;
   }
   char path[4096 + 1100], name[1024];
   snprintf(mpath, sizeof mpath, "%s/manifest.json", s.dir);
   if (tt_file_check_writable(mpath) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     rc = TT_EXIT_OUTPUT;
     goto done;
   }
   manifest = open_memstream(&mbuf, &mlen);
   if (!manifest) {
-    fprintf(stderr, "host: cannot write %s: %s\n", mpath, strerror(errno));
+    tt__say("cannot write %s: %s\n", mpath, strerror(errno));
     rc = TT_EXIT_OUTPUT;
     goto done;
   }
@@ -342,7 +342,7 @@ int tt__run_sequence(const tt__host_options *opt) {
           (unsigned long long)s.seed, TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS,
           s.post_name ? "\"" : "", s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
   if (!opt->quiet)
-    fprintf(stderr, "host: sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n",
+    tt__say("sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n",
             opt->scene, opt->seq_first, opt->seq_last, fps, w, h, s.spp,
             k ? (opt->reference_only ? ", reference only x" : ", reference x") : "",
             k ? (k == 2 ? "2" : k == 4 ? "4" : "K") : "", s.dir);
@@ -381,7 +381,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     if (render_frame) {
       uint64_t t0 = host->clock_ns();
       if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {
-        fprintf(stderr, "host: frame %u: %s\n", f, tt_last_error());
+        tt__say("frame %u: %s\n", f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
@@ -425,7 +425,7 @@ int tt__run_sequence(const tt__host_options *opt) {
       hi.height = h * k;
       uint64_t r0 = host->clock_ns();
       if (tt__seq_render(&s, ref_film, &hi, NULL, NULL, s.seed + 1000003u * (f + 1), ref_hi) != TT_OK) {
-        fprintf(stderr, "host: reference frame %u: %s\n", f, tt_last_error());
+        tt__say("reference frame %u: %s\n", f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
@@ -456,7 +456,7 @@ int tt__run_sequence(const tt__host_options *opt) {
       pf.prev_depth = prev_depth;
       uint64_t p0 = host->clock_ns();
       if (s.pi->process(s.post, &pf, post_rgb) != TT_OK) {
-        fprintf(stderr, "host: post-filter %s: frame %u: %s\n", s.post_name, f, tt_last_error());
+        tt__say("post-filter %s: frame %u: %s\n", s.post_name, f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
       }
@@ -481,7 +481,7 @@ int tt__run_sequence(const tt__host_options *opt) {
       snprintf(path, sizeof path, "%s/%s", s.dir, name);
       tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
       if (tt_image_write_png_display(path, w, h, px, 0.0f, meta, 1) != TT_OK) {
-        fprintf(stderr, "host: cannot write %s: %s\n", path, tt_last_error());
+        tt__say("cannot write %s: %s\n", path, tt_last_error());
         rc = TT_EXIT_OUTPUT;
         break;
       }
@@ -503,9 +503,9 @@ int tt__run_sequence(const tt__host_options *opt) {
   fclose(manifest);
   manifest = NULL;
   if (!opt->quiet && rc == TT_EXIT_OK)
-    fprintf(stderr, "host: wrote %u frames to %s\n", nframes, s.dir);
+    tt__say("wrote %u frames to %s\n", nframes, s.dir);
   else if (rc == TT_EXIT_INTERRUPTED)
-    fprintf(stderr, "host: interrupted: %u of %u frames written to %s (manifest.json lists them)\n",
+    tt__say("interrupted: %u of %u frames written to %s (manifest.json lists them)\n",
             done_frames, nframes, s.dir);
 done:
   if (manifest) fclose(manifest);

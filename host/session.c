@@ -60,18 +60,18 @@ static int tt__load_plugins(tt__session *s) {
   int failures = 0;
   for (int i = 0; i < opt->plugin_count; i++) {
     if (tt_session_load_plugin(s->lib, opt->plugins[i], NULL) != TT_OK) {
-      fprintf(stderr, "host: plugin \"%s\": %s\n", opt->plugins[i], tt_last_error());
+      tt__say("plugin \"%s\": %s\n", opt->plugins[i], tt_last_error());
       failures++;
     }
   }
   if (opt->post && !tt_registry_find_name(tt_session_registry(s->lib), opt->post) &&
       tt_session_load_plugin(s->lib, opt->post, NULL) != TT_OK) {
-    fprintf(stderr, "host: --post \"%s\": %s\n", opt->post, tt_last_error());
+    tt__say("--post \"%s\": %s\n", opt->post, tt_last_error());
     failures++;
   }
   if (failures) return failures;
   if (tt_session_load_defaults(s->lib) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     failures++;
   }
   /* the hybrid loop (--hybrid, --predict) also needs a search and a model: the thesis' */
@@ -80,7 +80,7 @@ static int tt__load_plugins(tt__session *s) {
   for (size_t i = 0; (opt->hybrid || opt->predict_only) && i < 2; i++) {
     if (tt_registry_find_kind(tt_session_registry(s->lib), hybrid[i].kind)) continue;
     if (tt_session_load_plugin(s->lib, hybrid[i].name, NULL) != TT_OK) {
-      fprintf(stderr, "host: default %s plugin \"%s\": %s\n", tt_plugin_kind_name(hybrid[i].kind),
+      tt__say("default %s plugin \"%s\": %s\n", tt_plugin_kind_name(hybrid[i].kind),
               hybrid[i].name, tt_last_error());
       failures++;
     }
@@ -109,7 +109,7 @@ static int tt__apply_sets(tt__session *s) {
     snprintf(plugin, sizeof plugin, "%.*s", (int)(dot - arg), arg);
     snprintf(param, sizeof param, "%.*s", (int)(eq - dot - 1), dot + 1);
     if (tt_session_set(s->lib, plugin, param, eq + 1) != TT_OK) {
-      fprintf(stderr, "host: --set %s: %s\n", arg, tt_last_error());
+      tt__say("--set %s: %s\n", arg, tt_last_error());
       errors++;
     }
   }
@@ -130,14 +130,14 @@ static int tt__apply_camera_index(tt__session *s) {
   int timed = c0->key_count > 0 || tt_scene_animated(s->scene);
   if (timed && !opt->camera_time_set) t = t0 + (t1 - t0) * (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
   if (tt_scene_animated(s->scene) && tt_scene_set_time(s->scene, t, t - dt) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     return TT_EXIT_SCENE;
   }
   if (!timed && opt->camera_time_set)  /* a warning: --quiet keeps it */
-    fprintf(stderr, "host: warning: --frames: the scene has no camera path; every frame "
+    tt__say("warning: --frames: the scene has no camera path; every frame "
             "uses its still camera\n");
   else if (!timed)
-    fprintf(stderr, "host: warning: --camera-index %u: the scene has no camera path; "
+    tt__say("warning: --camera-index %u: the scene has no camera path; "
             "using its still camera\n", opt->camera_index);
   tt_session_set_camera_time(s->lib, t, dt);
   return TT_EXIT_OK;
@@ -166,11 +166,11 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
   if (opt->clock_cpu) tt__host_use_cpu_clock();
   tt_set_log_host(s->host);  /* loader warnings go through the host's log */
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
-    fprintf(stderr, "host: --threads: %s\n", tt_last_error());
+    tt__say("--threads: %s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
   if (tt_session_create(s->host, &s->lib) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     return TT_EXIT_FAILURE;
   }
   const char *dirs[2 * TT_HOST_MAX_LIST];
@@ -183,12 +183,12 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
   int rc = TT_EXIT_OK;
   if (tt_session_load_scene_ex(s->lib, opt->scene,
                                opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     rc = TT_EXIT_SCENE;
   } else {
     s->scene = tt_session_scene(s->lib);
     if (opt->width && tt_scene_set_resolution(s->scene, opt->width, opt->height) != TT_OK) {
-      fprintf(stderr, "host: --res: %s\n", tt_last_error());
+      tt__say("--res: %s\n", tt_last_error());
       return TT_EXIT_USAGE;
     }
     if ((opt->camera_index_set || opt->camera_time_set) && (rc = tt__apply_camera_index(s)) != TT_EXIT_OK)
@@ -200,7 +200,7 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
   if (tt__apply_sets(s) && rc == TT_EXIT_OK) rc = TT_EXIT_USAGE;
   if (rc != TT_EXIT_OK) return rc;
   if (tt_session_check(s->lib) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
   size_t count = tt_registry_count(s->reg);
@@ -226,7 +226,7 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
 
 int tt__session_start(tt__session *s, uint32_t aovs) {
   if (tt_session_start(s->lib, aovs) != TT_OK) {
-    fprintf(stderr, "host: %s\n", tt_last_error());
+    tt__say("%s\n", tt_last_error());
     return TT_EXIT_FAILURE;
   }
   s->film = tt_session_film(s->lib);

@@ -98,7 +98,7 @@ static int tt__load_resume(tt__tune_ctx *c) {
                  : tt_tuning_load_state(c->t->session, text, path);
   tt_free(text);
   if (st != TT_OK) {
-    fprintf(stderr, "host: --resume %s: %s (the file is left as it is; remove it to start "
+    tt__say("--resume %s: %s (the file is left as it is; remove it to start "
             "afresh)\n", path, tt_last_error());
     return TT_EXIT_USAGE;
   }
@@ -135,18 +135,18 @@ static int tt__load_reference(tt__tune_ctx *c) {
   uint32_t w = 0, h = 0, ch = 0, W = c->s->camera->width, H = c->s->camera->height;
   float *px = NULL;
   if (tt_image_read(path, &w, &h, &ch, &px) != TT_OK) {
-    fprintf(stderr, "host: --reference %s: cannot read the image: %s\n", path, tt_last_error());
+    tt__say("--reference %s: cannot read the image: %s\n", path, tt_last_error());
     return TT_EXIT_USAGE;
   }
   if (w != W || h != H) {
-    fprintf(stderr, "host: --reference %s: the reference is %ux%u but the render is %ux%u; "
+    tt__say("--reference %s: the reference is %ux%u but the render is %ux%u; "
             "--objective rrmse compares pixel by pixel (render the reference with --res %ux%u)\n",
             path, w, h, W, H, W, H);
     tt_free(px);
     return TT_EXIT_USAGE;
   }
   if (ch != 1 && ch < 3) {
-    fprintf(stderr, "host: --reference %s: expected 1 (luminance) or 3-4 (RGB[A]) channels, "
+    tt__say("--reference %s: expected 1 (luminance) or 3-4 (RGB[A]) channels, "
             "got %u\n", path, ch);
     tt_free(px);
     return TT_EXIT_USAGE;
@@ -155,7 +155,7 @@ static int tt__load_reference(tt__tune_ctx *c) {
   c->ref_lum = malloc(n * sizeof *c->ref_lum);
   if (!c->ref_lum) {
     tt_free(px);
-    fprintf(stderr, "host: tuning: out of memory\n");
+    tt__say("tuning: out of memory\n");
     return TT_EXIT_FAILURE;
   }
   tt_luminance(px, ch, n, c->ref_lum);
@@ -163,7 +163,7 @@ static int tt__load_reference(tt__tune_ctx *c) {
   uint64_t hash = TT__FNV1A64_OFFSET;
   for (size_t i = 0; i < n; i++) {
     if (!isfinite(c->ref_lum[i])) {
-      fprintf(stderr, "host: --reference %s: pixel (%zu, %zu) is not finite\n", path, i % w,
+      tt__say("--reference %s: pixel (%zu, %zu) is not finite\n", path, i % w,
               i / w);
       return TT_EXIT_USAGE;
     }
@@ -194,7 +194,7 @@ static int tt__make_subset(tt__tune_ctx *c, const tt_tuning_hint *hint) {
     const char *name = tt_loaded_plugin_entry(c->target)->name;
     size_t len = strlen(name);
     if (tt_config_from_json(cfg, hint->setup, "tuning hint setup") != TT_OK) {
-      fprintf(stderr, "host: %s: %s\n", name, tt_last_error());
+      tt__say("%s: %s\n", name, tt_last_error());
       return 1;
     }
     for (int k = 0; k < opt->set_count; k++)
@@ -209,7 +209,7 @@ static int tt__make_subset(tt__tune_ctx *c, const tt_tuning_hint *hint) {
   if (n == 0) return 0;
   c->subset = tt_space_subset(c->space, names, n, c->s->configs[c->target_index]);
   if (!c->subset) {
-    fprintf(stderr, "host: %s: %s\n", opt->tune_params ? "--tune-params" : "tuning hint",
+    tt__say("%s: %s\n", opt->tune_params ? "--tune-params" : "tuning hint",
             tt_last_error());
     return 1;
   }
@@ -227,18 +227,18 @@ static int tt__choose(tt__tune_ctx *c) {
     c->target = tt_registry_find_name(s->reg, opt->tune);
     if (!c->target) {
       tt__session_plugin_names(s, names, sizeof names);
-      fprintf(stderr, "host: --tune %s: no loaded plugin is called \"%s\" (loaded: %s)\n",
+      tt__say("--tune %s: no loaded plugin is called \"%s\" (loaded: %s)\n",
               opt->tune, opt->tune, names);
       return TT_EXIT_USAGE;
     }
     uint32_t kind = tt_loaded_plugin_entry(c->target)->kind;
     if (kind != TT_KIND_ACCEL && kind != TT_KIND_INTEGRATOR && kind != TT_KIND_POST) {
-      fprintf(stderr, "host: --tune %s: a %s plugin cannot be tuned by the host (only accel, "
+      tt__say("--tune %s: a %s plugin cannot be tuned by the host (only accel, "
               "integrator and post plugins)\n", opt->tune, tt_plugin_kind_name(kind));
       return TT_EXIT_USAGE;
     }
     if (!tt__tunable(c->target)) {
-      fprintf(stderr, "host: --tune %s: the plugin publishes no tunable parameters\n", opt->tune);
+      tt__say("--tune %s: the plugin publishes no tunable parameters\n", opt->tune);
       return TT_EXIT_USAGE;
     }
     hint = tt__hint(c->target);
@@ -249,7 +249,7 @@ static int tt__choose(tt__tune_ctx *c) {
     if (hint && tt__tunable(s->integ_p)) c->target = s->integ_p;
     else if (tt__tunable(s->accel_p)) c->target = s->accel_p, hint = NULL;
     else {
-      fprintf(stderr, "host: tuning: neither the integrator nor the accel publishes tunable "
+      tt__say("tuning: neither the integrator nor the accel publishes tunable "
               "parameters; name a plugin with --tune\n");
       return TT_EXIT_USAGE;
     }
@@ -264,7 +264,7 @@ static int tt__choose(tt__tune_ctx *c) {
     return TT_EXIT_USAGE;
   if ((c->objective.kind == TT_OBJECTIVE_BUILD || c->objective.kind == TT_OBJECTIVE_TOTAL) &&
       c->target_kind != TT_KIND_ACCEL) {
-    fprintf(stderr, "host: --objective %s: only an accel target builds anything; %s is "
+    tt__say("--objective %s: only an accel target builds anything; %s is "
             "of kind %s (use render or metric:NAME)\n", c->objective_spec,
             tt_loaded_plugin_entry(c->target)->name, tt_plugin_kind_name(c->target_kind));
     return TT_EXIT_USAGE;
@@ -275,7 +275,7 @@ static int tt__choose(tt__tune_ctx *c) {
   }
   const char *dir = opt->tune_pass_images;
   if (dir && mkdir(dir, 0777) != 0 && errno != EEXIST) {
-    fprintf(stderr, "host: --tune-pass-images %s: cannot create the folder: %s\n", dir,
+    tt__say("--tune-pass-images %s: cannot create the folder: %s\n", dir,
             strerror(errno));
     return TT_EXIT_USAGE;
   }
@@ -295,7 +295,7 @@ static int tt__open_db(tt__tune_ctx *c) {
   }
   if (tt_tunedb_open(path, &c->db) != TT_OK) {
     if (opt->db) {
-      fprintf(stderr, "host: --db: %s\n", tt_last_error());
+      tt__say("--db: %s\n", tt_last_error());
       free(path);
       return TT_EXIT_FAILURE;
     }
@@ -328,7 +328,7 @@ static int tt__make_state(tt__tune_ctx *c, tt_tuning_state *state) {
   strcat(context, "}");
   if (tt_session_tuning_state(c->s->lib, c->target_index, c->spp, camera[0] ? camera : NULL,
                               context, c->db != NULL, state) != TT_OK) {
-    fprintf(stderr, "host: tuning: %s\n", tt_last_error());
+    tt__say("tuning: %s\n", tt_last_error());
     return -1;
   }
   return 0;
@@ -402,7 +402,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
   if (!tuner_p && !explore) {
     if (opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify ||
         opt->tune_pass_images) {
-      fprintf(stderr, "host: %s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
+      tt__say("%s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
               opt->tune ? "--tune" : opt->objective ? "--objective"
               : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp"
               : opt->verify ? "--verify" : "--tune-pass-images");
@@ -411,7 +411,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
     return TT_EXIT_OK;
   }
   if (explore && opt->iterations) {
-    fprintf(stderr, "host: --explore N and --iterations exclude each other (exploration "
+    tt__say("--explore N and --iterations exclude each other (exploration "
             "measures N random configurations)\n");
     return TT_EXIT_USAGE;
   }
@@ -479,7 +479,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
   d.on_sample = tt__on_sample;
   d.user = &c;
   if (tt_tuning_create(&d, &t->session) != TT_OK) {
-    fprintf(stderr, "host: %s: %s\n", explore ? "tuning" : t->tuner, tt_last_error());
+    tt__say("%s: %s\n", explore ? "tuning" : t->tuner, tt_last_error());
     t->session = NULL;
     rc = TT_EXIT_FAILURE;
     goto done;
@@ -487,7 +487,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
   if (opt->resume && (rc = tt__load_resume(&c)) != TT_EXIT_OK) goto done;
   tt_tuning_target target;
   if (tt_session_tuning_target(s->lib, c.target_index, c.want_pass, &target) != TT_OK) {
-    fprintf(stderr, "host: tuning: %s\n", tt_last_error());
+    tt__say("tuning: %s\n", tt_last_error());
     rc = TT_EXIT_FAILURE;
     goto done;
   }
@@ -496,7 +496,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
   tt__progress_finish();
   t->ms = (s->host->clock_ns() - t0) * 1e-6;
   if (st == TT_ERR_NO_DATA) {
-    fprintf(stderr, "host: --objective %s: %s\n", c.objective.spec, tt_last_error());
+    tt__say("--objective %s: %s\n", c.objective.spec, tt_last_error());
     rc = TT_EXIT_USAGE;
     goto done;
   }
@@ -529,7 +529,7 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
                  tt_last_error());
   if (!t->interrupted && rc == TT_EXIT_OK &&
       tt_tuning_apply_best(t->session, &target, NULL) != TT_OK) {
-    fprintf(stderr, "host: tuning: %s rejected the best configuration: %s\n", t->plugin,
+    tt__say("tuning: %s rejected the best configuration: %s\n", t->plugin,
             tt_last_error());
     rc = TT_EXIT_FAILURE;
   }

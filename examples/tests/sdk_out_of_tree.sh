@@ -222,6 +222,25 @@ grep -q '"samples"' "$tmp/describe.out" || fail "tunetrace --describe does not p
 clean "$tunetrace" --describe predictor_static >"$tmp/pdescribe.out" 2>&1 ||
   { cat "$tmp/pdescribe.out" >&2; fail "tunetrace --describe predictor_static failed"; }
 grep -q '"minShare"' "$tmp/pdescribe.out" || fail "tunetrace --describe predictor_static does not print its space"
+# the installed SDK READMEs' commands, as written (they name the installed program)
+readme_cmds=0
+for readme in "$example/README.md" "$stage$prefix/share/tunetrace/examples/predictor_static/README.md"; do
+  while IFS= read -r line; do
+    cmd=${line%%#*}
+    read -r -a words <<<"$cmd"
+    clean "$bin/${words[0]}" "${words[@]:1}" >"$tmp/readme.out" 2>&1 ||
+      { cat "$tmp/readme.out" >&2; fail "$readme: '$cmd' failed"; }
+    readme_cmds=$((readme_cmds + 1))
+  done < <(grep -E '^tunetrace ' "$readme")
+done
+[ "$readme_cmds" -ge 3 ] || fail "the installed SDK READMEs show $readme_cmds tunetrace commands, expected 3"
+# the program names itself as it was installed, in its usage line and its messages
+clean "$tunetrace" --help >"$tmp/help.out" 2>&1 || fail "tunetrace --help failed"
+grep -q "^usage: tunetrace " "$tmp/help.out" || fail "tunetrace --help: $(head -n 1 "$tmp/help.out")"
+rc=0
+clean "$tunetrace" --outfile x.exr >"$tmp/bad.out" 2>&1 || rc=$?
+[ "$rc" = 2 ] && grep -q '^tunetrace: unknown option "--outfile"; did you mean --out?' "$tmp/bad.out" ||
+  { cat "$tmp/bad.out" >&2; fail "tunetrace --outfile: exit $rc"; }
 # a small render, with a short exploration by the installed third-party tuner
 scene="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
 clean "$tunetrace" --quiet --res 16x16 --spp 2 --plugin tuner_random --iterations 2 --no-db \

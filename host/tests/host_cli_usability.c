@@ -137,6 +137,49 @@ int main(void) {
   CHECK_CONTAINS(out, "--quiet, -q");
   CHECK_CONTAINS(out, "--help, -h");
   CHECK_CONTAINS(out, "--spp=64");
+  /* (#30) --help is short, by task; --help TOPIC and --help-all have the rest, and every
+   * option is listed once with one meaning (--aov, --set, --frames were each listed twice) */
+  CHECK(run_host("--help", out, sizeof out) == 0);
+  CHECK_MSG(count_of(out, "\n") <= 60, "--help is %d lines", count_of(out, "\n"));
+  CHECK_CONTAINS(out, "Render:");
+  CHECK_CONTAINS(out, "Tune (load a tuner):");
+  CHECK_CONTAINS(out, "Hybrid tuning along the camera path:");
+  CHECK_CONTAINS(out, "Sequences (frames for temporal filters):");
+  CHECK_CONTAINS(out, "--help-all");
+  CHECK(!strstr(out, "--tune-pass-images") && !strstr(out, "--indicator-norm"));
+  CHECK(run_host("--help-all", out, sizeof out) == 0);
+  const char *every[] = {"--aov", "--set", "--frames", "--plugin", "--spp", "--tune-pass-images",
+                         "--indicator-norm", "--rounds", "--supersample", "--states", "--clock"};
+  for (size_t k = 0; k < sizeof every / sizeof every[0]; k++) {
+    char line[64];
+    snprintf(line, sizeof line, "\n  %s ", every[k]);
+    CHECK_MSG(count_of(out, line) == 1, "--help-all lists %s %d times", every[k],
+              count_of(out, line));
+  }
+  CHECK_CONTAINS(out, "Exit codes: 0 success");
+  CHECK_CONTAINS(out, "Environment: TT_PLUGIN_PATH");
+  CHECK(run_host("--help tune", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "--tune-params A,B,...");
+  CHECK_CONTAINS(out, "Loading a tuner (--plugin tuner_nm) turns tuning on");
+  CHECK(!strstr(out, "--sequence"));
+  CHECK(run_host("-h=sequence", out, sizeof out) == 2);  /* -h takes no '=' */
+  CHECK(run_host("--help=sequence", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "--reference-scale K");
+  CHECK(run_host("--help sequences", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "--help: unknown topic \"sequences\" (did you mean sequence?)");
+  CHECK(run_host("--help x.json", out, sizeof out) == 0);  /* a scene, not a topic */
+  CHECK_CONTAINS(out, "Render:");
+  /* (#30) the program's name is the one it was run as (installed: tunetrace), in the usage
+   * line and in every message */
+  const char *as_tunetrace = "bash -c 'exec -a /usr/local/bin/tunetrace \"$0\" \"$@\"'";
+  CHECK(run_in(dir, as_tunetrace, "--help", out, sizeof out) == 0);
+  CHECK_CONTAINS(out, "usage: tunetrace [options]");
+  CHECK_CONTAINS(out, "Render:  tunetrace --spp 64");
+  CHECK(run_in(dir, as_tunetrace, "--frobnicate x.json", out, sizeof out) == 2);
+  CHECK_CONTAINS(out, "tunetrace: unknown option \"--frobnicate\"");
+  CHECK(run_in(dir, as_tunetrace, "--res 4x4 /nonexistent/scene.json", out, sizeof out) == 4);
+  CHECK_CONTAINS(out, "tunetrace: /nonexistent/scene.json");
+  CHECK(!strstr(out, "host:"));
   /* several --describe: an array of the spaces, in order */
   CHECK(run_host("--describe integrator_pt --describe accel_embree", out, sizeof out) == 0);
   CHECK(out[0] == '[');
