@@ -74,8 +74,8 @@ static const tt__option tt__table[] = {
    "  build+render   both (accel targets; alias: total)\n"
    "  metric:NAME    an integrator metric of the pass, minimised;\n"
    "  metric:NAME:max            ... maximised\n"
-   "  metric:NAME:target=X       ... |value - X| minimised,\n"
-   "                 e.g. metric:acceptance:target=0.234\n"
+   "  metric:NAME:target=X       ... |value - X| minimised, e.g.\n"
+   "                 metric:small_step_acceptance:target=0.234\n"
    "  rrmse          rRMSE of the pass's own image (luminance)\n"
    "                 against --reference; any integrator"},
   {"--iterations", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(iterations), TT_LIMIT_ITERATIONS,
