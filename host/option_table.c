@@ -14,6 +14,17 @@
 
 #define TT__AT(member) offsetof(tt__host_options, member)
 
+/* tt__set_list finds a list's count right after its array. */
+#define TT__LIST(list, count)                                                            \
+  _Static_assert(offsetof(tt__host_options, count) ==                                    \
+                     offsetof(tt__host_options, list) + sizeof((tt__host_options){0}.list), \
+                 #count " must follow " #list)
+TT__LIST(plugins, plugin_count);
+TT__LIST(plugin_paths, plugin_path_count);
+TT__LIST(sets, set_count);
+TT__LIST(describe, describe_count);
+TT__LIST(warm_start, warm_start_count);
+
 static const tt__option tt__table[] = {
   /* --- plugins --- */
   {"--plugin", NULL, TT__ARG_ONE, "NAME|PATH", tt__set_list, TT__AT(plugins), 0,
