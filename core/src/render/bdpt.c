@@ -29,17 +29,18 @@ TT_API void tt_bdpt_options_default(tt_bdpt_options *options) {
   options->heuristic = TT_MIS_POWER;
 }
 
-/* The caller's options over the defaults (struct_size-aware). */
-static tt_bdpt_options tt__bdpt_opts(const tt_bdpt_options *options) {
-  tt_bdpt_options o;
-  tt_bdpt_options_default(&o);
+/* The caller's options over the defaults (struct_size-aware): the caller's struct itself
+ * when it is whole and valid (the per-connection path), else a completed copy in *tmp. */
+static const tt_bdpt_options *tt__bdpt_opts(const tt_bdpt_options *options, tt_bdpt_options *tmp) {
+  if (options && options->struct_size == sizeof *options && options->max_depth <= 64) return options;
+  tt_bdpt_options_default(tmp);
   if (options) {
-    size_t n = options->struct_size < sizeof o ? options->struct_size : sizeof o;
-    if (n > 0) memcpy(&o, options, n);
-    o.struct_size = sizeof o;
+    size_t n = options->struct_size < sizeof *tmp ? options->struct_size : sizeof *tmp;
+    if (n > 0) memcpy(tmp, options, n);
+    tmp->struct_size = sizeof *tmp;
   }
-  if (o.max_depth > 64) o.max_depth = 64;
-  return o;
+  if (tmp->max_depth > 64) tmp->max_depth = 64;
+  return tmp;
 }
 
 TT_API tt_status tt_bdpt_paths_create(uint32_t max_depth, tt_bdpt_paths **out) {
@@ -412,7 +413,8 @@ TT_API uint32_t tt_bdpt_camera_subpath(const tt_path_tracer *pt, const tt_tracer
   paths->hit = 0;
   if (max_vertices > paths->cap) max_vertices = paths->cap;
   if (max_vertices == 0) return 0;
-  const tt_bdpt_options o = tt__bdpt_opts(options);
+  tt_bdpt_options otmp;
+  const tt_bdpt_options *o = tt__bdpt_opts(options, &otmp);
   tt__bvertex *c = &paths->camera[0];
   memset(c, 0, offsetof(tt__bvertex, frame));
   c->kind = TT__BV_CAMERA;
@@ -427,7 +429,7 @@ TT_API uint32_t tt_bdpt_camera_subpath(const tt_path_tracer *pt, const tt_tracer
   float beta[3] = {1.0f, 1.0f, 1.0f};
   uint32_t n = 1;
   if (pdf > 0.0f)
-    n += tt__bdpt_walk(pt, tracer, &o, ray, beta, pdf, max_vertices - 1, 0, camera,
+    n += tt__bdpt_walk(pt, tracer, o, ray, beta, pdf, max_vertices - 1, 0, camera,
                        TT_BDPT_CAMERA_DIM_FIRST_BOUNCE, paths->camera, 1, paths);
   paths->n_camera = n;
   return n;
@@ -440,7 +442,8 @@ TT_API uint32_t tt_bdpt_light_subpath(const tt_path_tracer *pt, const tt_tracer 
   paths->n_light = 0;
   if (max_vertices > paths->cap) max_vertices = paths->cap;
   if (max_vertices == 0) return 0;
-  const tt_bdpt_options o = tt__bdpt_opts(options);
+  tt_bdpt_options otmp;
+  const tt_bdpt_options *o = tt__bdpt_opts(options, &otmp);
   const tt__lights *ls = &pt->lights;
   tt__emission em;
   float u_sel = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_SELECT);
@@ -471,7 +474,7 @@ TT_API uint32_t tt_bdpt_light_subpath(const tt_path_tracer *pt, const tt_tracer 
   ray.tfar = INFINITY;
   uint32_t n = 1;
   if (isfinite(tt__max3(beta)))
-    n += tt__bdpt_walk(pt, tracer, &o, ray, beta, em.pdf_dir, max_vertices - 1, 1, light,
+    n += tt__bdpt_walk(pt, tracer, o, ray, beta, em.pdf_dir, max_vertices - 1, 1, light,
                        TT_BDPT_LIGHT_DIM_FIRST_BOUNCE, paths->light, 1, paths);
   if (v->infinite) {  /* densities of a start at infinity: the disk, then the direction */
     if (n > 1) {
@@ -531,7 +534,8 @@ TT_API int tt_bdpt_connect(const tt_path_tracer *pt, const tt_tracer *tracer,
                            tt_bdpt_contribution *out) {
   memset(out, 0, sizeof *out);
   if (t == 0 || t > paths->n_camera || s > paths->n_light || (s == 1 && t == 1)) return 0;
-  const tt_bdpt_options o = tt__bdpt_opts(options);
+  tt_bdpt_options otmp;
+  const tt_bdpt_options *o = tt__bdpt_opts(options, &otmp);
   const tt__bvertex *cam = paths->camera, *lig = paths->light;
   /* A camera subpath that escaped is only its own (s = 0) strategy. */
   if (t > 1 && s != 0 && cam[t - 1].kind == TT__BV_LIGHT) return 0;
@@ -605,7 +609,7 @@ TT_API int tt_bdpt_connect(const tt_path_tracer *pt, const tt_tracer *tracer,
     return 0;
   }
   if (!(tt__max3(L) > 0.0f)) return 0;
-  float w = tt__bdpt_mis_weight(pt, frame, o.heuristic, lig, cam, (s == 1 || t == 1) ? &sampled : NULL, s, t);
+  float w = tt__bdpt_mis_weight(pt, frame, o->heuristic, lig, cam, (s == 1 || t == 1) ? &sampled : NULL, s, t);
   memcpy(out->unweighted, L, sizeof out->unweighted);
   out->weight = w;
   for (int i = 0; i < 3; ++i) out->L[i] = L[i] * w;

@@ -1,0 +1,433 @@
+#!/usr/bin/python3
+"""Chapter 4's evidence on the thesis' own base: BDPT references, Fig. 4.6 (ours against
+original at equal mutations and at equal CPU time, with mean path lengths), Figs. 4.8/4.9
+(equal-sample crops) and rRMSE against CPU time for the path tracer, BDPT, PSSMLT over the
+path tracer, multiplexed MLT "original" and multiplexed MLT "ours".
+
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 reference            # BDPT references
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 tune                 # "ours": tuned binning
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 fig46                # equal mutations
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 evt                  # error against CPU time
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 crops                # Figs. 4.8 / 4.9
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 plot --figures tools/pssmlt/figures
+
+Every step takes scene names (default: all of SCENES) and keeps what it has done in
+<out>/<step>/..., so a killed run resumes. `--quick` shrinks everything (16x16, few samples,
+one repetition) for the test suite; the full settings are the defaults below.
+
+The methods (all maxDepth 5, the thesis' and pbrt's MLT default):
+  pt        integrator_pt (rrDepth 5: no roulette, as the MLT methods)
+  bdpt      integrator_bdpt
+  pssmlt    integrator_pssmlt mode=pssmlt, classic (PSSMLT over the path tracer)
+  original  integrator_pssmlt mode=mmlt, classic: sigma 0.01, large steps 0.3 (the thesis'
+            "original", pbrt-v3's MLTIntegrator defaults)
+  ours      integrator_pssmlt mode=mmlt, sigma-binning (M = 7, alpha = 4 pi) tuned by tuner_nm
+            towards small-step acceptance 0.234 (the plugin's tuning hint), 50 iterations of
+            5 mutations per pixel, large steps 0.1 (the thesis' 4.7)
+The MLT methods use `--bootstrap` samples per path depth (pbrt-v3's 100000 are sized for
+images of a million pixels; at 64x64 they would cost more than the mutations) and 1000 chains.
+
+Time is the CPU time (user + sys) of the whole `host` process from getrusage (the machine is
+shared; wall time is not comparable between runs), with --threads 1. Errors are tunetrace's
+rRMSE (tools/common/images.py) against the BDPT reference of the same resolution.
+"""
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, '..', '..'))
+sys.path.insert(0, os.path.join(HERE, '..', 'common'))
+import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
+
+SHARED = os.path.normpath(os.path.join(ROOT, '..', 'shared', 'scenes'))
+# name -> scene path (relative to the repository root or absolute), what it is for
+SCENES = {
+    'bathroom': ('scenes/bathroom/scene.json', "the thesis' contemporary bathroom: light through blinds, glass, mirror"),
+    'caustic-glass': ('scenes/caustic-glass/scene.json', 'a spot light through a glass object: the focused caustic'),
+    'veach-ajar': ('scenes/veach-ajar/scene.json', 'light through a door gap'),
+    'cornell-box': (os.path.join(SHARED, 'cornell-box-pbrt', 'cornell-box.pbrt'),
+                    "pbrt-v4's diffuse Cornell box: the thesis' failure case"),
+    'cornell-specular': (os.path.join(SHARED, 'cornell-box-pbrt', 'cornell-box-specular.pbrt'),
+                         "pbrt-v4's Cornell box with a glass and a metal sphere"),
+}
+METHODS = ['pt', 'bdpt', 'pssmlt', 'original', 'ours']
+LABELS = {'pt': 'path tracer', 'bdpt': 'BDPT', 'pssmlt': 'PSSMLT over PT', 'original': 'MMLT original',
+          'ours': 'MMLT ours (tuned binning)'}
+DEPTH = 5
+TUNED_KEYS = ['sigma'] + [f'a{i}' for i in range(1, 10)] + [f'sigma{i}' for i in range(1, 9)]
+
+
+def settings(args):
+    """Full or quick settings (the test suite runs --quick)."""
+    if args.quick:
+        return dict(res='16x16', ref_spp=64, tune_iterations=4, tune_spp=2, mpp=[4, 8], reps=2,
+                    counts=[1, 2, 4], seeds=1, bootstrap=1000, chains=64, crop_mpp=4)
+    return dict(res=args.res, ref_spp=args.ref_spp, tune_iterations=50, tune_spp=5, mpp=[100, 200], reps=args.reps,
+                counts=[4, 8, 16, 32, 64, 128], seeds=3, bootstrap=args.bootstrap, chains=1000, crop_mpp=200)
+
+
+def scene_path(name):
+    p = SCENES[name][0]
+    return p if os.path.isabs(p) else os.path.join(ROOT, p)
+
+
+def host_run(args, scene, extra, out, stats):
+    """Runs host; returns (its --stats JSON, CPU seconds of the process)."""
+    host = os.path.join(args.build, 'host', 'host')
+    cmd = ['nice', '-n', str(args.nice), host, scene, '--res', settings(args)['res'], '--no-db', '--quiet',
+           '--out', out, '--stats', stats] + extra
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(cmd, check=True)
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    with open(stats) as f:
+        return json.load(f), cpu
+
+
+def load_rows(path):
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return json.load(f)
+
+
+def save_rows(path, rows):
+    tmp = path + '.tmp'
+    with open(tmp, 'w') as f:
+        json.dump(rows, f, indent=1)
+    os.replace(tmp, path)
+
+
+def method_args(args, name, method):
+    """host arguments of a method on a scene (`ours` needs the tune step's result)."""
+    s = settings(args)
+    d = str(DEPTH)
+    mlt = ['--plugin', 'integrator_pssmlt', '--set', f'integrator_pssmlt.maxDepth={d}',
+           '--set', f'integrator_pssmlt.bootstrapSamples={s["bootstrap"]}',
+           '--set', f'integrator_pssmlt.chains={s["chains"]}']
+    if method == 'pt':
+        return ['--plugin', 'integrator_pt', '--set', f'integrator_pt.maxDepth={d}', '--set', f'integrator_pt.rrDepth={d}']
+    if method == 'bdpt':
+        return ['--plugin', 'integrator_bdpt', '--set', f'integrator_bdpt.maxDepth={d}']
+    if method == 'pssmlt':
+        return mlt + ['--set', 'integrator_pssmlt.mode=pssmlt']
+    if method == 'original':
+        return mlt + ['--set', 'integrator_pssmlt.mode=mmlt']
+    if method == 'ours':
+        tuned = os.path.join(args.out, 'tune', f'{name}.json')
+        if not os.path.exists(tuned):
+            raise SystemExit(f'{tuned}: missing: run the tune step first')
+        with open(tuned) as f:
+            sets = json.load(f)['set']
+        return mlt + ['--set', 'integrator_pssmlt.mode=mmlt'] + sum((['--set', x] for x in sets), [])
+    raise ValueError(method)
+
+
+# ---- steps ----
+
+def step_reference(args, names):
+    """BDPT at --ref-spp (seed 999, both threads): <out>/refs/NAME.exr and NAME.json."""
+    s = settings(args)
+    d = os.path.join(args.out, 'refs')
+    os.makedirs(d, exist_ok=True)
+    for name in names:
+        exr = os.path.join(d, f'{name}.exr')
+        meta = os.path.join(d, f'{name}.json')
+        if os.path.exists(exr) and os.path.exists(meta):
+            continue
+        extra = method_args(args, name, 'bdpt') + ['--spp', str(s['ref_spp']), '--seed', '999',
+                                                   '--threads', str(args.ref_threads)]
+        st, cpu = host_run(args, scene_path(name), extra, exr, os.path.join(d, f'{name}.stats.json'))
+        save_rows(meta, dict(scene=SCENES[name][0], spp=s['ref_spp'], res=s['res'], cpu_s=cpu,
+                             command=' '.join(['host', SCENES[name][0], '--res', s['res']] + extra)))
+        print(f'reference {name}: {s["ref_spp"]} spp, {cpu:.1f} CPU s', flush=True)
+
+
+def step_tune(args, names):
+    """`ours`: host --plugin integrator_pssmlt --plugin tuner_nm with mode=mmlt and large steps
+    0.1; the best configuration as a --set list in <out>/tune/NAME.json."""
+    s = settings(args)
+    d = os.path.join(args.out, 'tune')
+    os.makedirs(d, exist_ok=True)
+    for name in names:
+        res = os.path.join(d, f'{name}.json')
+        if os.path.exists(res):
+            continue
+        extra = ['--plugin', 'integrator_pssmlt', '--plugin', 'tuner_nm', '--iterations', str(s['tune_iterations']),
+                 '--tune-spp', str(s['tune_spp']), '--spp', str(s['tune_spp']), '--seed', '1', '--threads', '1',
+                 '--set', f'integrator_pssmlt.maxDepth={DEPTH}', '--set', 'integrator_pssmlt.mode=mmlt',
+                 '--set', 'integrator_pssmlt.largeStepProbability=0.1',
+                 '--set', f'integrator_pssmlt.bootstrapSamples={s["bootstrap"]}',
+                 '--set', f'integrator_pssmlt.chains={s["chains"]}']
+        st, cpu = host_run(args, scene_path(name), extra, os.path.join(d, f'{name}.exr'),
+                           os.path.join(d, f'{name}.stats.json'))
+        t = st['tuning']
+        best = t['best_config']
+        keys = ['binning', 'bins', 'largeStepProbability'] + TUNED_KEYS
+        sets = ['integrator_pssmlt.mode=mmlt'] + [f'integrator_pssmlt.{k}={best[k]!r}' for k in keys]
+        sets = [x.replace('=True', '=true').replace('=False', '=false') for x in sets]
+        if best.get('mode') != 'mmlt':
+            raise SystemExit(f'{name}: the tuning run was not in mode mmlt: {best.get("mode")!r}')
+        save_rows(res, dict(scene=SCENES[name][0], set=sets, best_config=best, best_cost=t['best_cost'],
+                            default_cost=t['default_cost'], costs=t['costs'], tuning_ms=t['tuning_ms'], cpu_s=cpu))
+        print(f'tune {name}: |acceptance - 0.234| {t["default_cost"]:.4f} -> {t["best_cost"]:.4f} ({cpu:.1f} CPU s)',
+              flush=True)
+
+
+def render_row(args, name, method, count, seed, d, R):
+    """One render of `count` samples (mutations) per pixel; its row."""
+    img = os.path.join(d, f'{method}_{count}_{seed}.exr')
+    extra = method_args(args, name, method) + ['--spp', str(count), '--seed', str(seed), '--threads', '1']
+    st, cpu = host_run(args, scene_path(name), extra, img, os.path.join(d, f'{method}_{count}_{seed}.json'))
+    m = st.get('metrics', {})
+    row = dict(scene=name, method=method, count=count, seed=seed, cpu_s=cpu,
+               rrmse=images.rrmse(images.read_luminance(img), R), render_ms=st['render_ms'],
+               rays=st.get('rays'), samples=st.get('samples'))
+    for k in ('small_step_acceptance', 'mean_path_length', 'rays_per_mutation', 'bootstrap_ms'):
+        if k in m:
+            row[k] = m[k]
+    if not args.keep_images:
+        os.remove(img)
+        png = os.path.splitext(img)[0] + '.png'
+        if os.path.exists(png):
+            os.remove(png)
+    return row
+
+
+def reference_of(args, name):
+    p = os.path.join(args.out, 'refs', f'{name}.exr')
+    if not os.path.exists(p):
+        raise SystemExit(f'{p}: missing: run the reference step first')
+    return images.read_luminance(p)
+
+
+def step_runs(args, names, step, methods, counts, seeds):
+    """Renders methods x counts x seeds per scene; rows in <out>/<step>/NAME.json."""
+    for name in names:
+        d = os.path.join(args.out, step, name)
+        os.makedirs(d, exist_ok=True)
+        resf = os.path.join(args.out, step, f'{name}.json')
+        rows = load_rows(resf)
+        done = {(r['method'], r['count'], r['seed']) for r in rows}
+        R = reference_of(args, name)
+        for seed in seeds:
+            for count in counts:
+                for m in methods:
+                    if (m, count, seed) in done:
+                        continue
+                    row = render_row(args, name, m, count, seed, d, R)
+                    rows.append(row)
+                    save_rows(resf, rows)
+                    print(f'{step} {name:16s} {m:8s} {count:4d}/px seed {seed}: rRMSE {row["rrmse"]:.4f} '
+                          f'cpu {row["cpu_s"]:.2f} s', flush=True)
+
+
+def step_fig46(args, names):
+    s = settings(args)
+    step_runs(args, names, 'fig46', ['original', 'ours'], s['mpp'], range(1, s['reps'] + 1))
+
+
+def step_evt(args, names):
+    s = settings(args)
+    counts = s['counts']
+    for m in args.methods.split(','):
+        # PT and BDPT also at 2x and 4x the largest count, so their curves span the MLT methods' time
+        c = counts + ([2 * counts[-1], 4 * counts[-1]] if m in ('pt', 'bdpt') else [])
+        step_runs(args, names, 'evt', [m], c, range(1, s['seeds'] + 1))
+
+
+def step_crops(args, names):
+    """Equal-sample renders (crop_mpp, seed 1) of ours and original, kept as EXR."""
+    s = settings(args)
+    for name in names:
+        d = os.path.join(args.out, 'crops', name)
+        os.makedirs(d, exist_ok=True)
+        for m in ('original', 'ours'):
+            img = os.path.join(d, f'{m}.exr')
+            if os.path.exists(img):
+                continue
+            extra = method_args(args, name, m) + ['--spp', str(s['crop_mpp']), '--seed', '1', '--threads', '1']
+            host_run(args, scene_path(name), extra, img, os.path.join(d, f'{m}.json'))
+
+
+# ---- analysis ----
+
+def curve(rows, method):
+    """(count, median CPU s, median rRMSE, n) per count of a method."""
+    pts = []
+    for c in sorted({r['count'] for r in rows if r['method'] == method}):
+        rs = [r for r in rows if r['method'] == method and r['count'] == c]
+        pts.append((c, float(np.median([r['cpu_s'] for r in rs])), float(np.median([r['rrmse'] for r in rs])), len(rs)))
+    return pts
+
+
+def at_time(pts, t):
+    """log-log interpolation of rRMSE at CPU time t; None outside the measured range."""
+    if len(pts) < 2:
+        return None
+    x = np.log([p[1] for p in pts])
+    y = np.log([p[2] for p in pts])
+    o = np.argsort(x)
+    x, y = x[o], y[o]
+    lt = np.log(t)
+    if lt < x[0] or lt > x[-1]:
+        return None
+    return float(np.exp(np.interp(lt, x, y)))
+
+
+def summarize(args, names):
+    """Fig. 4.6 and equal-time tables as a dict (also written to <out>/summary.json)."""
+    out = {'scenes': {}}
+    for name in names:
+        sc = {}
+        rows = load_rows(os.path.join(args.out, 'fig46', f'{name}.json'))
+        eq = []
+        for c in sorted({r['count'] for r in rows}):
+            by = {m: {r['seed']: r for r in rows if r['method'] == m and r['count'] == c} for m in ('original', 'ours')}
+            seeds = sorted(set(by['original']) & set(by['ours']))
+            if not seeds:
+                continue
+            rel = [(by['ours'][k]['rrmse'] - by['original'][k]['rrmse']) / by['original'][k]['rrmse'] for k in seeds]
+            e = dict(mpp=c, reps=len(seeds), rel_diff=rel, rel_diff_median=float(np.median(rel)))
+            for m in ('original', 'ours'):
+                rs = [by[m][k] for k in seeds]
+                e[m] = {k: float(np.median([r[k] for r in rs])) for k in
+                        ('rrmse', 'cpu_s', 'mean_path_length', 'rays_per_mutation', 'small_step_acceptance')
+                        if all(k in r for r in rs)}
+            eq.append(e)
+        sc['equal_mutations'] = eq
+        erows = load_rows(os.path.join(args.out, 'evt', f'{name}.json'))
+        curves = {m: curve(erows, m) for m in METHODS if any(r['method'] == m for r in erows)}
+        sc['curves'] = curves
+        # equal CPU time: at times every method's curve covers
+        lo = max((p[0][1] for p in curves.values() if p), default=None)
+        hi = min((p[-1][1] for p in curves.values() if p), default=None)
+        table = []
+        if lo and hi and hi > lo:
+            for t in np.geomspace(lo, hi, 4):
+                table.append(dict(cpu_s=float(t), **{m: at_time(p, t) for m, p in curves.items()}))
+        sc['equal_time'] = table
+        out['scenes'][name] = sc
+    return out
+
+
+def step_plot(args, names):
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    summ = summarize(args, names)
+    figs = args.figures or os.path.join(args.out, 'figures')
+    os.makedirs(figs, exist_ok=True)
+    with open(os.path.join(figs, 'ch4_summary.json'), 'w') as f:
+        json.dump(summ, f, indent=1)
+    # Fig. 4.6: relative rRMSE differences ours vs original per scene and mutation count
+    data, labels = [], []
+    for name in names:
+        for e in summ['scenes'][name]['equal_mutations']:
+            data.append(100.0 * np.array(e['rel_diff']))
+            labels.append(f'{name}\n{e["mpp"]} mpp')
+    if data:
+        fig, ax = plt.subplots(figsize=(max(4, 1.1 * len(data)), 3.2), dpi=90)
+        ax.boxplot(data, labels=labels, showfliers=True)
+        ax.axhline(0, color='k', lw=0.8)
+        ax.set_ylabel('rRMSE: (ours - original) / original  [%]')
+        ax.set_title('Fig. 4.6 on MMLT: tuned sigma-binning against classic, equal mutations (lower: ours better)',
+                     fontsize=8)
+        ax.tick_params(axis='x', labelsize=6)
+        fig.tight_layout()
+        fig.savefig(os.path.join(figs, 'ch4_fig46.png'))
+        plt.close(fig)
+    # error against CPU time, one panel per scene
+    present = [n for n in names if summ['scenes'][n]['curves']]
+    if present:
+        cols = min(3, len(present))
+        rows_ = (len(present) + cols - 1) // cols
+        fig, axes = plt.subplots(rows_, cols, figsize=(3.6 * cols, 3.0 * rows_), dpi=90, squeeze=False)
+        for ax, name in zip(axes.flat, present):
+            for i, (m, pts) in enumerate(summ['scenes'][name]['curves'].items()):
+                ax.loglog([p[1] for p in pts], [p[2] for p in pts], 'o-', ms=3, color=f'C{METHODS.index(m)}',
+                          label=LABELS[m])
+            ax.set_title(name, fontsize=9)
+            ax.set_xlabel('CPU s (1 thread, whole process)', fontsize=7)
+            ax.set_ylabel('rRMSE vs BDPT reference', fontsize=7)
+            ax.tick_params(labelsize=6)
+            ax.grid(True, which='both', lw=0.3)
+        for ax in list(axes.flat)[len(present):]:
+            ax.axis('off')
+        axes.flat[0].legend(fontsize=6)
+        fig.tight_layout()
+        fig.savefig(os.path.join(figs, 'ch4_error_vs_time.png'))
+        plt.close(fig)
+    # Figs. 4.8 / 4.9: crops, reference / original / ours, same exposure
+    for name in names:
+        d = os.path.join(args.out, 'crops', name)
+        ref = os.path.join(args.out, 'refs', f'{name}.exr')
+        if not (os.path.exists(os.path.join(d, 'ours.exr')) and os.path.exists(ref)):
+            continue
+        imgs = [images.read_rgb(p) for p in (ref, os.path.join(d, 'original.exr'), os.path.join(d, 'ours.exr'))]
+        scale = 1.0 / max(1e-6, float(np.percentile(images.luminance(imgs[0]), 99)))
+        fig, axes = plt.subplots(1, 3, figsize=(7.5, 2.8), dpi=110)
+        R = images.luminance(imgs[0])
+        for ax, im, t in zip(axes, imgs, ['BDPT reference', 'MMLT original', 'MMLT ours']):
+            disp = np.clip((im * scale) ** (1 / 2.2), 0, 1)
+            ax.imshow(disp, interpolation='nearest')
+            err = '' if t.startswith('BDPT') else f'\nrRMSE {images.rrmse(images.luminance(im), R):.3f}'
+            ax.set_title(t + err, fontsize=7)
+            ax.axis('off')
+        fig.suptitle(f'{name}: equal mutations ({settings(args)["crop_mpp"]} per pixel)', fontsize=8)
+        fig.tight_layout()
+        fig.savefig(os.path.join(figs, f'ch4_crops_{name}.png'))
+        plt.close(fig)
+    print_tables(summ)
+
+
+def print_tables(summ):
+    for name, sc in summ['scenes'].items():
+        for e in sc['equal_mutations']:
+            o, u = e['original'], e['ours']
+            print(f'{name:16s} {e["mpp"]:4d} mpp x{e["reps"]}: rRMSE original {o.get("rrmse", 0):.4f} ours '
+                  f'{u.get("rrmse", 0):.4f} (median rel. diff {100 * e["rel_diff_median"]:+.1f}%), CPU s '
+                  f'{o.get("cpu_s", 0):.2f} / {u.get("cpu_s", 0):.2f}, path length {o.get("mean_path_length", 0):.2f} / '
+                  f'{u.get("mean_path_length", 0):.2f}, acceptance {o.get("small_step_acceptance", 0):.3f} / '
+                  f'{u.get("small_step_acceptance", 0):.3f}')
+        for row in sc['equal_time']:
+            vals = ' '.join(f'{m} {v:.4f}' if v else f'{m} -' for m, v in row.items() if m != 'cpu_s')
+            print(f'{name:16s} at {row["cpu_s"]:.2f} CPU s: {vals}')
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument('step', choices=['reference', 'tune', 'fig46', 'evt', 'crops', 'plot', 'all'])
+    ap.add_argument('scenes', nargs='*', help='scene names (default: all): ' + ', '.join(SCENES))
+    ap.add_argument('--build', default=os.path.join(ROOT, 'build'))
+    ap.add_argument('--out', default='/tmp/tt_chapter4')
+    ap.add_argument('--figures', default=None, help='folder of the figures and summary (default <out>/figures)')
+    ap.add_argument('--res', default='64x64')
+    ap.add_argument('--ref-spp', type=int, default=4096)
+    ap.add_argument('--ref-threads', type=int, default=2)
+    ap.add_argument('--reps', type=int, default=5)
+    ap.add_argument('--bootstrap', type=int, default=20000, help='MLT bootstrap samples (per depth in mmlt)')
+    ap.add_argument('--methods', default=','.join(METHODS), help='evt: which methods')
+    ap.add_argument('--nice', type=int, default=5)
+    ap.add_argument('--keep-images', action='store_true')
+    ap.add_argument('--quick', action='store_true', help='tiny settings for the test suite')
+    args = ap.parse_args(argv)
+    names = args.scenes or list(SCENES)
+    for n in names:
+        if n not in SCENES:
+            ap.error(f'unknown scene {n!r} (known: {", ".join(SCENES)})')
+    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
+    steps = ['reference', 'tune', 'fig46', 'evt', 'crops', 'plot'] if args.step == 'all' else [args.step]
+    for st in steps:
+        globals()['step_' + st](args, names)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
