@@ -9,6 +9,7 @@ path tracer, multiplexed MLT "original" and multiplexed MLT "ours".
     python3 tools/pssmlt/chapter4.py --out /tmp/ch4 fig46                # equal mutations
     python3 tools/pssmlt/chapter4.py --out /tmp/ch4 evt                  # error against CPU time
     python3 tools/pssmlt/chapter4.py --out /tmp/ch4 crops                # Figs. 4.8 / 4.9
+    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 speed                # BDPT vs PT samples/s
     python3 tools/pssmlt/chapter4.py --out /tmp/ch4 plot --figures tools/pssmlt/figures
 
 Every step takes scene names (default: all of SCENES) and keeps what it has done in
@@ -69,7 +70,7 @@ def settings(args):
         return dict(res='16x16', ref_spp=64, tune_iterations=4, tune_spp=2, mpp=[4, 8], reps=2,
                     counts=[1, 2, 4], seeds=1, bootstrap=1000, chains=64, crop_mpp=4)
     return dict(res=args.res, ref_spp=args.ref_spp, tune_iterations=50, tune_spp=5, mpp=[100, 200], reps=args.reps,
-                counts=[4, 8, 16, 32, 64, 128], seeds=3, bootstrap=args.bootstrap, chains=1000, crop_mpp=200)
+                counts=[4, 16, 64, 128], seeds=3, bootstrap=args.bootstrap, chains=1000, crop_mpp=200)
 
 
 def scene_path(name):
@@ -256,6 +257,33 @@ def step_crops(args, names):
             host_run(args, scene_path(name), extra, img, os.path.join(d, f'{m}.json'))
 
 
+def step_speed(args, names):
+    """BDPT's samples per second against the path tracer's, interleaved rounds of the same
+    number of samples with the render's own CPU clock (host --clock cpu), one thread:
+    <out>/speed/NAME.json rows with samples/s and rays per sample."""
+    spp = 2 if args.quick else 16
+    rounds = 1 if args.quick else 3
+    d = os.path.join(args.out, 'speed')
+    os.makedirs(d, exist_ok=True)
+    for name in names:
+        resf = os.path.join(d, f'{name}.json')
+        rows = load_rows(resf)
+        for k in range(len({r['round'] for r in rows}), rounds):
+            for m in ('pt', 'bdpt'):
+                extra = method_args(args, name, m) + ['--spp', str(spp), '--seed', str(k + 1), '--threads', '1',
+                                                      '--clock', 'cpu']
+                st, cpu = host_run(args, scene_path(name), extra, os.path.join(d, f'{name}_{m}.exr'),
+                                   os.path.join(d, f'{name}_{m}.stats.json'))
+                rows.append(dict(scene=name, method=m, round=k, samples=st['samples'], render_cpu_ms=st['render_ms'],
+                                 rays=st['rays'], samples_per_s=st['samples'] / (st['render_ms'] * 1e-3),
+                                 rays_per_sample=st['rays'] / st['samples']))
+            save_rows(resf, rows)
+        med = {m: float(np.median([r['samples_per_s'] for r in rows if r['method'] == m])) for m in ('pt', 'bdpt')}
+        rps = {m: float(np.median([r['rays_per_sample'] for r in rows if r['method'] == m])) for m in ('pt', 'bdpt')}
+        print(f'speed {name:16s} samples/s PT {med["pt"]:.0f} BDPT {med["bdpt"]:.0f} (PT / BDPT {med["pt"] / med["bdpt"]:.2f}x); '
+              f'rays per sample PT {rps["pt"]:.1f} BDPT {rps["bdpt"]:.1f}', flush=True)
+
+
 # ---- analysis ----
 
 def curve(rows, method):
@@ -313,6 +341,11 @@ def summarize(args, names):
             for t in np.geomspace(lo, hi, 4):
                 table.append(dict(cpu_s=float(t), **{m: at_time(p, t) for m, p in curves.items()}))
         sc['equal_time'] = table
+        srows = load_rows(os.path.join(args.out, 'speed', f'{name}.json'))
+        if srows:
+            sc['speed'] = {m: dict(samples_per_s=float(np.median([r['samples_per_s'] for r in srows if r['method'] == m])),
+                                   rays_per_sample=float(np.median([r['rays_per_sample'] for r in srows if r['method'] == m])))
+                           for m in ('pt', 'bdpt')}
         out['scenes'][name] = sc
     return out
 
@@ -403,7 +436,7 @@ def print_tables(summ):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument('step', choices=['reference', 'tune', 'fig46', 'evt', 'crops', 'plot', 'all'])
+    ap.add_argument('step', choices=['reference', 'tune', 'fig46', 'evt', 'crops', 'speed', 'plot', 'all'])
     ap.add_argument('scenes', nargs='*', help='scene names (default: all): ' + ', '.join(SCENES))
     ap.add_argument('--build', default=os.path.join(ROOT, 'build'))
     ap.add_argument('--out', default='/tmp/tt_chapter4')
@@ -423,7 +456,7 @@ def main(argv=None):
         if n not in SCENES:
             ap.error(f'unknown scene {n!r} (known: {", ".join(SCENES)})')
     os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
-    steps = ['reference', 'tune', 'fig46', 'evt', 'crops', 'plot'] if args.step == 'all' else [args.step]
+    steps = ['reference', 'tune', 'fig46', 'evt', 'crops', 'speed', 'plot'] if args.step == 'all' else [args.step]
     for st in steps:
         globals()['step_' + st](args, names)
     return 0

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # tools/pssmlt/chapter4.py with its quick settings on pbrt-v4's Cornell box: every step runs
 # (BDPT reference, tuning "ours", Fig. 4.6 runs, error against CPU time for the five methods,
-# crops, plots), the summary holds both methods at both mutation counts with path lengths and
+# crops, BDPT's speed against PT's, plots), the summary holds both methods at both mutation counts with path lengths and
 # every method's curve, the figures are PNGs, a step resumes without rendering again, and bad
 # input (unknown scene, a step before its reference) fails naming what is missing.
 set -euo pipefail
@@ -39,6 +39,9 @@ for m, pts in s['curves'].items():
     assert len(pts) >= 3 and all(p[1] > 0 and p[2] > 0 for p in pts), (m, pts)
     errs = [p[2] for p in pts]
     assert errs[-1] < errs[0], (m, errs)   # more samples, less error
+sp = s['speed']
+assert sp['pt']['samples_per_s'] > 0 and sp['bdpt']['samples_per_s'] > 0, sp
+assert sp['bdpt']['rays_per_sample'] > sp['pt']['rays_per_sample'], sp
 print('summary ok')
 PYEOF
 # resuming: nothing is rendered again
