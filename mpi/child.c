@@ -1,6 +1,8 @@
 /* tunetrace-mpi: a job's host process (see child.h). */
 #include "child.h"
 
+#include <tunetrace/file.h>
+
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -100,6 +102,7 @@ void tt_mpi_child_kill(pid_t pid, int sig) {
 
 void tt_mpi_file_tail(const char *path, char *buf, size_t max) {
   buf[0] = 0;
+  if (tt_file_check_regular(path, "log") != TT_OK) return;  /* never block on a FIFO */
   FILE *f = fopen(path, "rb");
   if (!f) return;
   fseek(f, 0, SEEK_END);

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <tunetrace/options.h>
 #include <tunetrace/plugin.h>
@@ -94,11 +95,7 @@ static void taa_weights_path(uint32_t channels, char *out, size_t size) {
     const char *slash = strrchr(info.dli_fname, '/');
     if (slash) {
       snprintf(out, size, "%.*s/%s", (int)(slash - info.dli_fname), info.dli_fname, name);
-      FILE *f = fopen(out, "rb");
-      if (f) {
-        fclose(f);
-        return;
-      }
+      if (access(out, F_OK) == 0) return;  /* read (and checked) by tt_file_read */
     }
   }
   snprintf(out, size, "%s/%s", TT__TAA_SOURCE_DIR, name);

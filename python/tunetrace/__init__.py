@@ -494,7 +494,10 @@ class Session(_Handle):
                 _check(-1, "params")
         own_db = None
         if db is not None and not isinstance(db, TuningDB):
-            db = own_db = TuningDB(db)
+            db = own_db = TuningDB(db, write=True)
+        elif db is not None and db.read_only:
+            raise Error(-1, f"tune: the tuning database {db.path} was opened read-only: "
+                            "TuningDB(path, write=True), or give the path")
         try:
             return self._run_tuning(index, entry, space, current, subset, objective, tuner_p,
                                     iterations, spp, db, seed, warmup_passes, time_budget,
@@ -621,19 +624,33 @@ class Tuning:
 class TuningDB(_Handle):
     """The tuning database (tunetrace/tunedb.h): one SQLite file of every measured (state,
     configuration) pair. TuningDB() opens the default one ($XDG_DATA_HOME/tunetrace/
-    tuning.db); rows() reads it through the library, so the schema is the library's."""
+    tuning.db); rows() reads it through the library, so the schema is the library's.
+    TuningDB(path) reads an existing database and changes nothing in the file;
+    TuningDB(path, write=True) also records into it (created if missing), as tune(db=...)
+    does."""
 
     _what = "database"
     _free = staticmethod(lambda p: lib.tt_tunedb_close(p))
 
-    def __init__(self, path=None):
+    def __init__(self, path=None, write=False):
         if path is None:
             path = _lib.take_string(lib.tt_tunedb_default_path())
             if path is None:
                 raise Error(-1, "no $XDG_DATA_HOME or $HOME: give the database a path")
         ptr = ctypes.c_void_p()
-        _check(lib.tt_tunedb_open(_b(os.fspath(path)), ctypes.byref(ptr)))
+        opener = lib.tt_tunedb_open if write else lib.tt_tunedb_open_readonly
+        _check(opener(_b(os.fspath(path)), ctypes.byref(ptr)))
         self._ptr = ptr
+
+    @property
+    def read_only(self):
+        """True when opened without write=True."""
+        return bool(lib.tt_tunedb_read_only(self._p))
+
+    @property
+    def bad_rows(self):
+        """Rows the last rows() or export_csv() skipped: not rows of the schema."""
+        return lib.tt_tunedb_bad_rows(self._p)
 
     @property
     def path(self):

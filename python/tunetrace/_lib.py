@@ -324,6 +324,8 @@ _PROTOTYPES = {
     "tt_tunedb_foreach": (_I, [_P, _S, ROW_FN, _P]),
     "tt_tunedb_count": (_I, [_P, _S, ctypes.POINTER(_U64)]),
     "tt_tunedb_export_csv": (_I, [_P, _S]),
+    "tt_tunedb_open_readonly": (_I, [_S, _PP]), "tt_tunedb_read_only": (_I, [_P]),
+    "tt_tunedb_bad_rows": (_U64, [_P]),
 }
 
 for _name, (_res, _args) in _PROTOTYPES.items():

@@ -36,6 +36,17 @@ TT_API tt_status tt_file_read(const char *path, const char *what, size_t max_byt
  * a directory, a FIFO, a device) otherwise. `what` as for tt_file_read. Never blocks. */
 TT_API tt_status tt_file_check_regular(const char *path, const char *what);
 
+/* 1 if `a` and `b` name the same file: the same device and inode when both exist (hard and
+ * symbolic links included), else, when neither exists yet, the same real folder and name;
+ * 0 otherwise. */
+TT_API int tt_file_same(const char *a, const char *b);
+
+/* TT_ERR_INVALID_ARGUMENT, with a message naming both files and their roles ("stats file",
+ * "scene file"), if writing `output` would replace `input` (tt_file_same); TT_OK otherwise.
+ * Programs call it before any work for every pair of an output and an input. */
+TT_API tt_status tt_file_check_not_input(const char *output, const char *output_what,
+                                         const char *input, const char *input_what);
+
 /* Checks before a long computation that `path` can be written atomically later: it is not
  * a directory or another non-regular file, and a file can be created in its folder (one is
  * created and removed). The message names the path and the OS reason. */

@@ -87,8 +87,13 @@ typedef struct tt_tunedb_row {
  * nor $HOME is set. */
 TT_API char *tt_tunedb_default_path(void);
 
-/* Opens (creating the file, its parent directory and the schema if needed) the database
- * at `path`. `*out` is owned by the caller: free with tt_tunedb_close. */
+/* Opens for reading and writing (creating the file, its parent directory and the schema if
+ * needed) the database at `path`. Before anything is written the file is checked: a FIFO,
+ * a device or a folder, another program's SQLite file (schema version 0 with tables of its
+ * own), a schema version this build does not read (newer, or negative) and a damaged file
+ * (PRAGMA quick_check) are refused, naming the file and what it holds, and left as they
+ * are. A file of an older schema is upgraded. `*out` is owned by the caller: free with
+ * tt_tunedb_close. To read a database, use tt_tunedb_open_readonly. */
 TT_API tt_status tt_tunedb_open(const char *path, tt_tunedb **out);
 /* Closes the database (NULL is ignored). */
 TT_API void tt_tunedb_close(tt_tunedb *db);
@@ -107,7 +112,10 @@ TT_API tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, doubl
                                   uint32_t *count);
 
 /* Calls fn for every row (of `plugin`, or all if NULL) in insertion order; a non-zero
- * return from fn stops the walk. */
+ * return from fn stops the walk. A row that is not one of the schema (text where a number
+ * belongs, a non-finite cost, an unknown status, indicators that are not a JSON object of
+ * numbers) is skipped and counted: one warning through the library's log per walk names the
+ * number and the first such row (tt_tunedb_bad_rows). */
 TT_API tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
                                    int (*fn)(void *user, const tt_tunedb_row *row),
                                    void *user);
@@ -142,6 +150,24 @@ TT_API tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *
 
 /* *merged = 1 if `tag` was merged into `db` (tt_tunedb_merge), else 0. */
 TT_API tt_status tt_tunedb_merged(tt_tunedb *db, const char *tag, int *merged);
+
+/* ---- appended: reading a database without writing to it ---- */
+
+/* Opens the existing database at `path` read-only (SQLITE_OPEN_READONLY): nothing in the
+ * file changes, not its journal mode, not its schema, so another program's file, a
+ * read-only file or a baseline kept for comparison can be read. Refused, naming the file:
+ * a missing or non-regular file, a file without tunetrace's schema (another program's
+ * SQLite file, an empty one), a newer or negative schema version, a damaged file (PRAGMA
+ * quick_check). A file of schema 1 is read as it is (host and rank NULL). The handle reads
+ * (foreach, count, lookup, export); tt_tunedb_record and tt_tunedb_merge refuse it. */
+TT_API tt_status tt_tunedb_open_readonly(const char *path, tt_tunedb **out);
+
+/* Non-zero if `db` was opened with tt_tunedb_open_readonly. */
+TT_API int tt_tunedb_read_only(const tt_tunedb *db);
+
+/* Rows the last tt_tunedb_foreach (or tt_tunedb_export_csv) on `db` skipped because they
+ * were not rows of the schema. */
+TT_API uint64_t tt_tunedb_bad_rows(const tt_tunedb *db);
 
 #ifdef __cplusplus
 }

@@ -1,7 +1,10 @@
 /* assimp restricted to the readers that claim a file's extension (see assimp_read.h). */
 #include "io/assimp_read.h"
 
+#include <tunetrace/file.h>
+
 #include <assimp/BaseImporter.h>
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
 
@@ -15,6 +18,23 @@
 
 struct tt__assimp {
   Assimp::Importer importer;
+};
+
+/* assimp's file system with the library's input check: every file an importer opens (the
+ * mesh, an OBJ's .mtl, a glTF's .bin buffers) is refused unless it is a regular file, so a
+ * FIFO or a device named inside a mesh is a missing file to assimp, never a hang. */
+class tt__regular_io : public Assimp::DefaultIOSystem {
+ public:
+  bool Exists(const char *file) const override {
+    return file && tt_file_check_regular(file, NULL) == TT_OK;
+  }
+  Assimp::IOStream *Open(const char *file, const char *mode = "rb") override {
+    if (!file || !mode) return nullptr;
+    if (!std::strchr(mode, 'w') && !std::strchr(mode, 'a') &&
+        tt_file_check_regular(file, NULL) != TT_OK)
+      return nullptr;
+    return Assimp::DefaultIOSystem::Open(file, mode);
+  }
 };
 
 /* assimp's own test (Importer::ReadFile): the whole path ends with "." + ext, any case. */
@@ -33,6 +53,7 @@ extern "C" tt__assimp_result tt__assimp_read(const char *file, unsigned flags, t
   try {
     h = new tt__assimp;
     Assimp::Importer &imp = h->importer;
+    imp.SetIOHandler(new tt__regular_io);  /* the importer owns and deletes it */
     const std::string path(file);
     std::vector<Assimp::BaseImporter *> others;
     size_t claimed = 0;

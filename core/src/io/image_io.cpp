@@ -305,6 +305,8 @@ TT_API tt_status tt_image_read(const char *path, uint32_t *width, uint32_t *heig
   if (!path || !width || !height || !channels || !pixels)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "read image: NULL argument");
   *pixels = nullptr;
+  // OpenImageIO would block on a FIFO and read /dev/zero forever: regular files only
+  if (tt_file_check_regular(path, "image") != TT_OK) return TT_ERR_IO;
   try {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in)
@@ -342,6 +344,7 @@ TT_API tt_status tt_image_read_meta(const char *path, const char *key, char *val
   if (!path || !key || !*key || !value || size == 0)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "read metadata: NULL or empty argument");
   value[0] = '\0';
+  if (tt_file_check_regular(path, "image") != TT_OK) return TT_ERR_IO;
   try {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in)

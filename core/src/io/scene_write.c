@@ -401,6 +401,11 @@ tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
   if (!scene || !path || !path[0])
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_write_json: %s is NULL or empty",
                         !scene ? "scene" : "path");
+  /* converting a scene onto its own file would destroy the input */
+  if (tt_scene_source(scene) &&
+      tt_file_check_not_input(path, "converted scene", tt_scene_source(scene),
+                              "scene file it was loaded from") != TT_OK)
+    return TT_ERR_INVALID_ARGUMENT;
   const char *slash = strrchr(path, '/');
   size_t dl = slash ? (size_t)(slash - path) : 1;
   char *dir = malloc(dl + 2);

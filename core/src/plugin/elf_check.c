@@ -5,6 +5,7 @@
  * Reading the headers ourselves turns that into an error that names the file. The section
  * headers are checked too: a file cut past its last segment would load and run. */
 #include "plugin/elf_check.h"
+#include "util/files.h"
 
 #include <elf.h>
 #include <errno.h>
@@ -60,20 +61,13 @@ static const char *tt__ptype(uint32_t t) {
 }
 
 tt_status tt__elf_check_plugin(const char *path) {
-  /* O_NONBLOCK: a FIFO named NAME.so must not block the open (it is rejected below) */
-  int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0) return tt_set_error(TT_ERR_IO, "cannot load plugin %s: %s", path, strerror(errno));
-  tt_status st = TT_OK;
+  /* the one input check (util/files.h): a FIFO named NAME.so must not block the open */
   struct stat sb;
+  char why[256];
+  int fd = tt__open_regular_fd(path, &sb, why, sizeof why);
+  if (fd < 0) return tt_set_error(TT_ERR_IO, "cannot load plugin %s: %s", path, why);
+  tt_status st = TT_OK;
   ElfW(Ehdr) eh;
-  if (fstat(fd, &sb) != 0) {
-    st = tt_set_error(TT_ERR_IO, "cannot load plugin %s: %s", path, strerror(errno));
-    goto done;
-  }
-  if (!S_ISREG(sb.st_mode)) {
-    st = tt_set_error(TT_ERR_IO, "cannot load plugin %s: not a regular file", path);
-    goto done;
-  }
   const uint64_t size = (uint64_t)sb.st_size;
   if (size < EI_NIDENT || tt__pread_all(fd, eh.e_ident, EI_NIDENT, 0) != 0 ||
       memcmp(eh.e_ident, ELFMAG, SELFMAG) != 0) {

@@ -7,6 +7,7 @@
 // Selected with TT_TEXTURES=oiio in the environment (path.c); the default is direct loading,
 // which measured faster (plugins/integrator_pt/README.md, "Textures").
 #include <tunetrace/common.h>
+#include <tunetrace/file.h>
 
 #include <OpenImageIO/texture.h>
 
@@ -56,6 +57,8 @@ inline float tt__srgb_decode(float c) {
 
 extern "C" tt_status tt__oiio_tex_open(const char *path, int srgb, tt__oiio_tex **out) {
   *out = nullptr;
+  // the TextureSystem would block on a FIFO and read /dev/zero forever: regular files only
+  if (tt_file_check_regular(path, "texture") != TT_OK) return TT_ERR_IO;
   try {
     OIIO::TextureSystem *ts = tt__texture_system();
     if (!ts) return tt_set_error(TT_ERR_UNSUPPORTED, "texture '%s': no OIIO TextureSystem", path);

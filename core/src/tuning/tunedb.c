@@ -3,9 +3,15 @@
 
 #include <tunetrace/file.h>
 
+#include "plugin/log.h"
+#include "util/files.h"
+
+#include <cjson/cJSON.h>
+
 #include <errno.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <sqlite3.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,9 +22,12 @@
 
 struct tt_tunedb {
   sqlite3 *sql;
-  sqlite3_stmt *insert;
+  sqlite3_stmt *insert;     /* NULL when read-only */
   sqlite3_stmt *lookup;
   char *path;
+  int read_only;            /* tt_tunedb_open_readonly */
+  int version;              /* the file's schema version (1 is read as 2 with NULL host, rank) */
+  uint64_t bad_rows;        /* rows the last tt_tunedb_foreach skipped */
 };
 
 /* Fields of a caller's row beyond the ones its struct_size covers read as absent (rows of
@@ -76,7 +85,7 @@ static const char tt__lookup_sql[] =
   "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
   " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
   " AND config = ?6 AND objective = ?7 AND machine = ?8 AND cpu = ?9"
-  " AND status IN (0, 1)";
+  " AND status IN (0, 1) AND typeof(cost) IN ('real', 'integer')";
 
 /* Records an SQLite failure with the database path and SQLite's own message. */
 static tt_status tt__sql_error(const tt_tunedb *db, sqlite3 *sql, const char *what) {
@@ -171,32 +180,171 @@ static int tt__exec(tt_tunedb *db, const char *sql, const char *what) {
   return -1;
 }
 
-/* Reads PRAGMA user_version; -1 on error. */
-static int tt__user_version(tt_tunedb *db) {
+/* Reads PRAGMA user_version into *version. A negative version is a value, not an error:
+ * tt__check_schema refuses it by name. */
+static tt_status tt__user_version(tt_tunedb *db, int *version) {
   sqlite3_stmt *st = NULL;
-  int v = -1;
-  if (sqlite3_prepare_v2(db->sql, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK &&
-      sqlite3_step(st) == SQLITE_ROW)
-    v = sqlite3_column_int(st, 0);
+  int ok = sqlite3_prepare_v2(db->sql, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK &&
+           sqlite3_step(st) == SQLITE_ROW;
+  if (ok) *version = sqlite3_column_int(st, 0);
   sqlite3_finalize(st);
-  if (v < 0) tt__sql_error(db, db->sql, "reading the schema version");
-  return v;
+  if (ok) return TT_OK;
+  if (sqlite3_errcode(db->sql) == SQLITE_NOTADB)
+    return tt_set_error(TT_ERR_IO, "tuning database %s: not an SQLite database (%s)", db->path,
+                        sqlite3_errmsg(db->sql));
+  return tt__sql_error(db, db->sql, "reading the schema version");
+}
+
+/* The columns of table samples every schema version has (tt__columns without id, and
+ * without host and rank, which version 2 added). */
+static const char *const tt__required_columns[] = {
+  "scene_id", "scene", "camera", "context", "indicators", "plugin", "plugin_version", "config",
+  "objective", "build_ms", "render_ms", "cost", "status", "mode", "iteration", "run_id", "tuner",
+  "metrics", "machine", "cpu", "timestamp"};
+#define TT__NREQUIRED (sizeof tt__required_columns / sizeof tt__required_columns[0])
+
+/* Appends `name` to the comma-separated list `buf` ("..." once it is full). */
+static void tt__list_add(char *buf, size_t n, const char *name) {
+  size_t len = strlen(buf);
+  if (len + strlen(name) + 8 >= n) {
+    if (len + 6 < n && (len < 3 || strcmp(buf + len - 3, "..."))) strcat(buf, ", ...");
+    return;
+  }
+  if (len) strcat(buf, ", ");
+  strcat(buf, name);
+}
+
+/* The names of the file's tables (`tables`, comma-separated) and whether it has `samples`. */
+static tt_status tt__tables(tt_tunedb *db, char *tables, size_t n, int *has_samples) {
+  sqlite3_stmt *st = NULL;
+  *has_samples = 0;
+  tables[0] = '\0';
+  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM sqlite_master WHERE type = 'table' AND "
+                         "name NOT LIKE 'sqlite\\_%' ESCAPE '\\' ORDER BY name", -1, &st,
+                         NULL) != SQLITE_OK)
+    return tt__sql_error(db, db->sql, "reading the schema");
+  int rc;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+    const char *name = (const char *)sqlite3_column_text(st, 0);
+    if (!name) continue;
+    tt__list_add(tables, n, name);
+    if (!strcmp(name, "samples")) *has_samples = 1;
+  }
+  sqlite3_finalize(st);
+  return rc == SQLITE_DONE ? TT_OK : tt__sql_error(db, db->sql, "reading the schema");
+}
+
+/* The columns of table samples a schema `version` needs that the file lacks, in `missing`
+ * (empty when none). */
+static tt_status tt__missing_columns(tt_tunedb *db, int version, char *missing, size_t n) {
+  int have[TT__NREQUIRED] = {0}, has_host = 0, has_rank = 0;
+  missing[0] = '\0';
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM pragma_table_info('samples')", -1, &st,
+                         NULL) != SQLITE_OK)
+    return tt__sql_error(db, db->sql, "reading the columns of table samples");
+  int rc;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+    const char *name = (const char *)sqlite3_column_text(st, 0);
+    if (!name) continue;
+    for (size_t i = 0; i < TT__NREQUIRED; i++)
+      if (!strcmp(name, tt__required_columns[i])) have[i] = 1;
+    has_host |= !strcmp(name, "host");
+    has_rank |= !strcmp(name, "rank");
+  }
+  sqlite3_finalize(st);
+  if (rc != SQLITE_DONE) return tt__sql_error(db, db->sql, "reading the columns of table samples");
+  for (size_t i = 0; i < TT__NREQUIRED; i++)
+    if (!have[i]) tt__list_add(missing, n, tt__required_columns[i]);
+  if (version >= 2 && !has_host) tt__list_add(missing, n, "host");
+  if (version >= 2 && !has_rank) tt__list_add(missing, n, "rank");
+  return TT_OK;
+}
+
+/* Checks that the file is a tunetrace tuning database this build reads, before anything is
+ * written to it: its schema version (PRAGMA user_version) and, for an existing schema, the
+ * table samples with the columns of that version. A file of version 0 is new only when it
+ * holds no table: another program's SQLite file is refused, naming its tables, and never
+ * given ours. Sets db->version. */
+static tt_status tt__check_schema(tt_tunedb *db) {
+  int version = 0;
+  tt_status st = tt__user_version(db, &version);
+  if (st != TT_OK) return st;
+  if (version < 0)
+    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: schema version %d (PRAGMA "
+                        "user_version) is not a tunetrace tuning database's (1..%d)", db->path,
+                        version, TT_TUNEDB_SCHEMA_VERSION);
+  if (version > TT_TUNEDB_SCHEMA_VERSION)
+    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: schema version %d is newer "
+                        "than this build reads (%d)", db->path, version,
+                        TT_TUNEDB_SCHEMA_VERSION);
+  char tables[512], missing[512];
+  int has_samples;
+  if ((st = tt__tables(db, tables, sizeof tables, &has_samples)) != TT_OK) return st;
+  if (version == 0 && tables[0])
+    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: not a tunetrace tuning "
+                        "database (schema version 0 and the tables %s): left as it is",
+                        db->path, tables);
+  if (version > 0 && !has_samples)
+    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: not a tunetrace tuning "
+                        "database (schema version %d without the table samples; tables: %s)",
+                        db->path, version, tables[0] ? tables : "none");
+  if (version > 0) {
+    if ((st = tt__missing_columns(db, version, missing, sizeof missing)) != TT_OK) return st;
+    if (missing[0])
+      return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: not a tunetrace tuning "
+                          "database (its table samples lacks the columns %s of schema "
+                          "version %d)", db->path, missing, version);
+  }
+  db->version = version;
+  return TT_OK;
+}
+
+/* PRAGMA quick_check: a damaged file is refused before it is read or written. */
+static tt_status tt__quick_check(tt_tunedb *db) {
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(db->sql, "PRAGMA quick_check(1)", -1, &st, NULL) != SQLITE_OK)
+    return tt__sql_error(db, db->sql, "checking the file (PRAGMA quick_check)");
+  int rc = sqlite3_step(st);
+  const char *r = rc == SQLITE_ROW ? (const char *)sqlite3_column_text(st, 0) : NULL;
+  tt_status status = TT_OK;
+  if (rc != SQLITE_ROW)
+    status = tt__sql_error(db, db->sql, "checking the file (PRAGMA quick_check)");
+  else if (!r || strcmp(r, "ok")) {
+    /* SQLite's report on one line, without its "*** in database main ***" heading */
+    char what[512];
+    snprintf(what, sizeof what, "%s", r ? r : "no answer");
+    const char *head = "*** in database main ***\n";
+    char *w = !strncmp(what, head, strlen(head)) ? what + strlen(head) : what;
+    for (char *p = w; *p; p++)
+      if (*p == '\n') *p = ';';
+    status = tt_set_error(TT_ERR_IO, "tuning database %s: the file is damaged (PRAGMA "
+                          "quick_check: %s); restore it from a copy, or give another file",
+                          db->path, w);
+  }
+  sqlite3_finalize(st);
+  return status;
 }
 
 /* Creates the schema or upgrades an older one, in one transaction that re-reads the version
  * (two processes opening a new or old file at once: the second finds the work done). */
-static int tt__upgrade(tt_tunedb *db) {
-  if (tt__exec(db, "BEGIN IMMEDIATE", "upgrading the schema")) return -1;
-  int version = tt__user_version(db);
-  if (version < 0) return -1;
-  if (version < 1 && tt__exec(db, tt__schema_v1, "creating the schema")) return -1;
-  if (version < 2 && tt__exec(db, tt__schema_v2, "upgrading the schema to version 2")) return -1;
+static tt_status tt__upgrade(tt_tunedb *db) {
+  if (tt__exec(db, "BEGIN IMMEDIATE", "upgrading the schema")) return TT_ERR_IO;
+  /* another process may have created or upgraded the file since it was checked */
+  tt_status st = tt__check_schema(db);
+  if (st != TT_OK) return st;
+  int version = db->version;
+  if (version < 1 && tt__exec(db, tt__schema_v1, "creating the schema")) return TT_ERR_IO;
+  if (version < 2 && tt__exec(db, tt__schema_v2, "upgrading the schema to version 2"))
+    return TT_ERR_IO;
   if (version < TT_TUNEDB_SCHEMA_VERSION) {
     char sql[64];
     snprintf(sql, sizeof sql, "PRAGMA user_version=%d", TT_TUNEDB_SCHEMA_VERSION);
-    if (tt__exec(db, sql, "upgrading the schema")) return -1;
+    if (tt__exec(db, sql, "upgrading the schema")) return TT_ERR_IO;
   }
-  return tt__exec(db, "COMMIT", "upgrading the schema");
+  if (tt__exec(db, "COMMIT", "upgrading the schema")) return TT_ERR_IO;
+  db->version = TT_TUNEDB_SCHEMA_VERSION;
+  return TT_OK;
 }
 
 void tt_tunedb_close(tt_tunedb *db) {
@@ -208,19 +356,56 @@ void tt_tunedb_close(tt_tunedb *db) {
   free(db);
 }
 
+/* A handle for `path` with its path copied; NULL with the error set. */
+static tt_tunedb *tt__tunedb_new(const char *path) {
+  tt_tunedb *db = calloc(1, sizeof *db);
+  if (db) db->path = malloc(strlen(path) + 1);
+  if (!db || !db->path) {
+    free(db);
+    tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open: out of memory");
+    return NULL;
+  }
+  strcpy(db->path, path);
+  return db;
+}
+
+/* An existing file must be a regular file (a FIFO would block SQLite's first read). 1 if
+ * it exists, 0 if not, -1 with the error set. */
+static int tt__db_file(const char *path, int must_exist) {
+  struct stat st;
+  char why[256];
+  int fd = tt__open_regular_fd(path, &st, why, sizeof why);
+  if (fd >= 0) {
+    close(fd);
+    return 1;
+  }
+  if (errno == ENOENT && !must_exist && lstat(path, &st) != 0) return 0;
+  tt_set_error(TT_ERR_IO, "tuning database %s: cannot open: %s", path, why);
+  return -1;
+}
+
+/* Prepares the statements a handle uses (the insert only when writable). */
+static int tt__prepare(tt_tunedb *db) {
+  char sql[1024];
+  snprintf(sql, sizeof sql, "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
+           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
+  if ((!db->read_only && sqlite3_prepare_v2(db->sql, sql, -1, &db->insert, NULL) != SQLITE_OK) ||
+      sqlite3_prepare_v2(db->sql, tt__lookup_sql, -1, &db->lookup, NULL) != SQLITE_OK) {
+    tt__sql_error(db, db->sql, "preparing statements");
+    return -1;
+  }
+  return 0;
+}
+
 tt_status tt_tunedb_open(const char *path, tt_tunedb **out) {
   if (!path || !*path || !out)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_open: path and out are required");
   *out = NULL;
-  tt_tunedb *db = calloc(1, sizeof *db);
-  if (!db) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open: out of memory");
-  db->path = malloc(strlen(path) + 1);
-  if (!db->path) {
-    free(db);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tunedb_open: out of memory");
-  }
-  strcpy(db->path, path);
-  tt__make_parent_dirs(path);
+  int exists = tt__db_file(path, 0);
+  if (exists < 0) return TT_ERR_IO;
+  tt_tunedb *db = tt__tunedb_new(path);
+  if (!db) return TT_ERR_OUT_OF_MEMORY;
+  if (!exists) tt__make_parent_dirs(path);
   if (sqlite3_open_v2(path, &db->sql, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, NULL) !=
       SQLITE_OK) {
     tt__sql_error(db, db->sql, "cannot open");
@@ -231,41 +416,71 @@ tt_status tt_tunedb_open(const char *path, tt_tunedb **out) {
    * holds the lock for one small insert, but on a loaded machine a checkpoint can take
    * seconds: a minute before "database is locked" (host/tests/tune_concurrency.py). */
   sqlite3_busy_timeout(db->sql, 60000);
+  /* nothing is written before the file is known to be ours (or empty) and undamaged */
+  tt_status st = tt__check_schema(db);
+  if (st == TT_OK && exists) st = tt__quick_check(db);
+  if (st != TT_OK) {
+    tt_tunedb_close(db);
+    return st;
+  }
   /* WAL: readers never block the loop; synchronous=NORMAL keeps every commit across a
    * process kill (only a power loss can drop the last transactions) */
   if (tt__exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;", "enabling WAL")) {
     tt_tunedb_close(db);
     return TT_ERR_IO;
   }
-  int version = tt__user_version(db);
-  if (version < 0) {
-    tt_tunedb_close(db);
-    return TT_ERR_IO;
-  }
-  if (version > TT_TUNEDB_SCHEMA_VERSION) {
-    tt_set_error(TT_ERR_UNSUPPORTED,
-                 "tuning database %s: schema version %d is newer than this build reads (%d)",
-                 path, version, TT_TUNEDB_SCHEMA_VERSION);
-    tt_tunedb_close(db);
-    return TT_ERR_UNSUPPORTED;
-  }
-  if (version < TT_TUNEDB_SCHEMA_VERSION && tt__upgrade(db)) {
+  if (db->version < TT_TUNEDB_SCHEMA_VERSION && (st = tt__upgrade(db)) != TT_OK) {
+    char why[1024];
+    snprintf(why, sizeof why, "%s", tt_last_error());
     sqlite3_exec(db->sql, "ROLLBACK", NULL, NULL, NULL);
     tt_tunedb_close(db);
-    return TT_ERR_IO;
+    return tt_set_error(st, "%s", why);
   }
-  char sql[1024];
-  snprintf(sql, sizeof sql, "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
-           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
-  if (sqlite3_prepare_v2(db->sql, sql, -1, &db->insert, NULL) != SQLITE_OK ||
-      sqlite3_prepare_v2(db->sql, tt__lookup_sql, -1, &db->lookup, NULL) != SQLITE_OK) {
-    tt__sql_error(db, db->sql, "preparing statements");
+  if (tt__prepare(db)) {
     tt_tunedb_close(db);
     return TT_ERR_IO;
   }
   *out = db;
   return TT_OK;
 }
+
+tt_status tt_tunedb_open_readonly(const char *path, tt_tunedb **out) {
+  if (!path || !*path || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_tunedb_open_readonly: path and out are required");
+  *out = NULL;
+  if (tt__db_file(path, 1) < 0) return TT_ERR_IO;
+  tt_tunedb *db = tt__tunedb_new(path);
+  if (!db) return TT_ERR_OUT_OF_MEMORY;
+  db->read_only = 1;
+  if (sqlite3_open_v2(path, &db->sql, SQLITE_OPEN_READONLY, NULL) != SQLITE_OK) {
+    tt__sql_error(db, db->sql, "cannot open");
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
+  }
+  sqlite3_busy_timeout(db->sql, 60000);
+  tt_status st = tt__check_schema(db);
+  if (st == TT_OK) st = tt__quick_check(db);
+  if (st != TT_OK) {
+    tt_tunedb_close(db);
+    return st;
+  }
+  if (db->version == 0) {
+    tt_tunedb_close(db);
+    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: empty (no schema, no rows): "
+                        "not a tunetrace tuning database yet", path);
+  }
+  if (tt__prepare(db)) {
+    tt_tunedb_close(db);
+    return TT_ERR_IO;
+  }
+  *out = db;
+  return TT_OK;
+}
+
+int tt_tunedb_read_only(const tt_tunedb *db) { return db ? db->read_only : 0; }
+
+uint64_t tt_tunedb_bad_rows(const tt_tunedb *db) { return db ? db->bad_rows : 0; }
 
 const char *tt_tunedb_path(const tt_tunedb *db) { return db ? db->path : NULL; }
 
@@ -293,19 +508,6 @@ static char *tt__indicators_json(const tt_tunedb_row *row) {
   }
   snprintf(s + n, cap - n, "}");
   return s;
-}
-
-/* Parses the indicators JSON written above back into out[]; returns 1 if present. Only
- * our own compact format needs reading, so a scan for "name": is enough. */
-static int tt__indicators_parse(const char *json, double *out) {
-  if (!json) return 0;
-  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) {
-    char key[128];
-    snprintf(key, sizeof key, "\"%s\":", tt_scene_indicator_name(i));
-    const char *p = strstr(json, key);
-    out[i] = p && strncmp(p + strlen(key), "null", 4) != 0 ? strtod(p + strlen(key), NULL) : NAN;
-  }
-  return 1;
 }
 
 /* Current UTC time as ISO 8601 with milliseconds. */
@@ -347,6 +549,9 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *caller_row) {
   if (!isfinite(row->cost) || !isfinite(row->build_ms) || !isfinite(row->render_ms))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_record: cost and times must be "
                         "finite (use TT_COST_INFEASIBLE for failures)");
+  if (db->read_only)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning database %s: opened read-only: "
+                        "nothing can be recorded", db->path);
   char now[64];
   tt__now_iso(now, sizeof now);
   tt_tunedb_row full = tt__complete_row(row, now);
@@ -421,18 +626,118 @@ tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost
   return TT_OK;
 }
 
-/* Fills `row` from the current result row of a SELECT of tt__columns. */
-static void tt__read_row(sqlite3_stmt *st, tt_tunedb_row *row) {
+/* What an SQLite value is, for messages. */
+static const char *tt__type_name(int type) {
+  switch (type) {
+    case SQLITE_INTEGER: return "an integer";
+    case SQLITE_FLOAT: return "a real";
+    case SQLITE_TEXT: return "text";
+    case SQLITE_BLOB: return "a blob";
+    default: return "NULL";
+  }
+}
+
+/* Parses the indicators column (the JSON object tt__indicators_json writes) into out[]: every
+ * indicator a number, null or absent (NaN: unknown, or one added after the row was written).
+ * 0, or -1 with the reason in `why`. */
+static int tt__indicators_parse(const char *json, double *out, char *why, size_t n) {
+  cJSON *o = cJSON_Parse(json);
+  if (!cJSON_IsObject(o)) {
+    snprintf(why, n, "indicators is not a JSON object");
+    cJSON_Delete(o);
+    return -1;
+  }
+  int rc = 0;
+  for (uint32_t i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) {
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, tt_scene_indicator_name(i));
+    if (cJSON_IsNumber(v)) {
+      out[i] = v->valuedouble;
+    } else if (!v || cJSON_IsNull(v)) {
+      out[i] = NAN;
+    } else {
+      snprintf(why, n, "indicators.%s is not a number", tt_scene_indicator_name(i));
+      rc = -1;
+      break;
+    }
+  }
+  cJSON_Delete(o);
+  return rc;
+}
+
+/* The columns of tt__columns, in order, and what each must hold. */
+enum { TT__TEXT, TT__TEXT_OR_NULL, TT__NUMBER, TT__INT, TT__INT_OR_NULL, TT__ID, TT__JSON };
+static const struct {
+  const char *name;
+  int kind;
+} tt__column_kinds[] = {
+  {"id", TT__ID}, {"scene_id", TT__TEXT}, {"scene", TT__TEXT_OR_NULL}, {"camera", TT__TEXT},
+  {"context", TT__TEXT}, {"indicators", TT__JSON}, {"plugin", TT__TEXT},
+  {"plugin_version", TT__TEXT}, {"config", TT__TEXT}, {"objective", TT__TEXT},
+  {"build_ms", TT__NUMBER}, {"render_ms", TT__NUMBER}, {"cost", TT__NUMBER},
+  {"status", TT__INT}, {"mode", TT__TEXT_OR_NULL}, {"iteration", TT__INT_OR_NULL},
+  {"run_id", TT__TEXT_OR_NULL}, {"tuner", TT__TEXT_OR_NULL}, {"metrics", TT__TEXT_OR_NULL},
+  {"machine", TT__TEXT}, {"cpu", TT__TEXT}, {"timestamp", TT__TEXT},
+  {"host", TT__TEXT_OR_NULL}, {"rank", TT__INT_OR_NULL}};
+#define TT__NCOLUMNS (sizeof tt__column_kinds / sizeof tt__column_kinds[0])
+
+/* Checks the current result row of a SELECT of tt__columns against the schema (types, a
+ * finite cost and times, a known status, 32-bit integers, the indicators' JSON): 0, or -1
+ * with what is wrong in `why`. Rows another program wrote into the file may be anything. */
+static int tt__check_row(sqlite3_stmt *st, char *why, size_t n) {
+  for (int i = 0; i < (int)TT__NCOLUMNS; i++) {
+    int type = sqlite3_column_type(st, i), kind = tt__column_kinds[i].kind;
+    const char *name = tt__column_kinds[i].name;
+    int ok = 1;
+    switch (kind) {
+      case TT__ID: ok = type == SQLITE_INTEGER; break;
+      case TT__TEXT: ok = type == SQLITE_TEXT; break;
+      case TT__TEXT_OR_NULL: ok = type == SQLITE_TEXT || type == SQLITE_NULL; break;
+      case TT__JSON: ok = type == SQLITE_TEXT || type == SQLITE_NULL; break;
+      case TT__NUMBER: ok = type == SQLITE_INTEGER || type == SQLITE_FLOAT; break;
+      case TT__INT: ok = type == SQLITE_INTEGER; break;
+      case TT__INT_OR_NULL: ok = type == SQLITE_INTEGER || type == SQLITE_NULL; break;
+    }
+    if (!ok) {
+      snprintf(why, n, "%s is %s, not %s", name, tt__type_name(type),
+               kind == TT__NUMBER ? "a number"
+               : kind == TT__INT || kind == TT__INT_OR_NULL || kind == TT__ID ? "an integer"
+               : kind == TT__JSON ? "JSON text" : "text");
+      return -1;
+    }
+    if (kind == TT__NUMBER && !isfinite(sqlite3_column_double(st, i))) {
+      snprintf(why, n, "%s is not finite", name);
+      return -1;
+    }
+    if ((kind == TT__INT || kind == TT__INT_OR_NULL) && type == SQLITE_INTEGER) {
+      sqlite3_int64 v = sqlite3_column_int64(st, i);
+      if (v < INT32_MIN || v > INT32_MAX) {
+        snprintf(why, n, "%s %lld is out of the 32-bit range", name, (long long)v);
+        return -1;
+      }
+      if (!strcmp(name, "status") && (v < TT_TUNEDB_OK || v > TT_TUNEDB_FAILED)) {
+        snprintf(why, n, "status %lld is not 0 (ok), 1 (infeasible) or 2 (failed)", (long long)v);
+        return -1;
+      }
+    }
+  }
+  return 0;
+}
+
+/* Fills `row` from the current result row of a SELECT of tt__columns, checked first
+ * (tt__check_row): 0, or -1 with what is wrong in `why`. */
+static int tt__read_row(sqlite3_stmt *st, tt_tunedb_row *row, char *why, size_t n) {
   memset(row, 0, sizeof *row);
   row->struct_size = sizeof *row;
+  if (tt__check_row(st, why, n)) return -1;
   int i = 0;
   row->id = sqlite3_column_int64(st, i++);
   row->scene_id = (const char *)sqlite3_column_text(st, i++);
   row->scene = (const char *)sqlite3_column_text(st, i++);
   row->camera = (const char *)sqlite3_column_text(st, i++);
   row->context = (const char *)sqlite3_column_text(st, i++);
-  row->has_indicators = tt__indicators_parse((const char *)sqlite3_column_text(st, i++),
-                                             row->indicators);
+  const char *ind = (const char *)sqlite3_column_text(st, i++);
+  if (ind && tt__indicators_parse(ind, row->indicators, why, n)) return -1;
+  row->has_indicators = ind != NULL;
   row->plugin = (const char *)sqlite3_column_text(st, i++);
   row->plugin_version = (const char *)sqlite3_column_text(st, i++);
   row->config = (const char *)sqlite3_column_text(st, i++);
@@ -452,22 +757,37 @@ static void tt__read_row(sqlite3_stmt *st, tt_tunedb_row *row) {
   row->host = (const char *)sqlite3_column_text(st, i++);
   row->has_rank = sqlite3_column_type(st, i) != SQLITE_NULL;
   row->rank = sqlite3_column_int(st, i++);
+  return 0;
 }
 
 tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
                             int (*fn)(void *user, const tt_tunedb_row *row), void *user) {
   if (!db || !fn) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_foreach: db and fn");
+  db->bad_rows = 0;
   char sql[1024];
-  snprintf(sql, sizeof sql, "SELECT %s FROM samples%s ORDER BY id", tt__columns,
+  /* a file of schema 1 opened read-only is not upgraded: its rows have no host and rank */
+  snprintf(sql, sizeof sql, "SELECT %.*s%s FROM samples%s ORDER BY id",
+           (int)(sizeof tt__columns - 1 - (db->version < 2 ? strlen(", host, rank") : 0)),
+           tt__columns, db->version < 2 ? ", NULL, NULL" : "",
            plugin ? " WHERE plugin = ?1" : "");
   sqlite3_stmt *st = NULL;
   if (sqlite3_prepare_v2(db->sql, sql, -1, &st, NULL) != SQLITE_OK)
     return tt__sql_error(db, db->sql, "reading rows");
   if (plugin) tt__bind_text(st, 1, plugin);
   int rc;
+  uint64_t bad = 0;
+  long long first_bad = 0;
+  char why[256], first_why[256] = "";
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
     tt_tunedb_row row;
-    tt__read_row(st, &row);
+    if (tt__read_row(st, &row, why, sizeof why)) {
+      /* a row that is not one of the schema is skipped, never passed on as garbage */
+      if (!bad++) {
+        first_bad = sqlite3_column_int64(st, 0);
+        snprintf(first_why, sizeof first_why, "%s", why);
+      }
+      continue;
+    }
     if (fn(user, &row)) {
       rc = SQLITE_DONE;
       break;
@@ -475,6 +795,11 @@ tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
   }
   tt_status status = rc == SQLITE_DONE ? TT_OK : tt__sql_error(db, db->sql, "reading rows");
   sqlite3_finalize(st);
+  db->bad_rows = bad;
+  if (bad)
+    tt__log(TT_LOG_WARN, "tuning database %s: %llu row%s skipped, not rows of its schema (the "
+            "first, id %lld: %s)", db->path, (unsigned long long)bad, bad == 1 ? "" : "s",
+            first_bad, first_why);
   return status;
 }
 
@@ -552,6 +877,8 @@ static int tt__csv_row(void *user, const tt_tunedb_row *r) {
 
 tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
   if (!db || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_export_csv: db, path");
+  if (tt_file_check_not_input(path, "CSV export", db->path, "tuning database") != TT_OK)
+    return TT_ERR_INVALID_ARGUMENT;
   tt_atomic_file *af;
   if (tt_atomic_file_open(path, &af) != TT_OK) return TT_ERR_IO;
   FILE *f = tt_atomic_file_stream(af);
@@ -661,9 +988,18 @@ tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag, in
   if (already) *already = 0;
   if (!db || !tag || !tag[0])
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: db and a non-empty tag");
-  if (source && access(source, R_OK) != 0)  /* ATTACH would create a missing file */
-    return tt_set_error(TT_ERR_IO, "tt_tunedb_merge: cannot read %s: %s", source,
-                        strerror(errno));
+  if (db->read_only)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning database %s: opened read-only: "
+                        "nothing can be merged into it", db->path);
+  if (source) {
+    /* ATTACH would create a missing file and block on a FIFO */
+    char why[256];
+    if (tt__file_regular_reason(source, why, sizeof why) != 0)
+      return tt_set_error(TT_ERR_IO, "tt_tunedb_merge: cannot read %s: %s", source, why);
+    if (tt_file_same(source, db->path) == 1)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: %s is the database "
+                          "merged into (%s)", source, db->path);
+  }
   if (source) {
     sqlite3_stmt *st = NULL;
     int rc = sqlite3_prepare_v2(db->sql, "ATTACH DATABASE ?1 AS src", -1, &st, NULL);

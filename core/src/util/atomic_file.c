@@ -4,7 +4,13 @@
  * or a crash sees the old file or the complete new one. Writes go through a stdio stream
  * whose backend (fopencookie) records the first failing write(2) with its errno, so a full
  * disk is reported at commit even when the code that wrote (OpenImageIO's PNG writer, for
- * one) ignored the error. */
+ * one) ignored the error.
+ *
+ * A writer holds an exclusive flock on its temporary file until commit or abort; the kernel
+ * drops it when the writer dies. The next write of the same output removes the temporaries
+ * of that output whose lock is free and which were not modified for TT__STALE_TEMP_AGE_S
+ * seconds: a killed write leaves its temporary at most until then, and a concurrent
+ * writer's temporary (locked) is never touched. */
 #include "util/files.h"
 
 #include <tunetrace/file.h>
@@ -18,6 +24,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -118,6 +126,53 @@ static int tt__create_temp(const char *path, char **tmp) {
   return -1;
 }
 
+/* Age (seconds since the last modification) from which an unlocked temporary of an output is
+ * abandoned: it covers the moment between a writer's create and its flock, and writers that
+ * do not lock (older builds), which keep the file's time fresh while they write. */
+#define TT__STALE_TEMP_AGE_S 60
+
+/* 1 if `name` is a temporary of the output named `base`: ".BASE.tmp-" and exactly six
+ * lowercase hex digits (tt__create_temp's pattern), nothing else. */
+static int tt__is_temp_of(const char *name, const char *base) {
+  size_t nb = strlen(base);
+  if (name[0] != '.' || strncmp(name + 1, base, nb) || strncmp(name + 1 + nb, ".tmp-", 5))
+    return 0;
+  const char *hex = name + 1 + nb + 5;
+  for (int i = 0; i < 6; i++)
+    if (!((hex[i] >= '0' && hex[i] <= '9') || (hex[i] >= 'a' && hex[i] <= 'f'))) return 0;
+  return hex[6] == '\0';
+}
+
+/* Removes the abandoned temporaries of the output `path` (see the top of the file); `own` is
+ * the temporary this writer just created. Best effort: anything unexpected leaves a file. */
+static void tt__remove_stale_temps(const char *path, const char *own) {
+  const char *slash = strrchr(path, '/');
+  const char *base = slash ? slash + 1 : path;
+  const char *own_name = own ? strrchr(own, '/') : NULL;
+  own_name = own_name ? own_name + 1 : own;
+  char *dir = tt__dirname(path);
+  DIR *d = dir ? opendir(dir) : NULL;
+  free(dir);
+  if (!d) return;
+  int dfd = dirfd(d);
+  struct dirent *e;
+  while ((e = readdir(d))) {
+    if (e->d_name[0] != '.' || !tt__is_temp_of(e->d_name, base)) continue;
+    if (own_name && !strcmp(e->d_name, own_name)) continue;
+    int fd = openat(dfd, e->d_name, O_RDONLY | O_NONBLOCK | O_NOFOLLOW | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0) continue;
+    struct stat held, now_st;
+    /* a writer alive holds its exclusive lock: a shared one is refused at once */
+    if (fstat(fd, &held) == 0 && S_ISREG(held.st_mode) && flock(fd, LOCK_SH | LOCK_NB) == 0 &&
+        fstatat(dfd, e->d_name, &now_st, AT_SYMLINK_NOFOLLOW) == 0 &&
+        now_st.st_dev == held.st_dev && now_st.st_ino == held.st_ino &&
+        time(NULL) - now_st.st_mtime >= TT__STALE_TEMP_AGE_S)
+      (void)unlinkat(dfd, e->d_name, 0);
+    close(fd);  /* drops the shared lock */
+  }
+  closedir(d);
+}
+
 tt_status tt_file_check_writable(const char *path) {
   if (!path || !*path) return tt_set_error(TT_ERR_IO, "cannot write to an empty path");
   struct stat st;
@@ -171,8 +226,14 @@ tt_status tt_atomic_file_open(const char *path, tt_atomic_file **out) {
     goto fail;
   } else {
     f->fd = tt__create_temp(f->path, &f->tmp);
-    /* keep the permissions of the file being replaced */
-    if (f->fd >= 0 && have) (void)fchmod(f->fd, st.st_mode & 07777);
+    if (f->fd >= 0) {
+      /* held until commit or abort (or death): other writers of this output leave it alone */
+      while (flock(f->fd, LOCK_EX) != 0 && errno == EINTR) {
+      }
+      /* keep the permissions of the file being replaced */
+      if (have) (void)fchmod(f->fd, st.st_mode & 07777);
+      tt__remove_stale_temps(f->path, f->tmp);
+    }
   }
   if (f->fd < 0) {
     int e = errno;

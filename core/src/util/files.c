@@ -29,55 +29,116 @@ const char *tt__file_kind(mode_t mode) {
   return "not a regular file";
 }
 
-/* Opens `path` read-only without blocking (a FIFO would block open() until a writer comes)
- * and checks it is a regular file; returns the fd, or -1 with the error set. */
-static int tt__open_regular(const char *path, const char *what, struct stat *st) {
+int tt__open_regular_fd(const char *path, struct stat *st, char *why, size_t n) {
   if (!path || !*path) {
-    tt_set_error(TT_ERR_IO, "cannot open %s: empty path", what);
+    snprintf(why, n, "empty path");
+    errno = ENOENT;
     return -1;
   }
+  /* O_NONBLOCK: open() of a FIFO would block until a writer comes; O_NOCTTY: a terminal
+   * named as an input must not become our controlling terminal */
   int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
   if (fd < 0) {
-    tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path, what, strerror(errno));
+    int e = errno;
+    snprintf(why, n, "%s", strerror(e));
+    errno = e;
     return -1;
   }
   if (fstat(fd, st) != 0) {
-    tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path, what, strerror(errno));
+    int e = errno;
+    snprintf(why, n, "%s", strerror(e));
     close(fd);
+    errno = e;
     return -1;
   }
   if (!S_ISREG(st->st_mode)) {
-    tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s, not a regular file", path, what,
-                 tt__file_kind(st->st_mode));
+    snprintf(why, n, "%s, not a regular file", tt__file_kind(st->st_mode));
     close(fd);
+    errno = S_ISDIR(st->st_mode) ? EISDIR : EINVAL;
     return -1;
   }
+  /* reads of a regular file never block; the descriptor reads as usual from here */
+  int flags = fcntl(fd, F_GETFL);
+  if (flags >= 0) (void)fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+  return fd;
+}
+
+/* tt__open_regular_fd with the error set: "PATH: cannot open WHAT: REASON". */
+static int tt__open_regular(const char *path, const char *what, struct stat *st) {
+  char why[256];
+  int fd = tt__open_regular_fd(path, st, why, sizeof why);
+  if (fd < 0)
+    tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path && *path ? path : "(empty path)",
+                 what, why);
   return fd;
 }
 
 int tt__file_regular_reason(const char *path, char *why, size_t n) {
-  if (!path || !*path) {
-    snprintf(why, n, "empty path");
-    return -1;
-  }
   struct stat st;
-  int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
-  if (fd < 0 || fstat(fd, &st) != 0) {
-    snprintf(why, n, "%s", strerror(errno));
-    if (fd >= 0) close(fd);
-    return -1;
-  }
+  int fd = tt__open_regular_fd(path, &st, why, n);
+  if (fd < 0) return -1;
   close(fd);
-  if (S_ISREG(st.st_mode)) return 0;
-  snprintf(why, n, "%s, not a regular file", tt__file_kind(st.st_mode));
-  return -1;
+  return 0;
 }
 
 tt_status tt_file_check_regular(const char *path, const char *what) {
-  char why[256];
-  if (tt__file_regular_reason(path, why, sizeof why) == 0) return TT_OK;
-  return tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path && *path ? path : "(empty path)",
-                      what ? what : "file", why);
+  struct stat st;
+  int fd = tt__open_regular(path, what ? what : "file", &st);
+  if (fd < 0) return TT_ERR_IO;
+  close(fd);
+  return TT_OK;
+}
+
+/* The real path of `path` when it exists, else of its folder joined with its name (an output
+ * not written yet); NULL when neither resolves (malloc'ed). */
+static char *tt__canonical(const char *path) {
+  char *real = realpath(path, NULL);
+  if (real) return real;
+  const char *slash = strrchr(path, '/');
+  const char *base = slash ? slash + 1 : path;
+  if (!*base || !strcmp(base, ".") || !strcmp(base, "..")) return NULL;
+  char *dir;
+  if (!slash) dir = realpath(".", NULL);
+  else if (slash == path) dir = realpath("/", NULL);
+  else {
+    char *d = strndup(path, (size_t)(slash - path));
+    dir = d ? realpath(d, NULL) : NULL;
+    free(d);
+  }
+  if (!dir) return NULL;
+  size_t n = strlen(dir) + strlen(base) + 2;
+  char *out = malloc(n);
+  if (out) snprintf(out, n, "%s%s%s", dir, strcmp(dir, "/") ? "/" : "", base);
+  free(dir);
+  return out;
+}
+
+int tt_file_same(const char *a, const char *b) {
+  if (!a || !b || !*a || !*b) return 0;
+  struct stat sa, sb;
+  int ha = stat(a, &sa) == 0, hb = stat(b, &sb) == 0;
+  if (ha && hb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (ha != hb) return 0;  /* one exists, the other not: two files */
+  /* neither exists yet: the same real folder and name */
+  char *ca = tt__canonical(a), *cb = tt__canonical(b);
+  int same = ca && cb ? !strcmp(ca, cb) : !strcmp(a, b);
+  free(ca);
+  free(cb);
+  return same;
+}
+
+tt_status tt_file_check_not_input(const char *output, const char *output_what,
+                                  const char *input, const char *input_what) {
+  if (!tt_file_same(output, input)) return TT_OK;
+  if (!output_what) output_what = "output";
+  if (!input_what) input_what = "input";
+  if (!strcmp(output, input))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the %s would replace the %s (the same "
+                        "file): give the %s another name", output, output_what, input_what,
+                        output_what);
+  return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the %s would replace the %s %s (the same "
+                      "file): give the %s another name", output, output_what, input_what, input,
+                      output_what);
 }
 
 tt_status tt_file_read(const char *path, const char *what, size_t max_bytes, char **data,

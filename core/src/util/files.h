@@ -6,6 +6,7 @@
 #include <tunetrace/common.h>
 
 #include <stddef.h>
+#include <sys/stat.h>
 #include <sys/types.h>
 
 /* Case-insensitive file-name suffix test (".pbrt", ".json"). */
@@ -13,6 +14,14 @@ int tt__has_ext(const char *path, const char *ext);
 
 /* tt_file_read of a scene file (what = "scene file", default limit); errors name the file. */
 tt_status tt__read_file(const char *path, char **out, size_t *len);
+
+/* The one check of every input the library, the host and the plugins read: opens `path`
+ * read-only without blocking (a FIFO, a device, a socket or a directory is refused at once,
+ * before anything reads it) and returns a blocking descriptor of the regular file with its
+ * stat in *st; or -1 with the reason in `why` ("No such file or directory", "a FIFO, not a
+ * regular file") and errno set. tt_file_read, tt_file_check_regular and the functions
+ * below are built on it. */
+int tt__open_regular_fd(const char *path, struct stat *st, char *why, size_t n);
 
 /* 0 if `path` is a regular file; else -1 and the reason in `why` ("No such file or
  * directory", "a FIFO, not a regular file"), for loaders that word their own message. Never
