@@ -114,6 +114,11 @@ int tt__ensure_dir(const char *dir);
 /* Creates the folder of the output file `path` if missing, before a render; on failure
  * prints one message naming `option`, the path and the reason, and returns TT_EXIT_OUTPUT. */
 int tt__ensure_parent_dir(const char *option, const char *path);
+/* The still's default output <scene folder>.exr, or <file stem>.exr (output_dir.c). */
+void tt__default_out(const char *scene, char *buf, size_t n);
+/* Refuses, before any work, an output that would replace an input or another output,
+ * naming both: TT_EXIT_USAGE after one message, else TT_EXIT_OK (io_check.c). */
+int tt__check_outputs(const tt__host_options *opt);
 
 /* Runs --convert: loads the scene and writes it as scene.json v1 + PLY meshes (convert.c). */
 int tt__run_convert(const tt__host_options *opt);

@@ -180,7 +180,7 @@ static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context, const ch
   for (int i = 0; i < h->opt->warm_start_count; i++) {
     const char *path = h->opt->warm_start[i];
     tt_tunedb *db = NULL;
-    if (tt_tunedb_open(path, &db) != TT_OK) {
+    if (tt_tunedb_open_readonly(path, &db) != TT_OK) {
       tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_USAGE;
     }

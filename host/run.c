@@ -116,30 +116,6 @@ int tt__run_describe(const tt__host_options *opt) {
 
 /* ---- render ---- */
 
-/* Default output: <scene folder>.exr for ".../NAME/scene.json", else <file stem>.exr. The
- * folder's name comes from the resolved path, so "scene.json" run from its own folder (or
- * "./scene.json", "../NAME/scene.json") is named after the folder too, never "..exr". */
-static void tt__default_out(const char *scene, char *buf, size_t n) {
-  char tmp[4096];
-  snprintf(tmp, sizeof tmp, "%s", scene);
-  char *base = basename(tmp);
-  if (!strcmp(base, "scene.json")) {
-    char resolved[PATH_MAX], tmp2[4096];
-    snprintf(tmp2, sizeof tmp2, "%s", realpath(scene, resolved) ? resolved : scene);
-    char *dir = dirname(tmp2);
-    char tmp3[4096];
-    snprintf(tmp3, sizeof tmp3, "%s", dir);
-    const char *name = basename(tmp3);
-    /* "/scene.json" or an unresolvable "./scene.json": no folder name to use */
-    if (!strcmp(name, "/") || !strcmp(name, ".") || !strcmp(name, "..")) name = "scene";
-    snprintf(buf, n, "%s.exr", name);
-  } else {
-    char *dot = strrchr(base, '.');
-    if (dot && dot != base) *dot = 0;
-    snprintf(buf, n, "%s.exr", base);
-  }
-}
-
 /* The EXR's pixels: RGB, then every AOV plane of the film as a named layer, in the channel
  * names external denoisers and compositors read (depth.Z, normal.X/Y/Z, albedo.R/G/B,
  * motion.X/Y). Returns the channel count; `names` receives them (static strings). */
