@@ -24,6 +24,8 @@ typedef struct tt__ctx {
   size_t n;
   tt_mpi_jobs *out;
   size_t cap;
+  size_t *index;      /* open-addressing set of the jobs' tags: job index + 1, 0 = empty */
+  size_t index_cap;   /* a power of two, at least twice the job count */
 } tt__ctx;
 
 static int tt__fail(tt__ctx *c, size_t item, const char *key, const char *fmt, ...) {
@@ -106,6 +108,15 @@ static int tt__check_owned(tt__ctx *c, size_t item, tt_mpi_kind kind, char **arg
   return 0;
 }
 
+/* 1 if `v` is a number that is an integer in lo..hi. The range is checked on the double
+ * before any cast: 1e300, -1e300 or NaN never reach (long), whose result would be undefined. */
+static int tt__int_in(const cJSON *v, long lo, long hi) {
+  if (!cJSON_IsNumber(v)) return 0;
+  double d = v->valuedouble;
+  if (!(d >= (double)lo && d <= (double)hi)) return 0;  /* NaN fails both */
+  return d == (double)(long)d;
+}
+
 /* Reads an integer list key (`one` or `many`), into vals; -1 on error, else the count (0:
  * neither given). */
 static int tt__int_list(tt__ctx *c, size_t item, const cJSON *o, const char *one,
@@ -114,8 +125,7 @@ static int tt__int_list(tt__ctx *c, size_t item, const cJSON *o, const char *one
   const cJSON *b = strcmp(one, many) ? cJSON_GetObjectItemCaseSensitive(o, many) : NULL;
   if (a && b) return tt__fail(c, item, many, "give either %s or %s", one, many);
   if (a) {
-    if (!cJSON_IsNumber(a) || a->valuedouble != (double)(long)a->valuedouble ||
-        a->valuedouble < lo || a->valuedouble > hi)
+    if (!tt__int_in(a, lo, hi))
       return tt__fail(c, item, one, "expected an integer in %ld..%ld", lo, hi);
     vals[0] = (long)a->valuedouble;
     return 1;
@@ -126,8 +136,7 @@ static int tt__int_list(tt__ctx *c, size_t item, const cJSON *o, const char *one
   int k = 0;
   for (const cJSON *v = b->child; v; v = v->next, k++) {
     if (k >= max) return tt__fail(c, item, many, "more than %d values", max);
-    if (!cJSON_IsNumber(v) || v->valuedouble != (double)(long)v->valuedouble ||
-        v->valuedouble < lo || v->valuedouble > hi)
+    if (!tt__int_in(v, lo, hi))
       return tt__fail(c, item, many, "[%d]: expected an integer in %ld..%ld", k, lo, hi);
     vals[k] = (long)v->valuedouble;
   }
@@ -165,13 +174,55 @@ static void tt__args_hash(char **args, size_t n, char out[17]) {
   snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
-/* Appends one job (takes a copy of args). */
+/* The slot of `tag` in the tag set: where it is, or the empty slot where it goes. */
+static size_t tt__slot(const tt__ctx *c, const char *tag) {
+  size_t mask = c->index_cap - 1;
+  size_t i = (size_t)tt__fnv1a64(TT__FNV1A64_OFFSET, tag, strlen(tag)) & mask;
+  while (c->index[i] && strcmp(c->out->jobs[c->index[i] - 1].tag, tag)) i = (i + 1) & mask;
+  return i;
+}
+
+/* Grows the tag set to hold `count` jobs at half load at most; -1 when out of memory. */
+static int tt__index_reserve(tt__ctx *c, size_t count) {
+  if (count * 2 <= c->index_cap) return 0;
+  size_t cap = c->index_cap ? c->index_cap : 64;
+  while (cap < count * 2) cap *= 2;
+  size_t *old = c->index, old_cap = c->index_cap;
+  c->index = calloc(cap, sizeof *c->index);
+  if (!c->index) {
+    c->index = old;
+    return -1;
+  }
+  c->index_cap = cap;
+  for (size_t i = 0; i < old_cap; i++)
+    if (old[i]) c->index[tt__slot(c, c->out->jobs[old[i] - 1].tag)] = old[i];
+  free(old);
+  return 0;
+}
+
+/* -1 (with the message) if `more` jobs would take the list past TT_MPI_MAX_JOBS; checked
+ * before an item is expanded, so that no range is ever walked further than the bound. */
+static int tt__check_count(tt__ctx *c, size_t item, const char *key, uint64_t more,
+                           const char *how) {
+  uint64_t total = (uint64_t)c->out->count + more;
+  if (total <= TT_MPI_MAX_JOBS) return 0;
+  return tt__fail(c, item, key, "%s makes %llu jobs (%llu with the items before it); a job "
+                  "list holds at most %d: cut it into several lists%s", how,
+                  (unsigned long long)more, (unsigned long long)total, TT_MPI_MAX_JOBS,
+                  key && !strcmp(key, "range") ? ", or give a larger chunk" : "");
+}
+
+/* Appends one job (takes a copy of args). Repeated tags are found in the tag set: the
+ * expansion is linear in the number of jobs. */
 static int tt__push(tt__ctx *c, size_t item, const tt_mpi_job *proto, char **args, size_t n,
                     const char *tag) {
   tt_mpi_jobs *o = c->out;
-  for (size_t i = 0; i < o->count; i++)
-    if (!strcmp(o->jobs[i].tag, tag))
-      return tt__fail(c, item, NULL, "repeats a job of jobs[%zu] (%s)", o->jobs[i].item, tag);
+  if (tt__index_reserve(c, o->count + 1)) return tt__fail(c, item, NULL, "out of memory");
+  size_t slot = tt__slot(c, tag);
+  if (c->index[slot]) {
+    const tt_mpi_job *same = &o->jobs[c->index[slot] - 1];
+    return tt__fail(c, item, NULL, "repeats a job of jobs[%zu] (%s)", same->item, tag);
+  }
   if (o->count == c->cap) {
     size_t cap = c->cap ? c->cap * 2 : 16;
     tt_mpi_job *g = realloc(o->jobs, cap * sizeof *g);
@@ -179,7 +230,7 @@ static int tt__push(tt__ctx *c, size_t item, const tt_mpi_job *proto, char **arg
     o->jobs = g;
     c->cap = cap;
   }
-  tt_mpi_job *j = &o->jobs[o->count++];
+  tt_mpi_job *j = &o->jobs[o->count];
   *j = *proto;
   j->tag = tt__strdup(tag);
   j->scene = tt__strdup(proto->scene);
@@ -188,8 +239,33 @@ static int tt__push(tt__ctx *c, size_t item, const tt_mpi_job *proto, char **arg
   j->sequence = proto->sequence ? tt__strdup(proto->sequence) : NULL;
   j->args = n ? malloc(n * sizeof *j->args) : NULL;
   j->nargs = n;
-  for (size_t i = 0; i < n; i++) j->args[i] = tt__strdup(args[i]);
+  int oom = !j->tag || !j->scene || (proto->objective && !j->objective) ||
+            (proto->out_dir && !j->out_dir) || (proto->sequence && !j->sequence) ||
+            (n && !j->args);
+  for (size_t i = 0; j->args && i < n; i++) oom |= !(j->args[i] = tt__strdup(args[i]));
   j->item = item;
+  if (oom) {
+    if (!j->args) j->nargs = 0;
+    tt__job_free(j);
+    return tt__fail(c, item, NULL, "out of memory");
+  }
+  o->count++;
+  c->index[slot] = o->count;
+  return 0;
+}
+
+/* Parses a frame number of a "range": decimal digits only, at most 4294967295 (the host's
+ * frame numbers are 32-bit); *end is set after it. 0, or -1. */
+static int tt__frame_number(const char *s, uint32_t *out, const char **end) {
+  uint64_t v = 0;
+  const char *p = s;
+  if (*p < '0' || *p > '9') return -1;
+  for (; *p >= '0' && *p <= '9'; p++) {
+    v = v * 10 + (uint64_t)(*p - '0');
+    if (v > UINT32_MAX) return -1;
+  }
+  *out = (uint32_t)v;
+  *end = p;
   return 0;
 }
 
@@ -245,11 +321,12 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
         goto done;
       }
     const cJSON *range = cJSON_GetObjectItemCaseSensitive(o, "range");
-    unsigned a = 0, b = 0;
-    char extra;
-    if (!cJSON_IsString(range) || range->valuestring[0] < '0' || range->valuestring[0] > '9' ||
-        sscanf(range->valuestring, "%u:%u%c", &a, &b, &extra) != 2 || a > b) {
-      tt__fail(c, item, "range", "expected frames \"A:B\" with A <= B (A..B inclusive), got %s",
+    uint32_t a = 0, b = 0;
+    const char *p = cJSON_IsString(range) ? range->valuestring : "";
+    if (!cJSON_IsString(range) || tt__frame_number(p, &a, &p) || *p++ != ':' ||
+        tt__frame_number(p, &b, &p) || *p || a > b) {
+      tt__fail(c, item, "range", "expected frames \"A:B\" with A <= B (A..B inclusive, "
+               "integers in 0..4294967295), got %s",
                cJSON_IsString(range) ? range->valuestring : "no string");
       goto done;
     }
@@ -273,9 +350,13 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
     snprintf(seq, sizeof seq, "sequence:%s:%u-%u:%s", dir->valuestring, a, b, hash);
     proto.out_dir = dir->valuestring;
     proto.sequence = seq;
-    for (unsigned long f = a; f <= b; f += (unsigned long)chunk[0]) {
+    char how[128];
+    snprintf(how, sizeof how, "%s in chunks of %ld", range->valuestring, chunk[0]);
+    if (tt__check_count(c, item, "range", ((uint64_t)b - a) / (uint64_t)chunk[0] + 1, how))
+      goto done;
+    for (uint64_t f = a; f <= b; f += (uint64_t)chunk[0]) {
       proto.first = (uint32_t)f;
-      proto.last = (uint32_t)(f + (unsigned long)chunk[0] - 1 < b ? f + chunk[0] - 1 : b);
+      proto.last = (uint32_t)(f + (uint64_t)chunk[0] - 1 < b ? f + (uint64_t)chunk[0] - 1 : b);
       snprintf(tag, sizeof tag, "frames:%s:%u-%u:%s", dir->valuestring, proto.first, proto.last,
                hash);
       if (tt__push(c, item, &proto, args, nargs, tag)) goto done;
@@ -328,6 +409,11 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
         goto done;
       }
   }
+  char how[128];
+  snprintf(how, sizeof how, "%d camera%s x %d objective%s x %d seed%s", ncam, ncam == 1 ? "" : "s",
+           nobj, nobj == 1 ? "" : "s", nseed, nseed == 1 ? "" : "s");
+  if (tt__check_count(c, item, NULL, (uint64_t)ncam * (uint64_t)nobj * (uint64_t)nseed, how))
+    goto done;
   for (int ci = 0; ci < ncam; ci++)
     for (int oi = 0; oi < nobj; oi++)
       for (int si = 0; si < nseed; si++) {
@@ -353,7 +439,7 @@ done:
 int tt_mpi_jobs_parse(const char *text, const char *source, tt_mpi_jobs *out, char *err,
                       size_t n) {
   memset(out, 0, sizeof *out);
-  tt__ctx c = {source, err, n, out, 0};
+  tt__ctx c = {source, err, n, out, 0, NULL, 0};
   const char *end = NULL;
   cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
   if (!root) {
@@ -392,6 +478,7 @@ int tt_mpi_jobs_parse(const char *text, const char *source, tt_mpi_jobs *out, ch
 done:
   for (size_t k = 0; k < ncommon; k++) free(common[k]);
   free(common);
+  free(c.index);
   cJSON_Delete(root);
   if (rc) tt_mpi_jobs_free(out);
   return rc;

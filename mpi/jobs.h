@@ -7,6 +7,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* The most jobs one list expands to (all items together): a list past it is refused before
+ * it is expanded, naming the file and the item. 100000 jobs hold a sequence of 100000 frames
+ * in chunks of 1 and take some 50 MB on every rank. */
+#define TT_MPI_MAX_JOBS 100000
+
 typedef enum tt_mpi_kind {
   TT_MPI_TUNE = 0,     /* one tuning search: host --camera-index I --objective O ... --db */
   TT_MPI_EXPLORE = 1,  /* host --explore N --seed S at one camera (random configurations) */
@@ -38,8 +43,10 @@ typedef struct tt_mpi_jobs {
 } tt_mpi_jobs;
 
 /* Parses the job list `text` (from `source`), checks every item (scene files exist, ranges
- * not empty, cameras 0..99, known keys) and expands it: "cameras" lists, "objectives" lists
- * and frame ranges cut into "chunk" frames. 0, or -1 with the message in `err`. */
+ * not empty, cameras 0..99, known keys, every number in its range before it is converted)
+ * and expands it: "cameras" lists, "objectives" lists and frame ranges cut into "chunk"
+ * frames, in time linear in the number of jobs, at most TT_MPI_MAX_JOBS. 0, or -1 with the
+ * message in `err`. */
 int tt_mpi_jobs_parse(const char *text, const char *source, tt_mpi_jobs *out, char *err,
                       size_t n);
 
