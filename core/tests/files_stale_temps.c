@@ -1,8 +1,9 @@
-/* A killed write leaves its temporary ".NAME.tmp-XXXXXX"; the next write of the same output
+/* A killed write leaves its temporary ".NAME.tmp-NNNNNN"; the next write of the same output
  * removes it (its writer is gone: its lock is free, and it is older than a minute), and
  * never a file that is not one of ours: a temporary a live writer holds (even an old one),
  * a fresh unlocked one (a writer between create and lock), another output's temporaries,
- * names that only look alike. The live writer then commits as if nothing happened. */
+ * names that only look alike. The live writer then commits as if nothing happened, and a
+ * stale temporary past a gap of freed numbers is found too. */
 #include <tunetrace/tunetrace.h>
 
 #include <dirent.h>
@@ -115,7 +116,7 @@ int main(void) {
   make(".other.exr.tmp-abcdef", "another output's", 3600);
   make("frame.exr.tmp-abcdef", "no dot", 3600);
   /* ours but fresh and unlocked (a writer between its create and its lock): stays */
-  make(".frame.exr.tmp-00f00d", "fresh", 0);
+  make(".frame.exr.tmp-000002", "fresh", 0);
 
   /* the next write of the output */
   CHECK(tt_file_write_atomic(out, "frame 2", 7) == TT_OK);
@@ -123,7 +124,7 @@ int main(void) {
   CHECK(exists(".frame.exr.tmp-12345") && exists(".frame.exr.tmp-1234567") &&
         exists(".frame.exr.tmp-ABCDEF") && exists(".frame.exr.tmp-abcdef.bak") &&
         exists(".other.exr.tmp-abcdef") && exists("frame.exr.tmp-abcdef"));
-  CHECK(exists(".frame.exr.tmp-00f00d"));
+  CHECK(exists(".frame.exr.tmp-000002"));
   CHECK_MSG(live_name[0] && exists(live_name), "the live writer's temporary %s was removed",
             live_name);
   size_t n = 0;
@@ -139,12 +140,18 @@ int main(void) {
   CHECK(!exists(live_name));
 
   /* the fresh one, once old, goes with the next write; the look-alikes stay */
-  age_file(".frame.exr.tmp-00f00d", 120);
+  age_file(".frame.exr.tmp-000002", 120);
   CHECK(tt_file_write_atomic(out, "frame 3", 7) == TT_OK);
-  CHECK(!exists(".frame.exr.tmp-00f00d"));
+  CHECK(!exists(".frame.exr.tmp-000002"));
   CHECK(temps_of("frame.exr", NULL, 0) == 4);  /* 12345, 1234567, ABCDEF, abcdef.bak */
   snprintf(text, sizeof text, "%d", temps_of("other.exr", NULL, 0));
   CHECK_MSG(!strcmp(text, "1"), "another output's temporaries: %s", text);
+
+  /* numbers freed by finished writers leave gaps: a stale one past a few is still found */
+  make(".frame.exr.tmp-000005", "stale past a gap", 3600);
+  CHECK(tt_file_write_atomic(out, "frame 4", 7) == TT_OK);
+  CHECK(!exists(".frame.exr.tmp-000005"));
+  CHECK(temps_of("frame.exr", NULL, 0) == 4);
 
   char cmd[700];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);

@@ -58,9 +58,12 @@ TT_API tt_status tt_file_write_atomic(const char *path, const void *data, size_t
 /* An output being written: a temporary file beside its final path. */
 typedef struct tt_atomic_file tt_atomic_file;
 
-/* Creates a temporary file in the folder of `path` (named ".NAME.tmp-XXXXXX"), with the
- * permissions `path` already has, else 0666 minus the umask. `*out` is owned by the
- * caller: end it with tt_atomic_file_commit or tt_atomic_file_abort. */
+/* Creates a temporary file in the folder of `path` (".NAME.tmp-NNNNNN", the first free
+ * number), with the permissions `path` already has, else 0666 minus the umask, and holds a
+ * lock on it until commit or abort. Temporaries of the same output left by writers that are
+ * gone (a kill: the lock is free) and not modified for a minute are removed; a live
+ * writer's never are. `*out` is owned by the caller: end it with tt_atomic_file_commit or
+ * tt_atomic_file_abort. */
 TT_API tt_status tt_atomic_file_open(const char *path, tt_atomic_file **out);
 
 /* The stream to write the content to (owned by `file`; do not fclose it). */

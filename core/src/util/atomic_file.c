@@ -6,11 +6,14 @@
  * disk is reported at commit even when the code that wrote (OpenImageIO's PNG writer, for
  * one) ignored the error.
  *
- * A writer holds an exclusive flock on its temporary file until commit or abort; the kernel
- * drops it when the writer dies. The next write of the same output removes the temporaries
- * of that output whose lock is free and which were not modified for TT__STALE_TEMP_AGE_S
- * seconds: a killed write leaves its temporary at most until then, and a concurrent
- * writer's temporary (locked) is never touched. */
+ * Temporaries are numbered: ".NAME.tmp-000000", "-000001", ... (six hex digits), each writer
+ * taking the first free number with O_EXCL, so the temporaries of an output are found by
+ * probing a few names, without reading the folder (a sequence writes thousands of files
+ * into one). A writer holds an exclusive flock on its temporary until commit or abort; the
+ * kernel drops it when the writer dies. The next write of the same output removes that
+ * output's temporaries whose lock is free and which were not modified for
+ * TT__STALE_TEMP_AGE_S seconds: a killed write leaves its temporary at most until then, and
+ * a concurrent writer's temporary (locked) is never touched. */
 #include "util/files.h"
 
 #include <tunetrace/file.h>
@@ -19,12 +22,10 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
-#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <dirent.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -94,25 +95,29 @@ static int tt__sync_dir(const char *dir) {
   return e;
 }
 
-/* Creates ".NAME.tmp-XXXXXX" beside `path` with O_EXCL (0666 minus the umask, as a plain
- * open would); returns the fd and sets *tmp, or -1 with errno set. */
-static int tt__create_temp(const char *path, char **tmp) {
-  static atomic_uint counter;
+/* Temporaries per output: numbers a writer tries, and free numbers in a row after which the
+ * probe for stale ones stops (numbers freed by finished writers leave gaps). */
+#define TT__TEMP_SLOTS 4096
+#define TT__TEMP_PROBE_GAP 8
+
+/* ".NAME.tmp-NNNNNN" (slot `slot` in hex) of the output `path`, in its folder, into `t`. */
+static void tt__temp_name(const char *path, unsigned slot, char *t, size_t n) {
   const char *slash = strrchr(path, '/');
   size_t dir_len = slash ? (size_t)(slash - path + 1) : 0;
-  const char *base = path + dir_len;
-  size_t n = dir_len + 1 + strlen(base) + 32;
+  snprintf(t, n, "%.*s.%s.tmp-%06x", (int)dir_len, path, path + dir_len, slot);
+}
+
+/* Creates the first free ".NAME.tmp-NNNNNN" beside `path` with O_EXCL (0666 minus the umask,
+ * as a plain open would); returns the fd and sets *tmp, or -1 with errno set. */
+static int tt__create_temp(const char *path, char **tmp) {
+  size_t n = strlen(path) + 32;
   char *t = malloc(n);
   if (!t) {
     errno = ENOMEM;
     return -1;
   }
-  for (int attempt = 0; attempt < 100; attempt++) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    unsigned r = (unsigned)ts.tv_nsec ^ ((unsigned)getpid() << 12) ^
-                 (atomic_fetch_add(&counter, 1) * 2654435761u);
-    snprintf(t, n, "%.*s.%s.tmp-%06x", (int)dir_len, path, base, r & 0xffffffu);
+  for (unsigned slot = 0; slot < TT__TEMP_SLOTS; slot++) {
+    tt__temp_name(path, slot, t, n);
     int fd = open(t, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
       *tmp = t;
@@ -131,46 +136,34 @@ static int tt__create_temp(const char *path, char **tmp) {
  * do not lock (older builds), which keep the file's time fresh while they write. */
 #define TT__STALE_TEMP_AGE_S 60
 
-/* 1 if `name` is a temporary of the output named `base`: ".BASE.tmp-" and exactly six
- * lowercase hex digits (tt__create_temp's pattern), nothing else. */
-static int tt__is_temp_of(const char *name, const char *base) {
-  size_t nb = strlen(base);
-  if (name[0] != '.' || strncmp(name + 1, base, nb) || strncmp(name + 1 + nb, ".tmp-", 5))
-    return 0;
-  const char *hex = name + 1 + nb + 5;
-  for (int i = 0; i < 6; i++)
-    if (!((hex[i] >= '0' && hex[i] <= '9') || (hex[i] >= 'a' && hex[i] <= 'f'))) return 0;
-  return hex[6] == '\0';
-}
-
 /* Removes the abandoned temporaries of the output `path` (see the top of the file); `own` is
  * the temporary this writer just created. Best effort: anything unexpected leaves a file. */
 static void tt__remove_stale_temps(const char *path, const char *own) {
-  const char *slash = strrchr(path, '/');
-  const char *base = slash ? slash + 1 : path;
-  const char *own_name = own ? strrchr(own, '/') : NULL;
-  own_name = own_name ? own_name + 1 : own;
-  char *dir = tt__dirname(path);
-  DIR *d = dir ? opendir(dir) : NULL;
-  free(dir);
-  if (!d) return;
-  int dfd = dirfd(d);
-  struct dirent *e;
-  while ((e = readdir(d))) {
-    if (e->d_name[0] != '.' || !tt__is_temp_of(e->d_name, base)) continue;
-    if (own_name && !strcmp(e->d_name, own_name)) continue;
-    int fd = openat(dfd, e->d_name, O_RDONLY | O_NONBLOCK | O_NOFOLLOW | O_NOCTTY | O_CLOEXEC);
-    if (fd < 0) continue;
+  size_t n = strlen(path) + 32;
+  char *t = malloc(n);
+  if (!t) return;
+  for (unsigned slot = 0, gap = 0; slot < TT__TEMP_SLOTS && gap < TT__TEMP_PROBE_GAP; slot++) {
+    tt__temp_name(path, slot, t, n);
+    if (own && !strcmp(t, own)) {
+      gap = 0;
+      continue;
+    }
+    int fd = open(t, O_RDONLY | O_NONBLOCK | O_NOFOLLOW | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0) {
+      gap = errno == ENOENT ? gap + 1 : 0;
+      continue;
+    }
+    gap = 0;
     struct stat held, now_st;
-    /* a writer alive holds its exclusive lock: a shared one is refused at once */
+    /* a writer alive holds its exclusive lock: a shared one is refused at once; the name
+     * must still be the file locked (not a new writer's, made since) */
     if (fstat(fd, &held) == 0 && S_ISREG(held.st_mode) && flock(fd, LOCK_SH | LOCK_NB) == 0 &&
-        fstatat(dfd, e->d_name, &now_st, AT_SYMLINK_NOFOLLOW) == 0 &&
-        now_st.st_dev == held.st_dev && now_st.st_ino == held.st_ino &&
-        time(NULL) - now_st.st_mtime >= TT__STALE_TEMP_AGE_S)
-      (void)unlinkat(dfd, e->d_name, 0);
+        lstat(t, &now_st) == 0 && now_st.st_dev == held.st_dev &&
+        now_st.st_ino == held.st_ino && time(NULL) - now_st.st_mtime >= TT__STALE_TEMP_AGE_S)
+      (void)unlink(t);
     close(fd);  /* drops the shared lock */
   }
-  closedir(d);
+  free(t);
 }
 
 tt_status tt_file_check_writable(const char *path) {
