@@ -186,7 +186,7 @@ int main(void) {
   cJSON *warm = cJSON_GetArrayItem(
       cJSON_GetObjectItem(cJSON_GetObjectItem(root, "hybrid"), "warm_start"), 0);
   cJSON *rows = cJSON_GetObjectItem(warm, "rows");
-  CHECK_MSG(cJSON_IsNumber(rows) && rows->valuedouble == 5, "%s", stats);  /* the good rows */
+  CHECK_MSG(cJSON_IsNumber(rows) && rows->valuedouble == 5, "%s", stats ? stats : "(no stats)");  /* the good rows */
   cJSON_Delete(root);
   tt_free(stats);
 
