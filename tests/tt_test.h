@@ -56,11 +56,22 @@ static int tt_test_checks = 0;
     }                                                                                  \
   } while (0)
 
+/* Skips the test (exit 77) for a reason outside the code under test: data or a tool the
+ * README's setup provides. tools/test.sh fails the suite on any skip when CI is set, so a
+ * skip never hides a missing install step there. */
 #define TEST_SKIP(...)                                                                 \
   do {                                                                                 \
     fprintf(stderr, "SKIP: " __VA_ARGS__);                                             \
     fputc('\n', stderr);                                                               \
     exit(77);                                                                          \
+  } while (0)
+
+/* Fails the test at once (a set-up step that must work, such as a temporary folder). */
+#define TEST_FAIL(...)                                                                 \
+  do {                                                                                 \
+    fprintf(stderr, "FAIL: " __VA_ARGS__);                                             \
+    fputc('\n', stderr);                                                               \
+    exit(1);                                                                           \
   } while (0)
 
 /* The whole content of `path` (malloc'ed and NUL-terminated: free it with free()), its
@@ -99,9 +110,15 @@ static inline char *tt_test_read_file(const char *path, size_t *len) {
   return buf;
 }
 
-/* Prints a summary and returns the process exit code. */
+/* Prints a summary and returns the process exit code: failure when a check failed, and
+ * when no check ran at all (a test that asserts nothing proves nothing: an early return, a
+ * loop over an empty list). Every test's main ends with `return tt_test_finish(name);`. */
 static inline int tt_test_finish(const char *name) {
   printf("%s: %d checks, %d failed\n", name, tt_test_checks, tt_test_failures);
+  if (tt_test_checks == 0) {
+    fprintf(stderr, "%s: no check ran: the test asserted nothing\n", name);
+    return 1;
+  }
   return tt_test_failures ? 1 : 0;
 }
 

@@ -7,6 +7,8 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 bash tools/bootstrap.sh >/dev/null || exit 1
+source tools/test_common.sh
+tt_link_shared
 dir=build-san
 if [ ! -f "$dir/build.ninja" ]; then
   CC=clang CXX=clang++ meson setup "$dir" -Db_sanitize=address,undefined -Db_lundef=false \
@@ -21,9 +23,4 @@ source tests/support/sanitizers/env.sh
 # Python's own exit-time allocations. The C paths they call are covered by the C tests here.
 meson test -C "$dir" --suite unit --suite render --suite fuzz --no-suite ctypes --print-errorlogs \
   --timeout-multiplier 5 --num-processes "$(nproc)" 2>&1 | tee "$dir/test-output.txt"
-rc=${PIPESTATUS[0]}
-count() { awk -v k="$1" '$1 == k":" {print $2}' "$dir/test-output.txt" | tail -n 1; }
-ok=$(count Ok); fail=$(count Fail); skip=$(count Skipped); timeout=$(count Timeout)
-echo
-echo "sanitized tests: ${ok:-0} passed, $(( ${fail:-0} + ${timeout:-0} )) failed, ${skip:-0} skipped"
-exit "$rc"
+tt_summarize "$dir/test-output.txt" "sanitized tests" "${PIPESTATUS[0]}"

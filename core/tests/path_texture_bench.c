@@ -120,7 +120,7 @@ int main(int argc, char **argv) {
   char scene_path[4096], dir[] = "/tmp/tt_texbench_XXXXXX", tex[4200], json_path[4200];
   snprintf(scene_path, sizeof scene_path, "%s/scenes/cornell-box/scene.json", root ? root : ".");
   const char *outdir = argc > 1 ? argv[1] : NULL;
-  if (!outdir && !mkdtemp(dir)) TEST_SKIP("mkdtemp failed");
+  if (!outdir && !mkdtemp(dir)) TEST_FAIL("cannot create a temporary folder in /tmp");
   if (!outdir) outdir = dir;
   snprintf(tex, sizeof tex, "%s/texture.png", outdir);
   snprintf(json_path, sizeof json_path, "%s/textured.json", outdir);

@@ -220,6 +220,5 @@ int main(void) {
   test_morph();
   test_range_and_id();
   test_errors();
-  printf("%d checks, %d failures\n", tt_test_checks, tt_test_failures);
-  return tt_test_failures ? 1 : 0;
+  return tt_test_finish("scene_anim");
 }
