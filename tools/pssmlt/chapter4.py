@@ -120,8 +120,10 @@ def method_args(args, name, method):
         return mlt + ['--set', 'integrator_pssmlt.mode=pssmlt']
     if method == 'original':
         return mlt + ['--set', 'integrator_pssmlt.mode=mmlt']
-    if method == 'ours':
-        tuned = os.path.join(args.out, 'tune', f'{name}.json')
+    if method == 'ls01':
+        return mlt + ['--set', 'integrator_pssmlt.mode=mmlt', '--set', 'integrator_pssmlt.largeStepProbability=0.1']
+    if method in ('ours', 'ours-bins'):
+        tuned = os.path.join(args.out, 'tune', f'{name}.json' if method == 'ours' else f'{name}_bins.json')
         if not os.path.exists(tuned):
             raise SystemExit(f'{tuned}: missing: run the tune step first')
         with open(tuned) as f:
@@ -156,18 +158,21 @@ def step_tune(args, names):
     s = settings(args)
     d = os.path.join(args.out, 'tune')
     os.makedirs(d, exist_ok=True)
-    for name in names:
-        res = os.path.join(d, f'{name}.json')
+    for name, variant in [(n, v) for n in names for v in ([''] + (['_bins'] if args.controls else []))]:
+        res = os.path.join(d, f'{name}{variant}.json')
         if os.path.exists(res):
             continue
-        extra = ['--plugin', 'integrator_pssmlt', '--plugin', 'tuner_nm', '--iterations', str(s['tune_iterations']),
+        # _bins (control): the bins only; the other dimensions keep sigma 0.01
+        params = ['--tune-params', ','.join([f'a{i}' for i in range(1, 9)] + [f'sigma{i}' for i in range(1, 8)])] \
+            if variant else []
+        extra = params + ['--plugin', 'integrator_pssmlt', '--plugin', 'tuner_nm', '--iterations', str(s['tune_iterations']),
                  '--tune-spp', str(s['tune_spp']), '--spp', str(s['tune_spp']), '--seed', '1', '--threads', '1',
                  '--set', f'integrator_pssmlt.maxDepth={DEPTH}', '--set', 'integrator_pssmlt.mode=mmlt',
                  '--set', 'integrator_pssmlt.largeStepProbability=0.1',
                  '--set', f'integrator_pssmlt.bootstrapSamples={s["bootstrap"]}',
                  '--set', f'integrator_pssmlt.chains={s["chains"]}']
-        st, cpu = host_run(args, scene_path(name), extra, os.path.join(d, f'{name}.exr'),
-                           os.path.join(d, f'{name}.stats.json'))
+        st, cpu = host_run(args, scene_path(name), extra, os.path.join(d, f'{name}{variant}.exr'),
+                           os.path.join(d, f'{name}{variant}.stats.json'))
         t = st['tuning']
         best = t['best_config']
         keys = ['binning', 'bins', 'largeStepProbability'] + TUNED_KEYS
@@ -177,7 +182,7 @@ def step_tune(args, names):
             raise SystemExit(f'{name}: the tuning run was not in mode mmlt: {best.get("mode")!r}')
         save_rows(res, dict(scene=SCENES[name][0], set=sets, best_config=best, best_cost=t['best_cost'],
                             default_cost=t['default_cost'], costs=t['costs'], tuning_ms=t['tuning_ms'], cpu_s=cpu))
-        print(f'tune {name}: |acceptance - 0.234| {t["default_cost"]:.4f} -> {t["best_cost"]:.4f} ({cpu:.1f} CPU s)',
+        print(f'tune {name}{variant}: |acceptance - 0.234| {t["default_cost"]:.4f} -> {t["best_cost"]:.4f} ({cpu:.1f} CPU s)',
               flush=True)
 
 
@@ -229,9 +234,15 @@ def step_runs(args, names, step, methods, counts, seeds):
                           f'cpu {row["cpu_s"]:.2f} s', flush=True)
 
 
+CONTROLS = ['ls01', 'ours-bins']
+LABELS.update({'ls01': 'MMLT classic, large steps 0.1', 'ours-bins': 'MMLT, only the bins tuned (sigma 0.01)'})
+
+
 def step_fig46(args, names):
     s = settings(args)
     step_runs(args, names, 'fig46', ['original', 'ours'], s['mpp'], range(1, s['reps'] + 1))
+    if args.controls:  # the controls at the first mutation count: what makes "ours" differ
+        step_runs(args, names, 'fig46', CONTROLS, s['mpp'][:1], range(1, s['reps'] + 1))
 
 
 def step_evt(args, names):
@@ -328,6 +339,14 @@ def summarize(args, names):
                 e[m] = {k: float(np.median([r[k] for r in rs])) for k in
                         ('rrmse', 'cpu_s', 'mean_path_length', 'rays_per_mutation', 'small_step_acceptance')
                         if all(k in r for r in rs)}
+            for m in CONTROLS:
+                cs = {r['seed']: r for r in rows if r['method'] == m and r['count'] == c}
+                ks = sorted(set(cs) & set(by['original']))
+                if ks:
+                    rel_c = [(cs[k]['rrmse'] - by['original'][k]['rrmse']) / by['original'][k]['rrmse'] for k in ks]
+                    e[m] = dict(rrmse=float(np.median([cs[k]['rrmse'] for k in ks])), rel_diff=rel_c,
+                                rel_diff_median=float(np.median(rel_c)),
+                                small_step_acceptance=float(np.median([cs[k].get('small_step_acceptance', 0) for k in ks])))
             eq.append(e)
         sc['equal_mutations'] = eq
         erows = load_rows(os.path.join(args.out, 'evt', f'{name}.json'))
@@ -418,6 +437,46 @@ def step_plot(args, names):
         fig.savefig(os.path.join(figs, f'ch4_crops_{name}.png'))
         plt.close(fig)
     print_tables(summ)
+    with open(os.path.join(figs, 'ch4_tables.md'), 'w') as f:
+        f.write(markdown_tables(summ) + '\n')
+
+
+def markdown_tables(summ):
+    """The README's tables: Fig. 4.6 (equal mutations), equal CPU time, speed."""
+    out = ['| scene | mut./px | reps | rRMSE original | rRMSE ours | (ours - original) / original, median (min..max) | '
+           'CPU s orig. / ours | path length orig. / ours | small-step acceptance orig. / ours |',
+           '|---|---|---|---|---|---|---|---|---|']
+    for name, sc in summ['scenes'].items():
+        for e in sc['equal_mutations']:
+            o, u, r = e['original'], e['ours'], e['rel_diff']
+            out.append(f'| {name} | {e["mpp"]} | {e["reps"]} | {o["rrmse"]:.3f} | {u["rrmse"]:.3f} | '
+                       f'{100 * e["rel_diff_median"]:+.0f}% ({100 * min(r):+.0f}..{100 * max(r):+.0f}%) | '
+                       f'{o["cpu_s"]:.2f} / {u["cpu_s"]:.2f} | {o["mean_path_length"]:.2f} / {u["mean_path_length"]:.2f} | '
+                       f'{o["small_step_acceptance"]:.2f} / {u["small_step_acceptance"]:.2f} |')
+    ctl = [(n, e) for n, sc in summ['scenes'].items() for e in sc['equal_mutations'] if any(m in e for m in CONTROLS)]
+    if ctl:
+        out += ['', '| scene | mut./px | ' + ' | '.join(f'{LABELS[m]}: rRMSE, vs original (acceptance)' for m in CONTROLS) + ' |',
+                '|---|---|' + '---|' * len(CONTROLS)]
+        for n, e in ctl:
+            cells = [f'{e[m]["rrmse"]:.3f}, {100 * e[m]["rel_diff_median"]:+.0f}% ({e[m]["small_step_acceptance"]:.2f})'
+                     if m in e else '-' for m in CONTROLS]
+            out.append(f'| {n} | {e["mpp"]} | ' + ' | '.join(cells) + ' |')
+    out += ['', '| scene | CPU s | ' + ' | '.join(LABELS[m] for m in METHODS) + ' |',
+            '|---|---|' + '---|' * len(METHODS)]
+    for name, sc in summ['scenes'].items():
+        for row in sc['equal_time']:
+            vals = [row.get(m) for m in METHODS]
+            best = min(v for v in vals if v is not None) if any(v is not None for v in vals) else None
+            cells = [('-' if v is None else (f'**{v:.3f}**' if v == best else f'{v:.3f}')) for v in vals]
+            out.append(f'| {name} | {row["cpu_s"]:.2f} | ' + ' | '.join(cells) + ' |')
+    sp = [(n, sc['speed']) for n, sc in summ['scenes'].items() if 'speed' in sc]
+    if sp:
+        out += ['', '| scene | PT samples/s | BDPT samples/s | PT / BDPT | rays per sample PT / BDPT |', '|---|---|---|---|---|']
+        for n, v in sp:
+            out.append(f'| {n} | {v["pt"]["samples_per_s"]:.0f} | {v["bdpt"]["samples_per_s"]:.0f} | '
+                       f'{v["pt"]["samples_per_s"] / v["bdpt"]["samples_per_s"]:.2f}x | '
+                       f'{v["pt"]["rays_per_sample"]:.1f} / {v["bdpt"]["rays_per_sample"]:.1f} |')
+    return '\n'.join(out)
 
 
 def print_tables(summ):
@@ -450,6 +509,8 @@ def main(argv=None):
     ap.add_argument('--nice', type=int, default=5)
     ap.add_argument('--keep-images', action='store_true')
     ap.add_argument('--quick', action='store_true', help='tiny settings for the test suite')
+    ap.add_argument('--controls', action='store_true',
+                    help='tune and fig46: also the controls (classic with large steps 0.1; only the bins tuned)')
     args = ap.parse_args(argv)
     names = args.scenes or list(SCENES)
     for n in names:
