@@ -1,7 +1,6 @@
-#!/usr/bin/python3
 """Checks that libtunetrace's folders depend on each other one way only (docs/ARCHITECTURE.md).
 
-    tools/check_layers.py BUILD_DIR
+    /usr/bin/python3 -m tools.check_layers BUILD_DIR
 
 Two views of the same rule, both from the tree as built:
   - calls: every tt_* symbol an object file of core/src/<folder> uses and another folder's
@@ -11,6 +10,7 @@ A folder may use only folders of a lower layer (LAYERS below); two folders of on
 not use each other, so there can be no cycle. The host program's files must form no cycle
 either (no function calls back into its caller's file): checked on host/*.o the same way.
 Prints both graphs; exit status 1 naming each edge that breaks the rule, 0 otherwise."""
+import argparse
 import collections
 import glob
 import os
@@ -157,8 +157,10 @@ def find_cycle(edges):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit(__doc__)
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("build", metavar="BUILD_DIR", help="the build tree (its object files)")
+    build = ap.parse_args().build
     folders = sorted({folder_of(r) for r in sources()})
     unknown = [f for f in folders if f not in RANK]
     if unknown:
@@ -166,7 +168,7 @@ def main():
               "docs/ARCHITECTURE.md): " + ", ".join(unknown))
         return 1
     bad = 0
-    for kind, edges in (("calls", call_edges(sys.argv[1])), ("includes", include_edges())):
+    for kind, edges in (("calls", call_edges(build)), ("includes", include_edges())):
         print(f"{kind}:")
         for (a, b), why in sorted(edges.items()):
             ok = RANK[a] > RANK[b]
@@ -176,7 +178,7 @@ def main():
                 for w in sorted(why)[:8]:
                     print(f"      {w}")
     print("layers: " + " < ".join("{" + ", ".join(layer) + "}" for layer in LAYERS))
-    hedges = host_edges(sys.argv[1])
+    hedges = host_edges(build)
     print("host files (caller -> callee):")
     for (a, b), syms in sorted(hedges.items()):
         print(f"  {a:12} -> {b:12} {', '.join(sorted(syms))}")

@@ -1,8 +1,8 @@
-#!/usr/bin/python3
 """Crash safety, measured (#13): kills `host` with SIGKILL at random moments of a render and
 of a tuning run, and checks what a kill may leave behind.
 
-  tools/crash_safety.py [--build build] [--kills 100] [--part render|tune|signal|both|all] [--seed 1]
+  /usr/bin/python3 -m tools.crash_safety [--host PATH] [--kills 100] \
+      [--part render|tune|signal|both|all] [--seed 1]
 
 Render: the host renders the Cornell box over the EXR, PNG and --stats record of the
 previous trial, and is killed at a random moment (half of the kills uniform over a whole
@@ -26,7 +26,6 @@ image and record rendered so far must have been written.
 
 Prints one summary line per part and exits 1 on any failure. meson runs a
 short version (3 kills per part) in the render suite (test crash_safety)."""
-import argparse
 import hashlib
 import json
 import os
@@ -38,6 +37,8 @@ import subprocess
 import sys
 import tempfile
 import time
+
+from tools.tttools import cli, host
 
 
 def digest(path):
@@ -290,29 +291,26 @@ def signal_part(host, scene, work, kills, rng):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--build", default=os.environ.get("TT_BUILD_ROOT", "build"))
+    ap = cli.parser(__doc__)
     ap.add_argument("--kills", type=int, default=100, help="kills per part")
     ap.add_argument("--part", choices=("render", "tune", "signal", "both", "all"), default="both",
                     help="both: render and tune; all: also signal")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--keep", help="work folder to keep (default: a temporary one)")
     a = ap.parse_args()
-    root = os.environ.get("TT_SOURCE_ROOT", os.path.dirname(os.path.dirname(
-        os.path.abspath(__file__))))
-    host = os.path.join(a.build, "host", "host")
-    scene = os.path.join(root, "scenes", "cornell-box", "scene.json")
+    exe = host.find(a.host)
+    scene = os.path.join(host.ROOT, "scenes", "cornell-box", "scene.json")
     rng = random.Random(a.seed)
     with tempfile.TemporaryDirectory(prefix="tt_crash_safety_") as tmp:
         work = a.keep or tmp
         os.makedirs(work, exist_ok=True)
         rc = 0
         if a.part in ("render", "both", "all"):
-            rc |= render_part(host, scene, work, a.kills, rng)
+            rc |= render_part(exe, scene, work, a.kills, rng)
         if a.part in ("tune", "both", "all"):
-            rc |= tune_part(host, scene, work, a.kills, rng)
+            rc |= tune_part(exe, scene, work, a.kills, rng)
         if a.part in ("signal", "all"):
-            rc |= signal_part(host, scene, work, a.kills, rng)
+            rc |= signal_part(exe, scene, work, a.kills, rng)
     return rc
 
 

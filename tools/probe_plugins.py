@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Bad plugins, measured (#13): hands `host` broken plugin files and counts how each is
 handled. Every kind must be rejected with exit 3 and a message naming the file as `--plugin FILE` (a
 4x4 render of the Cornell box); inside a `--plugin-path DIR --list-plugins` listing every
@@ -6,7 +5,7 @@ broken file must be rejected the same way, while a well-formed file whose interf
 init are broken may be listed (a listing reads entry tables only); the built plugins must
 still be listed. A crash, a hang (60 s) or another exit code is a failure.
 
-  tools/probe_plugins.py [--build build]
+  /usr/bin/python3 -m tools.probe_plugins [--host BUILD/host/host]
 
 Kinds: the loader fixtures broken in one way each (tests/fixtures: wrong ABI major, no entry
 symbol, wrong kind, no interface, init fails, short tables, NULL required functions), and
@@ -15,16 +14,16 @@ short, not ELF (text, random bytes), ELF header fields broken (32-bit class, big
 another machine, not a shared object, program headers past the end, a segment's file size
 past the end), and what is not a regular file (a folder, a FIFO, a link to /dev/zero, a
 dangling link). Prints one line per kind and a summary; exits 1 on any failure."""
-import argparse
 import os
 import random
-import stat
 import struct
 import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 FIXTURES = ["wrong_major", "no_entry", "wrong_kind", "no_iface", "init_fails", "short_table",
             "short_iface", "null_tuner", "null_post", "null_sampler"]
 
@@ -70,20 +69,18 @@ def run(cmd, timeout=60):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap = cli.parser(__doc__)
     a = ap.parse_args()
-    host = os.path.join(a.build, "host", "host")
+    exe = host.find(a.host)
     scene = os.path.join(ROOT, "scenes", "cornell-box", "scene.json")
-    with open(os.path.join(a.build, "plugins", "tuner_nm", "tuner_nm.so"), "rb") as f:
+    with open(host.build_path(exe, "plugins", "tuner_nm", "tuner_nm.so"), "rb") as f:
         real = f.read()
-    env = dict(os.environ, TT_PLUGIN_PATH=os.path.join(a.build, "plugins"))
     ok = bad = list_rejected = 0
     with tempfile.TemporaryDirectory(prefix="tt_probe_plugins_") as tmp:
         cases = []  # (kind, path)
         for name in FIXTURES:
-            cases.append(("fixture " + name, os.path.join(a.build, "tests", "fixtures",
-                                                         "fixture_%s.so" % name)))
+            cases.append(("fixture " + name, host.build_path(exe, "tests", "fixtures",
+                                                            "fixture_%s.so" % name)))
         for i, (kind, data) in enumerate(made_files(real)):
             d = os.path.join(tmp, "case%02d" % i)
             os.mkdir(d)
@@ -103,7 +100,7 @@ def main():
             cases.append((kind, p))
         for kind, path in cases:
             out = os.path.join(tmp, "out.exr")
-            rc1, log1 = run([host, "--plugin", path, "--spp", "1", "--res", "4x4", "--out", out,
+            rc1, log1 = run([exe, "--plugin", path, "--spp", "1", "--res", "4x4", "--out", out,
                              scene])
             # a listing of a folder holding it (fixtures: a folder with a link to it)
             d, listed = os.path.dirname(path), path
@@ -113,7 +110,7 @@ def main():
                 os.mkdir(d)
                 listed = os.path.join(d, os.path.basename(path))
                 os.symlink(path, listed)
-            rc2, log2 = run([host, "--plugin-path", d, "--list-plugins"])
+            rc2, log2 = run([exe, "--plugin-path", d, "--list-plugins"])
             loaded_ok = rc1 == 3 and path in log1
             # the listing reads entry tables only (no init, no interface tables): a fixture
             # broken past its entry table is listed, not rejected; it must not crash, hang or

@@ -10,7 +10,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 PY=/usr/bin/python3
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/tt_mpi_baseline.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
-B=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/baseline.py" --host "$TT_BUILD_ROOT/host/host"
+B=("$PY" -m tools.hybrid.baseline --host "$TT_BUILD_ROOT/host/host"
    --mpi-driver "$TT_BUILD_ROOT/mpi/tunetrace-mpi" --mpirun "${MPIRUN:-mpirun} --oversubscribe"
    --db "$tmp/b.db" --work "$tmp/w" --cameras 3 --iterations 3 --res 16x16
    --scene "box=$TT_SOURCE_ROOT/scenes/cornell-box/path.json")

@@ -131,10 +131,10 @@ PYEOF
 
 # the checking script users run (tools/mpi/check_db.py): 0 jobs lost, 0 rows duplicated or
 # outside the jobs, np 2 = np 1 in everything but timings; and it fails on a run cut short
-"$PY" "$TT_SOURCE_ROOT/tools/mpi/check_db.py" --driver "$drv" --jobs "$tmp/jobs2.json" \
+"$PY" -m tools.mpi.check_db --driver "$drv" --jobs "$tmp/jobs2.json" \
   --db "$tmp/np2.db" --against "$tmp/np1.db" >"$tmp/check.log" 2>&1 || { cat "$tmp/check.log"; fail "check_db.py np2 against np1"; }
 grep -q "8 of 8 jobs merged .* 0 jobs lost, 0 rows duplicated, +0 rows outside the jobs" "$tmp/check.log" || { cat "$tmp/check.log"; fail "check_db.py summary"; }
-"$PY" "$TT_SOURCE_ROOT/tools/mpi/check_db.py" --driver "$drv" --jobs "$tmp/jobs2.json" \
+"$PY" -m tools.mpi.check_db --driver "$drv" --jobs "$tmp/jobs2.json" \
   --db "$tmp/np1.db" >/dev/null 2>&1 && fail "check_db.py accepted np1.db against the list of np2 (other frame tags)"
 
 # --- a rank killed mid-run, then reruns ---

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """End-to-end accel comparison through the host program itself (issue 16): what a user runs.
 
 Every measurement is one whole `host` process rendering a scene (load, build, render,
@@ -12,26 +11,28 @@ round. Results go to --out as JSON (rewritten atomically after every finished bl
 reused on a rerun, so an interrupted run keeps what it measured); the tables are printed
 at the end, with the load average at the start and at the end.
 
-  host_renders.py --host build/host/host --rounds 5 --out /tmp/acc_host.json
-  host_renders.py --summarize /tmp/acc_host.json
-  host_renders.py --scene living-room --threads 1 --depths 3 --rounds 3 \\
+  H="/usr/bin/python3 -m tools.accel.host_renders"       # from the repository root
+  $H --rounds 5 --out /tmp/acc_host.json
+  $H --summarize /tmp/acc_host.json
+  $H --scene living-room --threads 1 --depths 3 --rounds 3 \\
       --config "bf8=backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"
 
 Configurations are "label=name=value,..." of accel_embree's parameters (the first is the
 reference; default: native default, custom default, bf4/bf8 with sahBlockSize 4 and
 maxLeafSize 8, the rows of plugins/accel_embree/tests/accel_embree_render_bench).
 """
-import argparse
 import json
 import math
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+from tools.scenes import generate
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "scenes"))
 SCENES = {
     "living-room": os.path.join(SHARED, "living-room", "living-room.pbrt"),
@@ -70,8 +71,7 @@ def scene_path(name, a):
     path = os.path.join(a.voxel_dir, "scene.json")
     if not os.path.exists(path):
         print(f"note: generating the voxel world into {a.voxel_dir}", flush=True)
-        subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "scenes", "generate.py"),
-                        "voxel", a.voxel_dir], check=True, stdout=subprocess.DEVNULL)
+        generate.main(["voxel", a.voxel_dir])
     return path
 
 
@@ -86,22 +86,16 @@ def write_atomic(path, data):
 
 
 def one_render(a, scene, settings, threads, depth, work):
-    stats = os.path.join(work, "stats.json")
-    cmd = [a.host, "--quiet", "--threads", str(threads), "--spp", str(a.spp), "--res", a.res,
-           "--clock", "cpu", "--seed", "1", "--set", f"integrator_pt.maxDepth={depth}"]
+    args = ["--quiet", "--threads", str(threads), "--spp", str(a.spp), "--res", a.res,
+            "--clock", "cpu", "--seed", "1", "--set", f"integrator_pt.maxDepth={depth}"]
     for name, value in settings:
-        cmd += ["--set", f"accel_embree.{name}={value}"]
-    cmd += ["--stats", stats, "--out", os.path.join(work, "out.exr"), scene]
-    t0 = time.time()
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    wall = time.time() - t0
-    if r.returncode != 0:
-        sys.exit(f"host_renders: {' '.join(cmd)}\nexit {r.returncode}\n{r.stdout[-3000:]}")
-    with open(stats) as f:
-        s = json.load(f)
+        args += ["--set", f"accel_embree.{name}={value}"]
+    r = host.run(a.host, args + ["--out", os.path.join(work, "out.exr"), scene],
+                 stats=os.path.join(work, "stats.json"), capture=True)
+    s = r.stats
     mem = (s.get("accel") or {}).get("memory_bytes", 0)
     return {"render_ms": s["render_ms"], "build_ms": s["build_ms"], "rays": s["rays"],
-            "process_wall_s": wall, "memory_bytes": mem}
+            "process_wall_s": r.wall_s, "memory_bytes": mem}
 
 
 def measure(a, configs):
@@ -169,8 +163,7 @@ def summarize(data):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
+    p = cli.parser(__doc__)
     p.add_argument("--scene", action="append", help="scene name (repeat); default all six")
     p.add_argument("--config", action="append", help="LABEL=name=value,... (repeat)")
     p.add_argument("--threads", default="1,2")
@@ -186,6 +179,7 @@ def main():
         with open(a.summarize) as f:
             summarize(json.load(f))
         return
+    a.host = host.find(a.host)
     a.scene = a.scene or list(SCENES)
     a.threads = [int(x) for x in a.threads.split(",")]
     a.depths = [int(x) for x in a.depths.split(",")]

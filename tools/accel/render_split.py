@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Where a render's time goes, per accel configuration (issue 16): a chart of the output of
 plugins/accel_embree/tests/accel_embree_render_bench.
 
@@ -12,7 +11,7 @@ traversal differs.
 
   TT_PLUGIN_PATH=build/plugins TT_SOURCE_ROOT=. build/plugins/accel_embree/tests/accel_embree_render_bench \\
       5 "" > bench.txt
-  render_split.py bench.txt --mode "t1 d3" --out render_split.png   # also prints the table
+  /usr/bin/python3 -m tools.accel.render_split bench.txt --mode "t1 d3" --out render_split.png   # also prints the table
 """
 import argparse
 import os

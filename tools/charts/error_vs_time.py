@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Speed-vs-accuracy chart for integrator_pt (issue 4): relative RMSE against a high-spp
 reference versus render time, on the Cornell box, for maxDepth 1, 2, 3, 5, 8.
 
@@ -11,42 +10,35 @@ Rec. 709 luminance, sqrt(mean((L - R)^2 / (R^2 + 1e-3))); time = the host's rend
 scene load / accel build / output).
 
 Usage (from the repository root):
-  /usr/bin/python3 tools/charts/error_vs_time.py [--host build/host/host] [--res 128x128]
+  /usr/bin/python3 -m tools.charts.error_vs_time [--host PATH] [--res 128x128]
       [--ref-spp 2048] [--max-spp 256] [--threads 2] [--out /tmp/tt_chart]
 Writes OUT/error_vs_time.png and OUT/error_vs_time.json and prints a table.
 Needs: python3-matplotlib, python3-numpy, python3-openimageio (Debian 12 packages).
 """
-import argparse
 import json
 import os
-import subprocess
-import sys
 
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
+from tools.common import images  # noqa: E402
+from tools.tttools import cli, host  # noqa: E402
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = host.ROOT
 
 
 def render(args, depth, spp, seed, out):
     """One host render; returns render seconds."""
-    cmd = [args.host, "--spp", str(spp), "--threads", str(args.threads), "--res", args.res,
-           "--seed", str(seed), "--set", f"integrator_pt.maxDepth={depth}", "--out", out,
-           "--stats", out + ".json", "--quiet", "--no-db", args.scene]
-    subprocess.run(cmd, check=True)
-    return json.load(open(out + ".json"))["render_ms"] / 1000.0
+    st = host.run(args.host, ["--spp", str(spp), "--threads", str(args.threads), "--res", args.res,
+                              "--seed", str(seed), "--set", f"integrator_pt.maxDepth={depth}",
+                              "--out", out, "--quiet", "--no-db", args.scene],
+                  stats=out + ".json").stats
+    return st["render_ms"] / 1000.0
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    default_host = os.path.join(ROOT, "build-pt", "host", "host")
-    if not os.path.exists(default_host):
-        default_host = os.path.join(ROOT, "build", "host", "host")
-    ap.add_argument("--host", default=default_host)
+    ap = cli.parser(__doc__)
     ap.add_argument("--scene", default=os.path.join(ROOT, "scenes", "cornell-box", "scene.json"))
     ap.add_argument("--res", default="128x128")
     ap.add_argument("--depths", default="1,2,3,5,8")
@@ -57,6 +49,7 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--out", default="/tmp/tt_chart")
     args = ap.parse_args()
+    args.host = host.find(args.host)
     os.makedirs(args.out, exist_ok=True)
 
     ref_path = args.reference

@@ -11,9 +11,7 @@ compare:
 
 with L and R the Rec. 709 luminance of the image and of the reference.
 
-Import it from a tool with
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-    import images"""
+A tool imports it as `from tools.common import images`."""
 import numpy as np
 import OpenImageIO as oiio
 

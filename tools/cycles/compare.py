@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Peer comparison of integrator_pt against Blender 3.4 Cycles (CPU) on the Cornell box and
 a glossy/glass variant (benchmark, not CI; issue 4). For each scene:
 
@@ -14,26 +13,23 @@ a glossy/glass variant (benchmark, not CI; issue 4). For each scene:
      Cycles: its render call). On a shared machine the CPU figures are the steadier ones.
 References are reused when their files exist in --out.
 
-Usage (from the repository root, after `ninja -C build-pt` or `ninja -C build`):
-  /usr/bin/python3 tools/cycles/compare.py [--host build/host/host] [--res 128x128]
+Usage (from the repository root, after `ninja -C build`):
+  /usr/bin/python3 -m tools.cycles.compare [--host PATH] [--res 128x128]
       [--ref-spp 1024] [--spp 64] [--depth 3] [--threads 2] [--repeat 3]
       [--sampler independent] [--out /tmp/tt_cycles]
 Needs: blender (apt-get install blender), python3-openimageio, python3-numpy.
 """
-import argparse
 import copy
 import json
 import os
-import resource
 import subprocess
 import sys
-import time
 
+from tools.common import images
+from tools.tttools import cli, host
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = host.ROOT
 CYCLES_SCRIPT = os.path.join(ROOT, "tools", "cycles", "cycles_reference.py")
-sys.path.insert(0, os.path.join(ROOT, "tools", "common"))
-import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
 
 
 read_rgb = images.read_rgb
@@ -41,23 +37,14 @@ luminance = images.luminance
 rrmse = images.rrmse
 
 
-def child_cpu():
-    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return ru.ru_utime + ru.ru_stime
-
-
 def run_ours(args, scene, spp, seed, out):
     """Renders with host; returns (render wall s, samples/s, cpu s)."""
-    cmd = [args.host, "--spp", str(spp), "--threads", str(args.threads), "--res", args.res,
-           "--seed", str(seed), "--set", f"integrator_pt.maxDepth={args.depth}",
-           "--set", f"integrator_pt.sampler={args.sampler}",
-           "--out", out, "--stats", out + ".json", "--quiet", "--no-db", scene]
-    c0 = child_cpu()
-    subprocess.run(cmd, check=True)
-    cpu = child_cpu() - c0
-    st = json.load(open(out + ".json"))
-    wall = st["render_ms"] / 1000.0
-    return wall, st["samples"] / wall, cpu
+    r = host.run(args.host, ["--spp", str(spp), "--threads", str(args.threads), "--res", args.res,
+                             "--seed", str(seed), "--set", f"integrator_pt.maxDepth={args.depth}",
+                             "--set", f"integrator_pt.sampler={args.sampler}",
+                             "--out", out, "--quiet", "--no-db", scene], stats=out + ".json")
+    wall = r.stats["render_ms"] / 1000.0
+    return wall, r.stats["samples"] / wall, r.cpu_s
 
 
 def run_cycles(args, scene, spp, seed, out):
@@ -90,11 +77,7 @@ def variants(base_path, outdir):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    default_host = os.path.join(ROOT, "build-pt", "host", "host")
-    if not os.path.exists(default_host):
-        default_host = os.path.join(ROOT, "build", "host", "host")
-    ap.add_argument("--host", default=default_host)
+    ap = cli.parser(__doc__)
     ap.add_argument("--blender", default="blender")
     ap.add_argument("--scene", default=os.path.join(ROOT, "scenes", "cornell-box", "scene.json"))
     ap.add_argument("--res", default="128x128")
@@ -107,6 +90,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=3, help="equal-spp timing runs per renderer")
     ap.add_argument("--sampler", default="independent", help="integrator_pt.sampler")
     args = ap.parse_args()
+    args.host = host.find(args.host)
     os.makedirs(args.out, exist_ok=True)
     w, h = (int(x) for x in args.res.split("x"))
 

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Baseline data for hybrid autotuning (thesis 3.3.5.1): one Nelder-Mead search per
 (scene, camera of the scene's path, objective), every measurement into one tuning DB.
 
@@ -18,16 +17,17 @@ wall time of a pass mostly measures who else ran (living-room, load 6-10: wall 3
 Jobs run in an order that keeps the finished set useful at any time: cameras by bit-reversed
 rank (0, the middle, the quarters, ...), scenes and objectives interleaved within a camera.
 
-  baseline.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/work            # all jobs
-  baseline.py --db DB --work W --list                        # jobs, one per line, done or not
-  baseline.py --db DB --work W --job bmw-m6:16:build+render  # one job (what an MPI rank runs)
-  baseline.py --db DB --work W --cameras 100 --iterations 80 # the thesis' full size
-  baseline.py --db DB --work W --shard 0/2 & baseline.py --db DB --work W --shard 1/2  # 2 workers
-  baseline.py --db DB --work W --mpi 4            # the jobs on 4 MPI ranks (tunetrace-mpi)
-  baseline.py --db DB --work W --emit-jobs J.json # tunetrace-mpi's job list (srun/mpirun it)
-  baseline.py --db DB --work W --import-mpi       # jobs merged by tunetrace-mpi -> hybrid_jobs
-  baseline.py --db DB --work W --dump D.sql.xz    # the DB as a compressed SQL dump (for git)
-  baseline.py --db DB --work W --restore D.sql.xz # a new DB from it, scene files of this checkout
+  B="/usr/bin/python3 -m tools.hybrid.baseline"        # from the repository root
+  $B --db /tmp/hybrid/baseline.db --work /tmp/hybrid/work    # all jobs
+  $B --db DB --work W --list                        # jobs, one per line, done or not
+  $B --db DB --work W --job bmw-m6:16:build+render  # one job (what an MPI rank runs)
+  $B --db DB --work W --cameras 100 --iterations 80 # the thesis' full size
+  $B --db DB --work W --shard 0/2 & $B --db DB --work W --shard 1/2  # 2 workers
+  $B --db DB --work W --mpi 4            # the jobs on 4 MPI ranks (tunetrace-mpi)
+  $B --db DB --work W --emit-jobs J.json # tunetrace-mpi's job list (srun/mpirun it)
+  $B --db DB --work W --import-mpi       # jobs merged by tunetrace-mpi -> hybrid_jobs
+  $B --db DB --work W --dump D.sql.xz    # the DB as a compressed SQL dump (for git)
+  $B --db DB --work W --restore D.sql.xz # a new DB from it, scene files of this checkout
 
 A dump keeps a baseline beyond the machine it ran on: --restore loads it into a new --db,
 points hybrid_jobs.scene_file at this checkout's scenes (generating voxel and tessellated
@@ -41,18 +41,19 @@ tunetrace-mpi merges its rows into --db; the jobs it merged (table merges, their
 the host's stats) become hybrid_jobs rows on import, which --mpi does when the run ends and
 every run does at its start, so the two ways share one resumable job set.
 """
-import argparse
 import json
 import lzma
 import os
-import resource
 import shutil
 import sqlite3
 import subprocess
 import sys
 import time
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+from tools.scenes import generate
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "scenes"))
 
 # name -> scene file (relative to the repository) or a generator command (tools/scenes).
@@ -138,8 +139,7 @@ def scene_file(a, name):
         tmp = out + ".tmp"
         shutil.rmtree(tmp, ignore_errors=True)
         print(f"baseline: generating the {kind} scene into {out}", flush=True)
-        subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "scenes", "generate.py"),
-                        kind, tmp], check=True)
+        generate.main([kind, tmp])
         os.rename(tmp, out)
     return path
 
@@ -198,14 +198,12 @@ def dump_db(path, out):
 def scene_ids(a, path):
     """(tt_scene_id, {part: id}) of a scene file as this checkout's host loads it (a 4x4 render
     with --stats), or (None, {}) when it does not load."""
-    st = os.path.join(a.work, "restore_" + str(os.getpid()) + ".json")
-    r = subprocess.run([a.host, "--quiet", "--res", "4x4", "--spp", "1", "--threads", "1",
-                        "--stats", st, "--out", st[:-5] + ".exr", path],
-                       stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
-    rec = json.load(open(st)) if r.returncode == 0 else {}
-    for f in (st, st[:-5] + ".exr"):
-        if os.path.exists(f):
-            os.remove(f)
+    img = os.path.join(a.work, "restore_" + str(os.getpid()) + ".exr")
+    r = host.run(a.host, ["--quiet", "--res", "4x4", "--spp", "1", "--threads", "1", "--out", img,
+                          path], stats=True, log=subprocess.DEVNULL, check=False)
+    if os.path.exists(img):
+        os.remove(img)
+    rec = r.stats or {}
     return rec.get("scene_id"), rec.get("scene_id_parts") or {}
 
 
@@ -274,12 +272,6 @@ def restore_db(a, dump):
                   "cost"))
     os.replace(tmp, a.db)
     return n, m
-
-
-def host_version(a):
-    r = subprocess.run([a.host, "--version"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                       text=True)
-    return r.stdout.strip().splitlines()[0] if r.stdout.strip() else "unknown"
 
 
 def search_args(a):
@@ -377,37 +369,25 @@ def run_job(a, con, scene, cam, obj, version):
     jdir = os.path.join(a.work, "jobs", scene)
     os.makedirs(jdir, exist_ok=True)
     stem = os.path.join(jdir, f"cam{cam:02d}_{obj.replace('+', '_')}")
-    stats = stem + ".json"
-    cmd = [a.host, "--quiet", "--camera-index", str(cam), "--objective", obj] + search_args(a) + \
-          ["--db", a.db, "--stats", stats + ".tmp", "--out", stem + ".exr", path]
-    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.time()
-    with open(stem + ".log", "w") as log:
-        r = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT)
-    wall = time.time() - t0
-    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
-    for ext in (".exr", ".png"):  # the image of 1-spp tuning passes is of no use here
-        if os.path.exists(stem + ext):
-            os.remove(stem + ext)
-    if r.returncode != 0:
-        with open(stem + ".log") as log:
-            tail = log.read()[-2000:]
-        print(f"baseline: job {jid} failed (exit {r.returncode}): {' '.join(cmd)}\n{tail}",
-              file=sys.stderr, flush=True)
+    args = ["--quiet", "--camera-index", str(cam), "--objective", obj] + search_args(a) + \
+        ["--db", a.db, "--out", stem + ".exr", path]
+    try:
+        r = host.run(a.host, args, stats=stem + ".json", log=stem + ".log")
+    except host.HostError as e:
+        print(f"baseline: job {jid} failed: {e}", file=sys.stderr, flush=True)
         return False
-    os.replace(stats + ".tmp", stats)
-    with open(stats) as f:
-        st = json.load(f)
-    record_job(con, a, scene, path, cam, obj, st, wall, cpu, os.getloadavg()[0], version,
-               time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    finally:
+        for ext in (".exr", ".png"):  # the image of 1-spp tuning passes is of no use here
+            if os.path.exists(stem + ext):
+                os.remove(stem + ext)
+    record_job(con, a, scene, path, cam, obj, r.stats, r.wall_s, r.cpu_s, os.getloadavg()[0],
+               version, time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     con.commit()
     return True
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
+def main(argv=None):
+    ap = cli.parser(__doc__)
     ap.add_argument("--db", required=True, help="tuning database (created if missing)")
     ap.add_argument("--work", required=True, help="folder for job stats/logs and generated scenes")
     ap.add_argument("--scenes", default=",".join(DEFAULT_SCENES),
@@ -434,7 +414,7 @@ def main():
     ap.add_argument("--mpi", type=int, default=0, metavar="N",
                     help="run the jobs on N MPI ranks (tunetrace-mpi, one merged --db)")
     ap.add_argument("--mpirun", default="mpirun", help="the MPI launcher command (--mpi)")
-    ap.add_argument("--mpi-driver", default=os.path.join(ROOT, "build", "mpi", "tunetrace-mpi"))
+    ap.add_argument("--mpi-driver", help="tunetrace-mpi (default: the one of the host's build)")
     ap.add_argument("--emit-jobs", metavar="FILE",
                     help="write tunetrace-mpi's job list of the jobs to run and exit")
     ap.add_argument("--import-mpi", action="store_true",
@@ -447,7 +427,7 @@ def main():
     ap.add_argument("--remap-scenes", action="store_true",
                     help="with --restore: keep the rows of a scene whose id differs from the dump's "
                          "under this checkout's id (warns, naming what changed)")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     for spec in a.scene:
         name, _, path = spec.partition("=")
         if not name or not path or not os.path.exists(path):
@@ -487,14 +467,13 @@ def main():
             sys.exit(f"baseline: --dump: {a.db} does not exist")
         print(f"baseline: {dump_db(a.db, a.dump)} jobs of {a.db} dumped to {a.dump}", flush=True)
         return 0
-    if not os.access(a.host, os.X_OK):
-        sys.exit(f"baseline: --host {a.host} is not an executable (build first: ninja -C build)")
+    a.host = host.find(a.host)
     if a.restore:
         n, m = restore_db(a, a.restore)
         print(f"baseline: {a.db} restored from {a.restore}: {n} jobs, {m} samples", flush=True)
         return 0
     con = open_db(a.db)
-    version = host_version(a)
+    version = host.version(a.host)
     imported = import_mpi(a, con, version)
     if imported:
         print(f"baseline: {imported} jobs merged by tunetrace-mpi recorded in hybrid_jobs", flush=True)
@@ -526,6 +505,7 @@ def main():
     if a.mpi:
         if not todo:
             return 0
+        a.mpi_driver = a.mpi_driver or host.build_path(a.host, "mpi", "tunetrace-mpi")
         if not os.access(a.mpi_driver, os.X_OK):
             sys.exit(f"baseline: --mpi-driver {a.mpi_driver} is not an executable (tunetrace-mpi "
                      "is built when MPI is found: tools/bootstrap.sh installs Open MPI)")

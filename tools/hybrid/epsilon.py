@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Hybrid autotuning along camera paths (thesis 3.3, Figure 3.14's loop) for several epsilon:
 `host --hybrid` itself, end to end, against pure search (epsilon 1).
 
@@ -22,23 +21,20 @@ host's own per-state clock (--clock cpu) over the state's F passes, predictor ca
 searches included, is reported beside it (`measured`), and the CPU seconds of each host
 process (scene loading and warm start included).
 
-  epsilon.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/epsilon --out tools/hybrid/figures
+  /usr/bin/python3 -m tools.hybrid.epsilon --db /tmp/hybrid/baseline.db --work /tmp/hybrid/epsilon \
+      --out tools/hybrid/figures
 """
-import argparse
 import hashlib
 import math
 import json
 import os
-import resource
 import sqlite3
-import subprocess
 import sys
 import time
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from baseline import TUNE_PARAMS  # noqa: E402
-from evaluate import copy_samples  # noqa: E402
+from tools.hybrid.baseline import TUNE_PARAMS
+from tools.hybrid.evaluate import copy_samples
+from tools.tttools import cli, host
 
 MODELS = {"nn": "predictor_nn", "rbf": "predictor_rbf", "static": "predictor_static"}
 
@@ -86,25 +82,15 @@ def run(a, scene, sfile, warm, obj, eps, model, seed, path):
     for p in (db, db + "-wal", db + "-shm"):
         if os.path.exists(p):
             os.remove(p)
-    stats = path + ".stats.tmp"
-    cmd = ["nice", "-n", str(a.nice), a.host, "--quiet", "--hybrid", "--plugin", MODELS[model],
-           "--epsilon", f"{eps:g}", "--iterations", str(a.iterations), "--camera-index", a.states,
-           "--objective", obj, "--tune-spp", "1", "--spp", str(a.frames), "--res", a.res,
-           "--threads", "1", "--clock", "cpu", "--seed", str(seed), "--tune-params", a.tune_params,
-           "--warm-start", warm, "--db", db, "--stats", stats] + (model_sets(a, model) if eps < 1.0 else []) + [sfile]
-    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.time()
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if r.returncode != 0:
-        sys.exit(f"epsilon: {' '.join(cmd)}\nexit {r.returncode}\n{r.stdout[-3000:]}")
-    with open(stats) as f:
-        st = json.load(f)
-    os.remove(stats)
-    out = {"scene": scene, "objective": obj, "epsilon": eps, "model": model, "seed": seed, "command": cmd[3:],
-           "wall_s": time.time() - t0, "load1": os.getloadavg()[0],
-           "cpu_s": (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime),
-           "hybrid": st["hybrid"]}
+    args = ["--quiet", "--hybrid", "--plugin", MODELS[model], "--epsilon", f"{eps:g}",
+            "--iterations", str(a.iterations), "--camera-index", a.states, "--objective", obj,
+            "--tune-spp", "1", "--spp", str(a.frames), "--res", a.res, "--threads", "1",
+            "--clock", "cpu", "--seed", str(seed), "--tune-params", a.tune_params,
+            "--warm-start", warm, "--db", db] + (model_sets(a, model) if eps < 1.0 else []) + [sfile]
+    r = host.run(a.host, args, nice=a.nice, stats=True, capture=True)
+    out = {"scene": scene, "objective": obj, "epsilon": eps, "model": model, "seed": seed,
+           "command": [a.host] + args, "wall_s": r.wall_s, "load1": os.getloadavg()[0],
+           "cpu_s": r.cpu_s, "hybrid": r.stats["hybrid"]}
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
         json.dump(out, f)
@@ -131,11 +117,10 @@ def totals(res, frames):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument("--db", required=True, help="baseline database (tools/hybrid/baseline.py)")
     ap.add_argument("--work", required=True, help="warm-start DBs and the runs (cached: reruns continue)")
     ap.add_argument("--out", default=None, help="folder for epsilon.json/.md and the chart")
-    ap.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
     ap.add_argument("--scenes", default="killeroos,living-room")
     ap.add_argument("--objectives", default="render,build+render")
     ap.add_argument("--epsilons", default="0,0.1,0.3,1")
@@ -153,6 +138,8 @@ def main():
     ap.add_argument("--no-run", action="store_true", help="report the cached runs only")
     a = ap.parse_args()
     a.frames = a.frames or a.iterations + 1
+    if not a.no_run:
+        a.host = host.find(a.host)
     eps = sorted({float(e) for e in a.epsilons.split(",")}, reverse=True)
     if 1.0 not in eps:
         eps.insert(0, 1.0)

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Evaluation of hybrid autotuning's prediction (thesis 3.3.5) on the baseline database of
 tools/hybrid/baseline.py: predictors against the Nelder-Mead search, the search's best (the
 "roofline") and the best static configuration, per scene and camera.
@@ -35,21 +34,22 @@ Stages are cached in --work (predictions, measurements), so a rerun continues; -
 reports with what is measured. Figures (matplotlib PNG) and a JSON/Markdown summary go to
 --out.
 
-  evaluate.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/eval --out tools/hybrid/figures
-  evaluate.py ... --variants norm,reward,features,table,candidates   # the studies of the README
+  E="/usr/bin/python3 -m tools.hybrid.evaluate"        # from the repository root
+  $E --db /tmp/hybrid/baseline.db --work /tmp/hybrid/eval --out tools/hybrid/figures
+  $E ... --variants norm,reward,features,table,candidates   # the studies of the README
 """
-import argparse
 import concurrent.futures
 import json
 import math
 import os
 import random
 import sqlite3
-import subprocess
 import sys
 import time
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 INDICATORS = ["meshes", "triangles", "lights", "camera_x", "camera_y", "camera_z", "target_x",
               "target_y", "target_z", "fov_y", "diffuse_ratio", "extent", "total_area",
               "light_area", "area_per_mesh", "mean_var_tri_size", "var_var_tri_size"]
@@ -188,15 +188,12 @@ def predict(a, job, model, variant, train_db, states, obj, path):
     sfile = path + ".states.json"
     with open(sfile, "w") as f:
         json.dump([{"id": f"{s}:{c}", "indicators": ind} for s, c, ind in states], f)
-    cmd = [a.host, "--predict", "--plugin", MODELS[model], "--warm-start", train_db, "--states", sfile,
-           "--objective", obj, "--no-db"] + host_common(job) + variant.get("args", [])
-    cmd.append(os.path.join(ROOT, "scenes", "cornell-box", "path.json"))
-    t0 = time.time()
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if r.returncode != 0:
-        sys.exit(f"evaluate: {' '.join(cmd)}\nexit {r.returncode}\n{r.stderr[-3000:]}")
-    out = json.loads(r.stdout[r.stdout.index("{"):])
-    out["wall_s"] = time.time() - t0
+    args = ["--predict", "--plugin", MODELS[model], "--warm-start", train_db, "--states", sfile,
+            "--objective", obj, "--no-db"] + host_common(job) + variant.get("args", [])
+    args.append(os.path.join(ROOT, "scenes", "cornell-box", "path.json"))
+    r = host.run(a.host, args, capture=True)
+    out = r.json()
+    out["wall_s"] = r.wall_s
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
         json.dump(out, f)
@@ -245,24 +242,22 @@ class Measurements:
         f = os.path.join(self.dir, f"todo_{s}_{c}_{o.replace('+', '_')}_{os.getpid()}.json")
         with open(f, "w") as fh:
             json.dump(uniq, fh)
-        cmd = [self.a.host, "--measure", f, "--rounds", str(self.a.rounds), "--camera-index", str(c),
-               "--objective", o, "--no-db"] + host_common(job) + [self.scenes[s][0]]
-        cmd = ["nice", "-n", str(self.a.nice)] + cmd
-        t0 = time.time()
-        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        args = ["--measure", f, "--rounds", str(self.a.rounds), "--camera-index", str(c),
+                "--objective", o, "--no-db"] + host_common(job) + [self.scenes[s][0]]
+        r = host.run(self.a.host, args, nice=self.a.nice, capture=True, check=False)
         os.remove(f)
         if r.returncode != 0:
             print(f"evaluate: measure {s}:{c}:{o} failed (exit {r.returncode}): {r.stderr[-1500:]}",
                   file=sys.stderr, flush=True)
             return False
-        res = json.loads(r.stdout[r.stdout.index("{"):])
+        res = r.json()
         d = self.get(s, c, o)
         # keyed by the configuration asked for: the host measures it as the space's check
         # repairs it (sahBlockSize to a power of two), as the tuning loop did
         for asked, item in zip(uniq, res["configs"]):
             if item.get("ratio_to_first") is not None:
                 d["ratios"].setdefault(canon(asked), []).append(item["ratio_to_first"])
-        d["runs"].append({"configs": len(uniq), "rounds": res["rounds"], "wall_s": time.time() - t0,
+        d["runs"].append({"configs": len(uniq), "rounds": res["rounds"], "wall_s": r.wall_s,
                           "load1": os.getloadavg()[0],
                           "default_ms": res["configs"][0].get("median_cost")})
         tmp = self._path(s, c, o) + ".tmp"
@@ -270,13 +265,6 @@ class Measurements:
             json.dump(d, fh)
         os.replace(tmp, self._path(s, c, o))
         return True
-
-
-def default_config(a):
-    """The accel's default configuration (host --describe)."""
-    r = subprocess.run([a.host, "--describe", "accel_embree"], stdout=subprocess.PIPE, text=True)
-    space = json.loads(r.stdout)
-    return {p["name"]: p["value"] for p in space["parameters"]}
 
 
 # Every variant's --set lands on top of the plugins' current defaults (since session 8:
@@ -426,11 +414,10 @@ def metrics(job, p, b):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument("--db", required=True, help="baseline database (tools/hybrid/baseline.py)")
     ap.add_argument("--work", required=True, help="cache of training DBs, predictions, measurements")
     ap.add_argument("--out", default=None, help="folder for figures and summary.json/.md")
-    ap.add_argument("--host", default=os.path.join(ROOT, "build", "host", "host"))
     ap.add_argument("--objectives", default="render,build+render")
     ap.add_argument("--models", default="nn,rbf,static")
     ap.add_argument("--splits", type=int, default=15)
@@ -465,7 +452,8 @@ def main():
     if not cams:
         sys.exit(f"evaluate: no scene has {a.min_cameras} cameras with every objective done in {a.db}")
     print("evaluate: " + ", ".join(f"{s} {len(c)} cameras" for s, c in sorted(cams.items())), flush=True)
-    a.default_config = default_config(a)
+    a.host = host.find(a.host)
+    a.default_config = host.default_config(a.host, "accel_embree")
     inds = camera_indicators(a.db, jobs, cams)
     prots = protocols(cams, a.splits, a.val, not a.no_loso, a.seed)
     studies = [v for v in a.variants.split(",") if v]
@@ -561,7 +549,7 @@ def main():
             json.dump(summary, f, indent=1, sort_keys=True)
         with open(os.path.join(a.out, "summary.md"), "w") as f:
             f.write(markdown(summary, a))
-        import figures
+        from tools.hybrid import figures
         figures.draw(rows, summary, a.out)
     print(json.dumps(summary["table"], indent=1))
     return 0
@@ -762,5 +750,4 @@ def summarize(rows, cams, objectives, models):
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     sys.exit(main())

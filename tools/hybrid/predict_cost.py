@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """predict() against one 1-spp frame, on evaluate.py's validation protocol (issue 15's goal:
 predict() below 1% of a frame), and whether a changed predictor answers the same.
 
@@ -19,19 +18,18 @@ protocol (so both see the same load), and the answers are compared: the configur
 must be the same, and the reported Q (`value`) is compared in relative terms. This is how a
 faster predict() is shown to answer what the earlier one answered.
 
-  predict_cost.py --db /tmp/hybrid/baseline.db --work /tmp/hybrid/pc --models rbf \\
-      --reference-host OLD_HOST --out tools/hybrid/figures/predict_cost
+  /usr/bin/python3 -m tools.hybrid.predict_cost --db /tmp/hybrid/baseline.db --work /tmp/hybrid/pc \\
+      --models rbf --reference-host OLD_HOST --out tools/hybrid/figures/predict_cost
 
 The training databases and predictions are cached in --work (per host, not per --set: give
 each set of --set its own --work).
 """
-import argparse
 import json
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import evaluate as ev  # noqa: E402
+from tools.hybrid import evaluate as ev
+from tools.tttools import cli, host
 
 
 def median(xs):
@@ -40,11 +38,10 @@ def median(xs):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = cli.parser(__doc__)
     ap.add_argument("--db", required=True, help="baseline database (tools/hybrid/baseline.py)")
     ap.add_argument("--work", required=True, help="cache of training DBs and predictions")
     ap.add_argument("--out", default=None, help="folder for predict_cost.json/.md")
-    ap.add_argument("--host", default=os.path.join(ev.ROOT, "build", "host", "host"))
     ap.add_argument("--reference-host", default=None, help="a host whose answers must be the same")
     ap.add_argument("--objectives", default="render,build+render")
     ap.add_argument("--models", default="rbf")
@@ -72,7 +69,8 @@ def main():
     for kv in a.set:
         if kv.split(".")[0] not in (ev.MODELS[m] for m in models):
             sys.exit(f"predict_cost: --set {kv}: no model of --models is that plugin")
-    hosts = [("new", a.host)] + ([("ref", a.reference_host)] if a.reference_host else [])
+    a.host = host.find(a.host)
+    hosts = [("new", a.host)] + ([("ref", host.find(a.reference_host))] if a.reference_host else [])
     for d in ("train",) + tuple(f"pred_{h}" for h, _ in hosts):
         os.makedirs(os.path.join(a.work, d), exist_ok=True)
     rows = []

@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """Checks a tuning database merged by tunetrace-mpi against its job list (issue 18), and
 optionally against the database of another run of the same list (e.g. `mpirun -np 1` against
 `-np 2`):
 
-  tools/mpi/check_db.py --jobs jobs.json --db np2.db [--against np1.db]
+  /usr/bin/python3 -m tools.mpi.check_db --jobs jobs.json --db np2.db [--against np1.db]
 
 Against the job list (0 rows lost or duplicated):
   * every job of the list is merged (its tag in the table `merges`, asked of
@@ -22,7 +21,6 @@ Frame ranges carry no rows and are left out of the comparison (their tags name t
 folder; mpi/tests/mpi_driver.sh compares their pixels). Exit 0: all
 checks hold; 1: a check failed (each printed); 2: bad arguments or unreadable files.
 """
-import argparse
 import collections
 import json
 import os
@@ -30,7 +28,7 @@ import sqlite3
 import subprocess
 import sys
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+from tools.tttools import cli, host
 # everything but timings and where/when a row was measured
 KEY = ("scene_id", "camera", "context", "indicators", "plugin", "plugin_version", "objective",
        "status", "mode", "iteration", "tuner")
@@ -177,13 +175,18 @@ def compare(a, merges, rows):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument("--jobs", required=True, help="the job list the run(s) ran")
     ap.add_argument("--db", required=True, help="the merged database")
     ap.add_argument("--against", help="another run's merged database of the same list")
     ap.add_argument("--strict", action="store_true", help="searches must take the same path too")
-    ap.add_argument("--driver", default=os.path.join(ROOT, "build", "mpi", "tunetrace-mpi"))
+    ap.add_argument("--driver", help="tunetrace-mpi (default: the one of the host's build)")
     a = ap.parse_args()
+    try:
+        a.driver = a.driver or host.build_path(host.find(a.host), "mpi", "tunetrace-mpi")
+    except host.HostError as e:
+        print(f"check_db: {e}", file=sys.stderr)
+        return 2
     if not os.access(a.driver, os.X_OK):
         print(f"check_db: {a.driver}: not built (tunetrace-mpi needs Open MPI)", file=sys.stderr)
         return 2

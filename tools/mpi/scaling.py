@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Parallel efficiency of tunetrace-mpi on the hybrid baseline (issue 18's goal: >= 0.9 at 2
 ranks). The same job list (tools/hybrid/baseline.py --emit-jobs) runs on 1 and on 2 ranks
 (more with --ranks) into fresh databases, the variants interleaved per round (1 2 | 2 1 |
@@ -13,13 +12,13 @@ Where the time goes, per variant (medians):
           difference is the tail, a rank waiting for the last job of the other)
   work efficiency  (T(1) - F(1)) / (n (T(n) - F(n))): the efficiency without the fixed part
 
-  nice -n -5 tools/mpi/scaling.py --rounds 5     (defaults: 4 cameras, 20 iterations, 64x64)
+  nice -n -5 /usr/bin/python3 -m tools.mpi.scaling --rounds 5   (4 cameras, 20 iterations, 64x64)
 
 The defaults are 16 jobs of ~0.35 s of CPU each: long enough that mpirun's start-up (the fixed
 part, ~0.6 s) does not dominate, short enough for a bench (~1 min). A real baseline job is
 15-100x longer. On a quiet machine: efficiency 0.97 at 2 ranks (docs/mpi.md).
 """
-import argparse
+import contextlib
 import json
 import os
 import sqlite3
@@ -29,12 +28,14 @@ import sys
 import tempfile
 import time
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+from tools.hybrid import baseline
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap = cli.parser(__doc__)
     ap.add_argument("--ranks", default="1,2", help="comma-separated rank counts (first: the reference)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--cameras", type=int, default=4)
@@ -48,20 +49,18 @@ def main():
     ranks = [int(r) for r in a.ranks.split(",")]
     scenes = a.scene or [f"box={ROOT}/scenes/cornell-box/path.json",
                          f"spec={ROOT}/scenes/cornell-box-variants/specular-box/scene.json"]
-    host = os.path.join(a.build, "host", "host")
-    drv = os.path.join(a.build, "mpi", "tunetrace-mpi")
-    for exe in (host, drv):
-        if not os.access(exe, os.X_OK):
-            sys.exit(f"scaling: {exe} is not built (tunetrace-mpi needs Open MPI: tools/bootstrap.sh)")
+    exe = host.find(a.host)
+    drv = host.build_path(exe, "mpi", "tunetrace-mpi")  # needs Open MPI: tools/bootstrap.sh
     work = tempfile.mkdtemp(prefix="tt_mpi_scaling.")
     jobs = os.path.join(work, "jobs.json")
-    cmd = ["/usr/bin/python3", os.path.join(ROOT, "tools", "hybrid", "baseline.py"), "--host", host,
-           "--db", os.path.join(work, "list.db"), "--work", os.path.join(work, "w"),
-           "--cameras", str(a.cameras), "--iterations", str(a.iterations), "--res", a.res,
-           "--emit-jobs", jobs]
+    args = ["--host", exe, "--db", os.path.join(work, "list.db"), "--work", os.path.join(work, "w"),
+            "--cameras", str(a.cameras), "--iterations", str(a.iterations), "--res", a.res,
+            "--emit-jobs", jobs]
     for s in scenes:
-        cmd += ["--scene", s]
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        args += ["--scene", s]
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
+        if baseline.main(args):
+            sys.exit("scaling: the baseline's job list could not be written")
     njobs = len(json.load(open(jobs))["jobs"])
     walls = {n: [] for n in ranks}
     cpus = {n: [] for n in ranks}
@@ -78,7 +77,7 @@ def main():
                 mp.append("--allow-run-as-root")
             if n > (os.cpu_count() or 1):
                 mp.append("--oversubscribe")
-            run = mp + [drv, "--jobs", jobs, "--db", db, "--host", host, "--scratch", work]
+            run = mp + [drv, "--jobs", jobs, "--db", db, "--host", exe, "--scratch", work]
             t0 = time.time()
             p = subprocess.run(run, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
             wall = time.time() - t0

@@ -1,27 +1,27 @@
-#!/usr/bin/python3
 """Camera paths for benchmark scenes (thesis 3.3.5.1): a few keyframes mixing open and
 occluded views, interpolated by tt_scene_camera_at and sampled into 100 poses by
 `host --camera-index I` (t = I/99 of the path's time range; `--frames A:B` renders frames
 at --fps instead, t = f / fps).
 
-  camera_path.py auto SOURCE [--seconds 2]         print a {"path": [...]} fragment
+  P="/usr/bin/python3 -m tools.scenes.camera_path"   # from the repository root
+  $P auto SOURCE [--seconds 2]         print a {"path": [...]} fragment
       SOURCE is a scene.json (bounds computed from its meshes) or one line of
       `scenes_info` output (build-*/tests/scenes_info SCENE.pbrt > info.json): the still
       camera and bounds as imported, i.e. in tunetrace's world coordinates (the pbrt importer
       may mirror x). Keys: the still view (open); halfway to the bounds' centre turned left;
       80% of the way to the centre looking sideways (occluded close-ups); the same spot
       looking back; the still position turned right.
-  camera_path.py merge SCENE.json FRAGMENT.json OUT.json
+  $P merge SCENE.json FRAGMENT.json OUT.json
       a copy of SCENE.json with camera.path from FRAGMENT (relative mesh/texture paths are
       rewritten so OUT.json still finds the original files)
-  camera_path.py sample SOURCE [--n 100]
+  $P sample SOURCE [--n 100]
       print the n sampled poses (JSON lines: index, t, position, target, up, fov) as host
       computes them, from a scene.json or a fragment
-  camera_path.py wrap SCENE.pbrt PATH OUT.json [--max-depth N]
+  $P wrap SCENE.pbrt PATH OUT.json [--max-depth N]
       a small scene.json that imports SCENE.pbrt (path relative to OUT.json's folder) and
       carries camera.path from PATH (a fragment or a scene.json with a path)
-  camera_path.py sheet SCENE.json OUT.png [--n 10] [--cols 5] [--res 96x64] [--spp 16]
-                       [--threads 2] [--colors 64] [--host build/host/host]
+  $P sheet SCENE.json OUT.png [--n 10] [--cols 5] [--res 96x64] [--spp 16]
+                       [--threads 2] [--colors 64] [--host PATH]
       renders n evenly spaced samples of the path (`host --camera-index`, indices
       round(j * 99 / (n - 1))) into a labelled contact sheet with a `colors` palette
       (needs python3-pil)
@@ -31,16 +31,13 @@ that imports it carries one (scenes/<name>/scene.json, written with `wrap`).
 """
 import argparse
 import json
-import math
 import os
-import sys
 
 import numpy as np
 
-sys.dont_write_bytecode = True   # no __pycache__ in the source tree
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import scenelib as sl  # noqa: E402
-from generate import hermite_eval  # noqa: E402
+from tools.scenes import scenelib as sl
+from tools.scenes.generate import hermite_eval
+from tools.tttools import cli, host
 
 
 def _rotate(v, up, deg):
@@ -137,7 +134,6 @@ def cmd_wrap(a):
 
 
 def cmd_sheet(a):
-    import subprocess
     import tempfile
     from PIL import Image, ImageDraw
     n, w_h = a.n, [int(x) for x in a.res.split("x")]
@@ -150,9 +146,9 @@ def cmd_sheet(a):
     with tempfile.TemporaryDirectory() as tmp:
         for j, i in enumerate(idx):
             out = os.path.join(tmp, "f%02d.exr" % i)
-            subprocess.run(["nice", "-n", "5", a.host, "--quiet", "--camera-index", str(i), "--res", a.res,
-                            "--spp", str(a.spp), "--threads", str(a.threads), "--out", out, a.scene],
-                           check=True, stderr=subprocess.DEVNULL)
+            host.run(a.host, ["--quiet", "--camera-index", str(i), "--res", a.res, "--spp", str(a.spp),
+                              "--threads", str(a.threads), "--out", out, a.scene],
+                     nice=5, capture=True)
             im = Image.open(out[:-4] + ".png").convert("RGB")
             x, y = (j % cols) * w_h[0], (j // cols) * (w_h[1] + label)
             sheet.paste(im, (x, y + label))
@@ -208,7 +204,7 @@ def main():
     p.add_argument("path")
     p.add_argument("out")
     p.add_argument("--max-depth", type=int, default=None)
-    p = sub.add_parser("sheet")
+    p = sub.add_parser("sheet", parents=[cli.HOST])
     p.add_argument("scene")
     p.add_argument("out")
     p.add_argument("--n", type=int, default=10)
@@ -217,9 +213,9 @@ def main():
     p.add_argument("--spp", type=int, default=16)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--colors", type=int, default=64, help="palette size of the PNG (0: RGB)")
-    p.add_argument("--host", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
-                                                  "..", "..", "build", "host", "host"))
     a = ap.parse_args()
+    if a.cmd == "sheet":
+        a.host = host.find(a.host)
     {"auto": cmd_auto, "merge": cmd_merge, "sample": cmd_sample, "wrap": cmd_wrap,
      "sheet": cmd_sheet}[a.cmd](a)
 

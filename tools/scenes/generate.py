@@ -1,24 +1,24 @@
-#!/usr/bin/python3
 """Procedural benchmark scenes for tunetrace (issue 5), each written as scene.json v1
 (scenes/README.md, "Procedural scenes"). Python 3 + numpy (Debian python3-numpy) only.
 
-  generate.py voxel OUTDIR [--size 512] [--height 64] [--seed 1] [--trees 0.004]
+  G="/usr/bin/python3 -m tools.scenes.generate"   # from the repository root
+  $G voxel OUTDIR [--size 512] [--height 64] [--seed 1] [--trees 0.004]
       Minecraft-like open terrain of unit boxes from seeded fractal value noise (grass, dirt,
       stone, sand, snow, trees); only faces between a solid and an empty cell are emitted.
       Writes OUTDIR/voxel_<material>.ply (binary) and OUTDIR/scene.json with a sky
       environment, a sun (distant light) and a 100-sample camera path (open and occluded
       views). --size 512: ~1.5M triangles.
-  generate.py cylinder SCENE.json OUT.json [--theta 30] [--axis 0 0 1] [--radius 0.002]
+  $G cylinder SCENE.json OUT.json [--theta 30] [--axis 0 0 1] [--radius 0.002]
       [--segments 8]
       The rotating thin cylinder of thesis 3.2.3: an open cylinder of `segments` long thin
       quads, length half the scene's bounding-box diagonal, radius `radius` x length, centred
       on the scene's bounds, along +x rotated by theta degrees about `axis`, inserted into a
       copy of SCENE.json (mesh files keep referring to the original files).
-  generate.py tessellated OUTDIR [--level 8] [--seed 1]
+  $G tessellated OUTDIR [--level 8] [--seed 1]
       A noise-displaced icosphere (level 8: 1,310,720 triangles) on a floor; writes
       OUTDIR/object.ply, OUTDIR/far.json (object a few pixels tall) and OUTDIR/near.json
       (object fills the view); both carry the same far-to-near camera path.
-  generate.py cornell-variants OUTDIR [--base scenes/cornell-box/scene.json]
+  $G cornell-variants OUTDIR [--base scenes/cornell-box/scene.json]
       The Cornell-box variants of thesis 4.4 (the two blocks' materials change):
       OUTDIR/{specular-plastic,box-plastic,specular-box}/scene.json, with a camera path.
 """
@@ -26,13 +26,10 @@ import argparse
 import copy
 import math
 import os
-import sys
 
 import numpy as np
 
-sys.dont_write_bytecode = True   # no __pycache__ in the source tree
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import scenelib as sl  # noqa: E402
+from tools.scenes import scenelib as sl
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -448,7 +445,9 @@ def cmd_cornell_variants(a):
         print("cornell-variants: %s" % path)
 
 
-def main():
+def main(argv=None):
+    """The command line (argv: its arguments, default sys.argv[1:]); other tools call
+    main(["voxel", OUTDIR]) to generate a scene in-process."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     p = sub.add_parser("voxel")
@@ -471,7 +470,7 @@ def main():
     p = sub.add_parser("cornell-variants")
     p.add_argument("outdir")
     p.add_argument("--base", default=os.path.join(ROOT, "scenes", "cornell-box", "scene.json"))
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     if a.cmd == "voxel":
         if a.size < 8 or a.height < 24:
             ap.error("voxel: --size >= 8 and --height >= 24")

@@ -13,13 +13,14 @@ SPP=${2:-64}
 HOST="$BUILD/host/host"
 INFO="$BUILD/tools/tests/scenes_info"
 PY=/usr/bin/python3
+GEN=("$ROOT/tools/run" scenes.generate)
 S="$ROOT/../shared/scenes"
 WORK=${WORK:-/tmp/tt_scene_set}
 OUT="$ROOT/scenes/thumbnails"
 mkdir -p "$WORK" "$OUT"
-[ -f "$WORK/voxel/scene.json" ] || "$PY" "$ROOT/tools/scenes/generate.py" voxel "$WORK/voxel"
-[ -f "$WORK/tessellated/far.json" ] || "$PY" "$ROOT/tools/scenes/generate.py" tessellated "$WORK/tessellated"
-"$PY" "$ROOT/tools/scenes/generate.py" cylinder "$ROOT/scenes/cornell-box/scene.json" \
+[ -f "$WORK/voxel/scene.json" ] || "${GEN[@]}" voxel "$WORK/voxel"
+[ -f "$WORK/tessellated/far.json" ] || "${GEN[@]}" tessellated "$WORK/tessellated"
+"${GEN[@]}" cylinder "$ROOT/scenes/cornell-box/scene.json" \
   "$WORK/cornell-cylinder/scene.json" --theta 30 --radius 0.01 >/dev/null
 
 # name  scene  [extra host options]

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Thesis 5.6 ablations at reduced scale: trains each variant with train.py from scratch (or,
 --init, from given weights of its width) for each seed (same data, steps, batch, patch,
 burn-in), evaluates it in PyTorch on the held-back sequences, and prints a markdown table with the per-seed and mean scores, the
@@ -7,7 +6,7 @@ mean score is within 1% of the best. The score of a run is the geometric mean of
 held-back RMSEs (the sequences' error scales differ by 3x between 1 and 8 spp, so an
 arithmetic mean would only rank the noisiest one).
 
-  ablations.py --data D1,D2 --scenes ... --val ... --out DIR [--steps 1000] [--batch 4]
+  /usr/bin/python3 -m tools.taa.ablations --data D1,D2 --scenes ... --val ... --out DIR [--steps 1000] [--batch 4]
                [--patch 32] [--burn 16] [--seeds 1,2,3] [--jobs 2]
                [--variants h5,h0,h0-in,h0-reset,...] [--cache DIR] [--lr 1e-3]
                [--init 12=W12.ttw,6=W6.ttw]
@@ -21,7 +20,7 @@ import subprocess
 import sys
 import time
 
-import taa_model
+from tools.taa import taa_model
 
 # name: (width, hidden, body, jitter layers, kernel-layer size, rejection)
 VARIANTS = {
@@ -54,8 +53,7 @@ def shape(v):
 
 def command(a, v, seed, out):
     width, hidden, body, jit, k, rej = VARIANTS[v]
-    here = os.path.dirname(os.path.abspath(__file__))
-    cmd = [sys.executable, os.path.join(here, "train.py"), "--data", a.data, "--scenes", a.scenes,
+    cmd = [sys.executable, "-m", "tools.taa.train", "--data", a.data, "--scenes", a.scenes,
            "--val", a.val, "--out", out, "--width", str(width), "--hidden", str(hidden),
            "--body", body, "--jitter-layers", jit, "--kernel", str(k), "--reject", rej,
            "--steps", str(a.steps), "--minutes", "100000", "--batch", str(a.batch),

@@ -1,16 +1,15 @@
-#!/usr/bin/python3
 """Linear interpolation of two weights files of the same shape (numpy only):
 OUT = (1 - A) * FROM + A * TO, layer by layer (weights and biases). With TO fine-tuned from
 FROM (train.py --init FROM), A between 0 and 1 walks the straight line from the original to
 the fine-tuned network, trading what the fine-tuning gained against what it lost
 (issue #19, session 6).
 
-  blend_weights.py FROM.ttw TO.ttw A OUT.ttw"""
-import sys
+  /usr/bin/python3 -m tools.taa.blend_weights FROM.ttw TO.ttw A OUT.ttw"""
 
 import numpy as np
 
-import ttw
+from tools.taa import ttw
+from tools.tttools import cli
 
 
 def blend(a_model, b_model, alpha):
@@ -28,10 +27,13 @@ def blend(a_model, b_model, alpha):
 
 
 def main():
-    if len(sys.argv) != 5:
-        raise SystemExit(__doc__)
-    src, dst, alpha, out = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
-    ttw.write(blend(ttw.read(src), ttw.read(dst), alpha), out)
+    ap = cli.parser(__doc__, host=False)
+    ap.add_argument("src", metavar="FROM.ttw")
+    ap.add_argument("dst", metavar="TO.ttw")
+    ap.add_argument("alpha", metavar="A", type=float, help="0: FROM, 1: TO")
+    ap.add_argument("out", metavar="OUT.ttw")
+    a = ap.parse_args()
+    ttw.write(blend(ttw.read(a.src), ttw.read(a.dst), a.alpha), a.out)
 
 
 if __name__ == "__main__":

@@ -1,10 +1,9 @@
-#!/usr/bin/python3
 """Side-by-side PNG of evaluate.py outputs for looking at ghosting / blur: one row per
 frame, columns input | reference | each method | 4x |method - reference| for each method
 (tonemapped c / (1 + max c), gamma 2.2, pixels repeated SCALE times); prints the per-frame
 RMSE of each.
 
-  crops.py SEQ EVAL_OUT/SEQ OUT.png SCALE F1,F2,... [X0:X1,Y0:Y1] [--methods vctaa,c12,...]
+  /usr/bin/python3 -m tools.taa.crops SEQ EVAL_OUT/SEQ OUT.png SCALE F1,F2,... [X0:X1,Y0:Y1] [--methods vctaa,c12,...]
 e.g. crops.py /tmp/taa/data/d1/pillars /tmp/ev/pillars /tmp/p.png 3 79,80,81 10:110,50:82
 SEQ: the dataset sequence (its manifest names the references); EVAL_OUT/SEQ/METHOD: the
 folders evaluate.py rendered (input = mode none)."""
@@ -15,8 +14,7 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-import images  # noqa: E402
+from tools.common import images
 
 
 def tm(a):

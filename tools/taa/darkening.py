@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """VCTAA's darkening of noisy input (issue #19), as a figure: the mean luminance of each
 method's output over the reference's (frames --skip..), against the input's samples per
 pixel, one panel per scene, from evaluate.py's eval.json (sequences NAME-spp1, -spp2, ...).
 
-  darkening.py EVAL.json [EVAL2.json ...] --out FIG.png [--skip 8]
+  /usr/bin/python3 -m tools.taa.darkening EVAL.json [EVAL2.json ...] --out FIG.png [--skip 8]
 
 Prints the table of the ratios too. The tonemapped resolve averages c / (1 + max c): the
 inverse of that average lies below the mean of c (the tonemap is concave), the more so the

@@ -13,14 +13,12 @@ import hashlib
 import json
 import os
 
-import sys
 
 import numpy as np
 import torch
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-from images import read_exr  # noqa: E402  (re-exported: training code reads EXRs through dataset)
-import rejection  # noqa: E402
+from tools.common.images import read_exr  # noqa: F401  (re-exported: training code reads EXRs here)
+from tools.taa import rejection
 
 CACHE_VERSION = "rej2"   # bump when what the cache holds changes
 

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Evaluates TAA outputs against references, per sequence (tonemapped c/(1+max c) space,
 the space the filters resolve in):
   RMSE       per-frame root-mean-square error vs the reference, averaged over frames
@@ -11,8 +10,9 @@ Each --test folder is scored on every image its manifest has: the rendered frame
 and, when a post filter ran, the filtered ones ("post"), one line each, so a filter's line
 can be read against its own input's; --key KEY scores that one key only.
 
-  eval.py --ref DIR --test DIR [--key post|color]     one sequence (manifest.json in each)
-  eval.py --ref DIR --test DIR1 --test DIR2 ...        several methods on one sequence
+  E="/usr/bin/python3 -m tools.taa.eval"   # from the repository root
+  $E --ref DIR --test DIR [--key post|color]     one sequence (manifest.json in each)
+  $E --ref DIR --test DIR1 --test DIR2 ...        several methods on one sequence
 (--json FILE also writes the numbers, per-frame RMSE / FLIP included.)"""
 import argparse
 import json
@@ -21,9 +21,8 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-import flip as flipmod  # noqa: E402
-import images  # noqa: E402  (OpenImageIO only: evaluation must not need torch)
+from tools.common import images  # OpenImageIO only: evaluation must not need torch
+from tools.taa import flip as flipmod
 
 
 def tm(x):

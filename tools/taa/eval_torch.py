@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """Evaluates a weights file in PyTorch on whole sequences (as the C plugin runs them:
 frame 0 and every reset start fresh, the state carries over otherwise) with eval.py's
 metrics (tonemapped RMSE and temporal error, frames --skip.. ).
 
-  eval_torch.py W.ttw DATA_DIR SEQ[,SEQ...] [--threads 1] [--cache DIR] [--json OUT]"""
+  /usr/bin/python3 -m tools.taa.eval_torch W.ttw DATA_DIR SEQ[,SEQ...] [--threads 1] [--cache DIR] [--json OUT]"""
 import argparse
 import json
 import os
@@ -11,9 +10,8 @@ import os
 import numpy as np
 import torch
 
-import dataset
-import eval as ev
-import taa_model
+from tools.taa import dataset, taa_model
+from tools.taa import eval as ev
 
 
 def run_sequence(model, seq):

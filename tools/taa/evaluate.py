@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """The evaluation of issue #19, one command: every held-back sequence through the C plugin
 (host --sequence ... --post post_taa, the way users run it) in modes none (the raw input),
 vctaa (the thesis' baseline, tonemapped resolve), vctaa with resolve=linear, and each
@@ -7,27 +6,23 @@ brightness of each output against the reference's (the darkening of noisy input)
 curves as PNG, a markdown table with the goals of the issue, eval.json and summary.png (every
 method's RMSE and temporal error relative to VCTAA's per sequence, and the jump frames).
 
-  evaluate.py --build BUILD --out OUT SEQ_DIR... [--net LABEL=W.ttw ...] [--default LABEL]
-              [--threads 2] [--no-flip] [--jumps pillars:80:84]
+  /usr/bin/python3 -m tools.taa.evaluate --out OUT SEQ_DIR... [--net LABEL=W.ttw ...]
+              [--default LABEL] [--threads 2] [--no-flip] [--jumps pillars:80:84] [--host PATH]
 
 SEQ_DIR: a sequence folder of render_noisy.sh (render.args replays its input) or of
 render_dataset.sh / render_real.sh (DATA/NAME with DATA/scenes/NAME/scene.json, maxDepth
 1). Folders already rendered in OUT are reused (delete them to re-render). Needs only
 bootstrap's packages (numpy, OpenImageIO, matplotlib, scipy for FLIP)."""
-import argparse
 import json
 import os
 import shlex
-import subprocess
 import sys
 
 import numpy as np
 
-here = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(here, "..", "common"))
-import eval as ev  # noqa: E402
-import flip as flipmod  # noqa: E402
-import images  # noqa: E402
+from tools.taa import eval as ev
+from tools.taa import flip as flipmod
+from tools.tttools import cli, host
 
 
 def fail(msg):
@@ -55,14 +50,11 @@ def run_method(a, seq, out, mode_args, nframes):
     man = os.path.join(out, "manifest.json")
     if os.path.exists(man) and len(json.load(open(man))["frames"]) == nframes:
         return
-    env = dict(os.environ, TT_PLUGIN_PATH=os.path.join(a.build, "plugins"))
+    env = dict(os.environ)
     env.pop("TT_POST_TAA_WEIGHTS", None)
-    cmd = [os.path.join(a.build, "host", "host"), "--quiet", "--threads", str(a.threads),
-           "--sequence", str(nframes), "--out-dir", out, "--aov", "none", "--post", "post_taa"]
-    cmd += mode_args + render_args(seq)
-    r = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if r.returncode:
-        fail(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stdout}")
+    host.run(a.host, ["--quiet", "--threads", str(a.threads), "--sequence", str(nframes),
+                      "--out-dir", out, "--aov", "none", "--post", "post_taa"] +
+             mode_args + render_args(seq), env=env, capture=True)
 
 
 def evaluate_seq(a, seq, methods):
@@ -217,9 +209,8 @@ def jumps(a, results):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = cli.parser(__doc__)
     ap.add_argument("seqs", nargs="*")
-    ap.add_argument("--build")
     ap.add_argument("--replot", action="store_true",
                     help="redraw OUT/summary.png from OUT/eval.json (no rendering)")
     ap.add_argument("--out", required=True)
@@ -240,8 +231,9 @@ def main():
             fail(f"--replot: {os.path.join(a.out, 'eval.json')}: {e}")
         print(f"chart: {plot_summary(a, results)}")
         return
-    if not a.seqs or not a.build:
-        fail("expected SEQ_DIR... and --build BUILD (or --replot --out OUT)")
+    if not a.seqs:
+        fail("expected SEQ_DIR... (or --replot --out OUT)")
+    a.host = host.find(a.host)
     methods = [("input", ["--set", "post_taa.mode=none"]), ("vctaa", ["--set", "post_taa.mode=vctaa"])]
     if not a.no_linear:
         methods.append(("vctaa-linear", ["--set", "post_taa.mode=vctaa", "--set",

@@ -1,8 +1,7 @@
-#!/usr/bin/python3
 """Writes the golden fixture the C test (plugins/post_taa/tests/taa_net.c) checks the plugin's inference
 against: small random inputs, run through the PyTorch model loaded from a weights file.
 
-  export_golden.py WEIGHTS.ttw OUT.bin
+  /usr/bin/python3 -m tools.taa.export_golden WEIGHTS.ttw OUT.bin
 
 OUT.bin (little-endian): "TTAAGLD2", u32 fnv1a(weights file), u32 width, height, frames,
 state channels; per frame: u32 jitter index, u32 fresh, float32 jitter offset (2), then
@@ -15,8 +14,7 @@ import sys
 import numpy as np
 import torch
 
-import rejection
-import taa_model
+from tools.taa import rejection, taa_model
 
 
 def halton(i, b):

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """LDR-FLIP image difference (Andersson et al. 2020, "FLIP: A Difference Evaluator for
 Alternating Images", HPG 2020), written from the paper's description with numpy + scipy.
 
@@ -27,8 +26,9 @@ Pipeline (paper section 3/4):
   result:  dE = dE_c ^ (1 - dF').
 All filters are separable and use clamp-to-edge borders.
 
-  flip.py --selftest                 property checks (+ one fixed synthetic pair)
-  flip.py REF.exr TEST.exr [--ppd P] mean FLIP of two linear EXRs (tonemapped, sRGB)
+  F="/usr/bin/python3 -m tools.taa.flip"   # from the repository root
+  $F --selftest                 property checks (+ one fixed synthetic pair)
+  $F REF.exr TEST.exr [--ppd P] mean FLIP of two linear EXRs (tonemapped, sRGB)
 """
 import sys
 
@@ -258,8 +258,7 @@ def main(argv):
         return selftest()
     if len(a.images) != 2:
         ap.error("give --selftest or REF TEST")
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-    import images
+    from tools.common import images
     r, t = (tonemap_srgb(images.read_exr(p)[..., :3]) for p in a.images)
     print(f"mean FLIP {float(flip_mean(r, t, a.ppd)):.6f}")
     return 0

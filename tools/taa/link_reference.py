@@ -1,8 +1,7 @@
-#!/usr/bin/python3
 """Points a sequence's manifest at reference frames rendered in another folder (one
 reference shared by inputs at several sample rates: render_noisy.sh).
 
-  link_reference.py SEQ_DIR REF_DIR
+  /usr/bin/python3 -m tools.taa.link_reference SEQ_DIR REF_DIR
 
 REF_DIR is a `host --frames A:B --out REF_DIR/frame_%04d.exr --supersample K` folder (or a
 --sequence folder with references); frame i of SEQ_DIR gets "reference": the relative path
@@ -11,11 +10,15 @@ import json
 import os
 import sys
 
+from tools.tttools import cli
+
 
 def main():
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    seq, ref = sys.argv[1:]
+    ap = cli.parser(__doc__, host=False)
+    ap.add_argument("seq", metavar="SEQ_DIR")
+    ap.add_argument("ref", metavar="REF_DIR")
+    a = ap.parse_args()
+    seq, ref = a.seq, a.ref
     mpath = os.path.join(seq, "manifest.json")
     man = json.load(open(mpath))
     rman = json.load(open(os.path.join(ref, "manifest.json")))

@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """Wraps a converted pbrt scene (`host --convert X.pbrt --out DIR/scene.json`) with the
 camera path fragment scenes/paths/<name>.json, optionally retimed (speed variants), so
 that `host --sequence` can render it.
 
-  real_scenes.py SCENE.json PATH_FRAGMENT.json OUT.json [--speed S] [--t0 T] [--t1 T]
+  /usr/bin/python3 -m tools.taa.real_scenes SCENE.json PATH_FRAGMENT.json OUT.json [--speed S] [--t0 T] [--t1 T]
                  [--res WxH] [--spp N] [--max-depth D]
 
 --speed S plays the path S times as fast (key times divided by S); --t0/--t1 keep only

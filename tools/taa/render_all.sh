@@ -29,14 +29,14 @@ part() { case " ${ONLY:-full d1} " in *" $1 "*) return 0 ;; *) return 1 ;; esac;
 
 if part full; then
   sc=$out/full/scenes
-  [ -f "$sc/pillars/scene.json" ] || /usr/bin/python3 "$here/make_scenes.py" "$sc" > /dev/null
-  [ -f "$sc/blocks-jumps/scene.json" ] || /usr/bin/python3 "$here/make_scenes.py" "$sc" --set jumps > /dev/null
+  [ -f "$sc/pillars/scene.json" ] || "$here/../run" taa.make_scenes "$sc" > /dev/null
+  [ -f "$sc/blocks-jumps/scene.json" ] || "$here/../run" taa.make_scenes "$sc" --set jumps > /dev/null
   for spec in staircase:72x128 bathroom:96x96 living-room:128x72; do
     s=${spec%%:*}; r=${spec#*:}
     if [ ! -f "$sc/$s/scene.json" ]; then
       mkdir -p "$sc/$s"
       "$build/host/host" --quiet --convert "$shared/$s/$s.pbrt" --out "$sc/$s/scene.json"
-      /usr/bin/python3 "$here/real_scenes.py" "$sc/$s/scene.json" "$paths/$s.json" \
+      "$here/../run" taa.real_scenes "$sc/$s/scene.json" "$paths/$s.json" \
         "$sc/$s/scene.json" --speed 2 --res "$r" --spp 1 --max-depth 64
     fi
   done

@@ -12,13 +12,13 @@ out=$2
 frames=${3:-120}
 here=$(dirname "$0")
 if [ "${SET:-}" = fast ]; then
-  /usr/bin/python3 "$here/make_scenes.py" "$out/scenes" --set fast
+  "$here/../run" taa.make_scenes "$out/scenes" --set fast
   names="windows blinds windows-pan blinds-dolly stairs-fast fence-fast"
 elif [ "${SET:-}" = jumps ]; then
-  /usr/bin/python3 "$here/make_scenes.py" "$out/scenes" --set jumps
+  "$here/../run" taa.make_scenes "$out/scenes" --set jumps
   names="blocks-jumps stairs-jumps fence-jumps windows-jumps"
 else
-  /usr/bin/python3 "$here/make_scenes.py" "$out/scenes"
+  "$here/../run" taa.make_scenes "$out/scenes"
   names="stairs fence pillars"
 fi
 for s in $names; do

@@ -44,5 +44,5 @@ for k in ${SPPS:-1 2 4 8}; do
   fi
   printf '%s\n' "--spp $k --set integrator_pt.maxDepth=$depth $seed $(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")" \
     > "$dir/render.args"
-  /usr/bin/python3 "$here/link_reference.py" "$dir" "$ref"
+  "$here/../run" taa.link_reference "$dir" "$ref"
 done

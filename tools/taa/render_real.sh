@@ -21,7 +21,7 @@ for spec in staircase:72x128:96 bathroom:96x96:96 living-room:128x72:72; do
   mkdir -p "$out/scenes/$s"
   "$build/host/host" --quiet --convert "$shared/$s/$s.pbrt" --out "$out/scenes/$s/scene.json"
   if [ -n "${PATHS:-}" ]; then path=$PATHS/$s.json; else path=$here/../../scenes/$s/scene.json; fi
-  /usr/bin/python3 "$here/real_scenes.py" "$out/scenes/$s/scene.json" "$path" \
+  "$here/../run" taa.real_scenes "$out/scenes/$s/scene.json" "$path" \
     "$out/scenes/$s/scene.json" --speed 2 \
     --res "$r" --spp "${SPP:-8}" --max-depth 1
   TT_PLUGIN_PATH="$build/plugins" "$build/host/host" --quiet --threads "${THREADS:-2}" --spp "${SPP:-8}" \

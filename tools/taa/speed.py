@@ -1,23 +1,24 @@
-#!/usr/bin/python3
 """post_taa speed figures (issue #19 goal 3): runs plugins/post_taa/tests/taa_bench several times (each run
 interleaves every variant frame by frame and prints its per-variant medians), then prints
 the median of the per-run medians and their range per variant, with the load average
 before and after each run. On this shared machine take the figures of a quiet moment:
 the load average is printed beside them.
 
-  speed.py BUILD [--runs 4] [--threads 2] [--weights label=FILE.ttw[@LEVEL],...] [--rounds 9]
-           [--default LABEL (c12)] [--goal LABEL=MS ...]
-           [--json OUT.json] [--png OUT.png] [--full]   (--full: also 1920x1080)
+  /usr/bin/python3 -m tools.taa.speed [--host BUILD/host/host: its build's taa_bench]
+      [--runs 4] [--threads 2] [--weights label=FILE.ttw[@LEVEL],...] [--rounds 9]
+      [--default LABEL (c12)] [--goal LABEL=MS ...]
+      [--json OUT.json] [--png OUT.png] [--full]   (--full: also 1920x1080)
 
 Goals (640x480, 2 threads, reprojection and colour mix included): network-12 <= 40 ms,
 the default network <= 30 ms (the labels of the shipped files: c12, and the default's)."""
-import argparse
 import json
 import os
 import subprocess
 import sys
 
 import numpy as np
+
+from tools.tttools import cli, host
 
 
 def loadavg():
@@ -59,8 +60,7 @@ def chart(path, rows, lo, hi, threads):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("build")
+    ap = cli.parser(__doc__)
     ap.add_argument("--runs", type=int, default=4)
     ap.add_argument("--threads", default="2")
     ap.add_argument("--weights", default=None)
@@ -76,9 +76,10 @@ def main():
     ap.add_argument("--png", default=None, help="chart: 640x480 wall ms per variant (median, "
                     "range) beside the CPU ms split into reprojection / network / mix")
     a = ap.parse_args()
-    root = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
-    env = dict(os.environ, TT_SOURCE_ROOT=root, TT_BENCH_THREADS=a.threads,
-               TT_BENCH_ROUNDS=str(a.rounds), TT_PLUGIN_PATH=os.path.join(a.build, "plugins"))
+    exe = host.find(a.host)
+    bench = host.build_path(exe, "plugins", "post_taa", "tests", "taa_bench")
+    env = dict(os.environ, TT_SOURCE_ROOT=host.ROOT, TT_BENCH_THREADS=a.threads,
+               TT_BENCH_ROUNDS=str(a.rounds), TT_PLUGIN_PATH=host.build_path(exe, "plugins"))
     if not a.full:
         env["TT_BENCH_QUICK"] = "1"
     if a.weights:
@@ -86,7 +87,7 @@ def main():
     runs = []
     for k in range(a.runs):
         before = loadavg()
-        r = subprocess.run([os.path.join(a.build, "plugins", "post_taa", "tests", "taa_bench")], env=env,
+        r = subprocess.run([bench], env=env,
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         after = loadavg()
         if r.returncode:

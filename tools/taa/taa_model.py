@@ -15,8 +15,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-import ttw
-from ttw import (ACT_NONE, ACT_RELU, ACT_SOFTMAX, FLAG_REJECT, FLAG_RESET, JITTER_SETS,  # noqa: F401
+from tools.taa import ttw
+from tools.taa.ttw import (ACT_NONE, ACT_RELU, ACT_SOFTMAX, FLAG_REJECT, FLAG_RESET, JITTER_SETS,  # noqa: F401
                  MIX_K, ROLE_BODY, ROLE_HIDDEN, ROLE_KERNEL, fnv1a)
 
 

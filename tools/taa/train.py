@@ -1,11 +1,10 @@
-#!/usr/bin/python3
 """Trains the TAA network on CPU (thesis 5.5): 8-frame windows of patches starting at every
 jitter index, channel swapping, losses L1 reference + gradient + temporal, each split by the
 aliasing mask M and (1 - M), computed on the last frame of the window; Adam (lr 1e-3,
 eps 1e-7, gradients clipped to norm 1) with exponential decay 0.96 every 1000 steps.
 Exports the weights file (and optionally the golden fixture).
 
-  train.py --data DIR[,DIR2] --scenes stairs,fence[,DIR2:NAME*W] --out w.ttw [--width 12]
+  /usr/bin/python3 -m tools.taa.train --data DIR[,DIR2] --scenes stairs,fence[,DIR2:NAME*W] --out w.ttw [--width 12]
            [--hidden 5] [--body 3,3,5] [--jitter-layers "b2 b3 k"] [--minutes 8] [--steps N]
            [--batch 8] [--patch 64] [--threads 1] [--burn 24] [--ema 0.99] [--lr 1e-3]
            [--val pillars,...] [--ckpt-minutes M] [--cache DIR] [--init W.ttw]
@@ -24,9 +23,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-import dataset
-import eval_torch
-import taa_model
+from tools.taa import dataset, eval_torch, taa_model  # noqa: E402
 
 # Loss weights (5.5.3): temporal dominant, gradient above reference; aliased regions 1.5x.
 W_REF, W_GRAD, W_TMP, ALIAS = 1.0, 1.5, 6.0, 1.5

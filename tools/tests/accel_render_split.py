@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """tools/accel/render_split.py on the committed render-bench output of session 9
 (tools/accel/data/render_bench_session9.txt): every table is read (6 scenes x 4 modes x 7
 configurations), the parts add up to the render (camera + bounce + shadow = traversal,
@@ -10,18 +9,17 @@ import subprocess
 import sys
 import tempfile
 
-ROOT = os.environ.get("TT_SOURCE_ROOT", ".")
-sys.path.insert(0, os.path.join(ROOT, "tools", "accel"))
-import render_split  # noqa: E402
+from tools.accel import render_split
 
+ROOT = os.environ.get("TT_SOURCE_ROOT", ".")
 DATA = os.path.join(ROOT, "tools", "accel", "data", "render_bench_session9.txt")
-TOOL = os.path.join(ROOT, "tools", "accel", "render_split.py")
 fails = 0
 
 
 def run(*args):
     """The tool as a user runs it: returncode, stdout, stderr."""
-    r = subprocess.run([sys.executable, TOOL, *args], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "tools.accel.render_split", *args],
+                       capture_output=True, text=True, cwd=ROOT)
     return r.returncode, r.stdout, r.stderr
 
 

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """The user docs agree with the tree: every relative link of every Markdown file in the
 repository (README.md files, docs/) names a file that exists, and every #anchor names a
 heading of its target, by GitHub's rule (lower case, punctuation dropped, spaces to '-',

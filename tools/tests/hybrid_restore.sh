@@ -19,7 +19,7 @@ for s in veach-ajar killeroos; do
   cp -r "$shared/$s" "$tmp/shared/scenes/"
 done
 chmod -R u+w "$tmp/shared"
-B=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/baseline.py" --host "$TT_BUILD_ROOT/host/host"
+B=("$PY" -m tools.hybrid.baseline --host "$TT_BUILD_ROOT/host/host"
    --work "$tmp/w" --restore "$TT_SOURCE_ROOT/tools/hybrid/data/baseline.sql.xz"
    --scene "veach-ajar=$tmp/repo/scenes/veach-ajar/scene.json"
    --scene "killeroos=$tmp/repo/scenes/killeroos/scene.json")

@@ -13,7 +13,7 @@ PY=/usr/bin/python3
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/tt_hybrid_tools.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 host="$TT_BUILD_ROOT/host/host"
-B=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/baseline.py" --host "$host" --db "$tmp/b.db" --work "$tmp/w"
+B=("$PY" -m tools.hybrid.baseline --host "$host" --db "$tmp/b.db" --work "$tmp/w"
    --cameras 6 --iterations 4 --res 16x16
    --scene "box=$TT_SOURCE_ROOT/scenes/cornell-box/path.json"
    --scene "spec=$TT_SOURCE_ROOT/scenes/cornell-box-variants/specular-box/scene.json")
@@ -47,7 +47,7 @@ if "${B[@]}" --db "$tmp/r3.db" --scene "box=$TT_SOURCE_ROOT/scenes/cornell-box-v
      --restore "$tmp/b.sql.xz" >"$tmp/r3.log" 2>&1; then fail "--restore with another scene should fail"; fi
 grep -q "box: .* has scene id" "$tmp/r3.log" && [ ! -e "$tmp/r3.db" ] || { cat "$tmp/r3.log"; fail "scene id check"; }
 
-E=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e" --out "$tmp/f"
+E=("$PY" -m tools.hybrid.evaluate --db "$tmp/b.db" --work "$tmp/e" --out "$tmp/f"
    --host "$host" --splits 2 --rounds 1 --min-cameras 4 --nice 0 --jobs 2
    --variants reward,candidates --variant-splits 1)
 "${E[@]}" >"$tmp/e.log" 2>&1 || { cat "$tmp/e.log"; fail "evaluate"; }
@@ -80,12 +80,12 @@ grep -q "Argmax candidates" "$tmp/f/summary.md" || fail "summary.md has no candi
 "${E[@]}" >"$tmp/e2.log" 2>&1 || fail "evaluate (cached)"
 if grep -q "measuring" "$tmp/e2.log"; then cat "$tmp/e2.log"; fail "the second evaluation measured again"; fi
 # too few cameras for the protocol: a clear error
-if "$PY" "$TT_SOURCE_ROOT/tools/hybrid/evaluate.py" --db "$tmp/b.db" --work "$tmp/e3" --host "$host" \
+if "$PY" -m tools.hybrid.evaluate --db "$tmp/b.db" --work "$tmp/e3" --host "$host" \
      --min-cameras 50 >"$tmp/e3.log" 2>&1; then fail "evaluate with too few cameras should fail"; fi
 grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "message"; }
 # predict_cost.py: predict() against the frame on the same protocols, and a reference host's
 # answers compared (the same host here: every answer the same, exit 0)
-PC=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/predict_cost.py" --db "$tmp/b.db" --work "$tmp/pc" --out "$tmp/fp"
+PC=("$PY" -m tools.hybrid.predict_cost --db "$tmp/b.db" --work "$tmp/pc" --out "$tmp/fp"
     --host "$host" --reference-host "$host" --splits 1 --min-cameras 4 --models rbf,nn
     --set predictor_rbf.poolSize=1)
 "${PC[@]}" >"$tmp/pc.log" 2>&1 || { cat "$tmp/pc.log"; fail "predict_cost.py"; }
@@ -103,12 +103,12 @@ import glob
 for f in glob.glob(sys.argv[2] + "/pred_*/*_rbf.json"):
     assert all(x["candidates"] == 2 for x in json.load(open(f))["predictions"]), f
 EOF
-"$PY" "$TT_SOURCE_ROOT/tools/hybrid/predict_cost.py" --db "$tmp/b.db" --work "$tmp/pc" --models nosuch \
+"$PY" -m tools.hybrid.predict_cost --db "$tmp/b.db" --work "$tmp/pc" --models nosuch \
   >"$tmp/pc2.log" 2>&1 && fail "predict_cost.py --models nosuch should be refused"
 grep -q "unknown model 'nosuch'" "$tmp/pc2.log" || { cat "$tmp/pc2.log"; fail "message"; }
 # epsilon.py: host --hybrid along the path at epsilon 0 and 1, warm-started without the
 # scene's own rows: epsilon 1 explores every state, epsilon 0 none (one build each)
-EP=("$PY" "$TT_SOURCE_ROOT/tools/hybrid/epsilon.py" --db "$tmp/b.db" --work "$tmp/eps" --out "$tmp/fe"
+EP=("$PY" -m tools.hybrid.epsilon --db "$tmp/b.db" --work "$tmp/eps" --out "$tmp/fe"
     --host "$host" --scenes box --objectives render --epsilons 0,1 --models nn --states 3:5
     --iterations 3 --res 16x16 --nice 0 --seeds 1,2)
 "${EP[@]}" >"$tmp/ep.log" 2>&1 || { cat "$tmp/ep.log"; fail "epsilon.py"; }

@@ -14,8 +14,8 @@ HAVE_OIIO=0
 "$PY" -c 'import OpenImageIO' 2>/dev/null && HAVE_OIIO=1
 HOST="$TT_BUILD_ROOT/host/host"
 INFO="$TT_BUILD_ROOT/tools/tests/scenes_info"
-GEN="$TT_SOURCE_ROOT/tools/scenes/generate.py"
-CAM="$TT_SOURCE_ROOT/tools/scenes/camera_path.py"
+GEN=("$PY" -m tools.scenes.generate)
+CAM=("$PY" -m tools.scenes.camera_path)
 CBOX="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
 dir=$(mktemp -d /tmp/tt_scenes_genXXXXXX)
 trap 'rm -rf "$dir"' EXIT
@@ -45,7 +45,7 @@ render() {
 }
 
 # 1. voxel world (small) -----------------------------------------------------------------
-"$PY" "$GEN" voxel "$dir/vox" --size 40 --seed 5 >"$dir/vox.log"
+"${GEN[@]}" voxel "$dir/vox" --size 40 --seed 5 >"$dir/vox.log"
 cat "$dir/vox.log"
 check '[ -f "$dir/vox/scene.json" ] && [ -f "$dir/vox/voxel_grass.ply" ]'
 info=$("$INFO" "$dir/vox/scene.json")
@@ -58,11 +58,11 @@ check "grep -q '\"environment\": 1, \"point\": 0, \"spot\": 0, \"distant\": 1' <
 check "grep -q '\"bounds\": \[\[0, [0-9]*, 0\], \[40, [0-9]*, 40\]\]' <<<'$info'"
 render vox "$dir/vox/scene.json"
 # the same seed gives the same world
-"$PY" "$GEN" voxel "$dir/vox2" --size 40 --seed 5 >/dev/null
+"${GEN[@]}" voxel "$dir/vox2" --size 40 --seed 5 >/dev/null
 check 'cmp -s "$dir/vox/voxel_grass.ply" "$dir/vox2/voxel_grass.ply"'
 
 # 2. thin cylinder in the Cornell box ------------------------------------------------------
-"$PY" "$GEN" cylinder "$CBOX" "$dir/cyl/scene.json" --theta 45 >"$dir/cyl.log"
+"${GEN[@]}" cylinder "$CBOX" "$dir/cyl/scene.json" --theta 45 >"$dir/cyl.log"
 cat "$dir/cyl.log"
 info=$("$INFO" "$dir/cyl/scene.json")
 check "grep -q '\"triangles\": 48,' <<<'$info'"      # 32 + 16 cylinder triangles
@@ -71,11 +71,11 @@ check 'grep -q "length 480.37" "$dir/cyl.log"'        # half of the box's 960.74
 render cyl "$dir/cyl/scene.json"
 # a scene with mesh files: the copy elsewhere still finds them
 mkdir -p "$dir/other"
-"$PY" "$GEN" cylinder "$dir/vox/scene.json" "$dir/other/deep/cyl_vox.json" --theta 10 >/dev/null
+"${GEN[@]}" cylinder "$dir/vox/scene.json" "$dir/other/deep/cyl_vox.json" --theta 10 >/dev/null
 render cylvox "$dir/other/deep/cyl_vox.json"
 
 # 3. Cornell-box variants: committed == generated, and each renders -----------------------
-"$PY" "$GEN" cornell-variants "$dir/cv" >/dev/null
+"${GEN[@]}" cornell-variants "$dir/cv" >/dev/null
 for v in specular-plastic box-plastic specular-box; do
   committed="$TT_SOURCE_ROOT/scenes/cornell-box-variants/$v/scene.json"
   check "cmp -s '$committed' '$dir/cv/$v/scene.json'"
@@ -96,7 +96,7 @@ if [ $HAVE_OIIO = 1 ]; then
   check "\"$PY\" -c 'import sys; sys.exit(not $d == 0)'"
 fi
 # the Python sampler agrees with the path's ends
-"$PY" "$CAM" sample "$SCENE" >"$dir/samples.jsonl"
+"${CAM[@]}" sample "$SCENE" >"$dir/samples.jsonl"
 check '[ "$(wc -l <"$dir/samples.jsonl")" = 100 ]'
 check 'grep -q "\"index\": 99, \"t\": 10.0, \"position\": \[278.0, 273.0, -800.0\]" "$dir/samples.jsonl"'
 mkdir -p "$dir/fr"
@@ -109,8 +109,8 @@ check '[ $rc = 2 ]'
 rc=0; "$HOST" --quiet --camera-index 100 "$SCENE" 2>/dev/null || rc=$?
 check '[ $rc = 2 ]'
 # camera_path.py auto + merge on a scene without a path: a 5-key path host renders along
-"$PY" "$CAM" auto "$CBOX" >"$dir/frag.json"
-"$PY" "$CAM" merge "$CBOX" "$dir/frag.json" "$dir/merged/scene.json"
+"${CAM[@]}" auto "$CBOX" >"$dir/frag.json"
+"${CAM[@]}" merge "$CBOX" "$dir/frag.json" "$dir/merged/scene.json"
 check "grep -q '\"path_keys\": 5}' <<<\"\$(\"$INFO\" \"$dir/merged/scene.json\")\""
 render merged "$dir/merged/scene.json" --camera-index 30
 

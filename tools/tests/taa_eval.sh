@@ -14,23 +14,22 @@ if ! "$PY" -c 'import numpy, scipy, OpenImageIO' 2>/dev/null; then
   exit 77
 fi
 HOST="$TT_BUILD_ROOT/host/host"
-TOOLS="$TT_SOURCE_ROOT/tools/taa"
 SCENE="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
 dir=$(mktemp -d /tmp/tt_taa_evalXXXXXX)
 trap 'rm -rf "$dir"' EXIT
 fail=0
 check() { if ! eval "$1"; then echo "FAIL: $1"; fail=1; fi; }
 
-"$PY" "$TOOLS/flip.py" --selftest || { echo "FAIL: flip.py --selftest"; fail=1; }
+"$PY" -m tools.taa.flip --selftest || { echo "FAIL: flip.py --selftest"; fail=1; }
 
 common=(--quiet --threads 2 --res 48x36 --spp 2 --frames 0:11 --set integrator_pt.maxDepth=1)
 "$HOST" "${common[@]}" --out "$dir/ref/frame_%04d.exr" --supersample 2 "$SCENE"
 "$HOST" "${common[@]}" --out "$dir/raw/frame_%04d.exr" "$SCENE"
 "$HOST" "${common[@]}" --out "$dir/vc/frame_%04d.exr" --plugin post_taa \
   --set post_taa.mode=vctaa "$SCENE"
-"$PY" "$TOOLS/eval.py" --ref "$dir/ref" --test "$dir/ref" --key reference --skip 4 \
+"$PY" -m tools.taa.eval --ref "$dir/ref" --test "$dir/ref" --key reference --skip 4 \
   --json "$dir/self.json"
-"$PY" "$TOOLS/eval.py" --ref "$dir/ref" --test "$dir/raw" --test "$dir/vc" --skip 4 \
+"$PY" -m tools.taa.eval --ref "$dir/ref" --test "$dir/raw" --test "$dir/vc" --skip 4 \
   --json "$dir/eval.json" | tee "$dir/eval.txt"
 check "grep -q 'raw:color .*RMSE .*temporal .*FLIP' '$dir/eval.txt'"
 check "grep -q 'vc:post (post_taa) .*FLIP' '$dir/eval.txt'"
@@ -38,7 +37,7 @@ check "grep -q 'vc:post (post_taa) .*FLIP' '$dir/eval.txt'"
 check "grep -q 'vc:color .*RMSE .*temporal .*FLIP' '$dir/eval.txt'"
 check "[ \$(grep -c RMSE '$dir/eval.txt') = 3 ]"
 # --help says what every option does
-"$PY" "$TOOLS/eval.py" --help > "$dir/help.txt"
+"$PY" -m tools.taa.eval --help > "$dir/help.txt"
 "$PY" - "$dir/help.txt" <<'PYEOF' || fail=1
 import re, sys
 text = open(sys.argv[1]).read()
@@ -67,11 +66,11 @@ sys.exit(0 if ok else 1)
 PYEOF
 
 # bad input: a folder without manifest, a key the manifest lacks
-if out=$("$PY" "$TOOLS/eval.py" --ref "$dir/nothing" --test "$dir/raw" 2>&1); then
+if out=$("$PY" -m tools.taa.eval --ref "$dir/nothing" --test "$dir/raw" 2>&1); then
   echo "FAIL: eval.py accepted a missing reference folder"; fail=1
 fi
 check "grep -q 'nothing/manifest.json' <<<\"\$out\""
-if out=$("$PY" "$TOOLS/eval.py" --ref "$dir/raw" --test "$dir/vc" 2>&1); then
+if out=$("$PY" -m tools.taa.eval --ref "$dir/raw" --test "$dir/vc" 2>&1); then
   echo "FAIL: eval.py accepted a reference folder without reference frames"; fail=1
 fi
 check "grep -q 'no \"reference\" file' <<<\"\$out\""

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """tools/taa's torch-free halves of the network (run with torch blocked, as every test):
 - ttw.py: the shipped weights decode and re-encode byte-identically; a network with 0 hidden
   channels and 8 jitter sets in every layer, and one with the rejection input + reset flags
@@ -14,11 +13,9 @@ import sys
 
 import numpy as np
 
+from tools.taa import blend_weights, rejection, ttw
+
 root = os.environ.get("TT_SOURCE_ROOT", ".")
-sys.path.insert(0, os.path.join(root, "tools", "taa"))
-import blend_weights  # noqa: E402
-import rejection  # noqa: E402
-import ttw  # noqa: E402
 
 failures = 0
 

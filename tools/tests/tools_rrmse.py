@@ -1,5 +1,4 @@
-#!/usr/bin/python3
-"""tools/common/images.py and the C library agree on tunetrace's one rRMSE: images.rrmse
+"""tools.common.images and the C library agree on tunetrace's one rRMSE: images.rrmse
 and images.luminance against tt_rrmse / tt_luminance of libtunetrace (ctypes), on random
 images with dark and bright pixels, plus a value known in closed form."""
 import ctypes
@@ -8,8 +7,7 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.environ.get("TT_SOURCE_ROOT", "."), "tools", "common"))
-import images  # noqa: E402
+from tools.common import images
 
 
 def main():

@@ -10,7 +10,7 @@ if ! "$PY" -c 'import matplotlib, numpy, scipy' 2>/dev/null; then
   exit 77
 fi
 HOST="$TT_BUILD_ROOT/host/host"
-TOOL="$TT_SOURCE_ROOT/tools/tuning/analyze.py"
+TOOL=(-m tools.tuning.analyze)
 SCENE="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
 dir=$(mktemp -d /tmp/tt_tune_analyzeXXXXXX)
 trap 'rm -rf "$dir"' EXIT
@@ -27,26 +27,26 @@ for mode in render build+render; do
     --stats "$dir/$mode.json" "$SCENE"
 done
 
-"$PY" "$TOOL" correlation --db "$dir/e.db" -o "$dir/corr.png" --table "$dir/corr.csv" | tee "$dir/corr.txt"
-"$PY" "$TOOL" correlation --db "$dir/e.db" --method pearson --table "$dir/pearson.csv" >/dev/null
-"$PY" "$TOOL" leafsize --db "$dir/e.db" -o "$dir/leaf.png"
-"$PY" "$TOOL" costs --db "$dir/e.db" --metric total -o "$dir/costs.png"
-"$PY" "$TOOL" blocksize --db "$dir/e.db" -o "$dir/block.png"
-"$PY" "$TOOL" convergence "$dir/render.json" "$dir/build+render.json" -o "$dir/conv.png" | tee "$dir/conv.txt"
+"$PY" "${TOOL[@]}" correlation --db "$dir/e.db" -o "$dir/corr.png" --table "$dir/corr.csv" | tee "$dir/corr.txt"
+"$PY" "${TOOL[@]}" correlation --db "$dir/e.db" --method pearson --table "$dir/pearson.csv" >/dev/null
+"$PY" "${TOOL[@]}" leafsize --db "$dir/e.db" -o "$dir/leaf.png"
+"$PY" "${TOOL[@]}" costs --db "$dir/e.db" --metric total -o "$dir/costs.png"
+"$PY" "${TOOL[@]}" blocksize --db "$dir/e.db" -o "$dir/block.png"
+"$PY" "${TOOL[@]}" convergence "$dir/render.json" "$dir/build+render.json" -o "$dir/conv.png" | tee "$dir/conv.txt"
 # convergence from the database too (#17 defect 17): one line per run, each labelled with
 # what it was tuned for
-"$PY" "$TOOL" convergence --db "$dir/t.db" -o "$dir/convdb.png" | tee "$dir/convdb.txt"
+"$PY" "${TOOL[@]}" convergence --db "$dir/t.db" -o "$dir/convdb.png" | tee "$dir/convdb.txt"
 for png in corr leaf costs block conv convdb; do check "is_png '$dir/$png.png'"; done
 for f in conv convdb; do
   check "grep -q 'tuner_random, tuned for render' '$dir/$f.txt'"
   check "grep -q 'tuner_random, tuned for build+render' '$dir/$f.txt'"
   check "[ \"\$(grep -c 'tuned for' '$dir/$f.txt')\" = 2 ]"
 done
-check '! "$PY" "$TOOL" convergence --db "$dir/t.db" "$dir/render.json" -o "$dir/x.png" 2>"$dir/err"'
+check '! "$PY" "${TOOL[@]}" convergence --db "$dir/t.db" "$dir/render.json" -o "$dir/x.png" 2>"$dir/err"'
 check 'grep -q "not both" "$dir/err"'
-check '! "$PY" "$TOOL" convergence --db "$dir/e.db" --mode tune -o "$dir/x.png" 2>"$dir/err"'
+check '! "$PY" "${TOOL[@]}" convergence --db "$dir/e.db" --mode tune -o "$dir/x.png" 2>"$dir/err"'
 check 'grep -q "no rows match" "$dir/err"'
-check '"$PY" "$TOOL" --help | grep -q "Input, for every subcommand"'
+check '"$PY" "${TOOL[@]}" --help | grep -q "Input, for every subcommand"'
 
 
 # the table: the accel's parameters + render_ms, build_ms, total_ms; r and p for each
@@ -83,9 +83,9 @@ check 'grep -q "over 13 rows" "$dir/corr.txt"'
 check 'grep -q "verify render ratio" "$dir/conv.txt"'
 
 # bad input: a message, not a traceback
-check '! "$PY" "$TOOL" leafsize --db "$dir/nope.db" -o "$dir/x.png" 2>"$dir/err"'
+check '! "$PY" "${TOOL[@]}" leafsize --db "$dir/nope.db" -o "$dir/x.png" 2>"$dir/err"'
 check 'grep -q "no such database" "$dir/err"'
-check '! "$PY" "$TOOL" blocksize --db "$dir/e.db" --plugin integrator_pt -o "$dir/x.png" 2>"$dir/err"'
+check '! "$PY" "${TOOL[@]}" blocksize --db "$dir/e.db" --plugin integrator_pt -o "$dir/x.png" 2>"$dir/err"'
 check 'grep -q "no rows match" "$dir/err"'
 check '! grep -q Traceback "$dir/err"'
 

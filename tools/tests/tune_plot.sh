@@ -9,7 +9,7 @@ if ! "$PY" -c 'import matplotlib' 2>/dev/null; then
   exit 77
 fi
 HOST="$TT_BUILD_ROOT/host/host"
-TOOL="$TT_SOURCE_ROOT/tools/tuning/convergence.py"
+TOOL=(-m tools.tuning.convergence)
 SCENE="$TT_SOURCE_ROOT/scenes/cornell-box/scene.json"
 dir=$(mktemp -d /tmp/tt_tune_plotXXXXXX)
 trap 'rm -rf "$dir"' EXIT
@@ -22,7 +22,7 @@ for obj in render build+render; do
     --stats "$dir/$obj.json" "$SCENE"
 done
 
-summary=$("$PY" "$TOOL" "$dir/render.json" "$dir/build+render.json" --summary -o "$dir/c.png")
+summary=$("$PY" "${TOOL[@]}" "$dir/render.json" "$dir/build+render.json" --summary -o "$dir/c.png")
 echo "$summary"
 check '[ "$(grep -c "iterations 6, cached 0" <<<"$summary")" = 2 ]'
 check 'grep -q "^accel_embree / render:" <<<"$summary"'
@@ -32,12 +32,12 @@ check '! grep -q "gain -" <<<"$summary"'
 check '[ "$(head -c 8 "$dir/c.png" | od -An -tx1 | tr -d " \n")" = "89504e470d0a1a0a" ]'
 check '[ "$(stat -c %s "$dir/c.png")" -gt 10000 ]'
 
-dbsum=$("$PY" "$TOOL" --db "$dir/t.db" --last 2 --summary -o "$dir/d.png")
+dbsum=$("$PY" "${TOOL[@]}" --db "$dir/t.db" --last 2 --summary -o "$dir/d.png")
 echo "$dbsum"
 check '[ "$(grep -c "iterations 6" <<<"$dbsum")" = 2 ]'
 check '[ -s "$dir/d.png" ]'
 # bad input is refused with a message, not a traceback
-check '! "$PY" "$TOOL" "$SCENE" --summary 2>"$dir/err"'
+check '! "$PY" "${TOOL[@]}" "$SCENE" --summary 2>"$dir/err"'
 check 'grep -q "no \"tuning\" object" "$dir/err"'
 
 [ "$fail" = 0 ] && echo "tune_plot: ok"

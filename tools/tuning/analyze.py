@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Parameter analysis of tuning-database rows (thesis 3.2, Figs. 3.3, 3.5, 3.6, 3.8, 3.10-3.12).
 
 Input, for every subcommand: a tuning database (--db, the SQLite file host writes) or a CSV
@@ -7,13 +6,14 @@ one column per parameter plus build_ms/render_ms). Rows can be filtered by plugi
 scene, run and parameter values; only status-ok rows are used. convergence also reads host
 --stats files (then one line per file).
 
-  analyze.py correlation --db t.db --mode explore -o corr.png --table corr.csv   # Fig. 3.5
-  analyze.py leafsize    --db t.db --where quality=1 -o leaf.png                 # Fig. 3.6
-  analyze.py leafsize    --db t.db --mode tune -o leaf_tuned.png                 # Fig. 3.10
-  analyze.py costs       --db t.db --mode tune --metric total -o costs.png       # Figs. 3.11/3.12
-  analyze.py blocksize   --db t.db -o block.png                                  # Fig. 3.8
-  analyze.py convergence render.json total.json -o conv.png                      # Fig. 3.3
-  analyze.py convergence --db t.db --scene cornell -o conv.png                   # every run
+  A="/usr/bin/python3 -m tools.tuning.analyze"   # from the repository root
+  $A correlation --db t.db --mode explore -o corr.png --table corr.csv           # Fig. 3.5
+  $A leafsize    --db t.db --where quality=1 -o leaf.png                         # Fig. 3.6
+  $A leafsize    --db t.db --mode tune -o leaf_tuned.png                         # Fig. 3.10
+  $A costs       --db t.db --mode tune --metric total -o costs.png               # Figs. 3.11/3.12
+  $A blocksize   --db t.db -o block.png                                          # Fig. 3.8
+  $A convergence render.json total.json -o conv.png                              # Fig. 3.3
+  $A convergence --db t.db --scene cornell -o conv.png                           # every run
 
 Gathering the data: `host --explore N --objective build+render --set accel_embree.backend=custom
 --db t.db scene.json` draws N random configurations (correlation, leaf size, block size

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Tuning convergence plot (thesis Fig. 3.3): cost per iteration against the default.
 
 Reads the `tuning` object of host --stats files, or the rows of one tuning run from the
@@ -6,9 +5,10 @@ tuning database, and draws for each run the measured cost of every iteration (ho
 markers: answered from the database), the best cost so far, and the default
 configuration's cost as a horizontal line.
 
-  convergence.py run_render.json run_total.json -o convergence.png
-  convergence.py --db ~/.local/share/tunetrace/tuning.db --last 2 -o convergence.png
-  convergence.py run.json --summary          # text only, no matplotlib needed
+  C="/usr/bin/python3 -m tools.tuning.convergence"   # from the repository root
+  $C run_render.json run_total.json -o convergence.png
+  $C --db ~/.local/share/tunetrace/tuning.db --last 2 -o convergence.png
+  $C run.json --summary                      # text only, no matplotlib needed
 """
 import argparse
 import json

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Spatial splits vs. a rotating thin cylinder (issue 6, thesis Fig. 3.13).
 
 A long thin cylinder (tools/scenes/generate.py cylinder) is inserted into a scene at K angles
@@ -10,22 +9,22 @@ default; --backends native,custom adds our own BVH builder). Runs are interleave
 the mean and a two-sided t-distribution confidence band (default 99.99 %) of build ms and
 render ms vs. theta, split vs. no split, one column per backend.
 
-  tools/tuning/cylinder_sweep.py --scene scenes/cornell-box/scene.json --angles 12 --reps 5 \\
-      --res 128x128 --backends native,custom --work /tmp/cyl_cornell \\
+  /usr/bin/python3 -m tools.tuning.cylinder_sweep --scene scenes/cornell-box/scene.json \\
+      --angles 12 --reps 5 --res 128x128 --backends native,custom --work /tmp/cyl_cornell \\
       --fig tools/tuning/figures/cylinder_cornell-box.png
-  tools/tuning/cylinder_sweep.py --summarize /tmp/cyl_cornell --fig ...   # re-plot only
+  /usr/bin/python3 -m tools.tuning.cylinder_sweep --summarize /tmp/cyl_cornell --fig ...  # re-plot
 """
-import argparse
 import csv
 import json
 import math
 import os
 import statistics
-import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
+from tools.scenes import generate
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 QUAL = {2: "no split (quality=2)", 3: "spatial splits (quality=3)"}
 
 
@@ -51,9 +50,8 @@ def run(a):
     for th in thetas:
         out = os.path.join(a.work, "theta_%06.2f.json" % th)
         if not os.path.exists(out):
-            cmd = [sys.executable, os.path.join(ROOT, "tools/scenes/generate.py"), "cylinder",
-                   a.scene, out, "--theta", repr(th)] + (["--radius", str(a.radius)] if a.radius else [])
-            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+            generate.main(["cylinder", a.scene, out, "--theta", repr(th)] +
+                          (["--radius", str(a.radius)] if a.radius else []))
         scenes[th] = out
     rows = []
     csv_path = os.path.join(a.work, "runs.csv")
@@ -64,18 +62,12 @@ def run(a):
             for th in thetas:
                 for be in a.backends:
                     for q in (2, 3):
-                        stats = os.path.join(a.work, "stats.json")
-                        cmd = [a.host, "--quiet", "--no-db", "--spp", "1", "--res", a.res,
-                               "--threads", str(a.threads), "--stats", stats,
-                               "--out", os.path.join(a.work, "img.exr"),
-                               "--set", "accel_embree.quality=%d" % q,
-                               "--set", "accel_embree.backend=%s" % be, scenes[th]]
-                        r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                           text=True)
-                        if r.returncode != 0:
-                            sys.exit("host failed (%d): %s\n%s" % (r.returncode, " ".join(cmd), r.stderr))
-                        with open(stats) as sf:
-                            s = json.load(sf)
+                        s = host.run(a.host, ["--quiet", "--no-db", "--spp", "1", "--res", a.res,
+                                              "--threads", str(a.threads),
+                                              "--out", os.path.join(a.work, "img.exr"),
+                                              "--set", "accel_embree.quality=%d" % q,
+                                              "--set", "accel_embree.backend=%s" % be, scenes[th]],
+                                     stats=True, capture=True).stats
                         row = [be, q, th, rep, s["build_ms"], s["render_ms"]]
                         w.writerow(row)
                         rows.append(row)
@@ -172,9 +164,8 @@ def summarize(work, fig, conf, title):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = cli.parser(__doc__)
     p.add_argument("--scene", default=os.path.join(ROOT, "scenes/cornell-box/scene.json"))
-    p.add_argument("--host", default=os.path.join(ROOT, "build/host/host"))
     p.add_argument("--angles", type=int, default=12, help="K angles over 0..180 (180 excluded)")
     p.add_argument("--include-180", action="store_true", help="space K angles over 0..180 inclusive")
     p.add_argument("--reps", type=int, default=5)
@@ -191,6 +182,7 @@ def main():
     if a.summarize:
         summarize(a.summarize, a.fig, a.conf, a.title)
         return
+    a.host = host.find(a.host)
     a.backends = a.backends.split(",")
     a.scene = os.path.abspath(a.scene)
     summarize(run(a), a.fig, a.conf, a.title)

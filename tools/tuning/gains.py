@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Tuning gains over the default configuration, measured side by side (issue 6 results).
 
 For every scene x objective x seed this runs one tuning run of the host with --verify N
@@ -15,23 +14,21 @@ and the spread (min..max) over seeds. --figures DIR writes one convergence chart
 (thesis Fig. 3.3 style: best cost so far per seed, default dashed, one panel per objective). Nothing in the database is reused: every run gets its
 own database file, so each run measures its own default.
 
-  gains.py --host build/host/host --scene scenes/cornell-box/scene.json \\
+  G="/usr/bin/python3 -m tools.tuning.gains"         # from the repository root
+  $G --scene scenes/cornell-box/scene.json \\
       --scene ../shared/scenes/living-room/living-room.pbrt --seeds 5 --iterations 40 \\
       --res 128x128 --verify 7 --out-dir /tmp/gains
-  gains.py --summarize /tmp/gains          # tables again from the stats files
-  gains.py --summarize /tmp/gains --figures tools/tuning/figures --figure-prefix conv120_
+  $G --summarize /tmp/gains          # tables again from the stats files
+  $G --summarize /tmp/gains --figures tools/tuning/figures --figure-prefix conv120_
 """
-import argparse
 import glob
 import json
 import os
 import statistics
-import subprocess
 import sys
-import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from convergence import converged_at, plot_scene  # noqa: E402
+from tools.tttools import cli, host
+from tools.tuning.convergence import converged_at, plot_scene
 
 
 def scene_name(path):
@@ -44,20 +41,19 @@ def run_one(a, scene, objective, seed, extra, tag):
     stats = os.path.join(a.out_dir, name + ".json")
     if os.path.exists(stats) and not a.force:
         return stats
-    cmd = [a.host, "--quiet", "--plugin", a.tuner, "--tune", "accel_embree", "--objective",
-           objective, "--iterations", str(a.iterations), "--verify", str(a.verify),
-           "--tune-spp", str(a.tune_spp), "--spp", "1", "--res", a.res, "--threads",
-           str(a.threads), "--seed", str(seed), "--db", os.path.join(a.out_dir, name + ".db"),
-           "--out", os.path.join(a.out_dir, name + ".exr"), "--stats", stats, "--clock", a.clock]
+    args = ["--quiet", "--plugin", a.tuner, "--tune", "accel_embree", "--objective",
+            objective, "--iterations", str(a.iterations), "--verify", str(a.verify),
+            "--tune-spp", str(a.tune_spp), "--spp", "1", "--res", a.res, "--threads",
+            str(a.threads), "--seed", str(seed), "--db", os.path.join(a.out_dir, name + ".db"),
+            "--out", os.path.join(a.out_dir, name + ".exr"), "--clock", a.clock]
     if a.tune_params:
-        cmd += ["--tune-params", a.tune_params]
-    cmd += extra + [scene]
-    t0 = time.time()
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if r.returncode != 0:
-        sys.stderr.write(f"gains: {' '.join(cmd)}\nexit {r.returncode}\n{r.stdout[-3000:]}\n")
+        args += ["--tune-params", a.tune_params]
+    try:
+        r = host.run(a.host, args + extra + [scene], stats=stats, capture=True)
+    except host.HostError as e:
+        print(f"gains: {e}", file=sys.stderr)
         return None
-    print(f"  {name}: {time.time() - t0:.1f} s", flush=True)
+    print(f"  {name}: {r.wall_s:.1f} s", flush=True)
     return stats
 
 
@@ -133,10 +129,7 @@ def figures(groups, out_dir, prefix):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter,
-                                 epilog="\n".join(__doc__.splitlines()[1:]))
-    ap.add_argument("--host", default="build/host/host")
+    ap = cli.parser(__doc__)
     ap.add_argument("--scene", action="append", default=[])
     ap.add_argument("--objective", action="append", default=[],
                     help="render and/or build+render (default both)")
@@ -171,6 +164,7 @@ def main():
         return
     if not a.scene:
         ap.error("give at least one --scene")
+    a.host = host.find(a.host)
     os.makedirs(a.out_dir, exist_ok=True)
     extra = [x for s in a.set for x in ("--set", s)]
     paths = []

@@ -486,8 +486,7 @@ static tt_scene *voxel_world(const char *root) {
   snprintf(scene, sizeof scene, "%s/scene.json", dir);
   struct stat sb;
   if (stat(scene, &sb) != 0) {
-    snprintf(cmd, sizeof cmd, "/usr/bin/python3 '%s/tools/scenes/generate.py' voxel '%s' >/dev/null",
-             root, dir);
+    snprintf(cmd, sizeof cmd, "'%s/tools/run' scenes.generate voxel '%s' >/dev/null", root, dir);
     printf("note: generating the voxel world into %s\n", dir);
     fflush(stdout);
     if (system(cmd) != 0) {

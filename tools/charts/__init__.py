@@ -1,0 +1,1 @@
+"""Charts of rendering error against time."""

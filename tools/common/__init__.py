@@ -1,0 +1,1 @@
+"""Image reading and the one rRMSE (images.py)."""

@@ -1,0 +1,1 @@
+"""Comparisons with Blender's Cycles (the reference renders run inside Blender)."""

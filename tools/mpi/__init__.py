@@ -1,0 +1,1 @@
+"""tunetrace-mpi: the merged database checked against its job list, parallel efficiency."""

@@ -1,0 +1,1 @@
+"""The tests of the tools (tools/tests/meson.build runs them)."""
