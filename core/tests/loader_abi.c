@@ -354,6 +354,42 @@ static void test_duplicates(void) {
   CHECK(ds && dg && ds < dg);
 }
 
+/* Two registries that load one file share it: init once for the first, deinit once after
+ * the last, whichever is destroyed first; a registry with another host table is refused
+ * while the plugin is live (the plugin keeps the table init gave it). */
+static void test_shared_across_registries(void) {
+  const char *good = fixture("fixture_good");
+  for (int older_first = 0; older_first < 2; older_first++) {
+    g_log[0] = '\0';
+    tt_registry *a = tt_registry_create(&g_host), *b = tt_registry_create(&g_host);
+    CHECK_MSG(tt_registry_load(a, good, NULL) == TT_OK, "%s", tt_last_error());
+    CHECK_MSG(tt_registry_load(b, good, NULL) == TT_OK, "%s", tt_last_error());
+    CHECK_MSG(log_count("init fixture_good") == 1, "init ran %d times for two registries",
+              log_count("init fixture_good"));
+    tt_registry_destroy(older_first ? a : b);
+    CHECK_MSG(log_count("deinit fixture_good") == 0, "deinit ran while a registry holds it");
+    CHECK(is_mapped(good));
+    tt_registry *c = tt_registry_create(&g_host);  /* a third one meanwhile */
+    CHECK(tt_registry_load(c, good, NULL) == TT_OK);
+    tt_registry_destroy(c);
+    CHECK(log_count("init fixture_good") == 1 && log_count("deinit fixture_good") == 0);
+    tt_registry_destroy(older_first ? b : a);
+    CHECK_MSG(log_count("deinit fixture_good") == 1, "deinit ran %d times after the last",
+              log_count("deinit fixture_good"));
+    CHECK(!is_mapped(good));
+  }
+  tt_host other = g_host;
+  other.host_name = "another host";
+  tt_registry *a = tt_registry_create(&g_host), *b = tt_registry_create(&other);
+  CHECK(tt_registry_load(a, good, NULL) == TT_OK);
+  CHECK(tt_registry_load(b, good, NULL) == TT_ERR_ABI);
+  CHECK_CONTAINS(tt_last_error(), good);
+  CHECK_CONTAINS(tt_last_error(), "already initialised in this process for host \"loader_abi test\"");
+  tt_registry_destroy(a);
+  CHECK(tt_registry_load(b, good, NULL) == TT_OK);  /* once the first one is gone */
+  tt_registry_destroy(b);
+}
+
 /* Resolution by name through added dirs, TT_PLUGIN_PATH and the NAME/NAME.so layout. */
 static void test_resolution(const char *tmp) {
   char dir[512], want[1024], nested_dir[512], nested[1024], sub[600];
@@ -525,6 +561,7 @@ int main(int argc, char **argv) {
   test_bad_files(tmp);
   test_truncated(tmp);
   test_duplicates();
+  test_shared_across_registries();
   test_resolution(tmp);
   test_list_and_probe(tmp);
   cleanup(tmp);

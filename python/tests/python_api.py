@@ -233,6 +233,62 @@ def test_tuning(tmp):
         raises(lambda: s.tune("accel_embree", tuner="tuner_nm"), "tuner_nm", "not loaded")
 
 
+def test_sessions_side_by_side():
+    """Sessions never free each other: two alive and closed in either order, `s = Session()`
+    re-assigned in a loop after a tuning run, a session per thread (the library releases the
+    GIL-free C calls; each thread's error message is its own)."""
+    import threading
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    kw = dict(plugins=["accel_embree", "integrator_pt"], resolution=(16, 12), seed=7)
+    with tt.Session(box, **kw) as s:
+        ref = s.render(spp=2)
+    for older_first in (True, False):
+        a, b = tt.Session(box, **kw), tt.Session(box, **kw)
+        a.render(spp=1)
+        b.render(spp=1)
+        gone, kept = (a, b) if older_first else (b, a)
+        gone.close()
+        kept.reset()
+        check(np.array_equal(kept.render(spp=2), ref),
+              f"the other session renders on ({'older' if older_first else 'newer'} closed first)")
+        raises(lambda: kept.set("accel_embree.quality", 7), "accel_embree.quality",
+               "is not one of 1, 2, 3")
+        kept.close()
+    s = tt.Session(box, **kw)
+    for i in range(5):
+        s.tune("accel_embree", iterations=2)
+        s = tt.Session(box, **kw)  # the old session is freed after the new one exists
+        raises(lambda: s.set("accel_embree.quality", 7), "is not one of 1, 2, 3")
+        check(np.array_equal(s.render(spp=2), ref), f"re-assigned session {i} renders the same image")
+    s.close()
+
+    results = {}
+
+    def worker(k):
+        out = results.setdefault(k, [])
+        try:
+            for _ in range(2):
+                with tt.Session(box, **kw) as t:
+                    img = t.render(spp=2)
+                    try:
+                        t.set(f"integrator_pt.noSuchParam{k}", 1)
+                        msg = ""
+                    except tt.Error as e:
+                        msg = str(e)
+                    t.tune("accel_embree", iterations=2)
+                    out.append((np.array_equal(img, ref), f"noSuchParam{k}" in msg))
+        except Exception as e:  # reported below
+            out.append((False, repr(e)))
+    threads = [threading.Thread(target=worker, args=(k,)) for k in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for k, out in sorted(results.items()):
+        check(len(out) == 2 and all(a is True and b is True for a, b in out),
+              f"thread {k}: images equal a lone session's and its own error message ({out})")
+
+
 def test_example(tmp):
     script = os.path.join(SOURCE, "python/examples/render_and_tune.py")
     env = dict(os.environ, PYTHONPATH=os.path.join(BUILD, "python"))
@@ -249,7 +305,8 @@ def main():
         os.environ["XDG_DATA_HOME"] = tmp  # never the user's database
         for test in (lambda: test_layout(abi), lambda: test_errors(tmp), test_plugins,
                      lambda: test_host_equal(tmp), lambda: test_aovs(tmp),
-                     lambda: test_tuning(tmp), lambda: test_example(tmp)):
+                     lambda: test_tuning(tmp), test_sessions_side_by_side,
+                     lambda: test_example(tmp)):
             test()
     print(f"python_api: {checks} checks, {failures} failed")
     return 1 if failures else 0

@@ -71,7 +71,9 @@ typedef struct tt_host {
 
 /* The host table libtunetrace's default implementation provides (stderr logging, pthread
  * pool, no progress drawing). Used by tests and by applications that embed libtunetrace
- * without a UI. Valid for the life of the process. Thread-safe. */
+ * without a UI. Valid for the life of the process. Thread-safe; its parallel_for may also
+ * be called from several threads at once (one render session per thread): their jobs share
+ * the one pool and run one after another. */
 TT_API const tt_host *tt_default_host(void);
 
 /* Sets the worker count of tt_default_host's pool (0 = number of CPUs). Main thread only,

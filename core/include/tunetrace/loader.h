@@ -2,7 +2,8 @@
  *
  * A registry dlopen()s plugins with RTLD_NOW | RTLD_LOCAL, checks their entry table and
  * required interface, calls init() with the host services, and keeps them loaded until the
- * registry is destroyed. Plugins are named either by path (anything containing '/' or
+ * registry is destroyed. A plugin file is initialised once per process: registries that
+ * load the same file share it (init for the first, deinit after the last; plugin.h). Plugins are named either by path (anything containing '/' or
  * ending in ".so") or by name, searched as NAME.so in: directories added with
  * tt_registry_add_dir (in order), then $TT_PLUGIN_PATH (':'-separated), then the installed
  * plugin folder: tunetrace-1/ beside the libtunetrace file in use (so a relocated or
@@ -18,12 +19,14 @@
  *   - abi_major different from the host's;
  *   - unknown kind;
  *   - init() failed;
+ *   - the plugin is live in another registry with a different host table;
  *   - get_interface() does not serve the kind's interface, or the interface table is
  *     shorter than its ABI 1.0 size;
  *   - a second plugin of a kind that allows one (all kinds but post);
  *   - a second plugin with the same name.
  *
- * Threads: a registry is used from the main thread only.
+ * Threads: one registry is used by one thread at a time; different registries may load
+ * and unload plugins on different threads.
  */
 #ifndef TUNETRACE_LOADER_H
 #define TUNETRACE_LOADER_H
@@ -40,7 +43,8 @@ typedef struct tt_loaded_plugin tt_loaded_plugin;
 
 /* Creates an empty registry whose plugins receive `host` (which must outlive it). */
 TT_API tt_registry *tt_registry_create(const tt_host *host);
-/* Calls deinit() of every plugin in reverse load order, then unloads them. */
+/* Unloads every plugin in reverse load order, calling deinit() of each one no other
+ * registry holds. */
 TT_API void tt_registry_destroy(tt_registry *reg);
 /* Appends a directory to the search list. */
 TT_API tt_status tt_registry_add_dir(tt_registry *reg, const char *dir);

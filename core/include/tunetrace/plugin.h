@@ -23,7 +23,13 @@
  * - The file itself is checked before dlopen: an ELF shared object of the host's class
  *   whose segments all lie inside the file (a truncated copy is rejected, not mapped).
  *
- * Threads: init, deinit and get_interface run on the host's main thread.
+ * Lifetime: a plugin file is initialised once per process. Registries (render sessions) that
+ * load the same file share it: init runs when the first one loads it, deinit when the last
+ * one unloads it, so static state set up in init serves every session. One host table per
+ * plugin at a time: a registry with another host table is refused while the plugin is live.
+ *
+ * Threads: init and deinit run serialized (under the loader's lock, on the thread that loads
+ * or unloads); get_interface on the thread that loads the plugin.
  */
 #ifndef TUNETRACE_PLUGIN_H
 #define TUNETRACE_PLUGIN_H
@@ -66,13 +72,14 @@ typedef struct tt_plugin {
   const char *version;      /* the plugin's own semantic version, e.g. "1.2.0" */
   const char *description;  /* one line for --list-plugins */
 
-  /* Called once after loading, before anything else. `host` stays valid until deinit
+  /* Called once after the file is loaded by its first registry, before anything else
+   * (see Lifetime above). `host` stays valid until deinit
    * returns; keep the pointer. Return TT_OK, or an error (with tt_set_error) to refuse
    * loading, e.g. when a required host field or CPU feature is missing. May be NULL. */
   tt_status (*init)(const tt_host *host);
 
-  /* Called once before unloading; every object the plugin created has been destroyed.
-   * May be NULL. */
+  /* Called once before the last registry holding the file unloads it; every object the
+   * plugin created has been destroyed. May be NULL. */
   void (*deinit)(void);
 
   /* Returns the interface table for a versioned id, or NULL if the plugin does not serve

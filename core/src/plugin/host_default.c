@@ -118,6 +118,14 @@ typedef struct tt__pool {
 
 static tt__pool tt__the_pool;
 static int tt__pool_started;
+/* Held for a whole job: render sessions on several threads (a session per thread, as an
+ * application or Python may use them) share the one pool, and their jobs run one after
+ * another instead of overwriting each other's job description. */
+static pthread_mutex_t tt__job_lock = PTHREAD_MUTEX_INITIALIZER;
+/* thread_index + 1 on a thread that is running chunks of a job, else 0: a parallel_for
+ * called from inside fn runs inline on that thread instead of waiting for the job it is
+ * part of. */
+static _Thread_local int tt__in_job;
 static uint32_t tt__thread_setting;  /* 0 = number of CPUs */
 
 /* Claims and runs chunks until the job is exhausted or a stop is requested. */
@@ -131,7 +139,9 @@ static void tt__pool_run_chunks(tt__pool *pool, uint32_t thread_index) {
     if (begin >= pool->count) return;
     uint64_t end = begin + pool->grain;
     if (end > pool->count) end = pool->count;
+    tt__in_job = (int)thread_index + 1;
     pool->fn(pool->ctx, begin, end, thread_index);
+    tt__in_job = 0;
   }
 }
 
@@ -221,13 +231,27 @@ static tt_status tt__pool_start(void) {
 
 static void tt__pool_atexit(void) { tt__pool_stop(); }
 
+/* A parallel_for called from inside a job's fn: the whole range on the calling thread. */
+static tt_status tt__run_inline(uint64_t count, tt_parallel_fn fn, void *ctx) {
+  if (tt__stop_now()) return TT_ERR_INTERRUPTED;
+  int outer = tt__in_job;
+  fn(ctx, 0, count, (uint32_t)(outer - 1));
+  tt__in_job = outer;
+  return TT_OK;
+}
+
 static tt_status tt__default_parallel_for(uint64_t count, uint64_t grain, tt_parallel_fn fn,
                                           void *ctx) {
   if (!fn) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "parallel_for: no function");
   if (count == 0) return tt__stop_now() ? TT_ERR_INTERRUPTED : TT_OK;
+  if (tt__in_job) return tt__run_inline(count, fn, ctx);
+  pthread_mutex_lock(&tt__job_lock);
   if (!tt__pool_started) {
     tt_status st = tt__pool_start();
-    if (st != TT_OK) return st;
+    if (st != TT_OK) {
+      pthread_mutex_unlock(&tt__job_lock);
+      return st;
+    }
     static int registered;
     if (!registered) {
       atexit(tt__pool_atexit);
@@ -258,13 +282,17 @@ static tt_status tt__default_parallel_for(uint64_t count, uint64_t grain, tt_par
   pthread_mutex_lock(&pool->lock);
   while (pool->busy > 0) pthread_cond_wait(&pool->done, &pool->lock);
   pthread_mutex_unlock(&pool->lock);
-  return atomic_load(&pool->interrupted) ? TT_ERR_INTERRUPTED : TT_OK;
+  tt_status st = atomic_load(&pool->interrupted) ? TT_ERR_INTERRUPTED : TT_OK;
+  pthread_mutex_unlock(&tt__job_lock);
+  return st;
 }
 
 tt_status tt_default_host_set_threads(uint32_t threads) {
   if (threads > 1024) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "threads: at most 1024, got %u", threads);
+  pthread_mutex_lock(&tt__job_lock);  /* not in the middle of another thread's job */
   tt__pool_stop();
   tt__thread_setting = threads;
+  pthread_mutex_unlock(&tt__job_lock);
   return TT_OK;
 }
 

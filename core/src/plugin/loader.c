@@ -17,6 +17,7 @@
 #include <dirent.h>
 #include <dlfcn.h>
 #include <errno.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -269,11 +270,86 @@ tt_registry *tt_registry_create(const tt_host *host) {
   return reg;
 }
 
-/* Unloads one plugin: deinit first so it can release what it owns while its code is
- * still mapped. */
-static void tt__unload(tt_loaded_plugin *p, int call_deinit) {
+/* ---- plugins live once per process ----
+ * dlopen of a file that is already loaded returns the same handle, so two registries (two
+ * render sessions, two Python tt.Session objects) that load one plugin share its static
+ * state: its space, its device, the host it keeps. init therefore runs when the first
+ * registry loads the plugin and deinit when the last one unloads it; a plugin serves one
+ * host table at a time. Before, each registry ran init and deinit on its own, so closing one
+ * session freed the state the others still used (accel_embree: "build before init", freed
+ * parameter names in error messages, a crash after tuning). One lock serializes init,
+ * deinit and the counts: sessions may be created and closed on any thread. */
+typedef struct tt__live {
+  void *handle;              /* the dlopen handle the registries share */
+  const tt_host *host;       /* the table init received */
+  unsigned refs;             /* registries holding the plugin */
+  struct tt__live *next;
+} tt__live;
+
+static pthread_mutex_t tt__live_lock = PTHREAD_MUTEX_INITIALIZER;
+static tt__live *tt__live_list;
+
+/* Registers one more user of the plugin behind `h`: the first one runs init with `host`.
+ * Sets the error (naming `path`) and returns it when init fails, when out of memory, or
+ * when the plugin already serves another host table. */
+static tt_status tt__acquire(void *h, const tt_plugin *e, const tt_host *host, const char *path) {
+  pthread_mutex_lock(&tt__live_lock);
+  tt__live *l = tt__live_list;
+  while (l && l->handle != h) l = l->next;
+  tt_status st = TT_OK;
+  if (l && l->host != host) {
+    st = tt_set_error(TT_ERR_ABI, "plugin %s: already initialised in this process for host "
+                      "\"%s\"; a plugin serves one host table at a time (load it with the same "
+                      "tt_host, or destroy the other registries first)", path,
+                      l->host && l->host->host_name ? l->host->host_name : "?");
+  } else if (l) {
+    l->refs++;
+  } else if (!(l = calloc(1, sizeof *l))) {
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory loading plugin %s", path);
+  } else {
+    tt_status ist = TT_OK;
+    if (e->init) {
+      tt_clear_error();
+      ist = e->init(host);
+    }
+    if (ist != TT_OK) {
+      /* Copy the plugin's message first: tt_set_error formats into the same buffer. */
+      char why[1024];
+      const char *le = tt_last_error();
+      snprintf(why, sizeof why, "%s", *le ? le : tt_status_string(ist));
+      st = tt_set_error(ist < 0 ? ist : TT_ERR_ABI, "plugin %s: init failed: %s", path, why);
+      free(l);
+    } else {
+      l->handle = h;
+      l->host = host;
+      l->refs = 1;
+      l->next = tt__live_list;
+      tt__live_list = l;
+    }
+  }
+  pthread_mutex_unlock(&tt__live_lock);
+  return st;
+}
+
+/* Drops one user of the plugin behind `h`: the last one runs deinit. */
+static void tt__release(void *h, const tt_plugin *e) {
+  pthread_mutex_lock(&tt__live_lock);
+  tt__live **pl = &tt__live_list;
+  while (*pl && (*pl)->handle != h) pl = &(*pl)->next;
+  tt__live *l = *pl;
+  if (l && --l->refs == 0) {
+    *pl = l->next;
+    free(l);
+    if (e->deinit) e->deinit();
+  }
+  pthread_mutex_unlock(&tt__live_lock);
+}
+
+/* Unloads one plugin: deinit (when no other registry holds it) first, so it can release
+ * what it owns while its code is still mapped. */
+static void tt__unload(tt_loaded_plugin *p) {
   if (!p) return;
-  if (call_deinit && p->entry && p->entry->deinit) p->entry->deinit();
+  if (p->entry) tt__release(p->handle, p->entry);
   if (p->handle) dlclose(p->handle);
   free(p->path);
   free(p);
@@ -281,7 +357,7 @@ static void tt__unload(tt_loaded_plugin *p, int call_deinit) {
 
 void tt_registry_destroy(tt_registry *reg) {
   if (!reg) return;
-  for (size_t i = reg->count; i-- > 0;) tt__unload(reg->plugins[i], 1);
+  for (size_t i = reg->count; i-- > 0;) tt__unload(reg->plugins[i]);
   free(reg->plugins);
   tt__strlist_free(&reg->dirs);
   free(reg->search_path);
@@ -467,19 +543,11 @@ tt_status tt_registry_load(tt_registry *reg, const char *name_or_path, tt_loaded
     return st;
   }
 
-  if (e->init) {
-    tt_clear_error();
-    tt_status ist = e->init(reg->host);
-    if (ist != TT_OK) {
-      /* Copy the plugin's message first: tt_set_error formats into the same buffer. */
-      char why[1024];
-      const char *le = tt_last_error();
-      snprintf(why, sizeof why, "%s", *le ? le : tt_status_string(ist));
-      dlclose(h);
-      st = tt_set_error(ist < 0 ? ist : TT_ERR_ABI, "plugin %s: init failed: %s", path, why);
-      free(path);
-      return st;
-    }
+  st = tt__acquire(h, e, reg->host, path);
+  if (st != TT_OK) {
+    dlclose(h);
+    free(path);
+    return st;
   }
 
   const char *id = tt_plugin_kind_interface(e->kind);
@@ -517,7 +585,7 @@ tt_status tt_registry_load(tt_registry *reg, const char *name_or_path, tt_loaded
   if (st == TT_OK && !(p = calloc(1, sizeof *p)))
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory loading plugin %s", path);
   if (st != TT_OK) {
-    if (e->deinit) e->deinit();
+    tt__release(h, e);
     dlclose(h);
     free(path);
     return st;
