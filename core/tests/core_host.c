@@ -32,8 +32,43 @@ static void count_calls(void *ctx, uint64_t begin, uint64_t end, uint32_t t) {
   atomic_fetch_add((atomic_long *)ctx, (long)(end - begin));
 }
 
+/* tt_default_host_set_log_callback: what the callback received last. */
+static struct {
+  int calls;
+  tt_log_level level;
+  char plugin[64], message[256];
+} g_logged;
+static void on_log(void *user, tt_log_level level, const char *plugin, const char *message) {
+  (void)user;
+  g_logged.calls++;
+  g_logged.level = level;
+  snprintf(g_logged.plugin, sizeof g_logged.plugin, "%s", plugin ? plugin : "(null)");
+  snprintf(g_logged.message, sizeof g_logged.message, "%s", message);
+}
+
+/* The log callback gets finished messages with their level and plugin, after the level
+ * filter; NULL restores stderr. */
+static void test_log_callback(const tt_host *host) {
+  int marker;
+  tt_default_host_set_log_callback(on_log, &marker);
+  host->log(TT_LOG_WARN, "accel_embree", "%d of %s", 3, "four");
+  CHECK(g_logged.calls == 1 && g_logged.level == TT_LOG_WARN);
+  CHECK(!strcmp(g_logged.plugin, "accel_embree") && !strcmp(g_logged.message, "3 of four"));
+  host->log(TT_LOG_DEBUG, NULL, "dropped below the level");
+  CHECK(g_logged.calls == 1);
+  tt_default_host_set_log_level(TT_LOG_DEBUG);
+  host->log(TT_LOG_DEBUG, NULL, "kept");
+  CHECK(g_logged.calls == 2 && !strcmp(g_logged.plugin, "(null)") &&
+        !strcmp(g_logged.message, "kept") && g_logged.level == TT_LOG_DEBUG);
+  tt_default_host_set_log_level(TT_LOG_INFO);
+  tt_default_host_set_log_callback(NULL, NULL);
+  host->log(TT_LOG_INFO, NULL, "core_host: a line on stderr again");
+  CHECK(g_logged.calls == 2);
+}
+
 int main(void) {
   const tt_host *host = tt_default_host();
+  test_log_callback(host);
   CHECK(host->struct_size == sizeof(tt_host));
   CHECK(host->abi_major == TT_ABI_MAJOR);
 
@@ -87,6 +122,11 @@ int main(void) {
   tt_set_error_callback(NULL, NULL);
   CHECK(strcmp(tt_status_string(TT_ERR_ABI), "plugin ABI mismatch") == 0);
   CHECK(strcmp(tt_status_string((tt_status)12345), "unknown status") == 0);
+  /* identifiers for bindings: every code by its header name, nothing for other values */
+  CHECK(strcmp(tt_status_name(TT_ERR_NO_DATA), "TT_ERR_NO_DATA") == 0);
+  CHECK(strcmp(tt_status_name(TT_OK), "TT_OK") == 0);
+  CHECK(strcmp(tt_status_name(TT_ERR_NUMERIC), "TT_ERR_NUMERIC") == 0);
+  CHECK(tt_status_name((tt_status)12345) == NULL && tt_status_name((tt_status)-12) == NULL);
 
   /* stop request: should_stop turns on, parallel_for reports the interruption and skips */
   CHECK(host->should_stop() == 0);

@@ -11,7 +11,6 @@
 #ifndef TUNETRACE_COMMON_H
 #define TUNETRACE_COMMON_H
 
-#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -76,13 +75,19 @@ typedef enum tt_log_level {
 /* Returns a static English name for a status code ("invalid argument", ...). Thread-safe. */
 TT_API const char *tt_status_string(tt_status status);
 
+/* Returns the identifier of a status code as this header spells it ("TT_ERR_NO_DATA"), or
+ * NULL for a value that is no tt_status: bindings (the Python package) take the codes from
+ * the library by name instead of copying the numbers. Thread-safe. */
+TT_API const char *tt_status_name(tt_status status);
+
 /* Records an error message for the calling thread and forwards it to the error callback;
  * returns `status` so that `return tt_set_error(TT_ERR_PARSE, "...")` reads naturally.
  * Thread-safe. Plugins call this too: they link against libtunetrace. */
 TT_API tt_status tt_set_error(tt_status status, const char *fmt, ...) TT_PRINTF(2, 3);
 
-/* Returns the last message recorded by tt_set_error on this thread ("" if none). The
- * pointer stays valid until the next tt_set_error on the same thread. Thread-safe. */
+/* Returns the last message recorded by tt_set_error on this thread ("" if none). Each
+ * thread has its own: another thread's errors never change it. The pointer stays valid
+ * until the next tt_set_error or tt_clear_error on the same thread. Thread-safe. */
 TT_API const char *tt_last_error(void);
 
 /* Clears the calling thread's last error message. Thread-safe. */

@@ -93,6 +93,18 @@ TT_API void tt_default_host_hold_stop(int hold);
 /* Sets the minimum level tt_default_host's log prints (default TT_LOG_INFO). */
 TT_API void tt_default_host_set_log_level(tt_log_level level);
 
+/* Receives one finished log message: `plugin` is the plugin's name, or NULL for the
+ * library's own messages. */
+typedef void (*tt_log_fn)(void *user, tt_log_level level, const char *plugin,
+                          const char *message);
+
+/* Sends tt_default_host's log (plugins' messages and the library's own) to `fn` instead of
+ * stderr; NULL prints to stderr again. Levels below tt_default_host_set_log_level are
+ * dropped before. For applications and bindings that route messages into their own
+ * logging (the Python package: the `tunetrace` logger), and whose callbacks cannot be
+ * variadic like tt_host.log. `fn` may be called from any thread, concurrently. */
+TT_API void tt_default_host_set_log_callback(tt_log_fn fn, void *user);
+
 /* Routes libtunetrace's own messages (the scene loaders' warnings: unknown keys, pbrt
  * features approximated or skipped, values clamped on write; a display config that falls
  * back) to host->log, so an application's quiet mode and progress display treat them like

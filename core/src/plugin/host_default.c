@@ -31,7 +31,19 @@ static const char *tt__level_name(tt_log_level level) {
   return "log";
 }
 
-/* Prints "tunetrace: [plugin] level: message" as one write so lines never interleave. */
+/* tt_default_host_set_log_callback's function and its argument (under tt__log_lock). */
+static tt_log_fn tt__log_fn;
+static void *tt__log_user;
+
+void tt_default_host_set_log_callback(tt_log_fn fn, void *user) {
+  pthread_mutex_lock(&tt__log_lock);
+  tt__log_fn = fn;
+  tt__log_user = user;
+  pthread_mutex_unlock(&tt__log_lock);
+}
+
+/* Prints "tunetrace: [plugin] level: message" as one write so lines never interleave, or
+ * hands the finished message to the log callback. */
 static void tt__default_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
   if ((int)level < atomic_load(&tt__log_min)) return;
   char msg[2048];
@@ -40,6 +52,13 @@ static void tt__default_log(tt_log_level level, const char *plugin, const char *
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
   pthread_mutex_lock(&tt__log_lock);
+  tt_log_fn fn = tt__log_fn;
+  void *user = tt__log_user;
+  if (fn) {  /* called outside the lock: the callback may take its own */
+    pthread_mutex_unlock(&tt__log_lock);
+    fn(user, level, plugin, msg);
+    return;
+  }
   fprintf(stderr, "tunetrace: %s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
           plugin ? "] " : "", tt__level_name(level), msg);
   pthread_mutex_unlock(&tt__log_lock);

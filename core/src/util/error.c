@@ -34,6 +34,29 @@ const char *tt_status_string(tt_status status) {
   return "unknown status";
 }
 
+const char *tt_status_name(tt_status status) {
+#define TT__NAME(code) \
+  case code: return #code
+  switch (status) {
+    TT__NAME(TT_OK);
+    TT__NAME(TT_DONE);
+    TT__NAME(TT_REPAIRED);
+    TT__NAME(TT_ERR_INVALID_ARGUMENT);
+    TT__NAME(TT_ERR_OUT_OF_MEMORY);
+    TT__NAME(TT_ERR_IO);
+    TT__NAME(TT_ERR_PARSE);
+    TT__NAME(TT_ERR_UNSUPPORTED);
+    TT__NAME(TT_ERR_INFEASIBLE);
+    TT__NAME(TT_ERR_ABI);
+    TT__NAME(TT_ERR_NO_DATA);
+    TT__NAME(TT_ERR_INTERRUPTED);
+    TT__NAME(TT_ERR_INTERNAL);
+    TT__NAME(TT_ERR_NUMERIC);
+  }
+#undef TT__NAME
+  return NULL;
+}
+
 tt_status tt_set_error(tt_status status, const char *fmt, ...) {
   /* formatted aside first: callers pass tt_last_error() itself as an argument to prefix
    * it ("%s: %s", source, tt_last_error()), and vsnprintf into the buffer it reads from is
