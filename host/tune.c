@@ -42,20 +42,6 @@ typedef struct tt__tune_ctx {
   char ref_hash[17];            /* FNV-1a 64 of the reference's luminance (database context) */
 } tt__tune_ctx;
 
-/* Non-zero if the plugin publishes a space with at least one parameter. */
-static int tt__tunable(const tt_loaded_plugin *p) {
-  const tt_space *s = p ? tt_loaded_plugin_space(p) : NULL;
-  return s && tt_space_count(s) > 0;
-}
-
-/* The plugin's tuning hint (tt.tuning_hint/1), or NULL. */
-static const tt_tuning_hint *tt__hint(const tt_loaded_plugin *p) {
-  const tt_tuning_hint *h = p ? tt_loaded_plugin_get(p, TT_TUNING_HINT_ID) : NULL;
-  if (!h || h->struct_size < sizeof(uint32_t) + sizeof(const char *) || !h->objective)
-    return NULL;
-  return h;
-}
-
 void tt__tuning_free(tt__tuning *t) {
   if (!t) return;
   tt_tuning_destroy(t->session);
@@ -173,92 +159,31 @@ static int tt__load_reference(tt__tune_ctx *c) {
   return TT_EXIT_OK;
 }
 
-/* Builds c->subset from --tune-params or the hint's tunable list (defaults = the target's
- * configured values); leaves it NULL when every parameter is searched. */
-static int tt__make_subset(tt__tune_ctx *c, const tt_tuning_hint *hint) {
+/* Chooses the target plugin, its searched parameters and the objective from the options
+ * (the library's tuning plan: --tune or the integrator's hint or the accel, the hint's
+ * setup under the user's --set, --tune-params or the hint's list); prints and returns
+ * TT_EXIT_USAGE on a bad choice. */
+static int tt__choose(tt__tune_ctx *c) {
+  const tt__host_options *opt = c->opt;
   const char *names[256];
   size_t n = 0;
   char buf[4096];
-  const tt__host_options *opt = c->opt;
   if (opt->tune_params) {
     snprintf(buf, sizeof buf, "%s", opt->tune_params);
     for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
-  } else if (hint && hint->struct_size >= offsetof(tt_tuning_hint, tunable) + sizeof(hint->tunable) &&
-             hint->tunable) {
-    for (; hint->tunable[n] && n < 256; n++) names[n] = hint->tunable[n];
   }
-  /* the hint's starting values (PSSMLT: binning on), then the user's --set on top */
-  if (hint && hint->struct_size >= offsetof(tt_tuning_hint, setup) + sizeof(hint->setup) &&
-      hint->setup) {
-    tt_config *cfg = c->s->configs[c->target_index];
-    const char *name = tt_loaded_plugin_entry(c->target)->name;
-    size_t len = strlen(name);
-    if (tt_config_from_json(cfg, hint->setup, "tuning hint setup") != TT_OK) {
-      tt__say("%s: %s\n", name, tt_last_error());
-      return 1;
-    }
-    for (int k = 0; k < opt->set_count; k++)
-      if (!strncmp(opt->sets[k], name, len) && opt->sets[k][len] == '.') {
-        char param[128];
-        const char *eq = strchr(opt->sets[k], '=');
-        snprintf(param, sizeof param, "%.*s", (int)(eq - opt->sets[k] - len - 1),
-                 opt->sets[k] + len + 1);
-        tt_config_set_string(cfg, param, eq + 1); /* validated when the configs were built */
-      }
+  tt_tuning_plan plan = {.struct_size = sizeof plan};
+  if (tt_session_tuning_plan(c->s->lib, opt->tune, opt->tune_params ? names : NULL, n,
+                             &plan) != TT_OK) {
+    tt__say("tuning: %s\n", tt_last_error());
+    return TT_EXIT_USAGE;
   }
-  if (n == 0) return 0;
-  c->subset = tt_space_subset(c->space, names, n, c->s->configs[c->target_index]);
-  if (!c->subset) {
-    tt__say("%s: %s\n", opt->tune_params ? "--tune-params" : "tuning hint",
-            tt_last_error());
-    return 1;
-  }
-  return 0;
-}
-
-/* Chooses the target plugin and objective from the options; prints and returns
- * TT_EXIT_USAGE on a bad choice. */
-static int tt__choose(tt__tune_ctx *c) {
-  tt__session *s = c->s;
-  const tt__host_options *opt = c->opt;
-  char names[1024];
-  const tt_tuning_hint *hint = NULL;
-  if (opt->tune) {
-    c->target = tt_registry_find_name(s->reg, opt->tune);
-    if (!c->target) {
-      tt__session_plugin_names(s, names, sizeof names);
-      tt__say("--tune %s: no loaded plugin is called \"%s\" (loaded: %s)\n",
-              opt->tune, opt->tune, names);
-      return TT_EXIT_USAGE;
-    }
-    uint32_t kind = tt_loaded_plugin_entry(c->target)->kind;
-    if (kind != TT_KIND_ACCEL && kind != TT_KIND_INTEGRATOR && kind != TT_KIND_POST) {
-      tt__say("--tune %s: a %s plugin cannot be tuned by the host (only accel, "
-              "integrator and post plugins)\n", opt->tune, tt_plugin_kind_name(kind));
-      return TT_EXIT_USAGE;
-    }
-    if (!tt__tunable(c->target)) {
-      tt__say("--tune %s: the plugin publishes no tunable parameters\n", opt->tune);
-      return TT_EXIT_USAGE;
-    }
-    hint = tt__hint(c->target);
-  } else {
-    /* an integrator that says how to tune it (PSSMLT) wins; otherwise the accel, whose
-     * parameters change speed only, never the image (integrator_pt's maxDepth would) */
-    hint = tt__hint(s->integ_p);
-    if (hint && tt__tunable(s->integ_p)) c->target = s->integ_p;
-    else if (tt__tunable(s->accel_p)) c->target = s->accel_p, hint = NULL;
-    else {
-      tt__say("tuning: neither the integrator nor the accel publishes tunable "
-              "parameters; name a plugin with --tune\n");
-      return TT_EXIT_USAGE;
-    }
-  }
-  c->target_index = tt__index_of(s, c->target);
+  c->target = plan.target;
+  c->target_index = plan.target_index;
   c->target_kind = tt_loaded_plugin_entry(c->target)->kind;
-  c->space = tt_loaded_plugin_space(c->target);
-  if (tt__make_subset(c, hint)) return TT_EXIT_USAGE;
-  c->objective_spec = opt->objective ? opt->objective : hint ? hint->objective : "render";
+  c->space = plan.space;
+  c->subset = plan.search;  /* freed with the phase */
+  c->objective_spec = opt->objective ? opt->objective : plan.objective;
   if (tt__parse_objective(opt->objective ? "--objective" : "tuning hint", c->objective_spec,
                           &c->objective))
     return TT_EXIT_USAGE;

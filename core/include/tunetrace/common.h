@@ -11,6 +11,7 @@
 #ifndef TUNETRACE_COMMON_H
 #define TUNETRACE_COMMON_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -44,6 +45,13 @@ extern "C" {
 #else
 #  define TT_PRINTF(fmt, args)
 #endif
+
+/* True when a versioned table or struct whose first field is `struct_size` is long enough
+ * to hold `field`: offsetof(field) + sizeof(field) <= struct_size. The one rule for reading
+ * an append-only table another party filled (a plugin's interface, a hint, a descriptor):
+ * a field past its struct_size was not there when that party was built. Needs <stddef.h>. */
+#define TT_HAS_FIELD(type, ptr, field) \
+  ((ptr)->struct_size >= offsetof(type, field) + sizeof(((const type *)0)->field))
 
 /* Status codes. Zero is success; negative values are errors; positive values are
  * non-error outcomes that a caller may want to distinguish. Values never change. */

@@ -67,7 +67,7 @@ typedef struct tt_host {
 
 /* True if the host table provides `field` (it may be older than the plugin). */
 #define TT_HOST_HAS(host, field) \
-  ((host)->struct_size >= offsetof(tt_host, field) + sizeof((host)->field) && (host)->field)
+  (TT_HAS_FIELD(tt_host, host, field) && (host)->field)
 
 /* The host table libtunetrace's default implementation provides (stderr logging, pthread
  * pool, no progress drawing). Used by tests and by applications that embed libtunetrace

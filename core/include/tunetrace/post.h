@@ -44,8 +44,7 @@ typedef struct tt_post_frame {
 } tt_post_frame;
 
 /* Non-zero when frame `f` (a const tt_post_frame *) was filled by a host that knows `field`. */
-#define TT_POST_FRAME_HAS(f, field)                                                        \
-  ((f)->struct_size >= offsetof(tt_post_frame, field) + sizeof((f)->field))
+#define TT_POST_FRAME_HAS(f, field) TT_HAS_FIELD(tt_post_frame, f, field)
 
 typedef struct tt_post_iface {
   uint32_t struct_size;     /* sizeof(tt_post_iface) as the plugin was built */

@@ -165,8 +165,7 @@ typedef struct tt_predictor_iface {
 
 /* True if the plugin's table provides `field` (it may be older than the host). */
 #define TT_PREDICTOR_HAS(iface, field) \
-  ((iface)->struct_size >= offsetof(tt_predictor_iface, field) + sizeof((iface)->field) && \
-   (iface)->field)
+  (TT_HAS_FIELD(tt_predictor_iface, iface, field) && (iface)->field)
 
 #ifdef __cplusplus
 }

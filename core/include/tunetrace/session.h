@@ -27,8 +27,10 @@
  * Ownership: the session owns the scene, the plugins (its registry), the configurations, the
  * accel, the integrator and the film; pointers it returns stay valid until the session is
  * destroyed unless a function says otherwise.
- * Threads: a session is used by one thread at a time (the one that created it: plugins
- * expect their main thread); its passes run in parallel on the host's worker pool.
+ * Threads: a session is used by one thread at a time; sessions on different threads may
+ * run at once (they share the loaded plugins' process-wide state, see plugin.h, and the
+ * default host's worker pool, whose jobs run one after another). A session's passes run in
+ * parallel on the host's worker pool.
  */
 #ifndef TUNETRACE_SESSION_H
 #define TUNETRACE_SESSION_H
@@ -220,6 +222,36 @@ TT_API void tt_session_set_seed(tt_session *s, uint64_t seed);
  * Valid until the session is destroyed or the next call. After tt_session_start. */
 TT_API tt_status tt_session_tuning_target(tt_session *s, size_t index, int want_images,
                                           tt_tuning_target *out);
+
+/* What a tuning run of the session searches (tt_session_tuning_plan). */
+typedef struct tt_tuning_plan {
+  uint32_t struct_size;        /* sizeof(tt_tuning_plan) as the caller was built */
+  size_t target_index;         /* the target's registry index (tt_session_config_at) */
+  tt_loaded_plugin *target;    /* the plugin tuned */
+  const tt_space *space;       /* its full space: what is measured and checked */
+  tt_space *search;            /* the searched parameters (a tt_space_subset of `space` whose
+                                  defaults are the configured values), or NULL: all of space.
+                                  Owned by the plan: tt_tuning_plan_release */
+  const char *objective;       /* the default objective: the target's tuning hint's
+                                  (tuning_hint.h), else "render"; valid while the plugin is
+                                  loaded */
+} tt_tuning_plan;
+
+/* Plans a tuning run the way host and the Python API run one: the target is the loaded
+ * plugin named `target`, or with NULL an integrator that serves a tuning hint and has
+ * tunable parameters (PSSMLT), else the accel (its parameters change speed, never the
+ * image); it must be an accel, integrator or post plugin with a non-empty space. The
+ * target's hint setup ({"binning": true}) is applied to its configuration and the values
+ * set on it with tt_session_set are put back on top (the user's settings win). The searched
+ * parameters are the `count` names of `params`, or with NULL the hint's tunable list, else
+ * all. Errors name the plugin (and the parameter). Release the plan with
+ * tt_tuning_plan_release. */
+TT_API tt_status tt_session_tuning_plan(tt_session *s, const char *target,
+                                        const char *const *params, size_t count,
+                                        tt_tuning_plan *out);
+
+/* Frees what the plan owns (its search space) and clears it; NULL or a cleared plan: no-op. */
+TT_API void tt_tuning_plan_release(tt_tuning_plan *plan);
 
 /* Fills `out` with the state the plugin at `index` is measured in: the scene id and file,
  * the camera (position, target, up, fov_y, resolution, then the members of `camera_extra`,

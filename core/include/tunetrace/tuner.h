@@ -103,8 +103,7 @@ typedef struct tt_tuner_context {
 
 /* True if the plugin's table provides `field` (it may be older than the host). */
 #define TT_TUNER_HAS(iface, field) \
-  ((iface)->struct_size >= offsetof(tt_tuner_iface, field) + sizeof((iface)->field) && \
-   (iface)->field)
+  (TT_HAS_FIELD(tt_tuner_iface, iface, field) && (iface)->field)
 
 #ifdef __cplusplus
 }

@@ -51,10 +51,8 @@ void tt_indicator_norm_init(tt_indicator_norm *n) {
 static tt_indicator_norm tt__norm(const tt_indicator_norm *n) {
   tt_indicator_norm d;
   tt_indicator_norm_init(&d);
-  if (n && n->struct_size >= offsetof(tt_indicator_norm, camera) + sizeof n->camera)
-    d.camera = n->camera;
-  if (n && n->struct_size >= offsetof(tt_indicator_norm, scale) + sizeof n->scale)
-    d.scale = n->scale;
+  if (n && TT_HAS_FIELD(tt_indicator_norm, n, camera)) d.camera = n->camera;
+  if (n && TT_HAS_FIELD(tt_indicator_norm, n, scale)) d.scale = n->scale;
   return d;
 }
 

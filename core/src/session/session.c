@@ -3,6 +3,7 @@
 #include "session/session_internal.h"
 
 #include <tunetrace/suggest.h>
+#include <tt_util/strings.h>
 
 #include <stdarg.h>
 #include <stddef.h>
@@ -55,6 +56,11 @@ void tt_session_destroy(tt_session *s) {
     if (s->configs[i]) tt_config_destroy(s->configs[i]);
   free(s->configs);
   free(s->depth_set);
+  for (size_t i = 0; i < s->setting_count; i++) {
+    free(s->settings[i].key);
+    free(s->settings[i].value);
+  }
+  free(s->settings);
   tt_registry_destroy(s->reg);
   tt_scene_destroy(s->scene);
   free(s);
@@ -225,7 +231,7 @@ tt_config *tt_session_config(tt_session *s, const char *plugin) {
 const tt_options_iface *tt_session_plugin_options(const tt_loaded_plugin *p) {
   const tt_options_iface *oi = p ? tt_loaded_plugin_get(p, TT_OPTIONS_INTERFACE_ID) : NULL;
   /* tables older than the fields we call are ignored (struct_size rule of the ABI) */
-  if (!oi || oi->struct_size < offsetof(tt_options_iface, get) + sizeof oi->get || !oi->count ||
+  if (!oi || !TT_HAS_FIELD(tt_options_iface, oi, get) || !oi->count ||
       !oi->info || !oi->set || !oi->get)
     return NULL;
   return oi;
@@ -239,6 +245,27 @@ static void tt__plugin_names(const tt_session *s, char *buf, size_t n) {
     size_t len = strlen(buf);
     snprintf(buf + len, n - len, "%s%s", i ? ", " : "", e->name);
   }
+}
+
+/* Records a value tt_session_set accepted (the tuning plan re-applies the user's settings);
+ * TT_ERR_OUT_OF_MEMORY when it cannot. */
+static tt_status tt__remember_setting(tt_session *s, size_t index, const char *key,
+                                      const char *value) {
+  if (s->setting_count == s->setting_cap) {
+    size_t cap = s->setting_cap ? 2 * s->setting_cap : 16;
+    struct tt__session_setting *v = realloc(s->settings, cap * sizeof *v);
+    if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory recording a setting");
+    s->settings = v;
+    s->setting_cap = cap;
+  }
+  char *k = tt__strdup(key), *v = tt__strdup(value);
+  if (!k || !v) {
+    free(k);
+    free(v);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory recording a setting");
+  }
+  s->settings[s->setting_count++] = (struct tt__session_setting){index, k, v};
+  return TT_OK;
 }
 
 tt_status tt_session_set(tt_session *s, const char *plugin, const char *key, const char *value) {
@@ -261,7 +288,10 @@ tt_status tt_session_set(tt_session *s, const char *plugin, const char *key, con
   /* a key that is no parameter may be an option (tt.options/1: files, names) */
   const tt_options_iface *oi = tt_session_plugin_options(p);
   int is_param = cfg && tt_space_find(tt_config_space(cfg), key) >= 0;
-  if (!is_param && oi && oi->get(key)) return oi->set(key, value);
+  if (!is_param && oi && oi->get(key)) {
+    tt_status st = oi->set(key, value);
+    return st == TT_OK ? tt__remember_setting(s, (size_t)idx, key, value) : st;
+  }
   if (!cfg)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "plugin \"%s\" has no parameters%s", plugin,
                         oi ? " and no such option" : "");
@@ -278,7 +308,7 @@ tt_status tt_session_set(tt_session *s, const char *plugin, const char *key, con
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s%s", cause, hint);
   }
   if (!strcmp(key, "maxDepth")) s->depth_set[idx] = 1;
-  return TT_OK;
+  return tt__remember_setting(s, (size_t)idx, key, value);
 }
 
 tt_status tt_session_check(tt_session *s) {

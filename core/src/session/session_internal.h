@@ -17,6 +17,13 @@ struct tt_session {
   tt_config **configs;          /* NULL where the plugin publishes no space */
   unsigned char *depth_set;     /* maxDepth set with tt_session_set: the scene's does not apply */
   size_t config_cap;
+  /* every value tt_session_set accepted, in order: the user's settings, which a tuning
+   * plan puts back on top of a tuning hint's setup (session_tuning.c) */
+  struct tt__session_setting {
+    size_t index;               /* registry index of the plugin */
+    char *key, *value;
+  } *settings;
+  size_t setting_count, setting_cap;
   tt_loaded_plugin *accel_p, *integ_p;
   const tt_accel_iface *ai;
   const tt_integrator_iface *ii;

@@ -3,6 +3,8 @@
  * state (camera, context, indicators) the measurements are recorded under. */
 #include "session/session_internal.h"
 
+#include <tunetrace/tuning_hint.h>
+
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
@@ -131,6 +133,111 @@ tt_status tt_session_tuning_target(tt_session *s, size_t index, int want_images,
   out->apply = tt__target_apply;
   out->render = tt__target_render;
   return TT_OK;
+}
+
+/* ---- the tuning plan ---- */
+
+/* Non-zero if the plugin publishes a space with at least one parameter. */
+static int tt__tunable(const tt_loaded_plugin *p) {
+  const tt_space *space = p ? tt_loaded_plugin_space(p) : NULL;
+  return space && tt_space_count(space) > 0;
+}
+
+/* The plugin's tuning hint (tt.tuning_hint/1) when it names an objective, else NULL. */
+static const tt_tuning_hint *tt__hint(const tt_loaded_plugin *p) {
+  const tt_tuning_hint *h = p ? tt_loaded_plugin_get(p, TT_TUNING_HINT_ID) : NULL;
+  return h && TT_HAS_FIELD(tt_tuning_hint, h, objective) && h->objective ? h : NULL;
+}
+
+/* Chooses the target: the plugin named `name`, or an integrator with a hint and a space,
+ * else the accel. */
+static tt_status tt__plan_target(tt_session *s, const char *name, tt_loaded_plugin **out) {
+  *out = NULL;
+  if (!name) {
+    tt_loaded_plugin *integ = tt_session_integrator_plugin(s), *accel = tt_session_accel_plugin(s);
+    if (tt__hint(integ) && tt__tunable(integ)) *out = integ;
+    else if (tt__tunable(accel)) *out = accel;
+    else
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "neither the integrator nor the accel "
+                          "publishes tunable parameters; name the plugin to tune");
+    return TT_OK;
+  }
+  tt_loaded_plugin *p = tt_registry_find_name(s->reg, name);
+  if (!p) {
+    char names[1024] = "";
+    for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
+      size_t len = strlen(names);
+      snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "",
+               tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name);
+    }
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "no loaded plugin is called \"%s\" (loaded: "
+                        "%s)", name, names);
+  }
+  uint32_t kind = tt_loaded_plugin_entry(p)->kind;
+  if (kind != TT_KIND_ACCEL && kind != TT_KIND_INTEGRATOR && kind != TT_KIND_POST)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: a %s plugin cannot be tuned (only accel, "
+                        "integrator and post plugins)", name, tt_plugin_kind_name(kind));
+  if (!tt__tunable(p))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the plugin publishes no tunable "
+                        "parameters", name);
+  *out = p;
+  return TT_OK;
+}
+
+/* The hint's starting values (PSSMLT: binning on), then the user's settings on top. */
+static tt_status tt__plan_setup(tt_session *s, size_t index, const tt_tuning_hint *hint) {
+  if (!hint || !TT_HAS_FIELD(tt_tuning_hint, hint, setup) || !hint->setup) return TT_OK;
+  tt_config *cfg = s->configs[index];
+  const char *name = tt_loaded_plugin_entry(tt_registry_get(s->reg, index))->name;
+  if (tt_config_from_json(cfg, hint->setup, "tuning hint setup") != TT_OK)
+    return tt__session_error(TT_ERR_PARSE, "%s: ", name);
+  for (size_t k = 0; k < s->setting_count; k++) {
+    const struct tt__session_setting *set = &s->settings[k];
+    /* options are no parameters: the setup does not touch them. The values were
+     * validated when they were set. */
+    if (set->index == index && tt_space_find(tt_config_space(cfg), set->key) >= 0)
+      tt_config_set_string(cfg, set->key, set->value);
+  }
+  return TT_OK;
+}
+
+tt_status tt_session_tuning_plan(tt_session *s, const char *target, const char *const *params,
+                                 size_t count, tt_tuning_plan *out) {
+  if (!s || !out || !TT_HAS_FIELD(tt_tuning_plan, out, objective))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_session_tuning_plan: NULL or short plan");
+  uint32_t size = out->struct_size;
+  memset(out, 0, size);
+  out->struct_size = size;
+  tt_loaded_plugin *p;
+  tt_status st = tt__plan_target(s, target, &p);
+  if (st != TT_OK) return st;
+  const tt_tuning_hint *hint = tt__hint(p);
+  size_t index = (size_t)tt_session_plugin_index(s, tt_loaded_plugin_entry(p)->name);
+  if ((st = tt__plan_setup(s, index, hint)) != TT_OK) return st;
+  const tt_space *space = tt_loaded_plugin_space(p);
+  const char *const *names = params;
+  size_t n = params ? count : 0;
+  int from_hint = !params && hint && TT_HAS_FIELD(tt_tuning_hint, hint, tunable) && hint->tunable;
+  if (from_hint) {
+    names = hint->tunable;
+    while (names[n]) n++;
+  }
+  tt_space *search = NULL;
+  if (n && !(search = tt_space_subset(space, names, n, s->configs[index])))
+    return tt__session_error(TT_ERR_INVALID_ARGUMENT, "%s: %s: ", tt_loaded_plugin_entry(p)->name,
+                             from_hint ? "the tuning hint's parameters" : "searched parameters");
+  out->target_index = index;
+  out->target = p;
+  out->space = space;
+  out->search = search;
+  out->objective = hint ? hint->objective : "render";
+  return TT_OK;
+}
+
+void tt_tuning_plan_release(tt_tuning_plan *plan) {
+  if (!plan || !TT_HAS_FIELD(tt_tuning_plan, plan, search)) return;
+  tt_space_destroy(plan->search);
+  plan->search = NULL;
 }
 
 /* Adds every member of the JSON object `extra` (NULL: none) to `obj`; TT_ERR_PARSE naming
