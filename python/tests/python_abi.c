@@ -92,11 +92,23 @@ int main(void) {
   F(tt_tunedb_row, rank); end();
   S(tt_tuning_hint); F(tt_tuning_hint, struct_size); F(tt_tuning_hint, objective);
   F(tt_tuning_hint, tunable); F(tt_tuning_hint, setup); end();
+  S(tt_tuning_plan); F(tt_tuning_plan, struct_size); F(tt_tuning_plan, target_index);
+  F(tt_tuning_plan, target); F(tt_tuning_plan, space); F(tt_tuning_plan, search);
+  F(tt_tuning_plan, objective); end();
   S(tt_option_info); F(tt_option_info, key); F(tt_option_info, description); end();
   S(tt_options_iface); F(tt_options_iface, struct_size); F(tt_options_iface, count);
   F(tt_options_iface, info); F(tt_options_iface, set); F(tt_options_iface, get); end();
   printf(",\n\"constants\": {\"TT_MAX_METRICS\": %d, \"TT_SCENE_INDICATOR_COUNT\": %d, "
-         "\"TT_COST_INFEASIBLE\": %.17g}}\n", TT_MAX_METRICS, TT_SCENE_INDICATOR_COUNT,
-         (double)TT_COST_INFEASIBLE);
+         "\"TT_COST_INFEASIBLE\": %.17g, \"TT_KIND_COUNT\": %d", TT_MAX_METRICS,
+         TT_SCENE_INDICATOR_COUNT, (double)TT_COST_INFEASIBLE, TT_KIND_COUNT);
+  /* the status codes as the header spells them: the package takes them from the library by
+   * name (tt_status_name) and must find the same numbers */
+#define STATUS(code) printf(", \"" #code "\": %d", (int)code)
+  STATUS(TT_OK); STATUS(TT_DONE); STATUS(TT_REPAIRED); STATUS(TT_ERR_INVALID_ARGUMENT);
+  STATUS(TT_ERR_OUT_OF_MEMORY); STATUS(TT_ERR_IO); STATUS(TT_ERR_PARSE);
+  STATUS(TT_ERR_UNSUPPORTED); STATUS(TT_ERR_INFEASIBLE); STATUS(TT_ERR_ABI);
+  STATUS(TT_ERR_NO_DATA); STATUS(TT_ERR_INTERRUPTED); STATUS(TT_ERR_INTERNAL);
+  STATUS(TT_ERR_NUMERIC);
+  printf("}}\n");
   return 0;
 }

@@ -289,6 +289,189 @@ def test_sessions_side_by_side():
               f"thread {k}: images equal a lone session's and its own error message ({out})")
 
 
+def test_python_errors(tmp):
+    """Errors are tunetrace.Error and the built-in exception Python code catches for them;
+    argument types are refused before any library call; nothing reads a path cut short."""
+    import errno
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    missing = os.path.join(tmp, "missing.json")
+
+    def expect(cls, fn, *needles):
+        try:
+            fn()
+        except tt.Error as e:
+            check(isinstance(e, cls), f"{type(e).__name__} is a {cls.__name__} ({e})")
+            for n in needles:
+                check(n in str(e), f"message {str(e)!r} contains {n!r}")
+            return e
+        except Exception as e:  # noqa: BLE001 (reported as a failed check)
+            check(False, f"expected tunetrace.Error and {cls.__name__}, got {type(e).__name__}: {e}")
+            return None
+        check(False, f"expected {cls.__name__} with {needles}")
+        return None
+
+    e = expect(FileNotFoundError, lambda: tt.Session(missing), "missing.json")
+    check(e is not None and e.errno == errno.ENOENT and e.filename == missing,
+          f"errno and filename of a missing scene ({getattr(e, 'errno', None)}, "
+          f"{getattr(e, 'filename', None)})")
+    expect(FileNotFoundError, lambda: tt.read_image(os.path.join(tmp, "missing.exr")))
+    expect(FileNotFoundError, lambda: tt.Session(box, plugins=["integrator_nope"]), "integrator_nope")
+    typo = os.path.join(tmp, "typo.db")
+    expect(FileNotFoundError, lambda: tt.TuningDB(typo), "typo.db")
+    check(not os.path.exists(typo), "TuningDB(typo) creates no file")
+    bad = os.path.join(tmp, "bad_fov.json")
+    with open(bad, "w") as f:
+        f.write('{"version": 1, "camera": {"position": [0, 0, 0], "target": [0, 0, 1], '
+                '"fov": 200}, "meshes": []}')
+    expect(ValueError, lambda: tt.Session(bad), "camera.fov")
+    with tt.Session(box, plugins="integrator_pt", resolution=(8, 8)) as s:
+        check([p["name"] for p in s.plugins] == ["integrator_pt"], "plugins=\"integrator_pt\" "
+              f"is one plugin ({[p['name'] for p in s.plugins]})")
+        k = expect(KeyError, lambda: s.set("integrator_pt.noSuchParam", 1), "noSuchParam")
+        check(k is not None and not isinstance(k, ValueError), "an unknown key is no ValueError")
+        v = expect(ValueError, lambda: s.set("integrator_pt.maxDepth", "deep"), "maxDepth")
+        check(v is not None and not isinstance(v, KeyError), "a bad value is no KeyError")
+        expect(KeyError, lambda: s.config("accel_nope"), "accel_nope")
+        expect(TypeError, lambda: s.render(spp="4"), "spp: expected an integer, got str '4'")
+        expect(TypeError, lambda: s.render(spp=2.5), "spp", "float")
+        expect(TypeError, lambda: s.tune("accel_embree", iterations="3"), "iterations")
+        check(s.stats["passes"] == 0, "a refused argument rendered nothing")
+        # a NUL character is refused, never read cut short
+        expect(ValueError, lambda: s.set("integrator_pt.max\0Depth", 3), "NUL")
+    expect(ValueError, lambda: tt.Session(box + "\0.json"), "NUL", "scene")
+    expect(ValueError, lambda: tt.Session(os.path.join(tmp, "a\0b.json")), "NUL")
+    expect(ValueError, lambda: tt.read_image("a\0b.exr"), "NUL")
+    expect(ValueError, lambda: tt.Session(box, plugins=["integrator_pt\0x"]), "NUL")
+    expect(TypeError, lambda: tt.Session(box, resolution=("16", 16)), "resolution width")
+    expect(TypeError, lambda: tt.Session(box, seed="7"), "seed")
+    expect(TypeError, lambda: tt.Session(box, plugins=3), "plugins")
+    with tt.Session(box, aovs="normal", resolution=(8, 8)) as s:
+        s.render(spp=1)
+        check(s.aov("normal").shape == (8, 8, 3), "aovs=\"normal\" is one AOV")
+    # every status the library names maps to its class; out of memory is a MemoryError
+    from tunetrace import _errors
+    for name, cls in [("TT_ERR_OUT_OF_MEMORY", MemoryError), ("TT_ERR_PARSE", ValueError),
+                      ("TT_ERR_INVALID_ARGUMENT", ValueError), ("TT_ERR_IO", OSError),
+                      ("TT_ERR_NUMERIC", ArithmeticError)]:
+        err = _errors.make_error(tt.STATUS[name], "x")
+        check(isinstance(err, cls) and isinstance(err, tt.Error) and str(err) == "x",
+              f"{name} -> {type(err).__name__}")
+
+
+def test_names_from_library(abi_exe):
+    """Status codes and plugin kinds come from the library (by name), with the numbers the
+    C header has; __version__ is the library's."""
+    c = json.loads(subprocess.run([abi_exe], check=True, capture_output=True, text=True).stdout)
+    k = c["constants"]
+    want = {n: v for n, v in k.items() if n.startswith("TT_OK") or n.startswith("TT_ERR_")
+            or n in ("TT_DONE", "TT_REPAIRED")}
+    check(tt.STATUS == want, f"STATUS {tt.STATUS} = the header's {want}")
+    check(sorted(tt.KINDS) == list(range(1, k["TT_KIND_COUNT"] + 1)) and
+          tt.KINDS[1] == "accel" and tt.KINDS[3] == "tuner", f"KINDS {tt.KINDS}")
+    check(tt.__version__ == tt.version() and tt.__version__.count(".") == 2,
+          f"__version__ {tt.__version__}")
+    for name in tt.__all__:
+        obj = getattr(tt, name)
+        if callable(obj) or isinstance(obj, type):
+            check(bool(getattr(obj, "__doc__", None)), f"tt.{name} has a docstring")
+    for cls in (tt.Session, tt.TuningDB, tt.Tuning):
+        for attr, obj in vars(cls).items():
+            if not attr.startswith("_") and (callable(obj) or isinstance(obj, property)):
+                check(bool(obj.__doc__), f"tt.{cls.__name__}.{attr} has a docstring")
+
+
+def test_on_demand_plugins(tmp):
+    """params= and set() before the first render load the plugin they name, as host loads
+    its defaults before --set; the image is host's with the same settings."""
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    with tt.Session(box, params={"integrator_pt.maxDepth": 4}, resolution=(8, 8)) as s:
+        check(s.config("integrator_pt")["maxDepth"] == 4, "params= loads integrator_pt")
+        s.set("accel_embree.quality", 2)
+        check(s.config("accel_embree")["quality"] == 2, "set() loads accel_embree")
+        s.render(spp=1)
+        check(sorted(p["name"] for p in s.plugins) == ["accel_embree", "integrator_pt"],
+              f"loaded once each: {[p['name'] for p in s.plugins]}")
+        raises(lambda: s.set("integrator_pssmlt.chains", 8), "integrator_pssmlt")  # started
+    with tt.Session(box, resolution=(8, 8)) as s:
+        s.set("integrator_pssmlt.binning", False)
+        check([p["name"] for p in s.plugins] == ["integrator_pssmlt"], "set() loads PSSMLT")
+        raises(lambda: s.set("accel_nope.quality", 3), "no plugin \"accel_nope\" is loaded")
+    # the tuner of tune() too, before the session starts
+    with tt.Session(box, resolution=(8, 8)) as s:
+        t = s.tune("accel_embree", tuner="tuner_nm", iterations=2, db=False)
+        check(t.mode == "tune" and len(t.history) == 3, f"tuner loaded by tune() ({t.mode})")
+
+
+def test_plan_and_logging(tmp, fixture_short):
+    """tune() plans through the library: a hint whose struct_size ends before `objective`
+    is ignored (as host does); the library's messages reach the `tunetrace` logger, not
+    stderr; tune() records into the per-user database unless db=False (host's rule)."""
+    import logging
+    box = os.path.join(SOURCE, "scenes/cornell-box/scene.json")
+    with tt.Session(box, plugins=[fixture_short], resolution=(8, 8)) as s:
+        t = s.tune("fixture_hint_short", iterations=1, db=False)
+        check(len(t.history) == 2 and all(x["status"] == "ok" for x in t.history),
+              f"a 12-byte hint's objective is not read ({[x['status'] for x in t.history]})")
+    # the user's value wins over PSSMLT's setup (binning on)
+    with tt.Session(box, plugins=["integrator_pssmlt"], resolution=(8, 8)) as s:
+        s.set("integrator_pssmlt.binning", False)
+        s.tune(iterations=1, db=False)
+        check(s.config("integrator_pssmlt")["binning"] is False, "set() wins over the hint")
+
+    records = []
+
+    class Keep(logging.Handler):
+        def emit(self, record):
+            records.append(record)
+    logger = logging.getLogger("tunetrace")
+    handler = Keep()
+    logger.addHandler(handler)
+    logger.setLevel(logging.DEBUG)
+    try:
+        noisy = os.path.join(tmp, "noisy.json")
+        with open(box) as f:
+            scene = json.load(f)
+        scene["colour_typo"] = 1
+        scene.setdefault("meshes", [])
+        for m in scene["meshes"]:
+            if "file" in m and not os.path.isabs(m["file"]):
+                m["file"] = os.path.join(os.path.dirname(box), m["file"])
+        with open(noisy, "w") as f:
+            json.dump(scene, f)
+        with tt.Session(noisy, resolution=(8, 8)) as s:
+            s.tune("accel_embree", iterations=1, db=False)
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(logging.NOTSET)
+    warn = [r for r in records if r.levelno == logging.WARNING and "colour_typo" in r.getMessage()]
+    check(len(warn) == 1 and warn[0].name == "tunetrace", f"the scene loader's warning as a "
+          f"WARNING record of 'tunetrace' ({[(r.name, r.levelname, r.getMessage()) for r in records][:4]})")
+    check(any(r.levelno == logging.INFO and "tuning" in r.getMessage() for r in records),
+          "the tuning session's INFO messages")
+    # a script run as is prints nothing of the library's info (logging's default: warnings)
+    code = ("import sys; sys.path.insert(0, %r); import tunetrace as tt\n"
+            "s = tt.Session(%r, resolution=(8, 8)); s.tune('accel_embree', iterations=1, "
+            "db=False); s.render(1); s.close()\n") % (os.path.join(BUILD, "python"), box)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    check(r.returncode == 0 and r.stderr == "", f"nothing on stderr: {r.stderr[:300]!r}")
+
+    # tune() without db: the per-user database ($XDG_DATA_HOME, set to tmp by main())
+    default_db = os.path.join(os.environ["XDG_DATA_HOME"], "tunetrace", "tuning.db")
+    before = tt.TuningDB(default_db).count() if os.path.exists(default_db) else 0
+    with tt.Session(box, resolution=(8, 8), seed=3) as s:
+        t = s.tune("accel_embree", iterations=2)
+    check(t.db_path == default_db and os.path.exists(default_db),
+          f"tune() records into the per-user database ({t.db_path})")
+    with tt.TuningDB() as db:
+        check(db.path == default_db and db.count() == before + t.stats["measured"],
+              f"rows {db.count()} = {before} + {t.stats['measured']} measured")
+        n = db.count()
+    with tt.Session(box, resolution=(8, 8), seed=4) as s:
+        s.tune("accel_embree", iterations=2, db=False)
+    with tt.TuningDB() as db:
+        check(db.count() == n, "db=False records nothing")
+
+
 def test_example(tmp):
     script = os.path.join(SOURCE, "python/examples/render_and_tune.py")
     env = dict(os.environ, PYTHONPATH=os.path.join(BUILD, "python"))
@@ -301,11 +484,16 @@ def test_example(tmp):
 
 def main():
     abi = sys.argv[1] if len(sys.argv) > 1 else os.path.join(BUILD, "python/tests/python_abi")
+    fixture_short = (sys.argv[2] if len(sys.argv) > 2 else
+                     os.path.join(BUILD, "tests/fixtures/fixture_hint_short.so"))
     with tempfile.TemporaryDirectory() as tmp:
         os.environ["XDG_DATA_HOME"] = tmp  # never the user's database
         for test in (lambda: test_layout(abi), lambda: test_errors(tmp), test_plugins,
                      lambda: test_host_equal(tmp), lambda: test_aovs(tmp),
                      lambda: test_tuning(tmp), test_sessions_side_by_side,
+                     lambda: test_python_errors(tmp), lambda: test_names_from_library(abi),
+                     lambda: test_on_demand_plugins(tmp),
+                     lambda: test_plan_and_logging(tmp, fixture_short),
                      lambda: test_example(tmp)):
             test()
     print(f"python_api: {checks} checks, {failures} failed")

@@ -13,57 +13,155 @@ tune plugin parameters online (thesis ch. 3) and read the tuning database.
 Everything goes through the library's render session (tunetrace/session.h), so an image is
 the one `host` renders for the same scene, plugins, parameters and seed. Errors raise
 tunetrace.Error carrying the library's message (which names the file, the field and what
-was expected). See python/README.md for how the library is found.
+was expected), as a subclass that is also the built-in exception Python code catches for
+it: a missing file is a FileNotFoundError, a bad value a ValueError, an unknown parameter a
+KeyError, a wrong argument type a TypeError. See python/README.md for how the library is
+found.
 """
+import atexit
+import contextlib
 import ctypes
 import json
-import operator
+import logging
 import os
 import warnings
 
 import numpy as np
 
 from . import _lib
+from ._errors import (STATUS, ArgumentTypeError, Error, FileError, InfeasibleError,
+                      InternalError, InvalidArgumentError, NoDataError, NotFoundError,
+                      NumericError, OutOfMemoryError, ParseError, PluginError, StopRequested,
+                      UnknownNameError, UnsupportedError, check as _check,
+                      make_error as _make_error)
 from ._lib import lib, text
 
-__all__ = ["Error", "Session", "Tuning", "TuningDB", "version", "library_path",
-           "list_plugins", "describe", "read_image", "write_exr", "set_threads", "AOVS"]
+__all__ = ["Error", "InvalidArgumentError", "ParseError", "InfeasibleError", "NumericError",
+           "UnknownNameError", "FileError", "NotFoundError", "OutOfMemoryError",
+           "ArgumentTypeError", "PluginError", "UnsupportedError", "NoDataError",
+           "StopRequested", "InternalError", "STATUS", "KINDS", "AOVS", "COST_INFEASIBLE",
+           "Session", "Tuning", "TuningDB", "version", "library_path", "list_plugins",
+           "describe", "read_image", "write_exr", "set_threads", "__version__"]
 
-KINDS = {1: "accel", 2: "integrator", 3: "tuner", 4: "predictor", 5: "post", 6: "sampler"}
-# AOV name -> (tt_aov bit, channels), film.h
+__version__ = text(lib.tt_version())
+"""The version of the libtunetrace this package loaded (the package is versioned with it)."""
+
+# ---- the library's messages through logging ----------------------------------------------
+# The default host's log (plugins' messages and the library's own, e.g. a scene loader's
+# warnings) goes to the logger "tunetrace" (a plugin's to "tunetrace.PLUGIN"), levels mapped;
+# nothing is printed to stderr by the library. Messages below the logger's level are
+# dropped in the library already: the threshold is taken when a session is created and at
+# every render() and tune().
+_log = logging.getLogger("tunetrace")
+_LEVELS = {0: logging.DEBUG, 1: logging.INFO, 2: logging.WARNING, 3: logging.ERROR}
+
+
+def _on_log(_user, level, plugin, message):
+    logger = _log.getChild(plugin.decode(errors="replace")) if plugin else _log
+    logger.log(_LEVELS.get(level, logging.ERROR), "%s", message.decode(errors="replace"))
+
+
+_LOG_FN = _lib.LOG_FN(_on_log)  # kept alive: the library holds the pointer
+
+
+def _sync_log_level():
+    """Lets the library drop what the `tunetrace` logger would drop anyway."""
+    eff = _log.getEffectiveLevel()
+    lib.tt_default_host_set_log_level(next((k for k, v in sorted(_LEVELS.items())
+                                            if v >= eff), 3))
+
+
+lib.tt_default_host_set_log_callback(_LOG_FN, None)
+_sync_log_level()
+# messages from interpreter shutdown on (sessions freed late) go to stderr again
+atexit.register(lib.tt_default_host_set_log_callback, _lib.LOG_FN(), None)
+
+
+def _kinds():
+    """{1: "accel", 2: "integrator", ...}: the plugin kinds as the library names them."""
+    out, k = {}, 1
+    while text(lib.tt_plugin_kind_name(k)) != "unknown":
+        out[k] = text(lib.tt_plugin_kind_name(k))
+        k += 1
+    return out
+
+
+KINDS = _kinds()
+"""Plugin kind value -> name ("accel", "integrator", "tuner", ...), from the library."""
 AOVS = {"depth": (1, 1), "normal": (2, 3), "albedo": (4, 3), "motion": (8, 2)}
-COST_INFEASIBLE = 1e300  # TT_COST_INFEASIBLE (tuner.h)
+"""AOV name -> (tt_aov bit, channels) (tunetrace/film.h)."""
+COST_INFEASIBLE = 1e300
+"""The cost of a configuration that could not be measured (TT_COST_INFEASIBLE, tuner.h)."""
 _STATUS_NAMES = {0: "ok", 1: "infeasible", 2: "failed"}
+_ERR_NO_DATA, _ERR_INTERRUPTED = STATUS["TT_ERR_NO_DATA"], STATUS["TT_ERR_INTERRUPTED"]
+_ERR_ARG = STATUS["TT_ERR_INVALID_ARGUMENT"]
 
 
-class Error(Exception):
-    """A libtunetrace call failed. str(e) is the library's message; e.status the tt_status
-    code (negative), e.status_name its name ("parse error", "I/O error", ...)."""
-
-    def __init__(self, status, message):
-        super().__init__(message)
-        self.status = status
-        self.status_name = text(lib.tt_status_string(status))
+def _refuse_nul(raw, text_, what):
+    if b"\0" in raw:
+        raise InvalidArgumentError(_ERR_ARG, f"{what}: {text_!r} contains a NUL character "
+                                   "(the library would read it cut short there)")
+    return raw
 
 
-def _check(status, what=None):
-    if status < 0:
-        msg = text(lib.tt_last_error()) or text(lib.tt_status_string(status))
-        raise Error(status, f"{what}: {msg}" if what else msg)
-    return status
+def _b(s, what="argument"):
+    """A name or value as the library's char *: UTF-8; a NUL character is refused (C would
+    silently cut the string there)."""
+    if s is None:
+        return None
+    s = str(s)
+    return _refuse_nul(s.encode(), s, what)
 
 
-def _b(s):
-    return None if s is None else str(s).encode()
+def _path(p, what="path"):
+    """A path (str, bytes or os.PathLike) as the library's char *, encoded as the file system
+    encodes it; a NUL character is refused (ValueError), as open() does."""
+    if not isinstance(p, (str, bytes, os.PathLike)):
+        raise ArgumentTypeError(_ERR_ARG, f"{what}: expected a path (str, bytes or "
+                                f"os.PathLike), got {type(p).__name__}")
+    p = os.fspath(p)
+    return _refuse_nul(os.fsencode(p), p, what)
+
+
+def _names(v, what):
+    """A list of names from a list/tuple or one name: plugins="integrator_pt" is one plugin,
+    not a sequence of letters."""
+    if v is None:
+        return []
+    if isinstance(v, (str, bytes, os.PathLike)):
+        return [v]
+    try:
+        return list(v)
+    except TypeError:
+        raise ArgumentTypeError(_ERR_ARG, f"{what}: expected a name or a list of names, got "
+                                f"{type(v).__name__}") from None
+
+
+def _integer(v, what):
+    """An integer argument (int, numpy integer, anything with __index__); TypeError naming
+    the argument for a str, float or other type. The range is checked by the library."""
+    if isinstance(v, bool):
+        raise ArgumentTypeError(_ERR_ARG, f"{what}: expected an integer, got bool {v!r}")
+    try:
+        return int(v.__index__())
+    except AttributeError:
+        raise ArgumentTypeError(_ERR_ARG, f"{what}: expected an integer, got "
+                                f"{type(v).__name__} {v!r}") from None
+
+
+def _number(v, what):
+    """A real-number argument (int, float, numpy number); TypeError naming the argument for a
+    str or other type."""
+    if isinstance(v, (str, bytes, bool)) or not hasattr(v, "__float__"):
+        raise ArgumentTypeError(_ERR_ARG, f"{what}: expected a number, got "
+                                f"{type(v).__name__} {v!r}")
+    return float(v)
 
 
 def _limited(limit, value, what):
     """`value` as an integer within the library's limit `limit` (tunetrace/limits.h, which
     the host's options use too): out of range raises, never wraps."""
-    try:
-        digits = str(operator.index(value))
-    except TypeError:
-        raise TypeError(f"{what}: expected an integer, got {value!r}") from None
+    digits = str(_integer(value, what))
     which, out = ctypes.c_int(), ctypes.c_uint64()
     _check(lib.tt_limit_find(_b(limit), ctypes.byref(which)), what)
     _check(lib.tt_limit_parse_uint(which, _b(digits), ctypes.byref(out)), what)
@@ -72,7 +170,12 @@ def _limited(limit, value, what):
 
 def _resolution(resolution):
     """(width, height) checked as the host checks --res WIDTHxHEIGHT (tunetrace/limits.h)."""
-    w, h = (operator.index(v) for v in resolution)
+    try:
+        w, h = resolution
+    except (TypeError, ValueError):
+        raise ArgumentTypeError(_ERR_ARG, "resolution: expected (width, height), got "
+                                f"{resolution!r}") from None
+    w, h = _integer(w, "resolution width"), _integer(h, "resolution height")
     out_w, out_h = ctypes.c_uint32(), ctypes.c_uint32()
     _check(lib.tt_limit_parse_resolution(_b(f"{w}x{h}"), ctypes.byref(out_w),
                                          ctypes.byref(out_h)), "resolution")
@@ -83,7 +186,8 @@ def _limited_real(limit, value, what):
     """`value` as a real number within the library's limit `limit` (tunetrace/limits.h)."""
     which, out = ctypes.c_int(), ctypes.c_double()
     _check(lib.tt_limit_find(_b(limit), ctypes.byref(which)), what)
-    _check(lib.tt_limit_parse_real(which, _b(repr(float(value))), ctypes.byref(out)), what)
+    _check(lib.tt_limit_parse_real(which, _b(repr(_number(value, what))), ctypes.byref(out)),
+           what)
     return out.value
 
 
@@ -106,7 +210,7 @@ def set_threads(n):
 def _extra_plugin_dirs(plugin_path):
     """plugin_path, then $TT_PLUGIN_PATH, then (the build tree's package only) the build
     tree's plugins; the library then searches its installed plugin folder."""
-    dirs = [os.fspath(d) for d in (plugin_path or [])]
+    dirs = [os.fspath(d) for d in _names(plugin_path, "plugin_path")]
     build = getattr(_lib._paths, "BUILD_PLUGIN_DIR", None) if _lib._paths else None
     if build:  # after $TT_PLUGIN_PATH, as for the uninstalled host
         dirs += [d for d in os.environ.get("TT_PLUGIN_PATH", "").split(":") if d]
@@ -148,7 +252,7 @@ class _Handle:
     @property
     def _p(self):
         if not self._ptr:
-            raise Error(-1, f"the {self._what} is closed")
+            raise InvalidArgumentError(_ERR_ARG, f"the {self._what} is closed")
         return self._ptr
 
 
@@ -160,9 +264,9 @@ class _Registry(_Handle):
     def __init__(self, plugin_path=None):
         self._ptr = lib.tt_registry_create(lib.tt_default_host())
         if not self._ptr:
-            _check(-2, "registry")
+            _check(STATUS["TT_ERR_OUT_OF_MEMORY"], "registry")
         for d in _extra_plugin_dirs(plugin_path):
-            lib.tt_registry_add_dir(self._ptr, _b(d))
+            lib.tt_registry_add_dir(self._ptr, _path(d, "plugin_path"))
 
 
 def list_plugins(plugin_path=None):
@@ -209,7 +313,8 @@ def describe(name, plugin_path=None):
     """The plugin's parameter space and options as a dict (host --describe NAME)."""
     with _Registry(plugin_path) as reg:
         p = ctypes.c_void_p()
-        _check(lib.tt_registry_load(reg._p, _b(name), ctypes.byref(p)), f"plugin \"{name}\"")
+        _check(lib.tt_registry_load(reg._p, _path(name, "plugin"), ctypes.byref(p)),
+               f"plugin \"{name}\"")
         return _describe_loaded(p)
 
 
@@ -218,8 +323,8 @@ def read_image(path):
     channels)."""
     w, h, c = ctypes.c_uint32(), ctypes.c_uint32(), ctypes.c_uint32()
     px = ctypes.POINTER(ctypes.c_float)()
-    _check(lib.tt_image_read(_b(path), ctypes.byref(w), ctypes.byref(h), ctypes.byref(c),
-                             ctypes.byref(px)))
+    _check(lib.tt_image_read(_path(path, "read_image"), ctypes.byref(w), ctypes.byref(h),
+                             ctypes.byref(c), ctypes.byref(px)), filename=path)
     try:
         n = w.value * h.value * c.value
         return np.ctypeslib.as_array(px, shape=(n,)).copy().reshape(h.value, w.value, c.value)
@@ -242,11 +347,13 @@ def write_exr(path, pixels, channels=None, meta=None):
     names = None
     if channels is not None:
         if len(channels) != c:
-            raise Error(-1, f"write_exr {path}: {c} channels but {len(channels)} names")
-        names = (ctypes.c_char_p * c)(*[_b(n) for n in channels])
+            raise InvalidArgumentError(_ERR_ARG, f"write_exr {path}: {c} channels but "
+                                       f"{len(channels)} names")
+        names = (ctypes.c_char_p * c)(*[_b(n, "channel name") for n in channels])
     items = list((meta or {}).items())
-    m = (_Meta * max(1, len(items)))(*[_Meta(_b(k), _b(v)) for k, v in items])
-    _check(lib.tt_image_write_exr(_b(os.fspath(path)), w, h, c,
+    m = (_Meta * max(1, len(items)))(*[_Meta(_b(k, "meta key"), _b(v, "meta value"))
+                                       for k, v in items])
+    _check(lib.tt_image_write_exr(_path(path, "write_exr"), w, h, c,
                                   a.ctypes.data_as(ctypes.POINTER(ctypes.c_float)), names,
                                   ctypes.cast(m, ctypes.c_void_p), len(items)))
 
@@ -264,28 +371,38 @@ class Session(_Handle):
 
     def __init__(self, scene, plugins=(), params=None, resolution=None, seed=None,
                  aovs=(), plugin_path=None, camera_time=None, frame_interval=1.0 / 24):
-        """Loads `scene` (scene.json or .pbrt) and the `plugins` (names or paths); `params`
-        maps "plugin.param" to a value; `resolution` (width, height) and `seed` override the
-        scene's; `aovs` names the AOV planes to keep (depth, normal, albedo, motion);
-        `camera_time` (seconds) picks the pose on the scene's camera path, with the motion
-        AOV measured against the pose `frame_interval` earlier."""
+        """Loads `scene` (scene.json or .pbrt) and the `plugins` (names or paths; one name
+        alone is one plugin); `params` maps "plugin.param" to a value (a plugin not listed in
+        `plugins` is loaded by name, as set() does); `resolution` (width, height) and `seed`
+        override the scene's; `aovs` names the AOV planes to keep (depth, normal, albedo,
+        motion); `camera_time` (seconds) picks the pose on the scene's camera path, with the
+        motion AOV measured against the pose `frame_interval` earlier."""
+        scene_b = _path(scene, "scene")
+        plugins = _names(plugins, "plugins")
+        aov_mask = self._aov_mask(aovs)
+        if resolution is not None:
+            w, h = _resolution(resolution)
+        if seed is not None:
+            seed = _limited("seed", seed, "seed")
+        if camera_time is not None:
+            camera_time = _number(camera_time, "camera_time")
+            frame_interval = _number(frame_interval, "frame_interval")
+        _sync_log_level()
         ptr = ctypes.c_void_p()
         _check(lib.tt_session_create(None, ctypes.byref(ptr)), "session")
         self._ptr = ptr
-        self._aovs = self._aov_mask(aovs)
-        self._set = {}  # plugin -> {key: value} set explicitly (a tuning hint's setup yields)
+        self._aovs = aov_mask
         for d in _extra_plugin_dirs(plugin_path):
-            _check(lib.tt_session_add_plugin_dir(self._ptr, _b(d)))
-        _check(lib.tt_session_load_scene(self._ptr, _b(os.fspath(scene))))
+            _check(lib.tt_session_add_plugin_dir(self._ptr, _path(d, "plugin_path")))
+        _check(lib.tt_session_load_scene(self._ptr, scene_b), filename=scene_b)
         if resolution is not None:
-            w, h = _resolution(resolution)
             _check(lib.tt_scene_set_resolution(lib.tt_session_scene(self._ptr), w, h),
                    "resolution")
         if camera_time is not None:
-            _check(lib.tt_session_set_camera_time(self._ptr, float(camera_time),
-                                                  float(frame_interval)), "camera_time")
+            _check(lib.tt_session_set_camera_time(self._ptr, camera_time, frame_interval),
+                   "camera_time")
         if seed is not None:
-            lib.tt_session_set_seed(self._ptr, _limited("seed", seed, "seed"))
+            lib.tt_session_set_seed(self._ptr, seed)
         for p in plugins:
             self.load_plugin(p)
         for key, value in (params or {}).items():
@@ -299,9 +416,10 @@ class Session(_Handle):
     @staticmethod
     def _aov_mask(aovs):
         mask = 0
-        for a in aovs:
+        for a in _names(aovs, "aovs"):
             if a not in AOVS:
-                raise Error(-1, f"AOV \"{a}\": expected one of {', '.join(AOVS)}")
+                raise InvalidArgumentError(_ERR_ARG, f"AOV \"{a}\": expected one of "
+                                           f"{', '.join(AOVS)}")
             mask |= AOVS[a][0]
         return mask
 
@@ -309,7 +427,8 @@ class Session(_Handle):
     def load_plugin(self, name):
         """Loads a plugin by name or path; returns its description (name, kind, version)."""
         p = ctypes.c_void_p()
-        _check(lib.tt_session_load_plugin(self._p, _b(name), ctypes.byref(p)), f"plugin \"{name}\"")
+        _check(lib.tt_session_load_plugin(self._p, _path(name, "plugin"), ctypes.byref(p)),
+               f"plugin \"{name}\"")
         return _plugin_info(lib.tt_loaded_plugin_entry(p), text(lib.tt_loaded_plugin_path(p)))
 
     @property
@@ -323,11 +442,36 @@ class Session(_Handle):
         return out
 
     def _loaded(self, name):
-        p = lib.tt_registry_find_name(lib.tt_session_registry(self._p), _b(name))
+        p = lib.tt_registry_find_name(lib.tt_session_registry(self._p), _b(name, "plugin"))
         if not p:
             loaded = ", ".join(x["name"] for x in self.plugins)
-            raise Error(-1, f"no plugin \"{name}\" is loaded (loaded: {loaded})")
+            raise UnknownNameError(_ERR_ARG, f"no plugin \"{name}\" is loaded (loaded: "
+                                   f"{loaded})")
         return p
+
+    def _load_on_demand(self, name):
+        """Loads plugin `name` for set() and tune() when the session has not started and no
+        plugin of that name is loaded (the host loads its default accel and integrator the
+        same way before --set); a name that is no plugin file is left to the caller's
+        error."""
+        if lib.tt_session_started(self._p) or lib.tt_registry_find_name(
+                lib.tt_session_registry(self._p), _b(name, "plugin")):
+            return
+        try:
+            self.load_plugin(name)
+        except NotFoundError:
+            pass
+
+    def _knows_key(self, plugin, key):
+        """True when `key` is a parameter or an option of the loaded plugin."""
+        p = lib.tt_registry_find_name(lib.tt_session_registry(self._p), _b(plugin))
+        if not p:
+            return False
+        space = lib.tt_loaded_plugin_space(p)
+        if space and lib.tt_space_find(space, _b(key)) >= 0:
+            return True
+        oi = lib.tt_session_plugin_options(p)
+        return bool(oi and oi.contents.get(_b(key)) is not None)
 
     def describe(self, name):
         """Space and options of a loaded plugin (as host --describe)."""
@@ -335,16 +479,22 @@ class Session(_Handle):
 
     def set(self, key, value, value2=None):
         """Sets a parameter or option: set("plugin.param", v) or set("plugin", "param", v).
-        Raises Error with the library's message for an unknown plugin, key or bad value."""
+        A plugin that is not loaded yet is loaded by name while the session has not started.
+        Raises UnknownNameError (a KeyError) for an unknown plugin or key and
+        InvalidArgumentError (a ValueError) for a bad value, with the library's message."""
         if value2 is None:
             plugin, dot, param = str(key).partition(".")
             if not dot:
-                raise Error(-1, f"set({key!r}, ...): expected \"plugin.param\"")
+                raise InvalidArgumentError(_ERR_ARG, f"set({key!r}, ...): expected "
+                                           "\"plugin.param\"")
         else:
             plugin, param, value = key, value, value2
-        _check(lib.tt_session_set(self._p, _b(plugin), _b(param), _b(_value_text(value))),
-               f"{plugin}.{param}={_value_text(value)}")
-        self._set.setdefault(plugin, {})[param] = _value_text(value)
+        what = f"{plugin}.{param}={_value_text(value)}"
+        raw = (_b(plugin, "plugin"), _b(param, "parameter"), _b(_value_text(value), what))
+        self._load_on_demand(plugin)
+        st = lib.tt_session_set(self._p, *raw)
+        if st < 0:
+            _check(st, what, cls=None if self._knows_key(plugin, param) else UnknownNameError)
 
     def config(self, plugin):
         """The plugin's configuration as a dict (parameter -> value)."""
@@ -365,6 +515,7 @@ class Session(_Handle):
 
     @property
     def resolution(self):
+        """The image size (width, height) the session renders."""
         c = lib.tt_session_camera(self._p).contents
         return c.width, c.height
 
@@ -372,6 +523,7 @@ class Session(_Handle):
         """Renders `spp` more samples per pixel in passes of `pass_spp` (host renders passes
         of 1) and returns the accumulated image, float32 (height, width, 3)."""
         spp, pass_spp = _limited("spp", spp, "spp"), _limited("spp", pass_spp, "pass_spp")
+        _sync_log_level()
         self.start()
         ps = _lib.PassStats(struct_size=ctypes.sizeof(_lib.PassStats))
         done = 0
@@ -392,21 +544,24 @@ class Session(_Handle):
     def _film(self):
         film = lib.tt_session_film(self._p)
         if not film:
-            raise Error(-1, "the session has not rendered yet (call render() or start())")
+            raise InvalidArgumentError(_ERR_ARG, "the session has not rendered yet (call "
+                                       "render() or start())")
         return film
 
     def aov(self, name):
         """An AOV plane of the last pass (first hit): depth (h, w), normal and albedo
         (h, w, 3), motion (h, w, 2) in pixels from this frame to the previous one."""
         if name not in AOVS:
-            raise Error(-1, f"AOV \"{name}\": expected one of {', '.join(AOVS)}")
+            raise InvalidArgumentError(_ERR_ARG, f"AOV \"{name}\": expected one of "
+                                       f"{', '.join(AOVS)}")
         film = self._film()
         bit, ch = AOVS[name]
         ptr = lib.tt_film_aov_const(film, bit)
         if not ptr:
             have = [a for a, (b, _) in AOVS.items() if lib.tt_film_aov_mask(film) & b]
-            raise Error(-1, f"AOV \"{name}\" was not requested (the session keeps: "
-                            f"{', '.join(have) or 'none'}; pass aovs=[...] to Session)")
+            raise InvalidArgumentError(_ERR_ARG, f"AOV \"{name}\" was not requested (the "
+                                       f"session keeps: {', '.join(have) or 'none'}; pass "
+                                       "aovs=[...] to Session)")
         w, h = lib.tt_film_width(film), lib.tt_film_height(film)
         a = np.ctypeslib.as_array(ptr, shape=(w * h * ch,)).copy()
         return a.reshape(h, w) if ch == 1 else a.reshape(h, w, ch)
@@ -434,87 +589,86 @@ class Session(_Handle):
     def tune(self, target=None, tuner=None, iterations=50, objective=None, params=None,
              spp=1, db=None, seed=None, warmup_passes=1, time_budget=0.0, verify=0):
         """Tunes the plugin `target` online (thesis Fig. 3.2): the default configuration is
-        measured first, then the tuner plugin `tuner` (loaded if needed; None: random
-        exploration) proposes `iterations` configurations, each applied and rendered for one
-        pass of `spp` (the passes accumulate into the image). `target` None: an integrator
-        with a tuning hint (PSSMLT), else the accel; `objective` None: the hint's, else
-        "render"; `params`: the parameters searched (None: the hint's list, else all). `db`: a
-        TuningDB or a path (None: no database). Afterwards the target runs the best
+        measured first, then the tuner plugin `tuner` (None: random exploration) proposes
+        `iterations` configurations, each applied and rendered for one pass of `spp` (the
+        passes accumulate into the image). The plan is the library's, as host's: `target`
+        None: an integrator with a tuning hint (PSSMLT), else the accel; the hint's setup
+        applies, the values set() put back on top; `objective` None: the hint's, else
+        "render"; `params` (a name or a list): the parameters searched (None: the hint's
+        list, else all). A target or tuner not loaded yet is loaded by name when the session
+        has not started. `db`: a TuningDB or a path; None: the per-user database as host
+        uses it ($XDG_DATA_HOME/tunetrace/tuning.db; one that cannot be opened is logged
+        and tuning goes on without); False: none. Afterwards the target runs the best
         configuration. `verify` > 0 measures default and best side by side that many rounds.
         Returns a Tuning with the history."""
         iterations = _limited("iterations", iterations, "iterations")
         spp = _limited("tune_spp", spp, "spp")
         seed = None if seed is None else _limited("seed", seed, "seed")
         warmup_passes = _limited("warmup", warmup_passes, "warmup_passes")
+        time_budget = _number(time_budget, "time_budget")
         time_budget = _limited_real("time", time_budget, "time_budget") if time_budget else 0.0
         verify = _limited("verify", verify, "verify") if verify else 0
+        params = None if params is None else _names(params, "params")
+        for name in (target, tuner):
+            if name is not None:
+                self._load_on_demand(name)
+        _sync_log_level()
         self.start()
-        reg = lib.tt_session_registry(self._p)
         tuner_p = None
         if tuner is not None:
-            tuner_p = lib.tt_registry_find_name(reg, _b(tuner))
+            tuner_p = lib.tt_registry_find_name(lib.tt_session_registry(self._p),
+                                                _b(tuner, "tuner"))
             if not tuner_p:
-                raise Error(-1, f"tuner \"{tuner}\" is not loaded: pass plugins=[\"{tuner}\", "
-                                "...] to Session (plugins load before the session starts)")
-        hint = None
-        if target is None:
-            integ = lib.tt_session_integrator_plugin(self._p)
-            hint = self._hint(integ)
-            space = lib.tt_loaded_plugin_space(integ)
-            if hint and space and lib.tt_space_count(space):
-                target_p = integ
-            else:
-                target_p, hint = lib.tt_session_accel_plugin(self._p), None
-        else:
-            target_p = self._loaded(target)
-            hint = self._hint(target_p)
-        entry = lib.tt_loaded_plugin_entry(target_p).contents
-        name = text(entry.name)
-        index = lib.tt_session_plugin_index(self._p, entry.name)
-        space = lib.tt_loaded_plugin_space(target_p)
-        if not space or not lib.tt_space_count(space):
-            raise Error(-1, f"{name}: the plugin publishes no tunable parameters")
-        current = lib.tt_session_config_at(self._p, index)
-        if hint is not None and hint.setup:  # the hint's starting values, the user's on top
-            _check(lib.tt_config_from_json(current, hint.setup, b"tuning hint setup"), name)
-            for k, v in self._set.get(name, {}).items():
-                _check(lib.tt_session_set(self._p, _b(name), _b(k), _b(v)))
-        if params is None and hint is not None and hint.tunable:
-            params, i = [], 0
-            while hint.tunable[i]:
-                params.append(text(hint.tunable[i]))
-                i += 1
-        if objective is None:
-            objective = text(hint.objective) if hint is not None else "render"
-        subset = None
-        if params:
-            names = (ctypes.c_char_p * len(params))(*[_b(p) for p in params])
-            subset = lib.tt_space_subset(space, names, len(params), current)
-            if not subset:
-                _check(-1, "params")
-        own_db = None
-        if db is not None and not isinstance(db, TuningDB):
-            db = own_db = TuningDB(db, write=True)
-        elif db is not None and db.read_only:
-            raise Error(-1, f"tune: the tuning database {db.path} was opened read-only: "
-                            "TuningDB(path, write=True), or give the path")
+                raise UnknownNameError(_ERR_ARG, f"tuner \"{tuner}\" is not loaded, and the "
+                                       "session has started: pass plugins=[\"{tuner}\", ...] "
+                                       "to Session or tune before the first render")
+        plan = _lib.TuningPlan(struct_size=ctypes.sizeof(_lib.TuningPlan))
+        names = None
+        if params is not None:
+            names = (ctypes.c_char_p * max(1, len(params)))(
+                *[_b(p, "tune(params)") for p in params])
+        st = lib.tt_session_tuning_plan(self._p, _b(target, "tune(target)"), names,
+                                        len(params or ()), ctypes.byref(plan))
+        if st < 0:
+            unknown = target is not None and not lib.tt_registry_find_name(
+                lib.tt_session_registry(self._p), _b(target))
+            _check(st, "tune", cls=UnknownNameError if unknown else None)
         try:
-            return self._run_tuning(index, entry, space, current, subset, objective, tuner_p,
-                                    iterations, spp, db, seed, warmup_passes, time_budget,
-                                    verify)
+            entry = lib.tt_loaded_plugin_entry(plan.target).contents
+            current = lib.tt_session_config_at(self._p, plan.target_index)
+            if objective is None:
+                objective = text(plan.objective)
+            with self._tuning_db(db) as tdb:
+                return self._run_tuning(plan.target_index, entry, plan.space, current,
+                                        plan.search, objective, tuner_p, iterations, spp,
+                                        tdb, seed, warmup_passes, time_budget, verify)
         finally:
-            if subset:
-                lib.tt_space_destroy(subset)
-            if own_db:
-                own_db.close()
+            lib.tt_tuning_plan_release(ctypes.byref(plan))
 
     @staticmethod
-    def _hint(p):
-        h = lib.tt_loaded_plugin_get(p, b"tt.tuning_hint/1") if p else None
-        if not h:
-            return None
-        h = ctypes.cast(h, ctypes.POINTER(_lib.TuningHint)).contents
-        return h if h.objective else None
+    def _tuning_db(db):
+        """The database of a tuning run as a context (None inside for no database): host's
+        rule, see tune(). A database this opened is closed afterwards."""
+        if db is False:
+            return contextlib.nullcontext(None)
+        if isinstance(db, TuningDB):
+            if db.read_only:
+                raise InvalidArgumentError(_ERR_ARG, f"tune: the tuning database {db.path} was "
+                                           "opened read-only: TuningDB(path, write=True), or "
+                                           "give the path")
+            return contextlib.nullcontext(db)
+        if db is not None:
+            return TuningDB(db, write=True)
+        path = _lib.take_string(lib.tt_tunedb_default_path())
+        if path is None:
+            _log.warning("tuning: no $XDG_DATA_HOME or $HOME: tuning without a database "
+                         "(pass db=PATH)")
+            return contextlib.nullcontext(None)
+        try:
+            return TuningDB(path, write=True)
+        except Error as e:
+            _log.warning("tuning: %s; tuning without a database", e)
+            return contextlib.nullcontext(None)
 
     def _run_tuning(self, index, entry, space, current, subset, objective, tuner_p, iterations,
                     spp, db, seed, warmup_passes, time_budget, verify):
@@ -536,9 +690,9 @@ class Session(_Handle):
             d.tuner_settings = lib.tt_session_config_at(
                 self._p, lib.tt_session_plugin_index(self._p, tentry.name))
             d.tuner_name = tentry.name
-        d.seed = int(seed) if seed is not None else self.stats["seed"]
-        d.iterations, d.spp, d.warmup_passes = int(iterations), int(spp), int(warmup_passes)
-        d.time_budget_s = float(time_budget)
+        d.seed = seed if seed is not None else self.stats["seed"]
+        d.iterations, d.spp, d.warmup_passes = iterations, spp, warmup_passes
+        d.time_budget_s = time_budget
         d.plugin, d.plugin_version = entry.name, entry.version
         d.db = db._ptr if db is not None else None
         d.state = ctypes.pointer(state)
@@ -553,15 +707,15 @@ class Session(_Handle):
     def _drive(self, t, target, current, objective, db, verify):
         verification = None
         st = lib.tt_tuning_run(t, ctypes.byref(target))
-        if st == -8:  # TT_ERR_NO_DATA: the objective's metric is not published
+        if st == _ERR_NO_DATA:  # the objective's metric is not published
             _check(st, f"objective {objective}")
-        interrupted = st == -9
+        interrupted = st == _ERR_INTERRUPTED
         if st < 0 and not interrupted:
             _check(st, "tuning")
         if verify and not interrupted:
             v = _lib.TuningVerification(struct_size=ctypes.sizeof(_lib.TuningVerification))
-            vst = lib.tt_tuning_verify(t, ctypes.byref(target), int(verify), ctypes.byref(v))
-            if vst < 0 and vst != -9:
+            vst = lib.tt_tuning_verify(t, ctypes.byref(target), verify, ctypes.byref(v))
+            if vst < 0 and vst != _ERR_INTERRUPTED:
                 _check(vst, "verify")
             verification = {
                 "rounds": v.rounds, "render_ratio": v.render_ratio, "total_ratio": v.total_ratio,
@@ -633,13 +787,22 @@ class TuningDB(_Handle):
     _free = staticmethod(lambda p: lib.tt_tunedb_close(p))
 
     def __init__(self, path=None, write=False):
+        """Opens a database: `path`, or None for the per-user one. Without `write` it is read
+        and nothing in the file changes; a file that does not exist raises NotFoundError (a
+        FileNotFoundError) and none is created. write=True also records into it, creating
+        it (and its folder) if missing, as tune(db=...) does."""
         if path is None:
             path = _lib.take_string(lib.tt_tunedb_default_path())
             if path is None:
-                raise Error(-1, "no $XDG_DATA_HOME or $HOME: give the database a path")
+                raise InvalidArgumentError(_ERR_ARG, "no $XDG_DATA_HOME or $HOME: give the "
+                                           "database a path")
+        raw = _path(path, "TuningDB")
+        if not write and not os.path.exists(raw):
+            raise _make_error(STATUS["TT_ERR_IO"], f"{os.fsdecode(raw)}: no such tuning "
+                              "database (Session.tune(db=...) creates one)", raw, NotFoundError)
         ptr = ctypes.c_void_p()
         opener = lib.tt_tunedb_open if write else lib.tt_tunedb_open_readonly
-        _check(opener(_b(os.fspath(path)), ctypes.byref(ptr)))
+        _check(opener(raw, ctypes.byref(ptr)), filename=raw)
         self._ptr = ptr
 
     @property
@@ -654,11 +817,13 @@ class TuningDB(_Handle):
 
     @property
     def path(self):
+        """The database file."""
         return text(lib.tt_tunedb_path(self._p))
 
     def count(self, plugin=None):
+        """Rows (of `plugin`, or all)."""
         n = ctypes.c_uint64()
-        _check(lib.tt_tunedb_count(self._p, _b(plugin), ctypes.byref(n)), "count")
+        _check(lib.tt_tunedb_count(self._p, _b(plugin, "plugin"), ctypes.byref(n)), "count")
         return n.value
 
     def __len__(self):
@@ -689,8 +854,10 @@ class TuningDB(_Handle):
             row["status"] = _STATUS_NAMES.get(r.status, str(r.status))
             out.append(row)
             return 0
-        _check(lib.tt_tunedb_foreach(self._p, _b(plugin), _lib.ROW_FN(one), None), "rows")
+        _check(lib.tt_tunedb_foreach(self._p, _b(plugin, "plugin"), _lib.ROW_FN(one), None),
+               "rows")
         return out
 
     def export_csv(self, path):
-        _check(lib.tt_tunedb_export_csv(self._p, _b(os.fspath(path))), "export")
+        """Writes every row to a CSV file (the columns of host --export-csv)."""
+        _check(lib.tt_tunedb_export_csv(self._p, _path(path, "export_csv")), "export")

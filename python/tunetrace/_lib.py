@@ -198,6 +198,11 @@ class TuningHint(ctypes.Structure):  # tt_tuning_hint (tuning_hint.h)
                 ("tunable", ctypes.POINTER(c_u8p)), ("setup", c_u8p)]
 
 
+class TuningPlan(ctypes.Structure):  # tt_tuning_plan (session.h)
+    _fields_ = [("struct_size", ctypes.c_uint32), ("target_index", ctypes.c_size_t),
+                ("target", c_vp), ("space", c_vp), ("search", c_vp), ("objective", c_u8p)]
+
+
 class OptionInfo(ctypes.Structure):  # tt_option_info (options.h)
     _fields_ = [("key", c_u8p), ("description", c_u8p)]
 
@@ -218,7 +223,7 @@ LAYOUTS = {
     "tt_tuning_measurement": TuningMeasurement, "tt_tuning_target": TuningTarget,
     "tt_tuning_desc": TuningDesc, "tt_tuning_stats": TuningStats,
     "tt_tuning_verification": TuningVerification, "tt_tunedb_row": TunedbRow,
-    "tt_tuning_hint": TuningHint, "tt_option_info": OptionInfo,
+    "tt_tuning_hint": TuningHint, "tt_tuning_plan": TuningPlan, "tt_option_info": OptionInfo,
     "tt_options_iface": OptionsIface,
 }
 
@@ -227,6 +232,7 @@ LAYOUTS = {
 LIST_FN = ctypes.CFUNCTYPE(None, c_vp, ctypes.c_char_p)
 ROW_FN = ctypes.CFUNCTYPE(ctypes.c_int, c_vp, ctypes.POINTER(TunedbRow))
 ERROR_FN = ctypes.CFUNCTYPE(None, c_vp, ctypes.c_int, ctypes.c_char_p)
+LOG_FN = ctypes.CFUNCTYPE(None, c_vp, ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p)
 
 _I, _U32, _U64, _D, _S, _P = (ctypes.c_int, ctypes.c_uint32, ctypes.c_uint64, ctypes.c_double,
                               ctypes.c_char_p, ctypes.c_void_p)
@@ -237,11 +243,12 @@ _PF = ctypes.POINTER(ctypes.c_float)
 _PROTOTYPES = {
     # common.h
     "tt_version": (_S, []), "tt_last_error": (_S, []), "tt_clear_error": (None, []),
-    "tt_status_string": (_S, [_I]), "tt_free": (None, [_P]),
+    "tt_status_string": (_S, [_I]), "tt_status_name": (_S, [_I]), "tt_free": (None, [_P]),
     # host.h
     "tt_default_host": (_P, []), "tt_default_host_set_threads": (_I, [_U32]),
     "tt_default_host_request_stop": (None, []), "tt_default_host_hold_stop": (None, [_I]),
     "tt_default_host_set_log_level": (None, [_I]),
+    "tt_default_host_set_log_callback": (None, [LOG_FN, _P]),
     # plugin.h, loader.h
     "tt_plugin_kind_name": (_S, [_U32]),
     "tt_registry_create": (_P, [_P]), "tt_registry_destroy": (None, [_P]),
@@ -259,6 +266,7 @@ _PROTOTYPES = {
     "tt_loaded_plugin_space": (_P, [_P]),
     # params.h
     "tt_space_to_json": (_P, [_P]), "tt_space_count": (ctypes.c_size_t, [_P]),
+    "tt_space_find": (_I, [_P, _S]),
     "tt_space_destroy": (None, [_P]),
     "tt_space_subset": (_P, [_P, ctypes.POINTER(_S), ctypes.c_size_t, _P]),
     "tt_config_to_json": (_P, [_P]), "tt_config_from_json": (_I, [_P, _S, _S]),
@@ -298,6 +306,9 @@ _PROTOTYPES = {
     "tt_session_tuning_target": (_I, [_P, ctypes.c_size_t, _I, ctypes.POINTER(TuningTarget)]),
     "tt_session_tuning_state": (_I, [_P, ctypes.c_size_t, _U32, _S, _S, _I,
                                      ctypes.POINTER(TuningState)]),
+    "tt_session_tuning_plan": (_I, [_P, _S, ctypes.POINTER(_S), ctypes.c_size_t,
+                                    ctypes.POINTER(TuningPlan)]),
+    "tt_tuning_plan_release": (None, [ctypes.POINTER(TuningPlan)]),
     # tuning.h
     "tt_tuning_create": (_I, [ctypes.POINTER(TuningDesc), _PP]),
     "tt_tuning_destroy": (None, [_P]),
