@@ -229,6 +229,5 @@ int main(void) {
   test_two_alive(0, ref);
   test_reassign_loop(ref);
   test_session_per_thread(ref);
-  printf("session_lifetime: %d checks, %d failed\n", tt_test_checks, tt_test_failures);
-  return tt_test_failures ? 1 : 0;
+  return tt_test_finish("session_lifetime");
 }

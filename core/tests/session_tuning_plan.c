@@ -129,6 +129,5 @@ int main(int argc, char **argv) {
   tt_default_host_set_log_level(TT_LOG_WARN);
   test_defaults();
   test_fixture_hints(argv[1], argv[2]);
-  printf("session_tuning_plan: %d checks, %d failed\n", tt_test_checks, tt_test_failures);
-  return tt_test_failures ? 1 : 0;
+  return tt_test_finish("session_tuning_plan");
 }
