@@ -162,7 +162,7 @@ typedef struct tt__net_layer {
   uint32_t in, out, ksize, sets, activation;  /* activation: 0 none, 1 ReLU, 2 softmax */
   float *w;       /* original layout, sets * out * in * k * k */
   float *b;       /* sets * out */
-  /* Pixel-vector path (taa_net_fast.c): outputs in blocks of `oblk`, weights
+  /* Pixel-vector path (taa_fast_pack.c, taa_kernel_*.c): outputs in blocks of `oblk`, weights
    * [set][block][in][k][k][oblk] (zero for padded outputs), biases [set][nob * oblk]. */
   uint32_t oblk, nob;
   float *wq;
@@ -254,7 +254,7 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
 void tt__net_state_free(tt__net_state *s);
 #define TT__NET_COL_OFF 8u   /* zero columns left of x = 0 in the fast path's planes */
 
-/* Fast path (taa_net_fast.c): repacks a layer's weights for the pixel-vector convolutions. */
+/* Fast path (taa_fast_pack.c): repacks a layer's weights for the pixel-vector convolutions. */
 tt_status tt__net_fast_pack(tt__net_layer *l);
 /* Allocates the fast path's planes; called by tt__net_state_init. */
 tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m);

@@ -8,7 +8,9 @@
  * - the result does not depend on the thread count or the band split: 1, 2 and 3 threads
  *   and forced band heights give bit-identical outputs and states (memcmp);
  * - all of it for both kernel-layer algorithms of the fast path (Winograd F(2x2, 5x5) and
- *   direct), the vs-reference checks also on forced AVX2. */
+ *   direct), the vs-reference checks also on forced AVX2 and on the portable kernels;
+ * - the kernels run are the best the CPU has, whichever compiler built them, and the
+ *   AVX-512 kernels give the same bits as the AVX2 ones. */
 #include "tt_test.h"
 
 #include "taa_internal.h"
@@ -192,6 +194,111 @@ static void test_fast_vs_reference(void) {
   }
   if (saved) setenv("TT_POST_TAA_ISA", saved, 1);
   else unsetenv("TT_POST_TAA_ISA");
+  free(saved);
+}
+
+/* Sets TT_POST_TAA_ISA (NULL: unsets it). */
+static void set_isa(const char *isa) {
+  if (isa) setenv("TT_POST_TAA_ISA", isa, 1);
+  else unsetenv("TT_POST_TAA_ISA");
+}
+
+/* The kernels the fast path runs are the best the CPU has, whichever compiler built them
+ * (the sanitizer build is clang's: its AVX2 / AVX-512 code must run there too), and
+ * TT_POST_TAA_ISA=avx2|generic caps the choice. */
+static void test_isa_dispatch(void) {
+  int v3 = 0, v4 = 0;
+#if defined(__x86_64__)
+  __builtin_cpu_init();
+  v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  v4 = v3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+#endif
+  const char *isa0 = getenv("TT_POST_TAA_ISA");
+  char *saved = isa0 ? strdup(isa0) : NULL;
+  const struct { const char *force, *want; } cases[] = {
+      {NULL, v4 ? "avx512" : v3 ? "avx2" : "generic"},
+      {"avx2", v3 ? "avx2" : "generic"},
+      {"generic", "generic"}};
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    set_isa(cases[k].force);
+    const char *got = tt__net_fast_isa();
+    printf("fast path kernels, TT_POST_TAA_ISA=%s: %s (expected %s)\n",
+           cases[k].force ? cases[k].force : "(unset)", got, cases[k].want);
+    CHECK_MSG(strcmp(got, cases[k].want) == 0, "TT_POST_TAA_ISA=%s: kernels %s, expected %s",
+              cases[k].force ? cases[k].force : "(unset)", got, cases[k].want);
+  }
+  set_isa(saved);
+  free(saved);
+}
+
+/* The AVX-512 kernels give the same bits as the AVX2 ones (the 16-lane code repeats the
+ * 8-lane code's operations per lane in the same order): outputs and states of 3 frames of
+ * one shape, compared with memcmp. 150 x 37: two 64-column chunks and a tail of 22, so the
+ * AVX-512 code's 16- and 8-lane groups both run. */
+static void check_isa_bits(const shape *s, const char *label, int wino) {
+  const uint32_t w = 150, h = 37;
+  buf b = write_model(s);
+  tt__net_model m;
+  tt_status st = tt__net_parse(b.p, b.n, label, &m);
+  CHECK_MSG(st == TT_OK, "%s: %s", label, tt_last_error());
+  free(b.p);
+  if (st != TT_OK) return;
+  tt__net_state best, avx2;
+  CHECK(tt__net_state_init(&best, &m, w, h) == TT_OK);
+  CHECK(tt__net_state_init(&avx2, &m, w, h) == TT_OK);
+  best.winograd = avx2.winograd = wino;
+  size_t n = (size_t)w * h;
+  float *color = malloc(n * 3 * 4), *depth = malloc(n * 4), *motion = malloc(n * 2 * 4);
+  float *o1 = malloc(n * 3 * 4), *o2 = malloc(n * 3 * 4), *zprev = malloc(n * 4);
+  uint32_t differ = 0;
+  const char *isa_best = "", *isa_avx2 = "";
+  for (uint32_t f = 0; f < 3; f++) {
+    random_frame(w, h, color, depth, motion);
+    for (size_t i = 0; i < n; i++) zprev[i] = 5.0f + 4.0f * rnd();
+    tt__net_frame fr = {.color = color, .depth = depth, .motion = motion, .prev_depth = zprev,
+                        .jitter_index = 3 + f};
+    tt_jitter_halton23(fr.jitter_index, fr.jitter);
+    set_isa(NULL);
+    isa_best = tt__net_fast_isa();
+    tt__net_process_frame(&best, &m, tt_default_host(), &fr, o1);
+    set_isa("avx2");
+    isa_avx2 = tt__net_fast_isa();
+    tt__net_process_frame(&avx2, &m, tt_default_host(), &fr, o2);
+    differ += memcmp(o1, o2, n * 3 * 4) != 0;
+    differ += memcmp(best.state, avx2.state, n * best.state_ch * 4) != 0;
+  }
+  printf("%s (%s): %s vs %s: %s\n", label, wino_name(wino), isa_best, isa_avx2,
+         differ ? "DIFFERENT" : "bit-identical");
+  CHECK_MSG(differ == 0, "%s (%s): %s and %s results differ", label, wino_name(wino), isa_best,
+            isa_avx2);
+  free(color), free(depth), free(motion), free(o1), free(o2), free(zprev);
+  tt__net_state_free(&best);
+  tt__net_state_free(&avx2);
+  tt__net_free(&m);
+}
+
+static void test_isa_bits(void) {
+  shape thesis12 = {12, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1, 0};
+  shape thesis6 = {6, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 1, 0};
+  shape no_hidden = {12, 0, 3, {3, 3, 5}, {1, 1, 1}, 1, 1, 0};
+  shape hidden8_all = {12, 8, 3, {3, 3, 5}, {8, 8, 8}, 8, 8, 0};
+  shape two = {12, 3, 1, {3}, {8}, 8, 1, 0};
+  shape wide = {40, 5, 2, {3, 5}, {1, 8}, 8, 1, 0};
+  shape reject6 = {6, 0, 3, {3, 3, 5}, {1, 8, 8}, 8, 1, TT__NET_FLAG_REJECT};
+  shape reset12 = {12, 5, 3, {3, 3, 5}, {1, 8, 8}, 8, 8, TT__NET_FLAG_REJECT | TT__NET_FLAG_RESET};
+  const char *isa0 = getenv("TT_POST_TAA_ISA");
+  char *saved = isa0 ? strdup(isa0) : NULL;
+  for (int wino = 2; wino >= 0; wino--) {
+    check_isa_bits(&thesis12, "thesis-12", wino);
+    check_isa_bits(&thesis6, "thesis-6", wino);
+    check_isa_bits(&no_hidden, "hidden-0", wino);
+    check_isa_bits(&hidden8_all, "hidden-8-all-sets", wino);
+    check_isa_bits(&two, "2-layers", wino);
+    check_isa_bits(&wide, "width-40", wino);
+    check_isa_bits(&reject6, "rejection-input-6", wino);
+    check_isa_bits(&reset12, "rejection-reset-12", wino);
+  }
+  set_isa(saved);
   free(saved);
 }
 
@@ -636,7 +743,9 @@ int main(void) {
   test_errors();
   test_roundtrip();
   test_rejection_disocclusion();
+  test_isa_dispatch();
   test_fast_vs_reference();
+  test_isa_bits();
   test_winograd_vs_direct();
   test_thread_invariance();
   /* every shipped network (README.md: the default and the two thesis widths) */
