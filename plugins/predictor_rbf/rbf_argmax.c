@@ -4,12 +4,10 @@
 #include <math.h>
 
 rbf_kernels rbf_kernels_pick(void) {
-  rbf_kernels k = {NULL, rbf_qbound_base};
 #ifdef RBF_HAVE_AVX2
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
-    k.coarse = rbf_qcoarse_avx2, k.fine = rbf_qbound_avx2;
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return *rbf_kernels_avx2();
 #endif
-  return k;
+  return *rbf_kernels_base();
 }
 
 size_t rbf_argmax_work(uint32_t features, size_t n) {

@@ -7,8 +7,8 @@
  * those with qa_k + tol_k >= max_j (qa_j - tol_j). Every other candidate has
  * Q_k < that maximum <= the best Q, so it can neither be the argmax nor tie with it. Three
  * levels, each on what the previous one kept:
- *   1. coarse (rbf_qcoarse_*: single precision, about 1e-6), where the CPU has a kernel;
- *   2. fine (rbf_qbound_*: double precision, a polynomial exp, about 1e-14);
+ *   1. coarse (rbf_kernels.coarse: single precision, about 1e-6), where the CPU has it;
+ *   2. fine (rbf_kernels.fine: double precision, a polynomial exp, about 1e-14);
  *   3. rbf_q_parts itself, in candidate order with a strict `>`: the reference's answer.
  * Usually a handful of candidates reach level 2 and one reaches level 3.
  *
@@ -38,11 +38,6 @@
 #include "rbf_qbound.h"
 
 #include <stddef.h>
-
-typedef struct rbf_kernels {
-  rbf_qcoarse_fn *coarse;  /* NULL: no level 1 */
-  rbf_qbound_fn *fine;
-} rbf_kernels;
 
 typedef struct rbf_argmax_stats {
   size_t fine;   /* candidates that reached level 2 */

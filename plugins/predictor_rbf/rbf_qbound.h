@@ -14,18 +14,25 @@
 typedef void rbf_qbound_fn(const double *theta, const double *ds, const double *da, uint32_t f,
                            double nw, double *e, double *q, double *qabs);
 
-rbf_qbound_fn rbf_qbound_base;
-/* The coarse level before it (rbf_qcoarse_avx2.c): single precision, about 1e-6 relative
+/* The coarse level before it (AVX2 only): single precision, about 1e-6 relative
  * where the polynomial kernel is 1e-14, at a third of its cost. Float copies of theta, ds and
  * da, f8 values each, a multiple of 8 (padded with zeros: theta 0 adds nothing);
  * *qx ~ sum_i |theta_i e_i| |x_i|, x_i = nw sqrt(ds_i + da_i). */
 typedef void rbf_qcoarse_fn(const float *thetaf, const float *dsf, const float *daf, uint32_t f8,
                             float nw, double *q, double *qabs, double *qx);
 
+/* One instruction set's kernels. */
+typedef struct rbf_kernels {
+  rbf_qcoarse_fn *coarse;  /* NULL: no level 1 */
+  rbf_qbound_fn *fine;
+} rbf_kernels;
+
+/* The copies (rbf_qbound.c, compiled once per instruction set): the baseline's (fine level
+ * only) everywhere; AVX2+FMA (both levels) in x86-64 builds, to run only where the CPU has
+ * both. rbf_argmax.c's rbf_kernels_pick is the one place that chooses. */
+const rbf_kernels *rbf_kernels_base(void);
 #ifdef RBF_HAVE_AVX2
-/* run only where the CPU has AVX2 and FMA */
-rbf_qbound_fn rbf_qbound_avx2;
-rbf_qcoarse_fn rbf_qcoarse_avx2;
+const rbf_kernels *rbf_kernels_avx2(void);
 #endif
 
 #endif /* TT_PREDICTOR_RBF_QBOUND_H */

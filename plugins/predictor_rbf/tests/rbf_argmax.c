@@ -27,12 +27,14 @@ typedef struct kernel { const char *name; rbf_kernels k; } kernel;
 
 static int kernels(kernel *out) {
   int n = 0;
-  out[n++] = (kernel){"base", {NULL, rbf_qbound_base}};
+  const rbf_kernels *base = rbf_kernels_base();
+  out[n++] = (kernel){"base", *base};
 #ifdef RBF_HAVE_AVX2
   if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-    out[n++] = (kernel){"avx2", {NULL, rbf_qbound_avx2}};
-    out[n++] = (kernel){"coarse avx2 + avx2", {rbf_qcoarse_avx2, rbf_qbound_avx2}};
-    out[n++] = (kernel){"coarse avx2 + base", {rbf_qcoarse_avx2, rbf_qbound_base}};
+    const rbf_kernels *avx2 = rbf_kernels_avx2();
+    out[n++] = (kernel){"avx2", {NULL, avx2->fine}};
+    out[n++] = (kernel){"coarse avx2 + avx2", *avx2};
+    out[n++] = (kernel){"coarse avx2 + base", {avx2->coarse, base->fine}};
   }
 #endif
   return n;
