@@ -216,173 +216,221 @@ static int tt__check_still_post(const tt__session *s) {
   return TT_EXIT_OK;
 }
 
+/* --frames A:B: one full render per frame f = A..B (the camera at t = f / fps, the frames of
+ * a sequence), <stem>_NNNN.exr (and <stats stem>_NNNN.json); the scene is reloaded for each
+ * frame. */
+static int tt__render_frames(const tt__host_options *opt) {
+  char stem[4096], name[4200], stats[4200];
+  if (opt->out) snprintf(stem, sizeof stem, "%.*s", (int)(strlen(opt->out) - 4), opt->out);
+  else {
+    tt__default_out(opt->scene, stem, sizeof stem);
+    stem[strlen(stem) - 4] = 0;
+  }
+  double fps = opt->fps > 0 ? opt->fps : 24.0;
+  for (uint32_t f = opt->frames_first; f <= opt->frames_last; f++) {
+    tt__host_options one = *opt;
+    one.frames = 0;
+    one.camera_time_set = 1;
+    one.camera_time = f / fps;
+    snprintf(name, sizeof name, "%s_%04u.exr", stem, f);
+    one.out = name;
+    if (opt->stats) {
+      const char *dot = strrchr(opt->stats, '.');
+      int len = dot && !strcmp(dot, ".json") ? (int)(dot - opt->stats) : (int)strlen(opt->stats);
+      snprintf(stats, sizeof stats, "%.*s_%04u.json", len, opt->stats, f);
+      one.stats = stats;
+    }
+    int frc = tt__run_render(&one);
+    if (frc != TT_EXIT_OK) return frc;
+  }
+  return TT_EXIT_OK;
+}
+
+/* A still render: the host session, the tuning phase's record, the output files and the
+ * limits of the progressive passes. tt__render_close frees what it holds at any stage. */
+typedef struct tt__render_job {
+  const tt__host_options *opt;
+  tt__session s;
+  tt__tuning *tuning;           /* NULL when nothing was tuned or explored */
+  char exr[4096], png[4096];
+  uint32_t target_spp;          /* UINT32_MAX: until the time budget */
+  double budget_s;              /* 0: no time budget */
+  uint64_t t0;                  /* the time budget counts from the tuning phase's start */
+} tt__render_job;
+
+/* The output files: named, then checked before the render (not found unwritable after it). */
+static int tt__render_outputs(tt__render_job *j) {
+  const tt__host_options *opt = j->opt;
+  if (opt->out) snprintf(j->exr, sizeof j->exr, "%s", opt->out);
+  else tt__default_out(opt->scene, j->exr, sizeof j->exr);
+  snprintf(j->png, sizeof j->png, "%.*s.png", (int)(strlen(j->exr) - 4), j->exr);
+  const char *outputs[3] = {j->exr, j->png, opt->stats};
+  for (int i = 0; i < 3; i++)
+    if (outputs[i] && tt_file_check_writable(outputs[i]) != TT_OK) {
+      tt__say("%s%s\n", i == 2 ? "--stats: " : "", tt_last_error());
+      return TT_EXIT_OUTPUT;
+    }
+  return TT_EXIT_OK;
+}
+
+/* The passes' limits: --spp (else the scene's) and --time-budget (else the scene's); a time
+ * budget alone renders until the budget, with --spp both limits apply. Logs the render. */
+static void tt__render_limits(tt__render_job *j) {
+  const tt__host_options *opt = j->opt;
+  const tt_render_settings *settings = tt_scene_settings(j->s.scene);
+  j->target_spp = opt->spp ? opt->spp : settings->spp;
+  j->budget_s = opt->time_budget > 0 ? opt->time_budget : settings->time_budget_s;
+  if (opt->time_budget > 0 && !opt->spp) j->target_spp = UINT32_MAX;
+  if (opt->quiet) return;
+  int until_budget = j->target_spp == UINT32_MAX;
+  tt__say("%s: %llu triangles, %ux%u, %s%u spp, seed %llu, %u threads\n",
+          opt->scene, (unsigned long long)tt_scene_triangle_count(j->s.scene),
+          j->s.camera->width, j->s.camera->height, until_budget ? "time budget, up to " : "",
+          until_budget ? 0 : j->target_spp, (unsigned long long)j->s.rec.seed, j->s.rec.threads);
+}
+
+/* Create: the outputs checked, the session opened (scene, plugins, configurations) and
+ * started (accel, integrator, film). Prints what failed; an exit code. */
+static int tt__render_create(tt__render_job *j, const tt__host_options *opt) {
+  memset(j, 0, sizeof *j);
+  j->opt = opt;
+  int rc = tt__render_outputs(j);
+  if (rc == TT_EXIT_OK) rc = tt__session_open(&j->s, opt);
+  if (rc == TT_EXIT_OK) rc = tt__check_still_post(&j->s);
+  if (rc != TT_EXIT_OK) return rc;
+  tt_loaded_plugin *predictor = tt_registry_find_kind(j->s.reg, TT_KIND_PREDICTOR);
+  if (predictor && !opt->quiet)
+    j->s.host->log(TT_LOG_WARN, NULL, "%s is loaded but not used: a predictor chooses the "
+                   "configuration in the hybrid loop (--hybrid over the camera path, or "
+                   "--predict)", tt_loaded_plugin_entry(predictor)->name);
+  tt__render_limits(j);
+  return tt__session_start(&j->s, opt->aov_mask);
+}
+
+/* The tuning phase (when a tuner is loaded, or --tune/--explore): its passes go into the
+ * film. Returns its exit code; the render goes on to write what it has unless that is a usage
+ * error or the phase left no record. */
+static int tt__render_tune(tt__render_job *j) {
+  tt__run_record *rec = &j->s.rec;
+  j->t0 = j->s.host->clock_ns();
+  int rc = tt__tune_phase(&j->s, &j->tuning);
+  rec->tuning = j->tuning;
+  tt__session_sync(&j->s);  /* the tuning passes and builds ran through the library */
+  if (!j->tuning) return rc;
+  if (j->tuning->interrupted) rec->interrupted = 1;
+  /* the image holds the tuning passes; the database's answers rendered none, so their
+   * samples are rendered here (with the kept configuration): with or without a database the
+   * same command ends with at least as many samples */
+  if (j->tuning->answered_spp && j->target_spp != UINT32_MAX) {
+    uint64_t without_db = (uint64_t)rec->spp + j->tuning->answered_spp;
+    if (without_db > j->target_spp)
+      j->target_spp = without_db > UINT32_MAX - 1 ? UINT32_MAX - 1 : (uint32_t)without_db;
+  }
+  return rc;
+}
+
+/* One pass of 1 spp into the film. */
+static tt_status tt__render_pass(tt__render_job *j) {
+  tt_pass_stats ps;
+  double ms = 0;
+  return tt__session_render_pass(&j->s, 1, &ps, &ms);
+}
+
+/* Prints that a pass failed; TT_EXIT_FAILURE. */
+static int tt__render_pass_failed(const tt__render_job *j) {
+  tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(j->s.integ_p)->name,
+          j->s.rec.passes, tt_last_error());
+  return TT_EXIT_FAILURE;
+}
+
+/* Step: one progressive pass, unless the target spp, the time budget or a stop request ends
+ * the render (*more = 0; a stop marks the record interrupted). Returns an exit code. */
+static int tt__render_step(tt__render_job *j, int *more) {
+  tt__run_record *rec = &j->s.rec;
+  const tt_host *host = j->s.host;
+  *more = 0;
+  if (rec->interrupted || rec->spp >= j->target_spp) return TT_EXIT_OK;
+  if (j->budget_s > 0 && (host->clock_ns() - j->t0) * 1e-9 >= j->budget_s) return TT_EXIT_OK;
+  tt_status st = host->should_stop() ? TT_ERR_INTERRUPTED : tt__render_pass(j);
+  if (st == TT_ERR_INTERRUPTED) {
+    rec->interrupted = 1;
+    return TT_EXIT_OK;
+  }
+  if (st != TT_OK) return tt__render_pass_failed(j);
+  double frac = j->target_spp == UINT32_MAX ? 0 : (double)rec->spp / j->target_spp;
+  if (j->budget_s > 0) {
+    double tf = (host->clock_ns() - j->t0) * 1e-9 / j->budget_s;
+    if (tf > frac) frac = tf;
+  }
+  tt__progress_update("render", frac);
+  *more = 1;
+  return TT_EXIT_OK;
+}
+
+/* A signal before any pass was done (the scene loading, the accel building, the first pass
+ * cut short) would leave nothing to write while exit 130 promises the image rendered so far:
+ * one pass is completed with the stop held back (a second signal still exits). */
+static int tt__render_first_pass(tt__render_job *j) {
+  if (!j->s.rec.interrupted || j->s.rec.spp != 0) return TT_EXIT_OK;
+  tt_default_host_hold_stop(1);
+  tt_status st = tt__render_pass(j);
+  tt_default_host_hold_stop(0);
+  return st == TT_OK ? TT_EXIT_OK : tt__render_pass_failed(j);
+}
+
+/* Finish: writes what was rendered (images, --stats), even when interrupted or a later pass
+ * failed; a second signal during the writes waits for them (signals.c). Returns `rc`, or the
+ * first output failure, or TT_EXIT_INTERRUPTED. */
+static int tt__render_finish(tt__render_job *j, int rc) {
+  tt__run_record *rec = &j->s.rec;
+  tt__progress_finish();
+  if (rec->nonfinite)  /* a warning: --quiet keeps it */
+    tt__say("warning: %llu non-finite samples were dropped\n",
+            (unsigned long long)rec->nonfinite);
+  tt__outputs_begin();
+  rec->out_exr = j->exr;
+  rec->out_png = j->png;
+  if (rec->spp > 0) {
+    int wrc = tt__write_images(rec, j->s.film, j->exr, j->png);
+    if (wrc != TT_EXIT_OK && rc == TT_EXIT_OK) rc = wrc;
+    else if (!j->opt->quiet && wrc == TT_EXIT_OK)
+      tt__say("wrote %s and %s (%u spp, %.1f ms, %.2f Mrays/s)\n", j->exr, j->png,
+              rec->spp, rec->render_ms,
+              rec->render_ms > 0 ? rec->rays / (rec->render_ms * 1e3) : 0.0);
+  } else {
+    tt__say("no pass completed: nothing to write\n");
+  }
+  if (j->opt->stats && tt__write_stats(j->opt->stats, rec) != TT_OK) {
+    tt__say("cannot write %s: %s\n", j->opt->stats, tt_last_error());
+    if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
+  }
+  tt__outputs_end();
+  return rec->interrupted && rc == TT_EXIT_OK ? TT_EXIT_INTERRUPTED : rc;
+}
+
+/* Frees what the job holds, at any stage. */
+static void tt__render_close(tt__render_job *j) {
+  tt__tuning_free(j->tuning);
+  tt__session_close(&j->s);
+}
+
 int tt__run_render(const tt__host_options *opt) {
   tt__install_signals("pass");
   /* a missing output folder is created now, not found missing after the render */
   if (opt->out && tt__ensure_parent_dir("--out", opt->out) != TT_EXIT_OK) return TT_EXIT_OUTPUT;
   if (opt->stats && tt__ensure_parent_dir("--stats", opt->stats) != TT_EXIT_OK)
     return TT_EXIT_OUTPUT;
-  if (opt->frames) {
-    /* --frames A:B: one full render per frame f = A..B (the camera at t = f / fps, the
-     * frames of a sequence), <stem>_NNNN.exr (and <stats stem>_NNNN.json); the scene is
-     * reloaded for each frame */
-    char stem[4096], name[4200], stats[4200];
-    if (opt->out) snprintf(stem, sizeof stem, "%.*s", (int)(strlen(opt->out) - 4), opt->out);
-    else {
-      tt__default_out(opt->scene, stem, sizeof stem);
-      stem[strlen(stem) - 4] = 0;
-    }
-    double fps = opt->fps > 0 ? opt->fps : 24.0;
-    for (uint32_t f = opt->frames_first; f <= opt->frames_last; f++) {
-      tt__host_options one = *opt;
-      one.frames = 0;
-      one.camera_time_set = 1;
-      one.camera_time = f / fps;
-      snprintf(name, sizeof name, "%s_%04u.exr", stem, f);
-      one.out = name;
-      if (opt->stats) {
-        const char *dot = strrchr(opt->stats, '.');
-        int len = dot && !strcmp(dot, ".json") ? (int)(dot - opt->stats) : (int)strlen(opt->stats);
-        snprintf(stats, sizeof stats, "%.*s_%04u.json", len, opt->stats, f);
-        one.stats = stats;
-      }
-      int frc = tt__run_render(&one);
-      if (frc != TT_EXIT_OK) return frc;
-    }
-    return TT_EXIT_OK;
+  if (opt->frames) return tt__render_frames(opt);
+  tt__render_job j;
+  int rc = tt__render_create(&j, opt);
+  if (rc == TT_EXIT_OK) rc = tt__render_tune(&j);
+  /* a failed tuning phase that left its record still writes the image and --stats */
+  if (rc == TT_EXIT_OK || (rc != TT_EXIT_USAGE && j.tuning)) {
+    tt__progress_update("render", 0);  /* "ETA ?" until the first pass has ended */
+    for (int more = 1; rc == TT_EXIT_OK && more;) rc = tt__render_step(&j, &more);
+    if (rc == TT_EXIT_OK) rc = tt__render_first_pass(&j);
+    rc = tt__render_finish(&j, rc);
   }
-  /* outputs are checked before the render, not found unwritable after it */
-  char exr[4096], png[4096];
-  if (opt->out) snprintf(exr, sizeof exr, "%s", opt->out);
-  else tt__default_out(opt->scene, exr, sizeof exr);
-  snprintf(png, sizeof png, "%.*s.png", (int)(strlen(exr) - 4), exr);
-  const char *outputs[3] = {exr, png, opt->stats};
-  for (int i = 0; i < 3; i++)
-    if (outputs[i] && tt_file_check_writable(outputs[i]) != TT_OK) {
-      tt__say("%s%s\n", i == 2 ? "--stats: " : "", tt_last_error());
-      return TT_EXIT_OUTPUT;
-    }
-  tt__session s;
-  tt__tuning *tuning = NULL;
-  int rc = tt__session_open(&s, opt);
-  if (rc != TT_EXIT_OK) goto done;
-  rc = tt__check_still_post(&s);
-  if (rc != TT_EXIT_OK) goto done;
-  const tt_host *host = s.host;
-  tt__run_record *rec = &s.rec;
-  tt_loaded_plugin *predictor = tt_registry_find_kind(s.reg, TT_KIND_PREDICTOR);
-  if (predictor && !opt->quiet)
-    host->log(TT_LOG_WARN, NULL, "%s is loaded but not used: a predictor chooses the "
-              "configuration in the hybrid loop (--hybrid over the camera path, or --predict)",
-              tt_loaded_plugin_entry(predictor)->name);
-  const tt_render_settings *settings = tt_scene_settings(s.scene);
-  uint32_t target_spp = opt->spp ? opt->spp : settings->spp;
-  double budget_s = opt->time_budget > 0 ? opt->time_budget : settings->time_budget_s;
-  /* a time budget alone renders until the budget; with --spp both limits apply */
-  if (opt->time_budget > 0 && !opt->spp) target_spp = UINT32_MAX;
-
-  if (!opt->quiet)
-    tt__say("%s: %llu triangles, %ux%u, %s%u spp, seed %llu, %u threads\n",
-            opt->scene, (unsigned long long)tt_scene_triangle_count(s.scene), s.camera->width,
-            s.camera->height, target_spp == UINT32_MAX ? "time budget, up to " : "",
-            target_spp == UINT32_MAX ? 0 : target_spp, (unsigned long long)rec->seed,
-            rec->threads);
-  rc = tt__session_start(&s, opt->aov_mask);
-  if (rc != TT_EXIT_OK) goto done;
-
-  /* tuning phase (when a tuner is loaded, or --tune/--explore): its passes go into the film */
-  uint64_t t0 = host->clock_ns();
-  int trc = tt__tune_phase(&s, &tuning);
-  rec->tuning = tuning;
-  tt__session_sync(&s);  /* the tuning passes and builds ran through the library */
-  if (trc != TT_EXIT_OK) {
-    rc = trc;
-    if (rc == TT_EXIT_USAGE || !tuning) goto done;
-  }
-  if (tuning && tuning->interrupted) rec->interrupted = 1;
-  /* the image holds the tuning passes; the database's answers rendered none, so their
-   * samples are rendered here (with the kept configuration): with or without a database the
-   * same command ends with at least as many samples */
-  if (tuning && tuning->answered_spp && target_spp != UINT32_MAX) {
-    uint64_t without_db = (uint64_t)rec->spp + tuning->answered_spp;
-    if (without_db > target_spp) target_spp = without_db > UINT32_MAX - 1 ? UINT32_MAX - 1
-                                                                          : (uint32_t)without_db;
-  }
-
-  /* progressive passes of 1 spp each, until the target or the time budget; the progress
-   * shows "ETA ?" until the first pass has ended */
-  tt__progress_update("render", 0);
-  while (rc == TT_EXIT_OK && !rec->interrupted && rec->spp < target_spp) {
-    double elapsed = (host->clock_ns() - t0) * 1e-9;
-    if (budget_s > 0 && elapsed >= budget_s) break;
-    if (host->should_stop()) {
-      rec->interrupted = 1;
-      break;
-    }
-    tt_pass_stats ps;
-    double ms = 0;
-    tt_status st = tt__session_render_pass(&s, 1, &ps, &ms);
-    if (st == TT_ERR_INTERRUPTED) {
-      rec->interrupted = 1;
-      break;
-    }
-    if (st != TT_OK) {
-      tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
-              rec->passes, tt_last_error());
-      rc = TT_EXIT_FAILURE;
-      break;
-    }
-    double frac = target_spp == UINT32_MAX ? 0 : (double)rec->spp / target_spp;
-    if (budget_s > 0) {
-      double tf = (host->clock_ns() - t0) * 1e-9 / budget_s;
-      if (tf > frac) frac = tf;
-    }
-    tt__progress_update("render", frac);
-  }
-  /* a signal before any pass was done (the scene loading, the accel building, the first pass
-   * cut short) would leave nothing to write while exit 130 promises the image rendered so
-   * far: one pass is completed with the stop held back (a second signal still exits) */
-  if (rc == TT_EXIT_OK && rec->interrupted && rec->spp == 0) {
-    tt_default_host_hold_stop(1);
-    tt_pass_stats ps;
-    double ms = 0;
-    tt_status st = tt__session_render_pass(&s, 1, &ps, &ms);
-    tt_default_host_hold_stop(0);
-    if (st != TT_OK) {
-      tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(s.integ_p)->name,
-              rec->passes, tt_last_error());
-      rc = TT_EXIT_FAILURE;
-    }
-  }
-  tt__progress_finish();
-  if (rec->nonfinite)  /* a warning: --quiet keeps it */
-    tt__say("warning: %llu non-finite samples were dropped\n",
-            (unsigned long long)rec->nonfinite);
-
-  /* write what was rendered, even when interrupted or a later pass failed; a second
-   * signal during the writes waits for them (signals.c) */
-  tt__outputs_begin();
-  rec->out_exr = exr;
-  rec->out_png = png;
-  if (rec->spp > 0) {
-    int wrc = tt__write_images(rec, s.film, exr, png);
-    if (wrc != TT_EXIT_OK && rc == TT_EXIT_OK) rc = wrc;
-    else if (!opt->quiet && wrc == TT_EXIT_OK)
-      tt__say("wrote %s and %s (%u spp, %.1f ms, %.2f Mrays/s)\n", exr, png,
-              rec->spp, rec->render_ms,
-              rec->render_ms > 0 ? rec->rays / (rec->render_ms * 1e3) : 0.0);
-  } else {
-    tt__say("no pass completed: nothing to write\n");
-  }
-  if (opt->stats && tt__write_stats(opt->stats, rec) != TT_OK) {
-    tt__say("cannot write %s: %s\n", opt->stats, tt_last_error());
-    if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
-  }
-  tt__outputs_end();
-  if (rec->interrupted && rc == TT_EXIT_OK) rc = TT_EXIT_INTERRUPTED;
-
-done:
-  tt__tuning_free(tuning);
-  tt__session_close(&s);
+  tt__render_close(&j);
   return rc;
 }
