@@ -40,6 +40,10 @@ typedef struct tt__tune_ctx {
   int want_pass;                /* the pass's own image (--objective rrmse, --tune-pass-images) */
   double *ref_lum;              /* --reference as luminance, 1 per pixel */
   char ref_hash[17];            /* FNV-1a 64 of the reference's luminance (database context) */
+  int explore;                  /* --explore N: random configurations, no tuner */
+  tt_loaded_plugin *tuner_p;    /* the tuner (NULL, or unused, with --explore) */
+  tt_tuning_target target_cb;   /* the render session as the tuning target */
+  tt_tuning_verification v;     /* --verify's result (rounds 0: not run) */
 } tt__tune_ctx;
 
 void tt__tuning_free(tt__tuning *t) {
@@ -319,146 +323,171 @@ static void tt__log_result(const tt__tune_ctx *c, const tt_tuning_verification *
                   st.iterations, st.measured, st.cached, best_json);
 }
 
-int tt__tune_phase(tt__session *s, tt__tuning **out) {
-  const tt__host_options *opt = s->opt;
-  *out = NULL;
-  tt_loaded_plugin *tuner_p = tt_registry_find_kind(s->reg, TT_KIND_TUNER);
-  int explore = opt->explore > 0;
-  if (!tuner_p && !explore) {
-    if (opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify ||
-        opt->tune_pass_images) {
-      tt__say("%s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
-              opt->tune ? "--tune" : opt->objective ? "--objective"
-              : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp"
-              : opt->verify ? "--verify" : "--tune-pass-images");
-      return TT_EXIT_USAGE;
-    }
-    return TT_EXIT_OK;
+/* Checks the tuning options against what is loaded: a tuning option without a tuner or
+ * --explore N, or --explore with --iterations, is a usage error (printed). */
+static int tt__tune_check(const tt__host_options *opt, const tt_loaded_plugin *tuner_p) {
+  if (!tuner_p && !opt->explore) {
+    if (!(opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify ||
+          opt->tune_pass_images))
+      return TT_EXIT_OK;
+    tt__say("%s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
+            opt->tune ? "--tune" : opt->objective ? "--objective"
+            : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp"
+            : opt->verify ? "--verify" : "--tune-pass-images");
+    return TT_EXIT_USAGE;
   }
-  if (explore && opt->iterations) {
+  if (opt->explore && opt->iterations) {
     tt__say("--explore N and --iterations exclude each other (exploration "
             "measures N random configurations)\n");
     return TT_EXIT_USAGE;
   }
+  return TT_EXIT_OK;
+}
 
-  tt__tuning *t = calloc(1, sizeof *t);
+/* Says what the phase tunes, with what, and where it records. */
+static void tt__tune_log_start(const tt__tune_ctx *c) {
+  const tt__tuning *t = c->t;
+  int explore = c->explore;
+  if (explore && c->tuner_p && !c->opt->quiet)
+    c->s->host->log(TT_LOG_INFO, NULL, "tuning: --explore draws random configurations; the "
+                    "tuner %s is not used", tt_loaded_plugin_entry(c->tuner_p)->name);
+  c->s->host->log(TT_LOG_INFO, NULL, "%s %s %s%s%s, objective %s, %u %s, %u spp per "
+                  "measurement, database %s", explore ? "exploring" : "tuning", t->plugin,
+                  t->plugin_version, explore ? "" : " with ", explore ? "" : t->tuner,
+                  c->objective.spec, t->requested, explore ? "configurations" : "iterations",
+                  c->spp, c->db ? tt_tunedb_path(c->db) : "none");
+}
+
+/* The library's tuning session over the target, in `state`: it searches c->subset (when
+ * --tune-params or the hint narrows it); every candidate is the target's configured values
+ * with the searched ones put in. Prints what failed. */
+static int tt__tune_session(tt__tune_ctx *c, const tt_tuning_state *state) {
+  tt__session *s = c->s;
+  tt__tuning *t = c->t;
+  int explore = c->explore;
+  tt_tuning_desc d = {.struct_size = sizeof d};
+  d.host = s->host;
+  d.space = c->space;
+  d.start = s->configs[c->target_index];
+  d.search = c->subset;
+  d.objective = c->objective_spec;
+  d.tuner = explore ? NULL : tt_loaded_plugin_iface(c->tuner_p);
+  d.tuner_settings = explore ? NULL : s->configs[tt__index_of(s, c->tuner_p)];
+  d.tuner_name = t->tuner;
+  d.seed = s->rec.seed;
+  d.iterations = t->requested;
+  d.spp = c->spp;
+  d.warmup_passes = 1;
+  d.time_budget_s = c->opt->time_budget;
+  d.plugin = t->plugin;
+  d.plugin_version = t->plugin_version;
+  d.db = c->db;
+  d.state = state;
+  d.width = s->camera->width;
+  d.height = s->camera->height;
+  d.reference_luminance = c->ref_lum;
+  d.want_images = c->want_pass;
+  d.on_sample = tt__on_sample;
+  d.user = c;
+  if (tt_tuning_create(&d, &t->session) == TT_OK) return TT_EXIT_OK;
+  tt__say("%s: %s\n", explore ? "tuning" : t->tuner, tt_last_error());
+  t->session = NULL;
+  return TT_EXIT_FAILURE;
+}
+
+/* Create: the record, the target and objective, the database, the state, the library's
+ * tuning session (continued from --resume) and its target over the render session. Prints
+ * what failed; an exit code. */
+static int tt__tune_create(tt__tune_ctx *c, tt__session *s, tt_loaded_plugin *tuner_p) {
+  const tt__host_options *opt = s->opt;
+  memset(c, 0, sizeof *c);
+  c->s = s;
+  c->opt = opt;
+  c->tuner_p = tuner_p;
+  c->explore = opt->explore > 0;
+  c->spp = opt->tune_spp ? opt->tune_spp : 1;
+  c->v.struct_size = sizeof c->v;
+  tt__tuning *t = c->t = calloc(1, sizeof *t);
   if (!t) return TT_EXIT_FAILURE;
-  tt__tune_ctx c;
-  memset(&c, 0, sizeof c);
-  c.s = s;
-  c.opt = opt;
-  c.t = t;
-  c.spp = opt->tune_spp ? opt->tune_spp : 1;
+  int explore = c->explore;
   t->mode = explore ? "explore" : "tune";
   t->tuner = explore ? NULL : tt_loaded_plugin_entry(tuner_p)->name;
   t->requested = explore ? opt->explore : opt->iterations ? opt->iterations
                                                           : TT_HOST_DEFAULT_ITERATIONS;
+  int rc = tt__choose(c);
+  if (rc == TT_EXIT_OK) rc = tt__open_db(c);
+  if (rc != TT_EXIT_OK) return rc;
+  t->plugin = tt_loaded_plugin_entry(c->target)->name;
+  t->plugin_version = tt_loaded_plugin_entry(c->target)->version;
+  if (c->db) snprintf(t->db_path, sizeof t->db_path, "%s", tt_tunedb_path(c->db));
   tt_tuning_state state;
-  int rc = tt__choose(&c);
-  if (rc == TT_EXIT_OK) rc = tt__open_db(&c);
-  if (rc != TT_EXIT_OK) goto done;
-  const tt_plugin *te = tt_loaded_plugin_entry(c.target);
-  t->plugin = te->name;
-  t->plugin_version = te->version;
-  if (c.db) snprintf(t->db_path, sizeof t->db_path, "%s", tt_tunedb_path(c.db));
-  if (tt__make_state(&c, &state)) {
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  if (explore && tuner_p && !opt->quiet)
-    s->host->log(TT_LOG_INFO, NULL, "tuning: --explore draws random configurations; the "
-                 "tuner %s is not used", tt_loaded_plugin_entry(tuner_p)->name);
-  s->host->log(TT_LOG_INFO, NULL, "%s %s %s%s%s, objective %s, %u %s, %u spp per "
-               "measurement, database %s", explore ? "exploring" : "tuning", te->name,
-               te->version, explore ? "" : " with ", explore ? "" : t->tuner,
-               c.objective.spec, t->requested, explore ? "configurations" : "iterations",
-               c.spp, c.db ? tt_tunedb_path(c.db) : "none");
-
-  /* the session searches c.subset (when --tune-params or the hint narrows it); every
-   * candidate is the target's configured values with the searched ones put in */
-  tt_config *current = s->configs[c.target_index];
-  tt_tuning_desc d;
-  memset(&d, 0, sizeof d);
-  d.struct_size = sizeof d;
-  d.host = s->host;
-  d.space = c.space;
-  d.start = current;
-  d.search = c.subset;
-  d.objective = c.objective_spec;
-  d.tuner = explore ? NULL : tt_loaded_plugin_iface(tuner_p);
-  d.tuner_settings = explore ? NULL : s->configs[tt__index_of(s, tuner_p)];
-  d.tuner_name = t->tuner;
-  d.seed = s->rec.seed;
-  d.iterations = t->requested;
-  d.spp = c.spp;
-  d.warmup_passes = 1;
-  d.time_budget_s = opt->time_budget;
-  d.plugin = te->name;
-  d.plugin_version = te->version;
-  d.db = c.db;
-  d.state = &state;
-  d.width = s->camera->width;
-  d.height = s->camera->height;
-  d.reference_luminance = c.ref_lum;
-  d.want_images = c.want_pass;
-  d.on_sample = tt__on_sample;
-  d.user = &c;
-  if (tt_tuning_create(&d, &t->session) != TT_OK) {
-    tt__say("%s: %s\n", explore ? "tuning" : t->tuner, tt_last_error());
-    t->session = NULL;
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  if (opt->resume && (rc = tt__load_resume(&c)) != TT_EXIT_OK) goto done;
-  tt_tuning_target target;
-  if (tt_session_tuning_target(s->lib, c.target_index, c.want_pass, &target) != TT_OK) {
+  if (tt__make_state(c, &state)) return TT_EXIT_FAILURE;
+  tt__tune_log_start(c);
+  if ((rc = tt__tune_session(c, &state)) != TT_EXIT_OK) return rc;
+  if (opt->resume && (rc = tt__load_resume(c)) != TT_EXIT_OK) return rc;
+  if (tt_session_tuning_target(s->lib, c->target_index, c->want_pass, &c->target_cb) != TT_OK) {
     tt__say("tuning: %s\n", tt_last_error());
-    rc = TT_EXIT_FAILURE;
-    goto done;
+    return TT_EXIT_FAILURE;
   }
-  uint64_t t0 = s->host->clock_ns();
-  tt_status st = tt_tuning_run(t->session, &target);
+  return TT_EXIT_OK;
+}
+
+/* Step: the library runs the search (or exploration); its passes render into the film. */
+static int tt__tune_run(tt__tune_ctx *c) {
+  tt__tuning *t = c->t;
+  uint64_t t0 = c->s->host->clock_ns();
+  tt_status st = tt_tuning_run(t->session, &c->target_cb);
   tt__progress_finish();
-  t->ms = (s->host->clock_ns() - t0) * 1e-6;
+  t->ms = (c->s->host->clock_ns() - t0) * 1e-6;
   if (st == TT_ERR_NO_DATA) {
-    tt__say("--objective %s: %s\n", c.objective.spec, tt_last_error());
-    rc = TT_EXIT_USAGE;
-    goto done;
+    tt__say("--objective %s: %s\n", c->objective.spec, tt_last_error());
+    return TT_EXIT_USAGE;
   }
   t->interrupted = st == TT_ERR_INTERRUPTED;
-  if (st != TT_OK && st != TT_ERR_INTERRUPTED) rc = TT_EXIT_FAILURE;
   /* a cost the database answered rendered no pass into the image: the render phase makes
    * up for those, so an answer from the database never leaves the image with fewer samples
    * than the same command without one */
   for (size_t i = 0; i < tt_tuning_sample_count(t->session); i++) {
     const tt_tuning_sample *x = tt_tuning_sample_at(t->session, i);
-    if (x->cached && x->status == TT_TUNEDB_OK) t->answered_spp += c.spp;
+    if (x->cached && x->status == TT_TUNEDB_OK) t->answered_spp += c->spp;
   }
+  return st != TT_OK && st != TT_ERR_INTERRUPTED ? TT_EXIT_FAILURE : TT_EXIT_OK;
+}
 
-  /* keep the best: the rest of the image renders with it */
-  tt_tuning_verification v = {.struct_size = sizeof v};
-  if (opt->verify && !t->interrupted && rc == TT_EXIT_OK) {
-    st = tt_tuning_verify(t->session, &target, opt->verify, &v);
-    if (st == TT_ERR_INTERRUPTED) t->interrupted = 1;
-    if ((st == TT_OK || st == TT_ERR_INTERRUPTED) && v.rounds) {
-      t->verify_json = tt__verify_json(&v);
-      s->host->log(TT_LOG_INFO, NULL, "tuning: verify, %u rounds side by side: render median "
-                   "%.4g ms (default) vs %.4g ms (best), ratio %.4f; build+render %.4g vs "
-                   "%.4g ms, ratio %.4f", v.rounds, v.median_render_ms[0], v.median_render_ms[1],
-                   v.render_ratio, v.median_total_ms[0], v.median_total_ms[1], v.total_ratio);
-    }
-  }
-  /* the kept configuration: the best, or the default when --verify rejected the best */
-  if (tt_config_from_json(current, tt_tuning_kept_json(t->session), "tuning") != TT_OK)
+/* --verify N: default and best side by side (the library keeps the default unless the best
+ * shows faster); the result goes to --stats and the log. */
+static void tt__tune_verify(tt__tune_ctx *c) {
+  tt__tuning *t = c->t;
+  const tt_tuning_verification *v = &c->v;
+  tt_status st = tt_tuning_verify(t->session, &c->target_cb, c->opt->verify, &c->v);
+  if (st == TT_ERR_INTERRUPTED) t->interrupted = 1;
+  if ((st != TT_OK && st != TT_ERR_INTERRUPTED) || !v->rounds) return;
+  t->verify_json = tt__verify_json(v);
+  c->s->host->log(TT_LOG_INFO, NULL, "tuning: verify, %u rounds side by side: render median "
+                  "%.4g ms (default) vs %.4g ms (best), ratio %.4f; build+render %.4g vs "
+                  "%.4g ms, ratio %.4f", v->rounds, v->median_render_ms[0],
+                  v->median_render_ms[1], v->render_ratio, v->median_total_ms[0],
+                  v->median_total_ms[1], v->total_ratio);
+}
+
+/* Finish: --verify, then the kept configuration (the best, or the default when --verify
+ * rejected the best) on the target, so the rest of the image renders with it; logs what was
+ * found. Returns `rc`, or what failed first. */
+static int tt__tune_finish(tt__tune_ctx *c, int rc) {
+  tt__tuning *t = c->t;
+  tt__session *s = c->s;
+  if (c->opt->verify && !t->interrupted && rc == TT_EXIT_OK) tt__tune_verify(c);
+  if (tt_config_from_json(s->configs[c->target_index], tt_tuning_kept_json(t->session),
+                          "tuning") != TT_OK)
     s->host->log(TT_LOG_ERROR, NULL, "tuning: cannot restore the kept configuration: %s",
                  tt_last_error());
   if (!t->interrupted && rc == TT_EXIT_OK &&
-      tt_tuning_apply_best(t->session, &target, NULL) != TT_OK) {
+      tt_tuning_apply_best(t->session, &c->target_cb, NULL) != TT_OK) {
     tt__say("tuning: %s rejected the best configuration: %s\n", t->plugin,
             tt_last_error());
     rc = TT_EXIT_FAILURE;
   }
-  tt__log_result(&c, &v);
+  tt__log_result(c, &c->v);
   tt_tuning_stats ts = {.struct_size = sizeof ts};
   tt_tuning_get_stats(t->session, &ts);
   if (ts.unrecorded) {
@@ -467,17 +496,32 @@ int tt__tune_phase(tt__session *s, tt__tuning **out) {
                  "the database %s", ts.unrecorded, ts.measured, t->db_path);
     if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
   }
-
-done:
-  tt_space_destroy(c.subset);
-  tt__session_sync(s);
-  /* the session borrows the database and the reference: the record keeps them */
-  t->db = c.db;
-  t->ref_lum = c.ref_lum;
-  if (rc == TT_EXIT_USAGE) {
-    tt__tuning_free(t);
-    return rc;
-  }
-  *out = t;
   return rc;
+}
+
+/* Hands the record to the caller (`*out`), with the database and the reference the session
+ * borrowed; a usage error leaves no record. Frees the rest of the phase. */
+static int tt__tune_close(tt__tune_ctx *c, int rc, tt__tuning **out) {
+  tt_space_destroy(c->subset);
+  if (!c->t) return rc;
+  tt__session_sync(c->s);
+  c->t->db = c->db;
+  c->t->ref_lum = c->ref_lum;
+  if (rc == TT_EXIT_USAGE) tt__tuning_free(c->t);
+  else *out = c->t;
+  return rc;
+}
+
+int tt__tune_phase(tt__session *s, tt__tuning **out) {
+  *out = NULL;
+  tt_loaded_plugin *tuner_p = tt_registry_find_kind(s->reg, TT_KIND_TUNER);
+  int rc = tt__tune_check(s->opt, tuner_p);
+  if (rc != TT_EXIT_OK || (!tuner_p && !s->opt->explore)) return rc;
+  tt__tune_ctx c;
+  rc = tt__tune_create(&c, s, tuner_p);
+  if (rc == TT_EXIT_OK) {
+    rc = tt__tune_run(&c);
+    if (rc != TT_EXIT_USAGE) rc = tt__tune_finish(&c, rc);
+  }
+  return tt__tune_close(&c, rc, out);
 }
