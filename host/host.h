@@ -228,9 +228,16 @@ void tt__tuning_free(tt__tuning *t);
 /* Writes the --stats JSON file. */
 tt_status tt__write_stats(const char *path, const tt__run_record *rec);
 
+/* Reads the JSON file `path` (`what` names it in errors: "states file"): 0 with `*root` the
+ * parsed document (NULL when the text is not JSON), or -1 after printing "NAME: OPTION
+ * <why>" when the file cannot be read (json_io.c). */
+struct cJSON;
+int tt__json_read(const char *option, const char *path, const char *what, struct cJSON **root);
+/* Prints `root` on stdout and deletes it; TT_EXIT_OK, or TT_EXIT_OUTPUT when stdout fails. */
+int tt__json_print(struct cJSON *root);
+
 /* Adds "scene_id" and "scene_id_parts" (geometry, materials, textures, lights) to a JSON
  * record, so a changed scene id can be explained. */
-struct cJSON;
 void tt__add_scene_ids(struct cJSON *root, const tt_scene *scene);
 
 #endif

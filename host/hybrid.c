@@ -28,8 +28,16 @@
 #include <time.h>
 #include <unistd.h>
 
+/* The hybrid job (--hybrid, --predict): the host session, the library's hybrid tuner with
+ * its model, tuner and database, and what the states measured. tt__hyb_close frees what it
+ * holds at any stage. */
+typedef struct tt__hyb_totals {
+  uint32_t states, explored, exploited, builds, remeasured, cached, samples;
+  double sum_cost, sum_search;
+} tt__hyb_totals;
+
 typedef struct tt__hyb {
-  tt__session *s;
+  tt__session s;
   const tt__host_options *opt;
   tt_space *subset;
   const tt_space *space;
@@ -40,6 +48,18 @@ typedef struct tt__hyb {
   tt_tunedb *db;
   uint32_t spp;               /* spp of one measurement pass */
   cJSON *warm;                /* [{db, rows, skipped}] */
+  tt_indicator_norm norm;     /* the state space (--indicator-norm) */
+  tt_objective obj;
+  const char *context_extra;  /* the clock, besides the library's context */
+  char *context, *camera0;    /* the state's context and first camera (warm-start filter) */
+  double epsilon;
+  uint32_t explore_iterations;
+  tt_hybrid *hy;
+  tt_tuning_target target;    /* the render session as the tuning target */
+  uint32_t first, end;        /* path samples first..end-1 (--camera-index A:B) */
+  cJSON *states;              /* the report of every state done */
+  tt__hyb_totals tot;
+  int interrupted;
 } tt__hyb;
 
 /* The searched parameters (--tune-params), NULL: all of the accel's. */
@@ -51,7 +71,7 @@ static int tt__hyb_subset(tt__hyb *h) {
   char buf[4096];
   snprintf(buf, sizeof buf, "%s", list);
   for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
-  h->subset = tt_space_subset(h->space, names, n, h->s->configs[h->accel_index]);
+  h->subset = tt_space_subset(h->space, names, n, h->s.configs[h->accel_index]);
   if (!h->subset) {
     tt__say("--tune-params: %s\n", tt_last_error());
     return -1;
@@ -60,8 +80,8 @@ static int tt__hyb_subset(tt__hyb *h) {
 }
 
 /* Creates the model; loads --model FILE when it exists. Prints and returns an exit code. */
-static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_norm *norm) {
-  tt__session *s = h->s;
+static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp) {
+  tt__session *s = &h->s;
   h->pi = tt_loaded_plugin_iface(pp);
   h->predictor_name = tt_loaded_plugin_entry(pp)->name;
   if (!TT_PREDICTOR_HAS(h->pi, create_ex) || !TT_PREDICTOR_HAS(h->pi, observe_ex) ||
@@ -78,7 +98,7 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp, const tt_indicator_no
   su.struct_size = sizeof su;
   su.target = h->subset ? h->subset : h->space;
   su.state_dim = TT_SCENE_INDICATOR_COUNT;
-  su.state_space = tt_indicator_norm_id(norm, id, sizeof id);
+  su.state_space = tt_indicator_norm_id(&h->norm, id, sizeof id);
   su.state_names = names;
   su.settings = tt_session_config(s->lib, h->predictor_name);
   su.seed = s->rec.seed;
@@ -162,18 +182,43 @@ static void tt__hyb_warm_log(const tt__hyb *h, const char *path, const tt_hybrid
 #undef TT__WHY
   uint64_t left = r->considered - r->rows;
   int none = r->rows == 0 && r->considered > 0;
-  h->s->host->log(none ? TT_LOG_WARN : TT_LOG_INFO, NULL, "hybrid: %s learnt %llu of the %llu "
+  h->s.host->log(none ? TT_LOG_WARN : TT_LOG_INFO, NULL, "hybrid: %s learnt %llu of the %llu "
                   "rows of %s in %s%s%s%s", h->predictor_name, (unsigned long long)r->rows,
-                  (unsigned long long)r->considered, tt_loaded_plugin_entry(h->s->accel_p)->name,
+                  (unsigned long long)r->considered, tt_loaded_plugin_entry(h->s.accel_p)->name,
                   path, left ? "; left out: " : "", left ? why : "",
                   none && r->other_context ? " (a warm start learns only costs measured as this "
                   "run measures them: match those options, see host/README.md)" : "");
 }
 
+/* What a warm start from `path` learnt and left out, for --stats. */
+static cJSON *tt__hyb_warm_json(const char *path, const tt_hybrid_warm_result *r) {
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddStringToObject(o, "db", path);
+  cJSON_AddNumberToObject(o, "rows", (double)r->rows);
+  cJSON_AddNumberToObject(o, "skipped", (double)(r->considered - r->rows));
+  cJSON_AddNumberToObject(o, "considered", (double)r->considered);
+  cJSON_AddNumberToObject(o, "exploit_rows", (double)r->exploit_rows);
+  cJSON *why = cJSON_AddObjectToObject(o, "skipped_because");
+  cJSON_AddNumberToObject(why, "other_objective", (double)r->other_objective);
+  cJSON_AddNumberToObject(why, "other_space", (double)r->other_space);
+  cJSON_AddNumberToObject(why, "failed", (double)r->failed);
+  cJSON_AddNumberToObject(why, "no_indicators", (double)r->no_indicators);
+  cJSON_AddNumberToObject(why, "other_context", (double)r->other_context);
+  cJSON *keys_o = cJSON_AddObjectToObject(o, "mismatch");
+  for (uint32_t k = 0; k < r->key_count; k++) {
+    cJSON *m = cJSON_AddObjectToObject(keys_o, r->key[k]);
+    cJSON_AddNumberToObject(m, "rows", (double)r->mismatch[k]);
+    cJSON *v = r->mismatch[k] ? cJSON_Parse(r->mismatch_value[k]) : NULL;
+    cJSON_AddItemToObject(m, "value", v ? v : cJSON_CreateNull());
+    cJSON *e = cJSON_Parse(r->expected_value[k]);
+    cJSON_AddItemToObject(m, "this_run", e ? e : cJSON_CreateNull());
+  }
+  return o;
+}
+
 /* --warm-start DB...: every usable row teaches the model; the clock, spp and threads of the
  * rows' context and the resolution of their camera must be this run's. */
-static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context, const char *camera,
-                        const char *objective) {
+static int tt__hyb_warm(tt__hyb *h) {
   static const char *const keys[] = {"clock", "spp", "threads", NULL};
   static const char *const camera_keys[] = {"resolution", NULL};
   h->warm = cJSON_CreateArray();
@@ -184,38 +229,18 @@ static int tt__hyb_warm(tt__hyb *h, tt_hybrid *hy, const char *context, const ch
       tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_USAGE;
     }
-    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys, .context = context,
-                               .camera_keys = camera_keys, .camera = camera};
+    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys,
+                               .context = h->context, .camera_keys = camera_keys,
+                               .camera = h->camera0};
     tt_hybrid_warm_result r = {.struct_size = sizeof r};
-    tt_status ws = tt_hybrid_warm_start_ex(hy, db, &f, &r);
+    tt_status ws = tt_hybrid_warm_start_ex(h->hy, db, &f, &r);
     tt_tunedb_close(db);
     if (ws != TT_OK) {
       tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_FAILURE;
     }
-    tt__hyb_warm_log(h, path, &r, objective);
-    cJSON *o = cJSON_CreateObject();
-    cJSON_AddStringToObject(o, "db", path);
-    cJSON_AddNumberToObject(o, "rows", (double)r.rows);
-    cJSON_AddNumberToObject(o, "skipped", (double)(r.considered - r.rows));
-    cJSON_AddNumberToObject(o, "considered", (double)r.considered);
-    cJSON_AddNumberToObject(o, "exploit_rows", (double)r.exploit_rows);
-    cJSON *why = cJSON_AddObjectToObject(o, "skipped_because");
-    cJSON_AddNumberToObject(why, "other_objective", (double)r.other_objective);
-    cJSON_AddNumberToObject(why, "other_space", (double)r.other_space);
-    cJSON_AddNumberToObject(why, "failed", (double)r.failed);
-    cJSON_AddNumberToObject(why, "no_indicators", (double)r.no_indicators);
-    cJSON_AddNumberToObject(why, "other_context", (double)r.other_context);
-    cJSON *keys_o = cJSON_AddObjectToObject(o, "mismatch");
-    for (uint32_t k = 0; k < r.key_count; k++) {
-      cJSON *m = cJSON_AddObjectToObject(keys_o, r.key[k]);
-      cJSON_AddNumberToObject(m, "rows", (double)r.mismatch[k]);
-      cJSON *v = r.mismatch[k] ? cJSON_Parse(r.mismatch_value[k]) : NULL;
-      cJSON_AddItemToObject(m, "value", v ? v : cJSON_CreateNull());
-      cJSON *e = cJSON_Parse(r.expected_value[k]);
-      cJSON_AddItemToObject(m, "this_run", e ? e : cJSON_CreateNull());
-    }
-    cJSON_AddItemToArray(h->warm, o);
+    tt__hyb_warm_log(h, path, &r, h->obj.spec);
+    cJSON_AddItemToArray(h->warm, tt__hyb_warm_json(path, &r));
   }
   return TT_EXIT_OK;
 }
@@ -276,14 +301,8 @@ static void tt__hyb_camera(tt__session *s, uint32_t i) {
 
 /* --states FILE: [{"id": ..., "indicators": {name: raw value}}, ...]; NULL (printed) on error. */
 static cJSON *tt__hyb_read_states(const char *path) {
-  char *text = NULL;
-  size_t n = 0;
-  if (tt_file_read(path, "states file", 0, &text, &n) != TT_OK) {
-    tt__say("--states %s\n", tt_last_error());
-    return NULL;
-  }
-  cJSON *root = cJSON_Parse(text);
-  tt_free(text);
+  cJSON *root = NULL;
+  if (tt__json_read("--states", path, "states file", &root)) return NULL;
   int ok = cJSON_IsArray(root);
   for (int i = 0; ok && i < cJSON_GetArraySize(root); i++) {
     cJSON *ind = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(root, i), "indicators");
@@ -304,12 +323,72 @@ static cJSON *tt__hyb_read_states(const char *path) {
   return root;
 }
 
-/* --predict: the model's answer for every state as JSON on stdout. */
-static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t first, uint32_t end) {
-  tt__session *s = h->s;
-  cJSON *root = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(root, "predictions");
-  cJSON_AddStringToObject(root, "scene", s->opt->scene);
-  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(s->scene));
+/* The raw indicators of a --predict state: the "indicators" of a --states item, or the
+ * scene's at path sample `i`. */
+static void tt__hyb_raw_state(tt__hyb *h, const cJSON *item, uint32_t i, double *raw) {
+  if (item) {
+    cJSON *ind = cJSON_GetObjectItemCaseSensitive(item, "indicators");
+    for (uint32_t k = 0; k < TT_SCENE_INDICATOR_COUNT; k++)
+      raw[k] = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k)));
+  } else {
+    tt__hyb_camera(&h->s, i);
+    tt_scene_indicators(h->s.scene, raw);
+  }
+}
+
+/* Adds a prediction to `o`: the accel's configured values with the predicted ones put in
+ * (`sub` holds them, `full` is scratch), the expected cost and what the model says of it. */
+static void tt__hyb_prediction_json(tt__hyb *h, cJSON *o, const tt_predictor_result *r,
+                                    const tt_config *sub, tt_config *full, double predict_ms) {
+  tt_config_copy(full, h->s.configs[h->accel_index]);
+  if (h->subset) tt_config_assign(full, sub);
+  else tt_config_copy(full, sub);
+  char *j = tt_config_to_json(full);
+  cJSON *cfg = j ? cJSON_Parse(j) : NULL;
+  tt_free(j);
+  cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
+  if (isfinite(r->expected_cost)) cJSON_AddNumberToObject(o, "expected_cost", r->expected_cost);
+  else cJSON_AddNullToObject(o, "expected_cost");
+  if (isfinite(r->value)) cJSON_AddNumberToObject(o, "value", r->value);
+  if (isfinite(r->distance)) cJSON_AddNumberToObject(o, "distance", r->distance);
+  cJSON_AddNumberToObject(o, "candidates", (double)r->candidates);
+  cJSON_AddNumberToObject(o, "predict_ms", predict_ms);
+}
+
+/* The model's answer for one state (a --states item, or path sample `i`) as JSON; `*rc`
+ * becomes TT_EXIT_FAILURE when the model fails (having no data is not a failure). */
+static cJSON *tt__hyb_predict_one(tt__hyb *h, const cJSON *item, uint32_t i, tt_config *sub,
+                                  tt_config *full, int *rc) {
+  double raw[TT_SCENE_INDICATOR_COUNT], state[TT_SCENE_INDICATOR_COUNT];
+  tt__hyb_raw_state(h, item, i, raw);
+  tt_indicators_normalize(&h->norm, raw, state);
+  tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
+  tt_predictor_result r = {.struct_size = sizeof r};
+  /* median of 5 calls: predict() must stay far below one frame (issue goal: < 1%) */
+  double ms[5];
+  tt_status st = TT_OK;
+  for (int k = 0; k < 5 && st == TT_OK; k++) {
+    double t0 = tt__thread_cpu_ms();
+    st = h->pi->predict_ex(h->model, &q, sub, &r);
+    ms[k] = tt__thread_cpu_ms() - t0;
+  }
+  cJSON *o = cJSON_CreateObject();
+  cJSON *id = item ? cJSON_GetObjectItemCaseSensitive(item, "id") : NULL;
+  if (id) cJSON_AddItemToObject(o, "id", cJSON_Duplicate(id, 1));
+  else cJSON_AddNumberToObject(o, "path_index", i);
+  if (st == TT_OK) {
+    tt__hyb_prediction_json(h, o, &r, sub, full, tt__median(ms, 5));
+    return o;
+  }
+  cJSON_AddStringToObject(o, "error", tt_last_error());
+  if (st != TT_ERR_NO_DATA) *rc = TT_EXIT_FAILURE;
+  return o;
+}
+
+/* The head of --predict's output: the scene, the predictor and what its model holds. */
+static void tt__hyb_predict_head(tt__hyb *h, cJSON *root) {
+  cJSON_AddStringToObject(root, "scene", h->opt->scene);
+  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(h->s.scene));
   cJSON_AddStringToObject(root, "predictor", h->predictor_name);
   tt_predictor_info info = {.struct_size = sizeof info};
   if (TT_PREDICTOR_HAS(h->pi, info) && h->pi->info(h->model, &info) == TT_OK) {
@@ -318,10 +397,18 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
     cJSON_AddNumberToObject(root, "observations", (double)info.observations);
   }
   if (h->warm) cJSON_AddItemToObject(root, "warm_start", h->warm), h->warm = NULL;
+}
+
+/* --predict: the model's answer for every state (--states, or the path samples) as JSON on
+ * stdout. */
+static int tt__hyb_predict(tt__hyb *h) {
+  cJSON *root = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(root, "predictions");
+  tt__hyb_predict_head(h, root);
   tt_config *sub = tt_config_create(h->subset ? h->subset : h->space);
   tt_config *full = tt_config_create(h->space);
   int rc = TT_EXIT_OK;
   cJSON *given = NULL;
+  uint32_t first = h->first, end = h->end;
   if (h->opt->states) {
     given = tt__hyb_read_states(h->opt->states);
     if (!given) rc = TT_EXIT_USAGE;
@@ -329,50 +416,8 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
     end = given ? (uint32_t)cJSON_GetArraySize(given) : 0;
   }
   for (uint32_t i = first; i < end && sub && full; i++) {
-    double raw[TT_SCENE_INDICATOR_COUNT], state[TT_SCENE_INDICATOR_COUNT];
     cJSON *item = given ? cJSON_GetArrayItem(given, (int)i) : NULL;
-    if (item) {
-      cJSON *ind = cJSON_GetObjectItemCaseSensitive(item, "indicators");
-      for (uint32_t k = 0; k < TT_SCENE_INDICATOR_COUNT; k++)
-        raw[k] = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k)));
-    } else {
-      tt__hyb_camera(s, i);
-      tt_scene_indicators(s->scene, raw);
-    }
-    tt_indicators_normalize(norm, raw, state);
-    tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
-    tt_predictor_result r = {.struct_size = sizeof r};
-    /* median of 5 calls: predict() must stay far below one frame (issue goal: < 1%) */
-    double ms[5];
-    tt_status st = TT_OK;
-    for (int k = 0; k < 5 && st == TT_OK; k++) {
-      double t0 = tt__thread_cpu_ms();
-      st = h->pi->predict_ex(h->model, &q, sub, &r);
-      ms[k] = tt__thread_cpu_ms() - t0;
-    }
-    cJSON *o = cJSON_CreateObject();
-    cJSON *id = item ? cJSON_GetObjectItemCaseSensitive(item, "id") : NULL;
-    if (id) cJSON_AddItemToObject(o, "id", cJSON_Duplicate(id, 1));
-    else cJSON_AddNumberToObject(o, "path_index", i);
-    if (st != TT_OK) {
-      cJSON_AddStringToObject(o, "error", tt_last_error());
-      if (st != TT_ERR_NO_DATA) rc = TT_EXIT_FAILURE;
-    } else {
-      tt_config_copy(full, s->configs[h->accel_index]);
-      if (h->subset) tt_config_assign(full, sub);
-      else tt_config_copy(full, sub);
-      char *j = tt_config_to_json(full);
-      cJSON *cfg = j ? cJSON_Parse(j) : NULL;
-      tt_free(j);
-      cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
-      if (isfinite(r.expected_cost)) cJSON_AddNumberToObject(o, "expected_cost", r.expected_cost);
-      else cJSON_AddNullToObject(o, "expected_cost");
-      if (isfinite(r.value)) cJSON_AddNumberToObject(o, "value", r.value);
-      if (isfinite(r.distance)) cJSON_AddNumberToObject(o, "distance", r.distance);
-      cJSON_AddNumberToObject(o, "candidates", (double)r.candidates);
-      cJSON_AddNumberToObject(o, "predict_ms", tt__median(ms, 5));
-    }
-    cJSON_AddItemToArray(arr, o);
+    cJSON_AddItemToArray(arr, tt__hyb_predict_one(h, item, i, sub, full, &rc));
   }
   tt_config_destroy(sub);
   tt_config_destroy(full);
@@ -381,17 +426,28 @@ static int tt__hyb_predict(tt__hyb *h, const tt_indicator_norm *norm, uint32_t f
     cJSON_Delete(root);
     return rc;
   }
-  char *text = cJSON_Print(root);
-  cJSON_Delete(root);
-  if (!text || puts(text) < 0 || fflush(stdout)) rc = TT_EXIT_OUTPUT;
-  cJSON_free(text);
+  int prc = tt__json_print(root);
+  return prc != TT_EXIT_OK ? prc : rc;
+}
+
+/* Saves the model to --model FILE (atomically); prints a failure, TT_EXIT_OUTPUT. */
+static int tt__hyb_save_model(tt__hyb *h) {
+  if (h->pi->save(h->model, h->opt->model) == TT_OK) return TT_EXIT_OK;
+  tt__say("--model %s: %s\n", h->opt->model, tt_last_error());
+  return TT_EXIT_OUTPUT;
+}
+
+/* The --predict job: the predictions, and what a warm start taught the model is kept. */
+static int tt__hyb_predict_job(tt__hyb *h) {
+  int rc = tt__hyb_predict(h);
+  if (rc == TT_EXIT_OK && h->opt->model && h->opt->warm_start_count) rc = tt__hyb_save_model(h);
   return rc;
 }
 
 /* Writes the film as DIR/state_NNNN.exr and its display preview DIR/state_NNNN.png (as a
  * still render writes both). */
 static void tt__hyb_write_state(tt__hyb *h, uint32_t index) {
-  tt__session *s = h->s;
+  tt__session *s = &h->s;
   uint32_t w = s->camera->width, hh = s->camera->height;
   float *px = malloc((size_t)w * hh * 3 * sizeof *px);
   char path[4200], png[4200];
@@ -405,286 +461,322 @@ static void tt__hyb_write_state(tt__hyb *h, uint32_t index) {
   free(px);
 }
 
-int tt__run_hybrid(const tt__host_options *opt) {
-  tt__install_signals("pass");
-  tt__session s;
-  tt__hyb h;
-  memset(&h, 0, sizeof h);
-  h.s = &s;
-  h.opt = opt;
-  h.spp = opt->tune_spp ? opt->tune_spp : 1;
-  tt_hybrid *hy = NULL;
-  cJSON *states = NULL;
-  char *context = NULL, *camera0 = NULL;
-  memset(&s, 0, sizeof s);
-  int rc = tt__hyb_warm_files(opt);
-  if (rc != TT_EXIT_OK) return rc;
-  rc = tt__session_open(&s, opt);
-  if (rc != TT_EXIT_OK) goto done;
-  const tt_camera *cam = tt_scene_camera(s.scene);
-  if (cam->key_count < 1 && !(opt->predict_only && opt->states)) {
+/* Checks the options against the scene and each other; prints and returns an exit code. */
+static int tt__hyb_check(const tt__hyb *h) {
+  const tt__host_options *opt = h->opt;
+  const char *job = opt->hybrid ? "hybrid" : "predict";
+  const char *accel = tt_loaded_plugin_entry(h->s.accel_p)->name;
+  if (tt_scene_camera(h->s.scene)->key_count < 1 && !(opt->predict_only && opt->states)) {
     tt__say("--%s: %s has no camera path (camera.path in scene.json): the hybrid "
-            "loop moves through the path's states\n", opt->hybrid ? "hybrid" : "predict", opt->scene);
-    rc = TT_EXIT_USAGE;
-    goto done;
+            "loop moves through the path's states\n", job, opt->scene);
+    return TT_EXIT_USAGE;
   }
-  if (opt->tune && strcmp(opt->tune, tt_loaded_plugin_entry(s.accel_p)->name)) {
-    tt__say("--hybrid tunes the accel (%s), not --tune %s\n",
-            tt_loaded_plugin_entry(s.accel_p)->name, opt->tune);
-    rc = TT_EXIT_USAGE;
-    goto done;
+  if (opt->tune && strcmp(opt->tune, accel)) {
+    tt__say("--hybrid tunes the accel (%s), not --tune %s\n", accel, opt->tune);
+    return TT_EXIT_USAGE;
   }
   if (opt->explore || opt->verify || opt->reference || (opt->states && opt->camera_index_set)) {
     tt__say("--%s: %s does not apply (the states are the path samples of "
-            "--camera-index A:B)\n", opt->hybrid ? "hybrid" : "predict",
-            opt->explore ? "--explore" : opt->verify ? "--verify"
+            "--camera-index A:B)\n", job, opt->explore ? "--explore" : opt->verify ? "--verify"
             : opt->reference ? "--reference" : "--camera-index with --states");
-    rc = TT_EXIT_USAGE;
-    goto done;
+    return TT_EXIT_USAGE;
   }
-  tt_indicator_norm norm;
-  tt_indicator_norm_init(&norm);
-  if (opt->indicator_norm) tt_indicator_norm_parse(opt->indicator_norm, &norm);  /* checked */
-  tt_objective obj;
+  return TT_EXIT_OK;
+}
+
+/* The state space (--indicator-norm, checked when the options were read) and the objective:
+ * a time (render, build+render, build). Prints and returns an exit code. */
+static int tt__hyb_objective(tt__hyb *h) {
+  const tt__host_options *opt = h->opt;
+  tt_indicator_norm_init(&h->norm);
+  if (opt->indicator_norm) tt_indicator_norm_parse(opt->indicator_norm, &h->norm);
   const char *spec = opt->objective ? opt->objective : "render";
-  if (tt__parse_objective("--objective", spec, &obj)) {
-    rc = TT_EXIT_USAGE;
-    goto done;
-  }
-  if (obj.kind != TT_OBJECTIVE_RENDER && obj.kind != TT_OBJECTIVE_TOTAL && obj.kind != TT_OBJECTIVE_BUILD) {
+  if (tt__parse_objective("--objective", spec, &h->obj)) return TT_EXIT_USAGE;
+  tt_objective_kind k = h->obj.kind;
+  if (k != TT_OBJECTIVE_RENDER && k != TT_OBJECTIVE_TOTAL && k != TT_OBJECTIVE_BUILD) {
     tt__say("--hybrid: --objective %s: the hybrid loop tunes the accel for time "
             "(render, build+render, build)\n", spec);
-    rc = TT_EXIT_USAGE;
-    goto done;
+    return TT_EXIT_USAGE;
   }
-  /* the session loaded tuner_nm and predictor_nn unless --plugin named others */
-  tt_loaded_plugin *tp = tt_registry_find_kind(s.reg, TT_KIND_TUNER);
-  tt_loaded_plugin *pp = tt_registry_find_kind(s.reg, TT_KIND_PREDICTOR);
-  h.tuner_name = tt_loaded_plugin_entry(tp)->name;
-  h.accel_index = (size_t)tt_session_plugin_index(s.lib, tt_loaded_plugin_entry(s.accel_p)->name);
-  h.space = tt_loaded_plugin_space(s.accel_p);
-  if (tt__hyb_subset(&h)) {
-    rc = TT_EXIT_USAGE;
-    goto done;
+  return TT_EXIT_OK;
+}
+
+/* Opens --db or the default database (none with --no-db, or without a home). */
+static int tt__hyb_open_db(tt__hyb *h) {
+  if (h->opt->no_db) return TT_EXIT_OK;
+  char *path = h->opt->db ? tt__strdup(h->opt->db) : tt_tunedb_default_path();
+  int rc = TT_EXIT_OK;
+  if (path && tt_tunedb_open(path, &h->db) != TT_OK) {
+    tt__say("--db %s: %s\n", path, tt_last_error());
+    rc = TT_EXIT_FAILURE;
   }
-  rc = tt__hyb_model(&h, pp, &norm);
-  if (rc != TT_EXIT_OK) goto done;
-  if (!opt->no_db) {
-    char *path = opt->db ? tt__strdup(opt->db) : tt_tunedb_default_path();
-    if (path && tt_tunedb_open(path, &h.db) != TT_OK) {
-      tt__say("--db %s: %s\n", path, tt_last_error());
-      free(path);
-      rc = TT_EXIT_FAILURE;
-      goto done;
-    }
-    free(path);
-  }
-  /* the state's context: as the tuning phase's (spp, threads, the other plugins), plus the
-   * clock; the camera gets "path_index" per state */
-  const char *context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
+  free(path);
+  return rc;
+}
+
+/* The library's hybrid tuner over the accel. The state's context is the tuning phase's
+ * (spp, threads, the other plugins) plus the clock; the camera gets "path_index" per state. */
+static int tt__hyb_tuner(tt__hyb *h, tt_loaded_plugin *tp) {
+  tt__session *s = &h->s;
+  const tt__host_options *opt = h->opt;
+  h->context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
   tt_tuning_state st0;
-  if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, NULL, context_extra, 0, &st0) == TT_OK) {
-    context = tt__strdup(st0.context);
-    camera0 = tt__strdup(st0.camera);
+  if (tt_session_tuning_state(s->lib, h->accel_index, h->spp, NULL, h->context_extra, 0,
+                              &st0) == TT_OK) {
+    h->context = tt__strdup(st0.context);
+    h->camera0 = tt__strdup(st0.camera);
   }
-  const tt_plugin *ae = tt_loaded_plugin_entry(s.accel_p);
-  tt_hybrid_desc d;
-  memset(&d, 0, sizeof d);
-  d.struct_size = sizeof d;
-  d.host = s.host;
-  d.space = h.space;
-  d.start = s.configs[h.accel_index];
-  d.search = h.subset;
-  d.objective = obj.spec;
+  h->epsilon = opt->epsilon_set ? opt->epsilon : TT_HOST_DEFAULT_EPSILON;
+  h->explore_iterations = opt->iterations ? opt->iterations : TT_HOST_DEFAULT_HYBRID_ITERATIONS;
+  const tt_plugin *ae = tt_loaded_plugin_entry(s->accel_p);
+  tt_hybrid_desc d = {.struct_size = sizeof d};
+  d.host = s->host;
+  d.space = h->space;
+  d.start = s->configs[h->accel_index];
+  d.search = h->subset;
+  d.objective = h->obj.spec;
   d.tuner = tt_loaded_plugin_iface(tp);
-  d.tuner_settings = tt_session_config(s.lib, h.tuner_name);
-  d.tuner_name = h.tuner_name;
-  d.predictor = h.pi;
-  d.model = h.model;
-  d.predictor_name = h.predictor_name;
-  d.epsilon = opt->epsilon_set ? opt->epsilon : TT_HOST_DEFAULT_EPSILON;
-  d.explore_iterations = opt->iterations ? opt->iterations : TT_HOST_DEFAULT_HYBRID_ITERATIONS;
-  d.spp = h.spp;
+  d.tuner_settings = tt_session_config(s->lib, h->tuner_name);
+  d.tuner_name = h->tuner_name;
+  d.predictor = h->pi;
+  d.model = h->model;
+  d.predictor_name = h->predictor_name;
+  d.epsilon = h->epsilon;
+  d.explore_iterations = h->explore_iterations;
+  d.spp = h->spp;
   d.warmup_passes = 1;
-  d.seed = s.rec.seed;
+  d.seed = s->rec.seed;
   d.plugin = ae->name;
   d.plugin_version = ae->version;
-  d.db = h.db;
-  d.norm = &norm;
-  if (!context || !camera0 || tt_hybrid_create(&d, &hy) != TT_OK) {
-    tt__say("--hybrid: %s\n", context ? tt_last_error() : "out of memory");
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  rc = tt__hyb_warm(&h, hy, context, camera0, obj.spec);
-  if (rc != TT_EXIT_OK) goto done;
-  /* --camera-index A:B (or I): path samples A..B, both included; default all of them */
-  uint32_t first = opt->camera_index_set ? opt->camera_index : 0;
-  uint32_t end = opt->camera_index_set ? opt->camera_index_last + 1 : TT_HOST_PATH_SAMPLES;
-  if (opt->predict_only) {
-    rc = tt__hyb_predict(&h, &norm, first, end);
-    /* what a warm start taught the model is kept (--model FILE: saved atomically) */
-    if (rc == TT_EXIT_OK && opt->model && opt->warm_start_count &&
-        h.pi->save(h.model, opt->model) != TT_OK) {
-      tt__say("--model %s: %s\n", opt->model, tt_last_error());
-      rc = TT_EXIT_OUTPUT;
-    }
-    goto done;
-  }
+  d.db = h->db;
+  d.norm = &h->norm;
+  if (h->context && h->camera0 && tt_hybrid_create(&d, &h->hy) == TT_OK) return TT_EXIT_OK;
+  tt__say("--hybrid: %s\n", h->context ? tt_last_error() : "out of memory");
+  return TT_EXIT_FAILURE;
+}
+
+/* Create: the session (the scene loaded once), the checks, the searched parameters, the
+ * model (the session loaded tuner_nm and predictor_nn unless --plugin named others), the
+ * database, the hybrid tuner and its warm start, and the path samples of --camera-index A:B
+ * (or I; default all of them). Prints what failed; an exit code. */
+static int tt__hyb_create(tt__hyb *h, const tt__host_options *opt) {
+  memset(h, 0, sizeof *h);
+  h->opt = opt;
+  h->spp = opt->tune_spp ? opt->tune_spp : 1;
+  int rc = tt__hyb_warm_files(opt);
+  if (rc == TT_EXIT_OK) rc = tt__session_open(&h->s, opt);
+  if (rc == TT_EXIT_OK) rc = tt__hyb_check(h);
+  if (rc == TT_EXIT_OK) rc = tt__hyb_objective(h);
+  if (rc != TT_EXIT_OK) return rc;
+  tt_loaded_plugin *tp = tt_registry_find_kind(h->s.reg, TT_KIND_TUNER);
+  tt_loaded_plugin *pp = tt_registry_find_kind(h->s.reg, TT_KIND_PREDICTOR);
+  h->tuner_name = tt_loaded_plugin_entry(tp)->name;
+  h->accel_index = (size_t)tt_session_plugin_index(h->s.lib,
+                                                   tt_loaded_plugin_entry(h->s.accel_p)->name);
+  h->space = tt_loaded_plugin_space(h->s.accel_p);
+  if (tt__hyb_subset(h)) return TT_EXIT_USAGE;
+  if ((rc = tt__hyb_model(h, pp)) != TT_EXIT_OK || (rc = tt__hyb_open_db(h)) != TT_EXIT_OK ||
+      (rc = tt__hyb_tuner(h, tp)) != TT_EXIT_OK || (rc = tt__hyb_warm(h)) != TT_EXIT_OK)
+    return rc;
+  h->first = opt->camera_index_set ? opt->camera_index : 0;
+  h->end = opt->camera_index_set ? opt->camera_index_last + 1 : TT_HOST_PATH_SAMPLES;
+  return TT_EXIT_OK;
+}
+
+/* Start (--hybrid): the --out-dir folder, the accel, integrator and film, and the render
+ * session as the tuning target. Prints what failed; an exit code. */
+static int tt__hyb_start(tt__hyb *h) {
+  const tt__host_options *opt = h->opt;
   if (opt->out_dir && mkdir(opt->out_dir, 0777) != 0 && errno != EEXIST) {
     tt__say("--out-dir %s: %s\n", opt->out_dir, strerror(errno));
-    rc = TT_EXIT_OUTPUT;
-    goto done;
+    return TT_EXIT_OUTPUT;
   }
-  rc = tt__session_start(&s, 0);
-  if (rc != TT_EXIT_OK) goto done;
-  s.host->log(TT_LOG_INFO, NULL, "hybrid: %s states %u..%u, epsilon %g, explore %s for %u "
-              "iterations, exploit %s, objective %s, database %s", opt->scene, first, end - 1,
-              d.epsilon, h.tuner_name, d.explore_iterations, h.predictor_name, obj.spec,
-              h.db ? tt_tunedb_path(h.db) : "none");
-  states = cJSON_CreateArray();
-  tt_tuning_target target;
-  if (tt_session_tuning_target(s.lib, h.accel_index, 0, &target) != TT_OK) {
+  int rc = tt__session_start(&h->s, 0);
+  if (rc != TT_EXIT_OK) return rc;
+  h->s.host->log(TT_LOG_INFO, NULL, "hybrid: %s states %u..%u, epsilon %g, explore %s for %u "
+                 "iterations, exploit %s, objective %s, database %s", opt->scene, h->first,
+                 h->end - 1, h->epsilon, h->tuner_name, h->explore_iterations,
+                 h->predictor_name, h->obj.spec, h->db ? tt_tunedb_path(h->db) : "none");
+  h->states = cJSON_CreateArray();
+  if (tt_session_tuning_target(h->s.lib, h->accel_index, 0, &h->target) != TT_OK) {
     tt__say("--hybrid: %s\n", tt_last_error());
-    rc = TT_EXIT_FAILURE;
-    goto done;
+    return TT_EXIT_FAILURE;
   }
-  uint32_t target_spp = opt->spp ? opt->spp : 1;
-  double sum_cost = 0, sum_search = 0;
-  uint32_t explored = 0, exploited = 0, builds = 0, done_states = 0, remeasured = 0, cached = 0;
-  uint32_t samples = 0;
-  int interrupted = 0;
-  for (uint32_t i = first; i < end; i++) {
-    tt__hyb_camera(&s, i);
-    tt_session_reset(s.lib);  /* a new view: the film starts over */
-    tt_session_stats ss = {.struct_size = sizeof ss};
-    tt_session_get_stats(s.lib, &ss);
-    uint32_t pass0 = ss.passes;
-    char camera_extra[48];
-    snprintf(camera_extra, sizeof camera_extra, "{\"path_index\":%u}", i);
-    tt_tuning_state state;
-    if (tt_session_tuning_state(s.lib, h.accel_index, h.spp, camera_extra, context_extra, 1,
-                                &state) != TT_OK) {
-      tt__say("--hybrid: state %u: %s\n", i, tt_last_error());
-      rc = TT_EXIT_FAILURE;
-      break;
-    }
-    uint64_t t0 = s.host->clock_ns();
-    tt_hybrid_report r = {.struct_size = sizeof r};
-    tt_status st = tt_hybrid_step(hy, &state, &target, &r);
-    if (st == TT_ERR_INTERRUPTED) {
-      interrupted = 1;
-      break;
-    }
-    if (st != TT_OK) {
-      tt__say("--hybrid: state %u: %s\n", i, tt_last_error());
-      rc = TT_EXIT_FAILURE;
-      break;
-    }
-    /* the rest of the state's samples with its configuration (progressive rendering) */
-    for (;;) {
-      tt_session_get_stats(s.lib, &ss);
-      if ((ss.passes - pass0) * h.spp >= target_spp || s.host->should_stop()) break;
-      double ms;
-      tt_pass_stats ps;
-      if (tt__session_render_pass(&s, 1, &ps, &ms) != TT_OK) break;
-    }
-    tt_session_get_stats(s.lib, &ss);
-    double total_ms = (s.host->clock_ns() - t0) * 1e-6;
-    if (opt->out_dir) tt__hyb_write_state(&h, i);
-    cJSON_AddItemToArray(states, tt__hyb_state_json(&r, i, total_ms, ss.passes - pass0));
-    done_states++;
-    explored += r.mode == TT_HYBRID_EXPLORE;
-    exploited += r.mode == TT_HYBRID_EXPLOIT;
-    builds += r.builds;
-    remeasured += r.remeasured;
-    cached += r.cached;
-    samples += r.samples;
-    if (r.cost < TT_COST_INFEASIBLE) sum_cost += r.cost;
-    sum_search += r.search_cost;
-    if (!opt->quiet) {
-      /* what the state cost, what the model expected and the default's cost beside it */
-      char cmp[160] = "";
-      size_t n = 0;
-      if (isfinite(r.predicted_cost))
-        n += (size_t)snprintf(cmp, sizeof cmp, ", the model expected %.4g", r.predicted_cost);
-      if (isfinite(r.default_cost) && !r.fallback && n < sizeof cmp)
-        snprintf(cmp + n, sizeof cmp - n, ", default %s%.4g%s",
-                 r.default_source == TT_HYBRID_COST_NEAREST ? "~" : "", r.default_cost,
-                 r.default_source == TT_HYBRID_COST_NEAREST ? " (nearest measured state)"
-                 : r.default_source == TT_HYBRID_COST_DATABASE ? " (database)" : "");
-      s.host->log(TT_LOG_INFO, NULL, "hybrid: state %u (path %u): %s%s, cost %.4g%s, %u "
-                  "build%s", r.state_index, i, r.mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
-                  r.fallback ? " (default: no usable prediction)" : "", r.cost, cmp, r.builds,
-                  r.builds == 1 ? "" : "s");
-    }
-    tt__progress_update("hybrid", (double)(i + 1 - first) / (end - first));
-    if (s.host->should_stop()) {
-      interrupted = 1;
-      break;
-    }
+  return TT_EXIT_OK;
+}
+
+/* The passes the render session has rendered. */
+static uint32_t tt__hyb_passes(const tt__hyb *h) {
+  tt_session_stats ss = {.struct_size = sizeof ss};
+  tt_session_get_stats(h->s.lib, &ss);
+  return ss.passes;
+}
+
+/* The rest of a state's samples, up to --spp, with its configuration (progressive). */
+static void tt__hyb_render_rest(tt__hyb *h, uint32_t pass0) {
+  uint32_t target_spp = h->opt->spp ? h->opt->spp : 1;
+  while ((tt__hyb_passes(h) - pass0) * h->spp < target_spp && !h->s.host->should_stop()) {
+    double ms;
+    tt_pass_stats ps;
+    if (tt__session_render_pass(&h->s, 1, &ps, &ms) != TT_OK) break;
   }
+}
+
+/* Adds a state's report to the run's totals. */
+static void tt__hyb_account(tt__hyb_totals *tot, const tt_hybrid_report *r) {
+  tot->states++;
+  tot->explored += r->mode == TT_HYBRID_EXPLORE;
+  tot->exploited += r->mode == TT_HYBRID_EXPLOIT;
+  tot->builds += r->builds;
+  tot->remeasured += r->remeasured;
+  tot->cached += r->cached;
+  tot->samples += r->samples;
+  if (r->cost < TT_COST_INFEASIBLE) tot->sum_cost += r->cost;
+  tot->sum_search += r->search_cost;
+}
+
+/* Logs what a state cost, what the model expected and the default's cost beside it. */
+static void tt__hyb_log_state(const tt__hyb *h, const tt_hybrid_report *r, uint32_t i) {
+  if (h->opt->quiet) return;
+  char cmp[160] = "";
+  size_t n = 0;
+  if (isfinite(r->predicted_cost))
+    n += (size_t)snprintf(cmp, sizeof cmp, ", the model expected %.4g", r->predicted_cost);
+  if (isfinite(r->default_cost) && !r->fallback && n < sizeof cmp)
+    snprintf(cmp + n, sizeof cmp - n, ", default %s%.4g%s",
+             r->default_source == TT_HYBRID_COST_NEAREST ? "~" : "", r->default_cost,
+             r->default_source == TT_HYBRID_COST_NEAREST ? " (nearest measured state)"
+             : r->default_source == TT_HYBRID_COST_DATABASE ? " (database)" : "");
+  h->s.host->log(TT_LOG_INFO, NULL, "hybrid: state %u (path %u): %s%s, cost %.4g%s, %u "
+                 "build%s", r->state_index, i, r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
+                 r->fallback ? " (default: no usable prediction)" : "", r->cost, cmp, r->builds,
+                 r->builds == 1 ? "" : "s");
+}
+
+/* Prints that state `i` failed; TT_EXIT_FAILURE. */
+static int tt__hyb_state_failed(uint32_t i) {
+  tt__say("--hybrid: state %u: %s\n", i, tt_last_error());
+  return TT_EXIT_FAILURE;
+}
+
+/* Step: path sample `i` — the camera moves, the film starts over, the hybrid tuner explores
+ * or exploits, the state renders the rest of its samples and is reported. A stop request
+ * marks the run interrupted. Prints what failed; an exit code. */
+static int tt__hyb_step(tt__hyb *h, uint32_t i) {
+  tt__session *s = &h->s;
+  tt__hyb_camera(s, i);
+  tt_session_reset(s->lib);  /* a new view: the film starts over */
+  uint32_t pass0 = tt__hyb_passes(h);
+  char camera_extra[48];
+  snprintf(camera_extra, sizeof camera_extra, "{\"path_index\":%u}", i);
+  tt_tuning_state state;
+  if (tt_session_tuning_state(s->lib, h->accel_index, h->spp, camera_extra, h->context_extra, 1,
+                              &state) != TT_OK)
+    return tt__hyb_state_failed(i);
+  uint64_t t0 = s->host->clock_ns();
+  tt_hybrid_report r = {.struct_size = sizeof r};
+  tt_status st = tt_hybrid_step(h->hy, &state, &h->target, &r);
+  if (st == TT_ERR_INTERRUPTED) {
+    h->interrupted = 1;
+    return TT_EXIT_OK;
+  }
+  if (st != TT_OK) return tt__hyb_state_failed(i);
+  tt__hyb_render_rest(h, pass0);
+  uint32_t passes = tt__hyb_passes(h) - pass0;
+  double total_ms = (s->host->clock_ns() - t0) * 1e-6;
+  if (h->opt->out_dir) tt__hyb_write_state(h, i);
+  cJSON_AddItemToArray(h->states, tt__hyb_state_json(&r, i, total_ms, passes));
+  tt__hyb_account(&h->tot, &r);
+  tt__hyb_log_state(h, &r, i);
+  tt__progress_update("hybrid", (double)(i + 1 - h->first) / (h->end - h->first));
+  if (s->host->should_stop()) h->interrupted = 1;
+  return TT_EXIT_OK;
+}
+
+/* The --stats record of the run: the settings, the totals and every state's report. */
+static cJSON *tt__hyb_stats_json(tt__hyb *h) {
+  const tt__host_options *opt = h->opt;
+  const tt__hyb_totals *tot = &h->tot;
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddStringToObject(root, "scene", opt->scene);
+  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(h->s.scene));
+  cJSON_AddStringToObject(root, "clock", opt->clock_cpu ? "cpu" : "wall");
+  cJSON_AddNumberToObject(root, "threads", h->s.rec.threads);
+  cJSON_AddNumberToObject(root, "seed", (double)h->s.rec.seed);
+  cJSON *hj = cJSON_AddObjectToObject(root, "hybrid");
+  cJSON_AddStringToObject(hj, "predictor", h->predictor_name);
+  cJSON_AddStringToObject(hj, "tuner", h->tuner_name);
+  cJSON_AddNumberToObject(hj, "epsilon", h->epsilon);
+  cJSON_AddNumberToObject(hj, "explore_iterations", h->explore_iterations);
+  cJSON_AddStringToObject(hj, "objective", h->obj.spec);
+  char id[96];
+  cJSON_AddStringToObject(hj, "state_space", tt_indicator_norm_id(&h->norm, id, sizeof id));
+  if (opt->model) cJSON_AddStringToObject(hj, "model", opt->model);
+  else cJSON_AddNullToObject(hj, "model");
+  if (h->db) cJSON_AddStringToObject(hj, "db", tt_tunedb_path(h->db));
+  else cJSON_AddNullToObject(hj, "db");
+  cJSON_AddItemToObject(hj, "warm_start", h->warm ? h->warm : cJSON_CreateArray());
+  h->warm = NULL;
+  cJSON_AddNumberToObject(hj, "states_done", tot->states);
+  cJSON_AddNumberToObject(hj, "explored", tot->explored);
+  cJSON_AddNumberToObject(hj, "exploited", tot->exploited);
+  cJSON_AddNumberToObject(hj, "builds", tot->builds);
+  cJSON_AddNumberToObject(hj, "sum_cost", tot->sum_cost);
+  cJSON_AddNumberToObject(hj, "sum_search_cost", tot->sum_search);
+  cJSON_AddBoolToObject(hj, "interrupted", h->interrupted);
+  cJSON_AddItemToObject(hj, "states", h->states);
+  h->states = NULL;
+  return root;
+}
+
+/* Finish: what the run re-measured and took from the database (said once per run), the
+ * model saved (--model), the --stats record. Returns `rc`, or what failed first, or
+ * TT_EXIT_INTERRUPTED. */
+static int tt__hyb_finish(tt__hyb *h, int rc) {
+  const tt__hyb_totals *tot = &h->tot;
   tt__progress_finish();
-  /* said once per run, not per state */
-  if (cached)
-    s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u costs came from the database %s (earlier "
-                "runs measured those configurations in the same state)", cached, samples,
-                tt_tunedb_path(h.db));
-  if (remeasured)
-    s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u samples measured again a configuration "
-                "already measured in their state (%s re-evaluating its best against noise)",
-                remeasured, samples, h.tuner_name);
-  if (opt->model && (rc == TT_EXIT_OK)) {
-    if (h.pi->save(h.model, opt->model) != TT_OK) {
-      tt__say("--model %s: %s\n", opt->model, tt_last_error());
-      rc = TT_EXIT_OUTPUT;
-    }
-  }
-  if (opt->stats) {
-    cJSON *root = cJSON_CreateObject();
-    cJSON_AddStringToObject(root, "scene", opt->scene);
-    cJSON_AddStringToObject(root, "scene_id", tt_scene_id(s.scene));
-    cJSON_AddStringToObject(root, "clock", opt->clock_cpu ? "cpu" : "wall");
-    cJSON_AddNumberToObject(root, "threads", s.rec.threads);
-    cJSON_AddNumberToObject(root, "seed", (double)s.rec.seed);
-    cJSON *hj = cJSON_AddObjectToObject(root, "hybrid");
-    cJSON_AddStringToObject(hj, "predictor", h.predictor_name);
-    cJSON_AddStringToObject(hj, "tuner", h.tuner_name);
-    cJSON_AddNumberToObject(hj, "epsilon", d.epsilon);
-    cJSON_AddNumberToObject(hj, "explore_iterations", d.explore_iterations);
-    cJSON_AddStringToObject(hj, "objective", obj.spec);
-    char id[96];
-    cJSON_AddStringToObject(hj, "state_space", tt_indicator_norm_id(&norm, id, sizeof id));
-    if (opt->model) cJSON_AddStringToObject(hj, "model", opt->model);
-    else cJSON_AddNullToObject(hj, "model");
-    if (h.db) cJSON_AddStringToObject(hj, "db", tt_tunedb_path(h.db));
-    else cJSON_AddNullToObject(hj, "db");
-    cJSON_AddItemToObject(hj, "warm_start", h.warm ? h.warm : cJSON_CreateArray());
-    h.warm = NULL;
-    cJSON_AddNumberToObject(hj, "states_done", done_states);
-    cJSON_AddNumberToObject(hj, "explored", explored);
-    cJSON_AddNumberToObject(hj, "exploited", exploited);
-    cJSON_AddNumberToObject(hj, "builds", builds);
-    cJSON_AddNumberToObject(hj, "sum_cost", sum_cost);
-    cJSON_AddNumberToObject(hj, "sum_search_cost", sum_search);
-    cJSON_AddBoolToObject(hj, "interrupted", interrupted);
-    cJSON_AddItemToObject(hj, "states", states);
-    states = NULL;
-    int wrc = tt__hyb_write_json(opt->stats, root);
+  if (tot->cached)
+    h->s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u costs came from the database %s "
+                   "(earlier runs measured those configurations in the same state)",
+                   tot->cached, tot->samples, tt_tunedb_path(h->db));
+  if (tot->remeasured)
+    h->s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u samples measured again a "
+                   "configuration already measured in their state (%s re-evaluating its best "
+                   "against noise)", tot->remeasured, tot->samples, h->tuner_name);
+  if (h->opt->model && rc == TT_EXIT_OK) rc = tt__hyb_save_model(h);
+  if (h->opt->stats) {
+    cJSON *root = tt__hyb_stats_json(h);
+    int wrc = tt__hyb_write_json(h->opt->stats, root);
     cJSON_Delete(root);
     if (wrc != TT_EXIT_OK && rc == TT_EXIT_OK) rc = wrc;
   }
-  if (interrupted && rc == TT_EXIT_OK) rc = TT_EXIT_INTERRUPTED;
+  return h->interrupted && rc == TT_EXIT_OK ? TT_EXIT_INTERRUPTED : rc;
+}
 
-done:
-  cJSON_Delete(states);
-  cJSON_Delete(h.warm);
-  free(context);
-  free(camera0);
-  tt_hybrid_destroy(hy);
-  if (h.model) h.pi->destroy(h.model);
-  tt_space_destroy(h.subset);
-  tt_tunedb_close(h.db);
-  tt__session_close(&s);
+/* Frees what the job holds, at any stage. */
+static void tt__hyb_close(tt__hyb *h) {
+  cJSON_Delete(h->states);
+  cJSON_Delete(h->warm);
+  free(h->context);
+  free(h->camera0);
+  tt_hybrid_destroy(h->hy);
+  if (h->model) h->pi->destroy(h->model);
+  tt_space_destroy(h->subset);
+  tt_tunedb_close(h->db);
+  tt__session_close(&h->s);
+}
+
+int tt__run_hybrid(const tt__host_options *opt) {
+  tt__install_signals("pass");
+  tt__hyb h;
+  int rc = tt__hyb_create(&h, opt);
+  if (rc == TT_EXIT_OK && opt->predict_only) {
+    rc = tt__hyb_predict_job(&h);
+  } else if (rc == TT_EXIT_OK && (rc = tt__hyb_start(&h)) == TT_EXIT_OK) {
+    for (uint32_t i = h.first; i < h.end && rc == TT_EXIT_OK && !h.interrupted; i++)
+      rc = tt__hyb_step(&h, i);
+    rc = tt__hyb_finish(&h, rc);
+  }
+  tt__hyb_close(&h);
   return rc;
 }

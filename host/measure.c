@@ -22,18 +22,25 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The --measure job: the host session, the configurations and what every round measured.
+ * tt__measure_close frees what it holds at any stage. */
+typedef struct tt__measure_job {
+  const tt__host_options *opt;
+  tt__session s;
+  tt_objective obj;
+  tt_config **cfgs;             /* the configurations of FILE, in its order */
+  size_t n;
+  int *ok;                      /* per configuration: feasible and measured without failure */
+  uint32_t rounds, spp, done_rounds;
+  double *m;                    /* rounds x n x {build, render, cost} */
+} tt__measure_job;
+
 /* Reads the configurations of FILE into `cfgs` (clones of `base`); prints and returns an
  * exit code. */
 static int tt__measure_read(const char *path, const tt_config *base, tt_config ***cfgs,
                             size_t *count) {
-  char *text = NULL;
-  size_t size = 0;
-  if (tt_file_read(path, "configurations file", 0, &text, &size) != TT_OK) {
-    tt__say("--measure %s\n", tt_last_error());
-    return TT_EXIT_USAGE;
-  }
-  cJSON *root = cJSON_Parse(text);
-  tt_free(text);
+  cJSON *root = NULL;
+  if (tt__json_read("--measure", path, "configurations file", &root)) return TT_EXIT_USAGE;
   if (!cJSON_IsArray(root) || cJSON_GetArraySize(root) < 1) {
     tt__say("--measure %s: expected a JSON array of configuration objects\n", path);
     cJSON_Delete(root);
@@ -60,124 +67,148 @@ static int tt__measure_read(const char *path, const tt_config *base, tt_config *
   return TT_EXIT_OK;
 }
 
-int tt__run_measure(const tt__host_options *opt) {
-  tt__install_signals("round");
-  tt__session s;
-  tt_config **cfgs = NULL;
-  size_t n = 0;
-  double *m = NULL;  /* rounds x n x {build, render, cost} */
-  int *ok = NULL;
-  int rc = tt__session_open(&s, opt);
-  if (rc != TT_EXIT_OK) goto done;
-  tt_objective obj;
-  const char *spec = opt->objective ? opt->objective : "render";
-  if (tt__parse_objective("--objective", spec, &obj)) {
-    rc = TT_EXIT_USAGE;
-    goto done;
+/* The objective: a time (render, build or build+render); prints and returns an exit code. */
+static int tt__measure_objective(tt__measure_job *j) {
+  const char *spec = j->opt->objective ? j->opt->objective : "render";
+  if (tt__parse_objective("--objective", spec, &j->obj)) return TT_EXIT_USAGE;
+  tt_objective_kind k = j->obj.kind;
+  if (k != TT_OBJECTIVE_RENDER && k != TT_OBJECTIVE_TOTAL && k != TT_OBJECTIVE_BUILD) {
+    tt__say("--measure: --objective %s: expected render, build or build+render\n",
+            spec);
+    return TT_EXIT_USAGE;
   }
-  if (obj.kind != TT_OBJECTIVE_RENDER && obj.kind != TT_OBJECTIVE_TOTAL && obj.kind != TT_OBJECTIVE_BUILD) {
-    tt__say("--measure: --objective %s: expected render, build or build+render\n", spec);
-    rc = TT_EXIT_USAGE;
-    goto done;
-  }
-  size_t ai = (size_t)tt_session_plugin_index(s.lib, tt_loaded_plugin_entry(s.accel_p)->name);
-  const tt_space *space = tt_loaded_plugin_space(s.accel_p);
-  rc = tt__measure_read(opt->measure, s.configs[ai], &cfgs, &n);
-  if (rc != TT_EXIT_OK) goto done;
-  uint32_t rounds = opt->rounds ? opt->rounds : 3, spp = opt->tune_spp ? opt->tune_spp : 1;
-  m = calloc((size_t)rounds * n * 3, sizeof *m);
-  ok = calloc(n, sizeof *ok);
-  if (!m || !ok) {
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
+  return TT_EXIT_OK;
+}
+
+/* Create: the session, the objective, the configurations (an infeasible one is reported,
+ * not measured), the accel, integrator and film, and one warm-up pass (page faults, lazy
+ * set-up). Prints what failed; an exit code. */
+static int tt__measure_create(tt__measure_job *j, const tt__host_options *opt) {
+  memset(j, 0, sizeof *j);
+  j->opt = opt;
+  int rc = tt__session_open(&j->s, opt);
+  if (rc == TT_EXIT_OK) rc = tt__measure_objective(j);
+  if (rc != TT_EXIT_OK) return rc;
+  size_t ai = (size_t)tt_session_plugin_index(j->s.lib, tt_loaded_plugin_entry(j->s.accel_p)->name);
+  const tt_space *space = tt_loaded_plugin_space(j->s.accel_p);
+  rc = tt__measure_read(opt->measure, j->s.configs[ai], &j->cfgs, &j->n);
+  if (rc != TT_EXIT_OK) return rc;
+  j->rounds = opt->rounds ? opt->rounds : 3;
+  j->spp = opt->tune_spp ? opt->tune_spp : 1;
+  j->m = calloc((size_t)j->rounds * j->n * 3, sizeof *j->m);
+  j->ok = calloc(j->n, sizeof *j->ok);
+  if (!j->m || !j->ok) return TT_EXIT_FAILURE;
   char why[512];
-  for (size_t i = 0; i < n; i++) {
-    tt_check_result c = tt_space_check(space, cfgs[i], why, sizeof why);
-    ok[i] = c != TT_CHECK_INFEASIBLE;
-  }
-  rc = tt__session_start(&s, 0);
-  if (rc != TT_EXIT_OK) goto done;
+  for (size_t i = 0; i < j->n; i++)
+    j->ok[i] = tt_space_check(space, j->cfgs[i], why, sizeof why) != TT_CHECK_INFEASIBLE;
+  rc = tt__session_start(&j->s, 0);
+  if (rc != TT_EXIT_OK) return rc;
   tt_pass_stats ps;
   double ms;
-  tt__session_render_pass(&s, 1, &ps, &ms);  /* warm-up: page faults, lazy set-up */
-  uint32_t done_rounds = 0;
-  for (uint32_t r = 0; r < rounds && !s.host->should_stop(); r++) {
-    for (size_t k = 0; k < n; k++) {
-      size_t i = r % 2 ? n - 1 - k : k;
-      if (!ok[i]) continue;
-      double build_ms = 0, render_ms = 0;
-      if (tt_session_rebuild_accel(s.lib, cfgs[i], &build_ms) != TT_OK ||
-          tt__session_render_pass(&s, spp, &ps, &render_ms) != TT_OK) {
-        if (s.host->should_stop()) break;
-        ok[i] = 0;
-        s.host->log(TT_LOG_WARN, NULL, "measure: configuration %zu failed: %s", i, tt_last_error());
-        continue;
-      }
-      double *x = &m[((size_t)r * n + i) * 3];
-      x[0] = build_ms;
-      x[1] = render_ms;
-      x[2] = obj.kind == TT_OBJECTIVE_RENDER ? render_ms
-             : obj.kind == TT_OBJECTIVE_BUILD ? build_ms : build_ms + render_ms;
+  tt__session_render_pass(&j->s, 1, &ps, &ms);
+  return TT_EXIT_OK;
+}
+
+/* Step: round `r`, every configuration applied (rebuilt) and rendered once, forward in even
+ * rounds and backward in odd ones; a configuration that fails is measured no more. */
+static void tt__measure_round(tt__measure_job *j, uint32_t r) {
+  const tt_host *host = j->s.host;
+  size_t n = j->n;
+  for (size_t k = 0; k < n; k++) {
+    size_t i = r % 2 ? n - 1 - k : k;
+    if (!j->ok[i]) continue;
+    double build_ms = 0, render_ms = 0;
+    tt_pass_stats ps;
+    if (tt_session_rebuild_accel(j->s.lib, j->cfgs[i], &build_ms) != TT_OK ||
+        tt__session_render_pass(&j->s, j->spp, &ps, &render_ms) != TT_OK) {
+      if (host->should_stop()) break;
+      j->ok[i] = 0;
+      host->log(TT_LOG_WARN, NULL, "measure: configuration %zu failed: %s", i, tt_last_error());
+      continue;
     }
-    if (!s.host->should_stop()) done_rounds++;
+    double *x = &j->m[((size_t)r * n + i) * 3];
+    x[0] = build_ms;
+    x[1] = render_ms;
+    x[2] = j->obj.kind == TT_OBJECTIVE_RENDER ? render_ms
+           : j->obj.kind == TT_OBJECTIVE_BUILD ? build_ms : build_ms + render_ms;
   }
+  if (!host->should_stop()) j->done_rounds++;
+}
+
+/* Configuration `i` as JSON: its canonical form, status, per-round figures, medians and the
+ * median of its per-round cost ratios to the first configuration (robust to drift); `tmp`
+ * holds a value per round. */
+static cJSON *tt__measure_config_json(const tt__measure_job *j, size_t i, double *tmp) {
+  static const char *names[3] = {"build_ms", "render_ms", "cost"};
+  const double *m = j->m;
+  size_t n = j->n;
+  int ok = j->ok[i];
+  cJSON *o = cJSON_CreateObject();
+  char *js = tt_config_to_json(j->cfgs[i]);
+  cJSON *cj = js ? cJSON_Parse(js) : NULL;
+  tt_free(js);
+  cJSON_AddItemToObject(o, "config", cj ? cj : cJSON_CreateNull());
+  cJSON_AddStringToObject(o, "status", ok ? "ok" : "infeasible or failed");
+  double med[3] = {NAN, NAN, NAN};
+  for (int f = 0; f < 3; f++) {
+    cJSON *a = cJSON_AddArrayToObject(o, names[f]);
+    for (uint32_t r = 0; ok && r < j->done_rounds; r++) {
+      tmp[r] = m[((size_t)r * n + i) * 3 + f];
+      cJSON_AddItemToArray(a, cJSON_CreateNumber(tmp[r]));
+    }
+    if (ok) med[f] = tt__median(tmp, j->done_rounds);
+  }
+  cJSON_AddNumberToObject(o, "median_build_ms", isfinite(med[0]) ? med[0] : -1);
+  cJSON_AddNumberToObject(o, "median_render_ms", isfinite(med[1]) ? med[1] : -1);
+  if (isfinite(med[2])) cJSON_AddNumberToObject(o, "median_cost", med[2]);
+  else cJSON_AddNullToObject(o, "median_cost");
+  uint32_t nr = 0;
+  for (uint32_t r = 0; ok && j->ok[0] && r < j->done_rounds; r++) {
+    double a = m[((size_t)r * n + i) * 3 + 2], b = m[((size_t)r * n + 0) * 3 + 2];
+    if (b > 0) tmp[nr++] = a / b;
+  }
+  if (nr) cJSON_AddNumberToObject(o, "ratio_to_first", tt__median(tmp, nr));
+  else cJSON_AddNullToObject(o, "ratio_to_first");
+  return o;
+}
+
+/* Finish: the result as JSON on stdout; TT_EXIT_INTERRUPTED when a stop cut the rounds. */
+static int tt__measure_finish(tt__measure_job *j) {
+  const tt__host_options *opt = j->opt;
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "scene", opt->scene);
-  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(s.scene));
+  cJSON_AddStringToObject(root, "scene_id", tt_scene_id(j->s.scene));
   if (opt->camera_index_set) cJSON_AddNumberToObject(root, "camera_index", opt->camera_index);
-  cJSON_AddStringToObject(root, "objective", obj.spec);
+  cJSON_AddStringToObject(root, "objective", j->obj.spec);
   cJSON_AddStringToObject(root, "clock", opt->clock_cpu ? "cpu" : "wall");
-  cJSON_AddNumberToObject(root, "rounds", done_rounds);
-  cJSON_AddNumberToObject(root, "spp", spp);
+  cJSON_AddNumberToObject(root, "rounds", j->done_rounds);
+  cJSON_AddNumberToObject(root, "spp", j->spp);
   cJSON *arr = cJSON_AddArrayToObject(root, "configs");
-  double *tmp = malloc((rounds ? rounds : 1) * sizeof *tmp);
-  double first = NAN;
-  for (size_t i = 0; i < n && tmp; i++) {
-    cJSON *o = cJSON_CreateObject();
-    char *j = tt_config_to_json(cfgs[i]);
-    cJSON *cj = j ? cJSON_Parse(j) : NULL;
-    tt_free(j);
-    cJSON_AddItemToObject(o, "config", cj ? cj : cJSON_CreateNull());
-    cJSON_AddStringToObject(o, "status", ok[i] ? "ok" : "infeasible or failed");
-    static const char *names[3] = {"build_ms", "render_ms", "cost"};
-    double med[3] = {NAN, NAN, NAN};
-    for (int f = 0; f < 3; f++) {
-      cJSON *a = cJSON_AddArrayToObject(o, names[f]);
-      for (uint32_t r = 0; ok[i] && r < done_rounds; r++) {
-        tmp[r] = m[((size_t)r * n + i) * 3 + f];
-        cJSON_AddItemToArray(a, cJSON_CreateNumber(tmp[r]));
-      }
-      if (ok[i]) med[f] = tt__median(tmp, done_rounds);
-    }
-    if (i == 0) first = med[2];
-    cJSON_AddNumberToObject(o, "median_build_ms", isfinite(med[0]) ? med[0] : -1);
-    cJSON_AddNumberToObject(o, "median_render_ms", isfinite(med[1]) ? med[1] : -1);
-    if (isfinite(med[2])) cJSON_AddNumberToObject(o, "median_cost", med[2]);
-    else cJSON_AddNullToObject(o, "median_cost");
-    /* the median of per-round ratios to the first configuration: robust to drift */
-    uint32_t nr = 0;
-    for (uint32_t r = 0; ok[i] && ok[0] && r < done_rounds; r++) {
-      double a = m[((size_t)r * n + i) * 3 + 2], b = m[((size_t)r * n + 0) * 3 + 2];
-      if (b > 0) tmp[nr++] = a / b;
-    }
-    if (nr) cJSON_AddNumberToObject(o, "ratio_to_first", tt__median(tmp, nr));
-    else cJSON_AddNullToObject(o, "ratio_to_first");
-    cJSON_AddItemToArray(arr, o);
-  }
-  (void)first;
+  double *tmp = malloc((j->rounds ? j->rounds : 1) * sizeof *tmp);
+  for (size_t i = 0; i < j->n && tmp; i++)
+    cJSON_AddItemToArray(arr, tt__measure_config_json(j, i, tmp));
   free(tmp);
-  char *text = cJSON_Print(root);
-  cJSON_Delete(root);
-  if (!text || puts(text) < 0 || fflush(stdout)) rc = TT_EXIT_OUTPUT;
-  cJSON_free(text);
-  if (rc == TT_EXIT_OK && s.host->should_stop()) rc = TT_EXIT_INTERRUPTED;
+  int rc = tt__json_print(root);
+  return rc == TT_EXIT_OK && j->s.host->should_stop() ? TT_EXIT_INTERRUPTED : rc;
+}
 
-done:
-  for (size_t i = 0; cfgs && i < n; i++) tt_config_destroy(cfgs[i]);
-  free(cfgs);
-  free(m);
-  free(ok);
-  tt__session_close(&s);
+/* Frees what the job holds, at any stage. */
+static void tt__measure_close(tt__measure_job *j) {
+  for (size_t i = 0; j->cfgs && i < j->n; i++) tt_config_destroy(j->cfgs[i]);
+  free(j->cfgs);
+  free(j->m);
+  free(j->ok);
+  tt__session_close(&j->s);
+}
+
+int tt__run_measure(const tt__host_options *opt) {
+  tt__install_signals("round");
+  tt__measure_job j;
+  int rc = tt__measure_create(&j, opt);
+  if (rc == TT_EXIT_OK) {
+    for (uint32_t r = 0; r < j.rounds && !j.s.host->should_stop(); r++) tt__measure_round(&j, r);
+    rc = tt__measure_finish(&j);
+  }
+  tt__measure_close(&j);
   return rc;
 }
