@@ -380,17 +380,27 @@ def step_plot(args, names):
         json.dump(summ, f, indent=1)
     # Fig. 4.6: relative rRMSE differences ours vs original per scene and mutation count
     data, labels = [], []
+    colors = []
+    short = {'ls01': 'classic, large\nsteps 0.1', 'ours-bins': 'bins only\ntuned'}
     for name in names:
         for e in summ['scenes'][name]['equal_mutations']:
             data.append(100.0 * np.array(e['rel_diff']))
             labels.append(f'{name}\n{e["mpp"]} mpp')
+            colors.append('C0')
+            for m in CONTROLS:
+                if m in e:
+                    data.append(100.0 * np.array(e[m]['rel_diff']))
+                    labels.append(f'{name}\n{short[m]}')
+                    colors.append('C7')
     if data:
         fig, ax = plt.subplots(figsize=(max(4, 1.1 * len(data)), 3.2), dpi=90)
-        ax.boxplot(data, labels=labels, showfliers=True)
+        bp = ax.boxplot(data, labels=labels, showfliers=True, patch_artist=True)
+        for box, c in zip(bp['boxes'], colors):
+            box.set_facecolor('white' if c == 'C0' else '0.85')
         ax.axhline(0, color='k', lw=0.8)
         ax.set_ylabel('rRMSE: (ours - original) / original  [%]')
-        ax.set_title('Fig. 4.6 on MMLT: tuned sigma-binning against classic, equal mutations (lower: ours better)',
-                     fontsize=8)
+        ax.set_title('Fig. 4.6 on MMLT: tuned sigma-binning ("ours") against classic ("original"), equal mutations '
+                     '(lower: better than original; grey: controls)', fontsize=8)
         ax.tick_params(axis='x', labelsize=6)
         fig.tight_layout()
         fig.savefig(os.path.join(figs, 'ch4_fig46.png'))

@@ -6,13 +6,18 @@ integrator_pt), at the same resolution and samples (mutations) per pixel, single
 the image mean per channel (the renderers must agree within noise) and CPU seconds.
 
     python3 tools/pssmlt/pbrt_v3_anchor.py --pbrt /tmp/pbrt-v3/pbrt --res 64 --spp 256 \
-        --out /tmp/pbrt_v3_anchor
+        --reference /tmp/ch4/refs/cornell-box.exr --out /tmp/pbrt_v3_anchor
 
 pbrt-v3 is not part of tunetrace: build it yourself (README, "pbrt-v3 anchor"). The scene is
 converted to pbrt-v3's syntax here (Film "image", Material "matte" "Kd", "point P", the light's
 scale folded into L, WorldEnd); pbrt-v3 renders RGB (its default RGBSpectrum), as tunetrace
-does, so the means compare directly. Seeds differ between the renderers: compare within the
-noise the table prints (the standard error of the mean from 4x4 blocks).
+does, so the means compare directly, against --reference (tunetrace's BDPT at many more
+samples, e.g. chapter4.py's refs/cornell-box.exr of the same resolution). pbrt-v3 has no seed
+option, so a render's noise is estimated from its pixels' differences to the reference: the
+image mean's standard error is sqrt(mean((image - reference)^2) / pixels) (the reference's own
+noise and any bias included, so it is an upper bound). MLT's image mean is its bootstrap
+estimate b, whose error does not shrink with mutations: pbrt-v3's default of 100000
+bootstrap samples per depth is used for both.
 """
 import argparse
 import json
@@ -75,12 +80,14 @@ def timed(cmd, cwd=None):
     return (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
-def mean_se(path):
-    """Per-channel image mean and its standard error from 4x4 blocks."""
+def mean_se(path, ref):
+    """Per-channel image mean and an upper bound of its standard error (pixel differences to
+    the reference, treated as independent noise)."""
     px = images.read_rgb(path).astype(np.float64)
-    h, w = px.shape[:2]
-    b = px[:h - h % 4, :w - w % 4].reshape(h // 4, 4, w // 4, 4, 3).mean(axis=(1, 3)).reshape(-1, 3)
-    return px.mean(axis=(0, 1)), b.std(axis=0, ddof=1) / np.sqrt(len(b))
+    if px.shape != ref.shape:
+        raise SystemExit(f'{path}: {px.shape[1]}x{px.shape[0]}, the reference is {ref.shape[1]}x{ref.shape[0]}')
+    n = px.shape[0] * px.shape[1]
+    return px.mean(axis=(0, 1)), np.sqrt(((px - ref) ** 2).mean(axis=(0, 1)) / n)
 
 
 def main(argv=None):
@@ -89,7 +96,8 @@ def main(argv=None):
     ap.add_argument('--build', default=os.path.join(ROOT, 'build'))
     ap.add_argument('--res', type=int, default=64)
     ap.add_argument('--spp', type=int, default=256, help='samples (BDPT, PT) and mutations (MLT) per pixel')
-    ap.add_argument('--bootstrap', type=int, default=20000)
+    ap.add_argument('--bootstrap', type=int, default=100000)
+    ap.add_argument('--reference', required=True, help='EXR of the same scene and resolution (high spp)')
     ap.add_argument('--chains', type=int, default=1000)
     ap.add_argument('--out', default='/tmp/pbrt_v3_anchor')
     args = ap.parse_args(argv)
@@ -97,6 +105,8 @@ def main(argv=None):
     os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
     with open(SCENE) as f:
         text = f.read()
+    ref = images.read_rgb(args.reference).astype(np.float64)
+    rmean = ref.mean(axis=(0, 1))
     host = os.path.join(args.build, 'host', 'host')
     d = 5
     mlt_v3 = (f'Integrator "mlt" "integer maxdepth" [{d}] "integer mutationsperpixel" [{args.spp}] '
@@ -124,12 +134,16 @@ def main(argv=None):
         else:
             cpu = timed([host, SCENE, '--res', f'{args.res}x{args.res}', '--spp', str(args.spp), '--threads', '1',
                          '--no-db', '--quiet', '--out', exr] + spec)
-        m, se = mean_se(exr)
-        rows.append(dict(run=label, mean=m.tolist(), se=se.tolist(), cpu_s=cpu))
-        print(f'{label:16s} mean R {m[0]:.4f} G {m[1]:.4f} B {m[2]:.4f} (se {se[1]:.4f})  CPU {cpu:.2f} s',
-              flush=True)
+        m, se = mean_se(exr, ref)
+        rel = (m - rmean) / rmean
+        rows.append(dict(run=label, mean=m.tolist(), se=se.tolist(), rel_to_reference=rel.tolist(), cpu_s=cpu,
+                         rrmse=images.rrmse(images.luminance(images.read_rgb(exr)), images.luminance(ref))))
+        print(f'{label:16s} mean R {m[0]:.4f} G {m[1]:.4f} B {m[2]:.4f}; vs reference ' +
+              ' '.join(f'{100 * r:+.2f}%' for r in rel) + f' (se {100 * max(se / rmean):.2f}%); '
+              f'rRMSE {rows[-1]["rrmse"]:.3f}; CPU {cpu:.2f} s', flush=True)
     with open(os.path.join(args.out, 'anchor.json'), 'w') as f:
-        json.dump(dict(res=args.res, spp=args.spp, rows=rows), f, indent=1)
+        json.dump(dict(res=args.res, spp=args.spp, reference=args.reference, reference_mean=rmean.tolist(), rows=rows),
+                  f, indent=1)
     return 0
 
 
