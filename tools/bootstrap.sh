@@ -27,6 +27,8 @@ PACKAGES=(
   python3-numpy python3-openimageio           # tools/scenes/ generators (tools/tests/scenes_generate.sh)
   python3-numpy python3-scipy                 # tools/tuning/analyze.py (tools/tests/tune_analyze.sh)
   python3-numpy                               # the Python API's arrays (python/tests/python_api.py)
+  python3-mesonpy python3-venv python3-pip    # pip install ./python (README "Installing",
+                                              # python/tests/readme_install.sh)
   clang libclang-rt-14-dev                    # the ASan+UBSan build and the libFuzzer harnesses
                                               # (tools/test_sanitized.sh, tests/fuzz; .ci/run)
   llvm-14                                     # llvm-symbolizer: sanitizer reports with lines

@@ -20,7 +20,9 @@ def main():
     ap.add_argument("--res", default="128x128", help="WIDTHxHEIGHT")
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--iterations", type=int, default=10)
-    ap.add_argument("--db", default=None, help="tuning database (default: none)")
+    ap.add_argument("--db", default=None,
+                    help="tuning database (default: the per-user one, as host)")
+    ap.add_argument("--no-db", action="store_true", help="tune without a database")
     ap.add_argument("--out", default="example", help="output stem: STEM.exr")
     a = ap.parse_args()
     w, h = (int(v) for v in a.res.split("x"))
@@ -28,7 +30,8 @@ def main():
     with tt.Session(a.scene, plugins=["integrator_pt", "tuner_nm"], resolution=(w, h),
                     aovs=["normal", "albedo"]) as s:
         s.set("integrator_pt.maxDepth", 5)
-        t = s.tune("accel_embree", tuner="tuner_nm", iterations=a.iterations, db=a.db)
+        t = s.tune("accel_embree", tuner="tuner_nm", iterations=a.iterations,
+                   db=False if a.no_db else a.db)
         print(f"tuning: {len(t.history)} samples, default {t.default_cost:.2f} ms, "
               f"best {t.best_cost:.2f} ms: {t.best_config}")
         rgb = s.render(spp=a.spp)

@@ -33,7 +33,7 @@ from ._errors import (STATUS, ArgumentTypeError, Error, FileError, InfeasibleErr
                       InternalError, InvalidArgumentError, NoDataError, NotFoundError,
                       NumericError, OutOfMemoryError, ParseError, PluginError, StopRequested,
                       UnknownNameError, UnsupportedError, check as _check,
-                      make_error as _make_error)
+                      last_error_text as _last_error_text, make_error as _make_error)
 from ._lib import lib, text
 
 __all__ = ["Error", "InvalidArgumentError", "ParseError", "InfeasibleError", "NumericError",
@@ -493,8 +493,10 @@ class Session(_Handle):
         raw = (_b(plugin, "plugin"), _b(param, "parameter"), _b(_value_text(value), what))
         self._load_on_demand(plugin)
         st = lib.tt_session_set(self._p, *raw)
-        if st < 0:
-            _check(st, what, cls=None if self._knows_key(plugin, param) else UnknownNameError)
+        if st < 0:  # the message first: the look-ups below may record errors of their own
+            msg = _last_error_text(st)
+            raise _make_error(st, f"{what}: {msg}",
+                              cls=None if self._knows_key(plugin, param) else UnknownNameError)
 
     def config(self, plugin):
         """The plugin's configuration as a dict (parameter -> value)."""
@@ -630,9 +632,10 @@ class Session(_Handle):
         st = lib.tt_session_tuning_plan(self._p, _b(target, "tune(target)"), names,
                                         len(params or ()), ctypes.byref(plan))
         if st < 0:
+            msg = _last_error_text(st)
             unknown = target is not None and not lib.tt_registry_find_name(
                 lib.tt_session_registry(self._p), _b(target))
-            _check(st, "tune", cls=UnknownNameError if unknown else None)
+            raise _make_error(st, f"tune: {msg}", cls=UnknownNameError if unknown else None)
         try:
             entry = lib.tt_loaded_plugin_entry(plan.target).contents
             current = lib.tt_session_config_at(self._p, plan.target_index)

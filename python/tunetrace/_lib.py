@@ -10,7 +10,8 @@ The library is looked for, in order:
   2. where the build put this package: the build tree's build/core/ (build/python is the
      package as the build tree has it), or, for an installed package, the library folder of
      the same installation prefix (paths relative to the package, so a --destdir staging
-     copy or a moved prefix works);
+     copy or a moved prefix works), or, for a package `pip install ./python` built, the
+     folder pkg-config named then;
   3. `pkg-config --variable=libdir tunetrace` (an install whose .pc is on PKG_CONFIG_PATH);
   4. the dynamic loader's own search (LD_LIBRARY_PATH, the ld.so cache): libtunetrace.so.1.
 """
@@ -39,6 +40,8 @@ def _candidates():
         if getattr(_paths, "PACKAGE_TO_LIBDIR", None):
             yield "the installation prefix", os.path.normpath(
                 os.path.join(here, _paths.PACKAGE_TO_LIBDIR, SONAME))
+        if getattr(_paths, "LIBDIR", None):
+            yield "pkg-config when the package was built", os.path.join(_paths.LIBDIR, SONAME)
     try:
         out = subprocess.run(["pkg-config", "--variable=libdir", "tunetrace"],
                              capture_output=True, text=True, timeout=10)
