@@ -159,6 +159,28 @@ void tt__session_sync(tt__session *s) {
   memcpy(rec->metric_sums, st.metric_sums, sizeof rec->metric_sums);
 }
 
+/* Once the session is checked: the views into the library session (configurations, accel,
+ * integrator) and the run record's fixed part (plugins, scene, seed, threads, size). */
+static void tt__session_views(tt__session *s) {
+  size_t count = tt_registry_count(s->reg);
+  for (size_t i = 0; i < count && i < TT_HOST_MAX_LIST; i++)
+    s->configs[i] = tt_session_config_at(s->lib, i);
+  s->accel_p = tt_session_accel_plugin(s->lib);
+  s->integ_p = tt_session_integrator_plugin(s->lib);
+  tt_session_stats st = {.struct_size = sizeof st};
+  tt_session_get_stats(s->lib, &st);
+  tt__run_record *rec = &s->rec;
+  rec->opt = s->opt;
+  rec->reg = s->reg;
+  rec->scene = s->scene;
+  for (size_t i = 0; i < count && i < TT_HOST_MAX_LIST; i++) rec->configs[i] = s->configs[i];
+  rec->seed = st.seed;
+  rec->threads = s->host->thread_count();
+  rec->width = s->camera->width;
+  rec->height = s->camera->height;
+  rec->build.struct_size = sizeof rec->build;
+}
+
 int tt__session_open(tt__session *s, const tt__host_options *opt) {
   memset(s, 0, sizeof *s);
   s->opt = opt;
@@ -203,24 +225,7 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
     tt__say("%s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
-  size_t count = tt_registry_count(s->reg);
-  for (size_t i = 0; i < count && i < TT_HOST_MAX_LIST; i++)
-    s->configs[i] = tt_session_config_at(s->lib, i);
-  s->accel_p = tt_session_accel_plugin(s->lib);
-  s->integ_p = tt_session_integrator_plugin(s->lib);
-
-  tt_session_stats st = {.struct_size = sizeof st};
-  tt_session_get_stats(s->lib, &st);
-  tt__run_record *rec = &s->rec;
-  rec->opt = opt;
-  rec->reg = s->reg;
-  rec->scene = s->scene;
-  for (size_t i = 0; i < count && i < TT_HOST_MAX_LIST; i++) rec->configs[i] = s->configs[i];
-  rec->seed = st.seed;
-  rec->threads = s->host->thread_count();
-  rec->width = s->camera->width;
-  rec->height = s->camera->height;
-  rec->build.struct_size = sizeof rec->build;
+  tt__session_views(s);
   return TT_EXIT_OK;
 }
 
