@@ -223,7 +223,7 @@ static tt_status ps_predict_ex(const tt_predictor *p, const tt_predictor_query *
     tt_status st = nom ? tt_config_set_index(out, i, (size_t)v) : tt_config_set_number(out, i, v);
     if (st != TT_OK) return st;
   }
-  if (res && res->struct_size >= offsetof(tt_predictor_result, candidates) + sizeof res->candidates) {
+  if (res && TT_HAS_FIELD(tt_predictor_result, res, candidates)) {
     res->value = exp(-m);  /* the typical speed-up over the reference */
     res->expected_cost = q->default_cost > 0 ? q->default_cost * exp(m) : NAN;
     res->distance = NAN;
@@ -254,7 +254,7 @@ static tt_status ps_estimate(const tt_predictor *p, const tt_predictor_query *q,
 
 static tt_status ps_info(const tt_predictor *p, tt_predictor_info *out) {
   if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": info: NULL");
-  if (out->struct_size < offsetof(tt_predictor_info, format_version) + sizeof out->format_version)
+  if (!TT_HAS_FIELD(tt_predictor_info, out, format_version))
     return TT_OK;
   out->memory_bytes = sizeof *p + p->cap * (sizeof(ps_config) + p->params * sizeof(double)) +
                       p->scap * sizeof(ps_state) + p->nstates * p->dim * sizeof(double);

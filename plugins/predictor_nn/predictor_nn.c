@@ -74,7 +74,7 @@ static const tt_space *nn_space(void) { return nn_settings; }
 static tt_status nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": create: out is NULL");
   *out = NULL;
-  if (!su || su->struct_size < offsetof(tt_predictor_setup, seed) + sizeof su->seed || !su->target)
+  if (!su || !TT_HAS_FIELD(tt_predictor_setup, su, seed) || !su->target)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": create: no target space");
   if (su->state_dim < 1 || su->state_dim > 4096)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": create: state dimension %u outside "
@@ -149,7 +149,7 @@ static tt_status nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
   int exploit = (flags & TT_PREDICTOR_EXPLOIT) != 0;
   if (!p || (!s && count)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: NULL argument");
   for (size_t i = 0; i < count; i++) {
-    if (s[i].struct_size < offsetof(tt_predictor_sample, cost) + sizeof s[i].cost)
+    if (!TT_HAS_FIELD(tt_predictor_sample, &s[i], cost))
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: sample %zu is too short", i);
     int ok = nn_check_sample(p, s[i].state, s[i].config, s[i].cost);
     if (ok < 0) return (tt_status)ok;
@@ -191,7 +191,7 @@ static tt_status nn_predict_ex(const tt_predictor *p, const tt_predictor_query *
   char why[256];
   if (ttpm_config_from_values(out, best->values, why, sizeof why))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: %s", why);
-  if (res && res->struct_size >= offsetof(tt_predictor_result, candidates) + sizeof res->candidates) {
+  if (res && TT_HAS_FIELD(tt_predictor_result, res, candidates)) {
     res->expected_cost = ttpm_table_mean(best);
     res->value = NAN;
     res->distance = sqrt(d2);
@@ -228,7 +228,7 @@ static tt_status nn_estimate(const tt_predictor *p, const tt_predictor_query *q,
 static tt_status nn_info(const tt_predictor *p, tt_predictor_info *out) {
   if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": info: NULL argument");
   uint64_t bytes = sizeof *p + ttpm_table_bytes(&p->table);
-  if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
+  if (TT_HAS_FIELD(tt_predictor_info, out, format_version)) {
     out->memory_bytes = bytes;
     out->entries = p->table.n;
     out->observations = p->observations;

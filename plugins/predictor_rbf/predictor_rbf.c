@@ -237,7 +237,7 @@ static int rbf_alloc(tt_predictor *p) {
 static tt_status rbf_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: out is NULL");
   *out = NULL;
-  if (!su || su->struct_size < offsetof(tt_predictor_setup, seed) + sizeof su->seed || !su->target)
+  if (!su || !TT_HAS_FIELD(tt_predictor_setup, su, seed) || !su->target)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: no target space");
   if (su->state_dim < 1 || su->state_dim > 4096)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: state dimension %u outside "
@@ -386,7 +386,7 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
                                 uint32_t flags) {
   if (!p || (!s && count)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: NULL argument");
   for (size_t i = 0; i < count; i++) {
-    if (s[i].struct_size < offsetof(tt_predictor_sample, default_cost) + sizeof s[i].default_cost)
+    if (!TT_HAS_FIELD(tt_predictor_sample, &s[i], default_cost))
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu is too short", i);
     if (!s[i].state || !s[i].config)
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu has no state "
@@ -608,7 +608,7 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
     st = tt_set_error(TT_ERR_INTERNAL, RBF_NAME ": predict: %s", why);
     goto done;
   }
-  if (res && res->struct_size >= offsetof(tt_predictor_result, candidates) + sizeof res->candidates) {
+  if (res && TT_HAS_FIELD(tt_predictor_result, res, candidates)) {
     res->expected_cost = rbf_cost_of(p, best_q, q->default_cost);
     res->value = best_q;
     res->distance = NAN;
@@ -663,7 +663,7 @@ static tt_status rbf_info(const tt_predictor *p, tt_predictor_info *out) {
                    pool * (p->params + p->m + 1 + f) * sizeof(double) +
                    (p->ncand + pool) * rbf_f8((uint32_t)f) * sizeof(float) +
                    ttpm_table_bytes(&p->table);
-  if (out->struct_size >= offsetof(tt_predictor_info, format_version) + sizeof out->format_version) {
+  if (TT_HAS_FIELD(tt_predictor_info, out, format_version)) {
     out->memory_bytes = bytes;
     out->entries = f;
     out->observations = p->observations;

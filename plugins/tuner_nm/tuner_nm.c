@@ -627,7 +627,7 @@ static tt_status tt__nm_feedback(tt_tuner *t, double cost) {
  * for best(). The state is not used by a pure search. */
 static tt_status tt__nm_set_context(tt_tuner *t, const tt_tuner_context *ctx) {
   if (!t || !ctx) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: NULL");
-  if (ctx->struct_size < offsetof(tt_tuner_context, budget) + sizeof ctx->budget)
+  if (!TT_HAS_FIELD(tt_tuner_context, ctx, budget))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: context of %u bytes, "
                         "shorter than ABI 1.1's %zu", ctx->struct_size,
                         offsetof(tt_tuner_context, budget) + sizeof ctx->budget);

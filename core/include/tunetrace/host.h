@@ -1,8 +1,9 @@
 /* tunetrace: services the host passes to every plugin (logging, memory, clock, threads,
  * progress, interruption). One versioned table, like CLAP's clap_host or SQLite's
  * sqlite3_api_routines: fields are only ever appended; a plugin must check
- * `host->struct_size >= offsetof(tt_host, field) + sizeof(host->field)` (TT_HOST_HAS) before
- * using a field newer than the ABI minor it was built for.
+ * `host->struct_size >= offsetof(tt_host, field) + sizeof(host->field)` (TT_HOST_HAS, the
+ * rule of TT_HAS_FIELD in common.h) before using a field newer than the ABI minor it was
+ * built for.
  *
  * Lifetime: the table and everything reachable from it are owned by the host and stay valid
  * from the plugin's init() until after its deinit().

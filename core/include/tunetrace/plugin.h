@@ -15,7 +15,9 @@
  * - abi_major must equal the host's TT_ABI_MAJOR, or the plugin is rejected.
  * - A newer abi_minor loads: tables only grow at the end, and the host reads only the
  *   prefix it knows (struct_size tells how long the plugin's table is). An older minor
- *   loads too; the host checks struct_size before touching a field newer than that minor.
+ *   loads too; the host checks struct_size before touching a field newer than that minor
+ *   (TT_HAS_FIELD in common.h: offsetof(field) + sizeof(field) <= struct_size, the one rule
+ *   for every versioned table either side reads).
  * - An interface that changes incompatibly gets a new id ("tt.accel/2"); the old id may
  *   still be served alongside it.
  * - Every function of a kind's interface table (and the sampler's name) is required: the

@@ -113,7 +113,7 @@ static double tt__default_nearest(const tt_hybrid *h, const double *state, doubl
 }
 
 #define TT__HDESC(d, f) \
-  ((d)->struct_size >= offsetof(tt_hybrid_desc, f) + sizeof((d)->f) ? (d)->f : 0)
+  (TT_HAS_FIELD(tt_hybrid_desc, d, f) ? (d)->f : 0)
 
 tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: out is NULL");
@@ -491,7 +491,7 @@ static char *tt__state_key(const tt_tunedb_row *r) {
 
 /* Field `f` of a warm filter the caller built with struct_size `size`, or 0/NULL. */
 #define TT__WF(f_, field) \
-  ((f_) && (f_)->struct_size >= offsetof(tt_hybrid_warm_filter, field) + sizeof((f_)->field) \
+  ((f_) && TT_HAS_FIELD(tt_hybrid_warm_filter, f_, field) \
        ? (f_)->field : 0)
 
 /* JSON text of `v` (malloc), "(none)" for a missing value. */

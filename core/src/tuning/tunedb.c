@@ -33,7 +33,7 @@ struct tt_tunedb {
 /* Fields of a caller's row beyond the ones its struct_size covers read as absent (rows of
  * callers built before schema 2; a struct_size of 0 is taken as the first layout). */
 #define TT__ROW_HAS(row, field) \
-  ((row)->struct_size >= offsetof(tt_tunedb_row, field) + sizeof((row)->field))
+  TT_HAS_FIELD(tt_tunedb_row, row, field)
 
 /* Version 1 schema. Indicators are a JSON object so the row stays one table when
  * TT_SCENE_INDICATOR_COUNT grows; the CSV export spreads them into columns. */

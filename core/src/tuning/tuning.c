@@ -119,7 +119,7 @@ void tt_tuning_destroy(tt_tuning *t) {
 
 /* Field `f` of a descriptor the caller built with struct_size `size`, or 0/NULL. */
 #define TT__DESC(d, f) \
-  ((d)->struct_size >= offsetof(tt_tuning_desc, f) + sizeof((d)->f) ? (d)->f : 0)
+  (TT_HAS_FIELD(tt_tuning_desc, d, f) ? (d)->f : 0)
 
 /* Searches only what tuners may change (tunetrace/params.h): a parameter marked not
  * tunable, or one that can never act because a condition names a parameter left out of the
@@ -187,7 +187,7 @@ tt_status tt_tuning_create(const tt_tuning_desc *d, tt_tuning **out) {
 tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: out is NULL");
   *out = NULL;
-  if (!d || d->struct_size < offsetof(tt_tuning_desc, space) + sizeof d->space || !d->space)
+  if (!d || !TT_HAS_FIELD(tt_tuning_desc, d, space) || !d->space)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: no descriptor or no "
                         "space to tune");
   const char *objective = TT__DESC(d, objective);
