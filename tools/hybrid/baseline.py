@@ -166,17 +166,30 @@ def upgrade_jobs_table(con):
         con.execute("ALTER TABLE hybrid_jobs ADD COLUMN scene_parts TEXT")
 
 
+def ensure_jobs_table(con):
+    """Creates (or upgrades) hybrid_jobs once the file is a tunetrace tuning database (a
+    schema version set by the host or tunetrace-mpi at the first job): the library refuses
+    a version-0 file that already holds tables as another program's, so a new --db gets
+    the tuning schema first and this table second. True when the table is there."""
+    if not con.execute("PRAGMA user_version").fetchone()[0]:
+        return False
+    con.execute(JOBS_SCHEMA)
+    upgrade_jobs_table(con)
+    con.commit()
+    return True
+
+
 def open_db(path):
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     con = sqlite3.connect(path, timeout=30)
     con.execute("PRAGMA journal_mode=WAL")
-    con.execute(JOBS_SCHEMA)
-    upgrade_jobs_table(con)
-    con.commit()
+    ensure_jobs_table(con)
     return con
 
 
 def done_jobs(con):
+    if not ensure_jobs_table(con):
+        return set()
     return {r[0] for r in con.execute("SELECT job FROM hybrid_jobs")}
 
 
@@ -285,6 +298,9 @@ def search_args(a):
 def record_job(con, a, scene, path, cam, obj, st, wall, cpu, load1, version, finished):
     """The finished job's row of hybrid_jobs from the host's --stats JSON `st`."""
     t = st["tuning"]
+    if not ensure_jobs_table(con):
+        raise RuntimeError(f"baseline: {a.db} is not a tunetrace tuning database after the "
+                           "job's host run (no schema version)")
     hist = [{"iteration": h["iteration"], "cost": h["cost"], "cached": h["cached"],
              "build_ms": h["build_ms"], "render_ms": h["render_ms"], "config": h["config"]}
             for h in t["history"]]
