@@ -482,6 +482,29 @@ def test_example(tmp):
     check(os.path.exists(os.path.join(tmp, "example.exr")), "example wrote its EXR")
 
 
+def test_readme_snippet(tmp):
+    """The README's Python example (the ```python block of "## Python") run as written, in a
+    folder holding only a link to the checkout's scenes/: it renders, tunes into tuning.db
+    there and prints the best configuration and the counts."""
+    readme = open(os.path.join(SOURCE, "README.md"), encoding="utf-8").read()
+    part = readme.split("\n## Python\n", 1)
+    check(len(part) == 2 and "```python\n" in part[1], "README.md has a ## Python section with code")
+    if len(part) != 2 or "```python\n" not in part[1]:
+        return
+    code = part[1].split("```python\n", 1)[1].split("```", 1)[0]
+    work = os.path.join(tmp, "readme_python")
+    os.makedirs(work)
+    os.symlink(os.path.join(SOURCE, "scenes"), os.path.join(work, "scenes"))
+    env = dict(os.environ, PYTHONPATH=os.path.join(BUILD, "python"))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       cwd=work, timeout=600)
+    check(r.returncode == 0, f"README's Python example: {r.stderr[-2000:]}")
+    check(os.path.exists(os.path.join(work, "tuning.db")), "README's example wrote tuning.db")
+    out = r.stdout.split()
+    check(len(out) >= 2 and out[-1].isdigit() and int(out[-1]) > 0 and out[-2].isdigit()
+          and int(out[-2]) > 0, f"README's example printed its history and rows: {r.stdout!r}")
+
+
 def main():
     abi = sys.argv[1] if len(sys.argv) > 1 else os.path.join(BUILD, "python/tests/python_abi")
     fixture_short = (sys.argv[2] if len(sys.argv) > 2 else
@@ -494,7 +517,7 @@ def main():
                      lambda: test_python_errors(tmp), lambda: test_names_from_library(abi),
                      lambda: test_on_demand_plugins(tmp),
                      lambda: test_plan_and_logging(tmp, fixture_short),
-                     lambda: test_example(tmp)):
+                     lambda: test_example(tmp), lambda: test_readme_snippet(tmp)):
             test()
     print(f"python_api: {checks} checks, {failures} failed")
     return 1 if failures else 0
