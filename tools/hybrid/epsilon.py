@@ -6,8 +6,9 @@ A:B` per epsilon and predictor: the camera moves through the path samples A..B (
 states, as a camera moving along its path); at each state the loop explores (a K-iteration
 Nelder-Mead search, every sample observed by the model) with probability E, else exploits
 (one predicted configuration, built once). The model is warm-started from the baseline
-database *without the scene's own rows* (what a renderer shipping a model trained elsewhere
-would have) and learns online along the path; every run writes a fresh database, so no
+database *without the rows of any scene tested* (--scenes: what a renderer shipping a model
+trained elsewhere would have; a test scene's rows would leak into another's runs) and learns
+online along the path; every run writes a fresh database, so no
 search is answered from an earlier one. Each state renders F frames (--spp F, default K + 1:
 the search's default + K iterations, so an explored state is exactly its search).
 
@@ -48,9 +49,18 @@ def scene_files(db):
     return out
 
 
-def db_without(src_path, scene_id, path):
-    """A copy of the baseline's samples without one scene's rows (the warm start)."""
-    return copy_samples(src_path, path, [("scene_id <> ?", (scene_id,))])
+def warm_start(src_path, files, test_scenes, work):
+    """The warm start of every run: a copy of the baseline's samples without the rows of any
+    test scene (--scenes), so no run learns from a scene it is later tested on. Refused when
+    no other scene is left to learn from."""
+    ids = sorted({files[s][1] for s in test_scenes})
+    rest = sorted(s for s, (_, sid) in files.items() if sid not in ids)
+    if not rest:
+        sys.exit(f"epsilon: every scene of {src_path} ({', '.join(sorted(files))}) is a test scene "
+                 f"(--scenes): no scene is left to warm-start the models from")
+    path = os.path.join(work, "without_" + "+".join(sorted(test_scenes)) + ".db")
+    marks = ",".join("?" * len(ids))
+    return copy_samples(src_path, path, [(f"scene_id NOT IN ({marks})", tuple(ids))])
 
 
 def model_sets(a, model):
@@ -74,10 +84,14 @@ def run_name(a, scene, obj, eps, model, seed):
 
 
 def run(a, scene, sfile, warm, obj, eps, model, seed, path):
-    """One host --hybrid run, cached in `path` (its --stats plus the process' CPU seconds)."""
+    """One host --hybrid run, cached in `path` (its --stats plus the process' CPU seconds);
+    a cached run warm-started from another file (another set of test scenes) runs again."""
     if os.path.exists(path):
         with open(path) as f:
-            return json.load(f)
+            out = json.load(f)
+        # runs cached before the name was recorded were warm-started without their own scene
+        if warm is None or out.get("warm_start", f"without_{scene}.db") == os.path.basename(warm):
+            return out
     db = path[:-5] + ".db"
     for p in (db, db + "-wal", db + "-shm"):
         if os.path.exists(p):
@@ -90,7 +104,7 @@ def run(a, scene, sfile, warm, obj, eps, model, seed, path):
     r = host.run(a.host, args, nice=a.nice, stats=True, capture=True)
     out = {"scene": scene, "objective": obj, "epsilon": eps, "model": model, "seed": seed,
            "command": [a.host] + args, "wall_s": r.wall_s, "load1": os.getloadavg()[0],
-           "cpu_s": r.cpu_s, "hybrid": r.stats["hybrid"]}
+           "cpu_s": r.cpu_s, "warm_start": os.path.basename(warm), "hybrid": r.stats["hybrid"]}
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
         json.dump(out, f)
@@ -121,7 +135,8 @@ def main():
     ap.add_argument("--db", required=True, help="baseline database (tools/hybrid/baseline.py)")
     ap.add_argument("--work", required=True, help="warm-start DBs and the runs (cached: reruns continue)")
     ap.add_argument("--out", default=None, help="folder for epsilon.json/.md and the chart")
-    ap.add_argument("--scenes", default="killeroos,living-room")
+    ap.add_argument("--scenes", default="killeroos,living-room", help="the test scenes (comma-"
+                    "separated): the warm start holds the baseline's rows of every other scene")
     ap.add_argument("--objectives", default="render,build+render")
     ap.add_argument("--epsilons", default="0,0.1,0.3,1")
     ap.add_argument("--models", default="nn,rbf")
@@ -149,15 +164,15 @@ def main():
     t0 = time.time()
     seeds = [int(x) for x in a.seeds.split(",")]
     # seeds innermost but one: whenever the run stops, every scene has its first seeds done
-    todo = [(s, o, e, m, sd) for sd in seeds for s in a.scenes.split(",") for o in a.objectives.split(",")
-            for e in eps for m in (a.models.split(",")[:1] if e == 1.0 else a.models.split(","))]
-    for k, (s, o, e, m, sd) in enumerate(todo):
+    test_scenes = a.scenes.split(",")
+    for s in test_scenes:
         if s not in files:
             sys.exit(f"epsilon: {s} has no finished job in {a.db}")
-        sfile, sid = files[s]
-        warm = os.path.join(a.work, f"without_{s}.db")
-        if not a.no_run:
-            warm = db_without(a.db, sid, warm)
+    warm = None if a.no_run else warm_start(a.db, files, test_scenes, a.work)
+    todo = [(s, o, e, m, sd) for sd in seeds for s in test_scenes for o in a.objectives.split(",")
+            for e in eps for m in (a.models.split(",")[:1] if e == 1.0 else a.models.split(","))]
+    for k, (s, o, e, m, sd) in enumerate(todo):
+        sfile = files[s][0]
         path = os.path.join(a.work, "runs", run_name(a, s, o, e, m, sd))
         if a.no_run and not os.path.exists(path):
             continue
@@ -192,7 +207,7 @@ def main():
         os.makedirs(a.out, exist_ok=True)
         meta = {"states": a.states, "iterations": a.iterations, "frames_per_state": a.frames,
                 "res": a.res, "seeds": seeds, "set": a.set,
-                "warm_start": "baseline rows of the other scenes"}
+                "warm_start": "baseline rows of the scenes not tested"}
         with open(os.path.join(a.out, "epsilon.json"), "w") as f:
             json.dump({"settings": meta, "rows": rows, "mean_over_seeds": over_seeds(rows)}, f, indent=1)
         with open(os.path.join(a.out, "epsilon.md"), "w") as f:

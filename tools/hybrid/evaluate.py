@@ -7,7 +7,10 @@ Protocols:
             models learn from the training cameras of every scene (thesis: "80 * 7"), and
             predict the validation cameras;
   loso S    leave one scene out: the models learn from every other scene and predict all
-            cameras of S.
+            cameras of S;
+  heldout   with --train-scenes / --test-scenes (instead of the two above): the models learn
+            from every camera of the training scenes and predict every camera of the test
+            scenes (the two sets must be disjoint: a scene in both would leak its rows).
 Models (host --predict through the plugins, warm-started from a database holding only the
 training rows): nn (predictor_nn), rbf (predictor_rbf), static (predictor_static: the one
 configuration with the best geometric-mean speed-up over the default on the training states).
@@ -122,8 +125,41 @@ def camera_indicators(db, jobs, cams):
     return out
 
 
-def protocols(cams, n_splits, val_share, loso, seed):
-    """[(name, {scene: train cams}, {scene: val cams})]."""
+# protocols whose rows make the main tables and figures (loso rows have their own)
+MAIN = ("split", "heldout")
+
+
+def scene_sets(cams, train, test):
+    """The training and test scenes of --train-scenes / --test-scenes (either may be left out:
+    it is then every other scene), checked: known, disjoint, both non-empty."""
+    def parse(opt, text):
+        names = [x for x in (text or "").split(",") if x]
+        unknown = [x for x in names if x not in cams]
+        if unknown:
+            sys.exit(f"evaluate: {opt}: {', '.join(unknown)} not among the scenes with enough cameras "
+                     f"({', '.join(sorted(cams))})")
+        return names
+    tr, te = parse("--train-scenes", train), parse("--test-scenes", test)
+    both = sorted(set(tr) & set(te))
+    if both:
+        sys.exit(f"evaluate: --train-scenes and --test-scenes must be disjoint; {', '.join(both)} "
+                 f"in both would be tested on its own rows")
+    tr = tr or [s for s in sorted(cams) if s not in te]
+    te = te or [s for s in sorted(cams) if s not in tr]
+    if not tr or not te:
+        sys.exit("evaluate: --train-scenes / --test-scenes leave no scene to "
+                 + ("train on" if not tr else "test on"))
+    return tr, te
+
+
+def protocols(cams, n_splits, val_share, loso, seed, heldout=None):
+    """[(name, {scene: train cams}, {scene: val cams})]; `heldout` = (train scenes, test
+    scenes) replaces the splits and leave-one-scene-out by the one held-out protocol."""
+    if heldout:
+        tr, te = heldout
+        # the scenes in the name: its training database and predictions are cached by it
+        return [(f"heldout_{'+'.join(tr)}_to_{'+'.join(te)}", {s: cams[s] for s in tr},
+                 {s: cams[s] for s in te})]
     out = []
     for k in range(n_splits):
         rng = random.Random(seed * 1000 + k)
@@ -426,6 +462,12 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--min-cameras", type=int, default=5)
     ap.add_argument("--scenes", default=None, help="comma-separated subset")
+    ap.add_argument("--train-scenes", default=None, metavar="A,B", help="learn from every camera "
+                    "of these scenes only (default with --test-scenes: every other scene); replaces "
+                    "the splits and leave-one-scene-out by one held-out protocol")
+    ap.add_argument("--test-scenes", default=None, metavar="C,D", help="predict every camera of "
+                    "these scenes (disjoint from --train-scenes; default with --train-scenes: every "
+                    "other scene)")
     ap.add_argument("--variants", default="", help="studies to run besides the default models: "
                     "norm, reward, features, table, candidates")
     ap.add_argument("--variant-splits", type=int, default=5, help="splits used by the studies")
@@ -451,11 +493,18 @@ def main():
         cams = {s: c for s, c in cams.items() if s in a.scenes.split(",")}
     if not cams:
         sys.exit(f"evaluate: no scene has {a.min_cameras} cameras with every objective done in {a.db}")
+    heldout = None
+    if a.train_scenes or a.test_scenes:
+        heldout = scene_sets(cams, a.train_scenes, a.test_scenes)
+        cams = {s: c for s, c in cams.items() if s in heldout[0] + heldout[1]}
     print("evaluate: " + ", ".join(f"{s} {len(c)} cameras" for s, c in sorted(cams.items())), flush=True)
+    if heldout:
+        print(f"evaluate: training on {', '.join(heldout[0])}; testing on {', '.join(heldout[1])}",
+              flush=True)
     a.host = host.find(a.host)
     a.default_config = host.default_config(a.host, "accel_embree")
     inds = camera_indicators(a.db, jobs, cams)
-    prots = protocols(cams, a.splits, a.val, not a.no_loso, a.seed)
+    prots = protocols(cams, a.splits, a.val, not a.no_loso, a.seed, heldout)
     studies = [v for v in a.variants.split(",") if v]
     runs = [("default", m, p) for p in prots for m in models]
     for name, v in VARIANTS.items():
@@ -535,6 +584,8 @@ def main():
             rows.append(r)
     summary = summarize(rows, cams, objectives, models)
     summary["scenes"] = {s: len(c) for s, c in cams.items()}
+    if heldout:
+        summary["heldout"] = {"train": heldout[0], "test": heldout[1]}
     summary["example"] = example(rows, jobs)
     summary["reward_spread"] = reward_spread(a.db, jobs, cams, objectives)
     summary["candidates"] = candidates_study(preds, objectives)
@@ -556,9 +607,13 @@ def main():
 
 
 def example(rows, jobs, scene="bmw-m6", objective="render"):
-    """Fig. 3.16's data: the first validation camera of split 0 in `scene` (the thesis' car),
-    its search curve as ratios to the default, the roofline and each model's prediction."""
-    sel = [r for r in rows if r["variant"] == "default" and r["protocol"] == "split0" and
+    """Fig. 3.16's data: the first validation camera of split 0 (or of the held-out
+    protocol) in `scene` (the thesis' car), its search curve as ratios to the default, the
+    roofline and each model's prediction."""
+    protocol = next((p for p in ("split0",) + tuple(sorted({r["protocol"] for r in rows}))
+                     if p.startswith(("split0", "heldout")) and any(r["protocol"] == p for r in rows)),
+                    "split0")
+    sel = [r for r in rows if r["variant"] == "default" and r["protocol"] == protocol and
            r["objective"] == objective]
     if not any(r["scene"] == scene for r in sel):
         scene = sorted({r["scene"] for r in sel})[0] if sel else None
@@ -570,7 +625,7 @@ def example(rows, jobs, scene="bmw-m6", objective="render"):
     d = job["default_cost"]
     search = [1.0] + [h["cost"] / d for h in job["history"] if h["cost"] < 1e299]
     pick = {r["model"]: r for r in sel if r["scene"] == scene and r["camera"] == c}
-    return {"scene": scene, "camera": c, "objective": objective, "protocol": "split0",
+    return {"scene": scene, "camera": c, "objective": objective, "protocol": protocol,
             "default_ms": d, "search": search, "roofline": next(iter(pick.values()))["b"],
             "predicted": {m: r["p"] for m, r in pick.items()}}
 
@@ -582,8 +637,12 @@ def markdown(summary, a):
     t = summary["table"]
     cams = summary["scenes"]
     loads = summary["load_during_measurement"]
+    ho = summary.get("heldout")
+    split = (f"trained on every camera of {', '.join(ho['train'])}, tested on every camera of "
+             f"{', '.join(ho['test'])}" if ho else
+             f"80/20 camera splits x {a.splits} (per scene, seeded), leave-one-scene-out")
     out = [f"Protocol: {len(cams)} scenes ({', '.join(f'{s} {n}' for s, n in sorted(cams.items()))} "
-           f"cameras), 80/20 camera splits x {a.splits} (per scene, seeded), leave-one-scene-out; "
+           f"cameras), {split}; "
            f"measurements side by side, {a.rounds} rounds alternating, CPU time of one thread; "
            f"load average during the measurements {f(min(loads) if loads else None, '{:.1f}')}-"
            f"{f(max(loads) if loads else None, '{:.1f}')}.", ""]
@@ -617,7 +676,7 @@ def markdown(summary, a):
             out += ["| scene | " + " | ".join(f"{m} speed-up (LOSO)" for m in models) + " | " +
                     " | ".join(f"{m} roofline" for m in models) + " |",
                     "|---|" + "---|" * (2 * len(models))]
-            for sc in sorted(cams):
+            for sc in sorted(set().union(*(ps[f"{o}/{m}"] for m in models))):
                 out.append(f"| {sc} | " + " | ".join(
                     f"{f(ps[f'{o}/{m}'][sc]['speedup'])} ({f(ps[f'{o}/{m}'][sc]['loso_speedup'])})"
                     for m in models) + " | " + " | ".join(f(ps[f"{o}/{m}"][sc]["roofline"]) for m in models) + " |")
@@ -676,7 +735,7 @@ def summarize(rows, cams, objectives, models):
     for o in objectives:
         for m in models:
             sel = [r for r in rows if r["variant"] == "default" and r["model"] == m and r["objective"] == o
-                   and r["protocol"].startswith("split")]
+                   and r["protocol"].startswith(MAIN)]
             loso = [r for r in rows if r["variant"] == "default" and r["model"] == m and r["objective"] == o
                     and r["protocol"].startswith("loso")]
             if not sel:
@@ -684,7 +743,8 @@ def summarize(rows, cams, objectives, models):
             be = [r["break_even"] for r in sel if math.isfinite(r["break_even"])]
             pos = sorted(x for x in be if 0 < x < 10000)
             per_scene = {}
-            for s in sorted(cams):
+            # the scenes predicted (a held-out protocol predicts its test scenes only)
+            for s in sorted({r["scene"] for r in sel + loso}):
                 ss = [r for r in sel if r["scene"] == s]
                 ls = [r for r in loso if r["scene"] == s]
                 per_scene[s] = {"speedup": geomean(r["speedup"] for r in ss),
@@ -729,7 +789,7 @@ def summarize(rows, cams, objectives, models):
         for o in objectives:
             for m in models:
                 allv = [r for r in rows if r["variant"] == v and r["model"] == m and r["objective"] == o]
-                sel = [r for r in allv if r["protocol"].startswith("split")]
+                sel = [r for r in allv if r["protocol"].startswith(MAIN)]
                 lsel = [r for r in allv if r["protocol"].startswith("loso")]
                 if not sel:
                     continue

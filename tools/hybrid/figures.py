@@ -15,7 +15,7 @@ OBJ = {"render": "render time", "build+render": "build + render time"}
 
 def _sel(rows, objective, variant="default", split=True):
     return [r for r in rows if r["variant"] == variant and r["objective"] == objective and
-            r["protocol"].startswith("split" if split else "loso")]
+            r["protocol"].startswith(("split", "heldout") if split else "loso")]
 
 
 def _boxes(ax, rows, key, scenes, models, log=False):

@@ -83,6 +83,30 @@ if grep -q "measuring" "$tmp/e2.log"; then cat "$tmp/e2.log"; fail "the second e
 if "$PY" -m tools.hybrid.evaluate --db "$tmp/b.db" --work "$tmp/e3" --host "$host" \
      --min-cameras 50 >"$tmp/e3.log" 2>&1; then fail "evaluate with too few cameras should fail"; fi
 grep -q "no scene has 50 cameras" "$tmp/e3.log" || { cat "$tmp/e3.log"; fail "message"; }
+# --train-scenes / --test-scenes: one held-out protocol (learn from every box camera, predict
+# every spec camera); its training database holds box's rows only; overlapping or unknown
+# sets are refused
+"${E[@]}" --out "$tmp/fh" --train-scenes box --test-scenes spec >"$tmp/eh.log" 2>&1 \
+  || { cat "$tmp/eh.log"; fail "evaluate --train-scenes box --test-scenes spec"; }
+"$PY" - "$tmp/fh/summary.json" "$tmp/e/train" "$tmp/b.db" <<'EOF' || { cat "$tmp/eh.log"; fail "held-out summary"; }
+import glob, json, math, sqlite3, sys
+s = json.load(open(sys.argv[1]))
+assert s["heldout"] == {"train": ["box"], "test": ["spec"]}, s.get("heldout")
+for key in ("render/nn", "render/rbf", "render/static", "build+render/nn"):
+    t = s["table"][key]
+    assert t["n"] == 6 and math.isfinite(t["speedup"]), (key, t)  # every spec camera, once
+    assert list(s["per_scene"][key]) == ["spec"], (key, s["per_scene"][key])
+ids = dict(sqlite3.connect(sys.argv[3]).execute("SELECT scene, scene_id FROM hybrid_jobs GROUP BY scene"))
+dbs = glob.glob(sys.argv[2] + "/heldout_*.db")
+assert len(dbs) == 2, dbs  # one per objective
+for db in dbs:
+    got = [r[0] for r in sqlite3.connect(db).execute("SELECT DISTINCT scene_id FROM samples")]
+    assert got == [ids["box"]], (db, got)
+EOF
+"${E[@]}" --train-scenes box,spec --test-scenes spec >"$tmp/eh2.log" 2>&1 && fail "overlapping scene sets should be refused"
+grep -q "must be disjoint; spec in both" "$tmp/eh2.log" || { cat "$tmp/eh2.log"; fail "message (disjoint)"; }
+"${E[@]}" --test-scenes nosuch >"$tmp/eh3.log" 2>&1 && fail "--test-scenes nosuch should be refused"
+grep -q "test-scenes: nosuch not among" "$tmp/eh3.log" || { cat "$tmp/eh3.log"; fail "message (unknown)"; }
 # predict_cost.py: predict() against the frame on the same protocols, and a reference host's
 # answers compared (the same host here: every answer the same, exit 0)
 PC=("$PY" -m tools.hybrid.predict_cost --db "$tmp/b.db" --work "$tmp/pc" --out "$tmp/fp"
@@ -128,4 +152,30 @@ n = sqlite3.connect(sys.argv[2] + "/without_box.db").execute(
     "SELECT count(DISTINCT scene_id) FROM samples").fetchone()[0]
 assert n == 1, n
 EOF
+# with several test scenes the warm start holds none of them: a copy of the baseline with a
+# third scene (spec's rows again under another scene id) tested beside box learns from spec only
+cp "$tmp/b.db" "$tmp/b3.db"
+"$PY" - "$tmp/b3.db" <<'EOF' || fail "a baseline with a third scene"
+import sqlite3, sys
+con = sqlite3.connect(sys.argv[1])
+sid = con.execute("SELECT scene_id FROM hybrid_jobs WHERE scene = 'spec'").fetchone()[0]
+cols = [r[1] for r in con.execute("PRAGMA table_info(samples)") if r[1] not in ("id", "scene_id")]
+con.execute(f"INSERT INTO samples (scene_id, {','.join(cols)}) SELECT 'third', {','.join(cols)} "
+            "FROM samples WHERE scene_id = ?", (sid,))
+jcols = [r[1] for r in con.execute("PRAGMA table_info(hybrid_jobs)") if r[1] not in ("job", "scene", "scene_id")]
+con.execute(f"INSERT INTO hybrid_jobs (job, scene, scene_id, {','.join(jcols)}) SELECT "
+            f"'third' || substr(job, 5), 'third', 'third', {','.join(jcols)} FROM hybrid_jobs WHERE scene = 'spec'")
+con.commit()
+EOF
+EP3=("$PY" -m tools.hybrid.epsilon --db "$tmp/b3.db" --work "$tmp/eps3" --host "$host" --objectives render
+     --epsilons 1 --models nn --states 3:3 --iterations 1 --res 16x16 --nice 0)
+"${EP3[@]}" --scenes box,third >"$tmp/ep3.log" 2>&1 || { cat "$tmp/ep3.log"; fail "epsilon.py --scenes box,third"; }
+"$PY" - "$tmp/b3.db" "$tmp/eps3/without_box+third.db" <<'EOF' || fail "the warm start of box,third"
+import sqlite3, sys
+spec = sqlite3.connect(sys.argv[1]).execute("SELECT scene_id FROM hybrid_jobs WHERE scene = 'spec'").fetchone()[0]
+got = [r[0] for r in sqlite3.connect(sys.argv[2]).execute("SELECT DISTINCT scene_id FROM samples")]
+assert got == [spec], got
+EOF
+"${EP3[@]}" --scenes box,third,spec >"$tmp/ep4.log" 2>&1 && fail "epsilon.py with every scene tested should be refused"
+grep -q "no scene is left to warm-start" "$tmp/ep4.log" || { cat "$tmp/ep4.log"; fail "message (no warm start)"; }
 echo "hybrid_tools: ok"

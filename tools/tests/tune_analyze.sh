@@ -49,6 +49,14 @@ check 'grep -q "no rows match" "$dir/err"'
 check '"$PY" "${TOOL[@]}" --help | grep -q "Input, for every subcommand"'
 
 
+# what the charts show (the figures as analyze.run returns them): leafsize's and costs' red
+# markers have legend entries; costs' log ticks read as plain numbers (no "6x10^-1");
+# blocksize draws points at the sampled sahBlockSize values only (no steps between them),
+# ticked at those values; convergence's default lines are what tuning measured (the stats'
+# default_cost, not the verify median) and each run has a best-so-far line (the running
+# minimum of convergence.best_so_far)
+check '"$PY" -m tools.tests.tune_analyze_charts "$dir"'
+
 # the table: the accel's parameters + render_ms, build_ms, total_ms; r and p for each
 nparams=$("$HOST" --describe accel_embree | "$PY" -c 'import json,sys; print(len(json.load(sys.stdin)["parameters"]))')
 nvars=$((nparams + 3))

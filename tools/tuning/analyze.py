@@ -169,6 +169,28 @@ def _plt():
     return plt
 
 
+def _plain_log(axis):
+    """Labels a log axis in plain numbers (0.6, 1, 2, 5, 10 rather than 6x10^-1): every
+    decade, and the 2s and 5s between them."""
+    from matplotlib.ticker import FuncFormatter
+
+    def major(v, _):
+        return f"{v:g}"
+
+    def minor(v, _):
+        lead = v / 10 ** math.floor(math.log10(v) + 1e-9) if v > 0 else 0
+        return f"{v:g}" if round(lead) in (2, 5) and abs(lead - round(lead)) < 1e-6 else ""
+    axis.set_major_formatter(FuncFormatter(major))
+    axis.set_minor_formatter(FuncFormatter(minor))
+
+
+def _save(fig, path, dpi=100):
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    print(f"wrote {path}")
+    return fig
+
+
 # ---------------------------------------------------------------- correlation (Fig. 3.5)
 
 
@@ -241,9 +263,7 @@ def cmd_correlation(a):
         fig.colorbar(im, ax=ax, shrink=0.8, label=f"{a.method} r")
         ax.set_title(f"{a.method.capitalize()} correlation (blank: p ≥ {a.alpha}), "
                      f"{len(rows)} configurations", fontsize=9)
-        fig.tight_layout()
-        fig.savefig(a.out, dpi=110)
-        print(f"wrote {a.out}")
+        return _save(fig, a.out, dpi=110)
 
 
 # ---------------------------------------------------------------- leaf size (Figs. 3.6/3.10)
@@ -289,15 +309,15 @@ def cmd_leafsize(a):
                            cmap="viridis_r", aspect="auto", vmax=vmax)
             fig.colorbar(im, ax=ax, label=f"mean {metric}")
             best = min(rs, key=lambda r: r[metric])
-            ax.plot(best["config"]["minLeafSize"], best["config"]["maxLeafSize"], "r*", ms=10)
+            ax.plot(best["config"]["minLeafSize"], best["config"]["maxLeafSize"], "r*", ms=10,
+                    label=f"lowest {metric}: {best[metric]:.4g}")
+            ax.legend(fontsize=7, loc="upper left")
             ax.set_xlabel("minLeafSize")
             ax.set_ylabel("maxLeafSize")
             ax.set_title(f"{scene_label(scene)}: {metric} ({len(rs)} rows)", fontsize=9)
             print(f"  {scene_label(scene)} {metric}: best {best[metric]:.4g} at "
                   f"min {best['config']['minLeafSize']}, max {best['config']['maxLeafSize']}")
-    fig.tight_layout()
-    fig.savefig(a.out, dpi=100)
-    print(f"wrote {a.out}")
+    return _save(fig, a.out)
 
 
 # ---------------------------------------------------------------- SAH costs (Figs. 3.11/3.12)
@@ -326,20 +346,22 @@ def cmd_costs(a):
         sc = ax.scatter(x, y, c=v, s=14, cmap="viridis_r", edgecolors="k", linewidths=0.2)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        _plain_log(ax.xaxis)
+        _plain_log(ax.yaxis)
         fig.colorbar(sc, ax=ax, label=metric)
         k = max(1, len(rs) // 10)  # the best tenth, circled: where the optima cluster
-        for r in sorted(rs, key=lambda r: r[metric])[:k]:
-            ax.plot(r["config"]["intcost"], r["config"]["travcost"], "o", mfc="none",
-                    mec="red", ms=8)
+        top = sorted(rs, key=lambda r: r[metric])[:k]
+        ax.plot([r["config"]["intcost"] for r in top], [r["config"]["travcost"] for r in top],
+                "o", mfc="none", mec="red", ms=8, ls="none",
+                label=f"lowest {metric}: best {k} of {len(rs)}")
+        ax.legend(fontsize=7)
         ax.set_xlabel("intcost")
         ax.set_ylabel("travcost")
         ax.set_title(f"{scene_label(scene)} ({len(rs)} rows)", fontsize=9)
         best = min(rs, key=lambda r: r[metric])
         print(f"  {scene_label(scene)}: best {best[metric]:.4g} at intcost "
               f"{best['config']['intcost']:.3g}, travcost {best['config']['travcost']:.3g}")
-    fig.tight_layout()
-    fig.savefig(a.out, dpi=100)
-    print(f"wrote {a.out}")
+    return _save(fig, a.out)
 
 
 # ---------------------------------------------------------------- sahBlockSize (Fig. 3.8)
@@ -347,6 +369,7 @@ def cmd_costs(a):
 
 def cmd_blocksize(a):
     import numpy as np
+    from matplotlib.ticker import NullLocator
     rows = load_rows(a)
     if "sahBlockSize" not in rows[0]["config"]:
         die("the rows have no sahBlockSize parameter (is this accel_embree?)")
@@ -354,8 +377,11 @@ def cmd_blocksize(a):
     plt = _plt()
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     print(f"sahBlockSize: {len(rows)} rows (median and quartiles per value)")
-    for scene, rs in groups.items():
+    markers = "osD^v<>"
+    sampled = set()
+    for si, (scene, rs) in enumerate(groups.items()):
         vals = sorted({int(r["config"]["sahBlockSize"]) for r in rs})
+        sampled.update(vals)
         for ax, metric in zip(axes, ("build_ms", "render_ms")):
             med, q1, q3 = [], [], []
             for b in vals:
@@ -363,25 +389,31 @@ def cmd_blocksize(a):
                 med.append(np.median(v))
                 q1.append(np.percentile(v, 25))
                 q3.append(np.percentile(v, 75))
-            line, = ax.step(vals, med, where="mid", label=scene_label(scene))
-            ax.fill_between(vals, q1, q3, step="mid", alpha=0.2, color=line.get_color())
+            # only the values the space has (powers of two): points with their quartiles,
+            # nothing drawn between them
+            ax.errorbar(vals, med, yerr=[np.subtract(med, q1), np.subtract(q3, med)],
+                        fmt=markers[si % len(markers)], ls="none", capsize=3,
+                        label=f"{scene_label(scene)} (n per value: "
+                        f"{', '.join(str(sum(int(r['config']['sahBlockSize']) == b for r in rs)) for b in vals)})")
             ax.set_ylabel(f"{metric} (median, IQR)")
             best = vals[int(np.argmin(med))]
             print(f"  {scene_label(scene)} {metric}: lowest median at sahBlockSize {best} "
                   f"({min(med):.4g}); {len(vals)} values")
     axes[0].set_title("sahBlockSize: build time (top) and render time (bottom)")
-    axes[1].set_xlabel("sahBlockSize")
+    axes[1].set_xscale("log", base=2)
+    axes[1].set_xticks(sorted(sampled), [str(b) for b in sorted(sampled)])
+    axes[1].xaxis.set_minor_locator(NullLocator())
+    axes[1].set_xlabel("sahBlockSize (the values sampled)")
     axes[0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(a.out, dpi=100)
-    print(f"wrote {a.out}")
+    return _save(fig, a.out)
 
 
 # ---------------------------------------------------------------- convergence (Fig. 3.3)
 
 
 def _runs_from_stats(paths):
-    """(name, objective, tuner, history, verify, default_cost) per host --stats file."""
+    """(name, objective, tuner, history, verify, default_cost) per host --stats file; the
+    tuning default is known for the run's objective only (default_cost)."""
     runs = []
     for path in paths:
         try:
@@ -414,18 +446,31 @@ def _runs_from_rows(rows):
         mode = next(r["mode"] for r in rs if r["mode"] in ("tune", "explore"))
         default = next((r for r in rs if r["iteration"] < 0), None)
         runs.append(dict(name=f"run {run_id}", objective=rs[0]["objective"] or "?",
-                         tuner=tuner or mode, history=rs, verify=None,
-                         default_cost=None, default=default))
+                         tuner=tuner or mode, history=[r for r in rs if r["iteration"] >= 0],
+                         verify=None, default_cost=None, default=default))
     if not runs:
         die("no tuning runs among the matching rows (rows of mode tune or explore; check "
             "--mode/--run)")
     return runs
 
 
+def _tuning_default(run, key):
+    """The default configuration's cost as the tuning run measured it (what the search
+    started from), for panel `key` (render / total); None where the run did not measure it:
+    a --stats file gives its objective's cost only."""
+    d = run.get("default")
+    if d is not None:
+        return d["render_ms"] if key == "render" else d["render_ms"] + d["build_ms"]
+    obj = {"render": "render", "total": "build+render"}[key]
+    return run["default_cost"] if run["objective"] == obj else None
+
+
 def cmd_convergence(a):
     """Render time and total time per iteration of tuning runs (host --stats files, or the
-    runs of a tuning database/CSV, one per run_id), one panel each, with the default's level:
+    runs of a tuning database/CSV, one per run_id), one panel each: every measured pass, the
+    best so far (tools.tuning.convergence's, as gains.py draws it) and the tuning default:
     default vs tuned-for-render vs tuned-for-total."""
+    from tools.tuning.convergence import best_so_far
     if a.stats and (a.db or a.csv):
         die("convergence: give host --stats files or --db/--csv, not both")
     if a.stats:
@@ -447,37 +492,36 @@ def cmd_convergence(a):
         color = colors[k % len(colors)]
         hist = r["history"]
         for ax, key in zip(axes, ("render", "total")):
+            xs = [h["iteration"] for h in hist]
             ys = [h["render_ms"] if key == "render" else h["render_ms"] + h["build_ms"]
                   for h in hist]
-            ax.plot([h["iteration"] for h in hist], ys, "-", color=color, lw=1, alpha=0.8,
-                    label=labels[k])
+            ax.plot(xs, ys, "-", marker=".", ms=3, color=color, lw=0.6, alpha=0.45,
+                    label=f"{labels[k]}: each pass")
+            level = _tuning_default(r, key)
+            start = level if level is not None else math.inf
+            ax.plot(xs, best_so_far([(y, False) for y in ys], start), "-", color=color, lw=1.8,
+                    label=f"{labels[k]}: best so far")
+            if level is not None:
+                ax.axhline(level, color=color, ls="--", lw=1.2,
+                           label=f"{labels[k]}: default (as tuning measured it)")
         v = r["verify"]
         if v:
             print(f"{r['name']}: {labels[k]}: verify render ratio {v.get('render_ratio'):.4f}, "
                   f"total ratio {v.get('total_ratio'):.4f} over {v.get('rounds')} rounds")
         else:
             print(f"{r['name']}: {labels[k]}: {len(hist)} samples")
-    # the default: the first run's verify medians, else its default measurement
-    r0 = runs[0]
-    d = (r0["verify"] or {}).get("default", {})
-    dflt = r0.get("default") or next((h for h in r0["history"] if h["iteration"] < 0), None)
-    for ax, key, title in zip(axes, ("render", "total"), ("render time", "build + render time")):
-        level = d.get("median_render_ms" if key == "render" else "median_total_ms")
-        if level is None and dflt is not None:
-            level = dflt["render_ms"] if key == "render" else dflt["render_ms"] + dflt["build_ms"]
-        if level is not None:
-            ax.axhline(level, color="k", lw=1.5, label="default")
+    for ax, title in zip(axes, ("render time", "build + render time")):
         ax.set_title(title)
         ax.set_xlabel("iteration")
         ax.set_ylabel("ms")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
     fig.suptitle("Tuning convergence (thesis Fig. 3.3)")
-    fig.tight_layout()
-    fig.savefig(a.out, dpi=100)
-    print(f"wrote {a.out}")
+    return _save(fig, a.out)
 
 
-def main():
+def run(argv=None):
+    """Parses `argv` (default: the command line), draws, and returns the matplotlib figure
+    (None for correlation without -o): what the tests inspect."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog="\n".join(__doc__.splitlines()[1:]))
@@ -515,7 +559,7 @@ def main():
     p.add_argument("--bins", type=int, default=12, help="hexagons across (with >= 20 rows)")
     p.set_defaults(fn=cmd_costs)
 
-    p = sub.add_parser("blocksize", help="sahBlockSize step chart (Fig. 3.8)")
+    p = sub.add_parser("blocksize", help="sahBlockSize: median and quartiles per sampled value (Fig. 3.8)")
     data_args(p)
     p.set_defaults(fn=cmd_blocksize)
 
@@ -528,7 +572,7 @@ def main():
                    "tuned for render, one for build+render), instead of --db/--csv")
     p.set_defaults(fn=cmd_convergence)
 
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     if a.plugin == "":
         a.plugin = None
     if a.cmd == "convergence" and (a.db or a.csv) and not a.mode:
@@ -542,7 +586,11 @@ def main():
             import scipy  # noqa: F401
     except ImportError as e:
         die(f"{e.name} is missing: install python3-numpy, python3-scipy, python3-matplotlib")
-    a.fn(a)
+    return a.fn(a)
+
+
+def main():
+    run()
 
 
 if __name__ == "__main__":
