@@ -14,8 +14,8 @@
  *    a diffuse floor; the path tracer's floor under the slab is black, BDPT's carries the
  *    transmitted light (Fresnel: about (1 - R)^2 of the unobstructed irradiance);
  *  - determinism for 1 and 2 threads; maxDepth 0; AOVs;
- *  - bad input: no light (black, no NaN), degenerate triangles (also as a light), a stop
- *    request. */
+ *  - bad input: no light, and lights (area, spot, point) inside a closed cube that nothing in
+ *    view can see (black, no NaN), degenerate triangles (also as a light), a stop request. */
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -79,6 +79,15 @@ static const char *DISTANT = HEAD "\"meshes\":["
     "{\"name\":\"ground\",\"material\":\"white\",\"positions\":[-4,-1,-4, 4,-1,-4, 4,-1,4, -4,-1,4],\"indices\":[0,2,1, 0,3,2]},"
     BLOCK("metal") "],\"lights\":[{\"type\":\"distant\",\"direction\":[0.3,-1,-0.4],\"irradiance\":[2,2,2]}]}";
 static const char *BLACK = HEAD "\"meshes\":[" FLOOR("white") "," WALLS "]}";
+/* A light inside a closed cube, the camera outside: no path from the light reaches the camera,
+ * whichever side builds it (light tracing included). */
+static const char *ENCLOSED = HEAD "\"meshes\":["
+    "{\"name\":\"cube\",\"material\":\"white\",\"positions\":[-0.5,-0.5,-0.5, 0.5,-0.5,-0.5, 0.5,0.5,-0.5, -0.5,0.5,-0.5,"
+    " -0.5,-0.5,0.5, 0.5,-0.5,0.5, 0.5,0.5,0.5, -0.5,0.5,0.5],\"indices\":[0,2,1, 0,3,2, 4,5,6, 4,6,7, 0,1,5, 0,5,4,"
+    " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]},"
+    "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.2,0.3,-0.2, 0.2,0.3,-0.2, 0.2,0.3,0.2, -0.2,0.3,0.2],\"indices\":[0,1,2, 0,2,3]}],"
+    "\"lights\":[{\"type\":\"spot\",\"position\":[0,-0.3,0],\"target\":[0,-1,0.2],\"intensity\":[4,4,4],\"angle\":50},"
+    "{\"type\":\"point\",\"position\":[0.2,0,0.1],\"intensity\":[2,2,2]}]}";
 /* Degenerate triangles: a zero-area floor triangle, a collinear light triangle. */
 static const char *DEGENERATE = HEAD "\"meshes\":[" FLOOR("white") "," WALLS ","
     "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, 0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
@@ -441,6 +450,15 @@ int main(void) {
     int nz = 0;
     for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);
     CHECK(nz == 0 && ps.nonfinite == 0);
+    tt_film_destroy(film);
+    pt_fixture_free(&s.fx);
+    /* lights (area, spot, point) that nothing in view can see: black, every strategy tried */
+    CHECK(pt_fixture_load(&s.fx, ENCLOSED));
+    CHECK(render(&s, NULL, 1, 8, 1, 0, &film, &ps) == TT_OK);
+    tt_film_resolve(film, rgb);
+    nz = 0;
+    for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);
+    CHECK_MSG(nz == 0 && ps.nonfinite == 0 && ps.rays > ps.samples, "enclosed lights: %d non-zero channels", nz);
     tt_film_destroy(film);
     pt_fixture_free(&s.fx);
     CHECK(pt_fixture_load(&s.fx, DEGENERATE));

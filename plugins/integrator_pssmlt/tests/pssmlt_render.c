@@ -5,7 +5,9 @@
  * sampler: whole-image and per-region means within noise bands measured over independent
  * seeds), determinism for 1 and 2 threads (both modes), configure() between passes keeping
  * the chains (a mode change restarts), an all-black scene rendering black (b = 0), the
- * caustic under a glass slab that mmlt renders and pssmlt cannot, and a stop request. */
+ * caustic under a glass slab that mmlt renders and pssmlt cannot, point and spot lights only
+ * (mmlt, against the path sampler), a light nothing in view can see (b = 0, black), degenerate
+ * triangles (finite image), and a stop request. */
 #include <stdlib.h>
 
 #include <tunetrace/film.h>
@@ -30,12 +32,16 @@
 #define REG 4 /* regions of REG x REG pixels */
 #define NREG ((W / REG) * (H / REG) + 1) /* + the whole image */
 
-#define BOX_WALLS                                                                                   \
+#define BOX_SIDES                                                                                   \
   "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, 1,1,1, -1,1,1],\"indices\":[0,1,2, 0,2,3]}," \
   "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, -1,1,-1],\"indices\":[0,1,2, 0,2,3]}," \
   "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, -1,1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"  \
-  "{\"name\":\"right\",\"material\":\"green\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, 1,-1,1],\"indices\":[0,1,2, 0,2,3]},"    \
+  "{\"name\":\"right\",\"material\":\"green\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, 1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
+
+#define BOX_LAMP                                                                                    \
   "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]}"
+#define BOX_WALLS BOX_SIDES "," BOX_LAMP
+
 #define BOX_HEAD                                                                                    \
   "{\"version\":1,\"camera\":{\"position\":[0,0,3.6],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"  \
   "\"resolution\":[16,16]},\"materials\":{"                                                         \
@@ -57,6 +63,30 @@ static const char *BLACK =
     "{\"version\":1,\"camera\":{\"position\":[0,0,3],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"
     "\"resolution\":[16,16]},\"materials\":{\"grey\":{\"type\":\"diffuse\"}},\"meshes\":["
     "{\"name\":\"q\",\"material\":\"grey\",\"positions\":[-1,-1,0, 1,-1,0, 1,1,0, -1,1,0],\"indices\":[0,1,2, 0,2,3]}]}";
+
+/* A point and a spot light, no area light: only light tracing and next-event connections
+ * reach them (no strategy with s = 0). */
+static const char *DELTA = BOX_HEAD "\"meshes\":["
+    "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
+    BOX_SIDES "],\"lights\":["
+    "{\"type\":\"point\",\"position\":[0.4,0.6,0.3],\"intensity\":[1.5,1.5,1.2]},"
+    "{\"type\":\"spot\",\"position\":[-0.6,0.9,0.6],\"target\":[0,-1,-0.5],\"intensity\":[4,3,3],\"angle\":35}]}";
+/* A light inside a closed grey cube, the camera outside: a light exists, none of it reaches
+ * the camera (every bootstrap path, camera or light side, has zero contribution). */
+static const char *ENCLOSED = BOX_HEAD "\"meshes\":["
+    "{\"name\":\"cube\",\"material\":\"white\",\"positions\":[-0.5,-0.5,-0.5, 0.5,-0.5,-0.5, 0.5,0.5,-0.5, -0.5,0.5,-0.5,"
+    " -0.5,-0.5,0.5, 0.5,-0.5,0.5, 0.5,0.5,0.5, -0.5,0.5,0.5],\"indices\":[0,2,1, 0,3,2, 4,5,6, 4,6,7, 0,1,5, 0,5,4,"
+    " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]},"
+    "{\"name\":\"inner\",\"material\":\"light\",\"positions\":[-0.2,0,-0.2, 0.2,0,-0.2, 0.2,0,0.2, -0.2,0,0.2],\"indices\":[0,1,2, 0,2,3]}]}";
+/* Degenerate triangles beside real ones (a mesh of nothing but degenerate triangles is a
+ * load error, tested in core/tests/scene_errors.c): a zero-area triangle in view, a
+ * collinear triangle in the light. */
+static const char *DEGENERATE = BOX_HEAD "\"meshes\":["
+    "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
+    BOX_SIDES ","
+    "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, 0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
+    "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
+    "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
 
 typedef struct setup {
   const tt_integrator_iface *it;
@@ -397,6 +427,55 @@ int main(void) {
     free(rgb);
     tt_film_destroy(film);
     pt_fixture_free(&s.fx);
+  }
+
+  /* Delta lights (point + spot, no area light) in mmlt: light tracing and connections only,
+   * unbiased against the path sampler. */
+  {
+    CHECK(pt_fixture_load(&s.fx, DELTA));
+    double ref[NREG], se[NREG];
+    reference(&s, 5, 512, ref, se);
+    CHECK(ref[NREG - 1] > 0.0);
+    check_unbiased(&s, "point + spot mmlt classic", mm_cls, ref, se);
+    pt_fixture_free(&s.fx);
+  }
+
+  /* A light nothing in view can see (inside a closed cube): b = 0 and a black image in both
+   * modes, no NaN, no hang; degenerate triangles (zero-area, a collinear emitter): a finite,
+   * non-negative image with light in it. */
+  for (int mode = 0; mode < 2; ++mode) {
+    const char *cfgs[1] = {mode ? "{\"mode\": \"mmlt\", \"bootstrapSamples\": 5000, \"chains\": 64}"
+                                : "{\"bootstrapSamples\": 5000, \"chains\": 64}"};
+    float *rgb = malloc(3 * sizeof(float) * W * H);
+    CHECK(pt_fixture_load(&s.fx, ENCLOSED));
+    tt_film *film = NULL;
+    tt_pass_stats ps;
+    CHECK(render(&s, cfgs, 1, 2, 1, &film, &ps) == TT_OK);
+    CHECK(metric(&ps, "b") == 0.0 && ps.nonfinite == 0);
+    tt_film_resolve(film, rgb);
+    int nz = 0;
+    for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);  /* NaN counts too */
+    CHECK_MSG(nz == 0, "enclosed light, mode %d: %d non-zero channels", mode, nz);
+    tt_film_destroy(film);
+    pt_fixture_free(&s.fx);
+    if (!pt_fixture_load(&s.fx, DEGENERATE)) {
+      CHECK_MSG(0, "the degenerate-triangle scene does not load: %s", tt_last_error());
+      free(rgb);
+      break;
+    }
+    CHECK(render(&s, cfgs, 1, 4, 1, &film, &ps) == TT_OK);
+    tt_film_resolve(film, rgb);
+    int bad = 0;
+    double sum = 0.0;
+    for (int i = 0; i < 3 * W * H; ++i) {
+      bad += !isfinite(rgb[i]) || rgb[i] < 0.0f;
+      sum += rgb[i];
+    }
+    CHECK_MSG(bad == 0 && sum > 0.0 && ps.nonfinite == 0, "degenerate triangles, mode %d: %d bad channels, "
+              "sum %g, %llu non-finite", mode, bad, sum, (unsigned long long)ps.nonfinite);
+    tt_film_destroy(film);
+    pt_fixture_free(&s.fx);
+    free(rgb);
   }
 
   /* A stop request: the pass returns TT_ERR_INTERRUPTED with a consistent film. */
