@@ -2,14 +2,13 @@
 # Installs tunetrace's build dependencies from Debian 12 packages (when missing) and
 # builds into ./build. Safe to run again: it only installs what is missing and rebuilds.
 #   tools/bootstrap.sh             build + test dependencies (what CI and the README need)
-#   tools/bootstrap.sh --training  also TRAINING_PACKAGES: PyTorch for tools/taa/train.py
-#                                  (opt-in; no test needs it, the suite blocks it)
+#   tools/bootstrap.sh --training  the same (kept for old instructions: PyTorch for
+#                                  tools/taa/train.py is now in PACKAGES)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-training=0
 for a in "$@"; do
   case $a in
-    --training) training=1 ;;
+    --training) ;;  # accepted: PACKAGES has everything now
     *) echo "bootstrap: unknown option $a (expected --training)" >&2; exit 2 ;;
   esac
 done
@@ -34,14 +33,9 @@ PACKAGES=(
   llvm-14                                     # llvm-symbolizer: sanitizer reports with lines
   openmpi-bin libopenmpi-dev                  # mpi/ tunetrace-mpi (meson -Dmpi=auto finds it);
                                               # mpi/tests/mpi_driver.sh, mpi_baseline.sh, tools/mpi/
+  python3-torch                               # tools/taa/ training, CPU (train.py, ablations.py,
+                                              # eval_torch.py; tools/tests/taa_train.sh)
 )
-
-# Opt-in (--training): training the TAA networks (tools/taa/train.py, ablations.py,
-# export_golden.py, eval_torch.py). Never needed by a test or by the evaluation tools.
-TRAINING_PACKAGES=(
-  python3-torch                               # tools/taa/ training (CPU)
-)
-[ "$training" -eq 1 ] && PACKAGES+=("${TRAINING_PACKAGES[@]}")
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -14,7 +14,7 @@ import subprocess
 import sys
 import tempfile
 
-NEEDS = {  # module (relative to tools/) -> the non-bootstrap package it needs, and why
+NEEDS = {  # module (relative to tools/) -> the blocked package it needs (torch: only taa_train), and why
     "taa/dataset.py": "torch (training windows are torch tensors)",
     "taa/taa_model.py": "torch (the network)",
     "taa/train.py": "torch (training)",
