@@ -31,7 +31,6 @@ import json
 import os
 import random
 import signal
-import sqlite3
 import statistics
 import subprocess
 import sys
@@ -39,6 +38,7 @@ import tempfile
 import time
 
 from tools.tttools import cli, host
+from tools.tttools import db as tunedb
 
 
 def digest(path):
@@ -163,11 +163,8 @@ def tune_part(host, scene, work, kills, rng):
 
     def committed():
         try:
-            con = sqlite3.connect("file:%s?mode=ro" % db, uri=True, timeout=60)
-            ids = {r[0] for r in con.execute("SELECT id FROM samples")}
-            con.close()
-            return ids
-        except sqlite3.Error as e:
+            return tunedb.row_ids(db)
+        except tunedb.SQLiteError as e:
             return e
 
     failures = []
@@ -181,10 +178,8 @@ def tune_part(host, scene, work, kills, rng):
         if isinstance(seen, Exception):
             failures.append("trial %d: reading before the kill: %s" % (trial, seen))
             continue
-        con = sqlite3.connect(db, timeout=60)
-        check = con.execute("PRAGMA integrity_check").fetchone()[0]
-        after = {r[0] for r in con.execute("SELECT id FROM samples")}
-        con.close()
+        check = tunedb.integrity(db)
+        after = tunedb.row_ids(db)
         integrity_ok += check == "ok"
         if check != "ok":
             failures.append("trial %d: integrity_check: %s" % (trial, check))
@@ -198,9 +193,7 @@ def tune_part(host, scene, work, kills, rng):
     if final.returncode != 0:
         failures.append("a tuning run after the kills failed (exit %d): %s"
                         % (final.returncode, final.stderr[-1000:]))
-    con = sqlite3.connect(db)
-    rows = con.execute("SELECT count(*) FROM samples").fetchone()[0]
-    con.close()
+    rows = tunedb.count(db)
     for f in failures:
         print("FAIL tune: " + f)
     print("tune: %d kills (%d runs finished first; a run takes %.2f s): integrity_check ok "

@@ -18,6 +18,7 @@
 Environment: TT_BUILD_ROOT, TT_SOURCE_ROOT (tests/meson.build)."""
 import json
 import os
+import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -205,6 +206,10 @@ def test_tuning(tmp):
         ok = [(r["cost"], x["cost"]) for r, x in zip(rows, h) if x["status"] == "ok"]
         check(all(abs(a - b) <= 1e-9 * max(1, abs(b)) for a, b in ok), "rows' costs = history")
         check(all(r["indicators"] and len(r["indicators"]) == 17 for r in rows), "indicators")
+        # named as the file stores them (a JSON object by tt_scene_indicator_name)
+        raw = sqlite3.connect(db_path).execute("SELECT indicators FROM samples ORDER BY id LIMIT 1")
+        check(json.loads(raw.fetchone()[0]) == dict(zip(tt.INDICATORS, rows[0]["indicators"])),
+              f"INDICATORS {tt.INDICATORS}")
         check(all(r["mode"] in ("default", "tune") and r["tuner"] in (None, "tuner_nm")
                   for r in rows), "mode and tuner")
         check(rows[0]["context"]["spp"] == 1 and "integrator_pt" in rows[0]["context"]["plugins"],

@@ -39,7 +39,7 @@ from ._lib import lib, text
 __all__ = ["Error", "InvalidArgumentError", "ParseError", "InfeasibleError", "NumericError",
            "UnknownNameError", "FileError", "NotFoundError", "OutOfMemoryError",
            "ArgumentTypeError", "PluginError", "UnsupportedError", "NoDataError",
-           "StopRequested", "InternalError", "STATUS", "KINDS", "AOVS", "COST_INFEASIBLE",
+           "StopRequested", "InternalError", "STATUS", "KINDS", "AOVS", "INDICATORS", "COST_INFEASIBLE",
            "Session", "Tuning", "TuningDB", "version", "library_path", "list_plugins",
            "describe", "read_image", "write_exr", "set_threads", "__version__"]
 
@@ -93,6 +93,10 @@ AOVS = {"depth": (1, 1), "normal": (2, 3), "albedo": (4, 3), "motion": (8, 2)}
 COST_INFEASIBLE = 1e300
 """The cost of a configuration that could not be measured (TT_COST_INFEASIBLE, tuner.h)."""
 _STATUS_NAMES = {0: "ok", 1: "infeasible", 2: "failed"}
+INDICATORS = tuple(text(lib.tt_scene_indicator_name(k))
+                   for k in range(_lib.TT_SCENE_INDICATOR_COUNT))
+"""The names of the scene indicators (tt_scene_indicator_name), in the order of a
+TuningDB row's "indicators" list: dict(zip(INDICATORS, row["indicators"]))."""
 _ERR_NO_DATA, _ERR_INTERRUPTED = STATUS["TT_ERR_NO_DATA"], STATUS["TT_ERR_INTERRUPTED"]
 _ERR_ARG = STATUS["TT_ERR_INVALID_ARGUMENT"]
 
@@ -834,7 +838,8 @@ class TuningDB(_Handle):
 
     def rows(self, plugin=None):
         """Every row (of `plugin`, or all) in insertion order as dicts; camera, context,
-        config and metrics are parsed JSON, indicators a list (None when unknown)."""
+        config and metrics are parsed JSON, indicators a list in the order of INDICATORS
+        (None when unknown)."""
         out = []
 
         def one(_user, rp):

@@ -285,6 +285,7 @@ _PROTOTYPES = {
     # scene.h
     "tt_scene_set_resolution": (_I, [_P, _U32, _U32]), "tt_scene_source": (_S, [_P]),
     "tt_scene_id": (_S, [_P]), "tt_scene_triangle_count": (_U64, [_P]),
+    "tt_scene_indicator_name": (_S, [_U32]),
     # session.h
     "tt_session_create": (_I, [_P, _PP]), "tt_session_destroy": (None, [_P]),
     "tt_session_add_plugin_dir": (_I, [_P, _S]), "tt_session_load_scene": (_I, [_P, _S]),

@@ -51,7 +51,7 @@ import sys
 import time
 
 from tools.scenes import generate
-from tools.tttools import cli, host
+from tools.tttools import cli, db, host
 
 ROOT = host.ROOT
 SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "scenes"))
@@ -171,7 +171,7 @@ def ensure_jobs_table(con):
     schema version set by the host or tunetrace-mpi at the first job): the library refuses
     a version-0 file that already holds tables as another program's, so a new --db gets
     the tuning schema first and this table second. True when the table is there."""
-    if not con.execute("PRAGMA user_version").fetchone()[0]:
+    if not db.schema_version(con):
         return False
     con.execute(JOBS_SCHEMA)
     upgrade_jobs_table(con)
@@ -193,13 +193,33 @@ def done_jobs(con):
     return {r[0] for r in con.execute("SELECT job FROM hybrid_jobs")}
 
 
+def read_jobs(path):
+    """Every row of hybrid_jobs in the baseline database at `path` as a dict (history and
+    best_config parsed): what evaluate.py, epsilon.py and predict_cost.py read."""
+    if not os.path.exists(path):
+        sys.exit(f"baseline: {path}: no such baseline database")
+    con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30)
+    try:
+        if not con.execute("SELECT count(*) FROM sqlite_master WHERE name = 'hybrid_jobs'").fetchone()[0]:
+            sys.exit(f"baseline: {path}: no hybrid_jobs table (not a baseline of tools/hybrid/baseline.py)")
+        cur = con.execute("SELECT * FROM hybrid_jobs")
+        names = [d[0] for d in cur.description]
+        out = [dict(zip(names, r)) for r in cur]
+    finally:
+        con.close()
+    for r in out:
+        r["history"] = json.loads(r["history"]) if r["history"] else []
+        r["best_config"] = json.loads(r["best_config"]) if r["best_config"] else None
+    return out
+
+
 def dump_db(path, out):
     """--db as an xz-compressed SQL dump (sqlite3 iterdump), written atomically; the schema
     version (PRAGMA user_version, which iterdump leaves out) first, or the host would
     create the schema again in the restored file."""
     con = sqlite3.connect(path, timeout=30)
     with lzma.open(out + ".tmp", "wt", preset=9 | lzma.PRESET_EXTREME) as f:
-        f.write("PRAGMA user_version=%d;\n" % con.execute("PRAGMA user_version").fetchone()[0])
+        f.write("PRAGMA user_version=%d;\n" % db.schema_version(con))
         for line in con.iterdump():
             f.write(line + "\n")
     n = con.execute("SELECT count(*) FROM hybrid_jobs").fetchone()[0]
@@ -247,9 +267,8 @@ def restore_db(a, dump):
         drop = [r[0] for r in con.execute("SELECT DISTINCT scene FROM hybrid_jobs")
                 if r[0] not in a.scenes]
         for name in drop:
-            sids = [r[0] for r in con.execute("SELECT DISTINCT scene_id FROM hybrid_jobs "
-                                              "WHERE scene = ?", (name,))]
-            con.executemany("DELETE FROM samples WHERE scene_id = ?", [(x,) for x in sids])
+            db.drop_scenes(con, [r[0] for r in con.execute(
+                "SELECT DISTINCT scene_id FROM hybrid_jobs WHERE scene = ?", (name,))])
             con.execute("DELETE FROM hybrid_jobs WHERE scene = ?", (name,))
     bad = []
     for name, sid, parts in con.execute("SELECT scene, scene_id, scene_parts FROM hybrid_jobs "
@@ -269,12 +288,12 @@ def restore_db(a, dump):
                 continue
             print(f"baseline: warning: --remap-scenes: {why}; its rows now count as measurements "
                   f"of the scene as this checkout has it", file=sys.stderr, flush=True)
-            con.execute("UPDATE samples SET scene_id = ? WHERE scene_id = ?", (got, sid))
+            db.relabel_scene(con, sid, got)
         con.execute("UPDATE hybrid_jobs SET scene_file = ?, scene_id = ?, scene_parts = ? "
                     "WHERE scene = ?", (path, got, json.dumps(got_parts, sort_keys=True), name))
     con.commit()
     n = con.execute("SELECT count(*) FROM hybrid_jobs").fetchone()[0]
-    m = con.execute("SELECT count(*) FROM samples").fetchone()[0]
+    m = db.count(con)
     con.close()
     if bad:
         os.remove(tmp)
@@ -322,8 +341,6 @@ def mpi_job_list(a, jobs):
 
 def import_mpi(a, con, version):
     """hybrid_jobs rows for the jobs tunetrace-mpi merged into --db with these settings."""
-    if not con.execute("SELECT count(*) FROM sqlite_master WHERE name = 'merges'").fetchone()[0]:
-        return 0
     names = {}
     for name in a.scenes:  # the paths scene_file gives, without generating anything
         spec = SCENES[name]
@@ -332,7 +349,8 @@ def import_mpi(a, con, version):
         names[path] = name
     done = done_jobs(con)
     n = 0
-    for note, finished in con.execute("SELECT note, timestamp FROM merges").fetchall():
+    for m in db.merges(con):
+        note, finished = m["note"], m["timestamp"]
         try:
             nt = json.loads(note)
             job = nt["job"]

@@ -29,24 +29,19 @@ import hashlib
 import math
 import json
 import os
-import sqlite3
 import sys
 import time
 
-from tools.hybrid.baseline import TUNE_PARAMS
-from tools.hybrid.evaluate import copy_samples
+from tools.hybrid import baseline
 from tools.tttools import cli, host
+from tools.tttools import db as tunedb
 
 MODELS = {"nn": "predictor_nn", "rbf": "predictor_rbf", "static": "predictor_static"}
 
 
-def scene_files(db):
+def scene_files(path):
     """{name: (scene file, scene id)} of the baseline's finished jobs."""
-    con = sqlite3.connect(db)
-    out = {r[0]: (r[1], r[2]) for r in con.execute(
-        "SELECT scene, scene_file, scene_id FROM hybrid_jobs GROUP BY scene")}
-    con.close()
-    return out
+    return {r["scene"]: (r["scene_file"], r["scene_id"]) for r in baseline.read_jobs(path)}
 
 
 def warm_start(src_path, files, test_scenes, work):
@@ -59,8 +54,7 @@ def warm_start(src_path, files, test_scenes, work):
         sys.exit(f"epsilon: every scene of {src_path} ({', '.join(sorted(files))}) is a test scene "
                  f"(--scenes): no scene is left to warm-start the models from")
     path = os.path.join(work, "without_" + "+".join(sorted(test_scenes)) + ".db")
-    marks = ",".join("?" * len(ids))
-    return copy_samples(src_path, path, [(f"scene_id NOT IN ({marks})", tuple(ids))])
+    return tunedb.copy_samples(src_path, path, lambda r: r["scene_id"] not in ids)
 
 
 def model_sets(a, model):
@@ -144,7 +138,7 @@ def main():
     ap.add_argument("--iterations", type=int, default=40, help="K, the search's iterations")
     ap.add_argument("--frames", type=int, default=0, help="frames per state (default K + 1)")
     ap.add_argument("--res", default="128x128")
-    ap.add_argument("--tune-params", default=TUNE_PARAMS)
+    ap.add_argument("--tune-params", default=baseline.TUNE_PARAMS)
     ap.add_argument("--seeds", default="1", help="comma-separated seeds (the epsilon draws and the "
                     "search's): every run is repeated per seed")
     ap.add_argument("--set", action="append", default=[], metavar="PLUGIN.KEY=VALUE",

@@ -46,11 +46,11 @@ import json
 import math
 import os
 import random
-import sqlite3
 import sys
 import time
 
-from tools.tttools import cli, host
+from tools.hybrid import baseline
+from tools.tttools import cli, db, host
 
 ROOT = host.ROOT
 INDICATORS = ["meshes", "triangles", "lights", "camera_x", "camera_y", "camera_z", "target_x",
@@ -77,23 +77,19 @@ def canon(cfg):
     return json.dumps(norm, sort_keys=True, separators=(",", ":"))
 
 
-def load_jobs(db, objectives):
+def load_jobs(path, objectives):
     """{(scene, cam, obj): job} of finished baseline jobs, and each scene's file and id."""
-    con = sqlite3.connect(db)
-    con.row_factory = sqlite3.Row
     jobs, scenes = {}, {}
-    for r in con.execute("SELECT * FROM hybrid_jobs"):
+    for r in baseline.read_jobs(path):
         if r["objective"] not in objectives:
             continue
-        hist = json.loads(r["history"])
         jobs[(r["scene"], r["path_index"], r["objective"])] = {
             "default_cost": r["default_cost"], "best_cost": r["best_cost"],
-            "best_config": json.loads(r["best_config"]), "history": hist,
+            "best_config": r["best_config"], "history": r["history"],
             "scene_id": r["scene_id"], "tune_params": r["tune_params"], "res": r["resolution"],
             "threads": r["threads"], "clock": r["clock"], "spp": r["tune_spp"], "seed": r["seed"],
             "iterations": r["iterations"]}
         scenes[r["scene"]] = (r["scene_file"], r["scene_id"])
-    con.close()
     return jobs, scenes
 
 
@@ -110,18 +106,18 @@ def cameras(jobs, objectives, min_cameras):
     return out
 
 
-def camera_indicators(db, jobs, cams):
-    """Raw indicators of every (scene, camera) from its rows."""
-    con = sqlite3.connect(db)
+def camera_indicators(path, jobs, cams):
+    """Raw indicators of every (scene, camera) from its rows, by name."""
+    first = {}
+    for r in db.samples(path):
+        k = (r["scene_id"], db.path_index(r))
+        if k not in first and r["indicators"] is not None:
+            first[k] = db.indicators(r)
     out = {}
     for s, cs in cams.items():
         for c in cs:
             sid = next(j["scene_id"] for (ss, cc, _), j in jobs.items() if ss == s and cc == c)
-            row = con.execute("SELECT indicators FROM samples WHERE scene_id = ? AND camera LIKE ? "
-                              "AND indicators IS NOT NULL LIMIT 1",
-                              (sid, f'%"path_index":{c}}}')).fetchone()
-            out[(s, c)] = json.loads(row[0])
-    con.close()
+            out[(s, c)] = first[(sid, c)]
     return out
 
 
@@ -176,39 +172,14 @@ def protocols(cams, n_splits, val_share, loso, seed, heldout=None):
     return out
 
 
-def copy_samples(src_path, path, selections):
-    """A tuning database at `path` (atomically, kept if it exists) holding the rows of the
-    samples table of `src_path` that match any (WHERE clause, parameters) of `selections`."""
-    if os.path.exists(path):
-        return path
-    tmp = path + ".tmp"
-    if os.path.exists(tmp):
-        os.remove(tmp)
-    src = sqlite3.connect(src_path)
-    schema = src.execute("SELECT sql FROM sqlite_master WHERE name = 'samples'").fetchone()[0]
-    version = src.execute("PRAGMA user_version").fetchone()[0]
-    dst = sqlite3.connect(tmp)
-    dst.execute(schema)
-    dst.execute(f"PRAGMA user_version = {version}")
-    cols = ",".join(r[1] for r in src.execute("PRAGMA table_info(samples)"))
-    q = f"INSERT INTO samples ({cols}) VALUES ({','.join('?' * len(cols.split(',')))})"
-    for where, params in selections:
-        dst.executemany(q, src.execute(f"SELECT {cols} FROM samples WHERE {where}", params).fetchall())
-    dst.commit()
-    dst.close()
-    src.close()
-    os.replace(tmp, path)
-    return path
-
-
 def training_db(a, jobs, train, obj, path):
     """A database with only the training cameras' rows of the objective (what the model sees)."""
-    sel = []
+    keep = set()
     for s, cs in train.items():
         sid = next(j["scene_id"] for (ss, _, _), j in jobs.items() if ss == s)
-        sel += [("scene_id = ? AND objective = ? AND camera LIKE ?", (sid, obj, f'%"path_index":{c}}}'))
-                for c in cs]
-    return copy_samples(a.db, path, sel)
+        keep |= {(sid, c) for c in cs}
+    return db.copy_samples(a.db, path, lambda r: r["objective"] == obj and
+                           (r["scene_id"], db.path_index(r)) in keep)
 
 
 def host_common(job):
@@ -360,12 +331,15 @@ VARIANTS = {
 }
 
 
-def reward_spread(db, jobs, cams, objectives):
+def reward_spread(path, jobs, cams, objectives):
     """Why a reward scale matters (issue 15 item 3): over the baseline's samples of every
     state (scene, camera) of the protocol, the share of the reward's variance that lies
     within the states, i.e. the most the action (configuration) can explain, for R = 1/cost
     and for R = default / cost; and how far a state's best sample is below its default."""
-    con = sqlite3.connect(db)
+    costs_of = {}
+    for r in db.samples(path):
+        if db.ok(r) and 0 < r["cost"] < 1e299:
+            costs_of.setdefault((r["scene_id"], r["objective"], db.path_index(r)), []).append(r["cost"])
     out = {}
     for o in objectives:
         inv, rel, gain = {}, {}, []
@@ -374,9 +348,7 @@ def reward_spread(db, jobs, cams, objectives):
                 job = jobs.get((s, c, o))
                 if not job:
                     continue
-                costs = [r[0] for r in con.execute(
-                    "SELECT cost FROM samples WHERE scene_id = ? AND objective = ? AND camera LIKE ? "
-                    "AND status = 0 AND cost > 0 AND cost < 1e299", (job["scene_id"], o, f'%"path_index":{c}}}'))]
+                costs = costs_of.get((job["scene_id"], o, c), [])
                 if len(costs) < 2:
                     continue
                 inv[(s, c)] = [1.0 / x for x in costs]
@@ -396,7 +368,6 @@ def reward_spread(db, jobs, cams, objectives):
                       "within_share_inverse": within(inv), "within_share_relative": within(rel),
                       "inverse_state_mean_min": min(means), "inverse_state_mean_max": max(means),
                       "best_over_default_median": gain[len(gain) // 2]}
-    con.close()
     return out
 
 

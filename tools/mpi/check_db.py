@@ -24,11 +24,11 @@ checks hold; 1: a check failed (each printed); 2: bad arguments or unreadable fi
 import collections
 import json
 import os
-import sqlite3
 import subprocess
 import sys
 
 from tools.tttools import cli, host
+from tools.tttools import db as tunedb
 # everything but timings and where/when a row was measured
 KEY = ("scene_id", "camera", "context", "indicators", "plugin", "plugin_version", "objective",
        "status", "mode", "iteration", "tuner")
@@ -50,13 +50,9 @@ def load(db):
     if not os.path.exists(db):
         print(f"check_db: {db}: no such file", file=sys.stderr)
         sys.exit(2)
-    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
-    con.row_factory = sqlite3.Row
-    merges = {r["tag"]: dict(r) for r in con.execute("SELECT tag, rows, note FROM merges")}
-    cols = [r[1] for r in con.execute("PRAGMA table_info(samples)")]
-    rows = [dict(r) for r in con.execute("SELECT * FROM samples ORDER BY id")]
-    con.close()
-    return merges, cols, rows
+    merges = {m["tag"]: m for m in tunedb.merges(db)}
+    rows = tunedb.samples(db)
+    return merges, list(rows[0]) if rows else [], rows
 
 
 def check(a):
@@ -81,7 +77,7 @@ def check(a):
         problems.append(f"rows per host run {sorted(by_run.values())} differ from rows per "
                         f"merged job {with_rows}")
     skip = {"id"}
-    seen = collections.Counter(tuple(r[c] for c in cols if c not in skip) for r in rows)
+    seen = collections.Counter(tuple(text(r[c]) for c in cols if c not in skip) for r in rows)
     dup = sum(n - 1 for n in seen.values() if n > 1)
     if dup:
         problems.append(f"{dup} rows are in the database twice")
@@ -97,18 +93,15 @@ def check(a):
     return 1 if problems else 0
 
 
+def text(v):
+    """A row's value as comparable text (the parsed JSON fields with their keys sorted)."""
+    return json.dumps(v, sort_keys=True) if isinstance(v, (dict, list)) else str(v)
+
+
 def signature(rows):
     """A job's rows without timings: sorted (iteration, key..., config)."""
     return sorted(tuple([r["iteration"] if r["iteration"] is not None else -1] +
-                        [str(r[k]) for k in KEY] + [r["config"]]) for r in rows)
-
-
-def cam_index(camera):
-    """A row's camera (JSON) -> its --camera-index (path_index), or None."""
-    try:
-        return json.loads(camera).get("path_index")
-    except (ValueError, AttributeError):
-        return None
+                        [text(r[k]) for k in KEY] + [text(r["config"])]) for r in rows)
 
 
 def per_job(merges, rows):
@@ -127,7 +120,7 @@ def per_job(merges, rows):
         mode = "explore" if job["kind"] == "explore" else "tune"
         for run, rs in list(free.items()):
             if len(rs) == m["rows"] and any(r["mode"] == mode for r in rs) and \
-               job["camera"] in {cam_index(r["camera"]) for r in rs} and \
+               job["camera"] in {tunedb.path_index(r) for r in rs} and \
                (job.get("objective") is None or job["objective"] in {r["objective"] for r in rs}):
                 out[tag] = rs
                 del free[run]

@@ -21,7 +21,6 @@ part, ~0.6 s) does not dominate, short enough for a bench (~1 min). A real basel
 import contextlib
 import json
 import os
-import sqlite3
 import statistics
 import subprocess
 import sys
@@ -30,6 +29,7 @@ import time
 
 from tools.hybrid import baseline
 from tools.tttools import cli, host
+from tools.tttools import db as tunedb
 
 ROOT = host.ROOT
 
@@ -88,9 +88,7 @@ def main():
             fixed[n].append(time.time() - t0)
             if p.returncode != 0 or " 0 to run" not in p.stderr:
                 sys.exit(f"scaling: -np {n}: the rerun should have nothing to do:\n{p.stderr[-3000:]}")
-            con = sqlite3.connect(db)
-            notes = [json.loads(x[0]) for x in con.execute("SELECT note FROM merges")]
-            con.close()
+            notes = [json.loads(m["note"]) for m in tunedb.merges(db)]
             if len(notes) != njobs:
                 sys.exit(f"scaling: -np {n}: {len(notes)} of {njobs} jobs merged")
             walls[n].append(wall)

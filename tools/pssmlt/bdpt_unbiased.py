@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """BDPT against the path tracer on the real scenes the path tracer can sample: the image
 mean per channel (relative difference and its standard error) and whether the per-pixel
 differences are consistent with noise (mean z^2 over pixels, 1 when they are).
 
-    python3 tools/pssmlt/bdpt_unbiased.py --res 32x32 --pt-spp 256 --bdpt-spp 64 --seeds 8 \
+    /usr/bin/python3 -m tools.pssmlt.bdpt_unbiased --res 32x32 --pt-spp 256 --bdpt-spp 64 --seeds 8 \
         --out /tmp/bdpt_unbiased
 
 Each method renders --seeds images (different seeds) of the scene's still camera with
@@ -14,7 +13,6 @@ light is a spot light behind glass: the path tracer cannot sample its caustic, s
 images differ by design; see integrator_bdpt's README) and the volume variants (no media).
 Results: <out>/unbiased.json and a table.
 """
-import argparse
 import json
 import os
 import subprocess
@@ -22,10 +20,10 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.normpath(os.path.join(HERE, '..', '..'))
-sys.path.insert(0, os.path.join(HERE, '..', 'common'))
-import images  # noqa: E402
+from tools.common import images
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 
 SHARED = os.path.normpath(os.path.join(ROOT, '..', 'shared', 'scenes'))
 SCENES = {
@@ -47,13 +45,12 @@ DEPTH = 5
 
 
 def render(args, scene, method, spp, seed, out):
-    host = os.path.join(args.build, 'host', 'host')
     p = (['--plugin', 'integrator_pt', '--set', f'integrator_pt.maxDepth={DEPTH}', '--set',
           f'integrator_pt.rrDepth={DEPTH}'] if method == 'pt' else
          ['--plugin', 'integrator_bdpt', '--set', f'integrator_bdpt.maxDepth={DEPTH}'])
-    cmd = ['nice', '-n', str(args.nice), host, scene, '--res', args.res, '--spp', str(spp), '--seed', str(seed),
-           '--threads', str(args.threads), '--no-db', '--quiet', '--out', out] + p
-    subprocess.run(cmd, check=True, stderr=subprocess.DEVNULL)
+    host.run(args.host, [scene, '--res', args.res, '--spp', str(spp), '--seed', str(seed), '--threads',
+                         str(args.threads), '--no-db', '--quiet', '--out', out] + p, nice=args.nice,
+             log=subprocess.DEVNULL)
     img = images.read_rgb(out).astype(np.float64)
     os.remove(out)
     png = os.path.splitext(out)[0] + '.png'
@@ -63,9 +60,8 @@ def render(args, scene, method, spp, seed, out):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('scenes', nargs='*', help='names (default all): ' + ', '.join(SCENES))
-    ap.add_argument('--build', default=os.path.join(ROOT, 'build'))
     ap.add_argument('--res', default='32x32')
     ap.add_argument('--pt-spp', type=int, default=256)
     ap.add_argument('--bdpt-spp', type=int, default=64)
@@ -79,7 +75,7 @@ def main(argv=None):
         if n not in SCENES:
             ap.error(f'unknown scene {n!r}')
     os.makedirs(args.out, exist_ok=True)
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
+    args.host = host.find(args.host)
     resf = os.path.join(args.out, 'unbiased.json')
     res = json.load(open(resf)) if os.path.exists(resf) else {}
     for name in names:

@@ -4,13 +4,13 @@ original at equal mutations and at equal CPU time, with mean path lengths), Figs
 (equal-sample crops) and rRMSE against CPU time for the path tracer, BDPT, PSSMLT over the
 path tracer, multiplexed MLT "original" and multiplexed MLT "ours".
 
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 reference            # BDPT references
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 tune                 # "ours": tuned binning
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 fig46                # equal mutations
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 evt                  # error against CPU time
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 crops                # Figs. 4.8 / 4.9
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 speed                # BDPT vs PT samples/s
-    python3 tools/pssmlt/chapter4.py --out /tmp/ch4 plot --figures tools/pssmlt/figures
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 reference            # BDPT references
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 tune                 # "ours": tuned binning
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 fig46                # equal mutations
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 evt                  # error against CPU time
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 crops                # Figs. 4.8 / 4.9
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 speed                # BDPT vs PT samples/s
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 plot --figures tools/pssmlt/figures
 
 Every step takes scene names (default: all of SCENES) and keeps what it has done in
 <out>/<step>/..., so a killed run resumes. `--quick` shrinks everything (16x16, few samples,
@@ -32,19 +32,16 @@ Time is the CPU time (user + sys) of the whole `host` process from getrusage (th
 shared; wall time is not comparable between runs), with --threads 1. Errors are tunetrace's
 rRMSE (tools/common/images.py) against the BDPT reference of the same resolution.
 """
-import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.normpath(os.path.join(HERE, '..', '..'))
-sys.path.insert(0, os.path.join(HERE, '..', 'common'))
-import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
+from tools.common import images  # image reading and the one rRMSE
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 
 SHARED = os.path.normpath(os.path.join(ROOT, '..', 'shared', 'scenes'))
 # name -> scene path (relative to the repository root or absolute), what it is for
@@ -80,15 +77,8 @@ def scene_path(name):
 
 def host_run(args, scene, extra, out, stats):
     """Runs host; returns (its --stats JSON, CPU seconds of the process)."""
-    host = os.path.join(args.build, 'host', 'host')
-    cmd = ['nice', '-n', str(args.nice), host, scene, '--res', settings(args)['res'], '--no-db', '--quiet',
-           '--out', out, '--stats', stats] + extra
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run(cmd, check=True)
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-    with open(stats) as f:
-        return json.load(f), cpu
+    return host.render(args.host, scene, extra, out=out, stats=stats, res=settings(args)['res'],
+                       nice=args.nice)
 
 
 def load_rows(path):
@@ -504,10 +494,9 @@ def print_tables(summ):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('step', choices=['reference', 'tune', 'fig46', 'evt', 'crops', 'speed', 'plot', 'all'])
     ap.add_argument('scenes', nargs='*', help='scene names (default: all): ' + ', '.join(SCENES))
-    ap.add_argument('--build', default=os.path.join(ROOT, 'build'))
     ap.add_argument('--out', default='/tmp/tt_chapter4')
     ap.add_argument('--figures', default=None, help='folder of the figures and summary (default <out>/figures)')
     ap.add_argument('--res', default='64x64')
@@ -526,7 +515,7 @@ def main(argv=None):
     for n in names:
         if n not in SCENES:
             ap.error(f'unknown scene {n!r} (known: {", ".join(SCENES)})')
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
+    args.host = host.find(args.host)
     steps = ['reference', 'tune', 'fig46', 'evt', 'crops', 'speed', 'plot'] if args.step == 'all' else [args.step]
     for st in steps:
         globals()['step_' + st](args, names)

@@ -1,22 +1,19 @@
-#!/usr/bin/python3
 """Equal-mutation comparison of the path tracer and PSSMLT (classic / sigma-binned) against
 a path-traced reference, as in the thesis' Fig. 4.6 (rRMSE spread over seeds).
 
-    python3 tools/pssmlt/compare.py scenes/cornell-box/scene.json --res 128x128 \
+    /usr/bin/python3 -m tools.pssmlt.compare scenes/cornell-box/scene.json --res 128x128 \
         --ref-spp 512 --spp 16 --seeds 3 --out /tmp/cmp
 
-Each method renders with `host` (build dir via --build); the reference uses integrator_pt
+Each method renders with `host` (--host, tools/tttools/host.py); the reference uses integrator_pt
 with maxDepth/rrDepth equal to PSSMLT's maxDepth. Prints tunetrace's rRMSE (over
 luminance, tools/common/images.py), render time and, for PSSMLT, the small-step acceptance.
 """
-import argparse
 import json
 import os
-import subprocess
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'common'))
-import images  # noqa: E402  (image reading and the one rRMSE, tools/common/images.py)
+from tools.common import images  # image reading and the one rRMSE
+from tools.tttools import cli, host
 
 METHODS = {
     'pt': ['--plugin', 'integrator_pt'],
@@ -25,18 +22,9 @@ METHODS = {
 }
 
 
-def run(host, scene, args, extra, out, stats):
-    cmd = [host, scene, '--res', args.res, '--threads', str(args.threads), '--no-db', '--quiet',
-           '--out', out, '--stats', stats] + extra
-    subprocess.run(cmd, check=True)
-    with open(stats) as f:
-        return json.load(f)
-
-
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('scene')
-    ap.add_argument('--build', default='build')
     ap.add_argument('--res', default='128x128')
     ap.add_argument('--threads', type=int, default=2)
     ap.add_argument('--depth', type=int, default=5)
@@ -48,14 +36,14 @@ def main(argv=None):
     ap.add_argument('--out', default='/tmp/pssmlt_compare')
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
-    host = os.path.join(args.build, 'host', 'host')
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
+    exe = host.find(args.host)
+    kw = dict(res=args.res, threads=args.threads)
     d = str(args.depth)
     pt_depth = ['--set', f'integrator_pt.maxDepth={d}', '--set', f'integrator_pt.rrDepth={d}']
     ref = os.path.join(args.out, 'reference.exr')
     if not os.path.exists(ref):
-        run(host, args.scene, args, METHODS['pt'] + pt_depth + ['--spp', str(args.ref_spp), '--seed', '999'],
-            ref, os.path.join(args.out, 'reference.json'))
+        host.render(exe, args.scene, METHODS['pt'] + pt_depth + ['--spp', str(args.ref_spp), '--seed', '999'],
+                    out=ref, stats=os.path.join(args.out, 'reference.json'), **kw)
     R = images.read_luminance(ref)
     rows = []
     for m in args.methods.split(','):
@@ -66,8 +54,8 @@ def main(argv=None):
                 extra += ['--set', s]
         for seed in range(1, args.seeds + 1):
             out = os.path.join(args.out, f'{m}_{seed}.exr')
-            st = run(host, args.scene, args, extra + ['--spp', str(args.spp), '--seed', str(seed)], out,
-                     os.path.join(args.out, f'{m}_{seed}.json'))
+            st, _ = host.render(exe, args.scene, extra + ['--spp', str(args.spp), '--seed', str(seed)],
+                                out=out, stats=os.path.join(args.out, f'{m}_{seed}.json'), **kw)
             img = images.read_luminance(out)
             rrmse = images.rrmse(img, R)
             met = st.get('metrics', {})

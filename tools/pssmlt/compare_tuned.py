@@ -1,33 +1,29 @@
-#!/usr/bin/python3
 """rRMSE at equal mutations per pixel (thesis Fig. 4.6 as box plots): path tracer, classic
 PSSMLT (sigma 0.01), untuned sigma-binning (defaults: equal-width bins, all sigma_i 0.01) and
 tuned sigma-binning (the configuration found by tune_convergence.py, passed with --set),
 against a high-spp integrator_pt reference (maxDepth = rrDepth = PSSMLT's maxDepth).
 
-    python3 tools/pssmlt/compare_tuned.py --build build-mlt2 --res 96x96 --spp 16 --seeds 5 \
+    C="/usr/bin/python3 -m tools.pssmlt.compare_tuned"   # from the repository root
+    $C --host build-mlt2/host/host --res 96x96 --spp 16 --seeds 5 \
         --ref-spp 1024 --tuned-dir /tmp/pssmlt_tune --out /tmp/pssmlt_cmp \
         cornell-box=scenes/cornell-box/scene.json ...
     # + binning tuned towards rRMSE (tune_convergence.py --objective rrmse --out DIR)
-    python3 tools/pssmlt/compare_tuned.py ... --rrmse-dir DIR --methods pt,classic,binned,tuned,rrmse
-    python3 tools/pssmlt/compare_tuned.py --plot-only --out /tmp/pssmlt_cmp \
+    $C ... --rrmse-dir DIR --methods pt,classic,binned,tuned,rrmse
+    $C --plot-only --out /tmp/pssmlt_cmp \
         --fig tools/pssmlt/figures/rrmse_equal_mutations.png NAME=SCENE ...
 
 Every run is a separate `host` process; its CPU time (user+sys of the child) is recorded
 next to the wall render_ms.  Results: <out>/<name>/results.json (appended per run, so a
 killed batch can be resumed), and the figure.
 """
-import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-from compare import images  # noqa: E402  (tools/common/images.py)
+from tools.common import images
+from tools.tttools import cli, figures, host
 
 LABELS = {'pt': 'path tracer', 'classic': 'PSSMLT classic', 'binned': 'binned untuned', 'tuned': 'binned tuned',
           'rrmse': 'binned rRMSE-tuned', 'rrmse200': 'binned rRMSE-tuned, 200 it.'}
@@ -35,19 +31,9 @@ SHORT = {'pt': 'PT', 'classic': 'classic', 'binned': 'untuned', 'tuned': 'acc.-t
          'rrmse200': 'rRMSE 200 it.'}
 
 
-def run(host, scene, args, extra, out, stats):
-    cmd = [host, scene, '--res', args.res, '--threads', str(args.threads), '--no-db', '--quiet',
-           '--out', out, '--stats', stats] + extra
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run(cmd, check=True)
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-    with open(stats) as f:
-        return json.load(f), cpu
-
-
 def do_scene(args, name, scene):
-    host = os.path.join(args.build, 'host', 'host')
+    exe = host.find(args.host)
+    kw = dict(res=args.res, threads=args.threads)
     out = os.path.join(args.out, name)
     os.makedirs(out, exist_ok=True)
     d = str(args.depth)
@@ -55,7 +41,8 @@ def do_scene(args, name, scene):
     mlt = ['--plugin', 'integrator_pssmlt', '--set', f'integrator_pssmlt.maxDepth={d}']
     ref = os.path.join(out, 'reference.exr')
     if not os.path.exists(ref):
-        run(host, scene, args, pt + ['--spp', str(args.ref_spp), '--seed', '999'], ref, os.path.join(out, 'reference.json'))
+        host.render(exe, scene, pt + ['--spp', str(args.ref_spp), '--seed', '999'], out=ref,
+                    stats=os.path.join(out, 'reference.json'), **kw)
     R = images.read_luminance(ref)
     with open(os.path.join(args.tuned_dir, f'{name}_tuned.json')) as f:
         tj = json.load(f)
@@ -86,8 +73,8 @@ def do_scene(args, name, scene):
                 if (m, seed, spp) in done:
                     continue
                 img_path = os.path.join(out, f'{m}_{spp}_{seed}.exr')
-                st, cpu = run(host, scene, args, methods[m] + ['--spp', str(spp), '--seed', str(seed)], img_path,
-                              os.path.join(out, f'{m}_{spp}_{seed}.json'))
+                st, cpu = host.render(exe, scene, methods[m] + ['--spp', str(spp), '--seed', str(seed)],
+                                      out=img_path, stats=os.path.join(out, f'{m}_{spp}_{seed}.json'), **kw)
                 img = images.read_luminance(img_path)
                 met = st.get('metrics', {})
                 row = dict(method=m, seed=seed, spp=spp, rrmse=images.rrmse(img, R), render_ms=st['render_ms'], cpu_s=cpu,
@@ -134,9 +121,8 @@ def paired(name, rows, base='classic'):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('scenes', nargs='+', help='NAME=PATH')
-    ap.add_argument('--build', default='build')
     ap.add_argument('--res', default='96x96')
     ap.add_argument('--threads', type=int, default=2)
     ap.add_argument('--depth', type=int, default=5)
@@ -153,7 +139,6 @@ def main(argv=None):
     ap.add_argument('--fig', default=None)
     ap.add_argument('--plot-only', action='store_true')
     args = ap.parse_args(argv)
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
     scenes = [s.split('=', 1) for s in args.scenes]
     allrows = {}
     for name, path in scenes:
@@ -197,9 +182,7 @@ def main(argv=None):
             ax.set_title(f'{name}\n{spp} mut./px, {len(data[0])} seeds', fontsize=8)
             if j == 0:
                 ax.set_ylabel('rRMSE', fontsize=8)
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(args.fig) or '.', exist_ok=True)
-    fig.savefig(args.fig)
+    figures.save(fig, args.fig)
     return 0
 
 

@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """rRMSE against CPU time (equal-time comparison): the path tracer, classic PSSMLT, binned
 PSSMLT tuned towards small-step acceptance 0.234 and binned PSSMLT tuned towards rRMSE
 (`host --objective rrmse`), each rendered at increasing samples resp. mutations per pixel.
 
-    python3 tools/pssmlt/error_vs_time.py --build build-h3 --res 96x96 --mpp 4 8 16 32 64 128 \
+    /usr/bin/python3 -m tools.pssmlt.error_vs_time --host build-h3/host/host --res 96x96 --mpp 4 8 16 32 64 128 \
         --seeds 3 --ref /tmp/cmp/cornell-box/reference.exr \
         --tuned acc=/tmp/tune/cornell-box_tuned.json --tuned rrmse=/tmp/tune_rrmse/cornell-box_tuned.json \
         --out /tmp/evt --fig tools/pssmlt/figures/error_vs_time_cornell-box.png \
@@ -18,33 +17,18 @@ CPU time at each sample count; the equal-time table interpolates log rRMSE linea
 log CPU time between those medians (no extrapolation). Results: <out>/<name>/evt.json
 (appended per run, so a killed batch resumes), the figure and the table on stdout.
 """
-import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-from compare import images  # noqa: E402  (tools/common/images.py)
+from tools.common import images
+from tools.tttools import cli, figures, host
 
 LABELS = {'pt': 'path tracer', 'classic': 'PSSMLT classic', 'acc': 'binned, acceptance-tuned',
           'rrmse': 'binned, rRMSE-tuned', 'rrmse200': 'binned, rRMSE-tuned (200 it.)',
           'split': 'binned, one direction sigma (control)'}
-
-
-def run(host, scene, args, extra, out, stats):
-    cmd = ['nice', '-n', str(args.nice), host, scene, '--res', args.res, '--threads', str(args.threads),
-           '--no-db', '--quiet', '--out', out, '--stats', stats] + extra
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run(cmd, check=True)
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-    with open(stats) as f:
-        return json.load(f), cpu
 
 
 def methods_for(args):
@@ -61,7 +45,8 @@ def methods_for(args):
 
 
 def do_scene(args, name, scene):
-    host = os.path.join(args.build, 'host', 'host')
+    exe = host.find(args.host)
+    kw = dict(res=args.res, threads=args.threads, nice=args.nice)
     out = os.path.join(args.out, name)
     os.makedirs(out, exist_ok=True)
     R = images.read_luminance(args.ref)
@@ -76,8 +61,8 @@ def do_scene(args, name, scene):
                     continue
                 extra, _ = methods[m]
                 img = os.path.join(out, f'{m}_{mpp}_{seed}.exr')
-                st, cpu = run(host, scene, args, extra + ['--spp', str(mpp), '--seed', str(seed)], img,
-                              os.path.join(out, f'{m}_{mpp}_{seed}.json'))
+                st, cpu = host.render(exe, scene, extra + ['--spp', str(mpp), '--seed', str(seed)],
+                                      out=img, stats=os.path.join(out, f'{m}_{mpp}_{seed}.json'), **kw)
                 row = dict(method=m, seed=seed, mpp=mpp, rrmse=images.rrmse(images.read_luminance(img), R), cpu_s=cpu,
                            render_ms=st['render_ms'], build_ms=st.get('build_ms'))
                 rows.append(row)
@@ -111,9 +96,8 @@ def at_time(pts, t):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('scene', help='NAME=PATH')
-    ap.add_argument('--build', default='build')
     ap.add_argument('--res', default='96x96')
     ap.add_argument('--threads', type=int, default=1)
     ap.add_argument('--nice', type=int, default=5)
@@ -128,7 +112,6 @@ def main(argv=None):
     ap.add_argument('--fig', default=None)
     ap.add_argument('--plot-only', action='store_true')
     args = ap.parse_args(argv)
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
     name, path = args.scene.split('=', 1)
     if args.plot_only:
         rows = json.load(open(os.path.join(args.out, name, 'evt.json')))
@@ -181,9 +164,7 @@ def main(argv=None):
     ax.tick_params(labelsize=7)
     ax.legend(fontsize=7)
     ax.grid(True, which='both', lw=0.3, alpha=0.5)
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(args.fig) or '.', exist_ok=True)
-    fig.savefig(args.fig)
+    figures.save(fig, args.fig)
     return 0
 
 

@@ -1,11 +1,10 @@
-#!/usr/bin/python3
 """Side by side with pbrt-v3 (the thesis' renderer, 4.6): pbrt-v4's diffuse Cornell box
 (../shared/scenes/cornell-box-pbrt/cornell-box.pbrt) rendered by pbrt-v3's `bdpt` and `mlt`
 integrators and by tunetrace's integrator_bdpt and integrator_pssmlt mode=mmlt (and
 integrator_pt), at the same resolution and samples (mutations) per pixel, single-threaded:
 the image mean per channel (the renderers must agree within noise) and CPU seconds.
 
-    python3 tools/pssmlt/pbrt_v3_anchor.py --pbrt /tmp/pbrt-v3/pbrt --res 64 --spp 256 \
+    /usr/bin/python3 -m tools.pssmlt.pbrt_v3_anchor --pbrt /tmp/pbrt-v3/pbrt --res 64 --spp 256 \
         --reference /tmp/ch4/refs/cornell-box.exr --out /tmp/pbrt_v3_anchor
 
 pbrt-v3 is not part of tunetrace: build it yourself (README, "pbrt-v3 anchor"). The scene is
@@ -19,7 +18,6 @@ noise and any bias included, so it is an upper bound). MLT's image mean is its b
 estimate b, whose error does not shrink with mutations: pbrt-v3's default of 100000
 bootstrap samples per depth is used for both.
 """
-import argparse
 import json
 import os
 import re
@@ -29,10 +27,10 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.normpath(os.path.join(HERE, '..', '..'))
-sys.path.insert(0, os.path.join(HERE, '..', 'common'))
-import images  # noqa: E402
+from tools.common import images
+from tools.tttools import cli, host
+
+ROOT = host.ROOT
 
 SCENE = os.path.normpath(os.path.join(ROOT, '..', 'shared', 'scenes', 'cornell-box-pbrt', 'cornell-box.pbrt'))
 
@@ -74,6 +72,7 @@ def to_v3(text, res, spp, integrator, out_exr):
 
 
 def timed(cmd, cwd=None):
+    """CPU seconds of pbrt-v3 running `cmd` (its output dropped)."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     subprocess.run(cmd, check=True, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -91,9 +90,8 @@ def mean_se(path, ref):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('--pbrt', required=True, help='the pbrt-v3 executable')
-    ap.add_argument('--build', default=os.path.join(ROOT, 'build'))
     ap.add_argument('--res', type=int, default=64)
     ap.add_argument('--spp', type=int, default=256, help='samples (BDPT, PT) and mutations (MLT) per pixel')
     ap.add_argument('--bootstrap', type=int, default=100000)
@@ -102,12 +100,11 @@ def main(argv=None):
     ap.add_argument('--out', default='/tmp/pbrt_v3_anchor')
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
     with open(SCENE) as f:
         text = f.read()
     ref = images.read_rgb(args.reference).astype(np.float64)
     rmean = ref.mean(axis=(0, 1))
-    host = os.path.join(args.build, 'host', 'host')
+    exe = host.find(args.host)
     d = 5
     mlt_v3 = (f'Integrator "mlt" "integer maxdepth" [{d}] "integer mutationsperpixel" [{args.spp}] '
               f'"integer bootstrapsamples" [{args.bootstrap}] "integer chains" [{args.chains}] '
@@ -132,8 +129,8 @@ def main(argv=None):
                 f.write(to_v3(text, args.res, args.spp, spec, exr))
             cpu = timed([args.pbrt, '--nthreads', '1', '--quiet', pb], cwd=os.path.dirname(SCENE))
         else:
-            cpu = timed([host, SCENE, '--res', f'{args.res}x{args.res}', '--spp', str(args.spp), '--threads', '1',
-                         '--no-db', '--quiet', '--out', exr] + spec)
+            cpu = host.run(exe, [SCENE, '--res', f'{args.res}x{args.res}', '--spp', str(args.spp), '--threads', '1',
+                                 '--no-db', '--quiet', '--out', exr] + spec, log=subprocess.DEVNULL).cpu_s
         m, se = mean_se(exr, ref)
         rel = (m - rmean) / rmean
         rows.append(dict(run=label, mean=m.tolist(), se=se.tolist(), rel_to_reference=rel.tolist(), cpu_s=cpu,

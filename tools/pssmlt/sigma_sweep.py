@@ -1,30 +1,26 @@
-#!/usr/bin/python3
 """Is small-step acceptance 0.234 the right target?  Classic PSSMLT with one sigma for all
 dims, swept over sigma: rRMSE (against a reference from compare_tuned.py) vs the measured
 small-step acceptance, at equal mutations per pixel, several seeds.
 
-    python3 tools/pssmlt/sigma_sweep.py scenes/cornell-box/scene.json \
-        --ref /tmp/pssmlt_cmp/cornell-box/reference.exr --build build-mlt2 --res 96x96 \
+    /usr/bin/python3 -m tools.pssmlt.sigma_sweep scenes/cornell-box/scene.json \
+        --ref /tmp/pssmlt_cmp/cornell-box/reference.exr --host build-mlt2/host/host --res 96x96 \
         --spp 16 --seeds 3 --out /tmp/pssmlt_sweep --fig tools/pssmlt/figures/sigma_sweep.png
 """
-import argparse
 import json
 import os
 import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare import images  # noqa: E402  (tools/common/images.py)
-from compare_tuned import run  # noqa: E402
+from tools.common import images
+from tools.tttools import cli, host
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('scene')
     ap.add_argument('--ref', required=True)
     ap.add_argument('--name', default='scene')
-    ap.add_argument('--build', default='build')
     ap.add_argument('--res', default='96x96')
     ap.add_argument('--threads', type=int, default=2)
     ap.add_argument('--depth', type=int, default=5)
@@ -34,17 +30,18 @@ def main(argv=None):
     ap.add_argument('--out', default='/tmp/pssmlt_sweep')
     ap.add_argument('--fig', default=None)
     args = ap.parse_args(argv)
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
     os.makedirs(args.out, exist_ok=True)
-    host = os.path.join(args.build, 'host', 'host')
+    exe = host.find(args.host)
     R = images.read_luminance(args.ref)
     rows = []
     for sg in [float(s) for s in args.sigmas.split(',')]:
         for seed in range(1, args.seeds + 1):
             p = os.path.join(args.out, f'{args.name}_{sg}_{seed}')
-            st, cpu = run(host, args.scene, args, ['--plugin', 'integrator_pssmlt', '--set',
-                          f'integrator_pssmlt.maxDepth={args.depth}', '--set', f'integrator_pssmlt.sigma={sg}',
-                          '--spp', str(args.spp), '--seed', str(seed)], p + '.exr', p + '.json')
+            st, cpu = host.render(exe, args.scene, ['--plugin', 'integrator_pssmlt', '--set',
+                                  f'integrator_pssmlt.maxDepth={args.depth}', '--set',
+                                  f'integrator_pssmlt.sigma={sg}', '--spp', str(args.spp), '--seed',
+                                  str(seed)], out=p + '.exr', stats=p + '.json', res=args.res,
+                                  threads=args.threads)
             e = images.rrmse(images.read_luminance(p + '.exr'), R)
             acc = st['metrics']['small_step_acceptance']
             rows.append(dict(sigma=sg, seed=seed, rrmse=e, small_acc=acc, cpu_s=cpu))

@@ -8,7 +8,7 @@ comment line. This plots one or more dumps (e.g. one per alpha, or per scene var
 marks the sigma-bin edges, to choose alpha and M per scene.
 
     TT_PSSMLT_THETA_DUMP=theta.csv host --plugin integrator_pssmlt scene.json --spp 4
-    python3 tools/pssmlt/theta_histogram.py theta.csv [more.csv ...] -o theta.png
+    /usr/bin/python3 -m tools.pssmlt.theta_histogram theta.csv [more.csv ...] -o theta.png
 """
 import argparse
 import sys

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Out-of-the-loop tuning of sigma-binned PSSMLT and its convergence chart (thesis Fig. 4.3).
 
 Runs the user's command `host --plugin integrator_pssmlt --plugin tuner_nm SCENE` (the plugin's
@@ -9,19 +8,20 @@ left, |small-step acceptance - 0.234| per iteration (dots) and the best so far (
 default configuration's cost dashed; right, the tuned bins on the Theta axis (edges A_i of
 eq. 4.2-4.3) with their sigma_i, against the untuned bins (equal widths, all 0.01).
 
-    python3 tools/pssmlt/tune_convergence.py scenes/cornell-box/scene.json \
-        --name cornell-box --build build-mlt2 --res 64x64 --iterations 50 --tune-spp 5 \
+    T="/usr/bin/python3 -m tools.pssmlt.tune_convergence"   # from the repository root
+    $T scenes/cornell-box/scene.json \
+        --name cornell-box --host build-mlt2/host/host --res 64x64 --iterations 50 --tune-spp 5 \
         --out /tmp/pssmlt_tune --fig tools/pssmlt/figures/tuning_cornell-box.png
     # the rRMSE objective: each pass's own image against a path-traced reference
-    python3 tools/pssmlt/tune_convergence.py ... --objective rrmse --reference ref_tune.exr
+    $T ... --objective rrmse --reference ref_tune.exr
 """
-import argparse
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
+
+from tools.tttools import cli, figures, host
 
 TUNED_KEYS = ['sigma'] + [f'a{i}' for i in range(1, 10)] + [f'sigma{i}' for i in range(1, 9)]
 
@@ -39,28 +39,23 @@ def edges(cfg):
 
 def tune(args, scene, seed):
     os.makedirs(args.out, exist_ok=True)
-    host = os.path.join(args.build, 'host', 'host')
     stats = os.path.join(args.out, f'{args.name}_tune_s{seed}.json')
-    cmd = [host, '--plugin', 'integrator_pssmlt', '--plugin', 'tuner_nm', scene,
+    cmd = ['--plugin', 'integrator_pssmlt', '--plugin', 'tuner_nm', scene,
            '--res', args.res, '--iterations', str(args.iterations), '--tune-spp', str(args.tune_spp),
            '--spp', str(args.tune_spp), '--seed', str(seed), '--threads', str(args.threads),
            '--set', f'integrator_pssmlt.maxDepth={args.depth}',
-           '--no-db', '--quiet', '--out', os.path.join(args.out, f'{args.name}_tune_s{seed}.exr'),
-           '--stats', stats]
+           '--no-db', '--quiet', '--out', os.path.join(args.out, f'{args.name}_tune_s{seed}.exr')]
     if args.objective:
         cmd += ['--objective', args.objective]
     if args.reference:
         cmd += ['--reference', args.reference]
-    subprocess.run(cmd, check=True)
-    with open(stats) as f:
-        return json.load(f)
+    return host.run(host.find(args.host), cmd, stats=stats).stats
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser(__doc__)
     ap.add_argument('scene')
     ap.add_argument('--name', required=True)
-    ap.add_argument('--build', default='build')
     ap.add_argument('--res', default='64x64')
     ap.add_argument('--threads', type=int, default=2)
     ap.add_argument('--depth', type=int, default=5)
@@ -74,7 +69,6 @@ def main(argv=None):
     ap.add_argument('--out', default='/tmp/pssmlt_tune')
     ap.add_argument('--fig', default=None)
     args = ap.parse_args(argv)
-    os.environ.setdefault('TT_PLUGIN_PATH', os.path.join(args.build, 'plugins'))
 
     runs = [tune(args, args.scene, s) for s in range(1, args.seeds + 1)]
     t0 = runs[0]['tuning']
@@ -135,9 +129,7 @@ def main(argv=None):
     bx.set_ylabel(r'bin $\sigma_i$')
     bx.set_title('tuned bins and sigmas', fontsize=9)
     bx.legend(fontsize=6, loc='best')
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(args.fig) or '.', exist_ok=True)
-    fig.savefig(args.fig)
+    figures.save(fig, args.fig)
     return 0
 
 

@@ -6,7 +6,6 @@
 # input (unknown scene, a step before its reference) fails naming what is missing.
 set -euo pipefail
 PY=/usr/bin/python3
-TOOL="$TT_SOURCE_ROOT/tools/pssmlt/chapter4.py"
 if [ ! -f "$TT_SOURCE_ROOT/../shared/scenes/cornell-box-pbrt/cornell-box.pbrt" ]; then
   echo "FAIL: ../shared/scenes is missing (the worktree must sit beside /work/shared)"; exit 1
 fi
@@ -14,7 +13,7 @@ dir=$(mktemp -d /tmp/tt_chapter4XXXXXX)
 trap 'rm -rf "$dir"' EXIT
 fail=0
 check() { if ! eval "$1"; then echo "FAIL: $1"; fail=1; fi; }
-run() { "$PY" "$TOOL" --quick --build "$TT_BUILD_ROOT" --out "$dir/run" --figures "$dir/fig" "$@"; }
+run() { "$PY" -m tools.pssmlt.chapter4 --quick --host "$TT_BUILD_ROOT/host/host" --out "$dir/run" --figures "$dir/fig" "$@"; }
 
 out=$(run all cornell-box)
 echo "$out" | tail -4

@@ -6,7 +6,11 @@ bpy), except the modules declared below as needing torch (training) or bpy (insi
   - each tool (a module with a __main__ block) answers `python3 -m tools.TOPIC.NAME --help`
     from another folder than the repository root with PYTHONPATH naming the checkout: a
     usage text, no traceback;
-  - no module edits sys.path: a tool reaches another's functions by importing them."""
+  - no module edits sys.path: a tool reaches another's functions by importing them;
+  - one way to find the host: no module but tools/tttools/ builds a host path itself
+    (BUILD/host/host) or takes a --build option (cli.HOST's --host, host.find);
+  - one way to read the tuning database: no module but tools/tttools/db.py (and
+    hybrid/baseline.py, for its own table hybrid_jobs) opens it with sqlite3."""
 import importlib
 import os
 import re
@@ -23,10 +27,13 @@ NEEDS = {  # module (relative to tools/) -> the blocked package it needs (torch:
     "taa/ablations.py": "torch (trains the ablation networks)",
     "cycles/cycles_reference.py": "bpy (runs inside Blender)",
 }
-# Folded into the package later (their sibling imports still go through sys.path).
-SYS_PATH_PENDING = ("pssmlt/",)
 MAIN = re.compile(r"__name__\s*==\s*['\"]__main__['\"]")
 SYS_PATH_EDIT = re.compile(r"sys\.path\s*(\.\s*(insert|append|extend)\s*\(|\[|\+?=)")
+# a host path put together by hand, or a --build option: tools/tttools/host.py's job
+HOST_BY_HAND = re.compile(r"""add_argument\(\s*['"]--build['"]|['"]host['"]\s*,\s*['"]host['"]\s*\)""")
+HOST_FINDERS = ("tttools/",)
+SQLITE = re.compile(r"^\s*(import sqlite3|from sqlite3 import)", re.M)
+SQLITE_READERS = ("tttools/db.py", "hybrid/baseline.py")
 
 
 def modules(root):
@@ -56,8 +63,15 @@ def main():
         for rel, name in modules(root):
             with open(os.path.join(root, rel)) as f:
                 text = f.read()
-            if SYS_PATH_EDIT.search(text) and not rel.startswith(SYS_PATH_PENDING):
+            if SYS_PATH_EDIT.search(text):
                 print(f"FAIL {rel}: edits sys.path (import the module by name instead)")
+                fail += 1
+            if HOST_BY_HAND.search(text) and not rel.startswith(HOST_FINDERS):
+                print(f"FAIL {rel}: finds the host itself (use cli.parser's --host and host.find)")
+                fail += 1
+            if SQLITE.search(text) and rel not in SQLITE_READERS:
+                print(f"FAIL {rel}: opens the tuning database with sqlite3 (read it with "
+                      "tools.tttools.db)")
                 fail += 1
             if rel in NEEDS:
                 print(f"skip {rel}: needs {NEEDS[rel]}")

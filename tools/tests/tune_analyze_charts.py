@@ -13,8 +13,9 @@ build+render.json: tuning runs with --verify):
 """
 import json
 import math
-import sqlite3
 import sys
+
+from tools.tttools import db
 
 
 def legend_texts(ax):
@@ -51,9 +52,8 @@ def check_costs(analyze, d):
 def check_blocksize(analyze, d):
     from matplotlib.collections import PolyCollection
     fig = analyze.run(["blocksize", "--db", d + "/e.db", "-o", d + "/block2.png"])
-    con = sqlite3.connect(d + "/e.db")
-    sampled = {int(json.loads(c)["sahBlockSize"]) for c, in con.execute(
-        "SELECT config FROM samples WHERE status = 0 AND plugin = 'accel_embree'")}
+    sampled = {int(r["config"]["sahBlockSize"]) for r in db.samples(d + "/e.db", "accel_embree")
+               if db.ok(r)}
     for ax in fig.axes:
         assert not any(isinstance(c, PolyCollection) for c in ax.collections), "blocksize: a band"
         for ln in ax.get_lines():

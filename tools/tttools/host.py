@@ -10,7 +10,8 @@ run() runs it: the arguments as given, optionally under `nice`, its output shown
 sent to a log file, `--stats` written to a file that is read back (and removed unless the
 caller named it), the wall and CPU seconds of the process. A failure raises HostError, a
 SystemExit whose message names the command, the exit status and the end of its output, so a
-tool that does not catch it exits with that message and no traceback.
+tool that does not catch it exits with that message and no traceback. render() is run() for
+one measured render (--res, --no-db, --out, --stats kept): (stats, CPU seconds).
 """
 import json
 import os
@@ -164,6 +165,16 @@ def run(host, args, *, stats=None, nice=None, capture=False, log=None, check=Tru
         if tmpdir:
             shutil.rmtree(tmpdir, ignore_errors=True)
     return Result(cmd, p.returncode, p.stdout, p.stderr, st, wall, cpu)
+
+
+def render(host, scene, extra, *, out, stats, res, threads=None, nice=None, log=None):
+    """One measured render, as the chapter-4 tools take them: `host SCENE --res RES
+    [--threads N] --no-db --quiet --out OUT` + extra, its --stats written to `stats` (kept)
+    and read back. Returns (the --stats dict, CPU seconds of the host process)."""
+    args = [scene, "--res", res] + (["--threads", str(threads)] if threads else [])
+    r = run(host, args + ["--no-db", "--quiet", "--out", out] + list(extra), stats=stats,
+            nice=nice, log=log)
+    return r.stats, r.cpu_s
 
 
 def describe(host, plugin):

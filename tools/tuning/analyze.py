@@ -27,8 +27,9 @@ import csv
 import json
 import math
 import os
-import sqlite3
 import sys
+
+from tools.tttools import db, figures
 
 TIMES = ("render_ms", "build_ms", "total_ms")
 METRICS = {"render": "render_ms", "build": "build_ms", "total": "total_ms", "cost": "cost"}
@@ -67,18 +68,14 @@ def load_rows(a):
     if a.db:
         if not os.path.exists(a.db):
             die(f"{a.db}: no such database")
-        try:
-            db = sqlite3.connect(f"file:{a.db}?mode=ro", uri=True)
-            cur = db.execute("SELECT scene, plugin, mode, run_id, objective, iteration, build_ms, "
-                             "render_ms, cost, status, config, tuner FROM samples ORDER BY id")
-        except sqlite3.Error as e:
-            die(f"{a.db}: {e}")
-        for scene, plugin, mode, run_id, objective, it, b, r, c, status, config, tuner in cur:
-            if status != 0:
+        for r in db.samples(a.db):
+            if not db.ok(r):
                 continue
-            rows.append(dict(scene=scene or "", plugin=plugin, mode=mode, run_id=run_id,
-                             objective=objective, iteration=it, build_ms=b, render_ms=r,
-                             cost=c, config=json.loads(config), tuner=tuner))
+            rows.append(dict(scene=r["scene"] or "", plugin=r["plugin"], mode=r["mode"],
+                             run_id=r["run_id"], objective=r["objective"],
+                             iteration=r["iteration"], build_ms=r["build_ms"],
+                             render_ms=r["render_ms"], cost=r["cost"], config=r["config"],
+                             tuner=r["tuner"]))
     else:
         with open(a.csv, newline="") as f:
             rd = csv.DictReader(f)
@@ -185,8 +182,7 @@ def _plain_log(axis):
 
 
 def _save(fig, path, dpi=100):
-    fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
+    figures.save(fig, path, dpi=dpi)
     print(f"wrote {path}")
     return fig
 

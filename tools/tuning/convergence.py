@@ -13,8 +13,9 @@ configuration's cost as a horizontal line.
 import argparse
 import json
 import math
-import sqlite3
 import sys
+
+from tools.tttools import db
 
 INFEASIBLE = 1e299  # TT_COST_INFEASIBLE is 1e300: anything this large was not measured
 
@@ -36,20 +37,21 @@ def runs_from_stats(paths):
 
 def runs_from_db(path, last, plugin):
     """The `last` runs (by run_id, newest last) in the database, optionally of one plugin."""
-    db = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
-    where, args = ("WHERE plugin = ?", (plugin,)) if plugin else ("", ())
-    ids = [r[0] for r in db.execute(
-        f"SELECT run_id FROM samples {where} GROUP BY run_id ORDER BY max(id) DESC LIMIT ?",
-        args + (last,))]
+    everything = db.samples(path)
+    newest = {}  # run_id -> its newest row's id, over the plugin's rows
+    for r in everything:
+        if not plugin or r["plugin"] == plugin:
+            newest[r["run_id"]] = max(newest.get(r["run_id"], r["id"]), r["id"])
+    ids = sorted(newest, key=newest.get)[-last:] if last > 0 else []
     runs = []
-    for run_id in reversed(ids):
-        rows = db.execute("SELECT iteration, cost, plugin, objective FROM samples "
-                          "WHERE run_id = ? ORDER BY iteration, id", (run_id,)).fetchall()
-        default = [c for it, c, _, _ in rows if it < 0]
-        samples = [(c, False) for it, c, _, _ in rows if it >= 0]
+    for run_id in ids:
+        rows = sorted((r for r in everything if r["run_id"] == run_id),
+                      key=lambda r: (r["iteration"], r["id"]))
+        default = [r["cost"] for r in rows if r["iteration"] < 0]
+        samples = [(r["cost"], False) for r in rows if r["iteration"] >= 0]
         feasible = [c for c, _ in samples if c < INFEASIBLE] + default
         # the database holds measurements only: cached iterations of that run are absent
-        label = f"{rows[0][2]} / {rows[0][3]} ({run_id})"
+        label = f"{rows[0]['plugin']} / {rows[0]['objective']} ({run_id})"
         runs.append((label, default[0] if default else math.nan, samples,
                      min(feasible) if feasible else math.nan))
     return runs
