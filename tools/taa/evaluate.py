@@ -1,4 +1,4 @@
-"""The evaluation of issue #19, one command: every held-back sequence through the C plugin
+"""The evaluation of issue #19, one command: every validation (or test) sequence through the C plugin
 (host --sequence ... --post post_taa, the way users run it) in modes none (the raw input),
 vctaa (the thesis' baseline, tonemapped resolve), vctaa with resolve=linear, and each
 network, then RMSE / temporal error / FLIP against the references (eval.py), the mean
@@ -186,7 +186,7 @@ def table(a, results, nets):
     out = "\n".join(lines) + "\n\nCells: RMSE (x VCTAA) / temporal / FLIP, frames %d.., tonemapped space.\n" % a.skip
     if goals:
         out += (f"\nGoals for the default network `{a.default}` (RMSE <= 0.8 x VCTAA, temporal <= "
-                "VCTAA, every held-back sequence):\n\n| sequence | RMSE / VCTAA | temporal / VCTAA | met |\n|---|---|---|---|\n")
+                "VCTAA, every sequence given):\n\n| sequence | RMSE / VCTAA | temporal / VCTAA | met |\n|---|---|---|---|\n")
         for s, g1, g2, r1, r2 in goals:
             out += f"| {s} | {r1:.3f} | {r2:.3f} | {'yes' if g1 and g2 else 'NO'} |\n"
     return out

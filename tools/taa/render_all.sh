@@ -2,7 +2,7 @@
 # Renders the whole TAA dataset of issue #19 into OUT (resumable: finished folders are kept).
 #   tools/taa/render_all.sh BUILD_DIR OUT_DIR [SHARED_SCENES_DIR]
 # 1. Full path depth at 1, 2, 4 and 8 spp (render_noisy.sh; one reference per scene):
-#      held back:  pillars (synthetic, 120 frames), living-room (real, 72 frames), with
+#      validation: pillars (synthetic, 120 frames), living-room (real, 72 frames), with
 #                  REF_SPP 16 (256 samples per output pixel)
 #      training:   stairs, fence (120 frames), the four jumps scenes (96), staircase, bathroom
 #                  (real, 96), with REF_SPP 8 (128 per output pixel)

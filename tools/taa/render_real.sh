@@ -4,7 +4,7 @@
 # jitter position, maxDepth 1, 4x4-supersampled reference, VCTAA output; the scenes go to
 # OUT/scenes/NAME/scene.json (resolution, spp and maxDepth baked in, for evaluate.sh).
 #   tools/taa/render_real.sh BUILD_DIR OUT_DIR [SCENES_DIR]
-# staircase and bathroom are training data, living-room is held back. The camera path is
+# staircase and bathroom are training data, living-room is validation. The camera path is
 # scenes/NAME/scene.json's; the shipped dataset used the earlier fragments
 # scenes/paths/NAME.json of commit 5bcc6a6 (PATHS=DIR takes DIR/NAME.json instead).
 # Environment: ONLY="living-room ..." renders only these; SPP (8), REF_SCALE (4: the

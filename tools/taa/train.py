@@ -134,7 +134,7 @@ def main():
     ap.add_argument("--cache", default=None, help="folder for decoded-sequence .npz caches")
     ap.add_argument("--ckpt-minutes", type=float, default=0.0,
                     help="write OUT.stepN.ttw every this many minutes (0: none)")
-    ap.add_argument("--val", default="", help="held-back sequences (DATA:NAME or NAME) "
+    ap.add_argument("--val", default="", help="validation sequences (DATA:NAME or NAME) "
                     "evaluated in PyTorch at each checkpoint and at the end")
     ap.add_argument("--ema", type=float, default=0.0,
                     help="save/evaluate an exponential moving average of the weights with "
