@@ -1,8 +1,8 @@
 """Thesis 5.6 ablations at reduced scale: trains each variant with train.py from scratch (or,
 --init, from given weights of its width) for each seed (same data, steps, batch, patch,
 burn-in), evaluates it in PyTorch on the validation sequences, and prints a markdown table with the per-seed and mean scores, the
-parameter count and FLOP/px; picks the smallest variant (FLOP/px, then parameters) whose
-mean score is within 1% of the best. The score of a run is the geometric mean of its
+parameter count and FLOP/px; nominates the smallest variant (FLOP/px, then parameters) whose
+mean score is within 1% of the best (a nomination only: README "Size rule"). The score of a run is the geometric mean of its
 validation RMSEs (the sequences' error scales differ by 3x between 1 and 8 spp, so an
 arithmetic mean would only rank the noisiest one).
 
