@@ -1,0 +1,125 @@
+"""tools/taa's test-set tools, without rendering:
+- make_test_set.py: one camera key per frame at f / 24 s, the first the scene's own first
+  key; the per-frame step is small in frames 0-7, about 8x larger in 8-15 (fast), largest
+  at 15 -> 16 (the jump, to the scene's third key), and medium after; the wrapper imports
+  the scene file itself (imports do not nest); a bad --res or scene name is refused;
+- test_report.py on a made-up evaluation (10 frames of 4x4, one emitter pixel of 100):
+  the goal flags follow the ratios (RMSE x VCTAA <= 0.8, temporal <= 1, mean within 3%),
+  the clamped mean of an output that clips the emitter to 1 is exactly 1 while its linear
+  mean is far below; an eval.json without the vctaa row is refused naming the file."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+import OpenImageIO as oiio
+
+root = os.environ.get("TT_SOURCE_ROOT", ".")
+failures = 0
+
+
+def check(ok, what):
+    global failures
+    print(("ok   " if ok else "FAIL ") + what)
+    failures += 0 if ok else 1
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", *args], capture_output=True, text=True, cwd=root)
+
+
+def write_exr(path, px):
+    out = oiio.ImageOutput.create(path)
+    out.open(path, oiio.ImageSpec(px.shape[1], px.shape[0], 3, "float"))
+    out.write_image(px.astype(np.float32))
+    out.close()
+
+
+def test_make_test_set(tmp):
+    r = run("tools.taa.make_test_set", tmp, "--scenes", "cornell-box,killeroos")
+    check(r.returncode == 0, f"make_test_set runs ({r.stderr.strip()[:200]})")
+    if r.returncode:
+        return
+    sc = json.load(open(os.path.join(tmp, "killeroos", "scene.json")))
+    src = json.load(open(os.path.join(root, "scenes", "killeroos", "scene.json")))
+    keys = sc["camera"]["path"]
+    check(len(keys) == 24 and all(abs(k["time"] - f / 24) < 1e-9 for f, k in enumerate(keys)),
+          "24 keys at f / 24 s")
+    check(keys[0]["position"] == src["camera"]["path"][0]["position"], "frame 0 is the scene's first key")
+    check(keys[16]["position"] == src["camera"]["path"][2]["position"], "frame 16 is the scene's third key")
+    step = [float(np.linalg.norm(np.subtract(keys[f]["position"], keys[f - 1]["position"])))
+            for f in range(1, 24)]
+    slow, fast, jump, medium = max(step[0:7]), min(step[8:14]), step[15], max(step[16:])
+    check(0 < slow * 5 < fast and fast * 3 < jump and medium * 3 < jump,
+          f"slow {slow:.2f} < fast {fast:.2f} < jump {jump:.1f}, medium {medium:.2f}")
+    check(sc["camera"]["resolution"] == [160, 90], "160x90 by default")
+    check(os.path.exists(sc["import"]) and sc["import"].endswith("killeroo-simple.pbrt"),
+          "imports the pbrt file the scene's wrapper imports")
+    box = json.load(open(os.path.join(tmp, "cornell-box", "scene.json")))
+    check(box["import"].endswith(os.path.join("cornell-box", "scene.json")),
+          "cornell-box imports scene.json (path.json is a wrapper)")
+    r = run("tools.taa.make_test_set", tmp, "--scenes", "nosuch")
+    check(r.returncode != 0 and "unknown scene 'nosuch'" in r.stderr, "an unknown scene is refused")
+    r = run("tools.taa.make_test_set", tmp, "--res", "160")
+    check(r.returncode != 0 and "--res" in r.stderr, "a bad --res is refused")
+
+
+def test_report(tmp):
+    n, skip = 10, 8
+    ref = np.full((4, 4, 3), 0.5)
+    ref[1, 1] = 100.0  # an emitter: most of the linear mean
+    seq = os.path.join(tmp, "data", "box-spp1")
+    os.makedirs(seq)
+    frames = []
+    for f in range(n):
+        write_exr(os.path.join(seq, f"reference_{f:04d}.exr"), ref)
+        frames.append({"index": f, "reference": f"reference_{f:04d}.exr"})
+    json.dump({"frames": frames}, open(os.path.join(seq, "manifest.json"), "w"))
+    ev = os.path.join(tmp, "eval")
+    clipped = np.minimum(ref, 1.0)
+    for m, img in (("input", ref), ("vctaa", clipped * 0.9), ("c12", clipped)):
+        d = os.path.join(ev, "box-spp1", m)
+        os.makedirs(d)
+        for f in range(n):
+            write_exr(os.path.join(d, f"post_{f:04d}.exr"), img)
+        json.dump({"frames": [{"post": f"post_{f:04d}.exr"} for f in range(n)]},
+                  open(os.path.join(d, "manifest.json"), "w"))
+    rows = [("input", 0.1, 0.05, 1.0), ("vctaa", 0.02, 0.010, 0.9), ("c12", 0.015, 0.011, 0.98)]
+    res = [{"sequence": "box-spp1", "folder": seq, "frames": n, "spp": 1,
+            "methods": [{"method": m, "rmse": r, "temporal": t, "brightness": b} for m, r, t, b in rows]}]
+    json.dump(res, open(os.path.join(ev, "eval.json"), "w"))
+    out = os.path.join(tmp, "report.json")
+    r = run("tools.taa.test_report", os.path.join(ev, "eval.json"), "--nets", "c12", "--json", out)
+    check(r.returncode == 0, f"test_report runs ({r.stderr.strip()[:200]})")
+    if r.returncode:
+        return
+    c = json.load(open(out))["sequences"][0]["methods"]["c12"]
+    check(c["met"] == {"rmse": True, "temporal": False, "mean": True},
+          f"goal flags: 0.75x RMSE yes, 1.1x temporal no, mean 0.98 yes ({c['met']})")
+    check(abs(c["rmse_vs_vctaa"] - 0.75) < 1e-4 and abs(c["temporal_vs_vctaa"] - 1.1) < 1e-4,
+          "ratios to VCTAA")
+    check(c["clamped_mean_vs_reference"] == 1.0, f"clamped mean of the clipped output is 1 "
+          f"({c['clamped_mean_vs_reference']})")
+    lin = np.minimum(ref, 1.0).mean() / ref.mean()
+    check(lin < 0.2, f"while its linear mean is {lin:.3f} of the reference's")
+    check("c12: all three goals met on 0 of 1" in r.stdout, "the summary line counts sequences")
+    res[0]["methods"] = res[0]["methods"][:1]
+    bad = os.path.join(ev, "bad.json")
+    json.dump(res, open(bad, "w"))
+    r = run("tools.taa.test_report", bad, "--nets", "c12")
+    check(r.returncode != 0 and "bad.json" in r.stderr and "no vctaa row" in r.stderr,
+          "an evaluation without VCTAA is refused naming the file")
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        test_make_test_set(os.path.join(tmp, "scenes"))
+        test_report(tmp)
+    print(f"{failures} failure(s)")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
