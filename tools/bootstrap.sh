@@ -35,6 +35,8 @@ PACKAGES=(
                                               # mpi/tests/mpi_driver.sh, mpi_baseline.sh, tools/mpi/
   python3-torch                               # tools/taa/ training, CPU (train.py, ablations.py,
                                               # eval_torch.py; tools/tests/taa_train.sh)
+  chromium                                    # a real headless browser for the results page:
+                                              # tools/evidence/check_page.py (tools/tests/evidence.sh)
 )
 
 missing=()

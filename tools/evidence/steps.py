@@ -1,0 +1,233 @@
+"""The quick evidence pass: every figure tool the docs rely on, run at quick settings (seconds
+each) or on the committed data it was measured into, so a tool that rots fails the suite.
+
+A step is a function step(ctx) that runs one tool as its users run it (`python3 -m tools...`
+or the script path its docstring shows) and returns the PNGs it wrote, relative to ctx.out.
+Steps that re-plot committed data (hybrid, accel) write the real figures; steps that measure
+(tuning, cylinder, integrators, Theta, PSSMLT tuning) run at toy sizes, and the page labels
+them so. The full-settings commands are in entries.py (what `run.py --full` prints)."""
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+from tools.tttools import host as tthost
+
+ROOT = tthost.ROOT
+PY = "/usr/bin/python3"
+CORNELL = os.path.join(ROOT, "scenes", "cornell-box", "scene.json")
+
+
+class StepError(Exception):
+    pass
+
+
+class Ctx:
+    def __init__(self, host, out, work, log):
+        self.host, self.out, self.work, self.log = host, out, work, log
+
+    def path(self, *parts):
+        p = os.path.join(self.out, *parts)
+        os.makedirs(os.path.dirname(p), exist_ok=True)
+        return p
+
+    def run(self, cmd, env=None, cwd=None):
+        """Runs one command (a list) from the repository root; its output goes to the log.
+        A non-zero exit is a StepError naming the command and the end of its output."""
+        e = dict(os.environ)
+        e.setdefault("MPLBACKEND", "Agg")
+        e["PYTHONPATH"] = ROOT + (os.pathsep + e["PYTHONPATH"] if e.get("PYTHONPATH") else "")
+        if env:
+            e.update(env)
+        self.log.write("$ " + " ".join(cmd) + "\n")
+        self.log.flush()
+        p = subprocess.run(cmd, cwd=cwd or ROOT, env=e, stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, text=True)
+        self.log.write(p.stdout)
+        self.log.flush()
+        if p.returncode != 0:
+            raise StepError(f"{' '.join(cmd)}: exit {p.returncode}\n{p.stdout[-2000:]}")
+        return p.stdout
+
+    def host_args(self):
+        return ["--host", self.host]
+
+
+def _png(ctx, rel):
+    p = os.path.join(ctx.out, rel)
+    with open(p, "rb") as f:
+        if f.read(8) != b"\x89PNG\r\n\x1a\n":
+            raise StepError(f"{p}: not a PNG")
+    return rel
+
+
+# --- chapter 3 -------------------------------------------------------------------------------
+
+HYBRID_DIR = os.path.join(ROOT, "tools", "hybrid", "figures", "session8")
+
+
+def hybrid_figures(ctx):
+    """Figs. 3.16-3.21 and leave-one-scene-out, redrawn by tools/hybrid/figures.py from the
+    committed per-camera rows of the current evaluation (re-measuring takes hours)."""
+    code = ("import json, sys\nfrom tools.hybrid import figures\n"
+            "rows = json.load(open(sys.argv[1])); summary = json.load(open(sys.argv[2]))\n"
+            "figures.draw(rows, summary, sys.argv[3])\n")
+    d = ctx.path("hybrid", "x")
+    ctx.run([PY, "-c", code, os.path.join(HYBRID_DIR, "rows.json"),
+             os.path.join(HYBRID_DIR, "summary.json"), os.path.dirname(d)])
+    return [_png(ctx, os.path.join("hybrid", n)) for n in sorted(os.listdir(os.path.dirname(d)))
+            if n.endswith(".png")]
+
+
+def hybrid_speed_vs_roofline(ctx):
+    """Speed against accuracy for hybrid tuning: per predictor and scene, the geometric mean
+    over cameras x splits of the speed-up over the search against the fraction of the
+    roofline (the search's best), one panel per objective, from the committed rows."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = json.load(open(os.path.join(HYBRID_DIR, "rows.json")))
+    colors = {"nn": "#1f77b4", "rbf": "#2ca02c", "static": "#7f7f7f"}
+    markers = "osD^v<>px*"
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
+    for ax, obj in zip(axes, ("render", "build+render")):
+        sel = [r for r in rows if r["variant"] == "default" and r["objective"] == obj
+               and r["protocol"].startswith("split")]
+        scenes = sorted({r["scene"] for r in sel})
+        for m in ("nn", "rbf", "static"):
+            for si, s in enumerate(scenes):
+                rs = [r for r in sel if r["model"] == m and r["scene"] == s
+                      and r["speedup"] and r["roofline"] and r["speedup"] > 0 and r["roofline"] > 0]
+                if not rs:
+                    continue
+                g = lambda k: math.exp(sum(math.log(r[k]) for r in rs) / len(rs))  # noqa: E731
+                ax.scatter(g("roofline"), g("speedup"), color=colors[m], marker=markers[si % 10],
+                           s=40, alpha=0.8, label=f"{m}" if si == 0 else None)
+                if m == "nn":
+                    ax.annotate(s, (g("roofline"), g("speedup")), fontsize=6, xytext=(3, 3),
+                                textcoords="offset points")
+        ax.axvline(1.0, color="k", lw=0.7, ls="--")
+        ax.set_xlabel("fraction of the roofline (1: the search's best; geo-mean per scene)")
+        ax.set_ylabel("speed-up over a 40-iteration search (geo-mean)")
+        ax.set_title(f"hybrid tuning, {obj} time: speed vs accuracy", fontsize=10)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    p = ctx.path("hybrid", "speed_vs_roofline.png")
+    fig.savefig(p, dpi=100)
+    plt.close(fig)
+    return [_png(ctx, "hybrid/speed_vs_roofline.png")]
+
+
+def accel_render_split(ctx):
+    """tools/accel/render_split.py on the committed render-bench output."""
+    ctx.run([PY, "-m", "tools.accel.render_split",
+             os.path.join(ROOT, "tools", "accel", "data", "render_bench_session9.txt"),
+             "--mode", "t1 d3", "--out", ctx.path("accel", "render_split_t1d3.png")])
+    return [_png(ctx, "accel/render_split_t1d3.png")]
+
+
+def tuning_analysis(ctx):
+    """tools/tuning/analyze.py's five charts (Figs. 3.3, 3.5, 3.6, 3.8, 3.11) on a 12-sample
+    exploration and two 6-iteration tuning runs of the Cornell box at 24x24."""
+    w = os.path.join(ctx.work, "tuning")
+    os.makedirs(w, exist_ok=True)
+    db, tdb = os.path.join(w, "e.db"), os.path.join(w, "t.db")
+    for f in (db, tdb):
+        if os.path.exists(f):
+            os.remove(f)
+    common = ["--quiet", "--res", "24x24", "--spp", "1", "--threads", "2"]
+    ctx.run([ctx.host, "--explore", "12", "--objective", "build+render", "--set",
+             "accel_embree.backend=custom", "--db", db, "--out", os.path.join(w, "e.exr")]
+            + common + [CORNELL])
+    stats = []
+    for mode in ("render", "build+render"):
+        s = os.path.join(w, f"{mode}.json")
+        ctx.run([ctx.host, "--plugin", "tuner_random", "--tune", "accel_embree", "--objective",
+                 mode, "--iterations", "6", "--verify", "3", "--db", tdb,
+                 "--out", os.path.join(w, "t.exr"), "--stats", s] + common + [CORNELL])
+        stats.append(s)
+    A = [PY, "-m", "tools.tuning.analyze"]
+    ctx.run(A + ["correlation", "--db", db, "-o", ctx.path("quick", "tuning_correlation.png")])
+    ctx.run(A + ["leafsize", "--db", db, "-o", ctx.path("quick", "tuning_leafsize.png")])
+    ctx.run(A + ["costs", "--db", db, "--metric", "total", "-o", ctx.path("quick", "tuning_costs.png")])
+    ctx.run(A + ["blocksize", "--db", db, "-o", ctx.path("quick", "tuning_blocksize.png")])
+    ctx.run(A + ["convergence"] + stats + ["-o", ctx.path("quick", "tuning_convergence.png")])
+    return [_png(ctx, f"quick/tuning_{n}.png")
+            for n in ("correlation", "leafsize", "costs", "blocksize", "convergence")]
+
+
+def cylinder_sweep(ctx):
+    """tools/tuning/cylinder_sweep.py (Fig. 3.13): 2 angles, 1 repetition, 16x16."""
+    w = os.path.join(ctx.work, "cylinder")
+    shutil.rmtree(w, ignore_errors=True)
+    ctx.run([PY, "-m", "tools.tuning.cylinder_sweep"] + ctx.host_args() +
+            ["--scene", CORNELL, "--angles", "2", "--reps", "2", "--res", "16x16",
+             "--backends", "native", "--work", w, "--fig", ctx.path("quick", "cylinder_cornell-box.png")])
+    return [_png(ctx, "quick/cylinder_cornell-box.png")]
+
+
+# --- chapter 4 -------------------------------------------------------------------------------
+
+def theta_histogram(ctx):
+    """tools/pssmlt/theta_histogram.py (Figs. 4.1/4.2) on a dump of a 16x16 PSSMLT render."""
+    w = os.path.join(ctx.work, "theta")
+    os.makedirs(w, exist_ok=True)
+    dump = os.path.join(w, "theta.csv")
+    ctx.run([ctx.host, "--quiet", "--no-db", "--plugin", "integrator_pssmlt", "--res", "16x16",
+             "--spp", "2", "--threads", "2", "--out", os.path.join(w, "t.exr"), CORNELL],
+            env={"TT_PSSMLT_THETA_DUMP": dump})
+    ctx.run([PY, os.path.join(ROOT, "tools", "pssmlt", "theta_histogram.py"), dump,
+             "--labels", "cornell-box", "-o", ctx.path("quick", "theta_cornell-box.png")])
+    return [_png(ctx, "quick/theta_cornell-box.png")]
+
+
+def pssmlt_tuning(ctx):
+    """tools/pssmlt/tune_convergence.py (Fig. 4.3): 4 iterations at 16x16."""
+    w = os.path.join(ctx.work, "pssmlt_tune")
+    shutil.rmtree(w, ignore_errors=True)
+    ctx.run([PY, os.path.join(ROOT, "tools", "pssmlt", "tune_convergence.py"), CORNELL,
+             "--name", "cornell-box", "--build", tthost.build_dir(ctx.host), "--res", "16x16",
+             "--iterations", "4", "--tune-spp", "1", "--out", w,
+             "--fig", ctx.path("quick", "pssmlt_tuning_cornell-box.png")])
+    return [_png(ctx, "quick/pssmlt_tuning_cornell-box.png")]
+
+
+# --- integrators (error against time) --------------------------------------------------------
+
+def integrator_error_vs_time(ctx):
+    """tools/charts/error_vs_time.py: rRMSE against render time, 16x16, maxDepth 1 and 3."""
+    w = os.path.join(ctx.work, "evt")
+    shutil.rmtree(w, ignore_errors=True)
+    ctx.run([PY, "-m", "tools.charts.error_vs_time"] + ctx.host_args() +
+            ["--res", "16x16", "--depths", "1,3", "--ref-spp", "64", "--max-spp", "8",
+             "--threads", "2", "--out", w])
+    shutil.copyfile(os.path.join(w, "error_vs_time.png"), ctx.path("quick", "error_vs_time_cornell.png"))
+    return [_png(ctx, "quick/error_vs_time_cornell.png")]
+
+
+QUICK = [hybrid_figures, hybrid_speed_vs_roofline, accel_render_split, tuning_analysis,
+         cylinder_sweep, theta_histogram, pssmlt_tuning, integrator_error_vs_time]
+
+
+def run_quick(host, out, work, log_path, only=None):
+    """Runs the quick steps; returns {step name: {"ok", "seconds", "pngs", "error"}}."""
+    results = {}
+    with open(log_path, "w") as log:
+        ctx = Ctx(host, out, work, log)
+        for step in QUICK:
+            if only and step.__name__ not in only:
+                continue
+            t0 = time.time()
+            try:
+                pngs = step(ctx)
+                results[step.__name__] = {"ok": True, "pngs": pngs, "error": None}
+            except Exception as e:  # noqa: BLE001 (a broken tool fails its step, not the pass)
+                results[step.__name__] = {"ok": False, "pngs": [], "error": str(e)}
+            results[step.__name__]["seconds"] = round(time.time() - t0, 1)
+            r = results[step.__name__]
+            print(f"evidence: {step.__name__}: {'ok' if r['ok'] else 'FAILED'} ({r['seconds']} s)"
+                  + ("" if r["ok"] else f"\n{r['error']}"), file=sys.stderr, flush=True)
+    return results
