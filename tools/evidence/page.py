@@ -68,7 +68,8 @@ def _table(t):
         return ""
     head = "".join(f"<th>{_e(h)}</th>" for h in t["head"])
     body = "".join("<tr>" + "".join(f"<td>{_e(c)}</td>" for c in r) + "</tr>" for r in t["rows"])
-    return f"<table><tr>{head}</tr>{body}</table>"
+    note = f'<p class="note">{_e(t["note"])}</p>' if t.get("note") else ""
+    return f"<table><tr>{head}</tr>{body}</table>{note}"
 
 
 def ch4_summary_tables():

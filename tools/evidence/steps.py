@@ -1,8 +1,7 @@
 """The quick evidence pass: every figure tool the docs rely on, run at quick settings (seconds
 each) or on the committed data it was measured into, so a tool that rots fails the suite.
 
-A step is a function step(ctx) that runs one tool as its users run it (`python3 -m tools...`
-or the script path its docstring shows) and returns the PNGs it wrote, relative to ctx.out.
+A step is a function step(ctx) that runs one tool as its users run it (`python3 -m tools...`) and returns the PNGs it wrote, relative to ctx.out.
 Steps that re-plot committed data (hybrid, accel) write the real figures; steps that measure
 (tuning, cylinder, integrators, Theta, PSSMLT tuning) run at toy sizes, and the page labels
 them so. The full-settings commands are in entries.py (what `run.py --full` prints)."""
@@ -179,7 +178,7 @@ def theta_histogram(ctx):
     ctx.run([ctx.host, "--quiet", "--no-db", "--plugin", "integrator_pssmlt", "--res", "16x16",
              "--spp", "2", "--threads", "2", "--out", os.path.join(w, "t.exr"), CORNELL],
             env={"TT_PSSMLT_THETA_DUMP": dump})
-    ctx.run([PY, os.path.join(ROOT, "tools", "pssmlt", "theta_histogram.py"), dump,
+    ctx.run([PY, "-m", "tools.pssmlt.theta_histogram", dump,
              "--labels", "cornell-box", "-o", ctx.path("quick", "theta_cornell-box.png")])
     return [_png(ctx, "quick/theta_cornell-box.png")]
 
@@ -188,11 +187,43 @@ def pssmlt_tuning(ctx):
     """tools/pssmlt/tune_convergence.py (Fig. 4.3): 4 iterations at 16x16."""
     w = os.path.join(ctx.work, "pssmlt_tune")
     shutil.rmtree(w, ignore_errors=True)
-    ctx.run([PY, os.path.join(ROOT, "tools", "pssmlt", "tune_convergence.py"), CORNELL,
-             "--name", "cornell-box", "--build", tthost.build_dir(ctx.host), "--res", "16x16",
+    ctx.run([PY, "-m", "tools.pssmlt.tune_convergence", CORNELL,
+             "--name", "cornell-box"] + ctx.host_args() + ["--res", "16x16",
              "--iterations", "4", "--tune-spp", "1", "--out", w,
              "--fig", ctx.path("quick", "pssmlt_tuning_cornell-box.png")])
     return [_png(ctx, "quick/pssmlt_tuning_cornell-box.png")]
+
+
+# --- chapter 5 -------------------------------------------------------------------------------
+
+# ms per 640x480 frame, 2 threads, reprojection and colour mix included: the quiet-machine
+# medians of plugins/post_taa/README.md ("the speed goals on a quiet machine", tools.taa.speed
+# --runs 8). Timings on this shared machine would not be comparable, so they are quoted.
+TAA_MS = {"c12": 29.5, "c6": 18.4, "vctaa": 13.2}
+
+
+def taa_speed_vs_rmse(ctx):
+    """Speed against accuracy for TAA: ms per frame (quoted above) against the geometric mean
+    RMSE over the committed test set (tools/taa/figures/test_set.json), c12, c6 and VCTAA."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    d = json.load(open(os.path.join(ROOT, "tools", "taa", "figures", "test_set.json")))
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for m, ms in TAA_MS.items():
+        r = [sq["methods"][m]["rmse"] for sq in d["sequences"] if m in sq["methods"]]
+        if not r:
+            raise StepError(f"test_set.json: no {m} rows")
+        g = math.exp(sum(math.log(x) for x in r) / len(r))
+        ax.scatter(ms, g, s=60)
+        ax.annotate(f"{m} ({g:.4f})", (ms, g), xytext=(5, 5), textcoords="offset points")
+    ax.set_xlabel("ms per 640x480 frame, 2 threads (plugins/post_taa/README.md)")
+    ax.set_ylabel("RMSE, geo-mean of the test set's 6 sequences")
+    ax.set_title("TAA: speed against accuracy on the test set", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(ctx.path("taa", "speed_vs_rmse.png"), dpi=100)
+    plt.close(fig)
+    return [_png(ctx, "taa/speed_vs_rmse.png")]
 
 
 # --- integrators (error against time) --------------------------------------------------------
@@ -209,7 +240,7 @@ def integrator_error_vs_time(ctx):
 
 
 QUICK = [hybrid_figures, hybrid_speed_vs_roofline, accel_render_split, tuning_analysis,
-         cylinder_sweep, theta_histogram, pssmlt_tuning, integrator_error_vs_time]
+         cylinder_sweep, theta_histogram, pssmlt_tuning, taa_speed_vs_rmse, integrator_error_vs_time]
 
 
 def run_quick(host, out, work, log_path, only=None):

@@ -22,7 +22,7 @@ check '[ -s "$page" ]'
 # the steps' figures are there and are PNGs
 for f in hybrid/fig3_17_speedup_render.png hybrid/speed_vs_roofline.png accel/render_split_t1d3.png \
          quick/tuning_correlation.png quick/cylinder_cornell-box.png quick/theta_cornell-box.png \
-         quick/pssmlt_tuning_cornell-box.png quick/error_vs_time_cornell.png; do
+         quick/pssmlt_tuning_cornell-box.png quick/error_vs_time_cornell.png taa/speed_vs_rmse.png; do
   check '[ "$(head -c 4 "$dir/page/$f" | tail -c 3)" = "PNG" ]'
 done
 # every chapter, the outcome table, no failed step
@@ -30,6 +30,8 @@ for id in ch3 ch4 ch5 outcomes quick-pass ch3-hybrid; do check "grep -q 'id=\"$i
 check '! grep -q "FAILED" "$page"'
 # the hybrid table is read from the committed summary (nn on build+render: 2.51x)
 check 'grep -q "2.51x" "$page"'
+# and the TAA test set from its committed JSON (c12 on cornell-box at 1 spp: 0.90 x VCTAA's RMSE)
+check 'grep -q "cornell-box-spp1</td><td>0.0177 / 0.0090 / 0.792</td><td>0.90 / 1.33 / 0.960" "$page"'
 
 out=$("$PY" -m tools.evidence.check_page "$page" 2>&1) || { echo "$out"; echo "FAIL: the page does not pass the browser check"; fail=1; }
 echo "$out"
