@@ -10,10 +10,11 @@ a tool never spells a column of the samples table in SQL:
   ok(row)                      the row is a measurement (status ok)
   path_index(row)              the camera's --camera-index on a path, else None
 
-Which binding: the package of the host's build tree (BUILD/python/tunetrace for the host
-tttools/host.py finds: --host, $TT_HOST, build/host/host), loaded from its folder by file
-location (no sys.path edit), so a tool reads the database with the library it measures;
-else an installed `tunetrace` (meson install, pip install ./python).
+Which binding: the package of a build tree (BUILD/python/tunetrace beside the host that
+tttools/host.py finds without --host: $TT_HOST, else build/host/host of this checkout),
+loaded from its folder by file location (no sys.path edit); else an installed `tunetrace`
+(meson install, pip install ./python). Nothing to set up for a tool in a built checkout or
+in the suite (which sets $TT_HOST).
 
 What the library does not read or write is here too, the one place in tools/ that opens
 the file with sqlite3: the schema version (PRAGMA user_version), the `merges` table that
