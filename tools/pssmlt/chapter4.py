@@ -9,6 +9,7 @@ path tracer, multiplexed MLT "original" and multiplexed MLT "ours".
     /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 fig46                # equal mutations
     /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 evt                  # error against CPU time
     /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 crops                # Figs. 4.8 / 4.9
+    /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 caustic caustic-glass  # light PT cannot build
     /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 speed                # BDPT vs PT samples/s
     /usr/bin/python3 -m tools.pssmlt.chapter4 --out /tmp/ch4 plot --figures tools/pssmlt/figures
 
@@ -66,8 +67,8 @@ def settings(args):
     if args.quick:
         return dict(res='16x16', ref_spp=64, tune_iterations=4, tune_spp=2, mpp=[4, 8], reps=2,
                     counts=[1, 2, 4], seeds=1, bootstrap=1000, chains=64, crop_mpp=4)
-    return dict(res=args.res, ref_spp=args.ref_spp, tune_iterations=50, tune_spp=5, mpp=[100, 200], reps=args.reps,
-                counts=[4, 16, 64, 128], seeds=3, bootstrap=args.bootstrap, chains=1000, crop_mpp=200)
+    return dict(res=args.res, ref_spp=args.ref_spp, tune_iterations=50, tune_spp=5, mpp=args.mpp, reps=args.reps,
+                counts=args.counts, seeds=args.seeds, bootstrap=args.bootstrap, chains=1000, crop_mpp=args.crop_mpp)
 
 
 def scene_path(name):
@@ -258,6 +259,53 @@ def step_crops(args, names):
             host_run(args, scene_path(name), extra, img, os.path.join(d, f'{m}.json'))
 
 
+def step_caustic(args, names):
+    """Is the focused caustic there? On each scene (meant for caustic-glass): a long path-traced
+    render (pt at 4096 spp, seed 7) defines the light the path tracer cannot build: the pixels
+    where the BDPT reference is more than 1.5x the path tracer's (and above 1% of the
+    reference's 99th percentile). Every method renders once at `--caustic-count` samples resp.
+    mutations per pixel; <out>/caustic/NAME.json gets, per method, the light in those pixels
+    relative to the reference's (1: all of it, 0: none) and the CPU time."""
+    quick = args.quick
+    if quick:
+        args.caustic_count = min(args.caustic_count, 8)
+    d0 = os.path.join(args.out, 'caustic')
+    for name in names:
+        d = os.path.join(d0, name)
+        os.makedirs(d, exist_ok=True)
+        resf = os.path.join(d0, f'{name}.json')
+        R = images.read_luminance(os.path.join(args.out, 'refs', f'{name}.exr'))
+        runs = [('pt', 64 if quick else 4096, 7)] + [(m, args.caustic_count, 1) for m in METHODS]
+        cpu = {}
+        for m, count, seed in runs:
+            img = os.path.join(d, f'{m}_{count}_{seed}.exr')
+            if not os.path.exists(img):
+                extra = method_args(args, name, m) + ['--spp', str(count), '--seed', str(seed), '--threads', '1']
+                _, cpu[(m, count)] = host_run(args, scene_path(name), extra, img, os.path.join(d, f'{m}_{count}_{seed}.json'))
+            else:
+                cpu[(m, count)] = None
+        P = images.read_luminance(os.path.join(d, f'pt_{runs[0][1]}_7.exr'))
+        mask = (R > 1.5 * P) & (R > 0.01 * np.percentile(R, 99))
+        out = dict(scene=name, pixels=int(mask.sum()), count=args.caustic_count, pt_long_spp=runs[0][1],
+                   reference_light_in_mask=float(R[mask].sum()), pt_long_fraction=float(P[mask].sum() / max(R[mask].sum(), 1e-30)),
+                   methods={})
+        for m in METHODS:
+            L = images.read_luminance(os.path.join(d, f'{m}_{args.caustic_count}_1.exr'))
+            st = load_rows(os.path.join(d, f'{m}_{args.caustic_count}_1.json'))
+            out['methods'][m] = dict(fraction=float(L[mask].sum() / max(R[mask].sum(), 1e-30)),
+                                     rrmse_in_mask=float(np.sqrt(np.mean((L[mask] - R[mask]) ** 2 / (R[mask] ** 2 + images.RRMSE_EPS))))
+                                     if mask.any() else None,
+                                     render_ms=st.get('render_ms'), cpu_s=cpu.get((m, args.caustic_count)))
+        prev = load_rows(resf) if os.path.exists(resf) else {}
+        for m, v in out['methods'].items():  # keep the CPU time of the run that rendered it
+            if v['cpu_s'] is None and isinstance(prev, dict):
+                v['cpu_s'] = prev.get('methods', {}).get(m, {}).get('cpu_s')
+        save_rows(resf, out)
+        print(f'caustic {name}: {out["pixels"]} pixels hold light the path tracer cannot build (long PT has '
+              f'{100 * out["pt_long_fraction"]:.0f}% of it); at {args.caustic_count}/px: ' +
+              ', '.join(f'{m} {100 * v["fraction"]:.0f}%' for m, v in out['methods'].items()), flush=True)
+
+
 def step_speed(args, names):
     """BDPT's samples per second against the path tracer's, interleaved rounds of the same
     number of samples with the render's own CPU clock (host --clock cpu), one thread:
@@ -310,6 +358,22 @@ def at_time(pts, t):
     return float(np.exp(np.interp(lt, x, y)))
 
 
+def ours_vs_original_equal_time(rows):
+    """Fig. 4.6 at equal CPU time: per seed and per count of `original`, ours' rRMSE at
+    original's CPU time (log-log interpolation along ours' curve of the same seed, no
+    extrapolation) relative to original's: (ours - original) / original."""
+    out = []
+    for seed in sorted({r['seed'] for r in rows}):
+        o = sorted([r for r in rows if r['method'] == 'original' and r['seed'] == seed], key=lambda r: r['count'])
+        u = [(r['count'], r['cpu_s'], r['rrmse']) for r in rows if r['method'] == 'ours' and r['seed'] == seed]
+        for r in o:
+            v = at_time(sorted(u), r['cpu_s'])
+            if v is not None:
+                out.append(dict(seed=seed, count=r['count'], cpu_s=r['cpu_s'], original=r['rrmse'], ours=v,
+                                rel_diff=(v - r['rrmse']) / r['rrmse']))
+    return out
+
+
 def summarize(args, names):
     """Fig. 4.6 and equal-time tables as a dict (also written to <out>/summary.json)."""
     out = {'scenes': {}}
@@ -350,6 +414,16 @@ def summarize(args, names):
             for t in np.geomspace(lo, hi, 4):
                 table.append(dict(cpu_s=float(t), **{m: at_time(p, t) for m, p in curves.items()}))
         sc['equal_time'] = table
+        sc['ours_vs_original_equal_time'] = ours_vs_original_equal_time(erows)
+        tf = os.path.join(args.out, 'tune', f'{name}.json')
+        if os.path.exists(tf):
+            with open(tf) as f:
+                t = json.load(f)
+            sc['tuning'] = dict(cpu_s=t['cpu_s'], default_cost=t['default_cost'], best_cost=t['best_cost'], set=t['set'])
+        cf = os.path.join(args.out, 'caustic', f'{name}.json')
+        if os.path.exists(cf):
+            with open(cf) as f:
+                sc['caustic'] = json.load(f)
         srows = load_rows(os.path.join(args.out, 'speed', f'{name}.json'))
         if srows:
             sc['speed'] = {m: dict(samples_per_s=float(np.median([r['samples_per_s'] for r in srows if r['method'] == m])),
@@ -382,15 +456,29 @@ def step_plot(args, names):
                     data.append(100.0 * np.array(e[m]['rel_diff']))
                     labels.append(f'{name}\n{short[m]}')
                     colors.append('C7')
+    tdata, tlabels = [], []
+    for name in names:
+        et = summ['scenes'][name]['ours_vs_original_equal_time']
+        if et:
+            tdata.append(100.0 * np.array([e['rel_diff'] for e in et]))
+            tlabels.append(f'{name}\n{len(et)} pts')
     if data:
-        fig, ax = plt.subplots(figsize=(max(4, 1.1 * len(data)), 3.2), dpi=90)
+        fig, axs = plt.subplots(1, 2, figsize=(max(4, 1.1 * len(data)) + max(2.5, 1.1 * len(tdata)), 3.4), dpi=90,
+                                gridspec_kw=dict(width_ratios=[max(1, len(data)), max(1, len(tdata))]))
+        ax = axs[0]
         bp = ax.boxplot(data, labels=labels, showfliers=True, patch_artist=True)
         for box, c in zip(bp['boxes'], colors):
             box.set_facecolor('white' if c == 'C0' else '0.85')
         ax.axhline(0, color='k', lw=0.8)
         ax.set_ylabel('rRMSE: (ours - original) / original  [%]')
-        ax.set_title('Fig. 4.6 on MMLT: tuned sigma-binning ("ours") against classic ("original"), equal mutations '
-                     '(lower: better than original; grey: controls)', fontsize=8)
+        ax.set_title('Fig. 4.6 on MMLT: tuned sigma-binning ("ours") vs classic ("original"), equal mutations\n'
+                     '(below 0: ours better; grey: controls)', fontsize=8)
+        ax.tick_params(axis='x', labelsize=6)
+        ax = axs[1]
+        if tdata:
+            ax.boxplot(tdata, labels=tlabels, showfliers=True)
+            ax.axhline(0, color='k', lw=0.8)
+        ax.set_title('equal CPU time (ours interpolated at\noriginal\'s CPU s, per seed and count)', fontsize=8)
         ax.tick_params(axis='x', labelsize=6)
         fig.tight_layout()
         fig.savefig(os.path.join(figs, 'ch4_fig46.png'))
@@ -416,6 +504,20 @@ def step_plot(args, names):
         fig.tight_layout()
         fig.savefig(os.path.join(figs, 'ch4_error_vs_time.png'))
         plt.close(fig)
+    # the same, one chart per scene (what a user picks an integrator by)
+    for name in present:
+        fig, ax = plt.subplots(figsize=(4.6, 3.4), dpi=100)
+        for m, pts in summ['scenes'][name]['curves'].items():
+            ax.loglog([p[1] for p in pts], [p[2] for p in pts], 'o-', ms=3, color=f'C{METHODS.index(m)}', label=LABELS[m])
+        ax.set_title(f'{name}: rRMSE against CPU time ({settings(args)["res"]}, maxDepth {DEPTH})', fontsize=8)
+        ax.set_xlabel('CPU s (1 thread, whole process: load, bootstrap, render)', fontsize=7)
+        ax.set_ylabel('rRMSE vs BDPT reference (median of seeds)', fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.grid(True, which='both', lw=0.3)
+        ax.legend(fontsize=6)
+        fig.tight_layout()
+        fig.savefig(os.path.join(figs, f'ch4_error_vs_time_{name}.png'))
+        plt.close(fig)
     # Figs. 4.8 / 4.9: crops, reference / original / ours, same exposure
     for name in names:
         d = os.path.join(args.out, 'crops', name)
@@ -435,6 +537,33 @@ def step_plot(args, names):
         fig.suptitle(f'{name}: equal mutations ({settings(args)["crop_mpp"]} per pixel)', fontsize=8)
         fig.tight_layout()
         fig.savefig(os.path.join(figs, f'ch4_crops_{name}.png'))
+        plt.close(fig)
+    # the focused caustic: reference, long path tracer, every method at the same count
+    for name in names:
+        c = summ['scenes'][name].get('caustic')
+        if not c:
+            continue
+        d = os.path.join(args.out, 'caustic', name)
+        panels = [('BDPT reference', os.path.join(args.out, 'refs', f'{name}.exr'))]
+        panels.append((f'path tracer {c["pt_long_spp"]} spp\n{100 * c["pt_long_fraction"]:.0f}% of the caustic',
+                       os.path.join(d, f'pt_{c["pt_long_spp"]}_7.exr')))
+        panels += [(f'{LABELS[m]}\n{c["count"]}/px: {100 * c["methods"][m]["fraction"]:.0f}%', os.path.join(d, f'{m}_{c["count"]}_1.exr'))
+                   for m in METHODS]
+        ims = [images.read_rgb(p) for _, p in panels]
+        R = images.luminance(ims[0])
+        P = images.luminance(ims[1])
+        mask = (R > 1.5 * P) & (R > 0.01 * np.percentile(R, 99))
+        scale = 1.0 / max(1e-6, float(np.percentile(R, 99)))
+        fig, axes = plt.subplots(1, len(panels), figsize=(1.7 * len(panels), 2.2), dpi=110)
+        for ax, (t, _), im in zip(axes, panels, ims):
+            ax.imshow(np.clip((im * scale) ** (1 / 2.2), 0, 1), interpolation='nearest')
+            ax.contour(mask.astype(float), levels=[0.5], colors='r', linewidths=0.5)
+            ax.set_title(t, fontsize=5.5)
+            ax.axis('off')
+        fig.suptitle(f'{name}: light the path tracer cannot build (red outline: reference > 1.5x a long path-traced '
+                     f'render); % = light inside the outline relative to the reference', fontsize=6)
+        fig.tight_layout()
+        fig.savefig(os.path.join(figs, f'ch4_caustic_{name}.png'))
         plt.close(fig)
     print_tables(summ)
     with open(os.path.join(figs, 'ch4_tables.md'), 'w') as f:
@@ -461,6 +590,15 @@ def markdown_tables(summ):
             cells = [f'{e[m]["rrmse"]:.3f}, {100 * e[m]["rel_diff_median"]:+.0f}% ({e[m]["small_step_acceptance"]:.2f})'
                      if m in e else '-' for m in CONTROLS]
             out.append(f'| {n} | {e["mpp"]} | ' + ' | '.join(cells) + ' |')
+    et = [(n, sc['ours_vs_original_equal_time']) for n, sc in summ['scenes'].items() if sc.get('ours_vs_original_equal_time')]
+    if et:
+        out += ['', '| scene | points (seeds x counts) | (ours - original) / original at equal CPU time, median (min..max) | '
+                'ours better | tuning CPU s (not included) |', '|---|---|---|---|---|']
+        for n, rows in et:
+            r = [x['rel_diff'] for x in rows]
+            tune = summ['scenes'][n].get('tuning', {}).get('cpu_s')
+            out.append(f'| {n} | {len(r)} | {100 * float(np.median(r)):+.0f}% ({100 * min(r):+.0f}..{100 * max(r):+.0f}%) | '
+                       f'{sum(x < 0 for x in r)}/{len(r)} | {"-" if tune is None else f"{tune:.1f}"} |')
     out += ['', '| scene | CPU s | ' + ' | '.join(LABELS[m] for m in METHODS) + ' |',
             '|---|---|' + '---|' * len(METHODS)]
     for name, sc in summ['scenes'].items():
@@ -469,6 +607,14 @@ def markdown_tables(summ):
             best = min(v for v in vals if v is not None) if any(v is not None for v in vals) else None
             cells = [('-' if v is None else (f'**{v:.3f}**' if v == best else f'{v:.3f}')) for v in vals]
             out.append(f'| {name} | {row["cpu_s"]:.2f} | ' + ' | '.join(cells) + ' |')
+    ca = [(n, sc['caustic']) for n, sc in summ['scenes'].items() if 'caustic' in sc]
+    if ca:
+        out += ['', '| scene | pixels | count/px | path tracer, long render | ' + ' | '.join(LABELS[m] for m in METHODS) + ' |',
+                '|---|---|---|---|' + '---|' * len(METHODS)]
+        for n, c in ca:
+            cells = [f'{100 * c["methods"][m]["fraction"]:.0f}%' + (f' ({c["methods"][m]["cpu_s"]:.1f} s)'
+                     if c['methods'][m].get('cpu_s') else '') for m in METHODS]
+            out.append(f'| {n} | {c["pixels"]} | {c["count"]} | {100 * c["pt_long_fraction"]:.0f}% ({c["pt_long_spp"]} spp) | ' + ' | '.join(cells) + ' |')
     sp = [(n, sc['speed']) for n, sc in summ['scenes'].items() if 'speed' in sc]
     if sp:
         out += ['', '| scene | PT samples/s | BDPT samples/s | PT / BDPT | rays per sample PT / BDPT |', '|---|---|---|---|---|']
@@ -495,14 +641,20 @@ def print_tables(summ):
 
 def main(argv=None):
     ap = cli.parser(__doc__)
-    ap.add_argument('step', choices=['reference', 'tune', 'fig46', 'evt', 'crops', 'speed', 'plot', 'all'])
+    ap.add_argument('step', choices=['reference', 'tune', 'fig46', 'evt', 'crops', 'caustic', 'speed', 'plot', 'all'])
     ap.add_argument('scenes', nargs='*', help='scene names (default: all): ' + ', '.join(SCENES))
     ap.add_argument('--out', default='/tmp/tt_chapter4')
     ap.add_argument('--figures', default=None, help='folder of the figures and summary (default <out>/figures)')
     ap.add_argument('--res', default='64x64')
     ap.add_argument('--ref-spp', type=int, default=4096)
     ap.add_argument('--ref-threads', type=int, default=2)
-    ap.add_argument('--reps', type=int, default=5)
+    ap.add_argument('--reps', type=int, default=5, help='fig46: repetitions (seeds) per mutation count')
+    ap.add_argument('--mpp', type=int, nargs='+', default=[100, 200], help='fig46: mutations per pixel')
+    ap.add_argument('--counts', type=int, nargs='+', default=[4, 16, 64, 128],
+                    help='evt: samples resp. mutations per pixel (PT and BDPT also 2x and 4x the largest)')
+    ap.add_argument('--seeds', type=int, default=3, help='evt: seeds per count')
+    ap.add_argument('--crop-mpp', type=int, default=200, help='crops: mutations per pixel')
+    ap.add_argument('--caustic-count', type=int, default=128, help='caustic: samples resp. mutations per pixel')
     ap.add_argument('--bootstrap', type=int, default=20000, help='MLT bootstrap samples (per depth in mmlt)')
     ap.add_argument('--methods', default=','.join(METHODS), help='evt: which methods')
     ap.add_argument('--nice', type=int, default=5)
@@ -516,7 +668,7 @@ def main(argv=None):
         if n not in SCENES:
             ap.error(f'unknown scene {n!r} (known: {", ".join(SCENES)})')
     args.host = host.find(args.host)
-    steps = ['reference', 'tune', 'fig46', 'evt', 'crops', 'speed', 'plot'] if args.step == 'all' else [args.step]
+    steps = ['reference', 'tune', 'fig46', 'evt', 'crops', 'caustic', 'speed', 'plot'] if args.step == 'all' else [args.step]
     for st in steps:
         globals()['step_' + st](args, names)
     return 0

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # tools/pssmlt/chapter4.py with its quick settings on pbrt-v4's Cornell box: every step runs
 # (BDPT reference, tuning "ours", Fig. 4.6 runs, error against CPU time for the five methods,
-# crops, BDPT's speed against PT's, plots), the summary holds both methods at both mutation counts with path lengths and
+# crops, the light a long path-traced render lacks, BDPT's speed against PT's, plots), the summary holds both methods at both mutation counts with path lengths and
 # every method's curve, the figures are PNGs, a step resumes without rendering again, and bad
 # input (unknown scene, a step before its reference) fails naming what is missing.
 set -euo pipefail
@@ -21,7 +21,8 @@ check '[ -f "$dir/run/refs/cornell-box.exr" ]'
 check 'grep -q "\"spp\": 64" "$dir/run/refs/cornell-box.json"'
 check 'grep -q "integrator_pssmlt.mode=mmlt" "$dir/run/tune/cornell-box.json"'
 check 'grep -q "integrator_pssmlt.binning=true" "$dir/run/tune/cornell-box.json"'
-for f in ch4_fig46.png ch4_error_vs_time.png ch4_crops_cornell-box.png; do
+for f in ch4_fig46.png ch4_error_vs_time.png ch4_error_vs_time_cornell-box.png ch4_crops_cornell-box.png \
+         ch4_caustic_cornell-box.png; do
   check '[ "$(head -c 4 "$dir/fig/$f" | tail -c 3)" = "PNG" ]'
 done
 "$PY" - "$dir/fig/ch4_summary.json" <<'PYEOF' || fail=1
@@ -38,6 +39,12 @@ for m, pts in s['curves'].items():
     assert len(pts) >= 3 and all(p[1] > 0 and p[2] > 0 for p in pts), (m, pts)
     errs = [p[2] for p in pts]
     assert errs[-1] < errs[0], (m, errs)   # more samples, less error
+c = s['caustic']   # the light a long path-traced render lacks, per method at one count
+assert c['pt_long_spp'] == 64 and c['count'] == 8 and sorted(c['methods']) == sorted(s['curves']), c
+for m, v in c['methods'].items():
+    assert v['fraction'] >= 0 and v['cpu_s'] > 0, (m, v)
+for e in s['ours_vs_original_equal_time']:
+    assert e['ours'] > 0 and e['original'] > 0 and e['rel_diff'] == (e['ours'] - e['original']) / e['original'], e
 sp = s['speed']
 assert sp['pt']['samples_per_s'] > 0 and sp['bdpt']['samples_per_s'] > 0, sp
 assert sp['bdpt']['rays_per_sample'] > sp['pt']['rays_per_sample'], sp
