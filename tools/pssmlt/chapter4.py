@@ -374,6 +374,22 @@ def ours_vs_original_equal_time(rows):
     return out
 
 
+RATIOS = [('bdpt', 'pt'), ('original', 'pt'), ('original', 'bdpt'), ('original', 'pssmlt'), ('ours', 'original')]
+
+
+def pair_ratio(a, b):
+    """rRMSE of curve a over curve b at equal CPU time: at 4 log-spaced times over the range
+    both curves cover (interpolated, no extrapolation); None without an overlap."""
+    if not a or not b:
+        return None
+    lo, hi = max(a[0][1], b[0][1]), min(a[-1][1], b[-1][1])
+    if not hi > lo:
+        return None
+    ts = np.geomspace(lo, hi, 4)
+    r = [at_time(a, t) / at_time(b, t) for t in ts]
+    return dict(cpu_s=[float(t) for t in ts], ratio=[float(x) for x in r])
+
+
 def summarize(args, names):
     """Fig. 4.6 and equal-time tables as a dict (also written to <out>/summary.json)."""
     out = {'scenes': {}}
@@ -415,6 +431,7 @@ def summarize(args, names):
                 table.append(dict(cpu_s=float(t), **{m: at_time(p, t) for m, p in curves.items()}))
         sc['equal_time'] = table
         sc['ours_vs_original_equal_time'] = ours_vs_original_equal_time(erows)
+        sc['ratios'] = {f'{a}/{b}': pair_ratio(curves.get(a), curves.get(b)) for a, b in RATIOS}
         tf = os.path.join(args.out, 'tune', f'{name}.json')
         if os.path.exists(tf):
             with open(tf) as f:
@@ -463,7 +480,7 @@ def step_plot(args, names):
             tdata.append(100.0 * np.array([e['rel_diff'] for e in et]))
             tlabels.append(f'{name}\n{len(et)} pts')
     if data:
-        fig, axs = plt.subplots(1, 2, figsize=(max(4, 1.1 * len(data)) + max(2.5, 1.1 * len(tdata)), 3.4), dpi=90,
+        fig, axs = plt.subplots(1, 2, figsize=(max(4, 1.0 * len(data)) + max(2.5, 1.1 * len(tdata)), 4.2), dpi=90,
                                 gridspec_kw=dict(width_ratios=[max(1, len(data)), max(1, len(tdata))]))
         ax = axs[0]
         bp = ax.boxplot(data, labels=labels, showfliers=True, patch_artist=True)
@@ -496,7 +513,7 @@ def step_plot(args, names):
             ax.set_title(name, fontsize=9)
             ax.set_xlabel('CPU s (1 thread, whole process)', fontsize=7)
             ax.set_ylabel('rRMSE vs BDPT reference', fontsize=7)
-            ax.tick_params(labelsize=6)
+            ax.tick_params(which='both', labelsize=6)
             ax.grid(True, which='both', lw=0.3)
         for ax in list(axes.flat)[len(present):]:
             ax.axis('off')
@@ -512,7 +529,7 @@ def step_plot(args, names):
         ax.set_title(f'{name}: rRMSE against CPU time ({settings(args)["res"]}, maxDepth {DEPTH})', fontsize=8)
         ax.set_xlabel('CPU s (1 thread, whole process: load, bootstrap, render)', fontsize=7)
         ax.set_ylabel('rRMSE vs BDPT reference (median of seeds)', fontsize=7)
-        ax.tick_params(labelsize=6)
+        ax.tick_params(which='both', labelsize=6)
         ax.grid(True, which='both', lw=0.3)
         ax.legend(fontsize=6)
         fig.tight_layout()
@@ -607,6 +624,14 @@ def markdown_tables(summ):
             best = min(v for v in vals if v is not None) if any(v is not None for v in vals) else None
             cells = [('-' if v is None else (f'**{v:.3f}**' if v == best else f'{v:.3f}')) for v in vals]
             out.append(f'| {name} | {row["cpu_s"]:.2f} | ' + ' | '.join(cells) + ' |')
+    out += ['', '| scene | ' + ' | '.join(f'{LABELS[a]} / {LABELS[b]}' for a, b in RATIOS) + ' |',
+            '|---|' + '---|' * len(RATIOS)]
+    for name, sc in summ['scenes'].items():
+        cells = []
+        for a, b in RATIOS:
+            v = sc.get('ratios', {}).get(f'{a}/{b}')
+            cells.append('-' if not v else f'{v["ratio"][0]:.2f} .. {v["ratio"][-1]:.2f} ({v["cpu_s"][0]:.2f}-{v["cpu_s"][-1]:.2f} s)')
+        out.append(f'| {name} | ' + ' | '.join(cells) + ' |')
     ca = [(n, sc['caustic']) for n, sc in summ['scenes'].items() if 'caustic' in sc]
     if ca:
         out += ['', '| scene | pixels | count/px | path tracer, long render | ' + ' | '.join(LABELS[m] for m in METHODS) + ' |',
