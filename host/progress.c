@@ -114,15 +114,10 @@ void tt__progress_finish(void) {
   pthread_mutex_unlock(&tt__lock);
 }
 
-/* Log for plugins and the host: clears a partial bar line first. */
-static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
+/* Log for plugins and the host (the table's log_str): clears a partial bar line first. */
+static void tt__host_log_str(tt_log_level level, const char *plugin, const char *msg) {
   if (level < TT_LOG_WARN && tt__quiet) return;
   if (level == TT_LOG_DEBUG && !getenv("TT_DEBUG")) return;
-  char msg[2048];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
   static const char *names[] = {"debug", "info", "warning", "error"};
   pthread_mutex_lock(&tt__lock);
   if (tt__bar_visible) {
@@ -133,6 +128,18 @@ static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt
   tt__say("%s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
           plugin ? "] " : "", names[level <= TT_LOG_ERROR ? level : TT_LOG_ERROR], msg);
   pthread_mutex_unlock(&tt__lock);
+}
+
+/* The table's variadic log (plugins older than ABI 1.2, the host's own messages). */
+static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
+  if (level < TT_LOG_WARN && tt__quiet) return;
+  if (level == TT_LOG_DEBUG && !getenv("TT_DEBUG")) return;
+  char msg[2048];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  tt__host_log_str(level, plugin, msg);
 }
 
 /* CPU time of the whole process (all its threads), in ns: the clock of --clock cpu. */
@@ -150,6 +157,7 @@ const tt_host *tt__host_services(int quiet) {
   tt__host = *tt_default_host();
   tt__host.host_name = "tunetrace host";
   tt__host.log = tt__host_log;
+  tt__host.log_str = tt__host_log_str;
   tt__host.progress = tt__progress_update;
   return &tt__host;
 }

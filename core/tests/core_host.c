@@ -61,9 +61,17 @@ static void test_log_callback(const tt_host *host) {
   CHECK(g_logged.calls == 2 && !strcmp(g_logged.plugin, "(null)") &&
         !strcmp(g_logged.message, "kept") && g_logged.level == TT_LOG_DEBUG);
   tt_default_host_set_log_level(TT_LOG_INFO);
+  /* log_str (ABI 1.2): the finished string, the same level filter and callback */
+  CHECK(TT_HOST_HAS(host, log_str));
+  host->log_str(TT_LOG_WARN, "post_taa", "100% as given, no format");
+  CHECK(g_logged.calls == 3 && !strcmp(g_logged.plugin, "post_taa") &&
+        !strcmp(g_logged.message, "100% as given, no format"));
+  host->log_str(TT_LOG_DEBUG, NULL, "dropped below the level");
+  tt_host_log(host, TT_LOG_INFO, "pt", "%u%%", 7u);
+  CHECK(g_logged.calls == 4 && !strcmp(g_logged.message, "7%"));
   tt_default_host_set_log_callback(NULL, NULL);
   host->log(TT_LOG_INFO, NULL, "core_host: a line on stderr again");
-  CHECK(g_logged.calls == 2);
+  CHECK(g_logged.calls == 4);
 }
 
 int main(void) {

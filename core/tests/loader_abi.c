@@ -209,6 +209,61 @@ static void test_abi10(void) {
   tt_registry_destroy(reg);
 }
 
+/* Test log_str: appends "plugin: message" lines, like test_log. */
+static char g_str_log[8192];
+static void test_log_str(tt_log_level level, const char *plugin, const char *message) {
+  (void)level;
+  size_t n = strlen(g_str_log);
+  snprintf(g_str_log + n, sizeof g_str_log - n, "%s: %s\n", plugin ? plugin : "-", message);
+}
+
+/* log_str (ABI 1.2): a host table with only the finished-string log (log NULL: what a
+ * ctypes or Rust host can give) and an older table that ends before log_str both receive
+ * a plugin's messages; a plugin older than ABI 1.2, which calls host->log itself, is
+ * refused by the log_str-only host, naming what it lacks; tt_host_log hands over a
+ * message longer than its stack buffer whole. */
+static void test_log_str_hosts(void) {
+  tt_host str_only = g_host;
+  str_only.host_name = "log_str only";
+  str_only.log = NULL;
+  str_only.log_str = test_log_str;
+  g_log[0] = g_str_log[0] = '\0';
+  tt_registry *reg = tt_registry_create(&str_only);
+  CHECK_MSG(tt_registry_load(reg, fixture("fixture_good"), NULL) == TT_OK, "%s", tt_last_error());
+  tt_registry_destroy(reg);
+  CHECK_CONTAINS(g_str_log, "fixture_good: init fixture_good\nfixture_good: deinit fixture_good\n");
+  CHECK(g_log[0] == '\0');
+
+  tt_host old = g_host;  /* as built before ABI 1.2: log_str past its struct_size is not read */
+  old.struct_size = offsetof(tt_host, log_str);
+  old.log_str = test_log_str;
+  g_log[0] = g_str_log[0] = '\0';
+  reg = tt_registry_create(&old);
+  CHECK_MSG(tt_registry_load(reg, fixture("fixture_good"), NULL) == TT_OK, "%s", tt_last_error());
+  tt_registry_destroy(reg);
+  CHECK(log_count("init fixture_good") == 1 && log_count("deinit fixture_good") == 1);
+  CHECK(g_str_log[0] == '\0');
+
+  g_str_log[0] = '\0';
+  reg = tt_registry_create(&str_only);
+  CHECK(tt_registry_load(reg, fixture("fixture_abi10"), NULL) == TT_ERR_ABI);
+  CHECK_CONTAINS(tt_last_error(), "fixture_abi10.so: plugin ABI 1.0 calls the host's variadic log");
+  CHECK_CONTAINS(tt_last_error(), "\"log_str only\"");
+  CHECK(g_str_log[0] == '\0');  /* refused before init */
+  CHECK_MSG(!is_mapped(fixture("fixture_abi10")), "fixture_abi10 still mapped after the refusal");
+  tt_registry_destroy(reg);
+
+  char big[3000];
+  memset(big, 'x', sizeof big - 1);
+  big[sizeof big - 1] = '\0';
+  g_str_log[0] = '\0';
+  tt_host_log(&str_only, TT_LOG_WARN, "p", "%s!", big);
+  CHECK(strlen(g_str_log) == 3 + sizeof big - 1 + 2 && g_str_log[3 + sizeof big - 1] == '!');
+  g_log[0] = '\0';
+  tt_host_log(&old, TT_LOG_WARN, "p", "%d %s", 42, "done");
+  CHECK(log_count("42 done") == 1);
+}
+
 /* A newer minor with longer tables loads; the host sees its own prefix. */
 static void test_newer_minor(void) {
   const char *path = fixture("fixture_newer_minor");
@@ -558,6 +613,7 @@ int main(int argc, char **argv) {
   test_rejections();
   test_newer_minor();
   test_abi10();
+  test_log_str_hosts();
   test_bad_files(tmp);
   test_truncated(tmp);
   test_duplicates();

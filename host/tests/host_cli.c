@@ -16,7 +16,7 @@ int main(void) {
   CHECK_CONTAINS(out, "Exit codes");
 
   CHECK(run_host("--version", out, sizeof out) == 0);
-  CHECK_CONTAINS(out, "plugin ABI 1.1");
+  CHECK_CONTAINS(out, "plugin ABI 1.2");
 
   CHECK(run_host("--frobnicate", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "unknown option \"--frobnicate\"");

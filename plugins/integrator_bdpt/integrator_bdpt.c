@@ -158,8 +158,9 @@ static tt_status bd_create(const tt_scene *scene, const tt_config *config, tt_in
     if (it->strategy_path) strcpy(it->strategy_path, dump);
   }
   if (tt_scene_light_count(scene) == 0)
-    bd_host()->log(TT_LOG_WARN, BD_NAME, "the scene has no light (no emissive material, no light "
-                   "source): the image is black");
+    tt_host_log(bd_host(), TT_LOG_WARN, BD_NAME,
+                "the scene has no light (no emissive material, no light "
+                "source): the image is black");
   *out = it;
   return TT_OK;
 }
@@ -366,7 +367,7 @@ static void bd_write_strategies(tt_integrator *it, uint32_t w, uint32_t h) {
   char **names = calloc(ch, sizeof(char *));
   char *name_mem = malloc((size_t)ch * 40);
   if (!img || !names || !name_mem) {
-    bd_host()->log(TT_LOG_WARN, BD_NAME, "cannot write the strategy images: out of memory");
+    tt_host_log(bd_host(), TT_LOG_WARN, BD_NAME, "cannot write the strategy images: out of memory");
     free(img);
     free(names);
     free(name_mem);
@@ -394,7 +395,8 @@ static void bd_write_strategies(tt_integrator *it, uint32_t w, uint32_t h) {
   snprintf(depth, sizeof depth, "%u", d);
   tt_image_meta meta[2] = {{"tunetrace:integrator", BD_NAME}, {"tunetrace:maxDepth", depth}};
   if (tt_image_write_exr(it->strategy_path, w, h, ch, img, (const char *const *)names, meta, 2) != TT_OK)
-    bd_host()->log(TT_LOG_WARN, BD_NAME, "cannot write the strategy images: %s", tt_last_error());
+    tt_host_log(bd_host(), TT_LOG_WARN, BD_NAME, "cannot write the strategy images: %s",
+                tt_last_error());
   free(img);
   free(names);
   free(name_mem);
@@ -438,7 +440,8 @@ static tt_status bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
     it->strategies = bd_strategy_count(it->strategy_depth);
     it->strategy_sum = calloc((size_t)it->strategies * pixels * 6, sizeof(double));
     if (!it->strategy_sum) {
-      host->log(TT_LOG_WARN, BD_NAME, "no strategy images: out of memory for %u strategies", it->strategies);
+      tt_host_log(host, TT_LOG_WARN, BD_NAME, "no strategy images: out of memory for %u strategies",
+                  it->strategies);
       free(it->strategy_path);
       it->strategy_path = NULL;
     }

@@ -494,9 +494,10 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
     it->black = 1;
     it->ready = 1;
     it->mutations_total = 0;
-    host->log(TT_LOG_WARN, MLT_NAME, "all %llu bootstrap paths have zero contribution: nothing "
-              "in view is lit, the image is black (raise bootstrap if the lights are tiny)",
-              (unsigned long long)n);
+    tt_host_log(host, TT_LOG_WARN, MLT_NAME,
+                "all %llu bootstrap paths have zero contribution: nothing "
+                "in view is lit, the image is black (raise bootstrap if the lights are tiny)",
+                (unsigned long long)n);
     goto done;
   }
   it->b = sum / (double)n * (double)depths;  /* mmlt: the mean over depths of each depth's image */
@@ -515,9 +516,10 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
   if (st == TT_OK) {
     it->ready = 1;
     it->mutations_total = 0;
-    host->log(TT_LOG_INFO, MLT_NAME, "bootstrap (%s): %llu paths (%llu non-zero), b = %.6g, %u chains",
-              s->mmlt ? "mmlt" : "pssmlt", (unsigned long long)n, (unsigned long long)nonzero, it->b,
-              it->nchains);
+    tt_host_log(host, TT_LOG_INFO, MLT_NAME,
+                "bootstrap (%s): %llu paths (%llu non-zero), b = %.6g, %u chains",
+                s->mmlt ? "mmlt" : "pssmlt", (unsigned long long)n, (unsigned long long)nonzero,
+                it->b, it->nchains);
   }
 done:
   free(job->weights);
@@ -628,7 +630,8 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
 static void mlt_write_theta(const tt_integrator *it) {
   tt_atomic_file *af;
   if (tt_atomic_file_open(it->theta_dump, &af) != TT_OK) {
-    mlt_host()->log(TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s", tt_last_error());
+    tt_host_log(mlt_host(), TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s",
+                tt_last_error());
     return;
   }
   FILE *f = tt_atomic_file_stream(af);
@@ -641,7 +644,8 @@ static void mlt_write_theta(const tt_integrator *it) {
             (unsigned long long)it->theta_hist[i]);
   fprintf(f, "1.000000,inf,%llu\n", (unsigned long long)it->theta_hist[TT__MLT_THETA_BINS]);
   if (tt_atomic_file_commit(af) != TT_OK)
-    mlt_host()->log(TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s", tt_last_error());
+    tt_host_log(mlt_host(), TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s",
+                tt_last_error());
 }
 
 /* The film's AOV planes: PSSMLT's paths land anywhere on the film, so the AOVs come from a

@@ -137,8 +137,10 @@ static tt_status taa_prepare_network(tt_post *p) {
   p->net_state = s;
   p->net_loaded = 1;
   snprintf(p->weights_path, sizeof p->weights_path, "%s", path);
-  taa_host()->log(TT_LOG_DEBUG, TT__TAA_NAME, "network weights %s: width %u, hidden %u, %u "
-                  "body layers", path, m.width, m.hidden, m.body_count);
+  tt_host_log(taa_host(), TT_LOG_DEBUG, TT__TAA_NAME,
+              "network weights %s: width %u, hidden %u, %u "
+              "body layers",
+              path, m.width, m.hidden, m.body_count);
   return TT_OK;
 }
 

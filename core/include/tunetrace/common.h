@@ -25,7 +25,7 @@ extern "C" {
 
 /* Plugin ABI version. Bump MAJOR for any incompatible change, MINOR for appended fields. */
 #define TT_ABI_MAJOR 1
-#define TT_ABI_MINOR 1
+#define TT_ABI_MINOR 2
 
 #if defined(_WIN32)
 #  define TT_EXPORT __declspec(dllexport)

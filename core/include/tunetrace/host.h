@@ -28,7 +28,10 @@ typedef struct tt_host {
   const char *host_name;  /* "tunetrace host" or the embedding application's name */
   const char *host_version;
 
-  /* Logs one message with a severity; `plugin` names the sender. Thread-safe. */
+  /* Logs one message with a severity; `plugin` names the sender. Thread-safe. Kept for
+   * plugins older than ABI 1.2, which call it directly; since ABI 1.2 a host may leave it
+   * NULL when it sets log_str (the loader then refuses plugins older than 1.2, naming it),
+   * and plugins log through tt_host_log, which uses log_str when the table has it. */
   void (*log)(tt_log_level level, const char *plugin, const char *fmt, ...) TT_PRINTF(3, 4);
 
   /* Allocates `size` bytes aligned to `align` (a power of two, at most 4096); NULL on
@@ -63,16 +66,35 @@ typedef struct tt_host {
    * has none. Thread-safe. No extensions are defined in ABI 1.0. */
   const void *(*get_extension)(const char *id);
 
-  /* ---- fields below are ABI 1.1 and later; check with TT_HOST_HAS ---- */
+  /* ---- fields below are ABI 1.2 and later; check with TT_HOST_HAS ---- */
+
+  /* Logs one finished message (no format, no varargs, like CLAP's clap_host_log): what a
+   * host written with ctypes, cffi or Rust can provide, which the variadic log is not.
+   * `plugin` names the sender (NULL: the library itself); `message` is one line without
+   * its newline, owned by the caller and valid only during the call. Thread-safe: plugins
+   * call it from worker threads, concurrently. */
+  void (*log_str)(tt_log_level level, const char *plugin, const char *message);
 } tt_host;
 
 /* True if the host table provides `field` (it may be older than the plugin). */
 #define TT_HOST_HAS(host, field) \
   (TT_HAS_FIELD(tt_host, host, field) && (host)->field)
 
+/* Logs one message through `host` (NULL: tt_default_host()): formats it, then hands the
+ * finished string to host->log_str when the table has it (TT_HOST_HAS), else to the
+ * variadic host->log as "%s"; nothing when the host has neither. A copy of
+ * tt_default_host() whose log was replaced and whose log_str was not counts as having only
+ * that log (the way applications customised the log before ABI 1.2). What plugins and the
+ * library call instead of host->log, so that both kinds of host receive their messages.
+ * Any length (longer messages are formatted on the heap). Thread-safe when the host's log
+ * is. */
+TT_API void tt_host_log(const tt_host *host, tt_log_level level, const char *plugin,
+                        const char *fmt, ...) TT_PRINTF(4, 5);
+
 /* The host table libtunetrace's default implementation provides (stderr logging, pthread
  * pool, no progress drawing). Used by tests and by applications that embed libtunetrace
- * without a UI. Valid for the life of the process. Thread-safe; its parallel_for may also
+ * without a UI; an application that copies it to replace services sets log_str with log
+ * (or leaves both: tt_default_host_set_log_callback takes finished messages). Valid for the life of the process. Thread-safe; its parallel_for may also
  * be called from several threads at once (one render session per thread): their jobs share
  * the one pool and run one after another. */
 TT_API const tt_host *tt_default_host(void);

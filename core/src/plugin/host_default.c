@@ -43,14 +43,9 @@ void tt_default_host_set_log_callback(tt_log_fn fn, void *user) {
 }
 
 /* Prints "tunetrace: [plugin] level: message" as one write so lines never interleave, or
- * hands the finished message to the log callback. */
-static void tt__default_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
+ * hands the finished message to the log callback. The table's log_str. */
+static void tt__default_log_str(tt_log_level level, const char *plugin, const char *msg) {
   if ((int)level < atomic_load(&tt__log_min)) return;
-  char msg[2048];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
   pthread_mutex_lock(&tt__log_lock);
   tt_log_fn fn = tt__log_fn;
   void *user = tt__log_user;
@@ -62,6 +57,17 @@ static void tt__default_log(tt_log_level level, const char *plugin, const char *
   fprintf(stderr, "tunetrace: %s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
           plugin ? "] " : "", tt__level_name(level), msg);
   pthread_mutex_unlock(&tt__log_lock);
+}
+
+/* The table's variadic log (plugins older than ABI 1.2): formats, then as log_str. */
+static void tt__default_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
+  if ((int)level < atomic_load(&tt__log_min)) return;
+  char msg[2048];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  tt__default_log_str(level, plugin, msg);
 }
 
 void tt_default_host_set_log_level(tt_log_level level) { atomic_store(&tt__log_min, (int)level); }
@@ -77,8 +83,11 @@ void tt__log(tt_log_level level, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
-  const tt_host *h = tt__log_host && TT_HOST_HAS(tt__log_host, log) ? tt__log_host : tt_default_host();
-  h->log(level, NULL, "%s", msg);
+  const tt_host *h = tt__log_host && (TT_HOST_HAS(tt__log_host, log_str) ||
+                                      TT_HOST_HAS(tt__log_host, log))
+                         ? tt__log_host
+                         : tt_default_host();
+  tt_host_log(h, level, NULL, "%s", msg);
 }
 
 /* ---- memory and clock ---- */
@@ -342,6 +351,7 @@ static const tt_host tt__default_host = {
   .progress = tt__default_progress,
   .should_stop = tt__default_should_stop,
   .get_extension = tt__default_get_extension,
+  .log_str = tt__default_log_str,
 };
 
 const tt_host *tt_default_host(void) { return &tt__default_host; }

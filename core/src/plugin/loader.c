@@ -292,7 +292,15 @@ static tt_status tt__acquire(void *h, const tt_plugin *e, const tt_host *host, c
   tt__live *l = tt__live_list;
   while (l && l->handle != h) l = l->next;
   tt_status st = TT_OK;
-  if (l && l->host != host) {
+  if (!l && e->abi_minor < 2 && !TT_HOST_HAS(host, log)) {
+    /* before ABI 1.2 plugins call host->log themselves: a host with log_str only would
+     * crash them at their first message */
+    st = tt_set_error(TT_ERR_ABI, "plugin %s: plugin ABI %u.%u calls the host's variadic log, "
+                      "which host \"%s\" does not provide (it has log_str only, ABI 1.2); "
+                      "rebuild the plugin against ABI 1.2 or give the host a log",
+                      path, (unsigned)e->abi_major, (unsigned)e->abi_minor,
+                      host->host_name ? host->host_name : "?");
+  } else if (l && l->host != host) {
     st = tt_set_error(TT_ERR_ABI, "plugin %s: already initialised in this process for host "
                       "\"%s\"; a plugin serves one host table at a time (load it with the same "
                       "tt_host, or destroy the other registries first)", path,

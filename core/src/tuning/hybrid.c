@@ -221,7 +221,8 @@ static void tt__observe(tt_hybrid *h, const char *json, double cost, double defa
   tt_predictor_sample s = {.struct_size = sizeof s, .state = h->state, .config = h->sub,
                            .cost = cost, .default_cost = default_cost};
   if (h->pi->observe_ex(h->model, &s, 1, TT_PREDICTOR_ONLINE | flags) != TT_OK)
-    h->host->log(TT_LOG_WARN, NULL, "hybrid: %s: observe: %s", h->predictor_name, tt_last_error());
+    tt_host_log(h->host, TT_LOG_WARN, NULL, "hybrid: %s: observe: %s", h->predictor_name,
+                tt_last_error());
 }
 
 /* tt_tuning_desc.on_sample of an explored state: every sample goes to the model. */
@@ -307,8 +308,10 @@ static tt_status tt__session(tt_hybrid *h, const tt_tuning_state *state, const t
     h->dropped_said = 1;
     const char *dropped = tt__tuning_dropped(*out);
     if (dropped)
-      h->host->log(TT_LOG_INFO, NULL, "hybrid: not searched in any state: %s (not tunable, or "
-                   "cannot act with the values the other parameters are fixed at)", dropped);
+      tt_host_log(h->host, TT_LOG_INFO, NULL,
+                  "hybrid: not searched in any state: %s (not tunable, or "
+                  "cannot act with the values the other parameters are fixed at)",
+                  dropped);
   }
   return st;
 }
@@ -378,8 +381,10 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
       else tt_config_copy(predicted, h->sub);
       char why[256];
       if (tt_space_check(h->space, predicted, why, sizeof why) == TT_CHECK_INFEASIBLE) {
-        h->host->log(TT_LOG_WARN, NULL, "hybrid: state %u: %s predicted an infeasible "
-                     "configuration (%s); using the default", h->states, h->predictor_name, why);
+        tt_host_log(h->host, TT_LOG_WARN, NULL,
+                    "hybrid: state %u: %s predicted an infeasible "
+                    "configuration (%s); using the default",
+                    h->states, h->predictor_name, why);
         r.fallback = 1;
       } else {
         start = predicted;
@@ -388,8 +393,8 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
     } else if (st == TT_ERR_NO_DATA) {
       r.fallback = 1;  /* nothing learnt yet: the default, still one build */
     } else {
-      h->host->log(TT_LOG_ERROR, NULL, "hybrid: %s: predict: %s", h->predictor_name,
-                   tt_last_error());
+      tt_host_log(h->host, TT_LOG_ERROR, NULL, "hybrid: %s: predict: %s", h->predictor_name,
+                  tt_last_error());
       return st;
     }
   }

@@ -166,8 +166,10 @@ static tt_status tt__drop_untunable(tt_tuning *t) {
     t->search = t->own_search;
     t->dropped = tt__strdup(dropped);
     if (!t->quiet)
-      t->host->log(TT_LOG_INFO, NULL, "tuning: not searched: %s (not tunable, or cannot act "
-                   "with the values the other parameters are fixed at)", dropped);
+      tt_host_log(t->host, TT_LOG_INFO, NULL,
+                  "tuning: not searched: %s (not tunable, or cannot act "
+                  "with the values the other parameters are fixed at)",
+                  dropped);
   }
   return TT_OK;
 }
@@ -354,8 +356,8 @@ static tt_status tt__record(tt_tuning *t, tt_tuning_sample *s) {
   t->next_iteration = s->iteration + 1;
   tt_status st = TT_OK;
   if (s->iteration >= 0 && t->tuner && t->ti->feedback(t->tuner, s->cost) != TT_OK) {
-    t->host->log(TT_LOG_ERROR, NULL, "tuning: %s: feedback: %s", t->tuner_name,
-                 tt_last_error());
+    tt_host_log(t->host, TT_LOG_ERROR, NULL, "tuning: %s: feedback: %s", t->tuner_name,
+                tt_last_error());
     st = TT_ERR_INTERNAL;
   }
   /* after the feedback, so that the session is consistent (tt_tuning_save_state) */
@@ -379,8 +381,8 @@ static void tt__record_db(tt_tuning *t, const tt_tuning_sample *s, const tt_pass
   row.metrics = metrics;
   /* one warning with the reason (a full disk fails every later write too), then a count */
   if (tt_tunedb_record(t->db, &row) != TT_OK && t->unrecorded++ == 0)
-    t->host->log(TT_LOG_WARN, NULL, "tuning: %s; later failures are counted, not repeated",
-                 tt_last_error());
+    tt_host_log(t->host, TT_LOG_WARN, NULL, "tuning: %s; later failures are counted, not repeated",
+                tt_last_error());
   free(metrics);
 }
 
@@ -400,8 +402,10 @@ static int tt__settle(tt_tuning *t, int32_t iteration) {
   if (here) {
     /* a tuner re-measuring its incumbent: routine, counted and said once per run */
     t->remeasured++;
-    t->host->log(TT_LOG_DEBUG, NULL, "tuning: iteration %d: measuring again a configuration "
-                 "measured %u time%s in this run", iteration, here, here == 1 ? "" : "s");
+    tt_host_log(t->host, TT_LOG_DEBUG, NULL,
+                "tuning: iteration %d: measuring again a configuration "
+                "measured %u time%s in this run",
+                iteration, here, here == 1 ? "" : "s");
   } else if (t->db && tt_tunedb_lookup(t->db, &row, &cached, &times) == TT_OK) {
     s.cost = cached;
     s.cached = 1;
@@ -410,13 +414,15 @@ static int tt__settle(tt_tuning *t, int32_t iteration) {
     if (s.status == TT_TUNEDB_INFEASIBLE) t->infeasible++;
     /* one line per answer only at debug level: the run says once how many (tt_tuning_run) */
     if (iteration < 0)
-      t->host->log(TT_LOG_DEBUG, NULL, "tuning: default configuration: cost %.6g from the "
-                   "database (%u earlier measurement%s), not measured again", cached, times,
-                   times == 1 ? "" : "s");
+      tt_host_log(t->host, TT_LOG_DEBUG, NULL,
+                  "tuning: default configuration: cost %.6g from the "
+                  "database (%u earlier measurement%s), not measured again",
+                  cached, times, times == 1 ? "" : "s");
     else
-      t->host->log(TT_LOG_DEBUG, NULL, "tuning: iteration %d: cost %.6g from the database "
-                   "(%u earlier measurement%s), not measured again", iteration, cached, times,
-                   times == 1 ? "" : "s");
+      tt_host_log(t->host, TT_LOG_DEBUG, NULL,
+                  "tuning: iteration %d: cost %.6g from the database "
+                  "(%u earlier measurement%s), not measured again",
+                  iteration, cached, times, times == 1 ? "" : "s");
     tt_status st = tt__record(t, &s);
     return st == TT_OK ? 0 : st;
   }
@@ -430,7 +436,7 @@ static int tt__settle(tt_tuning *t, int32_t iteration) {
   if (tt_space_check(t->space, t->work, why, sizeof why) == TT_CHECK_INFEASIBLE) {
     s.status = TT_TUNEDB_INFEASIBLE;
     s.cost = TT_COST_INFEASIBLE;
-    t->host->log(TT_LOG_INFO, NULL, "tuning: iteration %d: infeasible: %s", iteration, why);
+    tt_host_log(t->host, TT_LOG_INFO, NULL, "tuning: iteration %d: infeasible: %s", iteration, why);
     t->measured++;
     t->infeasible++;
     tt__record_db(t, &s, NULL);
@@ -468,8 +474,8 @@ static void tt__send_context(tt_tuning *t) {
     ctx.default_cost = t->samples[0].cost;
   ctx.budget = t->requested;
   if (t->ti->set_context(t->tuner, &ctx) != TT_OK)
-    t->host->log(TT_LOG_WARN, NULL, "tuning: %s: set_context: %s (searching without it)",
-                 t->tuner_name, tt_last_error());
+    tt_host_log(t->host, TT_LOG_WARN, NULL, "tuning: %s: set_context: %s (searching without it)",
+                t->tuner_name, tt_last_error());
 }
 
 /* t->cand from t->sub: every candidate is the configured values with the searched ones put
@@ -539,13 +545,13 @@ tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
         tt_status st = t->ti->next(t->tuner, t->sub);
         if (st == TT_DONE) {
           t->converged = 1;
-          t->host->log(TT_LOG_INFO, NULL, "tuning: %s reports convergence after %d iterations",
-                       t->tuner_name, it);
+          tt_host_log(t->host, TT_LOG_INFO, NULL,
+                      "tuning: %s reports convergence after %d iterations", t->tuner_name, it);
           return TT_DONE;
         }
         if (st != TT_OK) {
-          t->host->log(TT_LOG_ERROR, NULL, "tuning: %s: next: %s", t->tuner_name,
-                       tt_last_error());
+          tt_host_log(t->host, TT_LOG_ERROR, NULL, "tuning: %s: next: %s", t->tuner_name,
+                      tt_last_error());
           return st;
         }
       }
@@ -578,8 +584,8 @@ static tt_status tt__report(tt_tuning *t, const tt_tuning_measurement *m, double
   if (m->status != TT_OK) {
     s.status = TT_TUNEDB_FAILED;
     if (!logged)
-      t->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: the measurement failed: %s",
-                   iteration, tt_last_error());
+      tt_host_log(t->host, TT_LOG_WARN, NULL, "tuning: iteration %d: the measurement failed: %s",
+                  iteration, tt_last_error());
   } else {
     tt_status st = tt__objective_cost(&t->objective, m, t->ref, (size_t)t->width * t->height,
                                       &s.cost);
@@ -630,16 +636,19 @@ static tt_tuning_measurement tt__measurement(void) {
 static void tt__log_summary(const tt_tuning *t) {
   uint32_t samples = (uint32_t)t->count;
   if (t->cached)
-    t->host->log(TT_LOG_INFO, NULL, "tuning: %u of %u costs came from the database %s (earlier "
-                 "runs measured those configurations in the same state; they were not measured "
-                 "again)", t->cached, samples, t->db ? tt_tunedb_path(t->db) : "");
+    tt_host_log(t->host, TT_LOG_INFO, NULL,
+                "tuning: %u of %u costs came from the database %s (earlier "
+                "runs measured those configurations in the same state; they were not measured "
+                "again)",
+                t->cached, samples, t->db ? tt_tunedb_path(t->db) : "");
   uint32_t iterations = 0;
   for (size_t i = 0; i < t->count; i++) iterations += t->samples[i].iteration >= 0;
   if (t->remeasured)
-    t->host->log(TT_LOG_INFO, NULL, "tuning: %u of %u iterations measured again a configuration "
-                 "already measured in this run (%s re-evaluating its best against noise; a "
-                 "configuration is judged by its mean cost)", t->remeasured, iterations,
-                 t->tuner_name ? t->tuner_name : "the tuner");
+    tt_host_log(t->host, TT_LOG_INFO, NULL,
+                "tuning: %u of %u iterations measured again a configuration "
+                "already measured in this run (%s re-evaluating its best against noise; a "
+                "configuration is judged by its mean cost)",
+                t->remeasured, iterations, t->tuner_name ? t->tuner_name : "the tuner");
 }
 
 tt_status tt_tuning_run(tt_tuning *t, const tt_tuning_target *target) {
@@ -668,14 +677,14 @@ tt_status tt_tuning_run(tt_tuning *t, const tt_tuning_target *target) {
     int logged = 0;
     m.status = tt__apply(t, target, cfg, t->pending_json, &m.build_ms);
     if (m.status != TT_OK) {
-      t->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: %s rejected %s: %s", it,
-                   t->plugin, t->pending_json, tt_last_error());
+      tt_host_log(t->host, TT_LOG_WARN, NULL, "tuning: iteration %d: %s rejected %s: %s", it,
+                  t->plugin, t->pending_json, tt_last_error());
       logged = 1;
     } else {
       m.status = target->render(target->user, t->spp, &m);
       if (m.status != TT_OK && m.status != TT_ERR_INTERRUPTED) {
-        t->host->log(TT_LOG_WARN, NULL, "tuning: iteration %d: the pass failed: %s", it,
-                     tt_last_error());
+        tt_host_log(t->host, TT_LOG_WARN, NULL, "tuning: iteration %d: the pass failed: %s", it,
+                    tt_last_error());
         logged = 1;
       }
     }
@@ -853,7 +862,7 @@ static void tt__verdict(tt_tuning *t, const tt_tuning_verification *v, const cha
     }
   }
   if (t->verdict != TT_TUNING_UNVERIFIED)
-    t->host->log(TT_LOG_INFO, NULL, "tuning: %s", t->reason);
+    tt_host_log(t->host, TT_LOG_INFO, NULL, "tuning: %s", t->reason);
 }
 
 tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_t rounds,
@@ -880,7 +889,8 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
   if (!cfg[0] || !cfg[1] || !m || !tmp || !json[0] || !json[1] ||
       tt_config_from_json(cfg[0], json[0], "default") != TT_OK ||
       tt_config_from_json(cfg[1], json[1], "best") != TT_OK) {
-    t->host->log(TT_LOG_ERROR, NULL, "tuning: --verify: cannot set up: %s", tt_last_error());
+    tt_host_log(t->host, TT_LOG_ERROR, NULL, "tuning: --verify: cannot set up: %s",
+                tt_last_error());
     rc = TT_ERR_OUT_OF_MEMORY;
     goto out;
   }
@@ -894,8 +904,9 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
       int res = tt__verify_one(t, target, cfg[who], json[who], &m[((size_t)r * 2 + who) * 3]);
       if (res == 1) rc = TT_ERR_INTERRUPTED;
       if (res < 0) {
-        t->host->log(TT_LOG_ERROR, NULL, "tuning: --verify: the %s configuration failed: %s",
-                     who ? "best" : "default", tt_last_error());
+        tt_host_log(t->host, TT_LOG_ERROR, NULL,
+                    "tuning: --verify: the %s configuration failed: %s", who ? "best" : "default",
+                    tt_last_error());
         rc = TT_ERR_INTERNAL;
         failed_best = who == 1;
         goto out;
