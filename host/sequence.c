@@ -1,7 +1,9 @@
 /* host: --sequence rendering (see sequence.h). Each frame is rendered with every sample at
  * the frame's Halton(2,3) jitter (tt_render_ctx.fixed_jitter), so geometry aliases as in a
  * rasteriser while shading converges with --spp; motion vectors come from the previous
- * frame's pose (one frame interval earlier, also for the first frame). The reference frame
+ * frame's pose (one frame interval earlier, also for the first frame). An animated scene
+ * is posed at each frame's time and its accel updated (tt_session_set_time: the accel's
+ * refit or rebuild) before the frame renders; the manifest records each update. The reference frame
  * is the same pose rendered at --reference-scale times the resolution per axis with
  * ordinary random sub-pixel positions, downsampled with a Blackman-Harris filter. */
 #include "sequence.h"
@@ -355,6 +357,7 @@ int tt__run_sequence(const tt__host_options *opt) {
   int render_frame = !opt->reference_only || opt->aov_mask;
   int entry_open = 0;  /* a frame's manifest entry is started but not closed */
   uint32_t done_frames = 0;
+  const int animated = tt_scene_animated(s.ses.scene);
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
     /* a stop asked for during the frame before (or, for the first frame, during the scene
      * loading and accel build) ends the sequence here; the first frame is always completed,
@@ -378,6 +381,17 @@ int tt__run_sequence(const tt__host_options *opt) {
             f / fps, ji, jit[0], jit[1], f == opt->seq_first ? "true" : "false");
     double render_ms = 0, ref_ms = 0, post_ms = 0;
     const float *depth = NULL;
+    if (animated) {
+      tt_accel_update_stats us = {.struct_size = sizeof us};
+      if (tt_session_set_time(s.ses.lib, f / fps, 1.0 / fps, &us) != TT_OK) {
+        tt__say("frame %u: %s\n", f, tt_last_error());
+        rc = TT_EXIT_FAILURE;
+        break;
+      }
+      fprintf(manifest, ", \"update\": \"%s\", \"update_ms\": %.3f", us.rebuilt ? "rebuild" : "refit",
+              us.update_ms);
+      if (us.sah_cost > 0) fprintf(manifest, ", \"sah_cost\": %.4f", us.sah_cost);
+    }
     if (render_frame) {
       uint64_t t0 = host->clock_ns();
       if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {

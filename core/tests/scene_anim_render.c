@@ -1,8 +1,12 @@
 /* A frame of an animated scene renders bit for bit the image of a still scene with every
  * object placed where the animation puts it at that frame's time (fixed seed): the scene
  * posed with tt_scene_set_time is written as a plain scene.json (tt_scene_write_json) and
- * rendered in a second session. Scene: scenes/animated-cornell (rigid keys with slerp and
- * cubic paths, a morph target, a moving area light whose area changes). */
+ * rendered in a second session. The same frame rendered by a session that started at time
+ * 0 and was moved there with tt_session_set_time (the accel updated by accel_embree's
+ * rebuild, or refitted by its native or custom backend; the integrator made again for the
+ * moved light) is the same image bit for bit too. Scene: scenes/animated-cornell (rigid
+ * keys with slerp and cubic paths, a morph target, a moving area light whose area
+ * changes). */
 #define _DEFAULT_SOURCE /* mkdtemp */
 #include <tunetrace/tunetrace.h>
 
@@ -14,9 +18,12 @@
 
 #define FPS 24.0
 
-/* Renders `passes` 1-spp passes of `path` at time t (camera and meshes) into a new buffer;
- * `write_to` (if set) receives the posed scene as scene.json. */
-static float *render_at(const char *path, double t, int pose, const char *write_to, uint32_t *w, uint32_t *h) {
+/* Renders 4 1-spp passes of `path` at time t (camera and meshes) into a new buffer;
+ * `write_to` (if set) receives the posed scene as scene.json. `sets` (key, value pairs of
+ * accel_embree, NULL-terminated; or NULL): the session starts at time 0 with them and moves
+ * to t with tt_session_set_time before it renders. */
+static float *render_at(const char *path, double t, int pose, const char *write_to,
+                        const char *const *sets, uint32_t *w, uint32_t *h) {
   tt_session *s = NULL;
   float *rgb = NULL;
   if (tt_session_create(NULL, &s) != TT_OK || tt_session_load_scene(s, path) != TT_OK) {
@@ -26,10 +33,22 @@ static float *render_at(const char *path, double t, int pose, const char *write_
   }
   tt_scene *scene = tt_session_scene(s);
   CHECK(tt_scene_animated(scene) == pose);
-  if (pose) CHECK_MSG(tt_scene_set_time(scene, t, t - 1.0 / FPS) == TT_OK, "%s", tt_last_error());
-  CHECK(tt_session_set_camera_time(s, t, 1.0 / FPS) == TT_OK);
+  if (sets) {
+    CHECK(tt_session_load_defaults(s) == TT_OK);
+    for (size_t i = 0; sets[i]; i += 2)
+      CHECK_MSG(tt_session_set(s, "accel_embree", sets[i], sets[i + 1]) == TT_OK, "%s", tt_last_error());
+    CHECK(tt_session_set_time(s, 0.0, 1.0 / FPS, NULL) == TT_OK);
+    CHECK(tt_session_start(s, 0) == TT_OK);
+    tt_accel_update_stats us = {.struct_size = sizeof us};
+    CHECK_MSG(tt_session_set_time(s, t, 1.0 / FPS, &us) == TT_OK, "%s", tt_last_error());
+    int refit = !strcmp(sets[1], "refit");
+    if (pose) CHECK_MSG(us.rebuilt == !refit, "updateMethod %s: rebuilt %d", sets[1], us.rebuilt);
+  } else {
+    if (pose) CHECK_MSG(tt_scene_set_time(scene, t, t - 1.0 / FPS) == TT_OK, "%s", tt_last_error());
+    CHECK(tt_session_set_camera_time(s, t, 1.0 / FPS) == TT_OK);
+  }
   if (write_to) CHECK_MSG(tt_scene_write_json(scene, write_to) == TT_OK, "%s", tt_last_error());
-  if (tt_session_start(s, 0) == TT_OK) {
+  if (tt_session_started(s) || tt_session_start(s, 0) == TT_OK) {
     for (int i = 0; i < 4; i++) CHECK(tt_session_render_pass(s, 1, NULL) == TT_OK);
     tt_film *film = tt_session_film(s);
     *w = tt_film_width(film);
@@ -54,14 +73,34 @@ int main(void) {
   size_t n = 0;
   for (int k = 0; k < 2; k++) {
     uint32_t w = 0, h = 0, w2 = 0, h2 = 0;
-    float *anim = render_at(scene, times[k], 1, still, &w, &h);
-    float *ref = render_at(still, times[k], 0, NULL, &w2, &h2);
+    float *anim = render_at(scene, times[k], 1, still, NULL, &w, &h);
+    float *ref = render_at(still, times[k], 0, NULL, NULL, &w2, &h2);
     CHECK(anim && ref && w == w2 && h == h2);
     if (anim && ref && w == w2 && h == h2) {
       n = (size_t)3 * w * h;
       size_t diff = 0;
       for (size_t i = 0; i < n; i++) diff += memcmp(&anim[i], &ref[i], sizeof(float)) != 0;
       CHECK_MSG(diff == 0, "t = %g: %zu of %zu values differ from the still scene placed at that time", times[k], diff, n);
+      /* a session moved to the frame: the accel rebuilt or refitted, the same image */
+      static const char *const updates[][5] = {{"updateMethod", "rebuild", NULL},
+                                               {"updateMethod", "refit", NULL},
+                                               {"updateMethod", "refit", "backend", "custom", NULL}};
+      static const char *const custom[] = {"updateMethod", "rebuild", "backend", "custom", NULL};
+      uint32_t w4 = 0, h4 = 0;
+      float *ref_custom = render_at(still, times[k], 0, NULL, custom, &w4, &h4);  /* its own traversal */
+      CHECK(ref_custom && w4 == w && h4 == h);
+      for (size_t u = 0; u < 3 && ref_custom; u++) {
+        uint32_t w3 = 0, h3 = 0;
+        float *moved = render_at(scene, times[k], 1, NULL, updates[u], &w3, &h3);
+        CHECK(moved && w3 == w && h3 == h);
+        const float *r = updates[u][2] ? ref_custom : ref;
+        size_t mdiff = 0;
+        for (size_t i = 0; moved && w3 == w && h3 == h && i < n; i++) mdiff += memcmp(&moved[i], &r[i], sizeof(float)) != 0;
+        CHECK_MSG(moved && mdiff == 0, "t = %g, %s %s: %zu of %zu values differ from the still scene", times[k],
+                  updates[u][1], updates[u][2] ? "custom" : "native", mdiff, n);
+        free(moved);
+      }
+      free(ref_custom);
     }
     if (k == 0) {
       first = anim;

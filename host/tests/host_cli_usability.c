@@ -110,7 +110,7 @@ int main(void) {
   /* the unknown-parameter error names the close one and lists the known ones */
   CHECK_CONTAINS(out, "unknown parameter \"qualty\" (did you mean \"quality\"? known: quality, "
                  "branchingFactor, maxDepth,");
-  CHECK_CONTAINS(out, "robust, backend, counters)");
+  CHECK_CONTAINS(out, "robust, backend, counters, updateMethod, refitInterval, refitSahGrowth)");
   CHECK_CONTAINS(out, "no plugin \"accel_embre\" is loaded (did you mean \"accel_embree\"?");
   /* --opt=value */
   snprintf(args, sizeof args, "--quiet --spp=2 --res=4x4 --out=%s/eq.exr --stats=%s/eq.json '%s'",

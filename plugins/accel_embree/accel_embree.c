@@ -7,7 +7,13 @@
  *
  * Backend "custom" builds with rtcBuildBVH and every numeric parameter, lays the tree out
  * itself and traverses it with its own SIMD kernels (accel_embree_custom.c,
- * accel_embree_trav.c); `compact` falls back to native, which has the only compact layout. */
+ * accel_embree_trav.c); `compact` falls back to native, which has the only compact layout.
+ *
+ * update() (an animated scene moved): "updateMethod" rebuild builds from scratch with the
+ * same settings; refit keeps the tree and recomputes its boxes -- native: the moving meshes
+ * were attached with RTC_BUILD_QUALITY_REFIT to a dynamic scene, their vertex buffers are
+ * rewritten and the scene committed again; custom: tt__custom_refit, bottom-up -- with a
+ * rebuild every refitInterval updates or once the SAH cost grew by refitSahGrowth. */
 #include "accel_embree.h"
 #include "accel_embree_bvh.h"
 
@@ -37,6 +43,12 @@ struct tt_accel {
   int counting;                /* custom with counters on */
   const tt_scene *source;      /* must outlive us (accel.h contract) */
   tt__embree_settings settings;
+  /* update(): native refit keeps each moving mesh's Embree vertex buffer (NULL for meshes
+   * attached with the tuned quality) and the revision it holds */
+  float **vbuf;
+  uint64_t *vrev;
+  uint32_t since_rebuild;      /* updates since the last build from scratch */
+  double sah_built;            /* SAH cost when last built from scratch (0 unknown) */
 };
 
 /* Plugin-wide state: set in init, released in deinit (both on the host's main thread). */
@@ -100,12 +112,28 @@ static const tt_space *tt__embree_space(void) { return g_space; }
 
 /* ---- build / destroy ---- */
 
-/* Releases the Embree scene or our tree, and the wrapper. */
+/* Releases the Embree scene or our tree (the wrapper stays, for a rebuild in place). */
+static void tt__embree_release(tt_accel *accel) {
+  if (accel->scene) rtcReleaseScene(accel->scene);
+  accel->scene = NULL;
+  tt__custom_free(accel->bvh);
+  accel->bvh = NULL;
+  free(accel->vbuf);
+  free(accel->vrev);
+  accel->vbuf = NULL;
+  accel->vrev = NULL;
+}
+
+/* Releases the structure and the wrapper. */
 static void tt__embree_destroy(tt_accel *accel) {
   if (!accel) return;
-  if (accel->scene) rtcReleaseScene(accel->scene);
-  tt__custom_free(accel->bvh);
+  tt__embree_release(accel);
   free(accel);
+}
+
+/* Non-zero when tt_scene_set_time may move the mesh (read only where struct_size has it). */
+static int tt__mesh_moves(const tt_mesh *m) {
+  return TT_HAS_FIELD(tt_mesh, m, motion) && m->motion != TT_MESH_STATIC;
 }
 
 /* Checks a mesh before Embree sees it: Embree does not validate indices and would read out
@@ -128,9 +156,10 @@ static tt_status tt__check_mesh(const tt_mesh *m, uint32_t index) {
   return TT_OK;
 }
 
-/* Creates the triangle geometry for mesh `index` and attaches it under geomID = index. */
+/* Creates the triangle geometry for mesh `index` and attaches it under geomID = index;
+ * `*vbuf` (if set) receives its Embree vertex buffer. */
 static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t index,
-                                 enum RTCBuildQuality quality) {
+                                 enum RTCBuildQuality quality, float **vbuf) {
   RTCGeometry g = rtcNewGeometry(g_device, RTC_GEOMETRY_TYPE_TRIANGLE);
   if (!g) return tt__embree_status("rtcNewGeometry");
   /* Positions are copied into an Embree-allocated buffer: Embree reads vertices with
@@ -143,6 +172,7 @@ static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t inde
     return tt__embree_status("rtcSetNewGeometryBuffer (vertices)");
   }
   memcpy(pos, m->positions, (size_t)m->vertex_count * 3 * sizeof(float));
+  if (vbuf) *vbuf = pos;
   rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->indices, 0,
                              3 * sizeof(uint32_t), m->triangle_count);
   /* Per-geometry quality matters for two-level (dynamic) builds, where each mesh gets its
@@ -162,8 +192,12 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
                                                    RTC_BUILD_QUALITY_HIGH};
   enum RTCBuildQuality quality = qualities[st->quality >= 1 && st->quality <= 3
                                                ? st->quality - 1 : 1];
+  /* Refit needs Embree's two-level (dynamic) scene: each moving mesh gets its own BVH,
+   * refitted on commit; the still meshes keep the tuned quality. A still scene builds as
+   * if updateMethod were rebuild. */
+  const int refit = st->update_method == TT__EMBREE_UPDATE_REFIT && tt_scene_animated(scene);
   int flags = RTC_SCENE_FLAG_NONE;
-  if (!st->is_static) flags |= RTC_SCENE_FLAG_DYNAMIC;
+  if (!st->is_static || refit) flags |= RTC_SCENE_FLAG_DYNAMIC;
   if (st->compact) flags |= RTC_SCENE_FLAG_COMPACT;
   if (st->robust) flags |= RTC_SCENE_FLAG_ROBUST;
 
@@ -174,11 +208,19 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
   rtcSetSceneBuildQuality(acc->scene, quality);
 
   const uint32_t meshes = tt_scene_mesh_count(scene);
+  if (refit) {
+    acc->vbuf = calloc(meshes, sizeof *acc->vbuf);
+    acc->vrev = calloc(meshes, sizeof *acc->vrev);
+    if (!acc->vbuf || !acc->vrev) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: out of memory");
+  }
   for (uint32_t i = 0; i < meshes; i++) {
     const tt_mesh *m = tt_scene_mesh(scene, i);
     if (m->triangle_count == 0) continue;  /* geomIDs may have gaps; Embree allows it */
-    tt_status s = tt__attach_mesh(acc->scene, m, i, quality);
+    const int moving = refit && tt__mesh_moves(m);
+    tt_status s = tt__attach_mesh(acc->scene, m, i, moving ? RTC_BUILD_QUALITY_REFIT : quality,
+                                  moving ? &acc->vbuf[i] : NULL);
     if (s != TT_OK) return s;
+    if (moving) acc->vrev[i] = m->revision;
   }
 
   const uint64_t t0 = g_host->clock_ns();
@@ -192,6 +234,8 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
   stats->memory_bytes = bytes > 0 ? (uint64_t)bytes : 0;
   return TT_OK;
 }
+
+static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out);
 
 /* Validates the inputs, checks/repairs the configuration and dispatches on the backend. */
 static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config,
@@ -258,6 +302,33 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
 
   tt_accel_build_stats stats;
   memset(&stats, 0, sizeof stats);
+  tt_status s = tt__build_backend(acc, &stats);
+  if (s != TT_OK) {
+    tt__embree_destroy(acc);
+    return s;
+  }
+  stats.repaired = cr == TT_CHECK_REPAIRED;
+  if (stats.repaired)
+    g_host->log(TT_LOG_DEBUG, TT__EMBREE_NAME, "configuration repaired: %s", why);
+
+  if (stats_out && stats_out->struct_size > sizeof stats_out->struct_size) {
+    /* Fill only the prefix the caller knows (it may be built against an older header). */
+    size_t n = stats_out->struct_size < sizeof stats ? stats_out->struct_size : sizeof stats;
+    uint32_t caller_size = stats_out->struct_size;
+    memcpy(stats_out, &stats, n);
+    stats_out->struct_size = caller_size;
+  }
+  *out = acc;
+  return TT_OK;
+}
+
+/* Builds acc's structure from scratch over acc->source with acc->settings (the wrapper
+ * holds none: a new one, or one released for a rebuild). */
+static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out) {
+  const tt_scene *scene = acc->source;
+  const tt__embree_settings st = acc->settings;
+  tt_accel_build_stats stats;
+  memset(&stats, 0, sizeof stats);
   rtcGetDeviceError(g_device);  /* clear a stale code so only this build's errors count */
   g_embree_error[0] = '\0';
 
@@ -287,21 +358,77 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
       break;
   }
   if (s != TT_OK) {
-    tt__embree_destroy(acc);
+    tt__embree_release(acc);
     return s;
   }
-  stats.repaired = cr == TT_CHECK_REPAIRED;
-  if (stats.repaired)
-    g_host->log(TT_LOG_DEBUG, TT__EMBREE_NAME, "configuration repaired: %s", why);
+  acc->since_rebuild = 0;
+  acc->sah_built = stats.sah_cost;
+  *out = stats;
+  return TT_OK;
+}
 
-  if (stats_out && stats_out->struct_size > sizeof stats_out->struct_size) {
-    /* Fill only the prefix the caller knows (it may be built against an older header). */
-    size_t n = stats_out->struct_size < sizeof stats ? stats_out->struct_size : sizeof stats;
-    uint32_t caller_size = stats_out->struct_size;
-    memcpy(stats_out, &stats, n);
-    stats_out->struct_size = caller_size;
+/* ---- update (animated scenes) ---- */
+
+/* Native refit: the moving meshes' vertex buffers take the new positions (only those
+ * whose revision changed), and the commit refits their BVHs and rebuilds the top level. */
+static tt_status tt__refit_native(tt_accel *acc) {
+  const tt_scene *scene = acc->source;
+  const uint32_t meshes = tt_scene_mesh_count(scene);
+  for (uint32_t i = 0; acc->vbuf && i < meshes; i++) {
+    const tt_mesh *m = tt_scene_mesh(scene, i);
+    if (!acc->vbuf[i] || m->revision == acc->vrev[i]) continue;
+    memcpy(acc->vbuf[i], m->positions, (size_t)m->vertex_count * 3 * sizeof(float));
+    RTCGeometry g = rtcGetGeometry(acc->scene, i);
+    rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry(g);
+    acc->vrev[i] = m->revision;
   }
-  *out = acc;
+  rtcCommitScene(acc->scene);
+  return tt__embree_status("rtcCommitScene (refit)");
+}
+
+/* Refit or rebuild, as the settings say (accel.h, update). */
+static tt_status tt__embree_update(tt_accel *acc, tt_accel_update_stats *out) {
+  if (!acc) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: update: accel is NULL");
+  const tt__embree_settings *st = &acc->settings;
+  const uint64_t t0 = g_host->clock_ns();
+  rtcGetDeviceError(g_device);
+  g_embree_error[0] = '\0';
+  int rebuild = st->update_method != TT__EMBREE_UPDATE_REFIT ||
+                (st->refit_interval > 0 && acc->since_rebuild + 1u >= (uint32_t)st->refit_interval);
+  double sah = 0.0;
+  tt_status s = TT_OK;
+  if (!rebuild && acc->bvh) {
+    sah = tt__custom_refit(acc->source, acc->bvh);
+    /* the growth test needs the refitted cost, so a rebuild it asks for comes after */
+    if (st->refit_sah_growth > 0.0f && acc->sah_built > 0.0 &&
+        sah > (double)st->refit_sah_growth * acc->sah_built)
+      rebuild = 1;
+  } else if (!rebuild) {
+    s = tt__refit_native(acc);
+  }
+  if (s == TT_OK && rebuild) {
+    tt__embree_release(acc);
+    tt_accel_build_stats bs;
+    s = tt__build_backend(acc, &bs);
+    sah = bs.sah_cost;
+  } else if (s == TT_OK) {
+    acc->since_rebuild++;
+  }
+  if (s != TT_OK) return s;
+  tt_accel_update_stats u;
+  memset(&u, 0, sizeof u);
+  u.update_ms = (double)(g_host->clock_ns() - t0) * 1e-6;
+  u.rebuilt = rebuild;
+  u.since_rebuild = acc->since_rebuild;
+  u.sah_cost = sah;
+  u.sah_growth = acc->sah_built > 0.0 && sah > 0.0 ? sah / acc->sah_built : 0.0;
+  if (out && out->struct_size > sizeof out->struct_size) {
+    uint32_t caller_size = out->struct_size;
+    size_t n = caller_size < sizeof u ? caller_size : sizeof u;
+    memcpy(out, &u, n);
+    out->struct_size = caller_size;
+  }
   return TT_OK;
 }
 
@@ -471,6 +598,7 @@ static const tt_accel_iface g_iface = {
     .occluded_stream = tt__embree_occluded_stream,
     .counters = tt__embree_counters,
     .destroy = tt__embree_destroy,
+    .update = tt__embree_update,
 };
 
 /* ---- plugin entry ---- */

@@ -30,7 +30,17 @@ typedef struct tt__embree_settings {
   int robust;             /* RTC_SCENE_FLAG_ROBUST */
   int backend;            /* a tt__embree_backend */
   int counters;           /* custom backend: count rays, nodes and triangles per query */
+  int update_method;      /* a tt__embree_update_method: what update() does when the scene moves */
+  int refit_interval;     /* refit: build from scratch every this many updates (0 never) */
+  float refit_sah_growth; /* refit, custom: build from scratch once the refitted tree's SAH
+                             cost exceeds this many times its cost when built (0 never) */
 } tt__embree_settings;
+
+/* Update methods, in the order of the "updateMethod" NOM parameter's values. */
+typedef enum tt__embree_update_method {
+  TT__EMBREE_UPDATE_REBUILD = 0,  /* build from scratch with the same configuration */
+  TT__EMBREE_UPDATE_REFIT = 1     /* keep the tree, recompute its boxes for the new positions */
+} tt__embree_update_method;
 
 /* Builds the published parameter space (once, at init); NULL with tt_set_error on failure. */
 tt_space *tt__embree_space_create(void);
@@ -59,6 +69,10 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
                            tt_accel_build_stats *stats);
 /* Frees a custom tree (NULL is ignored). */
 void tt__custom_free(struct tt__bvh *bvh);
+/* Refits a custom tree to the scene's current positions: every leaf's triangle data is
+ * recomputed from the mesh and every box set bottom-up to the union of its children (the
+ * topology stays). Returns the tree's SAH cost after the refit (as the build reports it). */
+double tt__custom_refit(const tt_scene *scene, struct tt__bvh *bvh);
 
 /* Text of the calling thread's last Embree error ("" if none). */
 const char *tt__embree_last_error(void);

@@ -579,3 +579,75 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   *out = bvh;
   return TT_OK;
 }
+
+/* ---- refit ---- */
+
+/* Refits the subtree `ref` whose box the caller stores: writes its box into lo/hi and adds
+ * its SAH terms to f (area_inner per inner node, area * triangles per leaf, as the layout
+ * pass counts them). Leaves repack their triangles from the current positions. */
+static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float lo[3],
+                          float hi[3]) {
+  for (int k = 0; k < 3; k++) {
+    lo[k] = INFINITY;
+    hi[k] = -INFINITY;
+  }
+  if (ref == TT__REF_NONE) return;
+  if (ref & TT__REF_LEAF) {
+    const uint32_t pairs = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u, wide = pairs / 2;
+    float *base = (float *)((char *)bvh->arena + (uint64_t)(ref & TT__LINE2_MASK) * 64u);
+    tt__id *id = (tt__id *)((char *)base + (size_t)pairs * 96u);
+    uint32_t tris = 0;
+    for (uint32_t j = 0; j < 2 * pairs; j++) {
+      if (id[j].geom == TT_INVALID_ID) continue;
+      int W = j < 4 * wide ? 4 : 2;
+      uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;
+      const uint32_t geom = id[j].geom, prim = id[j].prim;
+      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j], geom,
+                   prim);
+      const float *v[3];
+      tt__tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
+      for (int c = 0; c < 3; c++)
+        for (int k = 0; k < 3; k++) {
+          lo[k] = fminf(lo[k], v[c][k]);
+          hi[k] = fmaxf(hi[k], v[c][k]);
+        }
+      tris++;
+    }
+    f->area_leaf_tris += tt__area(lo, hi) * tris;
+    return;
+  }
+  const int N = f->N;
+  float *rows = (float *)(N == 2 ? (char *)bvh->arena + (uint64_t)ref * 64u
+                                 : (char *)bvh->nodes + (uint64_t)ref * (uint64_t)(32 * N));
+  const uint32_t *child = (const uint32_t *)(rows + 6 * N);
+  for (int i = 0; i < N; i++) {
+    float *clo[3], *cup[3];
+    for (int k = 0; k < 3; k++) {
+      clo[k] = N == 2 ? &rows[4 * k + i] : &rows[(2 * k) * N + i];
+      cup[k] = N == 2 ? &rows[4 * k + 2 + i] : &rows[(2 * k + 1) * N + i];
+    }
+    if (!(*clo[0] <= *cup[0])) continue;  /* an empty lane stays empty */
+    float b[6];
+    tt__refit_ref(f, bvh, child[i], b, b + 3);
+    for (int k = 0; k < 3; k++) {
+      *clo[k] = b[k];
+      *cup[k] = b[3 + k];
+      lo[k] = fminf(lo[k], b[k]);
+      hi[k] = fmaxf(hi[k], b[3 + k]);
+    }
+  }
+  f->area_inner += tt__area(lo, hi);
+}
+
+double tt__custom_refit(const tt_scene *scene, tt__bvh *bvh) {
+  if (!bvh || bvh->root == TT__REF_NONE) return 0.0;
+  tt__flat f;
+  memset(&f, 0, sizeof f);
+  f.scene = scene;
+  f.N = bvh->width;
+  f.robust = bvh->robust;
+  float lo[3], hi[3];
+  tt__refit_ref(&f, bvh, bvh->root, lo, hi);
+  double root_area = tt__area(lo, hi);
+  return root_area > 0.0 ? (f.area_inner + f.area_leaf_tris) / root_area : 0.0;
+}

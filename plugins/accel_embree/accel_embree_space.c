@@ -107,6 +107,7 @@ tt_space *tt__embree_space_create(void) {
   static const int64_t qualities[] = {1, 2, 3};
   static const int64_t factors[] = {2, 4, 8};
   static const char *const backends[] = {"native", "custom"};
+  static const char *const updates[] = {"rebuild", "refit"};
   int ok = 1;
   ok &= tt_space_add_nom_int(s, "quality", qualities, 3, 1,
                              "BVH builder: 1 Morton (RTC_BUILD_QUALITY_LOW), 2 binned SAH "
@@ -148,6 +149,18 @@ tt_space *tt__embree_space_create(void) {
   ok &= tt_space_add_nom_bool(s, "counters", 0,
                               "instrumentation, not a tuning parameter: count rays, nodes "
                               "visited and triangles tested (custom backend; slows queries)") >= 0;
+  /* The per-frame update of an animated scene (appended: the Table 3.1 indices stay). */
+  ok &= tt_space_add_nom_string(s, "updateMethod", updates, 2, TT__EMBREE_UPDATE_REBUILD,
+                                "when an animated scene moves: rebuild (from scratch with "
+                                "these parameters) or refit (keep the tree, recompute its "
+                                "boxes; native: RTC_BUILD_QUALITY_REFIT on a dynamic scene "
+                                "for the moving meshes); nothing changes for a still scene") >= 0;
+  ok &= tt_space_add_int(s, "refitInterval", 0, 64, 0,
+                         "refit: build from scratch every this many updates (0: never)") >= 0;
+  ok &= tt_space_add_float(s, "refitSahGrowth", 0.0, 8.0, 0.0, 0,
+                           "refit: build from scratch once the refitted tree's SAH cost "
+                           "exceeds this many times its cost when built (0: never; custom "
+                           "backend, Embree's scene API reports no SAH cost)") >= 0;
   /* What tuners may change (tunetrace/params.h): counters is instrumentation, not a tuning
    * parameter; the custom builder's settings act only with backend custom and compact false
    * (compact=true builds with native). "static" acts with native and with custom+compact
@@ -161,6 +174,12 @@ tt_space *tt__embree_space_create(void) {
     ok &= tt_space_add_condition(s, k, "backend", custom, 1) == TT_OK &&
           tt_space_add_condition(s, k, "compact", no, 1) == TT_OK;
   }
+  static const char *const refit[] = {"refit"};
+  if (ok)
+    ok &= tt_space_add_condition(s, (size_t)tt_space_find(s, "refitInterval"), "updateMethod",
+                                 refit, 1) == TT_OK &&
+          tt_space_add_condition(s, (size_t)tt_space_find(s, "refitSahGrowth"), "updateMethod",
+                                 refit, 1) == TT_OK;
   if (!ok) {
     tt_space_destroy(s);
     tt_set_error(TT_ERR_INTERNAL, "accel_embree: could not build the parameter space");
@@ -200,6 +219,9 @@ void tt__embree_settings_from_config(const tt_config *c, tt__embree_settings *o)
   o->robust = (int)tt_config_get_int(c, "robust", 0);
   o->backend = (int)tt_config_get_int(c, "backend", TT__DEF_BACKEND);
   o->counters = (int)tt_config_get_int(c, "counters", 0);
+  o->update_method = (int)tt_config_get_int(c, "updateMethod", TT__EMBREE_UPDATE_REBUILD);
+  o->refit_interval = (int)tt_config_get_int(c, "refitInterval", 0);
+  o->refit_sah_growth = (float)tt_config_get_float(c, "refitSahGrowth", 0.0);
 }
 
 /* Lists custom-only parameters set away from their defaults (for the native-backend WARN). */

@@ -145,8 +145,9 @@ static void brute_destroy(tt_accel *a) {
   free(a);
 }
 
+/* An ABI 1.1 table (no update): callers that move the scene build it again. */
 static const tt_accel_iface brute_iface = {
-  sizeof(tt_accel_iface), brute_space, brute_build, brute_intersect1, brute_occluded1,
-  brute_intersect_stream, brute_occluded_stream, brute_counters, brute_destroy};
+  TT_ACCEL_IFACE_SIZE_1_1, brute_space, brute_build, brute_intersect1, brute_occluded1,
+  brute_intersect_stream, brute_occluded_stream, brute_counters, brute_destroy, NULL};
 
 const tt_accel_iface *tt_test_brute_accel(void) { return &brute_iface; }

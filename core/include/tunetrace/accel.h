@@ -3,9 +3,11 @@
  * An accel builds a structure over the scene's triangle meshes with a configuration of its
  * parameter space (thesis Table 3.1 for accel_embree), then answers closest-hit and
  * occlusion queries for single rays and for streams of rays. Rebuilding with another
- * configuration (the autotuning loop) is destroy + build.
+ * configuration (the autotuning loop) is destroy + build. When an animated scene moves
+ * (tt_scene_set_time), update() brings the structure up to date (refit or rebuild, as its
+ * configuration says); a table without update (ABI 1.1) is destroyed and built again.
  *
- * Threads: build/destroy from one thread at a time (they may use host->parallel_for);
+ * Threads: build/destroy/update from one thread at a time (they may use host->parallel_for);
  * every query function is thread-safe on a built accel and must not allocate.
  */
 #ifndef TUNETRACE_ACCEL_H
@@ -43,6 +45,17 @@ typedef struct tt_accel_counters {
   uint64_t triangles_tested;
 } tt_accel_counters;
 
+/* Filled by update() (ABI 1.2). */
+typedef struct tt_accel_update_stats {
+  uint32_t struct_size;     /* set by the caller to sizeof; the plugin fills only that much */
+  double update_ms;         /* wall time of the update (refit or rebuild) */
+  int32_t rebuilt;          /* 1: built again from scratch; 0: refitted in place */
+  uint32_t since_rebuild;   /* updates since the structure was last built from scratch (0
+                               after a rebuild) */
+  double sah_cost;          /* SAH cost after the update, as tt_accel_build_stats (0 unknown) */
+  double sah_growth;        /* sah_cost / its value at the last rebuild (0 unknown) */
+} tt_accel_update_stats;
+
 typedef struct tt_accel_iface {
   uint32_t struct_size;     /* sizeof(tt_accel_iface) as the plugin was built */
 
@@ -77,8 +90,21 @@ typedef struct tt_accel_iface {
   /* Releases the structure (NULL is ignored). */
   void (*destroy)(tt_accel *accel);
 
-  /* ---- appended in later ABI minors: check struct_size ---- */
+  /* ---- appended in later ABI minors: check struct_size (TT_HAS_FIELD) ---- */
+
+  /* ABI 1.2. Brings `accel` up to date after the positions of its scene's meshes changed
+   * (tt_scene_set_time: same meshes, vertex counts and indices; tt_mesh.revision tells
+   * which moved). How -- refit the boxes, or build again from scratch with the
+   * configuration it was built with -- is the plugin's choice, usually a parameter.
+   * Afterwards queries answer for the new positions exactly as a fresh build would (same
+   * closest t and ids up to ties between equally distant triangles). `stats` may be NULL.
+   * On failure the accel must not be queried again: destroy it. NULL (or a table too short
+   * to hold it): the host destroys the accel and builds it again. */
+  tt_status (*update)(tt_accel *accel, tt_accel_update_stats *stats);
 } tt_accel_iface;
+
+/* Size of the ABI 1.1 table (before update): the smallest table a host accepts. */
+#define TT_ACCEL_IFACE_SIZE_1_1 offsetof(tt_accel_iface, update)
 
 #ifdef __cplusplus
 }

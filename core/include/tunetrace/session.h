@@ -89,6 +89,18 @@ TT_API tt_status tt_session_set_camera_time(tt_session *s, double t, double fram
  * without a scene. */
 TT_API const tt_camera *tt_session_camera(const tt_session *s);
 
+/* Moves the session to time `t` of an animated scene: the meshes are posed at `t` with
+ * their previous positions at `t - frame_interval` (tt_scene_set_time, for object motion
+ * vectors), the camera as tt_session_set_camera_time, and once started the accel is brought
+ * up to date -- the accel plugin's update (refit or rebuild, as its configuration says), or
+ * destroy + build for a plugin without one -- and the integrator is created again when an
+ * area light moved (its light distribution depends on the triangles). `stats` (may be
+ * NULL): what the update did (update_ms, rebuilt, ...); zeroed for a still scene, which
+ * only moves its camera. The film keeps what it holds (tt_session_reset for a new frame).
+ * On an update failure no accel is left: render calls fail until a rebuild succeeds. */
+TT_API tt_status tt_session_set_time(tt_session *s, double t, double frame_interval,
+                                     tt_accel_update_stats *stats);
+
 /* Loads a plugin by name (searched) or path and gives it a configuration of its space.
  * `*out` (may be NULL) points to it, owned by the session. Errors are the loader's (missing
  * file, ABI, second plugin of a kind, ...). Before tt_session_start. */

@@ -245,7 +245,7 @@ static void tt__iface_missing(uint32_t kind, const void *iface, char *buf, size_
 /* Minimum interface table size per kind: the ABI 1.0 size (tables grown in 1.1 name it). */
 static size_t tt__iface_min_size(uint32_t kind) {
   switch (kind) {
-    case TT_KIND_ACCEL: return sizeof(tt_accel_iface);
+    case TT_KIND_ACCEL: return TT_ACCEL_IFACE_SIZE_1_1;
     case TT_KIND_INTEGRATOR: return sizeof(tt_integrator_iface);
     case TT_KIND_TUNER: return TT_TUNER_IFACE_SIZE_1_0;
     case TT_KIND_PREDICTOR: return TT_PREDICTOR_IFACE_SIZE_1_0;

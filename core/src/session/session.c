@@ -5,6 +5,7 @@
 #include <tunetrace/suggest.h>
 #include <tt_util/strings.h>
 
+#include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -142,6 +143,75 @@ tt_status tt_session_set_camera_time(tt_session *s, double t, double frame_inter
   s->prev_camera.height = cam.height;
   s->has_prev = frame_interval > 0;
   tt_scene_set_camera(s->scene, &cam);
+  return TT_OK;
+}
+
+/* Non-zero when an area light's mesh moves: the path tracer's light distribution (areas,
+ * triangle CDFs) was computed from the positions at create. */
+static int tt__lights_move(const tt_scene *scene) {
+  for (uint32_t i = 0; i < tt_scene_mesh_count(scene); i++) {
+    const tt_mesh *m = tt_scene_mesh(scene, i);
+    if (m->light >= 0 && m->motion != TT_MESH_STATIC) return 1;
+  }
+  return 0;
+}
+
+/* Brings the started session's accel up to date after the scene moved. */
+static tt_status tt__update_accel(tt_session *s, tt_accel_update_stats *out) {
+  tt_accel_update_stats u;
+  memset(&u, 0, sizeof u);
+  u.struct_size = sizeof u;
+  tt_status st;
+  if (s->accel && TT_HAS_FIELD(tt_accel_iface, s->ai, update) && s->ai->update) {
+    st = s->ai->update(s->accel, &u);
+    if (st != TT_OK) {
+      s->ai->destroy(s->accel);
+      s->accel = NULL;
+      return tt__session_error(st, "%s: update failed: ", tt_loaded_plugin_entry(s->accel_p)->name);
+    }
+  } else {  /* an ABI 1.1 accel (or one left without a structure): build from scratch */
+    double ms = 0;
+    uint64_t t0 = s->host->clock_ns();
+    st = tt_session_rebuild_accel(s, NULL, &ms);
+    if (st != TT_OK) return st;
+    u.update_ms = (s->host->clock_ns() - t0) * 1e-6;
+    u.rebuilt = 1;
+    u.sah_cost = s->stats.build.sah_cost;
+  }
+  if (out && out->struct_size > sizeof out->struct_size) {
+    uint32_t size = out->struct_size;
+    memcpy(out, &u, size < sizeof u ? size : sizeof u);
+    out->struct_size = size;
+  }
+  return TT_OK;
+}
+
+tt_status tt_session_set_time(tt_session *s, double t, double frame_interval,
+                              tt_accel_update_stats *stats) {
+  if (stats && stats->struct_size > sizeof stats->struct_size) {
+    uint32_t size = stats->struct_size;
+    memset(stats, 0, size < sizeof *stats ? size : sizeof *stats);
+    stats->struct_size = size;
+  }
+  if (!s || !s->scene) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "set time: no scene loaded");
+  if (!isfinite(t) || !isfinite(frame_interval) || frame_interval < 0)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "set time: t = %g and frame interval %g "
+                        "must be finite (the interval >= 0)", t, frame_interval);
+  tt_status st = tt_session_set_camera_time(s, t, frame_interval);
+  if (st != TT_OK || !tt_scene_animated(s->scene)) return st;
+  if ((st = tt_scene_set_time(s->scene, t, t - frame_interval)) != TT_OK) return st;
+  if (!s->started) return TT_OK;  /* tt_session_start builds over this pose */
+  if ((st = tt__update_accel(s, stats)) != TT_OK) return st;
+  if (tt__lights_move(s->scene)) {
+    s->ii->destroy(s->integrator);
+    s->integrator = NULL;
+    const tt_config *icfg = tt_session_config(s, tt_loaded_plugin_entry(s->integ_p)->name);
+    st = s->ii->create(s->scene, icfg, &s->integrator);
+    if (st != TT_OK) {
+      s->integrator = NULL;
+      return tt__session_error(st, "%s: ", tt_loaded_plugin_entry(s->integ_p)->name);
+    }
+  }
   return TT_OK;
 }
 
@@ -401,6 +471,9 @@ static tt_status tt__can_render(const tt_session *s) {
   if (!s->accel)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no accel structure (its last build failed)",
                         tt_loaded_plugin_entry(s->accel_p)->name);
+  if (!s->integrator)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no integrator (creating it again after "
+                        "the scene moved failed)", tt_loaded_plugin_entry(s->integ_p)->name);
   return TT_OK;
 }
 

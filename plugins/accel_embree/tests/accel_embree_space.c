@@ -64,14 +64,14 @@ static double json_num(const cJSON *v) {
 static void test_space(const tt_space *space) {
   CHECK(space != NULL);
   CHECK(strcmp(tt_space_plugin(space), "accel_embree") == 0);
-  CHECK(tt_space_count(space) == 13);
+  CHECK(tt_space_count(space) == 16);
   char *json = tt_space_to_json(space);
   CHECK(json != NULL);
   cJSON *root = cJSON_Parse(json);
   CHECK_MSG(root != NULL, "tt_space_to_json output does not parse: %s", json);
   if (!root) return;
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
-  CHECK(cJSON_GetArraySize(params) == 13);
+  CHECK(cJSON_GetArraySize(params) == 16);
   for (size_t k = 0; k < sizeof table31 / sizeof table31[0]; k++) {
     const expect *e = &table31[k];
     CHECK_CONTAINS(json, e->name);
@@ -155,6 +155,20 @@ static void test_space(const tt_space *space) {
   for (size_t k = 0; k < 5; k++) {
     size_t i = (size_t)tt_space_find(space, always[k]);
     CHECK(tt_space_is_tunable(space, i) && tt_space_condition_count(space, i) == 0);
+  }
+  /* the per-frame update of animated scenes, appended after counters: updateMethod
+   * (rebuild by default) always acts; its refit schedule only with refit */
+  int um = tt_space_find(space, "updateMethod");
+  CHECK(um == 13 && tt_space_nom_count(space, (size_t)um) == 2 && tt_space_default(space, (size_t)um).index == 0);
+  CHECK(tt_space_is_tunable(space, (size_t)um) && tt_space_condition_count(space, (size_t)um) == 0);
+  static const char *const refit_only[] = {"refitInterval", "refitSahGrowth"};
+  for (size_t k = 0; k < 2; k++) {
+    int i = tt_space_find(space, refit_only[k]);
+    CHECK_MSG(i == 14 + (int)k && tt_space_is_tunable(space, (size_t)i) &&
+              tt_space_condition_count(space, (size_t)i) == 1, "%s", refit_only[k]);
+    CHECK(tt_config_set_string(cc, "updateMethod", "rebuild") == TT_OK && !tt_config_is_active(cc, (size_t)i));
+    CHECK(tt_config_set_string(cc, "updateMethod", "refit") == TT_OK && tt_config_is_active(cc, (size_t)i));
+    CHECK(tt_space_default(space, (size_t)i).f == 0.0);
   }
   tt_config_destroy(cc);
   /* constraint texts are published */
