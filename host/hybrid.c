@@ -11,7 +11,6 @@
  * DIR/state_NNNN.exr). --stats records every state (mode, configuration, cost, predicted
  * cost, builds, predict ms) and the totals.
  */
-#define _POSIX_C_SOURCE 200809L
 #include "tune.h"
 
 #include <tt_util/clock.h>

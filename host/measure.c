@@ -11,7 +11,6 @@
  * FILE.json: an array of configuration objects of the accel (partial ones are put into its
  * configured values, as --set would). Output (stdout): JSON with per configuration its
  * canonical JSON, status, per-round build/render/cost and the medians. */
-#define _POSIX_C_SOURCE 200809L
 #include "session.h"
 
 #include <tt_util/stats.h>

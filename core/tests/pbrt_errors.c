@@ -1,6 +1,5 @@
 /* pbrt-v4 importer: malformed input gives a clear "file:line: ..." error and never a crash;
  * a fuzz loop truncates and corrupts a fixture. Scratch files go to the build directory. */
-#define _POSIX_C_SOURCE 200809L /* clock_gettime, dup2, mkdir */
 #include <tunetrace/scene.h>
 
 #include "tt_test.h"

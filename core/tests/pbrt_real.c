@@ -6,7 +6,6 @@
  * the camera paths): each loads with the pbrt file's geometry (same scene id), has a path
  * whose samples 0, 50 and 99 are finite and distinct, and `host --camera-index` renders
  * those samples at 16x16, 1 spp without NaN and not all black. */
-#define _POSIX_C_SOURCE 200809L /* clock_gettime, dup2, mkdir */
 #include <tunetrace/image.h>
 #include <tunetrace/scene.h>
 

@@ -7,7 +7,6 @@
  * moved light) is the same image bit for bit too. Scene: scenes/animated-cornell (rigid
  * keys with slerp and cubic paths, a morph target, a moving area light whose area
  * changes). */
-#define _DEFAULT_SOURCE /* mkdtemp */
 #include <tunetrace/tunetrace.h>
 
 #include "tt_test.h"

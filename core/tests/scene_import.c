@@ -5,7 +5,6 @@
  * field and the imported file (missing file, wrong format, nested import / cycles, a parse
  * error inside the imported file). Fixtures: tests/data/pbrt/{basic,handed}.pbrt and
  * wrap-basic.json; error cases write small files into the build tree. */
-#define _POSIX_C_SOURCE 200809L /* mkdir */
 #include <tunetrace/scene.h>
 
 #include "tt_test.h"

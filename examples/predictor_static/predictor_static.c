@@ -15,7 +15,8 @@
  * 1.0 still gets the 1.0 functions. Model files: a small text format, versioned and
  * checksummed, written to a temporary file and renamed (static_save).
  */
-#define _POSIX_C_SOURCE 200809L /* open_memstream */
+/* open_memstream; its Makefile, unlike meson, sets no _GNU_SOURCE */
+#define _POSIX_C_SOURCE 200809L
 #include <tunetrace/file.h>
 #include <tunetrace/plugin.h>
 #include <tunetrace/predictor.h>

@@ -1,5 +1,4 @@
 /* Model files of the predictor plugins: see model_file.h for the layout. */
-#define _POSIX_C_SOURCE 200809L
 #include "model_file.h"
 
 #include <tunetrace/file.h>

@@ -4,7 +4,6 @@
  * file (.pbrt or a scene.json without an import of its own): its meshes, materials, lights,
  * camera and settings are loaded first, then this file's camera/render override them and
  * its materials/meshes/lights are appended. */
-#define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io_internal.h"
 #include "io/scene_json_internal.h"
 #include "plugin/log.h"

@@ -1,7 +1,6 @@
 /* Hybrid online autotuning (tunetrace/hybrid.h): eps-greedy between a K-iteration search and
  * one predicted configuration per state, every state a tuning session (tuning.h) over the
  * caller's target, every cost observed by the model. */
-#define _POSIX_C_SOURCE 200809L
 #include <tunetrace/hybrid.h>
 
 #include "tuning/tuning_internal.h"

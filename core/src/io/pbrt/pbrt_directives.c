@@ -1,7 +1,6 @@
 /* pbrt-v4 importer: the directives. A {name, handler} table maps each directive to one
  * function that reads its arguments and applies it through the graphics state, materials,
  * geometry and lights files; unknown directives warn and are skipped with their arguments. */
-#define _XOPEN_SOURCE 700 /* realpath */
 #include "io/pbrt/pbrt_internal.h"
 #include "plugin/log.h"
 
