@@ -66,6 +66,7 @@ struct tt_integrator {
   uint32_t strategy_depth;
   double *strategy_sum;       /* strategies * pixels * 6 */
   uint64_t camera_samples;    /* samples per pixel in the film */
+  int warned_dark;            /* "no light reached the camera" said once */
 };
 
 /* ---- parameters ---- */
@@ -202,7 +203,7 @@ typedef struct bd_job {
   tt_bdpt_paths **paths;           /* per thread, made on first use */
   uint32_t threads;
   bd_splats *splats;               /* per tile */
-  atomic_uint_fast64_t rays, samples, nonfinite, splat_count;
+  atomic_uint_fast64_t rays, samples, nonfinite, splat_count, contributions;
   atomic_int interrupted, failed;
 } bd_job;
 
@@ -255,7 +256,7 @@ static void bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
                    con = {bd_stream_get, NULL, &ks};
   double *strat = it->strategy_sum;
   const size_t pixels = it->pixels;
-  uint64_t rays = 0, samples = 0, nonfinite = 0, splat_count = 0;
+  uint64_t rays = 0, samples = 0, nonfinite = 0, splat_count = 0, contributions = 0;
   for (uint64_t tile = begin; tile < end; ++tile) {
     if (host->should_stop && host->should_stop()) {
       atomic_store(&job->interrupted, 1);
@@ -293,6 +294,7 @@ static void bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
                                         TT_BDPT_CONNECT_DIMS * t, &c);
               nonfinite += c.nonfinite ? 1u : 0u;
               if (!got) continue;
+              contributions++;
               uint32_t si = bd_strategy_index(sl, t);
               if (t == 1) {
                 uint32_t sx = (uint32_t)c.fx, sy = (uint32_t)c.fy;
@@ -331,6 +333,7 @@ static void bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
   atomic_fetch_add(&job->samples, samples);
   atomic_fetch_add(&job->nonfinite, nonfinite);
   atomic_fetch_add(&job->splat_count, splat_count);
+  atomic_fetch_add(&job->contributions, contributions);
 }
 
 /* Sums the tiles' splat records in tile order (the same additions whatever thread rendered
@@ -471,6 +474,7 @@ static tt_status bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
   atomic_init(&job->samples, 0);
   atomic_init(&job->nonfinite, 0);
   atomic_init(&job->splat_count, 0);
+  atomic_init(&job->contributions, 0);
   atomic_init(&job->interrupted, 0);
   atomic_init(&job->failed, 0);
   if (st == TT_OK) memset(it->splat_sum, 0, 3 * pixels * sizeof(double));
@@ -503,6 +507,15 @@ static tt_status bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
     }
     if (it->light_paths > 0) tt_film_set_splat_scale(ctx->film, (double)pixels / (double)it->light_paths);
     if (it->strategy_path && it->strategy_sum && done_samples > 0) bd_write_strategies(it, w, h);
+  }
+  /* Lights exist but no strategy of a whole pass reached the camera (lights enclosed, facing
+   * away, or behind something only a specular chain crosses): say why the image is black. */
+  if (st == TT_OK && done_samples > 0 && atomic_load(&job->contributions) == 0 && !it->warned_dark &&
+      tt_scene_light_count(it->scene) > 0) {
+    it->warned_dark = 1;
+    tt_host_log(host, TT_LOG_WARN, BD_NAME, "no light reached the camera in %llu samples: the image is "
+                "black (are the lights enclosed, or facing away from everything in view?)",
+                (unsigned long long)done_samples);
   }
   for (uint32_t i = 0; job->paths && i < job->threads; ++i) tt_bdpt_paths_destroy(job->paths[i]);
   for (uint64_t t = 0; job->splats && t < tiles; ++t) free(job->splats[t].v);

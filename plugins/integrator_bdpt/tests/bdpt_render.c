@@ -93,6 +93,17 @@ static const char *DEGENERATE = HEAD "\"meshes\":[" FLOOR("white") "," WALLS ","
     "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, 0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
     "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
     "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
+/* Warnings the plugin logged (tt_default_host's log callback). */
+static char g_warnings[4096];
+static void capture_log(void *user, tt_log_level level, const char *plugin, const char *message) {
+  (void)user;
+  if (level < TT_LOG_WARN || strlen(g_warnings) + strlen(message) + 2 > sizeof g_warnings) return;
+  strcat(g_warnings, plugin ? plugin : "-");
+  strcat(g_warnings, ": ");
+  strcat(g_warnings, message);
+  strcat(g_warnings, "\n");
+}
+
 typedef struct setup {
   const tt_integrator_iface *it;
   const tt_space *space;
@@ -454,7 +465,12 @@ int main(void) {
     pt_fixture_free(&s.fx);
     /* lights (area, spot, point) that nothing in view can see: black, every strategy tried */
     CHECK(pt_fixture_load(&s.fx, ENCLOSED));
+    g_warnings[0] = '\0';
+    tt_default_host_set_log_callback(capture_log, NULL);
     CHECK(render(&s, NULL, 1, 8, 1, 0, &film, &ps) == TT_OK);
+    tt_default_host_set_log_callback(NULL, NULL);
+    CHECK_MSG(strstr(g_warnings, "integrator_bdpt: no light reached the camera in 2048 samples") != NULL,
+              "enclosed lights: no warning that the image is black; logged: %s", g_warnings);
     tt_film_resolve(film, rgb);
     nz = 0;
     for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);

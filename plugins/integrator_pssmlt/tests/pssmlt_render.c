@@ -88,6 +88,17 @@ static const char *DEGENERATE = BOX_HEAD "\"meshes\":["
     "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
     "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
 
+/* Warnings the plugin logged (tt_default_host's log callback). */
+static char g_warnings[4096];
+static void capture_log(void *user, tt_log_level level, const char *plugin, const char *message) {
+  (void)user;
+  if (level < TT_LOG_WARN || strlen(g_warnings) + strlen(message) + 2 > sizeof g_warnings) return;
+  strcat(g_warnings, plugin ? plugin : "-");
+  strcat(g_warnings, ": ");
+  strcat(g_warnings, message);
+  strcat(g_warnings, "\n");
+}
+
 typedef struct setup {
   const tt_integrator_iface *it;
   const tt_space *space;
@@ -450,7 +461,12 @@ int main(void) {
     CHECK(pt_fixture_load(&s.fx, ENCLOSED));
     tt_film *film = NULL;
     tt_pass_stats ps;
+    g_warnings[0] = '\0';
+    tt_default_host_set_log_callback(capture_log, NULL);
     CHECK(render(&s, cfgs, 1, 2, 1, &film, &ps) == TT_OK);
+    tt_default_host_set_log_callback(NULL, NULL);
+    CHECK_MSG(strstr(g_warnings, "integrator_pssmlt: all ") && strstr(g_warnings, "have zero contribution"),
+              "enclosed light, mode %d: no warning that the image is black; logged: %s", mode, g_warnings);
     CHECK(metric(&ps, "b") == 0.0 && ps.nonfinite == 0);
     tt_film_resolve(film, rgb);
     int nz = 0;
