@@ -296,8 +296,11 @@ int tt__run_sequence(const tt__host_options *opt) {
   s.seed = opt->seed_set ? opt->seed : settings->seed;
   s.spp = opt->spp ? opt->spp : settings->spp;
   /* prevdepth is the host's own (from depth and the poses), not a film AOV */
-  rc = tt__session_start(&s.ses,
-                         TT_AOV_DEPTH | TT_AOV_MOTION | (opt->aov_mask & ~TT__AOV_PREVDEPTH));
+  /* a still scene's prevdepth is the host's own (from depth and the poses); an animated
+   * scene's comes from the film, which knows where each hit was (objects move too) */
+  const int animated = tt_scene_animated(s.ses.scene);
+  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION | (animated ? TT_AOV_PREV_DEPTH : 0) |
+                                     (opt->aov_mask & ~TT__AOV_PREVDEPTH));
   if (rc != TT_EXIT_OK) goto done;
   const tt_camera *still = s.ses.camera;
   uint32_t w = still->width, h = still->height, k = opt->reference_scale;
@@ -357,7 +360,6 @@ int tt__run_sequence(const tt__host_options *opt) {
   int render_frame = !opt->reference_only || opt->aov_mask;
   int entry_open = 0;  /* a frame's manifest entry is started but not closed */
   uint32_t done_frames = 0;
-  const int animated = tt_scene_animated(s.ses.scene);
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
     /* a stop asked for during the frame before (or, for the first frame, during the scene
      * loading and accel build) ends the sequence here; the first frame is always completed,
@@ -402,7 +404,10 @@ int tt__run_sequence(const tt__host_options *opt) {
       render_ms = (host->clock_ns() - t0) * 1e-6;
       depth = tt_film_aov_const(film, TT_AOV_DEPTH);
       memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
-      tt__seq_prev_depth(&cam, &prev, jit, depth, w, h, prev_depth);
+      if (animated)
+        memcpy(prev_depth, tt_film_aov_const(film, TT_AOV_PREV_DEPTH), (size_t)w * h * sizeof(float));
+      else
+        tt__seq_prev_depth(&cam, &prev, jit, depth, w, h, prev_depth);
       struct {
         tt__seq_file what;
         const char *key;

@@ -16,7 +16,7 @@ import numpy as np
 import OpenImageIO as oiio
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests", "support"))
-from plane_scene import MOVING_PATH, motion_pixels, pixel_size, plane, write  # noqa: E402
+from plane_scene import DISTANCE, MOVING_PATH, motion_pixels, pixel_size, plane, write  # noqa: E402
 
 HOST = os.path.join(os.environ["TT_BUILD_ROOT"], "host", "host")
 failures = checks = 0
@@ -125,6 +125,45 @@ def main():
         c, _ = read(os.path.join(seq, "frame_0001.normal.exr"))
         check(c and np.allclose(c.get("Z", np.zeros(1)), -1, atol=1e-5), "sequence normal.Z -1")
         check(not os.path.exists(os.path.join(seq, "frame_0000.motion.exr")), "motion not asked")
+
+        # objects move too (tt_mesh.prev_positions): the plane translating +1 unit/s along x
+        # under a still camera moves the other way in the image than under the moving camera
+        # (to 1e-3 px: the analytic motion), with every integrator; plane and camera moving
+        # together do not move in the image
+        slide = {"keys": [{"time": 0, "translate": [0, 0, 0]}, {"time": 1, "translate": [1, 0, 0]}]}
+        obj = plane()
+        obj["meshes"][0]["animation"] = slide
+        objpath = write(tmp, "object.json", obj)
+        for integ in ("integrator_pt", "integrator_bdpt", "integrator_pssmlt"):
+            oexr = os.path.join(tmp, f"object_{integ}.exr")
+            rc, out = host("--plugin", integ, "--aov", "motion", "--camera-index", "50", "--spp", "2",
+                           "--out", oexr, objpath)
+            oc, _ = read(oexr)
+            ox = oc.get("motion.X", np.zeros((12, 16)))
+            check(rc == 0 and np.allclose(ox, want, atol=1e-3),
+                  f"{integ}: a moving object: motion.X {ox[6, 8]} (expected {want}): {out}")
+            check(np.allclose(oc.get("motion.Y", np.ones(1)), 0, atol=1e-3), f"{integ}: object motion.Y 0")
+        both = plane(path=MOVING_PATH)
+        both["meshes"][0]["animation"] = slide
+        bexr = os.path.join(tmp, "both.exr")
+        rc, out = host("--aov", "motion", "--camera-index", "50", "--spp", "2", "--out", bexr,
+                       write(tmp, "both.json", both))
+        bc, _ = read(bexr)
+        check(rc == 0 and np.allclose(bc.get("motion.X", np.ones(1)), 0, atol=1e-3),
+              f"object moving with the camera: motion.X {bc.get('motion.X', np.ones((12, 16)))[6, 8]}")
+        # prevdepth of a sequence: the plane coming towards the camera at 1 unit/s was 1/24
+        # unit farther one frame earlier
+        towards = plane()
+        towards["meshes"][0]["animation"] = {"keys": [{"time": 0, "translate": [0, 0, 0]},
+                                                      {"time": 1, "translate": [0, 0, -1]}]}
+        tdir = os.path.join(tmp, "towards")
+        rc, out = host("--sequence", "11:11", "--aov", "depth,motion,prevdepth", "--spp", "1",
+                       "--out-dir", tdir, write(tmp, "towards.json", towards))
+        dc, _ = read(os.path.join(tdir, "depth_0011.exr"))
+        pc, _ = read(os.path.join(tdir, "prevdepth_0011.exr"))
+        d, p = dc.get("Z", np.zeros(1)), pc.get("Z", np.ones(1))
+        check(rc == 0 and np.allclose(d, DISTANCE - 11 / 24, atol=1e-4), f"depth {d.flat[0]}: {out}")
+        check(np.allclose(p, d + 1 / 24, atol=1e-4), f"prevdepth {p.flat[0]}, depth {d.flat[0]}")
 
         rc, out = host("--aov", "depth,shadow", still)
         check(rc == 2 and "shadow" in out and "albedo" in out, f"--aov shadow: exit {rc}: {out}")

@@ -321,11 +321,11 @@ static void bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
           samples++;
           if (job->aovs) {
             tt_path_result r;
-            tt_bdpt_first_hit(paths, &r);
+            tt_bdpt_first_hit_ex(paths, &r, sizeof r);
             tt_ray ray;
             tt_camera_generate_ray(&job->frame, fx, fy, &ray);
-            tt_path_write_aovs(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL, fx, fy,
-                               &ray, &r, index + 1);
+            tt_path_write_aovs_ex(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL,
+                                  fx, fy, &ray, &r, r.prev_position, index + 1);
           }
         }
   }

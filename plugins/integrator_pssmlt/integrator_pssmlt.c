@@ -179,6 +179,7 @@ static void mlt_apply(tt_integrator *it, const mlt_settings *s) {
   tt_path_options_default(&it->opts);
   it->opts.max_depth = s->max_depth;
   it->opts.rr_depth = s->max_depth;
+  it->opts.result_size = sizeof(tt_path_result);  /* with prev_position: object motion */
   tt_bdpt_options_default(&it->bopts);
   it->bopts.max_depth = s->max_depth;
   it->bopts.rr_depth = 64;  /* off, as in pssmlt mode: the chain picks the depth */
@@ -675,8 +676,8 @@ static void mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
       tt_camera_generate_ray(&job->frame, fx, fy, &ray);
       tt_path_result r;
       tt_path_trace(job->it->pt, &job->tracer, &a->opts, &ray, &src, &r);
-      tt_path_write_aovs(job->ctx->film, x, (uint32_t)y, &job->frame, a->has_prev ? &a->prev : NULL,
-                         fx, fy, &ray, &r, a->n);
+      tt_path_write_aovs_ex(job->ctx->film, x, (uint32_t)y, &job->frame, a->has_prev ? &a->prev : NULL,
+                            fx, fy, &ray, &r, r.prev_position, a->n);
       rays += r.rays;
     }
   }

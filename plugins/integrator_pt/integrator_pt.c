@@ -120,6 +120,7 @@ static tt_status pt_read_config(const tt_config *config, pt_settings *out) {
   tt_status st = TT_OK;
   tt_path_options_default(&out->path);
   out->path.max_depth = (uint32_t)tt_config_get_int(config, "maxDepth", 3);
+  out->path.result_size = sizeof(tt_path_result);  /* with prev_position: object motion */
   out->path.rr_depth = (uint32_t)tt_config_get_int(config, "rrDepth", 3);
   int mis = (int)tt_config_get_int(config, "mis", 1);
   const char *h = tt_config_get_string(config, "heuristic");
@@ -377,9 +378,9 @@ static void pt_wave_run(pt_job *job, pt_wave *w, uint32_t x0, uint32_t y0, uint3
     if (job->aovs) {
       tt_ray ray;  /* the camera ray again (motion of a miss uses its direction) */
       tt_camera_generate_ray(&job->frame, w->film_pos[k][0], w->film_pos[k][1], &ray);
-      tt_path_write_aovs(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL,
-                         w->film_pos[k][0], w->film_pos[k][1], &ray, r,
-                         ctx->sample_offset + q % spp + 1);
+      tt_path_write_aovs_ex(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL,
+                            w->film_pos[k][0], w->film_pos[k][1], &ray, r, r->prev_position,
+                            ctx->sample_offset + q % spp + 1);
     }
   }
 #undef PT_STATE
@@ -436,9 +437,9 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
           samples++;
           nonfinite += r.nonfinite ? 1u : 0u;
           if (job->aovs)
-            tt_path_write_aovs(ctx->film, px, py, &job->frame,
-                               job->has_prev ? &job->prev_frame : NULL, fx, fy, &ray, &r,
-                               ctx->sample_offset + s + 1);
+            tt_path_write_aovs_ex(ctx->film, px, py, &job->frame,
+                                  job->has_prev ? &job->prev_frame : NULL, fx, fy, &ray, &r,
+                                  r.prev_position, ctx->sample_offset + s + 1);
         }
       }
     }

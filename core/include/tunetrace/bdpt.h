@@ -128,6 +128,10 @@ TT_API uint32_t tt_bdpt_rays(const tt_bdpt_paths *paths);
 /* The camera subpath's first hit as path.h reports it (albedo, normal, position, distance,
  * hit; L and counters zero), for tt_path_write_aovs. */
 TT_API void tt_bdpt_first_hit(const tt_bdpt_paths *paths, tt_path_result *out);
+/* tt_bdpt_first_hit writing `result_size` bytes of `out` (ABI 1.2): sizeof(tt_path_result)
+ * adds prev_position; tt_bdpt_first_hit writes the ABI 1.1 result. */
+TT_API void tt_bdpt_first_hit_ex(const tt_bdpt_paths *paths, tt_path_result *out,
+                                 size_t result_size);
 
 #ifdef __cplusplus
 }

@@ -84,6 +84,10 @@ typedef struct tt_path_options {
   uint32_t rr_depth;         /* Russian roulette from this bounce on (>= max_depth: never) */
   tt_light_strategy strategy;
   tt_mis_heuristic heuristic;
+  /* ---- appended (ABI 1.2): read only when struct_size covers it ---- */
+  uint32_t result_size;      /* sizeof(tt_path_result) the caller passes to tt_path_trace /
+                                tt_path_finish: only that much is written. 0 (the default):
+                                the ABI 1.1 result, TT_PATH_RESULT_SIZE_1_1 bytes */
 } tt_path_options;
 
 /* Fills options with the defaults: max_depth 3 (thesis ch. 3), rr_depth 3, MIS, power. */
@@ -100,7 +104,14 @@ typedef struct tt_path_result {
   uint32_t max_dim;          /* highest dimension + 1 that get() was asked for */
   int32_t hit;               /* non-zero if the camera ray hit geometry */
   int32_t nonfinite;         /* non-zero if a non-finite value was produced and zeroed */
+  /* ---- appended (ABI 1.2): written only when the options' result_size covers it ---- */
+  float prev_position[3];    /* where the first hit's surface point was at the previous
+                                frame (tt_mesh.prev_positions at the hit's barycentrics; ==
+                                position on a still mesh and on a miss): object motion */
 } tt_path_result;
+
+/* Size of the ABI 1.1 result (before prev_position). */
+#define TT_PATH_RESULT_SIZE_1_1 offsetof(tt_path_result, prev_position)
 
 typedef struct tt_path_tracer tt_path_tracer;
 
@@ -126,6 +137,15 @@ TT_API void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y,
                                const tt_camera_frame *frame, const tt_camera_frame *prev,
                                float fx, float fy, const tt_ray *ray,
                                const tt_path_result *r, uint64_t n);
+/* tt_path_write_aovs with the hit's previous position (ABI 1.2): the motion AOV projects
+ * `prev_position` (r->prev_position of a result traced with result_size covering it; NULL:
+ * r->position) into `prev`, so objects that move show their own motion, not only the
+ * camera's. */
+TT_API void tt_path_write_aovs_ex(tt_film *film, uint32_t x, uint32_t y,
+                                  const tt_camera_frame *frame, const tt_camera_frame *prev,
+                                  float fx, float fy, const tt_ray *ray,
+                                  const tt_path_result *r, const float prev_position[3],
+                                  uint64_t n);
 
 /* ---- the same path, one step at a time (wavefront integrators) ----
  *

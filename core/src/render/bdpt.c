@@ -71,14 +71,24 @@ TT_API void tt_bdpt_paths_destroy(tt_bdpt_paths *paths) {
 TT_API uint32_t tt_bdpt_rays(const tt_bdpt_paths *paths) { return paths ? paths->rays : 0; }
 
 TT_API void tt_bdpt_first_hit(const tt_bdpt_paths *paths, tt_path_result *out) {
-  memset(out, 0, sizeof *out);
-  out->distance = INFINITY;
-  if (!paths || !paths->hit) return;
-  out->hit = 1;
-  out->distance = paths->hit_distance;
-  memcpy(out->normal, paths->hit_normal, sizeof out->normal);
-  memcpy(out->albedo, paths->hit_albedo, sizeof out->albedo);
-  if (paths->n_camera > 1) memcpy(out->position, paths->camera[1].p, sizeof out->position);
+  tt_bdpt_first_hit_ex(paths, out, TT_PATH_RESULT_SIZE_1_1);
+}
+
+TT_API void tt_bdpt_first_hit_ex(const tt_bdpt_paths *paths, tt_path_result *out,
+                                 size_t result_size) {
+  tt_path_result r;
+  memset(&r, 0, sizeof r);
+  r.distance = INFINITY;
+  if (paths && paths->hit) {
+    r.hit = 1;
+    r.distance = paths->hit_distance;
+    memcpy(r.normal, paths->hit_normal, sizeof r.normal);
+    memcpy(r.albedo, paths->hit_albedo, sizeof r.albedo);
+    if (paths->n_camera > 1) memcpy(r.position, paths->camera[1].p, sizeof r.position);
+    memcpy(r.prev_position, paths->hit_prev, sizeof r.prev_position);
+  }
+  /* an older caller's result ends before prev_position */
+  memcpy(out, &r, result_size >= sizeof r ? sizeof r : TT_PATH_RESULT_SIZE_1_1);
 }
 
 /* ---- geometry helpers ---- */
@@ -351,6 +361,7 @@ static uint32_t tt__bdpt_walk(const tt_path_tracer *pt, const tt_tracer *tracer,
       float sg = tt__dot3(v->ns, v->wo) < 0.0f ? -1.0f : 1.0f;
       for (int i = 0; i < 3; ++i) paths->hit_normal[i] = sg * v->ns[i];
       tt__bsdf_albedo(&v->bsdf, paths->hit_albedo);
+      tt__surface_prev_position(surf.mesh, &hit, surf.p, paths->hit_prev);
     }
     if (n >= max_new) break;
 

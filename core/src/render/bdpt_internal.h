@@ -38,6 +38,7 @@ struct tt_bdpt_paths {
   /* the camera subpath's first hit (AOVs) */
   int32_t hit;
   float hit_distance, hit_normal[3], hit_albedo[3];
+  float hit_prev[3];         /* the first hit's previous-frame position (object motion) */
 };
 
 /* Density of sampling `next` from `v`, which was reached from `prev` (NULL at a camera or

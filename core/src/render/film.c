@@ -17,7 +17,7 @@
 _Static_assert(sizeof(_Atomic float) == sizeof(float), "_Atomic float must be a bare float");
 _Static_assert(_Alignof(_Atomic float) == _Alignof(float), "_Atomic float alignment");
 
-#define TT__AOV_COUNT 4
+#define TT__AOV_COUNT 5
 
 struct tt_film {
   uint32_t width, height;
@@ -38,6 +38,7 @@ static int tt__aov_index(tt_aov aov) {
     case TT_AOV_NORMAL: return 1;
     case TT_AOV_ALBEDO: return 2;
     case TT_AOV_MOTION: return 3;
+    case TT_AOV_PREV_DEPTH: return 4;
   }
   return -1;
 }
@@ -49,6 +50,7 @@ uint32_t tt_aov_channels(tt_aov aov) {
     case TT_AOV_NORMAL: return 3;
     case TT_AOV_ALBEDO: return 3;
     case TT_AOV_MOTION: return 2;
+    case TT_AOV_PREV_DEPTH: return 1;
   }
   return 0;
 }
@@ -62,7 +64,8 @@ static void *tt__calloc_floats(size_t count, size_t per_pixel) {
 
 /* Allocates the film; all planes start zeroed, which is 0.0f for IEEE floats. */
 tt_film *tt_film_create(uint32_t width, uint32_t height, uint32_t aov_mask) {
-  const uint32_t known = TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION;
+  const uint32_t known = TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION |
+                         TT_AOV_PREV_DEPTH;
   if (width == 0 || height == 0) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT, "film: size %ux%u is empty", width, height);
     return NULL;

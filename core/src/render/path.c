@@ -68,6 +68,22 @@ static void tt__texture_lookup(const tt__texture_data *t, float u, float v, floa
     }
 }
 
+void tt__surface_prev_position(const tt_mesh *mesh, const tt_hit *hit, const float p[3],
+                               float out[3]) {
+  memcpy(out, p, 3 * sizeof(float));
+  if (!TT_HAS_FIELD(tt_mesh, mesh, revision) || mesh->motion == TT_MESH_STATIC ||
+      !mesh->prev_positions || mesh->prev_positions == mesh->positions)
+    return;
+  const uint32_t *idx = mesh->indices + 3 * (size_t)hit->prim_id;
+  const float w[3] = {1.0f - hit->u - hit->v, hit->u, hit->v};
+  for (int i = 0; i < 3; ++i) {
+    float d = 0.0f;
+    for (int k = 0; k < 3; ++k)
+      d += w[k] * (mesh->prev_positions[3 * (size_t)idx[k] + i] - mesh->positions[3 * (size_t)idx[k] + i]);
+    out[i] = p[i] + d;
+  }
+}
+
 int tt__surface_at(const tt_path_tracer *pt, const tt_hit *hitp, tt__surface *s) {
   const tt_hit hit = *hitp;
   const tt_mesh *mesh = tt_scene_mesh(pt->scene, hit.geom_id);
@@ -322,6 +338,7 @@ TT_API int tt_path_hit(const tt_path_tracer *pt, tt_path_state *st, const tt_ray
     out->hit = 1;
     out->distance = hit.t;
     memcpy(out->position, p, sizeof out->position);
+    tt__surface_prev_position(mesh, &hit, p, out->prev_position);
     float s = tt__dot3(ns, wo) < 0.0f ? -1.0f : 1.0f;
     for (int i = 0; i < 3; ++i) out->normal[i] = s * ns[i];
     tt__bsdf_albedo(bsdf, out->albedo);
@@ -424,7 +441,9 @@ TT_API void tt_path_shadow(tt_path_state *st, int occluded) {
 }
 
 TT_API void tt_path_finish(const tt_path_state *st, tt_path_result *out) {
-  *out = st->out;
+  /* the caller's result may end before prev_position (ABI 1.1: result_size 0) */
+  size_t size = st->o.result_size >= sizeof *out ? sizeof *out : TT_PATH_RESULT_SIZE_1_1;
+  memcpy(out, &st->out, size);
   out->max_dim = st->max_dim;
   const float *L = st->L;
   if (!isfinite(L[0]) || !isfinite(L[1]) || !isfinite(L[2])) {
@@ -467,6 +486,12 @@ static void tt__aov_mean(float *plane, size_t pix, uint32_t ch, const float *v, 
 void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y, const tt_camera_frame *frame,
                         const tt_camera_frame *prev, float fx, float fy, const tt_ray *ray,
                         const tt_path_result *r, uint64_t n) {
+  tt_path_write_aovs_ex(film, x, y, frame, prev, fx, fy, ray, r, NULL, n);
+}
+
+void tt_path_write_aovs_ex(tt_film *film, uint32_t x, uint32_t y, const tt_camera_frame *frame,
+                           const tt_camera_frame *prev, float fx, float fy, const tt_ray *ray,
+                           const tt_path_result *r, const float prev_position[3], uint64_t n) {
   size_t pix = (size_t)y * tt_film_width(film) + x;
   float *depth_plane = tt_film_aov(film, TT_AOV_DEPTH), *motion_plane = tt_film_aov(film, TT_AOV_MOTION);
   if (depth_plane) {
@@ -480,8 +505,8 @@ void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y, const tt_camera_f
     float m[2] = {0.0f, 0.0f}, pfx, pfy;
     if (prev) {
       float target[3];
-      if (r->hit) {
-        memcpy(target, r->position, sizeof target);
+      if (r->hit) {  /* where the surface point was: the object's motion and the camera's */
+        memcpy(target, prev_position ? prev_position : r->position, sizeof target);
       } else {  /* a point at infinity moves with the camera's rotation only */
         for (int i = 0; i < 3; ++i) target[i] = prev->origin[i] + ray->dir[i];
       }
@@ -491,5 +516,13 @@ void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y, const tt_camera_f
       }
     }
     tt__aov_mean(motion_plane, pix, 2, m, n);
+  }
+  float *prev_depth_plane = tt_film_aov(film, TT_AOV_PREV_DEPTH);
+  if (prev_depth_plane) {
+    float zp = 0.0f;
+    if (r->hit && prev &&
+        !tt_camera_project(prev, prev_position ? prev_position : r->position, NULL, NULL, &zp))
+      zp = 0.0f;
+    tt__aov_mean(prev_depth_plane, pix, 1, &zp, n);
   }
 }

@@ -46,5 +46,10 @@ typedef struct tt__surface {
 
 /* Fills `s` for a hit (geom_id valid); 0 for a degenerate triangle (no normal). */
 int tt__surface_at(const tt_path_tracer *pt, const tt_hit *hit, tt__surface *s);
+/* Where the surface point `p` of `hit` on `mesh` was at the previous frame: p moved by the
+ * displacement of the triangle's vertices since then (tt_mesh.prev_positions at the hit's
+ * barycentrics), so a still mesh gives p exactly. */
+void tt__surface_prev_position(const tt_mesh *mesh, const tt_hit *hit, const float p[3],
+                               float out[3]);
 
 #endif /* TT_PATH_INTERNAL_H */

@@ -126,7 +126,9 @@ tt_status tt_session_set_camera_time(tt_session *s, double t, double frame_inter
   if (!s || !s->scene) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera time: no scene loaded");
   const tt_camera *c0 = tt_scene_camera(s->scene);
   if (c0->key_count == 0) {
-    s->has_prev = 0;
+    /* a still camera: no motion, unless objects move (the previous frame is the same view) */
+    s->has_prev = tt_scene_animated(s->scene) && frame_interval > 0;
+    if (s->has_prev) s->prev_camera = *c0;
     return TT_OK;
   }
   tt_camera cam;
