@@ -93,6 +93,11 @@ def ch4_summary_tables():
     return out
 
 
+def _measured(en, files, regen):
+    """An entry is measured when it has a figure, or numbers unless it needs a figure."""
+    return bool(files or regen or (en["ours"] and not en.get("needs_figure")))
+
+
 def build(out, quick_results, mode):
     """Writes out/index.html; returns its path."""
     claimed = set()
@@ -119,7 +124,7 @@ def build(out, quick_results, mode):
                  '<th>what</th><th>outcome</th></tr>')
     for ch in (3, 4, 5, 0):
         for en in by_ch.get(ch, []):
-            oc = en["outcome"] if (committed(en["figures"]) or en["regenerated"] or en["ours"]) \
+            oc = en["outcome"] if _measured(en, committed(en["figures"]), en["regenerated"]) \
                 else "not measured yet"
             parts.append(f'<tr><td>{ch or "-"}</td><td>{_e(en["thesis"])}</td><td><a href="#{en["id"]}">'
                          f'{_e(en["title"])}</a></td><td><span class="outcome" style="background:'
@@ -133,7 +138,7 @@ def build(out, quick_results, mode):
             regen = [os.path.join(out, r) for r in en["regenerated"]
                      if os.path.exists(os.path.join(out, r))]
             quick = [os.path.join(out, q) for q in en["quick"] if os.path.exists(os.path.join(out, q))]
-            measured = bool(files or regen or en["ours"])
+            measured = _measured(en, files, regen)
             oc = en["outcome"] if measured else "not measured yet"
             parts.append(f'<h3><a id="{en["id"]}"></a>{_e(en["thesis"])}: {_e(en["title"])}</h3>')
             if not measured:

@@ -3,7 +3,7 @@ each) or on the committed data it was measured into, so a tool that rots fails t
 
 A step is a function step(ctx) that runs one tool as its users run it (`python3 -m tools...`) and returns the PNGs it wrote, relative to ctx.out.
 Steps that re-plot committed data (hybrid, accel) write the real figures; steps that measure
-(tuning, cylinder, integrators, Theta, PSSMLT tuning) run at toy sizes, and the page labels
+(tuning, gains, cylinder, Theta, the PSSMLT tools, TAA speed, integrators) run at toy sizes, and the page labels
 them so. The full-settings commands are in entries.py (what `run.py --full` prints)."""
 import json
 import math
@@ -183,15 +183,43 @@ def theta_histogram(ctx):
     return [_png(ctx, "quick/theta_cornell-box.png")]
 
 
-def pssmlt_tuning(ctx):
-    """tools/pssmlt/tune_convergence.py (Fig. 4.3): 4 iterations at 16x16."""
-    w = os.path.join(ctx.work, "pssmlt_tune")
+def pssmlt_tools(ctx):
+    """Chapter 4's figure tools in their order, at 16x16: tune_convergence.py (Fig. 4.3),
+    compare_tuned.py (Fig. 4.6 box plots; its reference serves the next two),
+    error_vs_time.py (equal CPU time) and sigma_sweep.py (the 0.234 target)."""
+    w = os.path.join(ctx.work, "pssmlt")
     shutil.rmtree(w, ignore_errors=True)
-    ctx.run([PY, "-m", "tools.pssmlt.tune_convergence", CORNELL,
-             "--name", "cornell-box"] + ctx.host_args() + ["--res", "16x16",
-             "--iterations", "4", "--tune-spp", "1", "--out", w,
-             "--fig", ctx.path("quick", "pssmlt_tuning_cornell-box.png")])
-    return [_png(ctx, "quick/pssmlt_tuning_cornell-box.png")]
+    tune = os.path.join(w, "tune")
+    ctx.run([PY, "-m", "tools.pssmlt.tune_convergence", CORNELL, "--name", "cornell-box"]
+            + ctx.host_args() + ["--res", "16x16", "--iterations", "4", "--tune-spp", "1",
+                                 "--out", tune, "--fig", ctx.path("quick", "pssmlt_tuning_cornell-box.png")])
+    cmp_dir = os.path.join(w, "cmp")
+    ctx.run([PY, "-m", "tools.pssmlt.compare_tuned"] + ctx.host_args() +
+            ["--res", "16x16", "--ref-spp", "32", "--spp", "2", "--seeds", "2", "--methods",
+             "pt,classic,binned,tuned", "--tuned-dir", tune, "--out", cmp_dir,
+             "--fig", ctx.path("quick", "pssmlt_equal_mutations.png"), f"cornell-box={CORNELL}"])
+    ref = os.path.join(cmp_dir, "cornell-box", "reference.exr")
+    ctx.run([PY, "-m", "tools.pssmlt.error_vs_time"] + ctx.host_args() +
+            ["--res", "16x16", "--mpp", "1", "2", "--seeds", "1", "--methods", "pt,classic,acc",
+             "--tuned", f"acc={os.path.join(tune, 'cornell-box_tuned.json')}", "--ref", ref,
+             "--out", os.path.join(w, "evt"), "--fig", ctx.path("quick", "pssmlt_error_vs_time.png"),
+             f"cornell-box={CORNELL}"])
+    ctx.run([PY, "-m", "tools.pssmlt.sigma_sweep", CORNELL, "--ref", ref] + ctx.host_args() +
+            ["--res", "16x16", "--spp", "1", "--seeds", "1", "--sigmas", "0.01,0.1",
+             "--out", os.path.join(w, "sweep"), "--fig", ctx.path("quick", "pssmlt_sigma_sweep.png")])
+    return [_png(ctx, f"quick/pssmlt_{n}.png")
+            for n in ("tuning_cornell-box", "equal_mutations", "error_vs_time", "sigma_sweep")]
+
+
+def tuning_gains(ctx):
+    """tools/tuning/gains.py (Fig. 3.3 charts, verified gains): one seed, 3 iterations, 16x16."""
+    w = os.path.join(ctx.work, "gains")
+    shutil.rmtree(w, ignore_errors=True)
+    ctx.run([PY, "-m", "tools.tuning.gains"] + ctx.host_args() +
+            ["--scene", CORNELL, "--seeds", "1", "--iterations", "3", "--verify", "2",
+             "--res", "16x16", "--out-dir", w, "--figures", os.path.dirname(ctx.path("quick", "x")),
+             "--figure-prefix", "gains_"])
+    return [_png(ctx, "quick/gains_cornell-box.png")]
 
 
 # --- chapter 5 -------------------------------------------------------------------------------
@@ -226,6 +254,15 @@ def taa_speed_vs_rmse(ctx):
     return [_png(ctx, "taa/speed_vs_rmse.png")]
 
 
+def taa_speed(ctx):
+    """tools/taa/speed.py (Table 5.2): one run of one round of taa_bench (wall times on a
+    loaded machine: the tool runs, the figures are not results)."""
+    ctx.run([PY, "-m", "tools.taa.speed"] + ctx.host_args() +
+            ["--runs", "1", "--rounds", "1", "--json", os.path.join(ctx.work, "speed.json"),
+             "--png", ctx.path("quick", "taa_speed.png")])
+    return [_png(ctx, "quick/taa_speed.png")]
+
+
 # --- integrators (error against time) --------------------------------------------------------
 
 def integrator_error_vs_time(ctx):
@@ -240,7 +277,8 @@ def integrator_error_vs_time(ctx):
 
 
 QUICK = [hybrid_figures, hybrid_speed_vs_roofline, accel_render_split, tuning_analysis,
-         cylinder_sweep, theta_histogram, pssmlt_tuning, taa_speed_vs_rmse, integrator_error_vs_time]
+         tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_speed,
+         integrator_error_vs_time]
 
 
 def run_quick(host, out, work, log_path, only=None):
