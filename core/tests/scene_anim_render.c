@@ -4,7 +4,8 @@
  * rendered in a second session. The same frame rendered by a session that started at time
  * 0 and was moved there with tt_session_set_time (the accel updated by accel_embree's
  * rebuild, or refitted by its native or custom backend; the integrator made again for the
- * moved light) is the same image bit for bit too. Scene: scenes/animated-cornell (rigid
+ * moved light) is the same image bit for bit too, and so is the frame of an accel plugin of
+ * ABI 1.1 (no update: the session builds it again; argv[1], tests/fixtures). Scene: scenes/animated-cornell (rigid
  * keys with slerp and cubic paths, a morph target, a moving area light whose area
  * changes). */
 #include <tunetrace/tunetrace.h>
@@ -61,7 +62,40 @@ static float *render_at(const char *path, double t, int pose, const char *write_
   return rgb;
 }
 
-int main(void) {
+/* The frame at t with the ABI 1.1 fixture accel `plugin`: posed before the session starts
+ * (move = 0), or started at time 0 and moved with tt_session_set_time (move = 1). */
+static float *render_fixture(const char *path, const char *plugin, double t, int move,
+                             uint32_t *w, uint32_t *h) {
+  tt_session *s = NULL;
+  float *rgb = NULL;
+  if (tt_session_create(NULL, &s) != TT_OK || tt_session_load_scene(s, path) != TT_OK ||
+      tt_session_load_plugin(s, plugin, NULL) != TT_OK) {
+    fprintf(stderr, "%s, %s: %s\n", path, plugin, tt_last_error());
+    tt_session_destroy(s);
+    return NULL;
+  }
+  CHECK(tt_session_set_time(s, move ? 0.0 : t, 1.0 / FPS, NULL) == TT_OK);
+  if (tt_session_start(s, 0) == TT_OK) {
+    CHECK(!strcmp(tt_loaded_plugin_entry(tt_session_accel_plugin(s))->name, "fixture_accel_abi11"));
+    if (move) {
+      tt_accel_update_stats us = {.struct_size = sizeof us};
+      CHECK_MSG(tt_session_set_time(s, t, 1.0 / FPS, &us) == TT_OK, "%s", tt_last_error());
+      CHECK_MSG(us.rebuilt == 1, "an ABI 1.1 accel is built again (rebuilt %d)", us.rebuilt);
+    }
+    for (int i = 0; i < 4; i++) CHECK(tt_session_render_pass(s, 1, NULL) == TT_OK);
+    tt_film *film = tt_session_film(s);
+    *w = tt_film_width(film);
+    *h = tt_film_height(film);
+    rgb = malloc(sizeof(float) * 3 * *w * *h);
+    if (rgb) tt_film_resolve(film, rgb);
+  } else {
+    fprintf(stderr, "start: %s\n", tt_last_error());
+  }
+  tt_session_destroy(s);
+  return rgb;
+}
+
+int main(int argc, char **argv) {
   const char *root = getenv("TT_SOURCE_ROOT");
   char scene[4096], tmp[] = "/tmp/tt_scene_anim_render_XXXXXX", still[4200];
   snprintf(scene, sizeof scene, "%s/scenes/animated-cornell/scene.json", root ? root : "..");
@@ -114,6 +148,22 @@ int main(void) {
     free(ref);
   }
   free(first);
+  if (argc > 1) {  /* the ABI 1.1 fixture accel */
+    uint32_t w = 0, h = 0, w2 = 0, h2 = 0;
+    float *posed = render_fixture(scene, argv[1], 1.3, 0, &w, &h);
+    float *moved = render_fixture(scene, argv[1], 1.3, 1, &w2, &h2);
+    CHECK(posed && moved && w == w2 && h == h2);
+    size_t diff = 0, lit = 0;
+    for (size_t i = 0; posed && moved && w == w2 && h == h2 && i < (size_t)3 * w * h; i++) {
+      diff += memcmp(&posed[i], &moved[i], sizeof(float)) != 0;
+      lit += posed[i] > 0.0f;
+    }
+    CHECK_MSG(diff == 0 && lit > 0, "ABI 1.1 accel: %zu values differ between the moved and the posed session (%zu lit)", diff, lit);
+    free(posed);
+    free(moved);
+  } else {
+    CHECK_MSG(0, "usage: scene_anim_render FIXTURE_ACCEL.so (tests/fixtures)");
+  }
   char cmd[4400];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmp);
