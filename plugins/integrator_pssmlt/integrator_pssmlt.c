@@ -27,18 +27,18 @@
 
 #include "pssmlt_chain.h"
 
-#define MLT_NAME "integrator_pssmlt"
-#define MLT_VERSION "0.1.0"
+#define TT__MLT_NAME "integrator_pssmlt"
+#define TT__MLT_VERSION "0.1.0"
 /* Fixed-point scale of the splat accumulator: 2^28 keeps 3.7e-9 resolution for splat
  * values that are at most 1/0.0722 (a pure blue path), with 2^35 of headroom per pass. */
-#define MLT_FIXED_SCALE 268435456.0
-#define MLT_STOP_CHECK 256
-#define MLT_PI 3.14159265358979323846
+#define TT__MLT_FIXED_SCALE 268435456.0
+#define TT__MLT_STOP_CHECK 256
+#define TT__MLT_PI 3.14159265358979323846
 
 static const tt_host *g_host;
 static tt_space *g_space;
 
-typedef struct mlt_settings {
+typedef struct tt__mlt_settings {
   int mmlt;                 /* multiplexed MLT over the bidirectional sampler (else PSSMLT over PT) */
   uint32_t max_depth;
   double large_step, sigma, alpha;
@@ -47,12 +47,12 @@ typedef struct mlt_settings {
   uint32_t mpp;
   uint64_t bootstrap;
   uint32_t chains;
-} mlt_settings;
+} tt__mlt_settings;
 
 struct tt_integrator {
   const tt_scene *scene;
   tt_path_tracer *pt;
-  mlt_settings set;
+  tt__mlt_settings set;
   tt_path_options opts;
   tt_bdpt_options bopts;    /* mmlt */
   tt__mlt_kernel kernel;
@@ -77,12 +77,13 @@ struct tt_integrator {
 /* ---- parameters ---- */
 
 /* The host, or libtunetrace's default services when the plugin is used without init(). */
-static const tt_host *mlt_host(void) { return g_host ? g_host : tt_default_host(); }
+static const tt_host *tt__mlt_host(void) { return g_host ? g_host : tt_default_host(); }
 
 /* Builds the parameter space once (init). */
-static tt_status mlt_build_space(void) {
-  tt_space *s = tt_space_create(MLT_NAME, MLT_VERSION);
-  if (!s) return tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": cannot create the parameter space");
+static tt_status tt__mlt_build_space(void) {
+  tt_space *s = tt_space_create(TT__MLT_NAME, TT__MLT_VERSION);
+  if (!s)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": cannot create the parameter space");
   int ok = 1;
   char name[32], desc[160];
   static const char *const modes[] = {"pssmlt", "mmlt"};
@@ -101,7 +102,7 @@ static tt_status mlt_build_space(void) {
   ok &= tt_space_add_nom_bool(s, "binning", 0, "sigma-binning by Theta = 1/(alpha pdf) with truncated-"
                               "normal steps (thesis 4.4-4.6); false: classic wrapped normal") >= 0;
   ok &= tt_space_add_int(s, "bins", 5, TT__MLT_MAX_BINS, 7, "number M of sigma bins") >= 0;
-  ok &= tt_space_add_float(s, "alpha", 0.1, 1000.0, 4.0 * MLT_PI, 1,
+  ok &= tt_space_add_float(s, "alpha", 0.1, 1000.0, 4.0 * TT__MLT_PI, 1,
                            "Theta = 1/(alpha * pdf) spread (thesis: 4 pi)") >= 0;
   for (int i = 1; i <= TT__MLT_MAX_BINS + 1; ++i) {
     snprintf(name, sizeof name, "a%d", i);
@@ -124,19 +125,19 @@ static tt_status mlt_build_space(void) {
   tt_space_add_constraint_text(s, "only a_1..a_{bins+1} and sigma1..sigma{bins} are used, and only with binning");
   if (!ok) {
     tt_space_destroy(s);
-    return tt_set_error(TT_ERR_INTERNAL, MLT_NAME ": building the parameter space failed");
+    return tt_set_error(TT_ERR_INTERNAL, TT__MLT_NAME ": building the parameter space failed");
   }
   g_space = s;
   return TT_OK;
 }
 
 /* Reads a configuration (NULL = defaults) into settings. */
-static tt_status mlt_read_config(const tt_config *config, mlt_settings *out) {
+static tt_status tt__mlt_read_config(const tt_config *config, tt__mlt_settings *out) {
   tt_config *defaults = NULL;
   if (!config) {
-    if (!g_space) return tt_set_error(TT_ERR_INTERNAL, MLT_NAME ": used before init()");
+    if (!g_space) return tt_set_error(TT_ERR_INTERNAL, TT__MLT_NAME ": used before init()");
     defaults = tt_config_create(g_space);
-    if (!defaults) return tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory");
+    if (!defaults) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": out of memory");
     config = defaults;
   }
   char name[32];
@@ -148,7 +149,7 @@ static tt_status mlt_read_config(const tt_config *config, mlt_settings *out) {
   out->sigma = tt_config_get_float(config, "sigma", 0.01);
   out->binning = (int)tt_config_get_int(config, "binning", 0);
   out->bins = (int)tt_config_get_int(config, "bins", 7);
-  out->alpha = tt_config_get_float(config, "alpha", 4.0 * MLT_PI);
+  out->alpha = tt_config_get_float(config, "alpha", 4.0 * TT__MLT_PI);
   for (int i = 0; i <= TT__MLT_MAX_BINS; ++i) {
     snprintf(name, sizeof name, "a%d", i + 1);
     out->a[i] = tt_config_get_float(config, name, 0.5);
@@ -165,16 +166,17 @@ static tt_status mlt_read_config(const tt_config *config, mlt_settings *out) {
   if (out->max_depth > 64 || out->bins < 1 || out->bins > TT__MLT_MAX_BINS || out->mpp < 1 ||
       out->bootstrap < 1 || out->chains < 1 || !(out->sigma > 0.0) || !(out->large_step >= 0.0) ||
       !(out->large_step <= 1.0) || !(out->alpha > 0.0))
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, MLT_NAME ": configuration out of range");
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__MLT_NAME ": configuration out of range");
   for (int i = 0; i < TT__MLT_MAX_BINS && st == TT_OK; ++i)
     if (!(out->bin_sigma[i] > 0.0) || !(out->a[i] >= 0.0))
-      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, MLT_NAME ": sigma%d/a%d out of range", i + 1, i + 1);
+      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__MLT_NAME ": sigma%d/a%d out of range", i + 1,
+                        i + 1);
   return st;
 }
 
 /* Path options and mutation kernel from settings (Russian roulette off: MLT explores depth
  * through the chain, and a roulette dimension would only add discontinuities). */
-static void mlt_apply(tt_integrator *it, const mlt_settings *s) {
+static void tt__mlt_apply(tt_integrator *it, const tt__mlt_settings *s) {
   it->set = *s;
   tt_path_options_default(&it->opts);
   it->opts.max_depth = s->max_depth;
@@ -189,18 +191,20 @@ static void mlt_apply(tt_integrator *it, const mlt_settings *s) {
 
 /* ---- interface ---- */
 
-static const tt_space *mlt_space(void) { return g_space; }
+static const tt_space *tt__mlt_space(void) { return g_space; }
 
-static tt_status mlt_create(const tt_scene *scene, const tt_config *config, tt_integrator **out) {
-  if (!scene || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, MLT_NAME ": scene or out is NULL");
+static tt_status tt__mlt_create(const tt_scene *scene, const tt_config *config,
+                                tt_integrator **out) {
+  if (!scene || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__MLT_NAME ": scene or out is NULL");
   *out = NULL;
-  mlt_settings s;
-  tt_status st = mlt_read_config(config, &s);
+  tt__mlt_settings s;
+  tt_status st = tt__mlt_read_config(config, &s);
   if (st != TT_OK) return st;
   tt_integrator *it = calloc(1, sizeof *it);
-  if (!it) return tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory");
+  if (!it) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": out of memory");
   it->scene = scene;
-  mlt_apply(it, &s);
+  tt__mlt_apply(it, &s);
   const char *dump = getenv("TT_PSSMLT_THETA_DUMP");
   if (dump && *dump) {
     it->theta_dump = malloc(strlen(dump) + 1);
@@ -217,7 +221,7 @@ static tt_status mlt_create(const tt_scene *scene, const tt_config *config, tt_i
 }
 
 /* Drops the chains; the next pass bootstraps again. */
-static void mlt_drop_chains(tt_integrator *it) {
+static void tt__mlt_drop_chains(tt_integrator *it) {
   free(it->chains);
   free(it->chain_mem);
   free(it->chain_depth);
@@ -229,29 +233,29 @@ static void mlt_drop_chains(tt_integrator *it) {
   it->mutations_total = 0;
 }
 
-static tt_status mlt_configure(tt_integrator *it, const tt_config *config) {
-  mlt_settings s;
-  tt_status st = mlt_read_config(config, &s);
+static tt_status tt__mlt_configure(tt_integrator *it, const tt_config *config) {
+  tt__mlt_settings s;
+  tt_status st = tt__mlt_read_config(config, &s);
   if (st != TT_OK) return st;
   int restart = s.max_depth != it->set.max_depth || s.bootstrap != it->set.bootstrap ||
                 s.chains != it->set.chains || s.mmlt != it->set.mmlt;
   if (restart) {
-    mlt_drop_chains(it);  /* another target function or start distribution */
+    tt__mlt_drop_chains(it);  /* another target function or start distribution */
   } else if (it->ready) {
     /* Pending steps were drawn under the old kernel: realise them before it changes. */
     for (uint32_t c = 0; c < it->nchains; ++c) tt__mlt_chain_flush(&it->chains[c]);
   }
-  mlt_apply(it, &s);
+  tt__mlt_apply(it, &s);
   return TT_OK;
 }
 
-static void mlt_reset(tt_integrator *it) {
-  if (it) mlt_drop_chains(it);
+static void tt__mlt_reset(tt_integrator *it) {
+  if (it) tt__mlt_drop_chains(it);
 }
 
-static void mlt_destroy(tt_integrator *it) {
+static void tt__mlt_destroy(tt_integrator *it) {
   if (!it) return;
-  mlt_drop_chains(it);
+  tt__mlt_drop_chains(it);
   free((void *)it->acc);
   free(it->theta_dump);
   tt_path_tracer_destroy(it->pt);
@@ -259,7 +263,7 @@ static void mlt_destroy(tt_integrator *it) {
 }
 
 /* Everything the workers share during one pass. */
-typedef struct mlt_job {
+typedef struct tt__mlt_job {
   tt_integrator *it;
   const tt_render_ctx *ctx;
   tt_camera_frame frame;
@@ -276,44 +280,45 @@ typedef struct mlt_job {
   atomic_uint_fast64_t rays, mutations, nonfinite, small_prop, small_acc, large_prop, large_acc, vertices;
   atomic_uint_fast64_t theta[TT__MLT_THETA_BINS + 1];
   atomic_int interrupted, failed;
-} mlt_job;
+} tt__mlt_job;
 
 /* One evaluated state: its contribution, where it lands, what it cost. */
-typedef struct mlt_sample {
+typedef struct tt__mlt_sample {
   float L[3];
   float fx, fy;
   uint32_t rays;
   uint32_t vertices;        /* surface vertices the state's path(s) traced */
   int32_t nonfinite;
-} mlt_sample;
+} tt__mlt_sample;
 
 /* Luminance (Rec. 709), the scalar contribution C. */
-static inline double mlt_lum(const float L[3]) {
+static inline double tt__mlt_lum(const float L[3]) {
   return 0.2126 * L[0] + 0.7152 * L[1] + 0.0722 * L[2];
 }
 
 /* Bootstrap sample source: counter-based uniforms, replayable by any chain. */
-typedef struct mlt_boot_src {
+typedef struct tt__mlt_boot_src {
   uint64_t seed, index;
-} mlt_boot_src;
+} tt__mlt_boot_src;
 
-static float mlt_boot_get(void *self, uint32_t dim) {
-  const mlt_boot_src *s = self;
+static float tt__mlt_boot_get(void *self, uint32_t dim) {
+  const tt__mlt_boot_src *s = self;
   float f = (float)tt__mlt_bootstrap_value(s->seed, s->index, dim);
   return f < 1.0f ? f : 0x1.fffffep-1f;
 }
 
 /* Film position of primary samples (u0, u1): the whole film. */
-static inline void mlt_film_pos(const mlt_job *job, float u0, float u1, float *fx, float *fy) {
+static inline void tt__mlt_film_pos(const tt__mlt_job *job, float u0, float u1, float *fx,
+                                    float *fy) {
   *fx = u0 * (float)job->width;
   *fy = u1 * (float)job->height;
 }
 
 /* Traces one path from primary samples read through `src` (pssmlt mode). */
-static void mlt_trace(const mlt_job *job, const tt_sample_source *src, tt_path_result *r,
+static void tt__mlt_trace(const tt__mlt_job *job, const tt_sample_source *src, tt_path_result *r,
                       float *fx, float *fy) {
   float u0 = src->get(src->self, TT_PATH_DIM_FILM), u1 = src->get(src->self, TT_PATH_DIM_FILM + 1);
-  mlt_film_pos(job, u0, u1, fx, fy);
+  tt__mlt_film_pos(job, u0, u1, fx, fy);
   tt_ray ray;
   tt_camera_generate_ray(&job->frame, *fx, *fy, &ray);
   tt_path_trace(job->it->pt, &job->tracer, &job->it->opts, &ray, src, r);
@@ -324,40 +329,40 @@ static void mlt_trace(const mlt_job *job, const tt_sample_source *src, tt_path_r
  * stream k's dimension d is the chain's 3 d + k), so that a change of one subpath's length
  * never shifts another's dimensions. Connection-stream dim 0 chooses the strategy s of the
  * chain's depth (uniformly among depth + 2), its dims 1.. feed the connection. */
-#define MLT_STREAMS 3
-#define MLT_CONNECT_BASE 1
+#define TT__MLT_STREAMS 3
+#define TT__MLT_CONNECT_BASE 1
 
-typedef struct mlt_stream {
+typedef struct tt__mlt_stream {
   const tt_sample_source *base;
   uint32_t k;
-} mlt_stream;
+} tt__mlt_stream;
 
-static float mlt_stream_get(void *self, uint32_t dim) {
-  const mlt_stream *s = self;
-  return s->base->get(s->base->self, MLT_STREAMS * dim + s->k);
+static float tt__mlt_stream_get(void *self, uint32_t dim) {
+  const tt__mlt_stream *s = self;
+  return s->base->get(s->base->self, TT__MLT_STREAMS * dim + s->k);
 }
 
-static void mlt_stream_report(void *self, uint32_t dim, float pdf) {
-  const mlt_stream *s = self;
-  if (s->base->report_pdf) s->base->report_pdf(s->base->self, MLT_STREAMS * dim + s->k, pdf);
+static void tt__mlt_stream_report(void *self, uint32_t dim, float pdf) {
+  const tt__mlt_stream *s = self;
+  if (s->base->report_pdf) s->base->report_pdf(s->base->self, TT__MLT_STREAMS * dim + s->k, pdf);
 }
 
 /* Dimensions of an mmlt state for paths up to `depth` bounces. */
-static uint32_t mlt_mmlt_dims(uint32_t depth) {
+static uint32_t tt__mlt_mmlt_dims(uint32_t depth) {
   uint32_t c = TT_BDPT_CAMERA_DIM_COUNT(depth), l = TT_BDPT_LIGHT_DIM_COUNT(depth);
-  uint32_t k = MLT_CONNECT_BASE + TT_BDPT_CONNECT_DIMS, m = c > l ? c : l;
-  return MLT_STREAMS * (m > k ? m : k);
+  uint32_t k = TT__MLT_CONNECT_BASE + TT_BDPT_CONNECT_DIMS, m = c > l ? c : l;
+  return TT__MLT_STREAMS * (m > k ? m : k);
 }
 
 /* The contribution of a state of a chain of path depth `depth` (times the number of
  * strategies, as the strategy is chosen uniformly). */
-static void mlt_trace_mmlt(const mlt_job *job, tt_bdpt_paths *paths, const tt_sample_source *src,
-                           uint32_t depth, mlt_sample *out) {
+static void tt__mlt_trace_mmlt(const tt__mlt_job *job, tt_bdpt_paths *paths,
+                               const tt_sample_source *src, uint32_t depth, tt__mlt_sample *out) {
   const tt_integrator *it = job->it;
-  mlt_stream cs = {src, 0}, ls = {src, 1}, ks = {src, 2};
-  tt_sample_source cam = {mlt_stream_get, mlt_stream_report, &cs};
-  tt_sample_source lig = {mlt_stream_get, mlt_stream_report, &ls};
-  tt_sample_source con = {mlt_stream_get, mlt_stream_report, &ks};
+  tt__mlt_stream cs = {src, 0}, ls = {src, 1}, ks = {src, 2};
+  tt_sample_source cam = {tt__mlt_stream_get, tt__mlt_stream_report, &cs};
+  tt_sample_source lig = {tt__mlt_stream_get, tt__mlt_stream_report, &ls};
+  tt_sample_source con = {tt__mlt_stream_get, tt__mlt_stream_report, &ks};
   uint32_t n = depth == 0 ? 1 : depth + 2, s = 0, t = 2;
   if (depth > 0) {
     float u = con.get(con.self, 0);
@@ -365,15 +370,16 @@ static void mlt_trace_mmlt(const mlt_job *job, tt_bdpt_paths *paths, const tt_sa
     if (s > n - 1) s = n - 1;
     t = n - s;
   }
-  mlt_film_pos(job, cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM), cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM + 1),
-               &out->fx, &out->fy);
+  tt__mlt_film_pos(job, cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM),
+                   cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM + 1), &out->fx, &out->fy);
   uint32_t nc = tt_bdpt_camera_subpath(it->pt, &job->tracer, &it->bopts, &job->frame, out->fx, out->fy, &cam, t,
                                        paths);
   uint32_t nl = nc == t ? tt_bdpt_light_subpath(it->pt, &job->tracer, &it->bopts, &lig, s, paths) : 0;
   out->vertices = (nc > 0 ? nc - 1 : 0) + (nl > 0 ? nl - 1 : 0);
   if (nc == t && nl == s) {
     tt_bdpt_contribution c;
-    tt_bdpt_connect(it->pt, &job->tracer, &it->bopts, &job->frame, paths, s, t, &con, MLT_CONNECT_BASE, &c);
+    tt_bdpt_connect(it->pt, &job->tracer, &it->bopts, &job->frame, paths, s, t, &con,
+                    TT__MLT_CONNECT_BASE, &c);
     for (int i = 0; i < 3; ++i) out->L[i] = c.L[i] * (float)n;
     out->nonfinite = c.nonfinite;
     if (t == 1) {
@@ -386,12 +392,12 @@ static void mlt_trace_mmlt(const mlt_job *job, tt_bdpt_paths *paths, const tt_sa
 
 /* Evaluates the state read through `src` in the integrator's mode (`depth`: the chain's, mmlt
  * only). Returns 0 when the thread's subpaths cannot be allocated. */
-static int mlt_eval(mlt_job *job, uint32_t thread, const tt_sample_source *src, uint32_t depth,
-                    mlt_sample *out) {
+static int tt__mlt_eval(tt__mlt_job *job, uint32_t thread, const tt_sample_source *src,
+                        uint32_t depth, tt__mlt_sample *out) {
   memset(out, 0, sizeof *out);
   if (!job->it->set.mmlt) {
     tt_path_result r;
-    mlt_trace(job, src, &r, &out->fx, &out->fy);
+    tt__mlt_trace(job, src, &r, &out->fx, &out->fy);
     memcpy(out->L, r.L, sizeof out->L);
     out->rays = r.rays;
     out->vertices = r.bounces;
@@ -400,29 +406,29 @@ static int mlt_eval(mlt_job *job, uint32_t thread, const tt_sample_source *src, 
   }
   if (thread >= job->threads) return 0;
   if (!job->paths[thread] && tt_bdpt_paths_create(job->it->set.max_depth, &job->paths[thread]) != TT_OK) return 0;
-  mlt_trace_mmlt(job, job->paths[thread], src, depth, out);
+  tt__mlt_trace_mmlt(job, job->paths[thread], src, depth, out);
   return 1;
 }
 
 /* Path depth of bootstrap sample i: pbrt-v3 cycles i through 0..maxDepth. */
-static inline uint32_t mlt_boot_depth(const tt_integrator *it, uint64_t i) {
+static inline uint32_t tt__mlt_boot_depth(const tt_integrator *it, uint64_t i) {
   return it->set.mmlt ? (uint32_t)(i % (it->set.max_depth + 1)) : 0;
 }
 
 /* Bootstrap paths [begin, end): their luminance, 0 for non-finite or negative. */
-static void mlt_boot_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
-  mlt_job *job = vctx;
-  mlt_boot_src bs = {job->it->seed, 0};
-  tt_sample_source src = {mlt_boot_get, NULL, &bs};
+static void tt__mlt_boot_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  tt__mlt_job *job = vctx;
+  tt__mlt_boot_src bs = {job->it->seed, 0};
+  tt_sample_source src = {tt__mlt_boot_get, NULL, &bs};
   uint64_t rays = 0;
   for (uint64_t i = begin; i < end; ++i) {
     bs.index = i;
-    mlt_sample r;
-    if (!mlt_eval(job, thread_index, &src, mlt_boot_depth(job->it, i), &r)) {
+    tt__mlt_sample r;
+    if (!tt__mlt_eval(job, thread_index, &src, tt__mlt_boot_depth(job->it, i), &r)) {
       atomic_store(&job->failed, 1);
       return;
     }
-    double c = mlt_lum(r.L);
+    double c = tt__mlt_lum(r.L);
     job->weights[i] = (isfinite(c) && c > 0.0 && !r.nonfinite) ? c : 0.0;
     rays += r.rays;
   }
@@ -430,19 +436,19 @@ static void mlt_boot_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t threa
 }
 
 /* Chains [begin, end): replay their bootstrap start as a forced large step. */
-static void mlt_start_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
-  mlt_job *job = vctx;
+static void tt__mlt_start_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  tt__mlt_job *job = vctx;
   tt_integrator *it = job->it;
   for (uint64_t c = begin; c < end; ++c) {
     tt__mlt_chain *ch = &it->chains[c];
     tt__mlt_chain_init(ch, it->chain_mem + c * tt__mlt_chain_bytes(it->dims), it->dims, &it->kernel);
-    if (it->set.mmlt) ch->pair_stride = MLT_STREAMS;
+    if (it->set.mmlt) ch->pair_stride = TT__MLT_STREAMS;
     tt__mlt_chain_start(ch, it->seed, job->starts[c], c);
-    if (it->chain_depth) it->chain_depth[c] = (uint8_t)mlt_boot_depth(it, job->starts[c]);
+    if (it->chain_depth) it->chain_depth[c] = (uint8_t)tt__mlt_boot_depth(it, job->starts[c]);
     tt__mlt_chain_propose(ch);
     tt_sample_source src = tt__mlt_chain_source(ch);
-    mlt_sample r;
-    if (!mlt_eval(job, thread_index, &src, it->chain_depth ? it->chain_depth[c] : 0, &r)) {
+    tt__mlt_sample r;
+    if (!tt__mlt_eval(job, thread_index, &src, it->chain_depth ? it->chain_depth[c] : 0, &r)) {
       atomic_store(&job->failed, 1);
       return;
     }
@@ -450,13 +456,13 @@ static void mlt_start_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thre
     memcpy(ch->L, r.L, sizeof ch->L);
     ch->fx = r.fx;
     ch->fy = r.fy;
-    ch->C = mlt_lum(r.L);  /* = the bootstrap weight (> 0): the evaluation is deterministic */
+    ch->C = tt__mlt_lum(r.L);  /* = the bootstrap weight (> 0): the evaluation is deterministic */
   }
 }
 
 /* Bootstraps b and the chains for the film of this pass. */
-static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
-  const mlt_settings *s = &it->set;
+static tt_status tt__mlt_bootstrap(tt_integrator *it, tt__mlt_job *job) {
+  const tt__mlt_settings *s = &it->set;
   /* mmlt: bootstrapSamples per path depth, sample i of depth i % (maxDepth + 1) (pbrt-v3) */
   const uint64_t depths = s->mmlt ? s->max_depth + 1 : 1;
   uint64_t n = s->bootstrap * depths;
@@ -464,7 +470,7 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
   it->width = job->width;
   it->height = job->height;
   it->nchains = s->chains;
-  it->dims = s->mmlt ? mlt_mmlt_dims(s->max_depth) : TT_PATH_DIM_COUNT(s->max_depth);
+  it->dims = s->mmlt ? tt__mlt_mmlt_dims(s->max_depth) : TT_PATH_DIM_COUNT(s->max_depth);
   job->weights = malloc(n * sizeof(double));
   job->starts = malloc((size_t)it->nchains * sizeof(uint64_t));
   it->chains = calloc(it->nchains, sizeof(tt__mlt_chain));
@@ -472,14 +478,16 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
   if (s->mmlt) it->chain_depth = calloc(it->nchains, 1);
   tt_status st = TT_OK;
   if (!job->weights || !job->starts || !it->chains || !it->chain_mem || (s->mmlt && !it->chain_depth)) {
-    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for %llu bootstrap samples and %u chains",
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                      TT__MLT_NAME ": out of memory for %llu bootstrap samples and %u chains",
                       (unsigned long long)n, it->nchains);
     goto done;
   }
-  const tt_host *host = mlt_host();
-  st = host->parallel_for(n, 256, mlt_boot_fn, job);
+  const tt_host *host = tt__mlt_host();
+  st = host->parallel_for(n, 256, tt__mlt_boot_fn, job);
   if (st == TT_OK && atomic_load(&job->failed))
-    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the bidirectional subpaths");
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                      TT__MLT_NAME ": out of memory for the bidirectional subpaths");
   if (st != TT_OK) goto done;
   /* Serial prefix sum: deterministic b whatever the thread count. */
   double sum = 0.0;
@@ -495,7 +503,7 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
     it->black = 1;
     it->ready = 1;
     it->mutations_total = 0;
-    tt_host_log(host, TT_LOG_WARN, MLT_NAME,
+    tt_host_log(host, TT_LOG_WARN, TT__MLT_NAME,
                 "all %llu bootstrap paths have zero contribution: nothing "
                 "in view is lit, the image is black (raise bootstrap if the lights are tiny)",
                 (unsigned long long)n);
@@ -511,13 +519,14 @@ static tt_status mlt_bootstrap(tt_integrator *it, mlt_job *job) {
     }
     job->starts[c] = lo;
   }
-  st = host->parallel_for(it->nchains, 1, mlt_start_fn, job);
+  st = host->parallel_for(it->nchains, 1, tt__mlt_start_fn, job);
   if (st == TT_OK && atomic_load(&job->failed))
-    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the bidirectional subpaths");
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                      TT__MLT_NAME ": out of memory for the bidirectional subpaths");
   if (st == TT_OK) {
     it->ready = 1;
     it->mutations_total = 0;
-    tt_host_log(host, TT_LOG_INFO, MLT_NAME,
+    tt_host_log(host, TT_LOG_INFO, TT__MLT_NAME,
                 "bootstrap (%s): %llu paths (%llu non-zero), b = %.6g, %u chains",
                 s->mmlt ? "mmlt" : "pssmlt", (unsigned long long)n, (unsigned long long)nonzero,
                 it->b, it->nchains);
@@ -527,13 +536,14 @@ done:
   free(job->starts);
   job->weights = NULL;
   job->starts = NULL;
-  if (!it->ready) mlt_drop_chains(it);
+  if (!it->ready) tt__mlt_drop_chains(it);
   return st;
 }
 
 /* Adds w * L / C at pixel `pix` to the fixed-point accumulator (finite values only). */
-static inline void mlt_splat(mlt_job *job, uint32_t pix, const float L[3], double C, double w) {
-  double k = w / C * MLT_FIXED_SCALE;
+static inline void tt__mlt_splat(tt__mlt_job *job, uint32_t pix, const float L[3], double C,
+                                 double w) {
+  double k = w / C * TT__MLT_FIXED_SCALE;
   _Atomic int64_t *acc = job->it->acc + 3 * (size_t)pix;
   for (int i = 0; i < 3; ++i) {
     double v = (double)L[i] * k;
@@ -544,7 +554,7 @@ static inline void mlt_splat(mlt_job *job, uint32_t pix, const float L[3], doubl
 }
 
 /* Pixel of a film position (positions come from [0, 1) samples). */
-static inline uint32_t mlt_pixel(const mlt_job *job, float fx, float fy) {
+static inline uint32_t tt__mlt_pixel(const tt__mlt_job *job, float fx, float fy) {
   uint32_t x = (uint32_t)fx, y = (uint32_t)fy;
   if (x >= job->width) x = job->width - 1;
   if (y >= job->height) y = job->height - 1;
@@ -552,10 +562,10 @@ static inline uint32_t mlt_pixel(const mlt_job *job, float fx, float fy) {
 }
 
 /* Runs the pass's mutations of chains [begin, end). */
-static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
-  mlt_job *job = vctx;
+static void tt__mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  tt__mlt_job *job = vctx;
   tt_integrator *it = job->it;
-  const tt_host *host = mlt_host();
+  const tt_host *host = tt__mlt_host();
   uint64_t rays = 0, done = 0, nonfinite = 0, sp = 0, sa = 0, lp = 0, la = 0, vertices = 0;
   uint64_t theta[TT__MLT_THETA_BINS + 1];
   int dump = it->theta_dump != NULL;
@@ -567,13 +577,13 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
     tt_sample_source src = tt__mlt_chain_source(ch);
     const uint32_t depth = it->chain_depth ? it->chain_depth[c] : 0;
     for (uint64_t m = 0; m < quota; ++m) {
-      if (m % MLT_STOP_CHECK == 0 && host->should_stop && host->should_stop()) {
+      if (m % TT__MLT_STOP_CHECK == 0 && host->should_stop && host->should_stop()) {
         atomic_store(&job->interrupted, 1);
         break;
       }
       tt__mlt_chain_propose(ch);
-      mlt_sample r;
-      if (!mlt_eval(job, thread_index, &src, depth, &r)) {
+      tt__mlt_sample r;
+      if (!tt__mlt_eval(job, thread_index, &src, depth, &r)) {
         tt__mlt_chain_reject(ch);
         atomic_store(&job->failed, 1);
         atomic_store(&job->interrupted, 1);
@@ -582,7 +592,7 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
       const float fx = r.fx, fy = r.fy;
       rays += r.rays;
       vertices += r.vertices;
-      double cy = mlt_lum(r.L);
+      double cy = tt__mlt_lum(r.L);
       if (r.nonfinite || !isfinite(cy) || cy < 0.0) {  /* never splatted, never accepted */
         nonfinite++;
         cy = 0.0;
@@ -596,8 +606,9 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
         a = la_ >= 0.0 ? 1.0 : exp(la_);
       }
       /* Expected values: the proposal with weight a, the current state with 1 - a. */
-      if (a > 0.0) mlt_splat(job, mlt_pixel(job, fx, fy), r.L, cy, a);
-      if (a < 1.0 && ch->C > 0.0) mlt_splat(job, mlt_pixel(job, ch->fx, ch->fy), ch->L, ch->C, 1.0 - a);
+      if (a > 0.0) tt__mlt_splat(job, tt__mlt_pixel(job, fx, fy), r.L, cy, a);
+      if (a < 1.0 && ch->C > 0.0)
+        tt__mlt_splat(job, tt__mlt_pixel(job, ch->fx, ch->fy), ch->L, ch->C, 1.0 - a);
       int large = ch->large;
       int accept = tt__mlt_rng_unit(&ch->rng) < a;
       if (large) { lp++; la += accept; } else { sp++; sa += accept; }
@@ -628,10 +639,10 @@ static void mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thr
 }
 
 /* Writes the Theta histogram (CSV with a comment header) for tools/pssmlt. */
-static void mlt_write_theta(const tt_integrator *it) {
+static void tt__mlt_write_theta(const tt_integrator *it) {
   tt_atomic_file *af;
   if (tt_atomic_file_open(it->theta_dump, &af) != TT_OK) {
-    tt_host_log(mlt_host(), TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s",
+    tt_host_log(tt__mlt_host(), TT_LOG_WARN, TT__MLT_NAME, "cannot write the Theta dump: %s",
                 tt_last_error());
     return;
   }
@@ -645,7 +656,7 @@ static void mlt_write_theta(const tt_integrator *it) {
             (unsigned long long)it->theta_hist[i]);
   fprintf(f, "1.000000,inf,%llu\n", (unsigned long long)it->theta_hist[TT__MLT_THETA_BINS]);
   if (tt_atomic_file_commit(af) != TT_OK)
-    tt_host_log(mlt_host(), TT_LOG_WARN, MLT_NAME, "cannot write the Theta dump: %s",
+    tt_host_log(tt__mlt_host(), TT_LOG_WARN, TT__MLT_NAME, "cannot write the Theta dump: %s",
                 tt_last_error());
 }
 
@@ -653,21 +664,21 @@ static void mlt_write_theta(const tt_integrator *it) {
  * pass of their own, one first-hit ray per pixel per render pass (at the pass's Halton(2,3)
  * offset, or the frame's fixed jitter), folded into the running mean as the path tracer
  * does (tt_path_write_aovs): with N passes an AOV is the mean of N stratified samples. */
-typedef struct mlt_aov_job {
-  mlt_job *job;
+typedef struct tt__mlt_aov_job {
+  tt__mlt_job *job;
   tt_path_options opts;     /* max_depth 0: the first hit only, no light sampling */
   tt_camera_frame prev;
   int has_prev;
   float jitter[2];
   uint64_t n;               /* this pass's AOV sample number since the film was cleared */
-} mlt_aov_job;
+} tt__mlt_aov_job;
 
-static void mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
-  mlt_aov_job *a = vctx;
-  mlt_job *job = a->job;
+static void tt__mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  tt__mlt_aov_job *a = vctx;
+  tt__mlt_job *job = a->job;
   (void)thread_index;
-  mlt_boot_src bs = {job->it->seed, 0};  /* a depth-0 path draws no sample dimension */
-  tt_sample_source src = {mlt_boot_get, NULL, &bs};
+  tt__mlt_boot_src bs = {job->it->seed, 0};  /* a depth-0 path draws no sample dimension */
+  tt_sample_source src = {tt__mlt_boot_get, NULL, &bs};
   uint64_t rays = 0;
   for (uint64_t y = begin; y < end; ++y) {
     for (uint32_t x = 0; x < job->width; ++x) {
@@ -684,9 +695,9 @@ static void mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
   atomic_fetch_add(&job->rays, rays);
 }
 
-static tt_status mlt_aovs(mlt_job *job) {
+static tt_status tt__mlt_aovs(tt__mlt_job *job) {
   const tt_render_ctx *ctx = job->ctx;
-  mlt_aov_job a;
+  tt__mlt_aov_job a;
   memset(&a, 0, sizeof a);
   a.job = job;
   a.opts = job->it->opts;
@@ -700,20 +711,23 @@ static tt_status mlt_aovs(mlt_job *job) {
     tt_jitter_halton23(ctx->pass_index, a.jitter);
   }
   a.n = ctx->sample_offset == 0 ? 1 : (uint64_t)ctx->pass_index + 1;
-  return mlt_host()->parallel_for(job->height, 1, mlt_aov_fn, &a);
+  return tt__mlt_host()->parallel_for(job->height, 1, tt__mlt_aov_fn, &a);
 }
 
-static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_pass_stats *stats) {
+static tt_status tt__mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
+                                     tt_pass_stats *stats) {
   if (!it || !ctx || !ctx->film || !ctx->camera || !ctx->accel_iface || !ctx->accel)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, MLT_NAME ": render_pass needs film, camera and accel");
-  const tt_host *host = mlt_host();
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__MLT_NAME ": render_pass needs film, camera and accel");
+  const tt_host *host = tt__mlt_host();
   uint64_t t0 = host->clock_ns();
   uint32_t w = tt_film_width(ctx->film), h = tt_film_height(ctx->film);
   if (w != ctx->camera->width || h != ctx->camera->height)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, MLT_NAME ": film %ux%u differs from camera %ux%u", w, h,
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__MLT_NAME ": film %ux%u differs from camera %ux%u", w, h,
                         ctx->camera->width, ctx->camera->height);
-  mlt_job *job = calloc(1, sizeof *job);
-  if (!job) return tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory");
+  tt__mlt_job *job = calloc(1, sizeof *job);
+  if (!job) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": out of memory");
   job->it = it;
   job->ctx = ctx;
   job->width = w;
@@ -727,13 +741,14 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
   atomic_init(&job->failed, 0);
   if (st == TT_OK && it->set.mmlt) {
     job->paths = calloc(job->threads, sizeof *job->paths);
-    if (!job->paths) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory");
+    if (!job->paths) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": out of memory");
   }
   if (st == TT_OK && it->acc_pixels != pixels) {  /* allocated once per film size */
     free((void *)it->acc);
     it->acc = calloc(3 * pixels, sizeof(int64_t));
     it->acc_pixels = it->acc ? pixels : 0;
-    if (!it->acc) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the splat buffer");
+    if (!it->acc)
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": out of memory for the splat buffer");
   }
   if (st != TT_OK) {
     free(job->paths);
@@ -744,10 +759,10 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
   /* A new target (first pass, reset, maxDepth/chains/bootstrap changed, other film size)
    * starts over; a film without earlier passes restarts the count but keeps the chains. */
   double boot_ms = 0.0;
-  if (it->ready && (it->width != w || it->height != h)) mlt_drop_chains(it);
+  if (it->ready && (it->width != w || it->height != h)) tt__mlt_drop_chains(it);
   if (!it->ready) {
     uint64_t b0 = host->clock_ns();
-    st = mlt_bootstrap(it, job);
+    st = tt__mlt_bootstrap(it, job);
     boot_ms = (double)(host->clock_ns() - b0) * 1e-6;
     if (st == TT_OK && ctx->sample_offset > 0)  /* the film holds an older estimate */
       memset(tt_film_splat_rgb(ctx->film), 0, 3 * pixels * sizeof(float));
@@ -760,9 +775,10 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
     uint64_t total = (uint64_t)ctx->spp * it->set.mpp * pixels;
     job->base = total / it->nchains;
     job->extra = total % it->nchains;
-    tt_status pst = host->parallel_for(it->nchains, 1, mlt_mutate_fn, job);
+    tt_status pst = host->parallel_for(it->nchains, 1, tt__mlt_mutate_fn, job);
     if (atomic_load(&job->failed))
-      st = tt_set_error(TT_ERR_OUT_OF_MEMORY, MLT_NAME ": out of memory for the bidirectional subpaths");
+      st = tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                        TT__MLT_NAME ": out of memory for the bidirectional subpaths");
     else if (pst == TT_ERR_INTERRUPTED || atomic_load(&job->interrupted)) st = TT_ERR_INTERRUPTED;
     else if (pst != TT_OK) st = pst;
     /* Flush the pass into the film: one splat per pixel, so the order is irrelevant. */
@@ -770,7 +786,8 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
       _Atomic int64_t *q = it->acc + 3 * p;
       int64_t q0 = atomic_load(&q[0]), q1 = atomic_load(&q[1]), q2 = atomic_load(&q[2]);
       if (!(q0 | q1 | q2)) continue;
-      float rgb[3] = {(float)(q0 / MLT_FIXED_SCALE), (float)(q1 / MLT_FIXED_SCALE), (float)(q2 / MLT_FIXED_SCALE)};
+      float rgb[3] = {(float)(q0 / TT__MLT_FIXED_SCALE), (float)(q1 / TT__MLT_FIXED_SCALE),
+                      (float)(q2 / TT__MLT_FIXED_SCALE)};
       tt_film_splat(ctx->film, (float)(p % w) + 0.5f, (float)(p / w) + 0.5f, rgb);
       atomic_store(&q[0], 0);
       atomic_store(&q[1], 0);
@@ -781,9 +798,9 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
       tt_film_set_splat_scale(ctx->film, it->b * (double)pixels / (double)it->mutations_total);
     if (it->theta_dump) {
       for (int i = 0; i <= TT__MLT_THETA_BINS; ++i) it->theta_hist[i] += atomic_load(&job->theta[i]);
-      mlt_write_theta(it);
+      tt__mlt_write_theta(it);
     }
-    if (st == TT_OK && tt_film_aov_mask(ctx->film)) st = mlt_aovs(job);
+    if (st == TT_OK && tt_film_aov_mask(ctx->film)) st = tt__mlt_aovs(job);
   }
 
   uint64_t t1 = host->clock_ns();
@@ -820,50 +837,51 @@ static tt_status mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt
   free(job->paths);
   free(job);
   if (st == TT_ERR_INTERRUPTED)
-    return tt_set_error(TT_ERR_INTERRUPTED, MLT_NAME ": pass interrupted (mutations done are in the film)");
+    return tt_set_error(TT_ERR_INTERRUPTED,
+                        TT__MLT_NAME ": pass interrupted (mutations done are in the film)");
   return st;
 }
 
-static const tt_integrator_iface mlt_iface = {
+static const tt_integrator_iface tt__mlt_iface = {
   .struct_size = sizeof(tt_integrator_iface),
-  .space = mlt_space,
-  .create = mlt_create,
-  .configure = mlt_configure,
-  .render_pass = mlt_render_pass,
-  .reset = mlt_reset,
-  .destroy = mlt_destroy,
+  .space = tt__mlt_space,
+  .create = tt__mlt_create,
+  .configure = tt__mlt_configure,
+  .render_pass = tt__mlt_render_pass,
+  .reset = tt__mlt_reset,
+  .destroy = tt__mlt_destroy,
 };
 
 /* Tells a tuning host what to minimise by default (thesis 4.4: small-step acceptance). */
 /* What the thesis tunes (4.4): the bin edges a_1..a_{M+1} and sigmas sigma_1..sigma_M of the
  * default M = 7, plus the sigma of the non-direction dimensions, with binning on. Chains,
  * bootstrap size or depth would change the cost of a measurement, not the method. */
-static const char *const mlt_tunable[] = {
+static const char *const tt__mlt_tunable[] = {
   "a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8",
   "sigma1", "sigma2", "sigma3", "sigma4", "sigma5", "sigma6", "sigma7", "sigma", NULL};
 
-static const tt_tuning_hint mlt_hint = {
+static const tt_tuning_hint tt__mlt_hint = {
   .struct_size = sizeof(tt_tuning_hint),
   .objective = "metric:small_step_acceptance:target=0.234",
-  .tunable = mlt_tunable,
+  .tunable = tt__mlt_tunable,
   .setup = "{\"binning\": true, \"bins\": 7}",
 };
 
-static tt_status mlt_init(const tt_host *host) {
+static tt_status tt__mlt_init(const tt_host *host) {
   g_host = host;
-  return g_space ? TT_OK : mlt_build_space();
+  return g_space ? TT_OK : tt__mlt_build_space();
 }
 
-static void mlt_deinit(void) {
+static void tt__mlt_deinit(void) {
   tt_space_destroy(g_space);
   g_space = NULL;
   g_host = NULL;
 }
 
-static const void *mlt_get_interface(const char *id) {
+static const void *tt__mlt_get_interface(const char *id) {
   if (!id) return NULL;
-  if (strcmp(id, TT_INTEGRATOR_INTERFACE_ID) == 0) return &mlt_iface;
-  if (strcmp(id, TT_TUNING_HINT_ID) == 0) return &mlt_hint;
+  if (strcmp(id, TT_INTEGRATOR_INTERFACE_ID) == 0) return &tt__mlt_iface;
+  if (strcmp(id, TT_TUNING_HINT_ID) == 0) return &tt__mlt_hint;
   return NULL;
 }
 
@@ -872,11 +890,11 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
   .abi_major = TT_ABI_MAJOR,
   .abi_minor = TT_ABI_MINOR,
   .kind = TT_KIND_INTEGRATOR,
-  .name = MLT_NAME,
-  .version = MLT_VERSION,
+  .name = TT__MLT_NAME,
+  .version = TT__MLT_VERSION,
   .description = "PSSMLT over the path tracer or multiplexed MLT over BDPT, with sigma-binning and "
                  "truncated-normal steps (thesis ch. 4)",
-  .init = mlt_init,
-  .deinit = mlt_deinit,
-  .get_interface = mlt_get_interface,
+  .init = tt__mlt_init,
+  .deinit = tt__mlt_deinit,
+  .get_interface = tt__mlt_get_interface,
 };

@@ -3,11 +3,11 @@
 
 #include <string.h>
 
-#define TT__SQRT2 1.41421356237309504880
-#define TT__SQRT2PI 2.50662827463100050242
-#define TT__PI 3.14159265358979323846
+#define TT__MLT_SQRT2 1.41421356237309504880
+#define TT__MLT_SQRT2PI 2.50662827463100050242
+#define TT__MLT_PI 3.14159265358979323846
 /* Relative error below which a composite or uniform shortcut counts as exact (README). */
-#define TT__EXACT_EPS 1e-17
+#define TT__MLT_EXACT_EPS 1e-17
 
 /* ---- random numbers ---- */
 
@@ -45,7 +45,8 @@ double tt__mlt_normal_quantile(double p) {
              ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
   /* (Phi(x) - p) / phi(x) as (Phi(x)/p - 1) exp(log p + x^2/2 + log sqrt(2 pi)): neither
    * factor overflows in the far tail (p down to 1e-300). */
-  double u = (0.5 * erfc(-x / TT__SQRT2) / p - 1.0) * exp(log(p) + 0.91893853320467274178 + 0.5 * x * x);
+  double u = (0.5 * erfc(-x / TT__MLT_SQRT2) / p - 1.0) *
+             exp(log(p) + 0.91893853320467274178 + 0.5 * x * x);
   x = x - u / (1.0 + 0.5 * x * u);
   return x;
 }
@@ -53,7 +54,7 @@ double tt__mlt_normal_quantile(double p) {
 /* Eq. 4.10 with a = -0.5, b = 0.5, rewritten around the nearer tail so that no 1 - (1 - eps)
  * cancellation occurs: for xi < 1/2, p = Phi(-c) + xi Z with c = 0.5/sigma, Z = 1 - 2 Phi(-c),
  * and X = sigma Phi^-1(p); the upper half mirrors it (the density is symmetric). */
-static double tt__tn_sample_pre(double sigma, double tail, double mass, double xi) {
+static double tt__mlt_tn_sample_pre(double sigma, double tail, double mass, double xi) {
   double u = xi < 0.5 ? xi : 1.0 - xi;
   double x = sigma * tt__mlt_normal_quantile(tail + u * mass);
   if (xi >= 0.5) x = -x;
@@ -63,20 +64,20 @@ static double tt__tn_sample_pre(double sigma, double tail, double mass, double x
 /* Public form for the tests: computes the normalisation on the fly. */
 double tt__mlt_tn_sample(double sigma, double xi) {
   double c = 0.5 / sigma;
-  return tt__tn_sample_pre(sigma, 0.5 * erfc(c / TT__SQRT2), erf(c / TT__SQRT2), xi);
+  return tt__mlt_tn_sample_pre(sigma, 0.5 * erfc(c / TT__MLT_SQRT2), erf(c / TT__MLT_SQRT2), xi);
 }
 
 /* phi(d / sigma) / (sigma Z) on [-0.5, 0.5] (eq. 2.11). */
 double tt__mlt_tn_pdf(double sigma, double d) {
   if (!(fabs(d) <= 0.5)) return 0.0;
-  double z = erf(0.5 / (TT__SQRT2 * sigma));
-  return exp(-0.5 * d * d / (sigma * sigma)) / (sigma * TT__SQRT2PI * z);
+  double z = erf(0.5 / (TT__MLT_SQRT2 * sigma));
+  return exp(-0.5 * d * d / (sigma * sigma)) / (sigma * TT__MLT_SQRT2PI * z);
 }
 
 /* log of eq. 4.7 (the D terms read as erf(0.5 / (sqrt(2 n_s) sigma)) differences). */
 double tt__mlt_tn_log_ratio(double delta, double sigma_c, double sigma_p, double n_s) {
   double sc = sigma_c * sqrt(n_s), sp = sigma_p * sqrt(n_s);
-  double dc = erf(0.5 / (TT__SQRT2 * sc)), dp = erf(0.5 / (TT__SQRT2 * sp));
+  double dc = erf(0.5 / (TT__MLT_SQRT2 * sc)), dp = erf(0.5 / (TT__MLT_SQRT2 * sp));
   return log(sc * dc) - log(sp * dp) + 0.5 * delta * delta * (1.0 / (sc * sc) - 1.0 / (sp * sp));
 }
 
@@ -104,10 +105,10 @@ int tt__mlt_bin_of_theta(const tt__mlt_kernel *k, double theta) {
 
 /* Largest |Fourier coefficient| c_m (m = 1..64) of one small step on the circle: after n
  * pending steps the wrapped sum deviates from uniform by at most 2 sum_m |c_m|^n. */
-static double tt__step_rho(const tt__mlt_kernel *k) {
+static double tt__mlt_step_rho(const tt__mlt_kernel *k) {
   double s = k->sigma;
   if (!k->binning || k->slot_tail[0] < 1e-20)  /* wrapped normal, or truncation invisible */
-    return exp(-2.0 * TT__PI * TT__PI * s * s);
+    return exp(-2.0 * TT__MLT_PI * TT__MLT_PI * s * s);
   enum { N = 4096 };
   double rho = 0.0;
   for (int m = 1; m <= 64; ++m) {
@@ -115,9 +116,9 @@ static double tt__step_rho(const tt__mlt_kernel *k) {
     for (int i = 0; i <= N; ++i) {  /* Simpson on [-0.5, 0.5] */
       double d = -0.5 + (double)i / N;
       double w = (i == 0 || i == N) ? 1.0 : (i & 1) ? 4.0 : 2.0;
-      acc += w * exp(-0.5 * d * d / (s * s)) * cos(2.0 * TT__PI * m * d);
+      acc += w * exp(-0.5 * d * d / (s * s)) * cos(2.0 * TT__MLT_PI * m * d);
     }
-    double cm = fabs(acc / (3.0 * N) / (s * TT__SQRT2PI * k->slot_mass[0]));
+    double cm = fabs(acc / (3.0 * N) / (s * TT__MLT_SQRT2PI * k->slot_mass[0]));
     if (cm > rho) rho = cm;
   }
   return rho;
@@ -133,42 +134,43 @@ void tt__mlt_kernel_init(tt__mlt_kernel *k, double sigma, double large_step, int
   k->large_step = large_step;
   k->binning = binning;
   k->bins = bins;
-  k->alpha = alpha > 0.0 ? alpha : 4.0 * TT__PI;
+  k->alpha = alpha > 0.0 ? alpha : 4.0 * TT__MLT_PI;
   tt__mlt_edges(a, bins, k->edges);
   for (int s = 0; s < TT__MLT_SLOTS; ++s) {
     double sg = s == 0 ? sigma : s <= bins ? bin_sigma[s - 1] : sigma;
     double c = 0.5 / sg;
     k->slot_sigma[s] = sg;
-    k->slot_tail[s] = 0.5 * erfc(c / TT__SQRT2);
-    k->slot_mass[s] = erf(c / TT__SQRT2);
+    k->slot_tail[s] = 0.5 * erfc(c / TT__MLT_SQRT2);
+    k->slot_mass[s] = erf(c / TT__MLT_SQRT2);
     k->slot_lognorm[s] = log(sg * k->slot_mass[s]);
     k->slot_invvar[s] = 1.0 / (sg * sg);
   }
   double out = 2.0 * k->slot_tail[0];
-  k->composite_max_n = !binning || out <= 0.0 ? INFINITY : TT__EXACT_EPS / out;
-  double rho = tt__step_rho(k);
-  k->uniform_n = rho < 1.0 ? log(TT__EXACT_EPS / 128.0) / log(rho) : INFINITY;
+  k->composite_max_n = !binning || out <= 0.0 ? INFINITY : TT__MLT_EXACT_EPS / out;
+  double rho = tt__mlt_step_rho(k);
+  k->uniform_n = rho < 1.0 ? log(TT__MLT_EXACT_EPS / 128.0) / log(rho) : INFINITY;
 }
 
 /* ---- chain ---- */
 
 /* x mod 1 in [0, 1) (x - floor(x) can round to 1 for tiny negative x). */
-static inline double tt__wrap(double x) {
+static inline double tt__mlt_wrap(double x) {
   x -= floor(x);
   return x >= 1.0 ? 0.0 : x;
 }
 
 /* Small-step offset from slot `s`: truncated normal (binning) or plain normal (classic). */
-static inline double tt__step(tt__mlt_chain *c, int s) {
+static inline double tt__mlt_step(tt__mlt_chain *c, int s) {
   const tt__mlt_kernel *k = c->k;
   double xi = tt__mlt_rng_unit(&c->rng);
-  if (k->binning) return tt__tn_sample_pre(k->slot_sigma[s], k->slot_tail[s], k->slot_mass[s], xi);
+  if (k->binning)
+    return tt__mlt_tn_sample_pre(k->slot_sigma[s], k->slot_tail[s], k->slot_mass[s], xi);
   return k->slot_sigma[s] * tt__mlt_normal_quantile(xi > 0.0 ? xi : 0x1p-60);
 }
 
 /* Brings a dimension to the current state: a dim untouched since the last accepted large
  * step is uniform; otherwise the n pending steps (all of `sigma`, README) are applied. */
-static void tt__realise(tt__mlt_chain *c, tt__mlt_dim *d) {
+static void tt__mlt_realise(tt__mlt_chain *c, tt__mlt_dim *d) {
   const tt__mlt_kernel *k = c->k;
   if (d->mod >= c->t) return;
   if (d->mod < c->t_large) {
@@ -179,9 +181,11 @@ static void tt__realise(tt__mlt_chain *c, tt__mlt_dim *d) {
       d->value = tt__mlt_rng_unit(&c->rng);
     } else if (n <= k->composite_max_n) {
       double xi = tt__mlt_rng_unit(&c->rng);
-      d->value = tt__wrap(d->value + k->sigma * sqrt(n) * tt__mlt_normal_quantile(xi > 0.0 ? xi : 0x1p-60));
+      d->value = tt__mlt_wrap(d->value + k->sigma * sqrt(n) *
+                                             tt__mlt_normal_quantile(xi > 0.0 ? xi : 0x1p-60));
     } else {
-      for (int64_t i = 0; i < c->t - d->mod; ++i) d->value = tt__wrap(d->value + tt__step(c, 0));
+      for (int64_t i = 0; i < c->t - d->mod; ++i)
+        d->value = tt__mlt_wrap(d->value + tt__mlt_step(c, 0));
     }
   }
   d->mod = c->t;
@@ -220,7 +224,7 @@ void tt__mlt_chain_propose(tt__mlt_chain *c) {
 }
 
 /* get(): the proposal's value of `dim`, mutated from the current state on first use. */
-static float tt__chain_get(void *self, uint32_t dim) {
+static float tt__mlt_chain_get(void *self, uint32_t dim) {
   tt__mlt_chain *c = self;
   if (dim >= c->dims) return 0.5f;  /* beyond TT_PATH_DIM_COUNT(maxDepth): not reached */
   tt__mlt_dim *d = &c->d[dim];
@@ -237,11 +241,11 @@ static float tt__chain_get(void *self, uint32_t dim) {
       d->mod_backup = d->mod;
       d->value = tt__mlt_rng_unit(&c->rng);
     } else {
-      tt__realise(c, d);
+      tt__mlt_realise(c, d);
       d->backup = d->value;
       d->mod_backup = d->mod;
-      d->delta = tt__step(c, tt__mlt_slot(c->k, d->pdf));
-      d->value = tt__wrap(d->value + d->delta);
+      d->delta = tt__mlt_step(c, tt__mlt_slot(c->k, d->pdf));
+      d->value = tt__mlt_wrap(d->value + d->delta);
     }
   }
   float f = (float)d->value;
@@ -251,7 +255,7 @@ static float tt__chain_get(void *self, uint32_t dim) {
 /* report_pdf(): remembers the proposal's direction pdf for both dims of the pair, and feeds
  * the Theta histogram. Tracked in classic mode too, so that a switch to binning between
  * passes knows the current state's sigmas. */
-static void tt__chain_report(void *self, uint32_t dim, float pdf) {
+static void tt__mlt_chain_report(void *self, uint32_t dim, float pdf) {
   tt__mlt_chain *c = self;
   if (c->theta_hist) {
     double th = tt__mlt_theta(c->k, pdf);
@@ -267,12 +271,12 @@ static void tt__chain_report(void *self, uint32_t dim, float pdf) {
 }
 
 tt_sample_source tt__mlt_chain_source(tt__mlt_chain *c) {
-  tt_sample_source s = {tt__chain_get, tt__chain_report, c};
+  tt_sample_source s = {tt__mlt_chain_get, tt__mlt_chain_report, c};
   return s;
 }
 
 /* One dimension's log[t_sp(delta) / t_sc(delta)]. */
-static inline double tt__slot_term(const tt__mlt_kernel *k, double delta, int sc, int sp) {
+static inline double tt__mlt_slot_term(const tt__mlt_kernel *k, double delta, int sc, int sp) {
   return k->slot_lognorm[sc] - k->slot_lognorm[sp] +
          0.5 * delta * delta * (k->slot_invvar[sc] - k->slot_invvar[sp]);
 }
@@ -284,7 +288,7 @@ double tt__mlt_chain_log_T_ratio(tt__mlt_chain *c) {
   for (uint32_t i = 0; i < c->n_touched; ++i) {
     const tt__mlt_dim *d = &c->d[c->touched[i]];
     int sc = tt__mlt_slot(k, d->pdf), sp = tt__mlt_slot(k, d->pdf_new);
-    if (sc != sp) lr += tt__slot_term(k, d->delta, sc, sp);
+    if (sc != sp) lr += tt__mlt_slot_term(k, d->delta, sc, sp);
   }
   /* Dims the current state uses with a binned sigma but the proposal never read still move
    * in the full-state chain, from sigma(x) to the default sigma of y: draw them now. */
@@ -293,9 +297,9 @@ double tt__mlt_chain_log_T_ratio(tt__mlt_chain *c) {
     if (d->stamp == c->iter) continue;
     int sc = tt__mlt_slot(k, d->pdf);
     if (sc == 0) continue;  /* same sigma both ways: stays a lazy pending step */
-    d->delta = tt__step(c, sc);
+    d->delta = tt__mlt_step(c, sc);
     d->eager = c->iter;
-    lr += tt__slot_term(k, d->delta, sc, 0);
+    lr += tt__mlt_slot_term(k, d->delta, sc, 0);
   }
   return k->no_hastings ? 0.0 : lr;
 }
@@ -307,7 +311,7 @@ void tt__mlt_chain_accept(tt__mlt_chain *c) {
     tt__mlt_dim *d = &c->d[c->cur_binned[i]];
     if (d->stamp == c->iter) continue;
     if (!c->large && d->eager == c->iter) {
-      d->value = tt__wrap(d->value + d->delta);
+      d->value = tt__mlt_wrap(d->value + d->delta);
       d->mod = c->t;
     }
     d->pdf = -1.0f;
@@ -335,10 +339,10 @@ void tt__mlt_chain_reject(tt__mlt_chain *c) {
 
 double tt__mlt_chain_value(tt__mlt_chain *c, uint32_t dim) {
   if (dim >= c->dims) return 0.5;
-  tt__realise(c, &c->d[dim]);
+  tt__mlt_realise(c, &c->d[dim]);
   return c->d[dim].value;
 }
 
 void tt__mlt_chain_flush(tt__mlt_chain *c) {
-  for (uint32_t i = 0; i < c->dims; ++i) tt__realise(c, &c->d[i]);
+  for (uint32_t i = 0; i < c->dims; ++i) tt__mlt_realise(c, &c->d[i]);
 }

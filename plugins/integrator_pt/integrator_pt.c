@@ -15,46 +15,47 @@
 #include <tunetrace/path.h>
 #include <tunetrace/plugin.h>
 
-#define PT_NAME "integrator_pt"
-#define PT_VERSION "0.1.0"
-#define PT_MAX_STATE 256
-#define PT_BH_RADIUS 1.5f
-#define PT_BH_TABLE 512
+#define TT__PT_NAME "integrator_pt"
+#define TT__PT_VERSION "0.1.0"
+#define TT__PT_MAX_STATE 256
+#define TT__PT_BH_RADIUS 1.5f
+#define TT__PT_BH_TABLE 512
 /* Paths in flight per thread in wavefront mode: one stream call traces up to this many
  * rays. A 32x32 tile at 1 spp is one wave. */
-#define PT_WAVE 1024
+#define TT__PT_WAVE 1024
 
 static const tt_host *g_host;
 static tt_space *g_space;
-/* Blackman-Harris 1D CDF over [-radius, radius], PT_BH_TABLE bins (built at init). */
-static float g_bh_cdf[PT_BH_TABLE + 1];
+/* Blackman-Harris 1D CDF over [-radius, radius], TT__PT_BH_TABLE bins (built at init). */
+static float g_bh_cdf[TT__PT_BH_TABLE + 1];
 
-typedef struct pt_settings {
+typedef struct tt__pt_settings {
   tt_path_options path;
   const tt_sampler_iface *sampler;
   int filter_bh;
   int wavefront;
   uint32_t tile_size;
-} pt_settings;
+} tt__pt_settings;
 
 struct tt_integrator {
   const tt_scene *scene;
   tt_path_tracer *pt;
-  pt_settings settings;
+  tt__pt_settings settings;
 };
 
 /* ---- parameters ---- */
 
 /* The host, or libtunetrace's default services when the plugin is used without init(). */
-static const tt_host *pt_host(void) { return g_host ? g_host : tt_default_host(); }
+static const tt_host *tt__pt_host(void) { return g_host ? g_host : tt_default_host(); }
 
 /* Builds the parameter space once (init). */
-static tt_status pt_build_space(void) {
+static tt_status tt__pt_build_space(void) {
   static const char *const heuristics[] = {"power", "balance"};
   static const char *const samplers[] = {"independent", "halton", "sobol"};
   static const char *const filters[] = {"box", "blackman-harris"};
-  tt_space *s = tt_space_create(PT_NAME, PT_VERSION);
-  if (!s) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": cannot create the parameter space");
+  tt_space *s = tt_space_create(TT__PT_NAME, TT__PT_VERSION);
+  if (!s)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": cannot create the parameter space");
   int ok = 1;
   ok &= tt_space_add_int(s, "maxDepth", 0, 64, 3, "maximum number of bounces (0: emission only)") >= 0;
   ok &= tt_space_add_int(s, "rrDepth", 0, 64, 3, "bounce from which Russian roulette may end paths") >= 0;
@@ -70,51 +71,51 @@ static tt_status pt_build_space(void) {
                               "occluded1. Same image either way") >= 0;
   if (!ok) {
     tt_space_destroy(s);
-    return tt_set_error(TT_ERR_INTERNAL, PT_NAME ": building the parameter space failed");
+    return tt_set_error(TT_ERR_INTERNAL, TT__PT_NAME ": building the parameter space failed");
   }
   g_space = s;
   return TT_OK;
 }
 
 /* Blackman-Harris window on [-r, r]. */
-static double pt_bh(double x) {
-  double t = x / (2.0 * PT_BH_RADIUS) + 0.5;
+static double tt__pt_bh(double x) {
+  double t = x / (2.0 * TT__PT_BH_RADIUS) + 0.5;
   return 0.35875 - 0.48829 * cos(2.0 * M_PI * t) + 0.14128 * cos(4.0 * M_PI * t) -
          0.01168 * cos(6.0 * M_PI * t);
 }
 
 /* Tabulates the filter CDF (midpoint rule per bin; the window is positive). */
-static void pt_build_bh_table(void) {
-  double acc = 0.0, sum[PT_BH_TABLE + 1];
+static void tt__pt_build_bh_table(void) {
+  double acc = 0.0, sum[TT__PT_BH_TABLE + 1];
   sum[0] = 0.0;
-  for (int i = 0; i < PT_BH_TABLE; ++i) {
-    double x = -PT_BH_RADIUS + (i + 0.5) * (2.0 * PT_BH_RADIUS / PT_BH_TABLE);
-    acc += pt_bh(x);
+  for (int i = 0; i < TT__PT_BH_TABLE; ++i) {
+    double x = -TT__PT_BH_RADIUS + (i + 0.5) * (2.0 * TT__PT_BH_RADIUS / TT__PT_BH_TABLE);
+    acc += tt__pt_bh(x);
     sum[i + 1] = acc;
   }
-  for (int i = 0; i <= PT_BH_TABLE; ++i) g_bh_cdf[i] = (float)(sum[i] / acc);
-  g_bh_cdf[PT_BH_TABLE] = 1.0f;
+  for (int i = 0; i <= TT__PT_BH_TABLE; ++i) g_bh_cdf[i] = (float)(sum[i] / acc);
+  g_bh_cdf[TT__PT_BH_TABLE] = 1.0f;
 }
 
 /* Inverts the tabulated CDF: offset in [-r, r] distributed as the filter. */
-static float pt_bh_sample(float u) {
-  int lo = 0, hi = PT_BH_TABLE;
+static float tt__pt_bh_sample(float u) {
+  int lo = 0, hi = TT__PT_BH_TABLE;
   while (hi - lo > 1) {
     int mid = (lo + hi) / 2;
     if (g_bh_cdf[mid] <= u) lo = mid; else hi = mid;
   }
   float w = g_bh_cdf[lo + 1] - g_bh_cdf[lo];
   float f = w > 0.0f ? (u - g_bh_cdf[lo]) / w : 0.5f;
-  return -PT_BH_RADIUS + ((float)lo + f) * (2.0f * PT_BH_RADIUS / PT_BH_TABLE);
+  return -TT__PT_BH_RADIUS + ((float)lo + f) * (2.0f * TT__PT_BH_RADIUS / TT__PT_BH_TABLE);
 }
 
 /* Reads a configuration (NULL = defaults) into settings. */
-static tt_status pt_read_config(const tt_config *config, pt_settings *out) {
+static tt_status tt__pt_read_config(const tt_config *config, tt__pt_settings *out) {
   tt_config *defaults = NULL;
   if (!config) {
-    if (!g_space) return tt_set_error(TT_ERR_INTERNAL, PT_NAME ": used before init()");
+    if (!g_space) return tt_set_error(TT_ERR_INTERNAL, TT__PT_NAME ": used before init()");
     defaults = tt_config_create(g_space);
-    if (!defaults) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": out of memory");
+    if (!defaults) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": out of memory");
     config = defaults;
   }
   tt_status st = TT_OK;
@@ -131,7 +132,7 @@ static tt_status pt_read_config(const tt_config *config, pt_settings *out) {
                         : (h && strcmp(h, "balance") == 0) ? TT_MIS_BALANCE : TT_MIS_POWER;
   out->sampler = tt_builtin_sampler(s ? s : "independent");
   if (!out->sampler)
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, PT_NAME ": unknown sampler '%s'", s ? s : "");
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__PT_NAME ": unknown sampler '%s'", s ? s : "");
   out->filter_bh = f && strcmp(f, "blackman-harris") == 0;
   out->wavefront = (int)tt_config_get_int(config, "wavefront", 1) != 0;
   int64_t ts = tt_config_get_int(config, "tileSize", 32);
@@ -143,15 +144,17 @@ static tt_status pt_read_config(const tt_config *config, pt_settings *out) {
 
 /* ---- interface ---- */
 
-static const tt_space *pt_space(void) { return g_space; }
+static const tt_space *tt__pt_space(void) { return g_space; }
 
-static tt_status pt_create(const tt_scene *scene, const tt_config *config, tt_integrator **out) {
-  if (!scene || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PT_NAME ": scene or out is NULL");
+static tt_status tt__pt_create(const tt_scene *scene, const tt_config *config,
+                               tt_integrator **out) {
+  if (!scene || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__PT_NAME ": scene or out is NULL");
   *out = NULL;
   tt_integrator *it = calloc(1, sizeof *it);
-  if (!it) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": out of memory");
+  if (!it) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": out of memory");
   it->scene = scene;
-  tt_status st = pt_read_config(config, &it->settings);
+  tt_status st = tt__pt_read_config(config, &it->settings);
   if (st == TT_OK) st = tt_path_tracer_create(scene, &it->pt);
   if (st != TT_OK) {
     free(it);
@@ -161,23 +164,23 @@ static tt_status pt_create(const tt_scene *scene, const tt_config *config, tt_in
   return TT_OK;
 }
 
-static tt_status pt_configure(tt_integrator *it, const tt_config *config) {
-  pt_settings s;
-  tt_status st = pt_read_config(config, &s);
+static tt_status tt__pt_configure(tt_integrator *it, const tt_config *config) {
+  tt__pt_settings s;
+  tt_status st = tt__pt_read_config(config, &s);
   if (st == TT_OK) it->settings = s;
   return st;
 }
 
-static void pt_reset(tt_integrator *it) { (void)it; /* stateless between passes */ }
+static void tt__pt_reset(tt_integrator *it) { (void)it; /* stateless between passes */ }
 
-static void pt_destroy(tt_integrator *it) {
+static void tt__pt_destroy(tt_integrator *it) {
   if (!it) return;
   tt_path_tracer_destroy(it->pt);
   free(it);
 }
 
 /* Everything the tile workers share during one pass. */
-typedef struct pt_job {
+typedef struct tt__pt_job {
   const tt_integrator *it;
   const tt_render_ctx *ctx;
   const tt_sampler *sampler;
@@ -186,31 +189,31 @@ typedef struct pt_job {
   tt_tracer tracer;
   uint32_t tiles_x, tile_size, width, height;
   uint32_t aovs;                  /* the film's AOV planes (tt_path_write_aovs fills them) */
-  struct pt_wave **waves;        /* wavefront mode: per-thread scratch, made on first use */
+  struct tt__pt_wave **waves;        /* wavefront mode: per-thread scratch, made on first use */
   uint32_t wave_count;
   atomic_uint_fast64_t rays, samples, nonfinite;
   atomic_int interrupted;
   atomic_int failed;             /* a wave's scratch could not be allocated */
-} pt_job;
+} tt__pt_job;
 
 /* Sample source over the sampler's per-thread state. */
-typedef struct pt_source {
+typedef struct tt__pt_source {
   const tt_sampler_iface *iface;
   const tt_sampler *sampler;
   void *state;
-} pt_source;
+} tt__pt_source;
 
-static float pt_source_get(void *self, uint32_t dim) {
-  pt_source *s = self;
+static float tt__pt_source_get(void *self, uint32_t dim) {
+  tt__pt_source *s = self;
   return s->iface->get(s->sampler, s->state, dim);
 }
 
 /* Starts sample `s` of pixel (px, py) in sampler `state`: the film position (fx, fy) from
  * dimensions 0-1 (or the fixed jitter) and the camera ray through it. */
-static void pt_camera_sample(const pt_job *job, void *state, uint32_t px, uint32_t py,
+static void tt__pt_camera_sample(const tt__pt_job *job, void *state, uint32_t px, uint32_t py,
                              uint32_t s, float *fx, float *fy, tt_ray *ray) {
   const tt_render_ctx *ctx = job->ctx;
-  const pt_settings *set = &job->it->settings;
+  const tt__pt_settings *set = &job->it->settings;
   set->sampler->start(job->sampler, state, px, py, ctx->sample_offset + s);
   float jx, jy;
   if (ctx->fixed_jitter) {
@@ -220,8 +223,8 @@ static void pt_camera_sample(const pt_job *job, void *state, uint32_t px, uint32
     float u0 = set->sampler->get(job->sampler, state, TT_PATH_DIM_FILM);
     float u1 = set->sampler->get(job->sampler, state, TT_PATH_DIM_FILM + 1);
     if (set->filter_bh) {
-      jx = pt_bh_sample(u0);
-      jy = pt_bh_sample(u1);
+      jx = tt__pt_bh_sample(u0);
+      jy = tt__pt_bh_sample(u1);
     } else {
       jx = u0 - 0.5f;
       jy = u1 - 0.5f;
@@ -232,12 +235,12 @@ static void pt_camera_sample(const pt_job *job, void *state, uint32_t px, uint32
   tt_camera_generate_ray(&job->frame, *fx, *fy, ray);
 }
 
-/* Wavefront scratch of one thread: up to PT_WAVE paths of a tile, each with its path state
+/* Wavefront scratch of one thread: up to TT__PT_WAVE paths of a tile, each with its path state
  * and sampler state, and the compacted ray/hit arrays the stream calls take. */
-typedef struct pt_wave {
+typedef struct tt__pt_wave {
   size_t state_stride, sampler_stride;
-  unsigned char *states;     /* PT_WAVE path states */
-  unsigned char *samplers;   /* PT_WAVE sampler states */
+  unsigned char *states;     /* TT__PT_WAVE path states */
+  unsigned char *samplers;   /* TT__PT_WAVE sampler states */
   float (*film_pos)[2];      /* per path: fx, fy */
   tt_path_result *results;
   tt_ray *rays, *next_rays, *shadows;
@@ -245,23 +248,23 @@ typedef struct pt_wave {
   uint8_t *occluded;
   uint32_t *active, *next_active, *shadow_of;
   void *block;
-} pt_wave;
+} tt__pt_wave;
 
-static size_t pt_align16(size_t n) { return (n + 15) & ~(size_t)15; }
-static size_t pt_align64(size_t n) { return (n + 63) & ~(size_t)63; }
+static size_t tt__pt_align16(size_t n) { return (n + 15) & ~(size_t)15; }
+static size_t tt__pt_align64(size_t n) { return (n + 63) & ~(size_t)63; }
 
 /* One allocation for all of a wave's arrays; NULL on failure. */
-static pt_wave *pt_wave_create(size_t sampler_state) {
-  pt_wave *w = calloc(1, sizeof *w);
+static tt__pt_wave *tt__pt_wave_create(size_t sampler_state) {
+  tt__pt_wave *w = calloc(1, sizeof *w);
   if (!w) return NULL;
-  w->state_stride = pt_align16(tt_path_state_size());
-  w->sampler_stride = pt_align16(sampler_state ? sampler_state : 1);
-  const size_t n = PT_WAVE;
+  w->state_stride = tt__pt_align16(tt_path_state_size());
+  w->sampler_stride = tt__pt_align16(sampler_state ? sampler_state : 1);
+  const size_t n = TT__PT_WAVE;
   size_t sizes[] = {n * w->state_stride, n * w->sampler_stride, n * sizeof *w->film_pos,
                     n * sizeof *w->results, n * sizeof(tt_ray), n * sizeof(tt_ray),
                     n * sizeof(tt_ray), n * sizeof(tt_hit), n, n * 4, n * 4, n * 4};
   size_t total = 0;
-  for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) total += pt_align64(sizes[i]);
+  for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) total += tt__pt_align64(sizes[i]);
   unsigned char *p = aligned_alloc(64, total);
   if (!p) {
     free(w);
@@ -274,12 +277,12 @@ static pt_wave *pt_wave_create(size_t sampler_state) {
                   (void **)&w->active, (void **)&w->next_active, (void **)&w->shadow_of};
   for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
     *dst[i] = p;
-    p += pt_align64(sizes[i]);  /* each array on its own cache lines */
+    p += tt__pt_align64(sizes[i]);  /* each array on its own cache lines */
   }
   return w;
 }
 
-static void pt_wave_destroy(pt_wave *w) {
+static void tt__pt_wave_destroy(tt__pt_wave *w) {
   if (!w) return;
   free(w->block);
   free(w);
@@ -289,18 +292,18 @@ static void pt_wave_destroy(pt_wave *w) {
  * normals and uvs of its three vertices, scattered lines that mostly miss the cache (in a
  * profile of a living-room render, the loads of the indices and the first vertex were a
  * third of tt_path_hit's time). With all hits of a wave known, they are prefetched ahead:
- * the indices PT_PF_INDICES hits ahead, the vertex data (whose indices are in cache by
- * then) PT_PF_VERTICES hits ahead. */
-#define PT_PF_INDICES 16
-#define PT_PF_VERTICES 8
+ * the indices TT__PT_PF_INDICES hits ahead, the vertex data (whose indices are in cache by
+ * then) TT__PT_PF_VERTICES hits ahead. */
+#define TT__PT_PF_INDICES 16
+#define TT__PT_PF_VERTICES 8
 
-static void pt_prefetch_indices(const tt_scene *scene, const tt_hit *h) {
+static void tt__pt_prefetch_indices(const tt_scene *scene, const tt_hit *h) {
   if (h->geom_id == TT_INVALID_ID) return;
   const tt_mesh *m = tt_scene_mesh(scene, h->geom_id);
   __builtin_prefetch(m->indices + 3 * (size_t)h->prim_id);
 }
 
-static void pt_prefetch_vertices(const tt_scene *scene, const tt_hit *h) {
+static void tt__pt_prefetch_vertices(const tt_scene *scene, const tt_hit *h) {
   if (h->geom_id == TT_INVALID_ID) return;
   const tt_mesh *m = tt_scene_mesh(scene, h->geom_id);
   const uint32_t *idx = m->indices + 3 * (size_t)h->prim_id;
@@ -317,24 +320,24 @@ static void pt_prefetch_vertices(const tt_scene *scene, const tt_hit *h) {
  * intersect_stream call, then per bounce the shading of every hit, one occluded_stream
  * call for the shadow rays and one intersect_stream call for the continuations. Results
  * go to the film in path order, so the image is the scalar loop's, bit for bit. */
-static void pt_wave_run(pt_job *job, pt_wave *w, uint32_t x0, uint32_t y0, uint32_t tw,
+static void tt__pt_wave_run(tt__pt_job *job, tt__pt_wave *w, uint32_t x0, uint32_t y0, uint32_t tw,
                         uint64_t first, uint32_t count, uint64_t *rays, uint64_t *samples,
                         uint64_t *nonfinite) {
   const tt_render_ctx *ctx = job->ctx;
-  const pt_settings *set = &job->it->settings;
+  const tt__pt_settings *set = &job->it->settings;
   const tt_accel_iface *A = job->tracer.iface;
   const tt_path_tracer *pt = job->it->pt;
   const uint32_t spp = ctx->spp;
-#define PT_STATE(k) ((tt_path_state *)(w->states + (size_t)(k) * w->state_stride))
-#define PT_SSTATE(k) ((void *)(w->samplers + (size_t)(k) * w->sampler_stride))
+#define TT__PT_STATE(k) ((tt_path_state *)(w->states + (size_t)(k) * w->state_stride))
+#define TT__PT_SSTATE(k) ((void *)(w->samplers + (size_t)(k) * w->sampler_stride))
   uint32_t n = 0;
   for (uint32_t k = 0; k < count; k++) {
     uint64_t q = first + k;
     uint32_t px = x0 + (uint32_t)((q / spp) % tw), py = y0 + (uint32_t)((q / spp) / tw);
     tt_ray ray;
-    pt_camera_sample(job, PT_SSTATE(k), px, py, (uint32_t)(q % spp), &w->film_pos[k][0],
+    tt__pt_camera_sample(job, TT__PT_SSTATE(k), px, py, (uint32_t)(q % spp), &w->film_pos[k][0],
                      &w->film_pos[k][1], &ray);
-    if (tt_path_begin(pt, &set->path, &ray, PT_STATE(k), &w->rays[n])) w->active[n++] = k;
+    if (tt_path_begin(pt, &set->path, &ray, TT__PT_STATE(k), &w->rays[n])) w->active[n++] = k;
   }
   while (n > 0) {
     for (uint32_t j = 0; j < n; j++) {
@@ -343,22 +346,26 @@ static void pt_wave_run(pt_job *job, pt_wave *w, uint32_t x0, uint32_t y0, uint3
     }
     A->intersect_stream(job->tracer.accel, w->rays, w->hits, n);
     uint32_t next = 0, shadows = 0;
-    for (uint32_t j = 0; j < n && j < PT_PF_INDICES; j++) pt_prefetch_indices(job->it->scene, &w->hits[j]);
+    for (uint32_t j = 0; j < n && j < TT__PT_PF_INDICES; j++)
+      tt__pt_prefetch_indices(job->it->scene, &w->hits[j]);
     for (uint32_t j = 0; j < n; j++) {
       const uint32_t k = w->active[j];
-      if (j + PT_PF_INDICES < n) pt_prefetch_indices(job->it->scene, &w->hits[j + PT_PF_INDICES]);
-      if (j + PT_PF_VERTICES < n) pt_prefetch_vertices(job->it->scene, &w->hits[j + PT_PF_VERTICES]);
-      pt_source src = {set->sampler, job->sampler, PT_SSTATE(k)};
-      tt_sample_source source = {pt_source_get, NULL, &src};
+      if (j + TT__PT_PF_INDICES < n)
+        tt__pt_prefetch_indices(job->it->scene, &w->hits[j + TT__PT_PF_INDICES]);
+      if (j + TT__PT_PF_VERTICES < n)
+        tt__pt_prefetch_vertices(job->it->scene, &w->hits[j + TT__PT_PF_VERTICES]);
+      tt__pt_source src = {set->sampler, job->sampler, TT__PT_SSTATE(k)};
+      tt_sample_source source = {tt__pt_source_get, NULL, &src};
       int has_shadow = 0;
-      if (tt_path_hit(pt, PT_STATE(k), &w->rays[j], &w->hits[j], &source, &w->shadows[shadows],
+      if (tt_path_hit(pt, TT__PT_STATE(k), &w->rays[j], &w->hits[j], &source, &w->shadows[shadows],
                       &has_shadow, &w->next_rays[next]))
         w->next_active[next++] = k;
       if (has_shadow) w->shadow_of[shadows++] = k;
     }
     if (shadows > 0) {
       A->occluded_stream(job->tracer.accel, w->shadows, w->occluded, shadows);
-      for (uint32_t j = 0; j < shadows; j++) tt_path_shadow(PT_STATE(w->shadow_of[j]), w->occluded[j]);
+      for (uint32_t j = 0; j < shadows; j++)
+        tt_path_shadow(TT__PT_STATE(w->shadow_of[j]), w->occluded[j]);
     }
     tt_ray *tr = w->rays;
     w->rays = w->next_rays, w->next_rays = tr;
@@ -370,7 +377,7 @@ static void pt_wave_run(pt_job *job, pt_wave *w, uint32_t x0, uint32_t y0, uint3
     uint64_t q = first + k;
     uint32_t px = x0 + (uint32_t)((q / spp) % tw), py = y0 + (uint32_t)((q / spp) / tw);
     tt_path_result *r = &w->results[k];
-    tt_path_finish(PT_STATE(k), r);
+    tt_path_finish(TT__PT_STATE(k), r);
     tt_film_add_sample(ctx->film, px, py, r->L, 1.0f);
     *rays += r->rays;
     (*samples)++;
@@ -383,24 +390,24 @@ static void pt_wave_run(pt_job *job, pt_wave *w, uint32_t x0, uint32_t y0, uint3
                             ctx->sample_offset + q % spp + 1);
     }
   }
-#undef PT_STATE
-#undef PT_SSTATE
+#undef TT__PT_STATE
+#undef TT__PT_SSTATE
 }
 
 /* Renders tiles [begin, end); a tile is skipped whole when a stop was requested. */
-static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
-  pt_job *job = vctx;
+static void tt__pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
+  tt__pt_job *job = vctx;
   const tt_render_ctx *ctx = job->ctx;
-  const pt_settings *set = &job->it->settings;
-  const tt_host *host = pt_host();
-  _Alignas(16) unsigned char state[PT_MAX_STATE];
-  pt_source src = {set->sampler, job->sampler, state};
-  tt_sample_source source = {pt_source_get, NULL, &src};
+  const tt__pt_settings *set = &job->it->settings;
+  const tt_host *host = tt__pt_host();
+  _Alignas(16) unsigned char state[TT__PT_MAX_STATE];
+  tt__pt_source src = {set->sampler, job->sampler, state};
+  tt_sample_source source = {tt__pt_source_get, NULL, &src};
   uint64_t rays = 0, samples = 0, nonfinite = 0;
-  pt_wave *wave = NULL;
+  tt__pt_wave *wave = NULL;
   if (set->wavefront && thread_index < job->wave_count) {
     if (!job->waves[thread_index])
-      job->waves[thread_index] = pt_wave_create(set->sampler->state_size(job->sampler));
+      job->waves[thread_index] = tt__pt_wave_create(set->sampler->state_size(job->sampler));
     wave = job->waves[thread_index];
     if (!wave) {
       atomic_store(&job->failed, 1);
@@ -418,9 +425,9 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
     uint32_t y1 = y0 + job->tile_size < job->height ? y0 + job->tile_size : job->height;
     if (wave) {
       const uint64_t paths = (uint64_t)(x1 - x0) * (y1 - y0) * ctx->spp;
-      for (uint64_t first = 0; first < paths; first += PT_WAVE) {
-        uint32_t count = (uint32_t)(paths - first < PT_WAVE ? paths - first : PT_WAVE);
-        pt_wave_run(job, wave, x0, y0, x1 - x0, first, count, &rays, &samples, &nonfinite);
+      for (uint64_t first = 0; first < paths; first += TT__PT_WAVE) {
+        uint32_t count = (uint32_t)(paths - first < TT__PT_WAVE ? paths - first : TT__PT_WAVE);
+        tt__pt_wave_run(job, wave, x0, y0, x1 - x0, first, count, &rays, &samples, &nonfinite);
       }
       continue;
     }
@@ -429,7 +436,7 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
         for (uint32_t s = 0; s < ctx->spp; ++s) {
           float fx, fy;
           tt_ray ray;
-          pt_camera_sample(job, state, px, py, s, &fx, &fy, &ray);
+          tt__pt_camera_sample(job, state, px, py, s, &fx, &fy, &ray);
           tt_path_result r;
           tt_path_trace(job->it->pt, &job->tracer, &set->path, &ray, &source, &r);
           tt_film_add_sample(ctx->film, px, py, r.L, 1.0f);
@@ -449,31 +456,34 @@ static void pt_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread
   atomic_fetch_add(&job->nonfinite, nonfinite);
 }
 
-static tt_status pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_pass_stats *stats) {
+static tt_status tt__pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
+                                    tt_pass_stats *stats) {
   if (!it || !ctx || !ctx->film || !ctx->camera || !ctx->accel_iface || !ctx->accel)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, PT_NAME ": render_pass needs film, camera and accel");
-  const tt_host *host = pt_host();
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__PT_NAME ": render_pass needs film, camera and accel");
+  const tt_host *host = tt__pt_host();
   uint64_t t0 = host->clock_ns ? host->clock_ns() : 0;
-  pt_job *job = calloc(1, sizeof *job);
-  if (!job) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": out of memory");
+  tt__pt_job *job = calloc(1, sizeof *job);
+  if (!job) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": out of memory");
   job->it = it;
   job->ctx = ctx;
   tt_status st = tt_camera_frame_init(&job->frame, ctx->camera);
   if (st == TT_OK && (tt_film_width(ctx->film) != ctx->camera->width ||
                       tt_film_height(ctx->film) != ctx->camera->height))
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, PT_NAME ": film %ux%u differs from camera %ux%u",
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__PT_NAME ": film %ux%u differs from camera %ux%u",
                       tt_film_width(ctx->film), tt_film_height(ctx->film), ctx->camera->width,
                       ctx->camera->height);
   if (st == TT_OK && ctx->prev_camera) {
     job->has_prev = tt_camera_frame_init(&job->prev_frame, ctx->prev_camera) == TT_OK;
     if (!job->has_prev) tt_clear_error();
   }
-  const pt_settings *set = &it->settings;
+  const tt__pt_settings *set = &it->settings;
   tt_sampler *sampler = NULL;
   if (st == TT_OK) st = set->sampler->create(NULL, ctx->seed, &sampler);
-  if (st == TT_OK && set->sampler->state_size(sampler) > PT_MAX_STATE)
-    st = tt_set_error(TT_ERR_UNSUPPORTED, PT_NAME ": sampler '%s' needs more than %d bytes of state",
-                      set->sampler->name, PT_MAX_STATE);
+  if (st == TT_OK && set->sampler->state_size(sampler) > TT__PT_MAX_STATE)
+    st = tt_set_error(TT_ERR_UNSUPPORTED,
+                      TT__PT_NAME ": sampler '%s' needs more than %d bytes of state",
+                      set->sampler->name, TT__PT_MAX_STATE);
   if (st != TT_OK) {
     if (sampler) set->sampler->destroy(sampler);
     free(job);
@@ -500,16 +510,16 @@ static tt_status pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
     if (!job->waves) {
       set->sampler->destroy(sampler);
       free(job);
-      return tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": out of memory");
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": out of memory");
     }
   }
 
-  tt_status pst = host->parallel_for((uint64_t)job->tiles_x * tiles_y, 1, pt_tile_fn, job);
+  tt_status pst = host->parallel_for((uint64_t)job->tiles_x * tiles_y, 1, tt__pt_tile_fn, job);
   if (pst == TT_ERR_INTERRUPTED || atomic_load(&job->interrupted)) st = TT_ERR_INTERRUPTED;
   else if (pst != TT_OK) st = pst;
   if (atomic_load(&job->failed) && st == TT_OK)
-    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, PT_NAME ": cannot allocate the wavefront buffers");
-  for (uint32_t i = 0; i < job->wave_count; i++) pt_wave_destroy(job->waves[i]);
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": cannot allocate the wavefront buffers");
+  for (uint32_t i = 0; i < job->wave_count; i++) tt__pt_wave_destroy(job->waves[i]);
   free(job->waves);
 
   uint64_t t1 = host->clock_ns ? host->clock_ns() : 0;
@@ -533,34 +543,35 @@ static tt_status pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx, tt_
   set->sampler->destroy(sampler);
   free(job);
   if (st == TT_ERR_INTERRUPTED)
-    return tt_set_error(TT_ERR_INTERRUPTED, PT_NAME ": pass interrupted (completed tiles are in the film)");
+    return tt_set_error(TT_ERR_INTERRUPTED,
+                        TT__PT_NAME ": pass interrupted (completed tiles are in the film)");
   return st;
 }
 
-static const tt_integrator_iface pt_iface = {
+static const tt_integrator_iface tt__pt_iface = {
   .struct_size = sizeof(tt_integrator_iface),
-  .space = pt_space,
-  .create = pt_create,
-  .configure = pt_configure,
-  .render_pass = pt_render_pass,
-  .reset = pt_reset,
-  .destroy = pt_destroy,
+  .space = tt__pt_space,
+  .create = tt__pt_create,
+  .configure = tt__pt_configure,
+  .render_pass = tt__pt_render_pass,
+  .reset = tt__pt_reset,
+  .destroy = tt__pt_destroy,
 };
 
-static tt_status pt_init(const tt_host *host) {
+static tt_status tt__pt_init(const tt_host *host) {
   g_host = host;
-  pt_build_bh_table();
-  return g_space ? TT_OK : pt_build_space();
+  tt__pt_build_bh_table();
+  return g_space ? TT_OK : tt__pt_build_space();
 }
 
-static void pt_deinit(void) {
+static void tt__pt_deinit(void) {
   tt_space_destroy(g_space);
   g_space = NULL;
   g_host = NULL;
 }
 
-static const void *pt_get_interface(const char *id) {
-  return id && strcmp(id, TT_INTEGRATOR_INTERFACE_ID) == 0 ? &pt_iface : NULL;
+static const void *tt__pt_get_interface(const char *id) {
+  return id && strcmp(id, TT_INTEGRATOR_INTERFACE_ID) == 0 ? &tt__pt_iface : NULL;
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
@@ -568,10 +579,10 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
   .abi_major = TT_ABI_MAJOR,
   .abi_minor = TT_ABI_MINOR,
   .kind = TT_KIND_INTEGRATOR,
-  .name = PT_NAME,
-  .version = PT_VERSION,
+  .name = TT__PT_NAME,
+  .version = TT__PT_VERSION,
   .description = "progressive path tracer: NEE + BSDF sampling with MIS, independent/Halton/Sobol samplers",
-  .init = pt_init,
-  .deinit = pt_deinit,
-  .get_interface = pt_get_interface,
+  .init = tt__pt_init,
+  .deinit = tt__pt_deinit,
+  .get_interface = tt__pt_get_interface,
 };

@@ -13,7 +13,7 @@
 
 /* ---- writer ---- */
 
-static void ttpm_put(ttpm_writer *w, const void *p, size_t n) {
+static void tt__pm_put(tt__pm_writer *w, const void *p, size_t n) {
   if (w->failed) return;
   if (w->len + n > w->cap) {
     size_t cap = w->cap ? w->cap : 4096;
@@ -30,37 +30,37 @@ static void ttpm_put(ttpm_writer *w, const void *p, size_t n) {
   w->len += n;
 }
 
-void ttpm_put_u32(ttpm_writer *w, uint32_t v) {
+void tt__pm_put_u32(tt__pm_writer *w, uint32_t v) {
   unsigned char b[4];
   for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
-  ttpm_put(w, b, 4);
+  tt__pm_put(w, b, 4);
 }
 
-void ttpm_put_u64(ttpm_writer *w, uint64_t v) {
+void tt__pm_put_u64(tt__pm_writer *w, uint64_t v) {
   unsigned char b[8];
   for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
-  ttpm_put(w, b, 8);
+  tt__pm_put(w, b, 8);
 }
 
-void ttpm_put_f64(ttpm_writer *w, double v) {
+void tt__pm_put_f64(tt__pm_writer *w, double v) {
   uint64_t u;
   memcpy(&u, &v, 8);
-  ttpm_put_u64(w, u);
+  tt__pm_put_u64(w, u);
 }
 
-void ttpm_put_f64s(ttpm_writer *w, const double *v, size_t n) {
-  for (size_t i = 0; i < n; i++) ttpm_put_f64(w, v[i]);
+void tt__pm_put_f64s(tt__pm_writer *w, const double *v, size_t n) {
+  for (size_t i = 0; i < n; i++) tt__pm_put_f64(w, v[i]);
 }
 
-void ttpm_put_str(ttpm_writer *w, const char *s) {
+void tt__pm_put_str(tt__pm_writer *w, const char *s) {
   size_t n = s ? strlen(s) : 0;
-  ttpm_put_u32(w, (uint32_t)n);
-  if (n) ttpm_put(w, s, n);
+  tt__pm_put_u32(w, (uint32_t)n);
+  if (n) tt__pm_put(w, s, n);
 }
 
 /* ---- reader ---- */
 
-void ttpm_fail(ttpm_reader *r, const char *fmt, ...) {
+void tt__pm_fail(tt__pm_reader *r, const char *fmt, ...) {
   if (r->err[0]) return;
   char msg[400];
   va_list ap;
@@ -70,10 +70,10 @@ void ttpm_fail(ttpm_reader *r, const char *fmt, ...) {
   snprintf(r->err, sizeof r->err, "%s: %s (payload offset %zu)", r->path, msg, r->pos);
 }
 
-static const unsigned char *ttpm_take(ttpm_reader *r, size_t n, const char *what) {
+static const unsigned char *tt__pm_take(tt__pm_reader *r, size_t n, const char *what) {
   if (r->err[0]) return NULL;
   if (r->len - r->pos < n) {
-    ttpm_fail(r, "file cut short: %s needs %zu bytes, %zu left", what, n, r->len - r->pos);
+    tt__pm_fail(r, "file cut short: %s needs %zu bytes, %zu left", what, n, r->len - r->pos);
     return NULL;
   }
   const unsigned char *p = r->data + r->pos;
@@ -81,63 +81,63 @@ static const unsigned char *ttpm_take(ttpm_reader *r, size_t n, const char *what
   return p;
 }
 
-uint32_t ttpm_get_u32(ttpm_reader *r, const char *what) {
-  const unsigned char *b = ttpm_take(r, 4, what);
+uint32_t tt__pm_get_u32(tt__pm_reader *r, const char *what) {
+  const unsigned char *b = tt__pm_take(r, 4, what);
   uint32_t v = 0;
   for (int i = 0; b && i < 4; i++) v |= (uint32_t)b[i] << (8 * i);
   return v;
 }
 
-uint64_t ttpm_get_u64(ttpm_reader *r, const char *what) {
-  const unsigned char *b = ttpm_take(r, 8, what);
+uint64_t tt__pm_get_u64(tt__pm_reader *r, const char *what) {
+  const unsigned char *b = tt__pm_take(r, 8, what);
   uint64_t v = 0;
   for (int i = 0; b && i < 8; i++) v |= (uint64_t)b[i] << (8 * i);
   return v;
 }
 
-double ttpm_get_f64(ttpm_reader *r, const char *what) {
-  uint64_t u = ttpm_get_u64(r, what);
+double tt__pm_get_f64(tt__pm_reader *r, const char *what) {
+  uint64_t u = tt__pm_get_u64(r, what);
   double v;
   memcpy(&v, &u, 8);
   return v;
 }
 
-void ttpm_get_f64s(ttpm_reader *r, double *v, size_t n, const char *what) {
-  for (size_t i = 0; i < n; i++) v[i] = ttpm_get_f64(r, what);
+void tt__pm_get_f64s(tt__pm_reader *r, double *v, size_t n, const char *what) {
+  for (size_t i = 0; i < n; i++) v[i] = tt__pm_get_f64(r, what);
 }
 
-uint64_t ttpm_get_count(ttpm_reader *r, uint64_t max, size_t elem, const char *what) {
-  uint64_t n = ttpm_get_u64(r, what);
+uint64_t tt__pm_get_count(tt__pm_reader *r, uint64_t max, size_t elem, const char *what) {
+  uint64_t n = tt__pm_get_u64(r, what);
   if (r->err[0]) return 0;
   if (n > max) {
-    ttpm_fail(r, "%s is %llu, more than the %llu this format allows", what,
+    tt__pm_fail(r, "%s is %llu, more than the %llu this format allows", what,
               (unsigned long long)n, (unsigned long long)max);
     return 0;
   }
   if (elem && n > (r->len - r->pos) / elem) {
-    ttpm_fail(r, "file cut short: %llu %s need %llu bytes, %zu left", (unsigned long long)n,
+    tt__pm_fail(r, "file cut short: %llu %s need %llu bytes, %zu left", (unsigned long long)n,
               what, (unsigned long long)(n * elem), r->len - r->pos);
     return 0;
   }
   return n;
 }
 
-char *ttpm_get_str(ttpm_reader *r, size_t max, const char *what) {
-  uint32_t n = ttpm_get_u32(r, what);
+char *tt__pm_get_str(tt__pm_reader *r, size_t max, const char *what) {
+  uint32_t n = tt__pm_get_u32(r, what);
   if (r->err[0]) return NULL;
   if (n > max) {
-    ttpm_fail(r, "%s is %u bytes long, more than %zu", what, n, max);
+    tt__pm_fail(r, "%s is %u bytes long, more than %zu", what, n, max);
     return NULL;
   }
-  const unsigned char *p = ttpm_take(r, n, what);
+  const unsigned char *p = tt__pm_take(r, n, what);
   if (!p) return NULL;
   if (memchr(p, 0, n)) {
-    ttpm_fail(r, "%s contains a NUL byte", what);
+    tt__pm_fail(r, "%s contains a NUL byte", what);
     return NULL;
   }
   char *s = malloc((size_t)n + 1);
   if (!s) {
-    ttpm_fail(r, "out of memory reading %s", what);
+    tt__pm_fail(r, "out of memory reading %s", what);
     return NULL;
   }
   memcpy(s, p, n);
@@ -147,10 +147,10 @@ char *ttpm_get_str(ttpm_reader *r, size_t max, const char *what) {
 
 /* ---- common header ---- */
 
-#define TTPM_MAX_TEXT (1u << 20)
-#define TTPM_MAX_STATE_DIM 4096u
+#define TT__PM_MAX_TEXT (1u << 20)
+#define TT__PM_MAX_STATE_DIM 4096u
 
-void ttpm_header_free(ttpm_header *h) {
+void tt__pm_header_free(tt__pm_header *h) {
   if (!h) return;
   free(h->kind);
   free(h->plugin_version);
@@ -163,37 +163,38 @@ void ttpm_header_free(ttpm_header *h) {
   memset(h, 0, sizeof *h);
 }
 
-void ttpm_put_header(ttpm_writer *w, const ttpm_header *h) {
-  ttpm_put_str(w, h->kind);
-  ttpm_put_str(w, h->plugin_version);
-  ttpm_put_str(w, h->state_space);
-  ttpm_put_u32(w, h->state_dim);
-  ttpm_put_u32(w, h->state_names ? 1u : 0u);
-  for (uint32_t i = 0; h->state_names && i < h->state_dim; i++) ttpm_put_str(w, h->state_names[i]);
-  ttpm_put_str(w, h->target);
-  ttpm_put_str(w, h->settings);
+void tt__pm_put_header(tt__pm_writer *w, const tt__pm_header *h) {
+  tt__pm_put_str(w, h->kind);
+  tt__pm_put_str(w, h->plugin_version);
+  tt__pm_put_str(w, h->state_space);
+  tt__pm_put_u32(w, h->state_dim);
+  tt__pm_put_u32(w, h->state_names ? 1u : 0u);
+  for (uint32_t i = 0; h->state_names && i < h->state_dim; i++)
+    tt__pm_put_str(w, h->state_names[i]);
+  tt__pm_put_str(w, h->target);
+  tt__pm_put_str(w, h->settings);
 }
 
-int ttpm_get_header(ttpm_reader *r, ttpm_header *h) {
+int tt__pm_get_header(tt__pm_reader *r, tt__pm_header *h) {
   memset(h, 0, sizeof *h);
-  h->kind = ttpm_get_str(r, 256, "the model kind");
-  h->plugin_version = ttpm_get_str(r, 256, "the plugin version");
-  h->state_space = ttpm_get_str(r, TTPM_MAX_TEXT, "the state space");
-  h->state_dim = ttpm_get_u32(r, "the state dimension");
-  if (!r->err[0] && (h->state_dim < 1 || h->state_dim > TTPM_MAX_STATE_DIM))
-    ttpm_fail(r, "state dimension %u outside [1, %u]", h->state_dim, TTPM_MAX_STATE_DIM);
-  uint32_t names = ttpm_get_u32(r, "the state-names flag");
-  if (!r->err[0] && names > 1) ttpm_fail(r, "state-names flag %u is neither 0 nor 1", names);
+  h->kind = tt__pm_get_str(r, 256, "the model kind");
+  h->plugin_version = tt__pm_get_str(r, 256, "the plugin version");
+  h->state_space = tt__pm_get_str(r, TT__PM_MAX_TEXT, "the state space");
+  h->state_dim = tt__pm_get_u32(r, "the state dimension");
+  if (!r->err[0] && (h->state_dim < 1 || h->state_dim > TT__PM_MAX_STATE_DIM))
+    tt__pm_fail(r, "state dimension %u outside [1, %u]", h->state_dim, TT__PM_MAX_STATE_DIM);
+  uint32_t names = tt__pm_get_u32(r, "the state-names flag");
+  if (!r->err[0] && names > 1) tt__pm_fail(r, "state-names flag %u is neither 0 nor 1", names);
   if (!r->err[0] && names) {
     h->state_names = calloc(h->state_dim, sizeof *h->state_names);
-    if (!h->state_names) ttpm_fail(r, "out of memory");
+    if (!h->state_names) tt__pm_fail(r, "out of memory");
     for (uint32_t i = 0; !r->err[0] && i < h->state_dim; i++)
-      h->state_names[i] = ttpm_get_str(r, 256, "a state name");
+      h->state_names[i] = tt__pm_get_str(r, 256, "a state name");
   }
-  h->target = ttpm_get_str(r, TTPM_MAX_TEXT, "the target space");
-  h->settings = ttpm_get_str(r, TTPM_MAX_TEXT, "the settings");
+  h->target = tt__pm_get_str(r, TT__PM_MAX_TEXT, "the target space");
+  h->settings = tt__pm_get_str(r, TT__PM_MAX_TEXT, "the settings");
   if (r->err[0]) {
-    ttpm_header_free(h);
+    tt__pm_header_free(h);
     return -1;
   }
   return 0;
@@ -202,7 +203,7 @@ int ttpm_get_header(ttpm_reader *r, ttpm_header *h) {
 /* ---- spaces and configurations ---- */
 
 /* Appends printf output to a malloc'ed string; returns it (NULL on failure, freeing). */
-static char *ttpm_cat(char *s, size_t *len, size_t *cap, const char *fmt, ...) {
+static char *tt__pm_cat(char *s, size_t *len, size_t *cap, const char *fmt, ...) {
   if (!s) return NULL;
   for (;;) {
     va_list ap;
@@ -228,35 +229,37 @@ static char *ttpm_cat(char *s, size_t *len, size_t *cap, const char *fmt, ...) {
   }
 }
 
-char *ttpm_space_signature(const tt_space *space) {
+char *tt__pm_space_signature(const tt_space *space) {
   size_t len = 0, cap = 256;
   char *s = malloc(cap);
   if (!s) return NULL;
   s[0] = 0;
-  s = ttpm_cat(s, &len, &cap, "%s:", tt_space_plugin(space) ? tt_space_plugin(space) : "");
+  s = tt__pm_cat(s, &len, &cap, "%s:", tt_space_plugin(space) ? tt_space_plugin(space) : "");
   for (size_t i = 0; s && i < tt_space_count(space); i++) {
     const char *name = tt_space_name(space, i);
     switch (tt_space_type(space, i)) {
       case TT_PARAM_INT:
-        s = ttpm_cat(s, &len, &cap, "%s %s INT[%.17g,%.17g]", i ? ";" : "", name,
+        s = tt__pm_cat(s, &len, &cap, "%s %s INT[%.17g,%.17g]", i ? ";" : "", name,
                      tt_space_min(space, i), tt_space_max(space, i));
         break;
       case TT_PARAM_FLOAT:
-        s = ttpm_cat(s, &len, &cap, "%s %s FLOAT[%.17g,%.17g]%s", i ? ";" : "", name,
+        s = tt__pm_cat(s, &len, &cap, "%s %s FLOAT[%.17g,%.17g]%s", i ? ";" : "", name,
                      tt_space_min(space, i), tt_space_max(space, i),
                      tt_space_is_log(space, i) ? " log" : "");
         break;
       case TT_PARAM_NOM: {
-        s = ttpm_cat(s, &len, &cap, "%s %s NOM{", i ? ";" : "", name);
+        s = tt__pm_cat(s, &len, &cap, "%s %s NOM{", i ? ";" : "", name);
         for (size_t k = 0; s && k < tt_space_nom_count(space, i); k++) {
           tt_value v = tt_space_nom_value(space, i, k);
           const char *sep = k ? "," : "";
-          if (v.kind == TT_VALUE_STRING) s = ttpm_cat(s, &len, &cap, "%s%s", sep, v.s);
-          else if (v.kind == TT_VALUE_BOOL) s = ttpm_cat(s, &len, &cap, "%s%s", sep, v.i ? "true" : "false");
-          else if (v.kind == TT_VALUE_INT) s = ttpm_cat(s, &len, &cap, "%s%lld", sep, (long long)v.i);
-          else s = ttpm_cat(s, &len, &cap, "%s%.17g", sep, v.f);
+          if (v.kind == TT_VALUE_STRING) s = tt__pm_cat(s, &len, &cap, "%s%s", sep, v.s);
+          else if (v.kind == TT_VALUE_BOOL)
+            s = tt__pm_cat(s, &len, &cap, "%s%s", sep, v.i ? "true" : "false");
+          else if (v.kind == TT_VALUE_INT)
+            s = tt__pm_cat(s, &len, &cap, "%s%lld", sep, (long long)v.i);
+          else s = tt__pm_cat(s, &len, &cap, "%s%.17g", sep, v.f);
         }
-        s = ttpm_cat(s, &len, &cap, "}");
+        s = tt__pm_cat(s, &len, &cap, "}");
         break;
       }
     }
@@ -264,7 +267,7 @@ char *ttpm_space_signature(const tt_space *space) {
   return s;
 }
 
-void ttpm_signature_diff(const char *a, const char *b, char *buf, size_t n) {
+void tt__pm_signature_diff(const char *a, const char *b, char *buf, size_t n) {
   /* compare parameter by parameter (';'-separated) */
   const char *pa = a, *pb = b;
   for (;;) {
@@ -284,7 +287,7 @@ void ttpm_signature_diff(const char *a, const char *b, char *buf, size_t n) {
   }
 }
 
-void ttpm_config_values(const tt_config *c, double *out) {
+void tt__pm_config_values(const tt_config *c, double *out) {
   const tt_space *s = tt_config_space(c);
   for (size_t i = 0; i < tt_space_count(s); i++) {
     tt_value v = tt_config_get(c, i);
@@ -292,7 +295,7 @@ void ttpm_config_values(const tt_config *c, double *out) {
   }
 }
 
-int ttpm_config_from_values(tt_config *c, const double *v, char *why, size_t n) {
+int tt__pm_config_from_values(tt_config *c, const double *v, char *why, size_t n) {
   const tt_space *s = tt_config_space(c);
   for (size_t i = 0; i < tt_space_count(s); i++) {
     tt_status st;
@@ -316,18 +319,18 @@ int ttpm_config_from_values(tt_config *c, const double *v, char *why, size_t n) 
 
 /* ---- files ---- */
 
-tt_status ttpm_save(const char *who, const char *path, uint32_t version, const ttpm_writer *w) {
+tt_status tt__pm_save(const char *who, const char *path, uint32_t version, const tt__pm_writer *w) {
   if (w->failed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
-  size_t total = TTPM_HEADER_BYTES + w->len + 8;
+  size_t total = TT__PM_HEADER_BYTES + w->len + 8;
   unsigned char *buf = malloc(total);
   if (!buf) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
-  memcpy(buf, TTPM_MAGIC, 8);
+  memcpy(buf, TT__PM_MAGIC, 8);
   for (int i = 0; i < 4; i++) buf[8 + i] = (unsigned char)(version >> (8 * i));
   memset(buf + 12, 0, 4);
   for (int i = 0; i < 8; i++) buf[16 + i] = (unsigned char)((uint64_t)w->len >> (8 * i));
-  if (w->len) memcpy(buf + TTPM_HEADER_BYTES, w->data, w->len);
-  uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TTPM_HEADER_BYTES + w->len);
-  for (int i = 0; i < 8; i++) buf[TTPM_HEADER_BYTES + w->len + i] = (unsigned char)(h >> (8 * i));
+  if (w->len) memcpy(buf + TT__PM_HEADER_BYTES, w->data, w->len);
+  uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TT__PM_HEADER_BYTES + w->len);
+  for (int i = 0; i < 8; i++) buf[TT__PM_HEADER_BYTES + w->len + i] = (unsigned char)(h >> (8 * i));
   /* a temporary file renamed over the target: a failed save leaves an existing model */
   tt_status st = tt_file_write_atomic(path, buf, total);
   free(buf);
@@ -337,7 +340,7 @@ tt_status ttpm_save(const char *who, const char *path, uint32_t version, const t
   return TT_OK;
 }
 
-tt_status ttpm_load(const char *who, const char *who_version, const char *path,
+tt_status tt__pm_load(const char *who, const char *who_version, const char *path,
                     uint32_t max_version, unsigned char **payload, size_t *payload_len,
                     uint32_t *version) {
   *payload = NULL;
@@ -359,7 +362,7 @@ tt_status ttpm_load(const char *who, const char *who_version, const char *path,
   tt_status rc = TT_OK;
   if (rerr || got != size) {
     rc = tt_set_error(TT_ERR_IO, "%s: cannot read model %s", who, path);
-  } else if (size < TTPM_HEADER_BYTES || memcmp(buf, TTPM_MAGIC, 8)) {
+  } else if (size < TT__PM_HEADER_BYTES || memcmp(buf, TT__PM_MAGIC, 8)) {
     rc = tt_set_error(TT_ERR_PARSE, "%s: %s is not a tunetrace predictor model (%s)", who, path,
                       size < 8 ? "shorter than the 8-byte magic" : "no \"TTPMODEL\" magic at the start");
   } else {
@@ -370,33 +373,34 @@ tt_status ttpm_load(const char *who, const char *who_version, const char *path,
     /* a newer version: the model kind (the payload's first string, u32 length + bytes)
      * where it can be read, so that a file of another predictor is named as such */
     uint32_t kl = 0;
-    if (v > max_version && size >= TTPM_HEADER_BYTES + 4)
-      for (int i = 0; i < 4; i++) kl |= (uint32_t)buf[TTPM_HEADER_BYTES + i] << (8 * i);
-    int other_kind = kl > 0 && kl < 256 && size >= TTPM_HEADER_BYTES + 4 + (size_t)kl &&
-                     (strlen(who) != kl || memcmp(buf + TTPM_HEADER_BYTES + 4, who, kl)) &&
-                     !memchr(buf + TTPM_HEADER_BYTES + 4, 0, kl);
+    if (v > max_version && size >= TT__PM_HEADER_BYTES + 4)
+      for (int i = 0; i < 4; i++) kl |= (uint32_t)buf[TT__PM_HEADER_BYTES + i] << (8 * i);
+    int other_kind = kl > 0 && kl < 256 && size >= TT__PM_HEADER_BYTES + 4 + (size_t)kl &&
+                     (strlen(who) != kl || memcmp(buf + TT__PM_HEADER_BYTES + 4, who, kl)) &&
+                     !memchr(buf + TT__PM_HEADER_BYTES + 4, 0, kl);
     if (other_kind) {
       rc = tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: model %s was written by %.*s (format "
                         "version %u), not by %s (load it with --plugin %.*s)", who, path, (int)kl,
-                        (const char *)buf + TTPM_HEADER_BYTES + 4, v, who, (int)kl,
-                        (const char *)buf + TTPM_HEADER_BYTES + 4);
+                        (const char *)buf + TT__PM_HEADER_BYTES + 4, v, who, (int)kl,
+                        (const char *)buf + TT__PM_HEADER_BYTES + 4);
     } else if (v > max_version || v == 0) {
       rc = tt_set_error(TT_ERR_UNSUPPORTED, "%s: model %s has format version %u; this %s %s reads "
                         "versions 1 to %u%s", who, path, v, who, who_version, max_version,
                         v > max_version ? " (written by a newer plugin: update it)" : "");
-    } else if (n > size || size - TTPM_HEADER_BYTES - 8 < n || size != TTPM_HEADER_BYTES + n + 8) {
+    } else if (n > size || size - TT__PM_HEADER_BYTES - 8 < n ||
+               size != TT__PM_HEADER_BYTES + n + 8) {
       rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is %zu bytes, but its header says %llu "
                         "(file cut short or padded)", who, path, size,
-                        (unsigned long long)(TTPM_HEADER_BYTES + n + 8));
+                        (unsigned long long)(TT__PM_HEADER_BYTES + n + 8));
     } else {
       uint64_t stored = 0;
-      for (int i = 0; i < 8; i++) stored |= (uint64_t)buf[TTPM_HEADER_BYTES + n + i] << (8 * i);
-      uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TTPM_HEADER_BYTES + (size_t)n);
+      for (int i = 0; i < 8; i++) stored |= (uint64_t)buf[TT__PM_HEADER_BYTES + n + i] << (8 * i);
+      uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TT__PM_HEADER_BYTES + (size_t)n);
       if (h != stored) {
         rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is corrupt (checksum %016llx, computed "
                           "%016llx)", who, path, (unsigned long long)stored, (unsigned long long)h);
       } else {
-        memmove(buf, buf + TTPM_HEADER_BYTES, (size_t)n);
+        memmove(buf, buf + TT__PM_HEADER_BYTES, (size_t)n);
         *payload = buf;
         *payload_len = (size_t)n;
         *version = v;

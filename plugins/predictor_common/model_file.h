@@ -24,80 +24,80 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define TTPM_MAGIC "TTPMODEL"
-#define TTPM_HEADER_BYTES 24u
+#define TT__PM_MAGIC "TTPMODEL"
+#define TT__PM_HEADER_BYTES 24u
 
 /* A growing output buffer; `failed` sticks after the first allocation failure. */
-typedef struct ttpm_writer {
+typedef struct tt__pm_writer {
   unsigned char *data;
   size_t len, cap;
   int failed;
-} ttpm_writer;
+} tt__pm_writer;
 
-void ttpm_put_u32(ttpm_writer *w, uint32_t v);
-void ttpm_put_u64(ttpm_writer *w, uint64_t v);
-void ttpm_put_f64(ttpm_writer *w, double v);
-void ttpm_put_f64s(ttpm_writer *w, const double *v, size_t n);
-void ttpm_put_str(ttpm_writer *w, const char *s);   /* u32 length + bytes; NULL as "" */
+void tt__pm_put_u32(tt__pm_writer *w, uint32_t v);
+void tt__pm_put_u64(tt__pm_writer *w, uint64_t v);
+void tt__pm_put_f64(tt__pm_writer *w, double v);
+void tt__pm_put_f64s(tt__pm_writer *w, const double *v, size_t n);
+void tt__pm_put_str(tt__pm_writer *w, const char *s);   /* u32 length + bytes; NULL as "" */
 
 /* A bounds-checked cursor over a payload; the first error is kept in `err` (a message
  * naming the file and the offset), later reads return zeros. */
-typedef struct ttpm_reader {
+typedef struct tt__pm_reader {
   const unsigned char *data;
   size_t len, pos;
   const char *path;
   char err[512];
-} ttpm_reader;
+} tt__pm_reader;
 
-uint32_t ttpm_get_u32(ttpm_reader *r, const char *what);
-uint64_t ttpm_get_u64(ttpm_reader *r, const char *what);
-double ttpm_get_f64(ttpm_reader *r, const char *what);
-void ttpm_get_f64s(ttpm_reader *r, double *v, size_t n, const char *what);
+uint32_t tt__pm_get_u32(tt__pm_reader *r, const char *what);
+uint64_t tt__pm_get_u64(tt__pm_reader *r, const char *what);
+double tt__pm_get_f64(tt__pm_reader *r, const char *what);
+void tt__pm_get_f64s(tt__pm_reader *r, double *v, size_t n, const char *what);
 /* A string of at most `max` bytes as a malloc'ed NUL-terminated copy (NULL on error). */
-char *ttpm_get_str(ttpm_reader *r, size_t max, const char *what);
+char *tt__pm_get_str(tt__pm_reader *r, size_t max, const char *what);
 /* A count that must be <= max and fit `elem` bytes per item in what is left. */
-uint64_t ttpm_get_count(ttpm_reader *r, uint64_t max, size_t elem, const char *what);
+uint64_t tt__pm_get_count(tt__pm_reader *r, uint64_t max, size_t elem, const char *what);
 /* Records an error (first one wins). */
-void ttpm_fail(ttpm_reader *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void tt__pm_fail(tt__pm_reader *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /* The fields every model file begins with. */
-typedef struct ttpm_header {
+typedef struct tt__pm_header {
   char *kind;            /* plugin name: "predictor_nn", "predictor_rbf" */
   char *plugin_version;  /* the plugin version that wrote it */
   char *state_space;     /* tt_predictor_setup.state_space */
   uint32_t state_dim;
   char **state_names;    /* state_dim names, or NULL */
-  char *target;          /* target-space signature (ttpm_space_signature) */
+  char *target;          /* target-space signature (tt__pm_space_signature) */
   char *settings;        /* the model's hyper-parameters as configuration JSON */
-} ttpm_header;
+} tt__pm_header;
 
-void ttpm_header_free(ttpm_header *h);
-void ttpm_put_header(ttpm_writer *w, const ttpm_header *h);
+void tt__pm_header_free(tt__pm_header *h);
+void tt__pm_put_header(tt__pm_writer *w, const tt__pm_header *h);
 /* Reads the header; 0, or -1 with r->err set. */
-int ttpm_get_header(ttpm_reader *r, ttpm_header *h);
+int tt__pm_get_header(tt__pm_reader *r, tt__pm_header *h);
 
 /* One-line description of a space's parameters (names, types, ranges, possible values):
  * "accel_embree: quality NOM{1,2,3}; maxDepth INT[8,64]; travcost FLOAT[0.1,10] log; ...".
  * Two spaces whose signatures are equal have the same configurations. malloc'ed. */
-char *ttpm_space_signature(const tt_space *space);
+char *tt__pm_space_signature(const tt_space *space);
 /* The first parameter where two signatures differ, as "A vs B" (or the whole lengths), into
  * buf. */
-void ttpm_signature_diff(const char *a, const char *b, char *buf, size_t n);
+void tt__pm_signature_diff(const char *a, const char *b, char *buf, size_t n);
 
 /* Configurations as one double per parameter: INT/FLOAT the value, NOM the index. Exact
  * both ways (FLOAT values are stored, not their unit-cube image). */
-void ttpm_config_values(const tt_config *c, double *out);
+void tt__pm_config_values(const tt_config *c, double *out);
 /* 0, or -1 if a value is not valid for the space (message in why). */
-int ttpm_config_from_values(tt_config *c, const double *v, char *why, size_t n);
+int tt__pm_config_from_values(tt_config *c, const double *v, char *why, size_t n);
 
 /* Writes magic + version + payload + checksum to `path` atomically. TT_OK or TT_ERR_IO
  * with a message naming `who` and the file. */
-tt_status ttpm_save(const char *who, const char *path, uint32_t version, const ttpm_writer *w);
+tt_status tt__pm_save(const char *who, const char *path, uint32_t version, const tt__pm_writer *w);
 
 /* Reads `path`: checks magic, version (<= max_version), length and checksum, and returns the
  * payload (malloc'ed, *payload_len) and the file's version. Errors name `who`, the file and
  * what is wrong. */
-tt_status ttpm_load(const char *who, const char *who_version, const char *path,
+tt_status tt__pm_load(const char *who, const char *who_version, const char *path,
                     uint32_t max_version, unsigned char **payload, size_t *payload_len,
                     uint32_t *version);
 

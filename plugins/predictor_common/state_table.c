@@ -5,14 +5,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-void ttpm_table_init(ttpm_table *t, uint32_t dim, size_t params, int64_t max_states) {
+void tt__pm_table_init(tt__pm_table *t, uint32_t dim, size_t params, int64_t max_states) {
   memset(t, 0, sizeof *t);
   t->dim = dim;
   t->params = params;
   t->max_states = max_states;
 }
 
-void ttpm_table_clear(ttpm_table *t) {
+void tt__pm_table_clear(tt__pm_table *t) {
   for (size_t i = 0; i < t->n; i++) {
     for (size_t k = 0; k < t->entries[i].ncfg; k++) free(t->entries[i].cfgs[k].values);
     free(t->entries[i].cfgs);
@@ -23,17 +23,17 @@ void ttpm_table_clear(ttpm_table *t) {
   t->n = t->cap = 0;
 }
 
-static double tt__dist2(const double *a, const double *b, uint32_t n) {
+static double tt__pm_dist2(const double *a, const double *b, uint32_t n) {
   double d = 0;
   for (uint32_t i = 0; i < n; i++) d += (a[i] - b[i]) * (a[i] - b[i]);
   return d;
 }
 
-size_t ttpm_table_nearest(const ttpm_table *t, const double *state, double *dist2) {
+size_t tt__pm_table_nearest(const tt__pm_table *t, const double *state, double *dist2) {
   size_t best = SIZE_MAX;
   double bd = INFINITY;
   for (size_t i = 0; i < t->n; i++) {
-    double d = tt__dist2(t->entries[i].state, state, t->dim);
+    double d = tt__pm_dist2(t->entries[i].state, state, t->dim);
     if (d < bd) {
       bd = d;
       best = i;
@@ -43,7 +43,7 @@ size_t ttpm_table_nearest(const ttpm_table *t, const double *state, double *dist
   return best;
 }
 
-size_t ttpm_table_find(const ttpm_table *t, const double *state) {
+size_t tt__pm_table_find(const tt__pm_table *t, const double *state) {
   for (size_t i = 0; i < t->n; i++) {
     uint32_t k = 0;
     while (k < t->dim && t->entries[i].state[k] == state[k]) k++;
@@ -52,24 +52,24 @@ size_t ttpm_table_find(const ttpm_table *t, const double *state) {
   return SIZE_MAX;
 }
 
-size_t ttpm_table_find_cfg(const ttpm_table *t, size_t i, const double *values) {
-  const ttpm_table_entry *e = &t->entries[i];
+size_t tt__pm_table_find_cfg(const tt__pm_table *t, size_t i, const double *values) {
+  const tt__pm_table_entry *e = &t->entries[i];
   for (size_t k = 0; k < e->ncfg; k++)
     if (!memcmp(e->cfgs[k].values, values, t->params * sizeof(double))) return k;
   return SIZE_MAX;
 }
 
-static void tt__update_best(ttpm_table_entry *e) {
+static void tt__pm_update_best(tt__pm_table_entry *e) {
   size_t b = 0;
   for (size_t k = 1; k < e->ncfg; k++)
-    if (ttpm_table_mean(&e->cfgs[k]) < ttpm_table_mean(&e->cfgs[b])) b = k;
+    if (tt__pm_table_mean(&e->cfgs[k]) < tt__pm_table_mean(&e->cfgs[b])) b = k;
   e->best = b;
 }
 
 /* Room for one more item in `items` (*cap items of `elem` bytes, n of them used): the array
  * itself, or when full a copy with twice the capacity (`first` for an empty one) and *cap
  * updated. NULL when out of memory (the old array is kept and still owned by the caller). */
-static void *tt__reserve(void *items, size_t *cap, size_t n, size_t elem, size_t first) {
+static void *tt__pm_reserve(void *items, size_t *cap, size_t n, size_t elem, size_t first) {
   if (n < *cap) return items;
   size_t c = *cap ? 2 * *cap : first;
   void *p = realloc(items, c * elem);
@@ -77,115 +77,117 @@ static void *tt__reserve(void *items, size_t *cap, size_t n, size_t elem, size_t
   return p;
 }
 
-size_t ttpm_table_add(ttpm_table *t, const double *state, const double *values, double cost,
+size_t tt__pm_table_add(tt__pm_table *t, const double *state, const double *values, double cost,
                       int *best_changed) {
-  size_t i = ttpm_table_find(t, state);
+  size_t i = tt__pm_table_find(t, state);
   if (i == SIZE_MAX && t->max_states > 0 && t->n >= (size_t)t->max_states)
-    i = ttpm_table_nearest(t, state, NULL);
+    i = tt__pm_table_nearest(t, state, NULL);
   if (i == SIZE_MAX) {
-    ttpm_table_entry *grown = tt__reserve(t->entries, &t->cap, t->n, sizeof *grown, 64);
+    tt__pm_table_entry *grown = tt__pm_reserve(t->entries, &t->cap, t->n, sizeof *grown, 64);
     if (!grown) return SIZE_MAX;
     t->entries = grown;
-    ttpm_table_entry *e = &t->entries[t->n];
+    tt__pm_table_entry *e = &t->entries[t->n];
     memset(e, 0, sizeof *e);
     e->state = malloc((t->dim ? t->dim : 1) * sizeof(double));
     if (!e->state) return SIZE_MAX;
     memcpy(e->state, state, t->dim * sizeof(double));
     i = t->n++;
   }
-  ttpm_table_entry *e = &t->entries[i];
+  tt__pm_table_entry *e = &t->entries[i];
   int fresh = e->ncfg == 0;
   size_t best = e->best;
-  size_t k = ttpm_table_find_cfg(t, i, values);
+  size_t k = tt__pm_table_find_cfg(t, i, values);
   if (k == SIZE_MAX) {
-    ttpm_table_cfg *grown = tt__reserve(e->cfgs, &e->cap, e->ncfg, sizeof *grown, 8);
+    tt__pm_table_cfg *grown = tt__pm_reserve(e->cfgs, &e->cap, e->ncfg, sizeof *grown, 8);
     if (!grown) return SIZE_MAX;
     e->cfgs = grown;
     double *v = malloc((t->params ? t->params : 1) * sizeof(double));
     if (!v) return SIZE_MAX;
     memcpy(v, values, t->params * sizeof(double));
     k = e->ncfg++;
-    e->cfgs[k] = (ttpm_table_cfg){v, 0.0, 0};
+    e->cfgs[k] = (tt__pm_table_cfg){v, 0.0, 0};
   }
   e->cfgs[k].sum += cost;
   e->cfgs[k].count++;
-  tt__update_best(e);
+  tt__pm_update_best(e);
   if (best_changed && (fresh || e->best != best)) *best_changed = 1;
   return i;
 }
 
-uint64_t ttpm_table_bytes(const ttpm_table *t) {
-  uint64_t bytes = t->cap * sizeof(ttpm_table_entry);
+uint64_t tt__pm_table_bytes(const tt__pm_table *t) {
+  uint64_t bytes = t->cap * sizeof(tt__pm_table_entry);
   for (size_t i = 0; i < t->n; i++) {
-    bytes += t->dim * sizeof(double) + t->entries[i].cap * sizeof(ttpm_table_cfg);
+    bytes += t->dim * sizeof(double) + t->entries[i].cap * sizeof(tt__pm_table_cfg);
     bytes += t->entries[i].ncfg * t->params * sizeof(double);
   }
   return bytes;
 }
 
-void ttpm_table_put(ttpm_writer *w, const ttpm_table *t) {
-  ttpm_put_u64(w, t->n);
+void tt__pm_table_put(tt__pm_writer *w, const tt__pm_table *t) {
+  tt__pm_put_u64(w, t->n);
   for (size_t i = 0; i < t->n; i++) {
-    const ttpm_table_entry *e = &t->entries[i];
-    ttpm_put_f64s(w, e->state, t->dim);
-    ttpm_put_u64(w, e->ncfg);
+    const tt__pm_table_entry *e = &t->entries[i];
+    tt__pm_put_f64s(w, e->state, t->dim);
+    tt__pm_put_u64(w, e->ncfg);
     for (size_t k = 0; k < e->ncfg; k++) {
-      ttpm_put_f64s(w, e->cfgs[k].values, t->params);
-      ttpm_put_f64(w, e->cfgs[k].sum);
-      ttpm_put_u64(w, e->cfgs[k].count);
+      tt__pm_put_f64s(w, e->cfgs[k].values, t->params);
+      tt__pm_put_f64(w, e->cfgs[k].sum);
+      tt__pm_put_u64(w, e->cfgs[k].count);
     }
   }
 }
 
-int ttpm_table_get(ttpm_reader *r, ttpm_table *t, const tt_space *target) {
+int tt__pm_table_get(tt__pm_reader *r, tt__pm_table *t, const tt_space *target) {
   int64_t max_states = t->max_states;
   t->max_states = 0; /* no merging while the stored table is rebuilt */
   size_t per_state = t->dim * 8 + 8;
-  uint64_t n = ttpm_get_count(r, UINT32_MAX, per_state, "states");
+  uint64_t n = tt__pm_get_count(r, UINT32_MAX, per_state, "states");
   double *v = malloc((t->params ? t->params : 1) * sizeof(double));
   double *state = malloc((t->dim ? t->dim : 1) * sizeof(double));
   tt_config *check = tt_config_create(target);
-  if (!v || !state || !check) ttpm_fail(r, "out of memory");
+  if (!v || !state || !check) tt__pm_fail(r, "out of memory");
   char why[256];
   for (uint64_t i = 0; !r->err[0] && i < n; i++) {
-    ttpm_get_f64s(r, state, t->dim, "a state");
+    tt__pm_get_f64s(r, state, t->dim, "a state");
     for (uint32_t k = 0; !r->err[0] && k < t->dim; k++)
-      if (!isfinite(state[k])) ttpm_fail(r, "state %llu has a non-finite value", (unsigned long long)i);
-    if (!r->err[0] && ttpm_table_find(t, state) != SIZE_MAX)
-      ttpm_fail(r, "state %llu is stored twice", (unsigned long long)i);
-    uint64_t ncfg = ttpm_get_count(r, UINT32_MAX, t->params * 8 + 16, "configurations");
-    if (!r->err[0] && ncfg == 0) ttpm_fail(r, "state %llu has no configuration", (unsigned long long)i);
+      if (!isfinite(state[k]))
+        tt__pm_fail(r, "state %llu has a non-finite value", (unsigned long long)i);
+    if (!r->err[0] && tt__pm_table_find(t, state) != SIZE_MAX)
+      tt__pm_fail(r, "state %llu is stored twice", (unsigned long long)i);
+    uint64_t ncfg = tt__pm_get_count(r, UINT32_MAX, t->params * 8 + 16, "configurations");
+    if (!r->err[0] && ncfg == 0)
+      tt__pm_fail(r, "state %llu has no configuration", (unsigned long long)i);
     for (uint64_t k = 0; !r->err[0] && k < ncfg; k++) {
-      ttpm_get_f64s(r, v, t->params, "a configuration");
-      double sum = ttpm_get_f64(r, "a cost sum");
-      uint64_t count = ttpm_get_u64(r, "a cost count");
+      tt__pm_get_f64s(r, v, t->params, "a configuration");
+      double sum = tt__pm_get_f64(r, "a cost sum");
+      uint64_t count = tt__pm_get_u64(r, "a cost count");
       if (r->err[0]) break;
-      if (ttpm_config_from_values(check, v, why, sizeof why)) {
-        ttpm_fail(r, "state %llu, configuration %llu: %s", (unsigned long long)i,
+      if (tt__pm_config_from_values(check, v, why, sizeof why)) {
+        tt__pm_fail(r, "state %llu, configuration %llu: %s", (unsigned long long)i,
                   (unsigned long long)k, why);
         break;
       }
       if (!(sum > 0) || !isfinite(sum) || count == 0) {
-        ttpm_fail(r, "state %llu, configuration %llu: cost sum %g over %llu measurements is not "
+        tt__pm_fail(r, "state %llu, configuration %llu: cost sum %g over %llu measurements is not "
                   "a positive finite mean", (unsigned long long)i, (unsigned long long)k, sum,
                   (unsigned long long)count);
         break;
       }
       /* rebuild exactly: one add with the whole sum, then the count */
-      size_t e_i = ttpm_table_add(t, state, v, sum, NULL);
+      size_t e_i = tt__pm_table_add(t, state, v, sum, NULL);
       if (e_i == SIZE_MAX) {
-        ttpm_fail(r, "out of memory");
+        tt__pm_fail(r, "out of memory");
         break;
       }
-      ttpm_table_entry *e = &t->entries[e_i];
+      tt__pm_table_entry *e = &t->entries[e_i];
       size_t j = e->ncfg - 1;
       if (e_i != t->n - 1 || e->cfgs[j].count != 1) {
-        ttpm_fail(r, "state %llu: configuration %llu is stored twice", (unsigned long long)i,
+        tt__pm_fail(r, "state %llu: configuration %llu is stored twice", (unsigned long long)i,
                   (unsigned long long)k);
         break;
       }
       e->cfgs[j].count = count;
-      tt__update_best(e);
+      tt__pm_update_best(e);
     }
   }
   tt_config_destroy(check);

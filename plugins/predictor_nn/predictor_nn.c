@@ -20,7 +20,7 @@
  * to its nearest stored state, so the table becomes a quantisation of the states seen first.
  * The model-size sweep of tools/hybrid varies it.
  *
- * Model files: predictor_common/model_file.h, payload version 1 (see nn_save).
+ * Model files: predictor_common/model_file.h, payload version 1 (see tt__nn_save).
  */
 #include "../predictor_common/model_file.h"
 #include "../predictor_common/state_table.h"
@@ -34,11 +34,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define NN_NAME "predictor_nn"
-#define NN_VERSION "0.1.0"
-#define NN_FORMAT 1u
+#define TT__NN_NAME "predictor_nn"
+#define TT__NN_VERSION "0.1.0"
+#define TT__NN_FORMAT 1u
 
-static tt_space *nn_settings;
+static tt_space *tt__nn_settings;
 
 struct tt_predictor {
   const tt_space *target;
@@ -46,21 +46,21 @@ struct tt_predictor {
   uint32_t dim;
   char *state_space;
   char **names;             /* dim names or NULL */
-  char *signature;          /* ttpm_space_signature(target) */
-  ttpm_table table;         /* the stored states (predictor_common/state_table.h) */
+  char *signature;          /* tt__pm_space_signature(target) */
+  tt__pm_table table;         /* the stored states (predictor_common/state_table.h) */
   uint64_t observations;
 };
 
 /* ---- model ---- */
 
-static void nn_clear(tt_predictor *p) {
-  ttpm_table_clear(&p->table);
+static void tt__nn_clear(tt_predictor *p) {
+  tt__pm_table_clear(&p->table);
   p->observations = 0;
 }
 
-static void nn_destroy(tt_predictor *p) {
+static void tt__nn_destroy(tt_predictor *p) {
   if (!p) return;
-  nn_clear(p);
+  tt__nn_clear(p);
   free(p->state_space);
   if (p->names)
     for (uint32_t i = 0; i < p->dim; i++) free(p->names[i]);
@@ -69,25 +69,25 @@ static void nn_destroy(tt_predictor *p) {
   free(p);
 }
 
-static const tt_space *nn_space(void) { return nn_settings; }
+static const tt_space *tt__nn_space(void) { return tt__nn_settings; }
 
-static tt_status nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
-  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": create: out is NULL");
+static tt_status tt__nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
+  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": create: out is NULL");
   *out = NULL;
   if (!su || !TT_HAS_FIELD(tt_predictor_setup, su, seed) || !su->target)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": create: no target space");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": create: no target space");
   if (su->state_dim < 1 || su->state_dim > 4096)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": create: state dimension %u outside "
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": create: state dimension %u outside "
                         "[1, 4096]", su->state_dim);
   int64_t max_states = su->settings ? tt_config_get_int(su->settings, "maxStates", 0) : 0;
   tt_predictor *p = calloc(1, sizeof *p);
-  if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
+  if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
   p->target = su->target;
   p->params = tt_space_count(su->target);
   p->dim = su->state_dim;
-  ttpm_table_init(&p->table, p->dim, p->params, max_states);
+  tt__pm_table_init(&p->table, p->dim, p->params, max_states);
   p->state_space = tt__strdup(su->state_space ? su->state_space : "");
-  p->signature = ttpm_space_signature(su->target);
+  p->signature = tt__pm_space_signature(su->target);
   int bad = !p->state_space || !p->signature;
   if (su->state_names && !bad) {
     p->names = calloc(p->dim, sizeof *p->names);
@@ -98,69 +98,74 @@ static tt_status nn_create_ex(const tt_predictor_setup *su, tt_predictor **out) 
     }
   }
   if (bad) {
-    nn_destroy(p);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
+    tt__nn_destroy(p);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
   }
   *out = p;
   return TT_OK;
 }
 
-static tt_status nn_create(const tt_space *target, uint32_t state_dim, const tt_config *settings,
-                           uint64_t seed, tt_predictor **out) {
+static tt_status tt__nn_create(const tt_space *target, uint32_t state_dim,
+                               const tt_config *settings, uint64_t seed, tt_predictor **out) {
   tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = state_dim,
                            .settings = settings, .seed = seed};
-  return nn_create_ex(&su, out);
+  return tt__nn_create_ex(&su, out);
 }
 
 /* Adds one validated observation; TT_OK or out of memory. */
-static tt_status nn_add(tt_predictor *p, const double *state, const double *values, double cost) {
-  if (ttpm_table_add(&p->table, state, values, cost, NULL) == SIZE_MAX)
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
+static tt_status tt__nn_add(tt_predictor *p, const double *state, const double *values,
+                            double cost) {
+  if (tt__pm_table_add(&p->table, state, values, cost, NULL) == SIZE_MAX)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
   p->observations++;
   return TT_OK;
 }
 
 /* Checks one sample; 1 = learn it, 0 = skip (infeasible), or an error status < 0. */
-static int nn_check_sample(const tt_predictor *p, const double *state, const tt_config *config,
+static int tt__nn_check_sample(const tt_predictor *p, const double *state, const tt_config *config,
                            double cost) {
   if (!state || !config)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: NULL state or configuration");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__NN_NAME ": observe: NULL state or configuration");
   if (tt_config_space(config) != p->target &&
       tt_space_count(tt_config_space(config)) != p->params)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: the configuration is not of "
-                        "the target space");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__NN_NAME ": observe: the configuration is not of "
+                                    "the target space");
   for (uint32_t i = 0; i < p->dim; i++)
     if (!isfinite(state[i]))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: state value %u is not "
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": observe: state value %u is not "
                           "finite", i);
   if (cost >= TT_COST_INFEASIBLE) return 0;
   if (!(cost > 0) || !isfinite(cost))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: cost %g is not a finite "
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": observe: cost %g is not a finite "
                         "positive number", cost);
   return 1;
 }
 
-static tt_status nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
+static tt_status tt__nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
                                uint32_t flags) {
   /* a table learns the same from a data set and from a stream; the model's own answers
    * (TT_PREDICTOR_EXPLOIT) only refine states the table holds from searches: stored as
    * states of their own they would be the nearest state of the next state along a path,
    * which would then get the same answer again, and so on for the whole path */
   int exploit = (flags & TT_PREDICTOR_EXPLOIT) != 0;
-  if (!p || (!s && count)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: NULL argument");
+  if (!p || (!s && count))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": observe: NULL argument");
   for (size_t i = 0; i < count; i++) {
     if (!TT_HAS_FIELD(tt_predictor_sample, &s[i], cost))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": observe: sample %zu is too short", i);
-    int ok = nn_check_sample(p, s[i].state, s[i].config, s[i].cost);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": observe: sample %zu is too short",
+                          i);
+    int ok = tt__nn_check_sample(p, s[i].state, s[i].config, s[i].cost);
     if (ok < 0) return (tt_status)ok;
   }
   double *v = malloc((p->params ? p->params : 1) * sizeof(double));
-  if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
+  if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
   for (size_t i = 0; i < count; i++) {
     if (s[i].cost >= TT_COST_INFEASIBLE) continue;
-    if (exploit && ttpm_table_find(&p->table, s[i].state) == SIZE_MAX) continue;
-    ttpm_config_values(s[i].config, v);
-    tt_status st = nn_add(p, s[i].state, v, s[i].cost);
+    if (exploit && tt__pm_table_find(&p->table, s[i].state) == SIZE_MAX) continue;
+    tt__pm_config_values(s[i].config, v);
+    tt_status st = tt__nn_add(p, s[i].state, v, s[i].cost);
     if (st != TT_OK) {
       free(v);
       return st;
@@ -170,29 +175,30 @@ static tt_status nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
   return TT_OK;
 }
 
-static tt_status nn_observe(tt_predictor *p, const double *state, const tt_config *config,
+static tt_status tt__nn_observe(tt_predictor *p, const double *state, const tt_config *config,
                             double cost) {
   tt_predictor_sample s = {.struct_size = sizeof s, .state = state, .config = config,
                            .cost = cost, .default_cost = NAN};
-  return nn_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
+  return tt__nn_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
 }
 
-static tt_status nn_predict_ex(const tt_predictor *p, const tt_predictor_query *q, tt_config *out,
-                               tt_predictor_result *res) {
+static tt_status tt__nn_predict_ex(const tt_predictor *p, const tt_predictor_query *q,
+                                   tt_config *out, tt_predictor_result *res) {
   if (!p || !q || !q->state || !out)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: NULL argument");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": predict: NULL argument");
   if (!p->table.n)
-    return tt_set_error(TT_ERR_NO_DATA, NN_NAME ": predict: the table is empty (nothing observed)");
+    return tt_set_error(TT_ERR_NO_DATA,
+                        TT__NN_NAME ": predict: the table is empty (nothing observed)");
   double d2;
-  size_t i = ttpm_table_nearest(&p->table, q->state, &d2);
+  size_t i = tt__pm_table_nearest(&p->table, q->state, &d2);
   if (i == SIZE_MAX)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: the state is not finite");
-  const ttpm_table_cfg *best = ttpm_table_best(&p->table, i);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": predict: the state is not finite");
+  const tt__pm_table_cfg *best = tt__pm_table_best(&p->table, i);
   char why[256];
-  if (ttpm_config_from_values(out, best->values, why, sizeof why))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": predict: %s", why);
+  if (tt__pm_config_from_values(out, best->values, why, sizeof why))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": predict: %s", why);
   if (res && TT_HAS_FIELD(tt_predictor_result, res, candidates)) {
-    res->expected_cost = ttpm_table_mean(best);
+    res->expected_cost = tt__pm_table_mean(best);
     res->value = NAN;
     res->distance = sqrt(d2);
     res->candidates = p->table.n;
@@ -200,67 +206,73 @@ static tt_status nn_predict_ex(const tt_predictor *p, const tt_predictor_query *
   return TT_OK;
 }
 
-static tt_status nn_predict(const tt_predictor *p, const double *state, tt_config *out,
+static tt_status tt__nn_predict(const tt_predictor *p, const double *state, tt_config *out,
                             double *expected_cost) {
   tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
   tt_predictor_result r = {.struct_size = sizeof r};
-  tt_status st = nn_predict_ex(p, &q, out, &r);
+  tt_status st = tt__nn_predict_ex(p, &q, out, &r);
   if (expected_cost) *expected_cost = st == TT_OK ? r.expected_cost : NAN;
   return st;
 }
 
-static tt_status nn_estimate(const tt_predictor *p, const tt_predictor_query *q,
+static tt_status tt__nn_estimate(const tt_predictor *p, const tt_predictor_query *q,
                              const tt_config *config, double *cost) {
   if (!p || !q || !q->state || !config || !cost)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": estimate: NULL argument");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": estimate: NULL argument");
   *cost = NAN;
-  size_t i = ttpm_table_nearest(&p->table, q->state, NULL);
+  size_t i = tt__pm_table_nearest(&p->table, q->state, NULL);
   if (i == SIZE_MAX) return TT_OK;
   double *v = malloc((p->params ? p->params : 1) * sizeof(double));
-  if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
-  ttpm_config_values(config, v);
-  size_t k = ttpm_table_find_cfg(&p->table, i, v);
-  if (k != SIZE_MAX) *cost = ttpm_table_mean(&p->table.entries[i].cfgs[k]);
+  if (!v) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
+  tt__pm_config_values(config, v);
+  size_t k = tt__pm_table_find_cfg(&p->table, i, v);
+  if (k != SIZE_MAX) *cost = tt__pm_table_mean(&p->table.entries[i].cfgs[k]);
   free(v);
   return TT_OK;
 }
 
-static tt_status nn_info(const tt_predictor *p, tt_predictor_info *out) {
-  if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": info: NULL argument");
-  uint64_t bytes = sizeof *p + ttpm_table_bytes(&p->table);
+static tt_status tt__nn_info(const tt_predictor *p, tt_predictor_info *out) {
+  if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": info: NULL argument");
+  uint64_t bytes = sizeof *p + tt__pm_table_bytes(&p->table);
   if (TT_HAS_FIELD(tt_predictor_info, out, format_version)) {
     out->memory_bytes = bytes;
     out->entries = p->table.n;
     out->observations = p->observations;
-    out->format_version = NN_FORMAT;
+    out->format_version = TT__NN_FORMAT;
   }
   return TT_OK;
 }
 
 /* ---- files ---- */
 
-static char *nn_settings_json(const tt_predictor *p) {
-  tt_config *c = tt_config_create(nn_settings);
+static char *tt__nn_settings_json(const tt_predictor *p) {
+  tt_config *c = tt_config_create(tt__nn_settings);
   if (!c) return NULL;
-  tt_config_set_number(c, (size_t)tt_space_find(nn_settings, "maxStates"), (double)p->table.max_states);
+  tt_config_set_number(c, (size_t)tt_space_find(tt__nn_settings, "maxStates"),
+                       (double)p->table.max_states);
   char *j = tt_config_to_json(c);
   tt_config_destroy(c);
   return j;
 }
 
-static tt_status nn_save(const tt_predictor *p, const char *path) {
-  if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": save: NULL argument");
-  char *settings = nn_settings_json(p);
-  ttpm_header h = {.kind = NN_NAME, .plugin_version = NN_VERSION, .state_space = p->state_space,
-                   .state_dim = p->dim, .state_names = p->names, .target = p->signature,
-                   .settings = settings};
-  ttpm_writer w = {0};
-  ttpm_put_header(&w, &h);
-  ttpm_put_u64(&w, p->params);
-  ttpm_put_u64(&w, p->observations);
-  ttpm_table_put(&w, &p->table);
-  tt_status st = settings ? ttpm_save(NN_NAME, path, NN_FORMAT, &w)
-                          : tt_set_error(TT_ERR_OUT_OF_MEMORY, NN_NAME ": out of memory");
+static tt_status tt__nn_save(const tt_predictor *p, const char *path) {
+  if (!p || !path)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": save: NULL argument");
+  char *settings = tt__nn_settings_json(p);
+  tt__pm_header h = {.kind = TT__NN_NAME,
+                     .plugin_version = TT__NN_VERSION,
+                     .state_space = p->state_space,
+                     .state_dim = p->dim,
+                     .state_names = p->names,
+                     .target = p->signature,
+                     .settings = settings};
+  tt__pm_writer w = {0};
+  tt__pm_put_header(&w, &h);
+  tt__pm_put_u64(&w, p->params);
+  tt__pm_put_u64(&w, p->observations);
+  tt__pm_table_put(&w, &p->table);
+  tt_status st = settings ? tt__pm_save(TT__NN_NAME, path, TT__NN_FORMAT, &w)
+                          : tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
   tt_free(settings);
   free(w.data);
   return st;
@@ -268,45 +280,51 @@ static tt_status nn_save(const tt_predictor *p, const char *path) {
 
 /* Checks the file's header against the model it is loaded into (kind, state space,
  * target); 0 or -1 with a message naming both sides. */
-static int nn_check_header(const tt_predictor *p, const ttpm_header *h, const char *path) {
+static int tt__nn_check_header(const tt_predictor *p, const tt__pm_header *h, const char *path) {
   char diff[400];
-  if (strcmp(h->kind, NN_NAME)) {
-    tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": model %s was written by %s %s, not by "
-                 NN_NAME " (load it with --plugin %s)", path, h->kind, h->plugin_version, h->kind);
+  if (strcmp(h->kind, TT__NN_NAME)) {
+    tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                 TT__NN_NAME ": model %s was written by %s %s, not by " TT__NN_NAME
+                             " (load it with --plugin %s)",
+                 path, h->kind, h->plugin_version, h->kind);
     return -1;
   }
   if (h->state_dim != p->dim || strcmp(h->state_space, p->state_space)) {
-    tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": model %s is for states \"%s\" of %u values, "
-                 "but this predictor gets states \"%s\" of %u values", path, h->state_space,
-                 h->state_dim, p->state_space, p->dim);
+    tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                 TT__NN_NAME ": model %s is for states \"%s\" of %u values, "
+                             "but this predictor gets states \"%s\" of %u values",
+                 path, h->state_space, h->state_dim, p->state_space, p->dim);
     return -1;
   }
   if (strcmp(h->target, p->signature)) {
-    ttpm_signature_diff(h->target, p->signature, diff, sizeof diff);
-    tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": model %s predicts configurations of another "
-                 "parameter space: the file's %s; this one's %s (first difference: %s)", path,
-                 h->target, p->signature, diff);
+    tt__pm_signature_diff(h->target, p->signature, diff, sizeof diff);
+    tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                 TT__NN_NAME ": model %s predicts configurations of another "
+                             "parameter space: the file's %s; this one's %s (first difference: %s)",
+                 path, h->target, p->signature, diff);
     return -1;
   }
   return 0;
 }
 
-static tt_status nn_load(tt_predictor *p, const char *path) {
-  if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, NN_NAME ": load: NULL argument");
+static tt_status tt__nn_load(tt_predictor *p, const char *path) {
+  if (!p || !path)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": load: NULL argument");
   unsigned char *data;
   size_t len;
   uint32_t version;
-  tt_status st = ttpm_load(NN_NAME, NN_VERSION, path, NN_FORMAT, &data, &len, &version);
+  tt_status st =
+      tt__pm_load(TT__NN_NAME, TT__NN_VERSION, path, TT__NN_FORMAT, &data, &len, &version);
   if (st != TT_OK) return st;
-  ttpm_reader r = {.data = data, .len = len, .path = path};
-  ttpm_header h;
-  if (ttpm_get_header(&r, &h)) {
-    st = tt_set_error(TT_ERR_PARSE, NN_NAME ": model %s", r.err);
+  tt__pm_reader r = {.data = data, .len = len, .path = path};
+  tt__pm_header h;
+  if (tt__pm_get_header(&r, &h)) {
+    st = tt_set_error(TT_ERR_PARSE, TT__NN_NAME ": model %s", r.err);
     free(data);
     return st;
   }
-  if (nn_check_header(p, &h, path)) {
-    ttpm_header_free(&h);
+  if (tt__nn_check_header(p, &h, path)) {
+    tt__pm_header_free(&h);
     free(data);
     return TT_ERR_INVALID_ARGUMENT;
   }
@@ -314,71 +332,71 @@ static tt_status nn_load(tt_predictor *p, const char *path) {
   tt_predictor tmp = *p;
   tmp.observations = 0;
   int64_t max_states = 0;
-  tt_config *s = tt_config_create(nn_settings);
+  tt_config *s = tt_config_create(tt__nn_settings);
   if (!s || tt_config_from_json(s, h.settings, path) != TT_OK)
-    ttpm_fail(&r, "settings: %s", s ? tt_last_error() : "out of memory");
+    tt__pm_fail(&r, "settings: %s", s ? tt_last_error() : "out of memory");
   else
     max_states = tt_config_get_int(s, "maxStates", 0);
   tt_config_destroy(s);
-  ttpm_table_init(&tmp.table, p->dim, p->params, max_states);
-  uint64_t params = ttpm_get_u64(&r, "the parameter count");
+  tt__pm_table_init(&tmp.table, p->dim, p->params, max_states);
+  uint64_t params = tt__pm_get_u64(&r, "the parameter count");
   if (!r.err[0] && params != p->params)
-    ttpm_fail(&r, "%llu parameters per configuration, the target space has %zu",
+    tt__pm_fail(&r, "%llu parameters per configuration, the target space has %zu",
               (unsigned long long)params, p->params);
-  uint64_t obs = ttpm_get_u64(&r, "the observation count");
-  if (!r.err[0]) ttpm_table_get(&r, &tmp.table, p->target);
-  if (!r.err[0] && r.pos != r.len) ttpm_fail(&r, "%zu bytes after the last state", r.len - r.pos);
-  ttpm_header_free(&h);
+  uint64_t obs = tt__pm_get_u64(&r, "the observation count");
+  if (!r.err[0]) tt__pm_table_get(&r, &tmp.table, p->target);
+  if (!r.err[0] && r.pos != r.len) tt__pm_fail(&r, "%zu bytes after the last state", r.len - r.pos);
+  tt__pm_header_free(&h);
   free(data);
   if (r.err[0]) {
-    ttpm_table_clear(&tmp.table);
-    return tt_set_error(TT_ERR_PARSE, NN_NAME ": model %s", r.err);
+    tt__pm_table_clear(&tmp.table);
+    return tt_set_error(TT_ERR_PARSE, TT__NN_NAME ": model %s", r.err);
   }
   tmp.observations = obs;
-  nn_clear(p);
+  tt__nn_clear(p);
   *p = tmp;
   return TT_OK;
 }
 
 /* ---- plugin ---- */
 
-static const tt_predictor_iface nn_iface = {
+static const tt_predictor_iface tt__nn_iface = {
   .struct_size = sizeof(tt_predictor_iface),
-  .space = nn_space,
-  .create = nn_create,
-  .observe = nn_observe,
-  .predict = nn_predict,
-  .save = nn_save,
-  .load = nn_load,
-  .destroy = nn_destroy,
-  .create_ex = nn_create_ex,
-  .observe_ex = nn_observe_ex,
-  .predict_ex = nn_predict_ex,
-  .info = nn_info,
-  .estimate = nn_estimate,
+  .space = tt__nn_space,
+  .create = tt__nn_create,
+  .observe = tt__nn_observe,
+  .predict = tt__nn_predict,
+  .save = tt__nn_save,
+  .load = tt__nn_load,
+  .destroy = tt__nn_destroy,
+  .create_ex = tt__nn_create_ex,
+  .observe_ex = tt__nn_observe_ex,
+  .predict_ex = tt__nn_predict_ex,
+  .info = tt__nn_info,
+  .estimate = tt__nn_estimate,
 };
 
-static tt_status nn_init(const tt_host *host) {
+static tt_status tt__nn_init(const tt_host *host) {
   (void)host;
-  nn_settings = tt_space_create(NN_NAME, NN_VERSION);
-  if (!nn_settings ||
-      tt_space_add_int(nn_settings, "maxStates", 0, INT64_C(1000000000), 0,
+  tt__nn_settings = tt_space_create(TT__NN_NAME, TT__NN_VERSION);
+  if (!tt__nn_settings ||
+      tt_space_add_int(tt__nn_settings, "maxStates", 0, INT64_C(1000000000), 0,
                        "largest number of stored states (0: unbounded); once full, a new state "
                        "is merged into its nearest stored state") < 0) {
-    tt_space_destroy(nn_settings);
-    nn_settings = NULL;
-    return tt_set_error(TT_ERR_INTERNAL, NN_NAME ": cannot build the settings space");
+    tt_space_destroy(tt__nn_settings);
+    tt__nn_settings = NULL;
+    return tt_set_error(TT_ERR_INTERNAL, TT__NN_NAME ": cannot build the settings space");
   }
   return TT_OK;
 }
 
-static void nn_deinit(void) {
-  tt_space_destroy(nn_settings);
-  nn_settings = NULL;
+static void tt__nn_deinit(void) {
+  tt_space_destroy(tt__nn_settings);
+  tt__nn_settings = NULL;
 }
 
-static const void *nn_get_interface(const char *id) {
-  return strcmp(id, TT_PREDICTOR_INTERFACE_ID) == 0 ? &nn_iface : NULL;
+static const void *tt__nn_get_interface(const char *id) {
+  return strcmp(id, TT_PREDICTOR_INTERFACE_ID) == 0 ? &tt__nn_iface : NULL;
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
@@ -386,11 +404,11 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
   .abi_major = TT_ABI_MAJOR,
   .abi_minor = TT_ABI_MINOR,
   .kind = TT_KIND_PREDICTOR,
-  .name = NN_NAME,
-  .version = NN_VERSION,
+  .name = TT__NN_NAME,
+  .version = TT__NN_VERSION,
   .description = "nearest neighbour: the best configuration of the nearest stored state "
                  "(thesis 3.3.2)",
-  .init = nn_init,
-  .deinit = nn_deinit,
-  .get_interface = nn_get_interface,
+  .init = tt__nn_init,
+  .deinit = tt__nn_deinit,
+  .get_interface = tt__nn_get_interface,
 };

@@ -30,7 +30,7 @@
  * (TT_PREDICTOR_EXPLOIT) update theta like any sample, but add no state to the table the
  * candidate pool is drawn from (poolSource = states: what the searches found).
  *
- * Model files: predictor_common/model_file.h, payload version 2 (see rbf_save; version 1,
+ * Model files: predictor_common/model_file.h, payload version 2 (see tt__rbf_save; version 1,
  * without the state table, still loads as a `poolSource = rewards` model).
  */
 #include "../predictor_common/model_file.h"
@@ -49,24 +49,24 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define RBF_NAME "predictor_rbf"
-#define RBF_VERSION "0.1.0"
-#define RBF_FORMAT 2u /* 2: the state table after the pool (poolSource = states) */
+#define TT__RBF_NAME "predictor_rbf"
+#define TT__RBF_VERSION "0.1.0"
+#define TT__RBF_FORMAT 2u /* 2: the state table after the pool (poolSource = states) */
 
-static tt_space *rbf_settings;
+static tt_space *tt__rbf_settings;
 
-enum { RBF_REWARD_INVERSE = 0, RBF_REWARD_RELATIVE = 1 };
-static const char *const rbf_reward_names[] = {"inverse", "relative"};
-enum { RBF_POOL_REWARDS = 0, RBF_POOL_STATES = 1 };
-static const char *const rbf_pool_names[] = {"rewards", "states"};
+enum { TT__RBF_REWARD_INVERSE = 0, TT__RBF_REWARD_RELATIVE = 1 };
+static const char *const tt__rbf_reward_names[] = {"inverse", "relative"};
+enum { TT__RBF_POOL_REWARDS = 0, TT__RBF_POOL_STATES = 1 };
+static const char *const tt__rbf_pool_names[] = {"rewards", "states"};
 
-typedef struct rbf_settings_values {
+typedef struct tt__rbf_settings_values {
   int64_t features;        /* 0: round(3.5 x (state dims + parameters)) */
   double width, alpha, decay;
   int64_t epochs, lhs, refine, starts, pool;
   int reward;
-  int pool_source;         /* RBF_POOL_REWARDS or RBF_POOL_STATES */
-} rbf_settings_values;
+  int pool_source;         /* TT__RBF_POOL_REWARDS or TT__RBF_POOL_STATES */
+} tt__rbf_settings_values;
 
 struct tt_predictor {
   const tt_space *target;
@@ -76,33 +76,33 @@ struct tt_predictor {
   char **names;
   char *signature;
   uint64_t seed;
-  rbf_settings_values set;
-  rbf_model model;
+  tt__rbf_settings_values set;
+  tt__rbf_model model;
   /* LHS candidates (regenerated from the seed): values (params), encodings (m) and the
-   * action parts of their distances to the centres (F, rbf_action_part) */
+   * action parts of their distances to the centres (F, tt__rbf_action_part) */
   size_t ncand;
   double *cand_values, *cand_enc, *cand_da;
-  float *cand_daf;          /* cand_da in float, rows of rbf_f8(F): the argmax's coarse level */
+  float *cand_daf;          /* cand_da in float, rows of tt__rbf_f8(F): the argmax's coarse level */
   /* pool of observed configurations, the `pool` highest rewards; pool_da as cand_da, kept
    * with each entry so that predict() does not recompute F x m sums per candidate */
   size_t npool;
   double *pool_values, *pool_enc, *pool_reward, *pool_da;
   float *pool_daf;          /* as cand_daf */
   /* poolSource = states: every observed state's configurations and mean costs; the pool is
-   * the states' best configurations (rbf_pool_from_states) */
-  ttpm_table table;
+   * the states' best configurations (tt__rbf_pool_from_states) */
+  tt__pm_table table;
   uint64_t observations;
   double *phi;              /* F scratch for updates (observe is single-threaded) */
   double *x;                /* d + m scratch */
 };
 
-static const tt_space *rbf_space(void) { return rbf_settings; }
+static const tt_space *tt__rbf_space(void) { return tt__rbf_settings; }
 
 /* Reads the settings (NULL: defaults) into v. */
-static void rbf_read_settings(const tt_config *c, rbf_settings_values *v) {
+static void tt__rbf_read_settings(const tt_config *c, tt__rbf_settings_values *v) {
   const tt_config *s = c;
   tt_config *def = NULL;
-  if (!s) s = def = tt_config_create(rbf_settings);
+  if (!s) s = def = tt_config_create(tt__rbf_settings);
   v->features = tt_config_get_int(s, "features", 0);
   v->width = tt_config_get_float(s, "width", 1.0);
   v->alpha = tt_config_get_float(s, "alpha", 0.1);
@@ -113,15 +113,15 @@ static void rbf_read_settings(const tt_config *c, rbf_settings_values *v) {
   v->starts = tt_config_get_int(s, "refineStarts", 4);
   v->pool = tt_config_get_int(s, "poolSize", 256);
   const char *r = tt_config_get_string(s, "reward");
-  v->reward = r && !strcmp(r, "relative") ? RBF_REWARD_RELATIVE : RBF_REWARD_INVERSE;
+  v->reward = r && !strcmp(r, "relative") ? TT__RBF_REWARD_RELATIVE : TT__RBF_REWARD_INVERSE;
   const char *ps = tt_config_get_string(s, "poolSource");
-  v->pool_source = ps && !strcmp(ps, "states") ? RBF_POOL_STATES : RBF_POOL_REWARDS;
+  v->pool_source = ps && !strcmp(ps, "states") ? TT__RBF_POOL_STATES : TT__RBF_POOL_REWARDS;
   tt_config_destroy(def);
 }
 
 /* The settings as a configuration JSON (what the model file records). */
-static char *rbf_settings_json(const rbf_settings_values *v) {
-  tt_config *c = tt_config_create(rbf_settings);
+static char *tt__rbf_settings_json(const tt__rbf_settings_values *v) {
+  tt_config *c = tt_config_create(tt__rbf_settings);
   if (!c) return NULL;
   char buf[64];
   struct { const char *name; double value; } num[] = {
@@ -130,18 +130,18 @@ static char *rbf_settings_json(const rbf_settings_values *v) {
     {"refine", (double)v->refine}, {"refineStarts", (double)v->starts},
     {"poolSize", (double)v->pool}};
   for (size_t i = 0; i < sizeof num / sizeof num[0]; i++)
-    tt_config_set_number(c, (size_t)tt_space_find(rbf_settings, num[i].name), num[i].value);
-  snprintf(buf, sizeof buf, "%s", rbf_reward_names[v->reward]);
+    tt_config_set_number(c, (size_t)tt_space_find(tt__rbf_settings, num[i].name), num[i].value);
+  snprintf(buf, sizeof buf, "%s", tt__rbf_reward_names[v->reward]);
   tt_config_set_string(c, "reward", buf);
-  snprintf(buf, sizeof buf, "%s", rbf_pool_names[v->pool_source]);
+  snprintf(buf, sizeof buf, "%s", tt__rbf_pool_names[v->pool_source]);
   tt_config_set_string(c, "poolSource", buf);
   char *j = tt_config_to_json(c);
   tt_config_destroy(c);
   return j;
 }
 
-static void rbf_free_model_parts(tt_predictor *p) {
-  rbf_model_free(&p->model);
+static void tt__rbf_free_model_parts(tt_predictor *p) {
+  tt__rbf_model_free(&p->model);
   free(p->cand_values);
   free(p->cand_enc);
   free(p->cand_da);
@@ -153,7 +153,7 @@ static void rbf_free_model_parts(tt_predictor *p) {
   free(p->pool_daf);
   free(p->phi);
   free(p->x);
-  ttpm_table_clear(&p->table);
+  tt__pm_table_clear(&p->table);
   p->cand_values = p->cand_enc = p->cand_da = NULL;
   p->pool_values = p->pool_enc = p->pool_reward = p->pool_da = NULL;
   p->cand_daf = p->pool_daf = NULL;
@@ -161,9 +161,9 @@ static void rbf_free_model_parts(tt_predictor *p) {
   p->ncand = p->npool = 0;
 }
 
-static void rbf_destroy(tt_predictor *p) {
+static void tt__rbf_destroy(tt_predictor *p) {
   if (!p) return;
-  rbf_free_model_parts(p);
+  tt__rbf_free_model_parts(p);
   free(p->state_space);
   if (p->names)
     for (uint32_t i = 0; i < p->d; i++) free(p->names[i]);
@@ -174,12 +174,12 @@ static void rbf_destroy(tt_predictor *p) {
 
 /* Draws the LHS candidates from the seed (every point through the space's check: repaired
  * points kept repaired, infeasible ones dropped). 0 or -1 when out of memory. */
-static int rbf_make_candidates(tt_predictor *p) {
+static int tt__rbf_make_candidates(tt_predictor *p) {
   size_t n = (size_t)p->set.lhs, np = p->params ? p->params : 1;
   p->cand_values = malloc((n ? n : 1) * np * sizeof(double));
   p->cand_enc = malloc((n ? n : 1) * (p->m ? p->m : 1) * sizeof(double));
   p->cand_da = malloc((n ? n : 1) * p->model.features * sizeof(double));
-  p->cand_daf = malloc((n ? n : 1) * rbf_f8(p->model.features) * sizeof(float));
+  p->cand_daf = malloc((n ? n : 1) * tt__rbf_f8(p->model.features) * sizeof(float));
   double *unit = malloc((n ? n : 1) * np * sizeof(double));
   tt_config *c = tt_config_create(p->target);
   if (!p->cand_values || !p->cand_enc || !p->cand_da || !p->cand_daf || !unit || !c) {
@@ -187,18 +187,18 @@ static int rbf_make_candidates(tt_predictor *p) {
     tt_config_destroy(c);
     return -1;
   }
-  rbf_lhs(p->seed ^ 0x63616e646964ull, (uint32_t)n, (uint32_t)p->params, unit);
+  tt__rbf_lhs(p->seed ^ 0x63616e646964ull, (uint32_t)n, (uint32_t)p->params, unit);
   p->ncand = 0;
   char why[128];
   for (size_t k = 0; k < n; k++) {
     tt_config_from_unit(c, unit + k * p->params);
     if (tt_space_check(p->target, c, why, sizeof why) == TT_CHECK_INFEASIBLE) continue;
-    ttpm_config_values(c, p->cand_values + p->ncand * p->params);
-    rbf_encode_action(c, p->cand_enc + p->ncand * p->m);
-    rbf_action_part(&p->model, p->cand_enc + p->ncand * p->m,
+    tt__pm_config_values(c, p->cand_values + p->ncand * p->params);
+    tt__rbf_encode_action(c, p->cand_enc + p->ncand * p->m);
+    tt__rbf_action_part(&p->model, p->cand_enc + p->ncand * p->m,
                     p->cand_da + p->ncand * p->model.features);
-    rbf_action_part_float(p->model.features, p->cand_da + p->ncand * p->model.features,
-                          p->cand_daf + p->ncand * rbf_f8(p->model.features));
+    tt__rbf_action_part_float(p->model.features, p->cand_da + p->ncand * p->model.features,
+                          p->cand_daf + p->ncand * tt__rbf_f8(p->model.features));
     p->ncand++;
   }
   free(unit);
@@ -208,15 +208,15 @@ static int rbf_make_candidates(tt_predictor *p) {
 
 /* Allocates the model, candidates, pool and scratch for p->set; 0 or -1. */
 /* Features of a model: the setting, or 3.5 x (state values + parameters) for 0. */
-static uint32_t rbf_feature_count(const tt_predictor *p) {
+static uint32_t tt__rbf_feature_count(const tt_predictor *p) {
   uint32_t f = p->set.features > 0 ? (uint32_t)p->set.features
                                    : (uint32_t)lround(3.5 * (double)(p->d + p->params));
   return f ? f : 1;
 }
 
-static int rbf_alloc(tt_predictor *p) {
-  uint32_t f = rbf_feature_count(p);
-  if (rbf_model_init(&p->model, p->d, p->m, f, p->set.width, p->set.alpha, p->set.decay,
+static int tt__rbf_alloc(tt_predictor *p) {
+  uint32_t f = tt__rbf_feature_count(p);
+  if (tt__rbf_model_init(&p->model, p->d, p->m, f, p->set.width, p->set.alpha, p->set.decay,
                      p->seed ^ 0x63656e747265ull))
     return -1;
   size_t pool = (size_t)p->set.pool ? (size_t)p->set.pool : 1;
@@ -224,34 +224,36 @@ static int rbf_alloc(tt_predictor *p) {
   p->pool_enc = malloc(pool * (p->m ? p->m : 1) * sizeof(double));
   p->pool_reward = malloc(pool * sizeof(double));
   p->pool_da = malloc(pool * f * sizeof(double));
-  p->pool_daf = malloc(pool * rbf_f8(f) * sizeof(float));
+  p->pool_daf = malloc(pool * tt__rbf_f8(f) * sizeof(float));
   p->phi = malloc(f * sizeof(double));
   p->x = malloc((p->d + p->m) * sizeof(double));
-  ttpm_table_init(&p->table, p->d, p->params, 0);
+  tt__pm_table_init(&p->table, p->d, p->params, 0);
   if (!p->pool_values || !p->pool_enc || !p->pool_reward || !p->pool_da || !p->pool_daf ||
       !p->phi || !p->x)
     return -1;
-  return rbf_make_candidates(p);
+  return tt__rbf_make_candidates(p);
 }
 
-static tt_status rbf_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
-  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: out is NULL");
+static tt_status tt__rbf_create_ex(const tt_predictor_setup *su, tt_predictor **out) {
+  if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": create: out is NULL");
   *out = NULL;
   if (!su || !TT_HAS_FIELD(tt_predictor_setup, su, seed) || !su->target)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: no target space");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": create: no target space");
   if (su->state_dim < 1 || su->state_dim > 4096)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": create: state dimension %u outside "
-                        "[1, 4096]", su->state_dim);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__RBF_NAME ": create: state dimension %u outside "
+                                     "[1, 4096]",
+                        su->state_dim);
   tt_predictor *p = calloc(1, sizeof *p);
-  if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
   p->target = su->target;
   p->params = tt_space_count(su->target);
   p->d = su->state_dim;
-  p->m = rbf_action_dims(su->target);
+  p->m = tt__rbf_action_dims(su->target);
   p->seed = su->seed;
-  rbf_read_settings(su->settings, &p->set);
+  tt__rbf_read_settings(su->settings, &p->set);
   p->state_space = tt__strdup(su->state_space ? su->state_space : "");
-  p->signature = ttpm_space_signature(su->target);
+  p->signature = tt__pm_space_signature(su->target);
   int bad = !p->state_space || !p->signature;
   if (su->state_names && !bad) {
     p->names = calloc(p->d, sizeof *p->names);
@@ -261,25 +263,25 @@ static tt_status rbf_create_ex(const tt_predictor_setup *su, tt_predictor **out)
       bad = !(p->names[i] = tt__strdup(name));
     }
   }
-  if (bad || rbf_alloc(p)) {
-    rbf_destroy(p);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  if (bad || tt__rbf_alloc(p)) {
+    tt__rbf_destroy(p);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
   }
   *out = p;
   return TT_OK;
 }
 
-static tt_status rbf_create(const tt_space *target, uint32_t state_dim, const tt_config *settings,
-                            uint64_t seed, tt_predictor **out) {
+static tt_status tt__rbf_create(const tt_space *target, uint32_t state_dim,
+                                const tt_config *settings, uint64_t seed, tt_predictor **out) {
   tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = state_dim,
                            .settings = settings, .seed = seed};
-  return rbf_create_ex(&su, out);
+  return tt__rbf_create_ex(&su, out);
 }
 
 /* The reward of a sample, or NAN when it cannot be learnt (relative without a default). */
-static double rbf_reward(const tt_predictor *p, double cost, double default_cost) {
+static double tt__rbf_reward(const tt_predictor *p, double cost, double default_cost) {
   if (cost >= TT_COST_INFEASIBLE) return 0.0;
-  if (p->set.reward == RBF_REWARD_INVERSE) return 1.0 / cost;
+  if (p->set.reward == TT__RBF_REWARD_INVERSE) return 1.0 / cost;
   if (!(default_cost > 0) || default_cost >= TT_COST_INFEASIBLE || !isfinite(default_cost))
     return NAN;
   return default_cost / cost;
@@ -287,19 +289,20 @@ static double rbf_reward(const tt_predictor *p, double cost, double default_cost
 
 /* Puts a configuration (its values and encoding) into pool slot `slot` with the cached action
  * parts of its distances to the centres. */
-static void rbf_pool_put(tt_predictor *p, size_t slot, const double *values, const double *enc,
+static void tt__rbf_pool_put(tt_predictor *p, size_t slot, const double *values, const double *enc,
                          double reward) {
   memcpy(p->pool_values + slot * p->params, values, p->params * sizeof(double));
   memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
-  rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
-  rbf_action_part_float(p->model.features, p->pool_da + slot * p->model.features,
-                        p->pool_daf + slot * rbf_f8(p->model.features));
+  tt__rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
+  tt__rbf_action_part_float(p->model.features, p->pool_da + slot * p->model.features,
+                        p->pool_daf + slot * tt__rbf_f8(p->model.features));
   p->pool_reward[slot] = reward;
 }
 
 /* poolSource = rewards: keeps the configuration in the pool if its reward ranks among the
  * `pool` best (an equal configuration keeps its highest reward). */
-static void rbf_pool_add(tt_predictor *p, const double *values, const double *enc, double reward) {
+static void tt__rbf_pool_add(tt_predictor *p, const double *values, const double *enc,
+                             double reward) {
   size_t np = p->params;
   for (size_t k = 0; k < p->npool; k++)
     if (!memcmp(p->pool_values + k * np, values, np * sizeof(double))) {
@@ -315,17 +318,17 @@ static void rbf_pool_add(tt_predictor *p, const double *values, const double *en
   } else {
     p->npool++;
   }
-  rbf_pool_put(p, slot, values, enc, reward);
+  tt__rbf_pool_put(p, slot, values, enc, reward);
 }
 
 /* A distinct best configuration of the state table: the first state it is best in and how
  * many states it is best in. */
-typedef struct rbf_state_best {
+typedef struct tt__rbf_state_best {
   size_t first, states;
-} rbf_state_best;
+} tt__rbf_state_best;
 
-static int rbf_state_best_order(const void *a, const void *b) {
-  const rbf_state_best *x = a, *y = b;
+static int tt__rbf_state_best_order(const void *a, const void *b) {
+  const tt__rbf_state_best *x = a, *y = b;
   if (x->states != y->states) return x->states > y->states ? -1 : 1;
   return x->first < y->first ? -1 : x->first > y->first;
 }
@@ -335,9 +338,9 @@ static int rbf_state_best_order(const void *a, const void *b) {
  * best in the most states first (ties: the state observed first), at most poolSize of them;
  * pool_reward holds the number of states each is best in. Deterministic in the table, so a
  * loaded model rebuilds the same pool. 0, or -1 when out of memory. */
-static int rbf_pool_from_states(tt_predictor *p) {
-  const ttpm_table *t = &p->table;
-  rbf_state_best *d = malloc((t->n ? t->n : 1) * sizeof *d);
+static int tt__rbf_pool_from_states(tt_predictor *p) {
+  const tt__pm_table *t = &p->table;
+  tt__rbf_state_best *d = malloc((t->n ? t->n : 1) * sizeof *d);
   double *enc = malloc((p->m ? p->m : 1) * sizeof(double));
   tt_config *c = tt_config_create(p->target);
   if (!d || !enc || !c) {
@@ -348,21 +351,23 @@ static int rbf_pool_from_states(tt_predictor *p) {
   }
   size_t nd = 0;
   for (size_t i = 0; i < t->n; i++) {
-    const double *v = ttpm_table_best(t, i)->values;
+    const double *v = tt__pm_table_best(t, i)->values;
     size_t k = 0;
-    while (k < nd && memcmp(ttpm_table_best(t, d[k].first)->values, v, p->params * sizeof(double))) k++;
-    if (k == nd) d[nd++] = (rbf_state_best){i, 0};
+    while (k < nd &&
+           memcmp(tt__pm_table_best(t, d[k].first)->values, v, p->params * sizeof(double)))
+      k++;
+    if (k == nd) d[nd++] = (tt__rbf_state_best){i, 0};
     d[k].states++;
   }
-  qsort(d, nd, sizeof *d, rbf_state_best_order);
+  qsort(d, nd, sizeof *d, tt__rbf_state_best_order);
   size_t keep = nd < (size_t)p->set.pool ? nd : (size_t)p->set.pool;
   char why[128];
   p->npool = 0;
   for (size_t k = 0; k < keep; k++) {
-    const double *v = ttpm_table_best(t, d[k].first)->values;
-    if (ttpm_config_from_values(c, v, why, sizeof why)) continue;  /* checked when added */
-    rbf_encode_action(c, enc);
-    rbf_pool_put(p, p->npool++, v, enc, (double)d[k].states);
+    const double *v = tt__pm_table_best(t, d[k].first)->values;
+    if (tt__pm_config_from_values(c, v, why, sizeof why)) continue;  /* checked when added */
+    tt__rbf_encode_action(c, enc);
+    tt__rbf_pool_put(p, p->npool++, v, enc, (double)d[k].states);
   }
   free(d);
   free(enc);
@@ -371,35 +376,42 @@ static int rbf_pool_from_states(tt_predictor *p) {
 }
 
 /* One validated sample: updates theta and the pool. */
-static void rbf_learn(tt_predictor *p, const tt_predictor_sample *s, double reward, double *values) {
+static void tt__rbf_learn(tt_predictor *p, const tt_predictor_sample *s, double reward,
+                          double *values) {
   memcpy(p->x, s->state, p->d * sizeof(double));
-  rbf_encode_action(s->config, p->x + p->d);
-  rbf_update(&p->model, p->x, reward, p->phi);
-  if (reward > 0 && p->set.pool_source == RBF_POOL_REWARDS) {
-    ttpm_config_values(s->config, values);
-    rbf_pool_add(p, values, p->x + p->d, reward);
+  tt__rbf_encode_action(s->config, p->x + p->d);
+  tt__rbf_update(&p->model, p->x, reward, p->phi);
+  if (reward > 0 && p->set.pool_source == TT__RBF_POOL_REWARDS) {
+    tt__pm_config_values(s->config, values);
+    tt__rbf_pool_add(p, values, p->x + p->d, reward);
   }
   p->observations++;
 }
 
-static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
+static tt_status tt__rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
                                 uint32_t flags) {
-  if (!p || (!s && count)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: NULL argument");
+  if (!p || (!s && count))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": observe: NULL argument");
   for (size_t i = 0; i < count; i++) {
     if (!TT_HAS_FIELD(tt_predictor_sample, &s[i], default_cost))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu is too short", i);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          TT__RBF_NAME ": observe: sample %zu is too short", i);
     if (!s[i].state || !s[i].config)
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu has no state "
-                          "or configuration", i);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          TT__RBF_NAME ": observe: sample %zu has no state "
+                                       "or configuration",
+                          i);
     if (tt_space_count(tt_config_space(s[i].config)) != p->params)
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu: the "
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": observe: sample %zu: the "
                           "configuration is not of the target space", i);
     for (uint32_t k = 0; k < p->d; k++)
       if (!isfinite(s[i].state[k]))
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu: state value "
-                            "%u is not finite", i, k);
+        return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                            TT__RBF_NAME ": observe: sample %zu: state value "
+                                         "%u is not finite",
+                            i, k);
     if (isnan(s[i].cost) || (s[i].cost < TT_COST_INFEASIBLE && !(s[i].cost > 0)))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": observe: sample %zu: cost %g is "
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": observe: sample %zu: cost %g is "
                           "not a finite positive number", i, s[i].cost);
   }
   double *values = malloc((p->params ? p->params : 1) * sizeof(double));
@@ -407,9 +419,9 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
   if (!values || !order) {
     free(values);
     free(order);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
   }
-  if (p->set.pool_source == RBF_POOL_STATES) {
+  if (p->set.pool_source == TT__RBF_POOL_STATES) {
     /* the table learns each sample once, whatever the passes of the update below; the
      * pool is rebuilt only when a state's best changed (a new state, another best) */
     int changed = 0;
@@ -417,19 +429,19 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
       if (s[i].cost >= TT_COST_INFEASIBLE) continue;
       /* the model's own answers (TT_PREDICTOR_EXPLOIT) train Q below, but enter the table
        * (the candidate actions) only for states it holds from searches */
-      if ((flags & TT_PREDICTOR_EXPLOIT) && ttpm_table_find(&p->table, s[i].state) == SIZE_MAX)
+      if ((flags & TT_PREDICTOR_EXPLOIT) && tt__pm_table_find(&p->table, s[i].state) == SIZE_MAX)
         continue;
-      ttpm_config_values(s[i].config, values);
-      if (ttpm_table_add(&p->table, s[i].state, values, s[i].cost, &changed) == SIZE_MAX) {
+      tt__pm_config_values(s[i].config, values);
+      if (tt__pm_table_add(&p->table, s[i].state, values, s[i].cost, &changed) == SIZE_MAX) {
         free(values);
         free(order);
-        return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+        return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
       }
     }
-    if (changed && rbf_pool_from_states(p)) {
+    if (changed && tt__rbf_pool_from_states(p)) {
       free(values);
       free(order);
-      return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
     }
   }
   int64_t passes = flags & TT_PREDICTOR_OFFLINE ? p->set.epochs : 1;
@@ -446,9 +458,9 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
       }
     for (size_t i = 0; i < count; i++) {
       const tt_predictor_sample *x = &s[order[i]];
-      double reward = rbf_reward(p, x->cost, x->default_cost);
+      double reward = tt__rbf_reward(p, x->cost, x->default_cost);
       if (isnan(reward)) continue;
-      rbf_learn(p, x, reward, values);
+      tt__rbf_learn(p, x, reward, values);
     }
   }
   free(values);
@@ -456,36 +468,37 @@ static tt_status rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, s
   return TT_OK;
 }
 
-static tt_status rbf_observe(tt_predictor *p, const double *state, const tt_config *config,
+static tt_status tt__rbf_observe(tt_predictor *p, const double *state, const tt_config *config,
                              double cost) {
   tt_predictor_sample s = {.struct_size = sizeof s, .state = state, .config = config,
                            .cost = cost, .default_cost = NAN};
-  return rbf_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
+  return tt__rbf_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
 }
 
 /* Expected cost of a value Q under the reward (NAN when it says nothing). */
-static double rbf_cost_of(const tt_predictor *p, double q, double default_cost) {
+static double tt__rbf_cost_of(const tt_predictor *p, double q, double default_cost) {
   if (!(q > 0)) return NAN;
-  if (p->set.reward == RBF_REWARD_INVERSE) return 1.0 / q;
+  if (p->set.reward == TT__RBF_REWARD_INVERSE) return 1.0 / q;
   return default_cost > 0 && isfinite(default_cost) ? default_cost / q : NAN;
 }
 
 /* One candidate of the argmax: its values and encoding in scratch, its Q. */
-typedef struct rbf_best {
+typedef struct tt__rbf_best {
   double q;
   size_t src;  /* index into the candidate list of the first phase */
-} rbf_best;
+} tt__rbf_best;
 
-static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query *q, tt_config *out,
-                                tt_predictor_result *res) {
+static tt_status tt__rbf_predict_ex(const tt_predictor *p, const tt_predictor_query *q,
+                                    tt_config *out, tt_predictor_result *res) {
   if (!p || !q || !q->state || !out)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": predict: NULL argument");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": predict: NULL argument");
   if (!p->observations)
-    return tt_set_error(TT_ERR_NO_DATA, RBF_NAME ": predict: nothing observed yet");
+    return tt_set_error(TT_ERR_NO_DATA, TT__RBF_NAME ": predict: nothing observed yet");
   for (uint32_t k = 0; k < p->d; k++)
     if (!isfinite(q->state[k]))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": predict: state value %u is not finite", k);
-  const rbf_model *r = &p->model;
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          TT__RBF_NAME ": predict: state value %u is not finite", k);
+  const tt__rbf_model *r = &p->model;
   size_t np = p->params ? p->params : 1, m = p->m ? p->m : 1;
   size_t n1 = p->npool + p->ncand + 1, starts = (size_t)p->set.starts;
   int refine = p->set.refine > 0;
@@ -495,11 +508,11 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   double *best_vals = malloc(np * sizeof(double)), *try_enc = malloc(m * sizeof(double));
   /* without refinement: the bounded argmax's rows and scratch; with it: every candidate's
    * values, encoding and Q (the starts and the coordinate search need them) */
-  uint32_t f8 = rbf_f8(r->features);
+  uint32_t f8 = tt__rbf_f8(r->features);
   const double **rows = refine ? NULL : malloc(n1 * sizeof *rows);
   const float **frows = refine ? NULL : malloc(n1 * sizeof *frows);
   float *ddf = refine ? NULL : malloc(f8 * sizeof(float));
-  double *work = refine ? NULL : malloc(rbf_argmax_work(r->features, n1) * sizeof(double));
+  double *work = refine ? NULL : malloc(tt__rbf_argmax_work(r->features, n1) * sizeof(double));
   double *vals = refine ? malloc(n1 * np * sizeof(double)) : NULL;
   double *enc = refine ? malloc(n1 * m * sizeof(double)) : NULL;
   double *qs = refine ? malloc(n1 * sizeof(double)) : NULL;
@@ -508,19 +521,19 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   tt_status st = TT_OK;
   if (!ds || !defv || !defe || !unit || !best_vals || !try_enc || !c ||
       (refine ? !vals || !enc || !qs || !top : !rows || !frows || !ddf || !work)) {
-    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
     goto done;
   }
-  rbf_state_part(r, q->state, ds);
+  tt__rbf_state_part(r, q->state, ds);
   /* phase 1: the pool, the LHS candidates and the default (the last candidate). The action
    * parts are cached per pool entry and LHS candidate, computed here for the default. */
   size_t n = n1, bi = 0, nt = 0;
   double best_q = -INFINITY;
-  ttpm_config_values(c, defv);  /* c holds the defaults */
-  rbf_encode_action(c, defe);
-  rbf_action_part(r, defe, dd);
+  tt__pm_config_values(c, defv);  /* c holds the defaults */
+  tt__rbf_encode_action(c, defe);
+  tt__rbf_action_part(r, defe, dd);
   if (!refine) {
-    /* the first maximum of rbf_q_parts over the candidates, bit for bit, with Q evaluated
+    /* the first maximum of tt__rbf_q_parts over the candidates, bit for bit, with Q evaluated
      * exactly only where the approximate bounds cannot decide (rbf_argmax.h) */
     for (size_t k = 0; k < p->npool; k++) {
       rows[k] = p->pool_da + k * r->features;
@@ -530,10 +543,10 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
       rows[p->npool + k] = p->cand_da + k * r->features;
       frows[p->npool + k] = p->cand_daf + k * f8;
     }
-    rbf_action_part_float(r->features, dd, ddf);
+    tt__rbf_action_part_float(r->features, dd, ddf);
     rows[n - 1] = dd;
     frows[n - 1] = ddf;
-    bi = rbf_argmax_bounded(r, ds, rows, frows, n, NULL, work, &best_q, NULL);
+    bi = tt__rbf_argmax_bounded(r, ds, rows, frows, n, NULL, work, &best_q, NULL);
     const double *v = bi < p->npool ? p->pool_values + bi * p->params
                       : bi < p->npool + p->ncand ? p->cand_values + (bi - p->npool) * p->params
                       : defv;
@@ -545,10 +558,11 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
     memcpy(enc + p->npool * p->m, p->cand_enc, p->ncand * p->m * sizeof(double));
     memcpy(vals + (n - 1) * p->params, defv, p->params * sizeof(double));
     memcpy(enc + (n - 1) * p->m, defe, p->m * sizeof(double));
-    for (size_t k = 0; k < p->npool; k++) qs[k] = rbf_q_parts(r, ds, p->pool_da + k * r->features);
+    for (size_t k = 0; k < p->npool; k++)
+      qs[k] = tt__rbf_q_parts(r, ds, p->pool_da + k * r->features);
     for (size_t k = 0; k < p->ncand; k++)
-      qs[p->npool + k] = rbf_q_parts(r, ds, p->cand_da + k * r->features);
-    qs[n - 1] = rbf_q_parts(r, ds, dd);
+      qs[p->npool + k] = tt__rbf_q_parts(r, ds, p->cand_da + k * r->features);
+    qs[n - 1] = tt__rbf_q_parts(r, ds, dd);
     /* the `starts` best, highest first (ties: lowest index) */
     for (; nt < starts && nt < n; nt++) {
       size_t b = SIZE_MAX;
@@ -568,7 +582,7 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
   char why[128];
   for (size_t t = 0; t < nt; t++) {
     double cur_q = qs[top[t]];
-    if (ttpm_config_from_values(c, vals + top[t] * p->params, why, sizeof why)) continue;
+    if (tt__pm_config_from_values(c, vals + top[t] * p->params, why, sizeof why)) continue;
     tt_config_to_unit(c, unit);
     double step = 0.125;
     for (int64_t round = 0; round < p->set.refine; round++, step *= 0.5) {
@@ -588,15 +602,15 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
           unit[i] = u;
           tt_config_from_unit(c, unit);
           if (tt_space_check(p->target, c, why, sizeof why) == TT_CHECK_INFEASIBLE) continue;
-          rbf_encode_action(c, try_enc);
-          double qa = rbf_q_action(r, ds, try_enc);
+          tt__rbf_encode_action(c, try_enc);
+          double qa = tt__rbf_q_action(r, ds, try_enc);
           evaluated++;
           if (qa > cur_q) {
             cur_q = qa;
             best_u = u;
             if (qa > best_q) {
               best_q = qa;
-              ttpm_config_values(c, best_vals);
+              tt__pm_config_values(c, best_vals);
             }
           }
         }
@@ -604,12 +618,12 @@ static tt_status rbf_predict_ex(const tt_predictor *p, const tt_predictor_query 
       }
     }
   }
-  if (ttpm_config_from_values(out, best_vals, why, sizeof why)) {
-    st = tt_set_error(TT_ERR_INTERNAL, RBF_NAME ": predict: %s", why);
+  if (tt__pm_config_from_values(out, best_vals, why, sizeof why)) {
+    st = tt_set_error(TT_ERR_INTERNAL, TT__RBF_NAME ": predict: %s", why);
     goto done;
   }
   if (res && TT_HAS_FIELD(tt_predictor_result, res, candidates)) {
-    res->expected_cost = rbf_cost_of(p, best_q, q->default_cost);
+    res->expected_cost = tt__rbf_cost_of(p, best_q, q->default_cost);
     res->value = best_q;
     res->distance = NAN;
     res->candidates = evaluated;
@@ -633,110 +647,120 @@ done:
   return st;
 }
 
-static tt_status rbf_predict(const tt_predictor *p, const double *state, tt_config *out,
+static tt_status tt__rbf_predict(const tt_predictor *p, const double *state, tt_config *out,
                              double *expected_cost) {
   tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
   tt_predictor_result r = {.struct_size = sizeof r};
-  tt_status st = rbf_predict_ex(p, &q, out, &r);
+  tt_status st = tt__rbf_predict_ex(p, &q, out, &r);
   if (expected_cost) *expected_cost = st == TT_OK ? r.expected_cost : NAN;
   return st;
 }
 
-static tt_status rbf_estimate(const tt_predictor *p, const tt_predictor_query *q,
+static tt_status tt__rbf_estimate(const tt_predictor *p, const tt_predictor_query *q,
                               const tt_config *config, double *cost) {
   if (!p || !q || !q->state || !config || !cost)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": estimate: NULL argument");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": estimate: NULL argument");
   double *x = malloc((p->d + p->m) * sizeof(double));
-  if (!x) return tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  if (!x) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
   memcpy(x, q->state, p->d * sizeof(double));
-  rbf_encode_action(config, x + p->d);
-  *cost = rbf_cost_of(p, rbf_q(&p->model, x), q->default_cost);
+  tt__rbf_encode_action(config, x + p->d);
+  *cost = tt__rbf_cost_of(p, tt__rbf_q(&p->model, x), q->default_cost);
   free(x);
   return TT_OK;
 }
 
-static tt_status rbf_info(const tt_predictor *p, tt_predictor_info *out) {
-  if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": info: NULL argument");
+static tt_status tt__rbf_info(const tt_predictor *p, tt_predictor_info *out) {
+  if (!p || !out)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": info: NULL argument");
   uint64_t f = p->model.features, dim = p->model.dim, pool = (uint64_t)p->set.pool;
   uint64_t bytes = sizeof *p + f * (dim + 2) * sizeof(double) + (p->d + p->m) * sizeof(double) +
                    p->ncand * (p->params + p->m + f) * sizeof(double) +
                    pool * (p->params + p->m + 1 + f) * sizeof(double) +
-                   (p->ncand + pool) * rbf_f8((uint32_t)f) * sizeof(float) +
-                   ttpm_table_bytes(&p->table);
+                   (p->ncand + pool) * tt__rbf_f8((uint32_t)f) * sizeof(float) +
+                   tt__pm_table_bytes(&p->table);
   if (TT_HAS_FIELD(tt_predictor_info, out, format_version)) {
     out->memory_bytes = bytes;
     out->entries = f;
     out->observations = p->observations;
-    out->format_version = RBF_FORMAT;
+    out->format_version = TT__RBF_FORMAT;
   }
   return TT_OK;
 }
 
 /* ---- files ---- */
 
-static tt_status rbf_save(const tt_predictor *p, const char *path) {
-  if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": save: NULL argument");
-  char *settings = rbf_settings_json(&p->set);
-  ttpm_header h = {.kind = RBF_NAME, .plugin_version = RBF_VERSION, .state_space = p->state_space,
-                   .state_dim = p->d, .state_names = p->names, .target = p->signature,
-                   .settings = settings};
-  ttpm_writer w = {0};
-  const rbf_model *r = &p->model;
-  ttpm_put_header(&w, &h);
-  ttpm_put_u64(&w, p->seed);
-  ttpm_put_u64(&w, p->params);
-  ttpm_put_u64(&w, p->m);
-  ttpm_put_u64(&w, r->features);
-  ttpm_put_u64(&w, r->updates);
-  ttpm_put_u64(&w, p->observations);
-  ttpm_put_f64s(&w, r->centres, (size_t)r->features * r->dim);
-  ttpm_put_f64s(&w, r->theta, r->features);
-  if (p->set.pool_source == RBF_POOL_STATES) {
-    ttpm_put_u64(&w, 0);  /* the pool is rebuilt from the table on load */
-    ttpm_table_put(&w, &p->table);
+static tt_status tt__rbf_save(const tt_predictor *p, const char *path) {
+  if (!p || !path)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": save: NULL argument");
+  char *settings = tt__rbf_settings_json(&p->set);
+  tt__pm_header h = {.kind = TT__RBF_NAME,
+                     .plugin_version = TT__RBF_VERSION,
+                     .state_space = p->state_space,
+                     .state_dim = p->d,
+                     .state_names = p->names,
+                     .target = p->signature,
+                     .settings = settings};
+  tt__pm_writer w = {0};
+  const tt__rbf_model *r = &p->model;
+  tt__pm_put_header(&w, &h);
+  tt__pm_put_u64(&w, p->seed);
+  tt__pm_put_u64(&w, p->params);
+  tt__pm_put_u64(&w, p->m);
+  tt__pm_put_u64(&w, r->features);
+  tt__pm_put_u64(&w, r->updates);
+  tt__pm_put_u64(&w, p->observations);
+  tt__pm_put_f64s(&w, r->centres, (size_t)r->features * r->dim);
+  tt__pm_put_f64s(&w, r->theta, r->features);
+  if (p->set.pool_source == TT__RBF_POOL_STATES) {
+    tt__pm_put_u64(&w, 0);  /* the pool is rebuilt from the table on load */
+    tt__pm_table_put(&w, &p->table);
   } else {
-    ttpm_put_u64(&w, p->npool);
-    ttpm_put_f64s(&w, p->pool_values, p->npool * p->params);
-    ttpm_put_f64s(&w, p->pool_reward, p->npool);
+    tt__pm_put_u64(&w, p->npool);
+    tt__pm_put_f64s(&w, p->pool_values, p->npool * p->params);
+    tt__pm_put_f64s(&w, p->pool_reward, p->npool);
   }
-  tt_status st = settings ? ttpm_save(RBF_NAME, path, RBF_FORMAT, &w)
-                          : tt_set_error(TT_ERR_OUT_OF_MEMORY, RBF_NAME ": out of memory");
+  tt_status st = settings ? tt__pm_save(TT__RBF_NAME, path, TT__RBF_FORMAT, &w)
+                          : tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__RBF_NAME ": out of memory");
   tt_free(settings);
   free(w.data);
   return st;
 }
 
-static tt_status rbf_load(tt_predictor *p, const char *path) {
-  if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": load: NULL argument");
+static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
+  if (!p || !path)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": load: NULL argument");
   unsigned char *data;
   size_t len;
   uint32_t version;
-  tt_status st = ttpm_load(RBF_NAME, RBF_VERSION, path, RBF_FORMAT, &data, &len, &version);
+  tt_status st =
+      tt__pm_load(TT__RBF_NAME, TT__RBF_VERSION, path, TT__RBF_FORMAT, &data, &len, &version);
   if (st != TT_OK) return st;
-  ttpm_reader rd = {.data = data, .len = len, .path = path};
-  ttpm_header h;
-  if (ttpm_get_header(&rd, &h)) {
-    st = tt_set_error(TT_ERR_PARSE, RBF_NAME ": model %s", rd.err);
+  tt__pm_reader rd = {.data = data, .len = len, .path = path};
+  tt__pm_header h;
+  if (tt__pm_get_header(&rd, &h)) {
+    st = tt_set_error(TT_ERR_PARSE, TT__RBF_NAME ": model %s", rd.err);
     free(data);
     return st;
   }
   char diff[400];
   st = TT_OK;
-  if (strcmp(h.kind, RBF_NAME)) {
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": model %s was written by %s %s, not by "
-                      RBF_NAME " (load it with --plugin %s)", path, h.kind, h.plugin_version, h.kind);
+  if (strcmp(h.kind, TT__RBF_NAME)) {
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                      TT__RBF_NAME ": model %s was written by %s %s, not by " TT__RBF_NAME
+                                   " (load it with --plugin %s)",
+                      path, h.kind, h.plugin_version, h.kind);
   } else if (h.state_dim != p->d || strcmp(h.state_space, p->state_space)) {
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": model %s is for states \"%s\" of %u "
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": model %s is for states \"%s\" of %u "
                       "values, but this predictor gets states \"%s\" of %u values", path,
                       h.state_space, h.state_dim, p->state_space, p->d);
   } else if (strcmp(h.target, p->signature)) {
-    ttpm_signature_diff(h.target, p->signature, diff, sizeof diff);
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, RBF_NAME ": model %s predicts configurations of "
+    tt__pm_signature_diff(h.target, p->signature, diff, sizeof diff);
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": model %s predicts configurations of "
                       "another parameter space: the file's %s; this one's %s (first difference: "
                       "%s)", path, h.target, p->signature, diff);
   }
   if (st != TT_OK) {
-    ttpm_header_free(&h);
+    tt__pm_header_free(&h);
     free(data);
     return st;
   }
@@ -746,110 +770,121 @@ static tt_status rbf_load(tt_predictor *p, const char *path) {
   tmp.pool_values = tmp.pool_enc = tmp.pool_reward = tmp.pool_da = NULL;
   tmp.cand_daf = tmp.pool_daf = NULL;
   tmp.phi = tmp.x = NULL;
-  ttpm_table_init(&tmp.table, p->d, p->params, 0);
+  tt__pm_table_init(&tmp.table, p->d, p->params, 0);
   memset(&tmp.model, 0, sizeof tmp.model);
-  tt_config *sc = tt_config_create(rbf_settings);
+  tt_config *sc = tt_config_create(tt__rbf_settings);
   if (!sc || tt_config_from_json(sc, h.settings, path) != TT_OK)
-    ttpm_fail(&rd, "settings: %s", sc ? tt_last_error() : "out of memory");
+    tt__pm_fail(&rd, "settings: %s", sc ? tt_last_error() : "out of memory");
   else
-    rbf_read_settings(sc, &tmp.set);
+    tt__rbf_read_settings(sc, &tmp.set);
   tt_config_destroy(sc);
-  if (version < 2) tmp.set.pool_source = RBF_POOL_REWARDS;  /* version 1 had no state table */
-  tmp.seed = ttpm_get_u64(&rd, "the seed");
-  uint64_t params = ttpm_get_u64(&rd, "the parameter count");
-  uint64_t m = ttpm_get_u64(&rd, "the action dimension");
-  uint64_t f = ttpm_get_u64(&rd, "the feature count");
-  uint64_t updates = ttpm_get_u64(&rd, "the update count");
-  uint64_t obs = ttpm_get_u64(&rd, "the observation count");
+  if (version < 2) tmp.set.pool_source = TT__RBF_POOL_REWARDS;  /* version 1 had no state table */
+  tmp.seed = tt__pm_get_u64(&rd, "the seed");
+  uint64_t params = tt__pm_get_u64(&rd, "the parameter count");
+  uint64_t m = tt__pm_get_u64(&rd, "the action dimension");
+  uint64_t f = tt__pm_get_u64(&rd, "the feature count");
+  uint64_t updates = tt__pm_get_u64(&rd, "the update count");
+  uint64_t obs = tt__pm_get_u64(&rd, "the observation count");
   if (!rd.err[0] && (params != p->params || m != p->m))
-    ttpm_fail(&rd, "%llu parameters / %llu action coordinates, the target space has %zu / %u",
+    tt__pm_fail(&rd, "%llu parameters / %llu action coordinates, the target space has %zu / %u",
               (unsigned long long)params, (unsigned long long)m, p->params, p->m);
-  if (!rd.err[0] && f != rbf_feature_count(&tmp))
-    ttpm_fail(&rd, "feature count %llu does not match the settings (%u)", (unsigned long long)f,
-              rbf_feature_count(&tmp));
+  if (!rd.err[0] && f != tt__rbf_feature_count(&tmp))
+    tt__pm_fail(&rd, "feature count %llu does not match the settings (%u)", (unsigned long long)f,
+              tt__rbf_feature_count(&tmp));
   if (!rd.err[0] && f * (p->d + p->m + 1) * 8 > rd.len - rd.pos)
-    ttpm_fail(&rd, "file cut short: %llu features need %llu bytes, %zu left", (unsigned long long)f,
-              (unsigned long long)(f * (p->d + p->m + 1) * 8), rd.len - rd.pos);
-  if (!rd.err[0] && rbf_alloc(&tmp)) ttpm_fail(&rd, "out of memory");
+    tt__pm_fail(&rd, "file cut short: %llu features need %llu bytes, %zu left",
+                (unsigned long long)f, (unsigned long long)(f * (p->d + p->m + 1) * 8),
+                rd.len - rd.pos);
+  if (!rd.err[0] && tt__rbf_alloc(&tmp)) tt__pm_fail(&rd, "out of memory");
   if (!rd.err[0]) {
-    ttpm_get_f64s(&rd, tmp.model.centres, (size_t)f * tmp.model.dim, "the centres");
-    ttpm_get_f64s(&rd, tmp.model.theta, (size_t)f, "theta");
+    tt__pm_get_f64s(&rd, tmp.model.centres, (size_t)f * tmp.model.dim, "the centres");
+    tt__pm_get_f64s(&rd, tmp.model.theta, (size_t)f, "theta");
     tmp.model.updates = updates;
     for (size_t i = 0; !rd.err[0] && i < (size_t)f * tmp.model.dim; i++)
-      if (!isfinite(tmp.model.centres[i])) ttpm_fail(&rd, "centre coordinate %zu is not finite", i);
+      if (!isfinite(tmp.model.centres[i]))
+        tt__pm_fail(&rd, "centre coordinate %zu is not finite", i);
     for (size_t i = 0; !rd.err[0] && i < (size_t)f; i++)
-      if (!isfinite(tmp.model.theta[i])) ttpm_fail(&rd, "theta[%zu] is not finite", i);
+      if (!isfinite(tmp.model.theta[i])) tt__pm_fail(&rd, "theta[%zu] is not finite", i);
     for (size_t k = 0; !rd.err[0] && k < tmp.ncand; k++) {  /* the file's centres */
-      rbf_action_part(&tmp.model, tmp.cand_enc + k * p->m, tmp.cand_da + k * f);
-      rbf_action_part_float((uint32_t)f, tmp.cand_da + k * f, tmp.cand_daf + k * rbf_f8((uint32_t)f));
+      tt__rbf_action_part(&tmp.model, tmp.cand_enc + k * p->m, tmp.cand_da + k * f);
+      tt__rbf_action_part_float((uint32_t)f, tmp.cand_da + k * f,
+                                tmp.cand_daf + k * tt__rbf_f8((uint32_t)f));
     }
   }
-  uint64_t npool = ttpm_get_count(&rd, (uint64_t)tmp.set.pool, (p->params + 1) * 8, "pool entries");
+  uint64_t npool =
+      tt__pm_get_count(&rd, (uint64_t)tmp.set.pool, (p->params + 1) * 8, "pool entries");
   tt_config *c = tt_config_create(p->target);
   char why[256];
   for (uint64_t k = 0; !rd.err[0] && k < npool; k++) {
     double *v = tmp.pool_values + k * p->params;
-    ttpm_get_f64s(&rd, v, p->params, "a pool configuration");
-    if (!rd.err[0] && (!c || ttpm_config_from_values(c, v, why, sizeof why)))
-      ttpm_fail(&rd, "pool configuration %llu: %s", (unsigned long long)k, c ? why : "out of memory");
+    tt__pm_get_f64s(&rd, v, p->params, "a pool configuration");
+    if (!rd.err[0] && (!c || tt__pm_config_from_values(c, v, why, sizeof why)))
+      tt__pm_fail(&rd, "pool configuration %llu: %s", (unsigned long long)k,
+                  c ? why : "out of memory");
     if (!rd.err[0]) {
-      rbf_encode_action(c, tmp.pool_enc + k * p->m);
-      rbf_action_part(&tmp.model, tmp.pool_enc + k * p->m, tmp.pool_da + k * f);
-      rbf_action_part_float((uint32_t)f, tmp.pool_da + k * f, tmp.pool_daf + k * rbf_f8((uint32_t)f));
+      tt__rbf_encode_action(c, tmp.pool_enc + k * p->m);
+      tt__rbf_action_part(&tmp.model, tmp.pool_enc + k * p->m, tmp.pool_da + k * f);
+      tt__rbf_action_part_float((uint32_t)f, tmp.pool_da + k * f,
+                                tmp.pool_daf + k * tt__rbf_f8((uint32_t)f));
     }
   }
   if (!rd.err[0]) {
-    ttpm_get_f64s(&rd, tmp.pool_reward, (size_t)npool, "the pool rewards");
+    tt__pm_get_f64s(&rd, tmp.pool_reward, (size_t)npool, "the pool rewards");
     tmp.npool = (size_t)npool;
-    /* a pool holds positive rewards only (rbf_learn; +inf where a cost underflows); a NaN
+    /* a pool holds positive rewards only (tt__rbf_learn; +inf where a cost underflows); a NaN
      * would never compare lower and so never leave the pool */
     for (size_t k = 0; !rd.err[0] && k < tmp.npool; k++)
       if (!(tmp.pool_reward[k] > 0))
-        ttpm_fail(&rd, "pool reward %zu is %g, expected a positive number", k, tmp.pool_reward[k]);
+        tt__pm_fail(&rd, "pool reward %zu is %g, expected a positive number", k,
+                    tmp.pool_reward[k]);
   }
-  if (!rd.err[0] && tmp.set.pool_source == RBF_POOL_STATES) {
-    if (npool) ttpm_fail(&rd, "%llu pool entries stored beside the state table (poolSource states "
-                         "stores none)", (unsigned long long)npool);
-    if (!rd.err[0] && !ttpm_table_get(&rd, &tmp.table, p->target) && rbf_pool_from_states(&tmp))
-      ttpm_fail(&rd, "out of memory");
+  if (!rd.err[0] && tmp.set.pool_source == TT__RBF_POOL_STATES) {
+    if (npool)
+      tt__pm_fail(&rd,
+                  "%llu pool entries stored beside the state table (poolSource states "
+                  "stores none)",
+                  (unsigned long long)npool);
+    if (!rd.err[0] && !tt__pm_table_get(&rd, &tmp.table, p->target) &&
+        tt__rbf_pool_from_states(&tmp))
+      tt__pm_fail(&rd, "out of memory");
   }
   tt_config_destroy(c);
   if (!rd.err[0] && rd.pos != rd.len)
-    ttpm_fail(&rd, "%zu bytes after the %s", rd.len - rd.pos,
-              tmp.set.pool_source == RBF_POOL_STATES ? "state table" : "pool");
-  ttpm_header_free(&h);
+    tt__pm_fail(&rd, "%zu bytes after the %s", rd.len - rd.pos,
+              tmp.set.pool_source == TT__RBF_POOL_STATES ? "state table" : "pool");
+  tt__pm_header_free(&h);
   free(data);
   if (rd.err[0]) {
-    rbf_free_model_parts(&tmp);
-    return tt_set_error(TT_ERR_PARSE, RBF_NAME ": model %s", rd.err);
+    tt__rbf_free_model_parts(&tmp);
+    return tt_set_error(TT_ERR_PARSE, TT__RBF_NAME ": model %s", rd.err);
   }
   tmp.observations = obs;
-  rbf_free_model_parts(p);
+  tt__rbf_free_model_parts(p);
   *p = tmp;
   return TT_OK;
 }
 
 /* ---- plugin ---- */
 
-static const tt_predictor_iface rbf_iface = {
+static const tt_predictor_iface tt__rbf_iface = {
   .struct_size = sizeof(tt_predictor_iface),
-  .space = rbf_space,
-  .create = rbf_create,
-  .observe = rbf_observe,
-  .predict = rbf_predict,
-  .save = rbf_save,
-  .load = rbf_load,
-  .destroy = rbf_destroy,
-  .create_ex = rbf_create_ex,
-  .observe_ex = rbf_observe_ex,
-  .predict_ex = rbf_predict_ex,
-  .info = rbf_info,
-  .estimate = rbf_estimate,
+  .space = tt__rbf_space,
+  .create = tt__rbf_create,
+  .observe = tt__rbf_observe,
+  .predict = tt__rbf_predict,
+  .save = tt__rbf_save,
+  .load = tt__rbf_load,
+  .destroy = tt__rbf_destroy,
+  .create_ex = tt__rbf_create_ex,
+  .observe_ex = tt__rbf_observe_ex,
+  .predict_ex = tt__rbf_predict_ex,
+  .info = tt__rbf_info,
+  .estimate = tt__rbf_estimate,
 };
 
-static tt_status rbf_init(const tt_host *host) {
+static tt_status tt__rbf_init(const tt_host *host) {
   (void)host;
-  tt_space *s = rbf_settings = tt_space_create(RBF_NAME, RBF_VERSION);
+  tt_space *s = tt__rbf_settings = tt_space_create(TT__RBF_NAME, TT__RBF_VERSION);
   int ok = s != NULL;
   ok = ok && tt_space_add_int(s, "features", 0, 1 << 20, 0, "RBF features; 0: 3.5 x (state "
                               "values + parameters), the thesis' rule (100 for its 28)") >= 0;
@@ -860,14 +895,14 @@ static tt_status rbf_init(const tt_host *host) {
                                 "has halved, alpha / (1 + t / decay); 0: constant") >= 0;
   ok = ok && tt_space_add_int(s, "epochs", 1, 10000, 10, "passes over offline data (a tuning "
                               "DB), each in a fresh shuffled order") >= 0;
-  ok = ok && tt_space_add_nom_string(s, "reward", rbf_reward_names, 2, 1, "inverse: R = 1/cost "
+  ok = ok && tt_space_add_nom_string(s, "reward", tt__rbf_reward_names, 2, 1, "inverse: R = 1/cost "
                                      "(thesis); relative: R = default cost / cost (the "
                                      "validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 0, "Latin-hypercube candidate "
                               "actions of the argmax (0: the pool only, the validated default)") >= 0;
   ok = ok && tt_space_add_int(s, "poolSize", 0, 1 << 20, 256, "observed configurations kept "
                               "as candidates") >= 0;
-  ok = ok && tt_space_add_nom_string(s, "poolSource", rbf_pool_names, 2, 1, "rewards: the "
+  ok = ok && tt_space_add_nom_string(s, "poolSource", tt__rbf_pool_names, 2, 1, "rewards: the "
                                      "poolSize configurations with the highest single reward; "
                                      "states: each observed state's best configuration (lowest "
                                      "mean cost), those best in most states first (the "
@@ -878,19 +913,19 @@ static tt_status rbf_init(const tt_host *host) {
                               "starts from") >= 0;
   if (!ok) {
     tt_space_destroy(s);
-    rbf_settings = NULL;
-    return tt_set_error(TT_ERR_INTERNAL, RBF_NAME ": cannot build the settings space");
+    tt__rbf_settings = NULL;
+    return tt_set_error(TT_ERR_INTERNAL, TT__RBF_NAME ": cannot build the settings space");
   }
   return TT_OK;
 }
 
-static void rbf_deinit(void) {
-  tt_space_destroy(rbf_settings);
-  rbf_settings = NULL;
+static void tt__rbf_deinit(void) {
+  tt_space_destroy(tt__rbf_settings);
+  tt__rbf_settings = NULL;
 }
 
-static const void *rbf_get_interface(const char *id) {
-  return strcmp(id, TT_PREDICTOR_INTERFACE_ID) == 0 ? &rbf_iface : NULL;
+static const void *tt__rbf_get_interface(const char *id) {
+  return strcmp(id, TT_PREDICTOR_INTERFACE_ID) == 0 ? &tt__rbf_iface : NULL;
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
@@ -898,10 +933,10 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
   .abi_major = TT_ABI_MAJOR,
   .abi_minor = TT_ABI_MINOR,
   .kind = TT_KIND_PREDICTOR,
-  .name = RBF_NAME,
-  .version = RBF_VERSION,
+  .name = TT__RBF_NAME,
+  .version = TT__RBF_VERSION,
   .description = "RBF features with myopic Greedy-GQ: argmax_a theta.phi(s, a) (thesis 3.3.2)",
-  .init = rbf_init,
-  .deinit = rbf_deinit,
-  .get_interface = rbf_get_interface,
+  .init = tt__rbf_init,
+  .deinit = tt__rbf_deinit,
+  .get_interface = tt__rbf_get_interface,
 };

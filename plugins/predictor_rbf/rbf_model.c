@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-uint32_t rbf_action_dims(const tt_space *space) {
+uint32_t tt__rbf_action_dims(const tt_space *space) {
   uint32_t m = 0;
   for (size_t i = 0; i < tt_space_count(space); i++) {
     size_t k = tt_space_type(space, i) == TT_PARAM_NOM ? tt_space_nom_count(space, i) : 1;
@@ -16,7 +16,7 @@ uint32_t rbf_action_dims(const tt_space *space) {
   return m;
 }
 
-void rbf_encode_action(const tt_config *config, double *out) {
+void tt__rbf_encode_action(const tt_config *config, double *out) {
   const tt_space *space = tt_config_space(config);
   size_t n = tt_space_count(space);
   double unit[512], *u = n <= 512 ? unit : malloc(n * sizeof *u);
@@ -40,20 +40,20 @@ void rbf_encode_action(const tt_config *config, double *out) {
 }
 
 /* Uniform double in [0, 1) with 53 random bits. */
-static double rbf_uniform(tt__pcg32 *rng) {
+static double tt__rbf_uniform(tt__pcg32 *rng) {
   uint64_t hi = tt__pcg32_next(rng), lo = tt__pcg32_next(rng);
   return (double)(((hi << 32) | lo) >> 11) * 0x1.0p-53;
 }
 
 /* Uniform integer in [0, n), n >= 1, without modulo bias. */
-static uint32_t rbf_below(tt__pcg32 *rng, uint32_t n) {
+static uint32_t tt__rbf_below(tt__pcg32 *rng, uint32_t n) {
   uint32_t limit = UINT32_MAX - UINT32_MAX % n, x;
   do x = tt__pcg32_next(rng);
   while (x >= limit);
   return x % n;
 }
 
-void rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out) {
+void tt__rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out) {
   tt__pcg32 rng;
   tt__pcg32_seed(&rng, seed, 0x7262666c6873ull); /* "rbflhs" */
   uint32_t *perm = malloc((n ? n : 1) * sizeof *perm);
@@ -64,17 +64,17 @@ void rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out) {
   for (uint32_t j = 0; j < dim; j++) {
     for (uint32_t k = 0; k < n; k++) perm[k] = k;
     for (uint32_t k = n; k > 1; k--) {  /* Fisher-Yates */
-      uint32_t r = rbf_below(&rng, k), t = perm[k - 1];
+      uint32_t r = tt__rbf_below(&rng, k), t = perm[k - 1];
       perm[k - 1] = perm[r];
       perm[r] = t;
     }
     for (uint32_t k = 0; k < n; k++)
-      out[(size_t)k * dim + j] = (perm[k] + rbf_uniform(&rng)) / n;
+      out[(size_t)k * dim + j] = (perm[k] + tt__rbf_uniform(&rng)) / n;
   }
   free(perm);
 }
 
-int rbf_model_init(rbf_model *r, uint32_t d, uint32_t m, uint32_t features, double width,
+int tt__rbf_model_init(tt__rbf_model *r, uint32_t d, uint32_t m, uint32_t features, double width,
                    double alpha, double decay, uint64_t seed) {
   memset(r, 0, sizeof *r);
   r->d = d;
@@ -87,20 +87,20 @@ int rbf_model_init(rbf_model *r, uint32_t d, uint32_t m, uint32_t features, doub
   r->centres = malloc((size_t)features * r->dim * sizeof(double) + 1);
   r->theta = calloc(features ? features : 1, sizeof(double));
   if (!r->centres || !r->theta) {
-    rbf_model_free(r);
+    tt__rbf_model_free(r);
     return -1;
   }
-  rbf_lhs(seed, features, r->dim, r->centres);
+  tt__rbf_lhs(seed, features, r->dim, r->centres);
   return 0;
 }
 
-void rbf_model_free(rbf_model *r) {
+void tt__rbf_model_free(tt__rbf_model *r) {
   free(r->centres);
   free(r->theta);
   r->centres = r->theta = NULL;
 }
 
-void rbf_features(const rbf_model *r, const double *x, double *phi) {
+void tt__rbf_features(const tt__rbf_model *r, const double *x, double *phi) {
   for (uint32_t i = 0; i < r->features; i++) {
     const double *c = r->centres + (size_t)i * r->dim;
     double s = 0;
@@ -109,7 +109,7 @@ void rbf_features(const rbf_model *r, const double *x, double *phi) {
   }
 }
 
-double rbf_q(const rbf_model *r, const double *x) {
+double tt__rbf_q(const tt__rbf_model *r, const double *x) {
   double q = 0;
   for (uint32_t i = 0; i < r->features; i++) {
     const double *c = r->centres + (size_t)i * r->dim;
@@ -120,8 +120,8 @@ double rbf_q(const rbf_model *r, const double *x) {
   return q;
 }
 
-void rbf_update(rbf_model *r, const double *x, double reward, double *phi) {
-  rbf_features(r, x, phi);
+void tt__rbf_update(tt__rbf_model *r, const double *x, double reward, double *phi) {
+  tt__rbf_features(r, x, phi);
   double q = 0;
   for (uint32_t i = 0; i < r->features; i++) q += r->theta[i] * phi[i];
   double a = r->decay > 0 ? r->alpha / (1.0 + (double)r->updates / r->decay) : r->alpha;
@@ -130,7 +130,7 @@ void rbf_update(rbf_model *r, const double *x, double reward, double *phi) {
   r->updates++;
 }
 
-void rbf_state_part(const rbf_model *r, const double *state, double *ds) {
+void tt__rbf_state_part(const tt__rbf_model *r, const double *state, double *ds) {
   for (uint32_t i = 0; i < r->features; i++) {
     const double *c = r->centres + (size_t)i * r->dim;
     double s = 0;
@@ -139,7 +139,7 @@ void rbf_state_part(const rbf_model *r, const double *state, double *ds) {
   }
 }
 
-void rbf_action_part(const rbf_model *r, const double *a, double *da) {
+void tt__rbf_action_part(const tt__rbf_model *r, const double *a, double *da) {
   for (uint32_t i = 0; i < r->features; i++) {
     const double *c = r->centres + (size_t)i * r->dim + r->d;
     double s = 0;
@@ -148,13 +148,13 @@ void rbf_action_part(const rbf_model *r, const double *a, double *da) {
   }
 }
 
-double rbf_q_parts(const rbf_model *r, const double *ds, const double *da) {
+double tt__rbf_q_parts(const tt__rbf_model *r, const double *ds, const double *da) {
   double q = 0, nw = -r->width;
   for (uint32_t i = 0; i < r->features; i++) q += r->theta[i] * exp(nw * sqrt(ds[i] + da[i]));
   return q;
 }
 
-double rbf_q_action(const rbf_model *r, const double *ds, const double *a) {
+double tt__rbf_q_action(const tt__rbf_model *r, const double *ds, const double *a) {
   double q = 0, nw = -r->width;
   for (uint32_t i = 0; i < r->features; i++) {
     const double *c = r->centres + (size_t)i * r->dim + r->d;

@@ -24,9 +24,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-typedef struct rbf_model {
+typedef struct tt__rbf_model {
   uint32_t d;            /* state coordinates */
-  uint32_t m;            /* action coordinates (rbf_action_dims) */
+  uint32_t m;            /* action coordinates (tt__rbf_action_dims) */
   uint32_t dim;          /* d + m */
   uint32_t features;     /* F */
   double width;          /* omega, the same for every feature */
@@ -35,42 +35,42 @@ typedef struct rbf_model {
   uint64_t updates;      /* t */
   double *centres;       /* F x dim, row-major */
   double *theta;         /* F */
-} rbf_model;
+} tt__rbf_model;
 
 /* Action coordinates of a space's configurations. */
-uint32_t rbf_action_dims(const tt_space *space);
-/* Writes enc(config) (rbf_action_dims values). */
-void rbf_encode_action(const tt_config *config, double *out);
+uint32_t tt__rbf_action_dims(const tt_space *space);
+/* Writes enc(config) (tt__rbf_action_dims values). */
+void tt__rbf_encode_action(const tt_config *config, double *out);
 
 /* Allocates centres and theta (theta = 0) for F features over d + m coordinates; the centres
  * are a Latin hypercube in [0,1]^(d+m) drawn from `seed`. 0, or -1 when out of memory. */
-int rbf_model_init(rbf_model *r, uint32_t d, uint32_t m, uint32_t features, double width,
+int tt__rbf_model_init(tt__rbf_model *r, uint32_t d, uint32_t m, uint32_t features, double width,
                    double alpha, double decay, uint64_t seed);
-void rbf_model_free(rbf_model *r);
+void tt__rbf_model_free(tt__rbf_model *r);
 
 /* phi(x) into `phi` (F values). */
-void rbf_features(const rbf_model *r, const double *x, double *phi);
+void tt__rbf_features(const tt__rbf_model *r, const double *x, double *phi);
 /* theta . phi(x). */
-double rbf_q(const rbf_model *r, const double *x);
+double tt__rbf_q(const tt__rbf_model *r, const double *x);
 /* One update towards reward R at x; `phi` is F scratch values. */
-void rbf_update(rbf_model *r, const double *x, double reward, double *phi);
+void tt__rbf_update(tt__rbf_model *r, const double *x, double reward, double *phi);
 
 /* The argmax's split of ||x - c_i||^2 = ds[i] + da[i] into the state part ds (once per
  * predict) and the action part da (once per candidate action, kept with the candidate:
  * predictor_rbf caches it per pool entry, so that a predict over the pool costs one sqrt and
- * one exp per candidate and feature, not the m-term sums too). rbf_q_action and rbf_q_parts
- * sum in the same order, so they agree bit for bit; rbf_q sums all d + m terms in one chain,
+ * one exp per candidate and feature, not the m-term sums too). tt__rbf_q_action and tt__rbf_q_parts
+ * sum in the same order, so they agree bit for bit; tt__rbf_q sums all d + m terms in one chain,
  * so it agrees with them within a few ulp of each distance. */
 /* Squared distances of the state part of x to every centre: ds[i] (F values). */
-void rbf_state_part(const rbf_model *r, const double *state, double *ds);
+void tt__rbf_state_part(const tt__rbf_model *r, const double *state, double *ds);
 /* Squared distances of the action coordinates `a` to every centre's action part: da[i]. */
-void rbf_action_part(const rbf_model *r, const double *a, double *da);
+void tt__rbf_action_part(const tt__rbf_model *r, const double *a, double *da);
 /* Q given the state part ds and the action part da. */
-double rbf_q_parts(const rbf_model *r, const double *ds, const double *da);
-/* Q of the action coordinates `a` given the state part ds (rbf_q_parts with da computed). */
-double rbf_q_action(const rbf_model *r, const double *ds, const double *a);
+double tt__rbf_q_parts(const tt__rbf_model *r, const double *ds, const double *da);
+/* Q of the action coordinates `a` given the state part ds (tt__rbf_q_parts with da computed). */
+double tt__rbf_q_action(const tt__rbf_model *r, const double *ds, const double *a);
 
 /* n points of a Latin hypercube in [0,1]^dim into out (n x dim), from `seed`. */
-void rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out);
+void tt__rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out);
 
 #endif /* TT_PREDICTOR_RBF_MODEL_H */

@@ -1,6 +1,6 @@
 /* The argmax's approximate Q of one candidate (rbf_qbound.h), compiled once per instruction
- * set by meson.build (RBF_ISA: base, the target's baseline, SSE2 on x86-64; avx2, with FMA,
- * on x86-64). Everything here is static except the copy's table (rbf_kernels_<isa>), so the
+ * set by meson.build (TT__RBF_ISA: base, the target's baseline, SSE2 on x86-64; avx2, with FMA,
+ * on x86-64). Everything here is static except the copy's table (tt__rbf_kernels_<isa>), so the
  * copies cannot be mixed up by the linker; rbf_argmax.c picks one at run time, only where
  * the CPU reports the features.
  *
@@ -9,8 +9,8 @@
  * partial sums (a reduction into one accumulator is not vectorised without -ffast-math).
  * The coarse level (the AVX2 copy only): single precision, 8 lanes of AVX2+FMA.
  *
- * The result may differ between the copies and from rbf_q_parts: the caller bounds the
- * difference (rbf_argmax.h) and recomputes with rbf_q_parts itself the candidates that the
+ * The result may differ between the copies and from tt__rbf_q_parts: the caller bounds the
+ * difference (rbf_argmax.h) and recomputes with tt__rbf_q_parts itself the candidates that the
  * bound cannot separate, so the answer never depends on which copy ran. */
 #include "rbf_qbound.h"
 
@@ -18,16 +18,16 @@
 #include <stdint.h>
 #include <string.h>
 
-#ifndef RBF_ISA
+#ifndef TT__RBF_ISA
 #  error "compile with -DRBF_ISA=base or avx2"
 #endif
-#define RBF_CAT2(a, b) a##b
-#define RBF_CAT(a, b) RBF_CAT2(a, b)
+#define TT__RBF_CAT2(a, b) a##b
+#define TT__RBF_CAT(a, b) TT__RBF_CAT2(a, b)
 #if defined(__x86_64__) && defined(__AVX2__) && defined(__FMA__)
-#  define RBF_COPY_AVX2 1
+#  define TT__RBF_COPY_AVX2 1
 #  include <immintrin.h>
 #else
-#  define RBF_COPY_AVX2 0
+#  define TT__RBF_COPY_AVX2 0
 #endif
 
 /* exp(x) for x <= 0, relative error below 1e-14 for x >= -708 (x below is taken as -708: the
@@ -35,7 +35,7 @@
  * reduction x = k ln2 + r, |r| <= ln2/2 (k from the 1.5 * 2^52 rounding trick, so it is an
  * integer in the low bits of t), Taylor polynomial of degree 11 (remainder r^12/12! < 7e-15),
  * scaled by 2^k built in the exponent field (k + 1023 in [1, 1023]). */
-static inline double rbf_exp_neg(double x) {
+static inline double tt__rbf_exp_neg(double x) {
   x = x < -708.0 ? -708.0 : x;
   x = x > 0.0 ? 0.0 : x;
   const double shift = 0x1.8p52;
@@ -63,11 +63,11 @@ static inline double rbf_exp_neg(double x) {
   return p * scale;
 }
 
-/* The fine level (rbf_qbound_fn). */
-static void rbf_qbound(const double *restrict theta, const double *restrict ds,
+/* The fine level (tt__rbf_qbound_fn). */
+static void tt__rbf_qbound(const double *restrict theta, const double *restrict ds,
                        const double *restrict da, uint32_t f, double nw, double *restrict e,
                        double *q, double *qabs) {
-  for (uint32_t i = 0; i < f; i++) e[i] = rbf_exp_neg(nw * sqrt(ds[i] + da[i]));
+  for (uint32_t i = 0; i < f; i++) e[i] = tt__rbf_exp_neg(nw * sqrt(ds[i] + da[i]));
   double s[8] = {0}, a[8] = {0};
   uint32_t i = 0;
   for (; i + 8 <= f; i += 8)
@@ -85,8 +85,8 @@ static void rbf_qbound(const double *restrict theta, const double *restrict ds,
   *qabs = ((a[0] + a[4]) + (a[1] + a[5])) + ((a[2] + a[6]) + (a[3] + a[7]));
 }
 
-#if RBF_COPY_AVX2
-/* The coarse level (rbf_qcoarse_fn): single precision, 8 lanes of AVX2+FMA, only in the
+#if TT__RBF_COPY_AVX2
+/* The coarse level (tt__rbf_qcoarse_fn): single precision, 8 lanes of AVX2+FMA, only in the
  * AVX2 copy.
  *
  * Per feature: s = ds + da (the float copies of both), x = nw sqrt(s), e = exp(x) by a
@@ -97,7 +97,7 @@ static void rbf_qbound(const double *restrict theta, const double *restrict ds,
  * which make e's relative error grow with |x|. */
 
 /* exp(x) for 8 floats x <= 0 (x below -86 taken as -86). */
-static inline __m256 rbf_exp8(__m256 x) {
+static inline __m256 tt__rbf_exp8(__m256 x) {
   x = _mm256_max_ps(x, _mm256_set1_ps(-86.0f));
   x = _mm256_min_ps(x, _mm256_setzero_ps());
   const __m256 shift = _mm256_set1_ps(0x1.8p23f);  /* k lands in t's low mantissa bits */
@@ -118,39 +118,39 @@ static inline __m256 rbf_exp8(__m256 x) {
   return _mm256_mul_ps(p, _mm256_castsi256_ps(sc));
 }
 
-static inline double rbf_hsum8(__m256 v) {
+static inline double tt__rbf_hsum8(__m256 v) {
   __m128 a = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
   a = _mm_add_ps(a, _mm_movehl_ps(a, a));
   a = _mm_add_ss(a, _mm_shuffle_ps(a, a, 1));
   return (double)_mm_cvtss_f32(a);
 }
 
-static void rbf_qcoarse(const float *thetaf, const float *dsf, const float *daf, uint32_t f8,
+static void tt__rbf_qcoarse(const float *thetaf, const float *dsf, const float *daf, uint32_t f8,
                         float nw, double *q, double *qabs, double *qx) {
   __m256 s = _mm256_setzero_ps(), a = s, b = s, nw8 = _mm256_set1_ps(nw);
   const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
   for (uint32_t i = 0; i < f8; i += 8) {
     __m256 x = _mm256_mul_ps(nw8, _mm256_sqrt_ps(_mm256_add_ps(_mm256_loadu_ps(dsf + i),
                                                                _mm256_loadu_ps(daf + i))));
-    __m256 t = _mm256_mul_ps(_mm256_loadu_ps(thetaf + i), rbf_exp8(x));
+    __m256 t = _mm256_mul_ps(_mm256_loadu_ps(thetaf + i), tt__rbf_exp8(x));
     __m256 at = _mm256_and_ps(t, absmask);
     s = _mm256_add_ps(s, t);
     a = _mm256_add_ps(a, at);
     b = _mm256_fnmadd_ps(at, x, b);  /* x <= 0: b += |t| |x| */
   }
-  *q = rbf_hsum8(s);
-  *qabs = rbf_hsum8(a);
-  *qx = rbf_hsum8(b);
+  *q = tt__rbf_hsum8(s);
+  *qabs = tt__rbf_hsum8(a);
+  *qx = tt__rbf_hsum8(b);
 }
 #endif
 
-static const rbf_kernels g_kernels = {
-#if RBF_COPY_AVX2
-    rbf_qcoarse,
+static const tt__rbf_kernels g_kernels = {
+#if TT__RBF_COPY_AVX2
+    tt__rbf_qcoarse,
 #else
     NULL,
 #endif
-    rbf_qbound};
+    tt__rbf_qbound};
 
-/* This instruction set's kernels (named after RBF_ISA). */
-const rbf_kernels *RBF_CAT(rbf_kernels_, RBF_ISA)(void) { return &g_kernels; }
+/* This instruction set's kernels (named after TT__RBF_ISA). */
+const tt__rbf_kernels *TT__RBF_CAT(tt__rbf_kernels_, TT__RBF_ISA)(void) { return &g_kernels; }

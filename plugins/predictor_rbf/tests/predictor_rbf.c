@@ -37,7 +37,7 @@ static double synth_cost(const double *s, const tt_config *c) {
 static void write_bump(const char *path, const tt_predictor *like, const double *state,
                        const tt_config *best, double width) {
   (void)like;
-  char *sig = ttpm_space_signature(target);
+  char *sig = tt__pm_space_signature(target);
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "features", "1");
   char wb[32];
@@ -47,29 +47,29 @@ static void write_bump(const char *path, const tt_predictor *like, const double 
   tt_config_set_string(set, "reward", "inverse");      /* Q = 1 / cost */
   tt_config_set_string(set, "refine", "3");
   char *settings = tt_config_to_json(set);
-  ttpm_header h = {.kind = "predictor_rbf", .plugin_version = "0.1.0",
+  tt__pm_header h = {.kind = "predictor_rbf", .plugin_version = "0.1.0",
                    .state_space = "synthetic", .state_dim = 2, .target = sig,
                    .settings = settings};
-  ttpm_writer w = {0};
-  ttpm_put_header(&w, &h);
-  ttpm_put_u64(&w, 7);                 /* seed */
-  ttpm_put_u64(&w, tt_space_count(target));
+  tt__pm_writer w = {0};
+  tt__pm_put_header(&w, &h);
+  tt__pm_put_u64(&w, 7);                 /* seed */
+  tt__pm_put_u64(&w, tt_space_count(target));
   uint32_t m = 1 + 1 + 3 + 1;          /* leaf, cost, quality one-hot, fast */
-  ttpm_put_u64(&w, m);
-  ttpm_put_u64(&w, 1);                 /* features */
-  ttpm_put_u64(&w, 0);                 /* updates */
-  ttpm_put_u64(&w, 1);                 /* observations */
+  tt__pm_put_u64(&w, m);
+  tt__pm_put_u64(&w, 1);                 /* features */
+  tt__pm_put_u64(&w, 0);                 /* updates */
+  tt__pm_put_u64(&w, 1);                 /* observations */
   double enc[8], u[4];
   tt_config_to_unit(best, u);
   enc[0] = u[0];
   enc[1] = u[1];
   for (int k = 0; k < 3; k++) enc[2 + k] = tt_config_get(best, 2).index == k;
   enc[5] = tt_config_get(best, 3).index;
-  ttpm_put_f64s(&w, state, 2);
-  ttpm_put_f64s(&w, enc, m);
-  ttpm_put_f64(&w, 1.0);               /* theta */
-  ttpm_put_u64(&w, 0);                 /* pool */
-  CHECK(ttpm_save("test", path, 1, &w) == TT_OK);
+  tt__pm_put_f64s(&w, state, 2);
+  tt__pm_put_f64s(&w, enc, m);
+  tt__pm_put_f64(&w, 1.0);               /* theta */
+  tt__pm_put_u64(&w, 0);                 /* pool */
+  CHECK(tt__pm_save("test", path, 1, &w) == TT_OK);
   free(w.data);
   free(sig);
   tt_free(settings);
@@ -302,7 +302,7 @@ static void state_pool(const char *dir) {
 /* The pool argmax with its cached action distances (pool_da) answers the exact argmax over
  * what the pool must hold: with poolSize 16 and 60 distinct observed configurations (so slots
  * are replaced), the 16 highest rewards (lowest costs) and the default. estimate() is the
- * reference Q (rbf_q, every distance summed afresh); the answer must be one of those 17 and
+ * reference Q (tt__rbf_q, every distance summed afresh); the answer must be one of those 17 and
  * within 1e-12 of their lowest expected cost. A stale cached distance (a replaced slot, a
  * loaded file) moves Q far more than that. */
 static void pool_argmax_is_exact(const char *dir) {
@@ -395,9 +395,9 @@ static void pool_argmax_is_exact(const char *dir) {
   P->destroy(loaded);
 }
 
-/* The default argmax (no refinement: rbf_argmax_bounded, Q approximated with bounds and
+/* The default argmax (no refinement: tt__rbf_argmax_bounded, Q approximated with bounds and
  * evaluated exactly only where they cannot decide) answers exactly what the reference loop
- * answers (rbf_q_parts for every candidate, taken with refine 1 and refineStarts 0, which
+ * answers (tt__rbf_q_parts for every candidate, taken with refine 1 and refineStarts 0, which
  * computes every Q and refines nothing): the same configuration and the same bits of Q, on
  * full-size argmaxes (a pool of up to 256 with slots replaced, 200 LHS points, the default),
  * for a trained model and the same model loaded from its file. */

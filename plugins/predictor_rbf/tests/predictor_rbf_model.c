@@ -50,9 +50,9 @@ enum { F = 8, D = 3, N = 300 };
 
 /* Runs `passes` shuffled passes of Greedy-GQ over the data; returns the relative error of
  * theta against theta_ls and the largest |Q - Q_ls| at the data points. */
-static void run_gq(const rbf_model *init, double (*X)[D], const double *R, const double *theta_ls,
-                   int passes, double *theta_err, double *q_err) {
-  rbf_model r = *init;
+static void run_gq(const tt__rbf_model *init, double (*X)[D], const double *R,
+                   const double *theta_ls, int passes, double *theta_err, double *q_err) {
+  tt__rbf_model r = *init;
   r.theta = calloc(F, sizeof(double));
   r.updates = 0;
   double phi[F];
@@ -65,7 +65,7 @@ static void run_gq(const rbf_model *init, double (*X)[D], const double *R, const
       order[j] = order[k];
       order[k] = t;
     }
-    for (int j = 0; j < N; j++) rbf_update(&r, X[order[j]], R[order[j]], phi);
+    for (int j = 0; j < N; j++) tt__rbf_update(&r, X[order[j]], R[order[j]], phi);
   }
   double num = 0, den = 0;
   for (int i = 0; i < F; i++) {
@@ -73,27 +73,27 @@ static void run_gq(const rbf_model *init, double (*X)[D], const double *R, const
     den += theta_ls[i] * theta_ls[i];
   }
   *theta_err = sqrt(num / den);
-  rbf_model ls = r;
+  tt__rbf_model ls = r;
   ls.theta = (double *)theta_ls;
   *q_err = 0;
   for (int j = 0; j < N; j++) {
-    double e = fabs(rbf_q(&r, X[j]) - rbf_q(&ls, X[j]));
+    double e = fabs(tt__rbf_q(&r, X[j]) - tt__rbf_q(&ls, X[j]));
     if (e > *q_err) *q_err = e;
   }
   free(r.theta);
 }
 
 static void gq_least_squares(void) {
-  rbf_model r;
+  tt__rbf_model r;
   /* narrow features (omega 4) keep Phi^T Phi well conditioned, so the test is about the
    * fixed point, not about waiting for a nearly singular direction */
-  CHECK(rbf_model_init(&r, 1, 2, F, 4.0, 0.5, 2000.0, 5) == 0);
+  CHECK(tt__rbf_model_init(&r, 1, 2, F, 4.0, 0.5, 2000.0, 5) == 0);
   double X[N][D], R[N], Phi[N][F];
   double theta_star[F] = {1.0, -0.5, 2.0, 0.25, -1.5, 0.75, 1.25, -0.3};
   uint64_t x = 3;
   for (int j = 0; j < N; j++) {
     for (int k = 0; k < D; k++) X[j][k] = uni(&x);
-    rbf_features(&r, X[j], Phi[j]);
+    tt__rbf_features(&r, X[j], Phi[j]);
     double q = 0;
     for (int i = 0; i < F; i++) q += theta_star[i] * Phi[j][i];
     R[j] = q + 0.05 * (uni(&x) - 0.5);  /* noise: the LS theta is not theta_star */
@@ -115,12 +115,12 @@ static void gq_least_squares(void) {
   CHECK_MSG(te < 0.01 && qe < 1e-3, "theta error %g, Q error %g", te, qe);
   run_gq(&r, X, R, b, 2, &te, &qe);
   CHECK_MSG(te > 0.01, "2 passes already at %g: the problem is too easy to test convergence", te);
-  rbf_model_free(&r);
+  tt__rbf_model_free(&r);
 }
 
 static void features_and_split(void) {
-  rbf_model r;
-  CHECK(rbf_model_init(&r, 2, 3, 17, 1.5, 0.1, 0, 9) == 0);
+  tt__rbf_model r;
+  CHECK(tt__rbf_model_init(&r, 2, 3, 17, 1.5, 0.1, 0, 9) == 0);
   /* the centres are a Latin hypercube: one per stratum in every coordinate */
   for (uint32_t k = 0; k < r.dim; k++) {
     int seen[17] = {0};
@@ -134,24 +134,24 @@ static void features_and_split(void) {
   uint64_t x = 1;
   for (uint32_t i = 0; i < r.features; i++) r.theta[i] = uni(&x) - 0.3;
   double xv[5] = {0.2, 0.7, 0.1, 0.9, 0.4}, phi[17], ds[17];
-  rbf_features(&r, xv, phi);
+  tt__rbf_features(&r, xv, phi);
   for (uint32_t i = 0; i < r.features; i++) {
     double s = 0;
     for (uint32_t k = 0; k < r.dim; k++) s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
     CHECK_NEAR(phi[i], exp(-1.5 * sqrt(s)), 1e-15);
   }
-  rbf_state_part(&r, xv, ds);
-  CHECK_NEAR(rbf_q_action(&r, ds, xv + 2), rbf_q(&r, xv), 1e-13);
+  tt__rbf_state_part(&r, xv, ds);
+  CHECK_NEAR(tt__rbf_q_action(&r, ds, xv + 2), tt__rbf_q(&r, xv), 1e-13);
   /* the argmax's cached action part: the same sums in the same order, the same bits */
   double da[17];
-  rbf_action_part(&r, xv + 2, da);
+  tt__rbf_action_part(&r, xv + 2, da);
   for (uint32_t i = 0; i < r.features; i++) {
     double s = 0;
     for (uint32_t k = 2; k < r.dim; k++) s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
     CHECK(da[i] == s);
   }
-  CHECK(rbf_q_parts(&r, ds, da) == rbf_q_action(&r, ds, xv + 2));
-  rbf_model_free(&r);
+  CHECK(tt__rbf_q_parts(&r, ds, da) == tt__rbf_q_action(&r, ds, xv + 2));
+  tt__rbf_model_free(&r);
 }
 
 static void encoding(void) {
@@ -161,16 +161,16 @@ static void encoding(void) {
   tt_space_add_nom_int(s, "quality", q, 3, 2, "");
   tt_space_add_nom_bool(s, "fast", 1, "");
   tt_space_add_float(s, "c", 0.1, 10, 1.0, 1, "");
-  CHECK(rbf_action_dims(s) == 1 + 3 + 1 + 1);
+  CHECK(tt__rbf_action_dims(s) == 1 + 3 + 1 + 1);
   tt_config *c = tt_config_create(s);
   double e[6];
-  rbf_encode_action(c, e);
+  tt__rbf_encode_action(c, e);
   CHECK_NEAR(e[0], 0.5, 1e-15);
   CHECK(e[1] == 0 && e[2] == 0 && e[3] == 1 && e[4] == 1);
   CHECK_NEAR(e[5], 0.5, 1e-12);  /* log scale: 1.0 is the middle of [0.1, 10] */
   tt_config_set_index(c, 1, 0);
   tt_config_set_index(c, 2, 0);
-  rbf_encode_action(c, e);
+  tt__rbf_encode_action(c, e);
   CHECK(e[1] == 1 && e[2] == 0 && e[3] == 0 && e[4] == 0);
   tt_config_destroy(c);
   tt_space_destroy(s);

@@ -1,5 +1,5 @@
 /* The bounded argmax (plugins/predictor_rbf/rbf_argmax.c) answers exactly what the reference
- * loop of rbf_q_parts answers: the same index and the same bits of Q, on random models with
+ * loop of tt__rbf_q_parts answers: the same index and the same bits of Q, on random models with
  * every kernel this CPU runs (the baseline copy and, where the CPU has it, AVX2+FMA).
  *
  * The models cover what could break the bounds or the kernels: feature counts around the
@@ -7,10 +7,10 @@
  * unit cube (exponents below -708: the polynomial's clamp), theta of mixed sign over 30
  * decades, exact ties (repeated candidates: the first must win) and near-ties (candidates
  * 1e-15 apart, where the approximation cannot separate them and the exact values must).
- * Also: every kernel is within half its bound of rbf_q_parts on every candidate (the fine
+ * Also: every kernel is within half its bound of tt__rbf_q_parts on every candidate (the fine
  * kernels within 1e-13 relative to sum |theta e|, the bound assumes 1e-11; a kernel that lost
  * its accuracy fails here before an argmax could), the argmax takes few candidates to the
- * fine level and one to rbf_q_parts on distinct candidates (else it is no faster), and a
+ * fine level and one to tt__rbf_q_parts on distinct candidates (else it is no faster), and a
  * model whose sums overflow takes the reference loop and still agrees. */
 #include "rbf_argmax.h"
 
@@ -23,15 +23,15 @@
 
 static double uni(uint64_t *x) { return tt__u64_to_unit(tt__splitmix64(x)); }
 
-typedef struct kernel { const char *name; rbf_kernels k; } kernel;
+typedef struct kernel { const char *name; tt__rbf_kernels k; } kernel;
 
 static int kernels(kernel *out) {
   int n = 0;
-  const rbf_kernels *base = rbf_kernels_base();
+  const tt__rbf_kernels *base = tt__rbf_kernels_base();
   out[n++] = (kernel){"base", *base};
-#ifdef RBF_HAVE_AVX2
+#ifdef TT__RBF_HAVE_AVX2
   if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-    const rbf_kernels *avx2 = rbf_kernels_avx2();
+    const tt__rbf_kernels *avx2 = tt__rbf_kernels_avx2();
     out[n++] = (kernel){"avx2", {NULL, avx2->fine}};
     out[n++] = (kernel){"coarse avx2 + avx2", *avx2};
     out[n++] = (kernel){"coarse avx2 + base", {avx2->coarse, base->fine}};
@@ -46,8 +46,8 @@ static size_t last_fine = SIZE_MAX;  /* candidates the coarse level kept, last c
  * the candidates evaluated exactly by the last kernel. */
 static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double width,
                        double spread, double theta_scale, size_t n, int ties) {
-  rbf_model r;
-  CHECK(rbf_model_init(&r, d, m, f, width, 0.1, 0, tt__splitmix64(x)) == 0);
+  tt__rbf_model r;
+  CHECK(tt__rbf_model_init(&r, d, m, f, width, 0.1, 0, tt__splitmix64(x)) == 0);
   for (size_t i = 0; i < (size_t)f * r.dim; i++)
     r.centres[i] = 0.5 + spread * (r.centres[i] - 0.5);
   double tabs = 0;
@@ -60,15 +60,15 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
   double *state = malloc(d * sizeof(double)), *ds = malloc(f * sizeof(double));
   double *acts = malloc(n * m * sizeof(double)), *da = malloc(n * f * sizeof(double));
   const double **rows = malloc(n * sizeof *rows);
-  double *work = malloc(rbf_argmax_work(f, n) * sizeof(double));
-  uint32_t f8 = rbf_f8(f);
+  double *work = malloc(tt__rbf_argmax_work(f, n) * sizeof(double));
+  uint32_t f8 = tt__rbf_f8(f);
   float *thf = malloc(f8 * sizeof(float)), *dsf = malloc(f8 * sizeof(float));
   float *daf = malloc(n * f8 * sizeof(float));
   const float **frows = malloc(n * sizeof *frows);
   for (uint32_t k = 0; k < d; k++) state[k] = uni(x);
-  rbf_state_part(&r, state, ds);
-  rbf_action_part_float(f, r.theta, thf);
-  rbf_action_part_float(f, ds, dsf);
+  tt__rbf_state_part(&r, state, ds);
+  tt__rbf_action_part_float(f, r.theta, thf);
+  tt__rbf_action_part_float(f, ds, dsf);
   for (size_t k = 0; k < n; k++) {
     for (uint32_t j = 0; j < m; j++) acts[k * m + j] = uni(x) < 0.3 ? (double)(uni(x) < 0.5) : uni(x);
     if (ties && k > 0 && uni(x) < 0.3) {  /* a repeat of an earlier candidate, or 1e-15 from it */
@@ -76,20 +76,20 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
       memcpy(acts + k * m, acts + src * m, m * sizeof(double));
       if (uni(x) < 0.5) acts[k * m] += 1e-15;
     }
-    rbf_action_part(&r, acts + k * m, da + k * f);
-    rbf_action_part_float(f, da + k * f, daf + k * f8);
+    tt__rbf_action_part(&r, acts + k * m, da + k * f);
+    tt__rbf_action_part_float(f, da + k * f, daf + k * f8);
     rows[k] = da + k * f;
     frows[k] = daf + k * f8;
   }
   double qref;
-  size_t iref = rbf_argmax_reference(&r, ds, rows, n, &qref);
+  size_t iref = tt__rbf_argmax_reference(&r, ds, rows, n, &qref);
   kernel ks[4];
   int nk = kernels(ks);
   size_t exact = 0;
   for (int kk = 0; kk < nk; kk++) {
     double q;
-    rbf_argmax_stats st;
-    size_t i = rbf_argmax_bounded(&r, ds, rows, frows, n, &ks[kk].k, work, &q, &st);
+    tt__rbf_argmax_stats st;
+    size_t i = tt__rbf_argmax_bounded(&r, ds, rows, frows, n, &ks[kk].k, work, &q, &st);
     CHECK_MSG(i == iref && memcmp(&q, &qref, sizeof q) == 0,
               "%s, f %u width %g spread %g theta %g n %zu: index %zu Q %.17g, reference %zu %.17g",
               ks[kk].name, f, width, spread, theta_scale, n, i, q, iref, qref);
@@ -99,10 +99,10 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
     /* each kernel's own accuracy, within half its bound */
     double e_scratch[300];
     for (size_t k = 0; k < n && f <= 300 && isfinite(tabs); k++) {
-      double qa, qabs, qx, qe = rbf_q_parts(&r, ds, rows[k]);
+      double qa, qabs, qx, qe = tt__rbf_q_parts(&r, ds, rows[k]);
       if (ks[kk].k.coarse && tabs < 1e34) {
         ks[kk].k.coarse(thf, dsf, frows[k], f8, (float)-width, &qa, &qabs, &qx);
-        double tol = rbf_coarse_tol(f, qabs, qx, tabs);
+        double tol = tt__rbf_coarse_tol(f, qabs, qx, tabs);
         CHECK_MSG(fabs(qa - qe) <= 0.5 * tol, "%s (coarse): f %u width %g spread %g theta %g "
                   "candidate %zu: %.9g vs %.17g, bound %g", ks[kk].name, f, width, spread,
                   theta_scale, k, qa, qe, tol);
@@ -123,7 +123,7 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
   free(dsf);
   free(daf);
   free(frows);
-  rbf_model_free(&r);
+  tt__rbf_model_free(&r);
   return exact;
 }
 
