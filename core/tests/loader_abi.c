@@ -253,6 +253,17 @@ static void test_log_str_hosts(void) {
   CHECK_MSG(!is_mapped(fixture("fixture_abi10")), "fixture_abi10 still mapped after the refusal");
   tt_registry_destroy(reg);
 
+  /* a real plugin through a log_str-only host with the default services (accel_embree
+   * needs a clock): its init says which kernels it runs */
+  tt_host services = *tt_default_host();
+  services.log = NULL;
+  services.log_str = test_log_str;
+  g_str_log[0] = '\0';
+  reg = tt_registry_create(&services);
+  CHECK_MSG(tt_registry_load(reg, "accel_embree", NULL) == TT_OK, "%s", tt_last_error());
+  tt_registry_destroy(reg);
+  CHECK_CONTAINS(g_str_log, "accel_embree: custom backend kernels: ");
+
   char big[3000];
   memset(big, 'x', sizeof big - 1);
   big[sizeof big - 1] = '\0';

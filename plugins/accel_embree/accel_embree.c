@@ -74,9 +74,9 @@ static void tt__embree_error(void *user, enum RTCError code, const char *str) {
   const tt_host *host = user;
   snprintf(g_embree_error, sizeof g_embree_error, "Embree error %d: %s", (int)code,
            str ? str : "(no message)");
-  if (host && host->log)
-    host->log(g_embree_quiet ? TT_LOG_DEBUG : TT_LOG_ERROR, TT__EMBREE_NAME, "%s",
-              g_embree_error);
+  if (host)
+    tt_host_log(host, g_embree_quiet ? TT_LOG_DEBUG : TT_LOG_ERROR, TT__EMBREE_NAME, "%s",
+                g_embree_error);
 }
 
 /* The calling thread's last Embree error text. */
@@ -281,7 +281,7 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
   if (st.backend == TT__EMBREE_BACKEND_CUSTOM && st.compact) {
     /* Our layout has no compact (index-leaf) variant; Embree's scene API has one. */
     if (!atomic_flag_test_and_set(&g_noted_compact))
-      g_host->log(TT_LOG_INFO, TT__EMBREE_NAME,
+      tt_host_log(g_host, TT_LOG_INFO, TT__EMBREE_NAME,
                   "compact=true: backend custom falls back to native (Embree's compact BVH4 "
                   "with index leaves); logged once");
     st.backend = TT__EMBREE_BACKEND_NATIVE;
@@ -289,9 +289,10 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
     char names[160];
     if (tt__embree_custom_only_changed(cfg, names, sizeof names) > 0 &&
         !atomic_flag_test_and_set(&g_warned_custom_only))
-      g_host->log(TT_LOG_WARN, TT__EMBREE_NAME,
+      tt_host_log(g_host, TT_LOG_WARN, TT__EMBREE_NAME,
                   "backend native ignores %s (they act only in the custom backend); "
-                  "logged once", names);
+                  "logged once",
+                  names);
   }
   tt_config_destroy(cfg);
 
@@ -309,7 +310,7 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
   }
   stats.repaired = cr == TT_CHECK_REPAIRED;
   if (stats.repaired)
-    g_host->log(TT_LOG_DEBUG, TT__EMBREE_NAME, "configuration repaired: %s", why);
+    tt_host_log(g_host, TT_LOG_DEBUG, TT__EMBREE_NAME, "configuration repaired: %s", why);
 
   if (stats_out && stats_out->struct_size > sizeof stats_out->struct_size) {
     /* Fill only the prefix the caller knows (it may be built against an older header). */
@@ -615,9 +616,9 @@ static void tt__embree_deinit(void) {
 /* Keeps the host, creates the Embree device with our error and memory callbacks, and
  * builds the parameter space once. */
 static tt_status tt__embree_init(const tt_host *host) {
-  if (!host || !host->log || !host->clock_ns)
+  if (!host || (!host->log && !TT_HOST_HAS(host, log_str)) || !host->clock_ns)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                        "accel_embree: the host table lacks log or clock_ns");
+                        "accel_embree: the host table lacks a log (log or log_str) or clock_ns");
   g_host = host;
   atomic_store(&g_embree_bytes, 0);
   atomic_flag_clear(&g_warned_custom_only);
@@ -643,7 +644,7 @@ static tt_status tt__embree_init(const tt_host *host) {
     g_kernels = tt__trav_table_sse41();
     g_kernels_isa = "sse41";
   }
-  host->log(TT_LOG_DEBUG, TT__EMBREE_NAME, "custom backend kernels: %s", g_kernels_isa);
+  tt_host_log(host, TT_LOG_DEBUG, TT__EMBREE_NAME, "custom backend kernels: %s", g_kernels_isa);
   /* Build with the host's worker count (--threads), so build times in tuning runs are
    * measured with the same parallelism as rendering. */
   char device_config[64] = "";

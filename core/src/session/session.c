@@ -89,12 +89,13 @@ static void tt__apply_scene_depth(tt_session *s, size_t i) {
   double depth = want < lo ? lo : want > hi ? hi : want;
   const char *name = tt_loaded_plugin_entry(p)->name;
   if (depth != want)
-    s->host->log(TT_LOG_WARN, NULL, "%s: the scene asks for maxDepth %g (render.maxDepth, "
-                 "pbrt's maxdepth); the plugin supports [%g, %g]: clamped to %g", name, want, lo,
-                 hi, depth);
+    tt_host_log(s->host, TT_LOG_WARN, NULL,
+                "%s: the scene asks for maxDepth %g (render.maxDepth, "
+                "pbrt's maxdepth); the plugin supports [%g, %g]: clamped to %g",
+                name, want, lo, hi, depth);
   if (tt_config_set_number(cfg, (size_t)d, depth) != TT_OK)
-    s->host->log(TT_LOG_WARN, NULL, "%s: render.maxDepth of the scene: %s", name,
-                 tt_last_error());
+    tt_host_log(s->host, TT_LOG_WARN, NULL, "%s: render.maxDepth of the scene: %s", name,
+                tt_last_error());
 }
 
 tt_status tt_session_load_scene(tt_session *s, const char *path) {
@@ -392,7 +393,7 @@ tt_status tt_session_check(tt_session *s) {
     tt_check_result r = tt_space_check(tt_config_space(s->configs[i]), s->configs[i], why, sizeof why);
     const char *name = tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name;
     if (r == TT_CHECK_REPAIRED) {
-      s->host->log(TT_LOG_WARN, NULL, "%s: configuration repaired: %s", name, why);
+      tt_host_log(s->host, TT_LOG_WARN, NULL, "%s: configuration repaired: %s", name, why);
     } else if (r == TT_CHECK_INFEASIBLE) {
       size_t len = strlen(all);
       snprintf(all + len, sizeof all - len, "%s%s: infeasible configuration: %s",
