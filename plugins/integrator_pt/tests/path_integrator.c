@@ -100,7 +100,7 @@ int main(void) {
   CHECK(tt_config_get_int(def, "wavefront", -1) == 1);
   CHECK(tt_config_get_int(def, "maxDepth", -1) == 3);
   CHECK(tt_config_get_int(def, "tileSize", -1) == 32);
-  CHECK(strcmp(tt_config_get_string(def, "sampler"), "independent") == 0);
+  CHECK(strcmp(tt_config_get_string(def, "sampler"), "sobol") == 0);
   CHECK(strcmp(tt_config_get_string(def, "filter"), "box") == 0);
   CHECK(strcmp(tt_config_get_string(def, "heuristic"), "power") == 0);
   CHECK(tt_space_max(rs.space, (size_t)tt_space_find(rs.space, "maxDepth")) == 64);
