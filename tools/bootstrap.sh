@@ -4,12 +4,16 @@
 #   tools/bootstrap.sh             build + test dependencies (what CI and the README need)
 #   tools/bootstrap.sh --training  the same (kept for old instructions: PyTorch for
 #                                  tools/taa/train.py is now in PACKAGES)
+#   tools/bootstrap.sh --peers     also PEER_PACKAGES: what the comparisons with other
+#                                  renderers need (benchmarks, not tests)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+peers=0
 for a in "$@"; do
   case $a in
     --training) ;;  # accepted: PACKAGES has everything now
-    *) echo "bootstrap: unknown option $a (expected --training)" >&2; exit 2 ;;
+    --peers) peers=1 ;;
+    *) echo "bootstrap: unknown option $a (expected --training or --peers)" >&2; exit 2 ;;
   esac
 done
 
@@ -38,6 +42,13 @@ PACKAGES=(
   chromium                                    # a real headless browser for the results page:
                                               # tools/evidence/check_page.py (tools/tests/evidence.sh)
 )
+
+PEER_PACKAGES=(
+  blender                                     # Cycles references: tools/cycles/ (cycles_reference.py)
+  libopenexr-dev libgoogle-glog-dev           # pbrt-v3 built as the chapter-4 anchor:
+                                              # tools/pssmlt/build_pbrt_v3.sh
+)
+[ "$peers" -eq 1 ] && PACKAGES+=("${PEER_PACKAGES[@]}")
 
 missing=()
 for p in "${PACKAGES[@]}"; do

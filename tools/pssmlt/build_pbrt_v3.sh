@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds pbrt-v3 (github.com/mmp/pbrt-v3, tested at 13d871f) for the side-by-side anchor
 # (tools/pssmlt/pbrt_v3_anchor.py) without its git submodules, against Debian's OpenEXR 3,
-# Imath and glog (apt-get install libopenexr-dev libgoogle-glog-dev) and without Ptex (no
+# Imath and glog (bash tools/bootstrap.sh --peers installs libopenexr-dev libgoogle-glog-dev) and without Ptex (no
 # Debian package: api.cpp's two ptex texture constructors are replaced by an error). One
 # file at a time with the configuration defines pbrt-v3's CMake sets on Linux; resumable.
 #
