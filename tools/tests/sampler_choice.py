@@ -18,14 +18,10 @@ import numpy as np
 
 from tools.charts import sampler_choice as sc
 
+from tools.tests import checks
+from tools.tests.checks import check
+
 root = os.environ.get("TT_SOURCE_ROOT", ".")
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += 0 if ok else 1
 
 
 def run(*args):
@@ -87,8 +83,8 @@ def test_end_to_end():
 def main():
     test_math()
     test_end_to_end()
-    print(f"sampler_choice: {failures} failed")
-    return 1 if failures else 0
+    print(f"sampler_choice: {checks.failures} failed")
+    return 1 if checks.failures else 0
 
 
 if __name__ == "__main__":

@@ -16,14 +16,10 @@ import tempfile
 import numpy as np
 import OpenImageIO as oiio
 
+from tools.tests import checks
+from tools.tests.checks import check
+
 root = os.environ.get("TT_SOURCE_ROOT", ".")
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += 0 if ok else 1
 
 
 def run(*args):
@@ -117,8 +113,8 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         test_make_test_set(os.path.join(tmp, "scenes"))
         test_report(tmp)
-    print(f"{failures} failure(s)")
-    sys.exit(1 if failures else 0)
+    print(f"{checks.failures} failure(s)")
+    sys.exit(1 if checks.failures else 0)
 
 
 if __name__ == "__main__":

@@ -15,15 +15,10 @@ import numpy as np
 
 from tools.taa import blend_weights, rejection, ttw
 
+from tools.tests import checks
+from tools.tests.checks import check
+
 root = os.environ.get("TT_SOURCE_ROOT", ".")
-
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += 0 if ok else 1
 
 
 def random_model(width, hidden, sets, flags, seed):
@@ -150,8 +145,8 @@ def main():
     test_format()
     test_rejection()
     test_blend()
-    print(f"taa_weights: {failures} failed")
-    return 1 if failures else 0
+    print(f"taa_weights: {checks.failures} failed")
+    return 1 if checks.failures else 0
 
 
 if __name__ == "__main__":
