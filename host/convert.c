@@ -6,7 +6,7 @@
 
 /* Load, write, report; exit codes as for a render (4 scene error, 5 output not written). */
 int tt__run_convert(const tt__host_options *opt) {
-  tt_set_log_host(tt__host_services(opt->quiet));  /* loader and writer warnings */
+  tt_set_log_host(tt__host_services(opt->quiet)); /* loader and writer warnings */
   tt_scene *scene = NULL;
   if (tt_scene_load_ex(opt->scene, opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT,
                        &scene) != TT_OK) {

@@ -7,15 +7,18 @@
 #include <stdio.h>
 #include <string.h>
 
-#define TT__HELP_COLUMN 25  /* where the description of an option starts */
+#define TT__HELP_COLUMN 25 /* where the description of an option starts */
 
 /* The short help's sections: a task, with a command that does it (after the program's name). */
-static const struct { unsigned task; const char *title, *example; } tt__tasks[] = {
-  {TT__TASK_RENDER, "Render", "--spp 64 -o box.exr scenes/cornell-box/scene.json"},
-  {TT__TASK_TUNE, "Tune (load a tuner)", "--plugin tuner_nm --iterations 40 scene.json"},
-  {TT__TASK_HYBRID, "Hybrid tuning along the camera path", "--hybrid --model m.ttpm scene.json"},
-  {TT__TASK_SEQUENCE, "Sequences (frames for temporal filters)",
-   "--sequence 0:47 --out-dir seq scene.json"},
+static const struct {
+  unsigned task;
+  const char *title, *example;
+} tt__tasks[] = {
+    {TT__TASK_RENDER, "Render", "--spp 64 -o box.exr scenes/cornell-box/scene.json"},
+    {TT__TASK_TUNE, "Tune (load a tuner)", "--plugin tuner_nm --iterations 40 scene.json"},
+    {TT__TASK_HYBRID, "Hybrid tuning along the camera path", "--hybrid --model m.ttpm scene.json"},
+    {TT__TASK_SEQUENCE, "Sequences (frames for temporal filters)",
+     "--sequence 0:47 --out-dir seq scene.json"},
 };
 
 static const char tt__help_notes[] =
@@ -72,7 +75,8 @@ static void tt__print_task(FILE *out, unsigned task) {
 }
 
 static void tt__print_head(FILE *out) {
-  fprintf(out, "usage: %s [options] [--plugin NAME]... scene.json|scene.pbrt\n\n"
+  fprintf(out,
+          "usage: %s [options] [--plugin NAME]... scene.json|scene.pbrt\n\n"
           "Renders a scene with swappable plugins (defaults: accel_embree, integrator_pt).\n\n",
           tt__prog());
 }
@@ -88,7 +92,8 @@ static void tt__print_short(FILE *out) {
   tt__print_task(out, TT__TASK_MORE);
   fprintf(out, "\nTopics: %s.\n%s", tt__topic_list(), tt__help_notes);
   fputs("Exit codes: 0 success, 1 failure, 2 usage, 3 plugin, 4 scene, 5 output, 130 "
-        "interrupted.\n", out);
+        "interrupted.\n",
+        out);
 }
 
 void tt__print_help(FILE *out, const char *topic) {
@@ -101,7 +106,7 @@ void tt__print_help(FILE *out, const char *topic) {
     tt__print_short(out);
     return;
   }
-  tt__print_head(out);  /* "all" */
+  tt__print_head(out); /* "all" */
   for (int k = 0; k < TT__TOPIC_COUNT; k++) {
     tt__print_topic(out, (tt__topic)k);
     fputc('\n', out);

@@ -24,80 +24,80 @@ typedef struct tt__host_options {
   int plugin_count;
   const char *plugin_paths[TT_HOST_MAX_LIST];
   int plugin_path_count;
-  const char *sets[TT_HOST_MAX_LIST];     /* "plugin.param=value" */
+  const char *sets[TT_HOST_MAX_LIST]; /* "plugin.param=value" */
   int set_count;
   const char *scene;
-  const char *out;          /* NULL: <scene folder>.exr in the current directory */
-  const char *stats;        /* NULL: no stats file */
-  const char *describe[TT_HOST_MAX_LIST];  /* --describe NAME, in order */
+  const char *out;                        /* NULL: <scene folder>.exr in the current directory */
+  const char *stats;                      /* NULL: no stats file */
+  const char *describe[TT_HOST_MAX_LIST]; /* --describe NAME, in order */
   int describe_count;
-  uint32_t spp;             /* 0: the scene's render.spp */
-  double time_budget;       /* seconds; 0: none */
+  uint32_t spp;       /* 0: the scene's render.spp */
+  double time_budget; /* seconds; 0: none */
   uint64_t seed;
   int seed_set;
-  uint32_t threads;         /* 0: all CPUs */
-  uint32_t width, height;   /* 0: the scene's resolution */
+  uint32_t threads;       /* 0: all CPUs */
+  uint32_t width, height; /* 0: the scene's resolution */
   int list_plugins;
   int quiet;
-  int png;                  /* --png: a PNG preview of every sequence frame */
-  int strict;               /* --strict: pbrt input as strictly as pbrt-v4 reads it */
+  int png;    /* --png: a PNG preview of every sequence frame */
+  int strict; /* --strict: pbrt input as strictly as pbrt-v4 reads it */
   /* tuning (tune.c) */
-  const char *tune;         /* --tune PLUGIN; NULL: automatic when a tuner is loaded */
-  const char *objective;    /* --objective SPEC; NULL: the target's natural objective */
-  const char *tune_params;  /* --tune-params A,B,...: search only these; NULL: the hint's or all */
-  uint32_t iterations;      /* --iterations N; 0: TT_HOST_DEFAULT_ITERATIONS */
-  uint32_t tune_spp;        /* --tune-spp N: spp per measurement; 0: 1 */
-  uint32_t explore;         /* --explore N: random configurations instead of a tuner */
-  uint32_t verify;          /* --verify N: default vs best side by side, N rounds */
-  const char *db;           /* --db PATH; NULL: tt_tunedb_default_path() */
-  int no_db;                /* --no-db */
-  int clock_cpu;            /* --clock cpu: every timing is the process's CPU time */
-  const char *reference;    /* --reference FILE: the image --objective rrmse compares with */
+  const char *tune;        /* --tune PLUGIN; NULL: automatic when a tuner is loaded */
+  const char *objective;   /* --objective SPEC; NULL: the target's natural objective */
+  const char *tune_params; /* --tune-params A,B,...: search only these; NULL: the hint's or all */
+  uint32_t iterations;     /* --iterations N; 0: TT_HOST_DEFAULT_ITERATIONS */
+  uint32_t tune_spp;       /* --tune-spp N: spp per measurement; 0: 1 */
+  uint32_t explore;        /* --explore N: random configurations instead of a tuner */
+  uint32_t verify;         /* --verify N: default vs best side by side, N rounds */
+  const char *db;          /* --db PATH; NULL: tt_tunedb_default_path() */
+  int no_db;               /* --no-db */
+  int clock_cpu;           /* --clock cpu: every timing is the process's CPU time */
+  const char *reference;   /* --reference FILE: the image --objective rrmse compares with */
   const char *tune_pass_images; /* --tune-pass-images DIR: each measurement's own pass image */
-  int help;                 /* --help, -h, --help-all */
-  const char *help_topic;   /* --help TOPIC; "all" for --help-all; NULL: the short help */
+  int help;                     /* --help, -h, --help-all */
+  const char *help_topic;       /* --help TOPIC; "all" for --help-all; NULL: the short help */
   int version;
   /* sequence rendering (sequence.c) */
-  int sequence;             /* --sequence given */
-  uint32_t seq_first, seq_last;  /* frames rendered, inclusive */
-  const char *out_dir;      /* --out-dir DIR */
-  double fps;               /* --fps F; 0: 24 */
-  uint32_t reference_scale; /* --reference-scale K; 0: no reference */
-  const char *post;         /* --post NAME: post-filter applied to each frame */
-  const char *seq_pattern;  /* --out DIR/NAME_%04d.exr: frame file pattern (sequence) */
-  int aov_set;              /* --aov given */
-  uint32_t aov_mask;        /* TT__AOV_* bits: EXR layers of a still, files of a sequence */
-  int reference_only;       /* --supersample K: the frames are the reference */
+  int sequence;                 /* --sequence given */
+  uint32_t seq_first, seq_last; /* frames rendered, inclusive */
+  const char *out_dir;          /* --out-dir DIR */
+  double fps;                   /* --fps F; 0: 24 */
+  uint32_t reference_scale;     /* --reference-scale K; 0: no reference */
+  const char *post;             /* --post NAME: post-filter applied to each frame */
+  const char *seq_pattern;      /* --out DIR/NAME_%04d.exr: frame file pattern (sequence) */
+  int aov_set;                  /* --aov given */
+  uint32_t aov_mask;            /* TT__AOV_* bits: EXR layers of a still, files of a sequence */
+  int reference_only;           /* --supersample K: the frames are the reference */
   /* camera path samples (run.c): sample I of TT_HOST_PATH_SAMPLES at t = I/(N-1) of the
    * path's time range */
-  int camera_index_set;     /* --camera-index given */
-  uint32_t camera_index;    /* --camera-index I (or A of A:B), in [0, TT_HOST_PATH_SAMPLES) */
+  int camera_index_set;       /* --camera-index given */
+  uint32_t camera_index;      /* --camera-index I (or A of A:B), in [0, TT_HOST_PATH_SAMPLES) */
   uint32_t camera_index_last; /* B of --camera-index A:B (--hybrid, --predict); I otherwise */
-  int camera_index_range;   /* --camera-index A:B given (a range: --hybrid and --predict) */
-  const char *frames_arg;   /* --frames text (checked once --out is known) */
-  int frames;               /* --frames A:B without an --out pattern: frames A..B (at --fps,
+  int camera_index_range;     /* --camera-index A:B given (a range: --hybrid and --predict) */
+  const char *frames_arg;     /* --frames text (checked once --out is known) */
+  int frames;                 /* --frames A:B without an --out pattern: frames A..B (at --fps,
                              * both included), each a full render to <out stem>_NNNN.exr */
   uint32_t frames_first, frames_last;
-  int camera_time_set;      /* one frame of --frames: the camera at t = camera_time */
+  int camera_time_set; /* one frame of --frames: the camera at t = camera_time */
   double camera_time;
-  int convert;              /* --convert: write the loaded scene as scene.json to --out */
+  int convert; /* --convert: write the loaded scene as scene.json to --out */
   /* the run itself, for the --stats benchmark record */
-  int argc;                 /* the command line as given */
+  int argc; /* the command line as given */
   char **argv;
-  int64_t started_ns;       /* wall-clock (Unix) time the options were read, in ns */
-  int indicators;           /* --indicators: print the scene's indicators as JSON */
+  int64_t started_ns; /* wall-clock (Unix) time the options were read, in ns */
+  int indicators;     /* --indicators: print the scene's indicators as JSON */
   /* hybrid tuning (hybrid.c) */
-  int hybrid;               /* --hybrid: eps-greedy search/prediction over the camera path */
-  int predict_only;         /* --predict: print the model's predictions, render nothing */
-  double epsilon;           /* --epsilon E in [0, 1] */
+  int hybrid;       /* --hybrid: eps-greedy search/prediction over the camera path */
+  int predict_only; /* --predict: print the model's predictions, render nothing */
+  double epsilon;   /* --epsilon E in [0, 1] */
   int epsilon_set;
-  const char *model;        /* --model FILE: loaded if it exists, saved at the end */
+  const char *model; /* --model FILE: loaded if it exists, saved at the end */
   const char *warm_start[TT_HOST_MAX_LIST]; /* --warm-start DB ... */
   int warm_start_count;
-  const char *states;       /* --states FILE.json: --predict for these states, not the path */
-  const char *measure;      /* --measure FILE.json: configurations measured side by side */
-  uint32_t rounds;          /* --rounds R (--measure); 0: 3 */
-  const char *resume;       /* --resume FILE: the tuning session's state, saved per sample */
+  const char *states;         /* --states FILE.json: --predict for these states, not the path */
+  const char *measure;        /* --measure FILE.json: configurations measured side by side */
+  uint32_t rounds;            /* --rounds R (--measure); 0: 3 */
+  const char *resume;         /* --resume FILE: the tuning session's state, saved per sample */
   const char *indicator_norm; /* --indicator-norm SPEC (tt_indicator_norm_parse); NULL: default */
 } tt__host_options;
 
@@ -184,7 +184,7 @@ typedef struct tt__run_record {
   const tt__host_options *opt;
   tt_registry *reg;
   const tt_scene *scene;
-  const tt_config *configs[TT_HOST_MAX_LIST];   /* per loaded plugin, may be NULL */
+  const tt_config *configs[TT_HOST_MAX_LIST]; /* per loaded plugin, may be NULL */
   double build_ms;
   double render_ms;
   uint32_t passes;
@@ -197,27 +197,27 @@ typedef struct tt__run_record {
   uint32_t width, height;
   int interrupted;
   tt_accel_build_stats build;
-  tt_pass_stats last_pass;     /* integrator metrics of the last pass */
+  tt_pass_stats last_pass; /* integrator metrics of the last pass */
   double metric_sums[TT_MAX_METRICS];
   const char *out_exr;
   const char *out_png;
-  const struct tt__tuning *tuning;  /* NULL when nothing was tuned or explored */
+  const struct tt__tuning *tuning; /* NULL when nothing was tuned or explored */
 } tt__run_record;
 
 /* What the tuning phase (tune.c) leaves for the log and --stats: the library's session
  * with its samples, best configuration and counters, and what the host added around it. */
 typedef struct tt__tuning {
-  tt_tuning *session;           /* NULL when the phase failed before the session existed */
-  const char *mode;             /* "tune" or "explore" */
+  tt_tuning *session; /* NULL when the phase failed before the session existed */
+  const char *mode;   /* "tune" or "explore" */
   const char *plugin, *plugin_version, *tuner;
   uint32_t requested;
   int interrupted;
-  double ms;                    /* wall time of the tuning phase */
-  char db_path[4096];           /* "" with --no-db */
-  char *verify_json;            /* --verify result (JSON object, malloc), or NULL */
-  tt_tunedb *db;                /* the database the session records into, or NULL */
-  double *ref_lum;              /* --reference as luminance (--objective rrmse), or NULL */
-  uint32_t answered_spp;        /* samples per pixel the database's answers did not render
+  double ms;             /* wall time of the tuning phase */
+  char db_path[4096];    /* "" with --no-db */
+  char *verify_json;     /* --verify result (JSON object, malloc), or NULL */
+  tt_tunedb *db;         /* the database the session records into, or NULL */
+  double *ref_lum;       /* --reference as luminance (--objective rrmse), or NULL */
+  uint32_t answered_spp; /* samples per pixel the database's answers did not render
                                    (answers x --tune-spp): the render phase renders them, so
                                    that the image is never worse than without a database */
 } tt__tuning;

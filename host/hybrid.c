@@ -45,18 +45,18 @@ typedef struct tt__hyb {
   tt_predictor *model;
   const char *predictor_name, *tuner_name;
   tt_tunedb *db;
-  uint32_t spp;               /* spp of one measurement pass */
-  cJSON *warm;                /* [{db, rows, skipped}] */
-  tt_indicator_norm norm;     /* the state space (--indicator-norm) */
+  uint32_t spp;           /* spp of one measurement pass */
+  cJSON *warm;            /* [{db, rows, skipped}] */
+  tt_indicator_norm norm; /* the state space (--indicator-norm) */
   tt_objective obj;
-  const char *context_extra;  /* the clock, besides the library's context */
-  char *context, *camera0;    /* the state's context and first camera (warm-start filter) */
+  const char *context_extra; /* the clock, besides the library's context */
+  char *context, *camera0;   /* the state's context and first camera (warm-start filter) */
   double epsilon;
   uint32_t explore_iterations;
   tt_hybrid *hy;
-  tt_tuning_target target;    /* the render session as the tuning target */
-  uint32_t first, end;        /* path samples first..end-1 (--camera-index A:B) */
-  cJSON *states;              /* the report of every state done */
+  tt_tuning_target target; /* the render session as the tuning target */
+  uint32_t first, end;     /* path samples first..end-1 (--camera-index A:B) */
+  cJSON *states;           /* the report of every state done */
   tt__hyb_totals tot;
   int interrupted;
 } tt__hyb;
@@ -86,7 +86,8 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp) {
   if (!TT_PREDICTOR_HAS(h->pi, create_ex) || !TT_PREDICTOR_HAS(h->pi, observe_ex) ||
       !TT_PREDICTOR_HAS(h->pi, predict_ex)) {
     tt__say("--hybrid: %s serves the ABI 1.0 predictor table; the hybrid loop "
-            "needs ABI 1.1 (create_ex, observe_ex, predict_ex)\n", h->predictor_name);
+            "needs ABI 1.1 (create_ex, observe_ex, predict_ex)\n",
+            h->predictor_name);
     return TT_EXIT_PLUGIN;
   }
   static const char *names[TT_SCENE_INDICATOR_COUNT];
@@ -109,8 +110,7 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp) {
   struct stat st;
   if (h->opt->model && stat(h->opt->model, &st) == 0) {
     if (h->pi->load(h->model, h->opt->model) != TT_OK) {
-      tt__say("--model %s: %s (the file is left as it is)\n", h->opt->model,
-              tt_last_error());
+      tt__say("--model %s: %s (the file is left as it is)\n", h->opt->model, tt_last_error());
       return TT_EXIT_USAGE;
     }
     s->host->log(TT_LOG_INFO, NULL, "hybrid: %s: loaded the model %s", h->predictor_name,
@@ -134,8 +134,11 @@ static int tt__hyb_warm_files(const tt__host_options *opt) {
 
 /* The option that sets a context or camera key, and how an absent value reads. */
 static const char *tt__hyb_key_option(const char *key) {
-  return !strcmp(key, "clock") ? "--clock" : !strcmp(key, "threads") ? "--threads"
-         : !strcmp(key, "spp") ? "--tune-spp" : !strcmp(key, "resolution") ? "--res" : key;
+  return !strcmp(key, "clock")        ? "--clock"
+         : !strcmp(key, "threads")    ? "--threads"
+         : !strcmp(key, "spp")        ? "--tune-spp"
+         : !strcmp(key, "resolution") ? "--res"
+                                      : key;
 }
 static const char *tt__hyb_key_value(const char *key, const char *value, char *buf, size_t n) {
   unsigned w, h;
@@ -156,10 +159,10 @@ static void tt__hyb_warm_log(const tt__hyb *h, const char *path, const tt_hybrid
                              const char *objective) {
   char why[2048] = "";
   size_t n = 0;
-#define TT__WHY(...) \
-  do { \
-    int w_ = snprintf(why + n, n < sizeof why ? sizeof why - n : 0, __VA_ARGS__); \
-    if (w_ > 0) n += (size_t)w_; \
+#define TT__WHY(...)                                                                               \
+  do {                                                                                             \
+    int w_ = snprintf(why + n, n < sizeof why ? sizeof why - n : 0, __VA_ARGS__);                  \
+    if (w_ > 0) n += (size_t)w_;                                                                   \
   } while (0)
   for (uint32_t k = 0; k < r->key_count; k++) {
     if (!r->mismatch[k]) continue;
@@ -175,18 +178,22 @@ static void tt__hyb_warm_log(const tt__hyb *h, const char *path, const tt_hybrid
             (unsigned long long)r->other_objective, objective);
   if (r->other_space)
     TT__WHY("%s%llu of another parameter space", n ? "; " : "", (unsigned long long)r->other_space);
-  if (r->failed) TT__WHY("%s%llu failed measurements", n ? "; " : "", (unsigned long long)r->failed);
+  if (r->failed)
+    TT__WHY("%s%llu failed measurements", n ? "; " : "", (unsigned long long)r->failed);
   if (r->no_indicators)
     TT__WHY("%s%llu without indicators", n ? "; " : "", (unsigned long long)r->no_indicators);
 #undef TT__WHY
   uint64_t left = r->considered - r->rows;
   int none = r->rows == 0 && r->considered > 0;
-  h->s.host->log(none ? TT_LOG_WARN : TT_LOG_INFO, NULL, "hybrid: %s learnt %llu of the %llu "
-                  "rows of %s in %s%s%s%s", h->predictor_name, (unsigned long long)r->rows,
-                  (unsigned long long)r->considered, tt_loaded_plugin_entry(h->s.accel_p)->name,
-                  path, left ? "; left out: " : "", left ? why : "",
-                  none && r->other_context ? " (a warm start learns only costs measured as this "
-                  "run measures them: match those options, see host/README.md)" : "");
+  h->s.host->log(
+      none ? TT_LOG_WARN : TT_LOG_INFO, NULL,
+      "hybrid: %s learnt %llu of the %llu "
+      "rows of %s in %s%s%s%s",
+      h->predictor_name, (unsigned long long)r->rows, (unsigned long long)r->considered,
+      tt_loaded_plugin_entry(h->s.accel_p)->name, path, left ? "; left out: " : "", left ? why : "",
+      none && r->other_context ? " (a warm start learns only costs measured as this "
+                                 "run measures them: match those options, see host/README.md)"
+                               : "");
 }
 
 /* What a warm start from `path` learnt and left out, for --stats. */
@@ -228,8 +235,10 @@ static int tt__hyb_warm(tt__hyb *h) {
       tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_USAGE;
     }
-    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys,
-                               .context = h->context, .camera_keys = camera_keys,
+    tt_hybrid_warm_filter f = {.struct_size = sizeof f,
+                               .context_keys = keys,
+                               .context = h->context,
+                               .camera_keys = camera_keys,
                                .camera = h->camera0};
     tt_hybrid_warm_result r = {.struct_size = sizeof r};
     tt_status ws = tt_hybrid_warm_start_ex(h->hy, db, &f, &r);
@@ -266,26 +275,33 @@ static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index,
   cJSON_AddBoolToObject(o, "fallback", r->fallback != 0);
   cJSON *cfg = r->config ? cJSON_Parse(r->config) : NULL;
   cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
-  const struct { const char *name; double v; } num[] = {
-    {"cost", r->cost}, {"predicted_cost", r->predicted_cost}, {"default_cost", r->default_cost},
-    {"default_distance", r->default_distance},
-    {"search_cost", r->search_cost}, {"predict_ms", r->predict_ms}, {"total_ms", total_ms}};
+  const struct {
+    const char *name;
+    double v;
+  } num[] = {{"cost", r->cost},
+             {"predicted_cost", r->predicted_cost},
+             {"default_cost", r->default_cost},
+             {"default_distance", r->default_distance},
+             {"search_cost", r->search_cost},
+             {"predict_ms", r->predict_ms},
+             {"total_ms", total_ms}};
   for (size_t i = 0; i < sizeof num / sizeof num[0]; i++) {
-    if (isfinite(num[i].v) && num[i].v < TT_COST_INFEASIBLE) cJSON_AddNumberToObject(o, num[i].name, num[i].v);
+    if (isfinite(num[i].v) && num[i].v < TT_COST_INFEASIBLE)
+      cJSON_AddNumberToObject(o, num[i].name, num[i].v);
     else cJSON_AddNullToObject(o, num[i].name);
   }
   static const char *const from[] = {NULL, "measured", "database", "nearest state"};
   if (r->default_source > 0 && r->default_source <= 3)
     cJSON_AddStringToObject(o, "default_cost_from", from[r->default_source]);
-  else
-    cJSON_AddNullToObject(o, "default_cost_from");
+  else cJSON_AddNullToObject(o, "default_cost_from");
   cJSON_AddNumberToObject(o, "remeasured", r->remeasured);
   cJSON_AddNumberToObject(o, "samples", r->samples);
   cJSON_AddNumberToObject(o, "builds", r->builds);
   cJSON_AddNumberToObject(o, "cached", r->cached);
   cJSON_AddNumberToObject(o, "passes", passes);
   cJSON *st = cJSON_AddArrayToObject(o, "indicators");
-  for (int i = 0; i < TT_SCENE_INDICATOR_COUNT; i++) cJSON_AddItemToArray(st, cJSON_CreateNumber(r->state[i]));
+  for (int i = 0; i < TT_SCENE_INDICATOR_COUNT; i++)
+    cJSON_AddItemToArray(st, cJSON_CreateNumber(r->state[i]));
   return o;
 }
 
@@ -293,8 +309,8 @@ static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index,
  * AOV's previous frame one --fps interval earlier). */
 static void tt__hyb_camera(tt__session *s, uint32_t i) {
   const tt_camera *c0 = tt_scene_camera(s->scene);
-  double t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) *
-                                    (double)i / (TT_HOST_PATH_SAMPLES - 1.0);
+  double t = c0->keys[0].time + (c0->keys[c0->key_count - 1].time - c0->keys[0].time) * (double)i /
+                                    (TT_HOST_PATH_SAMPLES - 1.0);
   tt_session_set_camera_time(s->lib, t, 1.0 / (s->opt->fps > 0 ? s->opt->fps : 24.0));
 }
 
@@ -328,7 +344,8 @@ static void tt__hyb_raw_state(tt__hyb *h, const cJSON *item, uint32_t i, double 
   if (item) {
     cJSON *ind = cJSON_GetObjectItemCaseSensitive(item, "indicators");
     for (uint32_t k = 0; k < TT_SCENE_INDICATOR_COUNT; k++)
-      raw[k] = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k)));
+      raw[k] =
+          cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k)));
   } else {
     tt__hyb_camera(&h->s, i);
     tt_scene_indicators(h->s.scene, raw);
@@ -467,7 +484,8 @@ static int tt__hyb_check(const tt__hyb *h) {
   const char *accel = tt_loaded_plugin_entry(h->s.accel_p)->name;
   if (tt_scene_camera(h->s.scene)->key_count < 1 && !(opt->predict_only && opt->states)) {
     tt__say("--%s: %s has no camera path (camera.path in scene.json): the hybrid "
-            "loop moves through the path's states\n", job, opt->scene);
+            "loop moves through the path's states\n",
+            job, opt->scene);
     return TT_EXIT_USAGE;
   }
   if (opt->tune && strcmp(opt->tune, accel)) {
@@ -476,8 +494,12 @@ static int tt__hyb_check(const tt__hyb *h) {
   }
   if (opt->explore || opt->verify || opt->reference || (opt->states && opt->camera_index_set)) {
     tt__say("--%s: %s does not apply (the states are the path samples of "
-            "--camera-index A:B)\n", job, opt->explore ? "--explore" : opt->verify ? "--verify"
-            : opt->reference ? "--reference" : "--camera-index with --states");
+            "--camera-index A:B)\n",
+            job,
+            opt->explore     ? "--explore"
+            : opt->verify    ? "--verify"
+            : opt->reference ? "--reference"
+                             : "--camera-index with --states");
     return TT_EXIT_USAGE;
   }
   return TT_EXIT_OK;
@@ -494,7 +516,8 @@ static int tt__hyb_objective(tt__hyb *h) {
   tt_objective_kind k = h->obj.kind;
   if (k != TT_OBJECTIVE_RENDER && k != TT_OBJECTIVE_TOTAL && k != TT_OBJECTIVE_BUILD) {
     tt__say("--hybrid: --objective %s: the hybrid loop tunes the accel for time "
-            "(render, build+render, build)\n", spec);
+            "(render, build+render, build)\n",
+            spec);
     return TT_EXIT_USAGE;
   }
   return TT_EXIT_OK;
@@ -520,8 +543,8 @@ static int tt__hyb_tuner(tt__hyb *h, tt_loaded_plugin *tp) {
   const tt__host_options *opt = h->opt;
   h->context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
   tt_tuning_state st0;
-  if (tt_session_tuning_state(s->lib, h->accel_index, h->spp, NULL, h->context_extra, 0,
-                              &st0) == TT_OK) {
+  if (tt_session_tuning_state(s->lib, h->accel_index, h->spp, NULL, h->context_extra, 0, &st0) ==
+      TT_OK) {
     h->context = tt__strdup(st0.context);
     h->camera0 = tt__strdup(st0.camera);
   }
@@ -570,8 +593,8 @@ static int tt__hyb_create(tt__hyb *h, const tt__host_options *opt) {
   tt_loaded_plugin *tp = tt_registry_find_kind(h->s.reg, TT_KIND_TUNER);
   tt_loaded_plugin *pp = tt_registry_find_kind(h->s.reg, TT_KIND_PREDICTOR);
   h->tuner_name = tt_loaded_plugin_entry(tp)->name;
-  h->accel_index = (size_t)tt_session_plugin_index(h->s.lib,
-                                                   tt_loaded_plugin_entry(h->s.accel_p)->name);
+  h->accel_index =
+      (size_t)tt_session_plugin_index(h->s.lib, tt_loaded_plugin_entry(h->s.accel_p)->name);
   h->space = tt_loaded_plugin_space(h->s.accel_p);
   if (tt__hyb_subset(h)) return TT_EXIT_USAGE;
   if ((rc = tt__hyb_model(h, pp)) != TT_EXIT_OK || (rc = tt__hyb_open_db(h)) != TT_EXIT_OK ||
@@ -592,9 +615,10 @@ static int tt__hyb_start(tt__hyb *h) {
   }
   int rc = tt__session_start(&h->s, 0);
   if (rc != TT_EXIT_OK) return rc;
-  h->s.host->log(TT_LOG_INFO, NULL, "hybrid: %s states %u..%u, epsilon %g, explore %s for %u "
-                 "iterations, exploit %s, objective %s, database %s", opt->scene, h->first,
-                 h->end - 1, h->epsilon, h->tuner_name, h->explore_iterations,
+  h->s.host->log(TT_LOG_INFO, NULL,
+                 "hybrid: %s states %u..%u, epsilon %g, explore %s for %u "
+                 "iterations, exploit %s, objective %s, database %s",
+                 opt->scene, h->first, h->end - 1, h->epsilon, h->tuner_name, h->explore_iterations,
                  h->predictor_name, h->obj.spec, h->db ? tt_tunedb_path(h->db) : "none");
   h->states = cJSON_CreateArray();
   if (tt_session_tuning_target(h->s.lib, h->accel_index, 0, &h->target) != TT_OK) {
@@ -644,10 +668,13 @@ static void tt__hyb_log_state(const tt__hyb *h, const tt_hybrid_report *r, uint3
   if (isfinite(r->default_cost) && !r->fallback && n < sizeof cmp)
     snprintf(cmp + n, sizeof cmp - n, ", default %s%.4g%s",
              r->default_source == TT_HYBRID_COST_NEAREST ? "~" : "", r->default_cost,
-             r->default_source == TT_HYBRID_COST_NEAREST ? " (nearest measured state)"
-             : r->default_source == TT_HYBRID_COST_DATABASE ? " (database)" : "");
-  h->s.host->log(TT_LOG_INFO, NULL, "hybrid: state %u (path %u): %s%s, cost %.4g%s, %u "
-                 "build%s", r->state_index, i, r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
+             r->default_source == TT_HYBRID_COST_NEAREST    ? " (nearest measured state)"
+             : r->default_source == TT_HYBRID_COST_DATABASE ? " (database)"
+                                                            : "");
+  h->s.host->log(TT_LOG_INFO, NULL,
+                 "hybrid: state %u (path %u): %s%s, cost %.4g%s, %u "
+                 "build%s",
+                 r->state_index, i, r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
                  r->fallback ? " (default: no usable prediction)" : "", r->cost, cmp, r->builds,
                  r->builds == 1 ? "" : "s");
 }
@@ -664,7 +691,7 @@ static int tt__hyb_state_failed(uint32_t i) {
 static int tt__hyb_step(tt__hyb *h, uint32_t i) {
   tt__session *s = &h->s;
   tt__hyb_camera(s, i);
-  tt_session_reset(s->lib);  /* a new view: the film starts over */
+  tt_session_reset(s->lib); /* a new view: the film starts over */
   uint32_t pass0 = tt__hyb_passes(h);
   char camera_extra[48];
   snprintf(camera_extra, sizeof camera_extra, "{\"path_index\":%u}", i);
@@ -735,13 +762,16 @@ static int tt__hyb_finish(tt__hyb *h, int rc) {
   const tt__hyb_totals *tot = &h->tot;
   tt__progress_finish();
   if (tot->cached)
-    h->s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u costs came from the database %s "
+    h->s.host->log(TT_LOG_INFO, NULL,
+                   "hybrid: %u of %u costs came from the database %s "
                    "(earlier runs measured those configurations in the same state)",
                    tot->cached, tot->samples, tt_tunedb_path(h->db));
   if (tot->remeasured)
-    h->s.host->log(TT_LOG_INFO, NULL, "hybrid: %u of %u samples measured again a "
+    h->s.host->log(TT_LOG_INFO, NULL,
+                   "hybrid: %u of %u samples measured again a "
                    "configuration already measured in their state (%s re-evaluating its best "
-                   "against noise)", tot->remeasured, tot->samples, h->tuner_name);
+                   "against noise)",
+                   tot->remeasured, tot->samples, h->tuner_name);
   if (h->opt->model && rc == TT_EXIT_OK) rc = tt__hyb_save_model(h);
   if (h->opt->stats) {
     cJSON *root = tt__hyb_stats_json(h);

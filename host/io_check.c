@@ -21,11 +21,11 @@
 
 #define TT__IO_MAX (2 * TT_HOST_MAX_LIST + 16)
 #define TT__IO_MAX_FORMATS 20
-#define TT__IO_PATH 4400  /* a path, a folder or a file-name format */
+#define TT__IO_PATH 4400 /* a path, a folder or a file-name format */
 
 /* One file read or written, with the option that names it. */
 typedef struct tt__io_file {
-  const char *option;  /* "--stats", "the scene file", ... (messages, exemptions) */
+  const char *option; /* "--stats", "the scene file", ... (messages, exemptions) */
   char path[TT__IO_PATH];
 } tt__io_file;
 
@@ -48,7 +48,7 @@ typedef struct tt__io {
 
 static void tt__io_add(tt__io_file *list, int *n, const char *option, const char *path) {
   size_t len = path ? strlen(path) : 0;
-  if (!len || len >= sizeof list[0].path || *n >= TT__IO_MAX) return;  /* longer than PATH_MAX */
+  if (!len || len >= sizeof list[0].path || *n >= TT__IO_MAX) return; /* longer than PATH_MAX */
   list[*n].option = option;
   memcpy(list[*n].path, path, len + 1);
   (*n)++;
@@ -106,20 +106,20 @@ static void tt__io_sequence_pattern(tt__io *io, const tt__host_options *opt) {
   tt__io_frames *f = tt__io_frames_add(io, "--out", dir, opt->seq_first, opt->seq_last);
   if (!f) return;
   tt__io_format(f, name);
-  static const char *const suffix[] = {".raw.exr", ".depth.exr", ".motion.exr",
-                                       ".reference.exr", ".post.exr", ".normal.exr",
-                                       ".albedo.exr", ".prevdepth.exr", ".png"};
+  static const char *const suffix[] = {".raw.exr",       ".depth.exr",     ".motion.exr",
+                                       ".reference.exr", ".post.exr",      ".normal.exr",
+                                       ".albedo.exr",    ".prevdepth.exr", ".png"};
   size_t len = strlen(name);
-  if (len > 4) name[len - 4] = '\0';  /* the pattern ends in .exr */
+  if (len > 4) name[len - 4] = '\0'; /* the pattern ends in .exr */
   for (size_t i = 0; i < sizeof suffix / sizeof suffix[0]; i++) tt__io_format2(f, name, suffix[i]);
 }
 
 /* The frames of an --out-dir sequence (color_0007.exr, depth_0007.exr, ..., and PNGs). */
 static void tt__io_sequence_dir(tt__io *io, const tt__host_options *opt) {
-  tt__io_frames *f = tt__io_frames_add(io, "--out-dir", opt->out_dir, opt->seq_first,
-                                       opt->seq_last);
-  static const char *const names[] = {"color", "depth", "motion", "reference", "post",
-                                      "normal", "albedo", "prevdepth"};
+  tt__io_frames *f =
+      tt__io_frames_add(io, "--out-dir", opt->out_dir, opt->seq_first, opt->seq_last);
+  static const char *const names[] = {"color", "depth",  "motion", "reference",
+                                      "post",  "normal", "albedo", "prevdepth"};
   for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
     tt__io_format2(f, names[i], "_%04d.exr");
     tt__io_format2(f, names[i], "_%04d.png");
@@ -131,7 +131,7 @@ static void tt__io_still_frames(tt__io *io, const tt__host_options *opt, const c
   char dir[TT__IO_PATH], name[TT__IO_PATH], esc[TT__IO_PATH];
   tt__io_split(exr, dir, sizeof dir, name, sizeof name);
   size_t len = strlen(name);
-  if (len > 4) name[len - 4] = '\0';  /* the .exr */
+  if (len > 4) name[len - 4] = '\0'; /* the .exr */
   tt__io_escape(name, esc, sizeof esc);
   tt__io_frames *f = tt__io_frames_add(io, opt->out ? "--out" : "the default output", dir,
                                        opt->frames_first, opt->frames_last);
@@ -167,8 +167,8 @@ static void tt__io_collect(tt__io *io, const tt__host_options *opt) {
   tt__io_add(io->out, &io->nout, "--resume", opt->resume);
   if (opt->tune_pass_images) {
     tt__io_add(io->out, &io->nout, "--tune-pass-images", opt->tune_pass_images);
-    tt__io_frames *f = tt__io_frames_add(io, "--tune-pass-images", opt->tune_pass_images, 0,
-                                         INT32_MAX);
+    tt__io_frames *f =
+        tt__io_frames_add(io, "--tune-pass-images", opt->tune_pass_images, 0, INT32_MAX);
     tt__io_format(f, "pass_%04d.exr");
     tt__io_format(f, "pass_default.exr");
   }
@@ -180,8 +180,8 @@ static void tt__io_collect(tt__io *io, const tt__host_options *opt) {
   if (opt->hybrid || opt->predict_only) {
     if (opt->out_dir) {
       tt__io_add(io->out, &io->nout, "--out-dir", opt->out_dir);
-      tt__io_frames *f = tt__io_frames_add(io, "--out-dir", opt->out_dir, 0,
-                                           TT_HOST_PATH_SAMPLES - 1);
+      tt__io_frames *f =
+          tt__io_frames_add(io, "--out-dir", opt->out_dir, 0, TT_HOST_PATH_SAMPLES - 1);
       tt__io_format(f, "state_%04d.exr");
     }
     return;
@@ -238,12 +238,12 @@ static int tt__io_frames_match(const tt__io_frames *f, const char *name) {
     for (int i = 0; i < f->count; i++) {
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wformat-nonliteral"
-      snprintf(buf, sizeof buf, f->formats[i], (int)n);  /* one integer conversion each */
+      snprintf(buf, sizeof buf, f->formats[i], (int)n); /* one integer conversion each */
 #pragma GCC diagnostic pop
       if (!strcmp(buf, name)) return 1;
     }
   }
-  for (int i = 0; i < f->count; i++)  /* a name without a number (pass_default.exr) */
+  for (int i = 0; i < f->count; i++) /* a name without a number (pass_default.exr) */
     if (!strchr(f->formats[i], '%') && !strcmp(f->formats[i], name)) return 1;
   return 0;
 }
@@ -257,7 +257,8 @@ static int tt__io_replaceable(const char *path) {
 
 /* The option a user changes to move an output (the PNG goes where --out goes). */
 static const char *tt__io_option(const char *output) {
-  if (!strncmp(output, "the default", 11) || !strcmp(output, "the PNG beside --out")) return "--out";
+  if (!strncmp(output, "the default", 11) || !strcmp(output, "the PNG beside --out"))
+    return "--out";
   if (!strcmp(output, "the sequence's manifest")) return "--out-dir (or the --out pattern)";
   return output;
 }
@@ -266,14 +267,14 @@ static const char *tt__io_option(const char *output) {
 static int tt__io_refuse(const char *out_option, const char *out_path, const char *in_option,
                          const char *in_path, int input) {
   tt__say("%s %s would replace %s%s %s (%s): refused before any work; give %s another "
-          "path\n", out_option, out_path, input ? "" : "the output ", in_option,
-          in_path, strcmp(out_path, in_path) ? "the same file" : "the same path",
-          tt__io_option(out_option));
+          "path\n",
+          out_option, out_path, input ? "" : "the output ", in_option, in_path,
+          strcmp(out_path, in_path) ? "the same file" : "the same path", tt__io_option(out_option));
   return TT_EXIT_USAGE;
 }
 
 int tt__check_outputs(const tt__host_options *opt) {
-  static tt__io io;  /* large; the check runs once per process */
+  static tt__io io; /* large; the check runs once per process */
   memset(&io, 0, sizeof io);
   tt__io_collect(&io, opt);
   for (int o = 0; o < io.nout; o++) {
@@ -282,8 +283,7 @@ int tt__check_outputs(const tt__host_options *opt) {
         return tt__io_refuse(io.out[o].option, io.out[o].path, io.in[i].option, io.in[i].path, 1);
     for (int k = 0; k < o; k++)
       if (tt__io_replaceable(io.out[o].path) && tt_file_same(io.out[o].path, io.out[k].path))
-        return tt__io_refuse(io.out[o].option, io.out[o].path, io.out[k].option,
-                             io.out[k].path, 0);
+        return tt__io_refuse(io.out[o].option, io.out[o].path, io.out[k].option, io.out[k].path, 0);
   }
   /* numbered outputs: an input in their folder with one of their names */
   for (int i = 0; i < io.nin; i++) {
@@ -296,8 +296,8 @@ int tt__check_outputs(const tt__host_options *opt) {
         snprintf(what, sizeof what, "%s (files numbered %u..%u in %s)", f->option, f->first,
                  f->last, f->dir);
         tt__say("%s would write %s, which is %s: refused before any work; give %s another "
-                "folder or name\n", what, io.in[i].path, io.in[i].option,
-                tt__io_option(f->option));
+                "folder or name\n",
+                what, io.in[i].path, io.in[i].option, tt__io_option(f->option));
         return TT_EXIT_USAGE;
       }
     }

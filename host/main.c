@@ -22,7 +22,7 @@ int main(int argc, char **argv) {
     tt__say("no scene given (try --help)\n");
     return TT_EXIT_USAGE;
   }
-  if ((rc = tt__check_outputs(&opt)) != TT_EXIT_OK) return rc;  /* no output replaces an input */
+  if ((rc = tt__check_outputs(&opt)) != TT_EXIT_OK) return rc; /* no output replaces an input */
   if (opt.convert) return tt__run_convert(&opt);
   if (opt.indicators) return tt__run_indicators(&opt);
   if (opt.hybrid || opt.predict_only) return tt__run_hybrid(&opt);

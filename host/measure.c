@@ -27,11 +27,11 @@ typedef struct tt__measure_job {
   const tt__host_options *opt;
   tt__session s;
   tt_objective obj;
-  tt_config **cfgs;             /* the configurations of FILE, in its order */
+  tt_config **cfgs; /* the configurations of FILE, in its order */
   size_t n;
-  int *ok;                      /* per configuration: feasible and measured without failure */
+  int *ok; /* per configuration: feasible and measured without failure */
   uint32_t rounds, spp, done_rounds;
-  double *m;                    /* rounds x n x {build, render, cost} */
+  double *m; /* rounds x n x {build, render, cost} */
 } tt__measure_job;
 
 /* Reads the configurations of FILE into `cfgs` (clones of `base`); prints and returns an
@@ -72,8 +72,7 @@ static int tt__measure_objective(tt__measure_job *j) {
   if (tt__parse_objective("--objective", spec, &j->obj)) return TT_EXIT_USAGE;
   tt_objective_kind k = j->obj.kind;
   if (k != TT_OBJECTIVE_RENDER && k != TT_OBJECTIVE_TOTAL && k != TT_OBJECTIVE_BUILD) {
-    tt__say("--measure: --objective %s: expected render, build or build+render\n",
-            spec);
+    tt__say("--measure: --objective %s: expected render, build or build+render\n", spec);
     return TT_EXIT_USAGE;
   }
   return TT_EXIT_OK;
@@ -128,8 +127,9 @@ static void tt__measure_round(tt__measure_job *j, uint32_t r) {
     double *x = &j->m[((size_t)r * n + i) * 3];
     x[0] = build_ms;
     x[1] = render_ms;
-    x[2] = j->obj.kind == TT_OBJECTIVE_RENDER ? render_ms
-           : j->obj.kind == TT_OBJECTIVE_BUILD ? build_ms : build_ms + render_ms;
+    x[2] = j->obj.kind == TT_OBJECTIVE_RENDER  ? render_ms
+           : j->obj.kind == TT_OBJECTIVE_BUILD ? build_ms
+                                               : build_ms + render_ms;
   }
   if (!host->should_stop()) j->done_rounds++;
 }

@@ -51,8 +51,7 @@ int tt__set_u32(const tt__option *o, const char *v, tt__host_options *opt) {
 }
 
 int tt__set_real(const tt__option *o, const char *v, tt__host_options *opt) {
-  if (tt_limit_parse_real(o->limit, v, TT__FIELD(double, o, opt)) != TT_OK)
-    return tt__bad_value(o);
+  if (tt_limit_parse_real(o->limit, v, TT__FIELD(double, o, opt)) != TT_OK) return tt__bad_value(o);
   return 0;
 }
 
@@ -115,7 +114,8 @@ int tt__set_sequence(const tt__option *o, const char *v, tt__host_options *opt) 
                  : tt_limit_parse_uint(o->limit, v, &n) == TT_OK && n >= 1;
   if (!ok) {
     tt__say("%s: expected a frame count N >= 1 or a range A:B with A <= B (frame "
-            "numbers up to %u), got \"%s\"\n", o->name, UINT32_MAX - 1, v);
+            "numbers up to %u), got \"%s\"\n",
+            o->name, UINT32_MAX - 1, v);
     return -1;
   }
   opt->seq_first = (uint32_t)f0;
@@ -134,7 +134,8 @@ int tt__set_camera_index(const tt__option *o, const char *v, tt__host_options *o
     opt->camera_index_range = 1;
   } else {
     tt__say("%s: expected I or A:B with A <= B <= %d (path samples A..B, both "
-            "included), got \"%s\"\n", o->name, TT_HOST_PATH_SAMPLES - 1, v);
+            "included), got \"%s\"\n",
+            o->name, TT_HOST_PATH_SAMPLES - 1, v);
     return -1;
   }
   opt->camera_index = (uint32_t)c0;
@@ -145,9 +146,14 @@ int tt__set_camera_index(const tt__option *o, const char *v, tt__host_options *o
 
 /* The TT__AOV_* bit of the `len` characters at `name`, or 0. */
 static uint32_t tt__aov_bit(const char *name, size_t len) {
-  static const struct { const char *name; uint32_t bit; } aovs[] = {
-    {"depth", TT__AOV_DEPTH}, {"normal", TT__AOV_NORMAL}, {"albedo", TT__AOV_ALBEDO},
-    {"motion", TT__AOV_MOTION}, {"prevdepth", TT__AOV_PREVDEPTH}};
+  static const struct {
+    const char *name;
+    uint32_t bit;
+  } aovs[] = {{"depth", TT__AOV_DEPTH},
+              {"normal", TT__AOV_NORMAL},
+              {"albedo", TT__AOV_ALBEDO},
+              {"motion", TT__AOV_MOTION},
+              {"prevdepth", TT__AOV_PREVDEPTH}};
   for (size_t k = 0; k < sizeof aovs / sizeof aovs[0]; k++)
     if (strlen(aovs[k].name) == len && !strncmp(name, aovs[k].name, len)) return aovs[k].bit;
   return 0;
@@ -163,7 +169,8 @@ int tt__set_aov(const tt__option *o, const char *v, tt__host_options *opt) {
     uint32_t bit = tt__aov_bit(p, len);
     if (!bit) {
       tt__say("%s: expected a comma-separated list of depth, normal, albedo, "
-              "motion, prevdepth (or none), got \"%.*s\" in \"%s\"\n", o->name, (int)len, p, v);
+              "motion, prevdepth (or none), got \"%.*s\" in \"%s\"\n",
+              o->name, (int)len, p, v);
       return -1;
     }
     opt->aov_mask |= bit;
@@ -193,7 +200,8 @@ int tt__set_out(const tt__option *o, const char *v, tt__host_options *opt) {
   const char *dot = strrchr(v, '.');
   if (!dot || (strcmp(dot, ".exr") != 0 && strcmp(dot, ".json") != 0)) {
     tt__say("%s: expected a file name ending in .exr (.json with --convert), got "
-            "\"%s\"\n", o->name, v);
+            "\"%s\"\n",
+            o->name, v);
     return -1;
   }
   opt->out = v;

@@ -13,9 +13,9 @@ struct tt__option;
 
 /* What follows an option on the command line. */
 typedef enum tt__arg_kind {
-  TT__ARG_NONE = 0,   /* a flag: --quiet ("--quiet=x" is refused) */
-  TT__ARG_ONE = 1,    /* one value: "--spp 64" or "--spp=64" */
-  TT__ARG_TOPIC = 2   /* an optional --help topic: "--help tune", "--help=tune" or none */
+  TT__ARG_NONE = 0, /* a flag: --quiet ("--quiet=x" is refused) */
+  TT__ARG_ONE = 1,  /* one value: "--spp 64" or "--spp=64" */
+  TT__ARG_TOPIC = 2 /* an optional --help topic: "--help tune", "--help=tune" or none */
 } tt__arg_kind;
 
 /* The sections of --help-all, in its order; "--help TOPIC" prints one. */
@@ -37,7 +37,7 @@ enum {
   TT__TASK_TUNE = 2,
   TT__TASK_HYBRID = 4,
   TT__TASK_SEQUENCE = 8,
-  TT__TASK_MORE = 16  /* the short help's last lines: --help itself, --version */
+  TT__TASK_MORE = 16 /* the short help's last lines: --help itself, --version */
 };
 
 /* tunetrace-mpi jobs whose driver sets an option itself (a job's args may not). */
@@ -54,17 +54,17 @@ typedef int (*tt__option_set)(const struct tt__option *o, const char *value,
                               struct tt__host_options *opt);
 
 typedef struct tt__option {
-  const char *name;      /* "--spp" */
-  const char *alias;     /* the short form ("-o"), or NULL */
+  const char *name;  /* "--spp" */
+  const char *alias; /* the short form ("-o"), or NULL */
   tt__arg_kind arg;
-  const char *value;     /* the value's placeholder in --help ("N", "FILE.exr") */
+  const char *value; /* the value's placeholder in --help ("N", "FILE.exr") */
   tt__option_set set;
-  size_t field;          /* offsetof the tt__host_options member the generic setters write */
-  tt_limit limit;        /* the range of a number (tunetrace/limits.h) */
+  size_t field;   /* offsetof the tt__host_options member the generic setters write */
+  tt_limit limit; /* the range of a number (tunetrace/limits.h) */
   tt__topic topic;
-  unsigned tasks;        /* TT__TASK_*: the short --help's sections that list it */
-  unsigned mpi;          /* TT__MPI_* */
-  const char *help;      /* lines of --help, '\n'-separated; the first one stands alone (the
+  unsigned tasks;   /* TT__TASK_*: the short --help's sections that list it */
+  unsigned mpi;     /* TT__MPI_* */
+  const char *help; /* lines of --help, '\n'-separated; the first one stands alone (the
                           * short --help shows only it) */
 } tt__option;
 

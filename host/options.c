@@ -14,17 +14,13 @@ static int tt__unknown_option(const char *arg) {
   char name[256];
   snprintf(name, sizeof name, "%.*s", eq ? (int)(eq - arg) : (int)strlen(arg), arg);
   const char *near = tt__option_suggest(name);
-  if (near)
-    tt__say("unknown option \"%s\"; did you mean %s? (try --help)\n", name, near);
-  else
-    tt__say("unknown option \"%s\" (try --help)\n", name);
+  if (near) tt__say("unknown option \"%s\"; did you mean %s? (try --help)\n", name, near);
+  else tt__say("unknown option \"%s\" (try --help)\n", name);
   return -1;
 }
 
 /* 1 when `arg` reads as a word (a --help topic), not an option or a file name. */
-static int tt__is_word(const char *arg) {
-  return arg[0] && arg[0] != '-' && !strpbrk(arg, "./");
-}
+static int tt__is_word(const char *arg) { return arg[0] && arg[0] != '-' && !strpbrk(arg, "./"); }
 
 /* Reads the option at argv[*i] and its value (attached with '=' or the next argument). */
 static int tt__read_option(int argc, char **argv, int *i, tt__host_options *opt) {
@@ -36,7 +32,7 @@ static int tt__read_option(int argc, char **argv, int *i, tt__host_options *opt)
     return -1;
   }
   if (o->arg == TT__ARG_TOPIC && !value && *i + 1 < argc && tt__is_word(argv[*i + 1]))
-    value = argv[++*i];  /* --help TOPIC; not a scene file */
+    value = argv[++*i]; /* --help TOPIC; not a scene file */
   if (o->arg == TT__ARG_ONE && !value) {
     if (*i + 1 >= argc) {
       tt__say("%s: missing value\n", a);
@@ -66,7 +62,8 @@ static int tt__out_pattern(const char *out) {
   if (convs == 0 && !strchr(out, '%')) return 0;
   if (convs == 1) return 1;
   tt__say("--out %s: a frame pattern needs exactly one %%d, %%4d or %%04d "
-          "(the frame number; %%%% for a literal %%)\n", out);
+          "(the frame number; %%%% for a literal %%)\n",
+          out);
   return -1;
 }
 
@@ -84,8 +81,7 @@ static int tt__use_out_pattern(tt__host_options *opt) {
   const char *v = opt->frames_arg;
   uint32_t f0 = 0, f1 = 0;
   if (opt->out_dir) {
-    tt__say("--out %s (a frame pattern) and --out-dir exclude each other\n",
-            opt->out);
+    tt__say("--out %s (a frame pattern) and --out-dir exclude each other\n", opt->out);
     return -1;
   }
   if (v && opt->sequence) {
@@ -94,7 +90,8 @@ static int tt__use_out_pattern(tt__host_options *opt) {
   }
   if (v && !tt__frames_range(v, &f0, &f1)) {
     tt__say("--frames: expected A:B with A <= B (frames A..B of the camera path, "
-            "written to --out %s), got \"%s\"\n", opt->out, v);
+            "written to --out %s), got \"%s\"\n",
+            opt->out, v);
     return -1;
   }
   if (v) {
@@ -104,7 +101,8 @@ static int tt__use_out_pattern(tt__host_options *opt) {
   }
   if (!opt->sequence) {
     tt__say("--out %s is a frame pattern: give the frames with --frames A:B (or "
-            "--sequence N)\n", opt->out);
+            "--sequence N)\n",
+            opt->out);
     return -1;
   }
   return 0;
@@ -131,7 +129,8 @@ static int tt__use_still_frames(tt__host_options *opt) {
   uint32_t f0 = 0, f1 = 0;
   if (!tt__frames_range(opt->frames_arg, &f0, &f1)) {
     tt__say("--frames: expected A:B with A <= B (frames A..B of the camera path "
-            "at --fps, both included), got \"%s\"\n", opt->frames_arg);
+            "at --fps, both included), got \"%s\"\n",
+            opt->frames_arg);
     return -1;
   }
   opt->frames = 1;
@@ -173,7 +172,7 @@ static int tt__check_sequence_options(tt__host_options *opt) {
   if (pattern && (tt__use_out_pattern(opt) || tt__check_out_pattern(opt))) return -1;
   if (!pattern && opt->frames_arg && tt__use_still_frames(opt)) return -1;
   if (tt__check_sequence_only(opt)) return -1;
-  if (opt->sequence && !opt->aov_set)  /* --out-dir sequences: depth, motion, prevdepth */
+  if (opt->sequence && !opt->aov_set) /* --out-dir sequences: depth, motion, prevdepth */
     opt->aov_mask = opt->seq_pattern ? 0 : TT__AOV_DEPTH | TT__AOV_MOTION | TT__AOV_PREVDEPTH;
   return 0;
 }
@@ -189,8 +188,7 @@ static int tt__check_reference(const tt__host_options *opt) {
     return -1;
   }
   if (opt->reference && !rrmse) {
-    tt__say("--reference %s: only --objective rrmse uses a reference\n",
-            opt->reference);
+    tt__say("--reference %s: only --objective rrmse uses a reference\n", opt->reference);
     return -1;
   }
   return 0;
@@ -214,8 +212,8 @@ static int tt__check_path_states(const tt__host_options *opt) {
   if ((opt->hybrid || opt->predict_only) && opt->frames_arg) {
     tt__say("--%s: the states are camera path samples (of %d over the path's "
             "time range): give them with --camera-index A:B (samples A..B, both included); "
-            "--frames A:B means frames at --fps\n", opt->hybrid ? "hybrid" : "predict",
-            TT_HOST_PATH_SAMPLES);
+            "--frames A:B means frames at --fps\n",
+            opt->hybrid ? "hybrid" : "predict", TT_HOST_PATH_SAMPLES);
     return -1;
   }
   if (opt->camera_index_range && !opt->hybrid && !opt->predict_only) {
@@ -241,7 +239,8 @@ static int tt__check_convert(const tt__host_options *opt) {
   }
   if (!opt->convert && out_json) {
     tt__say("--out: expected a file name ending in .exr, got \"%s\" (.json only "
-            "with --convert)\n", opt->out);
+            "with --convert)\n",
+            opt->out);
     return -1;
   }
   return 0;
@@ -249,8 +248,8 @@ static int tt__check_convert(const tt__host_options *opt) {
 
 /* The checks that involve several options, once all are read. */
 static int tt__check_combinations(tt__host_options *opt) {
-  if (tt__check_reference(opt) || tt__check_sequence_options(opt) ||
-      tt__check_exclusions(opt) || tt__check_path_states(opt) || tt__check_convert(opt))
+  if (tt__check_reference(opt) || tt__check_sequence_options(opt) || tt__check_exclusions(opt) ||
+      tt__check_path_states(opt) || tt__check_convert(opt))
     return -1;
   return 0;
 }

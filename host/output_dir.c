@@ -34,12 +34,11 @@ int tt__ensure_dir(const char *dir) {
 
 int tt__ensure_parent_dir(const char *option, const char *path) {
   const char *slash = strrchr(path, '/');
-  if (!slash || slash == path) return TT_EXIT_OK;  /* the current folder, or / */
+  if (!slash || slash == path) return TT_EXIT_OK; /* the current folder, or / */
   char dir[4096];
   snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
   if (tt__ensure_dir(dir) == 0) return TT_EXIT_OK;
-  tt__say("%s %s: cannot create the folder %s: %s\n", option, path, dir,
-          strerror(errno));
+  tt__say("%s %s: cannot create the folder %s: %s\n", option, path, dir, strerror(errno));
   return TT_EXIT_OUTPUT;
 }
 

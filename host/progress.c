@@ -14,15 +14,15 @@
 static pthread_mutex_t tt__lock = PTHREAD_MUTEX_INITIALIZER;
 static int tt__quiet;
 static int tt__tty;
-static int tt__bar_visible;        /* a partial bar line is on screen */
+static int tt__bar_visible; /* a partial bar line is on screen */
 static char tt__task[64];
 static uint64_t tt__task_start_ns;
-static uint64_t tt__last_draw_ns;  /* the bar's last redraw, or the last logged line */
-static int tt__estimated;          /* the task's estimate was said (after its first step) */
+static uint64_t tt__last_draw_ns; /* the bar's last redraw, or the last logged line */
+static int tt__estimated;         /* the task's estimate was said (after its first step) */
 static tt_host tt__host;
 
-#define TT__LOG_EVERY_NS 10000000000ull  /* not a terminal: one progress line per 10 s */
-#define TT__LONG_WORK_S 60.0             /* an estimate at least this long is said once */
+#define TT__LOG_EVERY_NS 10000000000ull /* not a terminal: one progress line per 10 s */
+#define TT__LONG_WORK_S 60.0            /* an estimate at least this long is said once */
 
 static uint64_t tt__now(void) { return tt_default_host()->clock_ns(); }
 static void tt__host_log(tt_log_level level, const char *plugin, const char *fmt, ...);
@@ -37,12 +37,14 @@ static void tt__fmt_time(double s, char *buf, size_t n) {
 
 /* How a user shortens each task, said with a long estimate. */
 static const char *tt__shorten(const char *task) {
-  static const struct { const char *task, *how; } hints[] = {
-    {"render", "--spp or --time to shorten"},
-    {"tuning", "--iterations to shorten"},
-    {"explore", "a smaller --explore N to shorten"},
-    {"hybrid", "--camera-index A:B or --iterations to shorten"},
-    {"sequence", "fewer frames or --spp to shorten"},
+  static const struct {
+    const char *task, *how;
+  } hints[] = {
+      {"render", "--spp or --time to shorten"},
+      {"tuning", "--iterations to shorten"},
+      {"explore", "a smaller --explore N to shorten"},
+      {"hybrid", "--camera-index A:B or --iterations to shorten"},
+      {"sequence", "fewer frames or --spp to shorten"},
   };
   for (size_t k = 0; k < sizeof hints / sizeof hints[0]; k++)
     if (!strcmp(task, hints[k].task)) return hints[k].how;
@@ -55,7 +57,10 @@ static void tt__say_estimate(const char *task, double eta) {
   const char *how = tt__shorten(task);
   double unit = eta >= 7200 ? 3600 : eta >= 120 ? 60 : 1;
   tt__host_log(TT_LOG_INFO, NULL, "%s: about %.0f %s%s%s", task, eta / unit,
-               unit == 3600 ? "h" : unit == 60 ? "min" : "s", how ? "; " : "", how ? how : "");
+               unit == 3600 ? "h"
+               : unit == 60 ? "min"
+                            : "s",
+               how ? "; " : "", how ? how : "");
 }
 
 /* Starts the progress of a new task (under the lock). */
@@ -74,8 +79,8 @@ static void tt__draw_bar(double fraction, const char *el, const char *et, uint64
   int fill = (int)(fraction * 30 + 0.5);
   for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
   bar[30] = 0;
-  fprintf(stderr, "\r\033[K%s [%s] %5.1f%%  elapsed %s  ETA %s", tt__task, bar, fraction * 100,
-          el, et);
+  fprintf(stderr, "\r\033[K%s [%s] %5.1f%%  elapsed %s  ETA %s", tt__task, bar, fraction * 100, el,
+          et);
   tt__bar_visible = 1;
 }
 
@@ -93,7 +98,7 @@ void tt__progress_update(const char *task, double fraction) {
   uint64_t now = tt__now();
   if (strncmp(task, tt__task, sizeof tt__task - 1) != 0) tt__begin_task(task, now);
   double elapsed = (now - tt__task_start_ns) * 1e-9;
-  double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : -1;  /* "?" until then */
+  double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : -1; /* "?" until then */
   int say = fraction > 0 && !tt__estimated && eta >= TT__LONG_WORK_S;
   tt__estimated |= fraction > 0;
   char el[32], et[32];
@@ -125,8 +130,8 @@ static void tt__host_log_str(tt_log_level level, const char *plugin, const char 
     tt__bar_visible = 0;
     tt__last_draw_ns = 0;
   }
-  tt__say("%s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "",
-          plugin ? "] " : "", names[level <= TT_LOG_ERROR ? level : TT_LOG_ERROR], msg);
+  tt__say("%s%s%s%s: %s\n", plugin ? "[" : "", plugin ? plugin : "", plugin ? "] " : "",
+          names[level <= TT_LOG_ERROR ? level : TT_LOG_ERROR], msg);
   pthread_mutex_unlock(&tt__lock);
 }
 

@@ -22,8 +22,8 @@ static void tt__list_one(void *user, const char *path) {
   tt__list_ctx *ctx = user;
   tt_plugin e;
   if (tt_registry_probe(ctx->reg, path, &e) == TT_OK) {
-    printf("%-22s %-10s %-8s %s\n    %s\n", e.name, tt_plugin_kind_name(e.kind), e.version,
-           path, e.description ? e.description : "");
+    printf("%-22s %-10s %-8s %s\n    %s\n", e.name, tt_plugin_kind_name(e.kind), e.version, path,
+           e.description ? e.description : "");
     ctx->found++;
   } else {
     printf("%-22s %-10s %-8s %s\n    rejected: %s\n", "?", "-", "-", path, tt_last_error());
@@ -38,8 +38,8 @@ int tt__run_list_plugins(const tt__host_options *opt) {
   printf("%-22s %-10s %-8s %s\n", "NAME", "KIND", "VERSION", "PATH");
   tt_registry_list_files(reg, tt__list_one, &ctx);
   if (!opt->quiet)
-    tt__say("%d plugin(s), %d rejected; search path: %s\n", ctx.found,
-            ctx.rejected, tt_registry_search_path(reg));
+    tt__say("%d plugin(s), %d rejected; search path: %s\n", ctx.found, ctx.rejected,
+            tt_registry_search_path(reg));
   tt_registry_destroy(reg);
   /* everything is listed first; a rejected file is then a plugin error like --plugin's */
   return ctx.rejected ? TT_EXIT_PLUGIN : TT_EXIT_OK;
@@ -62,8 +62,7 @@ static cJSON *tt__describe_one(tt_registry *reg, const char *name, int *rc) {
   cJSON *root = json ? cJSON_Parse(json) : cJSON_CreateObject();
   tt_free(json);
   if (!root) {
-    tt__say("--describe %s: %s\n", e->name,
-            space ? tt_last_error() : "out of memory");
+    tt__say("--describe %s: %s\n", e->name, space ? tt_last_error() : "out of memory");
     *rc = TT_EXIT_FAILURE;
     return NULL;
   }
@@ -121,18 +120,22 @@ int tt__run_describe(const tt__host_options *opt) {
  * motion.X/Y). Returns the channel count; `names` receives them (static strings). */
 static uint32_t tt__exr_layers(const tt_film *film, const float *rgb, float *out,
                                const char **names) {
-  static const struct { tt_aov aov; const char *names[3]; } layers[] = {
-    {TT_AOV_DEPTH, {"depth.Z"}},
-    {TT_AOV_NORMAL, {"normal.X", "normal.Y", "normal.Z"}},
-    {TT_AOV_ALBEDO, {"albedo.R", "albedo.G", "albedo.B"}},
-    {TT_AOV_MOTION, {"motion.X", "motion.Y"}},
+  static const struct {
+    tt_aov aov;
+    const char *names[3];
+  } layers[] = {
+      {TT_AOV_DEPTH, {"depth.Z"}},
+      {TT_AOV_NORMAL, {"normal.X", "normal.Y", "normal.Z"}},
+      {TT_AOV_ALBEDO, {"albedo.R", "albedo.G", "albedo.B"}},
+      {TT_AOV_MOTION, {"motion.X", "motion.Y"}},
   };
   size_t n = (size_t)tt_film_width(film) * tt_film_height(film);
   uint32_t ch = 3;
   names[0] = "R", names[1] = "G", names[2] = "B";
   for (size_t l = 0; l < sizeof layers / sizeof layers[0]; l++) {
     if (!(tt_film_aov_mask(film) & layers[l].aov)) continue;
-    for (uint32_t c = 0; c < tt_aov_channels(layers[l].aov); c++) names[ch + c] = layers[l].names[c];
+    for (uint32_t c = 0; c < tt_aov_channels(layers[l].aov); c++)
+      names[ch + c] = layers[l].names[c];
     ch += tt_aov_channels(layers[l].aov);
   }
   for (size_t i = 0; i < n; i++) {
@@ -175,13 +178,17 @@ static int tt__write_images(tt__run_record *rec, tt_film *film, char *exr, char 
     snprintf(plugins + len, sizeof plugins - len, "%s%s %s", i ? ", " : "", e->name, e->version);
   }
   tt_image_meta meta[] = {
-    {"spp", spp}, {"seed", seed}, {"render_ms", ms}, {"threads", threads},
-    {"plugins", plugins}, {"scene", tt_scene_source(rec->scene)},
-    {"software", "tunetrace " TT_VERSION_STRING},
-    /* what the AOV layers hold (film.h), for whoever reads them without our docs */
-    {"tunetrace:aovs", "depth: view-axis distance; normal: world-space shading normal; "
-                       "albedo: reflectance; motion: pixels to the previous frame; each the "
-                       "mean over the pixel's samples of the first hit"},
+      {"spp", spp},
+      {"seed", seed},
+      {"render_ms", ms},
+      {"threads", threads},
+      {"plugins", plugins},
+      {"scene", tt_scene_source(rec->scene)},
+      {"software", "tunetrace " TT_VERSION_STRING},
+      /* what the AOV layers hold (film.h), for whoever reads them without our docs */
+      {"tunetrace:aovs", "depth: view-axis distance; normal: world-space shading normal; "
+                         "albedo: reflectance; motion: pixels to the previous frame; each the "
+                         "mean over the pixel's samples of the first hit"},
   };
   size_t nmeta = sizeof meta / sizeof meta[0] - (layers ? 0 : 1);
   int rc = TT_EXIT_OK;
@@ -209,8 +216,9 @@ static int tt__check_still_post(const tt__session *s) {
     tt__say("%s %s: a post-filter runs over the frames of a sequence, and this "
             "is a still render, which it would leave unfiltered; render frames with --frames "
             "A:B --out DIR/frame_%%04d.exr (or --sequence N --out-dir DIR), or tune the filter "
-            "with --tune %s\n", s->opt->post && strstr(s->opt->post, e->name) ? "--post" : "--plugin",
-            e->name, e->name);
+            "with --tune %s\n",
+            s->opt->post && strstr(s->opt->post, e->name) ? "--post" : "--plugin", e->name,
+            e->name);
     return TT_EXIT_USAGE;
   }
   return TT_EXIT_OK;
@@ -251,11 +259,11 @@ static int tt__render_frames(const tt__host_options *opt) {
 typedef struct tt__render_job {
   const tt__host_options *opt;
   tt__session s;
-  tt__tuning *tuning;           /* NULL when nothing was tuned or explored */
+  tt__tuning *tuning; /* NULL when nothing was tuned or explored */
   char exr[4096], png[4096];
-  uint32_t target_spp;          /* UINT32_MAX: until the time budget */
-  double budget_s;              /* 0: no time budget */
-  uint64_t t0;                  /* the time budget counts from the tuning phase's start */
+  uint32_t target_spp; /* UINT32_MAX: until the time budget */
+  double budget_s;     /* 0: no time budget */
+  uint64_t t0;         /* the time budget counts from the tuning phase's start */
 } tt__render_job;
 
 /* The output files: named, then checked before the render (not found unwritable after it). */
@@ -283,9 +291,9 @@ static void tt__render_limits(tt__render_job *j) {
   if (opt->time_budget > 0 && !opt->spp) j->target_spp = UINT32_MAX;
   if (opt->quiet) return;
   int until_budget = j->target_spp == UINT32_MAX;
-  tt__say("%s: %llu triangles, %ux%u, %s%u spp, seed %llu, %u threads\n",
-          opt->scene, (unsigned long long)tt_scene_triangle_count(j->s.scene),
-          j->s.camera->width, j->s.camera->height, until_budget ? "time budget, up to " : "",
+  tt__say("%s: %llu triangles, %ux%u, %s%u spp, seed %llu, %u threads\n", opt->scene,
+          (unsigned long long)tt_scene_triangle_count(j->s.scene), j->s.camera->width,
+          j->s.camera->height, until_budget ? "time budget, up to " : "",
           until_budget ? 0 : j->target_spp, (unsigned long long)j->s.rec.seed, j->s.rec.threads);
 }
 
@@ -300,9 +308,11 @@ static int tt__render_create(tt__render_job *j, const tt__host_options *opt) {
   if (rc != TT_EXIT_OK) return rc;
   tt_loaded_plugin *predictor = tt_registry_find_kind(j->s.reg, TT_KIND_PREDICTOR);
   if (predictor && !opt->quiet)
-    j->s.host->log(TT_LOG_WARN, NULL, "%s is loaded but not used: a predictor chooses the "
+    j->s.host->log(TT_LOG_WARN, NULL,
+                   "%s is loaded but not used: a predictor chooses the "
                    "configuration in the hybrid loop (--hybrid over the camera path, or "
-                   "--predict)", tt_loaded_plugin_entry(predictor)->name);
+                   "--predict)",
+                   tt_loaded_plugin_entry(predictor)->name);
   tt__render_limits(j);
   return tt__session_start(&j->s, opt->aov_mask);
 }
@@ -315,7 +325,7 @@ static int tt__render_tune(tt__render_job *j) {
   j->t0 = j->s.host->clock_ns();
   int rc = tt__tune_phase(&j->s, &j->tuning);
   rec->tuning = j->tuning;
-  tt__session_sync(&j->s);  /* the tuning passes and builds ran through the library */
+  tt__session_sync(&j->s); /* the tuning passes and builds ran through the library */
   if (!j->tuning) return rc;
   if (j->tuning->interrupted) rec->interrupted = 1;
   /* the image holds the tuning passes; the database's answers rendered none, so their
@@ -338,8 +348,8 @@ static tt_status tt__render_pass(tt__render_job *j) {
 
 /* Prints that a pass failed; TT_EXIT_FAILURE. */
 static int tt__render_pass_failed(const tt__render_job *j) {
-  tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(j->s.integ_p)->name,
-          j->s.rec.passes, tt_last_error());
+  tt__say("%s: pass %u failed: %s\n", tt_loaded_plugin_entry(j->s.integ_p)->name, j->s.rec.passes,
+          tt_last_error());
   return TT_EXIT_FAILURE;
 }
 
@@ -384,9 +394,8 @@ static int tt__render_first_pass(tt__render_job *j) {
 static int tt__render_finish(tt__render_job *j, int rc) {
   tt__run_record *rec = &j->s.rec;
   tt__progress_finish();
-  if (rec->nonfinite)  /* a warning: --quiet keeps it */
-    tt__say("warning: %llu non-finite samples were dropped\n",
-            (unsigned long long)rec->nonfinite);
+  if (rec->nonfinite) /* a warning: --quiet keeps it */
+    tt__say("warning: %llu non-finite samples were dropped\n", (unsigned long long)rec->nonfinite);
   tt__outputs_begin();
   rec->out_exr = j->exr;
   rec->out_png = j->png;
@@ -394,9 +403,8 @@ static int tt__render_finish(tt__render_job *j, int rc) {
     int wrc = tt__write_images(rec, j->s.film, j->exr, j->png);
     if (wrc != TT_EXIT_OK && rc == TT_EXIT_OK) rc = wrc;
     else if (!j->opt->quiet && wrc == TT_EXIT_OK)
-      tt__say("wrote %s and %s (%u spp, %.1f ms, %.2f Mrays/s)\n", j->exr, j->png,
-              rec->spp, rec->render_ms,
-              rec->render_ms > 0 ? rec->rays / (rec->render_ms * 1e3) : 0.0);
+      tt__say("wrote %s and %s (%u spp, %.1f ms, %.2f Mrays/s)\n", j->exr, j->png, rec->spp,
+              rec->render_ms, rec->render_ms > 0 ? rec->rays / (rec->render_ms * 1e3) : 0.0);
   } else {
     tt__say("no pass completed: nothing to write\n");
   }
@@ -426,7 +434,7 @@ int tt__run_render(const tt__host_options *opt) {
   if (rc == TT_EXIT_OK) rc = tt__render_tune(&j);
   /* a failed tuning phase that left its record still writes the image and --stats */
   if (rc == TT_EXIT_OK || (rc != TT_EXIT_USAGE && j.tuning)) {
-    tt__progress_update("render", 0);  /* "ETA ?" until the first pass has ended */
+    tt__progress_update("render", 0); /* "ETA ?" until the first pass has ended */
     for (int more = 1; rc == TT_EXIT_OK && more;) rc = tt__render_step(&j, &more);
     if (rc == TT_EXIT_OK) rc = tt__render_first_pass(&j);
     rc = tt__render_finish(&j, rc);

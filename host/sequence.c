@@ -15,7 +15,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#define TT__SEQ_BH_RADIUS 1.0f  /* output pixels: close to the 1-pixel box TAA converges to */
+#define TT__SEQ_BH_RADIUS 1.0f /* output pixels: close to the 1-pixel box TAA converges to */
 
 /* Blackman-Harris window on [-r, r] (0 outside). */
 static double tt__bh(double x, double r) {
@@ -33,7 +33,7 @@ void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h,
   float *tmp = malloc((size_t)sh * w * 3 * sizeof(float));
   if (!tmp) return;
   for (uint32_t x = 0; x < w; x++) {
-    double cx = (x + 0.5) * scale;  /* output centre in source pixels */
+    double cx = (x + 0.5) * scale; /* output centre in source pixels */
     int i0 = (int)floor(cx) - reach, i1 = (int)floor(cx) + reach;
     for (uint32_t y = 0; y < sh; y++) {
       double acc[3] = {0, 0, 0}, ws = 0;
@@ -70,20 +70,26 @@ void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h,
 /* Everything one sequence run holds besides the session. */
 typedef struct tt__seq {
   const tt__host_options *opt;
-  tt__session ses;          /* scene, plugins, configurations, accel, integrator, film */
+  tt__session ses; /* scene, plugins, configurations, accel, integrator, film */
   const tt_post_iface *pi;
   tt_post *post;
   const char *post_name;
   uint64_t seed;
   uint32_t spp;
-  char dir[4096];           /* output folder (--out-dir, or the folder of the --out pattern) */
-  const char *pattern;      /* file name part of the --out pattern, or NULL */
+  char dir[4096];      /* output folder (--out-dir, or the folder of the --out pattern) */
+  const char *pattern; /* file name part of the --out pattern, or NULL */
 } tt__seq;
 
 /* What a sequence writes per frame. */
 typedef enum tt__seq_file {
-  TT__SEQ_COLOR, TT__SEQ_DEPTH, TT__SEQ_MOTION, TT__SEQ_REFERENCE, TT__SEQ_POST,
-  TT__SEQ_NORMAL, TT__SEQ_ALBEDO, TT__SEQ_PREVDEPTH
+  TT__SEQ_COLOR,
+  TT__SEQ_DEPTH,
+  TT__SEQ_MOTION,
+  TT__SEQ_REFERENCE,
+  TT__SEQ_POST,
+  TT__SEQ_NORMAL,
+  TT__SEQ_ALBEDO,
+  TT__SEQ_PREVDEPTH
 } tt__seq_file;
 
 /* File name (inside s->dir) of frame f's `what`. --out-dir: color_0007.exr, depth_0007.exr,
@@ -92,27 +98,27 @@ typedef enum tt__seq_file {
  * and the other files sit beside it: frame_0007.raw.exr (rendered frame under a filter),
  * frame_0007.depth.exr, frame_0007.motion.exr, frame_0007.reference.exr. */
 static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *out, size_t n) {
-  static const char *const legacy[] = {"color", "depth", "motion", "reference", "post",
-                                       "normal", "albedo", "prevdepth"};
+  static const char *const legacy[] = {"color", "depth",  "motion", "reference",
+                                       "post",  "normal", "albedo", "prevdepth"};
   if (!s->pattern) {
     snprintf(out, n, "%s_%04u.exr", legacy[what], f);
     return;
   }
   tt__seq_file main = s->opt->reference_only ? TT__SEQ_REFERENCE
-                      : s->post                ? TT__SEQ_POST
-                                               : TT__SEQ_COLOR;
+                      : s->post              ? TT__SEQ_POST
+                                             : TT__SEQ_COLOR;
   char name[1024];
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wformat-nonliteral"
-  snprintf(name, sizeof name, s->pattern, (int)f);  /* checked: one %d conversion */
+  snprintf(name, sizeof name, s->pattern, (int)f); /* checked: one %d conversion */
 #pragma GCC diagnostic pop
   if (what == main) {
     snprintf(out, n, "%s", name);
     return;
   }
-  static const char *const suffix[] = {"raw", "depth", "motion", "reference", "post",
-                                       "normal", "albedo", "prevdepth"};
-  size_t stem = strlen(name) - 4;  /* the pattern ends in .exr */
+  static const char *const suffix[] = {"raw",  "depth",  "motion", "reference",
+                                       "post", "normal", "albedo", "prevdepth"};
+  size_t stem = strlen(name) - 4; /* the pattern ends in .exr */
   snprintf(out, n, "%.*s.%s.exr", (int)stem, name, suffix[what]);
 }
 
@@ -172,7 +178,7 @@ static void tt__seq_prev_depth(const tt_camera *cam, const tt_camera *prev, cons
   tt_camera_frame cf, pf;
   if (tt_camera_frame_init(&cf, cam) != TT_OK || tt_camera_frame_init(&pf, prev) != TT_OK) {
     tt_clear_error();
-    memcpy(out, depth, (size_t)w * h * sizeof(float));  /* degenerate pose: no motion */
+    memcpy(out, depth, (size_t)w * h * sizeof(float)); /* degenerate pose: no motion */
     return;
   }
   for (uint32_t y = 0; y < h; y++)
@@ -182,8 +188,8 @@ static void tt__seq_prev_depth(const tt_camera *cam, const tt_camera *prev, cons
       if (z > 0.0f && isfinite(z)) {
         tt_ray ray;
         tt_camera_generate_ray(&cf, (float)x + 0.5f + jit[0], (float)y + 0.5f + jit[1], &ray);
-        float c = ray.dir[0] * cf.forward[0] + ray.dir[1] * cf.forward[1] +
-                  ray.dir[2] * cf.forward[2];
+        float c =
+            ray.dir[0] * cf.forward[0] + ray.dir[1] * cf.forward[1] + ray.dir[2] * cf.forward[2];
         float t = z / c, p[3];
         for (int k = 0; k < 3; k++) p[k] = ray.org[k] + t * ray.dir[k];
         if (!tt_camera_project(&pf, p, NULL, NULL, &zp)) zp = 0.0f;
@@ -193,8 +199,8 @@ static void tt__seq_prev_depth(const tt_camera *cam, const tt_camera *prev, cons
 }
 
 /* Writes an EXR, reporting failures. */
-static int tt__seq_write(const char *path, uint32_t w, uint32_t h, uint32_t ch,
-                         const float *px, const char *const *names) {
+static int tt__seq_write(const char *path, uint32_t w, uint32_t h, uint32_t ch, const float *px,
+                         const char *const *names) {
   tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
   if (tt_image_write_exr(path, w, h, ch, px, names, meta, 1) != TT_OK) {
     tt__say("cannot write %s: %s\n", path, tt_last_error());
@@ -236,24 +242,23 @@ int tt__run_sequence(const tt__host_options *opt) {
   if (opt->seq_pattern) {
     const char *slash = strrchr(opt->seq_pattern, '/');
     if (slash)
-      snprintf(s.dir, sizeof s.dir, "%.*s", (int)(slash - opt->seq_pattern + (slash == opt->seq_pattern)),
-               opt->seq_pattern);
-    else
-      snprintf(s.dir, sizeof s.dir, ".");
+      snprintf(s.dir, sizeof s.dir, "%.*s",
+               (int)(slash - opt->seq_pattern + (slash == opt->seq_pattern)), opt->seq_pattern);
+    else snprintf(s.dir, sizeof s.dir, ".");
     s.pattern = slash ? slash + 1 : opt->seq_pattern;
   } else {
     snprintf(s.dir, sizeof s.dir, "%s", opt->out_dir);
   }
   if (tt__ensure_dir(s.dir) != 0) {
-    tt__say("%s %s: cannot create the directory: %s\n",
-            opt->seq_pattern ? "--out" : "--out-dir", s.dir, strerror(errno));
+    tt__say("%s %s: cannot create the directory: %s\n", opt->seq_pattern ? "--out" : "--out-dir",
+            s.dir, strerror(errno));
     return TT_EXIT_OUTPUT;
   }
   int rc = TT_EXIT_OK;
   float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
   tt_film *film = NULL, *ref_film = NULL;
   float *prev_depth = NULL;
-  FILE *manifest = NULL;  /* memstream over mbuf: the manifest text so far */
+  FILE *manifest = NULL; /* memstream over mbuf: the manifest text so far */
   char *mbuf = NULL, mpath[4096 + 32];
   size_t mlen = 0;
   rc = tt__session_open(&s.ses, opt);
@@ -286,7 +291,8 @@ int tt__run_sequence(const tt__host_options *opt) {
       }
       if (opt->reference_only) {
         tt__say("--supersample writes the reference frames: no post-filter "
-                "(%s is loaded)\n", s.post_name);
+                "(%s is loaded)\n",
+                s.post_name);
         rc = TT_EXIT_USAGE;
         goto done;
       }
@@ -338,19 +344,25 @@ int tt__run_sequence(const tt__host_options *opt) {
     rc = TT_EXIT_OUTPUT;
     goto done;
   }
-  fprintf(manifest, "{\n  \"version\": 1,\n  \"scene\": \"%s\",\n  \"width\": %u,\n"
+  fprintf(manifest,
+          "{\n  \"version\": 1,\n  \"scene\": \"%s\",\n  \"width\": %u,\n"
           "  \"height\": %u,\n  \"fps\": %g,\n  \"spp\": %u,\n  \"seed\": %llu,\n"
           "  \"jitter_cycle\": %u,\n  \"reference_scale\": %u,\n"
           "  \"reference_filter\": \"blackman-harris radius %.1f px\",\n  \"post\": %s%s%s,\n"
           "  \"colour\": \"linear RGB\",\n  \"motion\": \"pixels, this frame -> previous\",\n"
-          "  \"frames\": [\n", tt_scene_source(s.ses.scene), w, h, fps, s.spp,
-          (unsigned long long)s.seed, TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS,
-          s.post_name ? "\"" : "", s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
+          "  \"frames\": [\n",
+          tt_scene_source(s.ses.scene), w, h, fps, s.spp, (unsigned long long)s.seed,
+          TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS, s.post_name ? "\"" : "",
+          s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
   if (!opt->quiet)
-    tt__say("sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n",
-            opt->scene, opt->seq_first, opt->seq_last, fps, w, h, s.spp,
+    tt__say("sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n", opt->scene,
+            opt->seq_first, opt->seq_last, fps, w, h, s.spp,
             k ? (opt->reference_only ? ", reference only x" : ", reference x") : "",
-            k ? (k == 2 ? "2" : k == 4 ? "4" : "K") : "", s.dir);
+            k ? (k == 2   ? "2"
+                 : k == 4 ? "4"
+                          : "K")
+              : "",
+            s.dir);
   static const char *const depth_names[] = {"Z"};
   static const char *const motion_names[] = {"X", "Y"};
   static const char *const normal_names[] = {"X", "Y", "Z"};
@@ -358,7 +370,7 @@ int tt__run_sequence(const tt__host_options *opt) {
   uint32_t nframes = opt->seq_last - opt->seq_first + 1;
   /* the jittered frame is rendered unless only the reference is asked for */
   int render_frame = !opt->reference_only || opt->aov_mask;
-  int entry_open = 0;  /* a frame's manifest entry is started but not closed */
+  int entry_open = 0; /* a frame's manifest entry is started but not closed */
   uint32_t done_frames = 0;
   for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
     /* a stop asked for during the frame before (or, for the first frame, during the scene
@@ -378,9 +390,11 @@ int tt__run_sequence(const tt__host_options *opt) {
     float jit[2];
     tt_jitter_halton23(ji, jit);
     entry_open = 1;
-    fprintf(manifest, "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
-            "\"jitter\": [%.6f, %.6f], \"reset\": %s", f == opt->seq_first ? "" : ",", f,
-            f / fps, ji, jit[0], jit[1], f == opt->seq_first ? "true" : "false");
+    fprintf(manifest,
+            "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
+            "\"jitter\": [%.6f, %.6f], \"reset\": %s",
+            f == opt->seq_first ? "" : ",", f, f / fps, ji, jit[0], jit[1],
+            f == opt->seq_first ? "true" : "false");
     double render_ms = 0, ref_ms = 0, post_ms = 0;
     const float *depth = NULL;
     if (animated) {
@@ -390,8 +404,8 @@ int tt__run_sequence(const tt__host_options *opt) {
         rc = TT_EXIT_FAILURE;
         break;
       }
-      fprintf(manifest, ", \"update\": \"%s\", \"update_ms\": %.3f", us.rebuilt ? "rebuild" : "refit",
-              us.update_ms);
+      fprintf(manifest, ", \"update\": \"%s\", \"update_ms\": %.3f",
+              us.rebuilt ? "rebuild" : "refit", us.update_ms);
       if (us.sah_cost > 0) fprintf(manifest, ", \"sah_cost\": %.4f", us.sah_cost);
     }
     if (render_frame) {
@@ -405,9 +419,9 @@ int tt__run_sequence(const tt__host_options *opt) {
       depth = tt_film_aov_const(film, TT_AOV_DEPTH);
       memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
       if (animated)
-        memcpy(prev_depth, tt_film_aov_const(film, TT_AOV_PREV_DEPTH), (size_t)w * h * sizeof(float));
-      else
-        tt__seq_prev_depth(&cam, &prev, jit, depth, w, h, prev_depth);
+        memcpy(prev_depth, tt_film_aov_const(film, TT_AOV_PREV_DEPTH),
+               (size_t)w * h * sizeof(float));
+      else tt__seq_prev_depth(&cam, &prev, jit, depth, w, h, prev_depth);
       struct {
         tt__seq_file what;
         const char *key;
@@ -416,16 +430,15 @@ int tt__run_sequence(const tt__host_options *opt) {
         const float *px;
         const char *const *names;
       } files[] = {
-        {TT__SEQ_COLOR, "color", !opt->reference_only, 3, rgb, NULL},
-        {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__AOV_DEPTH), 1, depth, depth_names},
-        {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__AOV_MOTION), 2, motion,
-         motion_names},
-        {TT__SEQ_NORMAL, "normal", !!(opt->aov_mask & TT__AOV_NORMAL), 3,
-         tt_film_aov_const(film, TT_AOV_NORMAL), normal_names},
-        {TT__SEQ_ALBEDO, "albedo", !!(opt->aov_mask & TT__AOV_ALBEDO), 3,
-         tt_film_aov_const(film, TT_AOV_ALBEDO), albedo_names},
-        {TT__SEQ_PREVDEPTH, "prev_depth", !!(opt->aov_mask & TT__AOV_PREVDEPTH), 1,
-         prev_depth, depth_names},
+          {TT__SEQ_COLOR, "color", !opt->reference_only, 3, rgb, NULL},
+          {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__AOV_DEPTH), 1, depth, depth_names},
+          {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__AOV_MOTION), 2, motion, motion_names},
+          {TT__SEQ_NORMAL, "normal", !!(opt->aov_mask & TT__AOV_NORMAL), 3,
+           tt_film_aov_const(film, TT_AOV_NORMAL), normal_names},
+          {TT__SEQ_ALBEDO, "albedo", !!(opt->aov_mask & TT__AOV_ALBEDO), 3,
+           tt_film_aov_const(film, TT_AOV_ALBEDO), albedo_names},
+          {TT__SEQ_PREVDEPTH, "prev_depth", !!(opt->aov_mask & TT__AOV_PREVDEPTH), 1, prev_depth,
+           depth_names},
       };
       for (size_t i = 0; i < sizeof files / sizeof files[0] && rc == TT_EXIT_OK; i++) {
         if (!files[i].on) continue;
@@ -433,8 +446,7 @@ int tt__run_sequence(const tt__host_options *opt) {
         snprintf(path, sizeof path, "%s/%s", s.dir, name);
         if (tt__seq_write(path, w, h, files[i].ch, files[i].px, files[i].names))
           rc = TT_EXIT_OUTPUT;
-        else
-          fprintf(manifest, ", \"%s\": \"%s\"", files[i].key, name);
+        else fprintf(manifest, ", \"%s\": \"%s\"", files[i].key, name);
       }
       if (rc != TT_EXIT_OK) break;
     }
@@ -443,7 +455,8 @@ int tt__run_sequence(const tt__host_options *opt) {
       hi.width = w * k;
       hi.height = h * k;
       uint64_t r0 = host->clock_ns();
-      if (tt__seq_render(&s, ref_film, &hi, NULL, NULL, s.seed + 1000003u * (f + 1), ref_hi) != TT_OK) {
+      if (tt__seq_render(&s, ref_film, &hi, NULL, NULL, s.seed + 1000003u * (f + 1), ref_hi) !=
+          TT_OK) {
         tt__say("reference frame %u: %s\n", f, tt_last_error());
         rc = TT_EXIT_FAILURE;
         break;
@@ -491,12 +504,12 @@ int tt__run_sequence(const tt__host_options *opt) {
     if (opt->png) {
       /* the frame the pattern names (tt__seq_name), through the display transform of stills */
       tt__seq_file main = opt->reference_only ? TT__SEQ_REFERENCE
-                          : s.post                ? TT__SEQ_POST
-                                                  : TT__SEQ_COLOR;
+                          : s.post            ? TT__SEQ_POST
+                                              : TT__SEQ_COLOR;
       const float *px = main == TT__SEQ_REFERENCE ? ref : main == TT__SEQ_POST ? post_rgb : rgb;
       tt__seq_name(&s, main, f, name, sizeof name);
       size_t len = strlen(name);
-      if (len > 4) memcpy(name + len - 4, ".png", 4);  /* every frame name ends in .exr */
+      if (len > 4) memcpy(name + len - 4, ".png", 4); /* every frame name ends in .exr */
       snprintf(path, sizeof path, "%s/%s", s.dir, name);
       tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
       if (tt_image_write_png_display(path, w, h, px, 0.0f, meta, 1) != TT_OK) {
@@ -521,11 +534,10 @@ int tt__run_sequence(const tt__host_options *opt) {
     rc = TT_EXIT_OUTPUT;
   fclose(manifest);
   manifest = NULL;
-  if (!opt->quiet && rc == TT_EXIT_OK)
-    tt__say("wrote %u frames to %s\n", nframes, s.dir);
+  if (!opt->quiet && rc == TT_EXIT_OK) tt__say("wrote %u frames to %s\n", nframes, s.dir);
   else if (rc == TT_EXIT_INTERRUPTED)
-    tt__say("interrupted: %u of %u frames written to %s (manifest.json lists them)\n",
-            done_frames, nframes, s.dir);
+    tt__say("interrupted: %u of %u frames written to %s (manifest.json lists them)\n", done_frames,
+            nframes, s.dir);
 done:
   if (manifest) fclose(manifest);
   free(mbuf);

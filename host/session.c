@@ -19,7 +19,8 @@
  * looks into the tree it was built in. */
 static int tt__uninstalled(void) {
   char exe[4096], dir[4096];
-  if (!TT_HOST_BUILD_DIR[0] || !realpath("/proc/self/exe", exe) || !realpath(TT_HOST_BUILD_DIR, dir))
+  if (!TT_HOST_BUILD_DIR[0] || !realpath("/proc/self/exe", exe) ||
+      !realpath(TT_HOST_BUILD_DIR, dir))
     return 0;
   char *slash = strrchr(exe, '/');
   if (!slash) return 0;
@@ -75,13 +76,15 @@ static int tt__load_plugins(tt__session *s) {
     failures++;
   }
   /* the hybrid loop (--hybrid, --predict) also needs a search and a model: the thesis' */
-  static const struct { uint32_t kind; const char *name; } hybrid[] = {
-    {TT_KIND_TUNER, "tuner_nm"}, {TT_KIND_PREDICTOR, "predictor_nn"}};
+  static const struct {
+    uint32_t kind;
+    const char *name;
+  } hybrid[] = {{TT_KIND_TUNER, "tuner_nm"}, {TT_KIND_PREDICTOR, "predictor_nn"}};
   for (size_t i = 0; (opt->hybrid || opt->predict_only) && i < 2; i++) {
     if (tt_registry_find_kind(tt_session_registry(s->lib), hybrid[i].kind)) continue;
     if (tt_session_load_plugin(s->lib, hybrid[i].name, NULL) != TT_OK) {
-      tt__say("default %s plugin \"%s\": %s\n", tt_plugin_kind_name(hybrid[i].kind),
-              hybrid[i].name, tt_last_error());
+      tt__say("default %s plugin \"%s\": %s\n", tt_plugin_kind_name(hybrid[i].kind), hybrid[i].name,
+              tt_last_error());
       failures++;
     }
   }
@@ -128,17 +131,19 @@ static int tt__apply_camera_index(tt__session *s) {
   const double dt = 1.0 / (opt->fps > 0 ? opt->fps : 24.0);
   tt_scene_time_range(s->scene, &t0, &t1);
   int timed = c0->key_count > 0 || tt_scene_animated(s->scene);
-  if (timed && !opt->camera_time_set) t = t0 + (t1 - t0) * (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
+  if (timed && !opt->camera_time_set)
+    t = t0 + (t1 - t0) * (double)opt->camera_index / (TT_HOST_PATH_SAMPLES - 1.0);
   if (tt_scene_animated(s->scene) && tt_scene_set_time(s->scene, t, t - dt) != TT_OK) {
     tt__say("%s\n", tt_last_error());
     return TT_EXIT_SCENE;
   }
-  if (!timed && opt->camera_time_set)  /* a warning: --quiet keeps it */
+  if (!timed && opt->camera_time_set) /* a warning: --quiet keeps it */
     tt__say("warning: --frames: the scene has no camera path; every frame "
             "uses its still camera\n");
   else if (!timed)
     tt__say("warning: --camera-index %u: the scene has no camera path; "
-            "using its still camera\n", opt->camera_index);
+            "using its still camera\n",
+            opt->camera_index);
   tt_session_set_camera_time(s->lib, t, dt);
   return TT_EXIT_OK;
 }
@@ -186,7 +191,7 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
   s->opt = opt;
   s->host = tt__host_services(opt->quiet);
   if (opt->clock_cpu) tt__host_use_cpu_clock();
-  tt_set_log_host(s->host);  /* loader warnings go through the host's log */
+  tt_set_log_host(s->host); /* loader warnings go through the host's log */
   if (opt->threads && tt_default_host_set_threads(opt->threads) != TT_OK) {
     tt__say("--threads: %s\n", tt_last_error());
     return TT_EXIT_USAGE;
@@ -204,7 +209,8 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
    * --set 2) */
   int rc = TT_EXIT_OK;
   if (tt_session_load_scene_ex(s->lib, opt->scene,
-                               opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT) != TT_OK) {
+                               opt->strict ? TT_SCENE_LOAD_STRICT : TT_SCENE_LOAD_DEFAULT) !=
+      TT_OK) {
     tt__say("%s\n", tt_last_error());
     rc = TT_EXIT_SCENE;
   } else {
@@ -213,7 +219,8 @@ int tt__session_open(tt__session *s, const tt__host_options *opt) {
       tt__say("--res: %s\n", tt_last_error());
       return TT_EXIT_USAGE;
     }
-    if ((opt->camera_index_set || opt->camera_time_set) && (rc = tt__apply_camera_index(s)) != TT_EXIT_OK)
+    if ((opt->camera_index_set || opt->camera_time_set) &&
+        (rc = tt__apply_camera_index(s)) != TT_EXIT_OK)
       return rc;
     s->camera = tt_session_camera(s->lib);
   }

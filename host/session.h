@@ -11,15 +11,15 @@
 typedef struct tt__session {
   const tt__host_options *opt;
   const tt_host *host;
-  tt_session *lib;              /* owns the scene, plugins, configurations, accel, film */
+  tt_session *lib; /* owns the scene, plugins, configurations, accel, film */
   /* views into lib, valid after tt__session_open (film: after tt__session_start) */
   tt_scene *scene;
-  const tt_camera *camera;      /* the scene's camera (after --camera-index) */
+  const tt_camera *camera; /* the scene's camera (after --camera-index) */
   tt_registry *reg;
-  tt_config *configs[TT_HOST_MAX_LIST];  /* per loaded plugin, registry order, may be NULL */
+  tt_config *configs[TT_HOST_MAX_LIST]; /* per loaded plugin, registry order, may be NULL */
   tt_loaded_plugin *accel_p, *integ_p;
   tt_film *film;
-  tt__run_record rec;           /* what the passes and builds measured, for --stats */
+  tt__run_record rec; /* what the passes and builds measured, for --stats */
 } tt__session;
 
 /* Opens a session: host services and --threads, the scene (--res, --camera-index), every

@@ -12,7 +12,7 @@
 
 static volatile sig_atomic_t tt__signals;
 static volatile sig_atomic_t tt__writing_outputs;
-static char tt__stop_msg[160];  /* set before the handlers are installed, read in them */
+static char tt__stop_msg[160]; /* set before the handlers are installed, read in them */
 static size_t tt__stop_len;
 
 static void tt__on_signal(int sig) {
@@ -26,9 +26,9 @@ static void tt__on_signal(int sig) {
 }
 
 void tt__install_signals(const char *unit) {
-  int n = snprintf(tt__stop_msg, sizeof tt__stop_msg,
-                   "\n%s: interrupted: finishing the current %s (again to abort)\n", tt__prog(),
-                   unit);
+  int n =
+      snprintf(tt__stop_msg, sizeof tt__stop_msg,
+               "\n%s: interrupted: finishing the current %s (again to abort)\n", tt__prog(), unit);
   tt__stop_len = n > 0 && (size_t)n < sizeof tt__stop_msg ? (size_t)n : 0;
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
@@ -42,5 +42,5 @@ void tt__outputs_begin(void) { tt__writing_outputs = 1; }
 
 void tt__outputs_end(void) {
   tt__writing_outputs = 0;
-  if (tt__signals > 1) _exit(TT_EXIT_INTERRUPTED);  /* the deferred second signal */
+  if (tt__signals > 1) _exit(TT_EXIT_INTERRUPTED); /* the deferred second signal */
 }

@@ -58,18 +58,19 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
   tt__add_json(o, "default_config", default_json);
   cJSON_AddNumberToObject(o, "best_cost", best_cost);
   tt__add_json(o, "best_config", best_json);
-  cJSON_AddStringToObject(o, "best_from", !best_json || !default_json ||
-                          !strcmp(best_json, default_json) ? "default" : t->mode);
+  cJSON_AddStringToObject(
+      o, "best_from",
+      !best_json || !default_json || !strcmp(best_json, default_json) ? "default" : t->mode);
   /* what the final passes used: the best, or the default when --verify rejected the best */
   static const char *verdict_names[] = {"unverified", "confirmed", "rejected", "default"};
   const char *reason = NULL;
   tt_tuning_verdict verdict = tt_tuning_get_verdict(session, &reason);
   const char *kept_json = tt_tuning_kept_json(session);
   tt__add_json(o, "kept_config", kept_json);
-  cJSON_AddStringToObject(o, "kept", kept_json && best_json && strcmp(kept_json, best_json)
-                                         ? "default" : "best");
-  cJSON_AddStringToObject(o, "verdict", verdict >= 0 && verdict <= 3 ? verdict_names[verdict]
-                                                                     : "unverified");
+  cJSON_AddStringToObject(
+      o, "kept", kept_json && best_json && strcmp(kept_json, best_json) ? "default" : "best");
+  cJSON_AddStringToObject(o, "verdict",
+                          verdict >= 0 && verdict <= 3 ? verdict_names[verdict] : "unverified");
   if (reason) cJSON_AddStringToObject(o, "kept_reason", reason);
   else cJSON_AddNullToObject(o, "kept_reason");
   cJSON_AddNumberToObject(o, "tuning_ms", t->ms);
@@ -89,8 +90,8 @@ static void tt__add_tuning(cJSON *root, const tt__tuning *t) {
     cJSON_AddNumberToObject(h, "cost", s->cost);
     cJSON_AddNumberToObject(h, "build_ms", s->build_ms);
     cJSON_AddNumberToObject(h, "render_ms", s->render_ms);
-    cJSON_AddStringToObject(h, "status", s->status >= 0 && s->status <= 2 ?
-                            status_names[s->status] : "unknown");
+    cJSON_AddStringToObject(h, "status",
+                            s->status >= 0 && s->status <= 2 ? status_names[s->status] : "unknown");
     cJSON_AddBoolToObject(h, "cached", s->cached);
     tt__add_json(h, "config", s->config);
     cJSON_AddItemToArray(hist, h);
@@ -209,7 +210,7 @@ tt_status tt__write_stats(const char *path, const tt__run_record *rec) {
   if (!text) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
   /* atomic: a kill or a full disk leaves the previous record, never half of one */
   size_t n = strlen(text);
-  text[n] = '\n';  /* cJSON_Print's buffer has room: replaces the terminator, written by size */
+  text[n] = '\n'; /* cJSON_Print's buffer has room: replaces the terminator, written by size */
   tt_status st = tt_file_write_atomic(path, text, n + 1);
   free(text);
   return st;

@@ -29,21 +29,21 @@ typedef struct tt__tune_ctx {
   const tt__host_options *opt;
   tt__tuning *t;
   tt_loaded_plugin *target;
-  size_t target_index;          /* registry index of the target (its configs[] slot) */
+  size_t target_index; /* registry index of the target (its configs[] slot) */
   uint32_t target_kind;
-  const tt_space *space;        /* the target's full space: what is measured and checked */
-  tt_space *subset;             /* the searched parameters, or NULL to search all of space */
+  const tt_space *space; /* the target's full space: what is measured and checked */
+  tt_space *subset;      /* the searched parameters, or NULL to search all of space */
   const char *objective_spec;
   tt_objective objective;
   tt_tunedb *db;
   uint32_t spp;
-  int want_pass;                /* the pass's own image (--objective rrmse, --tune-pass-images) */
-  double *ref_lum;              /* --reference as luminance, 1 per pixel */
-  char ref_hash[17];            /* FNV-1a 64 of the reference's luminance (database context) */
-  int explore;                  /* --explore N: random configurations, no tuner */
-  tt_loaded_plugin *tuner_p;    /* the tuner (NULL, or unused, with --explore) */
-  tt_tuning_target target_cb;   /* the render session as the tuning target */
-  tt_tuning_verification v;     /* --verify's result (rounds 0: not run) */
+  int want_pass;              /* the pass's own image (--objective rrmse, --tune-pass-images) */
+  double *ref_lum;            /* --reference as luminance, 1 per pixel */
+  char ref_hash[17];          /* FNV-1a 64 of the reference's luminance (database context) */
+  int explore;                /* --explore N: random configurations, no tuner */
+  tt_loaded_plugin *tuner_p;  /* the tuner (NULL, or unused, with --explore) */
+  tt_tuning_target target_cb; /* the render session as the tuning target */
+  tt_tuning_verification v;   /* --verify's result (rounds 0: not run) */
 } tt__tune_ctx;
 
 void tt__tuning_free(tt__tuning *t) {
@@ -77,19 +77,20 @@ static void tt__save_resume(tt__tune_ctx *c) {
 /* --resume FILE: continue the session saved there, if any; prints and returns an exit code. */
 static int tt__load_resume(tt__tune_ctx *c) {
   const char *path = c->opt->resume;
-  if (access(path, F_OK) != 0) return TT_EXIT_OK;  /* a first run */
+  if (access(path, F_OK) != 0) return TT_EXIT_OK; /* a first run */
   char *text = NULL;
   size_t n = 0;
   int ok = tt_file_read(path, "resume file", 0, &text, &n) == TT_OK;
   tt_status st = !ok ? TT_ERR_IO
-                 : strlen(text) != n  /* text after a NUL would not be read: refused */
-                 ? tt_set_error(TT_ERR_PARSE, "%s: a NUL byte at offset %zu (a state is text)",
-                                path, strlen(text))
-                 : tt_tuning_load_state(c->t->session, text, path);
+                 : strlen(text) != n /* text after a NUL would not be read: refused */
+                     ? tt_set_error(TT_ERR_PARSE, "%s: a NUL byte at offset %zu (a state is text)",
+                                    path, strlen(text))
+                     : tt_tuning_load_state(c->t->session, text, path);
   tt_free(text);
   if (st != TT_OK) {
     tt__say("--resume %s: %s (the file is left as it is; remove it to start "
-            "afresh)\n", path, tt_last_error());
+            "afresh)\n",
+            path, tt_last_error());
     return TT_EXIT_USAGE;
   }
   c->s->host->log(TT_LOG_INFO, NULL, "tuning: resumed from %s", path);
@@ -111,8 +112,8 @@ static void tt__on_sample(void *user, const tt_tuning_sample *sample) {
   tt_image_meta meta[3] = {{"tunetrace:iteration", it},
                            {"tunetrace:objective", c->objective.spec},
                            {"tunetrace:cost", cs}};
-  if (tt_image_write_exr(path, c->s->camera->width, c->s->camera->height, 3, sample->image,
-                         NULL, meta, 3) != TT_OK)
+  if (tt_image_write_exr(path, c->s->camera->width, c->s->camera->height, 3, sample->image, NULL,
+                         meta, 3) != TT_OK)
     c->s->host->log(TT_LOG_WARN, NULL, "tuning: --tune-pass-images: %s", tt_last_error());
 }
 
@@ -137,7 +138,8 @@ static int tt__load_reference(tt__tune_ctx *c) {
   }
   if (ch != 1 && ch < 3) {
     tt__say("--reference %s: expected 1 (luminance) or 3-4 (RGB[A]) channels, "
-            "got %u\n", path, ch);
+            "got %u\n",
+            path, ch);
     tt_free(px);
     return TT_EXIT_USAGE;
   }
@@ -153,8 +155,7 @@ static int tt__load_reference(tt__tune_ctx *c) {
   uint64_t hash = TT__FNV1A64_OFFSET;
   for (size_t i = 0; i < n; i++) {
     if (!isfinite(c->ref_lum[i])) {
-      tt__say("--reference %s: pixel (%zu, %zu) is not finite\n", path, i % w,
-              i / w);
+      tt__say("--reference %s: pixel (%zu, %zu) is not finite\n", path, i % w, i / w);
       return TT_EXIT_USAGE;
     }
     hash = tt__fnv1a64(hash, &c->ref_lum[i], sizeof c->ref_lum[i]);
@@ -177,8 +178,8 @@ static int tt__choose(tt__tune_ctx *c) {
     for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
   }
   tt_tuning_plan plan = {.struct_size = sizeof plan};
-  if (tt_session_tuning_plan(c->s->lib, opt->tune, opt->tune_params ? names : NULL, n,
-                             &plan) != TT_OK) {
+  if (tt_session_tuning_plan(c->s->lib, opt->tune, opt->tune_params ? names : NULL, n, &plan) !=
+      TT_OK) {
     tt__say("tuning: %s\n", tt_last_error());
     return TT_EXIT_USAGE;
   }
@@ -186,7 +187,7 @@ static int tt__choose(tt__tune_ctx *c) {
   c->target_index = plan.target_index;
   c->target_kind = tt_loaded_plugin_entry(c->target)->kind;
   c->space = plan.space;
-  c->subset = plan.search;  /* freed with the phase */
+  c->subset = plan.search; /* freed with the phase */
   c->objective_spec = opt->objective ? opt->objective : plan.objective;
   if (tt__parse_objective(opt->objective ? "--objective" : "tuning hint", c->objective_spec,
                           &c->objective))
@@ -194,8 +195,9 @@ static int tt__choose(tt__tune_ctx *c) {
   if ((c->objective.kind == TT_OBJECTIVE_BUILD || c->objective.kind == TT_OBJECTIVE_TOTAL) &&
       c->target_kind != TT_KIND_ACCEL) {
     tt__say("--objective %s: only an accel target builds anything; %s is "
-            "of kind %s (use render or metric:NAME)\n", c->objective_spec,
-            tt_loaded_plugin_entry(c->target)->name, tt_plugin_kind_name(c->target_kind));
+            "of kind %s (use render or metric:NAME)\n",
+            c->objective_spec, tt_loaded_plugin_entry(c->target)->name,
+            tt_plugin_kind_name(c->target_kind));
     return TT_EXIT_USAGE;
   }
   if (c->objective.kind == TT_OBJECTIVE_RRMSE) {
@@ -204,8 +206,7 @@ static int tt__choose(tt__tune_ctx *c) {
   }
   const char *dir = opt->tune_pass_images;
   if (dir && mkdir(dir, 0777) != 0 && errno != EEXIST) {
-    tt__say("--tune-pass-images %s: cannot create the folder: %s\n", dir,
-            strerror(errno));
+    tt__say("--tune-pass-images %s: cannot create the folder: %s\n", dir, strerror(errno));
     return TT_EXIT_USAGE;
   }
   c->want_pass = c->objective.kind == TT_OBJECTIVE_RRMSE || dir;
@@ -218,7 +219,8 @@ static int tt__open_db(tt__tune_ctx *c) {
   if (opt->no_db) return TT_EXIT_OK;
   char *path = opt->db ? tt__strdup(opt->db) : tt_tunedb_default_path();
   if (!path) {
-    c->s->host->log(TT_LOG_WARN, NULL, "tuning: no $XDG_DATA_HOME or $HOME: tuning without "
+    c->s->host->log(TT_LOG_WARN, NULL,
+                    "tuning: no $XDG_DATA_HOME or $HOME: tuning without "
                     "a database (use --db PATH)");
     return TT_EXIT_OK;
   }
@@ -228,8 +230,7 @@ static int tt__open_db(tt__tune_ctx *c) {
       free(path);
       return TT_EXIT_FAILURE;
     }
-    c->s->host->log(TT_LOG_WARN, NULL, "tuning: %s; tuning without a database",
-                    tt_last_error());
+    c->s->host->log(TT_LOG_WARN, NULL, "tuning: %s; tuning without a database", tt_last_error());
     c->db = NULL;
   }
   free(path);
@@ -250,8 +251,9 @@ static int tt__make_state(tt__tune_ctx *c, tt_tuning_state *state) {
     cJSON *file = cJSON_CreateString(c->opt->reference);
     char *quoted = cJSON_PrintUnformatted(file);
     cJSON_Delete(file);
-    snprintf(context + len, sizeof context - len, "%s\"reference\":{\"file\":%s,\"fnv1a64\":\"%s\"}",
-             len > 1 ? "," : "", quoted ? quoted : "\"\"", c->ref_hash);
+    snprintf(context + len, sizeof context - len,
+             "%s\"reference\":{\"file\":%s,\"fnv1a64\":\"%s\"}", len > 1 ? "," : "",
+             quoted ? quoted : "\"\"", c->ref_hash);
     cJSON_free(quoted);
   }
   strcat(context, "}");
@@ -311,16 +313,17 @@ static void tt__log_result(const tt__tune_ctx *c, const tt_tuning_verification *
   char gain[256] = "";
   if (v && v->rounds && isfinite(v->cost_ratio) && v->median_cost[0] > 0 && strcmp(from, "default"))
     snprintf(gain, sizeof gain, ": %.1f%% %s when verified (median of %u rounds side by side)",
-             100.0 * fabs(1.0 - v->cost_ratio), v->cost_ratio < 1 ? "lower" : "higher",
-             v->rounds);
+             100.0 * fabs(1.0 - v->cost_ratio), v->cost_ratio < 1 ? "lower" : "higher", v->rounds);
   else if (def > 0 && def < TT_COST_INFEASIBLE && best < TT_COST_INFEASIBLE &&
            c->objective.kind != TT_OBJECTIVE_METRIC && strcmp(from, "default"))
-    snprintf(gain, sizeof gain, ": %.1f%% %s in single tuning passes, unverified (the best of "
+    snprintf(gain, sizeof gain,
+             ": %.1f%% %s in single tuning passes, unverified (the best of "
              "many noisy passes looks better than it is; --verify 5 measures both side by side)",
              100.0 * fabs(1.0 - best / def), best <= def ? "lower" : "higher");
-  c->s->host->log(TT_LOG_INFO, NULL, "tuning: best cost %.6g (%s), default %.6g%s, after %u "
-                  "iterations (%u measured, %u from the database): %s", best, from, def, gain,
-                  st.iterations, st.measured, st.cached, best_json);
+  c->s->host->log(TT_LOG_INFO, NULL,
+                  "tuning: best cost %.6g (%s), default %.6g%s, after %u "
+                  "iterations (%u measured, %u from the database): %s",
+                  best, from, def, gain, st.iterations, st.measured, st.cached, best_json);
 }
 
 /* Checks the tuning options against what is loaded: a tuning option without a tuner or
@@ -331,9 +334,12 @@ static int tt__tune_check(const tt__host_options *opt, const tt_loaded_plugin *t
           opt->tune_pass_images))
       return TT_EXIT_OK;
     tt__say("%s needs a tuner plugin (e.g. --plugin tuner_nm) or --explore N\n",
-            opt->tune ? "--tune" : opt->objective ? "--objective"
-            : opt->iterations ? "--iterations" : opt->tune_spp ? "--tune-spp"
-            : opt->verify ? "--verify" : "--tune-pass-images");
+            opt->tune         ? "--tune"
+            : opt->objective  ? "--objective"
+            : opt->iterations ? "--iterations"
+            : opt->tune_spp   ? "--tune-spp"
+            : opt->verify     ? "--verify"
+                              : "--tune-pass-images");
     return TT_EXIT_USAGE;
   }
   if (opt->explore && opt->iterations) {
@@ -349,13 +355,17 @@ static void tt__tune_log_start(const tt__tune_ctx *c) {
   const tt__tuning *t = c->t;
   int explore = c->explore;
   if (explore && c->tuner_p && !c->opt->quiet)
-    c->s->host->log(TT_LOG_INFO, NULL, "tuning: --explore draws random configurations; the "
-                    "tuner %s is not used", tt_loaded_plugin_entry(c->tuner_p)->name);
-  c->s->host->log(TT_LOG_INFO, NULL, "%s %s %s%s%s, objective %s, %u %s, %u spp per "
-                  "measurement, database %s", explore ? "exploring" : "tuning", t->plugin,
-                  t->plugin_version, explore ? "" : " with ", explore ? "" : t->tuner,
-                  c->objective.spec, t->requested, explore ? "configurations" : "iterations",
-                  c->spp, c->db ? tt_tunedb_path(c->db) : "none");
+    c->s->host->log(TT_LOG_INFO, NULL,
+                    "tuning: --explore draws random configurations; the "
+                    "tuner %s is not used",
+                    tt_loaded_plugin_entry(c->tuner_p)->name);
+  c->s->host->log(TT_LOG_INFO, NULL,
+                  "%s %s %s%s%s, objective %s, %u %s, %u spp per "
+                  "measurement, database %s",
+                  explore ? "exploring" : "tuning", t->plugin, t->plugin_version,
+                  explore ? "" : " with ", explore ? "" : t->tuner, c->objective.spec, t->requested,
+                  explore ? "configurations" : "iterations", c->spp,
+                  c->db ? tt_tunedb_path(c->db) : "none");
 }
 
 /* The library's tuning session over the target, in `state`: it searches c->subset (when
@@ -412,8 +422,9 @@ static int tt__tune_create(tt__tune_ctx *c, tt__session *s, tt_loaded_plugin *tu
   int explore = c->explore;
   t->mode = explore ? "explore" : "tune";
   t->tuner = explore ? NULL : tt_loaded_plugin_entry(tuner_p)->name;
-  t->requested = explore ? opt->explore : opt->iterations ? opt->iterations
-                                                          : TT_HOST_DEFAULT_ITERATIONS;
+  t->requested = explore           ? opt->explore
+                 : opt->iterations ? opt->iterations
+                                   : TT_HOST_DEFAULT_ITERATIONS;
   int rc = tt__choose(c);
   if (rc == TT_EXIT_OK) rc = tt__open_db(c);
   if (rc != TT_EXIT_OK) return rc;
@@ -463,11 +474,12 @@ static void tt__tune_verify(tt__tune_ctx *c) {
   if (st == TT_ERR_INTERRUPTED) t->interrupted = 1;
   if ((st != TT_OK && st != TT_ERR_INTERRUPTED) || !v->rounds) return;
   t->verify_json = tt__verify_json(v);
-  c->s->host->log(TT_LOG_INFO, NULL, "tuning: verify, %u rounds side by side: render median "
+  c->s->host->log(TT_LOG_INFO, NULL,
+                  "tuning: verify, %u rounds side by side: render median "
                   "%.4g ms (default) vs %.4g ms (best), ratio %.4f; build+render %.4g vs "
-                  "%.4g ms, ratio %.4f", v->rounds, v->median_render_ms[0],
-                  v->median_render_ms[1], v->render_ratio, v->median_total_ms[0],
-                  v->median_total_ms[1], v->total_ratio);
+                  "%.4g ms, ratio %.4f",
+                  v->rounds, v->median_render_ms[0], v->median_render_ms[1], v->render_ratio,
+                  v->median_total_ms[0], v->median_total_ms[1], v->total_ratio);
 }
 
 /* Finish: --verify, then the kept configuration (the best, or the default when --verify
@@ -477,14 +489,13 @@ static int tt__tune_finish(tt__tune_ctx *c, int rc) {
   tt__tuning *t = c->t;
   tt__session *s = c->s;
   if (c->opt->verify && !t->interrupted && rc == TT_EXIT_OK) tt__tune_verify(c);
-  if (tt_config_from_json(s->configs[c->target_index], tt_tuning_kept_json(t->session),
-                          "tuning") != TT_OK)
+  if (tt_config_from_json(s->configs[c->target_index], tt_tuning_kept_json(t->session), "tuning") !=
+      TT_OK)
     s->host->log(TT_LOG_ERROR, NULL, "tuning: cannot restore the kept configuration: %s",
                  tt_last_error());
   if (!t->interrupted && rc == TT_EXIT_OK &&
       tt_tuning_apply_best(t->session, &c->target_cb, NULL) != TT_OK) {
-    tt__say("tuning: %s rejected the best configuration: %s\n", t->plugin,
-            tt_last_error());
+    tt__say("tuning: %s rejected the best configuration: %s\n", t->plugin, tt_last_error());
     rc = TT_EXIT_FAILURE;
   }
   tt__log_result(c, &c->v);
@@ -492,8 +503,10 @@ static int tt__tune_finish(tt__tune_ctx *c, int rc) {
   tt_tuning_get_stats(t->session, &ts);
   if (ts.unrecorded) {
     /* the image is still rendered and written; the exit status says records were lost */
-    s->host->log(TT_LOG_ERROR, NULL, "tuning: %u of %u measurements could not be recorded in "
-                 "the database %s", ts.unrecorded, ts.measured, t->db_path);
+    s->host->log(TT_LOG_ERROR, NULL,
+                 "tuning: %u of %u measurements could not be recorded in "
+                 "the database %s",
+                 ts.unrecorded, ts.measured, t->db_path);
     if (rc == TT_EXIT_OK) rc = TT_EXIT_OUTPUT;
   }
   return rc;

@@ -71,8 +71,9 @@ int tt_mpi_child_poll(tt_mpi_child *c, int block) {
     c->exit_code = -1;
     c->cpu_s = 0;
   } else {
-    c->exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
-                   : WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+    c->exit_code = WIFEXITED(status)     ? WEXITSTATUS(status)
+                   : WIFSIGNALED(status) ? 128 + WTERMSIG(status)
+                                         : -1;
     c->cpu_s = ru.ru_utime.tv_sec + ru.ru_utime.tv_usec * 1e-6 + ru.ru_stime.tv_sec +
                ru.ru_stime.tv_usec * 1e-6;
   }
@@ -102,7 +103,7 @@ void tt_mpi_child_kill(pid_t pid, int sig) {
 
 void tt_mpi_file_tail(const char *path, char *buf, size_t max) {
   buf[0] = 0;
-  if (tt_file_check_regular(path, "log") != TT_OK) return;  /* never block on a FIFO */
+  if (tt_file_check_regular(path, "log") != TT_OK) return; /* never block on a FIFO */
   FILE *f = fopen(path, "rb");
   if (!f) return;
   fseek(f, 0, SEEK_END);

@@ -7,11 +7,11 @@
 #include <sys/types.h>
 
 typedef struct tt_mpi_child {
-  pid_t pid;          /* 0: none running */
-  int pidfd;          /* readable when the child ends (pidfd_open); -1 where unsupported */
-  double t0;          /* start (monotonic seconds) */
+  pid_t pid; /* 0: none running */
+  int pidfd; /* readable when the child ends (pidfd_open); -1 where unsupported */
+  double t0; /* start (monotonic seconds) */
   double wall_s, cpu_s;
-  int exit_code;      /* exit status, 128 + signal if killed, -1 if it could not start */
+  int exit_code; /* exit status, 128 + signal if killed, -1 if it could not start */
 } tt_mpi_child;
 
 /* Monotonic seconds. */

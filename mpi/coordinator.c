@@ -47,8 +47,8 @@ static void tt__maybe_sequence(tt_mpi_coord *c, size_t k) {
 }
 
 /* Merges one finished job (its database file at `path`, or none) and reports it. */
-static void tt__merge(tt_mpi_coord *c, long k, int rank, int ok, const char *path,
-                      const char *note, double wall_s) {
+static void tt__merge(tt_mpi_coord *c, long k, int rank, int ok, const char *path, const char *note,
+                      double wall_s) {
   const tt_mpi_job *j = &c->jobs->jobs[k];
   c->finished++;
   uint64_t rows = 0;
@@ -66,8 +66,8 @@ static void tt__merge(tt_mpi_coord *c, long k, int rank, int ok, const char *pat
     cJSON *n = cJSON_Parse(note);
     const cJSON *e = n ? cJSON_GetObjectItemCaseSensitive(n, "error") : NULL;
     const cJSON *x = n ? cJSON_GetObjectItemCaseSensitive(n, "exit") : NULL;
-    fprintf(stderr, "tunetrace-mpi: job %s (jobs[%zu]) FAILED on rank %d (exit %d):\n%s\n",
-            j->tag, j->item, rank, cJSON_IsNumber(x) ? (int)x->valuedouble : -1,
+    fprintf(stderr, "tunetrace-mpi: job %s (jobs[%zu]) FAILED on rank %d (exit %d):\n%s\n", j->tag,
+            j->item, rank, cJSON_IsNumber(x) ? (int)x->valuedouble : -1,
             cJSON_IsString(e) ? e->valuestring : "");
     cJSON_Delete(n);
   }
@@ -107,16 +107,16 @@ static void tt__receive(tt_mpi_coord *c, int rank, const unsigned char *msg, int
 }
 
 /* rank 0's view of a worker */
-enum { PEER_WORKING, PEER_WAITING, PEER_LOST };  /* WAITING: asked, no job left for it */
+enum { PEER_WORKING, PEER_WAITING, PEER_LOST }; /* WAITING: asked, no job left for it */
 typedef struct tt_mpi_peer {
   int state;
-  double seen;          /* the last message from it (monotonic s) */
-  long job;             /* the job it runs (-1: none) */
-  int job_lost;         /* its job was counted lost */
-  MPI_Request recv;     /* a result being received (MPI_REQUEST_NULL: none) */
+  double seen;      /* the last message from it (monotonic s) */
+  long job;         /* the job it runs (-1: none) */
+  int job_lost;     /* its job was counted lost */
+  MPI_Request recv; /* a result being received (MPI_REQUEST_NULL: none) */
   unsigned char *buf;
   int len;
-  int64_t reply;        /* the job number last sent to it (the buffer of that send) */
+  int64_t reply; /* the job number last sent to it (the buffer of that send) */
 } tt_mpi_peer;
 
 /* What rank 0 keeps while the run goes on. */
@@ -124,9 +124,9 @@ typedef struct tt__loop {
   tt_mpi_coord *c;
   int size;
   const char *scratch;
-  tt_mpi_peer *peers;    /* per rank (0 unused) */
-  int active;            /* workers not yet told to stop, nor lost */
-  tt_mpi_run own;        /* rank 0's own job */
+  tt_mpi_peer *peers; /* per rank (0 unused) */
+  int active;         /* workers not yet told to stop, nor lost */
+  tt_mpi_run own;     /* rank 0's own job */
   int own_running;
   double now, last_alive;
 } tt__loop;
@@ -144,8 +144,10 @@ static void tt__peer_result(tt__loop *l, int rank) {
   tt_mpi_peer *p = &l->peers[rank];
   int was_lost = p->state == PEER_LOST;
   if (was_lost) {
-    fprintf(stderr, "tunetrace-mpi: rank %d answered again after being taken as lost; its "
-            "result is taken, and it gets no new job\n", rank);
+    fprintf(stderr,
+            "tunetrace-mpi: rank %d answered again after being taken as lost; its "
+            "result is taken, and it gets no new job\n",
+            rank);
     if (p->job_lost) {
       c->finished--;
       c->lost--;
@@ -155,7 +157,7 @@ static void tt__peer_result(tt__loop *l, int rank) {
     tt_mpi_result_head h;
     memcpy(&h, p->buf, sizeof h);
     if (h.job >= 0) {
-      if (tt_mpi_stop && h.exit_code != 0) c->finished++;  /* interrupted: redone by a rerun */
+      if (tt_mpi_stop && h.exit_code != 0) c->finished++; /* interrupted: redone by a rerun */
       else tt__receive(c, rank, p->buf, p->len);
     }
   }
@@ -164,7 +166,7 @@ static void tt__peer_result(tt__loop *l, int rank) {
   p->job_lost = 0;
   int64_t next = was_lost ? -1 : tt__next_job(c);
   p->job = (long)next;
-  if (next < 0) {  /* answered when the run is over (tt__coordinate) */
+  if (next < 0) { /* answered when the run is over (tt__coordinate) */
     if (!was_lost) l->active--;
     p->state = PEER_WAITING;
     return;
@@ -230,7 +232,7 @@ static int tt__receive_messages(tt__loop *l) {
       p->buf = malloc(len > 0 ? (size_t)len : 1);
       p->len = len;
       MPI_Imrecv(p->buf, len, MPI_BYTE, &msg, &p->recv);
-    } else {  /* a heartbeat (or a message out of turn): read and dropped */
+    } else { /* a heartbeat (or a message out of turn): read and dropped */
       unsigned char *junk = malloc(len > 0 ? (size_t)len : 1);
       MPI_Mrecv(junk, len, MPI_BYTE, &msg, MPI_STATUS_IGNORE);
       free(junk);
@@ -249,15 +251,19 @@ static void tt__peer_silent(tt__loop *l, int r) {
   p->state = PEER_LOST;
   if (p->job >= 0) {
     const tt_mpi_job *j = &c->jobs->jobs[p->job];
-    fprintf(stderr, "tunetrace-mpi: rank %d silent for %.0f s: taken as dead; its job "
+    fprintf(stderr,
+            "tunetrace-mpi: rank %d silent for %.0f s: taken as dead; its job "
             "%s (jobs[%zu]) is lost (the same command redoes it), the other ranks go "
-            "on\n", r, l->now - p->seen, j->tag, j->item);
+            "on\n",
+            r, l->now - p->seen, j->tag, j->item);
     p->job_lost = 1;
     c->finished++;
     c->lost++;
   } else {
-    fprintf(stderr, "tunetrace-mpi: rank %d silent for %.0f s: taken as dead (it held "
-            "no job)\n", r, l->now - p->seen);
+    fprintf(stderr,
+            "tunetrace-mpi: rank %d silent for %.0f s: taken as dead (it held "
+            "no job)\n",
+            r, l->now - p->seen);
   }
 }
 
@@ -297,10 +303,11 @@ static int tt__loop_end(tt__loop *l) {
   for (int r = 1; r < l->size; r++) lost |= l->peers[r].state == PEER_LOST;
   tt_mpi_skip_finalize = lost;
   for (int r = 1; r < l->size; r++)
-    if (l->peers[r].state == PEER_WAITING) tt__reply(&l->peers[r], r, lost ? REPLY_EXIT : REPLY_FINALIZE);
+    if (l->peers[r].state == PEER_WAITING)
+      tt__reply(&l->peers[r], r, lost ? REPLY_EXIT : REPLY_FINALIZE);
   if (lost)
     fprintf(stderr, "tunetrace-mpi: a rank was lost: the ranks end without MPI_Finalize (Open "
-            "MPI 4.1's would wait for the dead one)\n");
+                    "MPI 4.1's would wait for the dead one)\n");
   /* receives still open belong to lost ranks: their buffers stay with MPI */
   free(l->peers);
   return tt_mpi_stop ? EXIT_INTERRUPTED : (c->failed || c->lost) ? EXIT_FAILED : EXIT_OK;
@@ -368,11 +375,11 @@ static int tt__list(const tt_mpi_coord *c) {
 /* Without mpirun --enable-recovery a dying rank ends the whole run: said at the start. */
 static void tt__recovery_note(int size) {
   const char *rec = getenv("OMPI_MCA_orte_enable_recovery");
-  if (size > 1 && getenv("OMPI_COMM_WORLD_SIZE") && !(rec && (!strcmp(rec, "1") ||
-                                                       !strcmp(rec, "true"))))
+  if (size > 1 && getenv("OMPI_COMM_WORLD_SIZE") &&
+      !(rec && (!strcmp(rec, "1") || !strcmp(rec, "true"))))
     fprintf(stderr, "tunetrace-mpi: note: mpirun without --enable-recovery: a rank that "
-            "dies ends the whole run (Open MPI stops every rank; their jobs in flight are "
-            "lost); with it, only the dead rank's job is lost\n");
+                    "dies ends the whole run (Open MPI stops every rank; their jobs in flight are "
+                    "lost); with it, only the dead rank's job is lost\n");
 }
 
 /* Sequences finished by earlier runs whose manifest is missing get it now. */
@@ -390,8 +397,10 @@ int tt_mpi_coord_run(tt_mpi_coord *c, int size, const char *scratch) {
   const tt_mpi_opts *o = c->o;
   const tt_mpi_jobs *jobs = c->jobs;
   if (o->list || o->check) return tt__list(c);
-  fprintf(stderr, "tunetrace-mpi: %zu jobs in %s, %zu already in %s, %ld to run on %d "
-          "rank%s\n", jobs->count, o->jobs, jobs->count - (size_t)c->todo, o->db, c->todo, size,
+  fprintf(stderr,
+          "tunetrace-mpi: %zu jobs in %s, %zu already in %s, %ld to run on %d "
+          "rank%s\n",
+          jobs->count, o->jobs, jobs->count - (size_t)c->todo, o->db, c->todo, size,
           size == 1 ? "" : "s");
   snprintf(c->scratch, sizeof c->scratch, "%s", scratch);
   c->t0 = tt_mpi_now();
@@ -401,9 +410,11 @@ int tt_mpi_coord_run(tt_mpi_coord *c, int size, const char *scratch) {
   tt__old_sequences(c);
   long left = 0;
   for (size_t i = 0; i < jobs->count; i++) left += !c->done[i];
-  fprintf(stderr, "tunetrace-mpi: %s: %zu of %zu jobs done, %ld failed and %ld lost with "
-          "their rank in this run%s\n", o->db, jobs->count - (size_t)left, jobs->count,
-          c->failed, c->lost, left ? " (run the same command again to continue)" : "");
+  fprintf(stderr,
+          "tunetrace-mpi: %s: %zu of %zu jobs done, %ld failed and %ld lost with "
+          "their rank in this run%s\n",
+          o->db, jobs->count - (size_t)left, jobs->count, c->failed, c->lost,
+          left ? " (run the same command again to continue)" : "");
   return rc == EXIT_OK && left && !o->max_jobs ? EXIT_FAILED : rc;
 }
 

@@ -16,9 +16,9 @@ typedef struct tt_mpi_coord {
   const tt_mpi_opts *o;
   const tt_mpi_jobs *jobs;
   tt_tunedb *db;
-  unsigned char *done;   /* per job: merged (before or in this run) */
-  unsigned char *given;  /* per job: handed out in this run */
-  size_t next;           /* first job maybe not handed out */
+  unsigned char *done;  /* per job: merged (before or in this run) */
+  unsigned char *given; /* per job: handed out in this run */
+  size_t next;          /* first job maybe not handed out */
   long handed, todo, finished, failed, lost;
   double t0;
   char scratch[4200];

@@ -54,7 +54,7 @@ int tt_mpi_frames_prepare(const tt_mpi_job *job, char *dir, size_t dn, char *err
   snprintf(work, sizeof work, "%s/" TT__WORK, job->out_dir);
   if (tt__mkdirs(work, err, n)) return -1;
   tt__range_paths(job, dir, dn, NULL, 0);
-  tt_mpi_remove_folder(dir);  /* what a killed run of this range left */
+  tt_mpi_remove_folder(dir); /* what a killed run of this range left */
   return tt__mkdir(dir, err, n);
 }
 

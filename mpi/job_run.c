@@ -104,8 +104,9 @@ unsigned char *tt_mpi_run_pack(const tt_mpi_run *r, int ok, const char *note, in
     ok = 0;
     dbn = 0;
   }
-  tt_mpi_result_head h = {r->index, ok ? 0 : (r->child.exit_code ? r->child.exit_code : 1),
-                          (int64_t)dbn, (int64_t)strlen(note), r->child.wall_s, r->child.cpu_s};
+  tt_mpi_result_head h = {r->index,        ok ? 0 : (r->child.exit_code ? r->child.exit_code : 1),
+                          (int64_t)dbn,    (int64_t)strlen(note),
+                          r->child.wall_s, r->child.cpu_s};
   size_t total = sizeof h + dbn + strlen(note);
   unsigned char *m = malloc(total);
   memcpy(m, &h, sizeof h);

@@ -16,7 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TT_MPI_CAMERAS 100  /* the host's path samples (--camera-index 0..99) */
+#define TT_MPI_CAMERAS 100 /* the host's path samples (--camera-index 0..99) */
 
 typedef struct tt__ctx {
   const char *source;
@@ -24,8 +24,8 @@ typedef struct tt__ctx {
   size_t n;
   tt_mpi_jobs *out;
   size_t cap;
-  size_t *index;      /* open-addressing set of the jobs' tags: job index + 1, 0 = empty */
-  size_t index_cap;   /* a power of two, at least twice the job count */
+  size_t *index;    /* open-addressing set of the jobs' tags: job index + 1, 0 = empty */
+  size_t index_cap; /* a power of two, at least twice the job count */
 } tt__ctx;
 
 static int tt__fail(tt__ctx *c, size_t item, const char *key, const char *fmt, ...) {
@@ -37,8 +37,8 @@ static int tt__fail(tt__ctx *c, size_t item, const char *key, const char *fmt, .
   if (item == (size_t)-1)
     snprintf(c->err, c->n, "%s: %s%s%s", c->source, key ? key : "", key ? ": " : "", what);
   else
-    snprintf(c->err, c->n, "%s: jobs[%zu]%s%s: %s", c->source, item, key ? "." : "",
-             key ? key : "", what);
+    snprintf(c->err, c->n, "%s: jobs[%zu]%s%s: %s", c->source, item, key ? "." : "", key ? key : "",
+             what);
   return -1;
 }
 
@@ -61,8 +61,8 @@ void tt_mpi_jobs_free(tt_mpi_jobs *jobs) {
 }
 
 /* Appends a string array (checked) to args; -1 on a bad item. */
-static int tt__add_args(tt__ctx *c, size_t item, const char *key, const cJSON *arr,
-                        char ***args, size_t *n) {
+static int tt__add_args(tt__ctx *c, size_t item, const char *key, const cJSON *arr, char ***args,
+                        size_t *n) {
   if (!arr) return 0;
   if (!cJSON_IsArray(arr))
     return tt__fail(c, item, key, "expected an array of host arguments (strings)");
@@ -79,8 +79,9 @@ static int tt__add_args(tt__ctx *c, size_t item, const char *key, const cJSON *a
 
 /* The TT__MPI_* bit of a job kind, and its name. */
 static unsigned tt__kind_bit(tt_mpi_kind kind) {
-  return kind == TT_MPI_TUNE ? TT__MPI_TUNE : kind == TT_MPI_EXPLORE ? TT__MPI_EXPLORE
-                                                                     : TT__MPI_FRAMES;
+  return kind == TT_MPI_TUNE      ? TT__MPI_TUNE
+         : kind == TT_MPI_EXPLORE ? TT__MPI_EXPLORE
+                                  : TT__MPI_FRAMES;
 }
 
 static const char *tt__kind_name(tt_mpi_kind kind) {
@@ -103,7 +104,7 @@ static int tt__check_owned(tt__ctx *c, size_t item, tt_mpi_kind kind, char **arg
                           ? "a post-filter's history would cross the frame ranges; render "
                             "the frames, then filter the whole sequence"
                           : "use the job's own keys");
-    if (o->arg == TT__ARG_ONE && !value) i++;  /* its value is not an option */
+    if (o->arg == TT__ARG_ONE && !value) i++; /* its value is not an option */
   }
   return 0;
 }
@@ -113,14 +114,14 @@ static int tt__check_owned(tt__ctx *c, size_t item, tt_mpi_kind kind, char **arg
 static int tt__int_in(const cJSON *v, long lo, long hi) {
   if (!cJSON_IsNumber(v)) return 0;
   double d = v->valuedouble;
-  if (!(d >= (double)lo && d <= (double)hi)) return 0;  /* NaN fails both */
+  if (!(d >= (double)lo && d <= (double)hi)) return 0; /* NaN fails both */
   return d == (double)(long)d;
 }
 
 /* Reads an integer list key (`one` or `many`), into vals; -1 on error, else the count (0:
  * neither given). */
-static int tt__int_list(tt__ctx *c, size_t item, const cJSON *o, const char *one,
-                        const char *many, long lo, long hi, long *vals, int max) {
+static int tt__int_list(tt__ctx *c, size_t item, const cJSON *o, const char *one, const char *many,
+                        long lo, long hi, long *vals, int max) {
   const cJSON *a = cJSON_GetObjectItemCaseSensitive(o, one);
   const cJSON *b = strcmp(one, many) ? cJSON_GetObjectItemCaseSensitive(o, many) : NULL;
   if (a && b) return tt__fail(c, item, many, "give either %s or %s", one, many);
@@ -143,8 +144,8 @@ static int tt__int_list(tt__ctx *c, size_t item, const cJSON *o, const char *one
   return k;
 }
 
-static int tt__str_list(tt__ctx *c, size_t item, const cJSON *o, const char *one,
-                        const char *many, const char **vals, int max) {
+static int tt__str_list(tt__ctx *c, size_t item, const cJSON *o, const char *one, const char *many,
+                        const char **vals, int max) {
   const cJSON *a = cJSON_GetObjectItemCaseSensitive(o, one);
   const cJSON *b = cJSON_GetObjectItemCaseSensitive(o, many);
   if (a && b) return tt__fail(c, item, many, "give either %s or %s", one, many);
@@ -206,9 +207,10 @@ static int tt__check_count(tt__ctx *c, size_t item, const char *key, uint64_t mo
                            const char *how) {
   uint64_t total = (uint64_t)c->out->count + more;
   if (total <= TT_MPI_MAX_JOBS) return 0;
-  return tt__fail(c, item, key, "%s makes %llu jobs (%llu with the items before it); a job "
-                  "list holds at most %d: cut it into several lists%s", how,
-                  (unsigned long long)more, (unsigned long long)total, TT_MPI_MAX_JOBS,
+  return tt__fail(c, item, key,
+                  "%s makes %llu jobs (%llu with the items before it); a job "
+                  "list holds at most %d: cut it into several lists%s",
+                  how, (unsigned long long)more, (unsigned long long)total, TT_MPI_MAX_JOBS,
                   key && !strcmp(key, "range") ? ", or give a larger chunk" : "");
 }
 
@@ -240,8 +242,7 @@ static int tt__push(tt__ctx *c, size_t item, const tt_mpi_job *proto, char **arg
   j->args = n ? malloc(n * sizeof *j->args) : NULL;
   j->nargs = n;
   int oom = !j->tag || !j->scene || (proto->objective && !j->objective) ||
-            (proto->out_dir && !j->out_dir) || (proto->sequence && !j->sequence) ||
-            (n && !j->args);
+            (proto->out_dir && !j->out_dir) || (proto->sequence && !j->sequence) || (n && !j->args);
   for (size_t i = 0; j->args && i < n; i++) oom |= !(j->args[i] = tt__strdup(args[i]));
   j->item = item;
   if (oom) {
@@ -270,26 +271,29 @@ static int tt__frame_number(const char *s, uint32_t *out, const char **end) {
 }
 
 static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size_t ncommon) {
-  static const char *const keys[] = {"kind", "scene", "camera", "cameras", "objective",
-                                     "objectives", "samples", "seed", "seeds", "range", "chunk",
-                                     "out_dir", "args", NULL};
+  static const char *const keys[] = {"kind",       "scene",   "camera", "cameras", "objective",
+                                     "objectives", "samples", "seed",   "seeds",   "range",
+                                     "chunk",      "out_dir", "args",   NULL};
   if (!cJSON_IsObject(o)) return tt__fail(c, item, NULL, "expected an object");
   for (const cJSON *k = o->child; k; k = k->next) {
     int known = 0;
     for (const char *const *p = keys; *p; p++) known |= !strcmp(k->string, *p);
-    if (!known) return tt__fail(c, item, k->string, "unknown key (known: kind, scene, camera(s), "
-                                "objective(s), samples, seed(s), range, chunk, out_dir, args)");
+    if (!known)
+      return tt__fail(c, item, k->string,
+                      "unknown key (known: kind, scene, camera(s), "
+                      "objective(s), samples, seed(s), range, chunk, out_dir, args)");
   }
   const cJSON *kind = cJSON_GetObjectItemCaseSensitive(o, "kind");
   tt_mpi_job proto;
   memset(&proto, 0, sizeof proto);
   proto.camera = -1;
-  if (!cJSON_IsString(kind) || (strcmp(kind->valuestring, "tune") &&
-                                strcmp(kind->valuestring, "explore") &&
-                                strcmp(kind->valuestring, "frames")))
+  if (!cJSON_IsString(kind) ||
+      (strcmp(kind->valuestring, "tune") && strcmp(kind->valuestring, "explore") &&
+       strcmp(kind->valuestring, "frames")))
     return tt__fail(c, item, "kind", "expected \"tune\", \"explore\" or \"frames\"");
-  proto.kind = !strcmp(kind->valuestring, "tune") ? TT_MPI_TUNE
-               : !strcmp(kind->valuestring, "explore") ? TT_MPI_EXPLORE : TT_MPI_FRAMES;
+  proto.kind = !strcmp(kind->valuestring, "tune")      ? TT_MPI_TUNE
+               : !strcmp(kind->valuestring, "explore") ? TT_MPI_EXPLORE
+                                                       : TT_MPI_FRAMES;
   const cJSON *scene = cJSON_GetObjectItemCaseSensitive(o, "scene");
   if (!cJSON_IsString(scene) || !scene->valuestring[0])
     return tt__fail(c, item, "scene", "expected the path of a scene file");
@@ -313,9 +317,10 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
   long cams[TT_MPI_CAMERAS], seeds[1024];
   const char *objs[16];
   if (proto.kind == TT_MPI_FRAMES) {
-    for (const char *const *k = (const char *const[]){"camera", "cameras", "objective",
-                                                      "objectives", "samples", "seed", "seeds",
-                                                      NULL}; *k; k++)
+    for (const char *const *k =
+             (const char *const[]){"camera", "cameras", "objective", "objectives", "samples",
+                                   "seed", "seeds", NULL};
+         *k; k++)
       if (cJSON_GetObjectItemCaseSensitive(o, *k)) {
         tt__fail(c, item, *k, "not a key of a frames job (range, chunk, out_dir, args)");
         goto done;
@@ -325,7 +330,8 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
     const char *p = cJSON_IsString(range) ? range->valuestring : "";
     if (!cJSON_IsString(range) || tt__frame_number(p, &a, &p) || *p++ != ':' ||
         tt__frame_number(p, &b, &p) || *p || a > b) {
-      tt__fail(c, item, "range", "expected frames \"A:B\" with A <= B (A..B inclusive, "
+      tt__fail(c, item, "range",
+               "expected frames \"A:B\" with A <= B (A..B inclusive, "
                "integers in 0..4294967295), got %s",
                cJSON_IsString(range) ? range->valuestring : "no string");
       goto done;
@@ -340,10 +346,12 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
       goto done;
     }
     for (size_t i = 0; i < c->out->count; i++)
-      if (c->out->jobs[i].kind == TT_MPI_FRAMES && !strcmp(c->out->jobs[i].out_dir,
-                                                          dir->valuestring)) {
-        tt__fail(c, item, "out_dir", "%s is the folder of jobs[%zu] too (one sequence per "
-                 "folder: each has one manifest)", dir->valuestring, c->out->jobs[i].item);
+      if (c->out->jobs[i].kind == TT_MPI_FRAMES &&
+          !strcmp(c->out->jobs[i].out_dir, dir->valuestring)) {
+        tt__fail(c, item, "out_dir",
+                 "%s is the folder of jobs[%zu] too (one sequence per "
+                 "folder: each has one manifest)",
+                 dir->valuestring, c->out->jobs[i].item);
         goto done;
       }
     char seq[8192];
@@ -369,8 +377,8 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
       tt__fail(c, item, *k, "a key of frames jobs only");
       goto done;
     }
-  int ncam = tt__int_list(c, item, o, "camera", "cameras", 0, TT_MPI_CAMERAS - 1, cams,
-                          TT_MPI_CAMERAS);
+  int ncam =
+      tt__int_list(c, item, o, "camera", "cameras", 0, TT_MPI_CAMERAS - 1, cams, TT_MPI_CAMERAS);
   if (ncam < 0) goto done;
   if (ncam == 0) {
     tt__fail(c, item, "camera", "expected camera (0..99, the scene's path sample) or cameras");
@@ -381,8 +389,10 @@ static int tt__item(tt__ctx *c, size_t item, const cJSON *o, char **common, size
   for (int i = 0; i < nobj; i++) {
     tt_objective ob;
     if (tt_objective_parse(objs[i], &ob) != TT_OK) {
-      tt__fail(c, item, nobj == 1 && cJSON_GetObjectItemCaseSensitive(o, "objective")
-                            ? "objective" : "objectives", "%s", tt_last_error());
+      tt__fail(c, item,
+               nobj == 1 && cJSON_GetObjectItemCaseSensitive(o, "objective") ? "objective"
+                                                                             : "objectives",
+               "%s", tt_last_error());
       goto done;
     }
   }
@@ -436,8 +446,7 @@ done:
   return rc;
 }
 
-int tt_mpi_jobs_parse(const char *text, const char *source, tt_mpi_jobs *out, char *err,
-                      size_t n) {
+int tt_mpi_jobs_parse(const char *text, const char *source, tt_mpi_jobs *out, char *err, size_t n) {
   memset(out, 0, sizeof *out);
   tt__ctx c = {source, err, n, out, 0, NULL, 0};
   const char *end = NULL;
@@ -445,7 +454,10 @@ int tt_mpi_jobs_parse(const char *text, const char *source, tt_mpi_jobs *out, ch
   if (!root) {
     size_t at = end ? (size_t)(end - text) : 0, line = 1, col = 1;
     for (size_t i = 0; i < at && text[i]; i++) {
-      if (text[i] == '\n') { line++; col = 1; } else col++;
+      if (text[i] == '\n') {
+        line++;
+        col = 1;
+      } else col++;
     }
     tt__fail(&c, (size_t)-1, NULL, "not valid JSON (line %zu, column %zu)", line, col);
     return -1;
@@ -484,8 +496,8 @@ done:
   return rc;
 }
 
-char **tt_mpi_job_argv(const tt_mpi_job *job, const char *host, const char *db,
-                       const char *stats, const char *dir) {
+char **tt_mpi_job_argv(const tt_mpi_job *job, const char *host, const char *db, const char *stats,
+                       const char *dir) {
   size_t cap = job->nargs + 24, n = 0;
   char **v = calloc(cap, sizeof *v);
   if (!v) return NULL;
@@ -561,7 +573,8 @@ char *tt_mpi_job_json(const tt_mpi_job *job) {
     }
   }
   cJSON *args = cJSON_AddArrayToObject(o, "args");
-  for (size_t i = 0; i < job->nargs; i++) cJSON_AddItemToArray(args, cJSON_CreateString(job->args[i]));
+  for (size_t i = 0; i < job->nargs; i++)
+    cJSON_AddItemToArray(args, cJSON_CreateString(job->args[i]));
   char *s = cJSON_PrintUnformatted(o);
   cJSON_Delete(o);
   return s;

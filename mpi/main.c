@@ -39,10 +39,10 @@
 #include <unistd.h>
 
 #ifndef TT_MPI_BUILD_DIR
-#define TT_MPI_BUILD_DIR ""
+#  define TT_MPI_BUILD_DIR ""
 #endif
 #ifndef TT_MPI_BUILD_HOST
-#define TT_MPI_BUILD_HOST ""
+#  define TT_MPI_BUILD_HOST ""
 #endif
 #define TT_MPI_INSTALLED_HOST "tunetrace"
 
@@ -71,7 +71,8 @@ static void tt__on_signal(int sig) {
 static int tt__usage(int rank, const char *msg) {
   if (rank == 0) {
     if (msg) fprintf(stderr, "tunetrace-mpi: %s\n", msg);
-    fprintf(stderr, "usage: mpirun [--enable-recovery] -np N tunetrace-mpi --jobs FILE --db DB "
+    fprintf(stderr,
+            "usage: mpirun [--enable-recovery] -np N tunetrace-mpi --jobs FILE --db DB "
             "[--host PATH] [--scratch DIR] [--max-jobs N] [--liveness S] [--list | --check]\n"
             "  --jobs FILE   the job list (JSON; mpi/README.md)\n"
             "  --db DB       the merged tuning database (created; rank 0 writes it)\n"
@@ -96,9 +97,11 @@ static int tt__usage(int rank, const char *msg) {
  * it is missing or wrong, 0 when argv[*i] is no such option. */
 static int tt__parse_value(tt_mpi_opts *o, int argc, char **argv, int *i, char *msg, size_t n) {
   const char *a = argv[*i];
-  const char **val = !strcmp(a, "--jobs") ? &o->jobs : !strcmp(a, "--db") ? &o->db
-                     : !strcmp(a, "--host") ? &o->host : !strcmp(a, "--scratch") ? &o->scratch
-                                                                                : NULL;
+  const char **val = !strcmp(a, "--jobs")      ? &o->jobs
+                     : !strcmp(a, "--db")      ? &o->db
+                     : !strcmp(a, "--host")    ? &o->host
+                     : !strcmp(a, "--scratch") ? &o->scratch
+                                               : NULL;
   if (!val && strcmp(a, "--max-jobs") && strcmp(a, "--liveness")) return 0;
   if (*i + 1 >= argc) {
     snprintf(msg, n, "%s needs a value", a);
@@ -163,8 +166,7 @@ static int64_t tt__job_text(const tt_mpi_opts *o, char **text) {
     return -1;
   }
   if (access(o->host, X_OK) != 0) {
-    fprintf(stderr, "tunetrace-mpi: --host %s: not an executable (%s)\n", o->host,
-            strerror(errno));
+    fprintf(stderr, "tunetrace-mpi: --host %s: not an executable (%s)\n", o->host, strerror(errno));
     return -1;
   }
   return (int64_t)tn;
@@ -186,7 +188,7 @@ static int tt__read_jobs(const tt_mpi_opts *o, int rank, tt_mpi_jobs *jobs) {
   int parsed = tt_mpi_jobs_parse(text, o->jobs, jobs, msg, sizeof msg) == 0;
   if (rank == 0) tt_free(text);
   else free(text);
-  int parsed0 = parsed;  /* rank 0 names the problem; another rank only what rank 0 accepted */
+  int parsed0 = parsed; /* rank 0 names the problem; another rank only what rank 0 accepted */
   MPI_Bcast(&parsed0, 1, MPI_INT, 0, MPI_COMM_WORLD);
   if (!parsed && (rank == 0 || parsed0))
     fprintf(stderr, "tunetrace-mpi%s%.0d: %s\n", rank ? " rank " : "", rank, msg);
@@ -241,8 +243,10 @@ int main(int argc, char **argv) {
   int have_scratch = tt__make_scratch(&o, rank, scratch, sizeof scratch) == 0;
   int ready = opened && have_scratch, all_ready = 0;
   MPI_Allreduce(&ready, &all_ready, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
-  rc = !all_ready ? EXIT_USAGE : rank == 0 ? tt_mpi_coord_run(&c, size, scratch)
-       : o.list || o.check ? EXIT_OK : tt_mpi_work(&o, &jobs, rank, scratch);
+  rc = !all_ready          ? EXIT_USAGE
+       : rank == 0         ? tt_mpi_coord_run(&c, size, scratch)
+       : o.list || o.check ? EXIT_OK
+                           : tt_mpi_work(&o, &jobs, rank, scratch);
   if (have_scratch) tt_mpi_remove_folder(scratch);
   tt_mpi_coord_close(&c);
   tt_mpi_jobs_free(&jobs);

@@ -7,7 +7,7 @@ volatile sig_atomic_t tt_mpi_stop;
 volatile pid_t tt_mpi_running_child;
 int tt_mpi_skip_finalize;
 
-static const int64_t g_alive = 0;  /* a heartbeat's body (buffer of requests freed at once) */
+static const int64_t g_alive = 0; /* a heartbeat's body (buffer of requests freed at once) */
 
 void tt_mpi_send_alive(int to) {
   MPI_Request q;

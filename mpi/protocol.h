@@ -32,8 +32,8 @@ enum { REPLY_FINALIZE = -1, REPLY_EXIT = -2 };
 typedef struct tt_mpi_result_head {
   int64_t job;
   int64_t exit_code;
-  int64_t payload;     /* bytes of the database file that follow (0: none) */
-  int64_t note;        /* bytes of the note that follow */
+  int64_t payload; /* bytes of the database file that follow (0: none) */
+  int64_t note;    /* bytes of the note that follow */
   double wall_s, cpu_s;
 } tt_mpi_result_head;
 
@@ -42,8 +42,8 @@ typedef struct tt_mpi_opts {
   const char *jobs, *db, *host, *scratch;
   int list, check;
   long max_jobs;
-  double liveness;   /* seconds of silence after which a peer is taken as dead */
-  double heartbeat;  /* seconds between heartbeats (liveness / 10, within 0.1..5) */
+  double liveness;  /* seconds of silence after which a peer is taken as dead */
+  double heartbeat; /* seconds between heartbeats (liveness / 10, within 0.1..5) */
 } tt_mpi_opts;
 
 /* SIGINT/SIGTERM arrived: no new job is handed out (main.c's handler sets it). */

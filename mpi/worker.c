@@ -48,9 +48,11 @@ static int tt__finish(const tt_mpi_opts *o, MPI_Request *q, double *seen) {
 
 static int tt__rank0_lost(int rank, const tt_mpi_opts *o) {
   tt_mpi_skip_finalize = 1;
-  fprintf(stderr, "tunetrace-mpi: rank %d: rank 0 silent for %.0f s: taken as dead; this rank "
+  fprintf(stderr,
+          "tunetrace-mpi: rank %d: rank 0 silent for %.0f s: taken as dead; this rank "
           "stops (every job rank 0 merged is in the database: the same command completes "
-          "the set)\n", rank, o->liveness);
+          "the set)\n",
+          rank, o->liveness);
   return EXIT_FAILED;
 }
 
@@ -74,8 +76,8 @@ static int tt__wait_job(const tt_mpi_opts *o, tt_mpi_run *r, double *seen) {
 }
 
 /* Runs job `k` and sends its result; 0, or -1 when rank 0 fell silent. */
-static int tt__do_job(const tt_mpi_opts *o, const tt_mpi_jobs *jobs, int rank,
-                      const char *scratch, long k, double *seen) {
+static int tt__do_job(const tt_mpi_opts *o, const tt_mpi_jobs *jobs, int rank, const char *scratch,
+                      long k, double *seen) {
   tt_mpi_run r;
   if (tt_mpi_run_start(&r, o, scratch, jobs, k) == 0 && tt__wait_job(o, &r, seen)) return -1;
   tt_mpi_running_child = 0;
@@ -87,7 +89,7 @@ static int tt__do_job(const tt_mpi_opts *o, const tt_mpi_jobs *jobs, int rank,
   MPI_Isend(m, len, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD, &q);
   int lost = tt__finish(o, &q, seen);
   free(note);
-  if (lost) return -1;  /* m stays with the request */
+  if (lost) return -1; /* m stays with the request */
   free(m);
   return 0;
 }

@@ -21,8 +21,7 @@ static int run_host_timeout(int seconds, const char *args, char *out, size_t n) 
   char cmd[8192];
   if (seconds > 0)
     snprintf(cmd, sizeof cmd, "timeout -s KILL %d '%s' %s 2>&1", seconds, host_path(), args);
-  else
-    snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", host_path(), args);
+  else snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", host_path(), args);
   FILE *p = popen(cmd, "r");
   if (!p) return -1;
   size_t len = 0;

@@ -58,7 +58,7 @@ typedef struct pt_sampler_src {
   const tt_sampler_iface *iface;
   tt_sampler *sampler;
   _Alignas(16) unsigned char state[256];
-  double pdf_sum;       /* sum of reported BSDF pdfs (report_pdf) */
+  double pdf_sum; /* sum of reported BSDF pdfs (report_pdf) */
   uint32_t pdf_reports;
 } pt_sampler_src;
 
@@ -83,8 +83,8 @@ typedef struct pt_estimate {
 } pt_estimate;
 
 static inline void pt_estimate_ray(const pt_fixture *f, const tt_path_options *o, const tt_ray *ray,
-                            uint32_t n, uint32_t key, uint64_t seed, const char *sampler,
-                            pt_estimate *e) {
+                                   uint32_t n, uint32_t key, uint64_t seed, const char *sampler,
+                                   pt_estimate *e) {
   pt_sampler_src src;
   memset(&src, 0, sizeof src);
   src.iface = tt_builtin_sampler(sampler);

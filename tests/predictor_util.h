@@ -21,9 +21,12 @@
 static void pu_quiet(tt_log_level level, const char *plugin, const char *fmt, ...) {
   (void)level, (void)plugin, (void)fmt;
 }
-static const tt_host pu_host = {.struct_size = sizeof(tt_host), .abi_major = TT_ABI_MAJOR,
-                                .abi_minor = TT_ABI_MINOR, .host_name = "predictor test",
-                                .host_version = "0", .log = pu_quiet};
+static const tt_host pu_host = {.struct_size = sizeof(tt_host),
+                                .abi_major = TT_ABI_MAJOR,
+                                .abi_minor = TT_ABI_MINOR,
+                                .host_name = "predictor test",
+                                .host_version = "0",
+                                .log = pu_quiet};
 
 /* Loads a predictor by name from TT_PLUGIN_PATH; exits the test if it cannot. */
 static const tt_predictor_iface *pu_load(tt_registry **reg, const char *name) {
@@ -60,11 +63,14 @@ static tt_config *pu_config(const tt_space *s, int64_t leaf, double cost, int q_
   return c;
 }
 
-static tt_predictor *pu_create(const tt_predictor_iface *pi, const tt_space *target,
-                               uint32_t dim, const char *state_space, const tt_config *settings,
-                               uint64_t seed) {
-  tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = dim,
-                           .state_space = state_space, .settings = settings, .seed = seed};
+static tt_predictor *pu_create(const tt_predictor_iface *pi, const tt_space *target, uint32_t dim,
+                               const char *state_space, const tt_config *settings, uint64_t seed) {
+  tt_predictor_setup su = {.struct_size = sizeof su,
+                           .target = target,
+                           .state_dim = dim,
+                           .state_space = state_space,
+                           .settings = settings,
+                           .seed = seed};
   tt_predictor *p = NULL;
   CHECK_MSG(pi->create_ex(&su, &p) == TT_OK, "%s", tt_last_error());
   return p;
@@ -97,7 +103,7 @@ static inline void pu_reseal(unsigned char *b, long n) {
 
 /* Predictions of `p` for `count` pseudo-random states, as configuration JSON joined. */
 static inline char *pu_predictions(const tt_predictor_iface *pi, const tt_predictor *p,
-                            const tt_space *target, uint32_t dim, int count) {
+                                   const tt_space *target, uint32_t dim, int count) {
   size_t cap = 1 << 16, len = 0;
   char *out = malloc(cap);
   out[0] = 0;
@@ -125,10 +131,10 @@ static inline char *pu_predictions(const tt_predictor_iface *pi, const tt_predic
 /* The model-file properties: `p` (trained) saved to dir/model.ttpm; `other` is a predictor
  * plugin of another kind (its file must be refused by pi); pi reads format versions 1 to
  * `max_version`. */
-static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p, const tt_space *target,
-                           uint32_t dim, const char *state_space, const char *dir,
-                           const tt_predictor_iface *other, const tt_config *settings,
-                           unsigned max_version) {
+static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p,
+                                  const tt_space *target, uint32_t dim, const char *state_space,
+                                  const char *dir, const tt_predictor_iface *other,
+                                  const tt_config *settings, unsigned max_version) {
   char path[4200], path2[4200], bad[4200];
   snprintf(path, sizeof path, "%s/model.ttpm", dir);
   snprintf(path2, sizeof path2, "%s/model2.ttpm", dir);
@@ -144,7 +150,8 @@ static inline void pu_check_files(const tt_predictor_iface *pi, tt_predictor *p,
   CHECK(pi->save(q, path2) == TT_OK);
   long n1, n2;
   unsigned char *b1 = pu_read(path, &n1), *b2 = pu_read(path2, &n2);
-  CHECK_MSG(n1 > 0 && n1 == n2 && !memcmp(b1, b2, (size_t)n1), "second save differs (%ld vs %ld)", n1, n2);
+  CHECK_MSG(n1 > 0 && n1 == n2 && !memcmp(b1, b2, (size_t)n1), "second save differs (%ld vs %ld)",
+            n1, n2);
   tt_predictor_info i1 = {.struct_size = sizeof i1}, i2 = {.struct_size = sizeof i2};
   pi->info(p, &i1);
   pi->info(q, &i2);

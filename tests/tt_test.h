@@ -12,66 +12,66 @@
 static int tt_test_failures = 0;
 static int tt_test_checks = 0;
 
-#define CHECK(cond)                                                                    \
-  do {                                                                                 \
-    tt_test_checks++;                                                                  \
-    if (!(cond)) {                                                                     \
-      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);         \
-      tt_test_failures++;                                                              \
-    }                                                                                  \
+#define CHECK(cond)                                                                                \
+  do {                                                                                             \
+    tt_test_checks++;                                                                              \
+    if (!(cond)) {                                                                                 \
+      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);                     \
+      tt_test_failures++;                                                                          \
+    }                                                                                              \
   } while (0)
 
-#define CHECK_MSG(cond, ...)                                                           \
-  do {                                                                                 \
-    tt_test_checks++;                                                                  \
-    if (!(cond)) {                                                                     \
-      fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond);         \
-      fprintf(stderr, __VA_ARGS__);                                                    \
-      fputc('\n', stderr);                                                             \
-      tt_test_failures++;                                                              \
-    }                                                                                  \
+#define CHECK_MSG(cond, ...)                                                                       \
+  do {                                                                                             \
+    tt_test_checks++;                                                                              \
+    if (!(cond)) {                                                                                 \
+      fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond);                     \
+      fprintf(stderr, __VA_ARGS__);                                                                \
+      fputc('\n', stderr);                                                                         \
+      tt_test_failures++;                                                                          \
+    }                                                                                              \
   } while (0)
 
 /* |a - b| <= tol */
-#define CHECK_NEAR(a, b, tol)                                                          \
-  do {                                                                                 \
-    double tt__a = (double)(a), tt__b = (double)(b), tt__t = (double)(tol);            \
-    tt_test_checks++;                                                                  \
-    if (!(fabs(tt__a - tt__b) <= tt__t)) {                                             \
-      fprintf(stderr, "%s:%d: CHECK_NEAR failed: %s = %.9g, %s = %.9g, tol %.3g\n",    \
-              __FILE__, __LINE__, #a, tt__a, #b, tt__b, tt__t);                        \
-      tt_test_failures++;                                                              \
-    }                                                                                  \
+#define CHECK_NEAR(a, b, tol)                                                                      \
+  do {                                                                                             \
+    double tt__a = (double)(a), tt__b = (double)(b), tt__t = (double)(tol);                        \
+    tt_test_checks++;                                                                              \
+    if (!(fabs(tt__a - tt__b) <= tt__t)) {                                                         \
+      fprintf(stderr, "%s:%d: CHECK_NEAR failed: %s = %.9g, %s = %.9g, tol %.3g\n", __FILE__,      \
+              __LINE__, #a, tt__a, #b, tt__b, tt__t);                                              \
+      tt_test_failures++;                                                                          \
+    }                                                                                              \
   } while (0)
 
 /* strstr(haystack, needle) != NULL, printing both on failure */
-#define CHECK_CONTAINS(haystack, needle)                                               \
-  do {                                                                                 \
-    const char *tt__h = (haystack), *tt__n = (needle);                                 \
-    tt_test_checks++;                                                                  \
-    if (!tt__h || !strstr(tt__h, tt__n)) {                                             \
-      fprintf(stderr, "%s:%d: expected \"%s\" in \"%s\"\n", __FILE__, __LINE__, tt__n, \
-              tt__h ? tt__h : "(null)");                                               \
-      tt_test_failures++;                                                              \
-    }                                                                                  \
+#define CHECK_CONTAINS(haystack, needle)                                                           \
+  do {                                                                                             \
+    const char *tt__h = (haystack), *tt__n = (needle);                                             \
+    tt_test_checks++;                                                                              \
+    if (!tt__h || !strstr(tt__h, tt__n)) {                                                         \
+      fprintf(stderr, "%s:%d: expected \"%s\" in \"%s\"\n", __FILE__, __LINE__, tt__n,             \
+              tt__h ? tt__h : "(null)");                                                           \
+      tt_test_failures++;                                                                          \
+    }                                                                                              \
   } while (0)
 
 /* Skips the test (exit 77) for a reason outside the code under test: data or a tool the
  * README's setup provides. tools/test.sh fails the suite on any skip when CI is set, so a
  * skip never hides a missing install step there. */
-#define TEST_SKIP(...)                                                                 \
-  do {                                                                                 \
-    fprintf(stderr, "SKIP: " __VA_ARGS__);                                             \
-    fputc('\n', stderr);                                                               \
-    exit(77);                                                                          \
+#define TEST_SKIP(...)                                                                             \
+  do {                                                                                             \
+    fprintf(stderr, "SKIP: " __VA_ARGS__);                                                         \
+    fputc('\n', stderr);                                                                           \
+    exit(77);                                                                                      \
   } while (0)
 
 /* Fails the test at once (a set-up step that must work, such as a temporary folder). */
-#define TEST_FAIL(...)                                                                 \
-  do {                                                                                 \
-    fprintf(stderr, "FAIL: " __VA_ARGS__);                                             \
-    fputc('\n', stderr);                                                               \
-    exit(1);                                                                           \
+#define TEST_FAIL(...)                                                                             \
+  do {                                                                                             \
+    fprintf(stderr, "FAIL: " __VA_ARGS__);                                                         \
+    fputc('\n', stderr);                                                                           \
+    exit(1);                                                                                       \
   } while (0)
 
 /* The whole content of `path` (malloc'ed and NUL-terminated: free it with free()), its
@@ -83,7 +83,7 @@ static inline char *tt_test_read_file(const char *path, size_t *len) {
   if (!f) return NULL;
   char *buf = NULL;
   size_t n = 0, cap = 0;
-  int oom = 0;  /* out of memory with the buffer full: the file is not read whole */
+  int oom = 0; /* out of memory with the buffer full: the file is not read whole */
   for (;;) {
     if (n + 1 >= cap) {
       size_t ncap = cap ? 2 * cap : 65536;

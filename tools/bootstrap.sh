@@ -35,6 +35,7 @@ PACKAGES=(
   clang libclang-rt-14-dev                    # the ASan+UBSan build and the libFuzzer harnesses
                                               # (tools/test_sanitized.sh, tests/fuzz; .ci/run)
   llvm-14                                     # llvm-symbolizer: sanitizer reports with lines
+  clang-format-14                             # the tree's one layout (tools/tests/code_format.sh)
   openmpi-bin libopenmpi-dev                  # mpi/ tunetrace-mpi (meson -Dmpi=auto finds it);
                                               # mpi/tests/mpi_driver.sh, mpi_baseline.sh, tools/mpi/
   python3-torch                               # tools/taa/ training, CPU (train.py, ablations.py,

@@ -19,7 +19,10 @@
 #define MAXV 8
 
 /* Interleaved streams over one independent sample: dim -> 3 dim + stream. */
-typedef struct stream { pt_sampler_src *src; uint32_t k; } stream;
+typedef struct stream {
+  pt_sampler_src *src;
+  uint32_t k;
+} stream;
 static float stream_get(void *self, uint32_t dim) {
   stream *s = self;
   return pt_src_get(s->src, 3 * dim + s->k);
@@ -27,9 +30,9 @@ static float stream_get(void *self, uint32_t dim) {
 
 typedef struct full_path {
   uint32_t k;
-  tt__bvertex v[MAXV];     /* v[0] on the light (as a light vertex) ... v[k-1] the camera */
-  tt__bvertex light_surf;  /* v[0] as a surface of the camera subpath (s' = 0) */
-  float A[MAXV], B[MAXV];  /* densities of each vertex from the light side / camera side */
+  tt__bvertex v[MAXV];    /* v[0] on the light (as a light vertex) ... v[k-1] the camera */
+  tt__bvertex light_surf; /* v[0] as a surface of the camera subpath (s' = 0) */
+  float A[MAXV], B[MAXV]; /* densities of each vertex from the light side / camera side */
 } full_path;
 
 /* The light vertex of an emissive surface vertex and vice versa. */
@@ -95,7 +98,8 @@ static void run_scene(const char *name, const char *json, int delta_light, uint3
   src.iface = tt_builtin_sampler("independent");
   src.iface->create(NULL, 99, &src.sampler);
   stream cs = {&src, 0}, ls = {&src, 1}, ks = {&src, 2};
-  tt_sample_source cam = {stream_get, NULL, &cs}, lig = {stream_get, NULL, &ls}, con = {stream_get, NULL, &ks};
+  tt_sample_source cam = {stream_get, NULL, &cs}, lig = {stream_get, NULL, &ls},
+                   con = {stream_get, NULL, &ks};
   const tt_mis_heuristic hs[2] = {TT_MIS_POWER, TT_MIS_BALANCE};
   uint32_t checked = 0, bad_sum = 0, bad_self = 0, by_len[MAXV] = {0};
   double worst = 0.0;
@@ -107,7 +111,8 @@ static void run_scene(const char *name, const char *json, int delta_light, uint3
     o.heuristic = hs[i & 1];
     src.iface->start(src.sampler, src.state, i % 7, i / 7, i);
     float fxp = pt_src_get(&src, 0) * fr.width, fyp = pt_src_get(&src, 3) * fr.height;
-    uint32_t nc = tt_bdpt_camera_subpath(fx.pt, &fx.tracer, &o, &fr, fxp, fyp, &cam, o.max_depth + 2, paths);
+    uint32_t nc =
+        tt_bdpt_camera_subpath(fx.pt, &fx.tracer, &o, &fr, fxp, fyp, &cam, o.max_depth + 2, paths);
     uint32_t nl = tt_bdpt_light_subpath(fx.pt, &fx.tracer, &o, &lig, o.max_depth + 1, paths);
     for (uint32_t t = 2; t <= nc; ++t)
       for (uint32_t s = 0; s <= nl; ++s) {
@@ -129,11 +134,13 @@ static void run_scene(const char *name, const char *json, int delta_light, uint3
         double sum = 0.0;
         for (uint32_t s2 = 0; s2 < f.k; ++s2) {
           if (s2 == 0 && delta_light) continue;
-          if (s2 == 1 && f.k - s2 == 1) continue;  /* (1, 1): not a strategy */
+          if (s2 == 1 && f.k - s2 == 1) continue; /* (1, 1): not a strategy */
           float w = split_weight(fx.pt, &fr, o.heuristic, &f, s2);
           if (s2 == s && fabsf(w - c.weight) > worst_self) worst_self = fabsf(w - c.weight);
           if (s2 == s && fabsf(w - c.weight) > 1e-3f) {
-            if (bad_self < 5) fprintf(stderr, "%s: (s, t) = (%u, %u): split weight %.6f, connection %.6f\n", name, s, t, w, c.weight);
+            if (bad_self < 5)
+              fprintf(stderr, "%s: (s, t) = (%u, %u): split weight %.6f, connection %.6f\n", name,
+                      s, t, w, c.weight);
             bad_self++;
           }
           if (getenv("MIS_DEBUG")) fprintf(stderr, "  k=%u s'=%u w=%.6f\n", f.k, s2, w);
@@ -144,55 +151,74 @@ static void run_scene(const char *name, const char *json, int delta_light, uint3
         double err = fabs(sum - 1.0);
         if (err > worst) worst = err;
         if (err > 2e-3) {
-          if (bad_sum < 5) fprintf(stderr, "%s: (s, t) = (%u, %u): weights sum to %.6f\n", name, s, t, sum);
+          if (bad_sum < 5)
+            fprintf(stderr, "%s: (s, t) = (%u, %u): weights sum to %.6f\n", name, s, t, sum);
           bad_sum++;
         }
       }
   }
   printf("%s: %u paths checked (lengths 2-6: %u %u %u %u %u), worst |sum - 1| = %.2e, worst "
-         "|split - connection| = %.2e\n", name, checked, by_len[2], by_len[3], by_len[4], by_len[5], by_len[6],
-         worst, worst_self);
+         "|split - connection| = %.2e\n",
+         name, checked, by_len[2], by_len[3], by_len[4], by_len[5], by_len[6], worst, worst_self);
   CHECK_MSG(checked > samples / 4, "%s: only %u contributing connections", name, checked);
   CHECK_MSG(by_len[5] + by_len[6] > 0, "%s: no long path was checked", name);
   CHECK_MSG(bad_sum == 0, "%s: %u paths whose strategy weights do not sum to 1", name, bad_sum);
-  CHECK_MSG(bad_self == 0, "%s: %u connections whose weight the split does not reproduce", name, bad_self);
+  CHECK_MSG(bad_self == 0, "%s: %u connections whose weight the split does not reproduce", name,
+            bad_self);
   src.iface->destroy(src.sampler);
   tt_bdpt_paths_destroy(paths);
   pt_fixture_free(&fx);
 }
 
-#define HEAD(res)                                                                                   \
-  "{\"version\":1,\"camera\":{\"position\":[0,0,3.4],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":45,"  \
-  "\"resolution\":[" res "]},\"materials\":{"                                                        \
-  "\"white\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.7,0.7]},"                                      \
-  "\"red\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.1,0.1]},"                                        \
-  "\"metal\":{\"type\":\"conductor\",\"alpha\":0.3},"                                               \
-  "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.3,0.5],\"alpha\":0.15,\"ior\":1.5},"          \
-  "\"glass\":{\"type\":\"dielectric\",\"alpha\":0.2,\"ior\":1.4},"                                  \
+#define HEAD(res)                                                                                  \
+  "{\"version\":1,\"camera\":{\"position\":[0,0,3.4],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":"   \
+  "45,"                                                                                            \
+  "\"resolution\":[" res "]},\"materials\":{"                                                      \
+  "\"white\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.7,0.7]},"                                     \
+  "\"red\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.1,0.1]},"                                       \
+  "\"metal\":{\"type\":\"conductor\",\"alpha\":0.3},"                                              \
+  "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.3,0.5],\"alpha\":0.15,\"ior\":1.5},"         \
+  "\"glass\":{\"type\":\"dielectric\",\"alpha\":0.2,\"ior\":1.4},"                                 \
   "\"light\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],\"emission\":[8,8,7]}},"
-#define BLOCK                                                                                       \
-  "{\"name\":\"block\",\"material\":\"glass\",\"positions\":[-0.4,-1,-0.3, 0.2,-1,-0.3, 0.2,-0.2,-0.3, -0.4,-0.2,-0.3,"  \
-  " -0.4,-1,0.3, 0.2,-1,0.3, 0.2,-0.2,0.3, -0.4,-0.2,0.3],\"indices\":[0,2,1, 0,3,2, 4,5,6, 4,6,7, 0,1,5, 0,5,4,"        \
+#define BLOCK                                                                                      \
+  "{\"name\":\"block\",\"material\":\"glass\",\"positions\":[-0.4,-1,-0.3, 0.2,-1,-0.3, "          \
+  "0.2,-0.2,-0.3, -0.4,-0.2,-0.3,"                                                                 \
+  " -0.4,-1,0.3, 0.2,-1,0.3, 0.2,-0.2,0.3, -0.4,-0.2,0.3],\"indices\":[0,2,1, 0,3,2, 4,5,6, "      \
+  "4,6,7, 0,1,5, 0,5,4,"                                                                           \
   " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]}"
 
 int main(void) {
-  static const char *BOX = HEAD("16,16") "\"meshes\":["
-      "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,2,1, 0,3,2]},"
-      "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, 1,1,1, -1,1,1],\"indices\":[0,1,2, 0,2,3]},"
-      "{\"name\":\"back\",\"material\":\"metal\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, -1,1,-1],\"indices\":[0,1,2, 0,2,3]},"
-      "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, -1,1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3],"
-      " \"normals\":[0.9,0.3,0.3, 0.95,-0.2,0.1, 1,0,0, 0.9,0.1,-0.4]},"
-      "{\"name\":\"right\",\"material\":\"white\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, 1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
-      "{\"name\":\"front\",\"material\":\"white\",\"positions\":[-1,-1,3.5, 1,-1,3.5, 1,1,3.5, -1,1,3.5],\"indices\":[0,2,1, 0,3,2]},"
-      "{\"name\":\"lamp\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]},"
-      BLOCK "]}";
-  static const char *OPEN_ENV = HEAD("16,16") "\"meshes\":["
-      "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-3,-1,-3, 3,-1,-3, 3,-1,3, -3,-1,3],\"indices\":[0,2,1, 0,3,2]},"
-      BLOCK "],\"lights\":[{\"type\":\"environment\",\"radiance\":[0.5,0.6,0.8]}]}";
-  static const char *OPEN_POINT = HEAD("16,16") "\"meshes\":["
-      "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-3,-1,-1.5, 3,-1,-1.5, 3,3,-1.5, -3,3,-1.5],\"indices\":[0,1,2, 0,2,3]},"
-      "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-3,-1,-3, 3,-1,-3, 3,-1,3, -3,-1,3],\"indices\":[0,2,1, 0,3,2]},"
-      BLOCK "],\"lights\":[{\"type\":\"point\",\"position\":[0.5,1.5,0.5],\"intensity\":[5,5,5]}]}";
+  static const char *BOX =
+      HEAD("16,16") "\"meshes\":["
+                    "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, "
+                    "1,-1,1, -1,-1,1],\"indices\":[0,2,1, 0,3,2]},"
+                    "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, "
+                    "1,1,1, -1,1,1],\"indices\":[0,1,2, 0,2,3]},"
+                    "{\"name\":\"back\",\"material\":\"metal\",\"positions\":[-1,-1,-1, 1,-1,-1, "
+                    "1,1,-1, -1,1,-1],\"indices\":[0,1,2, 0,2,3]},"
+                    "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, "
+                    "-1,1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3],"
+                    " \"normals\":[0.9,0.3,0.3, 0.95,-0.2,0.1, 1,0,0, 0.9,0.1,-0.4]},"
+                    "{\"name\":\"right\",\"material\":\"white\",\"positions\":[1,-1,-1, 1,1,-1, "
+                    "1,1,1, 1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
+                    "{\"name\":\"front\",\"material\":\"white\",\"positions\":[-1,-1,3.5, "
+                    "1,-1,3.5, 1,1,3.5, -1,1,3.5],\"indices\":[0,2,1, 0,3,2]},"
+                    "{\"name\":\"lamp\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, "
+                    "0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]}," BLOCK
+                    "]}";
+  static const char *OPEN_ENV =
+      HEAD("16,16") "\"meshes\":["
+                    "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-3,-1,-3, 3,-1,-3, "
+                    "3,-1,3, -3,-1,3],\"indices\":[0,2,1, 0,3,2]}," BLOCK
+                    "],\"lights\":[{\"type\":\"environment\",\"radiance\":[0.5,0.6,0.8]}]}";
+  static const char *OPEN_POINT =
+      HEAD("16,16") "\"meshes\":["
+                    "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-3,-1,-1.5, "
+                    "3,-1,-1.5, 3,3,-1.5, -3,3,-1.5],\"indices\":[0,1,2, 0,2,3]},"
+                    "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-3,-1,-3, 3,-1,-3, "
+                    "3,-1,3, -3,-1,3],\"indices\":[0,2,1, 0,3,2]}," BLOCK
+                    "],\"lights\":[{\"type\":\"point\",\"position\":[0.5,1.5,0.5],\"intensity\":[5,"
+                    "5,5]}]}";
   run_scene("closed box", BOX, 0, 3000);
   run_scene("environment", OPEN_ENV, 0, 3000);
   run_scene("point light", OPEN_POINT, 1, 3000);

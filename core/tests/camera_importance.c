@@ -21,7 +21,9 @@ static void check_camera(float fov, uint32_t w, uint32_t h, const float target[3
   tt_camera c;
   memset(&c, 0, sizeof c);
   c.struct_size = sizeof c;
-  c.position[0] = 0.5f; c.position[1] = -1.0f; c.position[2] = 2.0f;
+  c.position[0] = 0.5f;
+  c.position[1] = -1.0f;
+  c.position[2] = 2.0f;
   memcpy(c.target, target, sizeof c.target);
   c.up[1] = 1.0f;
   c.fov_y = fov;
@@ -53,15 +55,16 @@ static void check_camera(float fov, uint32_t w, uint32_t h, const float target[3
     if (we > 0) CHECK(fx >= 0 && fx < w && fy >= 0 && fy < h);
   }
   double mean = s_we / N, se = sqrt((s_we2 / N - mean * mean) / N);
-  printf("fov %g %ux%u: int We cos = %.5f (se %.5f), int pdf = %.5f, region %.5f (1/6 = %.5f)\n", fov, w,
-         h, mean, se, s_pdf / N, s_region / N, 1.0 / 6.0);
+  printf("fov %g %ux%u: int We cos = %.5f (se %.5f), int pdf = %.5f, region %.5f (1/6 = %.5f)\n",
+         fov, w, h, mean, se, s_pdf / N, s_region / N, 1.0 / 6.0);
   CHECK_MSG(fabs(mean - 1.0) < 4.0 * se && se < 0.01, "int We cos = %g se %g", mean, se);
   CHECK_MSG(fabs(s_pdf / N - 1.0) < 4.0 * se, "int pdf = %g", s_pdf / N);
   CHECK_MSG(fabs(s_region / N - 1.0 / 6.0) < 4.0 * se, "region %g", s_region / N);
 
   /* Round trip: W_e of a generated ray reports its film position; W_e / pdf = 1 / cos. */
   for (int i = 0; i < 1000; ++i) {
-    float fx = (float)(tt__pcg32_double(&rng) * w), fy = (float)(tt__pcg32_double(&rng) * h), gx, gy;
+    float fx = (float)(tt__pcg32_double(&rng) * w), fy = (float)(tt__pcg32_double(&rng) * h), gx,
+          gy;
     tt_ray r;
     tt_camera_generate_ray(&fr, fx, fy, &r);
     float we = tt_camera_importance(&fr, r.dir, &gx, &gy);
@@ -73,10 +76,12 @@ static void check_camera(float fov, uint32_t w, uint32_t h, const float target[3
   }
   /* Behind the camera, and just outside the film. */
   float back[3] = {-fr.forward[0], -fr.forward[1], -fr.forward[2]};
-  CHECK(tt_camera_importance(&fr, back, NULL, NULL) == 0.0f && tt_camera_pdf_dir(&fr, back) == 0.0f);
+  CHECK(tt_camera_importance(&fr, back, NULL, NULL) == 0.0f &&
+        tt_camera_pdf_dir(&fr, back) == 0.0f);
   tt_ray r;
   tt_camera_generate_ray(&fr, -0.01f * w, 0.5f * h, &r);
-  CHECK(tt_camera_importance(&fr, r.dir, NULL, NULL) == 0.0f && tt_camera_pdf_dir(&fr, r.dir) == 0.0f);
+  CHECK(tt_camera_importance(&fr, r.dir, NULL, NULL) == 0.0f &&
+        tt_camera_pdf_dir(&fr, r.dir) == 0.0f);
   tt_camera_generate_ray(&fr, 0.5f * w, 1.01f * h, &r);
   CHECK(tt_camera_importance(&fr, r.dir, NULL, NULL) == 0.0f);
 }

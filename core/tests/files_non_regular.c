@@ -94,7 +94,8 @@ int main(void) {
   if (f) {
     fputs("{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], "
           "\"fov\": 45}, \"materials\": {\"white\": {\"albedo\": [0.7, 0.7, 0.7]}}, "
-          "\"meshes\": [{\"material\": \"white\", \"file\": \"tri.obj\"}]}\n", f);
+          "\"meshes\": [{\"material\": \"white\", \"file\": \"tri.obj\"}]}\n",
+          f);
     fclose(f);
   }
   tt_scene *s = NULL;

@@ -22,8 +22,8 @@ static char *slurp(const char *path, size_t *n) {
 int main(void) {
   char dir[] = "/tmp/tt_files_sameXXXXXX";
   if (!mkdtemp(dir)) return 1;
-  char a[512], b[512], lnk[512], hard[512], dotted[512], sub[512], up[512], miss1[512],
-      miss2[512], cwd[4096];
+  char a[512], b[512], lnk[512], hard[512], dotted[512], sub[512], up[512], miss1[512], miss2[512],
+      cwd[4096];
   snprintf(a, sizeof a, "%s/a.json", dir);
   snprintf(b, sizeof b, "%s/b.json", dir);
   snprintf(lnk, sizeof lnk, "%s/link.json", dir);
@@ -107,7 +107,7 @@ int main(void) {
     tt_tunedb_close(t);
   }
   tt_tunedb *again = NULL;
-  CHECK(tt_tunedb_open_readonly(db, &again) == TT_OK);  /* still a database */
+  CHECK(tt_tunedb_open_readonly(db, &again) == TT_OK); /* still a database */
   tt_tunedb_close(again);
 
   char cmd[600];

@@ -143,7 +143,7 @@ int main(void) {
   age_file(".frame.exr.tmp-000002", 120);
   CHECK(tt_file_write_atomic(out, "frame 3", 7) == TT_OK);
   CHECK(!exists(".frame.exr.tmp-000002"));
-  CHECK(temps_of("frame.exr", NULL, 0) == 4);  /* 12345, 1234567, ABCDEF, abcdef.bak */
+  CHECK(temps_of("frame.exr", NULL, 0) == 4); /* 12345, 1234567, ABCDEF, abcdef.bak */
   snprintf(text, sizeof text, "%d", temps_of("other.exr", NULL, 0));
   CHECK_MSG(!strcmp(text, "1"), "another output's temporaries: %s", text);
 

@@ -59,7 +59,7 @@ static void test_splat_scale(void) {
   CHECK(tt_film_splat_scale(film) == 0.5);
   float out[3 * 2 * 3];
   tt_film_resolve(film, out);
-  CHECK_NEAR(out[3 * 1 + 0], 2.0, 0);  /* 2 splats * 2 * 0.5 */
+  CHECK_NEAR(out[3 * 1 + 0], 2.0, 0); /* 2 splats * 2 * 0.5 */
   CHECK_NEAR(out[3 * 1 + 1], 4.0, 0);
   CHECK_NEAR(out[3 * 1 + 2], 8.0, 0);
   CHECK_NEAR(out[3 * 3 + 0], 1.0 + 1.0, 0); /* sample mean 1 + splat 2 * 0.5 */

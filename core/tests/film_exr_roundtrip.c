@@ -11,9 +11,7 @@ static char tmpdir[] = "/tmp/tt_film_exr_XXXXXX";
 
 /* SplitMix64: deterministic test data without libc rand's platform differences. */
 static uint64_t rng_state = 1;
-static uint32_t next_u32(void) {
-  return (uint32_t)(tt__splitmix64(&rng_state) >> 32);
-}
+static uint32_t next_u32(void) { return (uint32_t)(tt__splitmix64(&rng_state) >> 32); }
 
 /* A float from random bits, re-rolled while NaN (NaN payloads need not survive a round
  * trip and are not something the film ever writes). Covers denormals, huge values,
@@ -33,8 +31,8 @@ static void roundtrip(uint32_t w, uint32_t h, uint32_t c) {
   float *px = malloc(n * sizeof(float));
   for (size_t i = 0; i < n; i++) px[i] = random_float();
   /* make sure the interesting classes are there regardless of the generator */
-  const float special[] = {1.0e-45f, -1.0e-40f, 1.17e-38f, 3.0e38f, -3.4e38f, -0.0f, 0.0f,
-                           INFINITY, -INFINITY, 0.18f, 1.0f};
+  const float special[] = {1.0e-45f, -1.0e-40f, 1.17e-38f, 3.0e38f, -3.4e38f, -0.0f,
+                           0.0f,     INFINITY,  -INFINITY, 0.18f,   1.0f};
   for (size_t i = 0; i < sizeof special / sizeof special[0] && i < n; i++) px[i] = special[i];
   char path[256];
   snprintf(path, sizeof path, "%s/img_%ux%ux%u.exr", tmpdir, w, h, c);

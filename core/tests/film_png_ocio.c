@@ -75,14 +75,14 @@ static void test_ramp(void) {
   CHECK_MSG(differs_from_linear > RAMP_W, "only %d codes differ from linear*255",
             differs_from_linear);
   const int *pin = codes + 3 * RAMP_W;
-  CHECK(pin[0] == 0);                             /* 0 -> 0 */
-  CHECK_MSG(abs(pin[3] - 118) <= 1, "0.18 -> %d", pin[3]); /* 0.18 -> 118 */
-  CHECK(pin[6] == 255);                           /* 1 -> 255 */
-  CHECK(pin[9] == 255);                           /* 4 clips */
+  CHECK(pin[0] == 0);                                       /* 0 -> 0 */
+  CHECK_MSG(abs(pin[3] - 118) <= 1, "0.18 -> %d", pin[3]);  /* 0.18 -> 118 */
+  CHECK(pin[6] == 255);                                     /* 1 -> 255 */
+  CHECK(pin[9] == 255);                                     /* 4 clips */
   CHECK_MSG(abs(pin[12] - 7) <= 1, "0.002 -> %d", pin[12]); /* linear segment: 12.92*0.002 */
-  CHECK(pin[15] == 0);                            /* negative -> 0 */
-  CHECK(pin[18] == 0);                            /* NaN -> 0 */
-  CHECK(pin[21] == 255);                          /* +Inf clips */
+  CHECK(pin[15] == 0);                                      /* negative -> 0 */
+  CHECK(pin[18] == 0);                                      /* NaN -> 0 */
+  CHECK(pin[21] == 255);                                    /* +Inf clips */
   /* the in-place transform gives the same values as the file */
   float copy[RAMP_W * RAMP_H * 3];
   memcpy(copy, rgb, sizeof copy);
@@ -201,20 +201,21 @@ static void test_ocio_env(const char *self) {
   FILE *f = fopen(cfg, "w");
   CHECK(f != NULL);
   if (!f) return;
-  fputs("ocio_profile_version: 2\n"
-        "roles:\n"
-        "  default: lin\n"
-        "  scene_linear: lin\n"
-        "displays:\n"
-        "  TestDisplay:\n"
-        "    - !<View> {name: Sqrt, colorspace: sqrt}\n"
-        "colorspaces:\n"
-        "  - !<ColorSpace>\n"
-        "    name: lin\n"
-        "  - !<ColorSpace>\n"
-        "    name: sqrt\n"
-        "    from_scene_reference: !<ExponentTransform> {value: [2, 2, 2, 1], direction: inverse}\n",
-        f);
+  fputs(
+      "ocio_profile_version: 2\n"
+      "roles:\n"
+      "  default: lin\n"
+      "  scene_linear: lin\n"
+      "displays:\n"
+      "  TestDisplay:\n"
+      "    - !<View> {name: Sqrt, colorspace: sqrt}\n"
+      "colorspaces:\n"
+      "  - !<ColorSpace>\n"
+      "    name: lin\n"
+      "  - !<ColorSpace>\n"
+      "    name: sqrt\n"
+      "    from_scene_reference: !<ExponentTransform> {value: [2, 2, 2, 1], direction: inverse}\n",
+      f);
   fclose(f);
   rc = run_child(self, "user", cfg, log);
   text = slurp(log);

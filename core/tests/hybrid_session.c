@@ -21,11 +21,11 @@ static const double TRI_SCALE = 1e6; /* path position t = triangles / TRI_SCALE 
 
 /* ---- the target: configuration c in {0 (default), 1, 2}; cost depends on the state ---- */
 
-static double g_t;                   /* the current state's position on the path, [0, 1] */
+static double g_t; /* the current state's position on the path, [0, 1] */
 static int64_t g_applied = -1;
 
 static double cost_at(int64_t c, double t) {
-  return c == 0 ? 3.0 : c == 1 ? 1.0 + t : 2.0 - t;  /* best: 1 before t = 0.5, 2 after */
+  return c == 0 ? 3.0 : c == 1 ? 1.0 + t : 2.0 - t; /* best: 1 before t = 0.5, 2 after */
 }
 
 static tt_status t_apply(void *user, const tt_config *cfg, double *build_ms) {
@@ -89,14 +89,16 @@ static tt_host g_host;
 
 /* One path from t = 0.05 to 0.95 at epsilon 0 with `predictor`, warm-started from `db`;
  * returns the configurations used per state in `used` and checks the reports. */
-static void run_path(const tt_predictor_iface *pi, const char *name, tt_space *space,
-                     tt_tunedb *db, int64_t used[10]) {
+static void run_path(const tt_predictor_iface *pi, const char *name, tt_space *space, tt_tunedb *db,
+                     int64_t used[10]) {
   tt_indicator_norm norm;
   tt_indicator_norm_init(&norm);
   char id[96];
-  tt_predictor_setup su = {.struct_size = sizeof su, .target = space,
+  tt_predictor_setup su = {.struct_size = sizeof su,
+                           .target = space,
                            .state_dim = TT_SCENE_INDICATOR_COUNT,
-                           .state_space = tt_indicator_norm_id(&norm, id, sizeof id), .seed = 3};
+                           .state_space = tt_indicator_norm_id(&norm, id, sizeof id),
+                           .seed = 3};
   tt_predictor *model = NULL;
   CHECK(pi->create_ex(&su, &model) == TT_OK);
   tt_hybrid_desc d;
@@ -119,8 +121,11 @@ static void run_path(const tt_predictor_iface *pi, const char *name, tt_space *s
   CHECK(tt_hybrid_create(&d, &h) == TT_OK);
   static const char *const keys[] = {"clock", "spp", "threads", NULL};
   static const char *const camera_keys[] = {"resolution", NULL};
-  tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys, .context = CONTEXT,
-                             .camera_keys = camera_keys, .camera = CAMERA};
+  tt_hybrid_warm_filter f = {.struct_size = sizeof f,
+                             .context_keys = keys,
+                             .context = CONTEXT,
+                             .camera_keys = camera_keys,
+                             .camera = CAMERA};
   tt_hybrid_warm_result wr = {.struct_size = sizeof wr};
   CHECK(tt_hybrid_warm_start_ex(h, db, &f, &wr) == TT_OK);
   CHECK_MSG(wr.rows == 6, "%s: learnt %llu rows", name, (unsigned long long)wr.rows);
@@ -129,8 +134,12 @@ static void run_path(const tt_predictor_iface *pi, const char *name, tt_space *s
     g_t = 0.05 + 0.1 * k;
     char camera[64];
     snprintf(camera, sizeof camera, "{\"path_index\":%d}", k);
-    tt_tuning_state st = {.struct_size = sizeof st, .scene_id = "path", .scene = "path.json",
-                          .camera = camera, .context = CONTEXT, .has_indicators = 1};
+    tt_tuning_state st = {.struct_size = sizeof st,
+                          .scene_id = "path",
+                          .scene = "path.json",
+                          .camera = camera,
+                          .context = CONTEXT,
+                          .has_indicators = 1};
     raw_state(g_t, st.indicators);
     tt_hybrid_report r = {.struct_size = sizeof r};
     CHECK(tt_hybrid_step(h, &st, &tg, &r) == TT_OK);
@@ -141,7 +150,7 @@ static void run_path(const tt_predictor_iface *pi, const char *name, tt_space *s
               name, k, r.predicted_cost);
     CHECK_MSG(r.default_cost == 3.0 && r.default_source == TT_HYBRID_COST_NEAREST,
               "%s, state %d: default %g from %d", name, k, r.default_cost, r.default_source);
-    double nearest = fmin(g_t, 1.0 - g_t) * (TRI_SCALE / 1e7);  /* triangles' bound is 1e7 */
+    double nearest = fmin(g_t, 1.0 - g_t) * (TRI_SCALE / 1e7); /* triangles' bound is 1e7 */
     CHECK_NEAR(r.default_distance, nearest, 1e-12);
     if (!strcmp(name, "predictor_nn")) {
       /* NN's expected cost is the mean cost of the answer in the searched state it came
@@ -187,7 +196,7 @@ int main(void) {
   record(db, 0.5, 1, "render", "{\"spp\":1,\"threads\":2}", CAMERA);
   record(db, 0.5, 2, "render", "{\"spp\":1,\"threads\":2}", CAMERA);
   record(db, 0.5, 2, "render", CONTEXT, "{\"resolution\":[64,48]}");
-  record(db, 0.5, 1, "render", "{\"spp\":1,\"threads\":1}", CAMERA);  /* a wall clock */
+  record(db, 0.5, 1, "render", "{\"spp\":1,\"threads\":1}", CAMERA); /* a wall clock */
 
   int64_t used[10];
   run_path(tt_loaded_plugin_iface(nn), "predictor_nn", space, db, used);
@@ -200,8 +209,10 @@ int main(void) {
   {
     tt_predictor *model = NULL;
     const tt_predictor_iface *pi = tt_loaded_plugin_iface(nn);
-    tt_predictor_setup su = {.struct_size = sizeof su, .target = space,
-                             .state_dim = TT_SCENE_INDICATOR_COUNT, .seed = 1};
+    tt_predictor_setup su = {.struct_size = sizeof su,
+                             .target = space,
+                             .state_dim = TT_SCENE_INDICATOR_COUNT,
+                             .seed = 1};
     CHECK(pi->create_ex(&su, &model) == TT_OK);
     tt_hybrid_desc d;
     memset(&d, 0, sizeof d);
@@ -218,8 +229,10 @@ int main(void) {
     static const char *const keys[] = {"clock", "spp", "threads", NULL};
     static const char *const camera_keys[] = {"resolution", NULL};
     /* this run: a wall clock (no "clock" key), one thread, 24x24 */
-    tt_hybrid_warm_filter f = {.struct_size = sizeof f, .context_keys = keys,
-                               .context = "{\"spp\":1,\"threads\":1}", .camera_keys = camera_keys,
+    tt_hybrid_warm_filter f = {.struct_size = sizeof f,
+                               .context_keys = keys,
+                               .context = "{\"spp\":1,\"threads\":1}",
+                               .camera_keys = camera_keys,
                                .camera = CAMERA};
     tt_hybrid_warm_result wr = {.struct_size = sizeof wr};
     CHECK(tt_hybrid_warm_start_ex(h, db, &f, &wr) == TT_OK);

@@ -12,9 +12,7 @@
 enum { N = TT_SCENE_INDICATOR_COUNT };
 
 static uint64_t rng = 0x1234567u;
-static double uniform(void) {
-  return tt__u64_to_unit(tt__splitmix64(&rng));
-}
+static double uniform(void) { return tt__u64_to_unit(tt__splitmix64(&rng)); }
 
 /* Index of indicator `name`. */
 static int idx(const char *name) {
@@ -39,8 +37,9 @@ static void bounds_respected(void) {
         if (uniform() < 0.05) raw[i] = 0;
       }
       tt_indicators_normalize(&n, raw, out);
-      for (int i = 0; i < N; i++) CHECK_MSG(out[i] >= 0.0 && out[i] <= 1.0, "mode %d %s=%g -> %g",
-                                            mode, tt_scene_indicator_name(i), raw[i], out[i]);
+      for (int i = 0; i < N; i++)
+        CHECK_MSG(out[i] >= 0.0 && out[i] <= 1.0, "mode %d %s=%g -> %g", mode,
+                  tt_scene_indicator_name(i), raw[i], out[i]);
     }
   }
 }
@@ -52,13 +51,13 @@ static void known_values(void) {
   double raw[N] = {0}, out[N];
   raw[idx("triangles")] = 1e7;
   raw[idx("meshes")] = 5e4;
-  raw[idx("lights")] = 2e5;  /* above the bound: clamped */
+  raw[idx("lights")] = 2e5; /* above the bound: clamped */
   raw[idx("fov_y")] = 45;
   raw[idx("diffuse_ratio")] = 0.25;
   raw[idx("extent")] = 20;
-  raw[idx("camera_x")] = 20;   /* = extent: 1 */
-  raw[idx("camera_y")] = -10;  /* = -extent/2: 0.25 */
-  raw[idx("target_z")] = -30;  /* below -extent: clamped */
+  raw[idx("camera_x")] = 20;  /* = extent: 1 */
+  raw[idx("camera_y")] = -10; /* = -extent/2: 0.25 */
+  raw[idx("target_z")] = -30; /* below -extent: clamped */
   raw[idx("total_area")] = 5;
   raw[idx("mean_var_tri_size")] = 1e-2;
   uint32_t clamped = tt_indicators_normalize(&n, raw, out);
@@ -79,7 +78,7 @@ static void known_values(void) {
   /* the thesis' two camera bounds */
   n.camera = TT_INDICATOR_CAMERA_TABLE;
   tt_indicators_normalize(&n, raw, out);
-  CHECK_NEAR(out[idx("camera_x")], 1.0, 0);   /* 20 > 10: clamped */
+  CHECK_NEAR(out[idx("camera_x")], 1.0, 0); /* 20 > 10: clamped */
   CHECK_NEAR(out[idx("camera_y")], 0.0, 0);
   n.camera = TT_INDICATOR_CAMERA_TEXT;
   tt_indicators_normalize(&n, raw, out);
@@ -92,10 +91,10 @@ static void known_values(void) {
   /* log scale: log10(1 + x / unit) / log10(1 + bound / unit) on the decade-spanning ones */
   n.scale = TT_INDICATOR_LOG;
   double r2[N] = {0};
-  r2[idx("triangles")] = 9;       /* log10(10) / log10(1e7 + 1) */
-  r2[idx("extent")] = 99999;      /* 1 - tiny */
+  r2[idx("triangles")] = 9;             /* log10(10) / log10(1e7 + 1) */
+  r2[idx("extent")] = 99999;            /* 1 - tiny */
   r2[idx("mean_var_tri_size")] = 9e-12; /* log10(10) / log10(1 + 1e10) */
-  r2[idx("total_area")] = 5;      /* stays linear */
+  r2[idx("total_area")] = 5;            /* stays linear */
   tt_indicators_normalize(&n, r2, out);
   CHECK_NEAR(out[idx("triangles")], 1.0 / log10(1e7 + 1), 1e-12);
   CHECK_NEAR(out[idx("extent")], log10(1e5) / log10(1e5 + 1), 1e-12);
@@ -133,7 +132,8 @@ static void ids(void) {
     n.scale = (tt_indicator_scale)(mode / 3);
     tt_indicator_norm_id(&n, id, sizeof id);
     CHECK_MSG(tt_indicator_norm_parse(id, &m) == TT_OK && m.camera == n.camera &&
-              m.scale == n.scale, "%s", id);
+                  m.scale == n.scale,
+              "%s", id);
   }
   tt_indicator_norm m;
   CHECK(tt_indicator_norm_parse("scale=log", &m) == TT_OK && m.scale == TT_INDICATOR_LOG &&
@@ -176,7 +176,8 @@ static void host_json(void) {
   cJSON *r = cJSON_GetObjectItem(root, "raw"), *u = cJSON_GetObjectItem(root, "normalized");
   for (uint32_t i = 0; i < N; i++) {
     const char *name = tt_scene_indicator_name(i);
-    CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(r, name)), raw[i], 1e-12 * (1 + fabs(raw[i])));
+    CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(r, name)), raw[i],
+               1e-12 * (1 + fabs(raw[i])));
     CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(u, name)), unit[i], 1e-12);
   }
   CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(root, "normalization")),

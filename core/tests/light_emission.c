@@ -30,8 +30,15 @@ static tt__pcg32 g_rng;
 static float U(void) { return (float)tt__pcg32_double(&g_rng); }
 
 /* Mean and standard error accumulator. */
-typedef struct acc { double s, s2; long n; } acc;
-static void acc_add(acc *a, double v) { a->s += v; a->s2 += v * v; a->n++; }
+typedef struct acc {
+  double s, s2;
+  long n;
+} acc;
+static void acc_add(acc *a, double v) {
+  a->s += v;
+  a->s2 += v * v;
+  a->n++;
+}
 static double acc_mean(const acc *a) { return a->s / a->n; }
 static double acc_se(const acc *a) {
   double m = acc_mean(a);
@@ -44,19 +51,22 @@ static void check_est(const char *what, const acc *a, double expected) {
             expected, se);
 }
 
-static const char *FLOOR = "{\"name\":\"floor\",\"material\":\"grey\",\"positions\":[-2,0,-2, 2,0,-2, 2,0,2, -2,0,2],"
-                           "\"indices\":[0,2,1, 0,3,2]}";
+static const char *FLOOR =
+    "{\"name\":\"floor\",\"material\":\"grey\",\"positions\":[-2,0,-2, 2,0,-2, 2,0,2, -2,0,2],"
+    "\"indices\":[0,2,1, 0,3,2]}";
 
 /* Loads a scene with `lights_json` (a "lights" array or ""), `extra_mesh` (a mesh or "") and
  * the floor; builds the lights. */
-static int load(const char *lights_json, const char *extra_mesh, const char *extra_mat, tt_scene **scene,
-                tt__lights *ls) {
+static int load(const char *lights_json, const char *extra_mesh, const char *extra_mat,
+                tt_scene **scene, tt__lights *ls) {
   static char json[8192];
   snprintf(json, sizeof json,
-           "{\"version\":1,\"camera\":{\"position\":[0,1,5],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"
+           "{\"version\":1,\"camera\":{\"position\":[0,1,5],\"target\":[0,0,0],\"up\":[0,1,0],"
+           "\"fov\":40,"
            "\"resolution\":[8,8]},\"materials\":{\"grey\":{\"type\":\"diffuse\",\"albedo\":0.5}%s},"
            "\"meshes\":[%s%s%s]%s%s}",
-           extra_mat, FLOOR, *extra_mesh ? "," : "", extra_mesh, *lights_json ? "," : "", lights_json);
+           extra_mat, FLOOR, *extra_mesh ? "," : "", extra_mesh, *lights_json ? "," : "",
+           lights_json);
   if (tt_scene_load_json(json, strlen(json), "test", NULL, scene) != TT_OK) {
     fprintf(stderr, "scene: %s\n", tt_last_error());
     return 0;
@@ -93,7 +103,9 @@ static void check_emission(const char *name, const tt__lights *ls, double power,
   char what[96];
   snprintf(what, sizeof what, "%s: power", name);
   check_est(what, &a, power);
-  CHECK_MSG(bad_pdf == 0, "%s: %d samples whose densities tt__lights_pdf_emission does not give back", name, bad_pdf);
+  CHECK_MSG(bad_pdf == 0,
+            "%s: %d samples whose densities tt__lights_pdf_emission does not give back", name,
+            bad_pdf);
   CHECK_MSG(produced > N / 2, "%s: only %d of %d emissions", name, produced, N);
   if (delta_dir) return;
   /* The direction density integrates to 1 over the sphere (uniform directions). */
@@ -111,7 +123,8 @@ static void check_emission(const char *name, const tt__lights *ls, double power,
 }
 
 /* Irradiance at `p` (normal +y) from the s = 1 light points. */
-static void check_irradiance(const char *name, const tt__lights *ls, const float p[3], double expected) {
+static void check_irradiance(const char *name, const tt__lights *ls, const float p[3],
+                             double expected) {
   const int N = 400000;
   acc a = {0};
   for (int i = 0; i < N; ++i) {
@@ -136,25 +149,32 @@ int main(void) {
   /* Square light of side 1 at height 1, facing down; one- and two-sided. */
   for (int two = 0; two < 2; ++two) {
     char mat[256], mesh[512];
-    snprintf(mat, sizeof mat, ",\"lamp\":{\"type\":\"diffuse\",\"albedo\":0,\"emission\":[3,3,3],\"twoSided\":%s}",
+    snprintf(mat, sizeof mat,
+             ",\"lamp\":{\"type\":\"diffuse\",\"albedo\":0,\"emission\":[3,3,3],\"twoSided\":%s}",
              two ? "true" : "false");
-    snprintf(mesh, sizeof mesh, "{\"name\":\"lamp\",\"material\":\"lamp\",\"positions\":[-0.5,1,-0.5, 0.5,1,-0.5, "
+    snprintf(mesh, sizeof mesh,
+             "{\"name\":\"lamp\",\"material\":\"lamp\",\"positions\":[-0.5,1,-0.5, 0.5,1,-0.5, "
              "0.5,1,0.5, -0.5,1,0.5],\"indices\":[0,1,2, 0,2,3]}");
     CHECK(load("", mesh, mat, &scene, &ls));
-    check_emission(two ? "area two-sided" : "area one-sided", &ls, (two ? 2.0 : 1.0) * M_PI * 3.0 * 1.0, 0);
-    check_irradiance(two ? "area two-sided" : "area one-sided", &ls, recv, M_PI * 3.0 * 4.0 * corner_ff(0.5, 0.5));
+    check_emission(two ? "area two-sided" : "area one-sided", &ls,
+                   (two ? 2.0 : 1.0) * M_PI * 3.0 * 1.0, 0);
+    check_irradiance(two ? "area two-sided" : "area one-sided", &ls, recv,
+                     M_PI * 3.0 * 4.0 * corner_ff(0.5, 0.5));
     tt__lights_free(&ls);
     tt_scene_destroy(scene);
   }
   /* Point light. */
-  CHECK(load("\"lights\":[{\"type\":\"point\",\"position\":[0,2,0],\"intensity\":[5,5,5]}]", "", "", &scene, &ls));
+  CHECK(load("\"lights\":[{\"type\":\"point\",\"position\":[0,2,0],\"intensity\":[5,5,5]}]", "", "",
+             &scene, &ls));
   check_emission("point", &ls, 4.0 * M_PI * 5.0, 0);
   check_irradiance("point", &ls, recv, 5.0 / 4.0);
   tt__lights_free(&ls);
   tt_scene_destroy(scene);
   /* Spot light: cone 30 degrees, falloff from 20. */
-  CHECK(load("\"lights\":[{\"type\":\"spot\",\"position\":[0,2,0],\"direction\":[0,-1,0],\"intensity\":[5,5,5],"
-             "\"angle\":30,\"innerAngle\":20}]", "", "", &scene, &ls));
+  CHECK(load("\"lights\":[{\"type\":\"spot\",\"position\":[0,2,0],\"direction\":[0,-1,0],"
+             "\"intensity\":[5,5,5],"
+             "\"angle\":30,\"innerAngle\":20}]",
+             "", "", &scene, &ls));
   {
     double ci = ls.lights[0].cos_inner, co = ls.lights[0].cos_outer;
     check_emission("spot", &ls, 2.0 * M_PI * 5.0 * ((1.0 - ci) + 0.5 * (ci - co)), 0);
@@ -163,13 +183,15 @@ int main(void) {
   tt__lights_free(&ls);
   tt_scene_destroy(scene);
   /* Distant light. */
-  CHECK(load("\"lights\":[{\"type\":\"distant\",\"direction\":[0,-1,0],\"irradiance\":[2,2,2]}]", "", "", &scene, &ls));
+  CHECK(load("\"lights\":[{\"type\":\"distant\",\"direction\":[0,-1,0],\"irradiance\":[2,2,2]}]",
+             "", "", &scene, &ls));
   check_emission("distant", &ls, 2.0 * M_PI * ls.radius * ls.radius, 1);
   check_irradiance("distant", &ls, recv, 2.0);
   tt__lights_free(&ls);
   tt_scene_destroy(scene);
   /* Constant environment. */
-  CHECK(load("\"lights\":[{\"type\":\"environment\",\"radiance\":[0.7,0.7,0.7]}]", "", "", &scene, &ls));
+  CHECK(load("\"lights\":[{\"type\":\"environment\",\"radiance\":[0.7,0.7,0.7]}]", "", "", &scene,
+             &ls));
   check_emission("environment", &ls, 0.7 * 4.0 * M_PI * M_PI * ls.radius * ls.radius, 0);
   check_irradiance("environment", &ls, recv, M_PI * 0.7);
   tt__lights_free(&ls);
@@ -180,7 +202,7 @@ int main(void) {
   snprintf(path, sizeof path, "%s/env.exr", dir);
   enum { EW = 16, EH = 8 };
   static float px[3 * EW * EH];
-  double integral = 0.0;  /* of the radiance over the sphere (nearest texel lookup) */
+  double integral = 0.0; /* of the radiance over the sphere (nearest texel lookup) */
   for (int y = 0; y < EH; ++y)
     for (int x = 0; x < EW; ++x) {
       float v = (float)(0.1 + (x == 3 && y == 2 ? 20.0 : 0.0) + 0.3 * y + 0.05 * x);

@@ -20,7 +20,7 @@
 
 static int g_argc;
 static char **g_argv;
-static char g_log[16384];  /* everything fixtures logged, one line per message */
+static char g_log[16384]; /* everything fixtures logged, one line per message */
 
 /* Test host log: appends to g_log so checks can see which init/deinit calls happened. */
 static void test_log(tt_log_level level, const char *plugin, const char *fmt, ...) {
@@ -37,12 +37,12 @@ static void test_log(tt_log_level level, const char *plugin, const char *fmt, ..
 }
 
 static tt_host g_host = {
-  .struct_size = sizeof(tt_host),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .host_name = "loader_abi test",
-  .host_version = "0",
-  .log = test_log,
+    .struct_size = sizeof(tt_host),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .host_name = "loader_abi test",
+    .host_version = "0",
+    .log = test_log,
 };
 
 /* Number of log lines equal to `line`. */
@@ -169,8 +169,8 @@ static void test_rejections(void) {
   CHECK_MSG(strstr(g_log, "init ") == NULL, "init was called: %s", g_log);
 
   expect_reject("fixture_no_iface", "does not provide interface \"tt.tuner/1\"", 0);
-  CHECK(log_count("init fixture_no_iface") == 1);    /* load ran init; probe did not */
-  CHECK(log_count("deinit fixture_no_iface") == 1);  /* undone before unloading */
+  CHECK(log_count("init fixture_no_iface") == 1);   /* load ran init; probe did not */
+  CHECK(log_count("deinit fixture_no_iface") == 1); /* undone before unloading */
 
   expect_reject("fixture_short_iface", "\"tt.tuner/1\" table is", 0);
   CHECK(log_count("deinit fixture_short_iface") == log_count("init fixture_short_iface"));
@@ -234,7 +234,7 @@ static void test_log_str_hosts(void) {
   CHECK_CONTAINS(g_str_log, "fixture_good: init fixture_good\nfixture_good: deinit fixture_good\n");
   CHECK(g_log[0] == '\0');
 
-  tt_host old = g_host;  /* as built before ABI 1.2: log_str past its struct_size is not read */
+  tt_host old = g_host; /* as built before ABI 1.2: log_str past its struct_size is not read */
   old.struct_size = offsetof(tt_host, log_str);
   old.log_str = test_log_str;
   g_log[0] = g_str_log[0] = '\0';
@@ -249,7 +249,7 @@ static void test_log_str_hosts(void) {
   CHECK(tt_registry_load(reg, fixture("fixture_abi10"), NULL) == TT_ERR_ABI);
   CHECK_CONTAINS(tt_last_error(), "fixture_abi10.so: plugin ABI 1.0 calls the host's variadic log");
   CHECK_CONTAINS(tt_last_error(), "\"log_str only\"");
-  CHECK(g_str_log[0] == '\0');  /* refused before init */
+  CHECK(g_str_log[0] == '\0'); /* refused before init */
   CHECK_MSG(!is_mapped(fixture("fixture_abi10")), "fixture_abi10 still mapped after the refusal");
   tt_registry_destroy(reg);
 
@@ -341,8 +341,8 @@ static void test_truncated(const char *tmp) {
     for (int k = 0; k < 2; k++) {
       write_prefix(path, b, cuts[k]);
       int rc = child_load(path);
-      CHECK_MSG(rc == 2, "cut at byte %ld of %ld (inside PT_LOAD %u): result %d", cuts[k], size,
-                i, rc);
+      CHECK_MSG(rc == 2, "cut at byte %ld of %ld (inside PT_LOAD %u): result %d", cuts[k], size, i,
+                rc);
       inside++;
     }
   }
@@ -372,7 +372,7 @@ static void test_bad_files(const char *tmp) {
   CHECK_CONTAINS(tt_last_error(), trunc);
   CHECK(tt_registry_load(reg, missing, NULL) == TT_ERR_IO);
   CHECK_CONTAINS(tt_last_error(), missing);
-  CHECK(tt_registry_load(reg, tmp, NULL) != TT_OK);  /* a directory given as a path */
+  CHECK(tt_registry_load(reg, tmp, NULL) != TT_OK); /* a directory given as a path */
   CHECK_CONTAINS(tt_last_error(), tmp);
   CHECK(tt_registry_count(reg) == 0);
   tt_registry_destroy(reg);
@@ -399,10 +399,8 @@ static void test_duplicates(void) {
   CHECK(is_mapped(good));
 
   /* Post plugins may stack; but not twice the same name. */
-  CHECK_MSG(tt_registry_load(reg, fixture("fixture_post_a"), NULL) == TT_OK, "%s",
-            tt_last_error());
-  CHECK_MSG(tt_registry_load(reg, fixture("fixture_post_b"), NULL) == TT_OK, "%s",
-            tt_last_error());
+  CHECK_MSG(tt_registry_load(reg, fixture("fixture_post_a"), NULL) == TT_OK, "%s", tt_last_error());
+  CHECK_MSG(tt_registry_load(reg, fixture("fixture_post_b"), NULL) == TT_OK, "%s", tt_last_error());
   CHECK(tt_registry_load(reg, fixture("fixture_post_a"), NULL) == TT_ERR_ABI);
   CHECK_CONTAINS(tt_last_error(), "a plugin named \"fixture_post_a\" is already loaded from");
   CHECK(log_count("init fixture_post_a") == 1);
@@ -412,11 +410,12 @@ static void test_duplicates(void) {
   /* Sampler: space() is the third member, not the second. */
   tt_loaded_plugin *s = NULL;
   CHECK(tt_registry_load(reg, fixture("fixture_sampler"), &s) == TT_OK);
-  CHECK(s && (const void *)tt_loaded_plugin_space(s) ==
-                 tt_loaded_plugin_get(s, "fixture.sentinel/1"));
+  CHECK(s &&
+        (const void *)tt_loaded_plugin_space(s) == tt_loaded_plugin_get(s, "fixture.sentinel/1"));
   tt_registry_destroy(reg);
   /* Reverse load order: the sampler (last) is deinit'ed before the tuner (first). */
-  const char *ds = strstr(g_log, "deinit fixture_sampler"), *dg = strstr(g_log, "deinit fixture_good");
+  const char *ds = strstr(g_log, "deinit fixture_sampler"),
+             *dg = strstr(g_log, "deinit fixture_good");
   CHECK(ds && dg && ds < dg);
 }
 
@@ -435,7 +434,7 @@ static void test_shared_across_registries(void) {
     tt_registry_destroy(older_first ? a : b);
     CHECK_MSG(log_count("deinit fixture_good") == 0, "deinit ran while a registry holds it");
     CHECK(is_mapped(good));
-    tt_registry *c = tt_registry_create(&g_host);  /* a third one meanwhile */
+    tt_registry *c = tt_registry_create(&g_host); /* a third one meanwhile */
     CHECK(tt_registry_load(c, good, NULL) == TT_OK);
     tt_registry_destroy(c);
     CHECK(log_count("init fixture_good") == 1 && log_count("deinit fixture_good") == 0);
@@ -450,9 +449,10 @@ static void test_shared_across_registries(void) {
   CHECK(tt_registry_load(a, good, NULL) == TT_OK);
   CHECK(tt_registry_load(b, good, NULL) == TT_ERR_ABI);
   CHECK_CONTAINS(tt_last_error(), good);
-  CHECK_CONTAINS(tt_last_error(), "already initialised in this process for host \"loader_abi test\"");
+  CHECK_CONTAINS(tt_last_error(),
+                 "already initialised in this process for host \"loader_abi test\"");
   tt_registry_destroy(a);
-  CHECK(tt_registry_load(b, good, NULL) == TT_OK);  /* once the first one is gone */
+  CHECK(tt_registry_load(b, good, NULL) == TT_OK); /* once the first one is gone */
   tt_registry_destroy(b);
 }
 
@@ -569,9 +569,9 @@ static void test_list_and_probe(const char *tmp) {
   CHECK(strcmp(copy.name, "fixture_post_b") == 0 && copy.kind == TT_KIND_POST);
   CHECK(strcmp(copy.version, "0.0.1") == 0);
   CHECK(copy.init == NULL && copy.get_interface == NULL);
-  CHECK(tt_registry_probe(reg, "fixture_good", &copy) == TT_OK);  /* by name */
+  CHECK(tt_registry_probe(reg, "fixture_good", &copy) == TT_OK); /* by name */
   CHECK(strcmp(copy.name, "fixture_good") == 0 && copy.kind == TT_KIND_TUNER);
-  CHECK(g_log[0] == '\0');  /* no init, no deinit */
+  CHECK(g_log[0] == '\0'); /* no init, no deinit */
   CHECK(!is_mapped(f1));
   CHECK(tt_registry_count(reg) == 0);
   tt_registry_destroy(reg);
@@ -597,10 +597,17 @@ static void test_kinds(void) {
 
 /* Removes the scratch files this test created (known names only). */
 static void cleanup(const char *tmp) {
-  const char *files[] = {"bogus.so", "truncated.so", "plugins/fixture_sampler/fixture_sampler.so",
-                         "plugins/fixture_sampler", "plugins", "list1/fixture_good.so",
-                         "list1/notes.txt", "list1", "list2/fixture_good.so",
-                         "list2/fixture_post_b/fixture_post_b.so", "list2/fixture_post_b",
+  const char *files[] = {"bogus.so",
+                         "truncated.so",
+                         "plugins/fixture_sampler/fixture_sampler.so",
+                         "plugins/fixture_sampler",
+                         "plugins",
+                         "list1/fixture_good.so",
+                         "list1/notes.txt",
+                         "list1",
+                         "list2/fixture_good.so",
+                         "list2/fixture_post_b/fixture_post_b.so",
+                         "list2/fixture_post_b",
                          "list2"};
   char p[1024];
   for (size_t i = 0; i < sizeof files / sizeof *files; i++) {

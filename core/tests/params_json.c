@@ -22,8 +22,8 @@ static tt_space *make_space(void) {
   CHECK(tt_space_add_nom_string(s, "backend", backend, 2, 1, "kernel backend") == 6);
   CHECK(tt_space_add_float(s, "travcost", 1e-3, 1e3, 0.3, 1, "log-scaled cost") == 7);
   /* At the +-2^53 limit, where cJSON's default printing would switch to exponents. */
-  CHECK(tt_space_add_int(s, "seed", -9007199254740992LL, 9007199254740992LL,
-                         9007199254740991LL, "seed") == 8);
+  CHECK(tt_space_add_int(s, "seed", -9007199254740992LL, 9007199254740992LL, 9007199254740991LL,
+                         "seed") == 8);
   tt_space_add_constraint_text(s, "branchingFactor^(maxDepth-1)*maxLeafSize >= N");
   tt_space_add_constraint_text(s, "robust implies !compact");
   return s;
@@ -48,7 +48,7 @@ static void test_space_round_trip(void) {
   CHECK_CONTAINS(json, "\"log\":\ttrue");
   CHECK_CONTAINS(json, "\"max\":\t9007199254740992");
   CHECK_CONTAINS(json, "\"description\":\t\"robust implies !compact\"");
-  CHECK(strstr(json, "\"log\":\tfalse") == NULL);  /* "log" only when true */
+  CHECK(strstr(json, "\"log\":\tfalse") == NULL); /* "log" only when true */
 
   tt_space *r = tt_space_from_json(json, "roundtrip.json");
   CHECK_MSG(r != NULL, "%s", tt_last_error());
@@ -107,18 +107,25 @@ static void test_config_round_trip(void) {
 
   /* Config JSON errors leave the configuration untouched. */
   tt_config *before = tt_config_clone(b);
-  struct { const char *json, *expect; } bad[] = {
-    {"{\"maxDepth\": 6, \"bogus\": 1}", "cfg.json: unknown parameter \"bogus\" of accel_embree (known: quality"},
-    {"{\"maxDepth\": 65}", "cfg.json: accel_embree.maxDepth: 65 is out of range [4, 64]"},
-    {"{\"maxDepth\": 6.5}", "accel_embree.maxDepth: 6.5 is not an integer"},
-    {"{\"maxDepth\": \"6\"}", "cfg.json: accel_embree.maxDepth: expected an integer, got a string (\"6\")"},
-    {"{\"branchingFactor\": 3}", "cfg.json: accel_embree.branchingFactor: 3 is not one of 2, 4, 8"},
-    {"{\"static\": 1}", "cfg.json: accel_embree.static: expected true or false, got the number 1"},
-    {"{\"backend\": \"cuda\"}", "accel_embree.backend: expected one of \"native\", \"custom \"quoted\"\", got a string (\"cuda\")"},
-    {"{\"intcost\": null}", "accel_embree.intcost: expected a number, got null"},
-    {"{\"quality\": 1, \"quality\": 2}", "cfg.json: quality: appears twice"},
-    {"[1, 2]", "cfg.json: expected a JSON object"},
-    {"{\"quality\": 1,", "cfg.json: invalid JSON at line 1"},
+  struct {
+    const char *json, *expect;
+  } bad[] = {
+      {"{\"maxDepth\": 6, \"bogus\": 1}",
+       "cfg.json: unknown parameter \"bogus\" of accel_embree (known: quality"},
+      {"{\"maxDepth\": 65}", "cfg.json: accel_embree.maxDepth: 65 is out of range [4, 64]"},
+      {"{\"maxDepth\": 6.5}", "accel_embree.maxDepth: 6.5 is not an integer"},
+      {"{\"maxDepth\": \"6\"}",
+       "cfg.json: accel_embree.maxDepth: expected an integer, got a string (\"6\")"},
+      {"{\"branchingFactor\": 3}",
+       "cfg.json: accel_embree.branchingFactor: 3 is not one of 2, 4, 8"},
+      {"{\"static\": 1}",
+       "cfg.json: accel_embree.static: expected true or false, got the number 1"},
+      {"{\"backend\": \"cuda\"}", "accel_embree.backend: expected one of \"native\", \"custom "
+                                  "\"quoted\"\", got a string (\"cuda\")"},
+      {"{\"intcost\": null}", "accel_embree.intcost: expected a number, got null"},
+      {"{\"quality\": 1, \"quality\": 2}", "cfg.json: quality: appears twice"},
+      {"[1, 2]", "cfg.json: expected a JSON object"},
+      {"{\"quality\": 1,", "cfg.json: invalid JSON at line 1"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
     CHECK_MSG(tt_config_from_json(b, bad[k].json, "cfg.json") == TT_ERR_PARSE, "case %zu", k);
@@ -136,9 +143,11 @@ static void test_fig31(void) {
   const char *json =
       "{ \"plugin\": \"accel_embree\", \"version\": \"1.0.0\",\n"
       "  \"parameters\": [\n"
-      "    { \"name\": \"quality\", \"type\": \"NOM\", \"possibleValues\": [1, 2, 3], \"value\": 2 },\n"
+      "    { \"name\": \"quality\", \"type\": \"NOM\", \"possibleValues\": [1, 2, 3], \"value\": 2 "
+      "},\n"
       "    { \"name\": \"maxDepth\", \"type\": \"INT\", \"min\": 4, \"max\": 64, \"value\": 32 },\n"
-      "    { \"name\": \"intcost\", \"type\": \"FLOAT\", \"min\": 0.1, \"max\": 10.0, \"value\": 1.0 } ] }";
+      "    { \"name\": \"intcost\", \"type\": \"FLOAT\", \"min\": 0.1, \"max\": 10.0, \"value\": "
+      "1.0 } ] }";
   tt_space *s = tt_space_from_json(json, "fig31.json");
   CHECK_MSG(s != NULL, "%s", tt_last_error());
   if (!s) return;
@@ -161,60 +170,70 @@ static void space_with(char *buf, size_t size, const char *params) {
 
 /* Malformed space JSON: each fails, and the message names source, path and expectation. */
 static void test_space_errors(void) {
-  struct { const char *param, *expect; } bad[] = {
-    {"{\"name\": \"a\", \"min\": 0, \"max\": 1, \"value\": 0}",
-     "bad.json: parameters[1].type: missing (expected \"INT\", \"FLOAT\" or \"NOM\")"},
-    {"{\"name\": \"a\", \"type\": \"BOOL\", \"possibleValues\": [false, true], \"value\": true}",
-     "bad.json: parameters[1].type: unknown type \"BOOL\" (expected \"INT\", \"FLOAT\" or \"NOM\""},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 5, \"max\": 1, \"value\": 3}",
-     "bad.json: parameters[1].max: 1 is less than min 5"},
-    {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": 2.5, \"max\": 1.5, \"value\": 2}",
-     "bad.json: parameters[1].max: 1.5 is less than min 2.5"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 10, \"value\": 11}",
-     "bad.json: parameters[1].value: default 11 is outside [0, 10]"},
-    {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": 0, \"max\": 1, \"value\": -0.5}",
-     "bad.json: parameters[1].value: default -0.5 is outside [0, 1]"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [], \"value\": 1}",
-     "bad.json: parameters[1].possibleValues: empty (expected at least one possible value)"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, \"two\", 3], \"value\": 1}",
-     "bad.json: parameters[1].possibleValues[1]: mixed value kinds (possibleValues[0] is an "
-     "integer, this is a string"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1.5, 2], \"value\": 2}",
-     "bad.json: parameters[1].possibleValues[0]: expected an integer, boolean or string, got "
-     "the number 1.5"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, 2, 1], \"value\": 1}",
-     "bad.json: parameters[1].possibleValues[2]: duplicate value"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 3}",
-     "bad.json: parameters[1].value: default the number 3 is not one of possibleValues"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [\"x\", \"y\"], \"value\": 0}",
-     "bad.json: parameters[1].value: default the number 0 is not one of possibleValues"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [true, false], \"value\": true}",
-     "bad.json: parameters[1].possibleValues: boolean possible values must be [false, true]"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"value\": 1}",
-     "bad.json: parameters[1].possibleValues: missing (expected a non-empty array)"},
-    {"{\"name\": \"ok\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0}",
-     "bad.json: parameters[1].name: duplicate name \"ok\" (already used by parameters[0])"},
-    {"{\"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0}",
-     "bad.json: parameters[1].name: expected a non-empty string, got nothing"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0.5, \"max\": 1, \"value\": 1}",
-     "bad.json: parameters[1].min: expected an integer, got the number 0.5"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"value\": 0}",
-     "bad.json: parameters[1].max: missing (expected an integer)"},
-    {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": \"0\", \"max\": 1, \"value\": 0}",
-     "bad.json: parameters[1].min: expected a number, got a string (\"0\")"},
-    {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": 0, \"max\": 1, \"value\": 0.5, \"log\": true}",
-     "bad.json: parameters[1].log: log scale needs min > 0, got min 0"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 1, \"max\": 8, \"value\": 2, \"log\": true}",
-     "bad.json: parameters[1].log: only FLOAT parameters may be log-scaled"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"description\": 7}",
-     "bad.json: parameters[1].description: expected a string, got the number 7"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 1e300, \"value\": 0}",
-     "bad.json: parameters[1].max: expected an integer within +-2^53, got the number 1.0000000000000001e+300"},
-    {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 9223372036854775807, \"value\": 0}",
-     "bad.json: parameters[1].max: expected an integer within +-2^53, got the number 9.2233720368547758e+18"},
-    {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, 9007199254740994], \"value\": 1}",
-     "bad.json: parameters[1]: tt_space_add_nom_int: p.a: possible value 9007199254740994 exceeds +-2^53"},
-    {"42", "bad.json: parameters[1]: expected a parameter object, got the number 42"},
+  struct {
+    const char *param, *expect;
+  } bad[] = {
+      {"{\"name\": \"a\", \"min\": 0, \"max\": 1, \"value\": 0}",
+       "bad.json: parameters[1].type: missing (expected \"INT\", \"FLOAT\" or \"NOM\")"},
+      {"{\"name\": \"a\", \"type\": \"BOOL\", \"possibleValues\": [false, true], \"value\": true}",
+       "bad.json: parameters[1].type: unknown type \"BOOL\" (expected \"INT\", \"FLOAT\" or "
+       "\"NOM\""},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 5, \"max\": 1, \"value\": 3}",
+       "bad.json: parameters[1].max: 1 is less than min 5"},
+      {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": 2.5, \"max\": 1.5, \"value\": 2}",
+       "bad.json: parameters[1].max: 1.5 is less than min 2.5"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 10, \"value\": 11}",
+       "bad.json: parameters[1].value: default 11 is outside [0, 10]"},
+      {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": 0, \"max\": 1, \"value\": -0.5}",
+       "bad.json: parameters[1].value: default -0.5 is outside [0, 1]"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [], \"value\": 1}",
+       "bad.json: parameters[1].possibleValues: empty (expected at least one possible value)"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, \"two\", 3], \"value\": 1}",
+       "bad.json: parameters[1].possibleValues[1]: mixed value kinds (possibleValues[0] is an "
+       "integer, this is a string"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1.5, 2], \"value\": 2}",
+       "bad.json: parameters[1].possibleValues[0]: expected an integer, boolean or string, got "
+       "the number 1.5"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, 2, 1], \"value\": 1}",
+       "bad.json: parameters[1].possibleValues[2]: duplicate value"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 3}",
+       "bad.json: parameters[1].value: default the number 3 is not one of possibleValues"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [\"x\", \"y\"], \"value\": 0}",
+       "bad.json: parameters[1].value: default the number 0 is not one of possibleValues"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [true, false], \"value\": true}",
+       "bad.json: parameters[1].possibleValues: boolean possible values must be [false, true]"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"value\": 1}",
+       "bad.json: parameters[1].possibleValues: missing (expected a non-empty array)"},
+      {"{\"name\": \"ok\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0}",
+       "bad.json: parameters[1].name: duplicate name \"ok\" (already used by parameters[0])"},
+      {"{\"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0}",
+       "bad.json: parameters[1].name: expected a non-empty string, got nothing"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0.5, \"max\": 1, \"value\": 1}",
+       "bad.json: parameters[1].min: expected an integer, got the number 0.5"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"value\": 0}",
+       "bad.json: parameters[1].max: missing (expected an integer)"},
+      {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": \"0\", \"max\": 1, \"value\": 0}",
+       "bad.json: parameters[1].min: expected a number, got a string (\"0\")"},
+      {"{\"name\": \"a\", \"type\": \"FLOAT\", \"min\": 0, \"max\": 1, \"value\": 0.5, \"log\": "
+       "true}",
+       "bad.json: parameters[1].log: log scale needs min > 0, got min 0"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 1, \"max\": 8, \"value\": 2, \"log\": true}",
+       "bad.json: parameters[1].log: only FLOAT parameters may be log-scaled"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, "
+       "\"description\": 7}",
+       "bad.json: parameters[1].description: expected a string, got the number 7"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 1e300, \"value\": 0}",
+       "bad.json: parameters[1].max: expected an integer within +-2^53, got the number "
+       "1.0000000000000001e+300"},
+      {"{\"name\": \"a\", \"type\": \"INT\", \"min\": 0, \"max\": 9223372036854775807, \"value\": "
+       "0}",
+       "bad.json: parameters[1].max: expected an integer within +-2^53, got the number "
+       "9.2233720368547758e+18"},
+      {"{\"name\": \"a\", \"type\": \"NOM\", \"possibleValues\": [1, 9007199254740994], \"value\": "
+       "1}",
+       "bad.json: parameters[1]: tt_space_add_nom_int: p.a: possible value 9007199254740994 "
+       "exceeds +-2^53"},
+      {"42", "bad.json: parameters[1]: expected a parameter object, got the number 42"},
   };
   char buf[1024];
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
@@ -234,17 +253,21 @@ static void test_space_errors(void) {
   CHECK(good && tt_space_count(good) == 2 && tt_space_default(good, 1).index == 1);
   tt_space_destroy(good);
 
-  struct { const char *json, *expect; } top[] = {
-    {"{\"plugin\": \"p\", \"parameters\": [}", "bad.json: invalid JSON at line 1, column 32"},
-    {"{\n  \"plugin\": \"p\",\n  \"parameters\": [\n    {\"name\": }\n]}",
-     "bad.json: invalid JSON at line 4, column 14"},
-    {"[]", "bad.json: expected a JSON object at the top level, got an array"},
-    {"{\"parameters\": []}", "bad.json: plugin: expected the plugin name as a string, got nothing"},
-    {"{\"plugin\": \"p\"}", "bad.json: parameters: expected an array of parameter objects"},
-    {"{\"plugin\": \"p\", \"version\": 2, \"parameters\": []}", "bad.json: version: expected a version string"},
-    {"{\"plugin\": \"p\", \"parameters\": [], \"constraints\": [{\"text\": \"x\"}]}",
-     "bad.json: constraints[0]: expected {\"description\": \"...\"}, got an object"},
-    {"{\"plugin\": \"p\", \"parameters\": []} trailing", "bad.json: invalid JSON at line 1"},
+  struct {
+    const char *json, *expect;
+  } top[] = {
+      {"{\"plugin\": \"p\", \"parameters\": [}", "bad.json: invalid JSON at line 1, column 32"},
+      {"{\n  \"plugin\": \"p\",\n  \"parameters\": [\n    {\"name\": }\n]}",
+       "bad.json: invalid JSON at line 4, column 14"},
+      {"[]", "bad.json: expected a JSON object at the top level, got an array"},
+      {"{\"parameters\": []}",
+       "bad.json: plugin: expected the plugin name as a string, got nothing"},
+      {"{\"plugin\": \"p\"}", "bad.json: parameters: expected an array of parameter objects"},
+      {"{\"plugin\": \"p\", \"version\": 2, \"parameters\": []}",
+       "bad.json: version: expected a version string"},
+      {"{\"plugin\": \"p\", \"parameters\": [], \"constraints\": [{\"text\": \"x\"}]}",
+       "bad.json: constraints[0]: expected {\"description\": \"...\"}, got an object"},
+      {"{\"plugin\": \"p\", \"parameters\": []} trailing", "bad.json: invalid JSON at line 1"},
   };
   for (size_t k = 0; k < sizeof top / sizeof top[0]; k++) {
     tt_space *s = tt_space_from_json(top[k].json, "bad.json");

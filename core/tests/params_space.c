@@ -9,8 +9,19 @@
 #include <string.h>
 #include <tt_util/rng.h>
 
-enum { P_QUALITY, P_BRANCH, P_DEPTH, P_INTCOST, P_STATIC, P_COMPACT, P_ROBUST, P_BACKEND,
-       P_LEAF, P_TRAV, P_COUNT };
+enum {
+  P_QUALITY,
+  P_BRANCH,
+  P_DEPTH,
+  P_INTCOST,
+  P_STATIC,
+  P_COMPACT,
+  P_ROBUST,
+  P_BACKEND,
+  P_LEAF,
+  P_TRAV,
+  P_COUNT
+};
 
 /* Builds the test space; every add must succeed and return its position. */
 static tt_space *make_space(void) {
@@ -21,8 +32,7 @@ static tt_space *make_space(void) {
   CHECK(tt_space_add_nom_int(s, "quality", quality, 3, 1, "build quality") == P_QUALITY);
   CHECK(tt_space_add_nom_int(s, "branchingFactor", branch, 3, 0, "BVH width") == P_BRANCH);
   CHECK(tt_space_add_int(s, "maxDepth", 4, 64, 32, "maximum tree depth") == P_DEPTH);
-  CHECK(tt_space_add_float(s, "intcost", 0.1, 10.0, 1.0, 0, "intersection cost") ==
-        P_INTCOST);
+  CHECK(tt_space_add_float(s, "intcost", 0.1, 10.0, 1.0, 0, "intersection cost") == P_INTCOST);
   CHECK(tt_space_add_nom_bool(s, "static", 1, "static scene") == P_STATIC);
   CHECK(tt_space_add_nom_bool(s, "compact", 0, "compact layout") == P_COMPACT);
   CHECK(tt_space_add_nom_bool(s, "robust", 0, "robust traversal") == P_ROBUST);
@@ -75,7 +85,7 @@ static void test_readers_and_defaults(const tt_space *s) {
   CHECK_NEAR(tt_config_get_float(c, "intcost", -1), 1.0, 0);
   CHECK(tt_config_get_int(c, "static", -1) == 1);
   CHECK(tt_config_get_int(c, "compact", -1) == 0);
-  CHECK(tt_config_get_int(c, "backend", -1) == 0);  /* string NOM -> index */
+  CHECK(tt_config_get_int(c, "backend", -1) == 0); /* string NOM -> index */
   CHECK_NEAR(tt_config_get_float(c, "static", -1), 1.0, 0);
   CHECK(strcmp(tt_config_get_string(c, "backend"), "native") == 0);
   CHECK(tt_config_get_string(c, "maxDepth") == NULL);
@@ -121,7 +131,7 @@ static void test_builder_errors(void) {
   CHECK_CONTAINS(tt_last_error(), "possible value 9007199254740993 exceeds +-2^53");
   CHECK(tt_space_add_nom_string(s, "b", sv, 2, 5, NULL) == -1);
   CHECK(tt_space_add_nom_string(s, "", sv, 2, 0, NULL) == -1);
-  CHECK(tt_space_count(s) == 1);  /* failures added nothing */
+  CHECK(tt_space_count(s) == 1); /* failures added nothing */
   CHECK(tt_space_add_nom_string(s, "b", sv, 2, 1, NULL) == 1);
   /* Once configurations exist the space is published and frozen. */
   tt_config *c = tt_config_create(s);
@@ -139,7 +149,7 @@ static void test_setters(const tt_space *s) {
   CHECK(tt_config_get_int(c, "maxDepth", -1) == 4);
   CHECK(tt_config_set_string(c, "maxDepth", " 64 ") == TT_OK);
   CHECK(tt_config_get_int(c, "maxDepth", -1) == 64);
-  CHECK(tt_config_set_string(c, "maxDepth", "1e1") == TT_OK);  /* integral in any form */
+  CHECK(tt_config_set_string(c, "maxDepth", "1e1") == TT_OK); /* integral in any form */
   CHECK(tt_config_get_int(c, "maxDepth", -1) == 10);
   CHECK(tt_config_get(c, P_DEPTH).f == 10.0);
   CHECK(tt_config_set_string(c, "intcost", "0.5") == TT_OK);
@@ -182,7 +192,7 @@ static void test_setters(const tt_space *s) {
   CHECK_CONTAINS(tt_last_error(), "accel_embree.quality: \"two\" is not one of 1, 2, 3");
   CHECK(tt_config_set_string(c, "bogus", "1") == TT_ERR_INVALID_ARGUMENT);
   CHECK_CONTAINS(tt_last_error(), "accel_embree: unknown parameter \"bogus\"");
-  CHECK(tt_config_equal(c, before));  /* failed sets change nothing */
+  CHECK(tt_config_equal(c, before)); /* failed sets change nothing */
 
   /* Numeric setter: strict, no clamping. */
   CHECK(tt_config_set_number(c, P_DEPTH, 16) == TT_OK);
@@ -221,9 +231,7 @@ static void test_setters(const tt_space *s) {
 
 /* Small deterministic PRNG (SplitMix64), so failures reproduce. */
 static uint64_t rng_state = 1;
-static double rnd(void) {
-  return tt__u64_to_unit(tt__splitmix64(&rng_state));
-}
+static double rnd(void) { return tt__u64_to_unit(tt__splitmix64(&rng_state)); }
 
 /* to_unit/from_unit: exact inverses on configs, approximate on unit points, clamping. */
 static void test_unit_cube(const tt_space *s) {
@@ -238,7 +246,7 @@ static void test_unit_cube(const tt_space *s) {
   CHECK_NEAR(u[P_INTCOST], (1.0 - 0.1) / 9.9, 1e-12);
   CHECK_NEAR(u[P_STATIC], 0.75, 1e-12);
   CHECK_NEAR(u[P_BACKEND], 0.25, 1e-12);
-  CHECK_NEAR(u[P_TRAV], 0.5, 1e-12);  /* log: 1 is the geometric middle of [0.01, 100] */
+  CHECK_NEAR(u[P_TRAV], 0.5, 1e-12); /* log: 1 is the geometric middle of [0.01, 100] */
 
   int bins[P_COUNT][3] = {{0}};
   for (int trial = 0; trial < 2000; trial++) {
@@ -265,17 +273,13 @@ static void test_unit_cube(const tt_space *s) {
     tt_config_from_unit(d, u2);
     for (size_t i = 0; i < P_COUNT; i++) {
       tt_value a = tt_config_get(c, i), b = tt_config_get(d, i);
-      if (tt_space_type(s, i) == TT_PARAM_FLOAT)
-        CHECK_NEAR(a.f, b.f, 1e-12 * fabs(a.f));
-      else
-        CHECK(a.i == b.i && a.index == b.index && a.s == b.s);
+      if (tt_space_type(s, i) == TT_PARAM_FLOAT) CHECK_NEAR(a.f, b.f, 1e-12 * fabs(a.f));
+      else CHECK(a.i == b.i && a.index == b.index && a.s == b.s);
       /* unit -> config -> unit: FLOAT continuous; INT within half a step; NOM bin centre. */
-      if (tt_space_type(s, i) == TT_PARAM_FLOAT)
-        CHECK_NEAR(u2[i], u[i], 1e-12);
+      if (tt_space_type(s, i) == TT_PARAM_FLOAT) CHECK_NEAR(u2[i], u[i], 1e-12);
       else if (tt_space_type(s, i) == TT_PARAM_INT)
         CHECK_NEAR(u2[i], u[i], 0.5 / (tt_space_max(s, i) - tt_space_min(s, i)) + 1e-12);
-      else
-        CHECK_NEAR(u2[i], u[i], 0.5 / (double)tt_space_nom_count(s, i) + 1e-12);
+      else CHECK_NEAR(u2[i], u[i], 0.5 / (double)tt_space_nom_count(s, i) + 1e-12);
     }
   }
   /* Uniform points hit every NOM bin. */
@@ -321,7 +325,7 @@ static void test_copy_equal(const tt_space *s) {
   CHECK(c != NULL && tt_config_equal(b, c) && tt_config_space(c) == s);
   CHECK(tt_config_set_string(c, "robust", "true") == TT_OK);
   CHECK(!tt_config_equal(b, c));
-  CHECK(tt_config_get_int(b, "robust", -1) == 0);  /* clone is independent */
+  CHECK(tt_config_get_int(b, "robust", -1) == 0); /* clone is independent */
 
   /* Configurations of different spaces never compare equal and do not copy. */
   tt_space *other = make_space();
@@ -377,22 +381,22 @@ static void test_checks(void) {
 
   int calls = 0;
   tt_space_set_check(s, repair_check, &calls);
-  CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_OK);  /* 2^31*4 is plenty */
+  CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_OK); /* 2^31*4 is plenty */
   CHECK(calls == 1);
   CHECK(tt_config_set_string(c, "maxDepth", "8") == TT_OK);
   CHECK(tt_config_set_string(c, "maxLeafSize", "1") == TT_OK);
   /* 2^7 * 1 = 128 < 4096: repair to leaf 32 is impossible (max 16). */
   CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_INFEASIBLE);
   CHECK_CONTAINS(why, "needs maxLeafSize 32 > 16");
-  CHECK(tt_config_set_string(c, "branchingFactor", "4") == TT_OK);  /* 4^7 = 16384 */
+  CHECK(tt_config_set_string(c, "branchingFactor", "4") == TT_OK); /* 4^7 = 16384 */
   CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_OK);
-  CHECK(tt_config_set_string(c, "maxDepth", "7") == TT_OK);  /* 4^6 = 4096 */
+  CHECK(tt_config_set_string(c, "maxDepth", "7") == TT_OK); /* 4^6 = 4096 */
   CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_OK);
-  CHECK(tt_config_set_string(c, "maxDepth", "6") == TT_OK);  /* 4^5 = 1024: leaf 4 */
+  CHECK(tt_config_set_string(c, "maxDepth", "6") == TT_OK); /* 4^5 = 1024: leaf 4 */
   CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_REPAIRED);
   CHECK_CONTAINS(why, "maxLeafSize raised to 4");
   CHECK(tt_config_get_int(c, "maxLeafSize", -1) == 4);
-  CHECK(tt_space_check(s, c, NULL, 0) == TT_CHECK_OK);  /* repaired config is feasible */
+  CHECK(tt_space_check(s, c, NULL, 0) == TT_CHECK_OK); /* repaired config is feasible */
   CHECK(calls == 6);
 
   tt_space_set_check(s, reject_check, NULL);
@@ -401,7 +405,7 @@ static void test_checks(void) {
   CHECK(tt_config_set_string(c, "compact", "true") == TT_OK);
   tt_config *before = tt_config_clone(c);
   CHECK(tt_space_check(s, c, why, sizeof why) == TT_CHECK_INFEASIBLE);
-  CHECK_CONTAINS(why, "accel_embree: constraint violated");  /* filled in for the plugin */
+  CHECK_CONTAINS(why, "accel_embree: constraint violated"); /* filled in for the plugin */
   CHECK(tt_config_equal(c, before));
   CHECK(tt_space_check(s, c, NULL, 0) == TT_CHECK_INFEASIBLE);
 

@@ -173,7 +173,9 @@ int main(void) {
   int nm = 0;
   mats[nm].name = "lambert";
   mats[nm].m = base_material(TT_MATERIAL_DIFFUSE);
-  mats[nm].m.albedo[0] = 0.8f; mats[nm].m.albedo[1] = 0.5f; mats[nm].m.albedo[2] = 1.0f;
+  mats[nm].m.albedo[0] = 0.8f;
+  mats[nm].m.albedo[1] = 0.5f;
+  mats[nm].m.albedo[2] = 1.0f;
   nm++;
   mats[nm].name = "oren-nayar";
   mats[nm].m = base_material(TT_MATERIAL_DIFFUSE);
@@ -183,27 +185,37 @@ int main(void) {
   mats[nm].name = "conductor-iso";
   mats[nm].m = base_material(TT_MATERIAL_CONDUCTOR);
   mats[nm].m.alpha[0] = mats[nm].m.alpha[1] = 0.3f;
-  { const float eta[3] = {0.143f, 0.374f, 1.442f}, k[3] = {3.983f, 2.385f, 1.603f};
-    memcpy(mats[nm].m.eta, eta, sizeof eta); memcpy(mats[nm].m.k, k, sizeof k); }
+  {
+    const float eta[3] = {0.143f, 0.374f, 1.442f}, k[3] = {3.983f, 2.385f, 1.603f};
+    memcpy(mats[nm].m.eta, eta, sizeof eta);
+    memcpy(mats[nm].m.k, k, sizeof k);
+  }
   nm++;
   mats[nm].name = "conductor-aniso";
   mats[nm].m = mats[nm - 1].m;
-  mats[nm].m.alpha[0] = 0.08f; mats[nm].m.alpha[1] = 0.4f;
+  mats[nm].m.alpha[0] = 0.08f;
+  mats[nm].m.alpha[1] = 0.4f;
   nm++;
-  mats[nm].name = "conductor-white";  /* k = 0, eta = huge: F ~ 1, tests G2's energy loss */
+  mats[nm].name = "conductor-white"; /* k = 0, eta = huge: F ~ 1, tests G2's energy loss */
   mats[nm].m = base_material(TT_MATERIAL_CONDUCTOR);
   mats[nm].m.alpha[0] = mats[nm].m.alpha[1] = 0.8f;
-  for (int i = 0; i < 3; ++i) { mats[nm].m.eta[i] = 1000.0f; mats[nm].m.k[i] = 0.0f; }
+  for (int i = 0; i < 3; ++i) {
+    mats[nm].m.eta[i] = 1000.0f;
+    mats[nm].m.k[i] = 0.0f;
+  }
   nm++;
   mats[nm].name = "plastic";
   mats[nm].m = base_material(TT_MATERIAL_PLASTIC);
-  mats[nm].m.albedo[0] = 1.0f; mats[nm].m.albedo[1] = 0.6f; mats[nm].m.albedo[2] = 0.2f;
+  mats[nm].m.albedo[0] = 1.0f;
+  mats[nm].m.albedo[1] = 0.6f;
+  mats[nm].m.albedo[2] = 0.2f;
   mats[nm].m.alpha[0] = mats[nm].m.alpha[1] = 0.2f;
   nm++;
   mats[nm].name = "plastic-sharp";
   mats[nm].m = mats[nm - 1].m;
   mats[nm].m.albedo[0] = mats[nm].m.albedo[1] = mats[nm].m.albedo[2] = 1.0f;
-  mats[nm].m.alpha[0] = 0.05f; mats[nm].m.alpha[1] = 0.1f;
+  mats[nm].m.alpha[0] = 0.05f;
+  mats[nm].m.alpha[1] = 0.1f;
   nm++;
   mats[nm].name = "rough-glass";
   mats[nm].m = base_material(TT_MATERIAL_DIELECTRIC);
@@ -212,7 +224,8 @@ int main(void) {
   nm++;
   mats[nm].name = "rough-glass-aniso";
   mats[nm].m = mats[nm - 1].m;
-  mats[nm].m.alpha[0] = 0.12f; mats[nm].m.alpha[1] = 0.35f;
+  mats[nm].m.alpha[0] = 0.12f;
+  mats[nm].m.alpha[1] = 0.35f;
   mats[nm].m.ior = 1.33f;
   mats[nm].m.specular[2] = 0.5f;
   nm++;
@@ -235,27 +248,31 @@ int main(void) {
       double is_m[3], is_se[3], us_m[3], us_se[3], success;
       albedo_estimates(&b, wo, 200000, &rng, is_m, is_se, us_m, us_se, &success);
       double integral = pdf_integral(&b, wo, 1000, 2000);
-      printf("%-16s theta %.1f: albedo IS %.4f %.4f %.4f (se %.4f) uniform %.4f  int pdf %.4f  success %.4f\n",
-             mats[i].name, thetas[t], is_m[0], is_m[1], is_m[2], is_se[0], us_m[0], integral, success);
+      printf("%-16s theta %.1f: albedo IS %.4f %.4f %.4f (se %.4f) uniform %.4f  int pdf %.4f  "
+             "success %.4f\n",
+             mats[i].name, thetas[t], is_m[0], is_m[1], is_m[2], is_se[0], us_m[0], integral,
+             success);
       for (int k = 0; k < 3; ++k) {
         CHECK_MSG(is_m[k] <= bound + 3.0 * is_se[k] + 1e-4, "%s theta %.1f: albedo %.4f > %.2f",
                   mats[i].name, thetas[t], is_m[k], bound);
         double comb = sqrt(is_se[k] * is_se[k] + us_se[k] * us_se[k]);
         CHECK_MSG(fabs(is_m[k] - us_m[k]) <= 4.0 * comb + 1e-4,
-                  "%s theta %.1f ch %d: sampled albedo %.4f vs uniform %.4f (se %.4f)", mats[i].name,
-                  thetas[t], k, is_m[k], us_m[k], comb);
+                  "%s theta %.1f ch %d: sampled albedo %.4f vs uniform %.4f (se %.4f)",
+                  mats[i].name, thetas[t], k, is_m[k], us_m[k], comb);
       }
       if (i == 0)
         for (int k = 0; k < 3; ++k) CHECK_NEAR(is_m[k], mats[0].m.albedo[k], 1e-4);
       /* pdf integrates to <= 1, and to the probability that sampling succeeds. */
       double se_s = sqrt(success * (1.0 - success) / 200000.0);
       CHECK_MSG(integral <= 1.0 + 2e-3, "%s: pdf integrates to %.4f", mats[i].name, integral);
-      CHECK_MSG(fabs(integral - success) <= 4.0 * se_s + 3e-3, "%s theta %.1f: int pdf %.4f vs success %.4f",
-                mats[i].name, thetas[t], integral, success);
+      CHECK_MSG(fabs(integral - success) <= 4.0 * se_s + 3e-3,
+                "%s theta %.1f: int pdf %.4f vs success %.4f", mats[i].name, thetas[t], integral,
+                success);
       /* chi-square at a fixed seed: p must not be tiny. */
       int dof;
       double p = chi2_test(&b, wo, 100000, &rng, &dof);
-      CHECK_MSG(p > 1e-4, "%s theta %.1f: chi-square p = %.3g (dof %d)", mats[i].name, thetas[t], p, dof);
+      CHECK_MSG(p > 1e-4, "%s theta %.1f: chi-square p = %.3g (dof %d)", mats[i].name, thetas[t], p,
+                dof);
     }
     if (glass) {
       /* Generalised reciprocity over random pairs on both sides (eta = 1 outside). */
@@ -286,7 +303,8 @@ int main(void) {
       float a[3], c[3], fa[3], fc[3];
       uniform_sphere(tt__pcg32_float(&rng), tt__pcg32_float(&rng), a);
       uniform_sphere(tt__pcg32_float(&rng), tt__pcg32_float(&rng), c);
-      a[2] = fabsf(a[2]); c[2] = fabsf(c[2]);
+      a[2] = fabsf(a[2]);
+      c[2] = fabsf(c[2]);
       tt__bsdf_eval(&b, a, c, fa);
       tt__bsdf_eval(&b, c, a, fc);
       for (int k = 0; k < 3; ++k)
@@ -294,7 +312,8 @@ int main(void) {
       /* two-sided: viewing from below mirrors the lobe */
       float am[3] = {a[0], a[1], -a[2]}, cm[3] = {c[0], c[1], -c[2]}, fm[3];
       tt__bsdf_eval(&b, am, cm, fm);
-      for (int k = 0; k < 3; ++k) nonrecip += fabsf(fa[k] - fm[k]) > 1e-4f * fmaxf(1.0f, fabsf(fa[k]));
+      for (int k = 0; k < 3; ++k)
+        nonrecip += fabsf(fa[k] - fm[k]) > 1e-4f * fmaxf(1.0f, fabsf(fa[k]));
       /* opposite sides never reflect */
       tt__bsdf_eval(&b, a, cm, fm);
       nonrecip += fm[0] != 0.0f || tt__bsdf_pdf(&b, a, cm) != 0.0f;
@@ -329,7 +348,9 @@ int main(void) {
     tt__bsdf_result s;
     CHECK(tt__bsdf_sample(&b, wo, 0.3f, 0.4f, 0.5f, &s));
     CHECK(s.delta);
-    CHECK_NEAR(s.wi[0], -wo[0], 1e-6); CHECK_NEAR(s.wi[1], -wo[1], 1e-6); CHECK_NEAR(s.wi[2], wo[2], 1e-6);
+    CHECK_NEAR(s.wi[0], -wo[0], 1e-6);
+    CHECK_NEAR(s.wi[1], -wo[1], 1e-6);
+    CHECK_NEAR(s.wi[2], wo[2], 1e-6);
     CHECK_NEAR(s.f[0] * s.wi[2] / s.pdf, 1.0, 1e-5);
     CHECK_NEAR(s.f[1] * s.wi[2] / s.pdf, 0.5, 1e-5);
     tt__bsdf_eval(&b, wo, s.wi, f);
@@ -364,7 +385,7 @@ int main(void) {
         refl++;
       } else if (i < 50) {
         float sin_o = sqrtf(1.0f - wo[2] * wo[2]), sin_t = sqrtf(1.0f - s.wi[2] * s.wi[2]);
-        CHECK_NEAR(sin_t, sin_o / 1.5f, 1e-5);                 /* Snell */
+        CHECK_NEAR(sin_t, sin_o / 1.5f, 1e-5);                    /* Snell */
         CHECK_NEAR(s.wi[0] * wo[1] - s.wi[1] * wo[0], 0.0, 1e-6); /* plane of incidence */
         CHECK(s.wi[0] * wo[0] < 0.0f);
       }
@@ -404,7 +425,7 @@ int main(void) {
     tt__bsdf_result s;
     CHECK(tt__bsdf_sample(&b, wo, 0.5f, 0.5f, 0.5f, &s));
     double w = s.f[0] * s.wi[2] / s.pdf;
-    CHECK(w > 0.5 && w < 1.0);  /* gold's red reflectance */
+    CHECK(w > 0.5 && w < 1.0); /* gold's red reflectance */
     tt_material bad = base_material((tt_material_type)42);
     CHECK(tt__bsdf_init(&b, &bad) == TT_ERR_UNSUPPORTED);
   }
@@ -427,7 +448,8 @@ int main(void) {
     int n = 100000;
     for (int i = 0; i < n; ++i) {
       tt__bsdf_result s;
-      if (!tt__bsdf_sample(&b, wo, tt__pcg32_float(&rng), tt__pcg32_float(&rng), tt__pcg32_float(&rng), &s))
+      if (!tt__bsdf_sample(&b, wo, tt__pcg32_float(&rng), tt__pcg32_float(&rng),
+                           tt__pcg32_float(&rng), &s))
         continue;
       double w = s.f[0] * fabsf(s.wi[2]) / s.pdf;
       sum += w;
@@ -457,7 +479,9 @@ int main(void) {
         float fs[3];
         tt__bsdf_eval(&b, a.wi, wo, fs);
         for (int c = 0; c < 3; ++c)
-          if (a.wi[c] != r.wi[c] || a.pdf != r.pdf || fabsf(a.f[c] - fs[c]) > 1e-3f * fmaxf(fs[c], 1e-3f)) bad++;
+          if (a.wi[c] != r.wi[c] || a.pdf != r.pdf ||
+              fabsf(a.f[c] - fs[c]) > 1e-3f * fmaxf(fs[c], 1e-3f))
+            bad++;
       }
     }
     CHECK_MSG(bad == 0, "%d adjoint samples differ from f(wi, wo) or from radiance sampling", bad);
@@ -473,7 +497,8 @@ int main(void) {
       for (int k = 0; k < n; ++k) {
         tt__bsdf_result s;
         float ul = tt__pcg32_float(&rng);
-        if (tt__bsdf_sample_adjoint(&b, wo, ul, 0.5f, 0.5f, &s)) imp += s.f[0] * fabsf(s.wi[2]) / s.pdf;
+        if (tt__bsdf_sample_adjoint(&b, wo, ul, 0.5f, 0.5f, &s))
+          imp += s.f[0] * fabsf(s.wi[2]) / s.pdf;
         if (tt__bsdf_sample(&b, wo, ul, 0.5f, 0.5f, &s)) rad += s.f[0] * fabsf(s.wi[2]) / s.pdf;
       }
       float F = tt__fresnel_dielectric(wo[2], 1.6f), etap = side ? 1.0f / 1.6f : 1.6f;

@@ -17,7 +17,8 @@
 #include "tt_test.h"
 
 /* Appends JSON for the 12 triangles of the box [-1,1]^3; `inward` picks the winding. */
-static void box_mesh_json(char *buf, size_t size, const char *name, const char *material, int inward) {
+static void box_mesh_json(char *buf, size_t size, const char *name, const char *material,
+                          int inward) {
   float pos[24][3];
   uint32_t idx[12][3];
   int nv = 0, nt = 0;
@@ -37,43 +38,57 @@ static void box_mesh_json(char *buf, size_t size, const char *name, const char *
       for (int k = 0; k < 4; ++k) memcpy(pos[nv + k], q[k], sizeof q[k]);
       uint32_t a = (uint32_t)nv, b = a + 1, c = a + 2, d = a + 3;
       if (!flip) {
-        idx[nt][0] = a; idx[nt][1] = b; idx[nt][2] = c;
-        idx[nt + 1][0] = a; idx[nt + 1][1] = c; idx[nt + 1][2] = d;
+        idx[nt][0] = a;
+        idx[nt][1] = b;
+        idx[nt][2] = c;
+        idx[nt + 1][0] = a;
+        idx[nt + 1][1] = c;
+        idx[nt + 1][2] = d;
       } else {
-        idx[nt][0] = a; idx[nt][1] = c; idx[nt][2] = b;
-        idx[nt + 1][0] = a; idx[nt + 1][1] = d; idx[nt + 1][2] = c;
+        idx[nt][0] = a;
+        idx[nt][1] = c;
+        idx[nt][2] = b;
+        idx[nt + 1][0] = a;
+        idx[nt + 1][1] = d;
+        idx[nt + 1][2] = c;
       }
       nv += 4;
       nt += 2;
     }
   }
   size_t n = strlen(buf);
-  n += (size_t)snprintf(buf + n, size - n, "{\"name\":\"%s\",\"material\":\"%s\",\"positions\":[", name, material);
+  n += (size_t)snprintf(buf + n, size - n, "{\"name\":\"%s\",\"material\":\"%s\",\"positions\":[",
+                        name, material);
   for (int i = 0; i < nv; ++i)
-    n += (size_t)snprintf(buf + n, size - n, "%s%g,%g,%g", i ? "," : "", pos[i][0], pos[i][1], pos[i][2]);
+    n += (size_t)snprintf(buf + n, size - n, "%s%g,%g,%g", i ? "," : "", pos[i][0], pos[i][1],
+                          pos[i][2]);
   n += (size_t)snprintf(buf + n, size - n, "],\"indices\":[");
   for (int i = 0; i < nt; ++i)
-    n += (size_t)snprintf(buf + n, size - n, "%s%u,%u,%u", i ? "," : "", idx[i][0], idx[i][1], idx[i][2]);
+    n += (size_t)snprintf(buf + n, size - n, "%s%u,%u,%u", i ? "," : "", idx[i][0], idx[i][1],
+                          idx[i][2]);
   snprintf(buf + n, size - n, "]}");
 }
 
-static const char *CAMERA =
-    "\"camera\":{\"position\":[0,0,0.5],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":45,\"resolution\":[8,8]}";
+static const char *CAMERA = "\"camera\":{\"position\":[0,0,0.5],\"target\":[0,0,0],\"up\":[0,1,0],"
+                            "\"fov\":45,\"resolution\":[8,8]}";
 
 /* Checks |mean - expected| <= 3 se (+ float rounding) for every channel. */
 static void check_estimate(const char *what, const pt_estimate *e, double expected) {
   for (int c = 0; c < 3; ++c) {
     double tol = 3.0 * e->se[c] + 1e-5 * expected;
-    CHECK_MSG(fabs(e->mean[c] - expected) <= tol, "%s: channel %d mean %.5f expected %.5f (se %.5f)",
-              what, c, e->mean[c], expected, e->se[c]);
+    CHECK_MSG(fabs(e->mean[c] - expected) <= tol,
+              "%s: channel %d mean %.5f expected %.5f (se %.5f)", what, c, e->mean[c], expected,
+              e->se[c]);
   }
-  CHECK_MSG(e->nonfinite == 0, "%s: %llu non-finite samples", what, (unsigned long long)e->nonfinite);
+  CHECK_MSG(e->nonfinite == 0, "%s: %llu non-finite samples", what,
+            (unsigned long long)e->nonfinite);
 }
 
 /* Pools estimates over several ray directions from the box centre. */
 static void estimate_dirs(const pt_fixture *f, const tt_path_options *o, const char *sampler,
                           uint32_t n, pt_estimate *out) {
-  static const float dirs[4][3] = {{0.3f, 0.2f, 1.0f}, {-1.0f, 0.1f, 0.2f}, {0.2f, -1.0f, -0.4f}, {0.5f, 0.5f, -0.7f}};
+  static const float dirs[4][3] = {
+      {0.3f, 0.2f, 1.0f}, {-1.0f, 0.1f, 0.2f}, {0.2f, -1.0f, -0.4f}, {0.5f, 0.5f, -0.7f}};
   double m[3] = {0, 0, 0}, v[3] = {0, 0, 0};
   memset(out, 0, sizeof *out);
   for (int d = 0; d < 4; ++d) {
@@ -117,7 +132,11 @@ static void closed_box_tests(void) {
   CHECK(pt_fixture_load(&f, json));
   if (!f.pt) return;
 
-  struct { tt_light_strategy s; tt_mis_heuristic h; const char *name; } strategies[] = {
+  struct {
+    tt_light_strategy s;
+    tt_mis_heuristic h;
+    const char *name;
+  } strategies[] = {
       {TT_STRATEGY_MIS, TT_MIS_POWER, "mis-power"},
       {TT_STRATEGY_MIS, TT_MIS_BALANCE, "mis-balance"},
       {TT_STRATEGY_LIGHT, TT_MIS_POWER, "light-only"},
@@ -196,7 +215,7 @@ static void closed_box_tests(void) {
       CHECK(r.hit && r.bounces == 1 && r.rays >= 2);
       if (i == 0) {
         CHECK_NEAR(r.albedo[1], albedo, 1e-6);
-        CHECK(r.normal[2] < -0.99f);  /* the z = +1 wall, normal towards the viewer */
+        CHECK(r.normal[2] < -0.99f); /* the z = +1 wall, normal towards the viewer */
         CHECK_NEAR(r.distance, 1.0 / ray.dir[2], 1e-4);
       }
     }
@@ -212,10 +231,11 @@ static void closed_box_tests(void) {
   /* Outward winding: seen from inside every wall is a back face, so one-sided emission
    * gives L = 0 (nothing else emits); twoSided restores the series. */
   for (int two = 0; two < 2; ++two) {
-    snprintf(json, sizeof json,
-             "{\"version\":1,%s,\"materials\":{\"glow\":{\"type\":\"diffuse\",\"albedo\":[%g,%g,%g],"
-             "\"emission\":[1,1,1],\"twoSided\":%s}},\"meshes\":[",
-             CAMERA, albedo, albedo, albedo, two ? "true" : "false");
+    snprintf(
+        json, sizeof json,
+        "{\"version\":1,%s,\"materials\":{\"glow\":{\"type\":\"diffuse\",\"albedo\":[%g,%g,%g],"
+        "\"emission\":[1,1,1],\"twoSided\":%s}},\"meshes\":[",
+        CAMERA, albedo, albedo, albedo, two ? "true" : "false");
     box_mesh_json(json, sizeof json, "box", "glow", 0);
     strcat(json, "]}");
     CHECK(pt_fixture_load(&f, json));
@@ -227,7 +247,8 @@ static void closed_box_tests(void) {
     pt_estimate e;
     estimate_dirs(&f, &o, "independent", 1000, &e);
     printf("outward box, twoSided=%d: L = %.4f +- %.4f\n", two, e.mean[0], e.se[0]);
-    check_estimate(two ? "two-sided" : "one-sided back faces", &e, two ? geometric(albedo, 4) : 0.0);
+    check_estimate(two ? "two-sided" : "one-sided back faces", &e,
+                   two ? geometric(albedo, 4) : 0.0);
     pt_fixture_free(&f);
   }
 }
@@ -235,10 +256,11 @@ static void closed_box_tests(void) {
 static void environment_tests(void) {
   static char json[16384];
   const double albedo = 0.6;
-  snprintf(json, sizeof json,
-           "{\"version\":1,%s,\"materials\":{\"grey\":{\"type\":\"diffuse\",\"albedo\":[%g,%g,%g]}},"
-           "\"lights\":[{\"type\":\"environment\",\"radiance\":[1,1,1]}],\"meshes\":[",
-           CAMERA, albedo, albedo, albedo);
+  snprintf(
+      json, sizeof json,
+      "{\"version\":1,%s,\"materials\":{\"grey\":{\"type\":\"diffuse\",\"albedo\":[%g,%g,%g]}},"
+      "\"lights\":[{\"type\":\"environment\",\"radiance\":[1,1,1]}],\"meshes\":[",
+      CAMERA, albedo, albedo, albedo);
   box_mesh_json(json, sizeof json, "box", "grey", 0);
   strcat(json, "]}");
   pt_fixture f;
@@ -260,7 +282,9 @@ static void environment_tests(void) {
       char what[64];
       snprintf(what, sizeof what, "env furnace strategy %d target %d", s, t);
       check_estimate(what, &e, albedo);
-      if (s == 1 && t == 0) printf("env furnace (light only): L = %.4f +- %.4f (expected %.2f)\n", e.mean[0], e.se[0], albedo);
+      if (s == 1 && t == 0)
+        printf("env furnace (light only): L = %.4f +- %.4f (expected %.2f)\n", e.mean[0], e.se[0],
+               albedo);
     }
   }
   /* A miss sees the environment exactly. */
@@ -284,7 +308,8 @@ static int write_env(const char *path, uint32_t w, uint32_t h, float constant) {
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x)
       for (int k = 0; k < 3; ++k)
-        px[3 * (y * w + x) + k] = constant > 0.0f ? constant : (y < h / 2 ? (x < w / 2 ? 3.0f : 1.0f) : 0.0f);
+        px[3 * (y * w + x) + k] =
+            constant > 0.0f ? constant : (y < h / 2 ? (x < w / 2 ? 3.0f : 1.0f) : 0.0f);
   tt_status st = tt_image_write_exr(path, w, h, 3, px, NULL, NULL, 0);
   free(px);
   return st == TT_OK;
@@ -314,8 +339,9 @@ static void image_environment_tests(void) {
   for (int use_image = 0; use_image < 2; ++use_image) {
     char light[700];
     if (use_image)
-      snprintf(light, sizeof light, "{\"type\":\"environment\",\"radiance\":[%g,%g,%g],\"image\":\"%s\"}",
-               scale[0], scale[1], scale[2], flat);
+      snprintf(light, sizeof light,
+               "{\"type\":\"environment\",\"radiance\":[%g,%g,%g],\"image\":\"%s\"}", scale[0],
+               scale[1], scale[2], flat);
     else
       snprintf(light, sizeof light, "{\"type\":\"environment\",\"radiance\":[%g,%g,%g]}", scale[0],
                scale[1], scale[2]);
@@ -328,7 +354,8 @@ static void image_environment_tests(void) {
     pt_fixture f;
     CHECK(pt_fixture_load(&f, json));
     if (!f.pt) return;
-    CHECK(tt_scene_light(f.scene, 0)->type == (use_image ? TT_LIGHT_ENV_IMAGE : TT_LIGHT_ENV_CONSTANT));
+    CHECK(tt_scene_light(f.scene, 0)->type ==
+          (use_image ? TT_LIGHT_ENV_IMAGE : TT_LIGHT_ENV_CONSTANT));
     for (int s = 0; s < 3; ++s) {
       tt_path_options o;
       tt_path_options_default(&o);
@@ -339,8 +366,8 @@ static void image_environment_tests(void) {
       for (int c = 0; c < 3; ++c) {
         double expect = albedo * scale[c];
         CHECK_MSG(fabs(e->mean[c] - expect) <= 3.0 * e->se[c] + 1e-5,
-                  "%s env strategy %d ch %d: %.5f expected %.5f (se %.5f)", use_image ? "image" : "constant",
-                  s, c, e->mean[c], expect, e->se[c]);
+                  "%s env strategy %d ch %d: %.5f expected %.5f (se %.5f)",
+                  use_image ? "image" : "constant", s, c, e->mean[c], expect, e->se[c]);
       }
       CHECK(e->nonfinite == 0);
     }
@@ -370,7 +397,11 @@ static void image_environment_tests(void) {
   pt_fixture f;
   CHECK(pt_fixture_load(&f, json));
   if (!f.pt) return;
-  static const struct { float from[3], to[3]; double expect; const char *face; } faces[4] = {
+  static const struct {
+    float from[3], to[3];
+    double expect;
+    const char *face;
+  } faces[4] = {
       {{0.1f, 5.0f, 0.2f}, {0.2f, 0.0f, 0.3f}, 2.0, "top"},
       {{5.0f, 0.2f, 0.1f}, {0.0f, 0.1f, -0.2f}, 0.5, "+x"},
       {{-5.0f, 0.3f, 0.2f}, {0.0f, 0.0f, 0.0f}, 1.5, "-x"},
@@ -387,8 +418,8 @@ static void image_environment_tests(void) {
       pt_estimate_ray(&f, &o, &ray, 4000, (uint32_t)i, 5, "independent", &e);
       double expect = albedo * faces[i].expect;
       if (s == 0)
-        printf("split image env, %-6s face (MIS): L = %.4f +- %.4f (expected %.4f)\n", faces[i].face,
-               e.mean[0], e.se[0], expect);
+        printf("split image env, %-6s face (MIS): L = %.4f +- %.4f (expected %.4f)\n",
+               faces[i].face, e.mean[0], e.se[0], expect);
       char what[64];
       snprintf(what, sizeof what, "split env %s face strategy %d", faces[i].face, s);
       check_estimate(what, &e, expect);

@@ -38,11 +38,13 @@ int main(void) {
   const char *names[3] = {"mis", "light", "bsdf"};
 
   /* 1. Uniform environment. */
-  snprintf(json, sizeof json,
-           "{\"version\":1,\"camera\":{\"position\":[3,0.5,0.4],\"target\":[0,0,0],\"up\":[0,1,0],"
-           "\"fov\":30,\"resolution\":[4,4]},\"materials\":{\"floor\":{\"type\":\"diffuse\","
-           "\"albedo\":[0.5,0.7,0.9]}},\"lights\":[{\"type\":\"environment\",\"radiance\":[0.5,1,2]}],"
-           "\"meshes\":[%s]}", PLANE);
+  snprintf(
+      json, sizeof json,
+      "{\"version\":1,\"camera\":{\"position\":[3,0.5,0.4],\"target\":[0,0,0],\"up\":[0,1,0],"
+      "\"fov\":30,\"resolution\":[4,4]},\"materials\":{\"floor\":{\"type\":\"diffuse\","
+      "\"albedo\":[0.5,0.7,0.9]}},\"lights\":[{\"type\":\"environment\",\"radiance\":[0.5,1,2]}],"
+      "\"meshes\":[%s]}",
+      PLANE);
   pt_fixture f;
   CHECK(pt_fixture_load(&f, json));
   if (f.pt) {
@@ -66,17 +68,19 @@ int main(void) {
   double F = 4.0 * corner_ff(half / height, half / height);
   for (int flip = 0; flip < 2; ++flip) {
     /* flip = 1 winds the light upwards: one-sided, the receiver sees only its back. */
-    snprintf(json, sizeof json,
-             "{\"version\":1,\"camera\":{\"position\":[3,0.5,0.4],\"target\":[0,0,0],\"up\":[0,1,0],"
-             "\"fov\":30,\"resolution\":[4,4]},\"materials\":{\"floor\":{\"type\":\"diffuse\","
-             "\"albedo\":[0.5,0.7,0.9]},\"lamp\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],"
-             "\"emission\":[%g,%g,%g]}},\"meshes\":[%s,{\"name\":\"lamp\",\"material\":\"lamp\","
-             "\"positions\":[%g,%g,%g, %g,%g,%g, %g,%g,%g, %g,%g,%g],\"indices\":[%s]}]}",
-             Le, Le, Le, PLANE, -half, height, -half, half, height, -half, half, height, half, -half,
-             height, half, flip ? "0,2,1, 0,3,2" : "0,1,2, 0,2,3");
+    snprintf(
+        json, sizeof json,
+        "{\"version\":1,\"camera\":{\"position\":[3,0.5,0.4],\"target\":[0,0,0],\"up\":[0,1,0],"
+        "\"fov\":30,\"resolution\":[4,4]},\"materials\":{\"floor\":{\"type\":\"diffuse\","
+        "\"albedo\":[0.5,0.7,0.9]},\"lamp\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],"
+        "\"emission\":[%g,%g,%g]}},\"meshes\":[%s,{\"name\":\"lamp\",\"material\":\"lamp\","
+        "\"positions\":[%g,%g,%g, %g,%g,%g, %g,%g,%g, %g,%g,%g],\"indices\":[%s]}]}",
+        Le, Le, Le, PLANE, -half, height, -half, half, height, -half, half, height, half, -half,
+        height, half, flip ? "0,2,1, 0,3,2" : "0,1,2, 0,2,3");
     CHECK(pt_fixture_load(&f, json));
     if (!f.pt) continue;
-    const double expected[3] = {flip ? 0.0 : 0.5 * Le * F, flip ? 0.0 : 0.7 * Le * F, flip ? 0.0 : 0.9 * Le * F};
+    const double expected[3] = {flip ? 0.0 : 0.5 * Le * F, flip ? 0.0 : 0.7 * Le * F,
+                                flip ? 0.0 : 0.9 * Le * F};
     for (int s = 0; s < 3; ++s) {
       for (uint32_t depth = 1; depth <= 3; depth += 2) {
         tt_path_options o;
@@ -117,13 +121,14 @@ int main(void) {
     snprintf(file, sizeof file, "%s/tex.exr", dir);
     const float texels[6] = {1.0f, 0.5f, 0.25f, 0.2f, 0.4f, 0.8f};
     CHECK(tt_image_write_exr(file, 2, 1, 3, texels, NULL, NULL, 0) == TT_OK);
-    snprintf(json, sizeof json,
-             "{\"version\":1,\"camera\":{\"position\":[3,0.5,0.4],\"target\":[0,0,0],\"up\":[0,1,0],"
-             "\"fov\":30,\"resolution\":[4,4]},\"materials\":{\"floor\":{\"type\":\"diffuse\","
-             "\"albedo\":[0.8,0.8,0.8],\"texture\":\"tex.exr\"}},\"lights\":[{\"type\":\"environment\","
-             "\"radiance\":[1,1,1]}],\"meshes\":[{\"name\":\"floor\",\"material\":\"floor\","
-             "\"positions\":[-4,0,-4, 4,0,-4, 4,0,4, -4,0,4],\"uvs\":[0,0, 1,0, 1,1, 0,1],"
-             "\"indices\":[0,2,1, 0,3,2]}]}");
+    snprintf(
+        json, sizeof json,
+        "{\"version\":1,\"camera\":{\"position\":[3,0.5,0.4],\"target\":[0,0,0],\"up\":[0,1,0],"
+        "\"fov\":30,\"resolution\":[4,4]},\"materials\":{\"floor\":{\"type\":\"diffuse\","
+        "\"albedo\":[0.8,0.8,0.8],\"texture\":\"tex.exr\"}},\"lights\":[{\"type\":\"environment\","
+        "\"radiance\":[1,1,1]}],\"meshes\":[{\"name\":\"floor\",\"material\":\"floor\","
+        "\"positions\":[-4,0,-4, 4,0,-4, 4,0,4, -4,0,4],\"uvs\":[0,0, 1,0, 1,1, 0,1],"
+        "\"indices\":[0,2,1, 0,3,2]}]}");
     tt_scene *sc = NULL;
     tt_status lst = tt_scene_load_json(json, strlen(json), "textured", dir, &sc);
     CHECK_MSG(lst == TT_OK, "%s", tt_last_error());
@@ -143,9 +148,11 @@ int main(void) {
         o.max_depth = 1;
         pt_estimate e;
         pt_estimate_ray(&f, &o, &r2, 256, 40 + side, 3, "independent", &e);
-        const double expected[3] = {0.8 * texels[3 * side], 0.8 * texels[3 * side + 1], 0.8 * texels[3 * side + 2]};
-        printf("textured plane, %s texel: L = %.4f %.4f %.4f, expected %.4f %.4f %.4f\n", side ? "right" : "left",
-               e.mean[0], e.mean[1], e.mean[2], expected[0], expected[1], expected[2]);
+        const double expected[3] = {0.8 * texels[3 * side], 0.8 * texels[3 * side + 1],
+                                    0.8 * texels[3 * side + 2]};
+        printf("textured plane, %s texel: L = %.4f %.4f %.4f, expected %.4f %.4f %.4f\n",
+               side ? "right" : "left", e.mean[0], e.mean[1], e.mean[2], expected[0], expected[1],
+               expected[2]);
         for (int c = 0; c < 3; ++c) CHECK_NEAR(e.mean[c], expected[c], 1e-4);
       }
       pt_fixture_free(&f);

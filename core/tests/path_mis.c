@@ -13,12 +13,17 @@ static const char *SCENE =
     "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.4,0.5],\"alpha\":0.08,\"ior\":1.5},"
     "\"metal\":{\"type\":\"conductor\",\"alpha\":[0.15,0.3]},"
     "\"small\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],\"emission\":[60,50,40]},"
-    "\"large\":{\"type\":\"diffuse\",\"albedo\":[0.2,0.2,0.2],\"emission\":[1.5,1.5,2],\"twoSided\":true}},"
+    "\"large\":{\"type\":\"diffuse\",\"albedo\":[0.2,0.2,0.2],\"emission\":[1.5,1.5,2],"
+    "\"twoSided\":true}},"
     "\"meshes\":["
-    "{\"name\":\"left\",\"material\":\"glossy\",\"positions\":[-3,0,-3, 0,0,-3, 0,0,3, -3,0,3],\"indices\":[0,2,1, 0,3,2]},"
-    "{\"name\":\"right\",\"material\":\"metal\",\"positions\":[0,0,-3, 3,0,-3, 3,0,3, 0,0,3],\"indices\":[0,2,1, 0,3,2]},"
-    "{\"name\":\"small\",\"material\":\"small\",\"positions\":[-1.1,1.5,-1.1, -0.9,1.5,-1.1, -0.9,1.5,-0.9, -1.1,1.5,-0.9],\"indices\":[0,1,2, 0,2,3]},"
-    "{\"name\":\"large\",\"material\":\"large\",\"positions\":[0.4,1.8,-1.6, 1.6,1.8,-1.6, 1.6,1.8,-0.4, 0.4,1.8,-0.4],\"indices\":[0,1,2, 0,2,3]}"
+    "{\"name\":\"left\",\"material\":\"glossy\",\"positions\":[-3,0,-3, 0,0,-3, 0,0,3, "
+    "-3,0,3],\"indices\":[0,2,1, 0,3,2]},"
+    "{\"name\":\"right\",\"material\":\"metal\",\"positions\":[0,0,-3, 3,0,-3, 3,0,3, "
+    "0,0,3],\"indices\":[0,2,1, 0,3,2]},"
+    "{\"name\":\"small\",\"material\":\"small\",\"positions\":[-1.1,1.5,-1.1, -0.9,1.5,-1.1, "
+    "-0.9,1.5,-0.9, -1.1,1.5,-0.9],\"indices\":[0,1,2, 0,2,3]},"
+    "{\"name\":\"large\",\"material\":\"large\",\"positions\":[0.4,1.8,-1.6, 1.6,1.8,-1.6, "
+    "1.6,1.8,-0.4, 0.4,1.8,-0.4],\"indices\":[0,1,2, 0,2,3]}"
     "]}";
 
 int main(void) {
@@ -28,12 +33,15 @@ int main(void) {
   const float eye[3] = {0.0f, 1.2f, 4.0f};
   /* Points on both halves, some in the glossy reflection of a light. */
   const float targets[6][3] = {{-1.0f, 0, -0.3f}, {-0.6f, 0, 0.6f}, {-1.5f, 0, -1.8f},
-                               {1.0f, 0, -0.4f}, {0.6f, 0, 0.5f}, {1.8f, 0, -2.0f}};
-  struct { tt_light_strategy s; tt_mis_heuristic h; const char *name; } st[4] = {
-      {TT_STRATEGY_LIGHT, TT_MIS_POWER, "light"},
-      {TT_STRATEGY_BSDF, TT_MIS_POWER, "bsdf"},
-      {TT_STRATEGY_MIS, TT_MIS_POWER, "power"},
-      {TT_STRATEGY_MIS, TT_MIS_BALANCE, "balance"}};
+                               {1.0f, 0, -0.4f},  {0.6f, 0, 0.5f},  {1.8f, 0, -2.0f}};
+  struct {
+    tt_light_strategy s;
+    tt_mis_heuristic h;
+    const char *name;
+  } st[4] = {{TT_STRATEGY_LIGHT, TT_MIS_POWER, "light"},
+             {TT_STRATEGY_BSDF, TT_MIS_POWER, "bsdf"},
+             {TT_STRATEGY_MIS, TT_MIS_POWER, "power"},
+             {TT_STRATEGY_MIS, TT_MIS_BALANCE, "balance"}};
   int mis_better = 0, cases = 0;
   for (uint32_t depth = 1; depth <= 3; depth += 2) {
     for (int t = 0; t < 6; ++t) {
@@ -52,7 +60,8 @@ int main(void) {
         pt_estimate_ray(&f, &o, &ray, n, (uint32_t)(t * 16 + s), 21 + depth, "independent", &e[s]);
         CHECK(e[s].nonfinite == 0);
       }
-      printf("depth %u point %d: light %.4f+-%.4f bsdf %.4f+-%.4f power %.4f+-%.4f balance %.4f+-%.4f\n",
+      printf("depth %u point %d: light %.4f+-%.4f bsdf %.4f+-%.4f power %.4f+-%.4f balance "
+             "%.4f+-%.4f\n",
              depth, t, e[0].mean[0], e[0].se[0], e[1].mean[0], e[1].se[0], e[2].mean[0], e[2].se[0],
              e[3].mean[0], e[3].se[0]);
       for (int a = 0; a < 4; ++a)

@@ -64,10 +64,12 @@ static char *textured_cornell(const char *scene_path, const char *texture) {
     float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
     cJSON_ArrayForEach(p, pos) for (int i = 0; i < 3; ++i) {
       float v = (float)cJSON_GetArrayItem(p, i)->valuedouble;
-      lo[i] = fminf(lo[i], v); hi[i] = fmaxf(hi[i], v);
+      lo[i] = fminf(lo[i], v);
+      hi[i] = fmaxf(hi[i], v);
     }
-    int small = 0;  /* drop the axis of least extent */
-    for (int i = 1; i < 3; ++i) if (hi[i] - lo[i] < hi[small] - lo[small]) small = i;
+    int small = 0; /* drop the axis of least extent */
+    for (int i = 1; i < 3; ++i)
+      if (hi[i] - lo[i] < hi[small] - lo[small]) small = i;
     int a = (small + 1) % 3, b = (small + 2) % 3;
     cJSON *uvs = cJSON_AddArrayToObject(mesh, "uvs");
     cJSON_ArrayForEach(p, pos) {
@@ -129,7 +131,10 @@ int main(int argc, char **argv) {
   CHECK(json != NULL);
   if (!json) return tt_test_finish("path_texture_bench");
   FILE *jf = fopen(json_path, "w");
-  if (jf) { fputs(json, jf); fclose(jf); }
+  if (jf) {
+    fputs(json, jf);
+    fclose(jf);
+  }
 
   /* accel_embree through the loader, so that traversal does not dilute texture costs. */
   const tt_accel_iface *embree = NULL;
@@ -140,12 +145,13 @@ int main(int argc, char **argv) {
     snprintf(ppath, sizeof ppath, "%s/accel_embree/accel_embree.so", pdir);
     reg = tt_registry_create(tt_default_host());
     tt_loaded_plugin *lp = NULL;
-    if (reg && tt_registry_load(reg, ppath, &lp) == TT_OK && lp) embree = tt_loaded_plugin_iface(lp);
+    if (reg && tt_registry_load(reg, ppath, &lp) == TT_OK && lp)
+      embree = tt_loaded_plugin_iface(lp);
   }
   const char *modes[2] = {"direct", "oiio"};
   double sps[2] = {0, 0}, mean[2] = {0, 0};
   const uint32_t spp = 16;
-  for (int rep = 0; rep < 2; ++rep)  /* twice, alternating, against a busy machine */
+  for (int rep = 0; rep < 2; ++rep) /* twice, alternating, against a busy machine */
     for (int m = 0; m < 2; ++m) {
       setenv("TT_TEXTURES", modes[m], 1);
       pt_fixture f;
@@ -157,7 +163,7 @@ int main(int argc, char **argv) {
         f.tracer.accel = ea;
       }
       double mu = 0.0, s = render(&f, spp, &mu);
-      if (s > sps[m]) sps[m] = s;  /* best of the two */
+      if (s > sps[m]) sps[m] = s; /* best of the two */
       mean[m] = mu;
       if (ea) {
         embree->destroy(ea);
@@ -178,7 +184,8 @@ int main(int argc, char **argv) {
   printf("  OIIO / direct  : %.3fx  (+%.0f ns per sample)\n", sps[1] / sps[0], per_sample_ns);
   /* Both modes must render the same picture (bilinear of the same texels; OIIO filters the
    * sRGB-encoded values, direct the decoded ones, hence a loose tolerance). */
-  CHECK_MSG(fabs(mean[1] - mean[0]) <= 0.02 * mean[0], "means differ: %.5f vs %.5f", mean[0], mean[1]);
+  CHECK_MSG(fabs(mean[1] - mean[0]) <= 0.02 * mean[0], "means differ: %.5f vs %.5f", mean[0],
+            mean[1]);
   free(json);
   if (outdir == dir) {
     unlink(tex);

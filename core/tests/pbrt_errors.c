@@ -27,7 +27,8 @@ static const char *write_file(const char *name, const char *text, size_t len) {
 }
 
 /* Loads `text` as <name>; expects failure with every fragment in the message. */
-static void expect_error(const char *name, const char *text, tt_status want, const char *frag1, const char *frag2) {
+static void expect_error(const char *name, const char *text, tt_status want, const char *frag1,
+                         const char *frag2) {
   const char *path = write_file(name, text, strlen(text));
   tt_scene *s = NULL;
   tt_status st = tt_scene_load(path, &s);
@@ -46,9 +47,12 @@ static const char *const k_seed =
     "Integrator \"path\" \"integer maxdepth\" [ 3 ]\n"
     "WorldBegin\n"
     "Texture \"t\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [ 1 1 1 ]\n"
-    "MakeNamedMaterial \"m\" \"string type\" \"coateddiffuse\" \"texture reflectance\" \"t\" \"float roughness\" 0.1\n"
-    "MakeNamedMaterial \"g\" \"string type\" \"conductor\" \"spectrum eta\" \"metal-Cu-eta\" \"spectrum k\" \"metal-Cu-k\"\n"
-    "MakeNamedMaterial \"x\" \"string type\" \"mix\" \"string materials\" [ \"m\" \"g\" ] \"float amount\" 0.8\n"
+    "MakeNamedMaterial \"m\" \"string type\" \"coateddiffuse\" \"texture reflectance\" \"t\" "
+    "\"float roughness\" 0.1\n"
+    "MakeNamedMaterial \"g\" \"string type\" \"conductor\" \"spectrum eta\" \"metal-Cu-eta\" "
+    "\"spectrum k\" \"metal-Cu-k\"\n"
+    "MakeNamedMaterial \"x\" \"string type\" \"mix\" \"string materials\" [ \"m\" \"g\" ] \"float "
+    "amount\" 0.8\n"
     "LightSource \"point\" \"rgb I\" [ 1 1 1 ] \"point3 from\" [ 0 4 0 ]\n"
     "LightSource \"spot\" \"blackbody I\" 3000 \"point3 from\" [ 0 4 0 ] \"point3 to\" [ 0 0 0 ]\n"
     "LightSource \"infinite\" \"rgb L\" [ 0.1 0.1 0.1 ]\n"
@@ -86,36 +90,47 @@ static uint32_t rng(uint32_t *s) {
 }
 
 static void test_errors(void) {
-  expect_error("trunc.pbrt", "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0\n", TT_ERR_PARSE,
-               "trunc.pbrt:2:", "unterminated '[' array");
-  expect_error("badnum.pbrt", "WorldBegin\n\nTranslate 1 x2 3\n", TT_ERR_PARSE, "badnum.pbrt:3:", "Translate: expected 3 numbers");
-  expect_error("badnum2.pbrt", "Camera \"perspective\"\n  \"float fov\" [ 4.5.6 ]\n", TT_ERR_PARSE, "badnum2.pbrt:2:",
-               "bad number '4.5.6'");
-  expect_error("badbool.pbrt", "WorldBegin\nAreaLightSource \"diffuse\" \"bool twosided\" maybe\n", TT_ERR_PARSE,
-               "badbool.pbrt:2:", "has no value");
-  expect_error("shape.pbrt", "WorldBegin\n\n\nShape \"blob\" \"float radius\" 1\n", TT_ERR_PARSE, "shape.pbrt:4:",
-               "unknown shape type \"blob\"");
-  expect_error("inc.pbrt", "WorldBegin\nInclude \"does-not-exist.pbrt\"\n", TT_ERR_PARSE, "inc.pbrt:2:",
-               "cannot open included file");
+  expect_error("trunc.pbrt", "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0\n",
+               TT_ERR_PARSE, "trunc.pbrt:2:", "unterminated '[' array");
+  expect_error("badnum.pbrt", "WorldBegin\n\nTranslate 1 x2 3\n", TT_ERR_PARSE,
+               "badnum.pbrt:3:", "Translate: expected 3 numbers");
+  expect_error("badnum2.pbrt", "Camera \"perspective\"\n  \"float fov\" [ 4.5.6 ]\n", TT_ERR_PARSE,
+               "badnum2.pbrt:2:", "bad number '4.5.6'");
+  expect_error("badbool.pbrt", "WorldBegin\nAreaLightSource \"diffuse\" \"bool twosided\" maybe\n",
+               TT_ERR_PARSE, "badbool.pbrt:2:", "has no value");
+  expect_error("shape.pbrt", "WorldBegin\n\n\nShape \"blob\" \"float radius\" 1\n", TT_ERR_PARSE,
+               "shape.pbrt:4:", "unknown shape type \"blob\"");
+  expect_error("inc.pbrt", "WorldBegin\nInclude \"does-not-exist.pbrt\"\n", TT_ERR_PARSE,
+               "inc.pbrt:2:", "cannot open included file");
   write_file("cyc-b.pbrt", "# b\nInclude \"cyc-a.pbrt\"\n", 25);
-  expect_error("cyc-a.pbrt", "WorldBegin\nInclude \"cyc-b.pbrt\"\n", TT_ERR_PARSE, "cyc-b.pbrt:2: cyclic Include",
-               "cyc-a.pbrt -> ");
-  expect_error("self.pbrt", "Include \"self.pbrt\"\n", TT_ERR_PARSE, "self.pbrt:1: cyclic Include", NULL);
-  expect_error("str.pbrt", "WorldBegin\nMaterial \"diffuse\n\"rgb reflectance\" [ 1 1 1 ]\n", TT_ERR_PARSE,
-               "str.pbrt:2:", "unterminated string");
-  expect_error("str2.pbrt", "WorldBegin\nMaterial \"diff", TT_ERR_PARSE, "str2.pbrt:2:", "unterminated string");
-  expect_error("arr.pbrt", "WorldBegin\nShape \"sphere\" \"float radius\" [ 1\n", TT_ERR_PARSE, "arr.pbrt:2:",
-               "unterminated '[' array");
-  expect_error("nested.pbrt", "WorldBegin\nShape \"sphere\" \"float radius\" [ [ 1 ] ]\n", TT_ERR_PARSE, "nested.pbrt:2:",
-               "nested");
-  expect_error("idx.pbrt", "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"integer indices\" [ 0 1 7 ]\n",
+  expect_error("cyc-a.pbrt", "WorldBegin\nInclude \"cyc-b.pbrt\"\n", TT_ERR_PARSE,
+               "cyc-b.pbrt:2: cyclic Include", "cyc-a.pbrt -> ");
+  expect_error("self.pbrt", "Include \"self.pbrt\"\n", TT_ERR_PARSE, "self.pbrt:1: cyclic Include",
+               NULL);
+  expect_error("str.pbrt", "WorldBegin\nMaterial \"diffuse\n\"rgb reflectance\" [ 1 1 1 ]\n",
+               TT_ERR_PARSE, "str.pbrt:2:", "unterminated string");
+  expect_error("str2.pbrt", "WorldBegin\nMaterial \"diff", TT_ERR_PARSE,
+               "str2.pbrt:2:", "unterminated string");
+  expect_error("arr.pbrt", "WorldBegin\nShape \"sphere\" \"float radius\" [ 1\n", TT_ERR_PARSE,
+               "arr.pbrt:2:", "unterminated '[' array");
+  expect_error("nested.pbrt", "WorldBegin\nShape \"sphere\" \"float radius\" [ [ 1 ] ]\n",
+               TT_ERR_PARSE, "nested.pbrt:2:", "nested");
+  expect_error("idx.pbrt",
+               "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"integer "
+               "indices\" [ 0 1 7 ]\n",
                TT_ERR_PARSE, "idx.pbrt:2:", "out of range");
-  expect_error("decl.pbrt", "Film \"rgb\" \"integer\" [ 5 ]\n", TT_ERR_PARSE, "decl.pbrt:1:", "bad parameter declaration");
-  expect_error("type.pbrt", "Film \"rgb\" \"quaternion q\" [ 5 ]\n", TT_ERR_PARSE, "type.pbrt:1:", "unknown parameter type");
-  expect_error("named.pbrt", "WorldBegin\nNamedMaterial \"ghost\"\n", TT_ERR_PARSE, "named.pbrt:2:", "no material named \"ghost\"");
-  expect_error("mattype.pbrt", "WorldBegin\nMaterial \"velvetine\"\n", TT_ERR_PARSE, "mattype.pbrt:2:", "unknown material type");
-  expect_error("obj.pbrt", "WorldBegin\nObjectInstance \"nope\"\n", TT_ERR_PARSE, "obj.pbrt:2:", "no object named \"nope\"");
-  expect_error("lookat.pbrt", "LookAt 0 0 0 0 0 0 0 1 0\n", TT_ERR_PARSE, "lookat.pbrt:1:", "LookAt");
+  expect_error("decl.pbrt", "Film \"rgb\" \"integer\" [ 5 ]\n", TT_ERR_PARSE,
+               "decl.pbrt:1:", "bad parameter declaration");
+  expect_error("type.pbrt", "Film \"rgb\" \"quaternion q\" [ 5 ]\n", TT_ERR_PARSE,
+               "type.pbrt:1:", "unknown parameter type");
+  expect_error("named.pbrt", "WorldBegin\nNamedMaterial \"ghost\"\n", TT_ERR_PARSE,
+               "named.pbrt:2:", "no material named \"ghost\"");
+  expect_error("mattype.pbrt", "WorldBegin\nMaterial \"velvetine\"\n", TT_ERR_PARSE,
+               "mattype.pbrt:2:", "unknown material type");
+  expect_error("obj.pbrt", "WorldBegin\nObjectInstance \"nope\"\n", TT_ERR_PARSE,
+               "obj.pbrt:2:", "no object named \"nope\"");
+  expect_error("lookat.pbrt", "LookAt 0 0 0 0 0 0 0 1 0\n", TT_ERR_PARSE,
+               "lookat.pbrt:1:", "LookAt");
   expect_error("dir.pbrt", "[ 1 2 ]\n", TT_ERR_PARSE, "dir.pbrt:1:", "expected a directive");
   expect_error("nul.pbrt", "WorldBegin\n\001\n", TT_ERR_PARSE, "nul.pbrt:2:", "control character");
   tt_scene *s = NULL;
@@ -127,11 +142,13 @@ static void test_errors(void) {
   CHECK(st == TT_ERR_IO && s == NULL);
   CHECK_CONTAINS(tt_last_error(), "/nonexistent/dir/x.pbrt: cannot open scene file");
   /* a broken PLY names the PLY and the pbrt line */
-  static const char ply[] = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\0\0\0";
+  static const char ply[] =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int "
+      "vertex_indices\nend_header\n\0\0\0";
   write_file("broken.ply", ply, sizeof ply - 1);
-  expect_error("ply.pbrt", "WorldBegin\n\nShape \"plymesh\" \"string filename\" \"broken.ply\"\n", TT_ERR_PARSE, "ply.pbrt:3:",
-               "truncated");
+  expect_error("ply.pbrt", "WorldBegin\n\nShape \"plymesh\" \"string filename\" \"broken.ply\"\n",
+               TT_ERR_PARSE, "ply.pbrt:3:", "truncated");
 }
 
 /* Runs tt_scene_load with stderr captured into `err` (n bytes); returns its status. */
@@ -182,8 +199,9 @@ static void test_files(void) {
   for (int v = 0; v < 40; v++) n += snprintf(ply + n, sizeof ply - n, "%d 1 0\n", v);
   n += snprintf(ply + n, sizeof ply - n, "3 0 1 2\n");
   write_file("twovert.ply", ply, (size_t)n);
-  expect_error("twovert.pbrt", "WorldBegin\nShape \"plymesh\" \"string filename\" \"twovert.ply\"\n",
-               TT_ERR_PARSE, "twovert.pbrt:2:", "second \"element vertex\"");
+  expect_error("twovert.pbrt",
+               "WorldBegin\nShape \"plymesh\" \"string filename\" \"twovert.ply\"\n", TT_ERR_PARSE,
+               "twovert.pbrt:2:", "second \"element vertex\"");
   CHECK_CONTAINS(tt_last_error(), "twovert.ply");
 
   /* a missing PLY warns and is skipped, like a missing texture; the scene loads */
@@ -192,7 +210,8 @@ static void test_files(void) {
   const char *path = write_file("ply2.pbrt", missing, sizeof missing - 1);
   tt_scene *s = NULL;
   tt_status st = load_capturing(path, &s, err, sizeof err);
-  CHECK_MSG(st == TT_OK && s && tt_scene_mesh_count(s) == 1, "status %d: %s", (int)st, tt_last_error());
+  CHECK_MSG(st == TT_OK && s && tt_scene_mesh_count(s) == 1, "status %d: %s", (int)st,
+            tt_last_error());
   CHECK_CONTAINS(err, "ply2.pbrt:2:");
   CHECK_CONTAINS(err, "PLY file");
   CHECK_CONTAINS(err, "none.ply\" not found (shape skipped)");
@@ -207,7 +226,8 @@ static void test_files(void) {
   const char *const bad[] = {"/dev/zero", fifo};
   for (int i = 0; i < 2; i++) {
     char text[8192];
-    snprintf(text, sizeof text, "WorldBegin\nShape \"plymesh\" \"string filename\" \"%s\"\n", bad[i]);
+    snprintf(text, sizeof text, "WorldBegin\nShape \"plymesh\" \"string filename\" \"%s\"\n",
+             bad[i]);
     expect_error("special.pbrt", text, TT_ERR_IO, "special.pbrt:2:", bad[i]);
     CHECK_CONTAINS(tt_last_error(), "not a regular file");
     snprintf(text, sizeof text, "WorldBegin\nInclude \"%s\"\n", bad[i]);
@@ -249,20 +269,21 @@ static void test_fuzz(void) {
     size_t len = n;
     memcpy(buf, k_seed, n);
     switch (rng(&seed) % 4) {
-      case 0: len = rng(&seed) % (n + 1); break; /* truncation */
-      case 1:                                   /* byte corruption */
-        for (int k = 0, c = 1 + (int)(rng(&seed) % 4); k < c; k++) buf[rng(&seed) % n] = junk[rng(&seed) % (sizeof junk - 1)];
-        break;
-      case 2: { /* delete a span */
-        size_t a = rng(&seed) % n, b = a + rng(&seed) % 24;
-        if (b > n) b = n;
-        memmove(buf + a, buf + b, n - b);
-        len = n - (b - a);
-        break;
-      }
-      default: /* random bytes anywhere */
-        for (int k = 0; k < 3; k++) buf[rng(&seed) % n] = (char)(rng(&seed) & 0xff);
-        break;
+    case 0: len = rng(&seed) % (n + 1); break; /* truncation */
+    case 1:                                    /* byte corruption */
+      for (int k = 0, c = 1 + (int)(rng(&seed) % 4); k < c; k++)
+        buf[rng(&seed) % n] = junk[rng(&seed) % (sizeof junk - 1)];
+      break;
+    case 2: { /* delete a span */
+      size_t a = rng(&seed) % n, b = a + rng(&seed) % 24;
+      if (b > n) b = n;
+      memmove(buf + a, buf + b, n - b);
+      len = n - (b - a);
+      break;
+    }
+    default: /* random bytes anywhere */
+      for (int k = 0; k < 3; k++) buf[rng(&seed) % n] = (char)(rng(&seed) & 0xff);
+      break;
     }
     const char *path = write_file("fuzz.pbrt", buf, len);
     tt_scene *s = NULL;
@@ -285,12 +306,14 @@ static void test_fuzz(void) {
   }
   free(buf);
   /* PLY: truncations and corruptions of a binary and an ASCII mesh */
-  static const char ply_bin[] = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
-                                "property float y\nproperty float z\nproperty float u\nproperty float v\n"
-                                "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
-  static const char ply_ascii[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-                                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                                  "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+  static const char ply_bin[] =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
+      "property float y\nproperty float z\nproperty float u\nproperty float v\n"
+      "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  static const char ply_ascii[] =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
   unsigned char pb[512];
   size_t hl = sizeof ply_bin - 1, pl = hl;
   memcpy(pb, ply_bin, hl);
@@ -357,7 +380,8 @@ static void test_strict(void) {
   tt_scene *s = NULL;
   tt_status st = load_capturing(path, &s, err, sizeof err);
   CHECK_MSG(st == TT_OK && s, "lenient: %s", tt_last_error());
-  CHECK_CONTAINS(err, "typos.pbrt:3: unknown directive \"WorldBgin\" (did you mean \"WorldBegin\"?)");
+  CHECK_CONTAINS(err,
+                 "typos.pbrt:3: unknown directive \"WorldBgin\" (did you mean \"WorldBegin\"?)");
   CHECK_CONTAINS(err, "typos.pbrt:4: Material \"diffuse\": unknown parameter \"rgb reflectanse\" "
                       "(did you mean \"reflectance\"?)");
   CHECK_CONTAINS(err, "--strict refuses it");
@@ -365,7 +389,8 @@ static void test_strict(void) {
   s = NULL;
   st = load_capturing_ex(path, TT_SCENE_LOAD_STRICT, &s, err, sizeof err);
   CHECK(st == TT_ERR_PARSE && s == NULL);
-  CHECK_CONTAINS(tt_last_error(), "typos.pbrt:3: unknown directive \"WorldBgin\" (did you mean \"WorldBegin\"?)");
+  CHECK_CONTAINS(tt_last_error(),
+                 "typos.pbrt:3: unknown directive \"WorldBgin\" (did you mean \"WorldBegin\"?)");
   CHECK_CONTAINS(tt_last_error(), "and 1 more error");
   CHECK_CONTAINS(err, "typos.pbrt:4: Material \"diffuse\": unknown parameter \"rgb reflectanse\"");
   /* a parameter far from every name read: "not used by the importer" */
@@ -375,15 +400,16 @@ static void test_strict(void) {
       "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n";
   st = load_strict("unused.pbrt", unused, &s);
   CHECK(st == TT_ERR_PARSE && s == NULL);
-  CHECK_CONTAINS(tt_last_error(), "unused.pbrt:2: Material \"diffuse\": parameter \"float glitter\" "
-                                  "is not used by the importer (strict)");
+  CHECK_CONTAINS(tt_last_error(),
+                 "unused.pbrt:2: Material \"diffuse\": parameter \"float glitter\" "
+                 "is not used by the importer (strict)");
   /* strict accepts a clean file, approximations included (they only warn) */
   static const char *const clean =
       "WorldBegin\n"
       "Material \"thindielectric\" \"float eta\" 1.5\n"
       "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
       "Texture \"bump\" \"float\" \"constant\" \"float value\" 0.1\n"
-      "Material \"diffuse\" \"texture displacement\" \"bump\"\n"  /* pbrt-v4, not rendered */
+      "Material \"diffuse\" \"texture displacement\" \"bump\"\n" /* pbrt-v4, not rendered */
       "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 1 1 0 1 0 1 1 ]\n";
   st = load_strict("clean.pbrt", clean, &s);
   CHECK_MSG(st == TT_OK && s, "strict, clean file: %s", tt_last_error());

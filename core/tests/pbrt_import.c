@@ -37,9 +37,11 @@ static const tt_mesh *mesh(const tt_scene *s, const char *name, int index) {
 
 /* Geometric normal (unnormalised) of triangle t. */
 static void tri_normal(const tt_mesh *m, uint32_t t, double n[3]) {
-  const float *a = m->positions + 3 * m->indices[3 * t], *b = m->positions + 3 * m->indices[3 * t + 1],
+  const float *a = m->positions + 3 * m->indices[3 * t],
+              *b = m->positions + 3 * m->indices[3 * t + 1],
               *c = m->positions + 3 * m->indices[3 * t + 2];
-  double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+         e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
   n[0] = e1[1] * e2[2] - e1[2] * e2[1];
   n[1] = e1[2] * e2[0] - e1[0] * e2[2];
   n[2] = e1[0] * e2[1] - e1[1] * e2[0];
@@ -62,14 +64,20 @@ static void test_basic(void) {
   CHECK(tt_scene_light_count(s) == 6);
   float lo[3], hi[3];
   tt_scene_bounds(s, lo, hi);
-  CHECK_NEAR(lo[0], -10, 1e-5); CHECK_NEAR(lo[1], -1, 1e-5); CHECK_NEAR(lo[2], -40, 1e-5);
-  CHECK_NEAR(hi[0], 10, 1e-5); CHECK_NEAR(hi[1], 5, 1e-5); CHECK_NEAR(hi[2], 30, 1e-5);
+  CHECK_NEAR(lo[0], -10, 1e-5);
+  CHECK_NEAR(lo[1], -1, 1e-5);
+  CHECK_NEAR(lo[2], -40, 1e-5);
+  CHECK_NEAR(hi[0], 10, 1e-5);
+  CHECK_NEAR(hi[1], 5, 1e-5);
+  CHECK_NEAR(hi[2], 30, 1e-5);
 
   /* camera, film, sampler, integrator; `Scale -1 1 1` means no mirroring */
   const tt_camera *c = tt_scene_camera(s);
   CHECK(c->width == 200 && c->height == 100);
   CHECK_NEAR(c->fov_y, 40, 1e-4); /* screenwindow height 2 = the default */
-  CHECK_NEAR(c->position[0], 0, 1e-6); CHECK_NEAR(c->position[1], 1, 1e-6); CHECK_NEAR(c->position[2], -10, 1e-6);
+  CHECK_NEAR(c->position[0], 0, 1e-6);
+  CHECK_NEAR(c->position[1], 1, 1e-6);
+  CHECK_NEAR(c->position[2], -10, 1e-6);
   CHECK_NEAR(c->target[2] - c->position[2], 1, 1e-6);
   CHECK_NEAR(c->up[1], 1, 1e-6);
   CHECK(tt_scene_settings(s)->spp == 8);
@@ -79,7 +87,8 @@ static void test_basic(void) {
   const tt_material *m = mat(s, "red");
   if (m) {
     CHECK(m->type == TT_MATERIAL_DIFFUSE);
-    CHECK_NEAR(m->albedo[0], 0.8, 1e-6); CHECK_NEAR(m->albedo[2], 0.1, 1e-6);
+    CHECK_NEAR(m->albedo[0], 0.8, 1e-6);
+    CHECK_NEAR(m->albedo[2], 0.1, 1e-6);
     CHECK(m->albedo_texture == -1);
   }
   if ((m = mat(s, "plastic"))) {
@@ -101,12 +110,15 @@ static void test_basic(void) {
   CHECK(tt_scene_texture_count(s) == 2);
   if ((m = mat(s, "gold"))) {
     CHECK(m->type == TT_MATERIAL_CONDUCTOR);
-    CHECK_NEAR(m->eta[0], 0.143119, 1e-5); CHECK_NEAR(m->k[2], 1.60322, 1e-5);
-    CHECK_NEAR(m->alpha[0], 0.1, 1e-6); CHECK_NEAR(m->alpha[1], 0.3, 1e-6);
+    CHECK_NEAR(m->eta[0], 0.143119, 1e-5);
+    CHECK_NEAR(m->k[2], 1.60322, 1e-5);
+    CHECK_NEAR(m->alpha[0], 0.1, 1e-6);
+    CHECK_NEAR(m->alpha[1], 0.3, 1e-6);
   }
   if ((m = mat(s, "rawrough"))) {
     CHECK_NEAR(m->alpha[0], 0.3, 1e-6); /* remaproughness false */
-    CHECK_NEAR(m->eta[1], 0.9, 1e-6); CHECK_NEAR(m->k[0], 3.9, 1e-6);
+    CHECK_NEAR(m->eta[1], 0.9, 1e-6);
+    CHECK_NEAR(m->k[0], 3.9, 1e-6);
   }
   if ((m = mat(s, "spd"))) {
     for (int i = 0; i < 3; i++) {
@@ -114,11 +126,26 @@ static void test_basic(void) {
       CHECK_NEAR(m->k[i], 1.0, 1e-3);   /* flat inline pairs */
     }
   }
-  if ((m = mat(s, "glass"))) { CHECK(m->type == TT_MATERIAL_DIELECTRIC); CHECK_NEAR(m->ior, 1.5168, 1e-4); }
-  if ((m = mat(s, "water"))) { CHECK(m->type == TT_MATERIAL_DIELECTRIC); CHECK_NEAR(m->ior, 1.33, 1e-6); }
-  if ((m = mat(s, "leaf"))) { CHECK(m->type == TT_MATERIAL_DIFFUSE); CHECK_NEAR(m->albedo[1], 0.4, 1e-6); }
-  if ((m = mat(s, "fallback"))) { CHECK(m->albedo_texture == -1); CHECK_NEAR(m->albedo[0], 0.5, 1e-6); }
-  if ((m = mat(s, "checks"))) { CHECK(m->albedo_texture == -1); CHECK_NEAR(m->albedo[0], 0.5, 1e-6); }
+  if ((m = mat(s, "glass"))) {
+    CHECK(m->type == TT_MATERIAL_DIELECTRIC);
+    CHECK_NEAR(m->ior, 1.5168, 1e-4);
+  }
+  if ((m = mat(s, "water"))) {
+    CHECK(m->type == TT_MATERIAL_DIELECTRIC);
+    CHECK_NEAR(m->ior, 1.33, 1e-6);
+  }
+  if ((m = mat(s, "leaf"))) {
+    CHECK(m->type == TT_MATERIAL_DIFFUSE);
+    CHECK_NEAR(m->albedo[1], 0.4, 1e-6);
+  }
+  if ((m = mat(s, "fallback"))) {
+    CHECK(m->albedo_texture == -1);
+    CHECK_NEAR(m->albedo[0], 0.5, 1e-6);
+  }
+  if ((m = mat(s, "checks"))) {
+    CHECK(m->albedo_texture == -1);
+    CHECK_NEAR(m->albedo[0], 0.5, 1e-6);
+  }
   if ((m = mat(s, "coated"))) {
     CHECK(m->type == TT_MATERIAL_CONDUCTOR);
     CHECK_NEAR(m->eta[0], 0.155265, 1e-5);
@@ -140,12 +167,14 @@ static void test_basic(void) {
       double n[3];
       tri_normal(me, t, n);
       const float *a = me->positions + 3 * me->indices[3 * t];
-      if (n[0] * (a[0] - ctr[0]) + n[1] * (a[1] - ctr[1]) + n[2] * (a[2] - ctr[2]) <= 0) outward = 0;
+      if (n[0] * (a[0] - ctr[0]) + n[1] * (a[1] - ctr[1]) + n[2] * (a[2] - ctr[2]) <= 0)
+        outward = 0;
     }
     CHECK(outward);
     double cc[3];
     centroid(me, cc);
-    CHECK_NEAR(cc[0], 3, 0.02); CHECK_NEAR(cc[1], 1, 1e-3); /* seam vertices are doubled */
+    CHECK_NEAR(cc[0], 3, 0.02);
+    CHECK_NEAR(cc[1], 1, 1e-3); /* seam vertices are doubled */
   }
   /* disk: +z rotated to -y, then ReverseOrientation -> faces +y */
   if ((me = mesh(s, "disk@basic.pbrt:82", 0))) {
@@ -162,52 +191,55 @@ static void test_basic(void) {
   }
   if ((me = mesh(s, "loopsubdiv@basic.pbrt:92", 0))) {
     CHECK(me->triangle_count == 16 && me->vertex_count == 10 && me->normals != NULL);
-    for (uint32_t v = 0; v < me->vertex_count * 3; v++) CHECK(me->positions[v] >= -1e-5 && me->positions[v] <= 2.0f);
+    for (uint32_t v = 0; v < me->vertex_count * 3; v++)
+      CHECK(me->positions[v] >= -1e-5 && me->positions[v] <= 2.0f);
   }
   /* the area light: emission = L * scale, one-sided, facing -y like pbrt's normal */
   int area = 0;
   for (uint32_t i = 0; i < tt_scene_light_count(s); i++) {
     const tt_light *l = tt_scene_light(s, i);
     switch (l->type) {
-      case TT_LIGHT_AREA: {
-        area++;
-        CHECK_NEAR(l->radiance[0], 4, 1e-6); CHECK_NEAR(l->radiance[2], 12, 1e-6);
-        CHECK_NEAR(l->area, 4, 1e-5);
-        const tt_mesh *lm = tt_scene_mesh(s, l->mesh);
-        const tt_material *em = tt_scene_material(s, lm->material);
-        CHECK(em->two_sided == 0);
-        CHECK(em->type == TT_MATERIAL_DIFFUSE && fabs(em->albedo[0] - 0.8) < 1e-6);
-        double n[3];
-        tri_normal(lm, 0, n);
-        CHECK(n[1] < 0);
-        break;
+    case TT_LIGHT_AREA: {
+      area++;
+      CHECK_NEAR(l->radiance[0], 4, 1e-6);
+      CHECK_NEAR(l->radiance[2], 12, 1e-6);
+      CHECK_NEAR(l->area, 4, 1e-5);
+      const tt_mesh *lm = tt_scene_mesh(s, l->mesh);
+      const tt_material *em = tt_scene_material(s, lm->material);
+      CHECK(em->two_sided == 0);
+      CHECK(em->type == TT_MATERIAL_DIFFUSE && fabs(em->albedo[0] - 0.8) < 1e-6);
+      double n[3];
+      tri_normal(lm, 0, n);
+      CHECK(n[1] < 0);
+      break;
+    }
+    case TT_LIGHT_POINT:
+      if (l->radiance[0] == 10) {
+        CHECK_NEAR(l->position[0], 1, 1e-6);
+        CHECK_NEAR(l->position[2], 3, 1e-6);
+        CHECK_NEAR(l->radiance[2], 30, 1e-6);
+      } else { /* CoordSysTransform "lamp" */
+        CHECK_NEAR(l->position[1], 3, 1e-6);
+        CHECK_NEAR(l->position[0], 0, 1e-6);
       }
-      case TT_LIGHT_POINT:
-        if (l->radiance[0] == 10) {
-          CHECK_NEAR(l->position[0], 1, 1e-6); CHECK_NEAR(l->position[2], 3, 1e-6);
-          CHECK_NEAR(l->radiance[2], 30, 1e-6);
-        } else { /* CoordSysTransform "lamp" */
-          CHECK_NEAR(l->position[1], 3, 1e-6); CHECK_NEAR(l->position[0], 0, 1e-6);
-        }
-        break;
-      case TT_LIGHT_SPOT: {
-        CHECK_NEAR(l->position[1], 5, 1e-6);
-        CHECK_NEAR(l->direction[1], -1, 1e-6);
-        CHECK_NEAR(l->cos_outer, cos(40 * TT_PI / 180), 1e-6);
-        CHECK_NEAR(l->cos_inner, cos(30 * TT_PI / 180), 1e-6);
-        /* blackbody normalised to luminance 1, times scale 2; 6500 K is near white */
-        double y = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
-        CHECK_NEAR(y, 2.0, 0.02);
-        CHECK(fabs(l->radiance[0] - l->radiance[2]) < 0.3);
-        break;
-      }
-      case TT_LIGHT_DISTANT:
-        CHECK_NEAR(l->direction[1], -1, 1e-6);
-        break;
-      case TT_LIGHT_ENV_CONSTANT:
-        CHECK_NEAR(l->radiance[0], 0.1, 1e-6); CHECK_NEAR(l->radiance[2], 0.3, 1e-6);
-        break;
-      default: CHECK_MSG(0, "unexpected light type %d", (int)l->type);
+      break;
+    case TT_LIGHT_SPOT: {
+      CHECK_NEAR(l->position[1], 5, 1e-6);
+      CHECK_NEAR(l->direction[1], -1, 1e-6);
+      CHECK_NEAR(l->cos_outer, cos(40 * TT_PI / 180), 1e-6);
+      CHECK_NEAR(l->cos_inner, cos(30 * TT_PI / 180), 1e-6);
+      /* blackbody normalised to luminance 1, times scale 2; 6500 K is near white */
+      double y = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
+      CHECK_NEAR(y, 2.0, 0.02);
+      CHECK(fabs(l->radiance[0] - l->radiance[2]) < 0.3);
+      break;
+    }
+    case TT_LIGHT_DISTANT: CHECK_NEAR(l->direction[1], -1, 1e-6); break;
+    case TT_LIGHT_ENV_CONSTANT:
+      CHECK_NEAR(l->radiance[0], 0.1, 1e-6);
+      CHECK_NEAR(l->radiance[2], 0.3, 1e-6);
+      break;
+    default: CHECK_MSG(0, "unexpected light type %d", (int)l->type);
     }
   }
   CHECK(area == 1);
@@ -220,14 +252,19 @@ static void test_basic(void) {
   }
   if ((me = mesh(s, "ascii.ply", 0))) {
     CHECK(me->vertex_count == 5 && me->triangle_count == 3 && me->normals && me->uvs);
-    if (me->uvs) { CHECK_NEAR(me->uvs[8], 0.5, 1e-6); CHECK_NEAR(me->uvs[9], 1.5, 1e-6); }
+    if (me->uvs) {
+      CHECK_NEAR(me->uvs[8], 0.5, 1e-6);
+      CHECK_NEAR(me->uvs[9], 1.5, 1e-6);
+    }
   }
   if ((me = mesh(s, "tri_be.ply", 0))) {
     CHECK(me->vertex_count == 3 && me->triangle_count == 1);
-    CHECK_NEAR(me->positions[3], 2, 1e-6); CHECK_NEAR(me->positions[5], -3, 1e-6);
+    CHECK_NEAR(me->positions[3], 2, 1e-6);
+    CHECK_NEAR(me->positions[5], -3, 1e-6);
   }
   /* ObjectInstance: two flattened copies of the included object */
-  const tt_mesh *i0 = mesh(s, "trianglemesh@objects.pbrt:4", 0), *i1 = mesh(s, "trianglemesh@objects.pbrt:4", 1);
+  const tt_mesh *i0 = mesh(s, "trianglemesh@objects.pbrt:4", 0),
+                *i1 = mesh(s, "trianglemesh@objects.pbrt:4", 1);
   if (i0 && i1) {
     CHECK_NEAR(i0->positions[2], 20, 1e-6);
     CHECK_NEAR(i1->positions[2], 30, 1e-6);
@@ -250,19 +287,27 @@ static void test_rough_glass(void) {
   if ((m = mat(s, "frosted"))) {
     CHECK(m->type == TT_MATERIAL_DIELECTRIC);
     CHECK_NEAR(m->ior, 1.5, 1e-6);
-    CHECK_NEAR(m->alpha[0], 0.2, 1e-6); CHECK_NEAR(m->alpha[1], 0.2, 1e-6); /* remapped: sqrt(0.04) */
+    CHECK_NEAR(m->alpha[0], 0.2, 1e-6);
+    CHECK_NEAR(m->alpha[1], 0.2, 1e-6); /* remapped: sqrt(0.04) */
   }
   if ((m = mat(s, "aniso"))) {
     CHECK(m->type == TT_MATERIAL_DIELECTRIC);
     CHECK_NEAR(m->ior, 1.33, 1e-6);
-    CHECK_NEAR(m->alpha[0], 0.1, 1e-6); CHECK_NEAR(m->alpha[1], 0.3, 1e-6);
+    CHECK_NEAR(m->alpha[0], 0.1, 1e-6);
+    CHECK_NEAR(m->alpha[1], 0.3, 1e-6);
   }
   if ((m = mat(s, "rawglass"))) {
     CHECK(m->type == TT_MATERIAL_DIELECTRIC);
-    CHECK_NEAR(m->alpha[0], 0.3, 1e-6); CHECK_NEAR(m->alpha[1], 0.3, 1e-6); /* remaproughness false */
+    CHECK_NEAR(m->alpha[0], 0.3, 1e-6);
+    CHECK_NEAR(m->alpha[1], 0.3, 1e-6); /* remaproughness false */
   }
-  if ((m = mat(s, "clamped"))) { CHECK_NEAR(m->alpha[0], 1.0, 1e-6); CHECK_NEAR(m->alpha[1], 1.0, 1e-6); }
-  if ((m = mat(s, "smooth"))) { CHECK(m->alpha[0] == 0.0f && m->alpha[1] == 0.0f); }
+  if ((m = mat(s, "clamped"))) {
+    CHECK_NEAR(m->alpha[0], 1.0, 1e-6);
+    CHECK_NEAR(m->alpha[1], 1.0, 1e-6);
+  }
+  if ((m = mat(s, "smooth"))) {
+    CHECK(m->alpha[0] == 0.0f && m->alpha[1] == 0.0f);
+  }
   if ((m = mat(s, "thin"))) {
     CHECK(m->type == TT_MATERIAL_DIELECTRIC);
     CHECK_NEAR(m->ior, 1.4, 1e-6);
@@ -314,10 +359,13 @@ static void test_handedness(void) {
   if (s) {
     const tt_mesh *m = tt_scene_mesh(s, 0);
     /* Transform (translation in the last column), ConcatTransform scale 2; mirrored x */
-    CHECK_NEAR(m->positions[3], -12, 1e-5); CHECK_NEAR(m->positions[4], 20, 1e-5);
-    CHECK_NEAR(m->positions[7], 22, 1e-5); CHECK_NEAR(m->positions[8], 30, 1e-5);
+    CHECK_NEAR(m->positions[3], -12, 1e-5);
+    CHECK_NEAR(m->positions[4], 20, 1e-5);
+    CHECK_NEAR(m->positions[7], 22, 1e-5);
+    CHECK_NEAR(m->positions[8], 30, 1e-5);
     m = tt_scene_mesh(s, 1);
-    CHECK_NEAR(m->positions[0], 0, 1e-6); CHECK_NEAR(m->positions[2], 0, 1e-6); /* Identity */
+    CHECK_NEAR(m->positions[0], 0, 1e-6);
+    CHECK_NEAR(m->positions[2], 0, 1e-6);                                          /* Identity */
     CHECK(tt_scene_camera(s)->width == 1280 && tt_scene_camera(s)->height == 720); /* defaults */
     CHECK_NEAR(tt_scene_camera(s)->fov_y, 90, 1e-4);
     tt_scene_destroy(s);

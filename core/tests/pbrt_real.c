@@ -88,21 +88,23 @@ static void test_wrappers(const char *root, const char *shared) {
     free(real);
     CHECK_MSG(st == TT_OK && p, "%s: %s", pbrt, tt_last_error());
     if (p) {
-      CHECK_MSG(strcmp(tt_scene_id(s), tt_scene_id(p)) == 0, "%s: scene id differs from %s", k->name, k->pbrt);
+      CHECK_MSG(strcmp(tt_scene_id(s), tt_scene_id(p)) == 0, "%s: scene id differs from %s",
+                k->name, k->pbrt);
       CHECK(tt_scene_triangle_count(s) == tt_scene_triangle_count(p));
       CHECK(tt_scene_light_count(s) == tt_scene_light_count(p));
     }
     const tt_camera *c = tt_scene_camera(s);
     CHECK_MSG(c->key_count >= 4, "%s: %u path keys", k->name, c->key_count);
-    CHECK_MSG(tt_scene_settings(s)->max_depth <= 64, "%s: maxDepth %u above integrator_pt's 64", k->name,
-              tt_scene_settings(s)->max_depth);
+    CHECK_MSG(tt_scene_settings(s)->max_depth <= 64, "%s: maxDepth %u above integrator_pt's 64",
+              k->name, tt_scene_settings(s)->max_depth);
     if (c->key_count >= 2) {
       static const unsigned idx[3] = {0, 50, 99};
       tt_camera cam[3];
       for (int i = 0; i < 3; i++) {
         path_sample(s, idx[i], &cam[i]);
         for (int a = 0; a < 3; a++)
-          CHECK_MSG(isfinite(cam[i].position[a]) && isfinite(cam[i].target[a]) && isfinite(cam[i].up[a]),
+          CHECK_MSG(isfinite(cam[i].position[a]) && isfinite(cam[i].target[a]) &&
+                        isfinite(cam[i].up[a]),
                     "%s: sample %u not finite", k->name, idx[i]);
         CHECK(cam[i].fov_y > 0 && cam[i].fov_y < 180);
       }
@@ -116,7 +118,8 @@ static void test_wrappers(const char *root, const char *shared) {
       for (int i = 0; i < 3; i++) {
         char out[2300], args[4000], log[4096];
         snprintf(out, sizeof out, "%s/%s_%u.exr", tmp, k->name, idx[i]);
-        if (snprintf(args, sizeof args, "--quiet --camera-index %u --res 16x16 --spp 1 --threads 2 --out '%s' '%s'",
+        if (snprintf(args, sizeof args,
+                     "--quiet --camera-index %u --res 16x16 --spp 1 --threads 2 --out '%s' '%s'",
                      idx[i], out, path) >= 3000) {
           CHECK_MSG(0, "%s: paths too long", k->name);
           continue;
@@ -137,8 +140,9 @@ static void test_wrappers(const char *root, const char *shared) {
             if (!isfinite(v)) bad++;
             else sum += v;
           }
-        printf("%-14s sample %2u: position [%g %g %g], mean %.4g\n", k->name, idx[i], cam[i].position[0],
-               cam[i].position[1], cam[i].position[2], sum / ((double)iw * ih * 3));
+        printf("%-14s sample %2u: position [%g %g %g], mean %.4g\n", k->name, idx[i],
+               cam[i].position[0], cam[i].position[1], cam[i].position[2],
+               sum / ((double)iw * ih * 3));
         CHECK(iw == 16 && ih == 16);
         CHECK_MSG(bad == 0, "%s: sample %u: %zu non-finite values", k->name, idx[i], bad);
         CHECK_MSG(sum > 0, "%s: sample %u renders all black", k->name, idx[i]);
@@ -176,18 +180,20 @@ int main(void) {
     float lo[3], hi[3];
     tt_scene_bounds(s, lo, hi);
     const tt_camera *c = tt_scene_camera(s);
-    printf("%-52s %8.1f ms %9llu triangles %5u meshes %3u materials %3u lights %ux%u\n", k_scenes[i].file, ms,
-           (unsigned long long)tris, tt_scene_mesh_count(s), tt_scene_material_count(s), tt_scene_light_count(s),
-           c->width, c->height);
+    printf("%-52s %8.1f ms %9llu triangles %5u meshes %3u materials %3u lights %ux%u\n",
+           k_scenes[i].file, ms, (unsigned long long)tris, tt_scene_mesh_count(s),
+           tt_scene_material_count(s), tt_scene_light_count(s), c->width, c->height);
     CHECK_MSG(tris >= k_scenes[i].min_triangles, "%s: %llu triangles < %llu", k_scenes[i].file,
               (unsigned long long)tris, (unsigned long long)k_scenes[i].min_triangles);
-    if (strncmp(k_scenes[i].file, "cornell-box-pbrt/", 17) == 0) cornell_inline += k_scenes[i].min_triangles;
+    if (strncmp(k_scenes[i].file, "cornell-box-pbrt/", 17) == 0)
+      cornell_inline += k_scenes[i].min_triangles;
     CHECK_MSG(tt_scene_light_count(s) > 0, "%s: no lights", k_scenes[i].file);
     for (int k = 0; k < 3; k++) CHECK(isfinite(lo[k]) && isfinite(hi[k]) && lo[k] <= hi[k]);
     CHECK(c->width > 0 && c->height > 0 && c->fov_y > 0 && c->fov_y < 180);
     for (uint32_t m = 0; m < tt_scene_material_count(s); m++) {
       const tt_material *mt = tt_scene_material(s, m);
-      for (int k = 0; k < 3; k++) CHECK(isfinite(mt->albedo[k]) && isfinite(mt->eta[k]) && isfinite(mt->emission[k]));
+      for (int k = 0; k < 3; k++)
+        CHECK(isfinite(mt->albedo[k]) && isfinite(mt->eta[k]) && isfinite(mt->emission[k]));
     }
     tt_scene_destroy(s);
   }

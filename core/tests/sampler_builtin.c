@@ -110,16 +110,23 @@ int main(void) {
         for (uint32_t py = 0; py < 32; ++py)
           for (uint32_t px = 0; px < 32; ++px) {
             double x = smp_get(&m[k], px, py, idx, dim), y = smp_get(&m[k], px + 1, py, idx, dim);
-            sx += x; sy += y; sxx += x * x; syy += y * y; sxy += x * y;
+            sx += x;
+            sy += y;
+            sxx += x * x;
+            syy += y * y;
+            sxy += x * y;
             equal += x == y;
           }
         double n = 1024.0;
-        double r = (sxy / n - sx / n * sy / n) / sqrt((sxx / n - sx * sx / n / n) * (syy / n - sy * sy / n / n));
+        double r = (sxy / n - sx / n * sy / n) /
+                   sqrt((sxx / n - sx * sx / n / n) * (syy / n - sy * sy / n / n));
         /* 1/sqrt(1024) = 0.031 standard deviation of r under independence */
         CHECK_MSG(fabs(r) < 0.13, "%s: neighbouring pixels correlate, index %u dim %u r = %.3f",
                   NAMES[k], (unsigned)idx, dim, r);
-        CHECK_MSG(fabs(sx / n - 0.5) < 0.05, "%s: index %u dim %u mean over pixels %.3f", NAMES[k], (unsigned)idx, dim, sx / n);
-        CHECK_MSG(equal < 4, "%s: index %u dim %u: %d equal neighbours", NAMES[k], (unsigned)idx, dim, equal);
+        CHECK_MSG(fabs(sx / n - 0.5) < 0.05, "%s: index %u dim %u mean over pixels %.3f", NAMES[k],
+                  (unsigned)idx, dim, sx / n);
+        CHECK_MSG(equal < 4, "%s: index %u dim %u: %d equal neighbours", NAMES[k], (unsigned)idx,
+                  dim, equal);
       }
     }
   }
@@ -151,12 +158,14 @@ int main(void) {
     double di = mean_disc(&m[0], pairs[p][0], pairs[p][1]);
     double dh = mean_disc(&m[1], pairs[p][0], pairs[p][1]);
     double ds = mean_disc(&m[2], pairs[p][0], pairs[p][1]);
-    printf("L2* discrepancy^2 dims (%u,%u): independent %.3g halton %.3g sobol %.3g\n",
-           pairs[p][0], pairs[p][1], di, dh, ds);
+    printf("L2* discrepancy^2 dims (%u,%u): independent %.3g halton %.3g sobol %.3g\n", pairs[p][0],
+           pairs[p][1], di, dh, ds);
     /* independent: E[D^2] = (1/4 - 1/9)/256 = 5.4e-4 */
     CHECK(di > 2e-4 && di < 1e-3);
-    CHECK_MSG(dh < 0.5 * di, "halton dims (%u,%u) %.3g vs independent %.3g", pairs[p][0], pairs[p][1], dh, di);
-    CHECK_MSG(ds < (p == 0 ? 0.1 : 0.5) * di, "sobol dims (%u,%u) %.3g vs independent %.3g", pairs[p][0], pairs[p][1], ds, di);
+    CHECK_MSG(dh < 0.5 * di, "halton dims (%u,%u) %.3g vs independent %.3g", pairs[p][0],
+              pairs[p][1], dh, di);
+    CHECK_MSG(ds < (p == 0 ? 0.1 : 0.5) * di, "sobol dims (%u,%u) %.3g vs independent %.3g",
+              pairs[p][0], pairs[p][1], ds, di);
   }
 
   for (int k = 0; k < 3; ++k) m[k].it->destroy(m[k].s);

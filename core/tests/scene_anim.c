@@ -19,17 +19,20 @@ static tt_scene *load(const char *json) {
   return s;
 }
 
-#define HEAD "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0]}," \
-             " \"materials\": {\"w\": {}}, \"meshes\": ["
+#define HEAD                                                                                       \
+  "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0]},"                 \
+  " \"materials\": {\"w\": {}}, \"meshes\": ["
 #define TRI "\"material\": \"w\", \"positions\": [[1,0,0],[0,1,0],[0,0,1]]"
 
 /* translate linear from (0,0,0) at t=0 to (2,4,6) at t=2; rotate about y 0 -> 90 degrees
  * (slerp); scale 1 -> 3 */
 static void test_rigid_linear(void) {
-  tt_scene *s = load(HEAD "{\"name\": \"a\", " TRI ", \"animation\": {\"keys\": ["
-                     "{\"time\": 0, \"translate\": [0,0,0], \"rotate\": [0,0,0], \"scale\": 1},"
-                     "{\"time\": 2, \"translate\": [2,4,6], \"rotate\": {\"axis\": [0,1,0], \"angle\": 90}, \"scale\": 3}]}},"
-                     "{\"name\": \"still\", " TRI "}]}");
+  tt_scene *s =
+      load(HEAD "{\"name\": \"a\", " TRI ", \"animation\": {\"keys\": ["
+                "{\"time\": 0, \"translate\": [0,0,0], \"rotate\": [0,0,0], \"scale\": 1},"
+                "{\"time\": 2, \"translate\": [2,4,6], \"rotate\": {\"axis\": [0,1,0], \"angle\": "
+                "90}, \"scale\": 3}]}},"
+                "{\"name\": \"still\", " TRI "}]}");
   CHECK(s != NULL);
   if (!s) return;
   CHECK(tt_scene_animated(s));
@@ -83,12 +86,13 @@ static void test_rigid_linear(void) {
 /* Channels are independent: a key may give only some fields. Cubic hits every key and
  * follows the camera path's Catmull-Rom spline; step holds the earlier key. */
 static void test_channels_cubic_step(void) {
-  tt_scene *s = load(HEAD "{" TRI ", \"animation\": {\"interpolation\": \"cubic\", \"keys\": ["
-                     "{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 1, \"translate\": [1,0,0]},"
-                     "{\"time\": 2, \"rotate\": {\"quaternion\": [0,0,0,2]}},"
-                     "{\"time\": 3, \"translate\": [3,3,0]}]}},"
-                     "{" TRI ", \"animation\": {\"interpolation\": \"step\", \"keys\": ["
-                     "{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 1, \"translate\": [5,0,0]}]}}]}");
+  tt_scene *s = load(
+      HEAD "{" TRI ", \"animation\": {\"interpolation\": \"cubic\", \"keys\": ["
+           "{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 1, \"translate\": [1,0,0]},"
+           "{\"time\": 2, \"rotate\": {\"quaternion\": [0,0,0,2]}},"
+           "{\"time\": 3, \"translate\": [3,3,0]}]}},"
+           "{" TRI ", \"animation\": {\"interpolation\": \"step\", \"keys\": ["
+           "{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 1, \"translate\": [5,0,0]}]}}]}");
   CHECK(s != NULL);
   if (!s) return;
   const tt_mesh *a = tt_scene_mesh(s, 0), *b = tt_scene_mesh(s, 1);
@@ -105,17 +109,20 @@ static void test_channels_cubic_step(void) {
 
 /* Morph: position = rest + sum w_i (target_i - rest); weights keyframed. */
 static void test_morph(void) {
-  tt_scene *s = load(HEAD "{" TRI ", \"transform\": {\"translate\": [10, 0, 0]}, \"morph\": {"
-                     "\"targets\": [{\"positions\": [[2,0,0],[0,1,0],[0,0,1]]}, {\"positions\": [[1,0,0],[0,3,0],[0,0,1]]}],"
-                     "\"keys\": [{\"time\": 0, \"weights\": [0, 0]}, {\"time\": 1, \"weights\": [1, 0.5]}]}}]}");
+  tt_scene *s = load(
+      HEAD
+      "{" TRI ", \"transform\": {\"translate\": [10, 0, 0]}, \"morph\": {"
+      "\"targets\": [{\"positions\": [[2,0,0],[0,1,0],[0,0,1]]}, {\"positions\": "
+      "[[1,0,0],[0,3,0],[0,0,1]]}],"
+      "\"keys\": [{\"time\": 0, \"weights\": [0, 0]}, {\"time\": 1, \"weights\": [1, 0.5]}]}}]}");
   CHECK(s != NULL);
   if (!s) return;
   const tt_mesh *m = tt_scene_mesh(s, 0);
   CHECK(m->motion == TT_MESH_DEFORMING && m->object_positions == NULL);
   CHECK_NEAR(m->positions[0], 11, 1e-6);
   CHECK(tt_scene_set_time(s, 1.0, 0.5) == TT_OK);
-  CHECK_NEAR(m->positions[0], 12, 1e-5);    /* target 0 fully: x 1 -> 2, placed at +10 */
-  CHECK_NEAR(m->positions[4], 2, 1e-5);     /* target 1 half: y 1 -> 2 */
+  CHECK_NEAR(m->positions[0], 12, 1e-5); /* target 0 fully: x 1 -> 2, placed at +10 */
+  CHECK_NEAR(m->positions[4], 2, 1e-5);  /* target 1 half: y 1 -> 2 */
   CHECK_NEAR(m->prev_positions[0], 11.5, 1e-5);
   CHECK_NEAR(m->prev_positions[4], 1.5, 1e-5);
   tt_scene_destroy(s);
@@ -123,12 +130,16 @@ static void test_morph(void) {
 
 /* The camera path and the animation share the time axis; the id sees the motion. */
 static void test_range_and_id(void) {
-  const char *a = "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": ["
-                  "{\"time\": -1}, {\"time\": 4}]}, \"materials\": {\"w\": {}}, \"meshes\": [{" TRI
-                  ", \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 3, \"translate\": [1,0,0]}]}}]}";
-  const char *b = "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": ["
-                  "{\"time\": -1}, {\"time\": 4}]}, \"materials\": {\"w\": {}}, \"meshes\": [{" TRI
-                  ", \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 3, \"translate\": [2,0,0]}]}}]}";
+  const char *a =
+      "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": ["
+      "{\"time\": -1}, {\"time\": 4}]}, \"materials\": {\"w\": {}}, \"meshes\": [{" TRI
+      ", \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 3, "
+      "\"translate\": [1,0,0]}]}}]}";
+  const char *b =
+      "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": ["
+      "{\"time\": -1}, {\"time\": 4}]}, \"materials\": {\"w\": {}}, \"meshes\": [{" TRI
+      ", \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 3, "
+      "\"translate\": [2,0,0]}]}}]}";
   tt_scene *sa = load(a), *sb = load(b);
   CHECK(sa && sb);
   if (sa && sb) {
@@ -142,33 +153,45 @@ static void test_range_and_id(void) {
 }
 
 typedef struct bad_case {
-  const char *meshes;   /* the meshes array's content */
+  const char *meshes; /* the meshes array's content */
   const char *expect;
 } bad_case;
 
 static void test_errors(void) {
   static const bad_case cases[] = {
-      {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 1, \"translate\": [0,0,0]}, {\"time\": 0.5, \"translate\": [1,0,0]}]}}",
-       "anim.json: meshes[0].animation.keys[1].time: keys out of order: expected a time greater than the previous key's (1), got 0.5"},
+      {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 1, \"translate\": [0,0,0]}, {\"time\": "
+       "0.5, \"translate\": [1,0,0]}]}}",
+       "anim.json: meshes[0].animation.keys[1].time: keys out of order: expected a time greater "
+       "than the previous key's (1), got 0.5"},
       {"{" TRI ", \"morph\": {\"targets\": [{\"positions\": [[0,0,0],[1,0,0]]}]}}",
-       "anim.json: meshes[0].morph.targets[0].positions: mismatched morph target size: expected 3 positions"},
-      {"{" TRI ", \"morph\": {\"targets\": [{\"positions\": [[0,0,0],[1,0,0],[0,1,0]]}], \"keys\": [{\"time\": 0, \"weights\": [1, 2]}]}}",
+       "anim.json: meshes[0].morph.targets[0].positions: mismatched morph target size: expected 3 "
+       "positions"},
+      {"{" TRI ", \"morph\": {\"targets\": [{\"positions\": [[0,0,0],[1,0,0],[0,1,0]]}], \"keys\": "
+       "[{\"time\": 0, \"weights\": [1, 2]}]}}",
        "anim.json: meshes[0].morph.keys[0].weights: expected 1 weights (one per target)"},
-      {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 0, \"rotate\": {\"quaternion\": [0,0,0,0]}}]}}",
+      {"{" TRI
+       ", \"animation\": {\"keys\": [{\"time\": 0, \"rotate\": {\"quaternion\": [0,0,0,0]}}]}}",
        "anim.json: meshes[0].animation.keys[0].rotate.quaternion: expected a non-zero quaternion"},
       {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,1e999,0]}]}}",
        "anim.json: meshes[0].animation.keys[0].translate[1]: expected a finite number, got inf"},
-      {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 0, \"scale\": 1}, {\"time\": 1, \"scale\": [1, -1, 1]}]}}",
-       "anim.json: meshes[0].animation.keys[1].scale: expected non-zero factors with the signs of the first scale key"},
+      {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 0, \"scale\": 1}, {\"time\": 1, \"scale\": "
+       "[1, -1, 1]}]}}",
+       "anim.json: meshes[0].animation.keys[1].scale: expected non-zero factors with the signs of "
+       "the first scale key"},
       {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 0}]}}",
        "anim.json: meshes[0].animation.keys[0]: expected at least one of"},
-      {"{" TRI ", \"animation\": {\"interpolation\": \"bezier\", \"keys\": [{\"time\": 0, \"scale\": 2}]}}",
-       "anim.json: meshes[0].animation.interpolation: expected \"linear\", \"cubic\" or \"step\", got \"bezier\""},
-      {"{" TRI ", \"animation\": {\"keys\": []}}", "anim.json: meshes[0].animation.keys: expected a non-empty array of keys"},
+      {"{" TRI
+       ", \"animation\": {\"interpolation\": \"bezier\", \"keys\": [{\"time\": 0, \"scale\": 2}]}}",
+       "anim.json: meshes[0].animation.interpolation: expected \"linear\", \"cubic\" or \"step\", "
+       "got \"bezier\""},
+      {"{" TRI ", \"animation\": {\"keys\": []}}",
+       "anim.json: meshes[0].animation.keys: expected a non-empty array of keys"},
       {"{" TRI ", \"animation\": {\"keys\": [{\"translate\": [1,0,0]}]}}",
        "anim.json: meshes[0].animation.keys[0].time: missing required field"},
-      {"{" TRI ", \"morph\": {\"targets\": []}}", "anim.json: meshes[0].morph.targets: expected a non-empty array of targets"},
-      {"{" TRI ", \"morph\": {\"targets\": [{\"positions\": [[0,0,0],[1,0,0],[0,1,0]], \"normals\": [[0,0,1],[0,0,1],[0,0,1]]}]}}",
+      {"{" TRI ", \"morph\": {\"targets\": []}}",
+       "anim.json: meshes[0].morph.targets: expected a non-empty array of targets"},
+      {"{" TRI ", \"morph\": {\"targets\": [{\"positions\": [[0,0,0],[1,0,0],[0,1,0]], "
+       "\"normals\": [[0,0,1],[0,0,1],[0,0,1]]}]}}",
        "anim.json: meshes[0].morph.targets[0].normals: the mesh has no normals"},
       /* an animation that leaves the coordinate limit */
       {"{" TRI ", \"animation\": {\"keys\": [{\"time\": 0, \"scale\": 1e30}]}}",
@@ -184,20 +207,28 @@ static void test_errors(void) {
     tt_scene_destroy(s);
   }
   /* an animation longer than the sequence the camera path describes */
-  const char *longer = "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": ["
-                       "{\"time\": 0}, {\"time\": 2}]}, \"materials\": {\"w\": {}}, \"meshes\": [{\"material\": \"w\", "
-                       "\"positions\": [[1,0,0],[0,1,0],[0,0,1]]}, {\"material\": \"w\", \"positions\": [[1,0,0],[0,1,0],[0,0,1]],"
-                       " \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 3, \"translate\": [1,0,0]}]}}]}";
+  const char *longer =
+      "{\"version\": 1, \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"path\": ["
+      "{\"time\": 0}, {\"time\": 2}]}, \"materials\": {\"w\": {}}, \"meshes\": [{\"material\": "
+      "\"w\", "
+      "\"positions\": [[1,0,0],[0,1,0],[0,0,1]]}, {\"material\": \"w\", \"positions\": "
+      "[[1,0,0],[0,1,0],[0,0,1]],"
+      " \"animation\": {\"keys\": [{\"time\": 0, \"translate\": [0,0,0]}, {\"time\": 3, "
+      "\"translate\": [1,0,0]}]}}]}";
   tt_scene *s = NULL;
   CHECK(tt_scene_load_json(longer, strlen(longer), "anim.json", NULL, &s) == TT_ERR_PARSE);
-  CHECK_CONTAINS(tt_last_error(), "anim.json: meshes[1].animation.keys: keys from time 0 to 3: the animation is longer "
-                                  "than the sequence (the camera path runs from 0 to 2)");
+  CHECK_CONTAINS(
+      tt_last_error(),
+      "anim.json: meshes[1].animation.keys: keys from time 0 to 3: the animation is longer "
+      "than the sequence (the camera path runs from 0 to 2)");
 }
 
 /* A pose beyond the coordinate limit is refused and leaves the last good pose. */
 static void test_failed_pose(void) {
-  tt_scene *s = load(HEAD "{\"name\": \"grow\", " TRI ", \"animation\": {\"interpolation\": \"step\", \"keys\": [{\"time\": 0, \"scale\": 1},"
-                     " {\"time\": 1, \"scale\": 1e30}]}}]}");
+  tt_scene *s = load(
+      HEAD "{\"name\": \"grow\", " TRI
+           ", \"animation\": {\"interpolation\": \"step\", \"keys\": [{\"time\": 0, \"scale\": 1},"
+           " {\"time\": 1, \"scale\": 1e30}]}}]}");
   CHECK(s != NULL);
   if (!s) return;
   const tt_mesh *m = tt_scene_mesh(s, 0);

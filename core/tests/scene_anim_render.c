@@ -36,7 +36,8 @@ static float *render_at(const char *path, double t, int pose, const char *write_
   if (sets) {
     CHECK(tt_session_load_defaults(s) == TT_OK);
     for (size_t i = 0; sets[i]; i += 2)
-      CHECK_MSG(tt_session_set(s, "accel_embree", sets[i], sets[i + 1]) == TT_OK, "%s", tt_last_error());
+      CHECK_MSG(tt_session_set(s, "accel_embree", sets[i], sets[i + 1]) == TT_OK, "%s",
+                tt_last_error());
     CHECK(tt_session_set_time(s, 0.0, 1.0 / FPS, NULL) == TT_OK);
     CHECK(tt_session_start(s, 0) == TT_OK);
     tt_accel_update_stats us = {.struct_size = sizeof us};
@@ -64,8 +65,8 @@ static float *render_at(const char *path, double t, int pose, const char *write_
 
 /* The frame at t with the ABI 1.1 fixture accel `plugin`: posed before the session starts
  * (move = 0), or started at time 0 and moved with tt_session_set_time (move = 1). */
-static float *render_fixture(const char *path, const char *plugin, double t, int move,
-                             uint32_t *w, uint32_t *h) {
+static float *render_fixture(const char *path, const char *plugin, double t, int move, uint32_t *w,
+                             uint32_t *h) {
   tt_session *s = NULL;
   float *rgb = NULL;
   if (tt_session_create(NULL, &s) != TT_OK || tt_session_load_scene(s, path) != TT_OK ||
@@ -113,14 +114,18 @@ int main(int argc, char **argv) {
       n = (size_t)3 * w * h;
       size_t diff = 0;
       for (size_t i = 0; i < n; i++) diff += memcmp(&anim[i], &ref[i], sizeof(float)) != 0;
-      CHECK_MSG(diff == 0, "t = %g: %zu of %zu values differ from the still scene placed at that time", times[k], diff, n);
+      CHECK_MSG(diff == 0,
+                "t = %g: %zu of %zu values differ from the still scene placed at that time",
+                times[k], diff, n);
       /* a session moved to the frame: the accel rebuilt or refitted, the same image */
-      static const char *const updates[][5] = {{"updateMethod", "rebuild", NULL},
-                                               {"updateMethod", "refit", NULL},
-                                               {"updateMethod", "refit", "backend", "custom", NULL}};
+      static const char *const updates[][5] = {
+          {"updateMethod", "rebuild", NULL},
+          {"updateMethod", "refit", NULL},
+          {"updateMethod", "refit", "backend", "custom", NULL}};
       static const char *const custom[] = {"updateMethod", "rebuild", "backend", "custom", NULL};
       uint32_t w4 = 0, h4 = 0;
-      float *ref_custom = render_at(still, times[k], 0, NULL, custom, &w4, &h4);  /* its own traversal */
+      float *ref_custom =
+          render_at(still, times[k], 0, NULL, custom, &w4, &h4); /* its own traversal */
       CHECK(ref_custom && w4 == w && h4 == h);
       for (size_t u = 0; u < 3 && ref_custom; u++) {
         uint32_t w3 = 0, h3 = 0;
@@ -128,8 +133,10 @@ int main(int argc, char **argv) {
         CHECK(moved && w3 == w && h3 == h);
         const float *r = updates[u][2] ? ref_custom : ref;
         size_t mdiff = 0;
-        for (size_t i = 0; moved && w3 == w && h3 == h && i < n; i++) mdiff += memcmp(&moved[i], &r[i], sizeof(float)) != 0;
-        CHECK_MSG(moved && mdiff == 0, "t = %g, %s %s: %zu of %zu values differ from the still scene", times[k],
+        for (size_t i = 0; moved && w3 == w && h3 == h && i < n; i++)
+          mdiff += memcmp(&moved[i], &r[i], sizeof(float)) != 0;
+        CHECK_MSG(moved && mdiff == 0,
+                  "t = %g, %s %s: %zu of %zu values differ from the still scene", times[k],
                   updates[u][1], updates[u][2] ? "custom" : "native", mdiff, n);
         free(moved);
       }
@@ -142,13 +149,14 @@ int main(int argc, char **argv) {
       /* the frames differ: the objects moved */
       size_t moved = 0;
       for (size_t i = 0; i < n; i++) moved += first[i] != anim[i];
-      CHECK_MSG(moved > n / 20, "only %zu of %zu values changed between t = 0.35 and t = 1.3", moved, n);
+      CHECK_MSG(moved > n / 20, "only %zu of %zu values changed between t = 0.35 and t = 1.3",
+                moved, n);
     }
     free(anim);
     free(ref);
   }
   free(first);
-  if (argc > 1) {  /* the ABI 1.1 fixture accel */
+  if (argc > 1) { /* the ABI 1.1 fixture accel */
     uint32_t w = 0, h = 0, w2 = 0, h2 = 0;
     float *posed = render_fixture(scene, argv[1], 1.3, 0, &w, &h);
     float *moved = render_fixture(scene, argv[1], 1.3, 1, &w2, &h2);
@@ -158,7 +166,9 @@ int main(int argc, char **argv) {
       diff += memcmp(&posed[i], &moved[i], sizeof(float)) != 0;
       lit += posed[i] > 0.0f;
     }
-    CHECK_MSG(diff == 0 && lit > 0, "ABI 1.1 accel: %zu values differ between the moved and the posed session (%zu lit)", diff, lit);
+    CHECK_MSG(diff == 0 && lit > 0,
+              "ABI 1.1 accel: %zu values differ between the moved and the posed session (%zu lit)",
+              diff, lit);
     free(posed);
     free(moved);
   } else {

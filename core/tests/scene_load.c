@@ -158,7 +158,8 @@ static void test_cornell(void) {
 static void test_obj_transform(void) {
   char path[1200];
   tt_scene *s = NULL;
-  tt_status st = tt_scene_load(src_path("tests/data/scenes/obj-transform.json", path, sizeof path), &s);
+  tt_status st =
+      tt_scene_load(src_path("tests/data/scenes/obj-transform.json", path, sizeof path), &s);
   CHECK_MSG(st == TT_OK, "%s", tt_last_error());
   if (!s) return;
   CHECK(tt_scene_mesh_count(s) == 1);
@@ -178,10 +179,13 @@ static void test_obj_transform(void) {
   /* scale 2: the cube's area is 6 * 4 */
   double area = 0;
   for (uint32_t t = 0; t < m->triangle_count; t++) {
-    const float *a = m->positions + 3 * m->indices[3 * t], *b = m->positions + 3 * m->indices[3 * t + 1],
+    const float *a = m->positions + 3 * m->indices[3 * t],
+                *b = m->positions + 3 * m->indices[3 * t + 1],
                 *c = m->positions + 3 * m->indices[3 * t + 2];
-    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+           e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2],
+           z = e1[0] * e2[1] - e1[1] * e2[0];
     area += 0.5 * sqrt(x * x + y * y + z * z);
   }
   CHECK_NEAR(area, 24.0, 1e-4);
@@ -222,7 +226,8 @@ static void test_gltf(void) {
     if (!s) continue;
     CHECK_MSG(tt_scene_triangle_count(s) == 1, "%s", files[i]);
     CHECK(tt_scene_mesh_count(s) == 1);
-    CHECK_MSG(strcmp(tt_scene_mesh(s, 0)->name, "g/tri") == 0, "%s: %s", files[i], tt_scene_mesh(s, 0)->name);
+    CHECK_MSG(strcmp(tt_scene_mesh(s, 0)->name, "g/tri") == 0, "%s: %s", files[i],
+              tt_scene_mesh(s, 0)->name);
     float lo[3], hi[3];
     tt_scene_bounds(s, lo, hi);
     CHECK_NEAR(lo[0], 0.0, 1e-6);
@@ -243,7 +248,8 @@ static void test_inline_transform_normals(void) {
       " \"meshes\": [{\"material\": \"m\", \"positions\": [0,0,0, 1,0,0, 0,1,1],"
       "   \"normals\": [[0,-0.7071,0.7071],[0,-0.7071,0.7071],[0,-0.7071,0.7071]],"
       "   \"uvs\": [[0,0],[1,0],[0,1]],"
-      "   \"transform\": {\"scale\": [3, 1, 0.5], \"rotate\": [0, 0, 30], \"translate\": [1, 2, 3]}},"
+      "   \"transform\": {\"scale\": [3, 1, 0.5], \"rotate\": [0, 0, 30], \"translate\": [1, 2, "
+      "3]}},"
       "  {\"material\": \"m\", \"positions\": [0,0,0, 1,0,0, 0,1,0],"
       "   \"matrix\": [-1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], \"normals\": [0,0,1, 0,0,1, 0,0,1]}]}";
   tt_scene *s = load_text(json, NULL);
@@ -253,8 +259,10 @@ static void test_inline_transform_normals(void) {
   CHECK(m->normals != NULL && m->uvs != NULL);
   CHECK_NEAR(m->uvs[2], 1.0, 0);
   const float *p = m->positions;
-  float e1[3] = {p[3] - p[0], p[4] - p[1], p[5] - p[2]}, e2[3] = {p[6] - p[0], p[7] - p[1], p[8] - p[2]};
-  float gn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  float e1[3] = {p[3] - p[0], p[4] - p[1], p[5] - p[2]},
+        e2[3] = {p[6] - p[0], p[7] - p[1], p[8] - p[2]};
+  float gn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                 e1[0] * e2[1] - e1[1] * e2[0]};
   for (int v = 0; v < 3; v++) {
     const float *n = m->normals + 3 * v;
     CHECK_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-5);
@@ -283,9 +291,11 @@ static void test_inline_transform_normals(void) {
 static void test_camera_path(void) {
   const char *json =
       "{\"version\": 1,"
-      " \"camera\": {\"position\": [0, 0, 10], \"target\": [0, 0, 0], \"fov\": 50, \"resolution\": [32, 16],"
+      " \"camera\": {\"position\": [0, 0, 10], \"target\": [0, 0, 0], \"fov\": 50, \"resolution\": "
+      "[32, 16],"
       "  \"path\": [{\"time\": 0, \"position\": [0, 0, 10], \"fov\": 40},"
-      "            {\"time\": 1, \"position\": [10, 0, 0], \"target\": [1, 0, 0], \"up\": [0, 2, 0], \"fov\": 60},"
+      "            {\"time\": 1, \"position\": [10, 0, 0], \"target\": [1, 0, 0], \"up\": [0, 2, "
+      "0], \"fov\": 60},"
       "            {\"time\": 3, \"position\": [0, 5, -10], \"up\": [1, 1, 0]},"
       "            {\"time\": 4, \"position\": [-10, 0, 0], \"fov\": 30}]},"
       " \"materials\": {\"m\": {}},"
@@ -295,7 +305,7 @@ static void test_camera_path(void) {
   const tt_camera *still = tt_scene_camera(s);
   CHECK(still->key_count == 4 && still->keys != NULL);
   const tt_camera_key *k = still->keys;
-  CHECK_NEAR(k[1].up[1], 2.0, 0); /* keys are stored as given */
+  CHECK_NEAR(k[1].up[1], 2.0, 0);  /* keys are stored as given */
   CHECK_NEAR(k[2].fov_y, 50.0, 0); /* missing fields inherit the still camera */
   tt_camera c;
   for (int i = 0; i < 4; i++) {
@@ -341,7 +351,8 @@ static void test_camera_path(void) {
 
   /* no path: camera_at returns the still camera at any time */
   s = load_text("{\"version\": 1, \"camera\": {\"position\": [1, 2, 3], \"target\": [0, 0, 0]},"
-                " \"materials\": {\"m\": {}}, \"meshes\": [{\"material\": \"m\", \"positions\": [0,0,0, 1,0,0, 0,1,0]}]}",
+                " \"materials\": {\"m\": {}}, \"meshes\": [{\"material\": \"m\", \"positions\": "
+                "[0,0,0, 1,0,0, 0,1,0]}]}",
                 NULL);
   if (!s) return;
   tt_scene_camera_at(s, 12.5, &c);
@@ -427,7 +438,8 @@ static void test_scene_id_location(void) {
     CHECK_MSG(strcmp(tt_scene_id(a), tt_scene_id(b)) == 0, "same scene in two folders: %s vs %s",
               tt_scene_id(a), tt_scene_id(b));
     for (int p = 0; p < TT_SCENE_PART_COUNT; p++)
-      CHECK(strcmp(tt_scene_id_part(a, (tt_scene_part)p), tt_scene_id_part(b, (tt_scene_part)p)) == 0);
+      CHECK(strcmp(tt_scene_id_part(a, (tt_scene_part)p), tt_scene_id_part(b, (tt_scene_part)p)) ==
+            0);
   }
   tt_scene_destroy(b);
   b = NULL;
@@ -437,8 +449,10 @@ static void test_scene_id_location(void) {
   if (a && b) {
     CHECK(strcmp(tt_scene_id(a), tt_scene_id(b)) != 0);
     for (int p = 0; p < TT_SCENE_PART_COUNT; p++) {
-      int same = strcmp(tt_scene_id_part(a, (tt_scene_part)p), tt_scene_id_part(b, (tt_scene_part)p)) == 0;
-      CHECK_MSG(same == (p != TT_SCENE_PART_TEXTURES), "part %s", tt_scene_part_name((tt_scene_part)p));
+      int same =
+          strcmp(tt_scene_id_part(a, (tt_scene_part)p), tt_scene_id_part(b, (tt_scene_part)p)) == 0;
+      CHECK_MSG(same == (p != TT_SCENE_PART_TEXTURES), "part %s",
+                tt_scene_part_name((tt_scene_part)p));
     }
   }
   CHECK(tt_scene_id_part(a, TT_SCENE_PART_COUNT) == NULL);
@@ -464,16 +478,21 @@ static void test_materials_and_lights(void) {
       " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0]},"
       " \"render\": {\"spp\": 4, \"maxDepth\": 7, \"seed\": 42, \"timeBudget\": 1.5},"
       " \"materials\": {"
-      "   \"d\": {\"type\": \"diffuse\", \"albedo\": 0.25, \"roughness\": 0.3, \"texture\": \"no-such-texture.png\"},"
+      "   \"d\": {\"type\": \"diffuse\", \"albedo\": 0.25, \"roughness\": 0.3, \"texture\": "
+      "\"no-such-texture.png\"},"
       "   \"s\": {\"type\": \"mirror\", \"specular\": [0.9, 0.8, 0.7]},"
-      "   \"c\": {\"type\": \"conductor\", \"alpha\": [0.2, 0.05], \"eta\": [0.2, 0.9, 1.1], \"k\": [3.9, 2.4, 2.1]},"
+      "   \"c\": {\"type\": \"conductor\", \"alpha\": [0.2, 0.05], \"eta\": [0.2, 0.9, 1.1], "
+      "\"k\": [3.9, 2.4, 2.1]},"
       "   \"g\": {\"type\": \"dielectric\", \"ior\": 1.33},"
       "   \"p\": {\"type\": \"plastic\", \"alpha\": 0.3, \"twoSided\": true}},"
-      " \"meshes\": [{\"material\": \"d\", \"positions\": [[0,0,0],[1,0,0],[1,1,0],[0,1,0]], \"indices\": [0,1,2, 0,2,3]},"
-      "              {\"material\": \"s\", \"positions\": [[0,0,1],[1,0,1],[1,1,1],[0,1,1]], \"indices\": [[0,1,2],[0,2,3]]}],"
+      " \"meshes\": [{\"material\": \"d\", \"positions\": [[0,0,0],[1,0,0],[1,1,0],[0,1,0]], "
+      "\"indices\": [0,1,2, 0,2,3]},"
+      "              {\"material\": \"s\", \"positions\": [[0,0,1],[1,0,1],[1,1,1],[0,1,1]], "
+      "\"indices\": [[0,1,2],[0,2,3]]}],"
       " \"lights\": [{\"type\": \"environment\", \"radiance\": [0.1, 0.2, 0.3]},"
       "             {\"type\": \"point\", \"position\": [1, 2, 3], \"intensity\": 5},"
-      "             {\"type\": \"spot\", \"position\": [0, 5, 0], \"target\": [0, 0, 0], \"intensity\": [1, 1, 1], \"angle\": 60, \"innerAngle\": 0},"
+      "             {\"type\": \"spot\", \"position\": [0, 5, 0], \"target\": [0, 0, 0], "
+      "\"intensity\": [1, 1, 1], \"angle\": 60, \"innerAngle\": 0},"
       "             {\"type\": \"distant\", \"direction\": [0, -2, 0], \"irradiance\": [3, 3, 3]},"
       "             {\"type\": \"environment\", \"_x\": 1, \"image\": \"sky.exr\"}]}";
   /* two environments are an error; drop the last one for the positive test */

@@ -41,7 +41,7 @@ int main(void) {
   CHECK_CONTAINS(g_last, "warn.json");
   CHECK_CONTAINS(g_last, "colour");
   tt_scene_destroy(s);
-  tt_set_log_host(NULL);  /* back to the default host (stderr) */
+  tt_set_log_host(NULL); /* back to the default host (stderr) */
   g_warnings = 0;
   CHECK(tt_scene_load_json(json, sizeof json - 1, "warn.json", NULL, &s) == TT_OK);
   CHECK(g_warnings == 0);

@@ -120,8 +120,10 @@ static void test_two_alive(int close_older_first, const float *ref) {
             tt_last_error());
   tt_session_reset(kept);
   CHECK_MSG(render(kept, SPP, img) == TT_OK, "%s: render: %s", when, tt_last_error());
-  CHECK_MSG(!memcmp(img, ref, sizeof img), "%s: the survivor's image differs from a lone "
-            "session's", when);
+  CHECK_MSG(!memcmp(img, ref, sizeof img),
+            "%s: the survivor's image differs from a lone "
+            "session's",
+            when);
   check_rejects_bad_value(kept, when);
   tt_session_destroy(kept);
 }
@@ -200,12 +202,15 @@ static void test_session_per_thread(const float *ref) {
   }
   for (int i = 0; i < N; i++) pthread_join(th[i], NULL);
   for (int i = 0; i < N; i++) {
-    CHECK_MSG(w[i].rounds_ok == 3, "thread %d: %d of 3 rounds (%s)", i, w[i].rounds_ok,
-              w[i].error);
-    CHECK_MSG(w[i].images_equal == w[i].rounds_ok, "thread %d: %d of %d images equal a lone "
-              "session's", i, w[i].images_equal, w[i].rounds_ok);
-    CHECK_MSG(w[i].own_message == w[i].rounds_ok, "thread %d: its own error message in %d of "
-              "%d rounds", i, w[i].own_message, w[i].rounds_ok);
+    CHECK_MSG(w[i].rounds_ok == 3, "thread %d: %d of 3 rounds (%s)", i, w[i].rounds_ok, w[i].error);
+    CHECK_MSG(w[i].images_equal == w[i].rounds_ok,
+              "thread %d: %d of %d images equal a lone "
+              "session's",
+              i, w[i].images_equal, w[i].rounds_ok);
+    CHECK_MSG(w[i].own_message == w[i].rounds_ok,
+              "thread %d: its own error message in %d of "
+              "%d rounds",
+              i, w[i].own_message, w[i].rounds_ok);
   }
 }
 

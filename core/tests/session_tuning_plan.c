@@ -47,7 +47,7 @@ static void test_defaults(void) {
   CHECK(plan.search == NULL && plan.space == tt_loaded_plugin_space(plan.target));
   CHECK((int)plan.target_index == tt_session_plugin_index(s, "accel_embree"));
   tt_tuning_plan_release(&plan);
-  tt_tuning_plan_release(&plan);  /* twice: a released plan is empty */
+  tt_tuning_plan_release(&plan); /* twice: a released plan is empty */
   tt_session_destroy(s);
 
   /* PSSMLT's hint: target, objective, its list, binning on; the user's set wins */
@@ -64,10 +64,10 @@ static void test_defaults(void) {
   CHECK_MSG(plan.search && tt_space_count(plan.search) == listed, "searched %zu of the hint's %zu",
             plan.search ? tt_space_count(plan.search) : 0, listed);
   CHECK_MSG(value_of(s, "integrator_pssmlt", "binning") == 0, "the user's binning=false wins "
-            "over the hint's setup");
+                                                              "over the hint's setup");
   tt_tuning_plan_release(&plan);
   tt_session_destroy(s);
-  s = open_session(mlt, 1);  /* without a user value the hint's setup applies */
+  s = open_session(mlt, 1); /* without a user value the hint's setup applies */
   CHECK(tt_session_start(s, 0) == TT_OK);
   CHECK(tt_session_tuning_plan(s, NULL, NULL, 0, &plan) == TT_OK);
   CHECK(value_of(s, "integrator_pssmlt", "binning") == 1);
@@ -85,8 +85,10 @@ static void test_fixture_hints(const char *full, const char *short_) {
             tt_last_error());
   CHECK(!strcmp(plan.objective, "render"));
   CHECK(plan.search && tt_space_count(plan.search) == 1 && tt_space_find(plan.search, "b") == 0);
-  CHECK_MSG(value_of(s, "fixture_hint", "a") == 7, "a = %g: the user's 7 wins over the "
-            "setup's 3", value_of(s, "fixture_hint", "a"));
+  CHECK_MSG(value_of(s, "fixture_hint", "a") == 7,
+            "a = %g: the user's 7 wins over the "
+            "setup's 3",
+            value_of(s, "fixture_hint", "a"));
   CHECK_MSG(value_of(s, "fixture_hint", "c") == 2, "c = %g: the setup's 2",
             value_of(s, "fixture_hint", "c"));
   tt_tuning_plan_release(&plan);
@@ -107,7 +109,7 @@ static void test_fixture_hints(const char *full, const char *short_) {
   /* errors */
   CHECK(tt_session_tuning_plan(s, "nope", NULL, 0, &plan) == TT_ERR_INVALID_ARGUMENT);
   CHECK_CONTAINS(tt_last_error(), "no loaded plugin is called \"nope\" (loaded: fixture_hint, "
-                 "fixture_hint_short, accel_embree, integrator_pt)");
+                                  "fixture_hint_short, accel_embree, integrator_pt)");
   tt_session_destroy(s);
   const char *with_tuner[] = {"tuner_nm"};
   s = open_session(with_tuner, 1);

@@ -33,19 +33,20 @@ int main(void) {
   CHECK(tt_edit_distance("", "") == 0);
   CHECK(tt_edit_distance("abc", "") == 3);
   CHECK(tt_edit_distance("kitten", "sitting") == 3);
-  CHECK(tt_edit_distance("travcost", "trvacost") == 1);  /* adjacent transposition */
-  CHECK(tt_edit_distance("spp", "SPP") == 3);            /* case-sensitive */
+  CHECK(tt_edit_distance("travcost", "trvacost") == 1); /* adjacent transposition */
+  CHECK(tt_edit_distance("spp", "SPP") == 3);           /* case-sensitive */
 
-  static const char *const names[] = {"quality", "branchingFactor", "minLeaf", "maxLeaf",
-                                      "travcost", "intcost", "compact", "backend", "spp",
-                                      NULL, "threads", "a", "ab"};
+  static const char *const names[] = {
+      "quality", "branchingFactor", "minLeaf", "maxLeaf", "travcost", "intcost",
+      "compact", "backend",         "spp",     NULL,      "threads",  "a",
+      "ab"};
   const size_t n = sizeof names / sizeof names[0];
   CHECK(tt_suggest("qualty", names, n) && !strcmp(tt_suggest("qualty", names, n), "quality"));
   CHECK(tt_suggest("branchingfactor", names, n) &&
         !strcmp(tt_suggest("branchingfactor", names, n), "branchingFactor"));
   CHECK(tt_suggest("minleaf", names, n) && !strcmp(tt_suggest("minleaf", names, n), "minLeaf"));
   CHECK(tt_suggest("thread", names, n) && !strcmp(tt_suggest("thread", names, n), "threads"));
-  CHECK(tt_suggest("quality", names, n) == NULL);        /* a candidate itself */
+  CHECK(tt_suggest("quality", names, n) == NULL); /* a candidate itself */
   CHECK(tt_suggest("completelydifferent", names, n) == NULL);
   CHECK(tt_suggest("", names, n) == NULL);
 
@@ -57,9 +58,9 @@ int main(void) {
   for (int t = 0; t < trials; t++) {
     uint64_t r = tt__splitmix64(&st);
     size_t len;
-    if (t % 4 == 0) len = (size_t)(r % 301);        /* long ones too */
+    if (t % 4 == 0) len = (size_t)(r % 301); /* long ones too */
     else len = (size_t)(r % 18);
-    if (t % 2 && len > 0) {                         /* a candidate with an edit or two */
+    if (t % 2 && len > 0) { /* a candidate with an edit or two */
       const char *c = names[r % n] ? names[r % n] : "spp";
       snprintf(word, sizeof word, "%s", c);
       size_t cl = strlen(word);

@@ -79,9 +79,10 @@ int main(void) {
   CHECK_MSG(!strcmp(buf, "wal"), "journal_mode %s", buf);
   CHECK(query1(path, "PRAGMA user_version", buf, sizeof buf));
   CHECK(atoi(buf) == TT_TUNEDB_SCHEMA_VERSION);
-  const char *cols[] = {"scene_id", "camera", "context", "indicators", "plugin", "plugin_version",
-                        "config", "objective", "build_ms", "render_ms", "cost", "status",
-                        "machine", "cpu", "timestamp", "host", "rank"};
+  const char *cols[] = {"scene_id",       "camera", "context",   "indicators", "plugin",
+                        "plugin_version", "config", "objective", "build_ms",   "render_ms",
+                        "cost",           "status", "machine",   "cpu",        "timestamp",
+                        "host",           "rank"};
   for (size_t i = 0; i < sizeof cols / sizeof cols[0]; i++) {
     char sql[256];
     snprintf(sql, sizeof sql, "SELECT count(*) FROM pragma_table_info('samples') WHERE name='%s'",

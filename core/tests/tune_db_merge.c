@@ -54,21 +54,22 @@ static int write_v1(const char *path, int n, int bad) {
   char sql[4096];
   int ok = sqlite3_open(path, &raw) == SQLITE_OK;
   snprintf(sql, sizeof sql,
-    "PRAGMA journal_mode=WAL;"
-    "CREATE TABLE samples (id INTEGER PRIMARY KEY, scene_id TEXT %s, scene TEXT,"
-    " camera TEXT NOT NULL, context TEXT NOT NULL, indicators TEXT, plugin TEXT NOT NULL,"
-    " plugin_version TEXT NOT NULL, config TEXT NOT NULL, objective TEXT NOT NULL,"
-    " build_ms REAL NOT NULL, render_ms REAL NOT NULL, cost REAL %s,"
-    " status INTEGER NOT NULL, mode TEXT, iteration INTEGER, run_id TEXT, tuner TEXT,"
-    " metrics TEXT, machine TEXT NOT NULL, cpu TEXT NOT NULL, timestamp TEXT NOT NULL);"
-    "PRAGMA user_version=1;", bad ? "" : "NOT NULL", bad ? "" : "NOT NULL");
+           "PRAGMA journal_mode=WAL;"
+           "CREATE TABLE samples (id INTEGER PRIMARY KEY, scene_id TEXT %s, scene TEXT,"
+           " camera TEXT NOT NULL, context TEXT NOT NULL, indicators TEXT, plugin TEXT NOT NULL,"
+           " plugin_version TEXT NOT NULL, config TEXT NOT NULL, objective TEXT NOT NULL,"
+           " build_ms REAL NOT NULL, render_ms REAL NOT NULL, cost REAL %s,"
+           " status INTEGER NOT NULL, mode TEXT, iteration INTEGER, run_id TEXT, tuner TEXT,"
+           " metrics TEXT, machine TEXT NOT NULL, cpu TEXT NOT NULL, timestamp TEXT NOT NULL);"
+           "PRAGMA user_version=1;",
+           bad ? "" : "NOT NULL", bad ? "" : "NOT NULL");
   ok = ok && sqlite3_exec(raw, sql, NULL, NULL, NULL) == SQLITE_OK;
   for (int i = 0; i < n && ok; i++) {
     snprintf(sql, sizeof sql,
-      "INSERT INTO samples VALUES (NULL, 's1', 'scene.json', '{\"path_index\":3}', "
-      "'{\"spp\":1}', NULL, 'accel_embree', '1.0', '{\"a\":%d}', 'render', 0, 2, %s, 0, "
-      "'explore', %d, 'old', NULL, NULL, 'm', 'c', '2020-01-01T00:00:00.000Z');",
-      i, bad && i == n - 1 ? "NULL" : "2", i);
+             "INSERT INTO samples VALUES (NULL, 's1', 'scene.json', '{\"path_index\":3}', "
+             "'{\"spp\":1}', NULL, 'accel_embree', '1.0', '{\"a\":%d}', 'render', 0, 2, %s, 0, "
+             "'explore', %d, 'old', NULL, NULL, 'm', 'c', '2020-01-01T00:00:00.000Z');",
+             i, bad && i == n - 1 ? "NULL" : "2", i);
     ok = sqlite3_exec(raw, sql, NULL, NULL, NULL) == SQLITE_OK;
   }
   sqlite3_close(raw);
@@ -89,7 +90,8 @@ int main(void) {
   CHECK(query1(path, "PRAGMA user_version", buf, sizeof buf) && atoi(buf) == 2);
   CHECK(query1(path, "SELECT count(*) FROM samples", buf, sizeof buf) && !strcmp(buf, "1"));
   CHECK(query1(path, "SELECT coalesce(host, 'NULL') || ':' || coalesce(rank, 'NULL') FROM samples",
-               buf, sizeof buf) && !strcmp(buf, "NULL:NULL"));
+               buf, sizeof buf) &&
+        !strcmp(buf, "NULL:NULL"));
 
   /* new rows: the host always, the rank when given */
   tt_tunedb_row plain = make_row("{\"a\":2}", 3.0, "run-a");
@@ -106,7 +108,8 @@ int main(void) {
   old.struct_size = offsetof(tt_tunedb_row, host);
   CHECK(tt_tunedb_record(db, &old) == TT_OK);
   char sql[256];
-  snprintf(sql, sizeof sql, "SELECT host || ':' || coalesce(rank, 'NULL') FROM samples WHERE id = %lld",
+  snprintf(sql, sizeof sql,
+           "SELECT host || ':' || coalesce(rank, 'NULL') FROM samples WHERE id = %lld",
            (long long)plain.id);
   char want[300];
   snprintf(want, sizeof want, "%s:NULL", tt_tunedb_host_name());
@@ -137,8 +140,7 @@ int main(void) {
   uint64_t copied = 99;
   int already = -1, merged = -1;
   CHECK(tt_tunedb_merged(m, "job-a", &merged) == TT_OK && merged == 0);
-  CHECK(tt_tunedb_merge(m, path, "job-a", -1, "{\"kind\":\"tune\"}", &copied, &already) ==
-        TT_OK);
+  CHECK(tt_tunedb_merge(m, path, "job-a", -1, "{\"kind\":\"tune\"}", &copied, &already) == TT_OK);
   CHECK_MSG(copied == 4 && already == 0, "copied %llu already %d", (unsigned long long)copied,
             already);
   CHECK(tt_tunedb_merged(m, "job-a", &merged) == TT_OK && merged == 1);
@@ -150,7 +152,7 @@ int main(void) {
   CHECK(count_sql(dst, "SELECT count(*) FROM samples WHERE host = 'node17' AND rank = 5") == 1);
   CHECK(count_sql(dst, "SELECT count(*) FROM samples WHERE rank IS NULL") == 3);
   CHECK(count_sql(dst, "SELECT count(*) FROM samples m JOIN (SELECT config, cost, timestamp"
-                  " FROM samples) s USING (config, cost, timestamp)") == 4);
+                       " FROM samples) s USING (config, cost, timestamp)") == 4);
   /* a schema-1 file with a rank given: host NULL, rank set */
   CHECK(tt_tunedb_merge(m, src1, "job-b", 2, NULL, &copied, &already) == TT_OK && copied == 3);
   CHECK(count_sql(dst, "SELECT count(*) FROM samples WHERE rank = 2 AND host IS NULL") == 3);

@@ -37,7 +37,8 @@ static void fill(tt_tunedb_row *r, int i, char *config, size_t n) {
   r->context = "{\"spp\":1,\"threads\":1,\"clock\":\"cpu\",\"integrator_pt\":{\"max_depth\":8}}";
   r->plugin = "accel_embree";
   r->plugin_version = "1.2.0";
-  snprintf(config, n, "{\"quality\":\"high\",\"branchingFactor\":%d,\"maxDepth\":%d,"
+  snprintf(config, n,
+           "{\"quality\":\"high\",\"branchingFactor\":%d,\"maxDepth\":%d,"
            "\"sahBlockSize\":4,\"minLeafSize\":1,\"maxLeafSize\":8,\"travcost\":1.5,"
            "\"intcost\":%d.25,\"static\":true,\"compact\":false,\"robust\":false}",
            4 + i % 5, 20 + i, i);
@@ -109,8 +110,8 @@ int main(void) {
   if (getloadavg(load, 1) != 1) load[0] = -1;
   printf("BENCH tune_db_merge: %d jobs x %d rows, %d interleaved rounds, load %.1f\n", JOBS, ROWS,
          ROUNDS, load[0]);
-  printf("  merge (one transaction per job): median %.3f s = %.0f rows/s, %.0f jobs/s\n", m[ROUNDS / 2],
-         ROWS * JOBS / m[ROUNDS / 2], JOBS / m[ROUNDS / 2]);
+  printf("  merge (one transaction per job): median %.3f s = %.0f rows/s, %.0f jobs/s\n",
+         m[ROUNDS / 2], ROWS * JOBS / m[ROUNDS / 2], JOBS / m[ROUNDS / 2]);
   printf("  record (one transaction per row): median %.3f s = %.0f rows/s\n", r[ROUNDS / 2],
          ROWS * JOBS / r[ROUNDS / 2]);
   printf("  ratio record/merge time: %.2f\n", r[ROUNDS / 2] / m[ROUNDS / 2]);

@@ -181,11 +181,13 @@ int main(void) {
 
   /* another program's SQLite file: refused, never given our tables */
   const char *foreign = path_of("foreign.db");
-  CHECK(sql(foreign, "CREATE TABLE photos (id INTEGER, name TEXT); INSERT INTO photos VALUES (1, 'x')"));
+  CHECK(sql(foreign,
+            "CREATE TABLE photos (id INTEGER, name TEXT); INSERT INTO photos VALUES (1, 'x')"));
   refused_by_both(foreign, "not a tunetrace tuning database", 0);
   CHECK_CONTAINS(tt_last_error(), "photos");
   CHECK(tt_test_query1(foreign, "SELECT group_concat(name) FROM sqlite_master", buf, sizeof buf,
-                       "") && !strcmp(buf, "photos"));
+                       "") &&
+        !strcmp(buf, "photos"));
 
   /* schema versions this build does not read */
   const char *neg = path_of("negative.db");

@@ -22,15 +22,15 @@
 /* ---- the analytic target ---- */
 
 typedef struct target_state {
-  tt_config *applied;       /* what apply() got last */
+  tt_config *applied; /* what apply() got last */
   int applies, renders, warmups;
-  int interrupt_at;         /* render number that returns TT_ERR_INTERRUPTED (0: never) */
-  int infeasible_applied;   /* apply() saw a configuration the constraint rejects */
+  int interrupt_at;       /* render number that returns TT_ERR_INTERRUPTED (0: never) */
+  int infeasible_applied; /* apply() saw a configuration the constraint rejects */
   int publish_metric;
-  char order[64];           /* 'd' / 'b' per apply during verify (see verify test) */
+  char order[64]; /* 'd' / 'b' per apply during verify (see verify test) */
   int record_order;
   const char *best_json, *default_json;
-  float image[4 * 3];       /* 2x2 pass image (rrmse) */
+  float image[4 * 3]; /* 2x2 pass image (rrmse) */
 } target_state;
 
 /* Cost surface: minimum at x = 0.3, y = 0.7, n = 1; 1 ms offset keeps ratios finite. */
@@ -71,7 +71,7 @@ static tt_status t_apply(void *user, const tt_config *cfg, double *build_ms) {
   if (!ts->applied) ts->applied = tt_config_clone(cfg);
   else tt_config_copy(ts->applied, cfg);
   ts->applies++;
-  *build_ms = 2.0 * tt_config_get_float(cfg, "x", 0);  /* build cost grows with x */
+  *build_ms = 2.0 * tt_config_get_float(cfg, "x", 0); /* build cost grows with x */
   if (ts->record_order && ts->applies < (int)sizeof ts->order) {
     char *json = tt_config_to_json(cfg);
     ts->order[strlen(ts->order)] = !strcmp(json, ts->default_json) ? 'd'
@@ -219,8 +219,8 @@ static void test_loop(const tt_space *space) {
   /* apply_best: the target runs the last proposal, so the best is applied once, then not */
   int before = ts.applies;
   CHECK(tt_tuning_apply_best(t, &tg, NULL) == TT_OK);
-  CHECK(ts.applies == before + (strcmp(tt_tuning_best_json(t),
-                                       tt_tuning_sample_at(t, n - 1)->config) != 0));
+  CHECK(ts.applies ==
+        before + (strcmp(tt_tuning_best_json(t), tt_tuning_sample_at(t, n - 1)->config) != 0));
   before = ts.applies;
   CHECK(tt_tuning_apply_best(t, &tg, NULL) == TT_OK && ts.applies == before);
 
@@ -236,8 +236,8 @@ static void test_loop(const tt_space *space) {
   CHECK_NEAR(v.median_cost[1], cost_of(b), 1e-12);
   CHECK_NEAR(v.render_ratio, cost_of(b) / def, 1e-12);
   CHECK_NEAR(v.cost_ratio, v.render_ratio, 1e-12);
-  CHECK_NEAR(v.rounds_ms[(3 * 2 + 1) * 3 + 1], cost_of(b), 1e-12);  /* round 3, best, render */
-  CHECK(tt_tuning_sample_count(t) == n);  /* verification records nothing */
+  CHECK_NEAR(v.rounds_ms[(3 * 2 + 1) * 3 + 1], cost_of(b), 1e-12); /* round 3, best, render */
+  CHECK(tt_tuning_sample_count(t) == n); /* verification records nothing */
   /* the bowl's best is faster in every round: kept, and said so */
   const char *reason = NULL;
   CHECK(v.verdict == TT_TUNING_CONFIRMED && v.best_faster == 4 && v.cost_difference < 0);
@@ -259,12 +259,12 @@ static void test_ask_tell(const tt_space *space) {
   CHECK(tt_tuning_run(run, &tg) == TT_OK);
   tt_config *cfg = tt_config_create(space);
   tt_tuning_measurement m0 = {.struct_size = sizeof m0};
-  CHECK(tt_tuning_report(ask, &m0, NULL) == TT_ERR_INVALID_ARGUMENT);  /* nothing asked */
+  CHECK(tt_tuning_report(ask, &m0, NULL) == TT_ERR_INVALID_ARGUMENT); /* nothing asked */
   tt_status st;
   int steps = 0;
   while ((st = tt_tuning_next(ask, cfg)) == TT_OK) {
     tt_config *again = tt_config_create(space);
-    CHECK(tt_tuning_next(ask, again) == TT_OK && tt_config_equal(again, cfg));  /* re-asked */
+    CHECK(tt_tuning_next(ask, again) == TT_OK && tt_config_equal(again, cfg)); /* re-asked */
     tt_config_destroy(again);
     tt_tuning_measurement m = {.struct_size = sizeof m};
     t_apply(&b, cfg, &m.build_ms);
@@ -289,7 +289,10 @@ static void test_ask_tell(const tt_space *space) {
 }
 
 /* A tuner that proposes a fixed list, then converges: A, A, B. */
-typedef struct fixed_tuner { const tt_space *space; int next, fed; } fixed_tuner;
+typedef struct fixed_tuner {
+  const tt_space *space;
+  int next, fed;
+} fixed_tuner;
 static tt_status ft_create(const tt_space *target, const tt_config *settings, uint64_t seed,
                            tt_tuner **out) {
   (void)settings;
@@ -314,8 +317,8 @@ static tt_status ft_feedback(tt_tuner *t, double cost) {
   return TT_OK;
 }
 static void ft_destroy(tt_tuner *t) { free(t); }
-static const tt_tuner_iface g_fixed = {sizeof g_fixed, NULL, ft_create, ft_next, ft_feedback,
-                                       NULL, NULL, NULL, ft_destroy, NULL};
+static const tt_tuner_iface g_fixed = {sizeof g_fixed, NULL, ft_create, ft_next,    ft_feedback,
+                                       NULL,           NULL, NULL,      ft_destroy, NULL};
 
 /* A target whose costs are scripted per configuration: the default always costs 1; every
  * other configuration costs `lucky` at its first measurement and `later` after that (a
@@ -369,11 +372,15 @@ static tt_status sc_render(void *user, uint32_t spp, tt_tuning_measurement *m) {
  * every round, so the session keeps the default, applies it, says why, and still reports B
  * as the search's best. When B really is faster, it is kept. Costs of either sign. */
 static void test_verify_keeps_default(const tt_space *space) {
-  const struct { double lucky, later, sign; const char *objective; int keep_best; } cases[] = {
-    {0.5, 1.2, 1, "render", 0},
-    {0.5, 0.8, 1, "render", 1},
-    {0.5, 1.2, -1, "metric:acceptance:max", 0},
-    {0.5, 0.8, -1, "metric:acceptance:max", 1},
+  const struct {
+    double lucky, later, sign;
+    const char *objective;
+    int keep_best;
+  } cases[] = {
+      {0.5, 1.2, 1, "render", 0},
+      {0.5, 0.8, 1, "render", 1},
+      {0.5, 1.2, -1, "metric:acceptance:max", 0},
+      {0.5, 0.8, -1, "metric:acceptance:max", 1},
   };
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
     tt_tuning_desc d = base_desc(space, NULL);
@@ -382,14 +389,16 @@ static void test_verify_keeps_default(const tt_space *space) {
     d.objective = cases[c].objective;
     tt_tuning *t = NULL;
     CHECK(tt_tuning_create(&d, &t) == TT_OK);
-    scripted sc = {.default_json = tt_tuning_default_json(t), .lucky = cases[c].lucky,
-                   .later = cases[c].later, .sign = cases[c].sign};
+    scripted sc = {.default_json = tt_tuning_default_json(t),
+                   .lucky = cases[c].lucky,
+                   .later = cases[c].later,
+                   .sign = cases[c].sign};
     tt_tuning_target tg = {sizeof tg, &sc, sc_apply, sc_render};
     CHECK(tt_tuning_run(t, &tg) == TT_OK);
     const char *best = tt_tuning_best_json(t);
     CHECK_MSG(strstr(best, "\"x\":0.3") != NULL, "case %zu: best %s", c, best);
     CHECK(tt_tuning_get_verdict(t, NULL) == TT_TUNING_UNVERIFIED);
-    CHECK(!strcmp(tt_tuning_kept_json(t), best));  /* unverified: the best, as found */
+    CHECK(!strcmp(tt_tuning_kept_json(t), best)); /* unverified: the best, as found */
     tt_tuning_verification v = {.struct_size = sizeof v};
     CHECK(tt_tuning_verify(t, &tg, 5, &v) == TT_OK && v.rounds == 5);
     CHECK(tt_tuning_apply_best(t, &tg, NULL) == TT_OK);
@@ -403,15 +412,17 @@ static void test_verify_keeps_default(const tt_space *space) {
       CHECK(!strcmp(tt_tuning_kept_json(t), best));
     } else {
       CHECK_MSG(verdict == TT_TUNING_REJECTED && v.verdict == TT_TUNING_REJECTED &&
-                v.best_faster == 0, "case %zu: verdict %d", c, (int)verdict);
+                    v.best_faster == 0,
+                "case %zu: verdict %d", c, (int)verdict);
       CHECK_MSG(!strcmp(applied, tt_tuning_default_json(t)), "case %zu: applied %s", c, applied);
       CHECK(!strcmp(tt_tuning_kept_json(t), tt_tuning_default_json(t)));
-      CHECK(!strcmp(tt_tuning_best_json(t), best));  /* the search's best is still reported */
+      CHECK(!strcmp(tt_tuning_best_json(t), best)); /* the search's best is still reported */
       CHECK_MSG(reason && strstr(reason, "keeping the default configuration") &&
-                strstr(reason, "not faster") && !strstr(reason, "-"), "case %zu: %s", c, reason);
+                    strstr(reason, "not faster") && !strstr(reason, "-"),
+                "case %zu: %s", c, reason);
     }
-    CHECK_NEAR(v.cost_difference, cases[c].sign > 0 ? cases[c].later - 1.0
-                                                    : 1.0 - 1.0 / cases[c].later, 1e-12);
+    CHECK_NEAR(v.cost_difference,
+               cases[c].sign > 0 ? cases[c].later - 1.0 : 1.0 - 1.0 / cases[c].later, 1e-12);
     tt_free(applied);
     for (int k = 0; k < sc.nseen; k++) free(sc.seen[k]);
     tt_config_destroy(sc.applied);
@@ -427,8 +438,10 @@ static void test_database(const tt_space *space) {
   unlink(path);
   tt_tunedb *db = NULL;
   CHECK(tt_tunedb_open(path, &db) == TT_OK);
-  tt_tuning_state state = {.struct_size = sizeof state, .scene_id = "0123456789abcdef",
-                           .scene = "analytic.json", .camera = "{\"fov_y\":40}",
+  tt_tuning_state state = {.struct_size = sizeof state,
+                           .scene_id = "0123456789abcdef",
+                           .scene = "analytic.json",
+                           .camera = "{\"fov_y\":40}",
                            .context = "{\"spp\":2}"};
   /* first session: measures and records; A is proposed twice and measured twice */
   target_state a = {0};
@@ -459,8 +472,7 @@ static void test_database(const tt_space *space) {
   tt_tuning_get_stats(t, &st);
   CHECK(st.cached == 4 && st.measured == 0);
   CHECK(b.renders == 0 && b.applies == 0);
-  for (size_t i = 0; i < tt_tuning_sample_count(t); i++)
-    CHECK(tt_tuning_sample_at(t, i)->cached);
+  for (size_t i = 0; i < tt_tuning_sample_count(t); i++) CHECK(tt_tuning_sample_at(t, i)->cached);
   CHECK(strstr(tt_tuning_best_json(t), "\"x\":0.3") != NULL);
   tt_tuning_destroy(t);
 
@@ -497,7 +509,7 @@ static void test_explore(const tt_space *space) {
   tt_tuning_stats st = {.struct_size = sizeof st};
   tt_tuning_get_stats(t, &st);
   CHECK(st.iterations == 60);
-  CHECK(st.infeasible > 0);  /* x + y > 1.6 is 8% of the square: some of 60 draws hit it */
+  CHECK(st.infeasible > 0); /* x + y > 1.6 is 8% of the square: some of 60 draws hit it */
   CHECK(ts.infeasible_applied == 0);
   CHECK(ts.applies == 61 - (int)st.infeasible);
   for (size_t i = 0; i < tt_tuning_sample_count(t); i++)
@@ -527,7 +539,7 @@ static double cost_under(const tt_space *space, const char *objective, int metri
   t_apply(&ts, cfg, &m.build_ms);
   m.status = t_render(&ts, 2, &m);
   *report_st = tt_tuning_report(t, &m, &cost);
-  if (*report_st != TT_OK) CHECK(tt_tuning_sample_count(t) == 0);  /* nothing recorded */
+  if (*report_st != TT_OK) CHECK(tt_tuning_sample_count(t) == 0); /* nothing recorded */
   tt_config_destroy(cfg);
   tt_config_destroy(ts.applied);
   tt_tuning_destroy(t);
@@ -535,7 +547,7 @@ static double cost_under(const tt_space *space, const char *objective, int metri
 }
 
 static void test_objectives(const tt_space *space) {
-  tt_config *def = tt_config_create(space);  /* x 0.9, y 0.1 */
+  tt_config *def = tt_config_create(space); /* x 0.9, y 0.1 */
   double render = cost_of(def);
   tt_status st;
   CHECK_NEAR(cost_under(space, "render", 0, &st), render, 1e-12);
@@ -595,14 +607,14 @@ static void test_interrupt(const tt_space *space) {
   CHECK(tt_tuning_run(t, &tg) == TT_ERR_INTERRUPTED);
   tt_tuning_stats st = {.struct_size = sizeof st};
   tt_tuning_get_stats(t, &st);
-  CHECK(st.interrupted && tt_tuning_sample_count(t) == 2);  /* the cut pass is not recorded */
+  CHECK(st.interrupted && tt_tuning_sample_count(t) == 2); /* the cut pass is not recorded */
   tt_tuning_destroy(t);
   tt_config_destroy(ts.applied);
 
   target_state ts2 = {0};
   CHECK(tt_tuning_create(&d, &t) == TT_OK);
   tt_config *cfg = tt_config_create(space);
-  CHECK(tt_tuning_next(t, cfg) == TT_OK);  /* the default is asked even when stopping */
+  CHECK(tt_tuning_next(t, cfg) == TT_OK); /* the default is asked even when stopping */
   tt_tuning_measurement m = {.struct_size = sizeof m};
   t_apply(&ts2, cfg, &m.build_ms);
   m.status = t_render(&ts2, 2, &m);
@@ -669,7 +681,9 @@ static void test_state_fields(const tt_space *space) {
   tt_tuning_destroy(t);
   tt_config_destroy(ts.applied);
   if (!good) return;
-  static const struct { const char *from, *to, *field; } bad[] = {
+  static const struct {
+    const char *from, *to, *field;
+  } bad[] = {
       {"\"build_ms\":", "\"bulid_ms\":", "build_ms"},
       {"\"render_ms\":", "\"render_ms\":\"x\",\"r\":", "render_ms"},
       {"\"cost\":", "\"cost\":1e999,\"c\":", "cost"},

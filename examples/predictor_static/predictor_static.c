@@ -36,15 +36,15 @@
 static tt_space *ps_settings;
 
 typedef struct ps_config {
-  double *values;        /* per parameter: INT/FLOAT value, NOM index */
-  double log_ratio_sum;  /* sum over states of log(cost / reference cost of the state) */
-  uint64_t states;       /* states it was observed in */
-  uint64_t last_state;   /* index + 1 of the last state it was scored in */
+  double *values;       /* per parameter: INT/FLOAT value, NOM index */
+  double log_ratio_sum; /* sum over states of log(cost / reference cost of the state) */
+  uint64_t states;      /* states it was observed in */
+  uint64_t last_state;  /* index + 1 of the last state it was scored in */
 } ps_config;
 
 typedef struct ps_state {
-  double *x;             /* the state */
-  double reference;      /* default cost, else the first cost seen */
+  double *x;        /* the state */
+  double reference; /* default cost, else the first cost seen */
 } ps_state;
 
 struct tt_predictor {
@@ -76,9 +76,9 @@ static tt_status ps_create_ex(const tt_predictor_setup *su, tt_predictor **out) 
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": create: bad arguments");
   *out = NULL;
   const char *ss = su->state_space ? su->state_space : "";
-  if (strchr(ss, '\n'))  /* it is one line of the model file */
+  if (strchr(ss, '\n')) /* it is one line of the model file */
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": create: the state space holds a "
-                        "newline");
+                                                         "newline");
   tt_predictor *p = calloc(1, sizeof *p);
   if (p) p->state_space = malloc(strlen(ss) + 1);
   if (!p || !p->state_space) {
@@ -96,8 +96,11 @@ static tt_status ps_create_ex(const tt_predictor_setup *su, tt_predictor **out) 
 
 static tt_status ps_create(const tt_space *target, uint32_t dim, const tt_config *settings,
                            uint64_t seed, tt_predictor **out) {
-  tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = dim,
-                           .settings = settings, .seed = seed};
+  tt_predictor_setup su = {.struct_size = sizeof su,
+                           .target = target,
+                           .state_dim = dim,
+                           .settings = settings,
+                           .seed = seed};
   return ps_create_ex(&su, out);
 }
 
@@ -149,24 +152,31 @@ static tt_status ps_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
   (void)flags;
   if (!p || (n && !s)) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: NULL");
   double v[256];
-  if (p->params > 256) return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": more than 256 parameters");
+  if (p->params > 256)
+    return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": more than 256 parameters");
   /* the whole batch is checked first: a bad sample leaves the model unchanged */
   for (size_t k = 0; k < n; k++) {
     double cost = s[k].cost;
     if (!s[k].state || !s[k].config || isnan(cost) || !(cost > 0))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: sample %zu: no state, no "
-                          "configuration or a cost that is not positive", k);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          PS_NAME ": observe: sample %zu: no state, no "
+                                  "configuration or a cost that is not positive",
+                          k);
     if (tt_space_count(tt_config_space(s[k].config)) != p->params)
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: sample %zu: the "
-                          "configuration is not of the target space", k);
-    for (uint32_t i = 0; i < p->dim; i++)  /* the model file holds finite states only */
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          PS_NAME ": observe: sample %zu: the "
+                                  "configuration is not of the target space",
+                          k);
+    for (uint32_t i = 0; i < p->dim; i++) /* the model file holds finite states only */
       if (!isfinite(s[k].state[i]))
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": observe: sample %zu: state "
-                            "value %u is not finite", k, i);
+        return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                            PS_NAME ": observe: sample %zu: state "
+                                    "value %u is not finite",
+                            k, i);
   }
   for (size_t k = 0; k < n; k++) {
     double cost = s[k].cost;
-    if (cost >= TT_COST_INFEASIBLE) continue;  /* never a static answer */
+    if (cost >= TT_COST_INFEASIBLE) continue; /* never a static answer */
     double def = s[k].default_cost;
     size_t si = ps_state_index(p, s[k].state, def > 0 && isfinite(def) ? def : cost);
     ps_values(p, s[k].config, v);
@@ -176,7 +186,7 @@ static tt_status ps_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
     /* (the difference of the logs stays finite where the ratio of two extreme costs would
      * not, and the model file holds finite sums only) */
     c->log_ratio_sum += log(cost) - log(p->states[si].reference);
-    if (c->last_state != si + 1) c->states++;  /* repeats in one state count once */
+    if (c->last_state != si + 1) c->states++; /* repeats in one state count once */
     c->last_state = si + 1;
     p->observations++;
   }
@@ -185,8 +195,8 @@ static tt_status ps_observe_ex(tt_predictor *p, const tt_predictor_sample *s, si
 
 static tt_status ps_observe(tt_predictor *p, const double *state, const tt_config *config,
                             double cost) {
-  tt_predictor_sample s = {.struct_size = sizeof s, .state = state, .config = config,
-                           .cost = cost, .default_cost = NAN};
+  tt_predictor_sample s = {
+      .struct_size = sizeof s, .state = state, .config = config, .cost = cost, .default_cost = NAN};
   return ps_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
 }
 
@@ -216,16 +226,18 @@ static tt_status ps_predict_ex(const tt_predictor *p, const tt_predictor_query *
   size_t b = ps_best(p, &m);
   if (b == SIZE_MAX) return tt_set_error(TT_ERR_NO_DATA, PS_NAME ": predict: nothing observed");
   for (size_t i = 0; i < p->params; i++) {
-    double v = p->cfgs[b].values[i];  /* checked by observe and load; cast only when in range */
+    double v = p->cfgs[b].values[i]; /* checked by observe and load; cast only when in range */
     int nom = tt_space_type(p->target, i) == TT_PARAM_NOM;
     if (nom && !(v >= 0 && v < (double)tt_space_nom_count(p->target, i)))
-      return tt_set_error(TT_ERR_INTERNAL, PS_NAME ": predict: possible-value index %g of %s "
-                          "out of range", v, tt_space_name(p->target, i));
+      return tt_set_error(TT_ERR_INTERNAL,
+                          PS_NAME ": predict: possible-value index %g of %s "
+                                  "out of range",
+                          v, tt_space_name(p->target, i));
     tt_status st = nom ? tt_config_set_index(out, i, (size_t)v) : tt_config_set_number(out, i, v);
     if (st != TT_OK) return st;
   }
   if (res && TT_HAS_FIELD(tt_predictor_result, res, candidates)) {
-    res->value = exp(-m);  /* the typical speed-up over the reference */
+    res->value = exp(-m); /* the typical speed-up over the reference */
     res->expected_cost = q->default_cost > 0 ? q->default_cost * exp(m) : NAN;
     res->distance = NAN;
     res->candidates = p->ncfg;
@@ -242,7 +254,8 @@ static tt_status ps_predict(const tt_predictor *p, const double *state, tt_confi
 
 static tt_status ps_estimate(const tt_predictor *p, const tt_predictor_query *q,
                              const tt_config *config, double *cost) {
-  if (!p || !q || !config || !cost) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": estimate: NULL");
+  if (!p || !q || !config || !cost)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": estimate: NULL");
   double v[256];
   *cost = NAN;
   if (p->params > 256) return TT_OK;
@@ -255,8 +268,7 @@ static tt_status ps_estimate(const tt_predictor *p, const tt_predictor_query *q,
 
 static tt_status ps_info(const tt_predictor *p, tt_predictor_info *out) {
   if (!p || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": info: NULL");
-  if (!TT_HAS_FIELD(tt_predictor_info, out, format_version))
-    return TT_OK;
+  if (!TT_HAS_FIELD(tt_predictor_info, out, format_version)) return TT_OK;
   out->memory_bytes = sizeof *p + p->cap * (sizeof(ps_config) + p->params * sizeof(double)) +
                       p->scap * sizeof(ps_state) + p->nstates * p->dim * sizeof(double);
   out->entries = p->ncfg;
@@ -309,17 +321,19 @@ static tt_status ps_save(const tt_predictor *p, const char *path) {
     fprintf(m, "%a %llu %llu\n", p->cfgs[i].log_ratio_sum, (unsigned long long)p->cfgs[i].states,
             (unsigned long long)p->cfgs[i].last_state);
   }
-  fprintf(m, "checksum %016llx\n", 0ull);  /* placeholder, filled in below */
+  fprintf(m, "checksum %016llx\n", 0ull); /* placeholder, filled in below */
   fclose(m);
   if (!text) return tt_set_error(TT_ERR_OUT_OF_MEMORY, PS_NAME ": out of memory");
   /* the checksum covers everything before its line */
   size_t body = len - PS_CHECKSUM_LINE;
-  snprintf(text + body, len - body + 1, "checksum %016llx\n", (unsigned long long)ps_fnv(text, body));
+  snprintf(text + body, len - body + 1, "checksum %016llx\n",
+           (unsigned long long)ps_fnv(text, body));
   /* libtunetrace's atomic write (<tunetrace/file.h>): a temporary file renamed over `path`,
    * so a failed save never destroys the previous model */
   tt_status st = tt_file_write_atomic(path, text, len);
   free(text);
-  if (st != TT_OK) return tt_set_error(st, PS_NAME ": cannot write model %s: %s", path, tt_last_error());
+  if (st != TT_OK)
+    return tt_set_error(st, PS_NAME ": cannot write model %s: %s", path, tt_last_error());
   return TT_OK;
 }
 
@@ -337,11 +351,11 @@ static void ps_clear(tt_predictor *p) {
 /* The checksummed text of a model file, line by line. The first error is kept (in the
  * library's last error, and `failed`); later calls do nothing. */
 typedef struct ps_reader {
-  char *next;        /* the next line; the checksummed text ends with '\0' */
-  const char *end;   /* that '\0' */
+  char *next;      /* the next line; the checksummed text ends with '\0' */
+  const char *end; /* that '\0' */
   const char *path;
-  unsigned line;     /* number of the current line, 1-based */
-  char item[64];     /* the state or configuration the line holds, "" for the others */
+  unsigned line; /* number of the current line, 1-based */
+  char item[64]; /* the state or configuration the line holds, "" for the others */
   int failed;
 } ps_reader;
 
@@ -368,7 +382,7 @@ static char *ps_line(ps_reader *r, const char *key, const char *what) {
     ps_fail(r, "the file ends before %s", what);
     return NULL;
   }
-  char *s = r->next, *nl = strchr(s, '\n');  /* the text ends with '\n' (checked) */
+  char *s = r->next, *nl = strchr(s, '\n'); /* the text ends with '\n' (checked) */
   *nl = '\0';
   r->next = nl + 1;
   size_t k = strlen(key);
@@ -441,7 +455,7 @@ static int ps_value(ps_reader *r, const tt_predictor *p, tt_config *scratch, siz
                      tt_space_plugin(p->target), tt_space_name(p->target, i), v, n);
     st = tt_config_set_index(scratch, i, (size_t)v);
   } else {
-    st = tt_config_set_number(scratch, i, v);  /* INT: an integer in range; FLOAT: in range */
+    st = tt_config_set_number(scratch, i, v); /* INT: an integer in range; FLOAT: in range */
   }
   if (st != TT_OK) {
     char why[400];
@@ -483,34 +497,43 @@ static int ps_twice(ps_row *rows, size_t n, size_t *first, size_t *second) {
 static tt_status ps_checksum(const char *text, size_t n, const char *path, size_t *body) {
   const char *nul = memchr(text, '\0', n);
   if (nul)
-    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s holds a NUL byte at offset %zu (a "
-                        "model is text)", path, (size_t)(nul - text));
+    return tt_set_error(TT_ERR_PARSE,
+                        PS_NAME ": model %s holds a NUL byte at offset %zu (a "
+                                "model is text)",
+                        path, (size_t)(nul - text));
   /* the last "\nchecksum " line, wherever it is, to tell data after it from damage */
   const char *ck = NULL;
   for (size_t i = n; i-- > 0 && !ck;)
-    if (text[i] == '\n' && n - i - 1 >= 9 && !memcmp(text + i + 1, "checksum ", 9)) ck = text + i + 1;
+    if (text[i] == '\n' && n - i - 1 >= 9 && !memcmp(text + i + 1, "checksum ", 9))
+      ck = text + i + 1;
   int digits = 0;
   uint64_t want = 0;
   for (; ck && digits < 16 && (size_t)(ck + 9 + digits - text) < n; digits++) {
     char c = ck[9 + digits];
-    int d = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10
-          : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+    int d = c >= '0' && c <= '9'   ? c - '0'
+            : c >= 'a' && c <= 'f' ? c - 'a' + 10
+            : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                   : -1;
     if (d < 0) break;
     want = want << 4 | (uint64_t)d;
   }
   size_t covered = ck ? (size_t)(ck - text) : 0;
   if (!ck || digits != 16 || ps_fnv(text, covered) != want)
     return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s is truncated or corrupt (%s)", path,
-                        !ck ? "no \"checksum\" line" : digits != 16
-                        ? "the checksum line does not hold 16 hexadecimal digits"
-                        : "the checksum does not match the text before it");
+                        !ck            ? "no \"checksum\" line"
+                        : digits != 16 ? "the checksum line does not hold 16 hexadecimal digits"
+                                       : "the checksum does not match the text before it");
   size_t line_end = covered + PS_CHECKSUM_LINE;
   if (line_end > n || text[line_end - 1] != '\n')
-    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s: the checksum line is not "
-                        "\"checksum\", 16 hexadecimal digits and a newline", path);
+    return tt_set_error(TT_ERR_PARSE,
+                        PS_NAME ": model %s: the checksum line is not "
+                                "\"checksum\", 16 hexadecimal digits and a newline",
+                        path);
   if (line_end != n)
-    return tt_set_error(TT_ERR_PARSE, PS_NAME ": model %s has %zu bytes after its checksum line "
-                        "(a model ends there; was something appended to it?)", path, n - line_end);
+    return tt_set_error(TT_ERR_PARSE,
+                        PS_NAME ": model %s has %zu bytes after its checksum line "
+                                "(a model ends there; was something appended to it?)",
+                        path, n - line_end);
   *body = covered;
   return TT_OK;
 }
@@ -523,9 +546,10 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
   if (s && ps_u64(r, &s, 0, UINT32_MAX, "the format version", &version) == 0 &&
       ps_eol(r, s, "the format version") == 0) {
     if (version > PS_FORMAT)
-      return tt_set_error(TT_ERR_UNSUPPORTED, PS_NAME ": model %s has format %llu; this " PS_NAME
-                          " " PS_VERSION " reads format %d", r->path, (unsigned long long)version,
-                          PS_FORMAT);
+      return tt_set_error(TT_ERR_UNSUPPORTED,
+                          PS_NAME ": model %s has format %llu; this " PS_NAME " " PS_VERSION
+                                  " reads format %d",
+                          r->path, (unsigned long long)version, PS_FORMAT);
     if (version < 1) ps_fail(r, "format version 0 does not exist (1 to %d)", PS_FORMAT);
   }
   const char *space = ps_line(r, "state_space", "the state space");
@@ -536,11 +560,12 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
   if (s && !ps_u64(r, &s, 0, SIZE_MAX, "params", &params)) plugin = s;
   if (!r->failed && (strcmp(space, p->state_space) || dim != p->dim || params != p->params ||
                      strcmp(plugin, tt_space_plugin(p->target))))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": model %s is for states \"%s\" "
-                        "(%u values) and %llu parameters of %s; this predictor has \"%s\" "
-                        "(%u) and %zu of %s", r->path, space, (unsigned)dim,
-                        (unsigned long long)params, plugin, p->state_space, p->dim, p->params,
-                        tt_space_plugin(p->target));
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        PS_NAME ": model %s is for states \"%s\" "
+                                "(%u values) and %llu parameters of %s; this predictor has \"%s\" "
+                                "(%u) and %zu of %s",
+                        r->path, space, (unsigned)dim, (unsigned long long)params, plugin,
+                        p->state_space, p->dim, p->params, tt_space_plugin(p->target));
   s = ps_line(r, "minShare", "the minShare setting");
   if (s && !ps_f64(r, &s, 0.0, 1.0, "minShare", &q->min_share)) ps_eol(r, s, "minShare");
   /* every state line holds dim + 1 numbers of at least one character and a separator */
@@ -559,7 +584,7 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
     if (!q->states || !rows) ps_fail(r, "out of memory");
     q->scap = ns;
   }
-  unsigned first = r->line + 1;  /* the line of state 0 */
+  unsigned first = r->line + 1; /* the line of state 0 */
   for (uint64_t i = 0; !r->failed && i < ns; i++) {
     snprintf(r->item, sizeof r->item, "state %llu", (unsigned long long)i);
     s = ps_line(r, "", "a state");
@@ -583,8 +608,9 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
   rows = NULL;
   /* every configuration line holds params + 3 fields */
   s = ps_line(r, "configs", "the configuration count and observation count");
-  if (s && !ps_u64(r, &s, 0, (uint64_t)(r->end - r->next) / (2 * (p->params + 3)),
-                   "the configuration count (at most what the rest of the file can hold)", &nc) &&
+  if (s &&
+      !ps_u64(r, &s, 0, (uint64_t)(r->end - r->next) / (2 * (p->params + 3)),
+              "the configuration count (at most what the rest of the file can hold)", &nc) &&
       !ps_u64(r, &s, 0, UINT64_MAX, "the observation count", &obs))
     ps_eol(r, s, "the observation count");
   if (!r->failed && nc) {
@@ -593,7 +619,7 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
     if (!q->cfgs || !rows) ps_fail(r, "out of memory");
     q->cap = nc;
   }
-  uint64_t seen = 0;  /* sum of the configurations' state counts: at most one per observation */
+  uint64_t seen = 0; /* sum of the configurations' state counts: at most one per observation */
   first = r->line + 1;
   for (uint64_t i = 0; !r->failed && i < nc; i++) {
     snprintf(r->item, sizeof r->item, "configuration %llu", (unsigned long long)i);
@@ -606,8 +632,10 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
     ps_f64(r, &s, -DBL_MAX, DBL_MAX, "the sum of log cost ratios", &sum);
     /* invariants of every saved model: each observation adds to at most one configuration's
      * state count, and the last state is one of the states */
-    ps_u64(r, &s, 1, obs - seen, "the number of states it was seen in (at most the "
-           "observations the configurations before it leave)", &states);
+    ps_u64(r, &s, 1, obs - seen,
+           "the number of states it was seen in (at most the "
+           "observations the configurations before it leave)",
+           &states);
     ps_u64(r, &s, 1, ns, "the last state it was seen in", &last);
     ps_eol(r, s, "the last state");
     double *copy = r->failed ? NULL : malloc((p->params ? p->params : 1) * sizeof(double));
@@ -638,7 +666,7 @@ static tt_status ps_parse(tt_predictor *p, tt_predictor *q, ps_reader *r) {
 static tt_status ps_load(tt_predictor *p, const char *path) {
   if (!p || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, PS_NAME ": load: NULL");
   size_t n = 0, body = 0;
-  char *text = NULL;  /* regular files only, at most 64 MiB (<tunetrace/file.h>) */
+  char *text = NULL; /* regular files only, at most 64 MiB (<tunetrace/file.h>) */
   if (tt_file_read(path, "model", PS_MAX_FILE, &text, &n) != TT_OK)
     return tt_set_error(TT_ERR_IO, PS_NAME ": cannot open model %s: %s", path, tt_last_error());
   if (n < sizeof PS_NAME || memcmp(text, PS_NAME " ", sizeof PS_NAME)) {
@@ -650,9 +678,9 @@ static tt_status ps_load(tt_predictor *p, const char *path) {
     tt_free(text);
     return st;
   }
-  text[body] = '\0';  /* nothing after the checksummed text is read */
+  text[body] = '\0'; /* nothing after the checksummed text is read */
   ps_reader r = {.next = text, .end = text + body, .path = path};
-  tt_predictor q = *p;  /* the loaded model is built aside: p stays as it was on error */
+  tt_predictor q = *p; /* the loaded model is built aside: p stays as it was on error */
   q.cfgs = NULL, q.states = NULL, q.ncfg = q.cap = q.nstates = q.scap = 0;
   st = ps_parse(p, &q, &r);
   tt_free(text);
@@ -666,11 +694,19 @@ static tt_status ps_load(tt_predictor *p, const char *path) {
 }
 
 static const tt_predictor_iface ps_iface = {
-  .struct_size = sizeof(tt_predictor_iface),
-  .space = ps_space, .create = ps_create, .observe = ps_observe, .predict = ps_predict,
-  .save = ps_save, .load = ps_load, .destroy = ps_destroy,
-  .create_ex = ps_create_ex, .observe_ex = ps_observe_ex, .predict_ex = ps_predict_ex,
-  .info = ps_info, .estimate = ps_estimate,
+    .struct_size = sizeof(tt_predictor_iface),
+    .space = ps_space,
+    .create = ps_create,
+    .observe = ps_observe,
+    .predict = ps_predict,
+    .save = ps_save,
+    .load = ps_load,
+    .destroy = ps_destroy,
+    .create_ex = ps_create_ex,
+    .observe_ex = ps_observe_ex,
+    .predict_ex = ps_predict_ex,
+    .info = ps_info,
+    .estimate = ps_estimate,
 };
 
 static tt_status ps_init(const tt_host *host) {
@@ -696,15 +732,15 @@ static const void *ps_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_PREDICTOR,
-  .name = PS_NAME,
-  .version = PS_VERSION,
-  .description = "the best static configuration over all states seen (a baseline, and the "
-                 "SDK's predictor example)",
-  .init = ps_init,
-  .deinit = ps_deinit,
-  .get_interface = ps_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_PREDICTOR,
+    .name = PS_NAME,
+    .version = PS_VERSION,
+    .description = "the best static configuration over all states seen (a baseline, and the "
+                   "SDK's predictor example)",
+    .init = ps_init,
+    .deinit = ps_deinit,
+    .get_interface = ps_get_interface,
 };

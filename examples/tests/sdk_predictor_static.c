@@ -17,10 +17,21 @@ int main(void) {
    * 90% faster but seen in one state only */
   for (int i = 0; i < 10; i++) {
     double s[2] = {i * 0.1, 1 - i * 0.1}, def = 10.0 * (i + 1);
-    tt_predictor_sample x[3] = {
-        {.struct_size = sizeof x[0], .state = s, .config = a, .cost = 0.8 * def, .default_cost = def},
-        {.struct_size = sizeof x[0], .state = s, .config = b, .cost = 0.9 * def, .default_cost = def},
-        {.struct_size = sizeof x[0], .state = s, .config = lucky, .cost = 0.1 * def, .default_cost = def}};
+    tt_predictor_sample x[3] = {{.struct_size = sizeof x[0],
+                                 .state = s,
+                                 .config = a,
+                                 .cost = 0.8 * def,
+                                 .default_cost = def},
+                                {.struct_size = sizeof x[0],
+                                 .state = s,
+                                 .config = b,
+                                 .cost = 0.9 * def,
+                                 .default_cost = def},
+                                {.struct_size = sizeof x[0],
+                                 .state = s,
+                                 .config = lucky,
+                                 .cost = 0.1 * def,
+                                 .default_cost = def}};
     CHECK(P->observe_ex(p, x, i == 3 ? 3 : 2, TT_PREDICTOR_OFFLINE) == TT_OK);
   }
   double s[2] = {0.3, 0.3};
@@ -39,9 +50,16 @@ int main(void) {
   tt_predictor *p0 = pu_create(P, t, 2, "test", set, 1);
   for (int i = 0; i < 10; i++) {
     double st[2] = {i * 0.1, 1 - i * 0.1}, def = 10.0 * (i + 1);
-    tt_predictor_sample x[2] = {
-        {.struct_size = sizeof x[0], .state = st, .config = a, .cost = 0.8 * def, .default_cost = def},
-        {.struct_size = sizeof x[0], .state = st, .config = lucky, .cost = 0.1 * def, .default_cost = def}};
+    tt_predictor_sample x[2] = {{.struct_size = sizeof x[0],
+                                 .state = st,
+                                 .config = a,
+                                 .cost = 0.8 * def,
+                                 .default_cost = def},
+                                {.struct_size = sizeof x[0],
+                                 .state = st,
+                                 .config = lucky,
+                                 .cost = 0.1 * def,
+                                 .default_cost = def}};
     CHECK(P->observe_ex(p0, x, i == 3 ? 2 : 1, TT_PREDICTOR_ONLINE) == TT_OK);
   }
   CHECK(P->predict_ex(p0, &q, out, &r) == TT_OK && tt_config_equal(out, lucky));
@@ -69,7 +87,7 @@ int main(void) {
   tt_predictor *other = pu_create(P, t, 3, "test", NULL, 1);
   CHECK(P->load(other, path) == TT_ERR_INVALID_ARGUMENT);
   CHECK_CONTAINS(tt_last_error(), "(2 values)");
-  CHECK(P->predict_ex(l, &q, out, &r) == TT_OK && tt_config_equal(out, a));  /* unchanged */
+  CHECK(P->predict_ex(l, &q, out, &r) == TT_OK && tt_config_equal(out, a)); /* unchanged */
   free(bytes);
   char cmd[300];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);

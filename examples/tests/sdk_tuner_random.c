@@ -14,9 +14,12 @@
 /* Quiet log: the tuner does not log, other plugins are not loaded. */
 static void quiet_log(tt_log_level level, const char *plugin, const char *fmt, ...) {}
 
-static const tt_host g_host = {.struct_size = sizeof(tt_host), .abi_major = TT_ABI_MAJOR,
-                               .abi_minor = TT_ABI_MINOR, .host_name = "sdk test",
-                               .host_version = "0", .log = quiet_log};
+static const tt_host g_host = {.struct_size = sizeof(tt_host),
+                               .abi_major = TT_ABI_MAJOR,
+                               .abi_minor = TT_ABI_MINOR,
+                               .host_name = "sdk test",
+                               .host_version = "0",
+                               .log = quiet_log};
 
 static const tt_tuner_iface *T;
 
@@ -169,10 +172,10 @@ static void test_protocol(tt_space *target) {
   CHECK(T->feedback(tu, 1.0) == TT_ERR_INVALID_ARGUMENT);
   CHECK(T->next(tu, c) == TT_OK);
   CHECK(T->next(tu, c2) == TT_OK);
-  CHECK(tt_config_equal(c, c2));  /* re-proposed without feedback */
+  CHECK(tt_config_equal(c, c2)); /* re-proposed without feedback */
   CHECK(T->feedback(tu, NAN) == TT_ERR_INVALID_ARGUMENT);
   CHECK(T->feedback(tu, TT_COST_INFEASIBLE) == TT_OK);
-  CHECK(T->feedback(tu, 1.0) == TT_ERR_INVALID_ARGUMENT);  /* nothing outstanding */
+  CHECK(T->feedback(tu, 1.0) == TT_ERR_INVALID_ARGUMENT); /* nothing outstanding */
 
   double min_cost = TT_COST_INFEASIBLE;
   tt_config *argmin = tt_config_create(target);
@@ -198,7 +201,7 @@ static void test_protocol(tt_space *target) {
   CHECK(T->feedback(tu, TT_COST_INFEASIBLE) == TT_OK);
   CHECK_MSG(violations == 0, "%d proposals fail the check", violations);
   CHECK(high_a == 0);
-  CHECK(repaired_seen > 0);  /* a in [0,9] with x > 0.5 comes up about 4% of the time */
+  CHECK(repaired_seen > 0); /* a in [0,9] with x > 0.5 comes up about 4% of the time */
   CHECK(T->best(tu, c, &cost) == TT_OK);
   CHECK(cost == min_cost);
   CHECK(tt_config_equal(c, argmin));
@@ -227,14 +230,14 @@ static void test_resume(const tt_space *target) {
   tt_config *pre[PRE];
   run(ta, target, pre, PRE);
   tt_config *out_a = tt_config_create(target), *out_b = tt_config_create(target);
-  CHECK(T->next(ta, out_a) == TT_OK);  /* outstanding at save time */
+  CHECK(T->next(ta, out_a) == TT_OK); /* outstanding at save time */
   char *json = NULL;
   CHECK(T->save_state(ta, &json) == TT_OK);
   CHECK(json != NULL);
   CHECK_CONTAINS(json, "\"rng\"");
   CHECK_CONTAINS(json, "\"iteration\": 9");
   CHECK_MSG(T->load_state(tb, json) == TT_OK, "%s", tt_last_error());
-  char *json_b = NULL;  /* the restored tuner saves the very same state */
+  char *json_b = NULL; /* the restored tuner saves the very same state */
   CHECK(T->save_state(tb, &json_b) == TT_OK);
   CHECK_MSG(json_b && strcmp(json, json_b) == 0, "saved:\n%s\nresaved:\n%s", json, json_b);
   tt_free(json_b);

@@ -29,12 +29,12 @@
 #define TR_MAX_DRAWS 100
 #define TR_DEFAULT_SAMPLES 16
 
-static const tt_host *tr_host;     /* valid between init and deinit */
-static tt_space *tr_settings;      /* the tuner's own settings space */
+static const tt_host *tr_host; /* valid between init and deinit */
+static tt_space *tr_settings;  /* the tuner's own settings space */
 
 struct tt_tuner {
   const tt_space *target;
-  size_t dim;                /* parameters in the target space */
+  size_t dim; /* parameters in the target space */
   uint64_t seed;
   int64_t samples;           /* size of the Latin hypercube */
   int lhs;                   /* 0: uniform random from the start */
@@ -47,9 +47,9 @@ struct tt_tuner {
   tt_config *pending_config; /* that point after tt_space_check (what next() returned) */
   int has_best;
   double best_cost;
-  double *best_unit;         /* the drawn point behind the best configuration */
+  double *best_unit; /* the drawn point behind the best configuration */
   tt_config *best_config;
-  double *scratch;           /* dim doubles for drawing */
+  double *scratch; /* dim doubles for drawing */
 };
 
 /* ---- random numbers ---- */
@@ -119,7 +119,7 @@ static void tr_build_design(tt_tuner *t) {
   uint32_t n = (uint32_t)t->samples;
   for (size_t j = 0; j < t->dim; j++) {
     for (uint32_t k = 0; k < n; k++) t->cells[k * t->dim + j] = k;
-    for (uint32_t k = n - 1; k > 0; k--) {  /* Fisher-Yates */
+    for (uint32_t k = n - 1; k > 0; k--) { /* Fisher-Yates */
       uint32_t r = tr_below(s, k + 1), tmp = t->cells[k * t->dim + j];
       t->cells[k * t->dim + j] = t->cells[r * t->dim + j];
       t->cells[r * t->dim + j] = tmp;
@@ -146,7 +146,7 @@ static tt_status tr_create(const tt_space *target, const tt_config *settings, ui
   t->seed = seed;
   t->samples = samples;
   t->lhs = tr_setting(settings, "lhs", 1) != 0;
-  size_t d = t->dim ? t->dim : 1;  /* keep allocations non-empty for a 0-parameter space */
+  size_t d = t->dim ? t->dim : 1; /* keep allocations non-empty for a 0-parameter space */
   t->cells = malloc((size_t)samples * d * sizeof *t->cells);
   t->design = malloc((size_t)samples * d * sizeof *t->design);
   t->pending_unit = calloc(d, sizeof(double));
@@ -157,8 +157,7 @@ static tt_status tr_create(const tt_space *target, const tt_config *settings, ui
   if (!t->cells || !t->design || !t->pending_unit || !t->best_unit || !t->scratch ||
       !t->pending_config || !t->best_config) {
     tr_destroy(t);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TR_NAME ": out of memory for %zu parameters",
-                        t->dim);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TR_NAME ": out of memory for %zu parameters", t->dim);
   }
   tr_build_design(t);
   tr_seed(t->rng, seed, 2);
@@ -171,8 +170,8 @@ static tt_status tr_create(const tt_space *target, const tt_config *settings, ui
  * values, go back to their defaults (tt_config_canonicalize; the session passes the
  * configured values as defaults), then the space's check. Deterministic, so a saved point
  * always gives back the same configuration. */
-static tt_check_result tr_realize(const tt_tuner *t, const double *unit, tt_config *cfg,
-                                  char *why, size_t why_size) {
+static tt_check_result tr_realize(const tt_tuner *t, const double *unit, tt_config *cfg, char *why,
+                                  size_t why_size) {
   tt_config_from_unit(cfg, unit);
   tt_config_canonicalize(cfg, NULL);
   return tt_space_check(t->target, cfg, why, why_size);
@@ -220,7 +219,8 @@ static tt_status tr_next(tt_tuner *t, tt_config *out) {
 static tt_status tr_feedback(tt_tuner *t, double cost) {
   if (!t) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": feedback: NULL tuner");
   if (!t->pending)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": feedback without an outstanding proposal");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TR_NAME ": feedback without an outstanding proposal");
   if (cost != cost) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": feedback: cost is NaN");
   if (!t->has_best || cost < t->best_cost) {
     t->has_best = 1;
@@ -289,7 +289,8 @@ static void tr_print_vec(tr_buf *b, const double *v, size_t n) {
 /* Serialises the search state; see tt_tuner_iface.save_state. 64-bit integers are written
  * as hex strings because JSON readers commonly hold numbers as doubles. */
 static tt_status tr_save_state(const tt_tuner *t, char **json) {
-  if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": save_state: NULL argument");
+  if (!t || !json)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": save_state: NULL argument");
   *json = NULL;
   tr_buf b = {0};
   b.cap = 256;
@@ -380,19 +381,24 @@ static int tr_is_null(const char *p) { return p && strncmp(p, "null", 4) == 0; }
 /* Restores a state written by tr_save_state; see tt_tuner_iface.load_state. Everything is
  * parsed into locals first so that a bad state leaves the tuner untouched. */
 static tt_status tr_load_state(tt_tuner *t, const char *json) {
-  if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": load_state: NULL argument");
+  if (!t || !json)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TR_NAME ": load_state: NULL argument");
   const char *p = tr_key(json, "tuner");
   if (!p || strncmp(p, "\"" TR_NAME "\"", sizeof(TR_NAME) + 1) != 0)
-    return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: not a " TR_NAME " state (\"tuner\" is missing or names another tuner)");
+    return tt_set_error(TT_ERR_PARSE,
+                        TR_NAME ": load_state: not a " TR_NAME
+                                " state (\"tuner\" is missing or names another tuner)");
   double num;
   if (!(p = tr_key(json, "format")) || !tr_parse_num(p, &num, NULL) || num != TR_STATE_FORMAT)
-    return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: state format is not %d", TR_STATE_FORMAT);
+    return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: state format is not %d",
+                        TR_STATE_FORMAT);
   uint64_t seed;
   if (!(p = tr_key(json, "seed")) || !tr_parse_hex(p, &seed, NULL))
     return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: missing or malformed \"seed\"");
   if (seed != t->seed)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                        TR_NAME ": load_state: state was saved with seed %llu, this tuner has seed %llu",
+                        TR_NAME
+                        ": load_state: state was saved with seed %llu, this tuner has seed %llu",
                         (unsigned long long)seed, (unsigned long long)t->seed);
   if (!(p = tr_key(json, "dim")) || !tr_parse_num(p, &num, NULL))
     return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: missing \"dim\"");
@@ -421,7 +427,8 @@ static tt_status tr_load_state(tt_tuner *t, const char *json) {
   p = tr_ws(p + 1);
   for (int i = 0; i < 4; i++) {
     if (i) {
-      if (*p != ',') return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: \"rng\" needs 4 values");
+      if (*p != ',')
+        return tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: \"rng\" needs 4 values");
       p = tr_ws(p + 1);
     }
     if (!tr_parse_hex(p, &rng[i], &p))
@@ -442,11 +449,13 @@ static tt_status tr_load_state(tt_tuner *t, const char *json) {
   p = tr_key(json, "pending");
   if (p && !tr_is_null(p)) {
     if (!tr_parse_vec(p, pending, t->dim)) {
-      st = tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: \"pending\" is not %zu numbers", t->dim);
+      st = tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: \"pending\" is not %zu numbers",
+                        t->dim);
       goto done;
     }
     if (tr_realize(t, pending, pending_cfg, why, sizeof why) == TT_CHECK_INFEASIBLE) {
-      st = tt_set_error(TT_ERR_INFEASIBLE, TR_NAME ": load_state: pending point infeasible: %s", why);
+      st = tt_set_error(TT_ERR_INFEASIBLE, TR_NAME ": load_state: pending point infeasible: %s",
+                        why);
       goto done;
     }
     has_pending = 1;
@@ -455,7 +464,9 @@ static tt_status tr_load_state(tt_tuner *t, const char *json) {
   if (p && !tr_is_null(p)) {
     const char *c = tr_key(json, "best_cost");
     if (!c || !tr_parse_num(c, &best_cost, NULL) || !tr_parse_vec(p, best, t->dim)) {
-      st = tt_set_error(TT_ERR_PARSE, TR_NAME ": load_state: \"best\" needs %zu numbers and \"best_cost\"", t->dim);
+      st = tt_set_error(TT_ERR_PARSE,
+                        TR_NAME ": load_state: \"best\" needs %zu numbers and \"best_cost\"",
+                        t->dim);
       goto done;
     }
     if (tr_realize(t, best, best_cfg, why, sizeof why) == TT_CHECK_INFEASIBLE) {
@@ -500,15 +511,15 @@ static void tr_destroy(tt_tuner *t) {
 }
 
 static const tt_tuner_iface tr_iface = {
-  .struct_size = sizeof(tt_tuner_iface),
-  .space = tr_space,
-  .create = tr_create,
-  .next = tr_next,
-  .feedback = tr_feedback,
-  .best = tr_best,
-  .save_state = tr_save_state,
-  .load_state = tr_load_state,
-  .destroy = tr_destroy,
+    .struct_size = sizeof(tt_tuner_iface),
+    .space = tr_space,
+    .create = tr_create,
+    .next = tr_next,
+    .feedback = tr_feedback,
+    .best = tr_best,
+    .save_state = tr_save_state,
+    .load_state = tr_load_state,
+    .destroy = tr_destroy,
 };
 
 /* ---- plugin entry ---- */
@@ -517,7 +528,8 @@ static const tt_tuner_iface tr_iface = {
 static tt_status tr_init(const tt_host *host) {
   tr_host = host;
   tr_settings = tt_space_create(TR_NAME, TR_VERSION);
-  if (!tr_settings) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TR_NAME ": cannot create settings space");
+  if (!tr_settings)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TR_NAME ": cannot create settings space");
   if (tt_space_add_int(tr_settings, "samples", 1, 4096, TR_DEFAULT_SAMPLES,
                        "Latin hypercube size: the first proposals cover each parameter's range "
                        "in this many strata") < 0 ||
@@ -543,14 +555,14 @@ static const void *tr_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_TUNER,
-  .name = TR_NAME,
-  .version = TR_VERSION,
-  .description = "random search: a Latin hypercube, then uniform random points",
-  .init = tr_init,
-  .deinit = tr_deinit,
-  .get_interface = tr_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_TUNER,
+    .name = TR_NAME,
+    .version = TR_VERSION,
+    .description = "random search: a Latin hypercube, then uniform random points",
+    .init = tr_init,
+    .deinit = tr_deinit,
+    .get_interface = tr_get_interface,
 };

@@ -32,14 +32,20 @@ int main(void) {
     snprintf(claim, sizeof claim, "PSSMLT serves\n`\"%s\"`", hint->objective);
     snprintf(example, sizeof example, "--tune integrator_pssmlt \\\n     --objective %s ",
              hint->objective);
-    CHECK_MSG(strstr(text, claim) || strstr(text, claim + 14), "%s does not say PSSMLT "
-              "serves \"%s\"", path, hint->objective);
-    CHECK_MSG(strstr(text, example), "%s: the PSSMLT example does not tune towards the hint "
-              "%s", path, hint->objective);
+    CHECK_MSG(strstr(text, claim) || strstr(text, claim + 14),
+              "%s does not say PSSMLT "
+              "serves \"%s\"",
+              path, hint->objective);
+    CHECK_MSG(strstr(text, example),
+              "%s: the PSSMLT example does not tune towards the hint "
+              "%s",
+              path, hint->objective);
     /* every metric objective the README gives PSSMLT names one of its hint's kind: the
      * README must not name a metric spelling the plugin does not serve as its hint */
-    CHECK_MSG(!strstr(text, "metric:acceptance:target=0.234"), "%s still names "
-              "metric:acceptance:target=0.234 (the hint is %s)", path, hint->objective);
+    CHECK_MSG(!strstr(text, "metric:acceptance:target=0.234"),
+              "%s still names "
+              "metric:acceptance:target=0.234 (the hint is %s)",
+              path, hint->objective);
   }
   tt_registry_destroy(reg);
   return tt_test_finish("docs_hint");

@@ -60,7 +60,8 @@ int main(void) {
   snprintf(args, sizeof args, "'%s'", source_path("tests/data/scenes/ply-as-gltf.json"));
   CHECK(run_host_timeout(60, args, out, sizeof out) == 4);
   CHECK_CONTAINS(out, "ply-as-gltf.json: meshes[0].file: mesh file");
-  CHECK_CONTAINS(out, "ply-as-gltf.gltf\" is not a glTF file: expected a JSON object, got a PLY file");
+  CHECK_CONTAINS(out,
+                 "ply-as-gltf.gltf\" is not a glTF file: expected a JSON object, got a PLY file");
 
   /* plugin errors: exit 3, every failure reported */
   snprintf(args, sizeof args, "--plugin no_such_plugin --plugin also_missing '%s'", scene);
@@ -85,8 +86,9 @@ int main(void) {
 
   /* --describe prints the Table 3.1 space as JSON on stdout */
   CHECK(run_host("--describe accel_embree", out, sizeof out) == 0);
-  const char *names[] = {"quality", "branchingFactor", "maxDepth", "sahBlockSize", "minLeafSize",
-                         "maxLeafSize", "travcost", "intcost", "static", "compact", "robust"};
+  const char *names[] = {"quality",     "branchingFactor", "maxDepth", "sahBlockSize",
+                         "minLeafSize", "maxLeafSize",     "travcost", "intcost",
+                         "static",      "compact",         "robust"};
   for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
     char quoted[64];
     snprintf(quoted, sizeof quoted, "\"%s\"", names[i]);
@@ -116,7 +118,7 @@ int main(void) {
   FILE *in = fopen(src, "rb"), *o = fopen(cut, "wb");
   CHECK(in && o);
   if (in && o) {
-    static unsigned char buf[1 << 14];  /* the first 16 KiB: inside the code segment */
+    static unsigned char buf[1 << 14]; /* the first 16 KiB: inside the code segment */
     size_t n = fread(buf, 1, sizeof buf, in);
     CHECK(n == sizeof buf && fwrite(buf, 1, n, o) == n);
   }
@@ -131,7 +133,7 @@ int main(void) {
   CHECK(run_host(args, out, sizeof out) == 3);
   CHECK_CONTAINS(out, "rejected: cannot load plugin");
   CHECK_CONTAINS(out, cut);
-  CHECK_CONTAINS(out, "integrator_pt");  /* the good ones are still listed */
+  CHECK_CONTAINS(out, "integrator_pt"); /* the good ones are still listed */
   unlink(cut);
 
   /* cut one byte short: every segment is there, the section headers are not (it loaded and
@@ -180,7 +182,8 @@ int main(void) {
     fputs("{\"version\": 1, \"camera\": {\"position\": [0, 0, 1e19], \"target\": [0, 0, 0], "
           "\"resolution\": [8, 8]}, \"materials\": {\"w\": {\"albedo\": [0.5, 0.5, 0.5]}}, "
           "\"lights\": [{\"type\": \"point\", \"position\": [0, 5, 5], \"intensity\": [9, 9, 9]}], "
-          "\"meshes\": [{\"material\": \"w\", \"positions\": [-1,-1,0, 1,-1,0, 1,1,0]}]}", fj);
+          "\"meshes\": [{\"material\": \"w\", \"positions\": [-1,-1,0, 1,-1,0, 1,1,0]}]}",
+          fj);
     fclose(fj);
   }
   const char *backends[2] = {"native", "custom"};

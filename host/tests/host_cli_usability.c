@@ -100,16 +100,18 @@ int main(void) {
   CHECK_CONTAINS(out, "unknown option \"--outfile\"; did you mean --out?");
   CHECK(run_host("--nthreads=2 x.json", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "unknown option \"--nthreads\"; did you mean --threads?");
-  snprintf(args, sizeof args, "--plugin integrator_ptt --res 4x4 --spp 1 --out %s/a.exr '%s'",
-           dir, scene);
+  snprintf(args, sizeof args, "--plugin integrator_ptt --res 4x4 --spp 1 --out %s/a.exr '%s'", dir,
+           scene);
   CHECK(run_host(args, out, sizeof out) == 3);
   CHECK_CONTAINS(out, "plugin \"integrator_ptt\" not found (did you mean \"integrator_pt\"?)");
-  snprintf(args, sizeof args, "--set accel_embree.qualty=2 --set accel_embre.quality=2 "
-           "--res 4x4 --spp 1 --out %s/a.exr '%s'", dir, scene);
+  snprintf(args, sizeof args,
+           "--set accel_embree.qualty=2 --set accel_embre.quality=2 "
+           "--res 4x4 --spp 1 --out %s/a.exr '%s'",
+           dir, scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   /* the unknown-parameter error names the close one and lists the known ones */
   CHECK_CONTAINS(out, "unknown parameter \"qualty\" (did you mean \"quality\"? known: quality, "
-                 "branchingFactor, maxDepth,");
+                      "branchingFactor, maxDepth,");
   CHECK_CONTAINS(out, "robust, backend, counters, updateMethod, refitInterval, refitSahGrowth)");
   CHECK_CONTAINS(out, "no plugin \"accel_embre\" is loaded (did you mean \"accel_embree\"?");
   /* --opt=value */
@@ -127,8 +129,8 @@ int main(void) {
     stats = buf;
     fclose(f);
   }
-  CHECK_MSG(stats && strstr(stats, "\"spp\":\t2") && strstr(stats, "\"resolution\":\t[4, 4]"),
-            "%s", stats ? stats : "no stats");
+  CHECK_MSG(stats && strstr(stats, "\"spp\":\t2") && strstr(stats, "\"resolution\":\t[4, 4]"), "%s",
+            stats ? stats : "no stats");
   CHECK(run_host("--quiet=yes x.json", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "--quiet takes no value");
   /* -o -q -h are in --help */
@@ -148,8 +150,17 @@ int main(void) {
   CHECK_CONTAINS(out, "--help-all");
   CHECK(!strstr(out, "--tune-pass-images") && !strstr(out, "--indicator-norm"));
   CHECK(run_host("--help-all", out, sizeof out) == 0);
-  const char *every[] = {"--aov", "--set", "--frames", "--plugin", "--spp", "--tune-pass-images",
-                         "--indicator-norm", "--rounds", "--supersample", "--states", "--clock"};
+  const char *every[] = {"--aov",
+                         "--set",
+                         "--frames",
+                         "--plugin",
+                         "--spp",
+                         "--tune-pass-images",
+                         "--indicator-norm",
+                         "--rounds",
+                         "--supersample",
+                         "--states",
+                         "--clock"};
   for (size_t k = 0; k < sizeof every / sizeof every[0]; k++) {
     char line[64];
     snprintf(line, sizeof line, "\n  %s ", every[k]);
@@ -162,12 +173,12 @@ int main(void) {
   CHECK_CONTAINS(out, "--tune-params A,B,...");
   CHECK_CONTAINS(out, "Loading a tuner (--plugin tuner_nm) turns tuning on");
   CHECK(!strstr(out, "--sequence"));
-  CHECK(run_host("-h=sequence", out, sizeof out) == 2);  /* -h takes no '=' */
+  CHECK(run_host("-h=sequence", out, sizeof out) == 2); /* -h takes no '=' */
   CHECK(run_host("--help=sequence", out, sizeof out) == 0);
   CHECK_CONTAINS(out, "--reference-scale K");
   CHECK(run_host("--help sequences", out, sizeof out) == 2);
   CHECK_CONTAINS(out, "--help: unknown topic \"sequences\" (did you mean sequence?)");
-  CHECK(run_host("--help x.json", out, sizeof out) == 0);  /* a scene, not a topic */
+  CHECK(run_host("--help x.json", out, sizeof out) == 0); /* a scene, not a topic */
   CHECK_CONTAINS(out, "Render:");
   /* (#30) the program's name is the one it was run as (installed: tunetrace), in the usage
    * line and in every message */
@@ -224,8 +235,8 @@ int main(void) {
   CHECK(exists(path) && exists(path2));
   snprintf(path, sizeof path, "%s/..exr", box);
   CHECK(!exists(path));
-  CHECK_MSG(run_in(box, "", "--quiet --res 4x4 --spp 1 ./scene.json", out, sizeof out) == 0,
-            "%s", out);
+  CHECK_MSG(run_in(box, "", "--quiet --res 4x4 --spp 1 ./scene.json", out, sizeof out) == 0, "%s",
+            out);
   CHECK(!exists(path));
 
   /* 18: the film that cannot be allocated: its size in bytes, the prefix once (the address
@@ -241,8 +252,10 @@ int main(void) {
 
   /* 4: a missing output folder is created before the render; one that cannot be (a file
    * in the way) fails at once, exit 5, the path named once, nothing rendered */
-  snprintf(args, sizeof args, "--quiet --res 4x4 --spp 1 --out %s/new/sub/x.exr --stats "
-           "%s/st/x.json '%s'", dir, dir, scene);
+  snprintf(args, sizeof args,
+           "--quiet --res 4x4 --spp 1 --out %s/new/sub/x.exr --stats "
+           "%s/st/x.json '%s'",
+           dir, dir, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   snprintf(path, sizeof path, "%s/new/sub/x.png", dir);
   snprintf(path2, sizeof path2, "%s/st/x.json", dir);
@@ -250,8 +263,8 @@ int main(void) {
   snprintf(args, sizeof args, "--res 64x64 --spp 64 --out %s/new/sub/x.png/y.exr '%s'", dir, scene);
   CHECK(run_host(args, out, sizeof out) == 5);
   snprintf(path, sizeof path, "%s/new/sub/x.png/y.exr", dir);
-  CHECK_MSG(count_of(out, path) == 1 && !strstr(out, "spp, seed") && !strstr(out, "render"),
-            "%s", out);
+  CHECK_MSG(count_of(out, path) == 1 && !strstr(out, "spp, seed") && !strstr(out, "render"), "%s",
+            out);
   CHECK_CONTAINS(out, "cannot create the folder");
 
   /* 7: pbrt's maxdepth 65 is clamped to integrator_pt's 64, with a warning */
@@ -261,7 +274,8 @@ int main(void) {
     fputs("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [45]\n"
           "Film \"rgb\" \"integer xresolution\" [4] \"integer yresolution\" [4]\n"
           "Integrator \"volpath\" \"integer maxdepth\" [65]\nWorldBegin\n"
-          "LightSource \"infinite\" \"rgb L\" [1 1 1]\nShape \"sphere\" \"float radius\" [1]\n", f);
+          "LightSource \"infinite\" \"rgb L\" [1 1 1]\nShape \"sphere\" \"float radius\" [1]\n",
+          f);
     fclose(f);
   }
   snprintf(args, sizeof args, "--quiet --spp 1 --out %s/deep.exr --stats %s/deep.json '%s'", dir,
@@ -279,14 +293,20 @@ int main(void) {
 
   /* 5: --frames A:B is frames A..B (both included) at --fps with or without a pattern: frame
    * 30 rendered as a still and as a sequence frame show the same pose */
-  snprintf(args, sizeof args, "--quiet --threads 2 --res 24x24 --spp 16 --frames 30:31 --out "
-           "%s/fr/still.exr '%s'", dir, with_path);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --res 24x24 --spp 16 --frames 30:31 --out "
+           "%s/fr/still.exr '%s'",
+           dir, with_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
-  snprintf(args, sizeof args, "--quiet --threads 2 --res 24x24 --spp 16 --frames 30:30 --out "
-           "'%s/fr/seq/f%%04d.exr' '%s'", dir, with_path);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --res 24x24 --spp 16 --frames 30:30 --out "
+           "'%s/fr/seq/f%%04d.exr' '%s'",
+           dir, with_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
-  snprintf(args, sizeof args, "--quiet --threads 2 --res 24x24 --spp 16 --frames 0:0 --out "
-           "%s/fr/first.exr '%s'", dir, with_path);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --res 24x24 --spp 16 --frames 0:0 --out "
+           "%s/fr/first.exr '%s'",
+           dir, with_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   char s30[4300], s31[4300], q30[4300], s0[4300];
   snprintf(s30, sizeof s30, "%s/fr/still_0030.exr", dir);

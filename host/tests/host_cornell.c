@@ -102,12 +102,15 @@ int main(void) {
   snprintf(stats, sizeof stats, "%s/a.json", dir);
   snprintf(png, sizeof png, "%s/a.png", dir);
 
-  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 2 --out '%s' --stats '%s' '%s'",
-           a_exr, stats, scene_path);
+  snprintf(args, sizeof args,
+           "--quiet --res 64x64 --spp 8 --seed 7 --threads 2 --out '%s' --stats '%s' '%s'", a_exr,
+           stats, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
-  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 2 --out '%s' '%s'", b_exr, scene_path);
+  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 2 --out '%s' '%s'",
+           b_exr, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
-  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 1 --out '%s' '%s'", c_exr, scene_path);
+  snprintf(args, sizeof args, "--quiet --res 64x64 --spp 8 --seed 7 --threads 1 --out '%s' '%s'",
+           c_exr, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
 
   float *a = NULL, *b = NULL, *c = NULL;
@@ -159,7 +162,8 @@ int main(void) {
   struct stat st;
   CHECK(stat(png, &st) == 0 && st.st_size > 100);
   char meta[256];
-  CHECK(tt_image_read_meta(a_exr, "spp", meta, sizeof meta) == TT_OK || tt_image_read_meta(a_exr, "tunetrace:spp", meta, sizeof meta) == TT_OK);
+  CHECK(tt_image_read_meta(a_exr, "spp", meta, sizeof meta) == TT_OK ||
+        tt_image_read_meta(a_exr, "tunetrace:spp", meta, sizeof meta) == TT_OK);
   CHECK(strcmp(meta, "8") == 0);
 
   /* run record */
@@ -172,12 +176,13 @@ int main(void) {
     fclose(f);
     cJSON *root = cJSON_Parse(text);
     CHECK(root != NULL);
-    const char *keys[] = {"plugins", "params", "build_ms", "render_ms", "passes", "spp", "rays",
-                          "rays_per_s", "triangles", "seed", "threads", "metrics"};
+    const char *keys[] = {"plugins", "params",     "build_ms",  "render_ms", "passes",  "spp",
+                          "rays",    "rays_per_s", "triangles", "seed",      "threads", "metrics"};
     for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
       CHECK_MSG(cJSON_GetObjectItem(root, keys[k]) != NULL, "missing key %s", keys[k]);
     cJSON *accel = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "plugins"), "accel");
-    CHECK(accel && !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(accel, "name")), "accel_embree"));
+    CHECK(accel &&
+          !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(accel, "name")), "accel_embree"));
     cJSON *ap = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree");
     CHECK(ap && cJSON_GetObjectItem(ap, "quality") && cJSON_GetObjectItem(ap, "robust"));
     CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "spp")) == 8);
@@ -191,12 +196,17 @@ int main(void) {
               commit ? commit : "(none)");
     const char *stamp = cJSON_GetStringValue(cJSON_GetObjectItem(root, "timestamp"));
     int year = 0, mon = 0, day = 0, hh = -1, mm = -1, ss = -1;
-    CHECK_MSG(stamp && sscanf(stamp, "%4d-%2d-%2dT%2d:%2d:%2d", &year, &mon, &day, &hh, &mm, &ss) == 6 &&
-              year >= 2024 && mon >= 1 && mon <= 12 && stamp[strlen(stamp) - 1] == 'Z',
+    CHECK_MSG(stamp &&
+                  sscanf(stamp, "%4d-%2d-%2dT%2d:%2d:%2d", &year, &mon, &day, &hh, &mm, &ss) == 6 &&
+                  year >= 2024 && mon >= 1 && mon <= 12 && stamp[strlen(stamp) - 1] == 'Z',
               "timestamp %s", stamp ? stamp : "(none)");
-    if (stamp) {  /* the start of this very run: within a day of now */
-      struct tm tm = {.tm_year = year - 1900, .tm_mon = mon - 1, .tm_mday = day, .tm_hour = hh,
-                      .tm_min = mm, .tm_sec = ss};
+    if (stamp) { /* the start of this very run: within a day of now */
+      struct tm tm = {.tm_year = year - 1900,
+                      .tm_mon = mon - 1,
+                      .tm_mday = day,
+                      .tm_hour = hh,
+                      .tm_min = mm,
+                      .tm_sec = ss};
       double age = difftime(time(NULL), timegm(&tm));
       CHECK_MSG(age >= -5 && age < 86400, "timestamp %s is %g s old", stamp, age);
     }
@@ -218,8 +228,8 @@ int main(void) {
   /* SIGINT: the current pass finishes, the partial image is written, exit code 130 */
   char d_exr[4200];
   snprintf(d_exr, sizeof d_exr, "%s/d.exr", dir);
-  char *argv[] = {(char *)host_path(), "--res", "64x64", "--spp", "1000000",
-                  "--out", d_exr, (char *)scene_path, NULL};
+  char *argv[] = {(char *)host_path(), "--res", "64x64", "--spp", "1000000", "--out", d_exr,
+                  (char *)scene_path,  NULL};
   /* the signal goes once the first pass is done (its "render:" progress line is out), not
    * after a fixed sleep: on a loaded machine the program may take seconds to start, and a
    * SIGINT before the handler is installed kills it */
@@ -235,16 +245,19 @@ int main(void) {
   char e_exr[4200], e_stats[4200];
   snprintf(e_exr, sizeof e_exr, "%s/e.exr", dir);
   snprintf(e_stats, sizeof e_stats, "%s/e.json", dir);
-  char *argv_e[] = {(char *)host_path(), "--res", "512x512", "--spp", "1000000",
-                    "--out", e_exr, "--stats", e_stats, (char *)scene_path, NULL};
+  char *argv_e[] = {
+      (char *)host_path(), "--res", "512x512",          "--spp", "1000000", "--out", e_exr,
+      "--stats",           e_stats, (char *)scene_path, NULL};
   status = interrupt_at(argv_e, "triangles,");
   CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
   spp = exr_spp(e_exr, 512 * 512);
-  CHECK_MSG(spp >= 1 && spp < 1000000, "render interrupted before its first pass: %ld spp "
-            "in %s", spp, e_exr);
+  CHECK_MSG(spp >= 1 && spp < 1000000,
+            "render interrupted before its first pass: %ld spp "
+            "in %s",
+            spp, e_exr);
   cJSON *e_rec = read_json_file(e_stats);
   CHECK_MSG(e_rec && cJSON_IsTrue(cJSON_GetObjectItem(e_rec, "interrupted")) &&
-            cJSON_GetNumberValue(cJSON_GetObjectItem(e_rec, "spp")) == spp,
+                cJSON_GetNumberValue(cJSON_GetObjectItem(e_rec, "spp")) == spp,
             "the record of %s says interrupted with the image's spp", e_stats);
   cJSON_Delete(e_rec);
 
@@ -257,11 +270,20 @@ int main(void) {
     char pattern[4200], mpath[4200];
     snprintf(pattern, sizeof pattern, "%s/seq%d/f_%%04d.exr", dir, t);
     snprintf(mpath, sizeof mpath, "%s/seq%d/manifest.json", dir, t);
-    char *argv_s[] = {(char *)host_path(), "--res", "96x96", "--spp", "4", "--frames", "0:100000",
-                      "--out", pattern, (char *)scene_path, NULL};
+    char *argv_s[] = {(char *)host_path(),
+                      "--res",
+                      "96x96",
+                      "--spp",
+                      "4",
+                      "--frames",
+                      "0:100000",
+                      "--out",
+                      pattern,
+                      (char *)scene_path,
+                      NULL};
     status = interrupt_at(argv_s, triggers[t]);
-    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "sequence, signal at \"%s\": status %d",
-              triggers[t], status);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130,
+              "sequence, signal at \"%s\": status %d", triggers[t], status);
     cJSON *man = read_json_file(mpath);
     cJSON *frames = cJSON_GetObjectItem(man, "frames");
     int nf = cJSON_GetArraySize(frames);

@@ -77,12 +77,15 @@ int main(void) {
   CHECK(mkfifo(fifo, 0600) == 0);
 
   /* ---- inputs that are not regular files ---- */
-  const char *devices[][2] = {{"/dev/zero", "a character device"}, {fifo, "a FIFO"},
+  const char *devices[][2] = {{"/dev/zero", "a character device"},
+                              {fifo, "a FIFO"},
                               {"/dev/urandom", "a character device"}};
   for (int i = 0; i < 3; i++) {
-    snprintf(args, sizeof args, "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
+    snprintf(args, sizeof args,
+             "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
              "--objective rrmse --reference '%s' --iterations 1 --res 8x8 --spp 1 --no-db "
-             "--out '%s' '%s'", devices[i][0], path_of("rrmse.exr"), still);
+             "--out '%s' '%s'",
+             devices[i][0], path_of("rrmse.exr"), still);
     const char *n[] = {devices[i][0], devices[i][1], "not a regular file", NULL};
     int rc = run_host_timeout(60, args, g_out, sizeof g_out);
     CHECK_MSG(rc != 137, "HUNG (killed after 60 s): host %s", args);
@@ -103,24 +106,27 @@ int main(void) {
   CHECK(scene_bytes && tt_file_write_atomic(scene, scene_bytes, n_scene) == TT_OK);
   snprintf(args, sizeof args, "--res 8x8 --spp 1 --stats '%s' --out '%s' '%s'", scene,
            path_of("a.exr"), scene);
-  expect(2, args, (const char *[]){"--stats", "would replace the scene file", scene,
-                                   "before any work", NULL});
+  expect(
+      2, args,
+      (const char *[]){"--stats", "would replace the scene file", scene, "before any work", NULL});
   snprintf(args, sizeof args, "--convert --out '%s' '%s'", scene, scene);
   expect(2, args, (const char *[]){"--out", "would replace the scene file", NULL});
   CHECK(symlink("box.json", path_of("link.json")) == 0);
   snprintf(args, sizeof args, "--convert --out '%s' '%s'", path_of("link.json"), scene);
   expect(2, args, (const char *[]){path_of("link.json"), scene, "(the same file)", NULL});
   CHECK_MSG(same_bytes(scene, scene_bytes, n_scene), "%s was changed", scene);
-  CHECK(access(path_of("a.exr"), F_OK) != 0);  /* nothing rendered */
+  CHECK(access(path_of("a.exr"), F_OK) != 0); /* nothing rendered */
 
   /* --out through a hard link onto --reference */
   const char *ref = path_of("ref.exr");
-  snprintf(args, sizeof args, "--plugin integrator_pt --res 8x8 --spp 2 --out '%s' '%s'", ref, still);
+  snprintf(args, sizeof args, "--plugin integrator_pt --res 8x8 --spp 2 --out '%s' '%s'", ref,
+           still);
   CHECK(run_host(args, g_out, sizeof g_out) == 0);
   size_t n_ref = 0;
   char *ref_bytes = slurp(ref, &n_ref);
   CHECK(link(ref, path_of("ref-hard.exr")) == 0);
-  snprintf(args, sizeof args, "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
            "--objective rrmse --reference '%s' --iterations 1 --res 8x8 --no-db --out '%s' '%s'",
            ref, path_of("ref-hard.exr"), still);
   expect(2, args, (const char *[]){"--out", "would replace --reference", ref, NULL});
@@ -130,7 +136,8 @@ int main(void) {
   CHECK(chdir(g_dir) == 0);
   snprintf(cmd, sizeof cmd, "cp '%s' cornell-box.exr", ref);
   CHECK(system(cmd) == 0);
-  snprintf(args, sizeof args, "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
            "--objective rrmse --reference cornell-box.exr --iterations 1 --res 8x8 --no-db '%s'",
            still);
   expect(2, args, (const char *[]){"the default output cornell-box.exr", "--reference", NULL});
@@ -138,15 +145,19 @@ int main(void) {
   /* --frames 0:2 would write f_0001.exr, the reference */
   snprintf(cmd, sizeof cmd, "cp '%s' '%s'", ref, path_of("f_0001.exr"));
   CHECK(system(cmd) == 0);
-  snprintf(args, sizeof args, "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
            "--objective rrmse --reference '%s' --iterations 1 --res 8x8 --no-db --frames 0:2 "
-           "--out '%s' '%s'", path_of("f_0001.exr"), path_of("f.exr"), path);
+           "--out '%s' '%s'",
+           path_of("f_0001.exr"), path_of("f.exr"), path);
   expect(2, args, (const char *[]){"would write", "f_0001.exr", "--reference", NULL});
   /* --hybrid --out-dir writes state_NNNN.exr: one of them is the --model */
   CHECK(mkdir(path_of("states"), 0777) == 0);
   CHECK(tt_file_write_atomic(path_of("states/state_0001.exr"), "model", 5) == TT_OK);
-  snprintf(args, sizeof args, "%s --hybrid --camera-index 0:2 --no-db --out-dir '%s' --model '%s' "
-           "'%s'", common, path_of("states"), path_of("states/state_0001.exr"), path);
+  snprintf(args, sizeof args,
+           "%s --hybrid --camera-index 0:2 --no-db --out-dir '%s' --model '%s' "
+           "'%s'",
+           common, path_of("states"), path_of("states/state_0001.exr"), path);
   expect(2, args, (const char *[]){"--out-dir", "state_0001.exr", "--model", NULL});
   CHECK(same_bytes(path_of("states/state_0001.exr"), "model", 5));
   /* two outputs on one file */
@@ -158,10 +169,12 @@ int main(void) {
 
   /* ---- --warm-start reads; --db refuses a damaged file ---- */
   const char *good = path_of("good.db");
-  snprintf(args, sizeof args, "%s --plugin tuner_nm --iterations 4 --camera-index 2 --db '%s' "
-           "--out '%s' '%s'", common, good, path_of("t.exr"), path);
+  snprintf(args, sizeof args,
+           "%s --plugin tuner_nm --iterations 4 --camera-index 2 --db '%s' "
+           "--out '%s' '%s'",
+           common, good, path_of("t.exr"), path);
   expect(0, args, NULL);
-  CHECK(sql(good, "PRAGMA journal_mode=DELETE"));  /* one self-contained file to compare */
+  CHECK(sql(good, "PRAGMA journal_mode=DELETE")); /* one self-contained file to compare */
   const char *bad = path_of("bad.db");
   snprintf(cmd, sizeof cmd, "cp '%s' '%s'", good, bad);
   CHECK(system(cmd) == 0);
@@ -175,18 +188,21 @@ int main(void) {
   CHECK(sql(bad, cmd));
   size_t n_bad = 0;
   char *bad_bytes = slurp(bad, &n_bad);
-  snprintf(args, sizeof args, "%s --hybrid --epsilon 0 --camera-index 3:4 --warm-start '%s' "
-           "--no-db --stats '%s' '%s'", common, bad, path_of("warm.json"), path);
+  snprintf(args, sizeof args,
+           "%s --hybrid --epsilon 0 --camera-index 3:4 --warm-start '%s' "
+           "--no-db --stats '%s' '%s'",
+           common, bad, path_of("warm.json"), path);
   expect(0, args, (const char *[]){"2 rows skipped", bad, NULL});
   CHECK_MSG(same_bytes(bad, bad_bytes, n_bad), "--warm-start changed %s", bad);
   tt_free(bad_bytes);
   size_t n_stats = 0;
   char *stats = slurp(path_of("warm.json"), &n_stats);
   cJSON *root = stats ? cJSON_Parse(stats) : NULL;
-  cJSON *warm = cJSON_GetArrayItem(
-      cJSON_GetObjectItem(cJSON_GetObjectItem(root, "hybrid"), "warm_start"), 0);
+  cJSON *warm =
+      cJSON_GetArrayItem(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "hybrid"), "warm_start"), 0);
   cJSON *rows = cJSON_GetObjectItem(warm, "rows");
-  CHECK_MSG(cJSON_IsNumber(rows) && rows->valuedouble == 5, "%s", stats ? stats : "(no stats)");  /* the good rows */
+  CHECK_MSG(cJSON_IsNumber(rows) && rows->valuedouble == 5, "%s",
+            stats ? stats : "(no stats)"); /* the good rows */
   cJSON_Delete(root);
   tt_free(stats);
 
@@ -220,8 +236,10 @@ int main(void) {
   sqlite3_stmt *st = NULL;
   long page = 0, page_size = 0;
   if (sqlite3_open_v2(good, &s3, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
-      sqlite3_prepare_v2(s3, "SELECT rootpage, (SELECT page_size FROM pragma_page_size) FROM "
-                         "sqlite_master WHERE name = 'samples_key'", -1, &st, NULL) == SQLITE_OK &&
+      sqlite3_prepare_v2(s3,
+                         "SELECT rootpage, (SELECT page_size FROM pragma_page_size) FROM "
+                         "sqlite_master WHERE name = 'samples_key'",
+                         -1, &st, NULL) == SQLITE_OK &&
       sqlite3_step(st) == SQLITE_ROW) {
     page = sqlite3_column_int(st, 0);
     page_size = sqlite3_column_int(st, 1);

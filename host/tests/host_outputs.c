@@ -77,8 +77,20 @@ static void test_host(void) {
   snprintf(png, sizeof png, "%s/box.png", g_tmp);
   snprintf(stats, sizeof stats, "%s/box.json", g_tmp);
   const char *scene = source_path("scenes/cornell-box/scene.json");
-  char *good[] = {(char *)host_path(), "--quiet", "--spp", "2", "--res", "96x96", "--seed", "1",
-                  "--out", exr, "--stats", stats, (char *)scene, NULL};
+  char *good[] = {(char *)host_path(),
+                  "--quiet",
+                  "--spp",
+                  "2",
+                  "--res",
+                  "96x96",
+                  "--seed",
+                  "1",
+                  "--out",
+                  exr,
+                  "--stats",
+                  stats,
+                  (char *)scene,
+                  NULL};
   CHECK(run_limited(good, 0, err, sizeof err) == 0);
   size_t n_exr, n_png, n_stats;
   char *old_exr = slurp(exr, &n_exr), *old_png = slurp(png, &n_png),
@@ -88,8 +100,20 @@ static void test_host(void) {
   ino_t ino = inode(exr);
 
   /* 1: every output is bigger than 1 KiB: all three writes fail half-way */
-  char *more[] = {(char *)host_path(), "--quiet", "--spp", "3", "--res", "96x96", "--seed", "7",
-                  "--out", exr, "--stats", stats, (char *)scene, NULL};
+  char *more[] = {(char *)host_path(),
+                  "--quiet",
+                  "--spp",
+                  "3",
+                  "--res",
+                  "96x96",
+                  "--seed",
+                  "7",
+                  "--out",
+                  exr,
+                  "--stats",
+                  stats,
+                  (char *)scene,
+                  NULL};
   CHECK(run_limited(more, 1024, err, sizeof err) == 5);
   CHECK_CONTAINS(err, exr);
   CHECK_CONTAINS(err, png);
@@ -136,8 +160,8 @@ static void test_host(void) {
   FILE *blocker = fopen(in_the_way, "w");
   CHECK(blocker && fclose(blocker) == 0);
   snprintf(bad, sizeof bad, "%s/a_file/dir/run.json", g_tmp);
-  char *unwritable[] = {(char *)host_path(), "--spp", "1", "--res", "8x8", "--out", exr,
-                        "--stats", bad, (char *)scene, NULL};
+  char *unwritable[] = {(char *)host_path(), "--spp", "1",           "--res", "8x8", "--out", exr,
+                        "--stats",           bad,     (char *)scene, NULL};
   struct timespec t0, t1;
   clock_gettime(CLOCK_MONOTONIC, &t0);
   CHECK(run_limited(unwritable, 0, err, sizeof err) == 5);
@@ -171,9 +195,21 @@ static void test_db_full(void) {
   char db[256], exr[256], err[1 << 16];
   snprintf(db, sizeof db, "%s/full.db", g_tmp);
   snprintf(exr, sizeof exr, "%s/tuned.exr", g_tmp);
-  char *argv[] = {(char *)host_path(), "--plugin", "tuner_nm", "--iterations", "30", "--spp", "1",
-                  "--res", "8x8", "--db", db, "--out", exr,
-                  (char *)source_path("scenes/cornell-box/scene.json"), NULL};
+  char *argv[] = {(char *)host_path(),
+                  "--plugin",
+                  "tuner_nm",
+                  "--iterations",
+                  "30",
+                  "--spp",
+                  "1",
+                  "--res",
+                  "8x8",
+                  "--db",
+                  db,
+                  "--out",
+                  exr,
+                  (char *)source_path("scenes/cornell-box/scene.json"),
+                  NULL};
   /* 48 KiB: the schema and a few rows fit, the WAL of 30 commits does not; the 8x8 image
    * does */
   CHECK(run_limited(argv, 48 * 1024, err, sizeof err) == 5);
@@ -202,8 +238,15 @@ static void test_black_pssmlt(void) {
   CHECK(tt_file_write_atomic(scene, json, sizeof json - 1) == TT_OK);
   const char *integrators[2] = {"integrator_pt", "integrator_pssmlt"};
   for (int i = 0; i < 2; i++) {
-    char *argv[] = {(char *)host_path(), "--plugin", (char *)integrators[i], "--spp", "2",
-                    "--out", exr, scene, NULL};
+    char *argv[] = {(char *)host_path(),
+                    "--plugin",
+                    (char *)integrators[i],
+                    "--spp",
+                    "2",
+                    "--out",
+                    exr,
+                    scene,
+                    NULL};
     int rc = run_limited(argv, 0, err, sizeof err);
     CHECK_MSG(rc == 0, "%s: exit %d: %s", integrators[i], rc, err);
     uint32_t w = 0, h = 0, c = 0;
@@ -228,7 +271,7 @@ static void test_png_full(void) {
   uint32_t s = 12345;
   for (size_t i = 0; i < sizeof rgb / sizeof rgb[0]; i++) {
     s = s * 1664525u + 1013904223u;
-    rgb[i] = (float)(s >> 8) / 16777216.0f;  /* noise: the PNG stays large */
+    rgb[i] = (float)(s >> 8) / 16777216.0f; /* noise: the PNG stays large */
   }
   fflush(NULL);
   pid_t pid = fork();
@@ -238,7 +281,9 @@ static void test_png_full(void) {
     setrlimit(RLIMIT_FSIZE, &rl);
     tt_status st = tt_image_write_png_display(path, W, H, rgb, 0.0f, NULL, 0);
     _exit(st == TT_ERR_IO && strstr(tt_last_error(), path) &&
-                  strstr(tt_last_error(), "File too large") ? 0 : 1);
+                  strstr(tt_last_error(), "File too large")
+              ? 0
+              : 1);
   }
   int status = 0;
   waitpid(pid, &status, 0);
@@ -266,7 +311,7 @@ static void test_helpers(void) {
   char fifo[256], path[256];
   snprintf(fifo, sizeof fifo, "%s/fifo", g_tmp);
   CHECK(mkfifo(fifo, 0644) == 0);
-  alarm(20);  /* a blocking open would hang here */
+  alarm(20); /* a blocking open would hang here */
   CHECK(tt_file_read(fifo, NULL, 0, &data, &n) == TT_ERR_IO);
   CHECK_CONTAINS(tt_last_error(), "a FIFO");
   alarm(0);
@@ -313,9 +358,19 @@ static void png_size(const char *path, uint32_t *w, uint32_t *h) {
 static void test_sequence_png(void) {
   char pattern[256], err[1 << 16], path[300];
   snprintf(pattern, sizeof pattern, "%s/seq/f_%%04d.exr", g_tmp);
-  char *argv[] = {(char *)host_path(), "--quiet", "--res", "12x8", "--spp", "1", "--frames",
-                  "2:4", "--png", "--out", pattern,
-                  (char *)source_path("scenes/cornell-box/path.json"), NULL};
+  char *argv[] = {(char *)host_path(),
+                  "--quiet",
+                  "--res",
+                  "12x8",
+                  "--spp",
+                  "1",
+                  "--frames",
+                  "2:4",
+                  "--png",
+                  "--out",
+                  pattern,
+                  (char *)source_path("scenes/cornell-box/path.json"),
+                  NULL};
   int rc = run_limited(argv, 0, err, sizeof err);
   CHECK_MSG(rc == 0, "exit %d: %s", rc, err);
   for (int f = 2; f <= 4; f++) {
@@ -325,7 +380,7 @@ static void test_sequence_png(void) {
     CHECK_MSG(w == 12 && h == 8, "%s: %ux%u", path, w, h);
   }
   snprintf(path, sizeof path, "%s/seq/f_0005.png", g_tmp);
-  CHECK(access(path, F_OK) != 0);  /* frames 2..4 inclusive */
+  CHECK(access(path, F_OK) != 0); /* frames 2..4 inclusive */
   snprintf(path, sizeof path, "%s/seq/manifest.json", g_tmp);
   char *m = slurp(path, &(size_t){0});
   CHECK_CONTAINS(m, "\"png\": \"f_0003.png\"");

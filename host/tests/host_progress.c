@@ -40,14 +40,16 @@ int main(void) {
   snprintf(exr, sizeof exr, "%s/long.exr", dir);
 
   /* a log: SIGINT after 15 s */
-  snprintf(cmd, sizeof cmd, "timeout --preserve-status -s INT 15 '%s' --threads 1 --spp "
-           "16777216 --res 32x32 --out '%s' '%s' 2>&1", host_path(), exr, scene);
+  snprintf(cmd, sizeof cmd,
+           "timeout --preserve-status -s INT 15 '%s' --threads 1 --spp "
+           "16777216 --res 32x32 --out '%s' '%s' 2>&1",
+           host_path(), exr, scene);
   CHECK(run(cmd, out, sizeof out) == 130);
   CHECK_CONTAINS(out, "\nrender:   0.0%  elapsed 0.0s  ETA ?\n");
   CHECK_CONTAINS(out, "info: render: about ");
   CHECK_CONTAINS(out, " h; --spp or --time to shorten\n");
   const char *said = strstr(out, "info: render: about ");
-  CHECK(!said || !strstr(said + 1, "info: render: about "));  /* once */
+  CHECK(!said || !strstr(said + 1, "info: render: about ")); /* once */
   double last = last_elapsed(out);
   CHECK_MSG(last >= 10.0 && last < 15.0, "the last progress line is at %.1f s:\n%s", last, out);
   struct stat st;
@@ -55,8 +57,10 @@ int main(void) {
 
   /* a terminal: the bar says "ETA ?" before the first pass; a short render says no
    * estimate */
-  snprintf(cmd, sizeof cmd, "script -qec \"'%s' --spp 16777216 --res 32x32 --time 1 --out "
-           "'%s' '%s'\" /dev/null 2>&1", host_path(), exr, scene);
+  snprintf(cmd, sizeof cmd,
+           "script -qec \"'%s' --spp 16777216 --res 32x32 --time 1 --out "
+           "'%s' '%s'\" /dev/null 2>&1",
+           host_path(), exr, scene);
   CHECK(run(cmd, out, sizeof out) == 0);
   CHECK_CONTAINS(out, "\033[Krender [..............................]   0.0%  elapsed 0.0s  ETA ?");
   CHECK(!strstr(out, "about "));

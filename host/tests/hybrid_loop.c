@@ -26,8 +26,10 @@ static char *row_configs(const char *db_path, int path_index, const char *extra)
   sqlite3 *db = NULL;
   sqlite3_stmt *st = NULL;
   char sql[512];
-  snprintf(sql, sizeof sql, "SELECT config FROM samples WHERE camera LIKE '%%\"path_index\":%d}'"
-           " %s ORDER BY id", path_index, extra ? extra : "");
+  snprintf(sql, sizeof sql,
+           "SELECT config FROM samples WHERE camera LIKE '%%\"path_index\":%d}'"
+           " %s ORDER BY id",
+           path_index, extra ? extra : "");
   size_t cap = 1 << 16, len = 0;
   char *buf = malloc(cap);
   buf[0] = 0;
@@ -69,7 +71,8 @@ int main(void) {
   if (!mkdtemp(dir)) return 1;
   char scene[4200], other[4200], still[4200];
   snprintf(scene, sizeof scene, "%s", source_path("scenes/cornell-box/path.json"));
-  snprintf(other, sizeof other, "%s", source_path("scenes/cornell-box-variants/specular-box/scene.json"));
+  snprintf(other, sizeof other, "%s",
+           source_path("scenes/cornell-box-variants/specular-box/scene.json"));
   snprintf(still, sizeof still, "%s", source_path("scenes/cornell-box/scene.json"));
   char args[16384];
   char db[512], stats[512], model[512];
@@ -77,14 +80,18 @@ int main(void) {
 
   /* the tuning loop's own search at path samples 2, 3, 4 */
   for (int i = 2; i <= 4; i++) {
-    snprintf(args, sizeof args, "%s --plugin tuner_nm --iterations 6 --camera-index %d --db '%s' "
-             "--out '%s/t.exr' '%s'", common, i, db, dir, scene);
+    snprintf(args, sizeof args,
+             "%s --plugin tuner_nm --iterations 6 --camera-index %d --db '%s' "
+             "--out '%s/t.exr' '%s'",
+             common, i, db, dir, scene);
     CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   }
   /* epsilon 1: the same searches, every proposal answered by the database */
   snprintf(stats, sizeof stats, "%s/eps1.json", dir);
-  snprintf(args, sizeof args, "%s --hybrid --epsilon 1 --iterations 6 --camera-index 2:4 --db '%s' "
-           "--stats '%s' '%s'", common, db, stats, scene);
+  snprintf(args, sizeof args,
+           "%s --hybrid --epsilon 1 --iterations 6 --camera-index 2:4 --db '%s' "
+           "--stats '%s' '%s'",
+           common, db, stats, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   cJSON *root = read_json(stats);
   cJSON *h = root ? cJSON_GetObjectItem(root, "hybrid") : NULL;
@@ -93,8 +100,8 @@ int main(void) {
   for (int k = 0; k < cJSON_GetArraySize(states); k++) {
     cJSON *s = cJSON_GetArrayItem(states, k);
     CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(s, "mode")), "explore"));
-    CHECK_MSG(num(s, "samples") == 7 && num(s, "cached") == 7, "state %d: %g samples, %g cached",
-              k, num(s, "samples"), num(s, "cached"));
+    CHECK_MSG(num(s, "samples") == 7 && num(s, "cached") == 7, "state %d: %g samples, %g cached", k,
+              num(s, "samples"), num(s, "cached"));
   }
   cJSON_Delete(root);
   /* nothing new was measured: the database holds only the three searches */
@@ -110,9 +117,10 @@ int main(void) {
   snprintf(model, sizeof model, "%s/nn.ttpm", dir);
   char db2[512];
   snprintf(db2, sizeof db2, "%s/exploit.db", dir);
-  snprintf(args, sizeof args, "%s --hybrid --epsilon 0 --camera-index 10:15 --warm-start '%s' --db '%s' "
-           "--model '%s' --stats '%s' --out-dir '%s/states' '%s'", common, db, db2, model, stats,
-           dir, scene);
+  snprintf(args, sizeof args,
+           "%s --hybrid --epsilon 0 --camera-index 10:15 --warm-start '%s' --db '%s' "
+           "--model '%s' --stats '%s' --out-dir '%s/states' '%s'",
+           common, db, db2, model, stats, dir, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats);
   h = root ? cJSON_GetObjectItem(root, "hybrid") : NULL;
@@ -129,7 +137,8 @@ int main(void) {
      * state where it was (the warm start's searches at path samples 2-4), and says so */
     CHECK(cJSON_IsNumber(cJSON_GetObjectItem(s, "default_cost")) && num(s, "default_cost") > 0);
     CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(s, "default_cost_from")),
-                  "nearest state") && num(s, "default_distance") > 0);
+                  "nearest state") &&
+          num(s, "default_distance") > 0);
     /* --out-dir: each state's image and its preview */
     char png[600];
     snprintf(png, sizeof png, "%s/states/state_%04d.png", dir, 10 + k);
@@ -148,10 +157,12 @@ int main(void) {
   /* a warm start from rows measured otherwise learns nothing, and names why: every row was
    * measured with a wall clock, one thread, at 24x24 */
   snprintf(stats, sizeof stats, "%s/mismatch.json", dir);
-  snprintf(args, sizeof args, "--quiet --res 16x16 --spp 1 --threads 2 --clock cpu --tune-params "
-           "quality,branchingFactor,maxDepth,maxLeafSize,travcost --set accel_embree.backend=custom "
-           "--hybrid --epsilon 0 --camera-index 10:10 --warm-start '%s' --no-db --stats '%s' '%s'",
-           db, stats, scene);
+  snprintf(
+      args, sizeof args,
+      "--quiet --res 16x16 --spp 1 --threads 2 --clock cpu --tune-params "
+      "quality,branchingFactor,maxDepth,maxLeafSize,travcost --set accel_embree.backend=custom "
+      "--hybrid --epsilon 0 --camera-index 10:10 --warm-start '%s' --no-db --stats '%s' '%s'",
+      db, stats, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   CHECK_CONTAINS(out, "learnt 0 of the 21 rows");
   CHECK_CONTAINS(out, "21 measured with --clock wall (this run: --clock cpu)");
@@ -170,8 +181,10 @@ int main(void) {
   cJSON_Delete(root);
 
   /* said once per run, not at every state: the parameters not searched, the re-measurements */
-  snprintf(args, sizeof args, "--res 24x24 --spp 1 --threads 1 --set accel_embree.backend=custom "
-           "--hybrid --epsilon 1 --iterations 12 --camera-index 2:4 --no-db '%s'", scene);
+  snprintf(args, sizeof args,
+           "--res 24x24 --spp 1 --threads 1 --set accel_embree.backend=custom "
+           "--hybrid --epsilon 1 --iterations 12 --camera-index 2:4 --no-db '%s'",
+           scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   {
     int n = 0;
@@ -180,8 +193,10 @@ int main(void) {
   }
 
   /* the saved model predicts for another scene's states without a database */
-  snprintf(args, sizeof args, "--quiet --res 24x24 --tune-params quality,branchingFactor,maxDepth,"
-           "maxLeafSize,travcost --predict --camera-index 0:3 --model '%s' '%s'", model, scene);
+  snprintf(args, sizeof args,
+           "--quiet --res 24x24 --tune-params quality,branchingFactor,maxDepth,"
+           "maxLeafSize,travcost --predict --camera-index 0:3 --model '%s' '%s'",
+           model, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = cJSON_Parse(strchr(out, '{'));
   CHECK(root && cJSON_GetArraySize(cJSON_GetObjectItem(root, "predictions")) == 4);
@@ -193,17 +208,22 @@ int main(void) {
   char db3[512];
   snprintf(db3, sizeof db3, "%s/other.db", dir);
   snprintf(stats, sizeof stats, "%s/other.json", dir);
-  snprintf(args, sizeof args, "%s --plugin tuner_nm --iterations 5 --camera-index 30 --db '%s' "
-           "--stats '%s' --out '%s/o.exr' '%s'", common, db3, stats, dir, other);
+  snprintf(args, sizeof args,
+           "%s --plugin tuner_nm --iterations 5 --camera-index 30 --db '%s' "
+           "--stats '%s' --out '%s/o.exr' '%s'",
+           common, db3, stats, dir, other);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats);
   cJSON *tj = root ? cJSON_GetObjectItem(root, "tuning") : NULL;
   char *best = tj ? cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "best_config")) : NULL;
   cJSON_Delete(root);
-  snprintf(args, sizeof args, "--quiet --res 24x24 --threads 1 --spp 1 --tune-params quality,"
-           "branchingFactor,maxDepth,maxLeafSize,travcost --set accel_embree.backend=custom --predict "
-           "--camera-index 0:2 --warm-start '%s' "
-           "'%s'", db3, scene);
+  snprintf(
+      args, sizeof args,
+      "--quiet --res 24x24 --threads 1 --spp 1 --tune-params quality,"
+      "branchingFactor,maxDepth,maxLeafSize,travcost --set accel_embree.backend=custom --predict "
+      "--camera-index 0:2 --warm-start '%s' "
+      "'%s'",
+      db3, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = cJSON_Parse(strchr(out, '{'));
   cJSON *preds = root ? cJSON_GetObjectItem(root, "predictions") : NULL;
@@ -222,21 +242,25 @@ int main(void) {
   FILE *js = fopen(junk_scene, "w");
   fputs("{\"version\": 1, \"camera\": ", js);
   fclose(js);
-  struct { const char *args; const char *scene; const char *msg; } bad[] = {
-    {"--hybrid", still, "has no camera path"},
-    {"--hybrid --epsilon 1.5", scene, "--epsilon: expected"},
-    {"--hybrid --epsilon -0.1", scene, "--epsilon: expected"},
-    {"--hybrid --iterations 0", scene, "--iterations"},
-    /* the states are path samples (--camera-index A:B); --frames means frames at --fps */
-    {"--hybrid --frames 0:3", scene, "give them with --camera-index A:B"},
-    {"--predict --frames 0:3", scene, "give them with --camera-index A:B"},
-    {"--hybrid --camera-index 4:3", scene, "--camera-index: expected I or A:B"},
-    {"--hybrid --camera-index 0:100", scene, "--camera-index: expected I or A:B"},
-    {"--camera-index 0:3", scene, "applies to --hybrid and --predict"},
-    {"--hybrid --objective metric:rays_per_s", scene, "for time"},
-    {"--hybrid --warm-start /nonexistent/x.db", scene, "/nonexistent/x.db"},
-    /* a missing warm start is named before the scene loads (this scene does not parse) */
-    {"--hybrid --warm-start /nonexistent/x.db", junk_scene, "--warm-start /nonexistent/x.db"},
+  struct {
+    const char *args;
+    const char *scene;
+    const char *msg;
+  } bad[] = {
+      {"--hybrid", still, "has no camera path"},
+      {"--hybrid --epsilon 1.5", scene, "--epsilon: expected"},
+      {"--hybrid --epsilon -0.1", scene, "--epsilon: expected"},
+      {"--hybrid --iterations 0", scene, "--iterations"},
+      /* the states are path samples (--camera-index A:B); --frames means frames at --fps */
+      {"--hybrid --frames 0:3", scene, "give them with --camera-index A:B"},
+      {"--predict --frames 0:3", scene, "give them with --camera-index A:B"},
+      {"--hybrid --camera-index 4:3", scene, "--camera-index: expected I or A:B"},
+      {"--hybrid --camera-index 0:100", scene, "--camera-index: expected I or A:B"},
+      {"--camera-index 0:3", scene, "applies to --hybrid and --predict"},
+      {"--hybrid --objective metric:rays_per_s", scene, "for time"},
+      {"--hybrid --warm-start /nonexistent/x.db", scene, "/nonexistent/x.db"},
+      /* a missing warm start is named before the scene loads (this scene does not parse) */
+      {"--hybrid --warm-start /nonexistent/x.db", junk_scene, "--warm-start /nonexistent/x.db"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     snprintf(args, sizeof args, "%s %s --no-db --res 8x8 '%s'", common, bad[i].args, bad[i].scene);
@@ -250,13 +274,15 @@ int main(void) {
   FILE *f = fopen(junk, "w");
   fputs("not a model", f);
   fclose(f);
-  snprintf(args, sizeof args, "%s --hybrid --no-db --camera-index 0:1 --model '%s' '%s'", common, junk, scene);
+  snprintf(args, sizeof args, "%s --hybrid --no-db --camera-index 0:1 --model '%s' '%s'", common,
+           junk, scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, junk);
   CHECK_CONTAINS(out, "left as it is");
   CHECK(stat(junk, &st) == 0 && st.st_size == 11);
   /* an NN model loaded into RBF: refused naming both */
-  snprintf(args, sizeof args, "%s --hybrid --plugin predictor_rbf --no-db --camera-index 0:1 --model '%s' '%s'",
+  snprintf(args, sizeof args,
+           "%s --hybrid --plugin predictor_rbf --no-db --camera-index 0:1 --model '%s' '%s'",
            common, model, scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "written by predictor_nn");

@@ -14,7 +14,8 @@
 static char dir[] = "/tmp/tt_predict_modelXXXXXX";
 static char out[1 << 17];
 
-static const char *common = "--quiet --res 8x8 --spp 1 --threads 1 --tune-params quality,maxLeafSize";
+static const char *common =
+    "--quiet --res 8x8 --spp 1 --threads 1 --tune-params quality,maxLeafSize";
 
 /* `text` sealed with predictor_static's checksum line (FNV-1a 64 of the text before it),
  * then `tail`, written to `path`. */
@@ -41,7 +42,7 @@ static char *edited(const char *model, int field, const char *value) {
   char *line = strstr(t, "\nconfigs ");
   CHECK(line != NULL);
   if (!line) return t;
-  line = strchr(line + 1, '\n') + 1;  /* the first configuration */
+  line = strchr(line + 1, '\n') + 1; /* the first configuration */
   char *f = line;
   for (int i = 0; i < field; i++) f = strchr(f, ' ') + 1;
   size_t old = strcspn(f, " \n");
@@ -55,8 +56,10 @@ static void refused(const char *mode, const char *scene, const char *path, const
   struct stat a, b;
   CHECK(stat(path, &a) == 0);
   char args[8192];
-  snprintf(args, sizeof args, "%s %s --plugin predictor_static --no-db --camera-index 0:1 "
-           "--model '%s' '%s'", common, mode, path, scene);
+  snprintf(args, sizeof args,
+           "%s %s --plugin predictor_static --no-db --camera-index 0:1 "
+           "--model '%s' '%s'",
+           common, mode, path, scene);
   int rc = run_host(args, out, sizeof out);
   CHECK_MSG(rc == 2, "%s with %s: exit %d, expected 2: %s", mode, path, rc, out);
   CHECK_CONTAINS(out, path);
@@ -72,19 +75,25 @@ int main(void) {
   snprintf(model, sizeof model, "%s/static.txt", dir);
 
   /* a real model: a short search's rows, learnt by predictor_static and saved by the host */
-  snprintf(args, sizeof args, "%s --plugin tuner_nm --iterations 4 --camera-index 0 --db '%s' "
-           "--out '%s/t.exr' '%s'", common, db, dir, scene);
+  snprintf(args, sizeof args,
+           "%s --plugin tuner_nm --iterations 4 --camera-index 0 --db '%s' "
+           "--out '%s/t.exr' '%s'",
+           common, db, dir, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
-  snprintf(args, sizeof args, "%s --predict --plugin predictor_static --camera-index 0:1 "
-           "--warm-start '%s' --model '%s' '%s'", common, db, model, scene);
+  snprintf(args, sizeof args,
+           "%s --predict --plugin predictor_static --camera-index 0:1 "
+           "--warm-start '%s' --model '%s' '%s'",
+           common, db, model, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   size_t n = 0;
   char *text = tt_test_read_file(model, &n);
   CHECK(text && strstr(text, "predictor_static 1\n") == text);
   if (!text) return tt_test_finish("predict_model_files");
   /* it loads back and answers */
-  snprintf(args, sizeof args, "%s --predict --plugin predictor_static --camera-index 0:1 "
-           "--model '%s' '%s'", common, model, scene);
+  snprintf(args, sizeof args,
+           "%s --predict --plugin predictor_static --camera-index 0:1 "
+           "--model '%s' '%s'",
+           common, model, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   CHECK_CONTAINS(out, "\"quality\"");
 

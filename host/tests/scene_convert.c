@@ -13,7 +13,9 @@
 static char tmp_root[] = "/tmp/tt_scene_convert_XXXXXX";
 
 /* Relative difference scaled by the scene's size, for bounds. */
-static double rel_err(float a, float b, double scale) { return fabs((double)a - (double)b) / scale; }
+static double rel_err(float a, float b, double scale) {
+  return fabs((double)a - (double)b) / scale;
+}
 
 /* Compares every field the converter promises to keep. */
 static void compare(const tt_scene *a, const tt_scene *b, const char *what) {
@@ -30,7 +32,8 @@ static void compare(const tt_scene *a, const tt_scene *b, const char *what) {
     CHECK_MSG(rel_err(alo[i], blo[i], diag) <= 1e-5, "lo[%d] %g vs %g", i, alo[i], blo[i]);
     CHECK_MSG(rel_err(ahi[i], bhi[i], diag) <= 1e-5, "hi[%d] %g vs %g", i, ahi[i], bhi[i]);
   }
-  uint32_t nm = tt_scene_mesh_count(a) < tt_scene_mesh_count(b) ? tt_scene_mesh_count(a) : tt_scene_mesh_count(b);
+  uint32_t nm = tt_scene_mesh_count(a) < tt_scene_mesh_count(b) ? tt_scene_mesh_count(a)
+                                                                : tt_scene_mesh_count(b);
   for (uint32_t i = 0; i < nm; i++) {
     const tt_mesh *ma = tt_scene_mesh(a, i), *mb = tt_scene_mesh(b, i);
     CHECK_MSG(ma->triangle_count == mb->triangle_count, "mesh %u: %u vs %u triangles", i,
@@ -46,12 +49,15 @@ static void compare(const tt_scene *a, const tt_scene *b, const char *what) {
       uint32_t va = ma->indices[c];
       int found = 0;
       for (uint32_t v = 0; v < mb->vertex_count && !found; v++) {
-        if (memcmp(ma->positions + 3 * (size_t)va, mb->positions + 3 * (size_t)v, 3 * sizeof(float)) != 0)
+        if (memcmp(ma->positions + 3 * (size_t)va, mb->positions + 3 * (size_t)v,
+                   3 * sizeof(float)) != 0)
           continue;
         if (ma->normals && mb->normals &&
-            memcmp(ma->normals + 3 * (size_t)va, mb->normals + 3 * (size_t)v, 3 * sizeof(float)) != 0)
+            memcmp(ma->normals + 3 * (size_t)va, mb->normals + 3 * (size_t)v, 3 * sizeof(float)) !=
+                0)
           continue;
-        if (ma->uvs && mb->uvs && memcmp(ma->uvs + 2 * (size_t)va, mb->uvs + 2 * (size_t)v, 2 * sizeof(float)) != 0)
+        if (ma->uvs && mb->uvs &&
+            memcmp(ma->uvs + 2 * (size_t)va, mb->uvs + 2 * (size_t)v, 2 * sizeof(float)) != 0)
           continue;
         found = 1;
       }
@@ -61,10 +67,12 @@ static void compare(const tt_scene *a, const tt_scene *b, const char *what) {
   CHECK(tt_scene_material_count(a) == tt_scene_material_count(b));
   for (uint32_t i = 0; i < tt_scene_material_count(a) && i < tt_scene_material_count(b); i++) {
     const tt_material *ma = tt_scene_material(a, i), *mb = tt_scene_material(b, i);
-    CHECK_MSG(ma->type == mb->type, "material %u (%s): type %d vs %d", i, ma->name, ma->type, mb->type);
-    CHECK_MSG(memcmp(ma->albedo, mb->albedo, sizeof ma->albedo) == 0, "material %u (%s) albedo", i, ma->name);
-    CHECK_MSG(memcmp(ma->emission, mb->emission, sizeof ma->emission) == 0, "material %u (%s) emission", i,
+    CHECK_MSG(ma->type == mb->type, "material %u (%s): type %d vs %d", i, ma->name, ma->type,
+              mb->type);
+    CHECK_MSG(memcmp(ma->albedo, mb->albedo, sizeof ma->albedo) == 0, "material %u (%s) albedo", i,
               ma->name);
+    CHECK_MSG(memcmp(ma->emission, mb->emission, sizeof ma->emission) == 0,
+              "material %u (%s) emission", i, ma->name);
     CHECK(memcmp(ma->alpha, mb->alpha, sizeof ma->alpha) == 0);
     CHECK(memcmp(ma->eta, mb->eta, sizeof ma->eta) == 0);
     CHECK(memcmp(ma->k, mb->k, sizeof ma->k) == 0);
@@ -151,21 +159,29 @@ int main(void) {
   /* inline: camera path, spot/point/distant/environment lights, settings, odd names */
   static const char json[] =
       "{\"version\": 1,"
-      " \"camera\": {\"position\": [0, 1, 5], \"target\": [0, 1, 0], \"fov\": 33.3, \"resolution\": [64, 48],"
-      "   \"path\": [{\"time\": 0}, {\"time\": 0.5, \"position\": [1, 2, 5]}, {\"time\": 1.25, \"fov\": 50}]},"
+      " \"camera\": {\"position\": [0, 1, 5], \"target\": [0, 1, 0], \"fov\": 33.3, "
+      "\"resolution\": [64, 48],"
+      "   \"path\": [{\"time\": 0}, {\"time\": 0.5, \"position\": [1, 2, 5]}, {\"time\": 1.25, "
+      "\"fov\": 50}]},"
       " \"render\": {\"spp\": 7, \"maxDepth\": 9, \"seed\": 123456789, \"timeBudget\": 2.5},"
-      " \"materials\": {\"a \\\"quoted\\\" name\": {\"type\": \"plastic\", \"albedo\": [0.1, 0.2, 0.3], \"alpha\": [0.2, 0.05]},"
+      " \"materials\": {\"a \\\"quoted\\\" name\": {\"type\": \"plastic\", \"albedo\": [0.1, 0.2, "
+      "0.3], \"alpha\": [0.2, 0.05]},"
       "   \"lamp\": {\"emission\": [3, 2, 1], \"twoSided\": true},"
       "   \"metal\": {\"type\": \"conductor\", \"eta\": [0.2, 0.3, 0.4], \"k\": [3, 2, 1]}},"
       " \"meshes\": [{\"name\": \"tri/one two\", \"material\": \"a \\\"quoted\\\" name\","
-      "     \"positions\": [0,0,0, 1,0,0, 0,1,0], \"normals\": [0,0,1, 0,0,1, 0,0,1], \"uvs\": [0,0, 1,0, 0,1]},"
-      "   {\"material\": \"lamp\", \"positions\": [0,3,0, 1,3,0, 0,3,1, 1,3,1], \"indices\": [0,2,1, 1,2,3]},"
+      "     \"positions\": [0,0,0, 1,0,0, 0,1,0], \"normals\": [0,0,1, 0,0,1, 0,0,1], \"uvs\": "
+      "[0,0, 1,0, 0,1]},"
+      "   {\"material\": \"lamp\", \"positions\": [0,3,0, 1,3,0, 0,3,1, 1,3,1], \"indices\": "
+      "[0,2,1, 1,2,3]},"
       "   {\"material\": \"metal\", \"positions\": [[-2,0,0],[-1,0,0],[-2,1,0.5]]},"
       /* the first float's low byte is 0x0a: assimp skips whitespace after end_header, which
        * the writer's per-vertex guard byte defends against (staircase.pbrt has such a mesh) */
-      "   {\"material\": \"metal\", \"positions\": [[-0.345382988,2,0],[-0.345382988,3,0],[-0.345382988,2,1]]}],"
-      " \"lights\": [{\"type\": \"spot\", \"position\": [0, 4, 0], \"target\": [0, 0, 0], \"intensity\": 5,"
-      "   \"angle\": 35, \"innerAngle\": 20}, {\"type\": \"point\", \"position\": [1, 2, 3], \"intensity\": [1, 2, 3]},"
+      "   {\"material\": \"metal\", \"positions\": "
+      "[[-0.345382988,2,0],[-0.345382988,3,0],[-0.345382988,2,1]]}],"
+      " \"lights\": [{\"type\": \"spot\", \"position\": [0, 4, 0], \"target\": [0, 0, 0], "
+      "\"intensity\": 5,"
+      "   \"angle\": 35, \"innerAngle\": 20}, {\"type\": \"point\", \"position\": [1, 2, 3], "
+      "\"intensity\": [1, 2, 3]},"
       "   {\"type\": \"distant\", \"direction\": [0.3, -1, 0.2], \"irradiance\": 2},"
       "   {\"type\": \"environment\", \"radiance\": [0.1, 0.2, 0.3]}]}";
   s = NULL;
@@ -189,8 +205,10 @@ int main(void) {
   const char *build = getenv("TT_BUILD_ROOT");
   char cmd[1400];
   if (build) {
-    snprintf(cmd, sizeof cmd, "'%s/host/host' --quiet --convert '%s/scenes/cornell-box/scene.json' --out '%s/cli.json'",
-             build, root, tmp_root);
+    snprintf(
+        cmd, sizeof cmd,
+        "'%s/host/host' --quiet --convert '%s/scenes/cornell-box/scene.json' --out '%s/cli.json'",
+        build, root, tmp_root);
     CHECK_MSG(system(cmd) == 0, "%s", cmd);
     snprintf(path, sizeof path, "%s/cli.json", tmp_root);
     s = NULL;
@@ -198,7 +216,9 @@ int main(void) {
     CHECK_MSG(st == TT_OK, "%s", tt_last_error());
     if (st == TT_OK) CHECK(tt_scene_triangle_count(s) == 32 && tt_scene_mesh_count(s) == 8);
     tt_scene_destroy(s);
-    snprintf(cmd, sizeof cmd, "'%s/host/host' --quiet --convert '%s/scenes/cornell-box/scene.json' --out '%s/x.exr' 2>/dev/null",
+    snprintf(cmd, sizeof cmd,
+             "'%s/host/host' --quiet --convert '%s/scenes/cornell-box/scene.json' --out '%s/x.exr' "
+             "2>/dev/null",
              build, root, tmp_root);
     int rc = system(cmd);
     CHECK(rc != -1 && WIFEXITED(rc) && WEXITSTATUS(rc) == 2);

@@ -61,10 +61,10 @@ typedef struct row_check {
 static int on_row(void *user, const tt_tunedb_row *r) {
   row_check *c = user;
   c->rows++;
-  if (r->scene_id && r->scene_id[0] && r->camera && strstr(r->camera, "resolution") &&
-      r->context && strstr(r->context, "\"spp\"") && r->has_indicators && r->plugin &&
-      r->plugin_version && r->config && r->config[0] == '{' && r->objective && r->machine &&
-      r->cpu && r->timestamp && isfinite(r->cost) && r->cost > 0 && r->render_ms >= 0)
+  if (r->scene_id && r->scene_id[0] && r->camera && strstr(r->camera, "resolution") && r->context &&
+      strstr(r->context, "\"spp\"") && r->has_indicators && r->plugin && r->plugin_version &&
+      r->config && r->config[0] == '{' && r->objective && r->machine && r->cpu && r->timestamp &&
+      isfinite(r->cost) && r->cost > 0 && r->render_ms >= 0)
     c->complete++;
   return 0;
 }
@@ -140,8 +140,8 @@ static int check_tuning(const char *stats, const char *plugin, int iterations, i
     tt_config_destroy(cfg);
   }
   /* the final image continues with the best configuration */
-  char *used = cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"),
-                                                          plugin));
+  char *used =
+      cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), plugin));
   CHECK_MSG(!strcmp(used, best_cfg), "params.%s = %s, best %s", plugin, used, best_cfg);
   free(used);
   free(def_cfg);
@@ -166,7 +166,8 @@ static void tune_twice(const char *plugin) {
   char db[4300], stats[4300], args[16384];
   snprintf(db, sizeof db, "%s/%s.db", dir, plugin);
   snprintf(stats, sizeof stats, "%s/%s.json", dir, plugin);
-  snprintf(args, sizeof args, "--plugin tuner_nm --tune %s --iterations 8 --res 32x32 --spp 2 "
+  snprintf(args, sizeof args,
+           "--plugin tuner_nm --tune %s --iterations 8 --res 32x32 --spp 2 "
            "--threads 2 --db '%s' --out '%s/%s.exr' --stats '%s' '%s'",
            plugin, db, dir, plugin, stats, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
@@ -184,11 +185,11 @@ static void tune_twice(const char *plugin) {
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   CHECK_CONTAINS(out, "from the database");
   CHECK_MSG(count_of(out, "came from the database") == 1 &&
-            count_of(out, "earlier measurement") == 0, "one line per answer?\n%s", out);
+                count_of(out, "earlier measurement") == 0,
+            "one line per answer?\n%s", out);
   CHECK_CONTAINS(out, "9 of 9 costs came from the database");
   int measured2 = check_tuning(stats, plugin, 8, &cached);
-  CHECK_MSG(measured2 == 0 && cached == 9, "second run: %d measured, %d cached", measured2,
-            cached);
+  CHECK_MSG(measured2 == 0 && cached == 9, "second run: %d measured, %d cached", measured2, cached);
   /* the answers rendered no pass, the render phase did: the image has the samples of the
    * first run (1 warm-up + 9 measurements of 1 spp, more than --spp 2) */
   cJSON *r1 = first, *r2 = read_json(stats);
@@ -235,18 +236,20 @@ int main(void) {
    * iteration; the stats count the repeats. The search covers thesis Table 3.1's nominal
    * parameters (few configurations: some come back within 40 iterations) */
   snprintf(stats, sizeof stats, "%s/repeats.json", dir);
-  snprintf(args, sizeof args, "--plugin tuner_nm --iterations 40 --res 16x16 --spp 1 --threads 2 "
+  snprintf(args, sizeof args,
+           "--plugin tuner_nm --iterations 40 --res 16x16 --spp 1 --threads 2 "
            "--tune-params quality,static,compact,robust,backend "
-           "--no-db --out '%s/repeats.exr' --stats '%s' '%s'", dir, stats, scene_path);
+           "--no-db --out '%s/repeats.exr' --stats '%s' '%s'",
+           dir, stats, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   {
     cJSON *rr = read_json(stats);
     cJSON *hist = cJSON_GetObjectItem(cJSON_GetObjectItem(rr, "tuning"), "history");
-    int repeats = 0;  /* proposals of a configuration measured before in the run */
+    int repeats = 0; /* proposals of a configuration measured before in the run */
     char *seen[64];
     int nseen = 0;
-    seen[nseen++] = cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetObjectItem(rr, "tuning"),
-                                                               "default_config"));
+    seen[nseen++] = cJSON_PrintUnformatted(
+        cJSON_GetObjectItem(cJSON_GetObjectItem(rr, "tuning"), "default_config"));
     for (int i = 0; i < cJSON_GetArraySize(hist) && nseen < 64; i++) {
       char *c = cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetArrayItem(hist, i), "config"));
       int k = 0;
@@ -260,15 +263,17 @@ int main(void) {
     char line[128];
     snprintf(line, sizeof line, "%d of 40 iterations measured again", repeats);
     CHECK_MSG(count_of(out, "measuring again") == 0 && count_of(out, "measured again") == 1 &&
-              strstr(out, line), "expected one line '%s':\n%s", line, out);
+                  strstr(out, line),
+              "expected one line '%s':\n%s", line, out);
   }
 
   /* exploration: N random configurations, recorded for the analysis tools */
   snprintf(db, sizeof db, "%s/explore.db", dir);
   snprintf(stats, sizeof stats, "%s/explore.json", dir);
-  snprintf(args, sizeof args, "--quiet --explore 6 --objective build+render --res 32x32 --spp 1 "
-           "--threads 2 --db '%s' --out '%s/explore.exr' --stats '%s' '%s'", db, dir, stats,
-           scene_path);
+  snprintf(args, sizeof args,
+           "--quiet --explore 6 --objective build+render --res 32x32 --spp 1 "
+           "--threads 2 --db '%s' --out '%s/explore.exr' --stats '%s' '%s'",
+           db, dir, stats, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   CHECK(db_rows(db, "mode = 'explore' AND objective = 'build+render'") == 6);
   CHECK(db_rows(db, "mode = 'explore' AND build_ms > 0 AND tuner IS NULL") == 6);
@@ -280,9 +285,11 @@ int main(void) {
 
   /* a metric objective: maximising rays_per_s feeds negated values, best <= default */
   snprintf(stats, sizeof stats, "%s/metric.json", dir);
-  snprintf(args, sizeof args, "--quiet --plugin tuner_nm --tune integrator_pt --objective "
+  snprintf(args, sizeof args,
+           "--quiet --plugin tuner_nm --tune integrator_pt --objective "
            "metric:rays_per_s:max --iterations 3 --res 16x16 --spp 1 --no-db --out "
-           "'%s/metric.exr' --stats '%s' '%s'", dir, stats, scene_path);
+           "'%s/metric.exr' --stats '%s' '%s'",
+           dir, stats, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats);
   t = cJSON_GetObjectItem(root, "tuning");
@@ -299,19 +306,23 @@ int main(void) {
     snprintf(path_scene, sizeof path_scene, "%s", source_path("scenes/cornell-box/path.json"));
     snprintf(db, sizeof db, "%s/clock.db", dir);
     snprintf(stats, sizeof stats, "%s/clock.json", dir);
-    snprintf(args, sizeof args, "--quiet --plugin tuner_nm --iterations 3 --res 16x16 --spp 1 "
+    snprintf(args, sizeof args,
+             "--quiet --plugin tuner_nm --iterations 3 --res 16x16 --spp 1 "
              "--threads 1 --clock cpu --camera-index 7 --db '%s' --stats '%s' --out "
-             "'%s/clock.exr' '%s'", db, stats, dir, path_scene);
+             "'%s/clock.exr' '%s'",
+             db, stats, dir, path_scene);
     CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
     long n = db_rows(db, NULL);
     CHECK(n == 4);
-    CHECK(db_rows(db, "context LIKE '%\"clock\":\"cpu\"%' AND camera LIKE '%\"path_index\":7}'") == n);
+    CHECK(db_rows(db, "context LIKE '%\"clock\":\"cpu\"%' AND camera LIKE '%\"path_index\":7}'") ==
+          n);
     root = read_json(stats);
     CHECK(root && !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(root, "clock")), "cpu"));
     cJSON_Delete(root);
-    snprintf(args, sizeof args, "--quiet --plugin tuner_nm --iterations 3 --res 16x16 --spp 1 "
-             "--threads 1 --camera-index 7 --db '%s' --stats '%s' --out '%s/clock.exr' '%s'", db,
-             stats, dir, path_scene);
+    snprintf(args, sizeof args,
+             "--quiet --plugin tuner_nm --iterations 3 --res 16x16 --spp 1 "
+             "--threads 1 --camera-index 7 --db '%s' --stats '%s' --out '%s/clock.exr' '%s'",
+             db, stats, dir, path_scene);
     CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
     root = read_json(stats);
     t = cJSON_GetObjectItem(root, "tuning");
@@ -327,13 +338,17 @@ int main(void) {
   /* no --db: the default location under $XDG_DATA_HOME; --no-db writes nothing */
   char def_db[4400];
   snprintf(def_db, sizeof def_db, "%s/tunetrace/tuning.db", data_home);
-  snprintf(args, sizeof args, "--quiet --plugin tuner_nm --iterations 2 --res 16x16 --spp 1 "
-           "--no-db --out '%s/nodb.exr' '%s'", dir, scene_path);
+  snprintf(args, sizeof args,
+           "--quiet --plugin tuner_nm --iterations 2 --res 16x16 --spp 1 "
+           "--no-db --out '%s/nodb.exr' '%s'",
+           dir, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   struct stat st;
   CHECK(stat(def_db, &st) != 0);
-  snprintf(args, sizeof args, "--quiet --plugin tuner_nm --iterations 2 --res 16x16 --spp 1 "
-           "--out '%s/defdb.exr' '%s'", dir, scene_path);
+  snprintf(args, sizeof args,
+           "--quiet --plugin tuner_nm --iterations 2 --res 16x16 --spp 1 "
+           "--out '%s/defdb.exr' '%s'",
+           dir, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   CHECK(stat(def_db, &st) == 0);
   /* with a tuner and no --tune, integrator_pt (no tuning hint) leaves the target to the accel */
@@ -341,19 +356,24 @@ int main(void) {
   CHECK(db_rows(def_db, "plugin <> 'accel_embree'") == 0);
 
   /* usage errors: exit 2 with a message naming the problem */
-  struct { const char *args; const char *msg; } bad[] = {
-    {"--plugin tuner_nm --tune nope", "no loaded plugin is called \"nope\""},
-    {"--plugin tuner_nm --tune tuner_nm", "cannot be tuned"},
-    {"--plugin tuner_nm --objective fastest", "unknown objective \"fastest\""},
-    {"--plugin tuner_nm --objective metric:x:sometimes", ":target=NUMBER"},
-    {"--plugin tuner_nm --tune integrator_pt --objective build+render", "only an accel target"},
-    {"--plugin tuner_nm --objective metric:no_such_metric", "no finite metric \"no_such_metric\""},
-    {"--tune accel_embree", "needs a tuner plugin"},
-    {"--iterations 4", "needs a tuner plugin"},
+  struct {
+    const char *args;
+    const char *msg;
+  } bad[] = {
+      {"--plugin tuner_nm --tune nope", "no loaded plugin is called \"nope\""},
+      {"--plugin tuner_nm --tune tuner_nm", "cannot be tuned"},
+      {"--plugin tuner_nm --objective fastest", "unknown objective \"fastest\""},
+      {"--plugin tuner_nm --objective metric:x:sometimes", ":target=NUMBER"},
+      {"--plugin tuner_nm --tune integrator_pt --objective build+render", "only an accel target"},
+      {"--plugin tuner_nm --objective metric:no_such_metric",
+       "no finite metric \"no_such_metric\""},
+      {"--tune accel_embree", "needs a tuner plugin"},
+      {"--iterations 4", "needs a tuner plugin"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-    snprintf(args, sizeof args, "%s --no-db --iterations 2 --res 8x8 --spp 1 --out '%s/bad.exr' '%s'",
-             bad[i].args, dir, scene_path);
+    snprintf(args, sizeof args,
+             "%s --no-db --iterations 2 --res 8x8 --spp 1 --out '%s/bad.exr' '%s'", bad[i].args,
+             dir, scene_path);
     int rc = run_host(args, out, sizeof out);
     CHECK_MSG(rc == 2, "%s: exit %d", bad[i].args, rc);
     CHECK_CONTAINS(out, bad[i].msg);
@@ -364,9 +384,26 @@ int main(void) {
   snprintf(stats, sizeof stats, "%s/sigint.json", dir);
   snprintf(exr, sizeof exr, "%s/sigint.exr", dir);
   {
-    char *argv[] = {(char *)host_path(), "--quiet", "--plugin", "tuner_nm", "--iterations",
-                    "1000000", "--res", "32x32", "--spp", "4", "--threads", "2", "--db", db,
-                    "--out", exr, "--stats", stats, scene_path, NULL};
+    char *argv[] = {(char *)host_path(),
+                    "--quiet",
+                    "--plugin",
+                    "tuner_nm",
+                    "--iterations",
+                    "1000000",
+                    "--res",
+                    "32x32",
+                    "--spp",
+                    "4",
+                    "--threads",
+                    "2",
+                    "--db",
+                    db,
+                    "--out",
+                    exr,
+                    "--stats",
+                    stats,
+                    scene_path,
+                    NULL};
     pid_t pid = spawn_host(argv);
     CHECK(pid > 0);
     for (int i = 0; i < 200 && db_rows(db, NULL) < 3; i++) sleep_ms(25);
@@ -386,9 +423,24 @@ int main(void) {
   /* SIGKILL during tuning: every committed iteration stays readable */
   snprintf(db, sizeof db, "%s/sigkill.db", dir);
   {
-    char *argv[] = {(char *)host_path(), "--quiet", "--plugin", "tuner_nm", "--iterations",
-                    "1000000", "--res", "32x32", "--spp", "1", "--threads", "2", "--db", db,
-                    "--out", exr, scene_path, NULL};
+    char *argv[] = {(char *)host_path(),
+                    "--quiet",
+                    "--plugin",
+                    "tuner_nm",
+                    "--iterations",
+                    "1000000",
+                    "--res",
+                    "32x32",
+                    "--spp",
+                    "1",
+                    "--threads",
+                    "2",
+                    "--db",
+                    db,
+                    "--out",
+                    exr,
+                    scene_path,
+                    NULL};
     pid_t pid = spawn_host(argv);
     CHECK(pid > 0);
     for (int i = 0; i < 200 && db_rows(db, NULL) < 1; i++) sleep_ms(25);

@@ -50,24 +50,26 @@ static void test_space_api(void) {
   CHECK(tt_space_is_tunable(s, ix) && tt_space_is_tunable(s, im) && !tt_space_is_tunable(s, id));
   CHECK(!tt_space_is_tunable(s, 99));
   CHECK(tt_space_condition_count(s, ix) == 1 && tt_space_condition_count(s, im) == 0);
-  CHECK(tt_space_condition_parent(s, ix, 0) == (int)im);  /* a parent after its child */
+  CHECK(tt_space_condition_parent(s, ix, 0) == (int)im); /* a parent after its child */
   CHECK(!tt_space_condition_allows(s, ix, 0, 0) && tt_space_condition_allows(s, ix, 0, 1) &&
         tt_space_condition_allows(s, ix, 0, 2));
 
   /* active and canonical forms */
   tt_config *c = tt_config_create(s), *base = tt_config_create(s);
   CHECK(!tt_config_is_active(c, ix) && !tt_config_is_active(c, iy) && tt_config_is_active(c, im));
-  CHECK(tt_config_set_string(c, "x", "6") == TT_OK && tt_config_set_string(c, "y", "0.9") == TT_OK &&
+  CHECK(tt_config_set_string(c, "x", "6") == TT_OK &&
+        tt_config_set_string(c, "y", "0.9") == TT_OK &&
         tt_config_set_string(c, "debug", "true") == TT_OK);
-  CHECK(tt_config_canonicalize(c, NULL) == 3);  /* x, y inactive under mode a; debug a setting */
+  CHECK(tt_config_canonicalize(c, NULL) == 3); /* x, y inactive under mode a; debug a setting */
   CHECK(tt_config_equal(c, base));
-  CHECK(tt_config_set_string(c, "mode", "b") == TT_OK && tt_config_set_string(c, "x", "6") == TT_OK &&
-        tt_config_set_string(c, "y", "0.9") == TT_OK);
+  CHECK(tt_config_set_string(c, "mode", "b") == TT_OK &&
+        tt_config_set_string(c, "x", "6") == TT_OK && tt_config_set_string(c, "y", "0.9") == TT_OK);
   CHECK(tt_config_is_active(c, ix) && !tt_config_is_active(c, iy));
   CHECK(tt_config_canonicalize(c, NULL) == 1 && tt_config_get_int(c, "x", 0) == 6 &&
         tt_config_get_float(c, "y", 0) == 0.5);
   /* a base other than the defaults: inactive parameters take its values */
-  CHECK(tt_config_set_string(base, "y", "0.125") == TT_OK && tt_config_set_string(base, "debug", "true") == TT_OK);
+  CHECK(tt_config_set_string(base, "y", "0.125") == TT_OK &&
+        tt_config_set_string(base, "debug", "true") == TT_OK);
   CHECK(tt_config_canonicalize(c, base) == 2 && tt_config_get_float(c, "y", 0) == 0.125 &&
         tt_config_get_int(c, "debug", 0) == 1);
 
@@ -89,21 +91,28 @@ static void test_space_api(void) {
   } bad[] = {
       {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"tunable\": 1}",
        "bad.json: parameters[0].tunable: expected true or false"},
-      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": {\"mdoe\": [\"a\"]}},"
+      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": "
+       "{\"mdoe\": [\"a\"]}},"
        "{\"name\": \"mode\", \"type\": \"NOM\", \"possibleValues\": [\"a\"], \"value\": \"a\"}",
        "did you mean \"mode\""},
-      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": {\"mode\": [\"z\"]}},"
+      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": "
+       "{\"mode\": [\"z\"]}},"
        "{\"name\": \"mode\", \"type\": \"NOM\", \"possibleValues\": [\"a\"], \"value\": \"a\"}",
        "\"z\" is not a value of mode"},
-      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": {\"q\": [0]}},"
+      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": "
+       "{\"q\": [0]}},"
        "{\"name\": \"q\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0}",
        "not a NOM parameter"},
-      {"{\"name\": \"p\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 1, \"activeWhen\": {\"p\": [1]}}",
+      {"{\"name\": \"p\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 1, "
+       "\"activeWhen\": {\"p\": [1]}}",
        "its own ancestor"},
-      {"{\"name\": \"p\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 1, \"activeWhen\": {\"q\": [1]}},"
-       "{\"name\": \"q\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 1, \"activeWhen\": {\"p\": [2]}}",
+      {"{\"name\": \"p\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 1, "
+       "\"activeWhen\": {\"q\": [1]}},"
+       "{\"name\": \"q\", \"type\": \"NOM\", \"possibleValues\": [1, 2], \"value\": 1, "
+       "\"activeWhen\": {\"p\": [2]}}",
        "its own ancestor"},
-      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": {\"mode\": []}},"
+      {"{\"name\": \"p\", \"type\": \"INT\", \"min\": 0, \"max\": 1, \"value\": 0, \"activeWhen\": "
+       "{\"mode\": []}},"
        "{\"name\": \"mode\", \"type\": \"NOM\", \"possibleValues\": [\"a\"], \"value\": \"a\"}",
        "parameters[0].activeWhen.mode: expected a non-empty array"},
   };
@@ -122,16 +131,17 @@ static void test_space_api(void) {
 
   /* subsets: a condition on a parameter left out is decided by its fixed value */
   const char *only_x[] = {"x", "debug"};
-  tt_space *sub_a = tt_space_subset(s, only_x, 2, NULL);  /* mode fixed at a: x never acts */
+  tt_space *sub_a = tt_space_subset(s, only_x, 2, NULL); /* mode fixed at a: x never acts */
   CHECK(sub_a && !tt_space_is_tunable(sub_a, 0) && !tt_space_is_tunable(sub_a, 1) &&
         tt_space_condition_count(sub_a, 0) == 0);
   tt_config *fix = tt_config_create(s);
   CHECK(tt_config_set_string(fix, "mode", "b") == TT_OK);
-  tt_space *sub_b = tt_space_subset(s, only_x, 2, fix);  /* mode fixed at b: x acts */
+  tt_space *sub_b = tt_space_subset(s, only_x, 2, fix); /* mode fixed at b: x acts */
   CHECK(sub_b && tt_space_is_tunable(sub_b, 0) && tt_space_condition_count(sub_b, 0) == 0);
   const char *xm[] = {"x", "mode"};
-  tt_space *sub_m = tt_space_subset(s, xm, 2, NULL);  /* both in: the condition is copied */
-  CHECK(sub_m && tt_space_condition_count(sub_m, 0) == 1 && tt_space_condition_parent(sub_m, 0, 0) == 1);
+  tt_space *sub_m = tt_space_subset(s, xm, 2, NULL); /* both in: the condition is copied */
+  CHECK(sub_m && tt_space_condition_count(sub_m, 0) == 1 &&
+        tt_space_condition_parent(sub_m, 0, 0) == 1);
   tt_space_destroy(sub_a);
   tt_space_destroy(sub_b);
   tt_space_destroy(sub_m);
@@ -194,8 +204,10 @@ static void test_tuners(tt_registry *reg, const char *random_path) {
   seen v = {0}, r = {0};
   double best = drive(tt_loaded_plugin_iface(nm), s, &v, 60);
   CHECK(v.proposals == 60 && v.distinct > 10);
-  CHECK_MSG(v.not_canonical == 0, "tuner_nm: %d of %d proposals set parameters that do "
-            "nothing away from their defaults", v.not_canonical, v.proposals);
+  CHECK_MSG(v.not_canonical == 0,
+            "tuner_nm: %d of %d proposals set parameters that do "
+            "nothing away from their defaults",
+            v.not_canonical, v.proposals);
   CHECK_MSG(v.debug_changed == 0, "tuner_nm changed the setting debug %d times", v.debug_changed);
   /* mode a is one configuration, however many x and y the simplex passes through */
   int mode_a = 0;
@@ -203,8 +215,10 @@ static void test_tuners(tt_registry *reg, const char *random_path) {
   CHECK_MSG(mode_a <= 1, "tuner_nm measured %d configurations of mode a", mode_a);
   CHECK_MSG(best < 1.2, "tuner_nm best %g (the minimum is 1 at mode c)", best);
   drive(tt_loaded_plugin_iface(rnd), s, &r, 40);
-  CHECK_MSG(r.not_canonical == 0 && r.debug_changed == 0, "tuner_random: %d not canonical, "
-            "debug changed %d times", r.not_canonical, r.debug_changed);
+  CHECK_MSG(r.not_canonical == 0 && r.debug_changed == 0,
+            "tuner_random: %d not canonical, "
+            "debug changed %d times",
+            r.not_canonical, r.debug_changed);
   seen_free(&v);
   seen_free(&r);
   tt_space_destroy(s);
@@ -238,7 +252,7 @@ static void test_session(tt_registry *reg) {
   tt_space *s = tt_space_from_json(space_json, "marked.json");
   if (!s) return;
   tt_config *start = tt_config_create(s);
-  CHECK(tt_config_set_string(start, "debug", "true") == TT_OK);  /* the user's --set */
+  CHECK(tt_config_set_string(start, "debug", "true") == TT_OK); /* the user's --set */
   tt_tuning_desc d;
   memset(&d, 0, sizeof d);
   d.struct_size = sizeof d;
@@ -269,7 +283,7 @@ static void test_session(tt_registry *reg) {
   tt_tuning_destroy(t);
 
   /* the session hands a tuner a space without the setting (tuner_nm sees 3 parameters) */
-  tt_loaded_plugin *nm = tt_registry_find_kind(reg, TT_KIND_TUNER);  /* test_tuners' */
+  tt_loaded_plugin *nm = tt_registry_find_kind(reg, TT_KIND_TUNER); /* test_tuners' */
   d.tuner = nm ? tt_loaded_plugin_iface(nm) : NULL;
   d.tuner_name = "tuner_nm";
   d.iterations = 30;
@@ -282,7 +296,7 @@ static void test_session(tt_registry *reg) {
 
   /* nothing left to search: an error naming what was left out */
   const char *names[] = {"x", "debug"};
-  tt_space *sub = tt_space_subset(s, names, 2, NULL);  /* mode fixed at a: x never acts */
+  tt_space *sub = tt_space_subset(s, names, 2, NULL); /* mode fixed at a: x never acts */
   d.tuner = NULL;
   d.search = sub;
   t = NULL;

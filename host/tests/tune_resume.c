@@ -56,19 +56,22 @@ int main(void) {
   snprintf(state, sizeof state, "%s/state.json", dir);
   snprintf(img, sizeof img, "%s/i.exr", dir);
 
-  snprintf(args, sizeof args, "%s --iterations 14 --stats '%s' --out '%s' '%s'", common, full, img, scene);
+  snprintf(args, sizeof args, "%s --iterations 14 --stats '%s' --out '%s' '%s'", common, full, img,
+           scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   char *ref = history(full);
   CHECK(strlen(ref) > 0);
 
-  snprintf(args, sizeof args, "%s --iterations 6 --resume '%s' --stats '%s' --out '%s' '%s'", common,
-           state, part, img, scene);
+  snprintf(args, sizeof args, "%s --iterations 6 --resume '%s' --stats '%s' --out '%s' '%s'",
+           common, state, part, img, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   struct stat st;
   CHECK(stat(state, &st) == 0 && st.st_size > 0);
-  snprintf(args, sizeof args, "--quiet --plugin integrator_pssmlt --plugin tuner_nm --res 12x12 "
+  snprintf(args, sizeof args,
+           "--quiet --plugin integrator_pssmlt --plugin tuner_nm --res 12x12 "
            "--spp 1 --threads 1 --no-db --set integrator_pssmlt.bootstrapSamples=2000 "
-           "--iterations 14 --resume '%s' --stats '%s' --out '%s' '%s'", state, part, img, scene);
+           "--iterations 14 --resume '%s' --stats '%s' --out '%s' '%s'",
+           state, part, img, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   char *got = history(part);
   CHECK_MSG(!strcmp(ref, got), "resumed trajectory differs:\n%s\nvs\n%s", got, ref);
@@ -82,10 +85,29 @@ int main(void) {
   char state2[512];
   snprintf(state2, sizeof state2, "%s/state2.json", dir);
   snprintf(args, sizeof args, "%s/full2.json", dir);
-  char *argv[] = {(char *)host_path(), "--quiet", "--plugin", "integrator_pssmlt", "--plugin",
-                  "tuner_nm", "--res", "12x12", "--spp", "1", "--threads", "1", "--no-db",
-                  "--set", "integrator_pssmlt.bootstrapSamples=2000", "--iterations", "400",
-                  "--resume", state2, "--out", img, (char *)scene, NULL};
+  char *argv[] = {(char *)host_path(),
+                  "--quiet",
+                  "--plugin",
+                  "integrator_pssmlt",
+                  "--plugin",
+                  "tuner_nm",
+                  "--res",
+                  "12x12",
+                  "--spp",
+                  "1",
+                  "--threads",
+                  "1",
+                  "--no-db",
+                  "--set",
+                  "integrator_pssmlt.bootstrapSamples=2000",
+                  "--iterations",
+                  "400",
+                  "--resume",
+                  state2,
+                  "--out",
+                  img,
+                  (char *)scene,
+                  NULL};
   pid_t pid;
   CHECK(posix_spawn(&pid, host_path(), NULL, NULL, argv, environ) == 0);
   for (int i = 0; i < 400 && stat(state2, &st) != 0; i++) {
@@ -100,17 +122,19 @@ int main(void) {
   CHECK(stat(state2, &st) == 0 && st.st_size > 0);
   char stats2[512];
   snprintf(stats2, sizeof stats2, "%s/resumed2.json", dir);
-  snprintf(args, sizeof args, "%s --iterations 20 --resume '%s' --stats '%s' --out '%s' '%s'", common,
-           state2, stats2, img, scene);
+  snprintf(args, sizeof args, "%s --iterations 20 --resume '%s' --stats '%s' --out '%s' '%s'",
+           common, state2, stats2, img, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats2);
   t = root ? cJSON_GetObjectItem(root, "tuning") : NULL;
-  CHECK(t && num(t, "iterations") >= 20);  /* the killed run may have done more than 20 */
+  CHECK(t && num(t, "iterations") >= 20); /* the killed run may have done more than 20 */
   cJSON_Delete(root);
 
   /* another search's state: refused, exit 2, the file left as it is */
-  snprintf(args, sizeof args, "%s --iterations 4 --objective metric:acceptance:max --resume '%s' "
-           "--out '%s' '%s'", common, state, img, scene);
+  snprintf(args, sizeof args,
+           "%s --iterations 4 --objective metric:acceptance:max --resume '%s' "
+           "--out '%s' '%s'",
+           common, state, img, scene);
   long before = stat(state, &st) == 0 ? st.st_size : -1;
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, state);
@@ -119,7 +143,8 @@ int main(void) {
   FILE *f = fopen(state, "w");
   fputs("{\"not\": \"a state\"}", f);
   fclose(f);
-  snprintf(args, sizeof args, "%s --iterations 4 --resume '%s' --out '%s' '%s'", common, state, img, scene);
+  snprintf(args, sizeof args, "%s --iterations 4 --resume '%s' --out '%s' '%s'", common, state, img,
+           scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "not a tuning session state");
   /* nothing after the saved state is read: text appended to it, or behind a NUL byte */

@@ -99,12 +99,14 @@ int main(void) {
   snprintf(scene_path, sizeof scene_path, "%s", source_path("scenes/cornell-box/scene.json"));
   char data_home[4300];
   snprintf(data_home, sizeof data_home, "%s/data", dir);
-  setenv("XDG_DATA_HOME", data_home, 1);  /* never touch the user's own database */
+  setenv("XDG_DATA_HOME", data_home, 1); /* never touch the user's own database */
 
   /* the reference: a 24x24 path-traced render */
   snprintf(ref, sizeof ref, "%s/ref.exr", dir);
-  snprintf(args, sizeof args, "--plugin integrator_pt --res 24x24 --spp 32 --seed 99 --threads 2 "
-           "--quiet --out '%s' '%s'", ref, scene_path);
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --res 24x24 --spp 32 --seed 99 --threads 2 "
+           "--quiet --out '%s' '%s'",
+           ref, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   uint32_t rw = 0, rh = 0;
   double *R = read_lum(ref, &rw, &rh);
@@ -116,7 +118,8 @@ int main(void) {
   snprintf(stats, sizeof stats, "%s/pt.json", dir);
   snprintf(passes, sizeof passes, "%s/pt_passes", dir);
   snprintf(db, sizeof db, "%s/pt.db", dir);
-  snprintf(args, sizeof args, "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
            "--objective rrmse --reference '%s' --iterations 4 --res 24x24 --spp 1 --seed 7 "
            "--threads 2 --db '%s' --tune-pass-images '%s' --out '%s/pt.exr' --stats '%s' '%s'",
            ref, db, passes, dir, stats, scene_path);
@@ -128,11 +131,15 @@ int main(void) {
   char p1[4400], p2[4400];
   snprintf(p1, sizeof p1, "%s/plain1.exr", dir);
   snprintf(p2, sizeof p2, "%s/plain2.exr", dir);
-  snprintf(args, sizeof args, "--plugin integrator_pt --res 24x24 --spp 1 --seed 7 --threads 2 "
-           "--quiet --out '%s' '%s'", p1, scene_path);
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --res 24x24 --spp 1 --seed 7 --threads 2 "
+           "--quiet --out '%s' '%s'",
+           p1, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
-  snprintf(args, sizeof args, "--plugin integrator_pt --res 24x24 --spp 2 --seed 7 --threads 2 "
-           "--quiet --out '%s' '%s'", p2, scene_path);
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --res 24x24 --spp 2 --seed 7 --threads 2 "
+           "--quiet --out '%s' '%s'",
+           p2, scene_path);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   {
     uint32_t w, h;
@@ -160,8 +167,10 @@ int main(void) {
     sqlite3_stmt *st = NULL;
     long rows = -1, with_ref = -1;
     if (sqlite3_open_v2(db, &s, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
-        sqlite3_prepare_v2(s, "SELECT count(*), sum(context LIKE '%\"reference\"%fnv1a64%') "
-                           "FROM samples WHERE objective = 'rrmse'", -1, &st, NULL) == SQLITE_OK &&
+        sqlite3_prepare_v2(s,
+                           "SELECT count(*), sum(context LIKE '%\"reference\"%fnv1a64%') "
+                           "FROM samples WHERE objective = 'rrmse'",
+                           -1, &st, NULL) == SQLITE_OK &&
         sqlite3_step(st) == SQLITE_ROW) {
       rows = sqlite3_column_int64(st, 0);
       with_ref = sqlite3_column_int64(st, 1);
@@ -175,7 +184,8 @@ int main(void) {
   /* PSSMLT on the Cornell box, its hint's space, rrmse objective: completes, costs check */
   snprintf(stats, sizeof stats, "%s/mlt.json", dir);
   snprintf(passes, sizeof passes, "%s/mlt_passes", dir);
-  snprintf(args, sizeof args, "--plugin integrator_pssmlt --plugin tuner_nm --objective rrmse "
+  snprintf(args, sizeof args,
+           "--plugin integrator_pssmlt --plugin tuner_nm --objective rrmse "
            "--reference '%s' --iterations 6 --tune-spp 2 --res 24x24 --spp 2 --seed 3 "
            "--threads 2 --set integrator_pssmlt.bootstrapSamples=10000 --no-db "
            "--tune-pass-images '%s' --out '%s/mlt.exr' --stats '%s' '%s'",
@@ -185,8 +195,8 @@ int main(void) {
   {
     cJSON *root = read_json(stats);
     cJSON *t = root ? cJSON_GetObjectItem(root, "tuning") : NULL;
-    CHECK(t && !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(t, "plugin")),
-                       "integrator_pssmlt"));
+    CHECK(t &&
+          !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(t, "plugin")), "integrator_pssmlt"));
     CHECK(t && num(t, "iterations") == 6);
     CHECK(t && num(t, "best_cost") <= num(t, "default_cost"));
     cJSON_Delete(root);
@@ -199,9 +209,11 @@ int main(void) {
   }
 
   /* usage errors */
-  snprintf(args, sizeof args, "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
+  snprintf(args, sizeof args,
+           "--plugin integrator_pt --plugin tuner_nm --tune accel_embree "
            "--objective rrmse --reference '%s' --iterations 2 --res 16x12 --no-db --out "
-           "'%s/bad.exr' '%s'", ref, dir, scene_path);
+           "'%s/bad.exr' '%s'",
+           ref, dir, scene_path);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, ref);
   CHECK_CONTAINS(out, "24x24");
@@ -214,8 +226,10 @@ int main(void) {
            scene_path);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "only --objective rrmse uses a reference");
-  snprintf(args, sizeof args, "--plugin tuner_nm --tune accel_embree --objective rrmse "
-           "--reference '%s/missing.exr' --res 24x24 --no-db '%s'", dir, scene_path);
+  snprintf(args, sizeof args,
+           "--plugin tuner_nm --tune accel_embree --objective rrmse "
+           "--reference '%s/missing.exr' --res 24x24 --no-db '%s'",
+           dir, scene_path);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "missing.exr");
 

@@ -37,16 +37,20 @@ int main(void) {
   /* accel: with the default backend (native) maxLeafSize and intcost do nothing: refused,
    * naming them (#17 defect 9) */
   snprintf(stats, sizeof stats, "%s/a.json", dir);
-  snprintf(args, sizeof args, "--quiet --no-db --res 24x24 --spp 1 --threads 1 --plugin tuner_nm "
+  snprintf(args, sizeof args,
+           "--quiet --no-db --res 24x24 --spp 1 --threads 1 --plugin tuner_nm "
            "--tune accel_embree --tune-params maxLeafSize,intcost --iterations 12 "
-           "--stats %s --out %s/a.exr '%s'", stats, dir, scene);
+           "--stats %s --out %s/a.exr '%s'",
+           stats, dir, scene);
   CHECK(run_host(args, out, sizeof out) != 0);
   CHECK_CONTAINS(out, "nothing to search: maxLeafSize, intcost are not tunable");
   /* accel, backend custom: only maxLeafSize and intcost move */
-  snprintf(args, sizeof args, "--quiet --no-db --res 24x24 --spp 1 --threads 1 --plugin tuner_nm "
+  snprintf(args, sizeof args,
+           "--quiet --no-db --res 24x24 --spp 1 --threads 1 --plugin tuner_nm "
            "--tune accel_embree --tune-params maxLeafSize,intcost --iterations 12 "
            "--set accel_embree.backend=custom --set accel_embree.maxLeafSize=16 --stats %s "
-           "--out %s/a.exr '%s'", stats, dir, scene);
+           "--out %s/a.exr '%s'",
+           stats, dir, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   cJSON *root = read_json(stats);
   CHECK(root != NULL);
@@ -64,18 +68,21 @@ int main(void) {
 
   /* PSSMLT's hint: binning on, only a_i / sigma_i / sigma searched, maxDepth kept */
   snprintf(stats, sizeof stats, "%s/b.json", dir);
-  snprintf(args, sizeof args, "--quiet --no-db --res 24x24 --spp 2 --threads 1 "
+  snprintf(args, sizeof args,
+           "--quiet --no-db --res 24x24 --spp 2 --threads 1 "
            "--plugin integrator_pssmlt --plugin tuner_nm --iterations 6 "
            "--set integrator_pssmlt.bootstrapSamples=2000 --set integrator_pssmlt.chains=64 "
-           "--stats %s --out %s/b.exr '%s'", stats, dir, scene);
+           "--stats %s --out %s/b.exr '%s'",
+           stats, dir, scene);
   CHECK_MSG(run_host(args, out, sizeof out) == 0, "%s", out);
   root = read_json(stats);
   CHECK(root != NULL);
   if (root) {
     cJSON *t = cJSON_GetObjectItem(root, "tuning");
     CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(t, "plugin")), "integrator_pssmlt"));
-    const char *allowed[] = {"a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8", "sigma1", "sigma2",
-                             "sigma3", "sigma4", "sigma5", "sigma6", "sigma7", "sigma"};
+    const char *allowed[] = {"a1",     "a2",     "a3",     "a4",     "a5",     "a6",
+                             "a7",     "a8",     "sigma1", "sigma2", "sigma3", "sigma4",
+                             "sigma5", "sigma6", "sigma7", "sigma"};
     int inside = 0;
     CHECK(changed_outside(t, allowed, 16, &inside) == 0);
     CHECK(inside > 0);
@@ -86,8 +93,10 @@ int main(void) {
   }
 
   /* errors */
-  snprintf(args, sizeof args, "--quiet --no-db --plugin tuner_nm --tune accel_embree "
-           "--tune-params maxLeafSize,nonsense '%s'", scene);
+  snprintf(args, sizeof args,
+           "--quiet --no-db --plugin tuner_nm --tune accel_embree "
+           "--tune-params maxLeafSize,nonsense '%s'",
+           scene);
   CHECK(run_host(args, out, sizeof out) == 2);
   CHECK_CONTAINS(out, "no parameter \"nonsense\"");
   CHECK(run_host("--tune-params a,,b x.json", out, sizeof out) == 2);

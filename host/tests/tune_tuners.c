@@ -63,7 +63,8 @@ static void db_last_run(const char *path, char *buf, size_t n) {
   buf[0] = 0;
   if (sqlite3_open_v2(path, &db, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
       sqlite3_prepare_v2(db, "SELECT run_id FROM samples ORDER BY id DESC LIMIT 1", -1, &st,
-                         NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW)
+                         NULL) == SQLITE_OK &&
+      sqlite3_step(st) == SQLITE_ROW)
     snprintf(buf, n, "%s", (const char *)sqlite3_column_text(st, 0));
   sqlite3_finalize(st);
   sqlite3_close(db);
@@ -73,7 +74,8 @@ static void db_last_run(const char *path, char *buf, size_t n) {
 static cJSON *tune_nm(const char *db, const char *name, const char *extra, int iterations) {
   char stats[4400], args[16384];
   snprintf(stats, sizeof stats, "%s/%s.json", dir, name);
-  snprintf(args, sizeof args, "--plugin tuner_nm --tune accel_embree --iterations %d --res 8x8 "
+  snprintf(args, sizeof args,
+           "--plugin tuner_nm --tune accel_embree --iterations %d --res 8x8 "
            "--spp 1 --threads 1 --db '%s' --out '%s/%s.exr' --stats '%s' %s '%s'",
            iterations, db, dir, name, stats, extra, scene_path);
   int rc = run_host(args, out, sizeof out);
@@ -133,7 +135,8 @@ static void test_reevaluate(void) {
   CHECK_MSG(differ >= 1, "no repeated measurement gave a new cost");
   CHECK_MSG(rebuilt >= 1, "no repeated measurement rebuilt the accel");
   printf("reevaluate=1: a configuration measured %d times in one run; %d repeats with a new "
-         "cost, %d rebuilt\n", rep, differ, rebuilt);
+         "cost, %d rebuilt\n",
+         rep, differ, rebuilt);
   /* one row per measurement, repeats included */
   CHECK(db_int(db, "SELECT count(*) FROM samples") == 261);
   long most = db_int(db, "SELECT max(c) FROM (SELECT count(*) AS c FROM samples GROUP BY config)");
@@ -141,7 +144,7 @@ static void test_reevaluate(void) {
   /* the repeats are said once, counted: samples minus distinct configurations */
   {
     cJSON *hist = cJSON_GetObjectItem(t, "history");
-    int n = cJSON_GetArraySize(hist), distinct = 1;  /* the default */
+    int n = cJSON_GetArraySize(hist), distinct = 1; /* the default */
     char *def = cJSON_PrintUnformatted(cJSON_GetObjectItem(t, "default_config"));
     for (int i = 0; i < n; i++) {
       char *ci = cfg_of(cJSON_GetArrayItem(hist, i));
@@ -191,8 +194,7 @@ static void test_reevaluate(void) {
     else if (db_config_rows(db, ci, run2) > 0) bad++;
     free(ci);
   }
-  CHECK_MSG(bad == 0, "second run: %d configurations measured although the database had them",
-            bad);
+  CHECK_MSG(bad == 0, "second run: %d configurations measured although the database had them", bad);
   printf("second run: %g measured, %g cached, %d re-measured incumbents\n",
          t2 ? num(t2, "measured") : -1, t2 ? num(t2, "cached") : -1, remeasured);
   cJSON_Delete(root2);
@@ -217,7 +219,8 @@ static void test_random(void) {
   snprintf(stats, sizeof stats, "%s/random.json", dir);
   /* backend custom and compact false (set, not searched): travcost and intcost act, so the
    * hypercube over them is not canonicalised away (they do nothing with backend native) */
-  snprintf(args, sizeof args, "--plugin tuner_random --tune accel_embree --iterations 20 "
+  snprintf(args, sizeof args,
+           "--plugin tuner_random --tune accel_embree --iterations 20 "
            "--set accel_embree.backend=custom --tune-params travcost,intcost,maxLeafSize,quality "
            "--res 16x16 --spp 1 --threads 1 --db '%s' --out '%s/random.exr' --stats '%s' '%s'",
            db, dir, stats, scene_path);
@@ -252,7 +255,8 @@ static void test_random(void) {
       int k = (int)((v - 0.1) / 9.9 * 16);
       if (k >= 0 && k < 16) hit[k]++;
     }
-    for (int k = 0; k < 16; k++) CHECK_MSG(hit[k] == 1, "%s stratum %d hit %d times", names[p], k, hit[k]);
+    for (int k = 0; k < 16; k++)
+      CHECK_MSG(hit[k] == 1, "%s stratum %d hit %d times", names[p], k, hit[k]);
   }
   cJSON_Delete(root);
 }
@@ -260,9 +264,11 @@ static void test_random(void) {
 static void test_verify(void) {
   char stats[4400], args[16384];
   snprintf(stats, sizeof stats, "%s/verify.json", dir);
-  snprintf(args, sizeof args, "--plugin tuner_random --tune accel_embree --objective "
+  snprintf(args, sizeof args,
+           "--plugin tuner_random --tune accel_embree --objective "
            "build+render --iterations 6 --verify 5 --res 16x16 --spp 1 --threads 1 --no-db "
-           "--out '%s/verify.exr' --stats '%s' '%s'", dir, stats, scene_path);
+           "--out '%s/verify.exr' --stats '%s' '%s'",
+           dir, stats, scene_path);
   int rc = run_host(args, out, sizeof out);
   CHECK_MSG(rc == 0, "exit %d: %.2000s", rc, out);
   CHECK_CONTAINS(out, "verify, 5 rounds side by side");
@@ -288,15 +294,23 @@ static void test_verify(void) {
       double bb = cJSON_GetNumberValue(cJSON_GetArrayItem(cJSON_GetObjectItem(b, "build_ms"), r));
       double dc = cJSON_GetNumberValue(cJSON_GetArrayItem(cJSON_GetObjectItem(d, "cost"), r));
       CHECK(dr > 0 && br > 0 && db > 0 && bb > 0);
-      CHECK_NEAR(dc, db + dr, 1e-9 * dc);  /* build+render objective */
+      CHECK_NEAR(dc, db + dr, 1e-9 * dc); /* build+render objective */
       ratios[r] = br / dr;
       tot[r] = (bb + br) / (db + dr);
     }
     /* the reported ratios are the medians of the per-round ratios */
     for (int i = 0; i < 5; i++)
       for (int j = i + 1; j < 5; j++) {
-        if (ratios[j] < ratios[i]) { double x = ratios[i]; ratios[i] = ratios[j]; ratios[j] = x; }
-        if (tot[j] < tot[i]) { double x = tot[i]; tot[i] = tot[j]; tot[j] = x; }
+        if (ratios[j] < ratios[i]) {
+          double x = ratios[i];
+          ratios[i] = ratios[j];
+          ratios[j] = x;
+        }
+        if (tot[j] < tot[i]) {
+          double x = tot[i];
+          tot[i] = tot[j];
+          tot[j] = x;
+        }
       }
     CHECK_NEAR(num(v, "render_ratio"), ratios[2], 1e-12);
     CHECK_NEAR(num(v, "total_ratio"), tot[2], 1e-12);
@@ -306,8 +320,8 @@ static void test_verify(void) {
     char *best = cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "best_config"));
     char *def = cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "default_config"));
     char *kept = cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "kept_config"));
-    char *used = cJSON_PrintUnformatted(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"),
-                                                            "accel_embree"));
+    char *used = cJSON_PrintUnformatted(
+        cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree"));
     const char *reason = cJSON_GetStringValue(cJSON_GetObjectItem(tj, "kept_reason"));
     CHECK_MSG(!strcmp(used, kept), "final passes used %s, kept %s", used, kept);
     if (!strcmp(best, def)) {
@@ -316,7 +330,7 @@ static void test_verify(void) {
       CHECK_MSG(verdict && !strcmp(verdict, "confirmed") && !strcmp(kept, best), "%s", verdict);
     } else {
       CHECK_MSG(verdict && !strcmp(verdict, "rejected") && !strcmp(kept, def) &&
-                !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(tj, "kept")), "default"),
+                    !strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(tj, "kept")), "default"),
                 "%s", verdict);
       CHECK_CONTAINS(out, "keeping the default configuration");
     }
@@ -328,8 +342,8 @@ static void test_verify(void) {
   }
   cJSON_Delete(root);
   /* --verify needs something to verify */
-  snprintf(args, sizeof args, "--verify 3 --no-db --res 8x8 --spp 1 --out '%s/bad.exr' '%s'",
-           dir, scene_path);
+  snprintf(args, sizeof args, "--verify 3 --no-db --res 8x8 --spp 1 --out '%s/bad.exr' '%s'", dir,
+           scene_path);
   rc = run_host(args, out, sizeof out);
   CHECK_MSG(rc == 2, "exit %d", rc);
   CHECK_CONTAINS(out, "--verify needs a tuner plugin");

@@ -37,18 +37,18 @@
 #define TT__CHUNK 64
 
 struct tt_accel {
-  RTCScene scene;              /* native backend (NULL for custom) */
-  tt__bvh *bvh;                /* custom backend (NULL for native) */
-  tt__kernels kernels;         /* custom: the traversal kernels for this tree's shape */
-  int counting;                /* custom with counters on */
-  const tt_scene *source;      /* must outlive us (accel.h contract) */
+  RTCScene scene;         /* native backend (NULL for custom) */
+  tt__bvh *bvh;           /* custom backend (NULL for native) */
+  tt__kernels kernels;    /* custom: the traversal kernels for this tree's shape */
+  int counting;           /* custom with counters on */
+  const tt_scene *source; /* must outlive us (accel.h contract) */
   tt__embree_settings settings;
   /* update(): native refit keeps each moving mesh's Embree vertex buffer (NULL for meshes
    * attached with the tuned quality) and the revision it holds */
   float **vbuf;
   uint64_t *vrev;
-  uint32_t since_rebuild;      /* updates since the last build from scratch */
-  double sah_built;            /* SAH cost when last built from scratch (0 unknown) */
+  uint32_t since_rebuild; /* updates since the last build from scratch */
+  double sah_built;       /* SAH cost when last built from scratch (0 unknown) */
 };
 
 /* Plugin-wide state: set in init, released in deinit (both on the host's main thread). */
@@ -90,15 +90,15 @@ static bool tt__embree_memory(void *user, ssize_t bytes, bool post) {
   (void)user;
   (void)post;
   atomic_fetch_add_explicit(&g_embree_bytes, (long long)bytes, memory_order_relaxed);
-  return true;  /* never veto: the host has no memory budget in ABI 1.0 */
+  return true; /* never veto: the host has no memory budget in ABI 1.0 */
 }
 
 /* Reads and clears Embree's per-thread error code; returns TT_OK or an error naming it. */
 static tt_status tt__embree_status(const char *what) {
   enum RTCError e = rtcGetDeviceError(g_device);
   if (e == RTC_ERROR_NONE) return TT_OK;
-  tt_status s = e == RTC_ERROR_OUT_OF_MEMORY ? TT_ERR_OUT_OF_MEMORY
-                : e == RTC_ERROR_UNSUPPORTED_CPU ? TT_ERR_UNSUPPORTED
+  tt_status s = e == RTC_ERROR_OUT_OF_MEMORY      ? TT_ERR_OUT_OF_MEMORY
+                : e == RTC_ERROR_UNSUPPORTED_CPU  ? TT_ERR_UNSUPPORTED
                 : e == RTC_ERROR_INVALID_ARGUMENT ? TT_ERR_INVALID_ARGUMENT
                                                   : TT_ERR_INTERNAL;
   return tt_set_error(s, "accel_embree: %s failed: %s", what,
@@ -144,7 +144,8 @@ static tt_status tt__check_mesh(const tt_mesh *m, uint32_t index) {
   if (!m->positions || !m->indices || m->vertex_count == 0)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         "accel_embree: mesh %u (\"%s\") has triangles but no vertex or index "
-                        "data", index, m->name ? m->name : "?");
+                        "data",
+                        index, m->name ? m->name : "?");
   const uint64_t n = 3ull * m->triangle_count;
   for (uint64_t k = 0; k < n; k++) {
     if (m->indices[k] >= m->vertex_count)
@@ -180,18 +181,17 @@ static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t inde
   rtcSetGeometryBuildQuality(g, quality);
   rtcCommitGeometry(g);
   rtcAttachGeometryByID(scene, g, index);
-  rtcReleaseGeometry(g);  /* the scene holds its own reference */
+  rtcReleaseGeometry(g); /* the scene holds its own reference */
   return tt__embree_status("attaching a mesh");
 }
 
 /* Builds with backend native: Embree's scene API and its own builders. */
 static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settings *st,
                                   tt_accel *acc, tt_accel_build_stats *stats) {
-  static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW,
-                                                   RTC_BUILD_QUALITY_MEDIUM,
+  static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM,
                                                    RTC_BUILD_QUALITY_HIGH};
-  enum RTCBuildQuality quality = qualities[st->quality >= 1 && st->quality <= 3
-                                               ? st->quality - 1 : 1];
+  enum RTCBuildQuality quality =
+      qualities[st->quality >= 1 && st->quality <= 3 ? st->quality - 1 : 1];
   /* Refit needs Embree's two-level (dynamic) scene: each moving mesh gets its own BVH,
    * refitted on commit; the still meshes keep the tuned quality. A still scene builds as
    * if updateMethod were rebuild. */
@@ -211,11 +211,12 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
   if (refit) {
     acc->vbuf = calloc(meshes, sizeof *acc->vbuf);
     acc->vrev = calloc(meshes, sizeof *acc->vrev);
-    if (!acc->vbuf || !acc->vrev) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: out of memory");
+    if (!acc->vbuf || !acc->vrev)
+      return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: out of memory");
   }
   for (uint32_t i = 0; i < meshes; i++) {
     const tt_mesh *m = tt_scene_mesh(scene, i);
-    if (m->triangle_count == 0) continue;  /* geomIDs may have gaps; Embree allows it */
+    if (m->triangle_count == 0) continue; /* geomIDs may have gaps; Embree allows it */
     const int moving = refit && tt__mesh_moves(m);
     tt_status s = tt__attach_mesh(acc->scene, m, i, moving ? RTC_BUILD_QUALITY_REFIT : quality,
                                   moving ? &acc->vbuf[i] : NULL);
@@ -238,8 +239,8 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
 static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out);
 
 /* Validates the inputs, checks/repairs the configuration and dispatches on the backend. */
-static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config,
-                                  tt_accel **out, tt_accel_build_stats *stats_out) {
+static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config, tt_accel **out,
+                                  tt_accel_build_stats *stats_out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: build: out is NULL");
   *out = NULL;
   if (!g_device || !g_space)
@@ -264,7 +265,8 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
   if (triangles == 0)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         "accel_embree: scene \"%s\" has no triangles (%u meshes): nothing to "
-                        "build", tt_scene_source(scene) ? tt_scene_source(scene) : "?", meshes);
+                        "build",
+                        tt_scene_source(scene) ? tt_scene_source(scene) : "?", meshes);
 
   /* The check may repair, and `config` is const: work on a copy. */
   tt_config *cfg = config ? tt_config_clone(config) : tt_config_create(g_space);
@@ -330,33 +332,30 @@ static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out) {
   const tt__embree_settings st = acc->settings;
   tt_accel_build_stats stats;
   memset(&stats, 0, sizeof stats);
-  rtcGetDeviceError(g_device);  /* clear a stale code so only this build's errors count */
+  rtcGetDeviceError(g_device); /* clear a stale code so only this build's errors count */
   g_embree_error[0] = '\0';
 
   tt_status s;
   switch (st.backend) {
-    case TT__EMBREE_BACKEND_NATIVE:
-      s = tt__build_native(scene, &st, acc, &stats);
-      break;
-    case TT__EMBREE_BACKEND_CUSTOM: {
-      if (!g_kernels) {
-        s = tt_set_error(TT_ERR_UNSUPPORTED,
-                         "accel_embree: backend custom needs SSE4.1, which this CPU lacks");
-        break;
-      }
-      const uint64_t t0 = g_host->clock_ns();
-      s = tt__custom_build(scene, &st, g_device, &acc->bvh, &stats);
-      stats.build_ms = (double)(g_host->clock_ns() - t0) * 1e-6;
-      if (s != TT_OK) break;
-      int w = st.branching_factor == 2 ? 0 : st.branching_factor == 4 ? 1 : 2;
-      acc->counting = st.counters != 0;
-      acc->kernels = (*g_kernels)[w][st.robust ? 1 : 0][acc->counting];
+  case TT__EMBREE_BACKEND_NATIVE: s = tt__build_native(scene, &st, acc, &stats); break;
+  case TT__EMBREE_BACKEND_CUSTOM: {
+    if (!g_kernels) {
+      s = tt_set_error(TT_ERR_UNSUPPORTED,
+                       "accel_embree: backend custom needs SSE4.1, which this CPU lacks");
       break;
     }
-    default:
-      s = tt_set_error(TT_ERR_UNSUPPORTED, "accel_embree: unknown backend index %d",
-                       st.backend);
-      break;
+    const uint64_t t0 = g_host->clock_ns();
+    s = tt__custom_build(scene, &st, g_device, &acc->bvh, &stats);
+    stats.build_ms = (double)(g_host->clock_ns() - t0) * 1e-6;
+    if (s != TT_OK) break;
+    int w = st.branching_factor == 2 ? 0 : st.branching_factor == 4 ? 1 : 2;
+    acc->counting = st.counters != 0;
+    acc->kernels = (*g_kernels)[w][st.robust ? 1 : 0][acc->counting];
+    break;
+  }
+  default:
+    s = tt_set_error(TT_ERR_UNSUPPORTED, "accel_embree: unknown backend index %d", st.backend);
+    break;
   }
   if (s != TT_OK) {
     tt__embree_release(acc);
@@ -472,7 +471,7 @@ static inline void tt__from_rtc_hit(const struct RTCRayHit *e, tt_ray *r, tt_hit
   h->t = e->ray.tfar;
   h->u = e->hit.u;
   h->v = e->hit.v;
-  h->geom_id = e->hit.geomID;  /* == mesh index: attached by ID */
+  h->geom_id = e->hit.geomID; /* == mesh index: attached by ID */
   h->prim_id = e->hit.primID;
   h->ng[0] = e->hit.Ng_x;
   h->ng[1] = e->hit.Ng_y;
@@ -539,8 +538,8 @@ static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_
 }
 
 /* Occlusion of a stream, chunked like intersect_stream. */
-static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays,
-                                       uint8_t *occluded, size_t count) {
+static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays, uint8_t *occluded,
+                                       size_t count) {
   if (accel->bvh) {
     accel->kernels.occluded_stream(accel->bvh, rays, occluded, count);
     return;
@@ -662,7 +661,7 @@ static tt_status tt__embree_init(const tt_host *host) {
   rtcSetDeviceMemoryMonitorFunction(g_device, tt__embree_memory, NULL);
   g_space = tt__embree_space_create();
   if (!g_space) {
-    tt__embree_deinit();  /* the space builder already set the error message */
+    tt__embree_deinit(); /* the space builder already set the error message */
     return TT_ERR_INTERNAL;
   }
   return TT_OK;

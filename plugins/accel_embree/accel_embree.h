@@ -11,8 +11,8 @@
 
 /* Backends, in the order of the "backend" NOM parameter's possible values. */
 typedef enum tt__embree_backend {
-  TT__EMBREE_BACKEND_NATIVE = 0,  /* Embree's scene API (rtcCommitScene) */
-  TT__EMBREE_BACKEND_CUSTOM = 1   /* rtcBuildBVH, our layout and SIMD traversal */
+  TT__EMBREE_BACKEND_NATIVE = 0, /* Embree's scene API (rtcCommitScene) */
+  TT__EMBREE_BACKEND_CUSTOM = 1  /* rtcBuildBVH, our layout and SIMD traversal */
 } tt__embree_backend;
 
 /* A configuration decoded into plain values (thesis Table 3.1 + backend). */
@@ -38,8 +38,8 @@ typedef struct tt__embree_settings {
 
 /* Update methods, in the order of the "updateMethod" NOM parameter's values. */
 typedef enum tt__embree_update_method {
-  TT__EMBREE_UPDATE_REBUILD = 0,  /* build from scratch with the same configuration */
-  TT__EMBREE_UPDATE_REFIT = 1     /* keep the tree, recompute its boxes for the new positions */
+  TT__EMBREE_UPDATE_REBUILD = 0, /* build from scratch with the same configuration */
+  TT__EMBREE_UPDATE_REFIT = 1    /* keep the tree, recompute its boxes for the new positions */
 } tt__embree_update_method;
 
 /* Builds the published parameter space (once, at init); NULL with tt_set_error on failure. */

@@ -71,7 +71,7 @@ typedef struct tt__node8 {
  * whatever its packet; its ids follow the packets (below). */
 #define TT__SLOT_FLOATS 12
 typedef struct tt__id {
-  uint32_t geom, prim;  /* TT_INVALID_ID for an unused slot */
+  uint32_t geom, prim; /* TT_INVALID_ID for an unused slot */
 } tt__id;
 
 /* Leaf blocks live in an arena of 64-byte lines: a leaf of p triangle pairs is its packets
@@ -87,14 +87,14 @@ typedef struct tt__id {
 
 /* A built tree. */
 typedef struct tt__bvh {
-  int width;             /* 2, 4 or 8 */
-  int robust;            /* packets hold vertices; watertight test, conservative boxes */
-  uint32_t root;         /* a child reference, or TT__REF_NONE */
-  void *arena;           /* leaf blocks (BVH2: and nodes), 64-byte lines, 64-byte aligned */
-  void *nodes;           /* BVH4/8: tt__node{4,8}[node_count], 64-byte aligned; else NULL */
+  int width;     /* 2, 4 or 8 */
+  int robust;    /* packets hold vertices; watertight test, conservative boxes */
+  uint32_t root; /* a child reference, or TT__REF_NONE */
+  void *arena;   /* leaf blocks (BVH2: and nodes), 64-byte lines, 64-byte aligned */
+  void *nodes;   /* BVH4/8: tt__node{4,8}[node_count], 64-byte aligned; else NULL */
   uint64_t arena_lines;
   uint64_t node_count;
-  uint64_t slot_count;   /* triangle slots (2 per pair) */
+  uint64_t slot_count; /* triangle slots (2 per pair) */
   /* Traversal counters, updated (relaxed, once per ray) only by the counting kernels. */
   _Atomic uint64_t c_rays, c_nodes, c_tris;
 } tt__bvh;
@@ -104,8 +104,7 @@ typedef void (*tt__isect_fn)(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit);
 typedef int (*tt__occl_fn)(const tt__bvh *bvh, const tt_ray *ray);
 
 /* Stream query kernels: per ray the same answers (see accel_embree_trav.c, packets). */
-typedef void (*tt__isect_stream_fn)(const tt__bvh *bvh, tt_ray *rays, tt_hit *hits,
-                                    size_t count);
+typedef void (*tt__isect_stream_fn)(const tt__bvh *bvh, tt_ray *rays, tt_hit *hits, size_t count);
 typedef void (*tt__occl_stream_fn)(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occluded,
                                    size_t count);
 

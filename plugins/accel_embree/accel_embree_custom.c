@@ -29,24 +29,24 @@
 
 /* Temporary tree, allocated by Embree's thread-local allocator (freed with the RTCBVH). */
 typedef struct tt__tmp_inner {
-  uint32_t is_leaf;  /* 0 */
+  uint32_t is_leaf; /* 0 */
   uint32_t count;
   void *child[8];
   struct RTCBounds bounds[8];
 } tt__tmp_inner;
 
 typedef struct tt__tmp_leaf {
-  uint32_t is_leaf;  /* 1 */
+  uint32_t is_leaf; /* 1 */
   uint32_t count;
-  uint32_t ids[];    /* count (geomID, primID) pairs */
+  uint32_t ids[]; /* count (geomID, primID) pairs */
 } tt__tmp_leaf;
 
 /* State shared by the callbacks (called from Embree's worker threads). */
 typedef struct tt__cb_ctx {
   const tt_scene *scene;
-  uint32_t geom_mask;             /* TT__GEOMID_MASK for spatial splits, else all ones */
+  uint32_t geom_mask; /* TT__GEOMID_MASK for spatial splits, else all ones */
   _Atomic uint64_t inner, leaves, slots;
-  _Atomic int too_wide;           /* a node with more than 8 children was requested */
+  _Atomic int too_wide; /* a node with more than 8 children was requested */
 } tt__cb_ctx;
 
 /* createNode: an inner node sized for 8 children (we never ask for more). */
@@ -112,10 +112,10 @@ static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim,
   tt__tri_verts(m, prim->primID, v);
   float l[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
   float r[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-#define TT__EXT(b, p)                                  \
-  for (int k = 0; k < 3; k++) {                        \
-    b[k] = fminf(b[k], (p)[k]);                        \
-    b[3 + k] = fmaxf(b[3 + k], (p)[k]);                \
+#define TT__EXT(b, p)                                                                              \
+  for (int k = 0; k < 3; k++) {                                                                    \
+    b[k] = fminf(b[k], (p)[k]);                                                                    \
+    b[3 + k] = fmaxf(b[3 + k], (p)[k]);                                                            \
   }
   for (int i = 0; i < 3; i++) {
     const float *a = v[i], *b = v[(i + 1) % 3];
@@ -148,15 +148,15 @@ static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim,
 typedef struct tt__flat {
   const tt_scene *scene;
   int N, robust;
-  char *arena;                  /* lines: leaf blocks (BVH2: and nodes), accel_embree_bvh.h */
+  char *arena; /* lines: leaf blocks (BVH2: and nodes), accel_embree_bvh.h */
   uint64_t arena_lines, arena_cap;
-  char *nodes;                  /* BVH4/8: capacity node_cap nodes of 32 * N bytes */
+  char *nodes; /* BVH4/8: capacity node_cap nodes of 32 * N bytes */
   uint64_t node_count, node_cap;
-  uint64_t slot_count;          /* triangle slots used (2 per pair) */
+  uint64_t slot_count; /* triangle slots used (2 per pair) */
   uint64_t leaves;
   double area_inner, area_leaf_tris;
   uint32_t max_depth;
-  const char *error;            /* set on the first structural problem */
+  const char *error; /* set on the first structural problem */
 } tt__flat;
 
 /* Surface area of a box given as lower[3], upper[3]. */
@@ -181,7 +181,7 @@ static void tt__pack_tri(tt__flat *f, float *pk, int W, int lane, tt__id *id, ui
     pk[(3 + k) * W + lane] = f->robust ? v[1][k] : e1[k];
     pk[(6 + k) * W + lane] = f->robust ? v[2][k] : e2[k];
   }
-  double a[3], b[3];  /* v1 - v0 and v2 - v0 */
+  double a[3], b[3]; /* v1 - v0 and v2 - v0 */
   for (int k = 0; k < 3; k++) {
     a[k] = f->robust ? (double)v[1][k] - v[0][k] : -(double)e1[k];
     b[k] = f->robust ? (double)v[2][k] - v[0][k] : (double)e2[k];
@@ -231,9 +231,9 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
       /* Slot j: lane j % 4 of 4-wide packet j / 4, or lane j - 4 * wide of the 2-wide
        * packet that closes a leaf with an odd number of pairs. */
       int W = j < 4 * wide ? 4 : 2;
-      uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;  /* packet's first slot */
-      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j],
-                   l->ids[2 * j], l->ids[2 * j + 1]);
+      uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide; /* packet's first slot */
+      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j], l->ids[2 * j],
+                   l->ids[2 * j + 1]);
     }
     f->slot_count += nslots;
     f->leaves++;
@@ -247,7 +247,7 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
   }
   const int N = f->N;
   uint64_t index = f->node_count++;
-  if (N == 2) {  /* BVH2: the node's line, before its children's (pre-order) */
+  if (N == 2) { /* BVH2: the node's line, before its children's (pre-order) */
     if (f->arena_lines >= f->arena_cap || f->arena_lines > TT__LINE2_MASK) {
       f->error = f->arena_lines >= f->arena_cap ? "more BVH2 lines than counted"
                                                 : "BVH2 arena too large for 27-bit lines";
@@ -271,7 +271,8 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
   const int kids = n->count < 8 ? (int)n->count : 8;
   for (int i = 0; i < kids; i++) {
     const struct RTCBounds *b = &n->bounds[i];
-    const float lo[3] = {b->lower_x, b->lower_y, b->lower_z}, hi[3] = {b->upper_x, b->upper_y, b->upper_z};
+    const float lo[3] = {b->lower_x, b->lower_y, b->lower_z},
+                hi[3] = {b->upper_x, b->upper_y, b->upper_z};
     area[i] = tt__area(lo, hi);
     int j = i;
     for (; j > 0 && area[order[j - 1]] < area[i]; j--) order[j] = order[j - 1];
@@ -299,15 +300,15 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
     }
     child[i] = empty ? 0u : refs[i];
   }
-  for (int i = N; i < 2 * N; i++) child[i] = 0u;  /* padding */
+  for (int i = N; i < 2 * N; i++) child[i] = 0u; /* padding */
   if (N == 2) {
     /* Grandchild hints (tt__node2.grand): the children were laid out first, so an inner
      * child's node is already written. */
     for (int i = 0; i < 2; i++) {
-      uint32_t g = child[i];  /* a leaf (or empty) child: its own lines, or the root's */
+      uint32_t g = child[i]; /* a leaf (or empty) child: its own lines, or the root's */
       if (refs[i] != TT__REF_NONE && !(refs[i] & TT__REF_LEAF)) {
         const tt__node2 *cn = (const tt__node2 *)(f->arena + (uint64_t)refs[i] * 64u);
-        if (cn->b[0][1] <= cn->b[0][3]) g = cn->child[1];  /* non-empty second box */
+        if (cn->b[0][1] <= cn->b[0][3]) g = cn->child[1]; /* non-empty second box */
       }
       child[2 + i] = g;
     }
@@ -341,7 +342,7 @@ static void *tt__tree_alloc(size_t bytes) {
   n = (n + TT__HUGE - 1) & ~(TT__HUGE - 1);
   void *p = aligned_alloc(TT__HUGE, n);
 #ifdef MADV_HUGEPAGE
-  if (p) madvise(p, n, MADV_HUGEPAGE);  /* advice only: failure changes nothing */
+  if (p) madvise(p, n, MADV_HUGEPAGE); /* advice only: failure changes nothing */
 #endif
   return p;
 }
@@ -358,8 +359,8 @@ static int tt__min_depth(uint64_t n, int bf, int max_leaf) {
   return d;
 }
 
-tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
-                           RTCDevice device, tt__bvh **out, tt_accel_build_stats *stats) {
+tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st, RTCDevice device,
+                           tt__bvh **out, tt_accel_build_stats *stats) {
   *out = NULL;
   const int bf = st->branching_factor;
   if (bf != 2 && bf != 4 && bf != 8)
@@ -377,14 +378,15 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   if (min_leaf < 1 || max_leaf > RTC_BUILD_MAX_PRIMITIVES_PER_LEAF)
     return tt_set_error(TT_ERR_INFEASIBLE,
                         "accel_embree: custom backend: leaf sizes must lie in [1, %d] "
-                        "(minLeafSize %d, maxLeafSize %d)", RTC_BUILD_MAX_PRIMITIVES_PER_LEAF,
-                        min_leaf, max_leaf);
+                        "(minLeafSize %d, maxLeafSize %d)",
+                        RTC_BUILD_MAX_PRIMITIVES_PER_LEAF, min_leaf, max_leaf);
   if (st->max_depth < 1 || st->max_depth > 64 || st->sah_block_size < 1 ||
       !(st->trav_cost > 0.0f) || !(st->int_cost > 0.0f))
     return tt_set_error(TT_ERR_INFEASIBLE,
                         "accel_embree: custom backend: maxDepth %d, sahBlockSize %d, travcost "
-                        "%g, intcost %g out of range", st->max_depth, st->sah_block_size,
-                        (double)st->trav_cost, (double)st->int_cost);
+                        "%g, intcost %g out of range",
+                        st->max_depth, st->sah_block_size, (double)st->trav_cost,
+                        (double)st->int_cost);
 
   /* Valid triangles (finite vertices) become build primitives. */
   const uint32_t meshes = tt_scene_mesh_count(scene);
@@ -401,8 +403,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   struct RTCBuildPrimitive *prims =
       cap ? aligned_alloc(32, tt__round64(cap * sizeof *prims)) : NULL;
   if (cap && !prims)
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY,
-                        "accel_embree: cannot allocate %llu build primitives",
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot allocate %llu build primitives",
                         (unsigned long long)cap);
   float root_lo[3] = {INFINITY, INFINITY, INFINITY}, root_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   uint64_t count = 0;
@@ -418,7 +419,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
         hi[k] = fmaxf(v[0][k], fmaxf(v[1][k], v[2][k]));
         ok &= isfinite(v[0][k]) && isfinite(v[1][k]) && isfinite(v[2][k]);
       }
-      if (!ok) continue;  /* NaN/inf vertices: never hit (Embree's scene API drops them too) */
+      if (!ok) continue; /* NaN/inf vertices: never hit (Embree's scene API drops them too) */
       struct RTCBuildPrimitive *b = &prims[count++];
       b->lower_x = lo[0], b->lower_y = lo[1], b->lower_z = lo[2];
       b->upper_x = hi[0], b->upper_y = hi[1], b->upper_z = hi[2];
@@ -440,8 +441,8 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
                           "accel_embree: maxDepth %d is too small for %llu triangles with "
                           "branchingFactor %d and maxLeafSize %d: needs "
                           "branchingFactor^(maxDepth-1)*maxLeafSize >= triangles, i.e. "
-                          "maxDepth >= %d", st->max_depth, (unsigned long long)count, bf,
-                          max_leaf, need);
+                          "maxDepth >= %d",
+                          st->max_depth, (unsigned long long)count, bf, max_leaf, need);
     }
   }
 
@@ -453,7 +454,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   bvh->width = bf;
   bvh->robust = st->robust != 0;
   bvh->root = TT__REF_NONE;
-  if (count == 0) {  /* every triangle invalid: a tree that nothing hits */
+  if (count == 0) { /* every triangle invalid: a tree that nothing hits */
     free(prims);
     *out = bvh;
     stats->memory_bytes = sizeof *bvh;
@@ -465,8 +466,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   ctx.scene = scene;
   ctx.geom_mask = high && meshes <= TT__GEOMID_MASK ? TT__GEOMID_MASK : 0xFFFFFFFFu;
 
-  static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW,
-                                                   RTC_BUILD_QUALITY_MEDIUM,
+  static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM,
                                                    RTC_BUILD_QUALITY_HIGH};
   struct RTCBuildArguments args = rtcDefaultBuildArguments();
   args.byteSize = sizeof args;
@@ -516,9 +516,9 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
                           "accel_embree: rtcBuildBVH made a node wider than 8 children");
     return tt_set_error(code,
                         "accel_embree: rtcBuildBVH failed for quality %d, branchingFactor %d, "
-                        "maxDepth %d, leaves [%d, %d] over %llu triangles: %s%s", st->quality,
-                        bf, st->max_depth, min_leaf, max_leaf, (unsigned long long)count,
-                        msg && msg[0] ? msg : "no tree returned",
+                        "maxDepth %d, leaves [%d, %d] over %llu triangles: %s%s",
+                        st->quality, bf, st->max_depth, min_leaf, max_leaf,
+                        (unsigned long long)count, msg && msg[0] ? msg : "no tree returned",
                         depth ? " (raise maxDepth or maxLeafSize)" : "");
   }
 
@@ -548,7 +548,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
   rtcReleaseBVH(args.bvh);
   size_t bytes = (size_t)f.arena_lines * 64u;
-  if (!f.error && f.arena_lines < f.arena_cap) {  /* exact-size copy */
+  if (!f.error && f.arena_lines < f.arena_cap) { /* exact-size copy */
     char *a = tt__tree_alloc(bytes);
     if (a) {
       memcpy(a, f.arena, bytes);
@@ -585,8 +585,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
 /* Refits the subtree `ref` whose box the caller stores: writes its box into lo/hi and adds
  * its SAH terms to f (area_inner per inner node, area * triangles per leaf, as the layout
  * pass counts them). Leaves repack their triangles from the current positions. */
-static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float lo[3],
-                          float hi[3]) {
+static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float lo[3], float hi[3]) {
   for (int k = 0; k < 3; k++) {
     lo[k] = INFINITY;
     hi[k] = -INFINITY;
@@ -602,8 +601,7 @@ static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float l
       int W = j < 4 * wide ? 4 : 2;
       uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;
       const uint32_t geom = id[j].geom, prim = id[j].prim;
-      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j], geom,
-                   prim);
+      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j], geom, prim);
       const float *v[3];
       tt__tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
       for (int c = 0; c < 3; c++)
@@ -626,7 +624,7 @@ static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float l
       clo[k] = N == 2 ? &rows[4 * k + i] : &rows[(2 * k) * N + i];
       cup[k] = N == 2 ? &rows[4 * k + 2 + i] : &rows[(2 * k + 1) * N + i];
     }
-    if (!(*clo[0] <= *cup[0])) continue;  /* an empty lane stays empty */
+    if (!(*clo[0] <= *cup[0])) continue; /* an empty lane stays empty */
     float b[6];
     tt__refit_ref(f, bvh, child[i], b, b + 3);
     for (int k = 0; k < 3; k++) {

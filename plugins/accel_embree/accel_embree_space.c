@@ -24,9 +24,9 @@ static const struct {
   const char *name;
   double def;
 } tt__custom_only[] = {
-    {"branchingFactor", TT__DEF_BF},  {"maxDepth", TT__DEF_MAX_DEPTH},
+    {"branchingFactor", TT__DEF_BF},     {"maxDepth", TT__DEF_MAX_DEPTH},
     {"sahBlockSize", TT__DEF_SAH_BLOCK}, {"minLeafSize", TT__DEF_MIN_LEAF},
-    {"maxLeafSize", TT__DEF_MAX_LEAF}, {"travcost", TT__DEF_TRAV_COST},
+    {"maxLeafSize", TT__DEF_MAX_LEAF},   {"travcost", TT__DEF_TRAV_COST},
     {"intcost", TT__DEF_INT_COST},
 };
 
@@ -56,8 +56,7 @@ static tt_check_result tt__embree_check(const tt_space *space, tt_config *config
 
   /* Checked before repairing: a swap cannot make a Morton configuration feasible. */
   if (quality == 1 && (bf > 8 || max_leaf > 32 || min_leaf > 32)) {
-    tt__why(why, why_size,
-            "quality 1 (Morton) supports branchingFactor <= 8 and leaf sizes <= 32");
+    tt__why(why, why_size, "quality 1 (Morton) supports branchingFactor <= 8 and leaf sizes <= 32");
     return TT_CHECK_INFEASIBLE;
   }
   /* Embree uses only the largest power of two <= sahBlockSize (bsr of it): 5..7 act as 4.
@@ -66,7 +65,8 @@ static tt_check_result tt__embree_check(const tt_space *space, tt_config *config
   char block_why[128] = "";
   if (block >= 1 && tt__pow2_floor(block) != block) {
     int ib = tt_space_find(space, "sahBlockSize");
-    if (ib < 0 || tt_config_set_number(config, (size_t)ib, (double)tt__pow2_floor(block)) != TT_OK) {
+    if (ib < 0 ||
+        tt_config_set_number(config, (size_t)ib, (double)tt__pow2_floor(block)) != TT_OK) {
       tt__why(why, why_size, "sahBlockSize is not a power of two and could not be rounded");
       return TT_CHECK_INFEASIBLE;
     }

@@ -67,10 +67,10 @@ typedef __m128 tt__vreg;
 #  define TT__V4(v) (v)
 #endif
 typedef struct tt__rc {
-  tt__vreg o[3], d[3];     /* origin, direction */
-  tt__vreg rd[3], ord[3];  /* 1/dir (zero guarded) and org * rd */
-  tt__vreg tnear, tfar;    /* closest hit: tfar is tt__tfar_slack(the closest hit so far) */
-  int near[3];             /* near-plane row per axis: 2k + signbit(dir[k]) */
+  tt__vreg o[3], d[3];    /* origin, direction */
+  tt__vreg rd[3], ord[3]; /* 1/dir (zero guarded) and org * rd */
+  tt__vreg tnear, tfar;   /* closest hit: tfar is tt__tfar_slack(the closest hit so far) */
+  int near[3];            /* near-plane row per axis: 2k + signbit(dir[k]) */
   /* Watertight test (Woop, Benthin, Wald 2013): axes permuted so that kz has the largest
    * |dir| and the shear constants. */
   int kx, ky, kz;
@@ -103,7 +103,7 @@ TT__INLINE int tt__setup(tt__rc *r, const tt_ray *ray, int robust) {
   float d[3] = {ray->dir[0], ray->dir[1], ray->dir[2]};
   for (int k = 0; k < 3; k++)
     if (!isfinite(o[k]) || !isfinite(d[k])) return 0;
-  if (!(ray->tnear <= ray->tfar)) return 0;  /* also rejects NaN */
+  if (!(ray->tnear <= ray->tfar)) return 0; /* also rejects NaN */
   for (int k = 0; k < 3; k++) {
     /* A zero component would give 1/0 = inf and 0 * inf = NaN on a slab through the
      * origin; a tiny value of the same sign keeps every slab distance well defined. */
@@ -124,12 +124,12 @@ TT__INLINE int tt__setup(tt__rc *r, const tt_ray *ray, int robust) {
     if (fabsf(d[1]) > fabsf(d[kz])) kz = 1;
     if (fabsf(d[2]) > fabsf(d[kz])) kz = 2;
     int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
-    if (d[kz] < 0.0f) {  /* keep the winding so U, V, W signs mean the same thing */
+    if (d[kz] < 0.0f) { /* keep the winding so U, V, W signs mean the same thing */
       int t = kx;
       kx = ky;
       ky = t;
     }
-    if (d[kz] == 0.0f) return 0;  /* zero direction: nothing can be hit */
+    if (d[kz] == 0.0f) return 0; /* zero direction: nothing can be hit */
     r->kx = kx, r->ky = ky, r->kz = kz;
     r->sx = _mm_set1_ps(d[kx] / d[kz]);
     r->sy = _mm_set1_ps(d[ky] / d[kz]);
@@ -173,7 +173,9 @@ TT__INLINE int tt__ile4(__m128 a, __m128 b) {
 #ifdef __AVX512VL__
   return (int)_mm_cmple_epi32_mask(_mm_castps_si128(a), _mm_castps_si128(b));
 #else
-  return _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a), _mm_castps_si128(b)))) ^ 0xF;
+  return _mm_movemask_ps(
+             _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a), _mm_castps_si128(b)))) ^
+         0xF;
 #endif
 }
 
@@ -185,8 +187,8 @@ TT__INLINE int tt__ray_ibox(const tt_ray *ray, const int robust) {
 /* Tests 4 boxes given as row pointers (stride between rows `stride` floats); writes entry
  * distances and returns the hit mask. `two` loads only 2 lanes (BVH2 nodes). `ib`: integer
  * max/min (see above; the caller checked tt__ray_ibox). */
-TT__INLINE int tt__box4(const float *rows, size_t stride, const tt__rc *r, int robust,
-                        int two, float *dist, const int ib) {
+TT__INLINE int tt__box4(const float *rows, size_t stride, const tt__rc *r, int robust, int two,
+                        float *dist, const int ib) {
   __m128 tn[3], tf[3];
   for (int k = 0; k < 3; k++) {
     const float *pn = rows + (size_t)r->near[k] * stride;
@@ -234,22 +236,22 @@ TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *
     }
   }
   if (ib && !robust) {
-#define TT__IMAX8(a, b) _mm256_max_epi32(a, b)
-#define TT__IMIN8(a, b) _mm256_min_epi32(a, b)
-#define TT__I8(v) _mm256_castps_si256(v)
+#  define TT__IMAX8(a, b) _mm256_max_epi32(a, b)
+#  define TT__IMIN8(a, b) _mm256_min_epi32(a, b)
+#  define TT__I8(v) _mm256_castps_si256(v)
     __m256i tmin = TT__IMAX8(TT__IMAX8(TT__I8(tn[0]), TT__I8(tn[1])),
                              TT__IMAX8(TT__I8(tn[2]), TT__I8(r->tnear)));
     __m256i tmax = TT__IMIN8(TT__IMIN8(TT__I8(tf[0]), TT__I8(tf[1])),
                              TT__IMIN8(TT__I8(tf[2]), TT__I8(r->tfar)));
-#undef TT__I8
-#undef TT__IMIN8
-#undef TT__IMAX8
+#  undef TT__I8
+#  undef TT__IMIN8
+#  undef TT__IMAX8
     _mm256_storeu_si256((__m256i *)dist, tmin);
-#ifdef __AVX512VL__
+#  ifdef __AVX512VL__
     return (int)_mm256_cmple_epi32_mask(tmin, tmax);
-#else
+#  else
     return _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(tmin, tmax))) ^ 0xFF;
-#endif
+#  endif
   }
   __m256 tmin = _mm256_max_ps(_mm256_max_ps(tn[0], tn[1]), _mm256_max_ps(tn[2], r->tnear));
   __m256 tmax = _mm256_min_ps(_mm256_min_ps(tf[0], tf[1]), tf[2]);
@@ -265,8 +267,8 @@ TT__INLINE int tt__box8(const tt__node8 *n, const tt__rc *r, int robust, float *
 }
 
 /* Tests one inner node of width N; returns the hit mask, distances in `dist`. */
-TT__INLINE int tt__node_test(const void *node, const tt__rc *r, int N, int robust,
-                             float *dist, const int ib) {
+TT__INLINE int tt__node_test(const void *node, const tt__rc *r, int N, int robust, float *dist,
+                             const int ib) {
   if (N == 4) return tt__box4(&((const tt__node4 *)node)->b[0][0], 4, r, robust, 0, dist, ib);
   return tt__box8((const tt__node8 *)node, r, robust, dist, ib);
 }
@@ -302,8 +304,7 @@ TT__INLINE void tt__prefetch(const tt__bvh *bvh, uint32_t ref, int N) {
 }
 
 /* Prefetches the hit children of a BVH4/8 node (BVH2: tt__pf2). */
-TT__INLINE void tt__prefetch_children(const tt__bvh *bvh, const uint32_t *child, int mask,
-                                      int N) {
+TT__INLINE void tt__prefetch_children(const tt__bvh *bvh, const uint32_t *child, int mask, int N) {
   for (int m = mask; m; m &= m - 1) tt__prefetch(bvh, child[__builtin_ctz((unsigned)m)], N);
 }
 
@@ -316,8 +317,7 @@ TT__INLINE __m128 tt__row(const float *pk, int W, int r) {
 }
 
 TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust, __m128 *T_out,
-                            __m128 *U_out, __m128 *V_out, __m128 *den_out,
-                            __m128 *valid_out) {
+                            __m128 *U_out, __m128 *V_out, __m128 *den_out, __m128 *valid_out) {
   const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps();
   __m128 T, U, V, absden, valid;
   if (!robust) {
@@ -338,12 +338,14 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
     __m128 den = _mm_fmadd_ps(nx, dx, _mm_fmadd_ps(ny, dy, _mm_mul_ps(nz, dz)));
     __m128 sgn = _mm_and_ps(den, sign);
     absden = _mm_xor_ps(den, sgn);
-    U = _mm_xor_ps(_mm_fmadd_ps(rx, tt__row(pk, W, 6),
-                                _mm_fmadd_ps(ry, tt__row(pk, W, 7), _mm_mul_ps(rz, tt__row(pk, W, 8)))),
-                   sgn);
-    V = _mm_xor_ps(_mm_fmadd_ps(rx, tt__row(pk, W, 3),
-                                _mm_fmadd_ps(ry, tt__row(pk, W, 4), _mm_mul_ps(rz, tt__row(pk, W, 5)))),
-                   sgn);
+    U = _mm_xor_ps(
+        _mm_fmadd_ps(rx, tt__row(pk, W, 6),
+                     _mm_fmadd_ps(ry, tt__row(pk, W, 7), _mm_mul_ps(rz, tt__row(pk, W, 8)))),
+        sgn);
+    V = _mm_xor_ps(
+        _mm_fmadd_ps(rx, tt__row(pk, W, 3),
+                     _mm_fmadd_ps(ry, tt__row(pk, W, 4), _mm_mul_ps(rz, tt__row(pk, W, 5)))),
+        sgn);
     valid = _mm_and_ps(_mm_cmpge_ps(U, zero), _mm_cmpge_ps(V, zero));
     valid = _mm_and_ps(valid, _mm_cmple_ps(_mm_add_ps(U, V), absden));
     valid = _mm_and_ps(valid, _mm_cmpgt_ps(absden, zero));
@@ -354,22 +356,25 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
     __m128 ry = _mm_sub_ps(_mm_mul_ps(cz, TT__V4(r->d[0])), _mm_mul_ps(cx, TT__V4(r->d[2])));
     __m128 rz = _mm_sub_ps(_mm_mul_ps(cx, TT__V4(r->d[1])), _mm_mul_ps(cy, TT__V4(r->d[0])));
     __m128 nx = tt__row(pk, W, 9), ny = tt__row(pk, W, 10), nz = tt__row(pk, W, 11);
-    __m128 den = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, TT__V4(r->d[0])), _mm_mul_ps(ny, TT__V4(r->d[1]))),
-                            _mm_mul_ps(nz, TT__V4(r->d[2])));
+    __m128 den =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, TT__V4(r->d[0])), _mm_mul_ps(ny, TT__V4(r->d[1]))),
+                   _mm_mul_ps(nz, TT__V4(r->d[2])));
     __m128 sgn = _mm_and_ps(den, sign);
     absden = _mm_xor_ps(den, sgn);
-    U = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, tt__row(pk, W, 6)),
-                                         _mm_mul_ps(ry, tt__row(pk, W, 7))),
-                              _mm_mul_ps(rz, tt__row(pk, W, 8))), sgn);
-    V = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, tt__row(pk, W, 3)),
-                                         _mm_mul_ps(ry, tt__row(pk, W, 4))),
-                              _mm_mul_ps(rz, tt__row(pk, W, 5))), sgn);
+    U = _mm_xor_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, tt__row(pk, W, 6)), _mm_mul_ps(ry, tt__row(pk, W, 7))),
+                   _mm_mul_ps(rz, tt__row(pk, W, 8))),
+        sgn);
+    V = _mm_xor_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, tt__row(pk, W, 3)), _mm_mul_ps(ry, tt__row(pk, W, 4))),
+                   _mm_mul_ps(rz, tt__row(pk, W, 5))),
+        sgn);
     valid = _mm_and_ps(_mm_cmpge_ps(U, zero), _mm_cmpge_ps(V, zero));
     valid = _mm_and_ps(valid, _mm_cmple_ps(_mm_add_ps(U, V), absden));
     valid = _mm_and_ps(valid, _mm_cmpgt_ps(absden, zero));
     if (!_mm_movemask_ps(valid)) return 0;
-    T = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, cx), _mm_mul_ps(ny, cy)),
-                              _mm_mul_ps(nz, cz)), sgn);
+    T = _mm_xor_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, cx), _mm_mul_ps(ny, cy)), _mm_mul_ps(nz, cz)), sgn);
 #endif
   } else {
     /* Watertight: vertices relative to the origin, sheared so the ray is the +z axis;
@@ -378,19 +383,25 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
     __m128 az = _mm_sub_ps(tt__row(pk, W, 0 + kz), TT__V4(r->o[kz]));
     __m128 bz = _mm_sub_ps(tt__row(pk, W, 3 + kz), TT__V4(r->o[kz]));
     __m128 cz = _mm_sub_ps(tt__row(pk, W, 6 + kz), TT__V4(r->o[kz]));
-    __m128 ax = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 0 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, az));
-    __m128 ay = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 0 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, az));
-    __m128 bx = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 3 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, bz));
-    __m128 by = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 3 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, bz));
-    __m128 cx = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 6 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, cz));
-    __m128 cy = _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 6 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, cz));
+    __m128 ax =
+        _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 0 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, az));
+    __m128 ay =
+        _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 0 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, az));
+    __m128 bx =
+        _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 3 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, bz));
+    __m128 by =
+        _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 3 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, bz));
+    __m128 cx =
+        _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 6 + kx), TT__V4(r->o[kx])), _mm_mul_ps(r->sx, cz));
+    __m128 cy =
+        _mm_sub_ps(_mm_sub_ps(tt__row(pk, W, 6 + ky), TT__V4(r->o[ky])), _mm_mul_ps(r->sy, cz));
     __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
     __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
     __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-    __m128 pos = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero)),
-                            _mm_cmpge_ps(w, zero));
-    __m128 neg = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(u, zero), _mm_cmple_ps(v, zero)),
-                            _mm_cmple_ps(w, zero));
+    __m128 pos =
+        _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero)), _mm_cmpge_ps(w, zero));
+    __m128 neg =
+        _mm_and_ps(_mm_and_ps(_mm_cmple_ps(u, zero), _mm_cmple_ps(v, zero)), _mm_cmple_ps(w, zero));
     __m128 det = _mm_add_ps(_mm_add_ps(u, v), w);
     valid = _mm_and_ps(_mm_or_ps(pos, neg), _mm_cmpneq_ps(det, zero));
     if (!_mm_movemask_ps(valid)) return 0;
@@ -399,10 +410,10 @@ TT__INLINE int tt__tri_test(const float *pk, int W, const tt__rc *r, int robust,
     az = _mm_mul_ps(r->sz, az);
     bz = _mm_mul_ps(r->sz, bz);
     cz = _mm_mul_ps(r->sz, cz);
-    T = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(u, az), _mm_mul_ps(v, bz)),
-                              _mm_mul_ps(w, cz)), sgn);
-    U = _mm_xor_ps(v, sgn);  /* weight of v1 */
-    V = _mm_xor_ps(w, sgn);  /* weight of v2 */
+    T = _mm_xor_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(u, az), _mm_mul_ps(v, bz)), _mm_mul_ps(w, cz)),
+                   sgn);
+    U = _mm_xor_ps(v, sgn); /* weight of v1 */
+    V = _mm_xor_ps(w, sgn); /* weight of v2 */
   }
   valid = _mm_and_ps(valid, _mm_cmpge_ps(T, _mm_mul_ps(absden, TT__V4(r->tnear))));
   valid = _mm_and_ps(valid, _mm_cmple_ps(T, _mm_mul_ps(absden, TT__V4(r->tfar))));
@@ -429,9 +440,8 @@ TT__INLINE int tt__id_less(const tt__id *a, const tt__id *b) {
 
 /* Tests one width-W packet (ids of its lanes at `ids`) for a closer hit; updates `best`
  * and the ray's tfar. Returns 1 when the hit became closer (or won a tie). */
-TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids,
-                               tt__rc *restrict r, const int robust,
-                               tt__best *restrict best) {
+TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids, tt__rc *restrict r,
+                               const int robust, tt__best *restrict best) {
   __m128 T, U, V, den, valid;
   int m = tt__tri_test(pk, W, r, robust, &T, &U, &V, &den, &valid);
   if (!m) return 0;
@@ -444,8 +454,9 @@ TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids,
     mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(1, 0, 3, 2)));
     int eq = _mm_movemask_ps(_mm_cmpeq_ps(tv, mn)) & m;
     lane = __builtin_ctz((unsigned)eq);
-    for (eq &= eq - 1; eq; eq &= eq - 1)  /* a tie within the packet (rare) */
-      if (tt__id_less(&ids[__builtin_ctz((unsigned)eq)], &ids[lane])) lane = __builtin_ctz((unsigned)eq);
+    for (eq &= eq - 1; eq; eq &= eq - 1) /* a tie within the packet (rare) */
+      if (tt__id_less(&ids[__builtin_ctz((unsigned)eq)], &ids[lane]))
+        lane = __builtin_ctz((unsigned)eq);
   } else {
     lane = __builtin_ctz((unsigned)m);
   }
@@ -472,8 +483,7 @@ TT__INLINE int tt__leaf_packet(const float *pk, const int W, const tt__id *ids,
 /* Tests the `pairs` triangle pairs of a leaf (packets at `pk`, ids at `ids`) for a closer
  * hit; returns 1 when one was found. */
 TT__INLINE int tt__leaf_closest(const float *pk, const tt__id *ids, uint32_t pairs,
-                                tt__rc *restrict r, const int robust,
-                                tt__best *restrict best) {
+                                tt__rc *restrict r, const int robust, tt__best *restrict best) {
   int found = 0;
   uint32_t q = 0;
   for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
@@ -483,8 +493,7 @@ TT__INLINE int tt__leaf_closest(const float *pk, const tt__id *ids, uint32_t pai
 }
 
 /* Returns 1 when some triangle of a leaf lies within the ray's [tnear, tfar]. */
-TT__INLINE int tt__leaf_any(const float *pk, uint32_t pairs, const tt__rc *r,
-                            const int robust) {
+TT__INLINE int tt__leaf_any(const float *pk, uint32_t pairs, const tt__rc *r, const int robust) {
   __m128 T, U, V, den, valid;
   uint32_t q = 0;
   for (; q + 1 < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS)
@@ -523,7 +532,7 @@ TT__INLINE void tt__finish(const tt__bvh *bvh, const tt__best *best, tt_ray *ray
 
 /* Adds one ray's work to the tree's counters. */
 TT__INLINE void tt__count(const tt__bvh *bvh, uint64_t nodes, uint64_t tris) {
-  tt__bvh *mut = (tt__bvh *)bvh;  /* counters are the one mutable part of a built tree */
+  tt__bvh *mut = (tt__bvh *)bvh; /* counters are the one mutable part of a built tree */
   atomic_fetch_add_explicit(&mut->c_rays, 1, memory_order_relaxed);
   atomic_fetch_add_explicit(&mut->c_nodes, nodes, memory_order_relaxed);
   atomic_fetch_add_explicit(&mut->c_tris, tris, memory_order_relaxed);
@@ -538,10 +547,10 @@ TT__INLINE void tt__count(const tt__bvh *bvh, uint64_t nodes, uint64_t tris) {
  * the axes and (tnear, tnear, -tfar, -tfar) gives (tmin c0, tmin c1, -tmax c0, -tmax c1):
  * one max op tests both children on all three axes, no per-child min/max. */
 typedef struct tt__rc2 {
-  __m128 a[3];      /* a * (1, 1, -1, -1) */
-  __m128 b[3];      /* FMA, not robust: o * a * (1, 1, -1, -1); otherwise o */
-  __m128i perm[3];  /* identity or half swap */
-  __m128 lim;       /* (tnear, tnear, -tfar, -tfar) */
+  __m128 a[3];     /* a * (1, 1, -1, -1) */
+  __m128 b[3];     /* FMA, not robust: o * a * (1, 1, -1, -1); otherwise o */
+  __m128i perm[3]; /* identity or half swap */
+  __m128 lim;      /* (tnear, tnear, -tfar, -tfar) */
 } tt__rc2;
 
 TT__INLINE void tt__setup2(tt__rc2 *q, const tt_ray *ray, const int robust) {
@@ -587,8 +596,7 @@ TT__INLINE int tt__box2(const tt__node2 *n, const tt__rc2 *q, const int robust, 
   for (int k = 0; k < 3; k++) {
     __m128 row = _mm_load_ps(n->b[k]), v;
 #if TT__HAVE_AVX2
-    if (!robust)
-      v = _mm_fmsub_ps(row, q->a[k], q->b[k]);
+    if (!robust) v = _mm_fmsub_ps(row, q->a[k], q->b[k]);
     else
 #endif
       v = _mm_mul_ps(_mm_sub_ps(row, q->b[k]), q->a[k]);
@@ -716,7 +724,7 @@ TT__INLINE int tt__occluded2(const tt__bvh *bvh, const tt_ray *ray, const int ro
         __m128 m;
         int mask = tt__box2(n, &q, robust, &m);
         if (counting) c_nodes++;
-        if (mask == 1) {  /* branches, not selects: see tt__intersect2 */
+        if (mask == 1) { /* branches, not selects: see tt__intersect2 */
           ref = n->child[0];
           tt__pf2(bvh, ref);
           tt__pf2(bvh, n->grand[0]);
@@ -786,16 +794,16 @@ TT__INLINE void tt__intersect(const tt__bvh *bvh, tt_ray *ray, tt_hit *hit, cons
             /* One hit child: a (predicted) branch per child, not child[ctz(mask)], so
              * the next node's load need not wait for the box test (see tt__intersect2). */
             switch (mask) {
-              case 1: ref = child[0]; break;
-              case 2: ref = child[1]; break;
-              case 4: ref = child[2]; break;
-              case 8: ref = child[3]; break;
-              case 16: ref = child[N > 4 ? 4 : 0]; break;
-              case 32: ref = child[N > 5 ? 5 : 0]; break;
-              case 64: ref = child[N > 6 ? 6 : 0]; break;
-              default: ref = child[N > 7 ? 7 : 0]; break;
+            case 1: ref = child[0]; break;
+            case 2: ref = child[1]; break;
+            case 4: ref = child[2]; break;
+            case 8: ref = child[3]; break;
+            case 16: ref = child[N > 4 ? 4 : 0]; break;
+            case 32: ref = child[N > 5 ? 5 : 0]; break;
+            case 64: ref = child[N > 6 ? 6 : 0]; break;
+            default: ref = child[N > 7 ? 7 : 0]; break;
             }
-            __asm__("" : "+r"(ref));  /* keep the switch a branch, not a table lookup */
+            __asm__("" : "+r"(ref)); /* keep the switch a branch, not a table lookup */
             continue;
           }
           int i0 = __builtin_ctz((unsigned)mask);
@@ -877,8 +885,8 @@ done:
 
 /* Any-hit traversal: children in node order (sorting does not pay when the first hit
  * ends the ray), returns at the first triangle inside [tnear, tfar]. */
-TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N,
-                            const int robust, const int counting, const int ib) {
+TT__INLINE int tt__occluded(const tt__bvh *bvh, const tt_ray *ray, const int N, const int robust,
+                            const int counting, const int ib) {
   uint64_t c_nodes = 0, c_tris = 0;
   int result = 0;
   tt__rc r;
@@ -972,13 +980,16 @@ TT__INLINE void tt__bucket(const tt_ray *rays, size_t base, int n, size_t *idx, 
  * planes are loaded once and every ray of the mask is tested against them. */
 typedef struct tt__ogroup {
   _Alignas(32) float rd[3][TT__OS];
-  _Alignas(32) float ob[3][TT__OS];  /* FMA kernels: o * rd; otherwise o */
+  _Alignas(32) float ob[3][TT__OS]; /* FMA kernels: o * rd; otherwise o */
   _Alignas(32) float tnear[TT__OS], tfar[TT__OS];
 } tt__ogroup;
 
 #if TT__HAVE_AVX2
-typedef __m256 tt__gv;  /* up to 8 children */
-#  define TT__GLOAD(p, N) ((N) == 8 ? _mm256_load_ps(p) : _mm256_castps128_ps256((N) == 4 ? _mm_load_ps(p) : _mm_castpd_ps(_mm_load_sd((const double *)(p)))))
+typedef __m256 tt__gv; /* up to 8 children */
+#  define TT__GLOAD(p, N)                                                                          \
+    ((N) == 8 ? _mm256_load_ps(p)                                                                  \
+              : _mm256_castps128_ps256(                                                            \
+                    (N) == 4 ? _mm_load_ps(p) : _mm_castpd_ps(_mm_load_sd((const double *)(p)))))
 #  define TT__GSET1(x) _mm256_set1_ps(x)
 #  define TT__GSUB _mm256_sub_ps
 #  define TT__GMUL _mm256_mul_ps
@@ -998,8 +1009,9 @@ typedef __m256 tt__gv;  /* up to 8 children */
 #  define TT__GIGT(a, b) TT__GF(_mm256_cmpgt_epi32(TT__GI(a), TT__GI(b)))
 #  define TT__GANDNOT _mm256_andnot_ps
 #else
-typedef __m128 tt__gv;  /* up to 4 children (BVH8: two halves) */
-#  define TT__GLOAD(p, N) ((N) >= 4 ? _mm_load_ps(p) : _mm_castpd_ps(_mm_load_sd((const double *)(p))))
+typedef __m128 tt__gv; /* up to 4 children (BVH8: two halves) */
+#  define TT__GLOAD(p, N)                                                                          \
+    ((N) >= 4 ? _mm_load_ps(p) : _mm_castpd_ps(_mm_load_sd((const double *)(p))))
 #  define TT__GSET1(x) _mm_set1_ps(x)
 #  define TT__GSUB _mm_sub_ps
 #  define TT__GMUL _mm_mul_ps
@@ -1059,22 +1071,22 @@ TT__INLINE void tt__ogroup_planes(const void *node, const int near[3], const int
                                   tt__gv bn[3], tt__gv bf[3]) {
   for (int k = 0; k < 3; k++) {
     const int neg = near[k] & 1;
-    if (N == 2) {  /* row k: lower c0, lower c1, upper c0, upper c1 */
+    if (N == 2) { /* row k: lower c0, lower c1, upper c0, upper c1 */
       const float *row = ((const tt__node2 *)node)->b[k];
       bn[k] = TT__GLOAD(row + 2 * neg, 2);
       bf[k] = TT__GLOAD(row + 2 * (neg ^ 1), 2);
     } else {
       const float *rows = node;
-      const int w = N > 4 && !TT__HAVE_AVX2 ? 4 : N;  /* SSE: BVH8 rows in two halves */
+      const int w = N > 4 && !TT__HAVE_AVX2 ? 4 : N; /* SSE: BVH8 rows in two halves */
       bn[k] = TT__GLOAD(rows + (size_t)near[k] * N + 4 * half, w);
       bf[k] = TT__GLOAD(rows + (size_t)(near[k] ^ 1) * N + 4 * half, w);
     }
   }
 }
 
-TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const size_t *idx,
-                                  int n, uint8_t *occ, const int N, const int robust,
-                                  const int counting, const int ib) {
+TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const size_t *idx, int n,
+                                  uint8_t *occ, const int N, const int robust, const int counting,
+                                  const int ib) {
   tt__rc r[TT__OS];
   tt__ogroup g;
   uint64_t c_nodes[TT__OS], c_tris[TT__OS];
@@ -1095,7 +1107,7 @@ TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const 
         g.ob[k][i] = rays[idx[i]].org[k];
 #endif
       }
-      g.tnear[i] = rays[idx[i]].tnear + 0.0f;  /* -0 -> +0, as tt__setup */
+      g.tnear[i] = rays[idx[i]].tnear + 0.0f; /* -0 -> +0, as tt__setup */
       g.tfar[i] = rays[idx[i]].tfar;
     } else {
       occ[idx[i]] = 0;
@@ -1126,7 +1138,7 @@ TT__INLINE void tt__ostream_group(const tt__bvh *bvh, const tt_ray *rays, const 
         for (uint32_t mm = m; mm; mm &= mm - 1) c_nodes[__builtin_ctz(mm)]++;
       const uint32_t *child = N == 2 ? ((const tt__node2 *)node)->child : tt__children(node, N);
       int first = -1;
-      for (int c = N - 1; c >= 0; c--) {  /* pushed last lane first: lane order is visit order */
+      for (int c = N - 1; c >= 0; c--) { /* pushed last lane first: lane order is visit order */
         if (!cm[c]) continue;
         if (first >= 0) {
           stack[sp].ref = child[first], stack[sp].mask = cm[first], sp++;
@@ -1169,8 +1181,7 @@ out:
 
 /* Occlusion of a stream in octant groups of up to TT__OS rays. */
 TT__INLINE void tt__ostream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ, size_t count,
-                            const int N, const int robust, const int counting,
-                            tt__occl_fn single) {
+                            const int N, const int robust, const int counting, tt__occl_fn single) {
   size_t idx[TT__PCHUNK];
   for (size_t base = 0; base < count; base += TT__PCHUNK) {
     const int n = (int)(count - base < TT__PCHUNK ? count - base : TT__PCHUNK);
@@ -1184,12 +1195,10 @@ TT__INLINE void tt__ostream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ
           occ[idx[i]] = (uint8_t)single(bvh, &rays[idx[i]]);
           continue;
         }
-        int ib = !robust;  /* integer box tests when every ray has tnear >= 0 */
+        int ib = !robust; /* integer box tests when every ray has tnear >= 0 */
         for (int j = 0; j < m && ib; j++) ib = tt__ray_ibox(&rays[idx[i + j]], robust);
-        if (ib)
-          tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting, 1);
-        else
-          tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting, 0);
+        if (ib) tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting, 1);
+        else tt__ostream_group(bvh, rays, idx + i, m, occ, N, robust, counting, 0);
       }
   }
 }
@@ -1211,16 +1220,16 @@ TT__INLINE void tt__ostream(const tt__bvh *bvh, const tt_ray *rays, uint8_t *occ
  * of visit and not in the other (never seen on the bench's scenes). The robust (watertight) and counting kernels have no packet form:
  * their streams run the single-ray kernels. */
 #if TT__HAVE_AVX2
-#define TT__K 8
-#define TT__PSTACK (TT__STACK + 8)
+#  define TT__K 8
+#  define TT__PSTACK (TT__STACK + 8)
 
 typedef struct tt__pkt {
   __m256 o[3], d[3], rd[3], ord[3];
-  __m256 tnear, tfar;    /* tfar: each lane's closest hit so far */
-  __m256 tfar_s;         /* tt__tfar_slack(tfar), lane by lane */
-  int near[3];           /* near-plane row per axis: 2k + sign (the packet's octant) */
-  int n;                 /* lanes holding a ray (the rest never hit anything) */
-  size_t index[TT__K];   /* the lanes' positions in the stream */
+  __m256 tnear, tfar;  /* tfar: each lane's closest hit so far */
+  __m256 tfar_s;       /* tt__tfar_slack(tfar), lane by lane */
+  int near[3];         /* near-plane row per axis: 2k + sign (the packet's octant) */
+  int n;               /* lanes holding a ray (the rest never hit anything) */
+  size_t index[TT__K]; /* the lanes' positions in the stream */
   /* closest hit per lane, as tt__best */
   float u[TT__K], v[TT__K];
   const float *pk[TT__K];
@@ -1250,7 +1259,7 @@ TT__INLINE void tt__pkt_setup(tt__pkt *P, const tt_ray *rays, const size_t *idx,
       }
       v[12][l] = ray->tnear, v[13][l] = ray->tfar;
       P->index[l] = idx[l];
-    } else {  /* empty lane: an interval no box or triangle passes */
+    } else { /* empty lane: an interval no box or triangle passes */
       for (int k = 0; k < 12; k++) v[k][l] = 0.0f;
       for (int k = 6; k < 9; k++) v[k][l] = 1.0f;
       v[12][l] = INFINITY, v[13][l] = -INFINITY;
@@ -1274,8 +1283,8 @@ TT__INLINE void tt__pkt_setup(tt__pkt *P, const tt_ray *rays, const size_t *idx,
 
 /* One child box (near/far plane values per axis for the packet's octant) against the
  * packet: entry distances, +inf where a lane misses (or is not in `lanes`). As tt__box8. */
-TT__INLINE __m256 tt__pbox(const float *pn[3], const float *pf[3], const tt__pkt *P,
-                           __m256 lanes, __m256 tfar) {
+TT__INLINE __m256 tt__pbox(const float *pn[3], const float *pf[3], const tt__pkt *P, __m256 lanes,
+                           __m256 tfar) {
   __m256 tn[3], tf[3];
   for (int k = 0; k < 3; k++) {
     tn[k] = _mm256_fmsub_ps(_mm256_broadcast_ss(pn[k]), P->rd[k], P->ord[k]);
@@ -1293,7 +1302,7 @@ TT__INLINE __m256 tt__pchild(const void *node, int c, const tt__pkt *P, int N, _
                              const int closest) {
   const float *pn[3], *pf[3];
   if (N == 2) {
-    const tt__node2 *n = node;  /* row k: lower c0, lower c1, upper c0, upper c1 */
+    const tt__node2 *n = node; /* row k: lower c0, lower c1, upper c0, upper c1 */
     for (int k = 0; k < 3; k++) {
       const int neg = P->near[k] & 1;
       pn[k] = &n->b[k][c + 2 * neg];
@@ -1335,7 +1344,7 @@ TT__INLINE __m256 tt__ptri(const float *pk, int W, int j, const tt__pkt *P, __m2
                            const int closest, __m256 *T_out, __m256 *U_out, __m256 *V_out,
                            __m256 *den_out) {
   const __m256 sign = _mm256_set1_ps(-0.0f), zero = _mm256_setzero_ps();
-#define TT__R(r) _mm256_broadcast_ss(pk + (r) * W + j)
+#  define TT__R(r) _mm256_broadcast_ss(pk + (r)*W + j)
   __m256 cx = _mm256_sub_ps(TT__R(0), P->o[0]);
   __m256 cy = _mm256_sub_ps(TT__R(1), P->o[1]);
   __m256 cz = _mm256_sub_ps(TT__R(2), P->o[2]);
@@ -1344,19 +1353,27 @@ TT__INLINE __m256 tt__ptri(const float *pk, int W, int j, const tt__pkt *P, __m2
   __m256 ry = _mm256_fmsub_ps(cz, P->d[0], _mm256_mul_ps(cx, P->d[2]));
   __m256 rz = _mm256_fmsub_ps(cx, P->d[1], _mm256_mul_ps(cy, P->d[0]));
   __m256 nx = TT__R(9), ny = TT__R(10), nz = TT__R(11);
-  __m256 den = _mm256_fmadd_ps(nx, P->d[0], _mm256_fmadd_ps(ny, P->d[1], _mm256_mul_ps(nz, P->d[2])));
+  __m256 den =
+      _mm256_fmadd_ps(nx, P->d[0], _mm256_fmadd_ps(ny, P->d[1], _mm256_mul_ps(nz, P->d[2])));
   __m256 sgn = _mm256_and_ps(den, sign);
   __m256 absden = _mm256_xor_ps(den, sgn);
-  __m256 U = _mm256_xor_ps(_mm256_fmadd_ps(rx, TT__R(6), _mm256_fmadd_ps(ry, TT__R(7), _mm256_mul_ps(rz, TT__R(8)))), sgn);
-  __m256 V = _mm256_xor_ps(_mm256_fmadd_ps(rx, TT__R(3), _mm256_fmadd_ps(ry, TT__R(4), _mm256_mul_ps(rz, TT__R(5)))), sgn);
-  __m256 valid = _mm256_and_ps(_mm256_cmp_ps(U, zero, _CMP_GE_OQ), _mm256_cmp_ps(V, zero, _CMP_GE_OQ));
+  __m256 U = _mm256_xor_ps(
+      _mm256_fmadd_ps(rx, TT__R(6), _mm256_fmadd_ps(ry, TT__R(7), _mm256_mul_ps(rz, TT__R(8)))),
+      sgn);
+  __m256 V = _mm256_xor_ps(
+      _mm256_fmadd_ps(rx, TT__R(3), _mm256_fmadd_ps(ry, TT__R(4), _mm256_mul_ps(rz, TT__R(5)))),
+      sgn);
+  __m256 valid =
+      _mm256_and_ps(_mm256_cmp_ps(U, zero, _CMP_GE_OQ), _mm256_cmp_ps(V, zero, _CMP_GE_OQ));
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(_mm256_add_ps(U, V), absden, _CMP_LE_OQ));
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(absden, zero, _CMP_GT_OQ));
   valid = _mm256_and_ps(valid, lanes);
-  __m256 T = _mm256_xor_ps(_mm256_fmadd_ps(nx, cx, _mm256_fmadd_ps(ny, cy, _mm256_mul_ps(nz, cz))), sgn);
-#undef TT__R
+  __m256 T =
+      _mm256_xor_ps(_mm256_fmadd_ps(nx, cx, _mm256_fmadd_ps(ny, cy, _mm256_mul_ps(nz, cz))), sgn);
+#  undef TT__R
   valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, P->tnear), _CMP_GE_OQ));
-  valid = _mm256_and_ps(valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, closest ? P->tfar_s : P->tfar), _CMP_LE_OQ));
+  valid = _mm256_and_ps(
+      valid, _mm256_cmp_ps(T, _mm256_mul_ps(absden, closest ? P->tfar_s : P->tfar), _CMP_LE_OQ));
   *T_out = T, *U_out = U, *V_out = V, *den_out = absden;
   return valid;
 }
@@ -1385,7 +1402,7 @@ TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids
   _mm256_store_ps(f8, P->tfar);
   for (; acc; acc &= acc - 1) {
     const int l = __builtin_ctz((unsigned)acc);
-    int j = 0;  /* the nearest triangle; on a tie the smaller ids, as tt__leaf_packet */
+    int j = 0; /* the nearest triangle; on a tie the smaller ids, as tt__leaf_packet */
     while (j < W - 1 && tv[j][l] != m8[l]) j++;
     for (int k = j + 1; k < W; k++)
       if (tv[k][l] == m8[l] && tt__id_less(&ids[k], &ids[j])) j = k;
@@ -1397,8 +1414,8 @@ TT__INLINE void tt__pleaf_packet(const float *pk, const int W, const tt__id *ids
     P->lane[l] = j;
     P->id[l] = ids + j;
   }
-  P->tfar = _mm256_blendv_ps(P->tfar, mn,
-                             _mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
+  P->tfar =
+      _mm256_blendv_ps(P->tfar, mn, _mm256_and_ps(any, _mm256_cmp_ps(mn, P->tfar, _CMP_LE_OQ)));
   P->tfar_s = tt__ptfar_slack(P->tfar);
 }
 
@@ -1420,7 +1437,7 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
   _Alignas(32) float sdist[TT__PSTACK][TT__K];
   int sp = 0;
   uint32_t ref = bvh->root;
-  __m256 cur = P->tnear;  /* lanes in this subtree: entry distance, +inf if not */
+  __m256 cur = P->tnear; /* lanes in this subtree: entry distance, +inf if not */
   for (;;) {
     __m256 lanes = tt__plive(cur, P->tfar_s);
     if (!(ref & TT__REF_LEAF)) {
@@ -1436,7 +1453,7 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
         if (next == TT__REF_NONE) {
           next = child[c], nextd = dc;
         } else if (_mm256_movemask_ps(_mm256_cmp_ps(dc, nextd, _CMP_LT_OQ))) {
-          sref[sp] = next;  /* the new child is nearer for some lane: visit it first */
+          sref[sp] = next; /* the new child is nearer for some lane: visit it first */
           _mm256_store_ps(sdist[sp], nextd);
           sp++;
           next = child[c], nextd = dc;
@@ -1466,7 +1483,7 @@ TT__INLINE void tt__pintersect(const tt__bvh *bvh, tt__pkt *P, const int N) {
         tt__pleaf_packet(pk, 4, ids + 2 * q, P, lanes);
       if (q < pairs) tt__pleaf_packet(pk, 2, ids + 2 * q, P, lanes);
     }
-    for (;;) {  /* pop the next entry some lane can still improve on */
+    for (;;) { /* pop the next entry some lane can still improve on */
       if (sp == 0) return;
       --sp;
       __m256 d = _mm256_load_ps(sdist[sp]);
@@ -1491,12 +1508,13 @@ TT__INLINE int tt__poccluded(const tt__bvh *bvh, const tt__pkt *P, const int N) 
     if (!(ref & TT__REF_LEAF)) {
       const void *node = tt__pnode(bvh, ref, N);
       const uint32_t *child = tt__pchildren(node, N);
-      const __m256 lv = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-          _mm256_and_si256(_mm256_set1_epi32(lanes), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-          _mm256_setzero_si256()));
+      const __m256 lv = _mm256_castsi256_ps(
+          _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(lanes),
+                                              _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                             _mm256_setzero_si256()));
       uint32_t next = TT__REF_NONE;
       int nextm = 0;
-      for (int c = N - 1; c >= 0; c--) {  /* pushed last to first: lane order is visit order */
+      for (int c = N - 1; c >= 0; c--) { /* pushed last to first: lane order is visit order */
         __m256 dc = tt__pchild(node, c, P, N, lv, 0);
         int m = _mm256_movemask_ps(_mm256_cmp_ps(dc, _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
         if (!m) continue;
@@ -1514,9 +1532,10 @@ TT__INLINE int tt__poccluded(const tt__bvh *bvh, const tt__pkt *P, const int N) 
     } else {
       const uint32_t pairs = tt__leaf_pairs(ref);
       const float *pk = N == 2 ? (const float *)tt__line2(bvh, ref) : tt__leaf_pk(bvh, ref);
-      const __m256 lv = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-          _mm256_and_si256(_mm256_set1_epi32(lanes), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-          _mm256_setzero_si256()));
+      const __m256 lv = _mm256_castsi256_ps(
+          _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(lanes),
+                                              _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                             _mm256_setzero_si256()));
       __m256 hitv = _mm256_setzero_ps();
       uint32_t q = 0;
       for (; q < pairs; q += 2, pk += 4 * TT__SLOT_FLOATS) {
@@ -1542,8 +1561,8 @@ TT__INLINE int tt__poccluded(const tt__bvh *bvh, const tt__pkt *P, const int N) 
 }
 
 /* Streams through packets: see tt__bucket (octants) above the packet section. */
-TT__INLINE void tt__pintersect_stream(const tt__bvh *bvh, tt_ray *rays, tt_hit *hits,
-                                      size_t count, const int N, tt__isect_fn single) {
+TT__INLINE void tt__pintersect_stream(const tt__bvh *bvh, tt_ray *rays, tt_hit *hits, size_t count,
+                                      const int N, tt__isect_fn single) {
   size_t idx[TT__PCHUNK];
   for (size_t base = 0; base < count; base += TT__PCHUNK) {
     const int n = (int)(count - base < TT__PCHUNK ? count - base : TT__PCHUNK);
@@ -1553,7 +1572,7 @@ TT__INLINE void tt__pintersect_stream(const tt__bvh *bvh, tt_ray *rays, tt_hit *
     for (int b = 0, first = 0; b < 8; first = end[b], b++) {
       for (int i = first; i < end[b]; i += TT__K) {
         const int m = end[b] - i < TT__K ? end[b] - i : TT__K;
-        if (m < 3 || bvh->root == TT__REF_NONE) {  /* too few rays for a packet */
+        if (m < 3 || bvh->root == TT__REF_NONE) { /* too few rays for a packet */
           for (int l = 0; l < m; l++) single(bvh, &rays[idx[i + l]], &hits[idx[i + l]]);
           continue;
         }
@@ -1604,29 +1623,25 @@ TT__INLINE void tt__poccluded_stream(const tt__bvh *bvh, const tt_ray *rays, uin
 #else
 #  define TT__PACKETS(R, C) 0
 #endif
-#define TT__DEF(N, R, C)                                                                    \
-  static void tt__isect_##N##_##R##_##C(const tt__bvh *b, tt_ray *ray, tt_hit *h) {         \
-    if (N == 2)                                                                             \
-      tt__intersect2(b, ray, h, R, C);                                                      \
-    else if (tt__ray_ibox(ray, R))                                                          \
-      tt__intersect(b, ray, h, N, R, C, 1);                                                 \
-    else                                                                                    \
-      tt__intersect(b, ray, h, N, R, C, 0);                                                 \
-  }                                                                                         \
-  static int tt__occl_##N##_##R##_##C(const tt__bvh *b, const tt_ray *ray) {                \
-    if (N == 2) return tt__occluded2(b, ray, R, C);                                         \
-    return tt__ray_ibox(ray, R) ? tt__occluded(b, ray, N, R, C, 1)                          \
-                                : tt__occluded(b, ray, N, R, C, 0);                         \
-  }                                                                                         \
-  static void tt__isects_##N##_##R##_##C(const tt__bvh *b, tt_ray *rays, tt_hit *h,         \
-                                         size_t n) {                                        \
-    TT__PSTREAM_I(N, R, C)                                                                  \
-    for (size_t i = 0; i < n; i++) tt__isect_##N##_##R##_##C(b, &rays[i], &h[i]);           \
-  }                                                                                         \
-  static void tt__occls_##N##_##R##_##C(const tt__bvh *b, const tt_ray *rays, uint8_t *o,   \
-                                        size_t n) {                                         \
-    TT__PSTREAM_O(N, R, C)                                                                  \
-    tt__ostream(b, rays, o, n, N, R, C, tt__occl_##N##_##R##_##C);                          \
+#define TT__DEF(N, R, C)                                                                           \
+  static void tt__isect_##N##_##R##_##C(const tt__bvh *b, tt_ray *ray, tt_hit *h) {                \
+    if (N == 2) tt__intersect2(b, ray, h, R, C);                                                   \
+    else if (tt__ray_ibox(ray, R)) tt__intersect(b, ray, h, N, R, C, 1);                           \
+    else tt__intersect(b, ray, h, N, R, C, 0);                                                     \
+  }                                                                                                \
+  static int tt__occl_##N##_##R##_##C(const tt__bvh *b, const tt_ray *ray) {                       \
+    if (N == 2) return tt__occluded2(b, ray, R, C);                                                \
+    return tt__ray_ibox(ray, R) ? tt__occluded(b, ray, N, R, C, 1)                                 \
+                                : tt__occluded(b, ray, N, R, C, 0);                                \
+  }                                                                                                \
+  static void tt__isects_##N##_##R##_##C(const tt__bvh *b, tt_ray *rays, tt_hit *h, size_t n) {    \
+    TT__PSTREAM_I(N, R, C)                                                                         \
+    for (size_t i = 0; i < n; i++) tt__isect_##N##_##R##_##C(b, &rays[i], &h[i]);                  \
+  }                                                                                                \
+  static void tt__occls_##N##_##R##_##C(const tt__bvh *b, const tt_ray *rays, uint8_t *o,          \
+                                        size_t n) {                                                \
+    TT__PSTREAM_O(N, R, C)                                                                         \
+    tt__ostream(b, rays, o, n, N, R, C, tt__occl_##N##_##R##_##C);                                 \
   }
 /* Packets pay for coherent streams only (measured: 1.4-2.1x on camera rays, 0.6-1.0x on
  * diffuse-bounce and occlusion rays of the same scenes, bench: "streams of 1024"); rays
@@ -1639,15 +1654,15 @@ TT__INLINE int tt__one_origin(const tt_ray *rays, size_t n) {
   return 1;
 }
 #if TT__HAVE_AVX2
-#  define TT__PSTREAM_I(N, R, C)                                                            \
-    if (TT__PACKETS(R, C) && tt__one_origin(rays, n)) {                                     \
-      tt__pintersect_stream(b, rays, h, n, N, tt__isect_##N##_##R##_##C);                   \
-      return;                                                                               \
+#  define TT__PSTREAM_I(N, R, C)                                                                   \
+    if (TT__PACKETS(R, C) && tt__one_origin(rays, n)) {                                            \
+      tt__pintersect_stream(b, rays, h, n, N, tt__isect_##N##_##R##_##C);                          \
+      return;                                                                                      \
     }
-#  define TT__PSTREAM_O(N, R, C)                                                            \
-    if (TT__PACKETS(R, C) && tt__one_origin(rays, n)) {                                     \
-      tt__poccluded_stream(b, rays, o, n, N, tt__occl_##N##_##R##_##C);                     \
-      return;                                                                               \
+#  define TT__PSTREAM_O(N, R, C)                                                                   \
+    if (TT__PACKETS(R, C) && tt__one_origin(rays, n)) {                                            \
+      tt__poccluded_stream(b, rays, o, n, N, tt__occl_##N##_##R##_##C);                            \
+      return;                                                                                      \
     }
 #else
 #  define TT__PSTREAM_I(N, R, C)
@@ -1658,11 +1673,15 @@ TT__DEF_N(2)
 TT__DEF_N(4)
 TT__DEF_N(8)
 
-#define TT__ENT(N, R, C)                                                   \
-  {tt__isect_##N##_##R##_##C, tt__occl_##N##_##R##_##C,                    \
-   tt__isects_##N##_##R##_##C, tt__occls_##N##_##R##_##C}
-#define TT__ENT_N(N) \
-  {{TT__ENT(N, 0, 0), TT__ENT(N, 0, 1)}, {TT__ENT(N, 1, 0), TT__ENT(N, 1, 1)}}
+#define TT__ENT(N, R, C)                                                                           \
+  {                                                                                                \
+    tt__isect_##N##_##R##_##C, tt__occl_##N##_##R##_##C, tt__isects_##N##_##R##_##C,               \
+        tt__occls_##N##_##R##_##C                                                                  \
+  }
+#define TT__ENT_N(N)                                                                               \
+  {                                                                                                \
+    {TT__ENT(N, 0, 0), TT__ENT(N, 0, 1)}, { TT__ENT(N, 1, 0), TT__ENT(N, 1, 1) }                   \
+  }
 static const tt__kernel_table g_table = {TT__ENT_N(2), TT__ENT_N(4), TT__ENT_N(8)};
 
 /* This instruction set's kernels (named after TT__TRAV_ISA). */

@@ -56,17 +56,17 @@ struct tt_integrator {
   tt_path_tracer *pt;
   tt__bd_settings settings;
   /* light-tracing splats of the film (reset with a fresh film) */
-  uint64_t light_paths;       /* light subpaths traced into this film */
-  double *splat_sum;          /* 3 per pixel, this pass */
+  uint64_t light_paths; /* light subpaths traced into this film */
+  double *splat_sum;    /* 3 per pixel, this pass */
   size_t pixels;
   /* strategy images (TT_BDPT_STRATEGIES): per strategy and pixel, sums of weighted and
    * unweighted contributions (camera strategies) and of splats (t = 1) */
   char *strategy_path;
-  uint32_t strategies;        /* count for settings.bdpt.max_depth */
+  uint32_t strategies; /* count for settings.bdpt.max_depth */
   uint32_t strategy_depth;
-  double *strategy_sum;       /* strategies * pixels * 6 */
-  uint64_t camera_samples;    /* samples per pixel in the film */
-  int warned_dark;            /* "no light reached the camera" said once */
+  double *strategy_sum;    /* strategies * pixels * 6 */
+  uint64_t camera_samples; /* samples per pixel in the film */
+  int warned_dark;         /* "no light reached the camera" said once */
 };
 
 /* ---- parameters ---- */
@@ -90,7 +90,8 @@ static tt_status tt__bd_build_space(void) {
   ok &= tt_space_add_nom_string(s, "sampler", samplers, 3, 0,
                                 "primary-sample generator (the camera, light and connection "
                                 "streams interleaved)") >= 0;
-  ok &= tt_space_add_int(s, "tileSize", 4, 256, 32, "side of the square tiles handed to worker threads") >= 0;
+  ok &= tt_space_add_int(s, "tileSize", 4, 256, 32,
+                         "side of the square tiles handed to worker threads") >= 0;
   if (!ok) {
     tt_space_destroy(s);
     return tt_set_error(TT_ERR_INTERNAL, TT__BD_NAME ": building the parameter space failed");
@@ -109,7 +110,8 @@ static tt_status tt__bd_read_config(const tt_config *config, tt__bd_settings *ou
   }
   tt_status st = TT_OK;
   tt_bdpt_options_default(&out->bdpt);
-  int64_t d = tt_config_get_int(config, "maxDepth", 5), rr = tt_config_get_int(config, "rrDepth", 3);
+  int64_t d = tt_config_get_int(config, "maxDepth", 5),
+          rr = tt_config_get_int(config, "rrDepth", 3);
   out->bdpt.max_depth = (uint32_t)(d < 0 ? 0 : d > 64 ? 64 : d);
   out->bdpt.rr_depth = (uint32_t)(rr < 0 ? 0 : rr > 64 ? 64 : rr);
   const char *h = tt_config_get_string(config, "heuristic");
@@ -181,7 +183,8 @@ static void tt__bd_reset(tt_integrator *it) {
   if (!it) return;
   it->light_paths = 0;
   it->camera_samples = 0;
-  if (it->strategy_sum) memset(it->strategy_sum, 0, (size_t)it->strategies * it->pixels * 6 * sizeof(double));
+  if (it->strategy_sum)
+    memset(it->strategy_sum, 0, (size_t)it->strategies * it->pixels * 6 * sizeof(double));
 }
 
 static void tt__bd_destroy(tt_integrator *it) {
@@ -203,10 +206,10 @@ typedef struct tt__bd_job {
   tt_tracer tracer;
   uint32_t tiles_x, tile_size, width, height;
   uint32_t aovs;
-  uint32_t spp_first, spp_count;   /* the sub-pass: samples [first, first + count) of the pass */
-  tt_bdpt_paths **paths;           /* per thread, made on first use */
+  uint32_t spp_first, spp_count; /* the sub-pass: samples [first, first + count) of the pass */
+  tt_bdpt_paths **paths;         /* per thread, made on first use */
   uint32_t threads;
-  tt__bd_splats *splats;               /* per tile */
+  tt__bd_splats *splats; /* per tile */
   atomic_uint_fast64_t rays, samples, nonfinite, splat_count, contributions;
   atomic_int interrupted, failed;
 } tt__bd_job;
@@ -248,7 +251,8 @@ static void tt__bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t th
     atomic_store(&job->failed, 1);
     return;
   }
-  if (!job->paths[thread_index] && tt_bdpt_paths_create(o->max_depth, &job->paths[thread_index]) != TT_OK) {
+  if (!job->paths[thread_index] &&
+      tt_bdpt_paths_create(o->max_depth, &job->paths[thread_index]) != TT_OK) {
     atomic_store(&job->failed, 1);
     return;
   }
@@ -288,7 +292,8 @@ static void tt__bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t th
           float fx = (float)px + 0.5f + jx, fy = (float)py + 0.5f + jy;
           uint32_t nc = tt_bdpt_camera_subpath(it->pt, &job->tracer, o, &job->frame, fx, fy, &cam,
                                                o->max_depth + 2, paths);
-          uint32_t nl = tt_bdpt_light_subpath(it->pt, &job->tracer, o, &lig, o->max_depth + 1, paths);
+          uint32_t nl =
+              tt_bdpt_light_subpath(it->pt, &job->tracer, o, &lig, o->max_depth + 1, paths);
           float L[3] = {0.0f, 0.0f, 0.0f};
           size_t pix = (size_t)py * job->width + px;
           for (uint32_t t = 1; t <= nc; ++t)
@@ -305,9 +310,10 @@ static void tt__bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t th
                 uint32_t sx = (uint32_t)c.fx, sy = (uint32_t)c.fy;
                 if (sx >= job->width) sx = job->width - 1;
                 if (sy >= job->height) sy = job->height - 1;
-                tt__bd_splat sp = {sy * job->width + sx, (uint16_t)si,
-                               {c.L[0], c.L[1], c.L[2]},
-                               {c.unweighted[0], c.unweighted[1], c.unweighted[2]}};
+                tt__bd_splat sp = {sy * job->width + sx,
+                                   (uint16_t)si,
+                                   {c.L[0], c.L[1], c.L[2]},
+                                   {c.unweighted[0], c.unweighted[1], c.unweighted[2]}};
                 if (!tt__bd_push(list, &sp)) atomic_store(&job->failed, 1);
                 splat_count++;
               } else {
@@ -329,8 +335,9 @@ static void tt__bd_tile_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t th
             tt_bdpt_first_hit_ex(paths, &r, sizeof r);
             tt_ray ray;
             tt_camera_generate_ray(&job->frame, fx, fy, &ray);
-            tt_path_write_aovs_ex(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL,
-                                  fx, fy, &ray, &r, r.prev_position, index + 1);
+            tt_path_write_aovs_ex(ctx->film, px, py, &job->frame,
+                                  job->has_prev ? &job->prev_frame : NULL, fx, fy, &ray, &r,
+                                  r.prev_position, index + 1);
           }
         }
   }
@@ -398,12 +405,14 @@ static void tt__bd_write_strategies(tt_integrator *it, uint32_t w, uint32_t h) {
       double scale = t == 1 ? lt_scale : cam_scale;
       for (size_t p = 0; p < pixels; ++p)
         for (uint32_t c = 0; c < 6; ++c)
-          img[p * ch + 6 * si + c] = (float)(it->strategy_sum[((size_t)si * pixels + p) * 6 + c] * scale);
+          img[p * ch + 6 * si + c] =
+              (float)(it->strategy_sum[((size_t)si * pixels + p) * 6 + c] * scale);
     }
   char depth[16];
   snprintf(depth, sizeof depth, "%u", d);
   tt_image_meta meta[2] = {{"tunetrace:integrator", TT__BD_NAME}, {"tunetrace:maxDepth", depth}};
-  if (tt_image_write_exr(it->strategy_path, w, h, ch, img, (const char *const *)names, meta, 2) != TT_OK)
+  if (tt_image_write_exr(it->strategy_path, w, h, ch, img, (const char *const *)names, meta, 2) !=
+      TT_OK)
     tt_host_log(tt__bd_host(), TT_LOG_WARN, TT__BD_NAME, "cannot write the strategy images: %s",
                 tt_last_error());
   free(img);
@@ -446,7 +455,8 @@ static tt_status tt__bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
     }
     tt__bd_reset(it);
   }
-  if (st == TT_OK && it->strategy_path && (!it->strategy_sum || it->strategy_depth != set->bdpt.max_depth)) {
+  if (st == TT_OK && it->strategy_path &&
+      (!it->strategy_sum || it->strategy_depth != set->bdpt.max_depth)) {
     free(it->strategy_sum);
     it->strategy_depth = set->bdpt.max_depth;
     it->strategies = tt__bd_strategy_count(it->strategy_depth);
@@ -517,14 +527,15 @@ static tt_status tt__bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
       float rgb[3] = {(float)d[0], (float)d[1], (float)d[2]};
       tt_film_splat(ctx->film, (float)(p % w) + 0.5f, (float)(p / w) + 0.5f, rgb);
     }
-    if (it->light_paths > 0) tt_film_set_splat_scale(ctx->film, (double)pixels / (double)it->light_paths);
+    if (it->light_paths > 0)
+      tt_film_set_splat_scale(ctx->film, (double)pixels / (double)it->light_paths);
     if (it->strategy_path && it->strategy_sum && done_samples > 0)
       tt__bd_write_strategies(it, w, h);
   }
   /* Lights exist but no strategy of a whole pass reached the camera (lights enclosed, facing
    * away, or behind something only a specular chain crosses): say why the image is black. */
-  if (st == TT_OK && done_samples > 0 && atomic_load(&job->contributions) == 0 && !it->warned_dark &&
-      tt_scene_light_count(it->scene) > 0) {
+  if (st == TT_OK && done_samples > 0 && atomic_load(&job->contributions) == 0 &&
+      !it->warned_dark && tt_scene_light_count(it->scene) > 0) {
     it->warned_dark = 1;
     tt_host_log(host, TT_LOG_WARN, TT__BD_NAME,
                 "no light reached the camera in %llu samples: the image is "
@@ -547,8 +558,9 @@ static tt_status tt__bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
     double secs = local.time_ms > 0.0 ? local.time_ms * 1e-3 : 0.0;
     const char *names[] = {"samples_per_s", "rays_per_s", "rays_per_sample", "splats_per_sample"};
     double n = local.samples ? (double)local.samples : 1.0;
-    double values[] = {secs > 0.0 ? (double)local.samples / secs : 0.0, secs > 0.0 ? (double)local.rays / secs : 0.0,
-                       (double)local.rays / n, (double)atomic_load(&job->splat_count) / n};
+    double values[] = {secs > 0.0 ? (double)local.samples / secs : 0.0,
+                       secs > 0.0 ? (double)local.rays / secs : 0.0, (double)local.rays / n,
+                       (double)atomic_load(&job->splat_count) / n};
     local.metric_count = 4;
     for (uint32_t m = 0; m < local.metric_count; ++m) {
       local.metrics[m].name = names[m];
@@ -567,13 +579,13 @@ static tt_status tt__bd_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
 }
 
 static const tt_integrator_iface tt__bd_iface = {
-  .struct_size = sizeof(tt_integrator_iface),
-  .space = tt__bd_space,
-  .create = tt__bd_create,
-  .configure = tt__bd_configure,
-  .render_pass = tt__bd_render_pass,
-  .reset = tt__bd_reset,
-  .destroy = tt__bd_destroy,
+    .struct_size = sizeof(tt_integrator_iface),
+    .space = tt__bd_space,
+    .create = tt__bd_create,
+    .configure = tt__bd_configure,
+    .render_pass = tt__bd_render_pass,
+    .reset = tt__bd_reset,
+    .destroy = tt__bd_destroy,
 };
 
 static tt_status tt__bd_init(const tt_host *host) {
@@ -592,15 +604,16 @@ static const void *tt__bd_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_INTEGRATOR,
-  .name = TT__BD_NAME,
-  .version = TT__BD_VERSION,
-  .description = "bidirectional path tracer: every connection strategy incl. light tracing, MIS (power/balance), "
-                 "Russian roulette, independent/Halton/Sobol samplers",
-  .init = tt__bd_init,
-  .deinit = tt__bd_deinit,
-  .get_interface = tt__bd_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_INTEGRATOR,
+    .name = TT__BD_NAME,
+    .version = TT__BD_VERSION,
+    .description = "bidirectional path tracer: every connection strategy incl. light tracing, MIS "
+                   "(power/balance), "
+                   "Russian roulette, independent/Halton/Sobol samplers",
+    .init = tt__bd_init,
+    .deinit = tt__bd_deinit,
+    .get_interface = tt__bd_get_interface,
 };

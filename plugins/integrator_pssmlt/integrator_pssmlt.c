@@ -39,7 +39,7 @@ static const tt_host *g_host;
 static tt_space *g_space;
 
 typedef struct tt__mlt_settings {
-  int mmlt;                 /* multiplexed MLT over the bidirectional sampler (else PSSMLT over PT) */
+  int mmlt; /* multiplexed MLT over the bidirectional sampler (else PSSMLT over PT) */
   uint32_t max_depth;
   double large_step, sigma, alpha;
   int binning, bins;
@@ -54,14 +54,14 @@ struct tt_integrator {
   tt_path_tracer *pt;
   tt__mlt_settings set;
   tt_path_options opts;
-  tt_bdpt_options bopts;    /* mmlt */
+  tt_bdpt_options bopts; /* mmlt */
   tt__mlt_kernel kernel;
   /* chains (valid when ready) */
   int ready;
-  int black;                /* ready, but the bootstrap found no light: b = 0, no chains run */
+  int black; /* ready, but the bootstrap found no light: b = 0, no chains run */
   uint32_t nchains, dims, width, height;
   tt__mlt_chain *chains;
-  uint8_t *chain_depth;     /* mmlt: each chain's path depth (bounces) */
+  uint8_t *chain_depth; /* mmlt: each chain's path depth (bounces) */
   unsigned char *chain_mem;
   double b;
   uint64_t seed;
@@ -87,27 +87,32 @@ static tt_status tt__mlt_build_space(void) {
   int ok = 1;
   char name[32], desc[160];
   static const char *const modes[] = {"pssmlt", "mmlt"};
-  ok &= tt_space_add_nom_string(s, "mode", modes, 2, 0,
-                                "pssmlt: Kelemen PSSMLT over the path tracer; mmlt: multiplexed MLT "
-                                "(Hachisuka 2014, pbrt-v3's MLTIntegrator) over the bidirectional path "
-                                "sampler, one connection strategy per state and a path depth per chain; "
-                                "changing it restarts the estimate") >= 0;
-  ok &= tt_space_add_int(s, "maxDepth", 0, 64, 5, "maximum number of bounces (pbrt-v4 MLT default 5); "
+  ok &= tt_space_add_nom_string(
+            s, "mode", modes, 2, 0,
+            "pssmlt: Kelemen PSSMLT over the path tracer; mmlt: multiplexed MLT "
+            "(Hachisuka 2014, pbrt-v3's MLTIntegrator) over the bidirectional path "
+            "sampler, one connection strategy per state and a path depth per chain; "
+            "changing it restarts the estimate") >= 0;
+  ok &= tt_space_add_int(s, "maxDepth", 0, 64, 5,
+                         "maximum number of bounces (pbrt-v4 MLT default 5); "
                          "changing it between passes restarts the estimate") >= 0;
   ok &= tt_space_add_float(s, "largeStepProbability", 0.0, 1.0, 0.3, 0,
                            "probability of a large (independent uniform) step") >= 0;
   ok &= tt_space_add_float(s, "sigma", 1e-4, 0.3, 0.01, 1,
                            "small-step standard deviation: every dimension in classic mode, the "
                            "non-direction dimensions with binning") >= 0;
-  ok &= tt_space_add_nom_bool(s, "binning", 0, "sigma-binning by Theta = 1/(alpha pdf) with truncated-"
+  ok &= tt_space_add_nom_bool(s, "binning", 0,
+                              "sigma-binning by Theta = 1/(alpha pdf) with truncated-"
                               "normal steps (thesis 4.4-4.6); false: classic wrapped normal") >= 0;
   ok &= tt_space_add_int(s, "bins", 5, TT__MLT_MAX_BINS, 7, "number M of sigma bins") >= 0;
   ok &= tt_space_add_float(s, "alpha", 0.1, 1000.0, 4.0 * TT__MLT_PI, 1,
                            "Theta = 1/(alpha * pdf) spread (thesis: 4 pi)") >= 0;
   for (int i = 1; i <= TT__MLT_MAX_BINS + 1; ++i) {
     snprintf(name, sizeof name, "a%d", i);
-    snprintf(desc, sizeof desc, "bin edge weight a_%d: A_i = (a_1+..+a_i)/(a_1+..+a_{M+1}) (eq. 4.2-4.3); "
-             "used when %d <= M+1", i, i);
+    snprintf(desc, sizeof desc,
+             "bin edge weight a_%d: A_i = (a_1+..+a_i)/(a_1+..+a_{M+1}) (eq. 4.2-4.3); "
+             "used when %d <= M+1",
+             i, i);
     ok &= tt_space_add_float(s, name, 0.0, 1.0, 0.5, 0, desc) >= 0;
   }
   for (int i = 1; i <= TT__MLT_MAX_BINS; ++i) {
@@ -122,7 +127,8 @@ static tt_status tt__mlt_build_space(void) {
                          "(restarts when changed)") >= 0;
   ok &= tt_space_add_int(s, "chains", 1, 100000, 1000,
                          "independent Markov chains (restarts when changed)") >= 0;
-  tt_space_add_constraint_text(s, "only a_1..a_{bins+1} and sigma1..sigma{bins} are used, and only with binning");
+  tt_space_add_constraint_text(
+      s, "only a_1..a_{bins+1} and sigma1..sigma{bins} are used, and only with binning");
   if (!ok) {
     tt_space_destroy(s);
     return tt_set_error(TT_ERR_INTERNAL, TT__MLT_NAME ": building the parameter space failed");
@@ -181,10 +187,10 @@ static void tt__mlt_apply(tt_integrator *it, const tt__mlt_settings *s) {
   tt_path_options_default(&it->opts);
   it->opts.max_depth = s->max_depth;
   it->opts.rr_depth = s->max_depth;
-  it->opts.result_size = sizeof(tt_path_result);  /* with prev_position: object motion */
+  it->opts.result_size = sizeof(tt_path_result); /* with prev_position: object motion */
   tt_bdpt_options_default(&it->bopts);
   it->bopts.max_depth = s->max_depth;
-  it->bopts.rr_depth = 64;  /* off, as in pssmlt mode: the chain picks the depth */
+  it->bopts.rr_depth = 64; /* off, as in pssmlt mode: the chain picks the depth */
   tt__mlt_kernel_init(&it->kernel, s->sigma, s->large_step, s->binning, s->bins, s->alpha, s->a,
                       s->bin_sigma);
 }
@@ -240,7 +246,7 @@ static tt_status tt__mlt_configure(tt_integrator *it, const tt_config *config) {
   int restart = s.max_depth != it->set.max_depth || s.bootstrap != it->set.bootstrap ||
                 s.chains != it->set.chains || s.mmlt != it->set.mmlt;
   if (restart) {
-    tt__mlt_drop_chains(it);  /* another target function or start distribution */
+    tt__mlt_drop_chains(it); /* another target function or start distribution */
   } else if (it->ready) {
     /* Pending steps were drawn under the old kernel: realise them before it changes. */
     for (uint32_t c = 0; c < it->nchains; ++c) tt__mlt_chain_flush(&it->chains[c]);
@@ -277,7 +283,8 @@ typedef struct tt__mlt_job {
   /* mmlt: per-thread subpaths, made on first use */
   tt_bdpt_paths **paths;
   uint32_t threads;
-  atomic_uint_fast64_t rays, mutations, nonfinite, small_prop, small_acc, large_prop, large_acc, vertices;
+  atomic_uint_fast64_t rays, mutations, nonfinite, small_prop, small_acc, large_prop, large_acc,
+      vertices;
   atomic_uint_fast64_t theta[TT__MLT_THETA_BINS + 1];
   atomic_int interrupted, failed;
 } tt__mlt_job;
@@ -287,7 +294,7 @@ typedef struct tt__mlt_sample {
   float L[3];
   float fx, fy;
   uint32_t rays;
-  uint32_t vertices;        /* surface vertices the state's path(s) traced */
+  uint32_t vertices; /* surface vertices the state's path(s) traced */
   int32_t nonfinite;
 } tt__mlt_sample;
 
@@ -316,7 +323,7 @@ static inline void tt__mlt_film_pos(const tt__mlt_job *job, float u0, float u1, 
 
 /* Traces one path from primary samples read through `src` (pssmlt mode). */
 static void tt__mlt_trace(const tt__mlt_job *job, const tt_sample_source *src, tt_path_result *r,
-                      float *fx, float *fy) {
+                          float *fx, float *fy) {
   float u0 = src->get(src->self, TT_PATH_DIM_FILM), u1 = src->get(src->self, TT_PATH_DIM_FILM + 1);
   tt__mlt_film_pos(job, u0, u1, fx, fy);
   tt_ray ray;
@@ -372,9 +379,10 @@ static void tt__mlt_trace_mmlt(const tt__mlt_job *job, tt_bdpt_paths *paths,
   }
   tt__mlt_film_pos(job, cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM),
                    cam.get(cam.self, TT_BDPT_CAMERA_DIM_FILM + 1), &out->fx, &out->fy);
-  uint32_t nc = tt_bdpt_camera_subpath(it->pt, &job->tracer, &it->bopts, &job->frame, out->fx, out->fy, &cam, t,
-                                       paths);
-  uint32_t nl = nc == t ? tt_bdpt_light_subpath(it->pt, &job->tracer, &it->bopts, &lig, s, paths) : 0;
+  uint32_t nc = tt_bdpt_camera_subpath(it->pt, &job->tracer, &it->bopts, &job->frame, out->fx,
+                                       out->fy, &cam, t, paths);
+  uint32_t nl =
+      nc == t ? tt_bdpt_light_subpath(it->pt, &job->tracer, &it->bopts, &lig, s, paths) : 0;
   out->vertices = (nc > 0 ? nc - 1 : 0) + (nl > 0 ? nl - 1 : 0);
   if (nc == t && nl == s) {
     tt_bdpt_contribution c;
@@ -405,7 +413,9 @@ static int tt__mlt_eval(tt__mlt_job *job, uint32_t thread, const tt_sample_sourc
     return 1;
   }
   if (thread >= job->threads) return 0;
-  if (!job->paths[thread] && tt_bdpt_paths_create(job->it->set.max_depth, &job->paths[thread]) != TT_OK) return 0;
+  if (!job->paths[thread] &&
+      tt_bdpt_paths_create(job->it->set.max_depth, &job->paths[thread]) != TT_OK)
+    return 0;
   tt__mlt_trace_mmlt(job, job->paths[thread], src, depth, out);
   return 1;
 }
@@ -441,7 +451,8 @@ static void tt__mlt_start_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t 
   tt_integrator *it = job->it;
   for (uint64_t c = begin; c < end; ++c) {
     tt__mlt_chain *ch = &it->chains[c];
-    tt__mlt_chain_init(ch, it->chain_mem + c * tt__mlt_chain_bytes(it->dims), it->dims, &it->kernel);
+    tt__mlt_chain_init(ch, it->chain_mem + c * tt__mlt_chain_bytes(it->dims), it->dims,
+                       &it->kernel);
     if (it->set.mmlt) ch->pair_stride = TT__MLT_STREAMS;
     tt__mlt_chain_start(ch, it->seed, job->starts[c], c);
     if (it->chain_depth) it->chain_depth[c] = (uint8_t)tt__mlt_boot_depth(it, job->starts[c]);
@@ -456,7 +467,7 @@ static void tt__mlt_start_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t 
     memcpy(ch->L, r.L, sizeof ch->L);
     ch->fx = r.fx;
     ch->fy = r.fy;
-    ch->C = tt__mlt_lum(r.L);  /* = the bootstrap weight (> 0): the evaluation is deterministic */
+    ch->C = tt__mlt_lum(r.L); /* = the bootstrap weight (> 0): the evaluation is deterministic */
   }
 }
 
@@ -477,7 +488,8 @@ static tt_status tt__mlt_bootstrap(tt_integrator *it, tt__mlt_job *job) {
   it->chain_mem = malloc((size_t)it->nchains * tt__mlt_chain_bytes(it->dims));
   if (s->mmlt) it->chain_depth = calloc(it->nchains, 1);
   tt_status st = TT_OK;
-  if (!job->weights || !job->starts || !it->chains || !it->chain_mem || (s->mmlt && !it->chain_depth)) {
+  if (!job->weights || !job->starts || !it->chains || !it->chain_mem ||
+      (s->mmlt && !it->chain_depth)) {
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY,
                       TT__MLT_NAME ": out of memory for %llu bootstrap samples and %u chains",
                       (unsigned long long)n, it->nchains);
@@ -509,13 +521,14 @@ static tt_status tt__mlt_bootstrap(tt_integrator *it, tt__mlt_job *job) {
                 (unsigned long long)n);
     goto done;
   }
-  it->b = sum / (double)n * (double)depths;  /* mmlt: the mean over depths of each depth's image */
-  for (uint32_t c = 0; c < it->nchains; ++c) {  /* starts in proportion to the weights */
+  it->b = sum / (double)n * (double)depths; /* mmlt: the mean over depths of each depth's image */
+  for (uint32_t c = 0; c < it->nchains; ++c) { /* starts in proportion to the weights */
     double u = tt__u64_to_unit(tt__hash3(it->seed, c, 0x7374617274ull)) * sum;
     uint64_t lo = 0, hi = n - 1;
-    while (lo < hi) {  /* first i with prefix[i] > u */
+    while (lo < hi) { /* first i with prefix[i] > u */
       uint64_t mid = lo + (hi - lo) / 2;
-      if (job->weights[mid] > u) hi = mid; else lo = mid + 1;
+      if (job->weights[mid] > u) hi = mid;
+      else lo = mid + 1;
     }
     job->starts[c] = lo;
   }
@@ -547,7 +560,7 @@ static inline void tt__mlt_splat(tt__mlt_job *job, uint32_t pix, const float L[3
   _Atomic int64_t *acc = job->it->acc + 3 * (size_t)pix;
   for (int i = 0; i < 3; ++i) {
     double v = (double)L[i] * k;
-    if (!(v > 0.0)) continue;  /* also drops NaN */
+    if (!(v > 0.0)) continue; /* also drops NaN */
     int64_t q = llrint(v);
     if (q) atomic_fetch_add_explicit(&acc[i], q, memory_order_relaxed);
   }
@@ -593,7 +606,7 @@ static void tt__mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t
       rays += r.rays;
       vertices += r.vertices;
       double cy = tt__mlt_lum(r.L);
-      if (r.nonfinite || !isfinite(cy) || cy < 0.0) {  /* never splatted, never accepted */
+      if (r.nonfinite || !isfinite(cy) || cy < 0.0) { /* never splatted, never accepted */
         nonfinite++;
         cy = 0.0;
       }
@@ -611,7 +624,13 @@ static void tt__mlt_mutate_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t
         tt__mlt_splat(job, tt__mlt_pixel(job, ch->fx, ch->fy), ch->L, ch->C, 1.0 - a);
       int large = ch->large;
       int accept = tt__mlt_rng_unit(&ch->rng) < a;
-      if (large) { lp++; la += accept; } else { sp++; sa += accept; }
+      if (large) {
+        lp++;
+        la += accept;
+      } else {
+        sp++;
+        sa += accept;
+      }
       if (accept) {
         tt__mlt_chain_accept(ch);
         memcpy(ch->L, r.L, sizeof ch->L);
@@ -648,12 +667,14 @@ static void tt__mlt_write_theta(const tt_integrator *it) {
   }
   FILE *f = tt_atomic_file_stream(af);
   fprintf(f, "# integrator_pssmlt Theta = 1/(alpha*pdf) histogram of proposed BSDF directions\n");
-  fprintf(f, "# alpha=%.9g bins=%d binning=%d edges=", it->kernel.alpha, it->kernel.bins, it->kernel.binning);
-  for (int i = 0; i <= it->kernel.bins; ++i) fprintf(f, "%s%.9g", i ? ";" : "", it->kernel.edges[i]);
+  fprintf(f, "# alpha=%.9g bins=%d binning=%d edges=", it->kernel.alpha, it->kernel.bins,
+          it->kernel.binning);
+  for (int i = 0; i <= it->kernel.bins; ++i)
+    fprintf(f, "%s%.9g", i ? ";" : "", it->kernel.edges[i]);
   fprintf(f, "\ntheta_lo,theta_hi,count\n");
   for (int i = 0; i < TT__MLT_THETA_BINS; ++i)
-    fprintf(f, "%.6f,%.6f,%llu\n", (double)i / TT__MLT_THETA_BINS, (double)(i + 1) / TT__MLT_THETA_BINS,
-            (unsigned long long)it->theta_hist[i]);
+    fprintf(f, "%.6f,%.6f,%llu\n", (double)i / TT__MLT_THETA_BINS,
+            (double)(i + 1) / TT__MLT_THETA_BINS, (unsigned long long)it->theta_hist[i]);
   fprintf(f, "1.000000,inf,%llu\n", (unsigned long long)it->theta_hist[TT__MLT_THETA_BINS]);
   if (tt_atomic_file_commit(af) != TT_OK)
     tt_host_log(tt__mlt_host(), TT_LOG_WARN, TT__MLT_NAME, "cannot write the Theta dump: %s",
@@ -666,18 +687,18 @@ static void tt__mlt_write_theta(const tt_integrator *it) {
  * does (tt_path_write_aovs): with N passes an AOV is the mean of N stratified samples. */
 typedef struct tt__mlt_aov_job {
   tt__mlt_job *job;
-  tt_path_options opts;     /* max_depth 0: the first hit only, no light sampling */
+  tt_path_options opts; /* max_depth 0: the first hit only, no light sampling */
   tt_camera_frame prev;
   int has_prev;
   float jitter[2];
-  uint64_t n;               /* this pass's AOV sample number since the film was cleared */
+  uint64_t n; /* this pass's AOV sample number since the film was cleared */
 } tt__mlt_aov_job;
 
 static void tt__mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
   tt__mlt_aov_job *a = vctx;
   tt__mlt_job *job = a->job;
   (void)thread_index;
-  tt__mlt_boot_src bs = {job->it->seed, 0};  /* a depth-0 path draws no sample dimension */
+  tt__mlt_boot_src bs = {job->it->seed, 0}; /* a depth-0 path draws no sample dimension */
   tt_sample_source src = {tt__mlt_boot_get, NULL, &bs};
   uint64_t rays = 0;
   for (uint64_t y = begin; y < end; ++y) {
@@ -687,8 +708,8 @@ static void tt__mlt_aov_fn(void *vctx, uint64_t begin, uint64_t end, uint32_t th
       tt_camera_generate_ray(&job->frame, fx, fy, &ray);
       tt_path_result r;
       tt_path_trace(job->it->pt, &job->tracer, &a->opts, &ray, &src, &r);
-      tt_path_write_aovs_ex(job->ctx->film, x, (uint32_t)y, &job->frame, a->has_prev ? &a->prev : NULL,
-                            fx, fy, &ray, &r, r.prev_position, a->n);
+      tt_path_write_aovs_ex(job->ctx->film, x, (uint32_t)y, &job->frame,
+                            a->has_prev ? &a->prev : NULL, fx, fy, &ray, &r, r.prev_position, a->n);
       rays += r.rays;
     }
   }
@@ -743,7 +764,7 @@ static tt_status tt__mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx
     job->paths = calloc(job->threads, sizeof *job->paths);
     if (!job->paths) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__MLT_NAME ": out of memory");
   }
-  if (st == TT_OK && it->acc_pixels != pixels) {  /* allocated once per film size */
+  if (st == TT_OK && it->acc_pixels != pixels) { /* allocated once per film size */
     free((void *)it->acc);
     it->acc = calloc(3 * pixels, sizeof(int64_t));
     it->acc_pixels = it->acc ? pixels : 0;
@@ -764,7 +785,7 @@ static tt_status tt__mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx
     uint64_t b0 = host->clock_ns();
     st = tt__mlt_bootstrap(it, job);
     boot_ms = (double)(host->clock_ns() - b0) * 1e-6;
-    if (st == TT_OK && ctx->sample_offset > 0)  /* the film holds an older estimate */
+    if (st == TT_OK && ctx->sample_offset > 0) /* the film holds an older estimate */
       memset(tt_film_splat_rgb(ctx->film), 0, 3 * pixels * sizeof(float));
   } else if (ctx->sample_offset == 0) {
     it->mutations_total = 0;
@@ -797,7 +818,8 @@ static tt_status tt__mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx
     if (it->mutations_total > 0)
       tt_film_set_splat_scale(ctx->film, it->b * (double)pixels / (double)it->mutations_total);
     if (it->theta_dump) {
-      for (int i = 0; i <= TT__MLT_THETA_BINS; ++i) it->theta_hist[i] += atomic_load(&job->theta[i]);
+      for (int i = 0; i <= TT__MLT_THETA_BINS; ++i)
+        it->theta_hist[i] += atomic_load(&job->theta[i]);
       tt__mlt_write_theta(it);
     }
     if (st == TT_OK && tt_film_aov_mask(ctx->film)) st = tt__mlt_aovs(job);
@@ -816,14 +838,28 @@ static tt_status tt__mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx
     uint64_t lp = atomic_load(&job->large_prop), la = atomic_load(&job->large_acc);
     double small = sp ? (double)sa / sp : 0.0;
     double nm = local.samples ? (double)local.samples : 1.0;
-    const char *names[] = {"acceptance", "small_step_acceptance", "acceptance_small", "large_step_acceptance",
-                           "mutations_per_s", "mutations", "b", "rays_per_s", "bootstrap_ms",
-                           "rays_per_mutation", "mean_path_length"};
-    double values[] = {sp + lp ? (double)(sa + la) / (sp + lp) : 0.0, small, small,
+    const char *names[] = {"acceptance",
+                           "small_step_acceptance",
+                           "acceptance_small",
+                           "large_step_acceptance",
+                           "mutations_per_s",
+                           "mutations",
+                           "b",
+                           "rays_per_s",
+                           "bootstrap_ms",
+                           "rays_per_mutation",
+                           "mean_path_length"};
+    double values[] = {sp + lp ? (double)(sa + la) / (sp + lp) : 0.0,
+                       small,
+                       small,
                        lp ? (double)la / lp : 0.0,
-                       mut_s > 0.0 ? (double)local.samples / mut_s : 0.0, (double)local.samples, it->b,
-                       mut_s > 0.0 ? (double)(local.rays - boot_rays) / mut_s : 0.0, boot_ms,
-                       (double)(local.rays - boot_rays) / nm, (double)atomic_load(&job->vertices) / nm};
+                       mut_s > 0.0 ? (double)local.samples / mut_s : 0.0,
+                       (double)local.samples,
+                       it->b,
+                       mut_s > 0.0 ? (double)(local.rays - boot_rays) / mut_s : 0.0,
+                       boot_ms,
+                       (double)(local.rays - boot_rays) / nm,
+                       (double)atomic_load(&job->vertices) / nm};
     local.metric_count = (uint32_t)(sizeof values / sizeof values[0]);
     for (uint32_t m = 0; m < local.metric_count; ++m) {
       local.metrics[m].name = names[m];
@@ -843,13 +879,13 @@ static tt_status tt__mlt_render_pass(tt_integrator *it, const tt_render_ctx *ctx
 }
 
 static const tt_integrator_iface tt__mlt_iface = {
-  .struct_size = sizeof(tt_integrator_iface),
-  .space = tt__mlt_space,
-  .create = tt__mlt_create,
-  .configure = tt__mlt_configure,
-  .render_pass = tt__mlt_render_pass,
-  .reset = tt__mlt_reset,
-  .destroy = tt__mlt_destroy,
+    .struct_size = sizeof(tt_integrator_iface),
+    .space = tt__mlt_space,
+    .create = tt__mlt_create,
+    .configure = tt__mlt_configure,
+    .render_pass = tt__mlt_render_pass,
+    .reset = tt__mlt_reset,
+    .destroy = tt__mlt_destroy,
 };
 
 /* Tells a tuning host what to minimise by default (thesis 4.4: small-step acceptance). */
@@ -857,14 +893,14 @@ static const tt_integrator_iface tt__mlt_iface = {
  * default M = 7, plus the sigma of the non-direction dimensions, with binning on. Chains,
  * bootstrap size or depth would change the cost of a measurement, not the method. */
 static const char *const tt__mlt_tunable[] = {
-  "a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8",
-  "sigma1", "sigma2", "sigma3", "sigma4", "sigma5", "sigma6", "sigma7", "sigma", NULL};
+    "a1",     "a2",     "a3",     "a4",     "a5",     "a6",     "a7",    "a8", "sigma1",
+    "sigma2", "sigma3", "sigma4", "sigma5", "sigma6", "sigma7", "sigma", NULL};
 
 static const tt_tuning_hint tt__mlt_hint = {
-  .struct_size = sizeof(tt_tuning_hint),
-  .objective = "metric:small_step_acceptance:target=0.234",
-  .tunable = tt__mlt_tunable,
-  .setup = "{\"binning\": true, \"bins\": 7}",
+    .struct_size = sizeof(tt_tuning_hint),
+    .objective = "metric:small_step_acceptance:target=0.234",
+    .tunable = tt__mlt_tunable,
+    .setup = "{\"binning\": true, \"bins\": 7}",
 };
 
 static tt_status tt__mlt_init(const tt_host *host) {
@@ -886,15 +922,16 @@ static const void *tt__mlt_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_INTEGRATOR,
-  .name = TT__MLT_NAME,
-  .version = TT__MLT_VERSION,
-  .description = "PSSMLT over the path tracer or multiplexed MLT over BDPT, with sigma-binning and "
-                 "truncated-normal steps (thesis ch. 4)",
-  .init = tt__mlt_init,
-  .deinit = tt__mlt_deinit,
-  .get_interface = tt__mlt_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_INTEGRATOR,
+    .name = TT__MLT_NAME,
+    .version = TT__MLT_VERSION,
+    .description =
+        "PSSMLT over the path tracer or multiplexed MLT over BDPT, with sigma-binning and "
+        "truncated-normal steps (thesis ch. 4)",
+    .init = tt__mlt_init,
+    .deinit = tt__mlt_deinit,
+    .get_interface = tt__mlt_get_interface,
 };

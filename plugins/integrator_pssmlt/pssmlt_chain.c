@@ -26,13 +26,15 @@ void tt__mlt_rng_seed(tt__mlt_rng *rng, uint64_t seed, uint64_t stream) {
 double tt__mlt_normal_quantile(double p) {
   if (!(p > 0.0)) return -INFINITY;
   if (!(p < 1.0)) return INFINITY;
-  if (p > 0.5) return -tt__mlt_normal_quantile(1.0 - p);  /* 1 - p is exact for p >= 0.5 */
-  static const double a[6] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
-                              1.383577518672690e+02, -3.066479806614716e+01, 2.506628277459239e+00};
+  if (p > 0.5) return -tt__mlt_normal_quantile(1.0 - p); /* 1 - p is exact for p >= 0.5 */
+  static const double a[6] = {-3.969683028665376e+01, 2.209460984245205e+02,
+                              -2.759285104469687e+02, 1.383577518672690e+02,
+                              -3.066479806614716e+01, 2.506628277459239e+00};
   static const double b[5] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
                               6.680131188771972e+01, -1.328068155288572e+01};
-  static const double c[6] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
-                              -2.549732539343734e+00, 4.374664141464968e+00, 2.938163982698783e+00};
+  static const double c[6] = {-7.784894002430293e-03, -3.223964580411365e-01,
+                              -2.400758277161838e+00, -2.549732539343734e+00,
+                              4.374664141464968e+00,  2.938163982698783e+00};
   static const double d[4] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
                               3.754408661907416e+00};
   if (p >= 0.02425) {
@@ -107,13 +109,13 @@ int tt__mlt_bin_of_theta(const tt__mlt_kernel *k, double theta) {
  * pending steps the wrapped sum deviates from uniform by at most 2 sum_m |c_m|^n. */
 static double tt__mlt_step_rho(const tt__mlt_kernel *k) {
   double s = k->sigma;
-  if (!k->binning || k->slot_tail[0] < 1e-20)  /* wrapped normal, or truncation invisible */
+  if (!k->binning || k->slot_tail[0] < 1e-20) /* wrapped normal, or truncation invisible */
     return exp(-2.0 * TT__MLT_PI * TT__MLT_PI * s * s);
   enum { N = 4096 };
   double rho = 0.0;
   for (int m = 1; m <= 64; ++m) {
     double acc = 0.0;
-    for (int i = 0; i <= N; ++i) {  /* Simpson on [-0.5, 0.5] */
+    for (int i = 0; i <= N; ++i) { /* Simpson on [-0.5, 0.5] */
       double d = -0.5 + (double)i / N;
       double w = (i == 0 || i == N) ? 1.0 : (i & 1) ? 4.0 : 2.0;
       acc += w * exp(-0.5 * d * d / (s * s)) * cos(2.0 * TT__MLT_PI * m * d);
@@ -125,8 +127,8 @@ static double tt__mlt_step_rho(const tt__mlt_kernel *k) {
 }
 
 /* Derives the kernel's per-slot constants. */
-void tt__mlt_kernel_init(tt__mlt_kernel *k, double sigma, double large_step, int binning,
-                         int bins, double alpha, const double *a, const double *bin_sigma) {
+void tt__mlt_kernel_init(tt__mlt_kernel *k, double sigma, double large_step, int binning, int bins,
+                         double alpha, const double *a, const double *bin_sigma) {
   memset(k, 0, sizeof *k);
   if (bins < 1) bins = 1;
   if (bins > TT__MLT_MAX_BINS) bins = TT__MLT_MAX_BINS;
@@ -226,7 +228,7 @@ void tt__mlt_chain_propose(tt__mlt_chain *c) {
 /* get(): the proposal's value of `dim`, mutated from the current state on first use. */
 static float tt__mlt_chain_get(void *self, uint32_t dim) {
   tt__mlt_chain *c = self;
-  if (dim >= c->dims) return 0.5f;  /* beyond TT_PATH_DIM_COUNT(maxDepth): not reached */
+  if (dim >= c->dims) return 0.5f; /* beyond TT_PATH_DIM_COUNT(maxDepth): not reached */
   tt__mlt_dim *d = &c->d[dim];
   if (d->stamp != c->iter) {
     d->stamp = c->iter;
@@ -236,7 +238,7 @@ static float tt__mlt_chain_get(void *self, uint32_t dim) {
       d->backup = d->value;
       d->mod_backup = d->mod;
       d->value = tt__mlt_bootstrap_value(c->replay_seed, c->replay_index, dim);
-    } else if (c->large) {  /* no need to realise: a rejection restores the pending form */
+    } else if (c->large) { /* no need to realise: a rejection restores the pending form */
       d->backup = d->value;
       d->mod_backup = d->mod;
       d->value = tt__mlt_rng_unit(&c->rng);
@@ -264,7 +266,7 @@ static void tt__mlt_chain_report(void *self, uint32_t dim, float pdf) {
   }
   if (!(pdf >= 0.0f) || !isfinite(pdf) || dim + c->pair_stride >= c->dims) return;
   for (uint32_t j = dim; j <= dim + c->pair_stride; j += c->pair_stride) {
-    if (c->d[j].stamp != c->iter) continue;  /* not read (cannot happen in path.c) */
+    if (c->d[j].stamp != c->iter) continue; /* not read (cannot happen in path.c) */
     if (c->d[j].pdf_new < 0.0f) c->new_binned[c->n_new++] = j;
     c->d[j].pdf_new = pdf;
   }
@@ -296,7 +298,7 @@ double tt__mlt_chain_log_T_ratio(tt__mlt_chain *c) {
     tt__mlt_dim *d = &c->d[c->cur_binned[i]];
     if (d->stamp == c->iter) continue;
     int sc = tt__mlt_slot(k, d->pdf);
-    if (sc == 0) continue;  /* same sigma both ways: stays a lazy pending step */
+    if (sc == 0) continue; /* same sigma both ways: stays a lazy pending step */
     d->delta = tt__mlt_step(c, sc);
     d->eager = c->iter;
     lr += tt__mlt_slot_term(k, d->delta, sc, 0);
@@ -307,7 +309,7 @@ double tt__mlt_chain_log_T_ratio(tt__mlt_chain *c) {
 void tt__mlt_chain_accept(tt__mlt_chain *c) {
   c->t++;
   if (c->large) c->t_large = c->t;
-  for (uint32_t i = 0; i < c->n_cur; ++i) {  /* the old state's binned dims */
+  for (uint32_t i = 0; i < c->n_cur; ++i) { /* the old state's binned dims */
     tt__mlt_dim *d = &c->d[c->cur_binned[i]];
     if (d->stamp == c->iter) continue;
     if (!c->large && d->eager == c->iter) {

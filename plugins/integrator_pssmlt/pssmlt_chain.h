@@ -49,7 +49,7 @@ typedef struct tt__mlt_kernel {
   double composite_max_n;
   /* pending steps beyond which the wrapped sum is uniform to double precision (README) */
   double uniform_n;
-  int no_hastings;             /* tests only: drop the sigma factor (to show the test bites) */
+  int no_hastings; /* tests only: drop the sigma factor (to show the test bites) */
 } tt__mlt_kernel;
 
 /* Bin edges A_0..A_M from a_1..a_{M+1} (eq. 4.2-4.3): A_i = (a_1 + .. + a_i) / S for
@@ -57,8 +57,8 @@ typedef struct tt__mlt_kernel {
 void tt__mlt_edges(const double *a, int bins, double *edges);
 
 /* Fills a kernel. `a` has bins+1 entries, `bin_sigma` bins entries. */
-void tt__mlt_kernel_init(tt__mlt_kernel *k, double sigma, double large_step, int binning,
-                         int bins, double alpha, const double *a, const double *bin_sigma);
+void tt__mlt_kernel_init(tt__mlt_kernel *k, double sigma, double large_step, int binning, int bins,
+                         double alpha, const double *a, const double *bin_sigma);
 
 /* Theta of a solid-angle pdf (0 for a delta lobe gives +inf). */
 static inline double tt__mlt_theta(const tt__mlt_kernel *k, double pdf) {
@@ -90,32 +90,32 @@ double tt__mlt_tn_log_ratio(double delta, double sigma_c, double sigma_p, double
 /* ---- the chain ---- */
 
 typedef struct tt__mlt_dim {
-  double value;        /* value of the dim in the current state as of `mod` (or the proposal's) */
-  double backup;       /* the current state's while a proposal is out */
-  double delta;        /* this iteration's small-step offset */
-  int64_t mod;         /* accepted-move count at which `value` holds */
+  double value;  /* value of the dim in the current state as of `mod` (or the proposal's) */
+  double backup; /* the current state's while a proposal is out */
+  double delta;  /* this iteration's small-step offset */
+  int64_t mod;   /* accepted-move count at which `value` holds */
   int64_t mod_backup;
-  uint64_t stamp;      /* iteration that last touched the dim */
-  uint64_t eager;      /* iteration whose offset was drawn without the proposal reading it */
-  float pdf;           /* BSDF pdf the current state reported for this dim, -1 if none */
-  float pdf_new;       /* the proposal's */
+  uint64_t stamp; /* iteration that last touched the dim */
+  uint64_t eager; /* iteration whose offset was drawn without the proposal reading it */
+  float pdf;      /* BSDF pdf the current state reported for this dim, -1 if none */
+  float pdf_new;  /* the proposal's */
 } tt__mlt_dim;
 
 typedef struct tt__mlt_chain {
   tt__mlt_rng rng;
   const tt__mlt_kernel *k;
   uint32_t dims;
-  uint32_t pair_stride;             /* a direction's second dim is its first + this (1; 3 for
+  uint32_t pair_stride; /* a direction's second dim is its first + this (1; 3 for
                                        MMLT's interleaved streams) */
   tt__mlt_dim *d;
-  uint32_t *touched, n_touched;     /* dims the proposal read */
-  uint32_t *cur_binned, n_cur;      /* dims with a reported pdf in the current state */
-  uint32_t *new_binned, n_new;      /* dims with a reported pdf in the proposal */
-  int64_t t;                        /* accepted moves */
-  int64_t t_large;                  /* t of the last accepted large step */
-  uint64_t iter;                    /* iterations, accepted or not */
-  int large;                        /* current iteration is a large step */
-  int replay;                       /* current iteration replays a bootstrap sample */
+  uint32_t *touched, n_touched; /* dims the proposal read */
+  uint32_t *cur_binned, n_cur;  /* dims with a reported pdf in the current state */
+  uint32_t *new_binned, n_new;  /* dims with a reported pdf in the proposal */
+  int64_t t;                    /* accepted moves */
+  int64_t t_large;              /* t of the last accepted large step */
+  uint64_t iter;                /* iterations, accepted or not */
+  int large;                    /* current iteration is a large step */
+  int replay;                   /* current iteration replays a bootstrap sample */
   uint64_t replay_seed, replay_index;
   /* the plugin's view of the current state */
   float L[3], fx, fy;

@@ -57,20 +57,27 @@ static tt_status tt__pt_build_space(void) {
   if (!s)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__PT_NAME ": cannot create the parameter space");
   int ok = 1;
-  ok &= tt_space_add_int(s, "maxDepth", 0, 64, 3, "maximum number of bounces (0: emission only)") >= 0;
-  ok &= tt_space_add_int(s, "rrDepth", 0, 64, 3, "bounce from which Russian roulette may end paths") >= 0;
-  ok &= tt_space_add_nom_bool(s, "mis", 1, "combine light and BSDF sampling with MIS (false: light sampling only)") >= 0;
+  ok &= tt_space_add_int(s, "maxDepth", 0, 64, 3, "maximum number of bounces (0: emission only)") >=
+        0;
+  ok &= tt_space_add_int(s, "rrDepth", 0, 64, 3,
+                         "bounce from which Russian roulette may end paths") >= 0;
+  ok &= tt_space_add_nom_bool(
+            s, "mis", 1, "combine light and BSDF sampling with MIS (false: light sampling only)") >=
+        0;
   ok &= tt_space_add_nom_string(s, "heuristic", heuristics, 2, 0, "MIS heuristic") >= 0;
   /* sobol by default: the least CPU time to equal error on every scene measured
      (tools/charts/sampler_choice.py, the README's "Default sampler") */
   ok &= tt_space_add_nom_string(s, "sampler", samplers, 3, 2, "primary-sample generator") >= 0;
-  ok &= tt_space_add_nom_string(s, "filter", filters, 2, 0,
-                                "pixel filter, importance-sampled (blackman-harris: radius 1.5 px)") >= 0;
-  ok &= tt_space_add_int(s, "tileSize", 4, 256, 32, "side of the square tiles handed to worker threads") >= 0;
-  ok &= tt_space_add_nom_bool(s, "wavefront", 1,
-                              "trace each tile's rays bounce by bounce as streams (intersect_stream / "
-                              "occluded_stream); false: one path at a time with intersect1 / "
-                              "occluded1. Same image either way") >= 0;
+  ok &= tt_space_add_nom_string(
+            s, "filter", filters, 2, 0,
+            "pixel filter, importance-sampled (blackman-harris: radius 1.5 px)") >= 0;
+  ok &= tt_space_add_int(s, "tileSize", 4, 256, 32,
+                         "side of the square tiles handed to worker threads") >= 0;
+  ok &= tt_space_add_nom_bool(
+            s, "wavefront", 1,
+            "trace each tile's rays bounce by bounce as streams (intersect_stream / "
+            "occluded_stream); false: one path at a time with intersect1 / "
+            "occluded1. Same image either way") >= 0;
   if (!ok) {
     tt_space_destroy(s);
     return tt_set_error(TT_ERR_INTERNAL, TT__PT_NAME ": building the parameter space failed");
@@ -104,7 +111,8 @@ static float tt__pt_bh_sample(float u) {
   int lo = 0, hi = TT__PT_BH_TABLE;
   while (hi - lo > 1) {
     int mid = (lo + hi) / 2;
-    if (g_bh_cdf[mid] <= u) lo = mid; else hi = mid;
+    if (g_bh_cdf[mid] <= u) lo = mid;
+    else hi = mid;
   }
   float w = g_bh_cdf[lo + 1] - g_bh_cdf[lo];
   float f = w > 0.0f ? (u - g_bh_cdf[lo]) / w : 0.5f;
@@ -123,15 +131,16 @@ static tt_status tt__pt_read_config(const tt_config *config, tt__pt_settings *ou
   tt_status st = TT_OK;
   tt_path_options_default(&out->path);
   out->path.max_depth = (uint32_t)tt_config_get_int(config, "maxDepth", 3);
-  out->path.result_size = sizeof(tt_path_result);  /* with prev_position: object motion */
+  out->path.result_size = sizeof(tt_path_result); /* with prev_position: object motion */
   out->path.rr_depth = (uint32_t)tt_config_get_int(config, "rrDepth", 3);
   int mis = (int)tt_config_get_int(config, "mis", 1);
   const char *h = tt_config_get_string(config, "heuristic");
   const char *s = tt_config_get_string(config, "sampler");
   const char *f = tt_config_get_string(config, "filter");
   out->path.strategy = TT_STRATEGY_MIS;
-  out->path.heuristic = !mis ? TT_MIS_NONE
-                        : (h && strcmp(h, "balance") == 0) ? TT_MIS_BALANCE : TT_MIS_POWER;
+  out->path.heuristic = !mis                               ? TT_MIS_NONE
+                        : (h && strcmp(h, "balance") == 0) ? TT_MIS_BALANCE
+                                                           : TT_MIS_POWER;
   out->sampler = tt_builtin_sampler(s ? s : "sobol");
   if (!out->sampler)
     st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__PT_NAME ": unknown sampler '%s'", s ? s : "");
@@ -190,12 +199,12 @@ typedef struct tt__pt_job {
   int has_prev;
   tt_tracer tracer;
   uint32_t tiles_x, tile_size, width, height;
-  uint32_t aovs;                  /* the film's AOV planes (tt_path_write_aovs fills them) */
-  struct tt__pt_wave **waves;        /* wavefront mode: per-thread scratch, made on first use */
+  uint32_t aovs;              /* the film's AOV planes (tt_path_write_aovs fills them) */
+  struct tt__pt_wave **waves; /* wavefront mode: per-thread scratch, made on first use */
   uint32_t wave_count;
   atomic_uint_fast64_t rays, samples, nonfinite;
   atomic_int interrupted;
-  atomic_int failed;             /* a wave's scratch could not be allocated */
+  atomic_int failed; /* a wave's scratch could not be allocated */
 } tt__pt_job;
 
 /* Sample source over the sampler's per-thread state. */
@@ -213,7 +222,7 @@ static float tt__pt_source_get(void *self, uint32_t dim) {
 /* Starts sample `s` of pixel (px, py) in sampler `state`: the film position (fx, fy) from
  * dimensions 0-1 (or the fixed jitter) and the camera ray through it. */
 static void tt__pt_camera_sample(const tt__pt_job *job, void *state, uint32_t px, uint32_t py,
-                             uint32_t s, float *fx, float *fy, tt_ray *ray) {
+                                 uint32_t s, float *fx, float *fy, tt_ray *ray) {
   const tt_render_ctx *ctx = job->ctx;
   const tt__pt_settings *set = &job->it->settings;
   set->sampler->start(job->sampler, state, px, py, ctx->sample_offset + s);
@@ -241,9 +250,9 @@ static void tt__pt_camera_sample(const tt__pt_job *job, void *state, uint32_t px
  * and sampler state, and the compacted ray/hit arrays the stream calls take. */
 typedef struct tt__pt_wave {
   size_t state_stride, sampler_stride;
-  unsigned char *states;     /* TT__PT_WAVE path states */
-  unsigned char *samplers;   /* TT__PT_WAVE sampler states */
-  float (*film_pos)[2];      /* per path: fx, fy */
+  unsigned char *states;   /* TT__PT_WAVE path states */
+  unsigned char *samplers; /* TT__PT_WAVE sampler states */
+  float (*film_pos)[2];    /* per path: fx, fy */
   tt_path_result *results;
   tt_ray *rays, *next_rays, *shadows;
   tt_hit *hits;
@@ -262,9 +271,18 @@ static tt__pt_wave *tt__pt_wave_create(size_t sampler_state) {
   w->state_stride = tt__pt_align16(tt_path_state_size());
   w->sampler_stride = tt__pt_align16(sampler_state ? sampler_state : 1);
   const size_t n = TT__PT_WAVE;
-  size_t sizes[] = {n * w->state_stride, n * w->sampler_stride, n * sizeof *w->film_pos,
-                    n * sizeof *w->results, n * sizeof(tt_ray), n * sizeof(tt_ray),
-                    n * sizeof(tt_ray), n * sizeof(tt_hit), n, n * 4, n * 4, n * 4};
+  size_t sizes[] = {n * w->state_stride,
+                    n * w->sampler_stride,
+                    n * sizeof *w->film_pos,
+                    n * sizeof *w->results,
+                    n * sizeof(tt_ray),
+                    n * sizeof(tt_ray),
+                    n * sizeof(tt_ray),
+                    n * sizeof(tt_hit),
+                    n,
+                    n * 4,
+                    n * 4,
+                    n * 4};
   size_t total = 0;
   for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) total += tt__pt_align64(sizes[i]);
   unsigned char *p = aligned_alloc(64, total);
@@ -273,13 +291,13 @@ static tt__pt_wave *tt__pt_wave_create(size_t sampler_state) {
     return NULL;
   }
   w->block = p;
-  void **dst[] = {(void **)&w->states, (void **)&w->samplers, (void **)&w->film_pos,
-                  (void **)&w->results, (void **)&w->rays, (void **)&w->next_rays,
-                  (void **)&w->shadows, (void **)&w->hits, (void **)&w->occluded,
-                  (void **)&w->active, (void **)&w->next_active, (void **)&w->shadow_of};
+  void **dst[] = {(void **)&w->states,  (void **)&w->samplers,    (void **)&w->film_pos,
+                  (void **)&w->results, (void **)&w->rays,        (void **)&w->next_rays,
+                  (void **)&w->shadows, (void **)&w->hits,        (void **)&w->occluded,
+                  (void **)&w->active,  (void **)&w->next_active, (void **)&w->shadow_of};
   for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
     *dst[i] = p;
-    p += tt__pt_align64(sizes[i]);  /* each array on its own cache lines */
+    p += tt__pt_align64(sizes[i]); /* each array on its own cache lines */
   }
   return w;
 }
@@ -323,22 +341,22 @@ static void tt__pt_prefetch_vertices(const tt_scene *scene, const tt_hit *h) {
  * call for the shadow rays and one intersect_stream call for the continuations. Results
  * go to the film in path order, so the image is the scalar loop's, bit for bit. */
 static void tt__pt_wave_run(tt__pt_job *job, tt__pt_wave *w, uint32_t x0, uint32_t y0, uint32_t tw,
-                        uint64_t first, uint32_t count, uint64_t *rays, uint64_t *samples,
-                        uint64_t *nonfinite) {
+                            uint64_t first, uint32_t count, uint64_t *rays, uint64_t *samples,
+                            uint64_t *nonfinite) {
   const tt_render_ctx *ctx = job->ctx;
   const tt__pt_settings *set = &job->it->settings;
   const tt_accel_iface *A = job->tracer.iface;
   const tt_path_tracer *pt = job->it->pt;
   const uint32_t spp = ctx->spp;
-#define TT__PT_STATE(k) ((tt_path_state *)(w->states + (size_t)(k) * w->state_stride))
-#define TT__PT_SSTATE(k) ((void *)(w->samplers + (size_t)(k) * w->sampler_stride))
+#define TT__PT_STATE(k) ((tt_path_state *)(w->states + (size_t)(k)*w->state_stride))
+#define TT__PT_SSTATE(k) ((void *)(w->samplers + (size_t)(k)*w->sampler_stride))
   uint32_t n = 0;
   for (uint32_t k = 0; k < count; k++) {
     uint64_t q = first + k;
     uint32_t px = x0 + (uint32_t)((q / spp) % tw), py = y0 + (uint32_t)((q / spp) / tw);
     tt_ray ray;
     tt__pt_camera_sample(job, TT__PT_SSTATE(k), px, py, (uint32_t)(q % spp), &w->film_pos[k][0],
-                     &w->film_pos[k][1], &ray);
+                         &w->film_pos[k][1], &ray);
     if (tt_path_begin(pt, &set->path, &ray, TT__PT_STATE(k), &w->rays[n])) w->active[n++] = k;
   }
   while (n > 0) {
@@ -385,7 +403,7 @@ static void tt__pt_wave_run(tt__pt_job *job, tt__pt_wave *w, uint32_t x0, uint32
     (*samples)++;
     *nonfinite += r->nonfinite ? 1u : 0u;
     if (job->aovs) {
-      tt_ray ray;  /* the camera ray again (motion of a miss uses its direction) */
+      tt_ray ray; /* the camera ray again (motion of a miss uses its direction) */
       tt_camera_generate_ray(&job->frame, w->film_pos[k][0], w->film_pos[k][1], &ray);
       tt_path_write_aovs_ex(ctx->film, px, py, &job->frame, job->has_prev ? &job->prev_frame : NULL,
                             w->film_pos[k][0], w->film_pos[k][1], &ray, r, r->prev_position,
@@ -551,13 +569,13 @@ static tt_status tt__pt_render_pass(tt_integrator *it, const tt_render_ctx *ctx,
 }
 
 static const tt_integrator_iface tt__pt_iface = {
-  .struct_size = sizeof(tt_integrator_iface),
-  .space = tt__pt_space,
-  .create = tt__pt_create,
-  .configure = tt__pt_configure,
-  .render_pass = tt__pt_render_pass,
-  .reset = tt__pt_reset,
-  .destroy = tt__pt_destroy,
+    .struct_size = sizeof(tt_integrator_iface),
+    .space = tt__pt_space,
+    .create = tt__pt_create,
+    .configure = tt__pt_configure,
+    .render_pass = tt__pt_render_pass,
+    .reset = tt__pt_reset,
+    .destroy = tt__pt_destroy,
 };
 
 static tt_status tt__pt_init(const tt_host *host) {
@@ -577,14 +595,15 @@ static const void *tt__pt_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_INTEGRATOR,
-  .name = TT__PT_NAME,
-  .version = TT__PT_VERSION,
-  .description = "progressive path tracer: NEE + BSDF sampling with MIS, independent/Halton/Sobol samplers",
-  .init = tt__pt_init,
-  .deinit = tt__pt_deinit,
-  .get_interface = tt__pt_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_INTEGRATOR,
+    .name = TT__PT_NAME,
+    .version = TT__PT_VERSION,
+    .description =
+        "progressive path tracer: NEE + BSDF sampling with MIS, independent/Halton/Sobol samplers",
+    .init = tt__pt_init,
+    .deinit = tt__pt_deinit,
+    .get_interface = tt__pt_get_interface,
 };

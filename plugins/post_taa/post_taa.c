@@ -23,14 +23,14 @@ enum { TAA_MODE_VCTAA = 0, TAA_MODE_NETWORK = 1, TAA_MODE_NONE = 2 };
 
 static const tt_host *g_host;
 static tt_space *g_space;
-static char g_weights_option[4096];  /* option "weights" ("" = not set) */
+static char g_weights_option[4096]; /* option "weights" ("" = not set) */
 
 struct tt_post {
   uint32_t width, height;
   int mode;
   tt__vctaa_params vc_params;
-  uint32_t channels;          /* shipped network variant (12 or 6) */
-  char weights_path[4096];    /* file the loaded model came from ("" = none) */
+  uint32_t channels;       /* shipped network variant (12 or 6) */
+  char weights_path[4096]; /* file the loaded model came from ("" = none) */
   tt__vctaa vc;
   tt__net_model net;
   tt__net_state net_state;
@@ -95,7 +95,7 @@ static void taa_weights_path(uint32_t channels, char *out, size_t size) {
     const char *slash = strrchr(info.dli_fname, '/');
     if (slash) {
       snprintf(out, size, "%.*s/%s", (int)(slash - info.dli_fname), info.dli_fname, name);
-      if (access(out, F_OK) == 0) return;  /* read (and checked) by tt_file_read */
+      if (access(out, F_OK) == 0) return; /* read (and checked) by tt_file_read */
     }
   }
   snprintf(out, size, "%s/%s", TT__TAA_SOURCE_DIR, name);
@@ -160,8 +160,7 @@ static tt_status taa_create(uint32_t width, uint32_t height, const tt_config *co
                             tt_post **out) {
   *out = NULL;
   if (width == 0 || height == 0)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": frame size %ux%u", width,
-                        height);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": frame size %ux%u", width, height);
   tt_post *p = calloc(1, sizeof *p);
   if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory");
   p->width = width;
@@ -206,44 +205,44 @@ static tt_status taa_process(tt_post *p, const tt_post_frame *f, float *out_rgb)
   if (!p || !f || !out_rgb || !f->color)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": process: NULL argument");
   if (f->width != p->width || f->height != p->height)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": frame is %ux%u, the filter "
-                        "was created for %ux%u", f->width, f->height, p->width, p->height);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__TAA_NAME ": frame is %ux%u, the filter "
+                                     "was created for %ux%u",
+                        f->width, f->height, p->width, p->height);
   if (f->reset_history) taa_reset(p);
   switch (p->mode) {
-    case TAA_MODE_VCTAA:
-      tt__vctaa_process(&p->vc, taa_host(), &p->vc_params, f->color, f->motion, out_rgb);
-      break;
-    case TAA_MODE_NETWORK:
-    {
-      tt__net_frame nf = {.color = f->color, .depth = f->depth, .motion = f->motion,
-                          .prev_depth = TT_POST_FRAME_HAS(f, prev_depth) ? f->prev_depth : NULL,
-                          .jitter_index = f->jitter_index,
-                          .jitter = {f->jitter[0], f->jitter[1]}};
-      tt__net_process_frame(&p->net_state, &p->net, taa_host(), &nf, out_rgb);
-    }
-      break;
-    default:
-      memcpy(out_rgb, f->color, sizeof(float) * 3 * p->width * p->height);
-      break;
+  case TAA_MODE_VCTAA:
+    tt__vctaa_process(&p->vc, taa_host(), &p->vc_params, f->color, f->motion, out_rgb);
+    break;
+  case TAA_MODE_NETWORK: {
+    tt__net_frame nf = {.color = f->color,
+                        .depth = f->depth,
+                        .motion = f->motion,
+                        .prev_depth = TT_POST_FRAME_HAS(f, prev_depth) ? f->prev_depth : NULL,
+                        .jitter_index = f->jitter_index,
+                        .jitter = {f->jitter[0], f->jitter[1]}};
+    tt__net_process_frame(&p->net_state, &p->net, taa_host(), &nf, out_rgb);
+  } break;
+  default: memcpy(out_rgb, f->color, sizeof(float) * 3 * p->width * p->height); break;
   }
   return TT_OK;
 }
 
 static const tt_post_iface g_iface = {
-  .struct_size = sizeof(tt_post_iface),
-  .space = taa_space,
-  .create = taa_create,
-  .configure = taa_configure,
-  .process = taa_process,
-  .reset = taa_reset,
-  .destroy = taa_destroy,
+    .struct_size = sizeof(tt_post_iface),
+    .space = taa_space,
+    .create = taa_create,
+    .configure = taa_configure,
+    .process = taa_process,
+    .reset = taa_reset,
+    .destroy = taa_destroy,
 };
 
 /* ---- options (tt.options/1): settings that are not tuned ---- */
 
 static const tt_option_info g_options[] = {
-  {"weights", "network: weights file (.ttw, README.md) used instead of the shipped "
-              "post_taa_c<channels>.ttw; \"\" = the shipped file"},
+    {"weights", "network: weights file (.ttw, README.md) used instead of the shipped "
+                "post_taa_c<channels>.ttw; \"\" = the shipped file"},
 };
 
 /* Number of options. */
@@ -255,11 +254,15 @@ static const tt_option_info *taa_option_info(uint32_t i) { return i < 1 ? &g_opt
 /* Sets an option; the weights file is checked when a network filter is created. */
 static tt_status taa_option_set(const char *key, const char *value) {
   if (!key || strcmp(key, "weights"))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": no option \"%s\" (options: "
-                        "weights)", key ? key : "(null)");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__TAA_NAME ": no option \"%s\" (options: "
+                                     "weights)",
+                        key ? key : "(null)");
   if (!value || strlen(value) >= sizeof g_weights_option)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": option weights: expected a "
-                        "file name shorter than %zu bytes", sizeof g_weights_option);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__TAA_NAME ": option weights: expected a "
+                                     "file name shorter than %zu bytes",
+                        sizeof g_weights_option);
   snprintf(g_weights_option, sizeof g_weights_option, "%s", value);
   return TT_OK;
 }
@@ -270,11 +273,11 @@ static const char *taa_option_get(const char *key) {
 }
 
 static const tt_options_iface g_options_iface = {
-  .struct_size = sizeof(tt_options_iface),
-  .count = taa_option_count,
-  .info = taa_option_info,
-  .set = taa_option_set,
-  .get = taa_option_get,
+    .struct_size = sizeof(tt_options_iface),
+    .count = taa_option_count,
+    .info = taa_option_info,
+    .set = taa_option_set,
+    .get = taa_option_get,
 };
 
 /* Keeps the host table and builds the space. */
@@ -300,15 +303,15 @@ static const void *taa_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_POST,
-  .name = TT__TAA_NAME,
-  .version = TT__TAA_VERSION,
-  .description = "temporal anti-aliasing: variance-clipping TAA and the thesis' "
-                 "kernel-prediction network",
-  .init = taa_init,
-  .deinit = taa_deinit,
-  .get_interface = taa_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_POST,
+    .name = TT__TAA_NAME,
+    .version = TT__TAA_VERSION,
+    .description = "temporal anti-aliasing: variance-clipping TAA and the thesis' "
+                   "kernel-prediction network",
+    .init = taa_init,
+    .deinit = taa_deinit,
+    .get_interface = taa_get_interface,
 };

@@ -39,12 +39,12 @@ typedef struct tt__net_conv_args {
   const float *rowp[5];
   size_t cs;
   uint32_t in, ksize, oblk, nob, out;
-  const float *w, *b;  /* this set's packed weights and biases */
+  const float *w, *b; /* this set's packed weights and biases */
   uint32_t x0, n;
   float *dst;
   size_t dcs;
   int relu;
-  size_t pf;  /* AVX-512 code: floats from an input row to the row the next output row adds
+  size_t pf; /* AVX-512 code: floats from an input row to the row the next output row adds
                * (the first layer, reading the full-frame input planes), prefetched into L2
                * while this row computes; 0: none (ring rows are cache resident) */
 } tt__net_conv_args;
@@ -59,12 +59,12 @@ typedef struct tt__net_wino_args {
   const float *rowp[6];
   size_t cs;
   uint32_t in, nob, out;
-  const float *u, *b;   /* this set's transformed weights [block][36][in][O] and biases */
+  const float *u, *b; /* this set's transformed weights [block][36][in][O] and biases */
   uint32_t x0, n;
-  float *dst[2];        /* output rows p, p + 1: channel oc, column i at dst[r][oc * dcs + i] */
+  float *dst[2]; /* output rows p, p + 1: channel oc, column i at dst[r][oc * dcs + i] */
   size_t dcs;
   int relu;
-  float *vbuf, *mbuf;   /* scratch: 36 * in * 16 and 2 * 36 * O * 16 floats */
+  float *vbuf, *mbuf; /* scratch: 36 * in * 16 and 2 * 36 * O * 16 floats */
 } tt__net_wino_args;
 
 /* Winograd F(4x4, 5x5): four output rows p .. p + 3 (p a multiple of 4: tiles sit on
@@ -77,12 +77,12 @@ typedef struct tt__net_wino4_args {
   const float *rowp[8];
   size_t cs;
   uint32_t in, nob, out;
-  const float *u, *b;   /* this set's transformed weights [block][64][in][O] and biases */
+  const float *u, *b; /* this set's transformed weights [block][64][in][O] and biases */
   uint32_t x0, n;
   float *dst[4];
   size_t dcs;
   int relu;
-  float *vbuf, *mbuf, *ebuf;  /* scratch: 64 * in * 16, 64 * O * 16 and 64 * 16 floats */
+  float *vbuf, *mbuf, *ebuf; /* scratch: 64 * in * 16, 64 * O * 16 and 64 * 16 floats */
 } tt__net_wino4_args;
 
 /* Softmax of the kernel layer's logits, colour mix (eq. 5.3), hidden layer (1x1) and the
@@ -90,9 +90,9 @@ typedef struct tt__net_wino4_args {
 typedef struct tt__net_mix_args {
   const tt__net_state *s;
   const tt__net_model *m;
-  float *lg;            /* logits [50][TT__NET_CHUNK] of columns x0.. (overwritten) */
+  float *lg; /* logits [50][TT__NET_CHUNK] of columns x0.. (overwritten) */
   uint32_t x0, n, y;
-  const float *hrow;    /* last body layer, row y: channel c at hrow[c * hcs + COL + x - hx] */
+  const float *hrow; /* last body layer, row y: channel c at hrow[c * hcs + COL + x - hx] */
   size_t hcs;
   int hx;               /* first column of the tile's ring rows */
   const float *hw, *hb; /* hidden layer weights [out][in] and biases of this set */
@@ -105,8 +105,8 @@ typedef struct tt__net_input_job {
   tt__net_state *s;
   const tt__net_model *m;
   const float *color, *depth, *motion;
-  uint8_t *reject;          /* rejection mask (written here), or NULL (no rejection input) */
-  const float *dprev, *zprev;  /* previous depth and prevdepth for the tests, or NULL */
+  uint8_t *reject;            /* rejection mask (written here), or NULL (no rejection input) */
+  const float *dprev, *zprev; /* previous depth and prevdepth for the tests, or NULL */
   float jx, jy, pjx, pjy;
   float depth_scale;
 } tt__net_input_job;
@@ -115,7 +115,7 @@ typedef struct tt__net_input_job {
  * operations in the same order whatever band, tile or chunk it is called for, so results do
  * not depend on the split (tests/taa_net.c). */
 typedef struct tt__net_kernels {
-  const char *name;  /* "avx512", "avx2" or "generic" */
+  const char *name; /* "avx512", "avx2" or "generic" */
   /* Direct convolution of one row chunk (every layer shape of the format). */
   void (*conv)(const tt__net_conv_args *a);
   /* Softmax, colour mix, hidden layer and outputs of one row chunk. */

@@ -24,17 +24,17 @@
 typedef struct band_job {
   tt__net_state *s;
   const tt__net_model *m;
-  const tt__net_kernels *kern;  /* this frame's kernels */
+  const tt__net_kernels *kern; /* this frame's kernels */
   uint32_t set, band_rows, bands;
-  uint32_t tile_cols, tiles, margin;  /* column tiles: output columns per tile, count, and
+  uint32_t tile_cols, tiles, margin; /* column tiles: output columns per tile, count, and
                                        * the extra columns each side the body layers cover */
-  uint32_t lw, rrs;                   /* ring row: columns computed, stride */
+  uint32_t lw, rrs;                  /* ring row: columns computed, stride */
   float *out_rgb;
   size_t ring_off[TT__NET_MAX_LAYERS], logits_off;
-  int wino;                           /* tt__net_state.winograd this frame (0 on the
+  int wino;                            /* tt__net_state.winograd this frame (0 on the
                                        * portable path): 5x5 body layers after the first in
                                        * row pairs (1) or quads (2) */
-  int kwino;                          /* kernel layer by Winograd: 2 F(2x2, 5x5) rows in
+  int kwino;                           /* kernel layer by Winograd: 2 F(2x2, 5x5) rows in
                                        * even pairs, 4 F(4x4, 5x5) rows in quads; 0 direct */
   size_t vbuf_off, mbuf_off, ebuf_off; /* Winograd scratch */
 } band_job;
@@ -50,8 +50,8 @@ typedef struct band_ctx {
   float *ring[TT__NET_MAX_LAYERS];
   uint32_t rlen[TT__NET_MAX_LAYERS];
   int next[TT__NET_MAX_LAYERS];
-  int bx;             /* image column of ring column 0 */
-  uint32_t tx0, tx1;  /* the tile's output columns */
+  int bx;            /* image column of ring column 0 */
+  uint32_t tx0, tx1; /* the tile's output columns */
 } band_ctx;
 
 /* Ring slot of row y (y may be negative). */
@@ -98,8 +98,8 @@ static inline uint32_t set_of(const tt__net_layer *l, uint32_t set) {
 
 /* Input row pointers of layer l (0: the input planes; else the previous ring) for output
  * row y; returns the channel stride. *col0: image column of the rows' column 0. */
-static size_t layer_rows(const band_ctx *b, uint32_t l, uint32_t ksize, int y,
-                         const float **rowp, int *col0) {
+static size_t layer_rows(const band_ctx *b, uint32_t l, uint32_t ksize, int y, const float **rowp,
+                         int *col0) {
   const tt__net_state *s = b->job->s;
   int r = (int)ksize / 2;
   if (l == 0) {
@@ -125,7 +125,7 @@ static void band_image_cols(const band_ctx *b, int *xs, int *xe) {
  * band_image_cols. */
 static void zero_pad_cols(const band_ctx *b, float *dst, size_t dcs, uint32_t out, int xs) {
   int bx = b->bx, lw = (int)b->job->lw, w = (int)b->job->s->width;
-  int zr = w > xs ? w : xs;  /* first column right of the image */
+  int zr = w > xs ? w : xs; /* first column right of the image */
   for (uint32_t c = 0; c < out; c++) {
     float *d = dst + c * dcs + COL;
     if (xs > bx) memset(d, 0, (size_t)(xs - bx) * sizeof(float));
@@ -429,8 +429,8 @@ static void head_quad(band_ctx *b, int p, uint32_t y0, uint32_t y1) {
 }
 
 /* Rows [y0, y1) of columns [tx0, tx1) through all layers. */
-static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t y1,
-                     uint32_t tx0, uint32_t tx1) {
+static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t y1, uint32_t tx0,
+                     uint32_t tx1) {
   band_ctx b;
   memset(&b, 0, sizeof b);
   b.job = job;
@@ -482,7 +482,7 @@ static void band_run(const band_job *job, uint32_t thread, uint32_t y0, uint32_t
 static void band_body(void *ctx, uint64_t begin, uint64_t end, uint32_t thread_index) {
   const band_job *job = ctx;
   uint32_t h = job->s->height;
-  if (thread_index >= job->s->scratch_threads) thread_index = 0;  /* not expected */
+  if (thread_index >= job->s->scratch_threads) thread_index = 0; /* not expected */
   for (uint64_t k = begin; k < end; k++) {
     uint32_t band = (uint32_t)(k / job->tiles), tile = (uint32_t)(k % job->tiles);
     uint32_t y0 = band * job->band_rows, y1 = y0 + job->band_rows;
@@ -521,7 +521,7 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
     off += ((size_t)m->body[l].out * R * job->rrs * sizeof(float) + 63) & ~(size_t)63;
   }
   job->logits_off = off;
-  off += 4 * (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float);  /* 4 rows */
+  off += 4 * (size_t)m->kernel.nob * m->kernel.oblk * CHUNK * sizeof(float); /* 4 rows */
   /* Winograd scratch (every such layer reads W channels, blocks of <= 12 outputs). */
   job->vbuf_off = job->mbuf_off = job->ebuf_off = 0;
   int any = m->kernel.wino != NULL;
@@ -533,11 +533,11 @@ static tt_status fast_scratch(tt__net_state *s, const tt__net_model *m, band_job
     job->vbuf_off = off;
     off += ((v2 > v4 ? v2 : v4) * sizeof(float) + 63) & ~(size_t)63;
     job->mbuf_off = off;
-    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float);  /* >= 64 x 12 x 16 */
+    off += 2 * (size_t)WINO_POS * 12 * 16 * sizeof(float); /* >= 64 x 12 x 16 */
     job->ebuf_off = off;
     off += (size_t)WINO4_POS * 16 * sizeof(float);
   }
-  off = (off + 4095) & ~(size_t)4095;  /* threads' blocks on separate pages */
+  off = (off + 4095) & ~(size_t)4095; /* threads' blocks on separate pages */
   if (s->scratch && s->scratch_threads >= threads && s->scratch_bytes == off) return TT_OK;
   free(s->scratch);
   s->scratch = aligned_alloc(4096, off * threads);
@@ -560,29 +560,31 @@ tt_status tt__net_fast_bands(tt__net_state *s, const tt__net_model *m, const tt_
   if (threads < 1) threads = 1;
   band_job job = {.s = s, .m = m, .kern = k, .set = set, .out_rgb = out_rgb};
   job.wino = k->wino ? s->winograd : 0;
-  job.kwino = !job.wino || !m->kernel.wino ? 0 : s->winograd >= 2 && m->kernel.wino4 && k->wino4 ? 4 : 2;
+  job.kwino = !job.wino || !m->kernel.wino                      ? 0
+              : s->winograd >= 2 && m->kernel.wino4 && k->wino4 ? 4
+                                                                : 2;
   tt_status st = fast_scratch(s, m, &job, threads);
   if (st != TT_OK) return st;
   for (uint32_t t = 0; t < s->scratch_threads; t++)
-    memset((unsigned char *)s->scratch + (size_t)t * s->scratch_bytes, 0, sizeof(tt__net_band_times));
+    memset((unsigned char *)s->scratch + (size_t)t * s->scratch_bytes, 0,
+           sizeof(tt__net_band_times));
   /* Bands: about 4 per thread (dynamic scheduling evens out a loaded machine), at least 16
    * rows each (a band recomputes ~2 rows of halo work). The split does not change results. */
   uint32_t rows = s->band_rows;
   if (!rows) {
     rows = (s->height + 4 * threads - 1) / (4 * threads);
     if (rows < 16) rows = 16;
-    if (job.wino) rows = (rows + 3) & ~3u;  /* whole Winograd row pairs / quads per band */
+    if (job.wino) rows = (rows + 3) & ~3u; /* whole Winograd row pairs / quads per band */
   }
   job.band_rows = rows;
   job.bands = (s->height + rows - 1) / rows;
   uint64_t items = (uint64_t)job.bands * job.tiles;
-  if (!pool || threads == 1 || items == 1 ||
-      host->parallel_for(items, 1, band_body, &job) != TT_OK)
-    band_body(&job, 0, items, 0);  /* serial, or finishing an interrupted frame */
+  if (!pool || threads == 1 || items == 1 || host->parallel_for(items, 1, band_body, &job) != TT_OK)
+    band_body(&job, 0, items, 0); /* serial, or finishing an interrupted frame */
   memset(times, 0, sizeof *times);
   for (uint32_t t = 0; t < s->scratch_threads; t++) {
-    const tt__net_band_times *bt = (const tt__net_band_times *)((unsigned char *)s->scratch +
-                                                                (size_t)t * s->scratch_bytes);
+    const tt__net_band_times *bt =
+        (const tt__net_band_times *)((unsigned char *)s->scratch + (size_t)t * s->scratch_bytes);
     times->body_ns += bt->body_ns;
     times->kernel_ns += bt->kernel_ns;
     times->mix_ns += bt->mix_ns;

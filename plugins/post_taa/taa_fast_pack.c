@@ -11,13 +11,12 @@
  * hold small integers (exact in float); the fractions sit in G, applied once per weight
  * set in double. */
 #define WINO_POS TT__NET_WINO_POS
-static const double wino_g[6][5] = {
-    {1.0 / 4, 0, 0, 0, 0},
-    {1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6},
-    {1.0 / 6, -1.0 / 6, 1.0 / 6, -1.0 / 6, 1.0 / 6},
-    {1.0 / 24, 1.0 / 12, 1.0 / 6, 1.0 / 3, 2.0 / 3},
-    {1.0 / 24, -1.0 / 12, 1.0 / 6, -1.0 / 3, 2.0 / 3},
-    {0, 0, 0, 0, 1}};
+static const double wino_g[6][5] = {{1.0 / 4, 0, 0, 0, 0},
+                                    {1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6},
+                                    {1.0 / 6, -1.0 / 6, 1.0 / 6, -1.0 / 6, 1.0 / 6},
+                                    {1.0 / 24, 1.0 / 12, 1.0 / 6, 1.0 / 3, 2.0 / 3},
+                                    {1.0 / 24, -1.0 / 12, 1.0 / 6, -1.0 / 3, 2.0 / 3},
+                                    {0, 0, 0, 0, 1}};
 
 /* U = G g G^T of every (set, output, input) filter into l->wino, laid out
  * [set][block][36][in][oblk] (`uper` floats per set). */
@@ -52,15 +51,14 @@ static void wino_weights(tt__net_layer *l, size_t uper) {
  * against 9 for F(2x2, 5x5) and 25 direct). B^T (the same as F(6x6, 3x3)'s) and A^T hold
  * small dyadic fractions, exact in float; G is applied once per weight set in double. */
 #define WINO4_POS TT__NET_WINO4_POS
-static const double wino4_g[8][5] = {
-    {-1, 0, 0, 0, 0},
-    {-2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9},
-    {-2.0 / 9, 2.0 / 9, -2.0 / 9, 2.0 / 9, -2.0 / 9},
-    {1.0 / 90, 1.0 / 45, 2.0 / 45, 4.0 / 45, 8.0 / 45},
-    {1.0 / 90, -1.0 / 45, 2.0 / 45, -4.0 / 45, 8.0 / 45},
-    {32.0 / 45, 16.0 / 45, 8.0 / 45, 4.0 / 45, 2.0 / 45},
-    {32.0 / 45, -16.0 / 45, 8.0 / 45, -4.0 / 45, 2.0 / 45},
-    {0, 0, 0, 0, 1}};
+static const double wino4_g[8][5] = {{-1, 0, 0, 0, 0},
+                                     {-2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9},
+                                     {-2.0 / 9, 2.0 / 9, -2.0 / 9, 2.0 / 9, -2.0 / 9},
+                                     {1.0 / 90, 1.0 / 45, 2.0 / 45, 4.0 / 45, 8.0 / 45},
+                                     {1.0 / 90, -1.0 / 45, 2.0 / 45, -4.0 / 45, 8.0 / 45},
+                                     {32.0 / 45, 16.0 / 45, 8.0 / 45, 4.0 / 45, 2.0 / 45},
+                                     {32.0 / 45, -16.0 / 45, 8.0 / 45, -4.0 / 45, 2.0 / 45},
+                                     {0, 0, 0, 0, 1}};
 
 /* U = G g G^T of every (set, output, input) filter into l->wino4, laid out
  * [set][block][64][in][oblk] (`uper` floats per set). */

@@ -23,8 +23,7 @@ static void taa_rows_body(void *ctx, uint64_t begin, uint64_t end, uint32_t thre
   job->fn(job->ctx, (uint32_t)begin, (uint32_t)end);
 }
 
-void tt__taa_parallel_rows(const tt_host *host, uint32_t height, tt__taa_rows_fn fn,
-                           void *ctx) {
+void tt__taa_parallel_rows(const tt_host *host, uint32_t height, tt__taa_rows_fn fn, void *ctx) {
   /* Small frames are not worth the pool's wake-up cost. */
   if (!host || !host->parallel_for || height < 16) {
     fn(ctx, 0, height);
@@ -68,8 +67,8 @@ void tt__taa_sample_catmull_rom(const float *img, uint32_t width, uint32_t heigh
   }
 }
 
-void tt__taa_sample_bilinear(const float *img, uint32_t width, uint32_t height,
-                             uint32_t channels, float fx, float fy, float *out) {
+void tt__taa_sample_bilinear(const float *img, uint32_t width, uint32_t height, uint32_t channels,
+                             float fx, float fy, float *out) {
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float tx = ux - bx, ty = uy - by;

@@ -50,7 +50,7 @@ void TT__NET_K(wino)(const tt__net_wino_args *a, uint32_t oblk);
 void TT__NET_K(wino4)(const tt__net_wino4_args *a, uint32_t oblk);
 #endif
 
-#pragma GCC diagnostic ignored "-Wpsabi"  /* v8f helpers are always inlined (gcc and clang) */
+#pragma GCC diagnostic ignored "-Wpsabi" /* v8f helpers are always inlined (gcc and clang) */
 typedef float v8f __attribute__((vector_size(32)));
 typedef float v8fu __attribute__((vector_size(32), aligned(4)));
 typedef int32_t v8i __attribute__((vector_size(32)));
@@ -108,12 +108,12 @@ AI v8f vexp_neg(v8f x) {
 AI void t8x8(const v8f v[8], v8f t[8]) {
   v8f a[8], b[8];
 #pragma GCC unroll 4
-  for (int k = 0; k < 8; k += 2) {  /* a[k]: lanes 0 1 | 4 5 of rows k, k + 1 interleaved */
+  for (int k = 0; k < 8; k += 2) { /* a[k]: lanes 0 1 | 4 5 of rows k, k + 1 interleaved */
     a[k] = WINO_SHUF8(v[k], v[k + 1], 0, 8, 1, 9, 4, 12, 5, 13);
     a[k + 1] = WINO_SHUF8(v[k], v[k + 1], 2, 10, 3, 11, 6, 14, 7, 15);
   }
 #pragma GCC unroll 2
-  for (int k = 0; k < 8; k += 4)  /* b[k + i]: lanes (0 2 1 3)[i] | + 4 of rows k..k + 3 */
+  for (int k = 0; k < 8; k += 4) /* b[k + i]: lanes (0 2 1 3)[i] | + 4 of rows k..k + 3 */
 #pragma GCC unroll 2
     for (int j = 0; j < 2; j++) {
       b[k + j] = WINO_SHUF8(a[k + j], a[k + j + 2], 0, 1, 8, 9, 4, 5, 12, 13);

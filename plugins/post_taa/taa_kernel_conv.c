@@ -56,9 +56,11 @@ AI void conv_rows_t(const tt__net_conv_args *a, const int K, const int O, const 
 
 /* Dispatch on (output block, kernel size) to constant-folded loops; 16 pixels per block for
  * blocks of 6 (two vectors of accumulators fit the 16 registers), else 8. */
-#define CONV_CASE(O_, K_) \
-  case (O_) * 8 + (K_): conv_rows_t(a, K_, O_, (O_) <= 6 ? 2 : 1); break;
+#define CONV_CASE(O_, K_)                                                                          \
+  case (O_)*8 + (K_): conv_rows_t(a, K_, O_, (O_) <= 6 ? 2 : 1); break;
 AI void conv_rows_dispatch(const tt__net_conv_args *a) {
+  /* The macro cases form a table, one output block per row. */
+  // clang-format off
   switch (a->oblk * 8 + a->ksize) {
     CONV_CASE(6, 1) CONV_CASE(6, 3) CONV_CASE(6, 5)
     CONV_CASE(8, 1) CONV_CASE(8, 3) CONV_CASE(8, 5)
@@ -66,56 +68,57 @@ AI void conv_rows_dispatch(const tt__net_conv_args *a) {
     CONV_CASE(12, 1) CONV_CASE(12, 3) CONV_CASE(12, 5)
     default: break;
   }
+  // clang-format on
 }
 
 #if TT__NET_HAVE_AVX512
 /* conv_rows_t on 16-lane vectors (AVX-512): 16 or 32 output pixels per block, the same
  * multiply-adds per pixel in the same order as the 8-lane code (bit-identical results).
  * One block of 16 P output pixels from column xl, output block ob. */
-AI void conv16_block(const tt__net_conv_args *a, uint32_t ob, uint32_t xl, const int K,
-                     const int O, const int P) {
+AI void conv16_block(const tt__net_conv_args *a, uint32_t ob, uint32_t xl, const int K, const int O,
+                     const int P) {
   const uint32_t I = a->in, r = (uint32_t)K / 2;
   const float *wp = a->w + (size_t)ob * I * K * K * O;
   const float *bb = a->b + (size_t)ob * O;
   v16f acc[12][2];
-#pragma GCC unroll 12
+#  pragma GCC unroll 12
   for (int o = 0; o < O; o++)
-#pragma GCC unroll 2
+#  pragma GCC unroll 2
     for (int j = 0; j < P; j++) acc[o][j] = (v16f)_mm512_set1_ps(bb[o]);
   size_t col = COL + a->x0 + xl - r;
   for (uint32_t c = 0; c < I; c++) {
     if (a->pf) {
       const float *q = a->rowp[K - 1] + c * a->cs + col + a->pf;
-#pragma GCC unroll 3
+#  pragma GCC unroll 3
       for (int k = 0; k < P + 1; k++) _mm_prefetch((const char *)(q + 16 * k), _MM_HINT_T1);
     }
-#pragma GCC unroll 5
+#  pragma GCC unroll 5
     for (int ky = 0; ky < K; ky++) {
       const float *q = a->rowp[ky] + c * a->cs + col;
-#pragma GCC unroll 5
+#  pragma GCC unroll 5
       for (int kx = 0; kx < K; kx++) {
         v16f in[2];
-#pragma GCC unroll 2
+#  pragma GCC unroll 2
         for (int j = 0; j < P; j++) in[j] = *(const v16fu *)(q + kx + 16 * j);
-#pragma GCC unroll 12
+#  pragma GCC unroll 12
         for (int o = 0; o < O; o++) {
           float wv = wp[o];
-#pragma GCC unroll 2
+#  pragma GCC unroll 2
           for (int j = 0; j < P; j++) acc[o][j] += in[j] * wv;
         }
         wp += O;
       }
     }
   }
-#pragma GCC unroll 12
+#  pragma GCC unroll 12
   for (int o = 0; o < O; o++) {
     uint32_t oc = ob * O + (uint32_t)o;
     if (oc >= a->out) break;
     float *d = a->dst + oc * a->dcs + xl;
-#pragma GCC unroll 2
+#  pragma GCC unroll 2
     for (int j = 0; j < P; j++) {
       v16f v = acc[o][j];
-      if (a->relu) v = (v16f)_mm512_max_ps((__m512)v, _mm512_setzero_ps());  /* NaN -> 0 */
+      if (a->relu) v = (v16f)_mm512_max_ps((__m512)v, _mm512_setzero_ps()); /* NaN -> 0 */
       *(v16fu *)(d + 16 * j) = v;
     }
   }
@@ -131,8 +134,11 @@ AI void conv_rows16_t(const tt__net_conv_args *a, const int K, const int O) {
     }
 }
 
-#define CONV16_CASE(O_, K_) case (O_) * 8 + (K_): conv_rows16_t(a, K_, O_); break;
+#  define CONV16_CASE(O_, K_)                                                                      \
+  case (O_)*8 + (K_): conv_rows16_t(a, K_, O_); break;
 AI void conv_rows16_dispatch(const tt__net_conv_args *a) {
+  /* The macro cases form a table, one output block per row. */
+  // clang-format off
   switch (a->oblk * 8 + a->ksize) {
     CONV16_CASE(6, 1) CONV16_CASE(6, 3) CONV16_CASE(6, 5)
     CONV16_CASE(8, 1) CONV16_CASE(8, 3) CONV16_CASE(8, 5)
@@ -140,6 +146,7 @@ AI void conv_rows16_dispatch(const tt__net_conv_args *a) {
     CONV16_CASE(12, 1) CONV16_CASE(12, 3) CONV16_CASE(12, 5)
     default: break;
   }
+  // clang-format on
 }
 #endif
 

@@ -31,8 +31,8 @@ AI v8f fast_cr8(const float *img, uint32_t width, uint32_t height, float fx, flo
 }
 
 /* The same for C channels known at compile time (scalar taps, unrolled; C = 3 + hidden). */
-AI void fast_crc(const float *img, uint32_t width, uint32_t height, float fx, float fy,
-                 const int C, float *out) {
+AI void fast_crc(const float *img, uint32_t width, uint32_t height, float fx, float fy, const int C,
+                 float *out) {
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float wx[4], wy[4];
@@ -83,23 +83,23 @@ AI void input_pixel(const tt__net_input_job *job, uint32_t x, uint32_t y, float 
      * applied after the pass (fast_reject_reset) */
     rj = !s->valid ? (uint8_t)(TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET)
                    : tt__taa_reject_test(job->dprev, w, s->height, job->pjx, job->pjy,
-                                         job->zprev ? job->zprev[i] : 0.0f, x, y, mx, my,
-                                         job->jx, job->jy);
+                                         job->zprev ? job->zprev[i] : 0.0f, x, y, mx, my, job->jx,
+                                         job->jy);
     job->reject[i] = rj;
   }
   if (s->valid) {
     /* Motion points from this frame back to the previous one (film.h). */
     float fx = (float)x + 0.5f + mx, fy = (float)y + 0.5f + my;
     switch (sc) {
-      case 8: {
-        v8f v = fast_cr8(s->state, w, s->height, fx, fy);
-        memcpy(fb, &v, sizeof v);
-        break;
-      }
-      case 3: fast_crc(s->state, w, s->height, fx, fy, 3, fb); break;
-      case 4: fast_crc(s->state, w, s->height, fx, fy, 4, fb); break;
-      case 6: fast_crc(s->state, w, s->height, fx, fy, 6, fb); break;
-      default: tt__taa_sample_catmull_rom(s->state, w, s->height, sc, fx, fy, fb); break;
+    case 8: {
+      v8f v = fast_cr8(s->state, w, s->height, fx, fy);
+      memcpy(fb, &v, sizeof v);
+      break;
+    }
+    case 3: fast_crc(s->state, w, s->height, fx, fy, 3, fb); break;
+    case 4: fast_crc(s->state, w, s->height, fx, fy, 4, fb); break;
+    case 6: fast_crc(s->state, w, s->height, fx, fy, 6, fb); break;
+    default: tt__taa_sample_catmull_rom(s->state, w, s->height, sc, fx, fy, fb); break;
     }
   } else {
     memset(fb, 0, sizeof fb);
@@ -132,8 +132,7 @@ AI void input_rows_t(const tt__net_input_job *job, uint32_t y0, uint32_t y1) {
  * differently from the scalar code in the last bit (a pixel always takes the same path,
  * whatever the threads); the rejection test uses the same float operations as
  * tt__taa_reject_test, bit for bit. */
-AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *base,
-                 const int SC) {
+AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *base, const int SC) {
   const tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   const int w = (int)s->width, h = (int)s->height;
@@ -154,9 +153,9 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
     mx = _mm256_i32gather_ps(job->motion + 2 * i, i2, 4);
     my = _mm256_i32gather_ps(job->motion + 2 * i + 1, i2, 4);
   }
-  __m256 dep = job->depth ? _mm256_mul_ps(_mm256_loadu_ps(job->depth + i),
-                                          _mm256_set1_ps(job->depth_scale))
-                          : zero;
+  __m256 dep =
+      job->depth ? _mm256_mul_ps(_mm256_loadu_ps(job->depth + i), _mm256_set1_ps(job->depth_scale))
+                 : zero;
   const __m256 xf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32((int)x), lane));
   const __m256 yf = _mm256_set1_ps((float)y);
   __m256 raw = zero;
@@ -165,13 +164,15 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
       memset(job->reject + i, TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET, 8);
       raw = one;
     } else {
-      __m256 qx = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(xf, half), _mm256_set1_ps(job->jx)), mx);
-      __m256 qy = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(yf, half), _mm256_set1_ps(job->jy)), my);
-      __m256 in = _mm256_and_ps(
-          _mm256_and_ps(_mm256_cmp_ps(qx, zero, _CMP_GE_OQ),
-                        _mm256_cmp_ps(qx, _mm256_set1_ps((float)w), _CMP_LT_OQ)),
-          _mm256_and_ps(_mm256_cmp_ps(qy, zero, _CMP_GE_OQ),
-                        _mm256_cmp_ps(qy, _mm256_set1_ps((float)h), _CMP_LT_OQ)));
+      __m256 qx =
+          _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(xf, half), _mm256_set1_ps(job->jx)), mx);
+      __m256 qy =
+          _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(yf, half), _mm256_set1_ps(job->jy)), my);
+      __m256 in =
+          _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(qx, zero, _CMP_GE_OQ),
+                                      _mm256_cmp_ps(qx, _mm256_set1_ps((float)w), _CMP_LT_OQ)),
+                        _mm256_and_ps(_mm256_cmp_ps(qy, zero, _CMP_GE_OQ),
+                                      _mm256_cmp_ps(qy, _mm256_set1_ps((float)h), _CMP_LT_OQ)));
       __m256 far = zero;
       if (job->dprev) {
         __m256 ux = _mm256_sub_ps(_mm256_sub_ps(qx, half), _mm256_set1_ps(job->pjx));
@@ -184,11 +185,11 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
                       hm = _mm256_set1_epi32(h - 1), o1 = _mm256_set1_epi32(1);
         __m256i x0 = _mm256_min_epi32(_mm256_max_epi32(ix, z), wm);
         __m256i x1 = _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(ix, o1), z), wm);
-        __m256i y0 = _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(iy, z), hm),
-                                        _mm256_set1_epi32(w));
-        __m256i y1 = _mm256_mullo_epi32(
-            _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(iy, o1), z), hm),
-            _mm256_set1_epi32(w));
+        __m256i y0 =
+            _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(iy, z), hm), _mm256_set1_epi32(w));
+        __m256i y1 =
+            _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(iy, o1), z), hm),
+                               _mm256_set1_epi32(w));
         __m256 d[4] = {_mm256_i32gather_ps(job->dprev, _mm256_add_epi32(y0, x0), 4),
                        _mm256_i32gather_ps(job->dprev, _mm256_add_epi32(y0, x1), 4),
                        _mm256_i32gather_ps(job->dprev, _mm256_add_epi32(y1, x0), 4),
@@ -201,16 +202,18 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
         }
         __m256 zp = job->zprev ? _mm256_loadu_ps(job->zprev + i) : zero;
         __m256 thr = _mm256_mul_ps(hi, _mm256_set1_ps(1.0f + TT__TAA_REJECT_TOL));
-        __m256 test = _mm256_or_ps(_mm256_cmp_ps(zp, zero, _CMP_NGT_UQ),
-                                   _mm256_cmp_ps(zp, thr, _CMP_GT_OQ));
+        __m256 test =
+            _mm256_or_ps(_mm256_cmp_ps(zp, zero, _CMP_NGT_UQ), _mm256_cmp_ps(zp, thr, _CMP_GT_OQ));
         far = _mm256_and_ps(_mm256_andnot_ps(sky, test), in);
       }
       int offm = ~_mm256_movemask_ps(in) & 0xff, farm = _mm256_movemask_ps(far);
       for (int l = 0; l < 8; l++)
         job->reject[i + (size_t)l] =
-            (uint8_t)((offm >> l) & 1 ? TT__TAA_REJECT_RAW | TT__TAA_REJECT_OFF
-                      : (farm >> l) & 1 ? TT__TAA_REJECT_RAW | TT__TAA_REJECT_FAR : 0u);
-      raw = _mm256_and_ps(_mm256_or_ps(_mm256_xor_ps(in, _mm256_castsi256_ps(_mm256_set1_epi32(-1))), far), one);
+            (uint8_t)((offm >> l) & 1   ? TT__TAA_REJECT_RAW | TT__TAA_REJECT_OFF
+                      : (farm >> l) & 1 ? TT__TAA_REJECT_RAW | TT__TAA_REJECT_FAR
+                                        : 0u);
+      raw = _mm256_and_ps(
+          _mm256_or_ps(_mm256_xor_ps(in, _mm256_castsi256_ps(_mm256_set1_epi32(-1))), far), one);
     }
   }
   __m256 fb[8] = {t[0], t[1], t[2], zero, zero, zero, zero, zero};
@@ -222,9 +225,13 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
     __m256 wx[4], wy[4];
     for (int a = 0; a < 2; a++) {
       __m256 f = a ? fyr : fxr, *o = a ? wy : wx;
-      o[0] = _mm256_mul_ps(f, _mm256_fmadd_ps(f, _mm256_fnmadd_ps(half, f, one), _mm256_set1_ps(-0.5f)));
-      o[1] = _mm256_fmadd_ps(_mm256_mul_ps(f, f), _mm256_fmadd_ps(_mm256_set1_ps(1.5f), f, _mm256_set1_ps(-2.5f)), one);
-      o[2] = _mm256_mul_ps(f, _mm256_fmadd_ps(f, _mm256_fnmadd_ps(_mm256_set1_ps(1.5f), f, _mm256_set1_ps(2.0f)), half));
+      o[0] = _mm256_mul_ps(
+          f, _mm256_fmadd_ps(f, _mm256_fnmadd_ps(half, f, one), _mm256_set1_ps(-0.5f)));
+      o[1] = _mm256_fmadd_ps(_mm256_mul_ps(f, f),
+                             _mm256_fmadd_ps(_mm256_set1_ps(1.5f), f, _mm256_set1_ps(-2.5f)), one);
+      o[2] = _mm256_mul_ps(
+          f, _mm256_fmadd_ps(f, _mm256_fnmadd_ps(_mm256_set1_ps(1.5f), f, _mm256_set1_ps(2.0f)),
+                             half));
       o[3] = _mm256_mul_ps(_mm256_mul_ps(f, f), _mm256_fmadd_ps(half, f, _mm256_set1_ps(-0.5f)));
     }
     /* Per pixel: rows of taps weighted by wx, then the rows by wy. bx, by: floors of
@@ -236,10 +243,14 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
     float wxs[4][8], wys[4][8];
     for (int k = 0; k < 4; k++) {
       __m256i o = _mm256_set1_epi32(k - 1);
-      _mm256_storeu_si256((__m256i *)xi[k], _mm256_mullo_epi32(
-          _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(bxi, o), z), wm), _mm256_set1_epi32(SC)));
-      _mm256_storeu_si256((__m256i *)yo[k], _mm256_mullo_epi32(
-          _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(byi, o), z), hm), _mm256_set1_epi32(SC * w)));
+      _mm256_storeu_si256(
+          (__m256i *)xi[k],
+          _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(bxi, o), z), wm),
+                             _mm256_set1_epi32(SC)));
+      _mm256_storeu_si256(
+          (__m256i *)yo[k],
+          _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(byi, o), z), hm),
+                             _mm256_set1_epi32(SC * w)));
       _mm256_storeu_ps(wxs[k], wx[k]);
       _mm256_storeu_ps(wys[k], wy[k]);
     }
@@ -310,9 +321,9 @@ void TT__NET_K(input_rows)(void *ctx, uint32_t y0, uint32_t y1) {
   const tt__net_input_job *job = ctx;
 #if TT__NET_HAVE_AVX2
   switch (job->s->state_ch) {
-    case 3: input_rows8_t(job, y0, y1, 3); return;
-    case 8: input_rows8_t(job, y0, y1, 8); return;
-    default: break;
+  case 3: input_rows8_t(job, y0, y1, 3); return;
+  case 8: input_rows8_t(job, y0, y1, 8); return;
+  default: break;
   }
 #endif
   input_rows_t(job, y0, y1);

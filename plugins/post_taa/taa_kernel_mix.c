@@ -16,7 +16,6 @@ AI void store_rgb8(float *dst, v8f r, v8f g, v8f b) {
   vstore(dst + 16, WINO_SHUF8(rg2, b, 0, 13, 2, 3, 14, 5, 6, 15));
 }
 
-
 /* The 8 channel vectors v of 8 pixels to dst in pixel-major order (8 floats per pixel). */
 AI void store_t8x8(float *dst, const v8f v[8]) {
   v8f t[8];
@@ -88,7 +87,7 @@ AI void mix_rows_t(const tt__net_mix_args *a, const uint32_t hidden) {
     float *ns = s->next_state + i * sc, *out = a->out_rgb + i * 3;
     if (lanes == 8) {
       store_rgb8(out, lin[0], lin[1], lin[2]);
-      if (hidden == 5) {  /* 8 state channels */
+      if (hidden == 5) { /* 8 state channels */
         store_t8x8(ns, st);
         continue;
       }
@@ -103,9 +102,9 @@ AI void mix_rows_t(const tt__net_mix_args *a, const uint32_t hidden) {
 
 AI void mix_dispatch(const tt__net_mix_args *a) {
   switch (a->m->hidden) {
-    case 0: mix_rows_t(a, 0); break;
-    case 5: mix_rows_t(a, 5); break;
-    default: mix_rows_t(a, a->m->hidden); break;
+  case 0: mix_rows_t(a, 0); break;
+  case 5: mix_rows_t(a, 5); break;
+  default: mix_rows_t(a, a->m->hidden); break;
   }
 }
 
@@ -146,11 +145,11 @@ AI void mix_rows16_t(const tt__net_mix_args *a, const uint32_t hidden) {
     if (x >= s->width) break;
     float *lg = a->lg + xl;
     v16f m5[5];
-#pragma GCC unroll 5
+#  pragma GCC unroll 5
     for (int k = 0; k < 5; k++) m5[k] = vload16(lg + k * CHUNK);
-#pragma GCC unroll 9
+#  pragma GCC unroll 9
     for (int k = 5; k < 50; k += 5)
-#pragma GCC unroll 5
+#  pragma GCC unroll 5
       for (int j = 0; j < 5; j++) m5[j] = vmax16(m5[j], vload16(lg + (k + j) * CHUNK));
     v16f mx = vmax16(vmax16(vmax16(m5[0], m5[1]), vmax16(m5[2], m5[3])), m5[4]);
     v16f sa = vsplat16(0.0f), sb = vsplat16(0.0f);
@@ -158,13 +157,13 @@ AI void mix_rows16_t(const tt__net_mix_args *a, const uint32_t hidden) {
     const float *row = s->inp + (size_t)(a->y - 2 + s->halo) * rs + COL + x - 2;
     for (uint32_t ty = 0; ty < 5; ty++, row += rs) {
       const float *lt = lg + ty * 5 * CHUNK;
-#pragma GCC unroll 5
+#  pragma GCC unroll 5
       for (uint32_t tx = 0; tx < 5; tx++) {
         v16f ka = vexp_neg16(vload16(lt + tx * CHUNK) - mx);
         v16f kb = vexp_neg16(vload16(lt + (25 + tx) * CHUNK) - mx);
         sa += ka;
         sb += kb;
-#pragma GCC unroll 3
+#  pragma GCC unroll 3
         for (int c = 0; c < 3; c++)
           o[c] += ka * vload16(row + c * cs + tx) + kb * vload16(row + (6 + c) * cs + tx);
       }
@@ -172,14 +171,14 @@ AI void mix_rows16_t(const tt__net_mix_args *a, const uint32_t hidden) {
     v16f sum = sa + sb;
     v16f inv = vsplat16(1.0f) / sum;
     v16f st[16];
-#pragma GCC unroll 3
+#  pragma GCC unroll 3
     for (int c = 0; c < 3; c++) st[c] = o[c] = o[c] * inv;
     const float *hp = a->hrow + (int)(COL + x) - a->hx;
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
     for (uint32_t k = 0; k < hidden; k++) st[3 + k] = vsplat16(a->hb[k]);
     for (uint32_t c = 0; c < hin; c++) {
       v16f xin = vload16(hp + c * a->hcs);
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
       for (uint32_t k = 0; k < hidden; k++) st[3 + k] += xin * a->hw[k * hin + c];
     }
     v16f z = vsplat16(0.0f);
@@ -195,7 +194,7 @@ AI void mix_rows16_t(const tt__net_mix_args *a, const uint32_t hidden) {
       for (int c = 0; c < 3; c++) memcpy(l8[c], &lin[c], sizeof lin[c]);
       store_rgb8(out, l8[0][0], l8[1][0], l8[2][0]);
       store_rgb8(out + 24, l8[0][1], l8[1][1], l8[2][1]);
-      if (hidden == 5) {  /* 8 state channels */
+      if (hidden == 5) { /* 8 state channels */
         v8f s8[2][8];
         for (int c = 0; c < 8; c++) {
           v8f h[2];
@@ -217,9 +216,9 @@ AI void mix_rows16_t(const tt__net_mix_args *a, const uint32_t hidden) {
 
 AI void mix16_dispatch(const tt__net_mix_args *a) {
   switch (a->m->hidden) {
-    case 0: mix_rows16_t(a, 0); break;
-    case 5: mix_rows16_t(a, 5); break;
-    default: mix_rows16_t(a, a->m->hidden); break;
+  case 0: mix_rows16_t(a, 0); break;
+  case 5: mix_rows16_t(a, 5); break;
+  default: mix_rows16_t(a, a->m->hidden); break;
   }
 }
 #endif

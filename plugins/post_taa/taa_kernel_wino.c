@@ -62,14 +62,14 @@ AI void wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O, const
           d[k] = wino_even(lo, hi);
           d[k + 1] = wino_even(lo1, hi1);
         }
-        wino_bt(d, e[i]);  /* along the row: e[i][s] */
+        wino_bt(d, e[i]); /* along the row: e[i][s] */
       }
 #pragma GCC unroll 6
       for (int s2 = 0; s2 < 6; s2++) {
         v8f col[6], v[6];
 #pragma GCC unroll 6
         for (int i = 0; i < 6; i++) col[i] = e[i][s2];
-        wino_bt(col, v);  /* along the column: V[r][s2] */
+        wino_bt(col, v); /* along the column: V[r][s2] */
 #pragma GCC unroll 6
         for (int r = 0; r < 6; r++) vstore(V + ((size_t)(r * 6 + s2) * I + c) * T + 8 * j, v[r]);
       }
@@ -119,10 +119,10 @@ AI void wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O, const
         v8f m[6];
 #pragma GCC unroll 6
         for (int k = 0; k < 6; k++) m[k] = vload(Mp + ((size_t)(i * 6 + k) * O + o) * T + 8 * j);
-        wino_at(m, &r0[i], &r1[i]);  /* along the row: output columns 0, 1 */
+        wino_at(m, &r0[i], &r1[i]); /* along the row: output columns 0, 1 */
       }
       v8f y00, y10, y01, y11;
-      wino_at(r0, &y00, &y10);  /* along the column: output rows 0, 1 */
+      wino_at(r0, &y00, &y10); /* along the column: output rows 0, 1 */
       wino_at(r1, &y01, &y11);
       y00 += bias, y01 += bias, y10 += bias, y11 += bias;
       if (a->relu) {
@@ -143,21 +143,20 @@ AI void wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O, const
 
 /* All groups of a chunk: 16 tiles per group with 32 registers (`wide`), else 8. Output
  * blocks of 10 (the kernel layer's 50 outputs) or 12 (12-channel body layers). */
-#define WINO_CASE(O_) \
-  case O_: \
-    for (uint32_t xl = 0; xl < a->n;) { \
-      if (wide && a->n - xl >= 32) wino_group_t(a, xl, O_, 2), xl += 32; \
-      else wino_group_t(a, xl, O_, 1), xl += 16; \
-    } \
+#define WINO_CASE(O_)                                                                              \
+  case O_:                                                                                         \
+    for (uint32_t xl = 0; xl < a->n;) {                                                            \
+      if (wide && a->n - xl >= 32) wino_group_t(a, xl, O_, 2), xl += 32;                           \
+      else wino_group_t(a, xl, O_, 1), xl += 16;                                                   \
+    }                                                                                              \
     break;
 AI void wino_dispatch(const tt__net_wino_args *a, uint32_t oblk, const int wide) {
   switch (oblk) {
     WINO_CASE(10)
     WINO_CASE(12)
-    default: break;
+  default: break;
   }
 }
-
 
 /* ---- F(4x4, 5x5): the kernel layer and 5x5 body layers with output blocks of 6, 10 or 12 ----
  *
@@ -168,14 +167,14 @@ AI void wino_dispatch(const tt__net_wino_args *a, uint32_t oblk, const int wide)
  * tile's arithmetic is the same whatever lane or group it is in. */
 
 /* 4 x 4 transpose inside each 128-bit half of (r0, r1, r2, r3). */
-#define WINO4_T4(r0, r1, r2, r3)                                              \
-  do {                                                                         \
-    __m256 t0_ = _mm256_unpacklo_ps(r0, r1), t1_ = _mm256_unpackhi_ps(r0, r1); \
-    __m256 t2_ = _mm256_unpacklo_ps(r2, r3), t3_ = _mm256_unpackhi_ps(r2, r3); \
-    r0 = _mm256_shuffle_ps(t0_, t2_, 0x44);                                    \
-    r1 = _mm256_shuffle_ps(t0_, t2_, 0xEE);                                    \
-    r2 = _mm256_shuffle_ps(t1_, t3_, 0x44);                                    \
-    r3 = _mm256_shuffle_ps(t1_, t3_, 0xEE);                                    \
+#define WINO4_T4(r0, r1, r2, r3)                                                                   \
+  do {                                                                                             \
+    __m256 t0_ = _mm256_unpacklo_ps(r0, r1), t1_ = _mm256_unpackhi_ps(r0, r1);                     \
+    __m256 t2_ = _mm256_unpacklo_ps(r2, r3), t3_ = _mm256_unpackhi_ps(r2, r3);                     \
+    r0 = _mm256_shuffle_ps(t0_, t2_, 0x44);                                                        \
+    r1 = _mm256_shuffle_ps(t0_, t2_, 0xEE);                                                        \
+    r2 = _mm256_shuffle_ps(t1_, t3_, 0x44);                                                        \
+    r3 = _mm256_shuffle_ps(t1_, t3_, 0xEE);                                                        \
   } while (0)
 
 /* B^T of one 8-vector (rows: -1 0 21/4 0 -21/4 0 1 0 / 0 1 1 -17/4 -17/4 1 1 0 /
@@ -192,16 +191,16 @@ AI void wino4_bt(const __m256 d[8], __m256 v[8]) {
   v[2] = _mm256_sub_ps(e1, o1);
   __m256 e2 = _mm256_fmadd_ps(d[2], _mm256_set1_ps(0.25f),
                               _mm256_fnmadd_ps(d[4], _mm256_set1_ps(1.25f), d[6]));
-  __m256 o2 = _mm256_fmadd_ps(d[1], _mm256_set1_ps(0.5f),
-                              _mm256_fmadd_ps(d[5], _mm256_set1_ps(2.0f),
-                                              _mm256_mul_ps(d[3], _mm256_set1_ps(-2.5f))));
+  __m256 o2 = _mm256_fmadd_ps(
+      d[1], _mm256_set1_ps(0.5f),
+      _mm256_fmadd_ps(d[5], _mm256_set1_ps(2.0f), _mm256_mul_ps(d[3], _mm256_set1_ps(-2.5f))));
   v[3] = _mm256_add_ps(e2, o2);
   v[4] = _mm256_sub_ps(e2, o2);
   __m256 e3 = _mm256_fmadd_ps(d[2], _mm256_set1_ps(4.0f),
                               _mm256_fnmadd_ps(d[4], _mm256_set1_ps(5.0f), d[6]));
-  __m256 o3 = _mm256_fmadd_ps(d[1], _mm256_set1_ps(2.0f),
-                              _mm256_fmadd_ps(d[5], _mm256_set1_ps(0.5f),
-                                              _mm256_mul_ps(d[3], _mm256_set1_ps(-2.5f))));
+  __m256 o3 = _mm256_fmadd_ps(
+      d[1], _mm256_set1_ps(2.0f),
+      _mm256_fmadd_ps(d[5], _mm256_set1_ps(0.5f), _mm256_mul_ps(d[3], _mm256_set1_ps(-2.5f))));
   v[5] = _mm256_add_ps(e3, o3);
   v[6] = _mm256_sub_ps(e3, o3);
 }
@@ -215,8 +214,9 @@ AI void wino4_at(const __m256 m[8], __m256 y[4]) {
   y[0] = _mm256_add_ps(_mm256_add_ps(m[0], s1), _mm256_add_ps(s2, s3));
   y[1] = _mm256_fmadd_ps(d3, _mm256_set1_ps(0.5f), _mm256_fmadd_ps(d2, _mm256_set1_ps(2.0f), d1));
   y[2] = _mm256_fmadd_ps(s3, _mm256_set1_ps(0.25f), _mm256_fmadd_ps(s2, _mm256_set1_ps(4.0f), s1));
-  y[3] = _mm256_add_ps(_mm256_fmadd_ps(d3, _mm256_set1_ps(0.125f),
-                                       _mm256_fmadd_ps(d2, _mm256_set1_ps(8.0f), d1)), m[7]);
+  y[3] = _mm256_add_ps(
+      _mm256_fmadd_ps(d3, _mm256_set1_ps(0.125f), _mm256_fmadd_ps(d2, _mm256_set1_ps(8.0f), d1)),
+      m[7]);
 }
 
 /* One group of 8P tiles (32P columns from xl), O outputs per block; P = 2 (16 tiles)
@@ -234,17 +234,19 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
 #pragma GCC unroll 8
       for (int i = 0; i < 8; i++) {
         const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl + 32 * j;
-        __m256 r0 = _mm256_loadu_ps(q), r1 = _mm256_loadu_ps(q + 8),
-               r2 = _mm256_loadu_ps(q + 16), r3 = _mm256_loadu_ps(q + 24);
-        WINO4_T4(r0, r1, r2, r3);  /* rk: column 4t + k of tile t */
+        __m256 r0 = _mm256_loadu_ps(q), r1 = _mm256_loadu_ps(q + 8), r2 = _mm256_loadu_ps(q + 16),
+               r3 = _mm256_loadu_ps(q + 24);
+        WINO4_T4(r0, r1, r2, r3); /* rk: column 4t + k of tile t */
         __m256 d[8];
         d[0] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r2, prev), _mm256_broadcast_ss(q - 2), 1);
         d[1] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r3, prev), _mm256_broadcast_ss(q - 1), 1);
         d[2] = r0, d[3] = r1, d[4] = r2, d[5] = r3;
-        d[6] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r0, next), _mm256_broadcast_ss(q + 32), 0x80);
-        d[7] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r1, next), _mm256_broadcast_ss(q + 33), 0x80);
+        d[6] =
+            _mm256_blend_ps(_mm256_permutevar8x32_ps(r0, next), _mm256_broadcast_ss(q + 32), 0x80);
+        d[7] =
+            _mm256_blend_ps(_mm256_permutevar8x32_ps(r1, next), _mm256_broadcast_ss(q + 33), 0x80);
         __m256 e[8];
-        wino4_bt(d, e);  /* along the row: E[i][s] */
+        wino4_bt(d, e); /* along the row: E[i][s] */
 #pragma GCC unroll 8
         for (int s2 = 0; s2 < 8; s2++) _mm256_store_ps(E + (i * 8 + s2) * 8, e[s2]);
       }
@@ -253,7 +255,7 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
         __m256 col[8], v[8];
 #pragma GCC unroll 8
         for (int i = 0; i < 8; i++) col[i] = _mm256_load_ps(E + (i * 8 + s2) * 8);
-        wino4_bt(col, v);  /* along the column: V[r][s2] */
+        wino4_bt(col, v); /* along the column: V[r][s2] */
 #pragma GCC unroll 8
         for (int r = 0; r < 8; r++)
           _mm256_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * T + 8 * j, v[r]);
@@ -284,7 +286,8 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
 #pragma GCC unroll 12
       for (int o = 0; o < O; o++)
 #pragma GCC unroll 2
-        for (int j = 0; j < P; j++) _mm256_store_ps(M + ((size_t)pos * O + o) * T + 8 * j, acc[o][j]);
+        for (int j = 0; j < P; j++)
+          _mm256_store_ps(M + ((size_t)pos * O + o) * T + 8 * j, acc[o][j]);
     }
     for (int o = 0; o < O; o++) {
       uint32_t oc = ob * (uint32_t)O + (uint32_t)o;
@@ -299,15 +302,15 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
 #pragma GCC unroll 8
           for (int k = 0; k < 8; k++)
             m8[k] = _mm256_load_ps(M + ((size_t)(i * 8 + k) * O + o) * T + 8 * j);
-          wino4_at(m8, t[i]);  /* along the row: tile columns 0..3 */
+          wino4_at(m8, t[i]); /* along the row: tile columns 0..3 */
         }
-        __m256 y[4][4];  /* [row][column] */
+        __m256 y[4][4]; /* [row][column] */
 #pragma GCC unroll 4
         for (int k = 0; k < 4; k++) {
           __m256 col[8], yy[4];
 #pragma GCC unroll 8
           for (int i = 0; i < 8; i++) col[i] = t[i][k];
-          wino4_at(col, yy);  /* along the column: output rows 0..3 */
+          wino4_at(col, yy); /* along the column: output rows 0..3 */
 #pragma GCC unroll 4
           for (int r = 0; r < 4; r++) {
             y[r][k] = _mm256_add_ps(yy[r], bias);
@@ -316,7 +319,7 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
         }
 #pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
-          WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
+          WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]); /* back to column order */
           float *d = a->dst[r] + oc * a->dcs + xl + 32 * j;
           for (int k = 0; k < 4; k++) _mm256_storeu_ps(d + 8 * k, y[r][k]);
         }
@@ -327,19 +330,19 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
 
 /* All groups of a chunk; output blocks of 10 (the kernel layer's 50 outputs), 12 or 6
  * (12- and 6-channel body layers). */
-#define WINO4_CASE(O_) \
-  case O_: \
-    for (uint32_t xl = 0; xl < a->n;) { \
-      if (wide && a->n - xl >= 64) wino4_group_t(a, xl, O_, 2), xl += 64; \
-      else wino4_group_t(a, xl, O_, 1), xl += 32; \
-    } \
+#define WINO4_CASE(O_)                                                                             \
+  case O_:                                                                                         \
+    for (uint32_t xl = 0; xl < a->n;) {                                                            \
+      if (wide && a->n - xl >= 64) wino4_group_t(a, xl, O_, 2), xl += 64;                          \
+      else wino4_group_t(a, xl, O_, 1), xl += 32;                                                  \
+    }                                                                                              \
     break;
 AI void wino4_dispatch(const tt__net_wino4_args *a, uint32_t oblk, const int wide) {
   switch (oblk) {
     WINO4_CASE(6)
     WINO4_CASE(10)
     WINO4_CASE(12)
-    default: break;
+  default: break;
   }
 }
 
@@ -353,15 +356,15 @@ AI void wino4_dispatch(const tt__net_wino4_args *a, uint32_t oblk, const int wid
  * code's operation for operation (same expressions, so the same contractions and
  * roundings): a tile's results do not depend on which of the two codes ran it, so column
  * tiles and chunk tails that mix them stay bit-identical. */
-#define WINO4_T4_16(r0, r1, r2, r3)                                           \
-  do {                                                                         \
-    __m512 t0_ = _mm512_unpacklo_ps(r0, r1), t1_ = _mm512_unpackhi_ps(r0, r1); \
-    __m512 t2_ = _mm512_unpacklo_ps(r2, r3), t3_ = _mm512_unpackhi_ps(r2, r3); \
-    r0 = _mm512_shuffle_ps(t0_, t2_, 0x44);                                    \
-    r1 = _mm512_shuffle_ps(t0_, t2_, 0xEE);                                    \
-    r2 = _mm512_shuffle_ps(t1_, t3_, 0x44);                                    \
-    r3 = _mm512_shuffle_ps(t1_, t3_, 0xEE);                                    \
-  } while (0)
+#  define WINO4_T4_16(r0, r1, r2, r3)                                                              \
+    do {                                                                                           \
+      __m512 t0_ = _mm512_unpacklo_ps(r0, r1), t1_ = _mm512_unpackhi_ps(r0, r1);                   \
+      __m512 t2_ = _mm512_unpacklo_ps(r2, r3), t3_ = _mm512_unpackhi_ps(r2, r3);                   \
+      r0 = _mm512_shuffle_ps(t0_, t2_, 0x44);                                                      \
+      r1 = _mm512_shuffle_ps(t0_, t2_, 0xEE);                                                      \
+      r2 = _mm512_shuffle_ps(t1_, t3_, 0x44);                                                      \
+      r3 = _mm512_shuffle_ps(t1_, t3_, 0xEE);                                                      \
+    } while (0)
 
 /* wino4_bt on 16 lanes. */
 AI void wino4_bt16(const __m512 d[8], __m512 v[8]) {
@@ -374,16 +377,16 @@ AI void wino4_bt16(const __m512 d[8], __m512 v[8]) {
   v[2] = _mm512_sub_ps(e1, o1);
   __m512 e2 = _mm512_fmadd_ps(d[2], _mm512_set1_ps(0.25f),
                               _mm512_fnmadd_ps(d[4], _mm512_set1_ps(1.25f), d[6]));
-  __m512 o2 = _mm512_fmadd_ps(d[1], _mm512_set1_ps(0.5f),
-                              _mm512_fmadd_ps(d[5], _mm512_set1_ps(2.0f),
-                                              _mm512_mul_ps(d[3], _mm512_set1_ps(-2.5f))));
+  __m512 o2 = _mm512_fmadd_ps(
+      d[1], _mm512_set1_ps(0.5f),
+      _mm512_fmadd_ps(d[5], _mm512_set1_ps(2.0f), _mm512_mul_ps(d[3], _mm512_set1_ps(-2.5f))));
   v[3] = _mm512_add_ps(e2, o2);
   v[4] = _mm512_sub_ps(e2, o2);
   __m512 e3 = _mm512_fmadd_ps(d[2], _mm512_set1_ps(4.0f),
                               _mm512_fnmadd_ps(d[4], _mm512_set1_ps(5.0f), d[6]));
-  __m512 o3 = _mm512_fmadd_ps(d[1], _mm512_set1_ps(2.0f),
-                              _mm512_fmadd_ps(d[5], _mm512_set1_ps(0.5f),
-                                              _mm512_mul_ps(d[3], _mm512_set1_ps(-2.5f))));
+  __m512 o3 = _mm512_fmadd_ps(
+      d[1], _mm512_set1_ps(2.0f),
+      _mm512_fmadd_ps(d[5], _mm512_set1_ps(0.5f), _mm512_mul_ps(d[3], _mm512_set1_ps(-2.5f))));
   v[5] = _mm512_add_ps(e3, o3);
   v[6] = _mm512_sub_ps(e3, o3);
 }
@@ -396,8 +399,9 @@ AI void wino4_at16(const __m512 m[8], __m512 y[4]) {
   y[0] = _mm512_add_ps(_mm512_add_ps(m[0], s1), _mm512_add_ps(s2, s3));
   y[1] = _mm512_fmadd_ps(d3, _mm512_set1_ps(0.5f), _mm512_fmadd_ps(d2, _mm512_set1_ps(2.0f), d1));
   y[2] = _mm512_fmadd_ps(s3, _mm512_set1_ps(0.25f), _mm512_fmadd_ps(s2, _mm512_set1_ps(4.0f), s1));
-  y[3] = _mm512_add_ps(_mm512_fmadd_ps(d3, _mm512_set1_ps(0.125f),
-                                       _mm512_fmadd_ps(d2, _mm512_set1_ps(8.0f), d1)), m[7]);
+  y[3] = _mm512_add_ps(
+      _mm512_fmadd_ps(d3, _mm512_set1_ps(0.125f), _mm512_fmadd_ps(d2, _mm512_set1_ps(8.0f), d1)),
+      m[7]);
 }
 
 /* One group of 16 tiles (64 columns from xl), O outputs per block: wino4_group_t's steps
@@ -409,12 +413,12 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
   const __m512i prev = _mm512_setr_epi32(0, 12, 13, 14, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11);
   const __m512i next = _mm512_setr_epi32(4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 1, 2, 3, 0);
   for (uint32_t c = 0; c < I; c++) {
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
     for (int i = 0; i < 8; i++) {
       const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl;
-      __m512 r0 = _mm512_loadu_ps(q), r1 = _mm512_loadu_ps(q + 16),
-             r2 = _mm512_loadu_ps(q + 32), r3 = _mm512_loadu_ps(q + 48);
-      WINO4_T4_16(r0, r1, r2, r3);  /* rk: column 4t + k of tile t */
+      __m512 r0 = _mm512_loadu_ps(q), r1 = _mm512_loadu_ps(q + 16), r2 = _mm512_loadu_ps(q + 32),
+             r3 = _mm512_loadu_ps(q + 48);
+      WINO4_T4_16(r0, r1, r2, r3); /* rk: column 4t + k of tile t */
       __m512 d[8];
       d[0] = _mm512_mask_blend_ps(0x0001, _mm512_permutexvar_ps(prev, r2), _mm512_set1_ps(q[-2]));
       d[1] = _mm512_mask_blend_ps(0x0001, _mm512_permutexvar_ps(prev, r3), _mm512_set1_ps(q[-1]));
@@ -422,17 +426,17 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
       d[6] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r0), _mm512_set1_ps(q[64]));
       d[7] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r1), _mm512_set1_ps(q[65]));
       __m512 e[8];
-      wino4_bt16(d, e);  /* along the row: E[i][s] */
-#pragma GCC unroll 8
+      wino4_bt16(d, e); /* along the row: E[i][s] */
+#  pragma GCC unroll 8
       for (int s2 = 0; s2 < 8; s2++) _mm512_store_ps(E + (i * 8 + s2) * 16, e[s2]);
     }
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
     for (int s2 = 0; s2 < 8; s2++) {
       __m512 col[8], v[8];
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
       for (int i = 0; i < 8; i++) col[i] = _mm512_load_ps(E + (i * 8 + s2) * 16);
-      wino4_bt16(col, v);  /* along the column: V[r][s2] */
-#pragma GCC unroll 8
+      wino4_bt16(col, v); /* along the column: V[r][s2] */
+#  pragma GCC unroll 8
       for (int r = 0; r < 8; r++) _mm512_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * 16, v[r]);
     }
   }
@@ -440,17 +444,17 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
     const float *u = a->u + (size_t)ob * WINO4_POS * I * O;
     for (uint32_t pos = 0; pos < WINO4_POS; pos++) {
       __m512 acc[12];
-#pragma GCC unroll 12
+#  pragma GCC unroll 12
       for (int o = 0; o < O; o++) acc[o] = _mm512_setzero_ps();
       const float *vp = V + (size_t)pos * I * 16;
       for (uint32_t c = 0; c < I; c++) {
         __m512 in = _mm512_load_ps(vp);
-#pragma GCC unroll 12
+#  pragma GCC unroll 12
         for (int o = 0; o < O; o++) acc[o] = _mm512_fmadd_ps(in, _mm512_set1_ps(u[o]), acc[o]);
         u += O;
         vp += 16;
       }
-#pragma GCC unroll 12
+#  pragma GCC unroll 12
       for (int o = 0; o < O; o++) _mm512_store_ps(M + ((size_t)pos * O + o) * 16, acc[o]);
     }
     for (int o = 0; o < O; o++) {
@@ -458,29 +462,29 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
       if (oc >= a->out) break;
       __m512 bias = _mm512_set1_ps(a->b[oc]);
       __m512 t[8][4];
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
       for (int i = 0; i < 8; i++) {
         __m512 m8[8];
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
         for (int k = 0; k < 8; k++) m8[k] = _mm512_load_ps(M + ((size_t)(i * 8 + k) * O + o) * 16);
-        wino4_at16(m8, t[i]);  /* along the row: tile columns 0..3 */
+        wino4_at16(m8, t[i]); /* along the row: tile columns 0..3 */
       }
-      __m512 y[4][4];  /* [row][column] */
-#pragma GCC unroll 4
+      __m512 y[4][4]; /* [row][column] */
+#  pragma GCC unroll 4
       for (int k = 0; k < 4; k++) {
         __m512 col[8], yy[4];
-#pragma GCC unroll 8
+#  pragma GCC unroll 8
         for (int i = 0; i < 8; i++) col[i] = t[i][k];
-        wino4_at16(col, yy);  /* along the column: output rows 0..3 */
-#pragma GCC unroll 4
+        wino4_at16(col, yy); /* along the column: output rows 0..3 */
+#  pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
           y[r][k] = _mm512_add_ps(yy[r], bias);
           if (a->relu) y[r][k] = _mm512_max_ps(y[r][k], _mm512_setzero_ps());
         }
       }
-#pragma GCC unroll 4
+#  pragma GCC unroll 4
       for (int r = 0; r < 4; r++) {
-        WINO4_T4_16(y[r][0], y[r][1], y[r][2], y[r][3]);  /* back to column order */
+        WINO4_T4_16(y[r][0], y[r][1], y[r][2], y[r][3]); /* back to column order */
         float *d = a->dst[r] + oc * a->dcs + xl;
         for (int k = 0; k < 4; k++) _mm512_storeu_ps(d + 16 * k, y[r][k]);
       }
@@ -490,25 +494,25 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
 
 /* All groups of a chunk on AVX-512: 64 columns per 16-lane group, a 32-column tail by the
  * 8-lane code. */
-#define WINO4_CASE16(O_) \
-  case O_: \
-    for (uint32_t xl = 0; xl < a->n;) { \
-      if (a->n - xl >= 64) wino4_group16_t(a, xl, O_), xl += 64; \
-      else wino4_group_t(a, xl, O_, 1), xl += 32; \
-    } \
+#  define WINO4_CASE16(O_)                                                                         \
+  case O_:                                                                                         \
+    for (uint32_t xl = 0; xl < a->n;) {                                                            \
+      if (a->n - xl >= 64) wino4_group16_t(a, xl, O_), xl += 64;                                   \
+      else wino4_group_t(a, xl, O_, 1), xl += 32;                                                  \
+    }                                                                                              \
     break;
 AI void wino4_dispatch16(const tt__net_wino4_args *a, uint32_t oblk) {
   switch (oblk) {
     WINO4_CASE16(6)
     WINO4_CASE16(10)
     WINO4_CASE16(12)
-    default: break;
+  default: break;
   }
 }
 #endif
 
 void TT__NET_K(wino)(const tt__net_wino_args *a, uint32_t oblk) {
-  wino_dispatch(a, oblk, TT__NET_HAVE_AVX512);  /* 32 registers: 16 tiles per group */
+  wino_dispatch(a, oblk, TT__NET_HAVE_AVX512); /* 32 registers: 16 tiles per group */
 }
 
 void TT__NET_K(wino4)(const tt__net_wino4_args *a, uint32_t oblk) {

@@ -23,7 +23,6 @@
 
 #include <tt_util/hash.h>
 
-
 /* ---- weights file ---- */
 
 /* Reads a little-endian u32 (the format is LE whatever the host). */
@@ -79,24 +78,24 @@ static tt_status net_layer_read(tt__net_layer *l, const unsigned char *p, const 
   return tt__net_fast_pack(l);
 }
 
-#define NET_HEADER_FIXED 48u  /* magic 8, version, header size, 6 counts, motion scale, 2 reserved */
-#define NET_LAYER_RECORD 24u  /* role, in, out, ksize, sets, activation */
+#define NET_HEADER_FIXED 48u /* magic 8, version, header size, 6 counts, motion scale, 2 reserved */
+#define NET_LAYER_RECORD 24u /* role, in, out, ksize, sets, activation */
 
 tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_model *m) {
   const unsigned char *p = data;
   memset(m, 0, sizeof *m);
   if (size < 12 || memcmp(p, TT__NET_MAGIC, 8) != 0)
     return tt_set_error(TT_ERR_PARSE,
-                        "%s: not a post_taa weights file (bad magic; expected \"TTAANET\")",
-                        src);
+                        "%s: not a post_taa weights file (bad magic; expected \"TTAANET\")", src);
   uint32_t version = net_u32(p + 8);
   if (version < 1 || version > TT__NET_VERSION)
     return tt_set_error(TT_ERR_UNSUPPORTED,
                         "%s: weights format version %u is not supported (this build reads "
-                        "versions 1 to %u)", src, version, TT__NET_VERSION);
+                        "versions 1 to %u)",
+                        src, version, TT__NET_VERSION);
   if (size < NET_HEADER_FIXED)
-    return tt_set_error(TT_ERR_PARSE, "%s: truncated header (%zu bytes, expected at least %u)",
-                        src, size, NET_HEADER_FIXED);
+    return tt_set_error(TT_ERR_PARSE, "%s: truncated header (%zu bytes, expected at least %u)", src,
+                        size, NET_HEADER_FIXED);
   uint32_t header_bytes = net_u32(p + 12);
   m->in_channels = net_u32(p + 16);
   m->width = net_u32(p + 20);
@@ -104,21 +103,26 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
   uint32_t mix_k = net_u32(p + 28), jitter_sets = net_u32(p + 32);
   uint32_t layers = net_u32(p + 36);
   m->motion_scale = net_f32(p + 40);
-  m->flags = version >= 2 ? net_u32(p + 44) : 0;  /* reserved (ignored) in version 1 */
+  m->flags = version >= 2 ? net_u32(p + 44) : 0; /* reserved (ignored) in version 1 */
   const uint32_t known = TT__NET_FLAG_REJECT | TT__NET_FLAG_RESET;
   if ((m->flags & ~known) || ((m->flags & TT__NET_FLAG_RESET) && !(m->flags & TT__NET_FLAG_REJECT)))
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: input flags 0x%x (this build knows 0x1 "
-                        "rejection input, 0x2 history reset with it)", src, m->flags);
-  uint32_t want_in = 9 + m->hidden + ((m->flags & TT__NET_FLAG_REJECT) ? 1u : 0u);  if (mix_k != TT__NET_MIX_K || jitter_sets != TT__NET_JITTER_SETS)
-    return tt_set_error(TT_ERR_PARSE, "%s: colour-mix kernel %u and jitter sets %u (expected "
-                        "%u and %u)", src, mix_k, jitter_sets, TT__NET_MIX_K,
-                        TT__NET_JITTER_SETS);
-  if (m->hidden > 8 || m->in_channels != want_in || m->width < 1 ||
-      m->width > TT__NET_MAX_CH || !isfinite(m->motion_scale))
-    return tt_set_error(TT_ERR_PARSE, "%s: bad model shape: in %u, width %u, hidden %u, "
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "%s: input flags 0x%x (this build knows 0x1 "
+                        "rejection input, 0x2 history reset with it)",
+                        src, m->flags);
+  uint32_t want_in = 9 + m->hidden + ((m->flags & TT__NET_FLAG_REJECT) ? 1u : 0u);
+  if (mix_k != TT__NET_MIX_K || jitter_sets != TT__NET_JITTER_SETS)
+    return tt_set_error(TT_ERR_PARSE,
+                        "%s: colour-mix kernel %u and jitter sets %u (expected "
+                        "%u and %u)",
+                        src, mix_k, jitter_sets, TT__NET_MIX_K, TT__NET_JITTER_SETS);
+  if (m->hidden > 8 || m->in_channels != want_in || m->width < 1 || m->width > TT__NET_MAX_CH ||
+      !isfinite(m->motion_scale))
+    return tt_set_error(TT_ERR_PARSE,
+                        "%s: bad model shape: in %u, width %u, hidden %u, "
                         "flags 0x%x (in must be 9 + hidden, + 1 with the rejection input; "
-                        "hidden <= 8, width in [1, %u])", src, m->in_channels, m->width,
-                        m->hidden, m->flags, TT__NET_MAX_CH);
+                        "hidden <= 8, width in [1, %u])",
+                        src, m->in_channels, m->width, m->hidden, m->flags, TT__NET_MAX_CH);
   uint32_t want_layers_min = 2 + (m->hidden ? 1 : 0);
   if (layers < want_layers_min || layers > TT__NET_MAX_LAYERS)
     return tt_set_error(TT_ERR_PARSE, "%s: %u layers (expected %u to %u)", src, layers,
@@ -127,8 +131,8 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
     return tt_set_error(TT_ERR_PARSE, "%s: header size %u does not match %u layers", src,
                         header_bytes, layers);
   if (size < header_bytes)
-    return tt_set_error(TT_ERR_PARSE, "%s: truncated layer table (%zu bytes, expected %u)",
-                        src, size, header_bytes);
+    return tt_set_error(TT_ERR_PARSE, "%s: truncated layer table (%zu bytes, expected %u)", src,
+                        size, header_bytes);
   /* Validate every record and the chain of shapes before reading any payload. */
   size_t payload = 0;
   uint32_t prev_out = m->in_channels;
@@ -150,30 +154,34 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
       return tt_set_error(TT_ERR_PARSE, "%s: layer %u: unknown role %u", src, i, roles[i]);
     if ((l->sets != 1 && l->sets != TT__NET_JITTER_SETS) || l->ksize % 2 == 0 ||
         l->ksize > 2 * TT__NET_BORDER + 1 || l->out == 0 || l->out > TT__NET_MAX_CH)
-      return tt_set_error(TT_ERR_PARSE, "%s: layer %u (%s): sets %u, kernel %u, out %u "
-                          "(sets 1 or 8, odd kernel <= 5, out <= %u)", src, i, what, l->sets,
-                          l->ksize, l->out, TT__NET_MAX_CH);
+      return tt_set_error(TT_ERR_PARSE,
+                          "%s: layer %u (%s): sets %u, kernel %u, out %u "
+                          "(sets 1 or 8, odd kernel <= 5, out <= %u)",
+                          src, i, what, l->sets, l->ksize, l->out, TT__NET_MAX_CH);
     if (roles[i] == 1) {
       if (seen_kernel || seen_hidden || l->in != prev_out || l->out != m->width ||
           l->activation != 1)
-        return tt_set_error(TT_ERR_PARSE, "%s: layer %u (body): %u -> %u, activation %u "
-                            "(expected %u -> %u ReLU, before the kernel layer)", src, i,
-                            l->in, l->out, l->activation, prev_out, m->width);
+        return tt_set_error(TT_ERR_PARSE,
+                            "%s: layer %u (body): %u -> %u, activation %u "
+                            "(expected %u -> %u ReLU, before the kernel layer)",
+                            src, i, l->in, l->out, l->activation, prev_out, m->width);
       prev_out = l->out;
       m->body_count++;
     } else if (roles[i] == 2) {
       if (seen_kernel || l->in != m->width || l->out != 2 * TT__NET_MIX_TAPS ||
           l->activation != 2 || m->body_count == 0)
-        return tt_set_error(TT_ERR_PARSE, "%s: layer %u (kernel): %u -> %u, activation %u "
-                            "(expected %u -> %u softmax after the body)", src, i, l->in,
-                            l->out, l->activation, m->width, 2 * TT__NET_MIX_TAPS);
+        return tt_set_error(TT_ERR_PARSE,
+                            "%s: layer %u (kernel): %u -> %u, activation %u "
+                            "(expected %u -> %u softmax after the body)",
+                            src, i, l->in, l->out, l->activation, m->width, 2 * TT__NET_MIX_TAPS);
       seen_kernel = 1;
     } else {
       if (seen_hidden || l->in != m->width || l->out != m->hidden || l->ksize != 1 ||
           l->activation != 0 || m->hidden == 0 || m->body_count == 0)
-        return tt_set_error(TT_ERR_PARSE, "%s: layer %u (hidden): %u -> %u, kernel %u "
-                            "(expected %u -> %u, 1x1, no activation)", src, i, l->in, l->out,
-                            l->ksize, m->width, m->hidden);
+        return tt_set_error(TT_ERR_PARSE,
+                            "%s: layer %u (hidden): %u -> %u, kernel %u "
+                            "(expected %u -> %u, 1x1, no activation)",
+                            src, i, l->in, l->out, l->ksize, m->width, m->hidden);
       seen_hidden = 1;
     }
     payload += 4 * ((size_t)l->sets * l->out * (l->in * l->ksize * l->ksize + 1));
@@ -183,8 +191,8 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
                         !seen_kernel ? "kernel" : "hidden");
   size_t want = header_bytes + payload + 4;
   if (size < want)
-    return tt_set_error(TT_ERR_PARSE, "%s: truncated: %zu bytes, the layer table needs %zu",
-                        src, size, want);
+    return tt_set_error(TT_ERR_PARSE, "%s: truncated: %zu bytes, the layer table needs %zu", src,
+                        size, want);
   if (size > want)
     return tt_set_error(TT_ERR_PARSE, "%s: %zu trailing bytes after the checksum", src,
                         size - want);
@@ -245,8 +253,10 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
   }
   if (!s->state || !s->next_state || !rej_ok || tt__net_fast_init(s, m) != TT_OK) {
     tt__net_state_free(s);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
-                        "network planes", width, height);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                        TT__TAA_NAME ": out of memory for %ux%u "
+                                     "network planes",
+                        width, height);
   }
   return TT_OK;
 }
@@ -262,7 +272,7 @@ static tt_status net_reference_planes(tt__net_state *s) {
   s->reproj = net_alloc(ppx * 3);
   if (!s->planes[0] || !s->planes[1] || !s->tm || !s->reproj)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for the "
-                        "reference planes");
+                                                           "reference planes");
   return TT_OK;
 }
 
@@ -285,7 +295,7 @@ typedef struct net_job {
   tt__net_state *s;
   const tt__net_model *m;
   const float *color, *depth, *motion;
-  const uint8_t *reject;    /* rejection mask, or NULL (model without the input) */
+  const uint8_t *reject; /* rejection mask, or NULL (model without the input) */
   float depth_scale;
   uint32_t set;
   const tt__net_layer *layer;
@@ -429,8 +439,8 @@ void tt__net_reject_end(tt__net_state *s, const tt__net_model *m, const tt__net_
 void tt__net_process(tt__net_state *s, const tt__net_model *m, const tt_host *host,
                      const float *color, const float *depth, const float *motion,
                      uint32_t jitter_index, float *out_rgb) {
-  tt__net_frame f = {.color = color, .depth = depth, .motion = motion,
-                     .jitter_index = jitter_index};
+  tt__net_frame f = {
+      .color = color, .depth = depth, .motion = motion, .jitter_index = jitter_index};
   tt_jitter_halton23(jitter_index, f.jitter);
   tt__net_process_frame(s, m, host, &f, out_rgb);
 }
@@ -453,9 +463,14 @@ void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_ho
   const tt_host *h = host;
   uint64_t t0 = h && h->clock_ns ? h->clock_ns() : 0;
   double c0 = tt__taa_cpu_ms();
-  net_job job = {.s = s, .m = m, .color = color, .depth = depth, .motion = motion,
+  net_job job = {.s = s,
+                 .m = m,
+                 .color = color,
+                 .depth = depth,
+                 .motion = motion,
                  .reject = (m->flags & TT__NET_FLAG_REJECT) ? s->reject : NULL,
-                 .set = jitter_index % TT__NET_JITTER_SETS, .out_rgb = out_rgb};
+                 .set = jitter_index % TT__NET_JITTER_SETS,
+                 .out_rgb = out_rgb};
   /* Depth enters as a fraction of the frame's farthest hit, so scenes of any scale look
    * alike to the network. */
   float dmax = 0.0f;
@@ -472,8 +487,7 @@ void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_ho
     job.set = m->body[l].sets > 1 ? jitter_index % TT__NET_JITTER_SETS : 0;
     job.in_plane = s->planes[cur];
     job.out_plane = s->planes[cur ^ 1];
-    tt__taa_parallel_rows(h, s->height, net_ref_body_rows,
-                          &job);
+    tt__taa_parallel_rows(h, s->height, net_ref_body_rows, &job);
     cur ^= 1;
   }
   job.set = jitter_index % TT__NET_JITTER_SETS;

@@ -37,8 +37,8 @@ static uint32_t fast_halo_after(const tt__net_model *m, uint32_t l) {
 
 tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
   s->halo = fast_halo_after(m, 0) + m->body[0].ksize / 2;
-  if (s->halo < 2) s->halo = 2;  /* the colour mix reads 2 rows around */
-  s->vw = (s->width + 31u) & ~31u;  /* F(4x4, 5x5) groups: 8 tiles of 4 columns */
+  if (s->halo < 2) s->halo = 2;    /* the colour mix reads 2 rows around */
+  s->vw = (s->width + 31u) & ~31u; /* F(4x4, 5x5) groups: 8 tiles of 4 columns */
   s->rs = s->vw + 2 * COL;
   /* Rows of all channels side by side: the first layer reads one contiguous stream per
    * row (the hardware prefetcher follows it) instead of one short stream per channel. */
@@ -50,8 +50,10 @@ tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
   const char *pf = getenv("TT_POST_TAA_PREFETCH");
   s->prefetch = !(pf && pf[0] == '0');
   if (!s->inp)
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for %ux%u "
-                        "network planes", s->width, s->height);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                        TT__TAA_NAME ": out of memory for %ux%u "
+                                     "network planes",
+                        s->width, s->height);
   return TT_OK;
 }
 
@@ -73,8 +75,9 @@ const tt__net_kernels *tt__net_fast_kernels(void) {
   if (force && !strcmp(force, "generic")) return tt__net_kernels_generic();
   if (force && !strcmp(force, "avx2"))
     return has_v3 ? tt__net_kernels_avx2() : tt__net_kernels_generic();
-  return has_v4 ? tt__net_kernels_avx512() : has_v3 ? tt__net_kernels_avx2()
-                                                    : tt__net_kernels_generic();
+  return has_v4   ? tt__net_kernels_avx512()
+         : has_v3 ? tt__net_kernels_avx2()
+                  : tt__net_kernels_generic();
 #else
   return tt__net_kernels_generic();
 #endif
@@ -104,11 +107,18 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
   const float *color = f->color, *depth = f->depth;
   const tt__net_kernels *k = tt__net_fast_kernels();
   double w0 = tt__net_now_ns() * 1e-6, c0 = tt__taa_cpu_ms();
-  tt__net_input_job ij = {.s = s, .m = m, .color = color, .depth = depth, .motion = f->motion,
+  tt__net_input_job ij = {.s = s,
+                          .m = m,
+                          .color = color,
+                          .depth = depth,
+                          .motion = f->motion,
                           .reject = (m->flags & TT__NET_FLAG_REJECT) ? s->reject : NULL,
                           .dprev = s->have_prev_depth && f->prev_depth ? s->prev_depth : NULL,
-                          .zprev = f->prev_depth, .jx = f->jitter[0], .jy = f->jitter[1],
-                          .pjx = s->prev_jitter[0], .pjy = s->prev_jitter[1]};
+                          .zprev = f->prev_depth,
+                          .jx = f->jitter[0],
+                          .jy = f->jitter[1],
+                          .pjx = s->prev_jitter[0],
+                          .pjy = s->prev_jitter[1]};
   float dmax = 0.0f;
   if (depth)
     for (size_t i = 0; i < (size_t)s->width * s->height; i++)

@@ -80,13 +80,19 @@ void tt__taa_reject_open(uint32_t width, uint32_t height, uint8_t *mask, uint8_t
   }
 }
 
-void tt__taa_reject_masks(const tt_host *host, uint32_t width, uint32_t height,
-                          const float *dprev, const float jitter_prev[2], const float *zprev,
-                          const float *motion, const float jitter[2], uint8_t *mask,
-                          uint8_t *tmp) {
-  reject_job j = {.w = width, .h = height, .dprev = dprev, .zprev = zprev, .motion = motion,
-                  .jx = jitter[0], .jy = jitter[1], .pjx = jitter_prev[0],
-                  .pjy = jitter_prev[1], .mask = mask};
+void tt__taa_reject_masks(const tt_host *host, uint32_t width, uint32_t height, const float *dprev,
+                          const float jitter_prev[2], const float *zprev, const float *motion,
+                          const float jitter[2], uint8_t *mask, uint8_t *tmp) {
+  reject_job j = {.w = width,
+                  .h = height,
+                  .dprev = dprev,
+                  .zprev = zprev,
+                  .motion = motion,
+                  .jx = jitter[0],
+                  .jy = jitter[1],
+                  .pjx = jitter_prev[0],
+                  .pjy = jitter_prev[1],
+                  .mask = mask};
   if (!dprev) j.zprev = NULL;
   tt__taa_parallel_rows(host, height, reject_test_rows, &j);
   tt__taa_reject_open(width, height, mask, tmp);

@@ -67,8 +67,7 @@ static void vc_prepare_rows(void *ctx, uint32_t y0, uint32_t y1) {
     float t[3];
     if (job->p->linear)
       for (int c = 0; c < 3; c++) t[c] = tt__taa_fmax(job->color[3 * i + c], 0.0f);
-    else
-      tt__taa_tonemap_inl(job->color + 3 * i, t);
+    else tt__taa_tonemap_inl(job->color + 3 * i, t);
     vc_to_ycocg(t, job->v->ycocg + 3 * i);
   }
 }
@@ -137,10 +136,8 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
         memcpy(res, cur, sizeof res);
       } else {
         float hist_rgb[3], hist[3];
-        if (p->catmull_rom)
-          vc_catmull_rom3(v->history, (int)w, (int)h, hx, hy, hist_rgb);
-        else
-          tt__taa_sample_bilinear(v->history, w, h, 3, hx, hy, hist_rgb);
+        if (p->catmull_rom) vc_catmull_rom3(v->history, (int)w, (int)h, hx, hy, hist_rgb);
+        else tt__taa_sample_bilinear(v->history, w, h, 3, hx, hy, hist_rgb);
         vc_to_ycocg(hist_rgb, hist);
         /* Clip toward the box centre along the line to the mean (not a per-axis clamp), so
          * the clipped colour stays on a plausible hue. */
@@ -176,7 +173,7 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
 void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
                        const float *color, const float *motion, float *out_rgb) {
   vc_job job = {v, p, color, motion, out_rgb};
-  if (v->linear != p->linear) v->valid = 0;  /* the history is in the other space */
+  if (v->linear != p->linear) v->valid = 0; /* the history is in the other space */
   v->linear = p->linear;
   tt__taa_parallel_rows(host, v->height, vc_prepare_rows, &job);
   tt__taa_parallel_rows(host, v->height, vc_rows, &job);

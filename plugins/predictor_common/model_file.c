@@ -110,13 +110,13 @@ uint64_t tt__pm_get_count(tt__pm_reader *r, uint64_t max, size_t elem, const cha
   uint64_t n = tt__pm_get_u64(r, what);
   if (r->err[0]) return 0;
   if (n > max) {
-    tt__pm_fail(r, "%s is %llu, more than the %llu this format allows", what,
-              (unsigned long long)n, (unsigned long long)max);
+    tt__pm_fail(r, "%s is %llu, more than the %llu this format allows", what, (unsigned long long)n,
+                (unsigned long long)max);
     return 0;
   }
   if (elem && n > (r->len - r->pos) / elem) {
-    tt__pm_fail(r, "file cut short: %llu %s need %llu bytes, %zu left", (unsigned long long)n,
-              what, (unsigned long long)(n * elem), r->len - r->pos);
+    tt__pm_fail(r, "file cut short: %llu %s need %llu bytes, %zu left", (unsigned long long)n, what,
+                (unsigned long long)(n * elem), r->len - r->pos);
     return 0;
   }
   return n;
@@ -238,30 +238,30 @@ char *tt__pm_space_signature(const tt_space *space) {
   for (size_t i = 0; s && i < tt_space_count(space); i++) {
     const char *name = tt_space_name(space, i);
     switch (tt_space_type(space, i)) {
-      case TT_PARAM_INT:
-        s = tt__pm_cat(s, &len, &cap, "%s %s INT[%.17g,%.17g]", i ? ";" : "", name,
+    case TT_PARAM_INT:
+      s = tt__pm_cat(s, &len, &cap, "%s %s INT[%.17g,%.17g]", i ? ";" : "", name,
                      tt_space_min(space, i), tt_space_max(space, i));
-        break;
-      case TT_PARAM_FLOAT:
-        s = tt__pm_cat(s, &len, &cap, "%s %s FLOAT[%.17g,%.17g]%s", i ? ";" : "", name,
+      break;
+    case TT_PARAM_FLOAT:
+      s = tt__pm_cat(s, &len, &cap, "%s %s FLOAT[%.17g,%.17g]%s", i ? ";" : "", name,
                      tt_space_min(space, i), tt_space_max(space, i),
                      tt_space_is_log(space, i) ? " log" : "");
-        break;
-      case TT_PARAM_NOM: {
-        s = tt__pm_cat(s, &len, &cap, "%s %s NOM{", i ? ";" : "", name);
-        for (size_t k = 0; s && k < tt_space_nom_count(space, i); k++) {
-          tt_value v = tt_space_nom_value(space, i, k);
-          const char *sep = k ? "," : "";
-          if (v.kind == TT_VALUE_STRING) s = tt__pm_cat(s, &len, &cap, "%s%s", sep, v.s);
-          else if (v.kind == TT_VALUE_BOOL)
-            s = tt__pm_cat(s, &len, &cap, "%s%s", sep, v.i ? "true" : "false");
-          else if (v.kind == TT_VALUE_INT)
-            s = tt__pm_cat(s, &len, &cap, "%s%lld", sep, (long long)v.i);
-          else s = tt__pm_cat(s, &len, &cap, "%s%.17g", sep, v.f);
-        }
-        s = tt__pm_cat(s, &len, &cap, "}");
-        break;
+      break;
+    case TT_PARAM_NOM: {
+      s = tt__pm_cat(s, &len, &cap, "%s %s NOM{", i ? ";" : "", name);
+      for (size_t k = 0; s && k < tt_space_nom_count(space, i); k++) {
+        tt_value v = tt_space_nom_value(space, i, k);
+        const char *sep = k ? "," : "";
+        if (v.kind == TT_VALUE_STRING) s = tt__pm_cat(s, &len, &cap, "%s%s", sep, v.s);
+        else if (v.kind == TT_VALUE_BOOL)
+          s = tt__pm_cat(s, &len, &cap, "%s%s", sep, v.i ? "true" : "false");
+        else if (v.kind == TT_VALUE_INT)
+          s = tt__pm_cat(s, &len, &cap, "%s%lld", sep, (long long)v.i);
+        else s = tt__pm_cat(s, &len, &cap, "%s%.17g", sep, v.f);
       }
+      s = tt__pm_cat(s, &len, &cap, "}");
+      break;
+    }
     }
   }
   return s;
@@ -278,8 +278,11 @@ void tt__pm_signature_diff(const char *a, const char *b, char *buf, size_t n) {
       return;
     }
     if (!pa[la] || !pb[lb]) {
-      snprintf(buf, n, "%s", !pa[la] && !pb[lb] ? "(same)" : !pa[la] ? "the file's space has "
-               "fewer parameters" : "the file's space has more parameters");
+      snprintf(buf, n, "%s",
+               !pa[la] && !pb[lb] ? "(same)"
+               : !pa[la]          ? "the file's space has "
+                                    "fewer parameters"
+                                  : "the file's space has more parameters");
       return;
     }
     pa += la + 1;
@@ -320,10 +323,12 @@ int tt__pm_config_from_values(tt_config *c, const double *v, char *why, size_t n
 /* ---- files ---- */
 
 tt_status tt__pm_save(const char *who, const char *path, uint32_t version, const tt__pm_writer *w) {
-  if (w->failed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
+  if (w->failed)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
   size_t total = TT__PM_HEADER_BYTES + w->len + 8;
   unsigned char *buf = malloc(total);
-  if (!buf) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
+  if (!buf)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory writing model %s", who, path);
   memcpy(buf, TT__PM_MAGIC, 8);
   for (int i = 0; i < 4; i++) buf[8 + i] = (unsigned char)(version >> (8 * i));
   memset(buf + 12, 0, 4);
@@ -341,8 +346,8 @@ tt_status tt__pm_save(const char *who, const char *path, uint32_t version, const
 }
 
 tt_status tt__pm_load(const char *who, const char *who_version, const char *path,
-                    uint32_t max_version, unsigned char **payload, size_t *payload_len,
-                    uint32_t *version) {
+                      uint32_t max_version, unsigned char **payload, size_t *payload_len,
+                      uint32_t *version) {
   *payload = NULL;
   *payload_len = 0;
   char *data = NULL;
@@ -364,7 +369,8 @@ tt_status tt__pm_load(const char *who, const char *who_version, const char *path
     rc = tt_set_error(TT_ERR_IO, "%s: cannot read model %s", who, path);
   } else if (size < TT__PM_HEADER_BYTES || memcmp(buf, TT__PM_MAGIC, 8)) {
     rc = tt_set_error(TT_ERR_PARSE, "%s: %s is not a tunetrace predictor model (%s)", who, path,
-                      size < 8 ? "shorter than the 8-byte magic" : "no \"TTPMODEL\" magic at the start");
+                      size < 8 ? "shorter than the 8-byte magic"
+                               : "no \"TTPMODEL\" magic at the start");
   } else {
     uint32_t v = 0;
     uint64_t n = 0;
@@ -379,26 +385,32 @@ tt_status tt__pm_load(const char *who, const char *who_version, const char *path
                      (strlen(who) != kl || memcmp(buf + TT__PM_HEADER_BYTES + 4, who, kl)) &&
                      !memchr(buf + TT__PM_HEADER_BYTES + 4, 0, kl);
     if (other_kind) {
-      rc = tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: model %s was written by %.*s (format "
-                        "version %u), not by %s (load it with --plugin %.*s)", who, path, (int)kl,
-                        (const char *)buf + TT__PM_HEADER_BYTES + 4, v, who, (int)kl,
-                        (const char *)buf + TT__PM_HEADER_BYTES + 4);
+      rc = tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: model %s was written by %.*s (format "
+                        "version %u), not by %s (load it with --plugin %.*s)",
+                        who, path, (int)kl, (const char *)buf + TT__PM_HEADER_BYTES + 4, v, who,
+                        (int)kl, (const char *)buf + TT__PM_HEADER_BYTES + 4);
     } else if (v > max_version || v == 0) {
-      rc = tt_set_error(TT_ERR_UNSUPPORTED, "%s: model %s has format version %u; this %s %s reads "
-                        "versions 1 to %u%s", who, path, v, who, who_version, max_version,
+      rc = tt_set_error(TT_ERR_UNSUPPORTED,
+                        "%s: model %s has format version %u; this %s %s reads "
+                        "versions 1 to %u%s",
+                        who, path, v, who, who_version, max_version,
                         v > max_version ? " (written by a newer plugin: update it)" : "");
     } else if (n > size || size - TT__PM_HEADER_BYTES - 8 < n ||
                size != TT__PM_HEADER_BYTES + n + 8) {
-      rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is %zu bytes, but its header says %llu "
-                        "(file cut short or padded)", who, path, size,
-                        (unsigned long long)(TT__PM_HEADER_BYTES + n + 8));
+      rc = tt_set_error(TT_ERR_PARSE,
+                        "%s: model %s is %zu bytes, but its header says %llu "
+                        "(file cut short or padded)",
+                        who, path, size, (unsigned long long)(TT__PM_HEADER_BYTES + n + 8));
     } else {
       uint64_t stored = 0;
       for (int i = 0; i < 8; i++) stored |= (uint64_t)buf[TT__PM_HEADER_BYTES + n + i] << (8 * i);
       uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, buf, TT__PM_HEADER_BYTES + (size_t)n);
       if (h != stored) {
-        rc = tt_set_error(TT_ERR_PARSE, "%s: model %s is corrupt (checksum %016llx, computed "
-                          "%016llx)", who, path, (unsigned long long)stored, (unsigned long long)h);
+        rc = tt_set_error(TT_ERR_PARSE,
+                          "%s: model %s is corrupt (checksum %016llx, computed "
+                          "%016llx)",
+                          who, path, (unsigned long long)stored, (unsigned long long)h);
       } else {
         memmove(buf, buf + TT__PM_HEADER_BYTES, (size_t)n);
         *payload = buf;

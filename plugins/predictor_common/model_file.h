@@ -38,7 +38,7 @@ void tt__pm_put_u32(tt__pm_writer *w, uint32_t v);
 void tt__pm_put_u64(tt__pm_writer *w, uint64_t v);
 void tt__pm_put_f64(tt__pm_writer *w, double v);
 void tt__pm_put_f64s(tt__pm_writer *w, const double *v, size_t n);
-void tt__pm_put_str(tt__pm_writer *w, const char *s);   /* u32 length + bytes; NULL as "" */
+void tt__pm_put_str(tt__pm_writer *w, const char *s); /* u32 length + bytes; NULL as "" */
 
 /* A bounds-checked cursor over a payload; the first error is kept in `err` (a message
  * naming the file and the offset), later reads return zeros. */
@@ -62,13 +62,13 @@ void tt__pm_fail(tt__pm_reader *r, const char *fmt, ...) __attribute__((format(p
 
 /* The fields every model file begins with. */
 typedef struct tt__pm_header {
-  char *kind;            /* plugin name: "predictor_nn", "predictor_rbf" */
-  char *plugin_version;  /* the plugin version that wrote it */
-  char *state_space;     /* tt_predictor_setup.state_space */
+  char *kind;           /* plugin name: "predictor_nn", "predictor_rbf" */
+  char *plugin_version; /* the plugin version that wrote it */
+  char *state_space;    /* tt_predictor_setup.state_space */
   uint32_t state_dim;
-  char **state_names;    /* state_dim names, or NULL */
-  char *target;          /* target-space signature (tt__pm_space_signature) */
-  char *settings;        /* the model's hyper-parameters as configuration JSON */
+  char **state_names; /* state_dim names, or NULL */
+  char *target;       /* target-space signature (tt__pm_space_signature) */
+  char *settings;     /* the model's hyper-parameters as configuration JSON */
 } tt__pm_header;
 
 void tt__pm_header_free(tt__pm_header *h);
@@ -98,7 +98,7 @@ tt_status tt__pm_save(const char *who, const char *path, uint32_t version, const
  * payload (malloc'ed, *payload_len) and the file's version. Errors name `who`, the file and
  * what is wrong. */
 tt_status tt__pm_load(const char *who, const char *who_version, const char *path,
-                    uint32_t max_version, unsigned char **payload, size_t *payload_len,
-                    uint32_t *version);
+                      uint32_t max_version, unsigned char **payload, size_t *payload_len,
+                      uint32_t *version);
 
 #endif /* TT_PREDICTOR_MODEL_FILE_H */

@@ -78,7 +78,7 @@ static void *tt__pm_reserve(void *items, size_t *cap, size_t n, size_t elem, siz
 }
 
 size_t tt__pm_table_add(tt__pm_table *t, const double *state, const double *values, double cost,
-                      int *best_changed) {
+                        int *best_changed) {
   size_t i = tt__pm_table_find(t, state);
   if (i == SIZE_MAX && t->max_states > 0 && t->n >= (size_t)t->max_states)
     i = tt__pm_table_nearest(t, state, NULL);
@@ -164,13 +164,14 @@ int tt__pm_table_get(tt__pm_reader *r, tt__pm_table *t, const tt_space *target) 
       if (r->err[0]) break;
       if (tt__pm_config_from_values(check, v, why, sizeof why)) {
         tt__pm_fail(r, "state %llu, configuration %llu: %s", (unsigned long long)i,
-                  (unsigned long long)k, why);
+                    (unsigned long long)k, why);
         break;
       }
       if (!(sum > 0) || !isfinite(sum) || count == 0) {
-        tt__pm_fail(r, "state %llu, configuration %llu: cost sum %g over %llu measurements is not "
-                  "a positive finite mean", (unsigned long long)i, (unsigned long long)k, sum,
-                  (unsigned long long)count);
+        tt__pm_fail(r,
+                    "state %llu, configuration %llu: cost sum %g over %llu measurements is not "
+                    "a positive finite mean",
+                    (unsigned long long)i, (unsigned long long)k, sum, (unsigned long long)count);
         break;
       }
       /* rebuild exactly: one add with the whole sum, then the count */
@@ -183,7 +184,7 @@ int tt__pm_table_get(tt__pm_reader *r, tt__pm_table *t, const tt_space *target) 
       size_t j = e->ncfg - 1;
       if (e_i != t->n - 1 || e->cfgs[j].count != 1) {
         tt__pm_fail(r, "state %llu: configuration %llu is stored twice", (unsigned long long)i,
-                  (unsigned long long)k);
+                    (unsigned long long)k);
         break;
       }
       e->cfgs[j].count = count;

@@ -26,16 +26,16 @@ typedef struct tt__pm_table_cfg {
 } tt__pm_table_cfg;
 
 typedef struct tt__pm_table_entry {
-  double *state;       /* dim values */
+  double *state; /* dim values */
   tt__pm_table_cfg *cfgs;
   size_t ncfg, cap;
-  size_t best;         /* index of the lowest mean cost */
+  size_t best; /* index of the lowest mean cost */
 } tt__pm_table_entry;
 
 typedef struct tt__pm_table {
-  uint32_t dim;        /* state values */
-  size_t params;       /* values per configuration */
-  int64_t max_states;  /* 0: unbounded; else a new state beyond it joins its nearest state */
+  uint32_t dim;       /* state values */
+  size_t params;      /* values per configuration */
+  int64_t max_states; /* 0: unbounded; else a new state beyond it joins its nearest state */
   tt__pm_table_entry *entries;
   size_t n, cap;
 } tt__pm_table;
@@ -68,7 +68,7 @@ size_t tt__pm_table_find_cfg(const tt__pm_table *t, size_t i, const double *valu
  * its best configuration is now another one, else left as it was, so a caller can collect
  * over a batch whether anything derived from the states' bests must be recomputed. */
 size_t tt__pm_table_add(tt__pm_table *t, const double *state, const double *values, double cost,
-                      int *best_changed);
+                        int *best_changed);
 
 /* Heap bytes the table holds (what info() reports). */
 uint64_t tt__pm_table_bytes(const tt__pm_table *t);

@@ -42,12 +42,12 @@ static tt_space *tt__nn_settings;
 
 struct tt_predictor {
   const tt_space *target;
-  size_t params;            /* parameters of target */
+  size_t params; /* parameters of target */
   uint32_t dim;
   char *state_space;
-  char **names;             /* dim names or NULL */
-  char *signature;          /* tt__pm_space_signature(target) */
-  tt__pm_table table;         /* the stored states (predictor_common/state_table.h) */
+  char **names;       /* dim names or NULL */
+  char *signature;    /* tt__pm_space_signature(target) */
+  tt__pm_table table; /* the stored states (predictor_common/state_table.h) */
   uint64_t observations;
 };
 
@@ -77,8 +77,10 @@ static tt_status tt__nn_create_ex(const tt_predictor_setup *su, tt_predictor **o
   if (!su || !TT_HAS_FIELD(tt_predictor_setup, su, seed) || !su->target)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": create: no target space");
   if (su->state_dim < 1 || su->state_dim > 4096)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": create: state dimension %u outside "
-                        "[1, 4096]", su->state_dim);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__NN_NAME ": create: state dimension %u outside "
+                                    "[1, 4096]",
+                        su->state_dim);
   int64_t max_states = su->settings ? tt_config_get_int(su->settings, "maxStates", 0) : 0;
   tt_predictor *p = calloc(1, sizeof *p);
   if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__NN_NAME ": out of memory");
@@ -93,7 +95,7 @@ static tt_status tt__nn_create_ex(const tt_predictor_setup *su, tt_predictor **o
     p->names = calloc(p->dim, sizeof *p->names);
     bad = !p->names;
     for (uint32_t i = 0; !bad && i < p->dim; i++) {
-      const char *name = su->state_names[i] ? su->state_names[i] : "";  /* unnamed: "" */
+      const char *name = su->state_names[i] ? su->state_names[i] : ""; /* unnamed: "" */
       bad = !(p->names[i] = tt__strdup(name));
     }
   }
@@ -107,8 +109,11 @@ static tt_status tt__nn_create_ex(const tt_predictor_setup *su, tt_predictor **o
 
 static tt_status tt__nn_create(const tt_space *target, uint32_t state_dim,
                                const tt_config *settings, uint64_t seed, tt_predictor **out) {
-  tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = state_dim,
-                           .settings = settings, .seed = seed};
+  tt_predictor_setup su = {.struct_size = sizeof su,
+                           .target = target,
+                           .state_dim = state_dim,
+                           .settings = settings,
+                           .seed = seed};
   return tt__nn_create_ex(&su, out);
 }
 
@@ -123,28 +128,31 @@ static tt_status tt__nn_add(tt_predictor *p, const double *state, const double *
 
 /* Checks one sample; 1 = learn it, 0 = skip (infeasible), or an error status < 0. */
 static int tt__nn_check_sample(const tt_predictor *p, const double *state, const tt_config *config,
-                           double cost) {
+                               double cost) {
   if (!state || !config)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         TT__NN_NAME ": observe: NULL state or configuration");
-  if (tt_config_space(config) != p->target &&
-      tt_space_count(tt_config_space(config)) != p->params)
+  if (tt_config_space(config) != p->target && tt_space_count(tt_config_space(config)) != p->params)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         TT__NN_NAME ": observe: the configuration is not of "
                                     "the target space");
   for (uint32_t i = 0; i < p->dim; i++)
     if (!isfinite(state[i]))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": observe: state value %u is not "
-                          "finite", i);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          TT__NN_NAME ": observe: state value %u is not "
+                                      "finite",
+                          i);
   if (cost >= TT_COST_INFEASIBLE) return 0;
   if (!(cost > 0) || !isfinite(cost))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": observe: cost %g is not a finite "
-                        "positive number", cost);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        TT__NN_NAME ": observe: cost %g is not a finite "
+                                    "positive number",
+                        cost);
   return 1;
 }
 
 static tt_status tt__nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
-                               uint32_t flags) {
+                                   uint32_t flags) {
   /* a table learns the same from a data set and from a stream; the model's own answers
    * (TT_PREDICTOR_EXPLOIT) only refine states the table holds from searches: stored as
    * states of their own they would be the nearest state of the next state along a path,
@@ -176,9 +184,9 @@ static tt_status tt__nn_observe_ex(tt_predictor *p, const tt_predictor_sample *s
 }
 
 static tt_status tt__nn_observe(tt_predictor *p, const double *state, const tt_config *config,
-                            double cost) {
-  tt_predictor_sample s = {.struct_size = sizeof s, .state = state, .config = config,
-                           .cost = cost, .default_cost = NAN};
+                                double cost) {
+  tt_predictor_sample s = {
+      .struct_size = sizeof s, .state = state, .config = config, .cost = cost, .default_cost = NAN};
   return tt__nn_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
 }
 
@@ -207,7 +215,7 @@ static tt_status tt__nn_predict_ex(const tt_predictor *p, const tt_predictor_que
 }
 
 static tt_status tt__nn_predict(const tt_predictor *p, const double *state, tt_config *out,
-                            double *expected_cost) {
+                                double *expected_cost) {
   tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
   tt_predictor_result r = {.struct_size = sizeof r};
   tt_status st = tt__nn_predict_ex(p, &q, out, &r);
@@ -216,7 +224,7 @@ static tt_status tt__nn_predict(const tt_predictor *p, const double *state, tt_c
 }
 
 static tt_status tt__nn_estimate(const tt_predictor *p, const tt_predictor_query *q,
-                             const tt_config *config, double *cost) {
+                                 const tt_config *config, double *cost) {
   if (!p || !q || !q->state || !config || !cost)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__NN_NAME ": estimate: NULL argument");
   *cost = NAN;
@@ -335,14 +343,13 @@ static tt_status tt__nn_load(tt_predictor *p, const char *path) {
   tt_config *s = tt_config_create(tt__nn_settings);
   if (!s || tt_config_from_json(s, h.settings, path) != TT_OK)
     tt__pm_fail(&r, "settings: %s", s ? tt_last_error() : "out of memory");
-  else
-    max_states = tt_config_get_int(s, "maxStates", 0);
+  else max_states = tt_config_get_int(s, "maxStates", 0);
   tt_config_destroy(s);
   tt__pm_table_init(&tmp.table, p->dim, p->params, max_states);
   uint64_t params = tt__pm_get_u64(&r, "the parameter count");
   if (!r.err[0] && params != p->params)
     tt__pm_fail(&r, "%llu parameters per configuration, the target space has %zu",
-              (unsigned long long)params, p->params);
+                (unsigned long long)params, p->params);
   uint64_t obs = tt__pm_get_u64(&r, "the observation count");
   if (!r.err[0]) tt__pm_table_get(&r, &tmp.table, p->target);
   if (!r.err[0] && r.pos != r.len) tt__pm_fail(&r, "%zu bytes after the last state", r.len - r.pos);
@@ -361,19 +368,19 @@ static tt_status tt__nn_load(tt_predictor *p, const char *path) {
 /* ---- plugin ---- */
 
 static const tt_predictor_iface tt__nn_iface = {
-  .struct_size = sizeof(tt_predictor_iface),
-  .space = tt__nn_space,
-  .create = tt__nn_create,
-  .observe = tt__nn_observe,
-  .predict = tt__nn_predict,
-  .save = tt__nn_save,
-  .load = tt__nn_load,
-  .destroy = tt__nn_destroy,
-  .create_ex = tt__nn_create_ex,
-  .observe_ex = tt__nn_observe_ex,
-  .predict_ex = tt__nn_predict_ex,
-  .info = tt__nn_info,
-  .estimate = tt__nn_estimate,
+    .struct_size = sizeof(tt_predictor_iface),
+    .space = tt__nn_space,
+    .create = tt__nn_create,
+    .observe = tt__nn_observe,
+    .predict = tt__nn_predict,
+    .save = tt__nn_save,
+    .load = tt__nn_load,
+    .destroy = tt__nn_destroy,
+    .create_ex = tt__nn_create_ex,
+    .observe_ex = tt__nn_observe_ex,
+    .predict_ex = tt__nn_predict_ex,
+    .info = tt__nn_info,
+    .estimate = tt__nn_estimate,
 };
 
 static tt_status tt__nn_init(const tt_host *host) {
@@ -400,15 +407,15 @@ static const void *tt__nn_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_PREDICTOR,
-  .name = TT__NN_NAME,
-  .version = TT__NN_VERSION,
-  .description = "nearest neighbour: the best configuration of the nearest stored state "
-                 "(thesis 3.3.2)",
-  .init = tt__nn_init,
-  .deinit = tt__nn_deinit,
-  .get_interface = tt__nn_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_PREDICTOR,
+    .name = TT__NN_NAME,
+    .version = TT__NN_VERSION,
+    .description = "nearest neighbour: the best configuration of the nearest stored state "
+                   "(thesis 3.3.2)",
+    .init = tt__nn_init,
+    .deinit = tt__nn_deinit,
+    .get_interface = tt__nn_get_interface,
 };

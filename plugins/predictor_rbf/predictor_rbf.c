@@ -61,11 +61,11 @@ enum { TT__RBF_POOL_REWARDS = 0, TT__RBF_POOL_STATES = 1 };
 static const char *const tt__rbf_pool_names[] = {"rewards", "states"};
 
 typedef struct tt__rbf_settings_values {
-  int64_t features;        /* 0: round(3.5 x (state dims + parameters)) */
+  int64_t features; /* 0: round(3.5 x (state dims + parameters)) */
   double width, alpha, decay;
   int64_t epochs, lhs, refine, starts, pool;
   int reward;
-  int pool_source;         /* TT__RBF_POOL_REWARDS or TT__RBF_POOL_STATES */
+  int pool_source; /* TT__RBF_POOL_REWARDS or TT__RBF_POOL_STATES */
 } tt__rbf_settings_values;
 
 struct tt_predictor {
@@ -82,18 +82,18 @@ struct tt_predictor {
    * action parts of their distances to the centres (F, tt__rbf_action_part) */
   size_t ncand;
   double *cand_values, *cand_enc, *cand_da;
-  float *cand_daf;          /* cand_da in float, rows of tt__rbf_f8(F): the argmax's coarse level */
+  float *cand_daf; /* cand_da in float, rows of tt__rbf_f8(F): the argmax's coarse level */
   /* pool of observed configurations, the `pool` highest rewards; pool_da as cand_da, kept
    * with each entry so that predict() does not recompute F x m sums per candidate */
   size_t npool;
   double *pool_values, *pool_enc, *pool_reward, *pool_da;
-  float *pool_daf;          /* as cand_daf */
+  float *pool_daf; /* as cand_daf */
   /* poolSource = states: every observed state's configurations and mean costs; the pool is
    * the states' best configurations (tt__rbf_pool_from_states) */
   tt__pm_table table;
   uint64_t observations;
-  double *phi;              /* F scratch for updates (observe is single-threaded) */
-  double *x;                /* d + m scratch */
+  double *phi; /* F scratch for updates (observe is single-threaded) */
+  double *x;   /* d + m scratch */
 };
 
 static const tt_space *tt__rbf_space(void) { return tt__rbf_settings; }
@@ -124,11 +124,18 @@ static char *tt__rbf_settings_json(const tt__rbf_settings_values *v) {
   tt_config *c = tt_config_create(tt__rbf_settings);
   if (!c) return NULL;
   char buf[64];
-  struct { const char *name; double value; } num[] = {
-    {"features", (double)v->features}, {"width", v->width}, {"alpha", v->alpha},
-    {"decay", v->decay}, {"epochs", (double)v->epochs}, {"lhsCandidates", (double)v->lhs},
-    {"refine", (double)v->refine}, {"refineStarts", (double)v->starts},
-    {"poolSize", (double)v->pool}};
+  struct {
+    const char *name;
+    double value;
+  } num[] = {{"features", (double)v->features},
+             {"width", v->width},
+             {"alpha", v->alpha},
+             {"decay", v->decay},
+             {"epochs", (double)v->epochs},
+             {"lhsCandidates", (double)v->lhs},
+             {"refine", (double)v->refine},
+             {"refineStarts", (double)v->starts},
+             {"poolSize", (double)v->pool}};
   for (size_t i = 0; i < sizeof num / sizeof num[0]; i++)
     tt_config_set_number(c, (size_t)tt_space_find(tt__rbf_settings, num[i].name), num[i].value);
   snprintf(buf, sizeof buf, "%s", tt__rbf_reward_names[v->reward]);
@@ -196,9 +203,9 @@ static int tt__rbf_make_candidates(tt_predictor *p) {
     tt__pm_config_values(c, p->cand_values + p->ncand * p->params);
     tt__rbf_encode_action(c, p->cand_enc + p->ncand * p->m);
     tt__rbf_action_part(&p->model, p->cand_enc + p->ncand * p->m,
-                    p->cand_da + p->ncand * p->model.features);
+                        p->cand_da + p->ncand * p->model.features);
     tt__rbf_action_part_float(p->model.features, p->cand_da + p->ncand * p->model.features,
-                          p->cand_daf + p->ncand * tt__rbf_f8(p->model.features));
+                              p->cand_daf + p->ncand * tt__rbf_f8(p->model.features));
     p->ncand++;
   }
   free(unit);
@@ -217,7 +224,7 @@ static uint32_t tt__rbf_feature_count(const tt_predictor *p) {
 static int tt__rbf_alloc(tt_predictor *p) {
   uint32_t f = tt__rbf_feature_count(p);
   if (tt__rbf_model_init(&p->model, p->d, p->m, f, p->set.width, p->set.alpha, p->set.decay,
-                     p->seed ^ 0x63656e747265ull))
+                         p->seed ^ 0x63656e747265ull))
     return -1;
   size_t pool = (size_t)p->set.pool ? (size_t)p->set.pool : 1;
   p->pool_values = malloc(pool * (p->params ? p->params : 1) * sizeof(double));
@@ -259,7 +266,7 @@ static tt_status tt__rbf_create_ex(const tt_predictor_setup *su, tt_predictor **
     p->names = calloc(p->d, sizeof *p->names);
     bad = !p->names;
     for (uint32_t i = 0; !bad && i < p->d; i++) {
-      const char *name = su->state_names[i] ? su->state_names[i] : "";  /* unnamed: "" */
+      const char *name = su->state_names[i] ? su->state_names[i] : ""; /* unnamed: "" */
       bad = !(p->names[i] = tt__strdup(name));
     }
   }
@@ -273,8 +280,11 @@ static tt_status tt__rbf_create_ex(const tt_predictor_setup *su, tt_predictor **
 
 static tt_status tt__rbf_create(const tt_space *target, uint32_t state_dim,
                                 const tt_config *settings, uint64_t seed, tt_predictor **out) {
-  tt_predictor_setup su = {.struct_size = sizeof su, .target = target, .state_dim = state_dim,
-                           .settings = settings, .seed = seed};
+  tt_predictor_setup su = {.struct_size = sizeof su,
+                           .target = target,
+                           .state_dim = state_dim,
+                           .settings = settings,
+                           .seed = seed};
   return tt__rbf_create_ex(&su, out);
 }
 
@@ -290,12 +300,12 @@ static double tt__rbf_reward(const tt_predictor *p, double cost, double default_
 /* Puts a configuration (its values and encoding) into pool slot `slot` with the cached action
  * parts of its distances to the centres. */
 static void tt__rbf_pool_put(tt_predictor *p, size_t slot, const double *values, const double *enc,
-                         double reward) {
+                             double reward) {
   memcpy(p->pool_values + slot * p->params, values, p->params * sizeof(double));
   memcpy(p->pool_enc + slot * p->m, enc, p->m * sizeof(double));
   tt__rbf_action_part(&p->model, enc, p->pool_da + slot * p->model.features);
   tt__rbf_action_part_float(p->model.features, p->pool_da + slot * p->model.features,
-                        p->pool_daf + slot * tt__rbf_f8(p->model.features));
+                            p->pool_daf + slot * tt__rbf_f8(p->model.features));
   p->pool_reward[slot] = reward;
 }
 
@@ -311,7 +321,7 @@ static void tt__rbf_pool_add(tt_predictor *p, const double *values, const double
     }
   size_t slot = p->npool;
   if (p->npool == (size_t)p->set.pool) {
-    slot = 0;  /* replace the lowest reward if this one is higher */
+    slot = 0; /* replace the lowest reward if this one is higher */
     for (size_t k = 1; k < p->npool; k++)
       if (p->pool_reward[k] < p->pool_reward[slot]) slot = k;
     if (!(reward > p->pool_reward[slot]) || p->set.pool == 0) return;
@@ -365,7 +375,7 @@ static int tt__rbf_pool_from_states(tt_predictor *p) {
   p->npool = 0;
   for (size_t k = 0; k < keep; k++) {
     const double *v = tt__pm_table_best(t, d[k].first)->values;
-    if (tt__pm_config_from_values(c, v, why, sizeof why)) continue;  /* checked when added */
+    if (tt__pm_config_from_values(c, v, why, sizeof why)) continue; /* checked when added */
     tt__rbf_encode_action(c, enc);
     tt__rbf_pool_put(p, p->npool++, v, enc, (double)d[k].states);
   }
@@ -389,7 +399,7 @@ static void tt__rbf_learn(tt_predictor *p, const tt_predictor_sample *s, double 
 }
 
 static tt_status tt__rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *s, size_t count,
-                                uint32_t flags) {
+                                    uint32_t flags) {
   if (!p || (!s && count))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": observe: NULL argument");
   for (size_t i = 0; i < count; i++) {
@@ -402,8 +412,10 @@ static tt_status tt__rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *
                                        "or configuration",
                           i);
     if (tt_space_count(tt_config_space(s[i].config)) != p->params)
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": observe: sample %zu: the "
-                          "configuration is not of the target space", i);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          TT__RBF_NAME ": observe: sample %zu: the "
+                                       "configuration is not of the target space",
+                          i);
     for (uint32_t k = 0; k < p->d; k++)
       if (!isfinite(s[i].state[k]))
         return tt_set_error(TT_ERR_INVALID_ARGUMENT,
@@ -411,8 +423,10 @@ static tt_status tt__rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *
                                          "%u is not finite",
                             i, k);
     if (isnan(s[i].cost) || (s[i].cost < TT_COST_INFEASIBLE && !(s[i].cost > 0)))
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": observe: sample %zu: cost %g is "
-                          "not a finite positive number", i, s[i].cost);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          TT__RBF_NAME ": observe: sample %zu: cost %g is "
+                                       "not a finite positive number",
+                          i, s[i].cost);
   }
   double *values = malloc((p->params ? p->params : 1) * sizeof(double));
   size_t *order = malloc((count ? count : 1) * sizeof *order);
@@ -450,7 +464,7 @@ static tt_status tt__rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *
   for (size_t i = 0; i < count; i++) order[i] = i;
   for (int64_t e = 0; e < passes; e++) {
     if (flags & TT_PREDICTOR_OFFLINE)
-      for (size_t i = count; i > 1; i--) {  /* Fisher-Yates, 64-bit draws */
+      for (size_t i = count; i > 1; i--) { /* Fisher-Yates, 64-bit draws */
         uint64_t r = ((uint64_t)tt__pcg32_next(&rng) << 32 | tt__pcg32_next(&rng)) % i;
         size_t t = order[i - 1];
         order[i - 1] = order[r];
@@ -469,9 +483,9 @@ static tt_status tt__rbf_observe_ex(tt_predictor *p, const tt_predictor_sample *
 }
 
 static tt_status tt__rbf_observe(tt_predictor *p, const double *state, const tt_config *config,
-                             double cost) {
-  tt_predictor_sample s = {.struct_size = sizeof s, .state = state, .config = config,
-                           .cost = cost, .default_cost = NAN};
+                                 double cost) {
+  tt_predictor_sample s = {
+      .struct_size = sizeof s, .state = state, .config = config, .cost = cost, .default_cost = NAN};
   return tt__rbf_observe_ex(p, &s, 1, TT_PREDICTOR_ONLINE);
 }
 
@@ -485,7 +499,7 @@ static double tt__rbf_cost_of(const tt_predictor *p, double q, double default_co
 /* One candidate of the argmax: its values and encoding in scratch, its Q. */
 typedef struct tt__rbf_best {
   double q;
-  size_t src;  /* index into the candidate list of the first phase */
+  size_t src; /* index into the candidate list of the first phase */
 } tt__rbf_best;
 
 static tt_status tt__rbf_predict_ex(const tt_predictor *p, const tt_predictor_query *q,
@@ -529,7 +543,7 @@ static tt_status tt__rbf_predict_ex(const tt_predictor *p, const tt_predictor_qu
    * parts are cached per pool entry and LHS candidate, computed here for the default. */
   size_t n = n1, bi = 0, nt = 0;
   double best_q = -INFINITY;
-  tt__pm_config_values(c, defv);  /* c holds the defaults */
+  tt__pm_config_values(c, defv); /* c holds the defaults */
   tt__rbf_encode_action(c, defe);
   tt__rbf_action_part(r, defe, dd);
   if (!refine) {
@@ -547,9 +561,9 @@ static tt_status tt__rbf_predict_ex(const tt_predictor *p, const tt_predictor_qu
     rows[n - 1] = dd;
     frows[n - 1] = ddf;
     bi = tt__rbf_argmax_bounded(r, ds, rows, frows, n, NULL, work, &best_q, NULL);
-    const double *v = bi < p->npool ? p->pool_values + bi * p->params
+    const double *v = bi < p->npool              ? p->pool_values + bi * p->params
                       : bi < p->npool + p->ncand ? p->cand_values + (bi - p->npool) * p->params
-                      : defv;
+                                                 : defv;
     memcpy(best_vals, v, p->params * sizeof(double));
   } else {
     memcpy(vals, p->pool_values, p->npool * p->params * sizeof(double));
@@ -587,13 +601,14 @@ static tt_status tt__rbf_predict_ex(const tt_predictor *p, const tt_predictor_qu
     double step = 0.125;
     for (int64_t round = 0; round < p->set.refine; round++, step *= 0.5) {
       for (size_t i = 0; i < p->params; i++) {
-        size_t alts = tt_space_type(p->target, i) == TT_PARAM_NOM ? tt_space_nom_count(p->target, i) : 2;
+        size_t alts =
+            tt_space_type(p->target, i) == TT_PARAM_NOM ? tt_space_nom_count(p->target, i) : 2;
         double keep = unit[i], best_u = keep;
         for (size_t a = 0; a < alts; a++) {
           double u;
           if (tt_space_type(p->target, i) == TT_PARAM_NOM) {
             u = ((double)a + 0.5) / (double)alts;
-            if (fabs(u - keep) < 0.5 / (double)alts) continue;  /* the current value */
+            if (fabs(u - keep) < 0.5 / (double)alts) continue; /* the current value */
           } else {
             u = keep + (a ? step : -step);
             u = u < 0 ? 0 : u > 1 ? 1 : u;
@@ -648,7 +663,7 @@ done:
 }
 
 static tt_status tt__rbf_predict(const tt_predictor *p, const double *state, tt_config *out,
-                             double *expected_cost) {
+                                 double *expected_cost) {
   tt_predictor_query q = {.struct_size = sizeof q, .state = state, .default_cost = NAN};
   tt_predictor_result r = {.struct_size = sizeof r};
   tt_status st = tt__rbf_predict_ex(p, &q, out, &r);
@@ -657,7 +672,7 @@ static tt_status tt__rbf_predict(const tt_predictor *p, const double *state, tt_
 }
 
 static tt_status tt__rbf_estimate(const tt_predictor *p, const tt_predictor_query *q,
-                              const tt_config *config, double *cost) {
+                                  const tt_config *config, double *cost) {
   if (!p || !q || !q->state || !config || !cost)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": estimate: NULL argument");
   double *x = malloc((p->d + p->m) * sizeof(double));
@@ -712,7 +727,7 @@ static tt_status tt__rbf_save(const tt_predictor *p, const char *path) {
   tt__pm_put_f64s(&w, r->centres, (size_t)r->features * r->dim);
   tt__pm_put_f64s(&w, r->theta, r->features);
   if (p->set.pool_source == TT__RBF_POOL_STATES) {
-    tt__pm_put_u64(&w, 0);  /* the pool is rebuilt from the table on load */
+    tt__pm_put_u64(&w, 0); /* the pool is rebuilt from the table on load */
     tt__pm_table_put(&w, &p->table);
   } else {
     tt__pm_put_u64(&w, p->npool);
@@ -750,14 +765,18 @@ static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
                                    " (load it with --plugin %s)",
                       path, h.kind, h.plugin_version, h.kind);
   } else if (h.state_dim != p->d || strcmp(h.state_space, p->state_space)) {
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": model %s is for states \"%s\" of %u "
-                      "values, but this predictor gets states \"%s\" of %u values", path,
-                      h.state_space, h.state_dim, p->state_space, p->d);
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                      TT__RBF_NAME ": model %s is for states \"%s\" of %u "
+                                   "values, but this predictor gets states \"%s\" of %u values",
+                      path, h.state_space, h.state_dim, p->state_space, p->d);
   } else if (strcmp(h.target, p->signature)) {
     tt__pm_signature_diff(h.target, p->signature, diff, sizeof diff);
-    st = tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__RBF_NAME ": model %s predicts configurations of "
+    st = tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                      TT__RBF_NAME
+                      ": model %s predicts configurations of "
                       "another parameter space: the file's %s; this one's %s (first difference: "
-                      "%s)", path, h.target, p->signature, diff);
+                      "%s)",
+                      path, h.target, p->signature, diff);
   }
   if (st != TT_OK) {
     tt__pm_header_free(&h);
@@ -775,10 +794,9 @@ static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
   tt_config *sc = tt_config_create(tt__rbf_settings);
   if (!sc || tt_config_from_json(sc, h.settings, path) != TT_OK)
     tt__pm_fail(&rd, "settings: %s", sc ? tt_last_error() : "out of memory");
-  else
-    tt__rbf_read_settings(sc, &tmp.set);
+  else tt__rbf_read_settings(sc, &tmp.set);
   tt_config_destroy(sc);
-  if (version < 2) tmp.set.pool_source = TT__RBF_POOL_REWARDS;  /* version 1 had no state table */
+  if (version < 2) tmp.set.pool_source = TT__RBF_POOL_REWARDS; /* version 1 had no state table */
   tmp.seed = tt__pm_get_u64(&rd, "the seed");
   uint64_t params = tt__pm_get_u64(&rd, "the parameter count");
   uint64_t m = tt__pm_get_u64(&rd, "the action dimension");
@@ -787,10 +805,10 @@ static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
   uint64_t obs = tt__pm_get_u64(&rd, "the observation count");
   if (!rd.err[0] && (params != p->params || m != p->m))
     tt__pm_fail(&rd, "%llu parameters / %llu action coordinates, the target space has %zu / %u",
-              (unsigned long long)params, (unsigned long long)m, p->params, p->m);
+                (unsigned long long)params, (unsigned long long)m, p->params, p->m);
   if (!rd.err[0] && f != tt__rbf_feature_count(&tmp))
     tt__pm_fail(&rd, "feature count %llu does not match the settings (%u)", (unsigned long long)f,
-              tt__rbf_feature_count(&tmp));
+                tt__rbf_feature_count(&tmp));
   if (!rd.err[0] && f * (p->d + p->m + 1) * 8 > rd.len - rd.pos)
     tt__pm_fail(&rd, "file cut short: %llu features need %llu bytes, %zu left",
                 (unsigned long long)f, (unsigned long long)(f * (p->d + p->m + 1) * 8),
@@ -805,7 +823,7 @@ static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
         tt__pm_fail(&rd, "centre coordinate %zu is not finite", i);
     for (size_t i = 0; !rd.err[0] && i < (size_t)f; i++)
       if (!isfinite(tmp.model.theta[i])) tt__pm_fail(&rd, "theta[%zu] is not finite", i);
-    for (size_t k = 0; !rd.err[0] && k < tmp.ncand; k++) {  /* the file's centres */
+    for (size_t k = 0; !rd.err[0] && k < tmp.ncand; k++) { /* the file's centres */
       tt__rbf_action_part(&tmp.model, tmp.cand_enc + k * p->m, tmp.cand_da + k * f);
       tt__rbf_action_part_float((uint32_t)f, tmp.cand_da + k * f,
                                 tmp.cand_daf + k * tt__rbf_f8((uint32_t)f));
@@ -851,7 +869,7 @@ static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
   tt_config_destroy(c);
   if (!rd.err[0] && rd.pos != rd.len)
     tt__pm_fail(&rd, "%zu bytes after the %s", rd.len - rd.pos,
-              tmp.set.pool_source == TT__RBF_POOL_STATES ? "state table" : "pool");
+                tmp.set.pool_source == TT__RBF_POOL_STATES ? "state table" : "pool");
   tt__pm_header_free(&h);
   free(data);
   if (rd.err[0]) {
@@ -867,49 +885,59 @@ static tt_status tt__rbf_load(tt_predictor *p, const char *path) {
 /* ---- plugin ---- */
 
 static const tt_predictor_iface tt__rbf_iface = {
-  .struct_size = sizeof(tt_predictor_iface),
-  .space = tt__rbf_space,
-  .create = tt__rbf_create,
-  .observe = tt__rbf_observe,
-  .predict = tt__rbf_predict,
-  .save = tt__rbf_save,
-  .load = tt__rbf_load,
-  .destroy = tt__rbf_destroy,
-  .create_ex = tt__rbf_create_ex,
-  .observe_ex = tt__rbf_observe_ex,
-  .predict_ex = tt__rbf_predict_ex,
-  .info = tt__rbf_info,
-  .estimate = tt__rbf_estimate,
+    .struct_size = sizeof(tt_predictor_iface),
+    .space = tt__rbf_space,
+    .create = tt__rbf_create,
+    .observe = tt__rbf_observe,
+    .predict = tt__rbf_predict,
+    .save = tt__rbf_save,
+    .load = tt__rbf_load,
+    .destroy = tt__rbf_destroy,
+    .create_ex = tt__rbf_create_ex,
+    .observe_ex = tt__rbf_observe_ex,
+    .predict_ex = tt__rbf_predict_ex,
+    .info = tt__rbf_info,
+    .estimate = tt__rbf_estimate,
 };
 
 static tt_status tt__rbf_init(const tt_host *host) {
   (void)host;
   tt_space *s = tt__rbf_settings = tt_space_create(TT__RBF_NAME, TT__RBF_VERSION);
   int ok = s != NULL;
-  ok = ok && tt_space_add_int(s, "features", 0, 1 << 20, 0, "RBF features; 0: 3.5 x (state "
+  ok = ok && tt_space_add_int(s, "features", 0, 1 << 20, 0,
+                              "RBF features; 0: 3.5 x (state "
                               "values + parameters), the thesis' rule (100 for its 28)") >= 0;
   ok = ok && tt_space_add_float(s, "width", 0.01, 100.0, 1.0, 1,
                                 "omega of phi_i(x) = exp(-omega ||x - c_i||) (thesis: 1)") >= 0;
   ok = ok && tt_space_add_float(s, "alpha", 1e-6, 10.0, 0.1, 1, "Greedy-GQ step size") >= 0;
-  ok = ok && tt_space_add_float(s, "decay", 0.0, 1e12, 0.0, 0, "updates after which the step "
+  ok = ok && tt_space_add_float(s, "decay", 0.0, 1e12, 0.0, 0,
+                                "updates after which the step "
                                 "has halved, alpha / (1 + t / decay); 0: constant") >= 0;
-  ok = ok && tt_space_add_int(s, "epochs", 1, 10000, 10, "passes over offline data (a tuning "
+  ok = ok && tt_space_add_int(s, "epochs", 1, 10000, 10,
+                              "passes over offline data (a tuning "
                               "DB), each in a fresh shuffled order") >= 0;
-  ok = ok && tt_space_add_nom_string(s, "reward", tt__rbf_reward_names, 2, 1, "inverse: R = 1/cost "
+  ok = ok && tt_space_add_nom_string(s, "reward", tt__rbf_reward_names, 2, 1,
+                                     "inverse: R = 1/cost "
                                      "(thesis); relative: R = default cost / cost (the "
                                      "validated default)") >= 0;
-  ok = ok && tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 0, "Latin-hypercube candidate "
-                              "actions of the argmax (0: the pool only, the validated default)") >= 0;
-  ok = ok && tt_space_add_int(s, "poolSize", 0, 1 << 20, 256, "observed configurations kept "
+  ok = ok &&
+       tt_space_add_int(s, "lhsCandidates", 0, 1 << 20, 0,
+                        "Latin-hypercube candidate "
+                        "actions of the argmax (0: the pool only, the validated default)") >= 0;
+  ok = ok && tt_space_add_int(s, "poolSize", 0, 1 << 20, 256,
+                              "observed configurations kept "
                               "as candidates") >= 0;
-  ok = ok && tt_space_add_nom_string(s, "poolSource", tt__rbf_pool_names, 2, 1, "rewards: the "
+  ok = ok && tt_space_add_nom_string(s, "poolSource", tt__rbf_pool_names, 2, 1,
+                                     "rewards: the "
                                      "poolSize configurations with the highest single reward; "
                                      "states: each observed state's best configuration (lowest "
                                      "mean cost), those best in most states first (the "
                                      "validated default)") >= 0;
-  ok = ok && tt_space_add_int(s, "refine", 0, 64, 0, "rounds of coordinate search around the "
+  ok = ok && tt_space_add_int(s, "refine", 0, 64, 0,
+                              "rounds of coordinate search around the "
                               "best candidates (0: none, the validated default)") >= 0;
-  ok = ok && tt_space_add_int(s, "refineStarts", 0, 1024, 4, "candidates the coordinate search "
+  ok = ok && tt_space_add_int(s, "refineStarts", 0, 1024, 4,
+                              "candidates the coordinate search "
                               "starts from") >= 0;
   if (!ok) {
     tt_space_destroy(s);
@@ -929,14 +957,14 @@ static const void *tt__rbf_get_interface(const char *id) {
 }
 
 TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
-  .struct_size = sizeof(tt_plugin),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .kind = TT_KIND_PREDICTOR,
-  .name = TT__RBF_NAME,
-  .version = TT__RBF_VERSION,
-  .description = "RBF features with myopic Greedy-GQ: argmax_a theta.phi(s, a) (thesis 3.3.2)",
-  .init = tt__rbf_init,
-  .deinit = tt__rbf_deinit,
-  .get_interface = tt__rbf_get_interface,
+    .struct_size = sizeof(tt_plugin),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .kind = TT_KIND_PREDICTOR,
+    .name = TT__RBF_NAME,
+    .version = TT__RBF_VERSION,
+    .description = "RBF features with myopic Greedy-GQ: argmax_a theta.phi(s, a) (thesis 3.3.2)",
+    .init = tt__rbf_init,
+    .deinit = tt__rbf_deinit,
+    .get_interface = tt__rbf_get_interface,
 };

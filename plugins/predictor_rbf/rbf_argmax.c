@@ -28,12 +28,12 @@ double tt__rbf_fine_tol(uint32_t features, double qabs, double theta_abs) {
 }
 
 double tt__rbf_coarse_tol(uint32_t features, double qabs, double qx, double theta_abs) {
-  return (2e-6 + 1.2e-7 * ((double)features / 8.0 + 4.0)) * qabs + 5e-7 * qx +
-         1e-37 * theta_abs + (3.0 * features + 16.0) * 0x1p-125;
+  return (2e-6 + 1.2e-7 * ((double)features / 8.0 + 4.0)) * qabs + 5e-7 * qx + 1e-37 * theta_abs +
+         (3.0 * features + 16.0) * 0x1p-125;
 }
 
 size_t tt__rbf_argmax_reference(const tt__rbf_model *r, const double *ds, const double *const *da,
-                            size_t n, double *best_q) {
+                                size_t n, double *best_q) {
   size_t bi = 0;
   double b = -INFINITY;
   for (size_t k = 0; k < n; k++) {
@@ -45,8 +45,8 @@ size_t tt__rbf_argmax_reference(const tt__rbf_model *r, const double *ds, const 
 }
 
 size_t tt__rbf_argmax_bounded(const tt__rbf_model *r, const double *ds, const double *const *da,
-                          const float *const *daf, size_t n, const tt__rbf_kernels *kernels,
-                          double *work, double *best_q, tt__rbf_argmax_stats *stats) {
+                              const float *const *daf, size_t n, const tt__rbf_kernels *kernels,
+                              double *work, double *best_q, tt__rbf_argmax_stats *stats) {
   tt__rbf_kernels kk = kernels ? *kernels : tt__rbf_kernels_pick();
   uint32_t f = r->features;
   double *e = work, *qa = work + f, *tol = qa + n;
@@ -61,7 +61,7 @@ size_t tt__rbf_argmax_bounded(const tt__rbf_model *r, const double *ds, const do
    * the float range, the float sums' error bound below 1e-4) */
   int coarse = finite && kk.coarse && daf && f <= 8192 && tabs < 1e34;
   if (coarse) {
-    tt__rbf_action_part_float(f, r->theta, thf);  /* the same conversion and padding */
+    tt__rbf_action_part_float(f, r->theta, thf); /* the same conversion and padding */
     tt__rbf_action_part_float(f, ds, dsf);
     double lower = -INFINITY;
     for (size_t k = 0; k < n && coarse; k++) {
@@ -72,7 +72,7 @@ size_t tt__rbf_argmax_bounded(const tt__rbf_model *r, const double *ds, const do
       if (qa[k] - tol[k] > lower) lower = qa[k] - tol[k];
     }
     for (size_t k = 0; k < n && coarse; k++)
-      if (qa[k] + tol[k] >= lower) live[nlive++] = k;  /* else Q_k < lower <= the best Q */
+      if (qa[k] + tol[k] >= lower) live[nlive++] = k; /* else Q_k < lower <= the best Q */
   }
   if (!coarse)
     for (nlive = 0; nlive < n; nlive++) live[nlive] = nlive;

@@ -40,8 +40,8 @@
 #include <stddef.h>
 
 typedef struct tt__rbf_argmax_stats {
-  size_t fine;   /* candidates that reached level 2 */
-  size_t exact;  /* candidates evaluated by tt__rbf_q_parts */
+  size_t fine;  /* candidates that reached level 2 */
+  size_t exact; /* candidates evaluated by tt__rbf_q_parts */
 } tt__rbf_argmax_stats;
 
 /* The kernels of this CPU: AVX2+FMA where built and the CPU has them (coarse and fine),
@@ -61,14 +61,14 @@ void tt__rbf_action_part_float(uint32_t features, const double *da, float *daf);
 /* The reference: tt__rbf_q_parts for every candidate, the first strict maximum. n >= 1;
  * *best_q = its Q (-inf if no Q compares greater than -inf, then index 0). */
 size_t tt__rbf_argmax_reference(const tt__rbf_model *r, const double *ds, const double *const *da,
-                            size_t n, double *best_q);
+                                size_t n, double *best_q);
 
 /* The same answer through the bounds. `daf`: the candidates' float action parts
  * (tt__rbf_action_part_float; NULL: no coarse level); `kernels`: NULL for tt__rbf_kernels_pick();
  * `work`: tt__rbf_argmax_work(features, n) doubles; `stats` may be NULL. */
 size_t tt__rbf_argmax_bounded(const tt__rbf_model *r, const double *ds, const double *const *da,
-                          const float *const *daf, size_t n, const tt__rbf_kernels *kernels,
-                          double *work, double *best_q, tt__rbf_argmax_stats *stats);
+                              const float *const *daf, size_t n, const tt__rbf_kernels *kernels,
+                              double *work, double *best_q, tt__rbf_argmax_stats *stats);
 
 /* The bounds above, given a kernel's qabs (and qx) and sum_i |theta_i|. */
 double tt__rbf_fine_tol(uint32_t features, double qabs, double theta_abs);

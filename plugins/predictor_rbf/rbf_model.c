@@ -63,7 +63,7 @@ void tt__rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out) {
   }
   for (uint32_t j = 0; j < dim; j++) {
     for (uint32_t k = 0; k < n; k++) perm[k] = k;
-    for (uint32_t k = n; k > 1; k--) {  /* Fisher-Yates */
+    for (uint32_t k = n; k > 1; k--) { /* Fisher-Yates */
       uint32_t r = tt__rbf_below(&rng, k), t = perm[k - 1];
       perm[k - 1] = perm[r];
       perm[r] = t;
@@ -75,7 +75,7 @@ void tt__rbf_lhs(uint64_t seed, uint32_t n, uint32_t dim, double *out) {
 }
 
 int tt__rbf_model_init(tt__rbf_model *r, uint32_t d, uint32_t m, uint32_t features, double width,
-                   double alpha, double decay, uint64_t seed) {
+                       double alpha, double decay, uint64_t seed) {
   memset(r, 0, sizeof *r);
   r->d = d;
   r->m = m;

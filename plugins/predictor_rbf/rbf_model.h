@@ -25,16 +25,16 @@
 #include <stdint.h>
 
 typedef struct tt__rbf_model {
-  uint32_t d;            /* state coordinates */
-  uint32_t m;            /* action coordinates (tt__rbf_action_dims) */
-  uint32_t dim;          /* d + m */
-  uint32_t features;     /* F */
-  double width;          /* omega, the same for every feature */
-  double alpha;          /* step size */
-  double decay;          /* updates after which the step has halved; 0: constant */
-  uint64_t updates;      /* t */
-  double *centres;       /* F x dim, row-major */
-  double *theta;         /* F */
+  uint32_t d;        /* state coordinates */
+  uint32_t m;        /* action coordinates (tt__rbf_action_dims) */
+  uint32_t dim;      /* d + m */
+  uint32_t features; /* F */
+  double width;      /* omega, the same for every feature */
+  double alpha;      /* step size */
+  double decay;      /* updates after which the step has halved; 0: constant */
+  uint64_t updates;  /* t */
+  double *centres;   /* F x dim, row-major */
+  double *theta;     /* F */
 } tt__rbf_model;
 
 /* Action coordinates of a space's configurations. */
@@ -45,7 +45,7 @@ void tt__rbf_encode_action(const tt_config *config, double *out);
 /* Allocates centres and theta (theta = 0) for F features over d + m coordinates; the centres
  * are a Latin hypercube in [0,1]^(d+m) drawn from `seed`. 0, or -1 when out of memory. */
 int tt__rbf_model_init(tt__rbf_model *r, uint32_t d, uint32_t m, uint32_t features, double width,
-                   double alpha, double decay, uint64_t seed);
+                       double alpha, double decay, uint64_t seed);
 void tt__rbf_model_free(tt__rbf_model *r);
 
 /* phi(x) into `phi` (F values). */

@@ -41,9 +41,9 @@ static inline double tt__rbf_exp_neg(double x) {
   const double shift = 0x1.8p52;
   double t = x * 0x1.71547652b82fep0 + shift; /* log2(e) */
   double k = t - shift;
-  double r = x - k * 0x1.62e42fee00000p-1;    /* ln2, high part: k * it is exact */
-  r = r - k * 0x1.a39ef35793c76p-33;          /* ln2, low part */
-  double p = 1.0 / 39916800.0;                /* 1/11! */
+  double r = x - k * 0x1.62e42fee00000p-1; /* ln2, high part: k * it is exact */
+  r = r - k * 0x1.a39ef35793c76p-33;       /* ln2, low part */
+  double p = 1.0 / 39916800.0;             /* 1/11! */
   p = p * r + 1.0 / 3628800.0;
   p = p * r + 1.0 / 362880.0;
   p = p * r + 1.0 / 40320.0;
@@ -65,8 +65,8 @@ static inline double tt__rbf_exp_neg(double x) {
 
 /* The fine level (tt__rbf_qbound_fn). */
 static void tt__rbf_qbound(const double *restrict theta, const double *restrict ds,
-                       const double *restrict da, uint32_t f, double nw, double *restrict e,
-                       double *q, double *qabs) {
+                           const double *restrict da, uint32_t f, double nw, double *restrict e,
+                           double *q, double *qabs) {
   for (uint32_t i = 0; i < f; i++) e[i] = tt__rbf_exp_neg(nw * sqrt(ds[i] + da[i]));
   double s[8] = {0}, a[8] = {0};
   uint32_t i = 0;
@@ -100,11 +100,11 @@ static void tt__rbf_qbound(const double *restrict theta, const double *restrict 
 static inline __m256 tt__rbf_exp8(__m256 x) {
   x = _mm256_max_ps(x, _mm256_set1_ps(-86.0f));
   x = _mm256_min_ps(x, _mm256_setzero_ps());
-  const __m256 shift = _mm256_set1_ps(0x1.8p23f);  /* k lands in t's low mantissa bits */
-  __m256 t = _mm256_fmadd_ps(x, _mm256_set1_ps(0x1.715476p0f), shift);  /* log2(e) */
+  const __m256 shift = _mm256_set1_ps(0x1.8p23f); /* k lands in t's low mantissa bits */
+  __m256 t = _mm256_fmadd_ps(x, _mm256_set1_ps(0x1.715476p0f), shift); /* log2(e) */
   __m256 k = _mm256_sub_ps(t, shift);
-  __m256 r = _mm256_fnmadd_ps(k, _mm256_set1_ps(0x1.62e4p-1f), x);       /* ln2, high */
-  r = _mm256_fnmadd_ps(k, _mm256_set1_ps(0x1.7f7d1cp-20f), r);            /* ln2, low */
+  __m256 r = _mm256_fnmadd_ps(k, _mm256_set1_ps(0x1.62e4p-1f), x); /* ln2, high */
+  r = _mm256_fnmadd_ps(k, _mm256_set1_ps(0x1.7f7d1cp-20f), r);     /* ln2, low */
   __m256 p = _mm256_set1_ps(1.0f / 5040.0f);
   p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f / 720.0f));
   p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f / 120.0f));
@@ -114,7 +114,8 @@ static inline __m256 tt__rbf_exp8(__m256 x) {
   p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f));
   p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f));
   /* 2^k: k + 127 in [1, 127] into the exponent field */
-  __m256i sc = _mm256_slli_epi32(_mm256_add_epi32(_mm256_castps_si256(t), _mm256_set1_epi32(127)), 23);
+  __m256i sc =
+      _mm256_slli_epi32(_mm256_add_epi32(_mm256_castps_si256(t), _mm256_set1_epi32(127)), 23);
   return _mm256_mul_ps(p, _mm256_castsi256_ps(sc));
 }
 
@@ -126,17 +127,17 @@ static inline double tt__rbf_hsum8(__m256 v) {
 }
 
 static void tt__rbf_qcoarse(const float *thetaf, const float *dsf, const float *daf, uint32_t f8,
-                        float nw, double *q, double *qabs, double *qx) {
+                            float nw, double *q, double *qabs, double *qx) {
   __m256 s = _mm256_setzero_ps(), a = s, b = s, nw8 = _mm256_set1_ps(nw);
   const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
   for (uint32_t i = 0; i < f8; i += 8) {
-    __m256 x = _mm256_mul_ps(nw8, _mm256_sqrt_ps(_mm256_add_ps(_mm256_loadu_ps(dsf + i),
-                                                               _mm256_loadu_ps(daf + i))));
+    __m256 x = _mm256_mul_ps(
+        nw8, _mm256_sqrt_ps(_mm256_add_ps(_mm256_loadu_ps(dsf + i), _mm256_loadu_ps(daf + i))));
     __m256 t = _mm256_mul_ps(_mm256_loadu_ps(thetaf + i), tt__rbf_exp8(x));
     __m256 at = _mm256_and_ps(t, absmask);
     s = _mm256_add_ps(s, t);
     a = _mm256_add_ps(a, at);
-    b = _mm256_fnmadd_ps(at, x, b);  /* x <= 0: b += |t| |x| */
+    b = _mm256_fnmadd_ps(at, x, b); /* x <= 0: b += |t| |x| */
   }
   *q = tt__rbf_hsum8(s);
   *qabs = tt__rbf_hsum8(a);

@@ -12,7 +12,7 @@
 #include <stdint.h>
 
 typedef void tt__rbf_qbound_fn(const double *theta, const double *ds, const double *da, uint32_t f,
-                           double nw, double *e, double *q, double *qabs);
+                               double nw, double *e, double *q, double *qabs);
 
 /* The coarse level before it (AVX2 only): single precision, about 1e-6 relative
  * where the polynomial kernel is 1e-14, at a third of its cost. Float copies of theta, ds and
@@ -23,7 +23,7 @@ typedef void tt__rbf_qcoarse_fn(const float *thetaf, const float *dsf, const flo
 
 /* One instruction set's kernels. */
 typedef struct tt__rbf_kernels {
-  tt__rbf_qcoarse_fn *coarse;  /* NULL: no level 1 */
+  tt__rbf_qcoarse_fn *coarse; /* NULL: no level 1 */
   tt__rbf_qbound_fn *fine;
 } tt__rbf_kernels;
 

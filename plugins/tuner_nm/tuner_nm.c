@@ -59,8 +59,8 @@ static tt_status tt__nm_cache_rehash(tt__nm_cache *c, size_t P, size_t size) {
   return TT_OK;
 }
 
-tt_status tt__nm_cache_insert(tt__nm_cache *c, size_t P, const double *key, double sum,
-                              int64_t n, int32_t *out_id) {
+tt_status tt__nm_cache_insert(tt__nm_cache *c, size_t P, const double *key, double sum, int64_t n,
+                              int32_t *out_id) {
   if (c->count == c->cap) {
     size_t cap = c->cap ? c->cap * 2 : 64;
     double *keys = realloc(c->keys, cap * (P ? P : 1) * sizeof(double));
@@ -109,16 +109,14 @@ static void tt__nm_key(const tt_tuner *t, const tt_config *cfg, double *key) {
     tt_value v = tt_config_get(cfg, i);
     tt_param_type ty = tt_space_type(t->target, i);
     double k = ty == TT_PARAM_INT ? (double)v.i : ty == TT_PARAM_FLOAT ? v.f : (double)v.index;
-    key[i] = k == 0.0 ? 0.0 : k;  /* -0.0 and 0.0 are the same configuration */
+    key[i] = k == 0.0 ? 0.0 : k; /* -0.0 and 0.0 are the same configuration */
   }
 }
 
 void tt__nm_config_from_key(tt_tuner *t, tt_config *cfg, const double *key) {
   for (size_t i = 0; i < t->P; i++) {
-    if (tt_space_type(t->target, i) == TT_PARAM_NOM)
-      tt_config_set_index(cfg, i, (size_t)key[i]);
-    else
-      tt_config_set_number(cfg, i, key[i]);
+    if (tt_space_type(t->target, i) == TT_PARAM_NOM) tt_config_set_index(cfg, i, (size_t)key[i]);
+    else tt_config_set_number(cfg, i, key[i]);
   }
 }
 
@@ -148,8 +146,8 @@ static tt_space *tt__nm_build_space(void) {
                            "Nelder-Mead reflection coefficient alpha") >= 0;
   ok &= tt_space_add_float(s, "expansion", 1.0, 8.0, 2.0, 0,
                            "expansion coefficient gamma (> reflection)") >= 0;
-  ok &= tt_space_add_float(s, "contraction", 0.05, 0.95, 0.5, 0,
-                           "contraction coefficient rho") >= 0;
+  ok &=
+      tt_space_add_float(s, "contraction", 0.05, 0.95, 0.5, 0, "contraction coefficient rho") >= 0;
   ok &= tt_space_add_float(s, "shrink", 0.05, 0.95, 0.5, 0, "shrink coefficient sigma") >= 0;
   ok &= tt_space_add_nom_string(s, "init", tt__nm_init_names, 3, 0,
                                 "initial simplex: Latin hypercube, uniform or centred "
@@ -231,8 +229,8 @@ static void tt__nm_draw_probe(tt_tuner *t) {
 }
 
 /* Creates a tuner; see tuner.h. */
-static tt_status tt__nm_create(const tt_space *target, const tt_config *settings,
-                               uint64_t seed, tt_tuner **out) {
+static tt_status tt__nm_create(const tt_space *target, const tt_config *settings, uint64_t seed,
+                               tt_tuner **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: create: out is NULL");
   *out = NULL;
   if (!target) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: create: no target");
@@ -240,13 +238,12 @@ static tt_status tt__nm_create(const tt_space *target, const tt_config *settings
   tt__nm_settings_read(settings, &set);
   if (settings) {
     char why[256];
-    if (tt__nm_settings_check(NULL, (tt_config *)settings, why, sizeof why, NULL) !=
-        TT_CHECK_OK)
+    if (tt__nm_settings_check(NULL, (tt_config *)settings, why, sizeof why, NULL) != TT_CHECK_OK)
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: settings: %s", why);
   }
   if (!(set.reflection > 0.0) || !(set.contraction > 0.0 && set.contraction < 1.0) ||
-      !(set.shrink > 0.0 && set.shrink < 1.0) || !(set.init_size > 0.0) ||
-      !(set.tolerance > 0.0) || set.reevaluate < 0 || set.max_evaluations < 0 ||
+      !(set.shrink > 0.0 && set.shrink < 1.0) || !(set.init_size > 0.0) || !(set.tolerance > 0.0) ||
+      set.reevaluate < 0 || set.max_evaluations < 0 ||
       !(set.epsilon >= 0.0 && set.epsilon <= 1.0) || set.restarts < 0)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: settings out of range");
 
@@ -268,8 +265,8 @@ static tt_status tt__nm_create(const tt_space *target, const tt_config *settings
   t->proposal = tt_config_create(target);
   t->work = tt_config_create(target);
   t->work2 = tt_config_create(target);
-  if (!t->dim_param || !t->armnom_param || !t->armnom_count || !t->unit || !t->key ||
-      !t->center || !t->proposal || !t->work || !t->work2) {
+  if (!t->dim_param || !t->armnom_param || !t->armnom_count || !t->unit || !t->key || !t->center ||
+      !t->proposal || !t->work || !t->work2) {
     tt__nm_destroy(t);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tuner_nm: out of memory");
   }
@@ -316,7 +313,7 @@ static tt_status tt__nm_create(const tt_space *target, const tt_config *settings
     if (span > 0.0 && 2.0 / span > t->min_restart) t->min_restart = 2.0 / span;
   }
   if (t->min_restart > 1.0) t->min_restart = 1.0;
-  tt_config_to_unit(t->proposal, t->unit);  /* proposal holds the defaults here */
+  tt_config_to_unit(t->proposal, t->unit); /* proposal holds the defaults here */
   for (size_t d = 0; d < t->n; d++) t->center[d] = t->unit[t->dim_param[d]];
   t->arms = calloc(arms, sizeof *t->arms);
   if (!t->arms) {
@@ -379,7 +376,7 @@ static double tt__nm_spread_credit(const tt_tuner *t) {
     if (!isnan(t->arms[a].init_spread)) {
       double x = t->arms[a].init_spread;
       size_t j = m++;
-      while (j > 0 && v[j - 1] > x) v[j] = v[j - 1], j--;  /* insertion sort */
+      while (j > 0 && v[j - 1] > x) v[j] = v[j - 1], j--; /* insertion sort */
       v[j] = x;
     }
   if (!m) return 0.0;
@@ -596,7 +593,7 @@ static tt_status tt__nm_feedback(tt_tuner *t, double cost) {
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: feedback without a proposal");
   if (isnan(cost) || cost == -INFINITY)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: feedback: cost is %g", cost);
-  if (cost > TT_COST_INFEASIBLE) cost = TT_COST_INFEASIBLE;  /* +inf: failed measurement */
+  if (cost > TT_COST_INFEASIBLE) cost = TT_COST_INFEASIBLE; /* +inf: failed measurement */
   tt__nm_arm *a = &t->arms[t->out_arm];
   if (t->out_reeval) {
     int32_t id = t->reeval_id;
@@ -628,22 +625,27 @@ static tt_status tt__nm_feedback(tt_tuner *t, double cost) {
 static tt_status tt__nm_set_context(tt_tuner *t, const tt_tuner_context *ctx) {
   if (!t || !ctx) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: NULL");
   if (!TT_HAS_FIELD(tt_tuner_context, ctx, budget))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: context of %u bytes, "
-                        "shorter than ABI 1.1's %zu", ctx->struct_size,
-                        offsetof(tt_tuner_context, budget) + sizeof ctx->budget);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tuner_nm: set_context: context of %u bytes, "
+                        "shorter than ABI 1.1's %zu",
+                        ctx->struct_size, offsetof(tt_tuner_context, budget) + sizeof ctx->budget);
   if ((ctx->state == NULL) != (ctx->state_dim == 0))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: state %s with "
-                        "state_dim %u", ctx->state ? "given" : "NULL", ctx->state_dim);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tuner_nm: set_context: state %s with "
+                        "state_dim %u",
+                        ctx->state ? "given" : "NULL", ctx->state_dim);
   if (t->evaluations || t->out_arm >= 0 || t->cache.count || t->context_set)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: only once, before the "
-                        "first next()");
+                                                 "first next()");
   double dc = ctx->default_cost;
   if (!isnan(dc) && !(dc > 0))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuner_nm: set_context: default cost %g is "
-                        "neither NAN nor positive", dc);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tuner_nm: set_context: default cost %g is "
+                        "neither NAN nor positive",
+                        dc);
   if (ctx->budget > 0) {
-    int probe = t->n_arms > 1 && t->n > 0 &&
-                (double)t->n_arms * (double)(t->n + 1) > (double)ctx->budget;
+    int probe =
+        t->n_arms > 1 && t->n > 0 && (double)t->n_arms * (double)(t->n + 1) > (double)ctx->budget;
     if (probe && !t->probe) tt__nm_draw_probe(t);
     t->probe = probe;
     t->budget = ctx->budget;
@@ -662,13 +664,9 @@ static tt_status tt__nm_set_context(tt_tuner *t, const tt_tuner_context *ctx) {
   return TT_OK;
 }
 
-static tt_status tt__nm_save_state(const tt_tuner *t, char **json) {
-  return tt__nm_save(t, json);
-}
+static tt_status tt__nm_save_state(const tt_tuner *t, char **json) { return tt__nm_save(t, json); }
 
-static tt_status tt__nm_load_state(tt_tuner *t, const char *json) {
-  return tt__nm_load(t, json);
-}
+static tt_status tt__nm_load_state(tt_tuner *t, const char *json) { return tt__nm_load(t, json); }
 
 /* The settings space, built at init. */
 static const tt_space *tt__nm_space_fn(void) { return tt__nm_space; }

@@ -56,10 +56,9 @@ static double tt__nm_volume(const double *pts, size_t n, double *m) {
 
 /* Latin hypercube of `count` points in the box [lo, lo+size]^n: in every dimension each of
  * the `count` strata holds exactly one point, jittered uniformly inside its stratum. */
-void tt__nm_lhs(tt_tuner *t, double *pts, size_t count, size_t n, const double *lo,
-                double size) {
+void tt__nm_lhs(tt_tuner *t, double *pts, size_t count, size_t n, const double *lo, double size) {
   size_t *p = malloc(count * sizeof *p);
-  if (!p) {  /* out of memory: fall back to stratum centres in order (still a valid LHS) */
+  if (!p) { /* out of memory: fall back to stratum centres in order (still a valid LHS) */
     for (size_t d = 0; d < n; d++)
       for (size_t j = 0; j < count; j++)
         pts[j * n + d] = lo[d] + size * ((double)j + 0.5) / (double)count;
@@ -67,7 +66,7 @@ void tt__nm_lhs(tt_tuner *t, double *pts, size_t count, size_t n, const double *
   }
   for (size_t d = 0; d < n; d++) {
     for (size_t j = 0; j < count; j++) p[j] = j;
-    for (size_t j = count; j > 1; j--) {  /* Fisher-Yates */
+    for (size_t j = count; j > 1; j--) { /* Fisher-Yates */
       size_t r = (size_t)(tt__nm_rand(&t->rng) * (double)j);
       if (r >= j) r = j - 1;
       size_t tmp = p[j - 1];
@@ -75,8 +74,7 @@ void tt__nm_lhs(tt_tuner *t, double *pts, size_t count, size_t n, const double *
       p[r] = tmp;
     }
     for (size_t j = 0; j < count; j++)
-      pts[j * n + d] =
-          lo[d] + size * ((double)p[j] + tt__nm_rand(&t->rng)) / (double)count;
+      pts[j * n + d] = lo[d] + size * ((double)p[j] + tt__nm_rand(&t->rng)) / (double)count;
   }
   free(p);
 }
@@ -112,7 +110,7 @@ void tt__nm_arm_generate(tt_tuner *t, tt__nm_arm *a, const double *center, doubl
   double s = size > 1.0 ? 1.0 : size;
   /* Scratch: lo (n), best candidate and current candidate ((n+1) n each), matrix (n n). */
   double *buf = malloc(sizeof(double) * (n + 2 * (n + 1) * n + n * n));
-  if (!buf) {  /* out of memory: a degenerate simplex at the centre still terminates */
+  if (!buf) { /* out of memory: a degenerate simplex at the centre still terminates */
     for (size_t j = 0; j <= n; j++)
       if (!(keep_best && j == 0)) memcpy(X(a, t, j), center, n * sizeof(double));
     a->k = keep_best ? 1 : 0;
@@ -122,7 +120,7 @@ void tt__nm_arm_generate(tt_tuner *t, tt__nm_arm *a, const double *center, doubl
   double *lo = buf, *best = lo + n, *cand = best + (n + 1) * n, *m = cand + (n + 1) * n;
   for (size_t d = 0; d < n; d++) {
     double l = center[d] - 0.5 * s;
-    if (l > 1.0 - s) l = 1.0 - s;  /* shift the box inside [0,1] rather than clip it */
+    if (l > 1.0 - s) l = 1.0 - s; /* shift the box inside [0,1] rather than clip it */
     if (l < 0.0) l = 0.0;
     lo[d] = l;
   }
@@ -152,10 +150,8 @@ void tt__nm_arm_generate(tt_tuner *t, tt__nm_arm *a, const double *center, doubl
       memcpy(best, cand, (n + 1) * n * sizeof(double));
     }
   }
-  if (keep_best)
-    memcpy(X(a, t, 1), &best[n], n * n * sizeof(double));
-  else
-    memcpy(a->x, best, (n + 1) * n * sizeof(double));
+  if (keep_best) memcpy(X(a, t, 1), &best[n], n * n * sizeof(double));
+  else memcpy(a->x, best, (n + 1) * n * sizeof(double));
   free(buf);
   a->k = keep_best ? 1 : 0;
   a->pend = a->k;
@@ -199,8 +195,7 @@ static double tt__nm_diameter(const tt_tuner *t, const tt__nm_arm *a) {
 
 /* Writes xo + coef * (from - xo) into point `dst` (clamped), where xo is the centroid of
  * the n best vertices. */
-static void tt__nm_along(tt_tuner *t, tt__nm_arm *a, size_t dst, const double *from,
-                         double coef) {
+static void tt__nm_along(tt_tuner *t, tt__nm_arm *a, size_t dst, const double *from, double coef) {
   size_t n = t->n;
   for (size_t d = 0; d < n; d++) {
     double xo = 0.0;
@@ -262,9 +257,8 @@ static void tt__nm_finish_iteration(tt_tuner *t, tt__nm_arm *a) {
 static void tt__nm_start_shrink(tt_tuner *t, tt__nm_arm *a) {
   size_t n = t->n;
   for (size_t i = 1; i <= n; i++) {
-    for (size_t d = 0; d < n; d++)
-      X(a, t, i)[d] = tt__nm_clamp01(X(a, t, 0)[d] +
-                                     t->set.shrink * (X(a, t, i)[d] - X(a, t, 0)[d]));
+    for (size_t d = 0; d < n; d++) X(a, t, i)
+    [d] = tt__nm_clamp01(X(a, t, 0)[d] + t->set.shrink * (X(a, t, i)[d] - X(a, t, 0)[d]));
     a->id[i] = -2;
   }
   a->phase = TT__NM_WAIT_SHRINK;
@@ -276,72 +270,69 @@ void tt__nm_arm_receive(tt_tuner *t, tt__nm_arm *a) {
   size_t n = t->n;
   size_t R = n + 1, E = n + 2, C = n + 3;
   switch (a->phase) {
-    case TT__NM_WAIT_PROBE:
-      a->phase = TT__NM_PROBED;
-      return;
-    case TT__NM_WAIT_INIT:
-      if (++a->k <= (int)n) {
-        a->pend = a->k;
-        return;
-      }
-      /* The first full simplex's cost spread is what building an arm typically reveals;
-       * the scheduler credits it to arms that are not built yet. */
-      if (a->restarts == 0 && isnan(a->init_spread)) a->init_spread = tt__nm_arm_spread(t, a);
-      tt__nm_begin_iteration(t, a);
-      return;
-    case TT__NM_WAIT_REEVAL:
-      a->reeval_iter = a->iter;
-      tt__nm_begin_iteration(t, a);
-      return;
-    case TT__NM_WAIT_REFLECT: {
-      double fr = tt__nm_cost(t, a, R);
-      if (fr < tt__nm_cost(t, a, 0)) {
-        tt__nm_along(t, a, E, X(a, t, R), t->set.expansion);
-        a->phase = TT__NM_WAIT_EXPAND;
-        a->pend = (int)E;
-      } else if (fr < tt__nm_cost(t, a, n - 1)) {
-        tt__nm_replace_worst(t, a, R);
-        tt__nm_finish_iteration(t, a);
-      } else if (fr < tt__nm_cost(t, a, n)) {
-        tt__nm_along(t, a, C, X(a, t, R), t->set.contraction);
-        a->phase = TT__NM_WAIT_CONTRACT_OUT;
-        a->pend = (int)C;
-      } else {
-        tt__nm_along(t, a, C, X(a, t, n), t->set.contraction);
-        a->phase = TT__NM_WAIT_CONTRACT_IN;
-        a->pend = (int)C;
-      }
+  case TT__NM_WAIT_PROBE: a->phase = TT__NM_PROBED; return;
+  case TT__NM_WAIT_INIT:
+    if (++a->k <= (int)n) {
+      a->pend = a->k;
       return;
     }
-    case TT__NM_WAIT_EXPAND:
-      tt__nm_replace_worst(t, a, tt__nm_cost(t, a, E) < tt__nm_cost(t, a, R) ? E : R);
+    /* The first full simplex's cost spread is what building an arm typically reveals;
+       * the scheduler credits it to arms that are not built yet. */
+    if (a->restarts == 0 && isnan(a->init_spread)) a->init_spread = tt__nm_arm_spread(t, a);
+    tt__nm_begin_iteration(t, a);
+    return;
+  case TT__NM_WAIT_REEVAL:
+    a->reeval_iter = a->iter;
+    tt__nm_begin_iteration(t, a);
+    return;
+  case TT__NM_WAIT_REFLECT: {
+    double fr = tt__nm_cost(t, a, R);
+    if (fr < tt__nm_cost(t, a, 0)) {
+      tt__nm_along(t, a, E, X(a, t, R), t->set.expansion);
+      a->phase = TT__NM_WAIT_EXPAND;
+      a->pend = (int)E;
+    } else if (fr < tt__nm_cost(t, a, n - 1)) {
+      tt__nm_replace_worst(t, a, R);
       tt__nm_finish_iteration(t, a);
-      return;
-    case TT__NM_WAIT_CONTRACT_OUT:
-      if (tt__nm_cost(t, a, C) <= tt__nm_cost(t, a, R)) {
-        tt__nm_replace_worst(t, a, C);
-        tt__nm_finish_iteration(t, a);
-      } else {
-        tt__nm_start_shrink(t, a);
-      }
-      return;
-    case TT__NM_WAIT_CONTRACT_IN:
-      if (tt__nm_cost(t, a, C) < tt__nm_cost(t, a, n)) {
-        tt__nm_replace_worst(t, a, C);
-        tt__nm_finish_iteration(t, a);
-      } else {
-        tt__nm_start_shrink(t, a);
-      }
-      return;
-    case TT__NM_WAIT_SHRINK:
-      if (++a->k <= (int)n) {
-        a->pend = a->k;
-        return;
-      }
+    } else if (fr < tt__nm_cost(t, a, n)) {
+      tt__nm_along(t, a, C, X(a, t, R), t->set.contraction);
+      a->phase = TT__NM_WAIT_CONTRACT_OUT;
+      a->pend = (int)C;
+    } else {
+      tt__nm_along(t, a, C, X(a, t, n), t->set.contraction);
+      a->phase = TT__NM_WAIT_CONTRACT_IN;
+      a->pend = (int)C;
+    }
+    return;
+  }
+  case TT__NM_WAIT_EXPAND:
+    tt__nm_replace_worst(t, a, tt__nm_cost(t, a, E) < tt__nm_cost(t, a, R) ? E : R);
+    tt__nm_finish_iteration(t, a);
+    return;
+  case TT__NM_WAIT_CONTRACT_OUT:
+    if (tt__nm_cost(t, a, C) <= tt__nm_cost(t, a, R)) {
+      tt__nm_replace_worst(t, a, C);
       tt__nm_finish_iteration(t, a);
+    } else {
+      tt__nm_start_shrink(t, a);
+    }
+    return;
+  case TT__NM_WAIT_CONTRACT_IN:
+    if (tt__nm_cost(t, a, C) < tt__nm_cost(t, a, n)) {
+      tt__nm_replace_worst(t, a, C);
+      tt__nm_finish_iteration(t, a);
+    } else {
+      tt__nm_start_shrink(t, a);
+    }
+    return;
+  case TT__NM_WAIT_SHRINK:
+    if (++a->k <= (int)n) {
+      a->pend = a->k;
       return;
-    default:
-      return;
+    }
+    tt__nm_finish_iteration(t, a);
+    return;
+  default: return;
   }
 }
 

@@ -25,7 +25,7 @@ static void tt__nm_add_u64(cJSON *obj, const char *name, uint64_t v) {
 /* A number item that reads back bit-exactly (17 significant digits, strtod on parse). */
 static cJSON *tt__nm_exact(double v) {
   char buf[40];
-  if (!isfinite(v)) v = v < 0 ? -TT_COST_INFEASIBLE : TT_COST_INFEASIBLE;  /* not in JSON */
+  if (!isfinite(v)) v = v < 0 ? -TT_COST_INFEASIBLE : TT_COST_INFEASIBLE; /* not in JSON */
   snprintf(buf, sizeof buf, "%.17g", v);
   return cJSON_CreateRaw(buf);
 }
@@ -125,10 +125,8 @@ tt_status tt__nm_save(const tt_tuner *t, char **json) {
     cJSON_AddNumberToObject(o, "restarts", (double)a->restarts);
     tt__nm_add_exact(o, "size", a->size);
     cJSON_AddNumberToObject(o, "evals", (double)a->evals);
-    if (isnan(a->init_spread))
-      cJSON_AddNullToObject(o, "initSpread");
-    else
-      tt__nm_add_exact(o, "initSpread", a->init_spread);
+    if (isnan(a->init_spread)) cJSON_AddNullToObject(o, "initSpread");
+    else tt__nm_add_exact(o, "initSpread", a->init_spread);
     cJSON_AddItemToObject(o, "x", tt__nm_doubles(a->x, (n + 4) * n));
     cJSON *ids = cJSON_AddArrayToObject(o, "id");
     for (size_t i = 0; i < n + 4; i++) cJSON_AddItemToArray(ids, cJSON_CreateNumber(a->id[i]));
@@ -157,7 +155,7 @@ static int tt__nm_num(const cJSON *o, const char *name, double *v) {
 /* 1 if a count read from a state is an integer in [lo, 2^53]: it then converts to int64_t
  * exactly; a larger value (whose cast is undefined beyond INT64_MAX: 1e91 evaluations, found
  * by fuzz_tuning_state) or a fraction is a corrupt file. */
-static int tt__nm_count_ok(double v, double lo) {  /* lo: 0, 1, or -1 for "none" */
+static int tt__nm_count_ok(double v, double lo) { /* lo: 0, 1, or -1 for "none" */
   return v >= lo && v <= 9007199254740992.0 && v == floor(v);
 }
 
@@ -202,14 +200,16 @@ static tt_status tt__nm_expect(const cJSON *root, const char *name, double want)
 static int tt__nm_phase_consistent(int phase, int pend, int k, size_t n) {
   const int N = (int)n;
   switch (phase) {
-    /* (n = 0: a restart keeping the best vertex waits for point 1) */
-    case TT__NM_WAIT_INIT: return (k <= N || (N == 0 && k == 1)) && pend == k;
-    case TT__NM_WAIT_SHRINK: return k >= 1 && k <= N && pend == k;
-    case TT__NM_WAIT_REEVAL: case TT__NM_WAIT_PROBE: return pend == 0;
-    case TT__NM_WAIT_REFLECT: return pend == N + 1;
-    case TT__NM_WAIT_EXPAND: return pend == N + 2;
-    case TT__NM_WAIT_CONTRACT_OUT: case TT__NM_WAIT_CONTRACT_IN: return pend == N + 3;
-    default: return 1;  /* FRESH, DONE, PROBED: nothing pending */
+  /* (n = 0: a restart keeping the best vertex waits for point 1) */
+  case TT__NM_WAIT_INIT: return (k <= N || (N == 0 && k == 1)) && pend == k;
+  case TT__NM_WAIT_SHRINK: return k >= 1 && k <= N && pend == k;
+  case TT__NM_WAIT_REEVAL:
+  case TT__NM_WAIT_PROBE: return pend == 0;
+  case TT__NM_WAIT_REFLECT: return pend == N + 1;
+  case TT__NM_WAIT_EXPAND: return pend == N + 2;
+  case TT__NM_WAIT_CONTRACT_OUT:
+  case TT__NM_WAIT_CONTRACT_IN: return pend == N + 3;
+  default: return 1; /* FRESH, DONE, PROBED: nothing pending */
   }
 }
 
@@ -221,11 +221,13 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
   const char *end = json;
   cJSON *root = cJSON_ParseWithOpts(json, &end, 0);
   if (!root) return tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: malformed JSON");
-  end += strspn(end, " \t\r\n");  /* nothing may follow the state */
+  end += strspn(end, " \t\r\n"); /* nothing may follow the state */
   if (*end) {
     cJSON_Delete(root);
-    return tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: unexpected text after the state, "
-                        "at byte %zu", (size_t)(end - json));
+    return tt_set_error(TT_ERR_PARSE,
+                        "tuner_nm: load_state: unexpected text after the state, "
+                        "at byte %zu",
+                        (size_t)(end - json));
   }
   tt_status st = TT_OK;
   tt__nm_cache cache = {0};
@@ -255,7 +257,7 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
     cJSON *mine = tt__nm_settings_json(&t->set);
     const cJSON *it;
     cJSON_ArrayForEach(it, mine) {
-      double v, own = strtod(it->valuestring, NULL);  /* raw items keep their text */
+      double v, own = strtod(it->valuestring, NULL); /* raw items keep their text */
       if (!tt__nm_num(sj, it->string, &v) || v != own) {
         st = tt_set_error(TT_ERR_INVALID_ARGUMENT,
                           "tuner_nm: load_state: setting \"%s\" differs (state %g, tuner %g)",
@@ -271,7 +273,7 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
   if (!tt__nm_u64(root, "rng", &rng) || !tt__nm_num(root, "evaluations", &evals) ||
       !tt__nm_num(root, "deterministic", &det) || !tt__nm_num(root, "roundRobin", &rr) ||
       !tt__nm_count_ok(rr, 0) || rr >= (double)t->n_arms || !tt__nm_count_ok(evals, 0) ||
-      (det != 0 && det != 1 && det != -1)) {  /* unknown, identical, noisy */
+      (det != 0 && det != 1 && det != -1)) { /* unknown, identical, noisy */
     st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad rng/evaluations/roundRobin");
     goto done;
   }
@@ -298,8 +300,7 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
       int32_t id;
       if (!tt__nm_read_doubles(k, key, P) || !cJSON_IsNumber(s) || !cJSON_IsNumber(c) ||
           !tt__nm_count_ok(c->valuedouble, 1)) {
-        st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad cache entry %zu",
-                          cache.count);
+        st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad cache entry %zu", cache.count);
         goto done;
       }
       if ((st = tt__nm_cache_insert(&cache, P, key, s->valuedouble, (int64_t)c->valuedouble,
@@ -331,15 +332,13 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
                tt__nm_num(o, "pend", &pend) && tt__nm_num(o, "k", &k) &&
                tt__nm_num(o, "iter", &iter) && tt__nm_num(o, "reevalIter", &ri) &&
                tt__nm_num(o, "restarts", &rs) && tt__nm_num(o, "size", &size) &&
-               tt__nm_num(o, "evals", &ev) && tt__nm_count_ok(iter, 0) &&
-               tt__nm_count_ok(ri, -1) && tt__nm_count_ok(rs, 0) && tt__nm_count_ok(ev, 0) &&
-               tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "x"), a->x,
-                                   (n + 4) * n) &&
+               tt__nm_num(o, "evals", &ev) && tt__nm_count_ok(iter, 0) && tt__nm_count_ok(ri, -1) &&
+               tt__nm_count_ok(rs, 0) && tt__nm_count_ok(ev, 0) &&
+               tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "x"), a->x, (n + 4) * n) &&
                tt__nm_read_doubles(cJSON_GetObjectItemCaseSensitive(o, "id"), ids, n + 4) &&
-               ph >= TT__NM_FRESH && ph <= TT__NM_PROBED && pend >= 0 &&
-               pend < (double)(n + 4) && k >= 0 && k <= (double)(n + 1) &&
-               ph == (int)ph && pend == (int)pend && k == (int)k &&
-               tt__nm_phase_consistent((int)ph, (int)pend, (int)k, n);
+               ph >= TT__NM_FRESH && ph <= TT__NM_PROBED && pend >= 0 && pend < (double)(n + 4) &&
+               k >= 0 && k <= (double)(n + 1) && ph == (int)ph && pend == (int)pend &&
+               k == (int)k && tt__nm_phase_consistent((int)ph, (int)pend, (int)k, n);
       for (size_t i = 0; ok && i < n + 4; i++) {
         if (ids[i] < -2 || ids[i] >= (double)cache.count) ok = 0;
         else a->id[i] = (int32_t)ids[i];
@@ -400,7 +399,8 @@ tt_status tt__nm_load(tt_tuner *t, const char *json) {
   uint64_t budget = 0;
   if ((pr && !cJSON_IsBool(pr)) || (cs && !cJSON_IsBool(cs)) ||
       (cJSON_GetObjectItemCaseSensitive(root, "budget") && !tt__nm_u64(root, "budget", &budget))) {
-    st = tt_set_error(TT_ERR_PARSE, "tuner_nm: load_state: bad \"probe\", \"budget\" or \"contextSet\"");
+    st = tt_set_error(TT_ERR_PARSE,
+                      "tuner_nm: load_state: bad \"probe\", \"budget\" or \"contextSet\"");
     goto done;
   }
 

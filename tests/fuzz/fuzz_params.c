@@ -13,8 +13,7 @@
 #include <math.h>
 
 /* A space with every kind of parameter, and a check that repairs or rejects. */
-static tt_check_result fix_check(const tt_space *s, tt_config *c, char *why, size_t n,
-                                 void *user) {
+static tt_check_result fix_check(const tt_space *s, tt_config *c, char *why, size_t n, void *user) {
   (void)user;
   if (tt_config_get_int(c, "minLeaf", 1) > tt_config_get_int(c, "maxLeaf", 8)) {
     snprintf(why, n, "minLeaf > maxLeaf");
@@ -47,7 +46,7 @@ static void exercise(const tt_space *s, tt_config *c) {
   double *u = calloc(n ? n : 1, sizeof *u);
   tt_config_to_unit(c, u);
   for (size_t i = 0; i < n; i++)
-    if (!(u[i] >= 0.0 && u[i] <= 1.0)) abort();  /* unit coordinates stay in [0, 1] */
+    if (!(u[i] >= 0.0 && u[i] <= 1.0)) abort(); /* unit coordinates stay in [0, 1] */
   tt_config_from_unit(c, u);
   free(u);
   char *j = tt_config_to_json(c);
@@ -93,8 +92,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         char *eq = strchr(line, '=');
         if (!eq) continue;
         *eq = '\0';
-        if (tt_config_set_string(c, line, eq + 1) == TT_OK && nn < 8 &&
-            tt_space_find(s, line) >= 0)
+        if (tt_config_set_string(c, line, eq + 1) == TT_OK && nn < 8 && tt_space_find(s, line) >= 0)
           names[nn++] = tt_space_name(s, (size_t)tt_space_find(s, line));
       }
       exercise(s, c);

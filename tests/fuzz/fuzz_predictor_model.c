@@ -40,8 +40,12 @@ static tt_config *g_settings;
 
 static tt_predictor *create(void) {
   static const char *const names[DIM] = {"a", "b", "c"};
-  tt_predictor_setup su = {.struct_size = sizeof su, .target = g_target, .state_dim = DIM,
-                           .state_space = "fuzz/1", .state_names = names, .settings = g_settings,
+  tt_predictor_setup su = {.struct_size = sizeof su,
+                           .target = g_target,
+                           .state_dim = DIM,
+                           .state_space = "fuzz/1",
+                           .state_names = names,
+                           .settings = g_settings,
                            .seed = 3};
   tt_predictor *p = NULL;
   if (g_pi->create_ex(&su, &p) != TT_OK || !p) abort();
@@ -57,11 +61,15 @@ static void write_seeds(const char *dir) {
     tt_config *c = tt_config_create(g_target);
     for (int i = 0; i < counts[k]; i++) {
       double u[4], s[DIM];
-      for (int j = 0; j < 4; j++) u[j] = (double)((x = x * 6364136223846793005ull + 1) >> 11) * 0x1.0p-53;
+      for (int j = 0; j < 4; j++)
+        u[j] = (double)((x = x * 6364136223846793005ull + 1) >> 11) * 0x1.0p-53;
       for (int j = 0; j < DIM; j++) s[j] = u[j];
       tt_config_from_unit(c, u);
-      tt_predictor_sample sm = {.struct_size = sizeof sm, .state = s, .config = c,
-                                .cost = 1.0 + u[0] + u[3], .default_cost = 2.0};
+      tt_predictor_sample sm = {.struct_size = sizeof sm,
+                                .state = s,
+                                .config = c,
+                                .cost = 1.0 + u[0] + u[3],
+                                .default_cost = 2.0};
       if (g_pi->observe_ex(p, &sm, 1, TT_PREDICTOR_ONLINE) != TT_OK) abort();
     }
     char path[4096];
@@ -126,7 +134,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   memcpy(c, data, size);
   if (size < 8 || memcmp(c, "TTPMODEL", 8)) {
     reseal_text(c, size);
-  } else if (size >= 32) {  /* the checksum of bytes [0, 24 + payload) follows them */
+  } else if (size >= 32) { /* the checksum of bytes [0, 24 + payload) follows them */
     uint64_t n = get_u64(c + 16);
     if (n <= size - 32) {
       uint64_t h = tt__fnv1a64(TT__FNV1A64_OFFSET, c, 24 + n);
@@ -151,7 +159,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     snprintf(again, sizeof again, "%s/again.model", fuzz_dir());
     if (g_pi->save(p, again) == TT_OK) {
       tt_predictor *p2 = create();
-      if (g_pi->load(p2, again) != TT_OK) {  /* its own file must load */
+      if (g_pi->load(p2, again) != TT_OK) { /* its own file must load */
         fprintf(stderr, "its own saved model does not load: %s\n", tt_last_error());
         abort();
       }

@@ -11,7 +11,7 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   tt_scene *s = NULL;
   if (tt_scene_load_json((const char *)data, size, "fuzz.json", fuzz_dir(), &s) != TT_OK) {
-    if (s) abort();  /* an error must not hand out a scene */
+    if (s) abort(); /* an error must not hand out a scene */
     return 0;
   }
   float lo[3], hi[3];

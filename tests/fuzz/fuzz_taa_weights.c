@@ -16,7 +16,8 @@ static uint8_t *fix_checksum(const uint8_t *data, size_t size) {
   if (!c) abort();
   memcpy(c, data, size);
   if (size < 20) return c;
-  uint32_t hb = (uint32_t)c[12] | (uint32_t)c[13] << 8 | (uint32_t)c[14] << 16 | (uint32_t)c[15] << 24;
+  uint32_t hb =
+      (uint32_t)c[12] | (uint32_t)c[13] << 8 | (uint32_t)c[14] << 16 | (uint32_t)c[15] << 24;
   if (hb > size - 4) return c;
   uint32_t h = tt__fnv1a32(c + hb, size - 4 - hb);
   for (int k = 0; k < 4; k++) c[size - 4 + k] = (uint8_t)(h >> (8 * k));

@@ -31,12 +31,12 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
 static sqlite3 *memdb_hold(const uint8_t *data, size_t size) {
   sqlite3 *h = NULL;
   sqlite3_file *f = NULL;
-  if (sqlite3_open_v2(g_uri, &h, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_URI, NULL) !=
-          SQLITE_OK ||
+  if (sqlite3_open_v2(g_uri, &h, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_URI,
+                      NULL) != SQLITE_OK ||
       sqlite3_file_control(h, "main", SQLITE_FCNTL_FILE_POINTER, &f) != SQLITE_OK || !f ||
       f->pMethods->xTruncate(f, 0) != SQLITE_OK ||
       (size && f->pMethods->xWrite(f, data, (int)size, 0) != SQLITE_OK))
-    abort();  /* the harness's own set-up failed: stop loudly */
+    abort(); /* the harness's own set-up failed: stop loudly */
   return h;
 }
 

@@ -45,7 +45,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (g_ti->save_state(t, &saved) == TT_OK) {
       tt_tuner *t2 = NULL;
       if (g_ti->create(g_space, NULL, 7, &t2) != TT_OK) abort();
-      if (g_ti->load_state(t2, saved) != TT_OK) abort();  /* its own state must load */
+      if (g_ti->load_state(t2, saved) != TT_OK) abort(); /* its own state must load */
       g_ti->destroy(t2);
       tt_free(saved);
     }

@@ -55,8 +55,8 @@ static int advance(tt_tuning *t, int steps) {
       break;
     }
     double x = tt_config_get_float(c, "x", 0), tc = tt_config_get_float(c, "travcost", 1);
-    tt_tuning_measurement m = {.struct_size = sizeof m, .status = TT_OK,
-                               .render_ms = 10.0 + x * x + fabs(log(tc))};
+    tt_tuning_measurement m = {
+        .struct_size = sizeof m, .status = TT_OK, .render_ms = 10.0 + x * x + fabs(log(tc))};
     if (tt_tuning_report(t, &m, NULL) != TT_OK) abort();
   }
   tt_config_destroy(c);

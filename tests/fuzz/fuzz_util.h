@@ -32,7 +32,7 @@ static inline const char *fuzz_write(const char *name, const uint8_t *data, size
   char *p = paths[slot++ & 3];
   snprintf(p, sizeof paths[0], "%s/%s", fuzz_dir(), name);
   FILE *f = fopen(p, "wb");
-  if (!f) abort();  /* the harness's own environment is broken: stop loudly */
+  if (!f) abort(); /* the harness's own environment is broken: stop loudly */
   if (size && fwrite(data, 1, size, f) != size) abort();
   if (fclose(f) != 0) abort();
   return p;

@@ -28,7 +28,10 @@ static tt_status brute_build(const tt_scene *scene, const tt_config *config, tt_
   for (uint32_t m = 0; m < a->count; ++m) {
     tt__brute_mesh *bm = &a->meshes[m];
     bm->mesh = tt_scene_mesh(scene, m);
-    for (int i = 0; i < 3; ++i) { bm->lo[i] = INFINITY; bm->hi[i] = -INFINITY; }
+    for (int i = 0; i < 3; ++i) {
+      bm->lo[i] = INFINITY;
+      bm->hi[i] = -INFINITY;
+    }
     for (uint32_t v = 0; v < bm->mesh->vertex_count; ++v)
       for (int i = 0; i < 3; ++i) {
         float x = bm->mesh->positions[3 * v + i];
@@ -48,7 +51,11 @@ static int box_hit(const tt__brute_mesh *bm, const tt_ray *r) {
     float pad = 1e-4f * (1.0f + fabsf(bm->lo[i]) + fabsf(bm->hi[i]));
     float inv = 1.0f / r->dir[i];
     float a = (bm->lo[i] - pad - r->org[i]) * inv, b = (bm->hi[i] + pad - r->org[i]) * inv;
-    if (a > b) { float t = a; a = b; b = t; }
+    if (a > b) {
+      float t = a;
+      a = b;
+      b = t;
+    }
     if (!(a <= b)) { /* NaN from 0 * inf: the ray is parallel and inside the slab */
       if (r->org[i] < bm->lo[i] - pad || r->org[i] > bm->hi[i] + pad) return 0;
       continue;
@@ -64,7 +71,10 @@ static int box_hit(const tt__brute_mesh *bm, const tt_ray *r) {
 static float tri_hit(const float *p0, const float *p1, const float *p2, const tt_ray *r,
                      float *u_out, float *v_out) {
   float e1[3], e2[3], pv[3], tv[3], qv[3];
-  for (int i = 0; i < 3; ++i) { e1[i] = p1[i] - p0[i]; e2[i] = p2[i] - p0[i]; }
+  for (int i = 0; i < 3; ++i) {
+    e1[i] = p1[i] - p0[i];
+    e2[i] = p2[i] - p0[i];
+  }
   pv[0] = r->dir[1] * e2[2] - r->dir[2] * e2[1];
   pv[1] = r->dir[2] * e2[0] - r->dir[0] * e2[2];
   pv[2] = r->dir[0] * e2[1] - r->dir[1] * e2[0];
@@ -102,9 +112,16 @@ static int brute_trace(const tt_accel *a, tt_ray *r, tt_hit *hit, int any_hit) {
       if (any_hit) return 1;
       found = 1;
       r->tfar = th;
-      hit->t = th; hit->u = u; hit->v = v; hit->geom_id = m; hit->prim_id = t;
+      hit->t = th;
+      hit->u = u;
+      hit->v = v;
+      hit->geom_id = m;
+      hit->prim_id = t;
       float e1[3], e2[3];
-      for (int i = 0; i < 3; ++i) { e1[i] = p1[i] - p0[i]; e2[i] = p2[i] - p0[i]; }
+      for (int i = 0; i < 3; ++i) {
+        e1[i] = p1[i] - p0[i];
+        e2[i] = p2[i] - p0[i];
+      }
       hit->ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
       hit->ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
       hit->ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
@@ -146,8 +163,15 @@ static void brute_destroy(tt_accel *a) {
 }
 
 /* An ABI 1.1 table (no update): callers that move the scene build it again. */
-static const tt_accel_iface brute_iface = {
-  TT_ACCEL_IFACE_SIZE_1_1, brute_space, brute_build, brute_intersect1, brute_occluded1,
-  brute_intersect_stream, brute_occluded_stream, brute_counters, brute_destroy, NULL};
+static const tt_accel_iface brute_iface = {TT_ACCEL_IFACE_SIZE_1_1,
+                                           brute_space,
+                                           brute_build,
+                                           brute_intersect1,
+                                           brute_occluded1,
+                                           brute_intersect_stream,
+                                           brute_occluded_stream,
+                                           brute_counters,
+                                           brute_destroy,
+                                           NULL};
 
 const tt_accel_iface *tt_test_brute_accel(void) { return &brute_iface; }

@@ -35,9 +35,9 @@ int main(int argc, char **argv) {
     double load_ms = tt__wall_ms() - t0;
     float lo[3], hi[3];
     tt_scene_bounds(s, lo, hi);
-    double d = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) +
-                    (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                    (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
+    double d =
+        sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) + (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
+             (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
     uint32_t counts[8] = {0};
     for (uint32_t i = 0; i < tt_scene_light_count(s); i++) {
       uint32_t t = (uint32_t)tt_scene_light(s, i)->type;

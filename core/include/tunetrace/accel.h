@@ -23,18 +23,18 @@ extern "C" {
 
 #define TT_ACCEL_INTERFACE_ID "tt.accel/1"
 
-typedef struct tt_accel tt_accel;  /* opaque, defined by the plugin */
+typedef struct tt_accel tt_accel; /* opaque, defined by the plugin */
 
 /* Filled by build(). */
 typedef struct tt_accel_build_stats {
-  uint32_t struct_size;     /* set by the caller to sizeof; the plugin fills only that much */
-  double build_ms;          /* wall time of the build proper */
-  uint64_t memory_bytes;    /* bytes held by the structure (nodes, leaves, triangle data) */
-  uint64_t nodes;           /* inner nodes (0 if unknown) */
-  uint64_t leaves;          /* leaves (0 if unknown) */
-  double sah_cost;          /* SAH cost of the tree (0 if unknown) */
-  uint32_t max_depth;       /* depth reached (0 if unknown) */
-  int32_t repaired;         /* non-zero if the configuration was repaired before building */
+  uint32_t struct_size;  /* set by the caller to sizeof; the plugin fills only that much */
+  double build_ms;       /* wall time of the build proper */
+  uint64_t memory_bytes; /* bytes held by the structure (nodes, leaves, triangle data) */
+  uint64_t nodes;        /* inner nodes (0 if unknown) */
+  uint64_t leaves;       /* leaves (0 if unknown) */
+  double sah_cost;       /* SAH cost of the tree (0 if unknown) */
+  uint32_t max_depth;    /* depth reached (0 if unknown) */
+  int32_t repaired;      /* non-zero if the configuration was repaired before building */
 } tt_accel_build_stats;
 
 /* Optional traversal counters (enabled by the plugin's own parameter). */
@@ -47,17 +47,17 @@ typedef struct tt_accel_counters {
 
 /* Filled by update() (ABI 1.2). */
 typedef struct tt_accel_update_stats {
-  uint32_t struct_size;     /* set by the caller to sizeof; the plugin fills only that much */
-  double update_ms;         /* wall time of the update (refit or rebuild) */
-  int32_t rebuilt;          /* 1: built again from scratch; 0: refitted in place */
-  uint32_t since_rebuild;   /* updates since the structure was last built from scratch (0
+  uint32_t struct_size;   /* set by the caller to sizeof; the plugin fills only that much */
+  double update_ms;       /* wall time of the update (refit or rebuild) */
+  int32_t rebuilt;        /* 1: built again from scratch; 0: refitted in place */
+  uint32_t since_rebuild; /* updates since the structure was last built from scratch (0
                                after a rebuild) */
-  double sah_cost;          /* SAH cost after the update, as tt_accel_build_stats (0 unknown) */
-  double sah_growth;        /* sah_cost / its value at the last rebuild (0 unknown) */
+  double sah_cost;        /* SAH cost after the update, as tt_accel_build_stats (0 unknown) */
+  double sah_growth;      /* sah_cost / its value at the last rebuild (0 unknown) */
 } tt_accel_update_stats;
 
 typedef struct tt_accel_iface {
-  uint32_t struct_size;     /* sizeof(tt_accel_iface) as the plugin was built */
+  uint32_t struct_size; /* sizeof(tt_accel_iface) as the plugin was built */
 
   /* The plugin's parameter space; owned by the plugin, valid until deinit. Thread-safe. */
   const tt_space *(*space)(void);

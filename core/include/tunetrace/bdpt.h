@@ -65,17 +65,17 @@ extern "C" {
 #define TT_BDPT_CONNECT_DIM_POS 1
 #define TT_BDPT_CONNECT_DIMS 4
 /* Dimensions a stream can use for paths of up to `max_depth` bounces. */
-#define TT_BDPT_CAMERA_DIM_COUNT(max_depth) \
+#define TT_BDPT_CAMERA_DIM_COUNT(max_depth)                                                        \
   (TT_BDPT_CAMERA_DIM_FIRST_BOUNCE + TT_BDPT_DIMS_PER_BOUNCE * ((max_depth) + 1))
-#define TT_BDPT_LIGHT_DIM_COUNT(max_depth) \
+#define TT_BDPT_LIGHT_DIM_COUNT(max_depth)                                                         \
   (TT_BDPT_LIGHT_DIM_FIRST_BOUNCE + TT_BDPT_DIMS_PER_BOUNCE * ((max_depth) + 1))
 
 typedef struct tt_bdpt_options {
   uint32_t struct_size;
-  uint32_t max_depth;           /* bounces of a connected path (s + t - 2), as path.h's */
-  uint32_t rr_depth;            /* Russian roulette on subpath vertices from this bounce on,
+  uint32_t max_depth;         /* bounces of a connected path (s + t - 2), as path.h's */
+  uint32_t rr_depth;          /* Russian roulette on subpath vertices from this bounce on,
                                    survival min(1, throughput / the subpath's first) */
-  tt_mis_heuristic heuristic;   /* TT_MIS_POWER (beta 2) or TT_MIS_BALANCE */
+  tt_mis_heuristic heuristic; /* TT_MIS_POWER (beta 2) or TT_MIS_BALANCE */
 } tt_bdpt_options;
 
 /* Defaults: max_depth 5 (pbrt-v3), rr_depth 3, power heuristic. */
@@ -92,25 +92,23 @@ TT_API void tt_bdpt_paths_destroy(tt_bdpt_paths *paths);
  * `max_vertices` vertices (the pinhole included; 0..max_depth + 2). Returns the vertex count.
  * Resets the sample's ray count. */
 TT_API uint32_t tt_bdpt_camera_subpath(const tt_path_tracer *pt, const tt_tracer *tracer,
-                                       const tt_bdpt_options *options,
-                                       const tt_camera_frame *frame, float fx, float fy,
-                                       const tt_sample_source *camera, uint32_t max_vertices,
-                                       tt_bdpt_paths *paths);
+                                       const tt_bdpt_options *options, const tt_camera_frame *frame,
+                                       float fx, float fy, const tt_sample_source *camera,
+                                       uint32_t max_vertices, tt_bdpt_paths *paths);
 
 /* The sample's light subpath of at most `max_vertices` vertices (0..max_depth + 1). Returns
  * the vertex count (0: no light emits anything). */
 TT_API uint32_t tt_bdpt_light_subpath(const tt_path_tracer *pt, const tt_tracer *tracer,
-                                      const tt_bdpt_options *options,
-                                      const tt_sample_source *light, uint32_t max_vertices,
-                                      tt_bdpt_paths *paths);
+                                      const tt_bdpt_options *options, const tt_sample_source *light,
+                                      uint32_t max_vertices, tt_bdpt_paths *paths);
 
 /* One strategy's contribution. */
 typedef struct tt_bdpt_contribution {
-  float L[3];                   /* weighted: weight * unweighted (finite; 0 if not) */
-  float unweighted[3];          /* the strategy's own estimate */
-  float weight;                 /* MIS weight */
-  float fx, fy;                 /* t = 1: film position the light path reaches */
-  int32_t nonfinite;            /* a non-finite value was produced and zeroed */
+  float L[3];          /* weighted: weight * unweighted (finite; 0 if not) */
+  float unweighted[3]; /* the strategy's own estimate */
+  float weight;        /* MIS weight */
+  float fx, fy;        /* t = 1: film position the light path reaches */
+  int32_t nonfinite;   /* a non-finite value was produced and zeroed */
 } tt_bdpt_contribution;
 
 /* Strategy (s, t) of the current subpaths (s <= light count, 1 <= t <= camera count,

@@ -15,9 +15,9 @@ extern "C" {
 /* Precomputed camera basis. */
 typedef struct tt_camera_frame {
   float origin[3];
-  float forward[3], right[3], up[3];  /* orthonormal */
+  float forward[3], right[3], up[3]; /* orthonormal */
   float tan_half_fov_y;
-  float aspect;                       /* width / height */
+  float aspect; /* width / height */
   uint32_t width, height;
 } tt_camera_frame;
 
@@ -26,13 +26,12 @@ typedef struct tt_camera_frame {
 TT_API tt_status tt_camera_frame_init(tt_camera_frame *frame, const tt_camera *camera);
 
 /* Primary ray through film position (fx, fy); dir is normalised, tnear 0, tfar +inf. */
-TT_API void tt_camera_generate_ray(const tt_camera_frame *frame, float fx, float fy,
-                                   tt_ray *ray);
+TT_API void tt_camera_generate_ray(const tt_camera_frame *frame, float fx, float fy, tt_ray *ray);
 
 /* Projects world point p to film coordinates; returns 0 if p is behind the camera. `depth`
  * (may be NULL) receives the distance along the view axis. */
-TT_API int tt_camera_project(const tt_camera_frame *frame, const float p[3], float *fx,
-                             float *fy, float *depth);
+TT_API int tt_camera_project(const tt_camera_frame *frame, const float p[3], float *fx, float *fy,
+                             float *depth);
 
 /* ---- importance (bidirectional integrators: light tracing, BDPT, MLT) ----
  * The pinhole's importance W_e (pbrt-v3 PerspectiveCamera::We) is defined over the whole

@@ -50,26 +50,26 @@ extern "C" {
  * to hold `field`: offsetof(field) + sizeof(field) <= struct_size. The one rule for reading
  * an append-only table another party filled (a plugin's interface, a hint, a descriptor):
  * a field past its struct_size was not there when that party was built. Needs <stddef.h>. */
-#define TT_HAS_FIELD(type, ptr, field) \
+#define TT_HAS_FIELD(type, ptr, field)                                                             \
   ((ptr)->struct_size >= offsetof(type, field) + sizeof(((const type *)0)->field))
 
 /* Status codes. Zero is success; negative values are errors; positive values are
  * non-error outcomes that a caller may want to distinguish. Values never change. */
 typedef enum tt_status {
   TT_OK = 0,
-  TT_DONE = 1,               /* iteration finished (e.g. a tuner that has converged) */
-  TT_REPAIRED = 2,           /* a configuration was infeasible and has been repaired */
+  TT_DONE = 1,     /* iteration finished (e.g. a tuner that has converged) */
+  TT_REPAIRED = 2, /* a configuration was infeasible and has been repaired */
   TT_ERR_INVALID_ARGUMENT = -1,
   TT_ERR_OUT_OF_MEMORY = -2,
-  TT_ERR_IO = -3,            /* a file could not be read or written */
-  TT_ERR_PARSE = -4,         /* malformed input (scene, JSON, image, weights) */
-  TT_ERR_UNSUPPORTED = -5,   /* a feature this build or plugin does not provide */
-  TT_ERR_INFEASIBLE = -6,    /* a configuration violates a constraint and cannot be repaired */
-  TT_ERR_ABI = -7,           /* plugin ABI mismatch */
-  TT_ERR_NO_DATA = -8,       /* e.g. a predictor asked before it observed anything */
-  TT_ERR_INTERRUPTED = -9,   /* the user asked to stop */
-  TT_ERR_INTERNAL = -10,     /* a bug: please report */
-  TT_ERR_NUMERIC = -11       /* NaN/Inf or another numerical failure */
+  TT_ERR_IO = -3,          /* a file could not be read or written */
+  TT_ERR_PARSE = -4,       /* malformed input (scene, JSON, image, weights) */
+  TT_ERR_UNSUPPORTED = -5, /* a feature this build or plugin does not provide */
+  TT_ERR_INFEASIBLE = -6,  /* a configuration violates a constraint and cannot be repaired */
+  TT_ERR_ABI = -7,         /* plugin ABI mismatch */
+  TT_ERR_NO_DATA = -8,     /* e.g. a predictor asked before it observed anything */
+  TT_ERR_INTERRUPTED = -9, /* the user asked to stop */
+  TT_ERR_INTERNAL = -10,   /* a bug: please report */
+  TT_ERR_NUMERIC = -11     /* NaN/Inf or another numerical failure */
 } tt_status;
 
 /* Severity of log and error messages. */

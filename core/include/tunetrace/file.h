@@ -29,8 +29,8 @@ extern "C" {
  * *size excludes the NUL. Directories, FIFOs, devices and sockets are refused without
  * blocking, and so are files larger than `max_bytes` (0: TT_FILE_READ_DEFAULT_MAX). `what`
  * names the file's role in messages ("scene file", "PLY file"); NULL means "file". */
-TT_API tt_status tt_file_read(const char *path, const char *what, size_t max_bytes,
-                              char **data, size_t *size);
+TT_API tt_status tt_file_read(const char *path, const char *what, size_t max_bytes, char **data,
+                              size_t *size);
 
 /* TT_OK if `path` is a regular file (or a link to one), TT_ERR_IO with the reason (missing,
  * a directory, a FIFO, a device) otherwise. `what` as for tt_file_read. Never blocks. */

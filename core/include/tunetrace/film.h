@@ -21,10 +21,10 @@ typedef struct tt_film tt_film;
 
 /* AOV planes, combinable as a bit mask at creation. */
 typedef enum tt_aov {
-  TT_AOV_DEPTH = 1 << 0,   /* 1 channel: camera-space distance along the view axis */
-  TT_AOV_NORMAL = 1 << 1,  /* 3 channels: world-space shading normal of the first hit */
-  TT_AOV_ALBEDO = 1 << 2,  /* 3 channels: reflectance of the first hit */
-  TT_AOV_MOTION = 1 << 3,  /* 2 channels: screen-space motion in pixels, current -> previous */
+  TT_AOV_DEPTH = 1 << 0,  /* 1 channel: camera-space distance along the view axis */
+  TT_AOV_NORMAL = 1 << 1, /* 3 channels: world-space shading normal of the first hit */
+  TT_AOV_ALBEDO = 1 << 2, /* 3 channels: reflectance of the first hit */
+  TT_AOV_MOTION = 1 << 3, /* 2 channels: screen-space motion in pixels, current -> previous */
   /* appended (ABI 1.2) */
   TT_AOV_PREV_DEPTH = 1 << 4 /* 1 channel: the first hit's depth in the previous frame's camera
                                 at its previous position (0: a miss, behind that camera) */

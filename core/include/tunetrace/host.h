@@ -22,10 +22,10 @@ extern "C" {
 typedef void (*tt_parallel_fn)(void *ctx, uint64_t begin, uint64_t end, uint32_t thread_index);
 
 typedef struct tt_host {
-  uint32_t struct_size;   /* sizeof(tt_host) as the host was built: the table's version */
-  uint16_t abi_major;     /* TT_ABI_MAJOR of the host */
-  uint16_t abi_minor;     /* TT_ABI_MINOR of the host */
-  const char *host_name;  /* "tunetrace host" or the embedding application's name */
+  uint32_t struct_size;  /* sizeof(tt_host) as the host was built: the table's version */
+  uint16_t abi_major;    /* TT_ABI_MAJOR of the host */
+  uint16_t abi_minor;    /* TT_ABI_MINOR of the host */
+  const char *host_name; /* "tunetrace host" or the embedding application's name */
   const char *host_version;
 
   /* Logs one message with a severity; `plugin` names the sender. Thread-safe. Kept for
@@ -77,8 +77,7 @@ typedef struct tt_host {
 } tt_host;
 
 /* True if the host table provides `field` (it may be older than the plugin). */
-#define TT_HOST_HAS(host, field) \
-  (TT_HAS_FIELD(tt_host, host, field) && (host)->field)
+#define TT_HOST_HAS(host, field) (TT_HAS_FIELD(tt_host, host, field) && (host)->field)
 
 /* Logs one message through `host` (NULL: tt_default_host()): formats it, then hands the
  * finished string to host->log_str when the table has it (TT_HOST_HAS), else to the
@@ -118,8 +117,7 @@ TT_API void tt_default_host_set_log_level(tt_log_level level);
 
 /* Receives one finished log message: `plugin` is the plugin's name, or NULL for the
  * library's own messages. */
-typedef void (*tt_log_fn)(void *user, tt_log_level level, const char *plugin,
-                          const char *message);
+typedef void (*tt_log_fn)(void *user, tt_log_level level, const char *plugin, const char *message);
 
 /* Sends tt_default_host's log (plugins' messages and the library's own) to `fn` instead of
  * stderr; NULL prints to stderr again. Levels below tt_default_host_set_log_level are

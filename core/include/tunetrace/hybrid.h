@@ -34,50 +34,50 @@
 extern "C" {
 #endif
 
-typedef struct tt_hybrid tt_hybrid;  /* opaque */
+typedef struct tt_hybrid tt_hybrid; /* opaque */
 
 typedef enum tt_hybrid_mode {
-  TT_HYBRID_EXPLORE = 1,   /* a search of K iterations in this state */
-  TT_HYBRID_EXPLOIT = 2    /* one predicted configuration, built once */
+  TT_HYBRID_EXPLORE = 1, /* a search of K iterations in this state */
+  TT_HYBRID_EXPLOIT = 2  /* one predicted configuration, built once */
 } tt_hybrid_mode;
 
 /* Where a state's default cost (tt_hybrid_report.default_cost) comes from. An exploited state
  * does not measure the default (exploitation is one build), so its default cost is the
  * database's when an earlier run measured the default in this very state, else estimated. */
 typedef enum tt_hybrid_cost_source {
-  TT_HYBRID_COST_NONE = 0,      /* unknown (NAN) */
-  TT_HYBRID_COST_MEASURED = 1,  /* measured in this state by this run */
-  TT_HYBRID_COST_DATABASE = 2,  /* measured in this state by an earlier run (the database) */
-  TT_HYBRID_COST_NEAREST = 3    /* estimated: the default's cost in the nearest state (by the
+  TT_HYBRID_COST_NONE = 0,     /* unknown (NAN) */
+  TT_HYBRID_COST_MEASURED = 1, /* measured in this state by this run */
+  TT_HYBRID_COST_DATABASE = 2, /* measured in this state by an earlier run (the database) */
+  TT_HYBRID_COST_NEAREST = 3   /* estimated: the default's cost in the nearest state (by the
                                    normalised indicators) where it was measured, by this run or
                                    a warm start; default_distance says how near */
 } tt_hybrid_cost_source;
 
 /* Everything a hybrid tuner is created from. Zero-initialise, set struct_size, fill in. */
 typedef struct tt_hybrid_desc {
-  uint32_t struct_size;            /* sizeof(tt_hybrid_desc) as the caller was built */
-  const tt_host *host;             /* NULL: tt_default_host() */
-  const tt_space *space;           /* the target's full space (required) */
-  const tt_config *start;          /* configured values: the default (NULL: space defaults) */
-  const tt_space *search;          /* searched and predicted parameters (a tt_space_subset
+  uint32_t struct_size;        /* sizeof(tt_hybrid_desc) as the caller was built */
+  const tt_host *host;         /* NULL: tt_default_host() */
+  const tt_space *space;       /* the target's full space (required) */
+  const tt_config *start;      /* configured values: the default (NULL: space defaults) */
+  const tt_space *search;      /* searched and predicted parameters (a tt_space_subset
                                       of space), NULL: all of space */
-  const char *objective;           /* objective spec; NULL: "render" */
-  const tt_tuner_iface *tuner;     /* the exploration search (required) */
+  const char *objective;       /* objective spec; NULL: "render" */
+  const tt_tuner_iface *tuner; /* the exploration search (required) */
   const tt_config *tuner_settings;
   const char *tuner_name;
-  const tt_predictor_iface *predictor;  /* the model's table (ABI 1.1, required) */
-  tt_predictor *model;             /* created by the caller over `search` (required) */
+  const tt_predictor_iface *predictor; /* the model's table (ABI 1.1, required) */
+  tt_predictor *model;                 /* created by the caller over `search` (required) */
   const char *predictor_name;
-  double epsilon;                  /* probability of exploring a new state, in [0, 1] */
-  uint32_t explore_iterations;     /* K >= 1: tuner iterations of an explored state */
-  uint32_t spp;                    /* samples per pixel of one measurement pass (0: 1) */
-  uint32_t warmup_passes;          /* unmeasured 1-spp passes before the first state */
-  uint64_t seed;                   /* the eps-greedy draws; each state's tuner seed is
+  double epsilon;                      /* probability of exploring a new state, in [0, 1] */
+  uint32_t explore_iterations;         /* K >= 1: tuner iterations of an explored state */
+  uint32_t spp;                        /* samples per pixel of one measurement pass (0: 1) */
+  uint32_t warmup_passes;              /* unmeasured 1-spp passes before the first state */
+  uint64_t seed;                       /* the eps-greedy draws; each state's tuner seed is
                                       derived from it and the state index */
-  const char *plugin, *plugin_version;  /* the target (database, log) */
-  tt_tunedb *db;                   /* borrowed, or NULL */
-  const char *run_id;              /* NULL: generated */
-  const tt_indicator_norm *norm;   /* the model's state space; NULL: the default */
+  const char *plugin, *plugin_version; /* the target (database, log) */
+  tt_tunedb *db;                       /* borrowed, or NULL */
+  const char *run_id;                  /* NULL: generated */
+  const tt_indicator_norm *norm;       /* the model's state space; NULL: the default */
   /* Non-zero: an exploited configuration's measured cost is not given to the model (the
    * thesis observes it; turning it off measures what the model learns from search alone). */
   int32_t no_exploit_feedback;
@@ -86,28 +86,28 @@ typedef struct tt_hybrid_desc {
 /* What one state did (tt_hybrid_step). Strings are owned by the hybrid object and valid
  * until the next step. */
 typedef struct tt_hybrid_report {
-  uint32_t struct_size;            /* sizeof(tt_hybrid_report), set by the caller */
-  uint32_t state_index;            /* 0, 1, ... in step order */
+  uint32_t struct_size; /* sizeof(tt_hybrid_report), set by the caller */
+  uint32_t state_index; /* 0, 1, ... in step order */
   tt_hybrid_mode mode;
-  int32_t fallback;                /* exploit answered the default configuration: the model
+  int32_t fallback;      /* exploit answered the default configuration: the model
                                       had no data, or its answer was infeasible */
-  const char *config;              /* JSON of the configuration the state runs with */
-  double cost;                     /* its cost (explore: the best's mean over its samples;
+  const char *config;    /* JSON of the configuration the state runs with */
+  double cost;           /* its cost (explore: the best's mean over its samples;
                                       exploit: the one measurement, or the database's) */
-  double predicted_cost;           /* the model's expected cost of it (exploit), else NAN */
-  double default_cost;             /* the default's cost in this state when known, else NAN */
-  double search_cost;              /* explore: the sum of the costs of all samples (what the
+  double predicted_cost; /* the model's expected cost of it (exploit), else NAN */
+  double default_cost;   /* the default's cost in this state when known, else NAN */
+  double search_cost;    /* explore: the sum of the costs of all samples (what the
                                       search paid), exploit: = cost */
-  uint32_t samples;                /* samples recorded (measured or from the database) */
-  uint32_t builds;                 /* configurations applied through the target */
-  uint32_t cached;                 /* samples answered by the database */
-  double predict_ms;               /* CPU ms of the model's predict call (exploit) */
-  double state[TT_SCENE_INDICATOR_COUNT];  /* the normalised indicators */
+  uint32_t samples;      /* samples recorded (measured or from the database) */
+  uint32_t builds;       /* configurations applied through the target */
+  uint32_t cached;       /* samples answered by the database */
+  double predict_ms;     /* CPU ms of the model's predict call (exploit) */
+  double state[TT_SCENE_INDICATOR_COUNT]; /* the normalised indicators */
   /* ---- appended ---- */
-  int32_t default_source;          /* tt_hybrid_cost_source of default_cost */
-  double default_distance;         /* TT_HYBRID_COST_NEAREST: distance between the normalised
+  int32_t default_source;  /* tt_hybrid_cost_source of default_cost */
+  double default_distance; /* TT_HYBRID_COST_NEAREST: distance between the normalised
                                       states, else 0 (NAN when unknown) */
-  uint32_t remeasured;             /* samples that measured again a configuration already
+  uint32_t remeasured;     /* samples that measured again a configuration already
                                       measured in this state (the tuner against noise) */
 } tt_hybrid_report;
 
@@ -118,12 +118,12 @@ TT_API void tt_hybrid_destroy(tt_hybrid *h);
 
 /* Which database rows a warm start learns from. Zero-initialise, set struct_size. */
 typedef struct tt_hybrid_warm_filter {
-  uint32_t struct_size;            /* sizeof(tt_hybrid_warm_filter) */
+  uint32_t struct_size; /* sizeof(tt_hybrid_warm_filter) */
   /* Keys of the rows' context JSON that must equal those of `context` (e.g. "clock", "spp",
    * "threads": costs measured with another clock or thread count do not compare); NULL
    * entries end the list. NULL list: no context check. */
   const char *const *context_keys;
-  const char *context;             /* the JSON those keys are compared with */
+  const char *context; /* the JSON those keys are compared with */
   /* Called per candidate row; non-zero keeps it (e.g. leave a validation camera out). */
   int (*keep)(void *user, const tt_tunedb_row *row);
   void *user;
@@ -140,17 +140,17 @@ typedef struct tt_hybrid_warm_filter {
  * so a row measured with another clock and another thread count counts under both. */
 #define TT_HYBRID_WARM_MAX_KEYS 16
 typedef struct tt_hybrid_warm_result {
-  uint32_t struct_size;            /* sizeof(tt_hybrid_warm_result) */
-  uint64_t rows;                   /* rows learnt */
-  uint64_t exploit_rows;           /* of which the model's own answers (mode "exploit") */
-  uint64_t considered;             /* rows of the target plugin in the database */
-  uint64_t other_objective;        /* measured for another objective */
-  uint64_t failed;                 /* failed measurements (never learnt) */
-  uint64_t no_indicators;          /* without indicators (not a state a model can learn) */
-  uint64_t excluded;               /* left out by the filter's keep() */
-  uint64_t other_context;          /* left out by a context or camera key (mismatch[] says
+  uint32_t struct_size;     /* sizeof(tt_hybrid_warm_result) */
+  uint64_t rows;            /* rows learnt */
+  uint64_t exploit_rows;    /* of which the model's own answers (mode "exploit") */
+  uint64_t considered;      /* rows of the target plugin in the database */
+  uint64_t other_objective; /* measured for another objective */
+  uint64_t failed;          /* failed measurements (never learnt) */
+  uint64_t no_indicators;   /* without indicators (not a state a model can learn) */
+  uint64_t excluded;        /* left out by the filter's keep() */
+  uint64_t other_context;   /* left out by a context or camera key (mismatch[] says
                                       which) */
-  uint64_t other_space;            /* configurations this space cannot read (another plugin
+  uint64_t other_space;     /* configurations this space cannot read (another plugin
                                       version with other parameters) */
   /* per key, the filter's context_keys then its camera_keys: rows whose value differs, and
    * the first such value as JSON ("(none)" when the row lacks the key); owned by the hybrid
@@ -159,7 +159,7 @@ typedef struct tt_hybrid_warm_result {
   const char *key[TT_HYBRID_WARM_MAX_KEYS];
   uint64_t mismatch[TT_HYBRID_WARM_MAX_KEYS];
   const char *mismatch_value[TT_HYBRID_WARM_MAX_KEYS];
-  const char *expected_value[TT_HYBRID_WARM_MAX_KEYS];  /* the filter's value ("(none)") */
+  const char *expected_value[TT_HYBRID_WARM_MAX_KEYS]; /* the filter's value ("(none)") */
 } tt_hybrid_warm_result;
 
 /* Teaches the model every usable row of `db` (the target plugin, the session's objective,

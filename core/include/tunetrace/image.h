@@ -21,8 +21,8 @@ typedef struct tt_image_meta {
  * as 32-bit float, so a round trip is bit-exact. */
 TT_API tt_status tt_image_write_exr(const char *path, uint32_t width, uint32_t height,
                                     uint32_t channels, const float *pixels,
-                                    const char *const *channel_names,
-                                    const tt_image_meta *meta, size_t meta_count);
+                                    const char *const *channel_names, const tt_image_meta *meta,
+                                    size_t meta_count);
 
 /* Converts linear scene-referred RGB (in the OCIO config's scene_linear role) to the
  * config's default display/view (sRGB for the built-in config) after multiplying by
@@ -44,8 +44,7 @@ TT_API tt_status tt_image_read(const char *path, uint32_t *width, uint32_t *heig
 
 /* Reads one metadata attribute of an image file into `value` (size `size`); TT_ERR_NO_DATA
  * if absent. */
-TT_API tt_status tt_image_read_meta(const char *path, const char *key, char *value,
-                                    size_t size);
+TT_API tt_status tt_image_read_meta(const char *path, const char *key, char *value, size_t size);
 
 #ifdef __cplusplus
 }

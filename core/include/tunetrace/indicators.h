@@ -35,18 +35,18 @@ extern "C" {
 #define TT_INDICATOR_SPACE_VERSION 1
 
 typedef enum tt_indicator_camera {
-  TT_INDICATOR_CAMERA_EXTENT = 0,  /* +- the scene's extent (bounding-box diagonal) */
-  TT_INDICATOR_CAMERA_TABLE = 1,   /* +- 10 world units (thesis Table 3.2) */
-  TT_INDICATOR_CAMERA_TEXT = 2     /* +- 1e4 world units (thesis 3.3.2 text) */
+  TT_INDICATOR_CAMERA_EXTENT = 0, /* +- the scene's extent (bounding-box diagonal) */
+  TT_INDICATOR_CAMERA_TABLE = 1,  /* +- 10 world units (thesis Table 3.2) */
+  TT_INDICATOR_CAMERA_TEXT = 2    /* +- 1e4 world units (thesis 3.3.2 text) */
 } tt_indicator_camera;
 
 typedef enum tt_indicator_scale {
-  TT_INDICATOR_LINEAR = 0,         /* u = x / bound for every indicator */
-  TT_INDICATOR_LOG = 1             /* log10 scale for the indicators that span decades */
+  TT_INDICATOR_LINEAR = 0, /* u = x / bound for every indicator */
+  TT_INDICATOR_LOG = 1     /* log10 scale for the indicators that span decades */
 } tt_indicator_scale;
 
 typedef struct tt_indicator_norm {
-  uint32_t struct_size;            /* sizeof(tt_indicator_norm) */
+  uint32_t struct_size; /* sizeof(tt_indicator_norm) */
   tt_indicator_camera camera;
   tt_indicator_scale scale;
 } tt_indicator_norm;

@@ -22,7 +22,7 @@ extern "C" {
 
 #define TT_INTEGRATOR_INTERFACE_ID "tt.integrator/1"
 
-typedef struct tt_integrator tt_integrator;  /* opaque, defined by the plugin */
+typedef struct tt_integrator tt_integrator; /* opaque, defined by the plugin */
 
 /* Everything one pass needs. Owned by the host, valid during render_pass only. */
 typedef struct tt_render_ctx {
@@ -31,19 +31,19 @@ typedef struct tt_render_ctx {
   const tt_accel_iface *accel_iface;
   const tt_accel *accel;
   tt_film *film;
-  const tt_camera *camera;        /* pose and resolution of this pass (= film size) */
-  const tt_camera *prev_camera;   /* previous frame's pose for TT_AOV_MOTION, or NULL */
+  const tt_camera *camera;      /* pose and resolution of this pass (= film size) */
+  const tt_camera *prev_camera; /* previous frame's pose for TT_AOV_MOTION, or NULL */
   uint64_t seed;
-  uint32_t pass_index;            /* 0, 1, 2, ... */
-  uint32_t spp;                   /* samples per pixel to add in this pass */
-  uint64_t sample_offset;         /* samples per pixel already in the film */
-  int32_t fixed_jitter;           /* non-zero: every sample uses `jitter` (sequence frames) */
-  float jitter[2];                /* sub-pixel offset in [-0.5, 0.5) when fixed_jitter */
+  uint32_t pass_index;    /* 0, 1, 2, ... */
+  uint32_t spp;           /* samples per pixel to add in this pass */
+  uint64_t sample_offset; /* samples per pixel already in the film */
+  int32_t fixed_jitter;   /* non-zero: every sample uses `jitter` (sequence frames) */
+  float jitter[2];        /* sub-pixel offset in [-0.5, 0.5) when fixed_jitter */
 } tt_render_ctx;
 
 /* A named integrator-specific figure, e.g. {"acceptance", 0.31}. */
 typedef struct tt_metric {
-  const char *name;               /* static string owned by the plugin */
+  const char *name; /* static string owned by the plugin */
   double value;
 } tt_metric;
 
@@ -51,16 +51,16 @@ typedef struct tt_metric {
 
 typedef struct tt_pass_stats {
   uint32_t struct_size;
-  double time_ms;                 /* wall time of the pass */
-  uint64_t rays;                  /* rays traced (closest + shadow) */
-  uint64_t samples;               /* camera samples (or mutations) taken */
-  uint64_t nonfinite;             /* samples dropped as NaN/Inf */
+  double time_ms;     /* wall time of the pass */
+  uint64_t rays;      /* rays traced (closest + shadow) */
+  uint64_t samples;   /* camera samples (or mutations) taken */
+  uint64_t nonfinite; /* samples dropped as NaN/Inf */
   uint32_t metric_count;
   tt_metric metrics[TT_MAX_METRICS];
 } tt_pass_stats;
 
 typedef struct tt_integrator_iface {
-  uint32_t struct_size;           /* sizeof(tt_integrator_iface) as the plugin was built */
+  uint32_t struct_size; /* sizeof(tt_integrator_iface) as the plugin was built */
 
   /* The integrator's parameter space (maxDepth, sampler, ...). Owned by the plugin. */
   const tt_space *(*space)(void);

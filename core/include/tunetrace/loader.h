@@ -31,7 +31,7 @@
 #ifndef TUNETRACE_LOADER_H
 #define TUNETRACE_LOADER_H
 
-#include <tunetrace/params.h>  /* tt_space, used by tt_loaded_plugin_space */
+#include <tunetrace/params.h> /* tt_space, used by tt_loaded_plugin_space */
 #include <tunetrace/plugin.h>
 
 #ifdef __cplusplus

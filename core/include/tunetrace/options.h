@@ -31,7 +31,7 @@ typedef struct tt_option_info {
 } tt_option_info;
 
 typedef struct tt_options_iface {
-  uint32_t struct_size;     /* sizeof(tt_options_iface) as the plugin was built */
+  uint32_t struct_size; /* sizeof(tt_options_iface) as the plugin was built */
 
   /* Number of options. Thread-safe. */
   uint32_t (*count)(void);

@@ -31,13 +31,13 @@
 extern "C" {
 #endif
 
-typedef struct tt_space tt_space;    /* opaque parameter space */
-typedef struct tt_config tt_config;  /* opaque configuration (values for one space) */
+typedef struct tt_space tt_space;   /* opaque parameter space */
+typedef struct tt_config tt_config; /* opaque configuration (values for one space) */
 
 typedef enum tt_param_type {
-  TT_PARAM_INT = 1,    /* integer in [min, max] */
-  TT_PARAM_FLOAT = 2,  /* real in [min, max] */
-  TT_PARAM_NOM = 3     /* one of a list of possible values (no order assumed) */
+  TT_PARAM_INT = 1,   /* integer in [min, max] */
+  TT_PARAM_FLOAT = 2, /* real in [min, max] */
+  TT_PARAM_NOM = 3    /* one of a list of possible values (no order assumed) */
 } tt_param_type;
 
 typedef enum tt_value_kind {
@@ -51,17 +51,17 @@ typedef enum tt_value_kind {
  * the typed field holds the value itself. Strings point into the space (never free). */
 typedef struct tt_value {
   tt_value_kind kind;
-  int32_t index;       /* NOM: index into possibleValues; -1 for INT/FLOAT */
-  int64_t i;           /* TT_VALUE_INT, TT_VALUE_BOOL (0/1) */
-  double f;            /* TT_VALUE_FLOAT; also set (converted) for INT and BOOL */
-  const char *s;       /* TT_VALUE_STRING */
+  int32_t index; /* NOM: index into possibleValues; -1 for INT/FLOAT */
+  int64_t i;     /* TT_VALUE_INT, TT_VALUE_BOOL (0/1) */
+  double f;      /* TT_VALUE_FLOAT; also set (converted) for INT and BOOL */
+  const char *s; /* TT_VALUE_STRING */
 } tt_value;
 
 /* Result of a constraint check. */
 typedef enum tt_check_result {
-  TT_CHECK_OK = 0,          /* feasible as is */
-  TT_CHECK_REPAIRED = 1,    /* infeasible; `config` was changed into a feasible one */
-  TT_CHECK_INFEASIBLE = 2   /* infeasible and not repairable; the plugin will reject it */
+  TT_CHECK_OK = 0,        /* feasible as is */
+  TT_CHECK_REPAIRED = 1,  /* infeasible; `config` was changed into a feasible one */
+  TT_CHECK_INFEASIBLE = 2 /* infeasible and not repairable; the plugin will reject it */
 } tt_check_result;
 
 /* Constraint check: may modify `config` to repair it; writes a one-line reason into `why`
@@ -79,8 +79,8 @@ TT_API void tt_space_destroy(tt_space *space);
 TT_API int tt_space_add_int(tt_space *space, const char *name, int64_t min, int64_t max,
                             int64_t def, const char *description);
 /* Adds a FLOAT parameter (log != 0: tuners search in log space; requires min > 0). */
-TT_API int tt_space_add_float(tt_space *space, const char *name, double min, double max,
-                              double def, int log, const char *description);
+TT_API int tt_space_add_float(tt_space *space, const char *name, double min, double max, double def,
+                              int log, const char *description);
 /* Adds a NOM parameter with integer possible values; def_index selects the default. */
 TT_API int tt_space_add_nom_int(tt_space *space, const char *name, const int64_t *values,
                                 size_t count, size_t def_index, const char *description);
@@ -88,9 +88,8 @@ TT_API int tt_space_add_nom_int(tt_space *space, const char *name, const int64_t
 TT_API int tt_space_add_nom_bool(tt_space *space, const char *name, int def,
                                  const char *description);
 /* Adds a NOM parameter with string possible values (copied). */
-TT_API int tt_space_add_nom_string(tt_space *space, const char *name,
-                                   const char *const *values, size_t count, size_t def_index,
-                                   const char *description);
+TT_API int tt_space_add_nom_string(tt_space *space, const char *name, const char *const *values,
+                                   size_t count, size_t def_index, const char *description);
 /* Adds a human-readable constraint description (published in the JSON). */
 TT_API void tt_space_add_constraint_text(tt_space *space, const char *description);
 /* Installs the constraint check used by tt_space_check (one per space). */

@@ -41,11 +41,18 @@ extern "C" {
 #define TT_PATH_BOUNCE_BSDF_DIR 4
 #define TT_PATH_BOUNCE_RR 6
 /* Number of dimensions a path of up to `max_depth` bounces can use. */
-#define TT_PATH_DIM_COUNT(max_depth) (TT_PATH_DIM_FIRST_BOUNCE + TT_PATH_DIMS_PER_BOUNCE * ((max_depth) + 1))
+#define TT_PATH_DIM_COUNT(max_depth)                                                               \
+  (TT_PATH_DIM_FIRST_BOUNCE + TT_PATH_DIMS_PER_BOUNCE * ((max_depth) + 1))
 
 typedef enum tt_dim_kind {
-  TT_DIM_FILM = 1, TT_DIM_LENS = 2, TT_DIM_LIGHT_SELECT = 3, TT_DIM_LIGHT_POS = 4,
-  TT_DIM_BSDF_LOBE = 5, TT_DIM_BSDF_DIR = 6, TT_DIM_RR = 7, TT_DIM_RESERVED = 8
+  TT_DIM_FILM = 1,
+  TT_DIM_LENS = 2,
+  TT_DIM_LIGHT_SELECT = 3,
+  TT_DIM_LIGHT_POS = 4,
+  TT_DIM_BSDF_LOBE = 5,
+  TT_DIM_BSDF_DIR = 6,
+  TT_DIM_RR = 7,
+  TT_DIM_RESERVED = 8
 } tt_dim_kind;
 
 /* What dimension `dim` is used for. */
@@ -67,25 +74,25 @@ typedef struct tt_tracer {
 } tt_tracer;
 
 typedef enum tt_mis_heuristic {
-  TT_MIS_NONE = 0,     /* light sampling only for area lights (NEE), BSDF hits on lights not counted */
+  TT_MIS_NONE = 0, /* light sampling only for area lights (NEE), BSDF hits on lights not counted */
   TT_MIS_BALANCE = 1,
-  TT_MIS_POWER = 2     /* beta = 2 */
+  TT_MIS_POWER = 2 /* beta = 2 */
 } tt_mis_heuristic;
 
 typedef enum tt_light_strategy {
-  TT_STRATEGY_MIS = 0,       /* NEE + BSDF sampling combined with the MIS heuristic */
-  TT_STRATEGY_LIGHT = 1,     /* NEE only (emission found by BSDF sampling ignored after bounce 0) */
-  TT_STRATEGY_BSDF = 2       /* BSDF sampling only (no NEE) */
+  TT_STRATEGY_MIS = 0,   /* NEE + BSDF sampling combined with the MIS heuristic */
+  TT_STRATEGY_LIGHT = 1, /* NEE only (emission found by BSDF sampling ignored after bounce 0) */
+  TT_STRATEGY_BSDF = 2   /* BSDF sampling only (no NEE) */
 } tt_light_strategy;
 
 typedef struct tt_path_options {
   uint32_t struct_size;
-  uint32_t max_depth;        /* bounces; 0 = directly visible emission only */
-  uint32_t rr_depth;         /* Russian roulette from this bounce on (>= max_depth: never) */
+  uint32_t max_depth; /* bounces; 0 = directly visible emission only */
+  uint32_t rr_depth;  /* Russian roulette from this bounce on (>= max_depth: never) */
   tt_light_strategy strategy;
   tt_mis_heuristic heuristic;
   /* ---- appended (ABI 1.2): read only when struct_size covers it ---- */
-  uint32_t result_size;      /* sizeof(tt_path_result) the caller passes to tt_path_trace /
+  uint32_t result_size; /* sizeof(tt_path_result) the caller passes to tt_path_trace /
                                 tt_path_finish: only that much is written. 0 (the default):
                                 the ABI 1.1 result, TT_PATH_RESULT_SIZE_1_1 bytes */
 } tt_path_options;
@@ -94,18 +101,18 @@ typedef struct tt_path_options {
 TT_API void tt_path_options_default(tt_path_options *options);
 
 typedef struct tt_path_result {
-  float L[3];                /* radiance along the camera ray (finite: non-finite -> 0) */
-  float albedo[3];           /* first hit reflectance (0 on a miss) */
-  float normal[3];           /* first hit shading normal (0 on a miss) */
-  float position[3];         /* first hit position (for motion vectors) */
-  float distance;            /* first hit distance along the ray (+inf on a miss) */
-  uint32_t rays;             /* rays traced (closest + shadow) */
-  uint32_t bounces;          /* surface interactions */
-  uint32_t max_dim;          /* highest dimension + 1 that get() was asked for */
-  int32_t hit;               /* non-zero if the camera ray hit geometry */
-  int32_t nonfinite;         /* non-zero if a non-finite value was produced and zeroed */
+  float L[3];        /* radiance along the camera ray (finite: non-finite -> 0) */
+  float albedo[3];   /* first hit reflectance (0 on a miss) */
+  float normal[3];   /* first hit shading normal (0 on a miss) */
+  float position[3]; /* first hit position (for motion vectors) */
+  float distance;    /* first hit distance along the ray (+inf on a miss) */
+  uint32_t rays;     /* rays traced (closest + shadow) */
+  uint32_t bounces;  /* surface interactions */
+  uint32_t max_dim;  /* highest dimension + 1 that get() was asked for */
+  int32_t hit;       /* non-zero if the camera ray hit geometry */
+  int32_t nonfinite; /* non-zero if a non-finite value was produced and zeroed */
   /* ---- appended (ABI 1.2): written only when the options' result_size covers it ---- */
-  float prev_position[3];    /* where the first hit's surface point was at the previous
+  float prev_position[3]; /* where the first hit's surface point was at the previous
                                 frame (tt_mesh.prev_positions at the hit's barycentrics; ==
                                 position on a still mesh and on a miss): object motion */
 } tt_path_result;
@@ -133,9 +140,8 @@ TT_API void tt_path_trace(const tt_path_tracer *pt, const tt_tracer *tracer,
  * in pixels from (fx, fy) to where `prev` (the previous frame's camera, NULL: no motion)
  * saw the hit (a miss moves with the camera's rotation only). The integrators share it, so
  * every one writes the same AOVs. Not thread-safe for one pixel: callers split pixels. */
-TT_API void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y,
-                               const tt_camera_frame *frame, const tt_camera_frame *prev,
-                               float fx, float fy, const tt_ray *ray,
+TT_API void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y, const tt_camera_frame *frame,
+                               const tt_camera_frame *prev, float fx, float fy, const tt_ray *ray,
                                const tt_path_result *r, uint64_t n);
 /* tt_path_write_aovs with the hit's previous position (ABI 1.2): the motion AOV projects
  * `prev_position` (r->prev_position of a result traced with result_size covering it; NULL:
@@ -143,9 +149,8 @@ TT_API void tt_path_write_aovs(tt_film *film, uint32_t x, uint32_t y,
  * camera's. */
 TT_API void tt_path_write_aovs_ex(tt_film *film, uint32_t x, uint32_t y,
                                   const tt_camera_frame *frame, const tt_camera_frame *prev,
-                                  float fx, float fy, const tt_ray *ray,
-                                  const tt_path_result *r, const float prev_position[3],
-                                  uint64_t n);
+                                  float fx, float fy, const tt_ray *ray, const tt_path_result *r,
+                                  const float prev_position[3], uint64_t n);
 
 /* ---- the same path, one step at a time (wavefront integrators) ----
  *

@@ -45,12 +45,12 @@ extern "C" {
 
 /* The six plugin kinds. Values never change; new kinds are appended. */
 typedef enum tt_plugin_kind {
-  TT_KIND_ACCEL = 1,       /* acceleration structure: "tt.accel/1" (accel.h) */
-  TT_KIND_INTEGRATOR = 2,  /* light transport: "tt.integrator/1" (integrator.h) */
-  TT_KIND_TUNER = 3,       /* search over a parameter space: "tt.tuner/1" (tuner.h) */
-  TT_KIND_PREDICTOR = 4,   /* state -> configuration model: "tt.predictor/1" (predictor.h) */
-  TT_KIND_POST = 5,        /* per-frame image filter with temporal state: "tt.post/1" (post.h) */
-  TT_KIND_SAMPLER = 6      /* primary-sample generator: "tt.sampler/1" (sampler.h) */
+  TT_KIND_ACCEL = 1,      /* acceleration structure: "tt.accel/1" (accel.h) */
+  TT_KIND_INTEGRATOR = 2, /* light transport: "tt.integrator/1" (integrator.h) */
+  TT_KIND_TUNER = 3,      /* search over a parameter space: "tt.tuner/1" (tuner.h) */
+  TT_KIND_PREDICTOR = 4,  /* state -> configuration model: "tt.predictor/1" (predictor.h) */
+  TT_KIND_POST = 5,       /* per-frame image filter with temporal state: "tt.post/1" (post.h) */
+  TT_KIND_SAMPLER = 6     /* primary-sample generator: "tt.sampler/1" (sampler.h) */
 } tt_plugin_kind;
 
 #define TT_KIND_COUNT 6
@@ -66,13 +66,13 @@ typedef enum tt_plugin_kind {
 #endif
 
 typedef struct tt_plugin {
-  uint32_t struct_size;     /* sizeof(tt_plugin) as the plugin was built */
-  uint16_t abi_major;       /* TT_ABI_MAJOR the plugin was built against */
-  uint16_t abi_minor;       /* TT_ABI_MINOR the plugin was built against */
-  uint32_t kind;            /* a tt_plugin_kind */
-  const char *name;         /* unique short name, [a-z0-9_]+, e.g. "accel_embree" */
-  const char *version;      /* the plugin's own semantic version, e.g. "1.2.0" */
-  const char *description;  /* one line for --list-plugins */
+  uint32_t struct_size;    /* sizeof(tt_plugin) as the plugin was built */
+  uint16_t abi_major;      /* TT_ABI_MAJOR the plugin was built against */
+  uint16_t abi_minor;      /* TT_ABI_MINOR the plugin was built against */
+  uint32_t kind;           /* a tt_plugin_kind */
+  const char *name;        /* unique short name, [a-z0-9_]+, e.g. "accel_embree" */
+  const char *version;     /* the plugin's own semantic version, e.g. "1.2.0" */
+  const char *description; /* one line for --list-plugins */
 
   /* Called once after the file is loaded by its first registry, before anything else
    * (see Lifetime above). `host` stays valid until deinit

@@ -31,39 +31,41 @@ extern "C" {
 
 #define TT_PREDICTOR_INTERFACE_ID "tt.predictor/1"
 
-typedef struct tt_predictor tt_predictor;  /* opaque, defined by the plugin */
+typedef struct tt_predictor tt_predictor; /* opaque, defined by the plugin */
 
 /* ---- ABI 1.1 argument structs (each begins with its size; fields only appended) ---- */
 
 /* What a model is created for (create_ex). */
 typedef struct tt_predictor_setup {
-  uint32_t struct_size;          /* sizeof(tt_predictor_setup) as the caller was built */
-  const tt_space *target;        /* configurations predicted; must outlive the model */
-  uint32_t state_dim;            /* values per state (>= 1) */
+  uint32_t struct_size;   /* sizeof(tt_predictor_setup) as the caller was built */
+  const tt_space *target; /* configurations predicted; must outlive the model */
+  uint32_t state_dim;     /* values per state (>= 1) */
   /* What a state vector means, e.g. tt_indicator_norm_id()'s "tt.indicators/1 camera=extent
    * scale=linear"; recorded in model files, and load() refuses a file of another state
    * space. NULL is "". */
   const char *state_space;
-  const char *const *state_names;/* state_dim names recorded in model files, or NULL */
-  const tt_config *settings;     /* the predictor's hyper-parameters (of space()), NULL =
+  const char *const *state_names; /* state_dim names recorded in model files, or NULL */
+  const tt_config *settings;      /* the predictor's hyper-parameters (of space()), NULL =
                                     defaults */
-  uint64_t seed;                 /* every random choice (RBF centres, candidates) from it */
+  uint64_t seed;                  /* every random choice (RBF centres, candidates) from it */
 } tt_predictor_setup;
 
 /* One observation (observe_ex). */
 typedef struct tt_predictor_sample {
-  uint32_t struct_size;          /* sizeof(tt_predictor_sample) */
-  const double *state;           /* state_dim values */
-  const tt_config *config;       /* a configuration of the target space */
-  double cost;                   /* measured cost (finite, > 0), or TT_COST_INFEASIBLE */
-  double default_cost;           /* the state's default configuration's cost, or NAN */
+  uint32_t struct_size;    /* sizeof(tt_predictor_sample) */
+  const double *state;     /* state_dim values */
+  const tt_config *config; /* a configuration of the target space */
+  double cost;             /* measured cost (finite, > 0), or TT_COST_INFEASIBLE */
+  double default_cost;     /* the state's default configuration's cost, or NAN */
 } tt_predictor_sample;
 
 /* observe_ex flags. */
-#define TT_PREDICTOR_ONLINE 0u   /* each sample once, in order: online learning */
-#define TT_PREDICTOR_OFFLINE 1u  /* a data set (e.g. a tuning DB): the model may take several
+#define TT_PREDICTOR_ONLINE 0u /* each sample once, in order: online learning */
+#define TT_PREDICTOR_OFFLINE                                                                       \
+  1u /* a data set (e.g. a tuning DB): the model may take several
                                     seeded passes in shuffled order (RBF: `epochs`) */
-#define TT_PREDICTOR_EXPLOIT 2u  /* or'ed with either: the samples measure configurations the
+#define TT_PREDICTOR_EXPLOIT                                                                       \
+  2u /* or'ed with either: the samples measure configurations the
                                     model itself chose (exploitation), not what a search found.
                                     They refine what the model knows of states it already
                                     holds, but must not become the answer for other states: a
@@ -75,32 +77,32 @@ typedef struct tt_predictor_sample {
 
 /* A query (predict_ex, estimate). */
 typedef struct tt_predictor_query {
-  uint32_t struct_size;          /* sizeof(tt_predictor_query) */
-  const double *state;           /* state_dim values */
-  double default_cost;           /* the state's default cost if known (turns a relative
+  uint32_t struct_size; /* sizeof(tt_predictor_query) */
+  const double *state;  /* state_dim values */
+  double default_cost;  /* the state's default cost if known (turns a relative
                                     estimate into a cost), else NAN */
 } tt_predictor_query;
 
 /* What predict_ex says about its answer. Fields a model does not know are NAN / 0. */
 typedef struct tt_predictor_result {
-  uint32_t struct_size;          /* sizeof(tt_predictor_result), set by the caller */
-  double expected_cost;          /* the model's cost estimate of the answer, NAN if none */
-  double value;                  /* the model's value of the answer (RBF: Q = theta.phi) */
-  double distance;               /* NN: distance to the stored state answered from */
-  uint64_t candidates;           /* configurations compared to find the answer */
+  uint32_t struct_size; /* sizeof(tt_predictor_result), set by the caller */
+  double expected_cost; /* the model's cost estimate of the answer, NAN if none */
+  double value;         /* the model's value of the answer (RBF: Q = theta.phi) */
+  double distance;      /* NN: distance to the stored state answered from */
+  uint64_t candidates;  /* configurations compared to find the answer */
 } tt_predictor_result;
 
 /* Size and shape of a model (info). */
 typedef struct tt_predictor_info {
-  uint32_t struct_size;          /* sizeof(tt_predictor_info), set by the caller */
-  uint64_t memory_bytes;         /* heap bytes the model holds */
-  uint64_t entries;              /* NN: stored states; RBF: features */
-  uint64_t observations;         /* observations learnt from since create/load */
-  uint32_t format_version;       /* version of the model files save() writes */
+  uint32_t struct_size;    /* sizeof(tt_predictor_info), set by the caller */
+  uint64_t memory_bytes;   /* heap bytes the model holds */
+  uint64_t entries;        /* NN: stored states; RBF: features */
+  uint64_t observations;   /* observations learnt from since create/load */
+  uint32_t format_version; /* version of the model files save() writes */
 } tt_predictor_info;
 
 typedef struct tt_predictor_iface {
-  uint32_t struct_size;     /* sizeof(tt_predictor_iface) as the plugin was built */
+  uint32_t struct_size; /* sizeof(tt_predictor_iface) as the plugin was built */
 
   /* The predictor's own hyper-parameters (RBF widths, learning rates, ...), or NULL.
    * Owned by the plugin. Thread-safe. */
@@ -113,8 +115,7 @@ typedef struct tt_predictor_iface {
                       uint64_t seed, tt_predictor **out);
 
   /* Adds one observation: in `state`, `config` measured `cost` (lower is better). */
-  tt_status (*observe)(tt_predictor *p, const double *state, const tt_config *config,
-                       double cost);
+  tt_status (*observe)(tt_predictor *p, const double *state, const tt_config *config, double cost);
 
   /* Writes the predicted best configuration for `state` into `out`; `expected_cost` (may
    * be NULL) receives the model's cost estimate (NAN if it has none). TT_ERR_NO_DATA if
@@ -156,15 +157,15 @@ typedef struct tt_predictor_iface {
 
   /* The model's cost estimate of `config` in the query's state (NAN if it has none, e.g. NN
    * for a configuration it never stored). */
-  tt_status (*estimate)(const tt_predictor *p, const tt_predictor_query *q,
-                        const tt_config *config, double *cost);
+  tt_status (*estimate)(const tt_predictor *p, const tt_predictor_query *q, const tt_config *config,
+                        double *cost);
 } tt_predictor_iface;
 
 /* Bytes of the ABI 1.0 table: the shortest table a host accepts. */
 #define TT_PREDICTOR_IFACE_SIZE_1_0 offsetof(tt_predictor_iface, create_ex)
 
 /* True if the plugin's table provides `field` (it may be older than the host). */
-#define TT_PREDICTOR_HAS(iface, field) \
+#define TT_PREDICTOR_HAS(iface, field)                                                             \
   (TT_HAS_FIELD(tt_predictor_iface, iface, field) && (iface)->field)
 
 #ifdef __cplusplus

@@ -16,7 +16,7 @@ typedef struct tt_ray {
   float org[3];
   float tnear;
   float dir[3];
-  float tfar;       /* intersect: shortened to the hit distance on a hit */
+  float tfar; /* intersect: shortened to the hit distance on a hit */
 } tt_ray;
 
 /* Closest hit. geom_id is the mesh index in the scene, prim_id the triangle in that mesh;

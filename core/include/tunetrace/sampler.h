@@ -20,11 +20,11 @@ extern "C" {
 
 #define TT_SAMPLER_INTERFACE_ID "tt.sampler/1"
 
-typedef struct tt_sampler tt_sampler;  /* opaque, defined by the implementation */
+typedef struct tt_sampler tt_sampler; /* opaque, defined by the implementation */
 
 typedef struct tt_sampler_iface {
-  uint32_t struct_size;     /* sizeof(tt_sampler_iface) as built */
-  const char *name;         /* "independent", "halton", ... */
+  uint32_t struct_size; /* sizeof(tt_sampler_iface) as built */
+  const char *name;     /* "independent", "halton", ... */
 
   /* The sampler's settings space, or NULL. Thread-safe. */
   const tt_space *(*space)(void);
@@ -37,8 +37,7 @@ typedef struct tt_sampler_iface {
   size_t (*state_size)(const tt_sampler *s);
 
   /* Positions `state` at sample `sample_index` of pixel (px, py). Thread-safe. */
-  void (*start)(const tt_sampler *s, void *state, uint32_t px, uint32_t py,
-                uint64_t sample_index);
+  void (*start)(const tt_sampler *s, void *state, uint32_t px, uint32_t py, uint64_t sample_index);
 
   /* Returns dimension `dim` of the current sample, in [0, 1). Dimensions may be requested
    * in any order; the same (pixel, index, dim) always gives the same number. Thread-safe. */

@@ -21,69 +21,69 @@ typedef struct tt_scene tt_scene;
 /* A triangle mesh in world space. */
 typedef struct tt_mesh {
   uint32_t struct_size;
-  const char *name;           /* from the scene file ("mesh[3]" if unnamed) */
+  const char *name; /* from the scene file ("mesh[3]" if unnamed) */
   uint32_t vertex_count;
   uint32_t triangle_count;
-  const float *positions;     /* 3 * vertex_count floats, world space */
-  const float *normals;       /* 3 * vertex_count unit normals, or NULL (use the face normal) */
-  const float *uvs;           /* 2 * vertex_count, or NULL */
-  const uint32_t *indices;    /* 3 * triangle_count vertex indices */
-  uint32_t material;          /* index into the scene's materials */
-  int32_t light;              /* index of the area light this mesh emits as, or -1 */
+  const float *positions;  /* 3 * vertex_count floats, world space */
+  const float *normals;    /* 3 * vertex_count unit normals, or NULL (use the face normal) */
+  const float *uvs;        /* 2 * vertex_count, or NULL */
+  const uint32_t *indices; /* 3 * triangle_count vertex indices */
+  uint32_t material;       /* index into the scene's materials */
+  int32_t light;           /* index of the area light this mesh emits as, or -1 */
   /* ---- appended (ABI 1.2): animation; read only when struct_size covers them ---- */
-  uint32_t motion;            /* a tt_mesh_motion: how tt_scene_set_time changes the mesh */
+  uint32_t motion;               /* a tt_mesh_motion: how tt_scene_set_time changes the mesh */
   const float *prev_positions;   /* 3 * vertex_count: world positions at the previous frame's
                                     time (tt_scene_set_time); == positions when static */
   const float *object_positions; /* TT_MESH_RIGID: 3 * vertex_count in object space; else
                                     NULL */
-  float transform[12];        /* TT_MESH_RIGID: row-major 3x4 object-to-world matrix at the
+  float transform[12];           /* TT_MESH_RIGID: row-major 3x4 object-to-world matrix at the
                                  current time (positions are it times object_positions,
                                  computed in double and rounded); identity otherwise */
-  uint64_t revision;          /* changes whenever tt_scene_set_time rewrites the positions */
+  uint64_t revision;             /* changes whenever tt_scene_set_time rewrites the positions */
 } tt_mesh;
 
 /* How a mesh moves over the scene's time (tt_mesh.motion). */
 typedef enum tt_mesh_motion {
-  TT_MESH_STATIC = 0,         /* never changes */
-  TT_MESH_RIGID = 1,          /* placed by a keyframed transform: positions = transform *
+  TT_MESH_STATIC = 0,   /* never changes */
+  TT_MESH_RIGID = 1,    /* placed by a keyframed transform: positions = transform *
                                  object_positions */
-  TT_MESH_DEFORMING = 2       /* vertices move independently (morph targets, skinning) */
+  TT_MESH_DEFORMING = 2 /* vertices move independently (morph targets, skinning) */
 } tt_mesh_motion;
 
 typedef enum tt_material_type {
-  TT_MATERIAL_DIFFUSE = 1,     /* Lambert, or Oren-Nayar when roughness > 0 */
-  TT_MATERIAL_CONDUCTOR = 2,   /* anisotropic GGX microfacet metal (eta, k) */
-  TT_MATERIAL_DIELECTRIC = 3,  /* smooth glass with Fresnel (rough when alpha > 0) */
-  TT_MATERIAL_MIRROR = 4,      /* ideal specular reflector, tinted by `specular` */
-  TT_MATERIAL_PLASTIC = 5      /* diffuse base under a GGX dielectric coat (glossy) */
+  TT_MATERIAL_DIFFUSE = 1,    /* Lambert, or Oren-Nayar when roughness > 0 */
+  TT_MATERIAL_CONDUCTOR = 2,  /* anisotropic GGX microfacet metal (eta, k) */
+  TT_MATERIAL_DIELECTRIC = 3, /* smooth glass with Fresnel (rough when alpha > 0) */
+  TT_MATERIAL_MIRROR = 4,     /* ideal specular reflector, tinted by `specular` */
+  TT_MATERIAL_PLASTIC = 5     /* diffuse base under a GGX dielectric coat (glossy) */
 } tt_material_type;
 
 typedef struct tt_material {
   uint32_t struct_size;
   const char *name;
   tt_material_type type;
-  float albedo[3];          /* diffuse reflectance (linear RGB), DIFFUSE and PLASTIC base */
-  int32_t albedo_texture;   /* index of an image texture modulating albedo, or -1 */
-  float roughness;          /* Oren-Nayar sigma in radians (DIFFUSE) */
-  float alpha[2];           /* GGX alpha_x, alpha_y (CONDUCTOR, PLASTIC, rough DIELECTRIC) */
-  float eta[3];             /* CONDUCTOR: real part of the IOR per channel */
-  float k[3];               /* CONDUCTOR: imaginary part (absorption) per channel */
-  float ior;                /* DIELECTRIC / PLASTIC coat: index of refraction */
-  float specular[3];        /* tint of specular reflection/transmission */
-  float emission[3];        /* emitted radiance; non-zero makes every mesh using it a light */
-  int32_t two_sided;        /* emission from both sides when non-zero */
+  float albedo[3];        /* diffuse reflectance (linear RGB), DIFFUSE and PLASTIC base */
+  int32_t albedo_texture; /* index of an image texture modulating albedo, or -1 */
+  float roughness;        /* Oren-Nayar sigma in radians (DIFFUSE) */
+  float alpha[2];         /* GGX alpha_x, alpha_y (CONDUCTOR, PLASTIC, rough DIELECTRIC) */
+  float eta[3];           /* CONDUCTOR: real part of the IOR per channel */
+  float k[3];             /* CONDUCTOR: imaginary part (absorption) per channel */
+  float ior;              /* DIELECTRIC / PLASTIC coat: index of refraction */
+  float specular[3];      /* tint of specular reflection/transmission */
+  float emission[3];      /* emitted radiance; non-zero makes every mesh using it a light */
+  int32_t two_sided;      /* emission from both sides when non-zero */
 } tt_material;
 
 typedef struct tt_texture {
   uint32_t struct_size;
-  const char *path;         /* resolved path of the image file */
-  int32_t srgb;             /* non-zero: the file holds sRGB-encoded colour */
+  const char *path; /* resolved path of the image file */
+  int32_t srgb;     /* non-zero: the file holds sRGB-encoded colour */
 } tt_texture;
 
 typedef enum tt_light_type {
-  TT_LIGHT_AREA = 1,          /* an emissive mesh (radiance from its material) */
-  TT_LIGHT_ENV_CONSTANT = 2,  /* uniform environment of radiance `radiance` */
-  TT_LIGHT_ENV_IMAGE = 3,     /* lat-long environment image `image` scaled by `radiance` */
+  TT_LIGHT_AREA = 1,         /* an emissive mesh (radiance from its material) */
+  TT_LIGHT_ENV_CONSTANT = 2, /* uniform environment of radiance `radiance` */
+  TT_LIGHT_ENV_IMAGE = 3,    /* lat-long environment image `image` scaled by `radiance` */
   TT_LIGHT_POINT = 4,
   TT_LIGHT_SPOT = 5,
   TT_LIGHT_DISTANT = 6
@@ -92,14 +92,14 @@ typedef enum tt_light_type {
 typedef struct tt_light {
   uint32_t struct_size;
   tt_light_type type;
-  uint32_t mesh;            /* AREA: index of the emitting mesh */
-  float radiance[3];        /* AREA: emitted radiance; ENV: radiance or scale; POINT/SPOT:
+  uint32_t mesh;              /* AREA: index of the emitting mesh */
+  float radiance[3];          /* AREA: emitted radiance; ENV: radiance or scale; POINT/SPOT:
                                intensity; DISTANT: irradiance */
-  float position[3];        /* POINT, SPOT */
-  float direction[3];       /* SPOT, DISTANT: direction the light travels */
+  float position[3];          /* POINT, SPOT */
+  float direction[3];         /* SPOT, DISTANT: direction the light travels */
   float cos_inner, cos_outer; /* SPOT falloff cone */
-  const char *image;        /* ENV_IMAGE: resolved path */
-  float area;               /* AREA: total surface area (world units^2) */
+  const char *image;          /* ENV_IMAGE: resolved path */
+  float area;                 /* AREA: total surface area (world units^2) */
 } tt_light;
 
 /* One camera pose; a camera path is a list of them (times in seconds, increasing). */
@@ -113,7 +113,7 @@ typedef struct tt_camera_key {
   float position[3];
   float target[3];
   float up[3];
-  float fov_y;              /* vertical field of view in degrees */
+  float fov_y; /* vertical field of view in degrees */
 } tt_camera_key;
 
 typedef struct tt_camera {
@@ -121,19 +121,19 @@ typedef struct tt_camera {
   float position[3];
   float target[3];
   float up[3];
-  float fov_y;              /* vertical field of view, degrees, in (0, 180) */
-  uint32_t width, height;   /* resolution in pixels */
-  uint32_t key_count;       /* camera path keyframes (0: a still camera) */
+  float fov_y;            /* vertical field of view, degrees, in (0, 180) */
+  uint32_t width, height; /* resolution in pixels */
+  uint32_t key_count;     /* camera path keyframes (0: a still camera) */
   const tt_camera_key *keys;
 } tt_camera;
 
 /* Render settings stored in the scene (the host's options override them). */
 typedef struct tt_render_settings {
   uint32_t struct_size;
-  uint32_t spp;             /* samples per pixel for the final image */
-  uint32_t max_depth;       /* default path depth (bounces) for integrators */
+  uint32_t spp;       /* samples per pixel for the final image */
+  uint32_t max_depth; /* default path depth (bounces) for integrators */
   uint64_t seed;
-  double time_budget_s;     /* 0: no budget */
+  double time_budget_s; /* 0: no budget */
 } tt_render_settings;
 
 /* Loads a scene file (scene.json or .pbrt, chosen by extension; a scene.json may "import"

@@ -49,7 +49,7 @@
 extern "C" {
 #endif
 
-typedef struct tt_session tt_session;  /* opaque session handle */
+typedef struct tt_session tt_session; /* opaque session handle */
 
 /* ---- set-up ---------------------------------------------------------------------- */
 
@@ -192,8 +192,7 @@ TT_API void tt_session_reset(tt_session *s);
 /* Rebuilds the accel with `config` (NULL: the session's accel configuration); the old
  * structure is destroyed first, so on failure no accel is left (rebuild again to render).
  * `*build_ms` (may be NULL): the build time the accel reports, else the wall time. */
-TT_API tt_status tt_session_rebuild_accel(tt_session *s, const tt_config *config,
-                                          double *build_ms);
+TT_API tt_status tt_session_rebuild_accel(tt_session *s, const tt_config *config, double *build_ms);
 
 /* Applies `config` (of the plugin's space) to the plugin at registry `index` after start:
  * accel: rebuild; integrator: configure (its accumulated state survives); post: configure
@@ -204,17 +203,17 @@ TT_API tt_status tt_session_apply(tt_session *s, size_t index, const tt_config *
 
 /* What the session's passes and builds measured since it was created. */
 typedef struct tt_session_stats {
-  uint32_t struct_size;     /* sizeof(tt_session_stats) as the caller was built */
-  uint32_t passes;          /* progressive passes completed */
-  uint32_t spp;             /* samples per pixel in the film (since the last reset) */
-  uint64_t total_spp;       /* samples per pixel rendered, resets included */
-  double render_ms;         /* wall time of all passes, interrupted ones included */
+  uint32_t struct_size;               /* sizeof(tt_session_stats) as the caller was built */
+  uint32_t passes;                    /* progressive passes completed */
+  uint32_t spp;                       /* samples per pixel in the film (since the last reset) */
+  uint64_t total_spp;                 /* samples per pixel rendered, resets included */
+  double render_ms;                   /* wall time of all passes, interrupted ones included */
   uint64_t rays, samples, nonfinite;  /* summed over passes */
-  double build_ms;          /* the last successful accel build */
-  tt_accel_build_stats build;        /* statistics of the last successful build */
-  tt_pass_stats last_pass;  /* the last completed pass (integrator metrics) */
-  double metric_sums[TT_MAX_METRICS];/* per metric slot, summed over completed passes */
-  uint64_t seed;            /* the seed of the passes (scene's render.seed unless set) */
+  double build_ms;                    /* the last successful accel build */
+  tt_accel_build_stats build;         /* statistics of the last successful build */
+  tt_pass_stats last_pass;            /* the last completed pass (integrator metrics) */
+  double metric_sums[TT_MAX_METRICS]; /* per metric slot, summed over completed passes */
+  uint64_t seed;                      /* the seed of the passes (scene's render.seed unless set) */
 } tt_session_stats;
 
 /* Fills `out` up to out->struct_size. */
@@ -237,14 +236,14 @@ TT_API tt_status tt_session_tuning_target(tt_session *s, size_t index, int want_
 
 /* What a tuning run of the session searches (tt_session_tuning_plan). */
 typedef struct tt_tuning_plan {
-  uint32_t struct_size;        /* sizeof(tt_tuning_plan) as the caller was built */
-  size_t target_index;         /* the target's registry index (tt_session_config_at) */
-  tt_loaded_plugin *target;    /* the plugin tuned */
-  const tt_space *space;       /* its full space: what is measured and checked */
-  tt_space *search;            /* the searched parameters (a tt_space_subset of `space` whose
+  uint32_t struct_size;     /* sizeof(tt_tuning_plan) as the caller was built */
+  size_t target_index;      /* the target's registry index (tt_session_config_at) */
+  tt_loaded_plugin *target; /* the plugin tuned */
+  const tt_space *space;    /* its full space: what is measured and checked */
+  tt_space *search;         /* the searched parameters (a tt_space_subset of `space` whose
                                   defaults are the configured values), or NULL: all of space.
                                   Owned by the plan: tt_tuning_plan_release */
-  const char *objective;       /* the default objective: the target's tuning hint's
+  const char *objective;    /* the default objective: the target's tuning hint's
                                   (tuning_hint.h), else "render"; valid while the plugin is
                                   loaded */
 } tt_tuning_plan;

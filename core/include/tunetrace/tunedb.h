@@ -28,7 +28,7 @@
 
 #include <tunetrace/common.h>
 #include <tunetrace/scene.h>
-#include <tunetrace/tuning_hint.h>  /* tt.tuning_hint/1 used to be declared here */
+#include <tunetrace/tuning_hint.h> /* tt.tuning_hint/1 used to be declared here */
 
 #ifdef __cplusplus
 extern "C" {
@@ -38,49 +38,49 @@ extern "C" {
  * table merges (a file of version 1 is upgraded when opened, its rows kept). */
 #define TT_TUNEDB_SCHEMA_VERSION 2
 
-typedef struct tt_tunedb tt_tunedb;  /* opaque database handle */
+typedef struct tt_tunedb tt_tunedb; /* opaque database handle */
 
 /* Outcome of one measurement. Only OK and INFEASIBLE rows answer lookups: a failure may be
  * transient (out of memory, a driver hiccup) and is measured again next time. */
 typedef enum tt_tunedb_status {
-  TT_TUNEDB_OK = 0,          /* measured; cost is finite */
-  TT_TUNEDB_INFEASIBLE = 1,  /* rejected by the space's constraints; cost TT_COST_INFEASIBLE */
-  TT_TUNEDB_FAILED = 2       /* build or render failed; cost TT_COST_INFEASIBLE */
+  TT_TUNEDB_OK = 0,         /* measured; cost is finite */
+  TT_TUNEDB_INFEASIBLE = 1, /* rejected by the space's constraints; cost TT_COST_INFEASIBLE */
+  TT_TUNEDB_FAILED = 2      /* build or render failed; cost TT_COST_INFEASIBLE */
 } tt_tunedb_status;
 
 /* One row. Strings are borrowed: on record they are copied, in tt_tunedb_foreach they are
  * valid during the callback only. NULL strings are stored as NULL, except where noted. */
 typedef struct tt_tunedb_row {
-  uint32_t struct_size;      /* sizeof(tt_tunedb_row) */
-  int64_t id;                /* rowid; written by tt_tunedb_record */
-  const char *scene_id;      /* tt_scene_id (required) */
-  const char *scene;         /* scene file, for people */
-  const char *camera;        /* JSON of the view: position, target, up, fov_y, resolution */
-  const char *context;       /* JSON of what else shapes the cost: spp per measurement,
+  uint32_t struct_size;   /* sizeof(tt_tunedb_row) */
+  int64_t id;             /* rowid; written by tt_tunedb_record */
+  const char *scene_id;   /* tt_scene_id (required) */
+  const char *scene;      /* scene file, for people */
+  const char *camera;     /* JSON of the view: position, target, up, fov_y, resolution */
+  const char *context;    /* JSON of what else shapes the cost: spp per measurement,
                                 threads, the other plugins and their configurations */
-  int32_t has_indicators;    /* non-zero: indicators[] is set */
-  double indicators[TT_SCENE_INDICATOR_COUNT];  /* tt_scene_indicators, Table 3.2 */
-  const char *plugin;        /* tuned plugin's name (required) */
-  const char *plugin_version;/* its version (required) */
-  const char *config;        /* canonical configuration JSON (required) */
-  const char *objective;     /* objective spec, e.g. "render", "build+render" (required) */
-  double build_ms;           /* build time of this measurement (0 if nothing was built) */
-  double render_ms;          /* render time of this measurement */
-  double cost;               /* the objective's value; TT_COST_INFEASIBLE if not OK */
-  int32_t status;            /* tt_tunedb_status */
-  const char *mode;          /* "default", "tune", "explore" */
-  int32_t iteration;         /* -1 for the default configuration, else 0, 1, ... */
-  const char *run_id;        /* identifies one host run */
-  const char *tuner;         /* tuner plugin name, NULL for exploration */
-  const char *metrics;       /* JSON object of the integrator's pass metrics, or NULL */
-  const char *machine;       /* NULL on record: tt_tunedb_machine_id() */
-  const char *cpu;           /* NULL on record: tt_tunedb_cpu_model() */
-  const char *timestamp;     /* ISO 8601 UTC; NULL on record: now */
+  int32_t has_indicators; /* non-zero: indicators[] is set */
+  double indicators[TT_SCENE_INDICATOR_COUNT]; /* tt_scene_indicators, Table 3.2 */
+  const char *plugin;                          /* tuned plugin's name (required) */
+  const char *plugin_version;                  /* its version (required) */
+  const char *config;                          /* canonical configuration JSON (required) */
+  const char *objective; /* objective spec, e.g. "render", "build+render" (required) */
+  double build_ms;       /* build time of this measurement (0 if nothing was built) */
+  double render_ms;      /* render time of this measurement */
+  double cost;           /* the objective's value; TT_COST_INFEASIBLE if not OK */
+  int32_t status;        /* tt_tunedb_status */
+  const char *mode;      /* "default", "tune", "explore" */
+  int32_t iteration;     /* -1 for the default configuration, else 0, 1, ... */
+  const char *run_id;    /* identifies one host run */
+  const char *tuner;     /* tuner plugin name, NULL for exploration */
+  const char *metrics;   /* JSON object of the integrator's pass metrics, or NULL */
+  const char *machine;   /* NULL on record: tt_tunedb_machine_id() */
+  const char *cpu;       /* NULL on record: tt_tunedb_cpu_model() */
+  const char *timestamp; /* ISO 8601 UTC; NULL on record: now */
   /* ---- appended in schema 2; read on record only when struct_size covers them ---- */
-  const char *host;          /* host name of the machine that measured; NULL on record: this
+  const char *host; /* host name of the machine that measured; NULL on record: this
                                 one's (gethostname) */
-  int32_t has_rank;          /* non-zero: rank is set (a row of an MPI run, tunetrace-mpi) */
-  int32_t rank;              /* MPI rank that measured; stored as NULL when has_rank is 0 */
+  int32_t has_rank; /* non-zero: rank is set (a row of an MPI run, tunetrace-mpi) */
+  int32_t rank;     /* MPI rank that measured; stored as NULL when has_rank is 0 */
 } tt_tunedb_row;
 
 /* Default database path (see above). Free with tt_free; NULL if neither $XDG_DATA_HOME
@@ -117,8 +117,7 @@ TT_API tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, doubl
  * numbers) is skipped and counted: one warning through the library's log per walk names the
  * number and the first such row (tt_tunedb_bad_rows). */
 TT_API tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
-                                   int (*fn)(void *user, const tt_tunedb_row *row),
-                                   void *user);
+                                   int (*fn)(void *user, const tt_tunedb_row *row), void *user);
 
 /* Number of rows (of `plugin`, or all if NULL). */
 TT_API tt_status tt_tunedb_count(tt_tunedb *db, const char *plugin, uint64_t *count);
@@ -145,8 +144,8 @@ TT_API const char *tt_tunedb_host_name(void);
  * or redoing a job whose rows already arrived, never duplicates a row; a crash leaves either
  * all of a tag's rows or none. `source` NULL records the tag alone (work without rows).
  * `source` may be of schema 1 (its rows get NULL host and rank). rows/already may be NULL. */
-TT_API tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag,
-                                 int32_t rank, const char *note, uint64_t *rows, int *already);
+TT_API tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag, int32_t rank,
+                                 const char *note, uint64_t *rows, int *already);
 
 /* *merged = 1 if `tag` was merged into `db` (tt_tunedb_merge), else 0. */
 TT_API tt_status tt_tunedb_merged(tt_tunedb *db, const char *tag, int *merged);

@@ -32,11 +32,11 @@ extern "C" {
 /* Cost to report for an infeasible configuration or a failed measurement. */
 #define TT_COST_INFEASIBLE 1e300
 
-typedef struct tt_tuner tt_tuner;  /* opaque, defined by the plugin */
+typedef struct tt_tuner tt_tuner; /* opaque, defined by the plugin */
 struct tt_tuner_context;
 
 typedef struct tt_tuner_iface {
-  uint32_t struct_size;     /* sizeof(tt_tuner_iface) as the plugin was built */
+  uint32_t struct_size; /* sizeof(tt_tuner_iface) as the plugin was built */
 
   /* The tuner's own settings (e.g. Nelder-Mead coefficients, initial simplex), or NULL if
    * it has none. Owned by the plugin. Thread-safe. */
@@ -83,10 +83,10 @@ typedef struct tt_tuner_iface {
 
 /* What a caller knows about a search (set_context). Fields are only appended. */
 typedef struct tt_tuner_context {
-  uint32_t struct_size;      /* sizeof(tt_tuner_context) as the caller was built */
-  const double *state;       /* the state tuned for (e.g. normalised indicators), or NULL */
-  uint32_t state_dim;        /* values in `state` (0 with NULL) */
-  const char *state_space;   /* what the state means (tt_indicator_norm_id), or NULL */
+  uint32_t struct_size;    /* sizeof(tt_tuner_context) as the caller was built */
+  const double *state;     /* the state tuned for (e.g. normalised indicators), or NULL */
+  uint32_t state_dim;      /* values in `state` (0 with NULL) */
+  const char *state_space; /* what the state means (tt_indicator_norm_id), or NULL */
   /* Cost the caller measured for the target's default configuration (the configuration the
    * space's defaults describe) in this state, or NAN if it did not measure it. A tuner that
    * would propose the default may use this value instead (the host does not measure the
@@ -102,8 +102,7 @@ typedef struct tt_tuner_context {
 #define TT_TUNER_IFACE_SIZE_1_0 offsetof(tt_tuner_iface, set_context)
 
 /* True if the plugin's table provides `field` (it may be older than the host). */
-#define TT_TUNER_HAS(iface, field) \
-  (TT_HAS_FIELD(tt_tuner_iface, iface, field) && (iface)->field)
+#define TT_TUNER_HAS(iface, field) (TT_HAS_FIELD(tt_tuner_iface, iface, field) && (iface)->field)
 
 #ifdef __cplusplus
 }

@@ -56,26 +56,26 @@ extern "C" {
 
 /* What one measurement minimises. */
 typedef enum tt_objective_kind {
-  TT_OBJECTIVE_RENDER = 1,  /* render ms of the measurement pass */
-  TT_OBJECTIVE_BUILD = 2,   /* build ms of applying the configuration (accel targets) */
-  TT_OBJECTIVE_TOTAL = 3,   /* build + render ms */
-  TT_OBJECTIVE_METRIC = 4,  /* a metric the integrator's pass publishes (tt_pass_stats) */
-  TT_OBJECTIVE_RRMSE = 5    /* rRMSE of the pass's own image against a reference */
+  TT_OBJECTIVE_RENDER = 1, /* render ms of the measurement pass */
+  TT_OBJECTIVE_BUILD = 2,  /* build ms of applying the configuration (accel targets) */
+  TT_OBJECTIVE_TOTAL = 3,  /* build + render ms */
+  TT_OBJECTIVE_METRIC = 4, /* a metric the integrator's pass publishes (tt_pass_stats) */
+  TT_OBJECTIVE_RRMSE = 5   /* rRMSE of the pass's own image against a reference */
 } tt_objective_kind;
 
 /* How a metric becomes a cost. */
 typedef enum tt_objective_goal {
-  TT_OBJECTIVE_MIN = 0,     /* cost = value */
-  TT_OBJECTIVE_MAX = 1,     /* cost = -value */
-  TT_OBJECTIVE_TARGET = 2   /* cost = |value - target| */
+  TT_OBJECTIVE_MIN = 0,   /* cost = value */
+  TT_OBJECTIVE_MAX = 1,   /* cost = -value */
+  TT_OBJECTIVE_TARGET = 2 /* cost = |value - target| */
 } tt_objective_goal;
 
 typedef struct tt_objective {
   tt_objective_kind kind;
-  tt_objective_goal goal;   /* metric objectives */
-  double target;            /* TT_OBJECTIVE_TARGET */
-  char metric[64];          /* metric name (metric objectives) */
-  char spec[192];           /* canonical spec: the database's objective column */
+  tt_objective_goal goal; /* metric objectives */
+  double target;          /* TT_OBJECTIVE_TARGET */
+  char metric[64];        /* metric name (metric objectives) */
+  char spec[192];         /* canonical spec: the database's objective column */
 } tt_objective;
 
 /* Parses an objective spec: render, build, build+render (also "total", "render+build"),
@@ -90,55 +90,54 @@ TT_API double tt_rrmse(const float *rgb, const double *reference_luminance, size
 
 /* Rec. 709 luminance of `pixel_count` pixels of `channels` channels (1: the value itself,
  * 3 or more: 0.2126 R + 0.7152 G + 0.0722 B) into `out`. Thread-safe. */
-TT_API void tt_luminance(const float *pixels, uint32_t channels, size_t pixel_count,
-                         double *out);
+TT_API void tt_luminance(const float *pixels, uint32_t channels, size_t pixel_count, double *out);
 
 /* ---- the session ------------------------------------------------------------------- */
 
-typedef struct tt_tuning tt_tuning;  /* opaque session handle */
+typedef struct tt_tuning tt_tuning; /* opaque session handle */
 
 /* The state a measurement is taken in: the database key besides the target and its
  * configuration. Strings are copied by the session. */
 typedef struct tt_tuning_state {
-  uint32_t struct_size;     /* sizeof(tt_tuning_state) */
-  const char *scene_id;     /* tt_scene_id (required with a database) */
-  const char *scene;        /* scene file, for people */
-  const char *camera;       /* JSON of the view (position, target, up, fov_y, resolution) */
-  const char *context;      /* JSON of what else shapes the cost (spp, threads, the other
+  uint32_t struct_size;   /* sizeof(tt_tuning_state) */
+  const char *scene_id;   /* tt_scene_id (required with a database) */
+  const char *scene;      /* scene file, for people */
+  const char *camera;     /* JSON of the view (position, target, up, fov_y, resolution) */
+  const char *context;    /* JSON of what else shapes the cost (spp, threads, the other
                                plugins and their configurations, the reference) */
-  int32_t has_indicators;   /* non-zero: indicators[] is set (thesis Table 3.2) */
+  int32_t has_indicators; /* non-zero: indicators[] is set (thesis Table 3.2) */
   double indicators[TT_SCENE_INDICATOR_COUNT];
 } tt_tuning_state;
 
 /* One sample of the session: the default configuration (iteration -1) or a proposal. */
 typedef struct tt_tuning_sample {
-  uint32_t struct_size;     /* sizeof(tt_tuning_sample) as the library was built */
-  int32_t iteration;        /* -1: the default configuration; else 0, 1, ... */
-  const char *config;       /* canonical JSON of the full configuration */
-  double cost;              /* TT_COST_INFEASIBLE unless status is TT_TUNEDB_OK */
+  uint32_t struct_size; /* sizeof(tt_tuning_sample) as the library was built */
+  int32_t iteration;    /* -1: the default configuration; else 0, 1, ... */
+  const char *config;   /* canonical JSON of the full configuration */
+  double cost;          /* TT_COST_INFEASIBLE unless status is TT_TUNEDB_OK */
   double build_ms, render_ms;
-  int32_t status;           /* tt_tunedb_status: OK, INFEASIBLE (constraints), FAILED */
-  int32_t cached;           /* non-zero: answered by the database, not measured */
-  const float *image;       /* the measurement pass's own image (width x height RGB) when
+  int32_t status;     /* tt_tunedb_status: OK, INFEASIBLE (constraints), FAILED */
+  int32_t cached;     /* non-zero: answered by the database, not measured */
+  const float *image; /* the measurement pass's own image (width x height RGB) when
                                the objective or the caller asked for one, else NULL; valid
                                during on_sample only */
 } tt_tuning_sample;
 
 /* What the caller measured for one configuration (tt_tuning_report, target->render). */
 typedef struct tt_tuning_measurement {
-  uint32_t struct_size;     /* sizeof(tt_tuning_measurement) */
-  tt_status status;         /* TT_OK; TT_ERR_INTERRUPTED: the user asked to stop (nothing is
+  uint32_t struct_size;      /* sizeof(tt_tuning_measurement) */
+  tt_status status;          /* TT_OK; TT_ERR_INTERRUPTED: the user asked to stop (nothing is
                                recorded); any other error: a failed measurement */
-  double build_ms;          /* build time of applying the configuration (0: none) */
-  double render_ms;         /* wall ms of the measurement pass */
-  const tt_pass_stats *pass;/* the pass's metrics (metric objectives), or NULL */
-  const float *image;       /* the pass's own image, width x height RGB (rrmse), or NULL */
+  double build_ms;           /* build time of applying the configuration (0: none) */
+  double render_ms;          /* wall ms of the measurement pass */
+  const tt_pass_stats *pass; /* the pass's metrics (metric objectives), or NULL */
+  const float *image;        /* the pass's own image, width x height RGB (rrmse), or NULL */
 } tt_tuning_measurement;
 
 /* Callbacks through which tt_tuning_run, tt_tuning_verify and tt_tuning_apply_best act on
  * the target. Both are called on the session's thread. */
 typedef struct tt_tuning_target {
-  uint32_t struct_size;     /* sizeof(tt_tuning_target) */
+  uint32_t struct_size; /* sizeof(tt_tuning_target) */
   void *user;
   /* Applies `config` (of the session's space) to the target (an accel is rebuilt, an
    * integrator reconfigured); `*build_ms` receives the build time (0 when nothing is
@@ -153,38 +152,38 @@ typedef struct tt_tuning_target {
 
 /* Everything a session is created from. Zero-initialise, set struct_size, fill in. */
 typedef struct tt_tuning_desc {
-  uint32_t struct_size;     /* sizeof(tt_tuning_desc) as the caller was built */
-  const tt_host *host;      /* log, clock, progress, should_stop; NULL: tt_default_host() */
-  const tt_space *space;    /* the target's full space (required; borrowed) */
-  const tt_config *start;   /* the target's configured values: the default configuration,
+  uint32_t struct_size;            /* sizeof(tt_tuning_desc) as the caller was built */
+  const tt_host *host;             /* log, clock, progress, should_stop; NULL: tt_default_host() */
+  const tt_space *space;           /* the target's full space (required; borrowed) */
+  const tt_config *start;          /* the target's configured values: the default configuration,
                                measured first, and the value of every parameter not searched
                                (NULL: the space's defaults; copied) */
-  const tt_space *search;   /* the searched parameters: a tt_space_subset of `space` with
+  const tt_space *search;          /* the searched parameters: a tt_space_subset of `space` with
                                the configured values as defaults (borrowed), or NULL: all */
-  const char *objective;    /* objective spec (tt_objective_parse); NULL: "render" */
-  const tt_tuner_iface *tuner;       /* the search; NULL: random exploration */
-  const tt_config *tuner_settings;   /* the tuner's own settings, or NULL for its defaults */
-  const char *tuner_name;   /* for the log and the database (NULL: exploration) */
-  uint64_t seed;            /* the tuner's seed; exploration draws from it too */
-  uint32_t iterations;      /* configurations to ask for after the default (>= 0) */
-  uint32_t spp;             /* samples per pixel of one measurement pass (0: 1) */
-  uint32_t warmup_passes;   /* tt_tuning_run: unmeasured 1-spp passes before the default
+  const char *objective;           /* objective spec (tt_objective_parse); NULL: "render" */
+  const tt_tuner_iface *tuner;     /* the search; NULL: random exploration */
+  const tt_config *tuner_settings; /* the tuner's own settings, or NULL for its defaults */
+  const char *tuner_name;          /* for the log and the database (NULL: exploration) */
+  uint64_t seed;                   /* the tuner's seed; exploration draws from it too */
+  uint32_t iterations;             /* configurations to ask for after the default (>= 0) */
+  uint32_t spp;                    /* samples per pixel of one measurement pass (0: 1) */
+  uint32_t warmup_passes;          /* tt_tuning_run: unmeasured 1-spp passes before the default
                                (the first pass pays page faults and lazy set-up) */
-  double time_budget_s;     /* > 0: stop asking for configurations after this long */
-  const char *plugin;       /* the target's plugin name (log, database; required) */
+  double time_budget_s;            /* > 0: stop asking for configurations after this long */
+  const char *plugin;              /* the target's plugin name (log, database; required) */
   const char *plugin_version;
-  tt_tunedb *db;            /* the tuning database, or NULL (borrowed) */
-  const tt_tuning_state *state;  /* the state of the measurements (NULL: unknown) */
-  const char *run_id;       /* database run id (NULL: generated from time and pid) */
-  uint32_t width, height;   /* size of the pass images (rrmse objective, want_images) */
-  const double *reference_luminance;  /* width x height (rrmse; borrowed) */
-  int32_t want_images;      /* non-zero: ask the target for each pass's own image, given to
+  tt_tunedb *db;                     /* the tuning database, or NULL (borrowed) */
+  const tt_tuning_state *state;      /* the state of the measurements (NULL: unknown) */
+  const char *run_id;                /* database run id (NULL: generated from time and pid) */
+  uint32_t width, height;            /* size of the pass images (rrmse objective, want_images) */
+  const double *reference_luminance; /* width x height (rrmse; borrowed) */
+  int32_t want_images;               /* non-zero: ask the target for each pass's own image, given to
                                on_sample (the rrmse objective asks in any case) */
   /* Called after every sample is recorded (measured or answered by the database) and fed
    * to the tuner, e.g. to write the pass image, feed a model or save the session's state.
    * NULL: none. */
   void (*on_sample)(void *user, const tt_tuning_sample *sample);
-  void *user;               /* on_sample's first argument */
+  void *user; /* on_sample's first argument */
   /* ---- appended for the hybrid loop (tunetrace/hybrid.h) ---- */
   /* The database's mode column for every sample of this session (e.g. "exploit" for the
    * one configuration a model predicted); NULL: "default" for the default and "tune" /
@@ -242,18 +241,18 @@ TT_API const tt_tuning_sample *tt_tuning_sample_at(const tt_tuning *t, size_t in
 
 /* Counters of a session. */
 typedef struct tt_tuning_stats {
-  uint32_t struct_size;     /* sizeof(tt_tuning_stats) as the caller was built */
-  uint32_t requested;       /* desc->iterations */
-  uint32_t iterations;      /* proposals recorded after the default */
-  uint32_t measured;        /* samples measured (infeasible and failed included) */
-  uint32_t cached;          /* samples answered by the database */
+  uint32_t struct_size; /* sizeof(tt_tuning_stats) as the caller was built */
+  uint32_t requested;   /* desc->iterations */
+  uint32_t iterations;  /* proposals recorded after the default */
+  uint32_t measured;    /* samples measured (infeasible and failed included) */
+  uint32_t cached;      /* samples answered by the database */
   uint32_t infeasible, failed;
-  int32_t converged;        /* the tuner reported convergence */
-  int32_t interrupted;      /* the user asked to stop */
-  double tuning_ms;         /* wall ms of tt_tuning_run */
-  uint32_t unrecorded;      /* measurements the database failed to record (a full disk):
+  int32_t converged;   /* the tuner reported convergence */
+  int32_t interrupted; /* the user asked to stop */
+  double tuning_ms;    /* wall ms of tt_tuning_run */
+  uint32_t unrecorded; /* measurements the database failed to record (a full disk):
                              * one warning is logged, then they are only counted */
-  uint32_t remeasured;      /* proposals of a configuration already measured in this session
+  uint32_t remeasured; /* proposals of a configuration already measured in this session
                                (a tuner re-evaluating its incumbent), measured again */
 } tt_tuning_stats;
 
@@ -267,21 +266,21 @@ TT_API const tt_objective *tt_tuning_objective(const tt_tuning *t);
 
 /* Result of tt_tuning_verify: index 0 is the default configuration, 1 the best. */
 typedef struct tt_tuning_verification {
-  uint32_t struct_size;     /* sizeof(tt_tuning_verification) as the caller was built */
-  uint32_t rounds;          /* rounds completed */
-  uint32_t spp;             /* samples per pixel per pass */
+  uint32_t struct_size; /* sizeof(tt_tuning_verification) as the caller was built */
+  uint32_t rounds;      /* rounds completed */
+  uint32_t spp;         /* samples per pixel per pass */
   double median_build_ms[2], median_render_ms[2], median_total_ms[2], median_cost[2];
-  double render_ratio;      /* median over rounds of render best/default (NAN if none) */
-  double total_ratio;       /* ... of build+render */
-  double cost_ratio;        /* ... of the objective's cost */
-  const double *rounds_ms;  /* rounds x 2 x {build_ms, render_ms, cost}, [r][who][k];
+  double render_ratio;     /* median over rounds of render best/default (NAN if none) */
+  double total_ratio;      /* ... of build+render */
+  double cost_ratio;       /* ... of the objective's cost */
+  const double *rounds_ms; /* rounds x 2 x {build_ms, render_ms, cost}, [r][who][k];
                                owned by the session, valid until the next verify */
   /* ---- appended: what the rounds decided (tt_tuning_verdict) ---- */
-  int32_t verdict;          /* TT_TUNING_CONFIRMED, _REJECTED or _DEFAULT; _UNVERIFIED when no
+  int32_t verdict;        /* TT_TUNING_CONFIRMED, _REJECTED or _DEFAULT; _UNVERIFIED when no
                                round completed */
-  uint32_t best_faster;     /* rounds in which the best's cost was lower than the default's */
-  double cost_difference;   /* median over rounds of cost best - default (NAN if none) */
-  const char *reason;       /* one plain sentence saying which configuration is kept and why
+  uint32_t best_faster;   /* rounds in which the best's cost was lower than the default's */
+  double cost_difference; /* median over rounds of cost best - default (NAN if none) */
+  const char *reason;     /* one plain sentence saying which configuration is kept and why
                                (owned by the session, valid until the next verify) */
 } tt_tuning_verification;
 

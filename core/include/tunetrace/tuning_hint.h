@@ -16,8 +16,8 @@ extern "C" {
 #define TT_TUNING_HINT_ID "tt.tuning_hint/1"
 
 typedef struct tt_tuning_hint {
-  uint32_t struct_size;      /* sizeof(tt_tuning_hint) as the plugin was built */
-  const char *objective;     /* default objective spec, static string */
+  uint32_t struct_size;  /* sizeof(tt_tuning_hint) as the plugin was built */
+  const char *objective; /* default objective spec, static string */
   /* NULL-terminated names of the parameters a default tuning run searches (the others stay
    * at their configured values), or NULL for all. PSSMLT lists its a_i and sigma_i: the
    * thesis tunes those, while chains or bootstrap size would only change the cost of a

@@ -24,7 +24,7 @@ struct tt__assimp {
  * mesh, an OBJ's .mtl, a glTF's .bin buffers) is refused unless it is a regular file, so a
  * FIFO or a device named inside a mesh is a missing file to assimp, never a hang. */
 class tt__regular_io : public Assimp::DefaultIOSystem {
- public:
+public:
   bool Exists(const char *file) const override {
     return file && tt_file_check_regular(file, NULL) == TT_OK;
   }
@@ -53,7 +53,7 @@ extern "C" tt__assimp_result tt__assimp_read(const char *file, unsigned flags, t
   try {
     h = new tt__assimp;
     Assimp::Importer &imp = h->importer;
-    imp.SetIOHandler(new tt__regular_io);  /* the importer owns and deletes it */
+    imp.SetIOHandler(new tt__regular_io); /* the importer owns and deletes it */
     const std::string path(file);
     std::vector<Assimp::BaseImporter *> others;
     size_t claimed = 0;
@@ -63,10 +63,8 @@ extern "C" tt__assimp_result tt__assimp_read(const char *file, unsigned flags, t
       reader->GetExtensionList(exts);
       bool mine = false;
       for (const std::string &e : exts) mine = mine || tt__claims(path, e);
-      if (mine)
-        claimed++;
-      else
-        others.push_back(reader);
+      if (mine) claimed++;
+      else others.push_back(reader);
     }
     if (claimed == 0) {
       delete h;
@@ -100,6 +98,4 @@ extern "C" tt__assimp_result tt__assimp_read(const char *file, unsigned flags, t
   }
 }
 
-extern "C" void tt__assimp_free(tt__assimp *handle) {
-  delete handle;
-}
+extern "C" void tt__assimp_free(tt__assimp *handle) { delete handle; }

@@ -100,8 +100,7 @@ void tt__display_init() {
       d.name = std::string(env) + " (" + dv + ")";
       return;
     } catch (const std::exception &e) {
-      tt__log(TT_LOG_WARN, "OCIO config '%s' unusable (%s); using built-in sRGB", env,
-              e.what());
+      tt__log(TT_LOG_WARN, "OCIO config '%s' unusable (%s); using built-in sRGB", env, e.what());
     }
   }
   try {
@@ -208,8 +207,8 @@ extern "C" {
 // Float EXR so a round trip is bit-exact; zip compression is lossless.
 TT_API tt_status tt_image_write_exr(const char *path, uint32_t width, uint32_t height,
                                     uint32_t channels, const float *pixels,
-                                    const char *const *channel_names,
-                                    const tt_image_meta *meta, size_t meta_count) {
+                                    const char *const *channel_names, const tt_image_meta *meta,
+                                    size_t meta_count) {
   if (!path || !*path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "write EXR: path is empty");
   size_t count;
   if (!pixels || !tt__count(width, height, channels, &count) || width > INT32_MAX ||
@@ -254,8 +253,8 @@ TT_API tt_status tt_image_write_png_display(const char *path, uint32_t width, ui
   if (!path || !*path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "write PNG: path is empty");
   size_t count;
   if (!rgb || !tt__count(width, height, 3, &count) || width > INT32_MAX || height > INT32_MAX)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: bad image %ux%u or NULL pixels", path,
-                        width, height);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: bad image %ux%u or NULL pixels", path, width,
+                        height);
   try {
     std::vector<float> tmp(rgb, rgb + count);
     tt_status st = tt__display_apply(tmp.data(), count / 3, exposure);
@@ -310,13 +309,11 @@ TT_API tt_status tt_image_read(const char *path, uint32_t *width, uint32_t *heig
   try {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in)
-      return tt_set_error(TT_ERR_IO, "%s: cannot open image: %s", path,
-                          OIIO::geterror().c_str());
+      return tt_set_error(TT_ERR_IO, "%s: cannot open image: %s", path, OIIO::geterror().c_str());
     const OIIO::ImageSpec &spec = in->spec();
     size_t count;
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 ||
-        !tt__count((uint64_t)spec.width, (uint64_t)spec.height, (uint64_t)spec.nchannels,
-                   &count))
+        !tt__count((uint64_t)spec.width, (uint64_t)spec.height, (uint64_t)spec.nchannels, &count))
       return tt_set_error(TT_ERR_PARSE, "%s: bad image size %dx%dx%d", path, spec.width,
                           spec.height, spec.nchannels);
     float *buf = (float *)std::malloc(count * sizeof(float));
@@ -339,8 +336,7 @@ TT_API tt_status tt_image_read(const char *path, uint32_t *width, uint32_t *heig
 }
 
 // Looks up `key`, then "tunetrace:key" for bare keys (how tt_image_write_exr stores them).
-TT_API tt_status tt_image_read_meta(const char *path, const char *key, char *value,
-                                    size_t size) {
+TT_API tt_status tt_image_read_meta(const char *path, const char *key, char *value, size_t size) {
   if (!path || !key || !*key || !value || size == 0)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "read metadata: NULL or empty argument");
   value[0] = '\0';
@@ -348,12 +344,10 @@ TT_API tt_status tt_image_read_meta(const char *path, const char *key, char *val
   try {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in)
-      return tt_set_error(TT_ERR_IO, "%s: cannot open image: %s", path,
-                          OIIO::geterror().c_str());
+      return tt_set_error(TT_ERR_IO, "%s: cannot open image: %s", path, OIIO::geterror().c_str());
     const OIIO::ImageSpec &spec = in->spec();
     const OIIO::ParamValue *p = spec.find_attribute(key);
-    if (!p && !std::strchr(key, ':'))
-      p = spec.find_attribute(std::string(tt__meta_prefix) + key);
+    if (!p && !std::strchr(key, ':')) p = spec.find_attribute(std::string(tt__meta_prefix) + key);
     if (!p) return tt_set_error(TT_ERR_NO_DATA, "%s: no metadata '%s'", path, key);
     // get_string formats non-string attributes (ints, floats, matrices) as text.
     std::string s = p->type() == OIIO::TypeDesc::STRING ? std::string(p->get_ustring().string())

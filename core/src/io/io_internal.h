@@ -16,8 +16,8 @@
  * "<base_name>/<sub-mesh name or index>". `where` prefixes error messages (e.g.
  * "x.json: meshes[2].file"). On success *out holds *count entries (free each with
  * tt__mesh_data_free, then free(*out)). */
-tt_status tt__mesh_import(const char *file, const char *base_name, int split,
-                          const char *where, tt__mesh_data **out, uint32_t *count);
+tt_status tt__mesh_import(const char *file, const char *base_name, int split, const char *where,
+                          tt__mesh_data **out, uint32_t *count);
 
 /* Reads and loads a scene.json file with its own directory as the asset base; depth 0 for
  * the scene being loaded, 1 for a scene.json imported by it (scene_json.c). */

@@ -23,8 +23,8 @@
 /* One placement of an assimp mesh by the node hierarchy. */
 typedef struct tt__ai_instance {
   unsigned mesh;
-  double m[16];        /* row-major node-to-file-root matrix */
-  const char *name;    /* mesh name, else node name, may be "" */
+  double m[16];     /* row-major node-to-file-root matrix */
+  const char *name; /* mesh name, else node name, may be "" */
 } tt__ai_instance;
 
 typedef struct tt__ai_list {
@@ -42,8 +42,8 @@ static uint32_t tt__ai_triangles(const struct aiMesh *m) {
 /* Walks the node tree accumulating transforms, so glTF/FBX node placements survive and
  * each placed mesh stays a separate part for split mode. Depth is bounded against cyclic
  * or absurd files. */
-static int tt__ai_collect(const struct aiScene *sc, const struct aiNode *node, const double parent[16],
-                          int depth, tt__ai_list *list) {
+static int tt__ai_collect(const struct aiScene *sc, const struct aiNode *node,
+                          const double parent[16], int depth, tt__ai_list *list) {
   if (!node || depth > 256) return 1;
   const struct aiMatrix4x4 *t = &node->mTransformation;
   double local[16] = {t->a1, t->a2, t->a3, t->a4, t->b1, t->b2, t->b3, t->b4,
@@ -58,7 +58,8 @@ static int tt__ai_collect(const struct aiScene *sc, const struct aiNode *node, c
   for (unsigned i = 0; i < node->mNumMeshes; i++) {
     unsigned mi = node->mMeshes[i];
     if (mi >= sc->mNumMeshes || tt__ai_triangles(sc->mMeshes[mi]) == 0) continue;
-    tt__ai_instance *inst = tt__scene_push((void **)&list->items, &list->count, &list->cap, sizeof *inst);
+    tt__ai_instance *inst =
+        tt__scene_push((void **)&list->items, &list->count, &list->cap, sizeof *inst);
     if (!inst) return 0;
     inst->mesh = mi;
     memcpy(inst->m, m, sizeof m);
@@ -70,8 +71,8 @@ static int tt__ai_collect(const struct aiScene *sc, const struct aiNode *node, c
 }
 
 /* Copies one placed assimp mesh into a mesh_data in file-root space. */
-static tt_status tt__ai_part(const struct aiScene *sc, const tt__ai_instance *inst, const char *where,
-                             tt__mesh_data *out) {
+static tt_status tt__ai_part(const struct aiScene *sc, const tt__ai_instance *inst,
+                             const char *where, tt__mesh_data *out) {
   const struct aiMesh *m = sc->mMeshes[inst->mesh];
   uint32_t nv = m->mNumVertices, nt = tt__ai_triangles(m);
   memset(out, 0, sizeof *out);
@@ -134,7 +135,8 @@ static tt_status tt__ai_part(const struct aiScene *sc, const tt__ai_instance *in
 
 /* Concatenates parts into one; normals/uvs survive only if every part has them, since a
  * partial attribute array would be meaningless. Frees the parts. */
-static tt_status tt__ai_merge(tt__mesh_data *parts, uint32_t count, const char *where, tt__mesh_data *out) {
+static tt_status tt__ai_merge(tt__mesh_data *parts, uint32_t count, const char *where,
+                              tt__mesh_data *out) {
   uint64_t nv = 0, nt = 0;
   int has_n = 1, has_uv = 1;
   for (uint32_t i = 0; i < count; i++) {
@@ -146,7 +148,8 @@ static tt_status tt__ai_merge(tt__mesh_data *parts, uint32_t count, const char *
   memset(out, 0, sizeof *out);
   tt_status st = TT_OK;
   if (nv > UINT32_MAX || nt > UINT32_MAX / 3) {
-    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh too large (%llu vertices)", where, (unsigned long long)nv);
+    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh too large (%llu vertices)", where,
+                      (unsigned long long)nv);
     goto done;
   }
   out->vertex_count = (uint32_t)nv;
@@ -166,7 +169,8 @@ static tt_status tt__ai_merge(tt__mesh_data *parts, uint32_t count, const char *
     memcpy(out->positions + 3 * v0, p->positions, 3 * sizeof(float) * p->vertex_count);
     if (has_n) memcpy(out->normals + 3 * v0, p->normals, 3 * sizeof(float) * p->vertex_count);
     if (has_uv) memcpy(out->uvs + 2 * v0, p->uvs, 2 * sizeof(float) * p->vertex_count);
-    for (size_t k = 0; k < 3 * (size_t)p->triangle_count; k++) out->indices[3 * t0 + k] = (uint32_t)v0 + p->indices[k];
+    for (size_t k = 0; k < 3 * (size_t)p->triangle_count; k++)
+      out->indices[3 * t0 + k] = (uint32_t)v0 + p->indices[k];
     v0 += p->vertex_count;
     t0 += p->triangle_count;
   }
@@ -231,27 +235,31 @@ static uint32_t tt__le32(const unsigned char *b) {
  * declared length, the first one JSON. assimp 5.2.5 allocates and zero-fills a chunk's
  * declared length before it reads it: a 577-byte file declaring a 4 GiB JSON chunk made it
  * take 4 GiB (found by fuzz_mesh in CI). */
-static tt_status tt__glb_chunks_check(FILE *f, const char *file, const char *where, uint32_t length) {
+static tt_status tt__glb_chunks_check(FILE *f, const char *file, const char *where,
+                                      uint32_t length) {
   uint64_t at = 12;
   for (unsigned i = 0; at < length; i++) {
     unsigned char c[8];
     if (length - at < 8 || fseek(f, (long)at, SEEK_SET) != 0 || fread(c, 1, 8, f) != 8)
-      return tt_set_error(TT_ERR_PARSE,
-                          "%s: mesh file \"%s\": GLB chunk %u at byte %llu: expected an 8-byte chunk "
-                          "header inside the declared %u bytes",
-                          where, file, i, (unsigned long long)at, length);
+      return tt_set_error(
+          TT_ERR_PARSE,
+          "%s: mesh file \"%s\": GLB chunk %u at byte %llu: expected an 8-byte chunk "
+          "header inside the declared %u bytes",
+          where, file, i, (unsigned long long)at, length);
     uint32_t clen = tt__le32(c), type = tt__le32(c + 4);
-    if (i == 0 && type != 0x4E4F534Au)  /* "JSON" */
-      return tt_set_error(TT_ERR_PARSE,
-                          "%s: mesh file \"%s\": GLB chunk 0 must be the JSON chunk (type 0x4E4F534A), "
-                          "got type 0x%08X",
-                          where, file, type);
+    if (i == 0 && type != 0x4E4F534Au) /* "JSON" */
+      return tt_set_error(
+          TT_ERR_PARSE,
+          "%s: mesh file \"%s\": GLB chunk 0 must be the JSON chunk (type 0x4E4F534A), "
+          "got type 0x%08X",
+          where, file, type);
     if ((uint64_t)clen > length - at - 8)
-      return tt_set_error(TT_ERR_PARSE,
-                          "%s: mesh file \"%s\": GLB chunk %u at byte %llu declares %u bytes, only %llu "
-                          "remain of the declared %u (corrupt or cut short?)",
-                          where, file, i, (unsigned long long)at, clen,
-                          (unsigned long long)(length - at - 8), length);
+      return tt_set_error(
+          TT_ERR_PARSE,
+          "%s: mesh file \"%s\": GLB chunk %u at byte %llu declares %u bytes, only %llu "
+          "remain of the declared %u (corrupt or cut short?)",
+          where, file, i, (unsigned long long)at, clen, (unsigned long long)(length - at - 8),
+          length);
     at += 8 + (uint64_t)clen;
   }
   return TT_OK;
@@ -261,7 +269,9 @@ static tt_status tt__glb_chunks_check(FILE *f, const char *file, const char *whe
  * length it declares, and its chunks (GLB 2) or its JSON content (GLB 1) must fit in it. */
 static tt_status tt__glb_check(const char *file, const char *where) {
   FILE *f = fopen(file, "rb");
-  if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file, strerror(errno));
+  if (!f)
+    return tt_set_error(TT_ERR_IO, "%s: cannot open mesh file \"%s\": %s", where, file,
+                        strerror(errno));
   unsigned char h[20];
   size_t got = fread(h, 1, sizeof h, f);
   long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
@@ -272,10 +282,13 @@ static tt_status tt__glb_check(const char *file, const char *where) {
     st = tt_set_error(TT_ERR_PARSE,
                       "%s: mesh file \"%s\" is not a GLB file: expected the 12-byte GLB header "
                       "starting with \"glTF\", got %s",
-                      where, file, looks ? looks : got < 12 ? "a file shorter than that" : "other bytes");
+                      where, file,
+                      looks      ? looks
+                      : got < 12 ? "a file shorter than that"
+                                 : "other bytes");
   } else if (version != 1 && version != 2) {
-    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh file \"%s\": GLB version %u (expected 2, or 1)", where,
-                      file, version);
+    st = tt_set_error(TT_ERR_UNSUPPORTED, "%s: mesh file \"%s\": GLB version %u (expected 2, or 1)",
+                      where, file, version);
   } else if (length < (version == 1 ? 20u : 12u) || size < 0 || (uint64_t)length > (uint64_t)size) {
     st = tt_set_error(TT_ERR_PARSE,
                       "%s: mesh file \"%s\": the GLB header declares %u bytes, the file has %ld "
@@ -285,10 +298,11 @@ static tt_status tt__glb_check(const char *file, const char *where) {
     st = tt__glb_chunks_check(f, file, where, length);
   } else if (tt__le32(h + 12) > length - 20) {
     /* GLB 1: a 20-byte header whose content length (the JSON scene) follows the length */
-    st = tt_set_error(TT_ERR_PARSE,
-                      "%s: mesh file \"%s\": the GLB 1 header declares %u bytes of content, only %u "
-                      "follow the header (corrupt or cut short?)",
-                      where, file, tt__le32(h + 12), length - 20);
+    st =
+        tt_set_error(TT_ERR_PARSE,
+                     "%s: mesh file \"%s\": the GLB 1 header declares %u bytes of content, only %u "
+                     "follow the header (corrupt or cut short?)",
+                     where, file, tt__le32(h + 12), length - 20);
   }
   fclose(f);
   return st;
@@ -304,7 +318,7 @@ static tt_status tt__gltf_check(const char *file, const char *where) {
   size_t len = 0;
   tt_status st = tt_file_read(file, "mesh file", 0, &text, &len);
   if (st != TT_OK) return tt_set_error(st, "%s: %s", where, tt_last_error());
-  size_t skip = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0;  /* a UTF-8 BOM */
+  size_t skip = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0; /* a UTF-8 BOM */
   const char *end = NULL;
   cJSON *root = cJSON_ParseWithLengthOpts(text + skip, len - skip, &end, 0);
   if (!root || !cJSON_IsObject(root)) {
@@ -320,7 +334,8 @@ static tt_status tt__gltf_check(const char *file, const char *where) {
     } else {
       tt__json_describe(root, TT__JSON_SCENE, got, sizeof got);
     }
-    st = tt_set_error(TT_ERR_PARSE, "%s: mesh file \"%s\" is not a glTF file: expected a JSON object, got %s",
+    st = tt_set_error(TT_ERR_PARSE,
+                      "%s: mesh file \"%s\" is not a glTF file: expected a JSON object, got %s",
                       where, file, got);
   }
   cJSON_Delete(root);
@@ -350,19 +365,21 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
   const struct aiScene *sc = NULL;
   char reason[512];
   switch (tt__assimp_read(file,
-                          aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure,
+                          aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                              aiProcess_ValidateDataStructure,
                           &ai, &sc, reason, sizeof reason)) {
-  case TT__ASSIMP_OK:
-    break;
+  case TT__ASSIMP_OK: break;
   case TT__ASSIMP_UNKNOWN_EXTENSION:
-    return tt_set_error(TT_ERR_UNSUPPORTED,
-                        "%s: mesh file \"%s\": unknown mesh format (expected .ply, .obj, .gltf, .glb "
-                        "or another extension assimp reads, such as .fbx, .dae, .stl)",
-                        where, file);
+    return tt_set_error(
+        TT_ERR_UNSUPPORTED,
+        "%s: mesh file \"%s\": unknown mesh format (expected .ply, .obj, .gltf, .glb "
+        "or another extension assimp reads, such as .fbx, .dae, .stl)",
+        where, file);
   case TT__ASSIMP_OUT_OF_MEMORY:
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: mesh file \"%s\": out of memory", where, file);
   default:
-    return tt_set_error(TT_ERR_PARSE, "%s: cannot import mesh file \"%s\": %s", where, file, reason);
+    return tt_set_error(TT_ERR_PARSE, "%s: cannot import mesh file \"%s\": %s", where, file,
+                        reason);
   }
 
   static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -386,8 +403,9 @@ tt_status tt__mesh_import(const char *file, const char *base_name, int split, co
     st = tt__ai_part(sc, &list.items[i], where, &parts[i]);
     if (st == TT_OK && split) {
       char name[512];
-      int w = list.items[i].name[0] ? snprintf(name, sizeof name, "%s/%s", base_name, list.items[i].name)
-                                    : snprintf(name, sizeof name, "%s/%u", base_name, i);
+      int w = list.items[i].name[0]
+                  ? snprintf(name, sizeof name, "%s/%s", base_name, list.items[i].name)
+                  : snprintf(name, sizeof name, "%s/%u", base_name, i);
       if (w < 0) name[0] = '\0';
       parts[i].name = tt__strdup(name);
       if (!parts[i].name) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", where);

@@ -43,7 +43,8 @@ void tt__jwarn(const tt__jctx *c, const char *path, const char *fmt, ...) {
 /* "camera" + "fov" -> "camera.fov"; an empty prefix yields the key alone. */
 void tt__jkey(char *buf, size_t n, const char *prefix, const char *key) {
   /* testing the result tells GCC that truncating an absurdly deep path is acceptable */
-  int w = (prefix && prefix[0]) ? snprintf(buf, n, "%s.%s", prefix, key) : snprintf(buf, n, "%s", key);
+  int w =
+      (prefix && prefix[0]) ? snprintf(buf, n, "%s.%s", prefix, key) : snprintf(buf, n, "%s", key);
   if (w < 0) buf[0] = '\0';
 }
 
@@ -66,7 +67,7 @@ static const char *tt__jrange_str(const tt__range *r, char *buf, size_t n) {
 
 /* Warns about keys outside `known`; keys starting with '_' are comments and stay silent. */
 void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *prefix,
-                            const char *const *known) {
+                     const char *const *known) {
   for (const cJSON *it = obj ? obj->child : NULL; it; it = it->next) {
     if (!it->string || it->string[0] == '_') continue;
     int ok = 0;
@@ -82,13 +83,13 @@ void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *prefix,
 /* ---- typed getters --------------------------------------------------------------------- */
 
 /* Checks a number against a range; non-finite values (1e999 parses as inf) are rejected. */
-tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path,
-                               const tt__range *r, double *out) {
+tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path, const tt__range *r,
+                        double *out) {
   char got[128], rs[96];
   int integer = (r->flags & TT__INT) != 0;
   if (!cJSON_IsNumber(it))
-    return tt__jfail(c, TT_ERR_PARSE, path, "expected %s, got %s", integer ? "an integer" : "a number",
-                     tt__jdesc(it, got, sizeof got));
+    return tt__jfail(c, TT_ERR_PARSE, path, "expected %s, got %s",
+                     integer ? "an integer" : "a number", tt__jdesc(it, got, sizeof got));
   double v = it->valuedouble;
   if (!isfinite(v)) return tt__jfail(c, TT_ERR_PARSE, path, "expected a finite number, got %g", v);
   int lo_ok = (r->flags & TT__LO_OPEN) ? v > r->lo : v >= r->lo;
@@ -102,7 +103,7 @@ tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path,
 
 /* Optional/required number under `key`; leaves *out alone when absent and optional. */
 tt_status tt__jnum(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
-                          int required, const tt__range *r, double *out) {
+                   int required, const tt__range *r, double *out) {
   char path[512];
   tt__jkey(path, sizeof path, prefix, key);
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -115,7 +116,7 @@ tt_status tt__jnum(const tt__jctx *c, const cJSON *obj, const char *key, const c
 
 /* An array of exactly n numbers; with allow_scalar a single number fills all n. */
 tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *path, int n,
-                               const tt__range *r, int allow_scalar, float *out) {
+                        const tt__range *r, int allow_scalar, float *out) {
   char got[128], sub[560];
   double v;
   if (allow_scalar && cJSON_IsNumber(it)) {
@@ -139,20 +140,21 @@ tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *path, in
 
 /* Optional/required n-vector under `key`. */
 tt_status tt__jvec(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
-                          int required, int n, const tt__range *r, int allow_scalar, float *out) {
+                   int required, int n, const tt__range *r, int allow_scalar, float *out) {
   char path[512];
   tt__jkey(path, sizeof path, prefix, key);
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
   if (!it) {
     if (!required) return TT_OK;
-    return tt__jfail(c, TT_ERR_PARSE, path, "missing required field (expected an array of %d numbers)", n);
+    return tt__jfail(c, TT_ERR_PARSE, path,
+                     "missing required field (expected an array of %d numbers)", n);
   }
   return tt__jvec_item(c, it, path, n, r, allow_scalar, out);
 }
 
 /* Optional/required non-empty string under `key`; *out points into the JSON tree. */
 tt_status tt__jstr(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
-                          int required, const char **out) {
+                   int required, const char **out) {
   char path[512], got[128];
   tt__jkey(path, sizeof path, prefix, key);
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -169,13 +171,14 @@ tt_status tt__jstr(const tt__jctx *c, const cJSON *obj, const char *key, const c
 
 /* Optional boolean under `key`. */
 tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
-                           int *out) {
+                    int *out) {
   char path[512], got[128];
   tt__jkey(path, sizeof path, prefix, key);
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
   if (!it) return TT_OK;
   if (!cJSON_IsBool(it))
-    return tt__jfail(c, TT_ERR_PARSE, path, "expected true or false, got %s", tt__jdesc(it, got, sizeof got));
+    return tt__jfail(c, TT_ERR_PARSE, path, "expected true or false, got %s",
+                     tt__jdesc(it, got, sizeof got));
   *out = cJSON_IsTrue(it) ? 1 : 0;
   return TT_OK;
 }
@@ -184,7 +187,8 @@ tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key, const 
 tt_status tt__jobject(const tt__jctx *c, const cJSON *it, const char *path) {
   char got[128];
   if (!cJSON_IsObject(it))
-    return tt__jfail(c, TT_ERR_PARSE, path, "expected an object, got %s", tt__jdesc(it, got, sizeof got));
+    return tt__jfail(c, TT_ERR_PARSE, path, "expected an object, got %s",
+                     tt__jdesc(it, got, sizeof got));
   return TT_OK;
 }
 
@@ -250,7 +254,8 @@ static tt_status tt__jcheck_pose(const tt__jctx *c, const char *prefix, const fl
   }
   tt__jkey(path, sizeof path, prefix, "up");
   if (!(ul > 0)) return tt__jfail(c, TT_ERR_PARSE, path, "expected a non-zero vector");
-  float x[3] = {d[1] * up[2] - d[2] * up[1], d[2] * up[0] - d[0] * up[2], d[0] * up[1] - d[1] * up[0]};
+  float x[3] = {d[1] * up[2] - d[2] * up[1], d[2] * up[0] - d[0] * up[2],
+                d[0] * up[1] - d[1] * up[0]};
   if (tt__len3(x) <= 1e-6 * dl * ul)
     return tt__jfail(c, TT_ERR_PARSE, path, "expected a vector not parallel to the view direction");
   return TT_OK;
@@ -261,18 +266,22 @@ static tt_status tt__jcheck_pose(const tt__jctx *c, const char *prefix, const fl
 static tt_status tt__jcamera(const tt__jctx *c, const cJSON *root, int imported) {
   const cJSON *cam = cJSON_GetObjectItemCaseSensitive(root, "camera");
   if (!cam && imported) return TT_OK;
-  if (!cam) return tt__jfail(c, TT_ERR_PARSE, "camera", "missing required field (expected an object)");
+  if (!cam)
+    return tt__jfail(c, TT_ERR_PARSE, "camera", "missing required field (expected an object)");
   tt_status st = tt__jobject(c, cam, "camera");
   if (st != TT_OK) return st;
-  static const char *const known[] = {"position", "target", "up", "fov", "resolution", "path", NULL};
+  static const char *const known[] = {"position",   "target", "up", "fov",
+                                      "resolution", "path",   NULL};
   tt__jcheck_keys(c, cam, "camera", known);
   static const tt__range fov_r = {0, 180, TT__LO_OPEN | TT__HI_OPEN};
   static const tt__range res_r = {1, 65536, TT__INT};
   tt_camera *k = &c->scene->camera;
   double v;
   int req = !imported;
-  if ((st = tt__jvec(c, cam, "position", "camera", req, 3, &tt__any, 0, k->position)) != TT_OK) return st;
-  if ((st = tt__jvec(c, cam, "target", "camera", req, 3, &tt__any, 0, k->target)) != TT_OK) return st;
+  if ((st = tt__jvec(c, cam, "position", "camera", req, 3, &tt__any, 0, k->position)) != TT_OK)
+    return st;
+  if ((st = tt__jvec(c, cam, "target", "camera", req, 3, &tt__any, 0, k->target)) != TT_OK)
+    return st;
   if ((st = tt__jvec(c, cam, "up", "camera", 0, 3, &tt__any, 0, k->up)) != TT_OK) return st;
   v = k->fov_y;
   if ((st = tt__jnum(c, cam, "fov", "camera", 0, &fov_r, &v)) != TT_OK) return st;
@@ -314,8 +323,9 @@ static tt_status tt__jcamera(const tt__jctx *c, const cJSON *root, int imported)
     key->time = (float)v;
     if (i > 0 && !(key->time > key[-1].time)) {
       tt__jkey(tp, sizeof tp, kp, "time");
-      return tt__jfail(c, TT_ERR_PARSE, tp, "expected a time greater than the previous key's (%g), got %g",
-                       key[-1].time, v);
+      return tt__jfail(c, TT_ERR_PARSE, tp,
+                       "expected a time greater than the previous key's (%g), got %g", key[-1].time,
+                       v);
     }
     if ((st = tt__jvec(c, e, "position", kp, 0, 3, &tt__any, 0, key->position)) != TT_OK) return st;
     if ((st = tt__jvec(c, e, "target", kp, 0, 3, &tt__any, 0, key->target)) != TT_OK) return st;
@@ -350,7 +360,8 @@ static tt_status tt__jtexture(const tt__jctx *c, const char *path, const char *r
       *out = (int32_t)i;
       return TT_OK;
     }
-  tt_texture *t = tt__scene_push((void **)&s->textures, &s->texture_count, &s->texture_cap, sizeof *t);
+  tt_texture *t =
+      tt__scene_push((void **)&s->textures, &s->texture_count, &s->texture_cap, sizeof *t);
   if (!t) {
     free(full);
     return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, path, "out of memory");
@@ -360,7 +371,7 @@ static tt_status tt__jtexture(const tt__jctx *c, const char *path, const char *r
   /* HDR formats store linear values; 8-bit formats are sRGB by convention */
   size_t n = strlen(full);
   t->srgb = !((n >= 4 && (strcmp(full + n - 4, ".exr") == 0 || strcmp(full + n - 4, ".hdr") == 0 ||
-                         strcmp(full + n - 4, ".pfm") == 0)));
+                          strcmp(full + n - 4, ".pfm") == 0)));
   *out = (int32_t)(s->texture_count - 1);
   return TT_OK;
 }
@@ -370,8 +381,8 @@ static tt_status tt__jmaterial(const tt__jctx *c, const cJSON *e, const char *mp
   tt_status st;
   char path[512], got[128];
   if ((st = tt__jobject(c, e, mp)) != TT_OK) return st;
-  static const char *const known[] = {"type", "albedo", "texture", "roughness", "alpha", "eta", "k",
-                                      "ior", "specular", "emission", "twoSided", NULL};
+  static const char *const known[] = {"type", "albedo", "texture",  "roughness", "alpha",    "eta",
+                                      "k",    "ior",    "specular", "emission",  "twoSided", NULL};
   tt__jcheck_keys(c, e, mp, known);
   const char *type = "diffuse";
   if ((st = tt__jstr(c, e, "type", mp, 0, &type)) != TT_OK) return st;
@@ -384,9 +395,10 @@ static tt_status tt__jmaterial(const tt__jctx *c, const cJSON *e, const char *mp
     if (strcmp(type, names[i]) == 0) m->type = types[i];
   if (!m->type) {
     tt__jkey(path, sizeof path, mp, "type");
-    return tt__jfail(c, TT_ERR_PARSE, path,
-                     "unknown material type \"%s\" (expected diffuse, conductor, dielectric, mirror or plastic)",
-                     type);
+    return tt__jfail(
+        c, TT_ERR_PARSE, path,
+        "unknown material type \"%s\" (expected diffuse, conductor, dielectric, mirror or plastic)",
+        type);
   }
   m->struct_size = sizeof *m;
   for (int i = 0; i < 3; i++) {
@@ -401,7 +413,8 @@ static tt_status tt__jmaterial(const tt__jctx *c, const cJSON *e, const char *mp
   m->ior = 1.5f;
   float a = (m->type == TT_MATERIAL_CONDUCTOR || m->type == TT_MATERIAL_PLASTIC) ? 0.1f : 0.0f;
   m->alpha[0] = m->alpha[1] = a;
-  static const tt__range rough_r = {0, TT__PI / 2, 0}, pos_r = {0, INFINITY, TT__LO_OPEN | TT__HI_OPEN};
+  static const tt__range rough_r = {0, TT__PI / 2, 0},
+                         pos_r = {0, INFINITY, TT__LO_OPEN | TT__HI_OPEN};
   double v;
   if ((st = tt__jvec(c, e, "albedo", mp, 0, 3, &tt__unit, 1, m->albedo)) != TT_OK) return st;
   const char *tex = NULL;
@@ -438,7 +451,9 @@ static tt_status tt__jmaterial(const tt__jctx *c, const cJSON *e, const char *mp
 static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root, int imported) {
   const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
   if (!mats && imported) return TT_OK;
-  if (!mats) return tt__jfail(c, TT_ERR_PARSE, "materials", "missing required field (expected an object of named materials)");
+  if (!mats)
+    return tt__jfail(c, TT_ERR_PARSE, "materials",
+                     "missing required field (expected an object of named materials)");
   tt_status st = tt__jobject(c, mats, "materials");
   if (st != TT_OK) return st;
   tt_scene *s = c->scene;
@@ -453,7 +468,8 @@ static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root, int import
     tt_material m;
     memset(&m, 0, sizeof m);
     if ((st = tt__jmaterial(c, e, mp, &m)) != TT_OK) return st;
-    tt_material *slot = tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
+    tt_material *slot =
+        tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
     if (!slot) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mp, "out of memory");
     m.name = tt__strdup(e->string);
     *slot = m;
@@ -466,20 +482,32 @@ static tt_status tt__jmaterials(const tt__jctx *c, const cJSON *root, int import
 
 /* ---- meshes ---------------------------------------------------------------------------- */
 
-
 /* Rotation about a unit axis by `deg` degrees (Rodrigues). */
 void tt__mat_rot(double r[16], double x, double y, double z, double deg) {
   double a = deg * TT__PI / 180.0, cs = cos(a), sn = sin(a), t = 1 - cs;
-  double m[16] = {t * x * x + cs,     t * x * y - sn * z, t * x * z + sn * y, 0,
-                  t * x * y + sn * z, t * y * y + cs,     t * y * z - sn * x, 0,
-                  t * x * z - sn * y, t * y * z + sn * x, t * z * z + cs,     0,
-                  0,                  0,                  0,                  1};
+  double m[16] = {t * x * x + cs,
+                  t * x * y - sn * z,
+                  t * x * z + sn * y,
+                  0,
+                  t * x * y + sn * z,
+                  t * y * y + cs,
+                  t * y * z - sn * x,
+                  0,
+                  t * x * z - sn * y,
+                  t * y * z + sn * x,
+                  t * z * z + cs,
+                  0,
+                  0,
+                  0,
+                  0,
+                  1};
   memcpy(r, m, sizeof m);
 }
 
 /* Builds the mesh's object-to-world matrix from "transform" (T * R * S) or "matrix";
  * *has is 0 when the mesh has neither. */
-static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *mp, double m[16], int *has) {
+static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *mp, double m[16],
+                                int *has) {
   static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   memcpy(m, id, sizeof id);
   *has = 0;
@@ -487,12 +515,14 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
   const cJSON *mx = cJSON_GetObjectItemCaseSensitive(e, "matrix");
   char path[512], sub[560], got[128];
   tt_status st;
-  if (tr && mx) return tt__jfail(c, TT_ERR_PARSE, mp, "expected either \"transform\" or \"matrix\", not both");
+  if (tr && mx)
+    return tt__jfail(c, TT_ERR_PARSE, mp, "expected either \"transform\" or \"matrix\", not both");
   if (mx) {
     tt__jkey(path, sizeof path, mp, "matrix");
     int n = cJSON_GetArraySize(mx);
     if (!cJSON_IsArray(mx) || (n != 16 && n != 4))
-      return tt__jfail(c, TT_ERR_PARSE, path, "expected 16 numbers or 4 rows of 4 (row-major), got %s",
+      return tt__jfail(c, TT_ERR_PARSE, path,
+                       "expected 16 numbers or 4 rows of 4 (row-major), got %s",
                        tt__jdesc(mx, got, sizeof got));
     if (n == 16) {
       float f[16];
@@ -508,7 +538,8 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
       }
     }
     if (m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1)
-      return tt__jfail(c, TT_ERR_PARSE, path, "expected an affine matrix (last row 0 0 0 1), got last row %g %g %g %g",
+      return tt__jfail(c, TT_ERR_PARSE, path,
+                       "expected an affine matrix (last row 0 0 0 1), got last row %g %g %g %g",
                        m[12], m[13], m[14], m[15]);
     *has = 1;
     return TT_OK;
@@ -523,7 +554,8 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
   if ((st = tt__jvec(c, tr, "scale", path, 0, 3, &tt__any, 1, s)) != TT_OK) return st;
   if (s[0] == 0 || s[1] == 0 || s[2] == 0) {
     tt__jkey(sub, sizeof sub, path, "scale");
-    return tt__jfail(c, TT_ERR_PARSE, sub, "expected non-zero scale factors, got %g %g %g", s[0], s[1], s[2]);
+    return tt__jfail(c, TT_ERR_PARSE, sub, "expected non-zero scale factors, got %g %g %g", s[0],
+                     s[1], s[2]);
   }
   double R[16];
   memcpy(R, id, sizeof id);
@@ -554,7 +586,9 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
     }
     tt__mat_rot(R, axis[0] / l, axis[1] / l, axis[2] / l, angle);
   } else if (rot) {
-    return tt__jfail(c, TT_ERR_PARSE, sub, "expected Euler angles [x, y, z] in degrees or {\"axis\": [x, y, z], \"angle\": degrees}, got %s",
+    return tt__jfail(c, TT_ERR_PARSE, sub,
+                     "expected Euler angles [x, y, z] in degrees or {\"axis\": [x, y, z], "
+                     "\"angle\": degrees}, got %s",
                      tt__jdesc(rot, got, sizeof got));
   }
   double S[16] = {s[0], 0, 0, 0, 0, s[1], 0, 0, 0, 0, s[2], 0, 0, 0, 0, 1};
@@ -568,7 +602,7 @@ static tt_status tt__jtransform(const tt__jctx *c, const cJSON *e, const char *m
 /* Reads a vertex attribute given either flat ([x,y,z,x,y,z...]) or nested ([[x,y,z],...]);
  * *count receives the number of tuples. */
 tt_status tt__jtuples(const tt__jctx *c, const cJSON *arr, const char *path, int dim,
-                             const char *what, float **out, uint32_t *count) {
+                      const char *what, float **out, uint32_t *count) {
   char got[128], sub[560];
   *out = NULL;
   *count = 0;
@@ -579,7 +613,8 @@ tt_status tt__jtuples(const tt__jctx *c, const cJSON *arr, const char *path, int
   size_t n = (size_t)cJSON_GetArraySize(arr);
   size_t tuples = nested ? n : n / dim;
   if (!nested && n % (size_t)dim != 0)
-    return tt__jfail(c, TT_ERR_PARSE, path, "expected a multiple of %d numbers (flat %s), got %zu", dim, what, n);
+    return tt__jfail(c, TT_ERR_PARSE, path, "expected a multiple of %d numbers (flat %s), got %zu",
+                     dim, what, n);
   if (tuples > UINT32_MAX) return tt__jfail(c, TT_ERR_UNSUPPORTED, path, "too many %s", what);
   float *f = malloc(sizeof(float) * dim * tuples);
   if (!f) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, path, "out of memory");
@@ -618,20 +653,24 @@ static tt_status tt__jinline(const tt__jctx *c, const cJSON *e, const char *mp, 
   tt__jkey(path, sizeof path, mp, "indices");
   if (!idx) {
     if (nv % 3 != 0)
-      return tt__jfail(c, TT_ERR_PARSE, path,
-                       "missing required field (without indices the %u positions must form whole triangles)", nv);
+      return tt__jfail(
+          c, TT_ERR_PARSE, path,
+          "missing required field (without indices the %u positions must form whole triangles)",
+          nv);
     d->triangle_count = nv / 3;
     d->indices = malloc(sizeof(uint32_t) * nv);
     if (!d->indices) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, path, "out of memory");
     for (uint32_t i = 0; i < nv; i++) d->indices[i] = i;
   } else {
     if (!cJSON_IsArray(idx) || !idx->child)
-      return tt__jfail(c, TT_ERR_PARSE, path, "expected a non-empty array of vertex indices, got %s",
+      return tt__jfail(c, TT_ERR_PARSE, path,
+                       "expected a non-empty array of vertex indices, got %s",
                        tt__jdesc(idx, got, sizeof got));
     int nested = cJSON_IsArray(idx->child);
     size_t n = (size_t)cJSON_GetArraySize(idx) * (nested ? 3 : 1);
     if (n % 3 != 0)
-      return tt__jfail(c, TT_ERR_PARSE, path, "expected a multiple of 3 indices (whole triangles), got %zu", n);
+      return tt__jfail(c, TT_ERR_PARSE, path,
+                       "expected a multiple of 3 indices (whole triangles), got %zu", n);
     if (n / 3 > UINT32_MAX) return tt__jfail(c, TT_ERR_UNSUPPORTED, path, "too many triangles");
     d->triangle_count = (uint32_t)(n / 3);
     d->indices = malloc(sizeof(uint32_t) * n);
@@ -658,7 +697,8 @@ static tt_status tt__jinline(const tt__jctx *c, const cJSON *e, const char *mp, 
         double v;
         if ((st = tt__jnum_item(c, vals[j], sub2, &idx_r, &v)) != TT_OK) return st;
         if (v >= nv)
-          return tt__jfail(c, TT_ERR_PARSE, sub2, "index %.0f out of range (the mesh has %u vertices)", v, nv);
+          return tt__jfail(c, TT_ERR_PARSE, sub2,
+                           "index %.0f out of range (the mesh has %u vertices)", v, nv);
         d->indices[k++] = (uint32_t)v;
       }
     }
@@ -669,7 +709,8 @@ static tt_status tt__jinline(const tt__jctx *c, const cJSON *e, const char *mp, 
     tt__jkey(path, sizeof path, mp, "normals");
     if ((st = tt__jtuples(c, nrm, path, 3, "normals", &d->normals, &cnt)) != TT_OK) return st;
     if (cnt != nv)
-      return tt__jfail(c, TT_ERR_PARSE, path, "expected %u normals (one per vertex), got %u", nv, cnt);
+      return tt__jfail(c, TT_ERR_PARSE, path, "expected %u normals (one per vertex), got %u", nv,
+                       cnt);
     for (uint32_t v = 0; v < nv; v++) {
       float *n = d->normals + 3 * (size_t)v;
       double l = tt__len3(n);
@@ -692,8 +733,8 @@ static tt_status tt__jinline(const tt__jctx *c, const cJSON *e, const char *mp, 
 }
 
 /* Applies the mesh transform and rejects meshes that end up degenerate or non-finite. */
-static tt_status tt__jfinish_mesh(const tt__jctx *c, const char *mp, tt__mesh_data *d, const double m[16],
-                                  int has_tf, uint32_t material) {
+static tt_status tt__jfinish_mesh(const tt__jctx *c, const char *mp, tt__mesh_data *d,
+                                  const double m[16], int has_tf, uint32_t material) {
   if (has_tf) {
     if (tt__mesh_data_transform(d, m) != TT_OK)
       return tt__jfail(c, TT_ERR_PARSE, mp, "transform is singular (determinant 0)");
@@ -702,9 +743,11 @@ static tt_status tt__jfinish_mesh(const tt__jctx *c, const char *mp, tt__mesh_da
         return tt__jfail(c, TT_ERR_PARSE, mp, "transform produces non-finite positions");
   }
   double area = 0;
-  for (uint32_t t = 0; t < d->triangle_count; t++) area += tt__triangle_area(d->positions, d->indices, t);
+  for (uint32_t t = 0; t < d->triangle_count; t++)
+    area += tt__triangle_area(d->positions, d->indices, t);
   if (!(area > 0) || !isfinite(area))
-    return tt__jfail(c, TT_ERR_PARSE, mp, "mesh \"%s\" has zero area (every triangle is degenerate)",
+    return tt__jfail(c, TT_ERR_PARSE, mp,
+                     "mesh \"%s\" has zero area (every triangle is degenerate)",
                      d->name ? d->name : "");
   return tt__scene_add_mesh(c->scene, d, material);
 }
@@ -726,8 +769,9 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
   tt_status st;
   tt__jidx(mp, sizeof mp, "meshes", index);
   if ((st = tt__jobject(c, e, mp)) != TT_OK) return st;
-  static const char *const known[] = {"name", "material", "positions", "indices", "normals", "uvs",
-                                      "file", "split", "transform", "matrix", "animation", "morph", NULL};
+  static const char *const known[] = {"name",      "material", "positions", "indices",   "normals",
+                                      "uvs",       "file",     "split",     "transform", "matrix",
+                                      "animation", "morph",    NULL};
   tt__jcheck_keys(c, e, mp, known);
   tt_scene *s = c->scene;
   const char *name = NULL, *mat = NULL, *file = NULL;
@@ -747,10 +791,12 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
   }
   if ((st = tt__jstr(c, e, "file", mp, 0, &file)) != TT_OK) return st;
   const cJSON *pos = cJSON_GetObjectItemCaseSensitive(e, "positions");
-  if (file && pos) return tt__jfail(c, TT_ERR_PARSE, mp, "expected either \"file\" or \"positions\", not both");
+  if (file && pos)
+    return tt__jfail(c, TT_ERR_PARSE, mp, "expected either \"file\" or \"positions\", not both");
   if (!file && !pos) {
     tt__jkey(path, sizeof path, mp, "positions");
-    return tt__jfail(c, TT_ERR_PARSE, path, "missing required field (expected inline positions or a \"file\")");
+    return tt__jfail(c, TT_ERR_PARSE, path,
+                     "missing required field (expected inline positions or a \"file\")");
   }
   double m[16];
   int has_tf = 0;
@@ -771,8 +817,8 @@ static tt_status tt__jmesh(const tt__jctx *c, const cJSON *e, unsigned index) {
   }
   int split = 0;
   if ((st = tt__jbool(c, e, "split", mp, &split)) != TT_OK) return st;
-  if (cJSON_GetObjectItemCaseSensitive(e, "indices") || cJSON_GetObjectItemCaseSensitive(e, "normals") ||
-      cJSON_GetObjectItemCaseSensitive(e, "uvs"))
+  if (cJSON_GetObjectItemCaseSensitive(e, "indices") ||
+      cJSON_GetObjectItemCaseSensitive(e, "normals") || cJSON_GetObjectItemCaseSensitive(e, "uvs"))
     tt__jwarn(c, mp, "indices/normals/uvs are ignored for a mesh loaded from \"file\"");
   char *full = tt__resolve(c, file);
   if (!full) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mp, "out of memory");
@@ -796,9 +842,12 @@ static tt_status tt__jmeshes(const tt__jctx *c, const cJSON *root, int imported)
   const cJSON *ms = cJSON_GetObjectItemCaseSensitive(root, "meshes");
   char got[128];
   if (!ms && imported) return TT_OK;
-  if (!ms) return tt__jfail(c, TT_ERR_PARSE, "meshes", "missing required field (expected a non-empty array of meshes)");
+  if (!ms)
+    return tt__jfail(c, TT_ERR_PARSE, "meshes",
+                     "missing required field (expected a non-empty array of meshes)");
   if (imported && !cJSON_IsArray(ms))
-    return tt__jfail(c, TT_ERR_PARSE, "meshes", "expected an array of meshes, got %s", tt__jdesc(ms, got, sizeof got));
+    return tt__jfail(c, TT_ERR_PARSE, "meshes", "expected an array of meshes, got %s",
+                     tt__jdesc(ms, got, sizeof got));
   if (!cJSON_IsArray(ms) || (!ms->child && !imported))
     return tt__jfail(c, TT_ERR_PARSE, "meshes", "expected a non-empty array of meshes, got %s",
                      tt__jdesc(ms, got, sizeof got));
@@ -852,26 +901,30 @@ static tt_status tt__jlight(const tt__jctx *c, const cJSON *e, unsigned index, i
         l.type = TT_LIGHT_ENV_IMAGE;
         l.image = full;
       } else {
-        tt__jwarn(c, path, "environment image \"%s\" not found, using a constant environment", full);
+        tt__jwarn(c, path, "environment image \"%s\" not found, using a constant environment",
+                  full);
         free(full);
       }
     }
   } else if (strcmp(type, "point") == 0 || strcmp(type, "spot") == 0) {
     int spot = type[0] == 's';
     static const char *const pknown[] = {"type", "position", "intensity", NULL};
-    static const char *const sknown[] = {"type", "position", "intensity", "direction", "target",
-                                         "angle", "innerAngle", NULL};
+    static const char *const sknown[] = {"type",   "position", "intensity",  "direction",
+                                         "target", "angle",    "innerAngle", NULL};
     tt__jcheck_keys(c, e, lp, spot ? sknown : pknown);
     l.type = spot ? TT_LIGHT_SPOT : TT_LIGHT_POINT;
     if ((st = tt__jvec(c, e, "position", lp, 1, 3, &tt__any, 0, l.position)) != TT_OK) return st;
-    if ((st = tt__jvec(c, e, "intensity", lp, 1, 3, &tt__nonneg, 1, l.radiance)) != TT_OK) return st;
+    if ((st = tt__jvec(c, e, "intensity", lp, 1, 3, &tt__nonneg, 1, l.radiance)) != TT_OK)
+      return st;
     if (spot) {
       int has_dir = cJSON_GetObjectItemCaseSensitive(e, "direction") != NULL;
       int has_tgt = cJSON_GetObjectItemCaseSensitive(e, "target") != NULL;
       if (has_dir == has_tgt)
-        return tt__jfail(c, TT_ERR_PARSE, lp, "expected exactly one of \"direction\" or \"target\"");
+        return tt__jfail(c, TT_ERR_PARSE, lp,
+                         "expected exactly one of \"direction\" or \"target\"");
       if (has_dir) {
-        if ((st = tt__jvec(c, e, "direction", lp, 1, 3, &tt__any, 0, l.direction)) != TT_OK) return st;
+        if ((st = tt__jvec(c, e, "direction", lp, 1, 3, &tt__any, 0, l.direction)) != TT_OK)
+          return st;
         tt__jkey(path, sizeof path, lp, "direction");
       } else {
         float t[3];
@@ -887,7 +940,8 @@ static tt_status tt__jlight(const tt__jctx *c, const cJSON *e, unsigned index, i
       if ((st = tt__jnum(c, e, "innerAngle", lp, 0, &inner_r, &inner)) != TT_OK) return st;
       if (inner > outer) {
         tt__jkey(path, sizeof path, lp, "innerAngle");
-        return tt__jfail(c, TT_ERR_PARSE, path, "expected at most angle (%g), got %g", outer, inner);
+        return tt__jfail(c, TT_ERR_PARSE, path, "expected at most angle (%g), got %g", outer,
+                         inner);
       }
       l.cos_outer = (float)cos(outer * TT__PI / 180.0);
       l.cos_inner = (float)cos(inner * TT__PI / 180.0);
@@ -901,15 +955,18 @@ static tt_status tt__jlight(const tt__jctx *c, const cJSON *e, unsigned index, i
       tt__jkey(path, sizeof path, lp, "direction");
       return tt__jfail(c, TT_ERR_PARSE, path, "expected a non-zero direction");
     }
-    if ((st = tt__jvec(c, e, "irradiance", lp, 1, 3, &tt__nonneg, 1, l.radiance)) != TT_OK) return st;
+    if ((st = tt__jvec(c, e, "irradiance", lp, 1, 3, &tt__nonneg, 1, l.radiance)) != TT_OK)
+      return st;
   } else {
     tt__jkey(path, sizeof path, lp, "type");
     return tt__jfail(c, TT_ERR_PARSE, path,
                      "unknown light type \"%s\" (expected environment, point, spot or distant; "
-                     "area lights come from materials with emission)", type);
+                     "area lights come from materials with emission)",
+                     type);
   }
   tt_scene *s = c->scene;
-  tt_light *slot = tt__scene_push((void **)&s->lights, &s->light_count, &s->light_cap, sizeof *slot);
+  tt_light *slot =
+      tt__scene_push((void **)&s->lights, &s->light_count, &s->light_cap, sizeof *slot);
   if (!slot) {
     free((void *)l.image);
     return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, lp, "out of memory");
@@ -924,10 +981,12 @@ static tt_status tt__jlights(const tt__jctx *c, const cJSON *root) {
   char got[128];
   if (!ls) return TT_OK;
   if (!cJSON_IsArray(ls))
-    return tt__jfail(c, TT_ERR_PARSE, "lights", "expected an array of lights, got %s", tt__jdesc(ls, got, sizeof got));
+    return tt__jfail(c, TT_ERR_PARSE, "lights", "expected an array of lights, got %s",
+                     tt__jdesc(ls, got, sizeof got));
   int env = 0; /* 2: the imported scene's environment light */
   for (uint32_t i = 0; i < c->scene->light_count; i++)
-    if (c->scene->lights[i].type == TT_LIGHT_ENV_CONSTANT || c->scene->lights[i].type == TT_LIGHT_ENV_IMAGE)
+    if (c->scene->lights[i].type == TT_LIGHT_ENV_CONSTANT ||
+        c->scene->lights[i].type == TT_LIGHT_ENV_IMAGE)
       env = 2;
   unsigned i = 0;
   for (const cJSON *e = ls->child; e; e = e->next, i++) {
@@ -987,10 +1046,12 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
   if (depth > 0)
     return tt__jfail(c, TT_ERR_PARSE, "import",
                      "\"%s\" not loaded: this file is itself imported by a scene.json, and imports "
-                     "cannot be nested (import the scene directly)", rel);
+                     "cannot be nested (import the scene directly)",
+                     rel);
   int pbrt = tt__has_ext(rel, ".pbrt"), json = tt__has_ext(rel, ".json");
   if (!pbrt && !json)
-    return tt__jfail(c, TT_ERR_UNSUPPORTED, "import", "unsupported scene format \"%s\" (expected .pbrt or .json)", rel);
+    return tt__jfail(c, TT_ERR_UNSUPPORTED, "import",
+                     "unsupported scene format \"%s\" (expected .pbrt or .json)", rel);
   char *full = tt__resolve(c, rel);
   if (!full) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "import", "out of memory");
   char why[256];
@@ -1013,7 +1074,8 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
     free(a);
     free(b);
     if (self) {
-      st = tt__jfail(c, TT_ERR_PARSE, "import", "\"%s\" is this file (a scene cannot import itself)", full);
+      st = tt__jfail(c, TT_ERR_PARSE, "import",
+                     "\"%s\" is this file (a scene cannot import itself)", full);
       free(full);
       return st;
     }
@@ -1060,7 +1122,8 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
   if (nul) {
     unsigned line, col;
     tt__json_line_col(json, (size_t)(nul - json), &line, &col);
-    return tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error: unexpected NUL byte", source, line, col);
+    return tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error: unexpected NUL byte", source,
+                        line, col);
   }
   /* a private NUL-terminated copy lets cJSON insist that nothing follows the value */
   char *text = malloc(length + 1);
@@ -1077,10 +1140,14 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
     tt__json_line_col(text, at, &line, &col);
     char near[24];
     size_t k = 0;
-    for (size_t i = at; i < length && k + 1 < sizeof near && text[i] != '\n'; i++) near[k++] = text[i];
+    for (size_t i = at; i < length && k + 1 < sizeof near && text[i] != '\n'; i++)
+      near[k++] = text[i];
     near[k] = '\0';
-    tt_status st = k ? tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error near \"%s\"", source, line, col, near)
-                     : tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error (unexpected end of input)", source, line, col);
+    tt_status st =
+        k ? tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error near \"%s\"", source, line, col,
+                         near)
+          : tt_set_error(TT_ERR_PARSE, "%s:%u:%u: JSON syntax error (unexpected end of input)",
+                         source, line, col);
     free(text);
     return st;
   }
@@ -1095,14 +1162,17 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
     cJSON_Delete(root);
     return st;
   }
-  static const char *const known[] = {"version", "import", "camera", "render", "materials", "meshes", "lights", NULL};
+  static const char *const known[] = {"version",   "import", "camera", "render",
+                                      "materials", "meshes", "lights", NULL};
   tt__jcheck_keys(&c, root, "", known);
   const cJSON *ver = cJSON_GetObjectItemCaseSensitive(root, "version");
   if (!ver) st = tt__jfail(&c, TT_ERR_PARSE, "version", "missing required field (expected 1)");
   else if (!cJSON_IsNumber(ver))
-    st = tt__jfail(&c, TT_ERR_PARSE, "version", "expected the number 1, got %s", tt__jdesc(ver, got, sizeof got));
+    st = tt__jfail(&c, TT_ERR_PARSE, "version", "expected the number 1, got %s",
+                   tt__jdesc(ver, got, sizeof got));
   else if (ver->valuedouble != 1.0)
-    st = tt__jfail(&c, TT_ERR_UNSUPPORTED, "version", "unsupported version %g (expected 1)", ver->valuedouble);
+    st = tt__jfail(&c, TT_ERR_UNSUPPORTED, "version", "unsupported version %g (expected 1)",
+                   ver->valuedouble);
   tt_scene *imported = NULL;
   if (st == TT_OK) st = tt__jimport(&c, root, depth, &imported);
   if (st != TT_OK) {

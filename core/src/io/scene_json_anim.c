@@ -14,7 +14,8 @@
 #define TT__PI 3.14159265358979323846
 
 /* "linear" (default), "cubic" or "step" under obj.interpolation. */
-static tt_status tt__jinterp(const tt__jctx *c, const cJSON *obj, const char *prefix, tt__interp *out) {
+static tt_status tt__jinterp(const tt__jctx *c, const cJSON *obj, const char *prefix,
+                             tt__interp *out) {
   const char *name = NULL;
   tt_status st = tt__jstr(c, obj, "interpolation", prefix, 0, &name);
   if (st != TT_OK) return st;
@@ -25,20 +26,24 @@ static tt_status tt__jinterp(const tt__jctx *c, const cJSON *obj, const char *pr
   else {
     char path[600];
     tt__jkey(path, sizeof path, prefix, "interpolation");
-    return tt__jfail(c, TT_ERR_PARSE, path, "expected \"linear\", \"cubic\" or \"step\", got \"%s\"", name);
+    return tt__jfail(c, TT_ERR_PARSE, path,
+                     "expected \"linear\", \"cubic\" or \"step\", got \"%s\"", name);
   }
   return TT_OK;
 }
 
 /* The "keys" array of `obj`: non-empty, objects with strictly increasing "time". */
-static tt_status tt__jkeys(const tt__jctx *c, const cJSON *obj, const char *prefix, const cJSON **keys,
-                           const char *const *known) {
+static tt_status tt__jkeys(const tt__jctx *c, const cJSON *obj, const char *prefix,
+                           const cJSON **keys, const char *const *known) {
   char path[600], kp[640], got[128];
   tt__jkey(path, sizeof path, prefix, "keys");
   const cJSON *k = cJSON_GetObjectItemCaseSensitive(obj, "keys");
-  if (!k) return tt__jfail(c, TT_ERR_PARSE, path, "missing required field (expected a non-empty array of keys)");
+  if (!k)
+    return tt__jfail(c, TT_ERR_PARSE, path,
+                     "missing required field (expected a non-empty array of keys)");
   if (!cJSON_IsArray(k) || !k->child)
-    return tt__jfail(c, TT_ERR_PARSE, path, "expected a non-empty array of keys, got %s", tt__jdesc(k, got, sizeof got));
+    return tt__jfail(c, TT_ERR_PARSE, path, "expected a non-empty array of keys, got %s",
+                     tt__jdesc(k, got, sizeof got));
   double prev = 0;
   unsigned i = 0;
   for (const cJSON *e = k->child; e; e = e->next, i++) {
@@ -51,8 +56,10 @@ static tt_status tt__jkeys(const tt__jctx *c, const cJSON *obj, const char *pref
     if (i > 0 && !(t > prev)) {
       char tp[680];
       tt__jkey(tp, sizeof tp, kp, "time");
-      return tt__jfail(c, TT_ERR_PARSE, tp,
-                       "keys out of order: expected a time greater than the previous key's (%g), got %g", prev, t);
+      return tt__jfail(
+          c, TT_ERR_PARSE, tp,
+          "keys out of order: expected a time greater than the previous key's (%g), got %g", prev,
+          t);
     }
     prev = t;
   }
@@ -82,14 +89,17 @@ static tt_status tt__jrotation(const tt__jctx *c, const cJSON *rot, const char *
     return TT_OK;
   }
   if (!cJSON_IsObject(rot))
-    return tt__jfail(c, TT_ERR_PARSE, path,
-                     "expected Euler angles [x, y, z] in degrees, {\"axis\": [x, y, z], \"angle\": degrees} "
-                     "or {\"quaternion\": [x, y, z, w]}, got %s", tt__jdesc(rot, got, sizeof got));
+    return tt__jfail(
+        c, TT_ERR_PARSE, path,
+        "expected Euler angles [x, y, z] in degrees, {\"axis\": [x, y, z], \"angle\": degrees} "
+        "or {\"quaternion\": [x, y, z, w]}, got %s",
+        tt__jdesc(rot, got, sizeof got));
   static const char *const known[] = {"axis", "angle", "quaternion", NULL};
   tt__jcheck_keys(c, rot, path, known);
   if (cJSON_GetObjectItemCaseSensitive(rot, "quaternion")) {
     if ((st = tt__jvec(c, rot, "quaternion", path, 1, 4, &tt__any, 0, q)) != TT_OK) return st;
-    double l = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
+    double l =
+        sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
     if (!(l > 1e-12)) {
       tt__jkey(sub, sizeof sub, path, "quaternion");
       return tt__jfail(c, TT_ERR_PARSE, sub, "expected a non-zero quaternion [x, y, z, w]");
@@ -117,14 +127,16 @@ static tt_status tt__jrotation(const tt__jctx *c, const cJSON *rot, const char *
 static const char *const tt__anim_key_fields[] = {"time", "translate", "rotate", "scale", NULL};
 
 /* One channel ("translate", "rotate" or "scale") of the rigid keys: the keys that give it. */
-static tt_status tt__jchannel(const tt__jctx *c, const cJSON *keys, const char *kpath, const char *field,
-                              tt__interp interp, tt__track *t) {
+static tt_status tt__jchannel(const tt__jctx *c, const cJSON *keys, const char *kpath,
+                              const char *field, tt__interp interp, tt__track *t) {
   uint32_t n = 0;
-  for (const cJSON *e = keys->child; e; e = e->next) n += cJSON_GetObjectItemCaseSensitive(e, field) != NULL;
+  for (const cJSON *e = keys->child; e; e = e->next)
+    n += cJSON_GetObjectItemCaseSensitive(e, field) != NULL;
   int rot = strcmp(field, "rotate") == 0, scale = strcmp(field, "scale") == 0;
   t->rotation = rot;
   if (n == 0) return TT_OK;
-  if (tt__track_alloc(t, n, rot ? 4 : 3, interp) != TT_OK) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, kpath, "out of memory");
+  if (tt__track_alloc(t, n, rot ? 4 : 3, interp) != TT_OK)
+    return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, kpath, "out of memory");
   t->rotation = rot;
   uint32_t j = 0;
   unsigned i = 0;
@@ -136,17 +148,19 @@ static tt_status tt__jchannel(const tt__jctx *c, const cJSON *keys, const char *
     tt__jkey(fp, sizeof fp, kp, field);
     t->times[j] = cJSON_GetObjectItemCaseSensitive(e, "time")->valuedouble;
     float *out = t->values + (size_t)j * t->dim;
-    tt_status st = rot ? tt__jrotation(c, v, fp, out) : tt__jvec_item(c, v, fp, 3, &tt__any, scale, out);
+    tt_status st =
+        rot ? tt__jrotation(c, v, fp, out) : tt__jvec_item(c, v, fp, 3, &tt__any, scale, out);
     if (st != TT_OK) return st;
     if (scale) {
       /* a sign change between keys would pass through a flat (singular) mesh */
       const float *first = t->values;
       for (int k = 0; k < 3; k++)
         if (out[k] == 0.0f || (out[k] < 0) != (first[k] < 0))
-          return tt__jfail(c, TT_ERR_PARSE, fp,
-                           "expected non-zero factors with the signs of the first scale key (%g %g %g), got "
-                           "%g %g %g (a sign change between keys makes the mesh flat on the way)",
-                           first[0], first[1], first[2], out[0], out[1], out[2]);
+          return tt__jfail(
+              c, TT_ERR_PARSE, fp,
+              "expected non-zero factors with the signs of the first scale key (%g %g %g), got "
+              "%g %g %g (a sign change between keys makes the mesh flat on the way)",
+              first[0], first[1], first[2], out[0], out[1], out[2]);
     }
     j++;
   }
@@ -169,11 +183,13 @@ static tt_status tt__jrigid(const tt__jctx *c, const cJSON *a, const char *ap, u
   tt__jkey(kpath, sizeof kpath, ap, "keys");
   unsigned i = 0;
   for (const cJSON *e = keys->child; e; e = e->next, i++)
-    if (!cJSON_GetObjectItemCaseSensitive(e, "translate") && !cJSON_GetObjectItemCaseSensitive(e, "rotate") &&
+    if (!cJSON_GetObjectItemCaseSensitive(e, "translate") &&
+        !cJSON_GetObjectItemCaseSensitive(e, "rotate") &&
         !cJSON_GetObjectItemCaseSensitive(e, "scale")) {
       char kp[640];
       tt__jidx(kp, sizeof kp, kpath, i);
-      return tt__jfail(c, TT_ERR_PARSE, kp, "expected at least one of \"translate\", \"rotate\", \"scale\"");
+      return tt__jfail(c, TT_ERR_PARSE, kp,
+                       "expected at least one of \"translate\", \"rotate\", \"scale\"");
     }
   uint32_t node;
   if ((st = tt__scene_anim_add_node(c->scene, -1, &node)) != TT_OK) return st;
@@ -190,8 +206,10 @@ tt_status tt__janim_check(const tt__jctx *c, const cJSON *e, const char *mp, uin
   if (morph && parts != 1) {
     char path[600];
     tt__jkey(path, sizeof path, mp, "morph");
-    return tt__jfail(c, TT_ERR_PARSE, path,
-                     "morph targets need exactly one mesh, but \"split\" made %u (morph one part per entry)", parts);
+    return tt__jfail(
+        c, TT_ERR_PARSE, path,
+        "morph targets need exactly one mesh, but \"split\" made %u (morph one part per entry)",
+        parts);
   }
   return TT_OK;
 }
@@ -210,14 +228,16 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
   tt__jkey(tp, sizeof tp, mop, "targets");
   const cJSON *targets = cJSON_GetObjectItemCaseSensitive(mo, "targets");
   if (!cJSON_IsArray(targets) || !targets->child)
-    return tt__jfail(c, TT_ERR_PARSE, tp, "%s a non-empty array of targets%s%s", targets ? "expected" : "missing required field (expected",
+    return tt__jfail(c, TT_ERR_PARSE, tp, "%s a non-empty array of targets%s%s",
+                     targets ? "expected" : "missing required field (expected",
                      targets ? ", got " : ")", targets ? tt__jdesc(targets, got, sizeof got) : "");
   const uint32_t nt = (uint32_t)cJSON_GetArraySize(targets);
   ma->targets = nt;
   ma->dpos = calloc((size_t)nt * nv * 3, sizeof(float));
   ma->weights0 = calloc(nt, sizeof(float));
   if (v->normals) ma->dnrm = calloc((size_t)nt * nv * 3, sizeof(float));
-  if (!ma->dpos || !ma->weights0 || (v->normals && !ma->dnrm)) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mop, "out of memory");
+  if (!ma->dpos || !ma->weights0 || (v->normals && !ma->dnrm))
+    return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, mop, "out of memory");
   unsigned i = 0;
   for (const cJSON *t = targets->child; t; t = t->next, i++) {
     tt__jidx(ip, sizeof ip, tp, i);
@@ -228,12 +248,15 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
     memset(&d, 0, sizeof d);
     uint32_t cnt = 0;
     tt__jkey(fp, sizeof fp, ip, "positions");
-    if ((st = tt__jtuples(c, cJSON_GetObjectItemCaseSensitive(t, "positions"), fp, 3, "positions", &d.positions, &cnt)) != TT_OK)
+    if ((st = tt__jtuples(c, cJSON_GetObjectItemCaseSensitive(t, "positions"), fp, 3, "positions",
+                          &d.positions, &cnt)) != TT_OK)
       return st;
     d.vertex_count = cnt;
     if (cnt != nv) {
       tt__mesh_data_free(&d);
-      return tt__jfail(c, TT_ERR_PARSE, fp, "mismatched morph target size: expected %u positions (one per vertex of the mesh), got %u",
+      return tt__jfail(c, TT_ERR_PARSE, fp,
+                       "mismatched morph target size: expected %u positions (one per vertex of the "
+                       "mesh), got %u",
                        nv, cnt);
     }
     const cJSON *tn = cJSON_GetObjectItemCaseSensitive(t, "normals");
@@ -241,7 +264,8 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
       tt__jkey(fp, sizeof fp, ip, "normals");
       if (!v->normals) {
         tt__mesh_data_free(&d);
-        return tt__jfail(c, TT_ERR_PARSE, fp, "the mesh has no normals, so its targets cannot have any");
+        return tt__jfail(c, TT_ERR_PARSE, fp,
+                         "the mesh has no normals, so its targets cannot have any");
       }
       if ((st = tt__jtuples(c, tn, fp, 3, "normals", &d.normals, &cnt)) != TT_OK) {
         tt__mesh_data_free(&d);
@@ -249,7 +273,9 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
       }
       if (cnt != nv) {
         tt__mesh_data_free(&d);
-        return tt__jfail(c, TT_ERR_PARSE, fp, "mismatched morph target size: expected %u normals (one per vertex of the mesh), got %u",
+        return tt__jfail(c, TT_ERR_PARSE, fp,
+                         "mismatched morph target size: expected %u normals (one per vertex of the "
+                         "mesh), got %u",
                          nv, cnt);
       }
     }
@@ -269,7 +295,8 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
   const cJSON *w0 = cJSON_GetObjectItemCaseSensitive(mo, "weights");
   if (w0) {
     if (!cJSON_IsArray(w0) || (uint32_t)cJSON_GetArraySize(w0) != nt)
-      return tt__jfail(c, TT_ERR_PARSE, wp, "expected %u weights (one per target), got %s", nt, tt__jdesc(w0, got, sizeof got));
+      return tt__jfail(c, TT_ERR_PARSE, wp, "expected %u weights (one per target), got %s", nt,
+                       tt__jdesc(w0, got, sizeof got));
     unsigned k = 0;
     for (const cJSON *x = w0->child; x; x = x->next, k++) {
       double val;
@@ -278,7 +305,7 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
       ma->weights0[k] = (float)val;
     }
   }
-  if (!cJSON_GetObjectItemCaseSensitive(mo, "keys")) return TT_OK;  /* fixed weights */
+  if (!cJSON_GetObjectItemCaseSensitive(mo, "keys")) return TT_OK; /* fixed weights */
   tt__interp interp;
   if ((st = tt__jinterp(c, mo, mop, &interp)) != TT_OK) return st;
   static const char *const kknown[] = {"time", "weights", NULL};
@@ -293,9 +320,12 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
     tt__jidx(kp, sizeof kp, kpath, i);
     tt__jkey(fp, sizeof fp, kp, "weights");
     const cJSON *w = cJSON_GetObjectItemCaseSensitive(e, "weights");
-    if (!w) return tt__jfail(c, TT_ERR_PARSE, fp, "missing required field (expected %u weights, one per target)", nt);
+    if (!w)
+      return tt__jfail(c, TT_ERR_PARSE, fp,
+                       "missing required field (expected %u weights, one per target)", nt);
     if (!cJSON_IsArray(w) || (uint32_t)cJSON_GetArraySize(w) != nt)
-      return tt__jfail(c, TT_ERR_PARSE, fp, "expected %u weights (one per target), got %s", nt, tt__jdesc(w, got, sizeof got));
+      return tt__jfail(c, TT_ERR_PARSE, fp, "expected %u weights (one per target), got %s", nt,
+                       tt__jdesc(w, got, sizeof got));
     ma->weights.times[i] = cJSON_GetObjectItemCaseSensitive(e, "time")->valuedouble;
     unsigned k = 0;
     for (const cJSON *x = w->child; x; x = x->next, k++) {
@@ -310,8 +340,8 @@ static tt_status tt__jmorph(const tt__jctx *c, const cJSON *mo, const char *mop,
   return TT_OK;
 }
 
-tt_status tt__janim_attach(const tt__jctx *c, const cJSON *e, const char *mp, uint32_t first, uint32_t count,
-                           const double m[16], int has_tf) {
+tt_status tt__janim_attach(const tt__jctx *c, const cJSON *e, const char *mp, uint32_t first,
+                           uint32_t count, const double m[16], int has_tf) {
   const cJSON *anim = cJSON_GetObjectItemCaseSensitive(e, "animation");
   const cJSON *morph = cJSON_GetObjectItemCaseSensitive(e, "morph");
   if (!anim && !morph) return TT_OK;
@@ -350,7 +380,7 @@ static double tt__keys_span(const cJSON *obj, double *first) {
 
 tt_status tt__janim_check_range(const tt__jctx *c, const cJSON *root) {
   const tt_camera *cam = tt_scene_camera(c->scene);
-  if (cam->key_count < 2) return TT_OK;  /* no sequence to exceed */
+  if (cam->key_count < 2) return TT_OK; /* no sequence to exceed */
   const double lo = cam->keys[0].time, hi = cam->keys[cam->key_count - 1].time;
   const cJSON *ms = cJSON_GetObjectItemCaseSensitive(root, "meshes");
   unsigned i = 0;
@@ -361,10 +391,11 @@ tt_status tt__janim_check_range(const tt__jctx *c, const cJSON *root) {
       if (last == -INFINITY || (first >= lo && last <= hi)) continue;
       char path[600];
       snprintf(path, sizeof path, "meshes[%u].%s.keys", i, which[w]);
-      return tt__jfail(c, TT_ERR_PARSE, path,
-                       "keys from time %g to %g: the animation is longer than the sequence (the camera path "
-                       "runs from %g to %g); extend camera.path or move the keys inside it",
-                       first, last, lo, hi);
+      return tt__jfail(
+          c, TT_ERR_PARSE, path,
+          "keys from time %g to %g: the animation is longer than the sequence (the camera path "
+          "runs from %g to %g); extend camera.path or move the keys inside it",
+          first, last, lo, hi);
     }
   }
   return TT_OK;

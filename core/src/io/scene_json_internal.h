@@ -12,7 +12,7 @@
 /* Loader state: where messages point and where relative assets are resolved. */
 typedef struct tt__jctx {
   const char *src;
-  const char *base;   /* NULL: relative to the current directory */
+  const char *base; /* NULL: relative to the current directory */
   tt_scene *scene;
 } tt__jctx;
 
@@ -25,8 +25,8 @@ typedef struct tt__range {
 #define TT__HI_OPEN 2u
 #define TT__INT 4u
 
-extern const tt__range tt__any;     /* any finite number */
-extern const tt__range tt__nonneg;  /* [0, inf) */
+extern const tt__range tt__any;    /* any finite number */
+extern const tt__range tt__nonneg; /* [0, inf) */
 
 /* One place formats "<source>: <path>: <message>" so all errors look alike
  * (util/json_error.c, shared with the parameter-space reader). */
@@ -42,7 +42,8 @@ void tt__jidx(char *buf, size_t n, const char *prefix, unsigned i);
 const char *tt__jdesc(const cJSON *it, char *buf, size_t n);
 /* Warns about keys outside the NULL-terminated `known` (keys starting with '_' are
  * comments). */
-void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *prefix, const char *const *known);
+void tt__jcheck_keys(const tt__jctx *c, const cJSON *obj, const char *prefix,
+                     const char *const *known);
 /* A finite number inside `r`. */
 tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path, const tt__range *r,
                         double *out);
@@ -50,8 +51,8 @@ tt_status tt__jnum_item(const tt__jctx *c, const cJSON *it, const char *path, co
 tt_status tt__jnum(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                    int required, const tt__range *r, double *out);
 /* An array of exactly n numbers (one number fills all n with allow_scalar). */
-tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *path, int n, const tt__range *r,
-                        int allow_scalar, float *out);
+tt_status tt__jvec_item(const tt__jctx *c, const cJSON *it, const char *path, int n,
+                        const tt__range *r, int allow_scalar, float *out);
 /* Optional/required n-vector under `key`. */
 tt_status tt__jvec(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                    int required, int n, const tt__range *r, int allow_scalar, float *out);
@@ -59,12 +60,13 @@ tt_status tt__jvec(const tt__jctx *c, const cJSON *obj, const char *key, const c
 tt_status tt__jstr(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
                    int required, const char **out);
 /* Optional boolean under `key`. */
-tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix, int *out);
+tt_status tt__jbool(const tt__jctx *c, const cJSON *obj, const char *key, const char *prefix,
+                    int *out);
 /* TT_OK if `it` is an object. */
 tt_status tt__jobject(const tt__jctx *c, const cJSON *it, const char *path);
 /* Vertex attribute tuples given flat or nested; *count tuples into a malloc'ed *out. */
-tt_status tt__jtuples(const tt__jctx *c, const cJSON *arr, const char *path, int dim, const char *what,
-                      float **out, uint32_t *count);
+tt_status tt__jtuples(const tt__jctx *c, const cJSON *arr, const char *path, int dim,
+                      const char *what, float **out, uint32_t *count);
 /* Rotation about a unit axis by `deg` degrees (row-major 4x4). */
 void tt__mat_rot(double r[16], double x, double y, double z, double deg);
 /* Length of a 3-vector. */
@@ -74,7 +76,7 @@ double tt__len3(const float v[3]);
 
 /* What a mesh entry's "animation" and "morph" hold, read before the mesh is added. */
 typedef struct tt__janim {
-  const cJSON *animation, *morph;  /* NULL when absent */
+  const cJSON *animation, *morph; /* NULL when absent */
 } tt__janim;
 
 /* Validates the shape of "animation" and "morph" of mesh entry `e` (path `mp`) that made

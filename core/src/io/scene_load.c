@@ -21,6 +21,7 @@ tt_status tt_scene_load(const char *path, tt_scene **out) {
   if (!path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: path is NULL");
   if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
   if (!tt__has_ext(path, ".json"))
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: unsupported scene format (expected .json or .pbrt)", path);
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "%s: unsupported scene format (expected .json or .pbrt)", path);
   return tt__scene_load_json_file(path, 0, out);
 }

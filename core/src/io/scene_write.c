@@ -114,11 +114,14 @@ static tt_status tt__write_ply(const tt_mesh *m, const char *file, const char *j
   }
   FILE *f = tt_atomic_file_stream(af);
   fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by tunetrace\n");
-  fprintf(f, "element vertex %u\nproperty uchar guard\nproperty float x\nproperty float y\nproperty float z\n",
+  fprintf(f,
+          "element vertex %u\nproperty uchar guard\nproperty float x\nproperty float y\nproperty "
+          "float z\n",
           m->vertex_count);
   if (m->normals) fprintf(f, "property float nx\nproperty float ny\nproperty float nz\n");
   if (m->uvs) fprintf(f, "property float u\nproperty float v\n");
-  fprintf(f, "element face %u\nproperty list uchar uint vertex_indices\nend_header\n", m->triangle_count);
+  fprintf(f, "element face %u\nproperty list uchar uint vertex_indices\nend_header\n",
+          m->triangle_count);
   unsigned char buf[40];
   for (uint32_t v = 0; v < m->vertex_count; v++) {
     size_t n = 1;
@@ -201,7 +204,8 @@ static void tt__wrender(const tt__wctx *w, const tt_render_settings *s) {
     seed %= (1ull << 53);
   }
   double budget = s->time_budget_s > 0 && isfinite(s->time_budget_s) ? s->time_budget_s : 0.0;
-  fprintf(w->f, "  \"render\": {\"spp\": %u, \"maxDepth\": %u, \"seed\": %llu, \"timeBudget\": %.17g},\n",
+  fprintf(w->f,
+          "  \"render\": {\"spp\": %u, \"maxDepth\": %u, \"seed\": %llu, \"timeBudget\": %.17g},\n",
           spp, depth, (unsigned long long)seed, budget);
 }
 
@@ -240,7 +244,8 @@ static char **tt__material_keys(const tt_scene *s) {
 
 /* All materials in index order, every field written so no default is relied upon. */
 static tt_status tt__wmaterials(const tt__wctx *w, const tt_scene *s, char **keys) {
-  static const char *const types[] = {"", "diffuse", "conductor", "dielectric", "mirror", "plastic"};
+  static const char *const types[] = {"",           "diffuse", "conductor",
+                                      "dielectric", "mirror",  "plastic"};
   FILE *f = w->f;
   fputs("  \"materials\": {", f);
   for (uint32_t i = 0; i < s->material_count; i++) {
@@ -288,7 +293,8 @@ static tt_status tt__wmeshes(const tt__wctx *w, const tt_scene *s, char **keys, 
   if (!mdir) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", w->path);
   snprintf(mdir, dl + 16, "%s/meshes", dir);
   if (mkdir(mdir, 0777) != 0 && errno != EEXIST) {
-    tt_status st = tt_set_error(TT_ERR_IO, "%s: cannot create folder \"%s\": %s", w->path, mdir, strerror(errno));
+    tt_status st = tt_set_error(TT_ERR_IO, "%s: cannot create folder \"%s\": %s", w->path, mdir,
+                                strerror(errno));
     free(mdir);
     return st;
   }
@@ -299,7 +305,8 @@ static tt_status tt__wmeshes(const tt__wctx *w, const tt_scene *s, char **keys, 
     const tt_mesh *m = &s->meshes[i];
     double area = m->triangle_count ? tt__mesh_area(m) : 0.0;
     if (!(area > 0) || !isfinite(area)) { /* the loader rejects such meshes */
-      tt__wwarn(w, m->name ? m->name : "mesh", "mesh of zero area (all triangles degenerate) skipped");
+      tt__wwarn(w, m->name ? m->name : "mesh",
+                "mesh of zero area (all triangles degenerate) skipped");
       continue;
     }
     char rel[128];
@@ -344,48 +351,48 @@ static tt_status tt__wlights(const tt__wctx *w, const tt_scene *s) {
     fputs(first ? "\n    {" : ",\n    {", f);
     first = 0;
     switch (l->type) {
-      case TT_LIGHT_ENV_CONSTANT:
-      case TT_LIGHT_ENV_IMAGE:
-        fputs("\"type\": \"environment\", \"radiance\": ", f);
-        tt__wvec_clamped(w, "environment radiance", l->radiance, 3, 0.0, 1e30);
-        if (l->type == TT_LIGHT_ENV_IMAGE && l->image) {
-          char *abs = tt__wabs(l->image);
-          if (!abs) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", w->path);
-          fputs(", \"image\": ", f);
-          tt__wstr(f, abs);
-          free(abs);
-        }
-        break;
-      case TT_LIGHT_POINT:
-      case TT_LIGHT_SPOT: {
-        fprintf(f, "\"type\": \"%s\", \"position\": ", l->type == TT_LIGHT_POINT ? "point" : "spot");
-        tt__wvec(f, l->position, 3);
-        fputs(", \"intensity\": ", f);
-        tt__wvec_clamped(w, "light intensity", l->radiance, 3, 0.0, 1e30);
-        if (l->type == TT_LIGHT_SPOT) {
-          double co = l->cos_outer > 1 ? 1 : l->cos_outer < -1 ? -1 : l->cos_outer;
-          double ci = l->cos_inner > 1 ? 1 : l->cos_inner < -1 ? -1 : l->cos_inner;
-          double outer = acos(co) * 180.0 / TT__PI, inner = acos(ci) * 180.0 / TT__PI;
-          if (!(outer > 0) || outer > 90) {
-            tt__wwarn(w, "spot light angle", "outside (0, 90] degrees, clamped");
-            outer = outer > 90 ? 90 : 1e-6;
-          }
-          if (inner > outer) inner = outer;
-          fputs(", \"direction\": ", f);
-          tt__wvec(f, l->direction, 3);
-          fprintf(f, ", \"angle\": %.17g, \"innerAngle\": %.17g", outer, inner);
-        }
-        break;
+    case TT_LIGHT_ENV_CONSTANT:
+    case TT_LIGHT_ENV_IMAGE:
+      fputs("\"type\": \"environment\", \"radiance\": ", f);
+      tt__wvec_clamped(w, "environment radiance", l->radiance, 3, 0.0, 1e30);
+      if (l->type == TT_LIGHT_ENV_IMAGE && l->image) {
+        char *abs = tt__wabs(l->image);
+        if (!abs) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", w->path);
+        fputs(", \"image\": ", f);
+        tt__wstr(f, abs);
+        free(abs);
       }
-      case TT_LIGHT_DISTANT:
-        fputs("\"type\": \"distant\", \"direction\": ", f);
+      break;
+    case TT_LIGHT_POINT:
+    case TT_LIGHT_SPOT: {
+      fprintf(f, "\"type\": \"%s\", \"position\": ", l->type == TT_LIGHT_POINT ? "point" : "spot");
+      tt__wvec(f, l->position, 3);
+      fputs(", \"intensity\": ", f);
+      tt__wvec_clamped(w, "light intensity", l->radiance, 3, 0.0, 1e30);
+      if (l->type == TT_LIGHT_SPOT) {
+        double co = l->cos_outer > 1 ? 1 : l->cos_outer < -1 ? -1 : l->cos_outer;
+        double ci = l->cos_inner > 1 ? 1 : l->cos_inner < -1 ? -1 : l->cos_inner;
+        double outer = acos(co) * 180.0 / TT__PI, inner = acos(ci) * 180.0 / TT__PI;
+        if (!(outer > 0) || outer > 90) {
+          tt__wwarn(w, "spot light angle", "outside (0, 90] degrees, clamped");
+          outer = outer > 90 ? 90 : 1e-6;
+        }
+        if (inner > outer) inner = outer;
+        fputs(", \"direction\": ", f);
         tt__wvec(f, l->direction, 3);
-        fputs(", \"irradiance\": ", f);
-        tt__wvec_clamped(w, "light irradiance", l->radiance, 3, 0.0, 1e30);
-        break;
-      default:
-        return tt_set_error(TT_ERR_UNSUPPORTED, "%s: light %u has an unknown type %d", w->path, i,
-                            (int)l->type);
+        fprintf(f, ", \"angle\": %.17g, \"innerAngle\": %.17g", outer, inner);
+      }
+      break;
+    }
+    case TT_LIGHT_DISTANT:
+      fputs("\"type\": \"distant\", \"direction\": ", f);
+      tt__wvec(f, l->direction, 3);
+      fputs(", \"irradiance\": ", f);
+      tt__wvec_clamped(w, "light irradiance", l->radiance, 3, 0.0, 1e30);
+      break;
+    default:
+      return tt_set_error(TT_ERR_UNSUPPORTED, "%s: light %u has an unknown type %d", w->path, i,
+                          (int)l->type);
     }
     fputc('}', f);
   }
@@ -439,7 +446,7 @@ tt_status tt_scene_write_json(const tt_scene *scene, const char *path) {
   if ((st = tt__wmeshes(&w, scene, keys, dir)) != TT_OK) goto done;
   if ((st = tt__wlights(&w, scene)) != TT_OK) goto done;
   fputs("}\n", f);
-  st = tt_atomic_file_commit(af);  /* names the path and the OS reason on failure */
+  st = tt_atomic_file_commit(af); /* names the path and the OS reason on failure */
   af = NULL;
 done:
   tt_atomic_file_abort(af);

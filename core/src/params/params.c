@@ -26,17 +26,17 @@ typedef struct tt__param {
   int64_t imin, imax, idef;
   double fmin, fmax, fdef;
   int log;
-  tt_value_kind nom_kind;  /* TT_VALUE_INT, TT_VALUE_BOOL or TT_VALUE_STRING */
+  tt_value_kind nom_kind; /* TT_VALUE_INT, TT_VALUE_BOOL or TT_VALUE_STRING */
   size_t nom_count;
-  int64_t *nom_ints;       /* NOM int and bool values (bool: 0, 1) */
-  char **nom_strings;      /* NOM string values */
+  int64_t *nom_ints;  /* NOM int and bool values (bool: 0, 1) */
+  char **nom_strings; /* NOM string values */
   size_t nom_def;
-  int untunable;           /* tt_space_set_tunable(..., 0): tuners leave it alone */
-  size_t ncond;            /* tt_space_add_condition: acts only while all hold */
+  int untunable; /* tt_space_set_tunable(..., 0): tuners leave it alone */
+  size_t ncond;  /* tt_space_add_condition: acts only while all hold */
   struct tt__cond {
-    size_t parent;         /* a NOM parameter of the same space */
-    unsigned char *allowed;  /* one flag per possible value of the parent */
-  } *conds;
+    size_t parent;          /* a NOM parameter of the same space */
+    unsigned char *allowed; /* one flag per possible value of the parent */
+  } * conds;
 } tt__param;
 
 struct tt_space {
@@ -56,7 +56,7 @@ struct tt_space {
 
 struct tt_config {
   const tt_space *space;
-  tt_value *values;  /* one per parameter, in space order */
+  tt_value *values; /* one per parameter, in space order */
 };
 
 tt_status tt__prefix_error(tt_status status, const char *prefix) {
@@ -157,8 +157,8 @@ oom:
   return -1;
 }
 
-int tt_space_add_int(tt_space *space, const char *name, int64_t min, int64_t max,
-                     int64_t def, const char *description) {
+int tt_space_add_int(tt_space *space, const char *name, int64_t min, int64_t max, int64_t def,
+                     const char *description) {
   if (tt__check_new_name(space, name, "tt_space_add_int") < 0) return -1;
   /* Beyond 2^53 values stop being exact as doubles, which tt_config_set_number,
    * tt_value.f, tt_space_min/max and JSON all rely on. */
@@ -178,8 +178,8 @@ int tt_space_add_int(tt_space *space, const char *name, int64_t min, int64_t max
   }
   if (def < min || def > max) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                 "tt_space_add_int: %s.%s: default %" PRId64 " is outside [%" PRId64
-                 ", %" PRId64 "]",
+                 "tt_space_add_int: %s.%s: default %" PRId64 " is outside [%" PRId64 ", %" PRId64
+                 "]",
                  space->plugin, name, def, min, max);
     return -1;
   }
@@ -192,8 +192,8 @@ int tt_space_add_int(tt_space *space, const char *name, int64_t min, int64_t max
   return tt__push_param(space, &p, description);
 }
 
-int tt_space_add_float(tt_space *space, const char *name, double min, double max,
-                       double def, int log, const char *description) {
+int tt_space_add_float(tt_space *space, const char *name, double min, double max, double def,
+                       int log, const char *description) {
   if (tt__check_new_name(space, name, "tt_space_add_float") < 0) return -1;
   if (!isfinite(min) || !isfinite(max) || !isfinite(def)) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT,
@@ -210,14 +210,14 @@ int tt_space_add_float(tt_space *space, const char *name, double min, double max
   }
   if (def < min || def > max) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                 "tt_space_add_float: %s.%s: default %g is outside [%g, %g]", space->plugin,
-                 name, def, min, max);
+                 "tt_space_add_float: %s.%s: default %g is outside [%g, %g]", space->plugin, name,
+                 def, min, max);
     return -1;
   }
   if (log && min <= 0.0) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                 "tt_space_add_float: %s.%s: log scale needs min > 0, got min %g",
-                 space->plugin, name, min);
+                 "tt_space_add_float: %s.%s: log scale needs min > 0, got min %g", space->plugin,
+                 name, min);
     return -1;
   }
   tt__param p = {0};
@@ -230,8 +230,8 @@ int tt_space_add_float(tt_space *space, const char *name, double min, double max
   return tt__push_param(space, &p, description);
 }
 
-int tt_space_add_nom_int(tt_space *space, const char *name, const int64_t *values,
-                         size_t count, size_t def_index, const char *description) {
+int tt_space_add_nom_int(tt_space *space, const char *name, const int64_t *values, size_t count,
+                         size_t def_index, const char *description) {
   if (tt__check_new_name(space, name, "tt_space_add_nom_int") < 0) return -1;
   if (!values || count == 0) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT,
@@ -281,8 +281,7 @@ int tt_space_add_nom_int(tt_space *space, const char *name, const int64_t *value
   return tt__push_param(space, &p, description);
 }
 
-int tt_space_add_nom_bool(tt_space *space, const char *name, int def,
-                          const char *description) {
+int tt_space_add_nom_bool(tt_space *space, const char *name, int def, const char *description) {
   if (tt__check_new_name(space, name, "tt_space_add_nom_bool") < 0) return -1;
   tt__param p = {0};
   p.type = TT_PARAM_NOM;
@@ -341,7 +340,7 @@ int tt_space_add_nom_string(tt_space *space, const char *name, const char *const
   p.nom_strings = calloc(count, sizeof *p.nom_strings);
   int ok = p.nom_strings != NULL;
   if (ok) {
-    p.nom_count = count;  /* set only now: tt__param_free walks nom_count entries */
+    p.nom_count = count; /* set only now: tt__param_free walks nom_count entries */
     for (size_t k = 0; k < count; k++) ok = ok && (p.nom_strings[k] = tt__strdup(values[k]));
   }
   if (!ok) {
@@ -441,9 +440,9 @@ double tt_space_min(const tt_space *space, size_t index) {
   const tt__param *p = tt__param_at(space, index);
   if (!p) return 0.0;
   switch (p->type) {
-    case TT_PARAM_INT: return (double)p->imin;
-    case TT_PARAM_FLOAT: return p->fmin;
-    default: return 0.0;
+  case TT_PARAM_INT: return (double)p->imin;
+  case TT_PARAM_FLOAT: return p->fmin;
+  default: return 0.0;
   }
 }
 
@@ -451,9 +450,9 @@ double tt_space_max(const tt_space *space, size_t index) {
   const tt__param *p = tt__param_at(space, index);
   if (!p) return 0.0;
   switch (p->type) {
-    case TT_PARAM_INT: return (double)p->imax;
-    case TT_PARAM_FLOAT: return p->fmax;
-    default: return (double)p->nom_count - 1.0;
+  case TT_PARAM_INT: return (double)p->imax;
+  case TT_PARAM_FLOAT: return p->fmax;
+  default: return (double)p->nom_count - 1.0;
   }
 }
 
@@ -513,9 +512,9 @@ static tt_value tt__float_value(double f) {
 /* Default value of parameter `p`. */
 static tt_value tt__param_default(const tt__param *p) {
   switch (p->type) {
-    case TT_PARAM_INT: return tt__int_value(p->idef);
-    case TT_PARAM_FLOAT: return tt__float_value(p->fdef);
-    default: return tt__nom_value(p, p->nom_def);
+  case TT_PARAM_INT: return tt__int_value(p->idef);
+  case TT_PARAM_FLOAT: return tt__float_value(p->fdef);
+  default: return tt__nom_value(p, p->nom_def);
   }
 }
 
@@ -597,9 +596,7 @@ tt_config *tt_config_clone(const tt_config *config) {
   return c;
 }
 
-const tt_space *tt_config_space(const tt_config *config) {
-  return config ? config->space : NULL;
-}
+const tt_space *tt_config_space(const tt_config *config) { return config ? config->space : NULL; }
 
 int tt_config_equal(const tt_config *a, const tt_config *b) {
   if (!a || !b) return a == b;
@@ -608,9 +605,15 @@ int tt_config_equal(const tt_config *a, const tt_config *b) {
     const tt__param *p = &a->space->params[i];
     const tt_value *va = &a->values[i], *vb = &b->values[i];
     switch (p->type) {
-      case TT_PARAM_INT: if (va->i != vb->i) return 0; break;
-      case TT_PARAM_FLOAT: if (va->f != vb->f) return 0; break;
-      default: if (va->index != vb->index) return 0; break;
+    case TT_PARAM_INT:
+      if (va->i != vb->i) return 0;
+      break;
+    case TT_PARAM_FLOAT:
+      if (va->f != vb->f) return 0;
+      break;
+    default:
+      if (va->index != vb->index) return 0;
+      break;
     }
   }
   return 1;
@@ -636,10 +639,10 @@ int64_t tt_config_get_int(const tt_config *config, const char *name, int64_t fal
   const tt_value *v = tt__get_by_name(config, name);
   if (!v) return fallback;
   switch (v->kind) {
-    case TT_VALUE_INT:
-    case TT_VALUE_BOOL: return v->i;
-    case TT_VALUE_FLOAT: return (int64_t)llround(v->f);  /* nearest, not truncation */
-    case TT_VALUE_STRING: return v->index;
+  case TT_VALUE_INT:
+  case TT_VALUE_BOOL: return v->i;
+  case TT_VALUE_FLOAT: return (int64_t)llround(v->f); /* nearest, not truncation */
+  case TT_VALUE_STRING: return v->index;
   }
   return fallback;
 }
@@ -648,10 +651,10 @@ double tt_config_get_float(const tt_config *config, const char *name, double fal
   const tt_value *v = tt__get_by_name(config, name);
   if (!v) return fallback;
   switch (v->kind) {
-    case TT_VALUE_INT:
-    case TT_VALUE_BOOL: return (double)v->i;
-    case TT_VALUE_FLOAT: return v->f;
-    case TT_VALUE_STRING: return (double)v->index;
+  case TT_VALUE_INT:
+  case TT_VALUE_BOOL: return (double)v->i;
+  case TT_VALUE_FLOAT: return v->f;
+  case TT_VALUE_STRING: return (double)v->index;
   }
   return fallback;
 }
@@ -672,8 +675,7 @@ static void tt__format_nom_values(const tt__param *p, char *buf, size_t size) {
       n = snprintf(buf + used, size - used, "%s\"%s\"", sep, p->nom_strings[k]);
     else if (p->nom_kind == TT_VALUE_BOOL)
       n = snprintf(buf + used, size - used, "%s%s", sep, p->nom_ints[k] ? "true" : "false");
-    else
-      n = snprintf(buf + used, size - used, "%s%" PRId64, sep, p->nom_ints[k]);
+    else n = snprintf(buf + used, size - used, "%s%" PRId64, sep, p->nom_ints[k]);
     if (n < 0) break;
     used += (size_t)n;
   }
@@ -681,10 +683,8 @@ static void tt__format_nom_values(const tt__param *p, char *buf, size_t size) {
 
 /* Writes "[min, max]" for an INT or FLOAT parameter into buf. */
 static void tt__format_range(const tt__param *p, char *buf, size_t size) {
-  if (p->type == TT_PARAM_INT)
-    snprintf(buf, size, "[%" PRId64 ", %" PRId64 "]", p->imin, p->imax);
-  else
-    snprintf(buf, size, "[%.17g, %.17g]", p->fmin, p->fmax);
+  if (p->type == TT_PARAM_INT) snprintf(buf, size, "[%" PRId64 ", %" PRId64 "]", p->imin, p->imax);
+  else snprintf(buf, size, "[%.17g, %.17g]", p->fmin, p->fmax);
   /* %.17g is exact but noisy for values like 0.1; use %g when it round-trips. */
   if (p->type == TT_PARAM_FLOAT) {
     char a[64], b[64];
@@ -712,67 +712,65 @@ static void tt__shown_number(double value, const char *shown, char *num, size_t 
  * messages; NULL: the number). The messages are formatted only on error: this is every
  * predictor's and tuner's way of setting a configuration, and formatting them up front (two
  * snprintf, a strtod and the range) cost about 1 us per parameter on every call. */
-static tt_status tt__set_number(tt_config *config, size_t index, double value,
-                                const char *shown) {
+static tt_status tt__set_number(tt_config *config, size_t index, double value, const char *shown) {
   const tt_space *s = config->space;
   const tt__param *p = &s->params[index];
   char num[64], what[1024];
   switch (p->type) {
-    case TT_PARAM_INT:
-      if (!isfinite(value) || value != floor(value)) {
-        tt__shown_number(value, shown, num, sizeof num);
-        tt__format_range(p, what, sizeof what);
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not an integer in %s",
-                            s->plugin, p->name, num, what);
-      }
-      /* Compare as doubles first so the int64 conversion below cannot overflow (2^63
-       * itself is not representable), then exactly as integers. */
-      if (value < (double)p->imin || value > (double)p->imax || value >= 0x1p63 ||
-          (int64_t)value < p->imin || (int64_t)value > p->imax) {
-        tt__shown_number(value, shown, num, sizeof num);
-        tt__format_range(p, what, sizeof what);
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is out of range %s",
-                            s->plugin, p->name, num, what);
-      }
-      config->values[index] = tt__int_value((int64_t)value);
-      return TT_OK;
-    case TT_PARAM_FLOAT:
-      if (!isfinite(value)) {
-        tt__shown_number(value, shown, num, sizeof num);
-        tt__format_range(p, what, sizeof what);
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not a finite number in %s",
-                            s->plugin, p->name, num, what);
-      }
-      if (value < p->fmin || value > p->fmax) {
-        tt__shown_number(value, shown, num, sizeof num);
-        tt__format_range(p, what, sizeof what);
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is out of range %s",
-                            s->plugin, p->name, num, what);
-      }
-      config->values[index] = tt__float_value(value);
-      return TT_OK;
-    default:
-      if (p->nom_kind != TT_VALUE_STRING)
-        for (size_t k = 0; k < p->nom_count; k++)
-          if ((double)p->nom_ints[k] == value) {
-            config->values[index] = tt__nom_value(p, k);
-            return TT_OK;
-          }
+  case TT_PARAM_INT:
+    if (!isfinite(value) || value != floor(value)) {
       tt__shown_number(value, shown, num, sizeof num);
-      tt__format_nom_values(p, what, sizeof what);
-      if (p->nom_kind == TT_VALUE_STRING)
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                            "%s.%s: %s is not one of %s (a string parameter; set it by "
-                            "name or by index)",
-                            s->plugin, p->name, num, what);
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not one of %s", s->plugin,
+      tt__format_range(p, what, sizeof what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not an integer in %s", s->plugin,
                           p->name, num, what);
+    }
+    /* Compare as doubles first so the int64 conversion below cannot overflow (2^63
+       * itself is not representable), then exactly as integers. */
+    if (value < (double)p->imin || value > (double)p->imax || value >= 0x1p63 ||
+        (int64_t)value < p->imin || (int64_t)value > p->imax) {
+      tt__shown_number(value, shown, num, sizeof num);
+      tt__format_range(p, what, sizeof what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is out of range %s", s->plugin,
+                          p->name, num, what);
+    }
+    config->values[index] = tt__int_value((int64_t)value);
+    return TT_OK;
+  case TT_PARAM_FLOAT:
+    if (!isfinite(value)) {
+      tt__shown_number(value, shown, num, sizeof num);
+      tt__format_range(p, what, sizeof what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not a finite number in %s",
+                          s->plugin, p->name, num, what);
+    }
+    if (value < p->fmin || value > p->fmax) {
+      tt__shown_number(value, shown, num, sizeof num);
+      tt__format_range(p, what, sizeof what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is out of range %s", s->plugin,
+                          p->name, num, what);
+    }
+    config->values[index] = tt__float_value(value);
+    return TT_OK;
+  default:
+    if (p->nom_kind != TT_VALUE_STRING)
+      for (size_t k = 0; k < p->nom_count; k++)
+        if ((double)p->nom_ints[k] == value) {
+          config->values[index] = tt__nom_value(p, k);
+          return TT_OK;
+        }
+    tt__shown_number(value, shown, num, sizeof num);
+    tt__format_nom_values(p, what, sizeof what);
+    if (p->nom_kind == TT_VALUE_STRING)
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "%s.%s: %s is not one of %s (a string parameter; set it by "
+                          "name or by index)",
+                          s->plugin, p->name, num, what);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: %s is not one of %s", s->plugin, p->name,
+                        num, what);
   }
 }
 
 tt_status tt_config_set_number(tt_config *config, size_t index, double value) {
-  if (!config)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_number: config is NULL");
+  if (!config) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_number: config is NULL");
   if (index >= config->space->count)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         "tt_config_set_number: %s: parameter index %zu is out of range "
@@ -782,8 +780,7 @@ tt_status tt_config_set_number(tt_config *config, size_t index, double value) {
 }
 
 tt_status tt_config_set_index(tt_config *config, size_t index, size_t nom_index) {
-  if (!config)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_index: config is NULL");
+  if (!config) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_index: config is NULL");
   const tt_space *s = config->space;
   if (index >= s->count)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
@@ -798,8 +795,8 @@ tt_status tt_config_set_index(tt_config *config, size_t index, size_t nom_index)
                         s->plugin, p->name);
   if (nom_index >= p->nom_count)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                        "tt_config_set_index: %s.%s: index %zu is out of range [0, %zu]",
-                        s->plugin, p->name, nom_index, p->nom_count - 1);
+                        "tt_config_set_index: %s.%s: index %zu is out of range [0, %zu]", s->plugin,
+                        p->name, nom_index, p->nom_count - 1);
   config->values[index] = tt__nom_value(p, nom_index);
   return TT_OK;
 }
@@ -823,8 +820,7 @@ static int tt__parse_number(const char *t, double *out) {
 }
 
 tt_status tt_config_set_string(tt_config *config, const char *name, const char *text) {
-  if (!config)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_string: config is NULL");
+  if (!config) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_config_set_string: config is NULL");
   const tt_space *s = config->space;
   int idx = tt_space_find(s, name);
   if (idx < 0) {
@@ -835,8 +831,7 @@ tt_status tt_config_set_string(tt_config *config, const char *name, const char *
   }
   const tt__param *p = &s->params[idx];
   if (!text)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: value text is NULL", s->plugin,
-                        p->name);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: value text is NULL", s->plugin, p->name);
   /* Trim surrounding blanks: "--set a= 4" and shell quoting easily add them. */
   char buf[512];
   while (isspace((unsigned char)*text)) text++;
@@ -866,8 +861,8 @@ tt_status tt_config_set_string(tt_config *config, const char *name, const char *
     if (strcmp(buf, "false") == 0 || strcmp(buf, "0") == 0) b = 0;
     if (b < 0) {
       tt__format_nom_values(p, what, sizeof what);
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: \"%s\" is not one of %s",
-                          s->plugin, p->name, buf, what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: \"%s\" is not one of %s", s->plugin,
+                          p->name, buf, what);
     }
     config->values[idx] = tt__nom_value(p, (size_t)b);
     return TT_OK;
@@ -876,13 +871,12 @@ tt_status tt_config_set_string(tt_config *config, const char *name, const char *
   if (tt__parse_number(buf, &v) != 0) {
     if (p->type == TT_PARAM_NOM) {
       tt__format_nom_values(p, what, sizeof what);
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: \"%s\" is not one of %s",
-                          s->plugin, p->name, buf, what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: \"%s\" is not one of %s", s->plugin,
+                          p->name, buf, what);
     }
     tt__format_range(p, what, sizeof what);
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s.%s: \"%s\" is not %s in %s", s->plugin,
-                        p->name, buf, p->type == TT_PARAM_INT ? "an integer" : "a number",
-                        what);
+                        p->name, buf, p->type == TT_PARAM_INT ? "an integer" : "a number", what);
   }
   return tt__set_number(config, (size_t)idx, v, buf);
 }
@@ -902,16 +896,12 @@ void tt_config_to_unit(const tt_config *config, double *out) {
     double u;
     if (p->type == TT_PARAM_INT) {
       /* Degenerate ranges map to the middle, like a one-value NOM. */
-      u = p->imax > p->imin
-              ? ((double)v->i - (double)p->imin) / ((double)p->imax - (double)p->imin)
-              : 0.5;
+      u = p->imax > p->imin ? ((double)v->i - (double)p->imin) / ((double)p->imax - (double)p->imin)
+                            : 0.5;
     } else if (p->type == TT_PARAM_FLOAT) {
-      if (p->fmax <= p->fmin)
-        u = 0.5;
-      else if (p->log)
-        u = (log(v->f) - log(p->fmin)) / (log(p->fmax) - log(p->fmin));
-      else
-        u = (v->f - p->fmin) / (p->fmax - p->fmin);
+      if (p->fmax <= p->fmin) u = 0.5;
+      else if (p->log) u = (log(v->f) - log(p->fmin)) / (log(p->fmax) - log(p->fmin));
+      else u = (v->f - p->fmin) / (p->fmax - p->fmin);
     } else {
       u = ((double)v->index + 0.5) / (double)p->nom_count;
     }
@@ -937,12 +927,9 @@ void tt_config_from_unit(tt_config *config, const double *unit) {
       config->values[i] = tt__int_value(x);
     } else if (p->type == TT_PARAM_FLOAT) {
       double x;
-      if (p->fmax <= p->fmin)
-        x = p->fmin;
-      else if (p->log)
-        x = exp(log(p->fmin) + u * (log(p->fmax) - log(p->fmin)));
-      else
-        x = p->fmin + u * (p->fmax - p->fmin);
+      if (p->fmax <= p->fmin) x = p->fmin;
+      else if (p->log) x = exp(log(p->fmin) + u * (log(p->fmax) - log(p->fmin)));
+      else x = p->fmin + u * (p->fmax - p->fmin);
       /* Rounding in exp/log can step just outside the bounds. */
       if (x < p->fmin) x = p->fmin;
       if (x > p->fmax) x = p->fmax;
@@ -962,39 +949,39 @@ static int tt__copy_param(tt_space *dst, const tt_space *src, size_t i, tt_value
   const tt__param *p = tt__param_at(src, i);
   const char *desc = tt_space_description(src, i);
   switch (p->type) {
-    case TT_PARAM_INT: {
-      int64_t lo = 0, hi = 0;
-      tt__space_int_range(src, i, &lo, &hi);
-      return tt_space_add_int(dst, p->name, lo, hi, def.i, desc);
-    }
-    case TT_PARAM_FLOAT:
-      return tt_space_add_float(dst, p->name, tt_space_min(src, i), tt_space_max(src, i), def.f,
-                                tt_space_is_log(src, i), desc);
-    case TT_PARAM_NOM: {
-      size_t n = tt_space_nom_count(src, i);
-      size_t d = def.index >= 0 ? (size_t)def.index : 0;
-      if (p->nom_kind == TT_VALUE_BOOL) return tt_space_add_nom_bool(dst, p->name, (int)d, desc);
-      if (p->nom_kind == TT_VALUE_STRING) {
-        const char **vals = malloc(n * sizeof *vals);
-        if (!vals) return -1;
-        for (size_t k = 0; k < n; k++) vals[k] = tt_space_nom_value(src, i, k).s;
-        int r = tt_space_add_nom_string(dst, p->name, vals, n, d, desc);
-        free(vals);
-        return r;
-      }
-      int64_t *vals = malloc(n * sizeof *vals);
+  case TT_PARAM_INT: {
+    int64_t lo = 0, hi = 0;
+    tt__space_int_range(src, i, &lo, &hi);
+    return tt_space_add_int(dst, p->name, lo, hi, def.i, desc);
+  }
+  case TT_PARAM_FLOAT:
+    return tt_space_add_float(dst, p->name, tt_space_min(src, i), tt_space_max(src, i), def.f,
+                              tt_space_is_log(src, i), desc);
+  case TT_PARAM_NOM: {
+    size_t n = tt_space_nom_count(src, i);
+    size_t d = def.index >= 0 ? (size_t)def.index : 0;
+    if (p->nom_kind == TT_VALUE_BOOL) return tt_space_add_nom_bool(dst, p->name, (int)d, desc);
+    if (p->nom_kind == TT_VALUE_STRING) {
+      const char **vals = malloc(n * sizeof *vals);
       if (!vals) return -1;
-      for (size_t k = 0; k < n; k++) vals[k] = tt_space_nom_value(src, i, k).i;
-      int r = tt_space_add_nom_int(dst, p->name, vals, n, d, desc);
+      for (size_t k = 0; k < n; k++) vals[k] = tt_space_nom_value(src, i, k).s;
+      int r = tt_space_add_nom_string(dst, p->name, vals, n, d, desc);
       free(vals);
       return r;
     }
+    int64_t *vals = malloc(n * sizeof *vals);
+    if (!vals) return -1;
+    for (size_t k = 0; k < n; k++) vals[k] = tt_space_nom_value(src, i, k).i;
+    int r = tt_space_add_nom_int(dst, p->name, vals, n, d, desc);
+    free(vals);
+    return r;
+  }
   }
   return -1;
 }
 
-static tt_status tt__copy_marking(tt_space *sub, const tt_space *space,
-                                  const char *const *names, size_t count, const tt_config *base);
+static tt_status tt__copy_marking(tt_space *sub, const tt_space *space, const char *const *names,
+                                  size_t count, const tt_config *base);
 
 tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_t count,
                           const tt_config *base) {
@@ -1003,7 +990,8 @@ tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_
   if (base && tt_config_space(base) != space)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         "tt_space_subset: %s: the base configuration belongs to another space",
-                        space->plugin), NULL;
+                        space->plugin),
+           NULL;
   tt_space *sub = tt_space_create(space->plugin, space->version);
   if (!sub) return NULL;
   for (size_t k = 0; k < count; k++) {
@@ -1011,8 +999,8 @@ tt_space *tt_space_subset(const tt_space *space, const char *const *names, size_
     if (i < 0) {
       char hint[1024];
       tt__space_unknown_hint(space, names[k], hint, sizeof hint);
-      tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no parameter \"%s\" to tune (%s)",
-                   space->plugin, names[k], hint);
+      tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no parameter \"%s\" to tune (%s)", space->plugin,
+                   names[k], hint);
       tt_space_destroy(sub);
       return NULL;
     }
@@ -1040,7 +1028,8 @@ int tt_config_assign(tt_config *dst, const tt_config *src) {
     if (i < 0 || tt_space_type(ds, (size_t)i) != tt_space_type(ss, k)) continue;
     tt_value v = tt_config_get(src, k);
     tt_status st = v.index >= 0 ? tt_config_set_index(dst, (size_t)i, (size_t)v.index)
-                                : tt_config_set_number(dst, (size_t)i, v.kind == TT_VALUE_INT ? (double)v.i : v.f);
+                                : tt_config_set_number(dst, (size_t)i,
+                                                       v.kind == TT_VALUE_INT ? (double)v.i : v.f);
     if (st != TT_OK) return -1;
     copied++;
   }
@@ -1053,12 +1042,15 @@ int tt_config_assign(tt_config *dst, const tt_config *src) {
 static tt_status tt__check_mutable(const tt_space *space, size_t index, const char *fn) {
   if (!space) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: space is NULL", fn);
   if (index >= space->count)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: %s: parameter index %zu is out of range "
-                        "(the space has %zu parameters)", fn, space->plugin, index, space->count);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: %s: parameter index %zu is out of range "
+                        "(the space has %zu parameters)",
+                        fn, space->plugin, index, space->count);
   if (atomic_load_explicit(&space->frozen, memory_order_relaxed))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: %s.%s: configurations already exist (a "
-                        "space is immutable once published)", fn, space->plugin,
-                        space->params[index].name);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: %s.%s: configurations already exist (a "
+                        "space is immutable once published)",
+                        fn, space->plugin, space->params[index].name);
   return TT_OK;
 }
 
@@ -1077,7 +1069,7 @@ int tt_space_is_tunable(const tt_space *space, size_t index) {
 /* Non-zero if `anc` is `index` or one of its ancestors through conditions. */
 static int tt__is_ancestor(const tt_space *space, size_t anc, size_t index, unsigned depth) {
   if (anc == index) return 1;
-  if (depth > space->count) return 1;  /* a cycle already: refuse anything more */
+  if (depth > space->count) return 1; /* a cycle already: refuse anything more */
   const tt__param *p = &space->params[index];
   for (size_t k = 0; k < p->ncond; k++)
     if (tt__is_ancestor(space, anc, p->conds[k].parent, depth + 1)) return 1;
@@ -1089,7 +1081,7 @@ static tt_status tt__push_condition(tt_space *space, size_t index, size_t parent
                                     const unsigned char *allowed) {
   tt__param *p = &space->params[index];
   size_t n = space->params[parent].nom_count;
-  for (size_t k = 0; k < p->ncond; k++)  /* a second condition on one parent: both hold */
+  for (size_t k = 0; k < p->ncond; k++) /* a second condition on one parent: both hold */
     if (p->conds[k].parent == parent) {
       for (size_t v = 0; v < n; v++) p->conds[k].allowed[v] &= allowed[v];
       return TT_OK;
@@ -1113,8 +1105,9 @@ static int tt__nom_index_of(const tt__param *p, const char *text) {
     if (p->nom_kind == TT_VALUE_STRING) {
       if (!strcmp(p->nom_strings[k], text)) return (int)k;
     } else if (p->nom_kind == TT_VALUE_BOOL) {
-      int b = !strcmp(text, "true") || !strcmp(text, "1") ? 1
-              : !strcmp(text, "false") || !strcmp(text, "0") ? 0 : -1;
+      int b = !strcmp(text, "true") || !strcmp(text, "1")    ? 1
+              : !strcmp(text, "false") || !strcmp(text, "0") ? 0
+                                                             : -1;
       if (b >= 0 && p->nom_ints[k] == b) return (int)k;
     } else {
       char *end;
@@ -1135,22 +1128,27 @@ tt_status tt_space_add_condition(tt_space *space, size_t index, const char *pare
   if (q < 0) {
     char hint[1024];
     tt__space_unknown_hint(space, parent, hint, sizeof hint);
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: no parameter "
-                        "\"%s\" to depend on (%s)", space->plugin, child,
-                        parent ? parent : "(null)", hint);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_space_add_condition: %s.%s: no parameter "
+                        "\"%s\" to depend on (%s)",
+                        space->plugin, child, parent ? parent : "(null)", hint);
   }
   const tt__param *pp = &space->params[q];
   if (pp->type != TT_PARAM_NOM)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: the parent %s "
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_space_add_condition: %s.%s: the parent %s "
                         "is not a NOM parameter (conditions name possible values)",
                         space->plugin, child, pp->name);
   if (tt__is_ancestor(space, index, (size_t)q, 0))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: depending on "
-                        "%s would make the parameter its own ancestor", space->plugin, child,
-                        pp->name);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_space_add_condition: %s.%s: depending on "
+                        "%s would make the parameter its own ancestor",
+                        space->plugin, child, pp->name);
   if (!values || !count)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: no values of "
-                        "%s given (expected at least one)", space->plugin, child, pp->name);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_space_add_condition: %s.%s: no values of "
+                        "%s given (expected at least one)",
+                        space->plugin, child, pp->name);
   unsigned char *allowed = calloc(pp->nom_count, 1);
   if (!allowed) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", space->plugin);
   for (size_t k = 0; k < count; k++) {
@@ -1159,9 +1157,10 @@ tt_status tt_space_add_condition(tt_space *space, size_t index, const char *pare
       char what[1024];
       tt__format_nom_values(pp, what, sizeof what);
       free(allowed);
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_space_add_condition: %s.%s: \"%s\" is "
-                          "not a value of %s (expected one of %s)", space->plugin, child,
-                          values[k] ? values[k] : "(null)", pp->name, what);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "tt_space_add_condition: %s.%s: \"%s\" is "
+                          "not a value of %s (expected one of %s)",
+                          space->plugin, child, values[k] ? values[k] : "(null)", pp->name, what);
     }
     allowed[v] = 1;
   }
@@ -1190,7 +1189,7 @@ int tt_space_condition_allows(const tt_space *space, size_t index, size_t k, siz
 /* Active under the values of `c`: every condition holds and every parent is active. */
 static int tt__active(const tt_config *c, size_t index, unsigned depth) {
   const tt__param *p = &c->space->params[index];
-  if (depth > c->space->count) return 1;  /* cycles are refused at add time */
+  if (depth > c->space->count) return 1; /* cycles are refused at add time */
   for (size_t k = 0; k < p->ncond; k++) {
     size_t q = p->conds[k].parent;
     int32_t v = c->values[q].index;
@@ -1208,9 +1207,9 @@ int tt_config_is_active(const tt_config *config, size_t index) {
 /* Same value of parameter `p` (as tt_config_equal compares). */
 static int tt__same_value(const tt__param *p, const tt_value *a, const tt_value *b) {
   switch (p->type) {
-    case TT_PARAM_INT: return a->i == b->i;
-    case TT_PARAM_FLOAT: return a->f == b->f;
-    default: return a->index == b->index;
+  case TT_PARAM_INT: return a->i == b->i;
+  case TT_PARAM_FLOAT: return a->f == b->f;
+  default: return a->index == b->index;
   }
 }
 
@@ -1246,8 +1245,8 @@ int tt_config_canonicalize(tt_config *config, const tt_config *base) {
  * condition on a parameter of the subset is copied, one on a parameter left out is decided
  * by that parameter's fixed value in `base` (or its default): it holds, and is dropped, or
  * it fails, and the parameter can never act in the subset, so it is marked not tunable. */
-static tt_status tt__copy_marking(tt_space *sub, const tt_space *space,
-                                  const char *const *names, size_t count, const tt_config *base) {
+static tt_status tt__copy_marking(tt_space *sub, const tt_space *space, const char *const *names,
+                                  size_t count, const tt_config *base) {
   tt_config *fixed = NULL;
   tt_status st = TT_OK;
   for (size_t k = 0; k < count && st == TT_OK; k++) {

@@ -4,7 +4,7 @@
 #define TT_PARAMS_INTERNAL_H
 
 #include <tunetrace/params.h>
-#include <tt_util/strings.h>  /* tt__strdup */
+#include <tt_util/strings.h> /* tt__strdup */
 
 #include <stddef.h>
 

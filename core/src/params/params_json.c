@@ -28,8 +28,8 @@ static cJSON *tt__parse(const char *json, const char *source) {
     const char *at = end ? end : json;
     unsigned line, col;
     tt__json_line_col(json, (size_t)(at - json), &line, &col);
-    tt__json_error(TT_ERR_PARSE, source, NULL, "invalid JSON at line %u, column %u (near \"%.20s\")",
-                   line, col, at);
+    tt__json_error(TT_ERR_PARSE, source, NULL,
+                   "invalid JSON at line %u, column %u (near \"%.20s\")", line, col, at);
   }
   return root;
 }
@@ -57,8 +57,8 @@ static int tt__get_int(const cJSON *obj, const char *key, const char *path, cons
 }
 
 /* Reads member `key` of `obj` as a finite number into *out. */
-static int tt__get_double(const cJSON *obj, const char *key, const char *path,
-                          const char *source, double *out) {
+static int tt__get_double(const cJSON *obj, const char *key, const char *path, const char *source,
+                          double *out) {
   char p[256], got[128];
   snprintf(p, sizeof p, "%s.%s", path, key);
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -85,10 +85,10 @@ static tt_value_kind tt__nom_kind_of(const cJSON *v) {
 /* Name of a NOM value kind, with article, for messages. */
 static const char *tt__kind_name(tt_value_kind k) {
   switch (k) {
-    case TT_VALUE_INT: return "an integer";
-    case TT_VALUE_BOOL: return "a boolean";
-    case TT_VALUE_STRING: return "a string";
-    default: return "a number";
+  case TT_VALUE_INT: return "an integer";
+  case TT_VALUE_BOOL: return "a boolean";
+  case TT_VALUE_STRING: return "a string";
+  default: return "a number";
   }
 }
 
@@ -122,7 +122,8 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
            -1;
   int prev = tt_space_find(space, name->valuestring);
   if (prev >= 0)
-    return tt__json_error(TT_ERR_PARSE, source, p, "duplicate name \"%s\" (already used by parameters[%d])",
+    return tt__json_error(TT_ERR_PARSE, source, p,
+                          "duplicate name \"%s\" (already used by parameters[%d])",
                           name->valuestring, prev),
            -1;
 
@@ -137,7 +138,9 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
   const cJSON *type = cJSON_GetObjectItemCaseSensitive(item, "type");
   snprintf(p, sizeof p, "%s.type", path);
   if (!type)
-    return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected \"INT\", \"FLOAT\" or \"NOM\")"), -1;
+    return tt__json_error(TT_ERR_PARSE, source, p,
+                          "missing (expected \"INT\", \"FLOAT\" or \"NOM\")"),
+           -1;
   if (!cJSON_IsString(type))
     return tt__json_error(TT_ERR_PARSE, source, p, "expected \"INT\", \"FLOAT\" or \"NOM\", got %s",
                           tt__json_describe(type, TT__JSON_PARAMS, got, sizeof got)),
@@ -160,27 +163,29 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
            -1;
   int log = cJSON_IsTrue(logj);
   if (log && !is_float)
-    return tt__json_error(TT_ERR_PARSE, source, p, "only FLOAT parameters may be log-scaled (type is %s)", t),
+    return tt__json_error(TT_ERR_PARSE, source, p,
+                          "only FLOAT parameters may be log-scaled (type is %s)", t),
            -1;
 
   int r;
   if (is_int) {
     int64_t mn, mx, def;
-    if (tt__get_int(item, "min", path, source, &mn) || tt__get_int(item, "max", path, source, &mx) ||
+    if (tt__get_int(item, "min", path, source, &mn) ||
+        tt__get_int(item, "max", path, source, &mx) ||
         tt__get_int(item, "value", path, source, &def))
       return -1;
     if (mn > mx) {
       snprintf(p, sizeof p, "%s.max", path);
       return tt__json_error(TT_ERR_PARSE, source, p,
-                            "%" PRId64 " is less than min %" PRId64 " (expected min <= max)",
-                            mx, mn),
+                            "%" PRId64 " is less than min %" PRId64 " (expected min <= max)", mx,
+                            mn),
              -1;
     }
     if (def < mn || def > mx) {
       snprintf(p, sizeof p, "%s.value", path);
       return tt__json_error(TT_ERR_PARSE, source, p,
-                            "default %" PRId64 " is outside [%" PRId64 ", %" PRId64 "]", def,
-                            mn, mx),
+                            "default %" PRId64 " is outside [%" PRId64 ", %" PRId64 "]", def, mn,
+                            mx),
              -1;
     }
     r = tt_space_add_int(space, name->valuestring, mn, mx, def, description);
@@ -192,12 +197,14 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
       return -1;
     if (mn > mx) {
       snprintf(p, sizeof p, "%s.max", path);
-      return tt__json_error(TT_ERR_PARSE, source, p, "%g is less than min %g (expected min <= max)", mx, mn),
+      return tt__json_error(TT_ERR_PARSE, source, p, "%g is less than min %g (expected min <= max)",
+                            mx, mn),
              -1;
     }
     if (def < mn || def > mx) {
       snprintf(p, sizeof p, "%s.value", path);
-      return tt__json_error(TT_ERR_PARSE, source, p, "default %g is outside [%g, %g]", def, mn, mx), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p, "default %g is outside [%g, %g]", def, mn, mx),
+             -1;
     }
     if (log && mn <= 0.0) {
       snprintf(p, sizeof p, "%s.log", path);
@@ -215,14 +222,17 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
              -1;
     int count = cJSON_GetArraySize(pv);
     if (count == 0)
-      return tt__json_error(TT_ERR_PARSE, source, p, "empty (expected at least one possible value)"), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p,
+                            "empty (expected at least one possible value)"),
+             -1;
     tt_value_kind kind = tt__nom_kind_of(pv->child);
     int k = 0;
     for (const cJSON *e = pv->child; e; e = e->next, k++) {
       snprintf(p, sizeof p, "%s.possibleValues[%d]", path, k);
       tt_value_kind ek = tt__nom_kind_of(e);
       if (!ek)
-        return tt__json_error(TT_ERR_PARSE, source, p, "expected an integer, boolean or string, got %s",
+        return tt__json_error(TT_ERR_PARSE, source, p,
+                              "expected an integer, boolean or string, got %s",
                               tt__json_describe(e, TT__JSON_PARAMS, got, sizeof got)),
                -1;
       if (ek != kind)
@@ -235,18 +245,22 @@ static int tt__parse_param(tt_space *space, const cJSON *item, int i, const char
         if ((kind == TT_VALUE_STRING && strcmp(f->valuestring, e->valuestring) == 0) ||
             (kind == TT_VALUE_INT && f->valuedouble == e->valuedouble) ||
             (kind == TT_VALUE_BOOL && cJSON_IsTrue(f) == cJSON_IsTrue(e)))
-          return tt__json_error(TT_ERR_PARSE, source, p, "duplicate value %s (expected distinct values)",
+          return tt__json_error(TT_ERR_PARSE, source, p,
+                                "duplicate value %s (expected distinct values)",
                                 tt__json_describe(e, TT__JSON_PARAMS, got, sizeof got)),
                  -1;
     }
     snprintf(p, sizeof p, "%s.possibleValues", path);
     if (kind == TT_VALUE_BOOL && (count != 2 || cJSON_IsTrue(pv->child)))
-      return tt__json_error(TT_ERR_PARSE, source, p, "boolean possible values must be [false, true]"), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p,
+                            "boolean possible values must be [false, true]"),
+             -1;
 
     const cJSON *val = cJSON_GetObjectItemCaseSensitive(item, "value");
     snprintf(p, sizeof p, "%s.value", path);
     if (!val)
-      return tt__json_error(TT_ERR_PARSE, source, p, "missing (expected the default, one of possibleValues)"),
+      return tt__json_error(TT_ERR_PARSE, source, p,
+                            "missing (expected the default, one of possibleValues)"),
              -1;
     int def = tt__nom_find(pv, val);
     if (def < 0)
@@ -293,7 +307,8 @@ static int tt__parse_marking(tt_space *space, const cJSON *item, int i, const ch
     snprintf(p, sizeof p, "%s.tunable", path);
     if (!cJSON_IsBool(tun))
       return tt__json_error(TT_ERR_PARSE, source, p, "expected true or false, got %s",
-                            tt__json_describe(tun, TT__JSON_PARAMS, got, sizeof got)), -1;
+                            tt__json_describe(tun, TT__JSON_PARAMS, got, sizeof got)),
+             -1;
     tt_space_set_tunable(space, (size_t)i, cJSON_IsTrue(tun));
   }
   const cJSON *when = cJSON_GetObjectItemCaseSensitive(item, "activeWhen");
@@ -301,23 +316,31 @@ static int tt__parse_marking(tt_space *space, const cJSON *item, int i, const ch
   snprintf(p, sizeof p, "%s.activeWhen", path);
   if (!cJSON_IsObject(when))
     return tt__json_error(TT_ERR_PARSE, source, p, "expected {\"PARAMETER\": [values...]}, got %s",
-                          tt__json_describe(when, TT__JSON_PARAMS, got, sizeof got)), -1;
+                          tt__json_describe(when, TT__JSON_PARAMS, got, sizeof got)),
+           -1;
   for (const cJSON *c = when->child; c; c = c->next) {
     snprintf(p, sizeof p, "%s.activeWhen.%s", path, c->string);
     if (!cJSON_IsArray(c) || !c->child)
-      return tt__json_error(TT_ERR_PARSE, source, p, "expected a non-empty array of the parameter's values, "
-                            "got %s", tt__json_describe(c, TT__JSON_PARAMS, got, sizeof got)), -1;
+      return tt__json_error(TT_ERR_PARSE, source, p,
+                            "expected a non-empty array of the parameter's values, "
+                            "got %s",
+                            tt__json_describe(c, TT__JSON_PARAMS, got, sizeof got)),
+             -1;
     char texts[64][64];
     const char *vals[64];
     size_t n = 0;
     for (const cJSON *v = c->child; v && n < 64; v = v->next, n++) {
       if (cJSON_IsString(v)) snprintf(texts[n], sizeof texts[n], "%s", v->valuestring);
-      else if (cJSON_IsBool(v)) snprintf(texts[n], sizeof texts[n], "%s", cJSON_IsTrue(v) ? "true" : "false");
+      else if (cJSON_IsBool(v))
+        snprintf(texts[n], sizeof texts[n], "%s", cJSON_IsTrue(v) ? "true" : "false");
       else if (cJSON_IsNumber(v) && v->valuedouble == (double)(long long)v->valuedouble)
         snprintf(texts[n], sizeof texts[n], "%lld", (long long)v->valuedouble);
       else
-        return tt__json_error(TT_ERR_PARSE, source, p, "expected possible values (strings, booleans or "
-                              "integers), got %s", tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)), -1;
+        return tt__json_error(TT_ERR_PARSE, source, p,
+                              "expected possible values (strings, booleans or "
+                              "integers), got %s",
+                              tt__json_describe(v, TT__JSON_PARAMS, got, sizeof got)),
+               -1;
       vals[n] = texts[n];
     }
     if (tt_space_add_condition(space, (size_t)i, c->string, vals, n) != TT_OK) {
@@ -355,13 +378,15 @@ tt_space *tt_space_from_json(const char *json, const char *source) {
   }
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
   if (!cJSON_IsArray(params)) {
-    tt__json_error(TT_ERR_PARSE, source, "parameters", "expected an array of parameter objects, got %s",
+    tt__json_error(TT_ERR_PARSE, source, "parameters",
+                   "expected an array of parameter objects, got %s",
                    tt__json_describe(params, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
   const cJSON *cons = cJSON_GetObjectItemCaseSensitive(root, "constraints");
   if (cons && !cJSON_IsArray(cons)) {
-    tt__json_error(TT_ERR_PARSE, source, "constraints", "expected an array of {\"description\": ...}, got %s",
+    tt__json_error(TT_ERR_PARSE, source, "constraints",
+                   "expected an array of {\"description\": ...}, got %s",
                    tt__json_describe(cons, TT__JSON_PARAMS, got, sizeof got));
     goto fail;
   }
@@ -420,10 +445,10 @@ static cJSON *tt__json_double(double v) {
 /* JSON form of a parameter value. */
 static cJSON *tt__json_value(tt_value v) {
   switch (v.kind) {
-    case TT_VALUE_INT: return tt__json_int(v.i);
-    case TT_VALUE_FLOAT: return tt__json_double(v.f);
-    case TT_VALUE_BOOL: return cJSON_CreateBool(v.i != 0);
-    case TT_VALUE_STRING: return cJSON_CreateString(v.s);
+  case TT_VALUE_INT: return tt__json_int(v.i);
+  case TT_VALUE_FLOAT: return tt__json_double(v.f);
+  case TT_VALUE_BOOL: return cJSON_CreateBool(v.i != 0);
+  case TT_VALUE_STRING: return cJSON_CreateString(v.s);
   }
   return cJSON_CreateNull();
 }
@@ -467,9 +492,10 @@ char *tt_space_to_json(const tt_space *space) {
     cJSON_AddItemToArray(params, p);
     tt_param_type type = tt_space_type(space, i);
     cJSON_AddItemToObject(p, "name", cJSON_CreateString(tt_space_name(space, i)));
-    cJSON_AddItemToObject(p, "type", cJSON_CreateString(type == TT_PARAM_INT     ? "INT"
-                                                         : type == TT_PARAM_FLOAT ? "FLOAT"
-                                                                                  : "NOM"));
+    cJSON_AddItemToObject(p, "type",
+                          cJSON_CreateString(type == TT_PARAM_INT     ? "INT"
+                                             : type == TT_PARAM_FLOAT ? "FLOAT"
+                                                                      : "NOM"));
     if (type == TT_PARAM_INT) {
       /* Exact int64 bounds: tt_space_min/max are doubles and round beyond 2^53. */
       int64_t mn = 0, mx = 0;
@@ -509,8 +535,7 @@ char *tt_space_to_json(const tt_space *space) {
     for (size_t k = 0; k < tt__space_constraint_count(space); k++) {
       cJSON *c = cJSON_CreateObject();
       if (!c) break;
-      cJSON_AddItemToObject(c, "description",
-                            cJSON_CreateString(tt__space_constraint(space, k)));
+      cJSON_AddItemToObject(c, "description", cJSON_CreateString(tt__space_constraint(space, k)));
       cJSON_AddItemToArray(cons, c);
     }
   }
@@ -535,15 +560,13 @@ char *tt_config_to_json(const tt_config *config) {
     return NULL;
   }
   for (size_t i = 0; i < tt_space_count(space); i++)
-    cJSON_AddItemToObject(root, tt_space_name(space, i),
-                          tt__json_value(tt_config_get(config, i)));
+    cJSON_AddItemToObject(root, tt_space_name(space, i), tt__json_value(tt_config_get(config, i)));
   /* Compact: configurations are logged one per line by tuners and the host. */
   return tt__print(root, 0);
 }
 
 /* Sets parameter `idx` of `work` from JSON value `v`; 0 or -1 (error recorded). */
-static int tt__config_set_json(tt_config *work, size_t idx, const cJSON *v,
-                               const char *source) {
+static int tt__config_set_json(tt_config *work, size_t idx, const cJSON *v, const char *source) {
   const tt_space *space = tt_config_space(work);
   const char *name = tt_space_name(space, idx);
   char path[256], got[128];
@@ -602,7 +625,8 @@ tt_status tt_config_from_json(tt_config *config, const char *json, const char *s
   /* Work on a clone so that a failure leaves `config` untouched. */
   tt_config *work = NULL;
   if (!cJSON_IsObject(root)) {
-    st = tt__json_error(TT_ERR_PARSE, source, NULL, "expected a JSON object {\"name\": value, ...}, got %s",
+    st = tt__json_error(TT_ERR_PARSE, source, NULL,
+                        "expected a JSON object {\"name\": value, ...}, got %s",
                         tt__json_describe(root, TT__JSON_PARAMS, got, sizeof got));
     goto done;
   }
@@ -615,15 +639,16 @@ tt_status tt_config_from_json(tt_config *config, const char *json, const char *s
   for (const cJSON *m = root->child; m; m = m->next) {
     for (const cJSON *e = root->child; e != m; e = e->next)
       if (strcmp(e->string, m->string) == 0) {
-        st = tt__json_error(TT_ERR_PARSE, source, m->string, "appears twice (expected each name once)");
+        st = tt__json_error(TT_ERR_PARSE, source, m->string,
+                            "appears twice (expected each name once)");
         goto done;
       }
     int idx = tt_space_find(space, m->string);
     if (idx < 0) {
       char hint[1024];
       tt__space_unknown_hint(space, m->string, hint, sizeof hint);
-      st = tt__json_error(TT_ERR_PARSE, source, NULL, "unknown parameter \"%s\" of %s (%s)", m->string,
-                          tt_space_plugin(space), hint);
+      st = tt__json_error(TT_ERR_PARSE, source, NULL, "unknown parameter \"%s\" of %s (%s)",
+                          m->string, tt_space_plugin(space), hint);
       goto done;
     }
     if (tt__config_set_json(work, (size_t)idx, m, source) < 0) {

@@ -23,10 +23,10 @@ static pthread_mutex_t tt__log_lock = PTHREAD_MUTEX_INITIALIZER;
 
 static const char *tt__level_name(tt_log_level level) {
   switch (level) {
-    case TT_LOG_DEBUG: return "debug";
-    case TT_LOG_INFO: return "info";
-    case TT_LOG_WARN: return "warning";
-    case TT_LOG_ERROR: return "error";
+  case TT_LOG_DEBUG: return "debug";
+  case TT_LOG_INFO: return "info";
+  case TT_LOG_WARN: return "warning";
+  case TT_LOG_ERROR: return "error";
   }
   return "log";
 }
@@ -49,7 +49,7 @@ static void tt__default_log_str(tt_log_level level, const char *plugin, const ch
   pthread_mutex_lock(&tt__log_lock);
   tt_log_fn fn = tt__log_fn;
   void *user = tt__log_user;
-  if (fn) {  /* called outside the lock: the callback may take its own */
+  if (fn) { /* called outside the lock: the callback may take its own */
     pthread_mutex_unlock(&tt__log_lock);
     fn(user, level, plugin, msg);
     return;
@@ -83,10 +83,10 @@ void tt__log(tt_log_level level, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
-  const tt_host *h = tt__log_host && (TT_HOST_HAS(tt__log_host, log_str) ||
-                                      TT_HOST_HAS(tt__log_host, log))
-                         ? tt__log_host
-                         : tt_default_host();
+  const tt_host *h =
+      tt__log_host && (TT_HOST_HAS(tt__log_host, log_str) || TT_HOST_HAS(tt__log_host, log))
+          ? tt__log_host
+          : tt_default_host();
   tt_host_log(h, level, NULL, "%s", msg);
 }
 
@@ -129,12 +129,12 @@ static int tt__default_should_stop(void) { return tt__stop_now(); }
  * works on chunks itself as thread 0, and waits until every worker has left the job. */
 typedef struct tt__pool {
   pthread_t *threads;
-  uint32_t worker_count;          /* threads besides the caller */
+  uint32_t worker_count; /* threads besides the caller */
   pthread_mutex_t lock;
   pthread_cond_t wake;
   pthread_cond_t done;
   uint64_t generation;
-  uint32_t busy;                  /* workers still inside the current job */
+  uint32_t busy; /* workers still inside the current job */
   int quit;
   /* current job */
   tt_parallel_fn fn;
@@ -154,7 +154,7 @@ static pthread_mutex_t tt__job_lock = PTHREAD_MUTEX_INITIALIZER;
  * called from inside fn runs inline on that thread instead of waiting for the job it is
  * part of. */
 static _Thread_local int tt__in_job;
-static uint32_t tt__thread_setting;  /* 0 = number of CPUs */
+static uint32_t tt__thread_setting; /* 0 = number of CPUs */
 
 /* Claims and runs chunks until the job is exhausted or a stop is requested. */
 static void tt__pool_run_chunks(tt__pool *pool, uint32_t thread_index) {
@@ -316,8 +316,9 @@ static tt_status tt__default_parallel_for(uint64_t count, uint64_t grain, tt_par
 }
 
 tt_status tt_default_host_set_threads(uint32_t threads) {
-  if (threads > 1024) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "threads: at most 1024, got %u", threads);
-  pthread_mutex_lock(&tt__job_lock);  /* not in the middle of another thread's job */
+  if (threads > 1024)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "threads: at most 1024, got %u", threads);
+  pthread_mutex_lock(&tt__job_lock); /* not in the middle of another thread's job */
   tt__pool_stop();
   tt__thread_setting = threads;
   pthread_mutex_unlock(&tt__job_lock);
@@ -337,21 +338,21 @@ static const void *tt__default_get_extension(const char *id) {
 }
 
 static const tt_host tt__default_host = {
-  .struct_size = sizeof(tt_host),
-  .abi_major = TT_ABI_MAJOR,
-  .abi_minor = TT_ABI_MINOR,
-  .host_name = "libtunetrace default host",
-  .host_version = TT_VERSION_STRING,
-  .log = tt__default_log,
-  .alloc = tt__default_alloc,
-  .free_mem = tt__default_free,
-  .clock_ns = tt__default_clock_ns,
-  .thread_count = tt__default_thread_count,
-  .parallel_for = tt__default_parallel_for,
-  .progress = tt__default_progress,
-  .should_stop = tt__default_should_stop,
-  .get_extension = tt__default_get_extension,
-  .log_str = tt__default_log_str,
+    .struct_size = sizeof(tt_host),
+    .abi_major = TT_ABI_MAJOR,
+    .abi_minor = TT_ABI_MINOR,
+    .host_name = "libtunetrace default host",
+    .host_version = TT_VERSION_STRING,
+    .log = tt__default_log,
+    .alloc = tt__default_alloc,
+    .free_mem = tt__default_free,
+    .clock_ns = tt__default_clock_ns,
+    .thread_count = tt__default_thread_count,
+    .parallel_for = tt__default_parallel_for,
+    .progress = tt__default_progress,
+    .should_stop = tt__default_should_stop,
+    .get_extension = tt__default_get_extension,
+    .log_str = tt__default_log_str,
 };
 
 const tt_host *tt_default_host(void) { return &tt__default_host; }

@@ -22,19 +22,17 @@ void tt_host_log(const tt_host *host, tt_log_level level, const char *plugin, co
   va_start(ap, fmt);
   int n = vsnprintf(buf, sizeof buf, fmt, ap);
   va_end(ap);
-  if (n < 0) return;  /* an invalid format: nothing sensible to say */
-  if ((size_t)n >= sizeof buf) {  /* too long for the stack: the whole message, on the heap */
+  if (n < 0) return;             /* an invalid format: nothing sensible to say */
+  if ((size_t)n >= sizeof buf) { /* too long for the stack: the whole message, on the heap */
     char *big = malloc((size_t)n + 1);
     if (big) {
       va_start(ap, fmt);
       vsnprintf(big, (size_t)n + 1, fmt, ap);
       va_end(ap);
       msg = big;
-    }  /* else: the truncated message rather than none */
+    } /* else: the truncated message rather than none */
   }
-  if (has_str)
-    host->log_str(level, plugin, msg);
-  else
-    host->log(level, plugin, "%s", msg);
+  if (has_str) host->log_str(level, plugin, msg);
+  else host->log(level, plugin, "%s", msg);
   if (msg != buf) free(msg);
 }

@@ -15,13 +15,13 @@ static const struct {
   const char *name;
   const char *iface;
 } tt__kinds[TT_KIND_COUNT + 1] = {
-  {NULL, NULL},
-  {"accel", TT_ACCEL_INTERFACE_ID},
-  {"integrator", TT_INTEGRATOR_INTERFACE_ID},
-  {"tuner", TT_TUNER_INTERFACE_ID},
-  {"predictor", TT_PREDICTOR_INTERFACE_ID},
-  {"post", TT_POST_INTERFACE_ID},
-  {"sampler", TT_SAMPLER_INTERFACE_ID},
+    {NULL, NULL},
+    {"accel", TT_ACCEL_INTERFACE_ID},
+    {"integrator", TT_INTEGRATOR_INTERFACE_ID},
+    {"tuner", TT_TUNER_INTERFACE_ID},
+    {"predictor", TT_PREDICTOR_INTERFACE_ID},
+    {"post", TT_POST_INTERFACE_ID},
+    {"sampler", TT_SAMPLER_INTERFACE_ID},
 };
 
 /* Interface id of `kind`; NULL for values outside the enum so callers can reject them. */

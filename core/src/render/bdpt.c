@@ -17,7 +17,7 @@
  * vertex positions: the offset makes them differ by about eps / distance. A white-box test
  * shrinks it to compare the two exactly. */
 #ifndef TT__BDPT_OFFSET_EPS
-#define TT__BDPT_OFFSET_EPS 5e-5f
+#  define TT__BDPT_OFFSET_EPS 5e-5f
 #endif
 
 TT_API void tt_bdpt_options_default(tt_bdpt_options *options) {
@@ -32,7 +32,8 @@ TT_API void tt_bdpt_options_default(tt_bdpt_options *options) {
 /* The caller's options over the defaults (struct_size-aware): the caller's struct itself
  * when it is whole and valid (the per-connection path), else a completed copy in *tmp. */
 static const tt_bdpt_options *tt__bdpt_opts(const tt_bdpt_options *options, tt_bdpt_options *tmp) {
-  if (options && options->struct_size == sizeof *options && options->max_depth <= 64) return options;
+  if (options && options->struct_size == sizeof *options && options->max_depth <= 64)
+    return options;
   tt_bdpt_options_default(tmp);
   if (options) {
     size_t n = options->struct_size < sizeof *tmp ? options->struct_size : sizeof *tmp;
@@ -47,7 +48,8 @@ TT_API tt_status tt_bdpt_paths_create(uint32_t max_depth, tt_bdpt_paths **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_bdpt_paths_create: out is NULL");
   *out = NULL;
   if (max_depth > 64)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_bdpt_paths_create: max_depth %u exceeds 64", max_depth);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_bdpt_paths_create: max_depth %u exceeds 64",
+                        max_depth);
   tt_bdpt_paths *p = calloc(1, sizeof *p);
   if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_bdpt_paths_create: out of memory");
   p->cap = max_depth + 2;
@@ -102,7 +104,8 @@ static inline float tt__bdpt_dim(const tt_sample_source *src, uint32_t dim) {
 }
 
 /* Moves p off the surface along ng, to the side of w (as path.c does). */
-static inline void tt__bdpt_offset(const float p[3], const float ng[3], const float w[3], float out[3]) {
+static inline void tt__bdpt_offset(const float p[3], const float ng[3], const float w[3],
+                                   float out[3]) {
   float m = fmaxf(fabsf(p[0]), fmaxf(fabsf(p[1]), fabsf(p[2])));
   float eps = TT__BDPT_OFFSET_EPS * (1.0f + m);
   if (tt__dot3(w, ng) < 0.0f) eps = -eps;
@@ -163,7 +166,8 @@ static void tt__bv_f(const tt__bvertex *v, const tt__bvertex *next, int adjoint,
   float wn[3], d2;
   if (!tt__bv_dir(v, next, wn, &d2)) return;
   if (!tt__bv_side_ok(v, wn) || !tt__bv_side_ok(v, v->wo)) return;
-  if (!tt__bsdf_transmissive(&v->bsdf) && !(tt__dot3(wn, v->ng) * tt__dot3(v->wo, v->ng) > 0.0f)) return;
+  if (!tt__bsdf_transmissive(&v->bsdf) && !(tt__dot3(wn, v->ng) * tt__dot3(v->wo, v->ng) > 0.0f))
+    return;
   float a[3], b[3];
   tt__to_local(&v->frame, v->wo, a);
   tt__to_local(&v->frame, wn, b);
@@ -216,7 +220,8 @@ float tt__bv_pdf_light(const tt_path_tracer *pt, const tt__bvertex *v, const tt_
   return pdf;
 }
 
-float tt__bv_pdf_light_origin(const tt_path_tracer *pt, const tt__bvertex *v, const tt__bvertex *next) {
+float tt__bv_pdf_light_origin(const tt_path_tracer *pt, const tt__bvertex *v,
+                              const tt__bvertex *next) {
   const tt__lights *ls = &pt->lights;
   if (v->light < 0 || (uint32_t)v->light >= ls->count) return 0.0f;
   if (v->infinite) {
@@ -257,7 +262,8 @@ float tt__bdpt_mis_weight(const tt_path_tracer *pt, const tt_camera_frame *frame
   if (s + t == 2) return 1.0f;
   if (s > TT__BDPT_MAX_VERTS || t > TT__BDPT_MAX_VERTS || t == 0) return 0.0f;
   /* Copies of the densities: the connection's vertices get the densities of this strategy. */
-  float cf[TT__BDPT_MAX_VERTS], cr[TT__BDPT_MAX_VERTS], lf[TT__BDPT_MAX_VERTS], lr[TT__BDPT_MAX_VERTS];
+  float cf[TT__BDPT_MAX_VERTS], cr[TT__BDPT_MAX_VERTS], lf[TT__BDPT_MAX_VERTS],
+      lr[TT__BDPT_MAX_VERTS];
   uint8_t cd[TT__BDPT_MAX_VERTS], ld[TT__BDPT_MAX_VERTS];
   const tt__bvertex *qs = s == 0 ? NULL : s == 1 ? sampled : &light[s - 1];
   const tt__bvertex *ptv = t == 1 ? sampled : &camera[t - 1];
@@ -331,7 +337,7 @@ static uint32_t tt__bdpt_walk(const tt_path_tracer *pt, const tt_tracer *tracer,
     v->light = -1;
     memcpy(v->beta, beta, sizeof v->beta);
     if (hit.geom_id == TT_INVALID_ID) {
-      if (!adjoint && ls->env >= 0 && ls->count > 0) {  /* the environment as a light vertex */
+      if (!adjoint && ls->env >= 0 && ls->count > 0) { /* the environment as a light vertex */
         v->kind = TT__BV_LIGHT;
         v->infinite = 1;
         v->light = ls->env;
@@ -342,7 +348,7 @@ static uint32_t tt__bdpt_walk(const tt_path_tracer *pt, const tt_tracer *tracer,
       break;
     }
     tt__surface surf;
-    if (!tt__surface_at(pt, &hit, &surf)) break;  /* degenerate triangle: the path ends */
+    if (!tt__surface_at(pt, &hit, &surf)) break; /* degenerate triangle: the path ends */
     v->kind = TT__BV_SURFACE;
     v->on_surface = 1;
     v->mesh = hit.geom_id;
@@ -355,7 +361,7 @@ static uint32_t tt__bdpt_walk(const tt_path_tracer *pt, const tt_tracer *tracer,
     tt__frame_from(&v->frame, v->ns, surf.e1);
     v->pdf_fwd = tt__bv_convert(prev, pdf_fwd, v);
     n++;
-    if (k == 1 && !adjoint) {  /* the camera subpath's first hit, for the AOVs */
+    if (k == 1 && !adjoint) { /* the camera subpath's first hit, for the AOVs */
       paths->hit = 1;
       paths->hit_distance = hit.t;
       float sg = tt__dot3(v->ns, v->wo) < 0.0f ? -1.0f : 1.0f;
@@ -377,7 +383,8 @@ static uint32_t tt__bdpt_walk(const tt_path_tracer *pt, const tt_tracer *tracer,
     int ok = adjoint ? tt__bsdf_sample_adjoint(&v->bsdf, wo_l, u_lobe, u1, u2, &bs)
                      : tt__bsdf_sample(&v->bsdf, wo_l, u_lobe, u1, u2, &bs);
     if (!ok) break;
-    if (src->report_pdf) src->report_pdf(src->self, base + TT_BDPT_BOUNCE_DIR, bs.delta ? 0.0f : bs.pdf);
+    if (src->report_pdf)
+      src->report_pdf(src->self, base + TT_BDPT_BOUNCE_DIR, bs.delta ? 0.0f : bs.pdf);
     float wi[3];
     tt__to_world(&v->frame, bs.wi, wi);
     tt__normalize3(wi);
@@ -415,10 +422,9 @@ static uint32_t tt__bdpt_walk(const tt_path_tracer *pt, const tt_tracer *tracer,
 }
 
 TT_API uint32_t tt_bdpt_camera_subpath(const tt_path_tracer *pt, const tt_tracer *tracer,
-                                       const tt_bdpt_options *options,
-                                       const tt_camera_frame *frame, float fx, float fy,
-                                       const tt_sample_source *camera, uint32_t max_vertices,
-                                       tt_bdpt_paths *paths) {
+                                       const tt_bdpt_options *options, const tt_camera_frame *frame,
+                                       float fx, float fy, const tt_sample_source *camera,
+                                       uint32_t max_vertices, tt_bdpt_paths *paths) {
   paths->n_camera = 0;
   paths->rays = 0;
   paths->hit = 0;
@@ -447,9 +453,8 @@ TT_API uint32_t tt_bdpt_camera_subpath(const tt_path_tracer *pt, const tt_tracer
 }
 
 TT_API uint32_t tt_bdpt_light_subpath(const tt_path_tracer *pt, const tt_tracer *tracer,
-                                      const tt_bdpt_options *options,
-                                      const tt_sample_source *light, uint32_t max_vertices,
-                                      tt_bdpt_paths *paths) {
+                                      const tt_bdpt_options *options, const tt_sample_source *light,
+                                      uint32_t max_vertices, tt_bdpt_paths *paths) {
   paths->n_light = 0;
   if (max_vertices > paths->cap) max_vertices = paths->cap;
   if (max_vertices == 0) return 0;
@@ -458,8 +463,10 @@ TT_API uint32_t tt_bdpt_light_subpath(const tt_path_tracer *pt, const tt_tracer 
   const tt__lights *ls = &pt->lights;
   tt__emission em;
   float u_sel = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_SELECT);
-  float u1 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_POS), u2 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_POS + 1);
-  float u3 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_DIR), u4 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_DIR + 1);
+  float u1 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_POS),
+        u2 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_POS + 1);
+  float u3 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_DIR),
+        u4 = tt__bdpt_dim(light, TT_BDPT_LIGHT_DIM_DIR + 1);
   if (!tt__lights_sample_emission(ls, u_sel, u1, u2, u3, u4, &em)) return 0;
   const tt__light *l = &ls->lights[em.light];
   tt__bvertex *v = &paths->light[0];
@@ -487,7 +494,7 @@ TT_API uint32_t tt_bdpt_light_subpath(const tt_path_tracer *pt, const tt_tracer 
   if (isfinite(tt__max3(beta)))
     n += tt__bdpt_walk(pt, tracer, o, ray, beta, em.pdf_dir, max_vertices - 1, 1, light,
                        TT_BDPT_LIGHT_DIM_FIRST_BOUNCE, paths->light, 1, paths);
-  if (v->infinite) {  /* densities of a start at infinity: the disk, then the direction */
+  if (v->infinite) { /* densities of a start at infinity: the disk, then the direction */
     if (n > 1) {
       tt__bvertex *v1 = &paths->light[1];
       v1->pdf_fwd = em.pdf_pos * (v1->on_surface ? fabsf(tt__dot3(em.dir, v1->ng)) : 1.0f);
@@ -527,7 +534,8 @@ static int tt__bdpt_visible(const tt_tracer *tracer, const tt__bvertex *a, const
 }
 
 /* Emission of light vertex / emissive surface v towards vertex `to`. */
-static int tt__bv_Le(const tt_path_tracer *pt, const tt__bvertex *v, const tt__bvertex *to, float L[3]) {
+static int tt__bv_Le(const tt_path_tracer *pt, const tt__bvertex *v, const tt__bvertex *to,
+                     float L[3]) {
   if (v->infinite) {
     float d[3] = {-v->wo[0], -v->wo[1], -v->wo[2]};
     return tt__lights_env(&pt->lights, d, L);
@@ -566,11 +574,11 @@ TT_API int tt_bdpt_connect(const tt_path_tracer *pt, const tt_tracer *tracer,
     memcpy(sampled.p, frame->origin, sizeof sampled.p);
     memcpy(sampled.ng, frame->forward, sizeof sampled.ng);
     memcpy(sampled.ns, frame->forward, sizeof sampled.ns);
-    float w[3], d2;  /* from the camera towards qs */
+    float w[3], d2; /* from the camera towards qs */
     if (!tt__bv_dir(&sampled, qs, w, &d2)) return 0;
     float we = tt_camera_importance(frame, w, &out->fx, &out->fy);
     if (!(we > 0.0f)) return 0;
-    float pdf = d2 / tt__dot3(frame->forward, w);  /* pinhole: lens area 1 */
+    float pdf = d2 / tt__dot3(frame->forward, w); /* pinhole: lens area 1 */
     for (int i = 0; i < 3; ++i) sampled.beta[i] = we / pdf;
     float f[3], back[3] = {-w[0], -w[1], -w[2]};
     tt__bv_f(qs, &sampled, 1, f);
@@ -620,7 +628,8 @@ TT_API int tt_bdpt_connect(const tt_path_tracer *pt, const tt_tracer *tracer,
     return 0;
   }
   if (!(tt__max3(L) > 0.0f)) return 0;
-  float w = tt__bdpt_mis_weight(pt, frame, o->heuristic, lig, cam, (s == 1 || t == 1) ? &sampled : NULL, s, t);
+  float w = tt__bdpt_mis_weight(pt, frame, o->heuristic, lig, cam,
+                                (s == 1 || t == 1) ? &sampled : NULL, s, t);
   memcpy(out->unweighted, L, sizeof out->unweighted);
   out->weight = w;
   for (int i = 0; i < 3; ++i) out->L[i] = L[i] * w;

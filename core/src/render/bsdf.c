@@ -53,11 +53,14 @@ static float tt__fresnel_conductor(float cos_i, float eta_re, float k) {
 static void tt__cosine_hemisphere(float u1, float u2, float out[3]) {
   float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f, r, phi;
   if (a == 0.0f && b == 0.0f) {
-    r = 0.0f; phi = 0.0f;
+    r = 0.0f;
+    phi = 0.0f;
   } else if (fabsf(a) > fabsf(b)) {
-    r = a; phi = (TT__PI / 4.0f) * (b / a);
+    r = a;
+    phi = (TT__PI / 4.0f) * (b / a);
   } else {
-    r = b; phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
+    r = b;
+    phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
   }
   out[0] = r * cosf(phi);
   out[1] = r * sinf(phi);
@@ -102,7 +105,9 @@ static void tt__ggx_sample_vndf(float ax, float ay, const float wo[3], float u1,
   float t1v[3] = {1.0f, 0.0f, 0.0f};
   if (lensq > 0.0f) {
     float inv = 1.0f / sqrtf(lensq);
-    t1v[0] = -vh[1] * inv; t1v[1] = vh[0] * inv; t1v[2] = 0.0f;
+    t1v[0] = -vh[1] * inv;
+    t1v[1] = vh[0] * inv;
+    t1v[2] = 0.0f;
   }
   float t2v[3];
   tt__cross3(vh, t1v, t2v);
@@ -113,7 +118,9 @@ static void tt__ggx_sample_vndf(float ax, float ay, const float wo[3], float u1,
   float tz = sqrtf(fmaxf(0.0f, 1.0f - t1 * t1 - t2 * t2));
   float nh[3];
   for (int i = 0; i < 3; ++i) nh[i] = t1 * t1v[i] + t2 * t2v[i] + tz * vh[i];
-  wm[0] = ax * nh[0]; wm[1] = ay * nh[1]; wm[2] = fmaxf(1e-7f, nh[2]);
+  wm[0] = ax * nh[0];
+  wm[1] = ay * nh[1];
+  wm[2] = fmaxf(1e-7f, nh[2]);
   tt__normalize3(wm);
 }
 
@@ -160,9 +167,7 @@ tt_status tt__bsdf_init(tt__bsdf *b, const tt_material *m) {
       b->on_b = 0.0f;
     }
     return TT_OK;
-  case TT_MATERIAL_MIRROR:
-    b->delta = 1;
-    return TT_OK;
+  case TT_MATERIAL_MIRROR: b->delta = 1; return TT_OK;
   case TT_MATERIAL_DIELECTRIC:
     if (!(m->ior > 0.0f) || !isfinite(m->ior))
       return tt_set_error(TT_ERR_INVALID_ARGUMENT, "material '%s': dielectric ior %g must be > 0",
@@ -183,8 +188,9 @@ tt_status tt__bsdf_init(tt__bsdf *b, const tt_material *m) {
                           name, (double)m->ior);
     return TT_OK;
   }
-  return tt_set_error(TT_ERR_UNSUPPORTED, "material '%s': type %d is not supported by the path sampler",
-                      name, (int)m->type);
+  return tt_set_error(TT_ERR_UNSUPPORTED,
+                      "material '%s': type %d is not supported by the path sampler", name,
+                      (int)m->type);
 }
 
 /* ---- per-material lobes ---- */
@@ -214,7 +220,8 @@ static void tt__diffuse_eval(const tt__bsdf *b, const float wo[3], const float w
 }
 
 /* Rough conductor value. */
-static void tt__conductor_eval(const tt__bsdf *b, const float wo[3], const float wi[3], float f[3]) {
+static void tt__conductor_eval(const tt__bsdf *b, const float wo[3], const float wi[3],
+                               float f[3]) {
   float wm[3] = {wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]};
   if (tt__normalize3(wm) == 0.0f) {
     f[0] = f[1] = f[2] = 0.0f;
@@ -223,7 +230,8 @@ static void tt__conductor_eval(const tt__bsdf *b, const float wo[3], const float
   float dg = tt__ggx_d(b->alpha_x, b->alpha_y, wm) * tt__ggx_g2(b->alpha_x, b->alpha_y, wo, wi) /
              (4.0f * wo[2] * wi[2]);
   float c = fabsf(tt__dot3(wo, wm));
-  for (int i = 0; i < 3; ++i) f[i] = dg * b->specular[i] * tt__fresnel_conductor(c, b->eta[i], b->k[i]);
+  for (int i = 0; i < 3; ++i)
+    f[i] = dg * b->specular[i] * tt__fresnel_conductor(c, b->eta[i], b->k[i]);
 }
 
 /* Probability of sampling the plastic's specular coat given wo (Fresnel-weighted). */
@@ -264,14 +272,19 @@ static int tt__rough_glass_half(const tt__bsdf *b, const float wo[3], const floa
   *etap = reflect ? 1.0f : (co > 0.0f ? b->ior : 1.0f / b->ior);
   for (int i = 0; i < 3; ++i) wm[i] = wi[i] * *etap + wo[i];
   if (tt__normalize3(wm) == 0.0f) return 0;
-  if (wm[2] < 0.0f) { wm[0] = -wm[0]; wm[1] = -wm[1]; wm[2] = -wm[2]; }
+  if (wm[2] < 0.0f) {
+    wm[0] = -wm[0];
+    wm[1] = -wm[1];
+    wm[2] = -wm[2];
+  }
   if (tt__dot3(wm, wi) * ci < 0.0f || tt__dot3(wm, wo) * co < 0.0f) return 0;
   return reflect ? 1 : 2;
 }
 
 /* Rough glass value; transmission carries the 1/etap^2 radiance scaling, so it obeys
  * f(wo, wi) / eta_o^2 = f(wi, wo) / eta_i^2 instead of plain symmetry. */
-static void tt__rough_glass_eval(const tt__bsdf *b, const float wo[3], const float wi[3], float f[3]) {
+static void tt__rough_glass_eval(const tt__bsdf *b, const float wo[3], const float wi[3],
+                                 float f[3]) {
   f[0] = f[1] = f[2] = 0.0f;
   float wm[3], etap;
   int kind = tt__rough_glass_half(b, wo, wi, wm, &etap);
@@ -327,8 +340,11 @@ static int tt__rough_glass_sample(const tt__bsdf *b, const float wo[3], float u_
   } else {
     float eta = b->ior, c = dwo, n[3] = {wm[0], wm[1], wm[2]};
     if (c < 0.0f) {
-      eta = 1.0f / eta; c = -c;
-      n[0] = -n[0]; n[1] = -n[1]; n[2] = -n[2];
+      eta = 1.0f / eta;
+      c = -c;
+      n[0] = -n[0];
+      n[1] = -n[1];
+      n[2] = -n[2];
     }
     float sin2_t = (1.0f - c * c) / (eta * eta);
     if (sin2_t >= 1.0f) return 0;
@@ -340,7 +356,9 @@ static int tt__rough_glass_sample(const tt__bsdf *b, const float wo[3], float u_
   /* f and pdf from the closed forms, so sample/eval/pdf agree exactly. */
   tt__rough_glass_eval(b, wo, wi, s->f);
   s->pdf = tt__rough_glass_pdf(b, wo, wi);
-  s->wi[0] = wi[0]; s->wi[1] = wi[1]; s->wi[2] = wi[2];
+  s->wi[0] = wi[0];
+  s->wi[1] = wi[1];
+  s->wi[2] = wi[2];
   return s->pdf > 0.0f && isfinite(s->pdf);
 }
 
@@ -349,12 +367,15 @@ static int tt__rough_glass_sample(const tt__bsdf *b, const float wo[3], float u_
 void tt__bsdf_eval(const tt__bsdf *b, const float wo_in[3], const float wi_in[3], float f[3]) {
   f[0] = f[1] = f[2] = 0.0f;
   if (b->delta) return;
-  if (b->type == TT_MATERIAL_DIELECTRIC) {  /* both hemispheres: no two-sided mirroring */
+  if (b->type == TT_MATERIAL_DIELECTRIC) { /* both hemispheres: no two-sided mirroring */
     tt__rough_glass_eval(b, wo_in, wi_in, f);
     return;
   }
   float wo[3] = {wo_in[0], wo_in[1], wo_in[2]}, wi[3] = {wi_in[0], wi_in[1], wi_in[2]};
-  if (wo[2] < 0.0f) { wo[2] = -wo[2]; wi[2] = -wi[2]; }  /* two-sided */
+  if (wo[2] < 0.0f) {
+    wo[2] = -wo[2];
+    wi[2] = -wi[2];
+  } /* two-sided */
   if (!(wo[2] > 0.0f) || !(wi[2] > 0.0f)) return;
   switch (b->type) {
   case TT_MATERIAL_DIFFUSE: tt__diffuse_eval(b, wo, wi, f); break;
@@ -368,14 +389,18 @@ float tt__bsdf_pdf(const tt__bsdf *b, const float wo_in[3], const float wi_in[3]
   if (b->delta) return 0.0f;
   if (b->type == TT_MATERIAL_DIELECTRIC) return tt__rough_glass_pdf(b, wo_in, wi_in);
   float wo[3] = {wo_in[0], wo_in[1], wo_in[2]}, wi[3] = {wi_in[0], wi_in[1], wi_in[2]};
-  if (wo[2] < 0.0f) { wo[2] = -wo[2]; wi[2] = -wi[2]; }
+  if (wo[2] < 0.0f) {
+    wo[2] = -wo[2];
+    wi[2] = -wi[2];
+  }
   if (!(wo[2] > 0.0f) || !(wi[2] > 0.0f)) return 0.0f;
   switch (b->type) {
   case TT_MATERIAL_DIFFUSE: return wi[2] * TT__INV_PI;
   case TT_MATERIAL_CONDUCTOR: return tt__ggx_reflect_pdf(b->alpha_x, b->alpha_y, wo, wi);
   case TT_MATERIAL_PLASTIC: {
     float ps = tt__plastic_spec_prob(b, wo);
-    return ps * tt__ggx_reflect_pdf(b->alpha_x, b->alpha_y, wo, wi) + (1.0f - ps) * wi[2] * TT__INV_PI;
+    return ps * tt__ggx_reflect_pdf(b->alpha_x, b->alpha_y, wo, wi) +
+           (1.0f - ps) * wi[2] * TT__INV_PI;
   }
   default: return 0.0f;
   }
@@ -388,7 +413,9 @@ static int tt__dielectric_sample(const tt__bsdf *b, const float wo[3], float u_l
   float r = tt__fresnel_dielectric(cos_o, b->ior), t = 1.0f - r;
   s->delta = 1;
   if (u_lobe < r || !(t > 0.0f)) {
-    s->wi[0] = -wo[0]; s->wi[1] = -wo[1]; s->wi[2] = wo[2];
+    s->wi[0] = -wo[0];
+    s->wi[1] = -wo[1];
+    s->wi[2] = wo[2];
     float inv_cos = 1.0f / fabsf(wo[2]);
     for (int i = 0; i < 3; ++i) s->f[i] = b->specular[i] * r * inv_cos;
     s->pdf = r;
@@ -420,7 +447,10 @@ int tt__bsdf_sample(const tt__bsdf *b, const float wo_in[3], float u_lobe, float
                     : tt__rough_glass_sample(b, wo_in, u_lobe, u1, u2, s);
   float wo[3] = {wo_in[0], wo_in[1], wo_in[2]};
   float flip = 1.0f;
-  if (wo[2] < 0.0f) { wo[2] = -wo[2]; flip = -1.0f; }
+  if (wo[2] < 0.0f) {
+    wo[2] = -wo[2];
+    flip = -1.0f;
+  }
   if (!(wo[2] > 0.0f)) return 0;
   float wi[3];
   switch (b->type) {
@@ -433,9 +463,12 @@ int tt__bsdf_sample(const tt__bsdf *b, const float wo_in[3], float u_lobe, float
   case TT_MATERIAL_MIRROR:
   case TT_MATERIAL_CONDUCTOR:
     if (b->delta) {
-      wi[0] = -wo[0]; wi[1] = -wo[1]; wi[2] = wo[2];
+      wi[0] = -wo[0];
+      wi[1] = -wo[1];
+      wi[2] = wo[2];
       for (int i = 0; i < 3; ++i) {
-        float fr = b->type == TT_MATERIAL_MIRROR ? 1.0f : tt__fresnel_conductor(wo[2], b->eta[i], b->k[i]);
+        float fr =
+            b->type == TT_MATERIAL_MIRROR ? 1.0f : tt__fresnel_conductor(wo[2], b->eta[i], b->k[i]);
         s->f[i] = b->specular[i] * fr / wo[2];
       }
       s->pdf = 1.0f;
@@ -463,13 +496,15 @@ int tt__bsdf_sample(const tt__bsdf *b, const float wo_in[3], float u_lobe, float
     }
     if (!(wi[2] > 0.0f)) return 0;
     tt__plastic_eval(b, wo, wi, s->f);
-    s->pdf = ps * tt__ggx_reflect_pdf(b->alpha_x, b->alpha_y, wo, wi) + (1.0f - ps) * wi[2] * TT__INV_PI;
+    s->pdf =
+        ps * tt__ggx_reflect_pdf(b->alpha_x, b->alpha_y, wo, wi) + (1.0f - ps) * wi[2] * TT__INV_PI;
     break;
   }
-  default:
-    return 0;
+  default: return 0;
   }
-  s->wi[0] = wi[0]; s->wi[1] = wi[1]; s->wi[2] = wi[2] * flip;
+  s->wi[0] = wi[0];
+  s->wi[1] = wi[1];
+  s->wi[2] = wi[2] * flip;
   return s->pdf > 0.0f && isfinite(s->pdf);
 }
 
@@ -491,7 +526,9 @@ void tt__bsdf_albedo(const tt__bsdf *b, float out[3]) {
     switch (b->type) {
     case TT_MATERIAL_DIFFUSE:
     case TT_MATERIAL_PLASTIC: out[i] = b->albedo[i]; break;
-    case TT_MATERIAL_CONDUCTOR: out[i] = b->specular[i] * tt__fresnel_conductor(1.0f, b->eta[i], b->k[i]); break;
+    case TT_MATERIAL_CONDUCTOR:
+      out[i] = b->specular[i] * tt__fresnel_conductor(1.0f, b->eta[i], b->k[i]);
+      break;
     default: out[i] = b->specular[i]; break;
     }
   }

@@ -17,12 +17,18 @@ static inline float tt__dot3(const float a[3], const float b[3]) {
 }
 static inline void tt__cross3(const float a[3], const float b[3], float out[3]) {
   float x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
-  out[0] = x; out[1] = y; out[2] = z;
+  out[0] = x;
+  out[1] = y;
+  out[2] = z;
 }
 /* Normalises in place; returns the old length (0 leaves v unchanged). */
 static inline float tt__normalize3(float v[3]) {
   float l = sqrtf(tt__dot3(v, v));
-  if (l > 0.0f) { v[0] /= l; v[1] /= l; v[2] /= l; }
+  if (l > 0.0f) {
+    v[0] /= l;
+    v[1] /= l;
+    v[2] /= l;
+  }
   return l;
 }
 static inline float tt__luminance(const float c[3]) {
@@ -41,21 +47,29 @@ typedef struct tt__frame {
 /* Frame around unit n with s the projection of `tangent` (any vector; a fallback is chosen
  * when it is parallel to n), so anisotropic lobes are oriented consistently on a triangle. */
 static inline void tt__frame_from(tt__frame *fr, const float n[3], const float tangent[3]) {
-  fr->n[0] = n[0]; fr->n[1] = n[1]; fr->n[2] = n[2];
+  fr->n[0] = n[0];
+  fr->n[1] = n[1];
+  fr->n[2] = n[2];
   float d = tt__dot3(tangent, n);
   float s[3] = {tangent[0] - d * n[0], tangent[1] - d * n[1], tangent[2] - d * n[2]};
   if (tt__normalize3(s) < 1e-6f || !(fabsf(tt__dot3(s, n)) < 1e-3f)) {
     /* Duff et al. 2017 branchless basis. */
     float sign = copysignf(1.0f, n[2]);
     float a = -1.0f / (sign + n[2]), b = n[0] * n[1] * a;
-    s[0] = 1.0f + sign * n[0] * n[0] * a; s[1] = sign * b; s[2] = -sign * n[0];
+    s[0] = 1.0f + sign * n[0] * n[0] * a;
+    s[1] = sign * b;
+    s[2] = -sign * n[0];
   }
-  fr->s[0] = s[0]; fr->s[1] = s[1]; fr->s[2] = s[2];
+  fr->s[0] = s[0];
+  fr->s[1] = s[1];
+  fr->s[2] = s[2];
   tt__cross3(n, s, fr->t);
 }
 static inline void tt__to_local(const tt__frame *fr, const float v[3], float out[3]) {
   float x = tt__dot3(v, fr->s), y = tt__dot3(v, fr->t), z = tt__dot3(v, fr->n);
-  out[0] = x; out[1] = y; out[2] = z;
+  out[0] = x;
+  out[1] = y;
+  out[2] = z;
 }
 static inline void tt__to_world(const tt__frame *fr, const float v[3], float out[3]) {
   for (int i = 0; i < 3; ++i) out[i] = v[0] * fr->s[i] + v[1] * fr->t[i] + v[2] * fr->n[i];
@@ -77,8 +91,8 @@ typedef struct tt__bsdf {
 
 typedef struct tt__bsdf_result {
   float wi[3];
-  float f[3];             /* BSDF value (for delta lobes: weight * pdf / |cos|) */
-  float pdf;              /* solid angle; for delta lobes the discrete lobe probability */
+  float f[3]; /* BSDF value (for delta lobes: weight * pdf / |cos|) */
+  float pdf;  /* solid angle; for delta lobes the discrete lobe probability */
   int delta;
 } tt__bsdf_result;
 
@@ -88,7 +102,9 @@ tt_status tt__bsdf_init(tt__bsdf *b, const tt_material *m);
 
 /* Non-zero if directions can pass to the other side (dielectric): such BSDFs are not
  * mirrored to the viewer's side. */
-static inline int tt__bsdf_transmissive(const tt__bsdf *b) { return b->type == TT_MATERIAL_DIELECTRIC; }
+static inline int tt__bsdf_transmissive(const tt__bsdf *b) {
+  return b->type == TT_MATERIAL_DIELECTRIC;
+}
 
 /* f(wo, wi) for local unit directions; 0 for delta lobes. */
 void tt__bsdf_eval(const tt__bsdf *b, const float wo[3], const float wi[3], float f[3]);

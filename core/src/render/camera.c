@@ -5,9 +5,7 @@
 #include <math.h>
 
 /* Length of a 3-vector in double, so nearly-degenerate inputs are judged accurately. */
-static double tt__len3(const double v[3]) {
-  return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-}
+static double tt__len3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 TT_API tt_status tt_camera_frame_init(tt_camera_frame *frame, const tt_camera *camera) {
   if (!frame || !camera)
@@ -16,8 +14,8 @@ TT_API tt_status tt_camera_frame_init(tt_camera_frame *frame, const tt_camera *c
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera: resolution %ux%u has a zero side",
                         camera->width, camera->height);
   if (!(camera->fov_y > 0.0f && camera->fov_y < 180.0f))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                        "camera: fov %g degrees is outside (0, 180)", (double)camera->fov_y);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera: fov %g degrees is outside (0, 180)",
+                        (double)camera->fov_y);
   double f[3], up[3], r[3], u[3];
   for (int i = 0; i < 3; ++i) {
     f[i] = (double)camera->target[i] - (double)camera->position[i];
@@ -34,7 +32,8 @@ TT_API tt_status tt_camera_frame_init(tt_camera_frame *frame, const tt_camera *c
   r[2] = f[0] * up[1] - f[1] * up[0];
   double rl = tt__len3(r);
   if (!(rl > 1e-6 * ul))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera: up vector is parallel to the view direction");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "camera: up vector is parallel to the view direction");
   for (int i = 0; i < 3; ++i) r[i] /= rl;
   u[0] = r[1] * f[2] - r[2] * f[1];
   u[1] = r[2] * f[0] - r[0] * f[2];
@@ -97,7 +96,8 @@ static float tt__camera_cos_on_film(const tt_camera_frame *frame, const float di
   float y = (dir[0] * frame->up[0] + dir[1] * frame->up[1] + dir[2] * frame->up[2]) / c;
   float px = (x / (frame->tan_half_fov_y * frame->aspect) + 1.0f) * 0.5f * (float)frame->width;
   float py = (1.0f - y / frame->tan_half_fov_y) * 0.5f * (float)frame->height;
-  if (!(px >= 0.0f && px < (float)frame->width && py >= 0.0f && py < (float)frame->height)) return 0.0f;
+  if (!(px >= 0.0f && px < (float)frame->width && py >= 0.0f && py < (float)frame->height))
+    return 0.0f;
   if (fx) *fx = px;
   if (fy) *fy = py;
   return c;
@@ -129,7 +129,7 @@ static float tt__radical_inverse(uint32_t n, uint32_t base) {
 }
 
 TT_API void tt_jitter_halton23(uint32_t index, float offset[2]) {
-  uint32_t n = (index & 0x7fffffffu) + 1u;  /* index 0 uses Halton index 1 */
+  uint32_t n = (index & 0x7fffffffu) + 1u; /* index 0 uses Halton index 1 */
   offset[0] = tt__radical_inverse(n, 2) - 0.5f;
   offset[1] = tt__radical_inverse(n, 3) - 0.5f;
   /* Float rounding of values just below 1 must not produce +0.5. */

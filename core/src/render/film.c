@@ -22,23 +22,23 @@ _Static_assert(_Alignof(_Atomic float) == _Alignof(float), "_Atomic float alignm
 struct tt_film {
   uint32_t width, height;
   uint32_t aov_mask;
-  size_t pixels;                    /* width * height */
-  float *sum_rgb;                   /* 3 per pixel: sum of w * L */
-  float *sum_w;                     /* 1 per pixel: sum of w */
-  _Atomic float *splat;             /* 3 per pixel: sum of splatted L */
-  float *aov[TT__AOV_COUNT];        /* indexed by bit position of tt_aov; NULL if absent */
+  size_t pixels;             /* width * height */
+  float *sum_rgb;            /* 3 per pixel: sum of w * L */
+  float *sum_w;              /* 1 per pixel: sum of w */
+  _Atomic float *splat;      /* 3 per pixel: sum of splatted L */
+  float *aov[TT__AOV_COUNT]; /* indexed by bit position of tt_aov; NULL if absent */
   double splat_scale;
-  _Atomic uint64_t dropped;         /* non-finite or out-of-range samples and splats */
+  _Atomic uint64_t dropped; /* non-finite or out-of-range samples and splats */
 };
 
 /* Bit position of a single-bit tt_aov value, or -1 if it is not exactly one known bit. */
 static int tt__aov_index(tt_aov aov) {
   switch (aov) {
-    case TT_AOV_DEPTH: return 0;
-    case TT_AOV_NORMAL: return 1;
-    case TT_AOV_ALBEDO: return 2;
-    case TT_AOV_MOTION: return 3;
-    case TT_AOV_PREV_DEPTH: return 4;
+  case TT_AOV_DEPTH: return 0;
+  case TT_AOV_NORMAL: return 1;
+  case TT_AOV_ALBEDO: return 2;
+  case TT_AOV_MOTION: return 3;
+  case TT_AOV_PREV_DEPTH: return 4;
   }
   return -1;
 }
@@ -46,11 +46,11 @@ static int tt__aov_index(tt_aov aov) {
 /* Channels per pixel of an AOV; 0 for anything that is not a single known AOV bit. */
 uint32_t tt_aov_channels(tt_aov aov) {
   switch (aov) {
-    case TT_AOV_DEPTH: return 1;
-    case TT_AOV_NORMAL: return 3;
-    case TT_AOV_ALBEDO: return 3;
-    case TT_AOV_MOTION: return 2;
-    case TT_AOV_PREV_DEPTH: return 1;
+  case TT_AOV_DEPTH: return 1;
+  case TT_AOV_NORMAL: return 3;
+  case TT_AOV_ALBEDO: return 3;
+  case TT_AOV_MOTION: return 2;
+  case TT_AOV_PREV_DEPTH: return 1;
   }
   return 0;
 }
@@ -64,8 +64,8 @@ static void *tt__calloc_floats(size_t count, size_t per_pixel) {
 
 /* Allocates the film; all planes start zeroed, which is 0.0f for IEEE floats. */
 tt_film *tt_film_create(uint32_t width, uint32_t height, uint32_t aov_mask) {
-  const uint32_t known = TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION |
-                         TT_AOV_PREV_DEPTH;
+  const uint32_t known =
+      TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION | TT_AOV_PREV_DEPTH;
   if (width == 0 || height == 0) {
     tt_set_error(TT_ERR_INVALID_ARGUMENT, "film: size %ux%u is empty", width, height);
     return NULL;
@@ -97,13 +97,14 @@ oom:
   tt_film_destroy(film);
   {
     /* the size asked for, so the user sees how far off the machine it is */
-    size_t floats = 7;  /* colour sums (3), weight sums (1), splats (3) */
+    size_t floats = 7; /* colour sums (3), weight sums (1), splats (3) */
     for (int i = 0; i < TT__AOV_COUNT; i++)
       if (aov_mask & (1u << i)) floats += tt_aov_channels((tt_aov)(1u << i));
     double bytes = (double)width * (double)height * (double)floats * sizeof(float);
-    tt_set_error(TT_ERR_OUT_OF_MEMORY, "film: cannot allocate a %ux%u film: %.0f bytes (%.1f "
-                 "GiB, %zu floats per pixel) are not available", width, height, bytes,
-                 bytes / (1024.0 * 1024.0 * 1024.0), floats);
+    tt_set_error(TT_ERR_OUT_OF_MEMORY,
+                 "film: cannot allocate a %ux%u film: %.0f bytes (%.1f "
+                 "GiB, %zu floats per pixel) are not available",
+                 width, height, bytes, bytes / (1024.0 * 1024.0 * 1024.0), floats);
   }
   return NULL;
 }
@@ -145,8 +146,7 @@ static void tt__film_drop(tt_film *film) {
 
 /* Pixel-parallel accumulation; out-of-range pixels are a caller bug but are dropped and
  * counted rather than corrupting memory. */
-void tt_film_add_sample(tt_film *film, uint32_t x, uint32_t y, const float rgb[3],
-                        float weight) {
+void tt_film_add_sample(tt_film *film, uint32_t x, uint32_t y, const float rgb[3], float weight) {
   if (!film || !rgb) return;
   if (x >= film->width || y >= film->height || !isfinite(weight) || !isfinite(rgb[0]) ||
       !isfinite(rgb[1]) || !isfinite(rgb[2])) {
@@ -165,8 +165,7 @@ void tt_film_add_sample(tt_film *film, uint32_t x, uint32_t y, const float rgb[3
 static void tt__atomic_add_float(_Atomic float *dst, float v) {
   float old = atomic_load_explicit(dst, memory_order_relaxed);
   while (!atomic_compare_exchange_weak_explicit(dst, &old, old + v, memory_order_relaxed,
-                                                memory_order_relaxed)) {
-  }
+                                                memory_order_relaxed)) {}
 }
 
 /* Deposits rgb in pixel (floor(fx), floor(fy)); see the file comment for why no filter. */
@@ -217,8 +216,7 @@ float *tt_film_splat_rgb(tt_film *film) { return film ? (float *)film->splat : N
 /* Dropped contributions since creation or clear. */
 uint64_t tt_film_dropped(const tt_film *film) {
   /* atomic_load needs a non-const pointer in C11 (const was only allowed from C17). */
-  return film ? atomic_load_explicit((_Atomic uint64_t *)&film->dropped, memory_order_relaxed)
-              : 0;
+  return film ? atomic_load_explicit((_Atomic uint64_t *)&film->dropped, memory_order_relaxed) : 0;
 }
 
 /* rgb = sum_wL / sum_w + splat * scale, computed in double so the splat scale (often a
@@ -229,8 +227,8 @@ void tt_film_resolve(const tt_film *film, float *rgb) {
   for (size_t p = 0; p < film->pixels; p++) {
     const double w = film->sum_w[p];
     for (int c = 0; c < 3; c++) {
-      float s = atomic_load_explicit((_Atomic float *)&film->splat[3 * p + c],
-                                     memory_order_relaxed);
+      float s =
+          atomic_load_explicit((_Atomic float *)&film->splat[3 * p + c], memory_order_relaxed);
       const double mean = w != 0.0 ? film->sum_rgb[3 * p + c] / w : 0.0;
       rgb[3 * p + c] = (float)(mean + (double)s * scale);
     }

@@ -28,8 +28,13 @@ static void tt__concentric_disk(float u1, float u2, float *x, float *y) {
     *x = *y = 0.0f;
     return;
   }
-  if (fabsf(a) > fabsf(b)) { r = a; phi = (TT__PI / 4.0f) * (b / a); }
-  else { r = b; phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b); }
+  if (fabsf(a) > fabsf(b)) {
+    r = a;
+    phi = (TT__PI / 4.0f) * (b / a);
+  } else {
+    r = b;
+    phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
+  }
   *x = r * cosf(phi);
   *y = r * sinf(phi);
 }
@@ -86,7 +91,8 @@ static int tt__area_point(const tt__lights *ls, const tt__light *l, float u_sel,
 }
 
 /* A point of the disk of radius R centred on the scene, facing along `dir`, set back by R. */
-static void tt__disk_point(const tt__lights *ls, const float dir[3], float u1, float u2, float p[3]) {
+static void tt__disk_point(const tt__lights *ls, const float dir[3], float u1, float u2,
+                           float p[3]) {
   tt__frame fr;
   tt__frame_from(&fr, dir, dir);
   float x, y;
@@ -97,7 +103,8 @@ static void tt__disk_point(const tt__lights *ls, const float dir[3], float u1, f
 
 /* Chooses a light by power with *u_sel (remapped for the next choice): the light, its index
  * and probability; NULL when there is none or it cannot be chosen. */
-static const tt__light *tt__pick_light(const tt__lights *ls, float *u_sel, uint32_t *li, float *pmf) {
+static const tt__light *tt__pick_light(const tt__lights *ls, float *u_sel, uint32_t *li,
+                                       float *pmf) {
   if (ls->count == 0) return NULL;
   *li = tt__cdf_pick(ls->cdf, ls->count, u_sel);
   *pmf = ls->pmf[*li];
@@ -112,9 +119,12 @@ int tt__lights_sample_emission(const tt__lights *ls, float u_sel, float u1, floa
   case TT_LIGHT_AREA: {
     if (!(l->area > 0.0f) || !tt__area_point(ls, l, u_sel, u1, u2, out->p, out->n)) return 0;
     float side = 1.0f;
-    if (l->two_sided) {  /* either side with probability 1/2 */
+    if (l->two_sided) { /* either side with probability 1/2 */
       if (u3 < 0.5f) u3 = 2.0f * u3;
-      else { u3 = fminf(2.0f * u3 - 1.0f, 0x1.fffffep-1f); side = -1.0f; }
+      else {
+        u3 = fminf(2.0f * u3 - 1.0f, 0x1.fffffep-1f);
+        side = -1.0f;
+      }
     }
     float ns[3] = {side * out->n[0], side * out->n[1], side * out->n[2]};
     tt__cosine_around(ns, u3, u4, out->dir);
@@ -133,7 +143,7 @@ int tt__lights_sample_emission(const tt__lights *ls, float u_sel, float u1, floa
     if (l->type == TT_LIGHT_POINT) {
       tt__uniform_sphere(u3, u4, out->dir);
       out->pdf_dir = TT__INV_4PI;
-    } else {  /* uniform within the outer cone */
+    } else { /* uniform within the outer cone */
       float span = 1.0f - l->cos_outer;
       if (!(span > 0.0f)) return 0;
       float c = 1.0f - u3 * span, s = sqrtf(fmaxf(0.0f, 1.0f - c * c)), phi = 2.0f * TT__PI * u4;
@@ -168,15 +178,14 @@ int tt__lights_sample_emission(const tt__lights *ls, float u_sel, float u1, floa
     if (!tt__lights_env(ls, wi, out->Le)) return 0;
     break;
   }
-  default:
-    return 0;
+  default: return 0;
   }
   return tt__max3(out->Le) > 0.0f && out->pdf_pos > 0.0f && out->pdf_dir > 0.0f &&
          isfinite(out->pdf_pos) && isfinite(out->pdf_dir);
 }
 
-void tt__lights_pdf_emission(const tt__lights *ls, uint32_t li, const float n[3], const float dir[3],
-                             float *pdf_pos, float *pdf_dir) {
+void tt__lights_pdf_emission(const tt__lights *ls, uint32_t li, const float n[3],
+                             const float dir[3], float *pdf_pos, float *pdf_dir) {
   *pdf_pos = *pdf_dir = 0.0f;
   if (li >= ls->count) return;
   const tt__light *l = &ls->lights[li];
@@ -195,10 +204,12 @@ void tt__lights_pdf_emission(const tt__lights *ls, uint32_t li, const float n[3]
   case TT_LIGHT_SPOT: {
     float span = 1.0f - l->cos_outer;
     *pdf_pos = 1.0f;
-    *pdf_dir = span > 0.0f && tt__dot3(dir, l->direction) >= l->cos_outer ? 1.0f / (2.0f * TT__PI * span) : 0.0f;
+    *pdf_dir = span > 0.0f && tt__dot3(dir, l->direction) >= l->cos_outer
+                   ? 1.0f / (2.0f * TT__PI * span)
+                   : 0.0f;
     return;
   }
-  case TT_LIGHT_DISTANT:  /* a delta direction: no density */
+  case TT_LIGHT_DISTANT: /* a delta direction: no density */
     *pdf_pos = 1.0f / (TT__PI * ls->radius * ls->radius);
     return;
   case TT_LIGHT_ENV_CONSTANT:
@@ -208,8 +219,7 @@ void tt__lights_pdf_emission(const tt__lights *ls, uint32_t li, const float n[3]
     *pdf_dir = tt__env_dir_pdf(ls, wi);
     return;
   }
-  default:
-    return;
+  default: return;
   }
 }
 
@@ -267,8 +277,7 @@ int tt__lights_sample_point(const tt__lights *ls, const float ref[3], float u_se
     if (!tt__lights_env(ls, out->wi, out->Li)) return 0;
     out->dist = INFINITY;
     break;
-  default:
-    return 0;
+  default: return 0;
   }
   if (isinf(out->dist))
     for (int i = 0; i < 3; ++i) {

@@ -64,11 +64,13 @@ static tt_status tt__env_image_init(tt__lights *ls, uint32_t index, const tt_lig
   ls->env_conditional = malloc((size_t)h * (w + 1) * sizeof *ls->env_conditional);
   double *row_w = malloc(w * sizeof *row_w);
   double *marg_w = malloc(h * sizeof *marg_w);
-  if (!ls->env_rgb || !ls->env_weight || !ls->env_marginal || !ls->env_conditional || !row_w || !marg_w) {
+  if (!ls->env_rgb || !ls->env_weight || !ls->env_marginal || !ls->env_conditional || !row_w ||
+      !marg_w) {
     tt_free(px);
     free(row_w);
     free(marg_w);
-    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "light %u: out of memory for environment image", index);
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "light %u: out of memory for environment image",
+                        index);
   }
   ls->env_w = w;
   ls->env_h = h;
@@ -82,7 +84,7 @@ static tt_status tt__env_image_init(tt__lights *ls, uint32_t index, const tt_lig
       float *rgb = ls->env_rgb + 3 * i;
       for (int k = 0; k < 3; ++k) {
         float v = px[i * c + (c >= 3 ? (uint32_t)k : 0)] * l->radiance[k];
-        rgb[k] = v >= 0.0f && isfinite(v) ? v : 0.0f;  /* negative/NaN texels emit nothing */
+        rgb[k] = v >= 0.0f && isfinite(v) ? v : 0.0f; /* negative/NaN texels emit nothing */
       }
       /* Luminance weights; a texel that is non-black but of zero luminance keeps a chance. */
       double lu = tt__luminance(rgb);
@@ -128,11 +130,12 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
     const tt_light *l = tt_scene_light(scene, i);
     if (l->type == TT_LIGHT_AREA) {
       if (l->mesh >= meshes)
-        return tt_set_error(TT_ERR_INVALID_ARGUMENT, "light %u: mesh index %u out of range (%u meshes)",
-                            i, l->mesh, meshes);
+        return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                            "light %u: mesh index %u out of range (%u meshes)", i, l->mesh, meshes);
       tri_total += tt_scene_mesh(scene, l->mesh)->triangle_count + 1;
-    } else if (l->type != TT_LIGHT_ENV_IMAGE && l->type != TT_LIGHT_ENV_CONSTANT && l->type != TT_LIGHT_POINT &&
-               l->type != TT_LIGHT_SPOT && l->type != TT_LIGHT_DISTANT) {
+    } else if (l->type != TT_LIGHT_ENV_IMAGE && l->type != TT_LIGHT_ENV_CONSTANT &&
+               l->type != TT_LIGHT_POINT && l->type != TT_LIGHT_SPOT &&
+               l->type != TT_LIGHT_DISTANT) {
       return tt_set_error(TT_ERR_UNSUPPORTED, "light %u: unknown light type %d", i, (int)l->type);
     }
   }
@@ -202,7 +205,9 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
       }
       d->tri_offset = tri_offset;
       d->tri_count = m->triangle_count;
-      d->area = m->triangle_count ? (float)tt__build_cdf(tri_w, m->triangle_count, ls->tri_cdf + tri_offset) : 0.0f;
+      d->area = m->triangle_count
+                    ? (float)tt__build_cdf(tri_w, m->triangle_count, ls->tri_cdf + tri_offset)
+                    : 0.0f;
       tri_offset += m->triangle_count + 1;
       power[i] = lum * d->area * TT__PI * (d->two_sided ? 2.0 : 1.0);
       if (d->area > 0.0f) ls->mesh_light[l->mesh] = (int32_t)i;
@@ -211,12 +216,13 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
     case TT_LIGHT_ENV_CONSTANT:
     case TT_LIGHT_ENV_IMAGE:
       if (ls->env >= 0) {
-        st = tt_set_error(TT_ERR_UNSUPPORTED, "light %u: only one environment light is supported", i);
+        st = tt_set_error(TT_ERR_UNSUPPORTED, "light %u: only one environment light is supported",
+                          i);
         break;
       }
       ls->env = (int32_t)i;
       if (l->type == TT_LIGHT_ENV_IMAGE) {
-        double mean_lum = 0.0;  /* solid-angle mean of the image's luminance */
+        double mean_lum = 0.0; /* solid-angle mean of the image's luminance */
         st = tt__env_image_init(ls, i, l, &mean_lum);
         lum = mean_lum;
       }
@@ -231,10 +237,8 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
         st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "light %u: spot direction is zero", i);
       d->cos_inner = l->cos_inner;
       d->cos_outer = l->cos_outer;
-      if (l->type == TT_LIGHT_POINT)
-        power[i] = 4.0 * M_PI * lum;
-      else
-        power[i] = 2.0 * M_PI * lum * (1.0 - 0.5 * ((double)d->cos_inner + d->cos_outer));
+      if (l->type == TT_LIGHT_POINT) power[i] = 4.0 * M_PI * lum;
+      else power[i] = 2.0 * M_PI * lum * (1.0 - 0.5 * ((double)d->cos_inner + d->cos_outer));
       break;
     }
     case TT_LIGHT_DISTANT:
@@ -243,17 +247,15 @@ tt_status tt__lights_init(tt__lights *ls, const tt_scene *scene) {
         st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "light %u: distant light direction is zero", i);
       power[i] = M_PI * radius * radius * lum;
       break;
-    default:
-      break;
+    default: break;
     }
     if (!(power[i] >= 0.0) || !isfinite(power[i])) power[i] = 0.0;
   }
   free(tri_w);
   if (st == TT_OK && n > 0) {
     double total = tt__build_cdf(power, n, ls->cdf);
-    for (uint32_t i = 0; i < n; ++i)
-      ls->pmf[i] = total > 0.0 ? (float)(power[i] / total) : 0.0f;
-    if (!(total > 0.0)) ls->count = 0;  /* all lights are black: sample none */
+    for (uint32_t i = 0; i < n; ++i) ls->pmf[i] = total > 0.0 ? (float)(power[i] / total) : 0.0f;
+    if (!(total > 0.0)) ls->count = 0; /* all lights are black: sample none */
   }
   free(power);
   if (st != TT_OK) tt__lights_free(ls);
@@ -299,9 +301,16 @@ int tt__lights_sample(const tt__lights *ls, const float p[3], const float n[3], 
   case TT_LIGHT_ENV_CONSTANT: {
     float local[3];
     float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f, r, phi;
-    if (a == 0.0f && b == 0.0f) { r = 0.0f; phi = 0.0f; }
-    else if (fabsf(a) > fabsf(b)) { r = a; phi = (TT__PI / 4.0f) * (b / a); }
-    else { r = b; phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b); }
+    if (a == 0.0f && b == 0.0f) {
+      r = 0.0f;
+      phi = 0.0f;
+    } else if (fabsf(a) > fabsf(b)) {
+      r = a;
+      phi = (TT__PI / 4.0f) * (b / a);
+    } else {
+      r = b;
+      phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
+    }
     local[0] = r * cosf(phi);
     local[1] = r * sinf(phi);
     local[2] = sqrtf(fmaxf(0.0f, 1.0f - local[0] * local[0] - local[1] * local[1]));
@@ -349,8 +358,7 @@ int tt__lights_sample(const tt__lights *ls, const float p[3], const float n[3], 
     out->pdf = pmf;
     out->delta = 1;
     return 1;
-  default:
-    return 0;
+  default: return 0;
   }
 }
 
@@ -395,7 +403,8 @@ float tt__lights_pdf_env(const tt__lights *ls, const float n[3], const float dir
     float st;
     size_t i = tt__env_texel(ls, dir, &st);
     if (!(st > 0.0f)) return 0.0f;
-    float pdf = ls->pmf[ls->env] * ls->env_weight[i] * ls->env_pdf_scale / (2.0f * TT__PI * TT__PI * st);
+    float pdf =
+        ls->pmf[ls->env] * ls->env_weight[i] * ls->env_pdf_scale / (2.0f * TT__PI * TT__PI * st);
     return isfinite(pdf) ? pdf : 0.0f;
   }
   float c = tt__dot3(n, dir);

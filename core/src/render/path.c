@@ -79,7 +79,8 @@ void tt__surface_prev_position(const tt_mesh *mesh, const tt_hit *hit, const flo
   for (int i = 0; i < 3; ++i) {
     float d = 0.0f;
     for (int k = 0; k < 3; ++k)
-      d += w[k] * (mesh->prev_positions[3 * (size_t)idx[k] + i] - mesh->positions[3 * (size_t)idx[k] + i]);
+      d += w[k] *
+           (mesh->prev_positions[3 * (size_t)idx[k] + i] - mesh->positions[3 * (size_t)idx[k] + i]);
     out[i] = p[i] + d;
   }
 }
@@ -100,7 +101,7 @@ int tt__surface_at(const tt_path_tracer *pt, const tt_hit *hitp, tt__surface *s)
     e2[i] = p2[i] - p0[i];
   }
   tt__cross3(e1, e2, ng);
-  if (tt__normalize3(ng) == 0.0f) return 0;  /* degenerate triangle */
+  if (tt__normalize3(ng) == 0.0f) return 0; /* degenerate triangle */
   if (mesh->normals) {
     const float *n0 = mesh->normals + 3 * (size_t)idx[0];
     const float *n1 = mesh->normals + 3 * (size_t)idx[1];
@@ -108,13 +109,13 @@ int tt__surface_at(const tt_path_tracer *pt, const tt_hit *hitp, tt__surface *s)
     for (int i = 0; i < 3; ++i) ns[i] = w0 * n0[i] + hit.u * n1[i] + hit.v * n2[i];
     if (tt__normalize3(ns) == 0.0f) memcpy(ns, ng, 3 * sizeof(float));
     else if (tt__dot3(ns, ng) < 0.0f)
-      for (int i = 0; i < 3; ++i) ns[i] = -ns[i];  /* to the geometric side */
+      for (int i = 0; i < 3; ++i) ns[i] = -ns[i]; /* to the geometric side */
   } else {
     memcpy(ns, ng, 3 * sizeof(float));
   }
   s->bsdf = &pt->bsdfs[mesh->material];
   int32_t tex = pt->material_texture[mesh->material];
-  if (tex >= 0 && mesh->uvs) {  /* albedo modulated by the texture at the hit's uv */
+  if (tex >= 0 && mesh->uvs) { /* albedo modulated by the texture at the hit's uv */
     const float *t0 = mesh->uvs + 2 * (size_t)idx[0], *t1 = mesh->uvs + 2 * (size_t)idx[1],
                 *t2 = mesh->uvs + 2 * (size_t)idx[2];
     float tc[3];
@@ -178,8 +179,7 @@ TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **o
     if (mesh->material >= pt->material_count)
       st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "mesh '%s': material index %u out of range",
                         mesh->name ? mesh->name : "?", mesh->material);
-    else
-      used[mesh->material] = 1;
+    else used[mesh->material] = 1;
   }
   for (uint32_t i = 0; i < pt->material_count && st == TT_OK; ++i) {
     tt_status ms = tt__bsdf_init(&pt->bsdfs[i], tt_scene_material(scene, i));
@@ -187,7 +187,8 @@ TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **o
   }
   /* Albedo textures of used materials, loaded once. */
   pt->texture_count = tt_scene_texture_count(scene);
-  pt->material_texture = malloc((pt->material_count ? pt->material_count : 1) * sizeof *pt->material_texture);
+  pt->material_texture =
+      malloc((pt->material_count ? pt->material_count : 1) * sizeof *pt->material_texture);
   pt->textures = calloc(pt->texture_count ? pt->texture_count : 1, sizeof *pt->textures);
   if (st == TT_OK && (!pt->material_texture || !pt->textures))
     st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_path_tracer_create: out of memory");
@@ -198,7 +199,8 @@ TT_API tt_status tt_path_tracer_create(const tt_scene *scene, tt_path_tracer **o
     pt->material_texture[i] = -1;
     if (!used[i] || tex < 0) continue;
     if ((uint32_t)tex >= pt->texture_count) {
-      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "material %u: texture index %d out of range", i, tex);
+      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "material %u: texture index %d out of range", i,
+                        tex);
       break;
     }
     if (!pt->textures[tex].rgb && !pt->textures[tex].oiio)
@@ -262,13 +264,13 @@ static inline void tt__offset(const float p[3], const float ng[3], const float w
 struct tt_path_state {
   tt_path_options o;
   float L[3], beta[3];
-  float pending[3];          /* next-event contribution, added if its shadow ray is free */
+  float pending[3]; /* next-event contribution, added if its shadow ray is free */
   float prev_pdf, prev_p[3], prev_n[3];
   int32_t prev_delta;
   int32_t has_pending;
-  uint32_t bounce;           /* index of the surface interaction the next hit is */
+  uint32_t bounce; /* index of the surface interaction the next hit is */
   uint32_t max_dim;
-  tt_path_result out;        /* first-hit data, ray and bounce counts so far */
+  tt_path_result out; /* first-hit data, ray and bounce counts so far */
 };
 
 TT_API size_t tt_path_state_size(void) { return sizeof(tt_path_state); }
@@ -323,7 +325,7 @@ TT_API int tt_path_hit(const tt_path_tracer *pt, tt_path_state *st, const tt_ray
 
   /* Surface geometry: position from barycentrics, winding normal, shading normal. */
   tt__surface surf;
-  if (!tt__surface_at(pt, &hit, &surf)) return 0;  /* degenerate triangle */
+  if (!tt__surface_at(pt, &hit, &surf)) return 0; /* degenerate triangle */
   const tt_mesh *mesh = surf.mesh;
   float *p = surf.p, *e1 = surf.e1, *ng_w = surf.ng_w, ng[3], ns[3], wo[3];
   for (int i = 0; i < 3; ++i) wo[i] = -traced->dir[i];
@@ -332,7 +334,10 @@ TT_API int tt_path_hit(const tt_path_tracer *pt, tt_path_state *st, const tt_ray
   const tt__bsdf *bsdf = surf.bsdf;
   /* Opaque surfaces are two-sided: orient both normals towards the viewer. */
   if (!tt__bsdf_transmissive(bsdf) && tt__dot3(wo, ng) < 0.0f)
-    for (int i = 0; i < 3; ++i) { ng[i] = -ng[i]; ns[i] = -ns[i]; }
+    for (int i = 0; i < 3; ++i) {
+      ng[i] = -ng[i];
+      ns[i] = -ns[i];
+    }
 
   if (b == 0) {
     out->hit = 1;
@@ -493,7 +498,8 @@ void tt_path_write_aovs_ex(tt_film *film, uint32_t x, uint32_t y, const tt_camer
                            const tt_camera_frame *prev, float fx, float fy, const tt_ray *ray,
                            const tt_path_result *r, const float prev_position[3], uint64_t n) {
   size_t pix = (size_t)y * tt_film_width(film) + x;
-  float *depth_plane = tt_film_aov(film, TT_AOV_DEPTH), *motion_plane = tt_film_aov(film, TT_AOV_MOTION);
+  float *depth_plane = tt_film_aov(film, TT_AOV_DEPTH),
+        *motion_plane = tt_film_aov(film, TT_AOV_MOTION);
   if (depth_plane) {
     float depth = 0.0f;
     if (r->hit) tt_camera_project(frame, r->position, NULL, NULL, &depth);
@@ -505,9 +511,9 @@ void tt_path_write_aovs_ex(tt_film *film, uint32_t x, uint32_t y, const tt_camer
     float m[2] = {0.0f, 0.0f}, pfx, pfy;
     if (prev) {
       float target[3];
-      if (r->hit) {  /* where the surface point was: the object's motion and the camera's */
+      if (r->hit) { /* where the surface point was: the object's motion and the camera's */
         memcpy(target, prev_position ? prev_position : r->position, sizeof target);
-      } else {  /* a point at infinity moves with the camera's rotation only */
+      } else { /* a point at infinity moves with the camera's rotation only */
         for (int i = 0; i < 3; ++i) target[i] = prev->origin[i] + ray->dir[i];
       }
       if (tt_camera_project(prev, target, &pfx, &pfy, NULL)) {

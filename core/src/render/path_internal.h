@@ -19,8 +19,8 @@ void tt__oiio_tex_lookup(const tt__oiio_tex *t, float u, float v, float out[3]);
 /* An albedo texture: linear RGB in memory, or an OIIO texture handle. */
 typedef struct tt__texture_data {
   uint32_t width, height;
-  float *rgb;             /* 3 * width * height, row 0 at the top of the image */
-  tt__oiio_tex *oiio;     /* non-NULL: looked up through the TextureSystem instead */
+  float *rgb;         /* 3 * width * height, row 0 at the top of the image */
+  tt__oiio_tex *oiio; /* non-NULL: looked up through the TextureSystem instead */
 } tt__texture_data;
 
 struct tt_path_tracer {
@@ -28,7 +28,7 @@ struct tt_path_tracer {
   tt__lights lights;
   uint32_t material_count;
   tt__bsdf *bsdfs;
-  int32_t *material_texture;  /* per material: texture index or -1 */
+  int32_t *material_texture; /* per material: texture index or -1 */
   uint32_t texture_count;
   tt__texture_data *textures;
 };

@@ -41,7 +41,7 @@ OIIO::TextureSystem *tt__texture_system() {
   std::call_once(tt__ts_once, [] {
     tt__ts = OIIO::TextureSystem::create(true);
     if (tt__ts) {
-      tt__ts->attribute("automip", 1);   // MIP-map untiled, single-level files in the cache
+      tt__ts->attribute("automip", 1);  // MIP-map untiled, single-level files in the cache
       tt__ts->attribute("autotile", 64);
     }
   });
@@ -67,7 +67,8 @@ extern "C" tt_status tt__oiio_tex_open(const char *path, int srgb, tt__oiio_tex 
     const OIIO::ImageSpec *spec = h ? ts->imagespec(h, nullptr) : nullptr;
     if (!spec) {
       std::string err = ts->geterror();
-      return tt_set_error(TT_ERR_IO, "texture '%s': %s", path, err.empty() ? "cannot open" : err.c_str());
+      return tt_set_error(TT_ERR_IO, "texture '%s': %s", path,
+                          err.empty() ? "cannot open" : err.c_str());
     }
     tt__oiio_tex *t = new tt__oiio_tex;
     t->ts = ts;

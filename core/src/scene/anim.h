@@ -12,9 +12,9 @@
 
 /* How values between two keys are found. */
 typedef enum tt__interp {
-  TT__INTERP_STEP = 0,    /* the earlier key's value */
-  TT__INTERP_LINEAR = 1,  /* linear; rotations: slerp along the shorter arc */
-  TT__INTERP_CUBIC = 2    /* cubic Hermite with per-key tangents (normalised for rotations) */
+  TT__INTERP_STEP = 0,   /* the earlier key's value */
+  TT__INTERP_LINEAR = 1, /* linear; rotations: slerp along the shorter arc */
+  TT__INTERP_CUBIC = 2   /* cubic Hermite with per-key tangents (normalised for rotations) */
 } tt__interp;
 
 /* Keyframed values of `dim` floats. A track with count 0 is absent. Before the first key
@@ -22,10 +22,10 @@ typedef enum tt__interp {
 typedef struct tt__track {
   uint32_t count, dim;
   tt__interp interp;
-  int rotation;           /* values are unit quaternions (x, y, z, w) */
-  double *times;          /* count, strictly increasing */
-  float *values;          /* count * dim */
-  float *in_tan, *out_tan;/* CUBIC: count * dim each, value change per second; else NULL */
+  int rotation;            /* values are unit quaternions (x, y, z, w) */
+  double *times;           /* count, strictly increasing */
+  float *values;           /* count * dim */
+  float *in_tan, *out_tan; /* CUBIC: count * dim each, value change per second; else NULL */
 } tt__track;
 
 /* Allocates a track of `count` keys of `dim` floats (tangents too for CUBIC); NULL arrays
@@ -57,32 +57,32 @@ typedef struct tt__anim_node {
  *   skin: sum over influences w * (world(joint) * inverse_bind) * p,  else  world(node) * p
  * with p = rest + sum_i weight_i(t) * target_delta_i (morph), then `post` applied. */
 typedef struct tt__mesh_anim {
-  uint32_t mesh;          /* index of the scene mesh */
-  int32_t node;           /* node placing the mesh (-1: identity) */
-  double post[16];        /* applied after node / skin (the scene.json entry's placement of a
+  uint32_t mesh;   /* index of the scene mesh */
+  int32_t node;    /* node placing the mesh (-1: identity) */
+  double post[16]; /* applied after node / skin (the scene.json entry's placement of a
                              file) */
   int has_post;
-  float *rest_pos;        /* 3 * vertex_count */
-  float *rest_nrm;        /* 3 * vertex_count or NULL (mesh without normals) */
+  float *rest_pos; /* 3 * vertex_count */
+  float *rest_nrm; /* 3 * vertex_count or NULL (mesh without normals) */
   /* morph targets */
   uint32_t targets;
-  float *dpos, *dnrm;     /* targets * 3 * vertex_count position / normal offsets (dnrm may
+  float *dpos, *dnrm; /* targets * 3 * vertex_count position / normal offsets (dnrm may
                              be NULL) */
-  float *weights0;        /* targets: weights when `weights` has no keys */
-  tt__track weights;      /* dim = targets */
+  float *weights0;    /* targets: weights when `weights` has no keys */
+  tt__track weights;  /* dim = targets */
   /* skin */
   uint32_t joints;
-  int32_t *joint_node;    /* joints */
-  double *inverse_bind;   /* joints * 16 */
-  uint32_t influences;    /* per vertex */
-  uint32_t *joint_index;  /* vertex_count * influences */
-  float *joint_weight;    /* vertex_count * influences (normalised at load) */
+  int32_t *joint_node;   /* joints */
+  double *inverse_bind;  /* joints * 16 */
+  uint32_t influences;   /* per vertex */
+  uint32_t *joint_index; /* vertex_count * influences */
+  float *joint_weight;   /* vertex_count * influences (normalised at load) */
   /* scratch */
-  double *joint_mat;      /* joints * 16 */
-  float *morph_w;         /* targets */
+  double *joint_mat; /* joints * 16 */
+  float *morph_w;    /* targets */
   /* positions at the previous frame (tt_mesh.prev_positions) */
   float *prev;
-  int det_negative;       /* the placement mirrors at load time (winding already swapped) */
+  int det_negative; /* the placement mirrors at load time (winding already swapped) */
 } tt__mesh_anim;
 
 /* Everything that moves in a scene. */
@@ -91,7 +91,7 @@ typedef struct tt__scene_anim {
   uint32_t node_count, node_cap;
   tt__mesh_anim *meshes;
   uint32_t mesh_count, mesh_cap;
-  double time;            /* the time the scene is posed at */
+  double time; /* the time the scene is posed at */
 } tt__scene_anim;
 
 /* Frees the scene's animation (NULL is ignored). */

@@ -42,7 +42,8 @@ tt__anim_node *tt__scene_anim_node(tt_scene *s, uint32_t index) {
 tt_status tt__scene_anim_add_mesh(tt_scene *s, uint32_t mesh, tt__mesh_anim **out) {
   *out = NULL;
   tt__scene_anim *a = tt__anim_get(s);
-  if (!a || mesh >= s->mesh_count) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", s->source);
+  if (!a || mesh >= s->mesh_count)
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", s->source);
   tt__mesh_anim *m = tt__scene_push((void **)&a->meshes, &a->mesh_count, &a->mesh_cap, sizeof *m);
   if (!m) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", s->source);
   const tt_mesh *v = &s->meshes[mesh];
@@ -109,7 +110,8 @@ void tt__scene_anim_range(const tt_scene *s, double *t0, double *t1) {
     tt__range_track(&a->nodes[i].rot, &lo, &hi, &any);
     tt__range_track(&a->nodes[i].sc, &lo, &hi, &any);
   }
-  for (uint32_t i = 0; a && i < a->mesh_count; i++) tt__range_track(&a->meshes[i].weights, &lo, &hi, &any);
+  for (uint32_t i = 0; a && i < a->mesh_count; i++)
+    tt__range_track(&a->meshes[i].weights, &lo, &hi, &any);
   *t0 = lo;
   *t1 = hi;
 }
@@ -159,7 +161,8 @@ static void tt__pose_nodes(tt__scene_anim *a, double time) {
     } else {
       memcpy(local, n->rest, sizeof local);
     }
-    if (n->parent >= 0 && (uint32_t)n->parent < i) tt__mul(n->world, a->nodes[n->parent].world, local);
+    if (n->parent >= 0 && (uint32_t)n->parent < i)
+      tt__mul(n->world, a->nodes[n->parent].world, local);
     else memcpy(n->world, local, sizeof local);
   }
 }
@@ -179,24 +182,27 @@ static double tt__cofactor(const double *m, double c[9]) {
 }
 
 /* Writes p' = m * p (affine) and, when n is given, n' = normalise(cofactor(m) * n * sign). */
-static void tt__xform(const double m[16], const double p[3], const double *n, float *po, float *no) {
-  for (int r = 0; r < 3; r++) po[r] = (float)(m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3]);
+static void tt__xform(const double m[16], const double p[3], const double *n, float *po,
+                      float *no) {
+  for (int r = 0; r < 3; r++)
+    po[r] = (float)(m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3]);
   if (!n || !no) return;
   double c[9], o[3];
   double det = tt__cofactor(m, c), sgn = det < 0 ? -1.0 : 1.0;
-  for (int r = 0; r < 3; r++) o[r] = sgn * (c[3 * r] * n[0] + c[3 * r + 1] * n[1] + c[3 * r + 2] * n[2]);
+  for (int r = 0; r < 3; r++)
+    o[r] = sgn * (c[3 * r] * n[0] + c[3 * r + 1] * n[1] + c[3 * r + 2] * n[2]);
   double len = sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
   if (len > 0 && isfinite(len))
     for (int r = 0; r < 3; r++) no[r] = (float)(o[r] / len);
-  else
-    no[0] = 0.0f, no[1] = 0.0f, no[2] = 1.0f;
+  else no[0] = 0.0f, no[1] = 0.0f, no[2] = 1.0f;
 }
 
 /* ---- one mesh ---------------------------------------------------------------------------- */
 
 /* The placement of a mesh without a skin: post * world(node). */
 static void tt__mesh_matrix(const tt__scene_anim *a, const tt__mesh_anim *m, double out[16]) {
-  if (m->node >= 0 && (uint32_t)m->node < a->node_count) memcpy(out, a->nodes[m->node].world, sizeof(double) * 16);
+  if (m->node >= 0 && (uint32_t)m->node < a->node_count)
+    memcpy(out, a->nodes[m->node].world, sizeof(double) * 16);
   else memcpy(out, tt__id16, sizeof tt__id16);
   if (m->has_post) tt__mul(out, m->post, out);
 }
@@ -295,12 +301,15 @@ void tt_scene_time_range(const tt_scene *s, double *t0, double *t1) {
   if (t1) *t1 = hi;
 }
 
-double tt_scene_time(const tt_scene *s) { return s && s->anim ? s->anim->time : s ? s->start_time : 0.0; }
+double tt_scene_time(const tt_scene *s) {
+  return s && s->anim ? s->anim->time : s ? s->start_time : 0.0;
+}
 
 tt_status tt_scene_set_time(tt_scene *s, double t, double t_prev) {
   if (!s) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_set_time: scene is NULL");
   if (!isfinite(t) || !isfinite(t_prev))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_set_time: times must be finite (got %g, %g)", t, t_prev);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_scene_set_time: times must be finite (got %g, %g)", t, t_prev);
   tt__scene_anim *a = s->anim;
   if (!a || a->mesh_count == 0) return TT_OK;
   const double good = a->time;

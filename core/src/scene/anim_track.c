@@ -39,7 +39,8 @@ void tt__track_align_rotations(tt__track *t) {
   if (!t->rotation || t->dim != 4) return;
   for (uint32_t k = 1; k < t->count; k++) {
     float *a = t->values + 4 * (size_t)(k - 1), *b = t->values + 4 * (size_t)k;
-    double d = (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2] + (double)a[3] * b[3];
+    double d =
+        (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2] + (double)a[3] * b[3];
     if (d < 0)
       for (int i = 0; i < 4; i++) b[i] = -b[i];
   }
@@ -54,7 +55,8 @@ void tt__track_catmull_rom(tt__track *t) {
     uint32_t a = k > 0 ? k - 1 : k, b = k + 1 < n ? k + 1 : k;
     double dt = t->times[b] - t->times[a];
     for (uint32_t i = 0; i < d; i++) {
-      double m = dt > 0 ? ((double)t->values[(size_t)b * d + i] - t->values[(size_t)a * d + i]) / dt : 0.0;
+      double m =
+          dt > 0 ? ((double)t->values[(size_t)b * d + i] - t->values[(size_t)a * d + i]) / dt : 0.0;
       t->in_tan[(size_t)k * d + i] = t->out_tan[(size_t)k * d + i] = (float)m;
     }
   }
@@ -62,7 +64,7 @@ void tt__track_catmull_rom(tt__track *t) {
 
 /* Index k of the last key with times[k] <= time (0 <= k < count - 1 for an interior time). */
 static uint32_t tt__track_find(const tt__track *t, double time) {
-  uint32_t lo = 0, hi = t->count - 1;  /* times[lo] <= time < times[hi] */
+  uint32_t lo = 0, hi = t->count - 1; /* times[lo] <= time < times[hi] */
   while (hi - lo > 1) {
     uint32_t mid = lo + (hi - lo) / 2;
     if (t->times[mid] <= time) lo = mid;
@@ -73,7 +75,8 @@ static uint32_t tt__track_find(const tt__track *t, double time) {
 
 /* Unit quaternion, or identity if it has no length. */
 static void tt__quat_normalize(float *q) {
-  double l = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
+  double l =
+      sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
   if (!(l > 0) || !isfinite(l)) {
     q[0] = q[1] = q[2] = 0.0f;
     q[3] = 1.0f;
@@ -88,7 +91,7 @@ static void tt__slerp(const float *a, const float *b, double s, float *out) {
   double sign = d < 0 ? -1.0 : 1.0;
   d *= sign;
   double wa, wb;
-  if (d > 0.9995) {  /* nearly parallel: lerp, normalised below */
+  if (d > 0.9995) { /* nearly parallel: lerp, normalised below */
     wa = 1.0 - s;
     wb = s;
   } else {
@@ -115,24 +118,22 @@ void tt__track_eval(const tt__track *t, double time, float *out) {
   const float *a = t->values + (size_t)k * d, *b = a + d;
   double dt = t->times[k + 1] - t->times[k], s = (time - t->times[k]) / dt;
   switch (t->interp) {
-    case TT__INTERP_STEP:
-      memcpy(out, a, sizeof(float) * d);
-      return;
-    case TT__INTERP_LINEAR:
-      if (t->rotation && d == 4) {
-        tt__slerp(a, b, s, out);
-        return;
-      }
-      for (uint32_t i = 0; i < d; i++) out[i] = (float)((1.0 - s) * a[i] + s * (double)b[i]);
-      return;
-    case TT__INTERP_CUBIC: {
-      const float *m0 = t->out_tan + (size_t)k * d, *m1 = t->in_tan + (size_t)(k + 1) * d;
-      double s2 = s * s, s3 = s2 * s;
-      double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
-      for (uint32_t i = 0; i < d; i++)
-        out[i] = (float)(h00 * a[i] + h10 * dt * m0[i] + h01 * b[i] + h11 * dt * m1[i]);
-      if (t->rotation && d == 4) tt__quat_normalize(out);
+  case TT__INTERP_STEP: memcpy(out, a, sizeof(float) * d); return;
+  case TT__INTERP_LINEAR:
+    if (t->rotation && d == 4) {
+      tt__slerp(a, b, s, out);
       return;
     }
+    for (uint32_t i = 0; i < d; i++) out[i] = (float)((1.0 - s) * a[i] + s * (double)b[i]);
+    return;
+  case TT__INTERP_CUBIC: {
+    const float *m0 = t->out_tan + (size_t)k * d, *m1 = t->in_tan + (size_t)(k + 1) * d;
+    double s2 = s * s, s3 = s2 * s;
+    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+    for (uint32_t i = 0; i < d; i++)
+      out[i] = (float)(h00 * a[i] + h10 * dt * m0[i] + h01 * b[i] + h11 * dt * m1[i]);
+    if (t->rotation && d == 4) tt__quat_normalize(out);
+    return;
+  }
   }
 }

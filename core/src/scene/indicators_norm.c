@@ -59,8 +59,10 @@ static tt_indicator_norm tt__norm(const tt_indicator_norm *n) {
 tt_status tt_indicator_bounds(const tt_indicator_norm *n_, uint32_t index, double *lo, double *hi,
                               double *log_unit) {
   if (index >= TT_SCENE_INDICATOR_COUNT)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_indicator_bounds: index %u out of range "
-                        "(%d indicators)", index, TT_SCENE_INDICATOR_COUNT);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_indicator_bounds: index %u out of range "
+                        "(%d indicators)",
+                        index, TT_SCENE_INDICATOR_COUNT);
   tt_indicator_norm n = tt__norm(n_);
   double l = 0, h = tt__bound[index].hi, u = 0;
   if (tt__is_camera(index)) {
@@ -130,32 +132,41 @@ tt_status tt_indicator_norm_parse(const char *text, tt_indicator_norm *out) {
     size_t len = strcspn(p, " ,");
     char item[64];
     if (len >= sizeof item)
-      return tt_set_error(TT_ERR_PARSE, "indicator normalisation \"%s\": item \"%.*s...\" is too "
-                          "long", text, 20, p);
+      return tt_set_error(TT_ERR_PARSE,
+                          "indicator normalisation \"%s\": item \"%.*s...\" is too "
+                          "long",
+                          text, 20, p);
     memcpy(item, p, len);
     item[len] = 0;
     p += len;
     int v;
     if (!strncmp(item, "tt.indicators/", 14)) {
       if (sscanf(item + 14, "%d", &v) != 1 || v != TT_INDICATOR_SPACE_VERSION)
-        return tt_set_error(TT_ERR_PARSE, "indicator normalisation \"%s\": state space \"%s\" is "
-                            "not this library's tt.indicators/%d", text, item,
-                            TT_INDICATOR_SPACE_VERSION);
+        return tt_set_error(TT_ERR_PARSE,
+                            "indicator normalisation \"%s\": state space \"%s\" is "
+                            "not this library's tt.indicators/%d",
+                            text, item, TT_INDICATOR_SPACE_VERSION);
     } else if (!strncmp(item, "camera=", 7)) {
       for (v = 0; v < 3 && strcmp(item + 7, tt__camera_names[v]); v++) {}
       if (v == 3)
-        return tt_set_error(TT_ERR_PARSE, "indicator normalisation \"%s\": camera=\"%s\": expected "
-                            "extent, table or text", text, item + 7);
+        return tt_set_error(TT_ERR_PARSE,
+                            "indicator normalisation \"%s\": camera=\"%s\": expected "
+                            "extent, table or text",
+                            text, item + 7);
       n.camera = (tt_indicator_camera)v;
     } else if (!strncmp(item, "scale=", 6)) {
       for (v = 0; v < 2 && strcmp(item + 6, tt__scale_names[v]); v++) {}
       if (v == 2)
-        return tt_set_error(TT_ERR_PARSE, "indicator normalisation \"%s\": scale=\"%s\": expected "
-                            "linear or log", text, item + 6);
+        return tt_set_error(TT_ERR_PARSE,
+                            "indicator normalisation \"%s\": scale=\"%s\": expected "
+                            "linear or log",
+                            text, item + 6);
       n.scale = (tt_indicator_scale)v;
     } else {
-      return tt_set_error(TT_ERR_PARSE, "indicator normalisation \"%s\": unknown item \"%s\" "
-                          "(expected camera=extent|table|text, scale=linear|log)", text, item);
+      return tt_set_error(TT_ERR_PARSE,
+                          "indicator normalisation \"%s\": unknown item \"%s\" "
+                          "(expected camera=extent|table|text, scale=linear|log)",
+                          text, item);
     }
   }
   if (out) *out = n;

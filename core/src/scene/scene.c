@@ -64,8 +64,8 @@ void tt__mesh_data_free(tt__mesh_data *d) {
 
 /* Ownership moves into the scene so loaders never copy large arrays. */
 tt_status tt__scene_add_mesh(tt_scene *scene, tt__mesh_data *d, uint32_t material) {
-  tt_mesh *m = tt__scene_push((void **)&scene->meshes, &scene->mesh_count, &scene->mesh_cap,
-                              sizeof *m);
+  tt_mesh *m =
+      tt__scene_push((void **)&scene->meshes, &scene->mesh_count, &scene->mesh_cap, sizeof *m);
   if (!m) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", scene->source);
   m->struct_size = sizeof *m;
   m->name = d->name;
@@ -100,7 +100,8 @@ double tt__triangle_area(const float *p, const uint32_t *idx, uint32_t t) {
 /* Sum of triangle areas; used for area lights and indicators. */
 double tt__mesh_area(const tt_mesh *m) {
   double a = 0.0;
-  for (uint32_t t = 0; t < m->triangle_count; t++) a += tt__triangle_area(m->positions, m->indices, t);
+  for (uint32_t t = 0; t < m->triangle_count; t++)
+    a += tt__triangle_area(m->positions, m->indices, t);
   return a;
 }
 
@@ -119,7 +120,8 @@ tt_status tt__mesh_data_transform(tt__mesh_data *d, const double m[16]) {
   for (uint32_t v = 0; v < d->vertex_count; v++) {
     float *p = d->positions + 3 * (size_t)v;
     double x = p[0], y = p[1], z = p[2];
-    for (int r = 0; r < 3; r++) p[r] = (float)(m[4 * r] * x + m[4 * r + 1] * y + m[4 * r + 2] * z + m[4 * r + 3]);
+    for (int r = 0; r < 3; r++)
+      p[r] = (float)(m[4 * r] * x + m[4 * r + 1] * y + m[4 * r + 2] * z + m[4 * r + 3]);
   }
   if (d->normals) {
     /* inverse transpose of A = cofactor matrix / det; the 1/det only scales, and its sign
@@ -134,7 +136,8 @@ tt_status tt__mesh_data_transform(tt__mesh_data *d, const double m[16]) {
       double x = n[0], y = n[1], z = n[2], o[3];
       for (int r = 0; r < 3; r++) o[r] = sgn * (c[3 * r] * x + c[3 * r + 1] * y + c[3 * r + 2] * z);
       double len = sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
-      if (len > 0) for (int r = 0; r < 3; r++) n[r] = (float)(o[r] / len);
+      if (len > 0)
+        for (int r = 0; r < 3; r++) n[r] = (float)(o[r] / len);
     }
   }
   if (det < 0) {
@@ -295,15 +298,16 @@ static tt_status tt__scene_check_range(const tt_scene *s) {
   static const char *const cam_names[3] = {"position", "target", "up"};
   for (int k = 0; k < 3; k++)
     if (tt__far_vec(cam[k], 1) >= 0)
-      return tt_set_error(TT_ERR_PARSE, "%s: camera %s (%g, %g, %g) is %s", s->source,
-                          cam_names[k], cam[k][0], cam[k][1], cam[k][2], why);
+      return tt_set_error(TT_ERR_PARSE, "%s: camera %s (%g, %g, %g) is %s", s->source, cam_names[k],
+                          cam[k][0], cam[k][1], cam[k][2], why);
   for (uint32_t i = 0; i < c->key_count; i++) {
     const tt_camera_key *key = &s->keys[i];
     if (tt__far_vec(key->position, 1) >= 0 || tt__far_vec(key->target, 1) >= 0)
-      return tt_set_error(TT_ERR_PARSE, "%s: camera path key %u (time %g): position (%g, %g, %g) "
-                          "or target (%g, %g, %g) is %s", s->source, i, key->time,
-                          key->position[0], key->position[1], key->position[2], key->target[0],
-                          key->target[1], key->target[2], why);
+      return tt_set_error(TT_ERR_PARSE,
+                          "%s: camera path key %u (time %g): position (%g, %g, %g) "
+                          "or target (%g, %g, %g) is %s",
+                          s->source, i, key->time, key->position[0], key->position[1],
+                          key->position[2], key->target[0], key->target[1], key->target[2], why);
   }
   for (uint32_t i = 0; i < s->light_count; i++) {
     const tt_light *l = &s->lights[i];
@@ -379,7 +383,7 @@ static tt_status tt__scene_finish_anim(tt_scene *s) {
   }
   double t1;
   tt__scene_time_range(s, &s->start_time, &t1);
-  a->time = NAN;  /* nothing posed yet */
+  a->time = NAN; /* nothing posed yet */
   tt_status st = tt__scene_anim_pose(s, s->start_time);
   if (st != TT_OK) return tt_set_error(TT_ERR_PARSE, "%s", tt_last_error());
   for (uint32_t i = 0; i < a->mesh_count; i++) {
@@ -524,8 +528,8 @@ void tt_scene_camera_at(const tt_scene *s, double t, tt_camera *out) {
     const tt_camera_key *a = &k[i > 0 ? i - 1 : i], *b = &k[i], *c = &k[i + 1];
     const tt_camera_key *d = &k[i + 2 < n ? i + 2 : i + 1];
     double u = (t - b->time) / ((double)c->time - b->time);
-#define TT__INTERP(field, j)                                                                \
-  (float)tt__hermite(a->field[j], b->field[j], c->field[j], d->field[j], a->time, b->time, \
+#define TT__INTERP(field, j)                                                                       \
+  (float)tt__hermite(a->field[j], b->field[j], c->field[j], d->field[j], a->time, b->time,         \
                      c->time, d->time, u)
     for (int j = 0; j < 3; j++) {
       out->position[j] = TT__INTERP(position, j);
@@ -558,8 +562,8 @@ tt_status tt_scene_set_resolution(tt_scene *s, uint32_t width, uint32_t height) 
   if (!s) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_set_resolution: scene is NULL");
   if (width == 0 || height == 0 || width > 65536 || height > 65536)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
-                        "tt_scene_set_resolution: expected 1..65536 x 1..65536, got %ux%u",
-                        width, height);
+                        "tt_scene_set_resolution: expected 1..65536 x 1..65536, got %ux%u", width,
+                        height);
   s->camera.width = width;
   s->camera.height = height;
   return TT_OK;

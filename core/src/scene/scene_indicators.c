@@ -26,10 +26,11 @@
 #include <stdlib.h>
 
 static const char *const tt__indicator_names[TT_SCENE_INDICATOR_COUNT] = {
-    "meshes",   "triangles",     "lights",     "camera_x",      "camera_y",
-    "camera_z", "target_x",      "target_y",   "target_z",      "fov_y",
-    "diffuse_ratio", "extent",   "total_area", "light_area",    "area_per_mesh",
-    "mean_var_tri_size", "var_var_tri_size"};
+    "meshes",          "triangles",  "lights",        "camera_x",
+    "camera_y",        "camera_z",   "target_x",      "target_y",
+    "target_z",        "fov_y",      "diffuse_ratio", "extent",
+    "total_area",      "light_area", "area_per_mesh", "mean_var_tri_size",
+    "var_var_tri_size"};
 
 /* Short snake_case names, stable: tuning databases store them as column names. */
 const char *tt_scene_indicator_name(uint32_t index) {
@@ -42,17 +43,17 @@ static double tt__lum(const float c[3]) { return 0.2126 * c[0] + 0.7152 * c[1] +
 /* How diffuse a material is, in [0, 1] (see the file comment). */
 static double tt__diffuseness(const tt_material *m) {
   switch (m->type) {
-    case TT_MATERIAL_DIFFUSE: return 1.0;
-    case TT_MATERIAL_MIRROR:
-    case TT_MATERIAL_DIELECTRIC: return 0.0;
-    case TT_MATERIAL_PLASTIC: {
-      double kd = tt__lum(m->albedo), ks = tt__lum(m->specular);
-      return kd + ks > 0 ? kd / (kd + ks) : 0.0;
-    }
-    case TT_MATERIAL_CONDUCTOR: {
-      double a = sqrt((double)m->alpha[0] * m->alpha[1]);
-      return a < 1.0 ? a : 1.0;
-    }
+  case TT_MATERIAL_DIFFUSE: return 1.0;
+  case TT_MATERIAL_MIRROR:
+  case TT_MATERIAL_DIELECTRIC: return 0.0;
+  case TT_MATERIAL_PLASTIC: {
+    double kd = tt__lum(m->albedo), ks = tt__lum(m->specular);
+    return kd + ks > 0 ? kd / (kd + ks) : 0.0;
+  }
+  case TT_MATERIAL_CONDUCTOR: {
+    double a = sqrt((double)m->alpha[0] * m->alpha[1]);
+    return a < 1.0 ? a : 1.0;
+  }
   }
   return 0.0;
 }
@@ -75,7 +76,8 @@ void tt_scene_indicators(const tt_scene *s, double out[TT_SCENE_INDICATOR_COUNT]
   for (uint32_t i = 0; i < s->mesh_count; i++) {
     const tt_mesh *m = &s->meshes[i];
     double sum = 0.0;
-    for (uint32_t t = 0; t < m->triangle_count; t++) sum += tt__triangle_area(m->positions, m->indices, t) * norm;
+    for (uint32_t t = 0; t < m->triangle_count; t++)
+      sum += tt__triangle_area(m->positions, m->indices, t) * norm;
     double mean = m->triangle_count ? sum / m->triangle_count : 0.0, var = 0.0;
     for (uint32_t t = 0; t < m->triangle_count; t++) {
       double dv = tt__triangle_area(m->positions, m->indices, t) * norm - mean;

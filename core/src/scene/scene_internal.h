@@ -5,7 +5,7 @@
 #define TT_SCENE_INTERNAL_H
 
 #include <tunetrace/scene.h>
-#include <tt_util/strings.h>  /* tt__strdup */
+#include <tt_util/strings.h> /* tt__strdup */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -13,8 +13,8 @@
 /* Everything a scene owns. Mesh arrays, names and paths are heap copies owned here, freed by
  * tt_scene_destroy (the public views expose them as const). */
 struct tt_scene {
-  char *source;                 /* file path or source name given to the loader */
-  char id[17];                  /* 16 hex digits of the content hash, NUL-terminated */
+  char *source;                          /* file path or source name given to the loader */
+  char id[17];                           /* 16 hex digits of the content hash, NUL-terminated */
   char part_id[TT_SCENE_PART_COUNT][17]; /* the same of each part (tt_scene_id_part) */
   tt_mesh *meshes;
   uint32_t mesh_count, mesh_cap;
@@ -24,13 +24,13 @@ struct tt_scene {
   uint32_t texture_count, texture_cap;
   tt_light *lights;
   uint32_t light_count, light_cap;
-  tt_camera camera;             /* camera.keys points at `keys` */
+  tt_camera camera; /* camera.keys points at `keys` */
   tt_camera_key *keys;
   tt_render_settings settings;
-  float lo[3], hi[3];           /* world bounds, valid after tt__scene_finish */
+  float lo[3], hi[3]; /* world bounds, valid after tt__scene_finish */
   uint64_t triangle_count;
-  struct tt__scene_anim *anim;  /* moving meshes (scene/anim.h), NULL for a still scene */
-  double start_time;            /* start of the time range: the pose after loading */
+  struct tt__scene_anim *anim; /* moving meshes (scene/anim.h), NULL for a still scene */
+  double start_time;           /* start of the time range: the pose after loading */
 };
 
 /* Geometry produced by the mesh importer or an inline definition, before it becomes a
@@ -38,10 +38,10 @@ struct tt_scene {
 typedef struct tt__mesh_data {
   char *name;
   uint32_t vertex_count, triangle_count;
-  float *positions;             /* 3 * vertex_count */
-  float *normals;               /* 3 * vertex_count or NULL */
-  float *uvs;                   /* 2 * vertex_count or NULL */
-  uint32_t *indices;            /* 3 * triangle_count */
+  float *positions;  /* 3 * vertex_count */
+  float *normals;    /* 3 * vertex_count or NULL */
+  float *uvs;        /* 2 * vertex_count or NULL */
+  uint32_t *indices; /* 3 * triangle_count */
 } tt__mesh_data;
 
 /* Allocates an empty scene with the default camera and render settings; NULL when out of
@@ -50,7 +50,6 @@ tt_scene *tt__scene_new(const char *source);
 
 /* Appends one zeroed element of `size` bytes to a growable array; NULL when out of memory. */
 void *tt__scene_push(void **items, uint32_t *count, uint32_t *cap, size_t size);
-
 
 /* Frees the arrays and name of a mesh_data and zeroes it. */
 void tt__mesh_data_free(tt__mesh_data *data);

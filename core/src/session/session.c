@@ -105,8 +105,10 @@ tt_status tt_session_load_scene(tt_session *s, const char *path) {
 tt_status tt_session_load_scene_ex(tt_session *s, const char *path, uint32_t flags) {
   if (!s || !path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_session_load_scene: NULL");
   if (s->scene)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the session already has a scene (%s); "
-                        "one scene per session", path, tt_scene_source(s->scene));
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: the session already has a scene (%s); "
+                        "one scene per session",
+                        path, tt_scene_source(s->scene));
   tt_status st = tt_scene_load_ex(path, flags, &s->scene);
   if (st != TT_OK) {
     s->scene = NULL;
@@ -136,11 +138,12 @@ tt_status tt_session_set_camera_time(tt_session *s, double t, double frame_inter
   tt_scene_camera_at(s->scene, t, &cam);
   /* a started session moves along the path (the hybrid loop's states), but its film keeps
    * its size */
-  if (s->started && s->film && (cam.width != tt_film_width(s->film) ||
-                                cam.height != tt_film_height(s->film)))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "camera time: the path's camera at %g s is "
-                        "%ux%u, the started session's film %ux%u", t, cam.width, cam.height,
-                        tt_film_width(s->film), tt_film_height(s->film));
+  if (s->started && s->film &&
+      (cam.width != tt_film_width(s->film) || cam.height != tt_film_height(s->film)))
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "camera time: the path's camera at %g s is "
+                        "%ux%u, the started session's film %ux%u",
+                        t, cam.width, cam.height, tt_film_width(s->film), tt_film_height(s->film));
   tt_scene_camera_at(s->scene, t - frame_interval, &s->prev_camera);
   s->prev_camera.width = cam.width;
   s->prev_camera.height = cam.height;
@@ -172,7 +175,7 @@ static tt_status tt__update_accel(tt_session *s, tt_accel_update_stats *out) {
       s->accel = NULL;
       return tt__session_error(st, "%s: update failed: ", tt_loaded_plugin_entry(s->accel_p)->name);
     }
-  } else {  /* an ABI 1.1 accel (or one left without a structure): build from scratch */
+  } else { /* an ABI 1.1 accel (or one left without a structure): build from scratch */
     double ms = 0;
     uint64_t t0 = s->host->clock_ns();
     st = tt_session_rebuild_accel(s, NULL, &ms);
@@ -198,12 +201,14 @@ tt_status tt_session_set_time(tt_session *s, double t, double frame_interval,
   }
   if (!s || !s->scene) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "set time: no scene loaded");
   if (!isfinite(t) || !isfinite(frame_interval) || frame_interval < 0)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "set time: t = %g and frame interval %g "
-                        "must be finite (the interval >= 0)", t, frame_interval);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "set time: t = %g and frame interval %g "
+                        "must be finite (the interval >= 0)",
+                        t, frame_interval);
   tt_status st = tt_session_set_camera_time(s, t, frame_interval);
   if (st != TT_OK || !tt_scene_animated(s->scene)) return st;
   if ((st = tt_scene_set_time(s->scene, t, t - frame_interval)) != TT_OK) return st;
-  if (!s->started) return TT_OK;  /* tt_session_start builds over this pose */
+  if (!s->started) return TT_OK; /* tt_session_start builds over this pose */
   if ((st = tt__update_accel(s, stats)) != TT_OK) return st;
   if (tt__lights_move(s->scene)) {
     s->ii->destroy(s->integrator);
@@ -240,8 +245,10 @@ tt_status tt_session_load_plugin(tt_session *s, const char *name_or_path, tt_loa
   if (!s || !name_or_path)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_session_load_plugin: NULL");
   if (s->started)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "plugin \"%s\": load plugins before the "
-                        "session starts", name_or_path);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "plugin \"%s\": load plugins before the "
+                        "session starts",
+                        name_or_path);
   if (tt__grow(s, tt_registry_count(s->reg) + 1))
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory loading a plugin");
   tt_loaded_plugin *p = NULL;
@@ -258,8 +265,8 @@ tt_status tt_session_load_plugin(tt_session *s, const char *name_or_path, tt_loa
 
 const char *tt_session_default_plugin(uint32_t kind) {
   switch (kind) {
-    case TT_KIND_ACCEL: return "accel_embree";
-    case TT_KIND_INTEGRATOR: return "integrator_pt";
+  case TT_KIND_ACCEL: return "accel_embree";
+  case TT_KIND_INTEGRATOR: return "integrator_pt";
   }
   return NULL;
 }
@@ -304,8 +311,8 @@ tt_config *tt_session_config(tt_session *s, const char *plugin) {
 const tt_options_iface *tt_session_plugin_options(const tt_loaded_plugin *p) {
   const tt_options_iface *oi = p ? tt_loaded_plugin_get(p, TT_OPTIONS_INTERFACE_ID) : NULL;
   /* tables older than the fields we call are ignored (struct_size rule of the ABI) */
-  if (!oi || !TT_HAS_FIELD(tt_options_iface, oi, get) || !oi->count ||
-      !oi->info || !oi->set || !oi->get)
+  if (!oi || !TT_HAS_FIELD(tt_options_iface, oi, get) || !oi->count || !oi->info || !oi->set ||
+      !oi->get)
     return NULL;
   return oi;
 }
@@ -350,11 +357,12 @@ tt_status tt_session_set(tt_session *s, const char *plugin, const char *key, con
     tt__plugin_names(s, names, sizeof names);
     const char *loaded[256];
     size_t nl = tt_registry_count(s->reg) < 256 ? tt_registry_count(s->reg) : 256;
-    for (size_t i = 0; i < nl; i++) loaded[i] = tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name;
+    for (size_t i = 0; i < nl; i++)
+      loaded[i] = tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name;
     const char *near = tt_suggest(plugin, loaded, nl);
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "no plugin \"%s\" is loaded (%s%s%sloaded: %s)",
-                        plugin, near ? "did you mean \"" : "", near ? near : "",
-                        near ? "\"? " : "", names);
+                        plugin, near ? "did you mean \"" : "", near ? near : "", near ? "\"? " : "",
+                        names);
   }
   tt_loaded_plugin *p = tt_registry_get(s->reg, (size_t)idx);
   tt_config *cfg = s->configs[idx];
@@ -390,14 +398,15 @@ tt_status tt_session_check(tt_session *s) {
   for (size_t i = 0; i < tt_registry_count(s->reg); i++) {
     if (!s->configs[i]) continue;
     char why[512] = "";
-    tt_check_result r = tt_space_check(tt_config_space(s->configs[i]), s->configs[i], why, sizeof why);
+    tt_check_result r =
+        tt_space_check(tt_config_space(s->configs[i]), s->configs[i], why, sizeof why);
     const char *name = tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name;
     if (r == TT_CHECK_REPAIRED) {
       tt_host_log(s->host, TT_LOG_WARN, NULL, "%s: configuration repaired: %s", name, why);
     } else if (r == TT_CHECK_INFEASIBLE) {
       size_t len = strlen(all);
-      snprintf(all + len, sizeof all - len, "%s%s: infeasible configuration: %s",
-               len ? "; " : "", name, why);
+      snprintf(all + len, sizeof all - len, "%s%s: infeasible configuration: %s", len ? "; " : "",
+               name, why);
     }
   }
   return all[0] ? tt_set_error(TT_ERR_INFEASIBLE, "%s", all) : TT_OK;
@@ -423,8 +432,8 @@ tt_status tt_session_start(tt_session *s, uint32_t aov_mask) {
   const tt_config *acfg = tt_session_config(s, tt_loaded_plugin_entry(s->accel_p)->name);
   if (s->ai->build(s->scene, acfg, &s->accel, &bs) != TT_OK) {
     s->accel = NULL;
-    return tt__session_error(TT_ERR_INTERNAL, "%s: build failed: ",
-                             tt_loaded_plugin_entry(s->accel_p)->name);
+    return tt__session_error(TT_ERR_INTERNAL,
+                             "%s: build failed: ", tt_loaded_plugin_entry(s->accel_p)->name);
   }
   s->stats.build = bs;
   s->stats.build_ms = bs.build_ms;
@@ -435,7 +444,7 @@ tt_status tt_session_start(tt_session *s, uint32_t aov_mask) {
     return tt__session_error(st, "%s: ", tt_loaded_plugin_entry(s->integ_p)->name);
   }
   s->film = tt_film_create(cam->width, cam->height, aov_mask);
-  if (!s->film) return TT_ERR_OUT_OF_MEMORY;  /* tt_film_create's message names the size */
+  if (!s->film) return TT_ERR_OUT_OF_MEMORY; /* tt_film_create's message names the size */
   s->started = 1;
   return TT_OK;
 }
@@ -475,8 +484,10 @@ static tt_status tt__can_render(const tt_session *s) {
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no accel structure (its last build failed)",
                         tt_loaded_plugin_entry(s->accel_p)->name);
   if (!s->integrator)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: no integrator (creating it again after "
-                        "the scene moved failed)", tt_loaded_plugin_entry(s->integ_p)->name);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: no integrator (creating it again after "
+                        "the scene moved failed)",
+                        tt_loaded_plugin_entry(s->integ_p)->name);
   return TT_OK;
 }
 
@@ -572,7 +583,7 @@ tt_status tt_session_apply(tt_session *s, size_t index, const tt_config *config,
     return tt_set_error(TT_ERR_UNSUPPORTED, "%s: a %s plugin is not applied to a render", e->name,
                         tt_plugin_kind_name(e->kind));
   const tt_post_iface *pi = tt_loaded_plugin_iface(p);
-  if (s->post && s->pi != pi) {  /* a filter instance belongs to one plugin */
+  if (s->post && s->pi != pi) { /* a filter instance belongs to one plugin */
     s->pi->destroy(s->post);
     s->post = NULL;
   }

@@ -11,18 +11,18 @@ struct tt_session {
   const tt_host *host;
   tt_registry *reg;
   tt_scene *scene;
-  tt_camera prev_camera;        /* the previous frame's pose for TT_AOV_MOTION */
+  tt_camera prev_camera; /* the previous frame's pose for TT_AOV_MOTION */
   int has_prev;
   /* per loaded plugin, registry order */
-  tt_config **configs;          /* NULL where the plugin publishes no space */
-  unsigned char *depth_set;     /* maxDepth set with tt_session_set: the scene's does not apply */
+  tt_config **configs;      /* NULL where the plugin publishes no space */
+  unsigned char *depth_set; /* maxDepth set with tt_session_set: the scene's does not apply */
   size_t config_cap;
   /* every value tt_session_set accepted, in order: the user's settings, which a tuning
    * plan puts back on top of a tuning hint's setup (session_tuning.c) */
   struct tt__session_setting {
-    size_t index;               /* registry index of the plugin */
+    size_t index; /* registry index of the plugin */
     char *key, *value;
-  } *settings;
+  } * settings;
   size_t setting_count, setting_cap;
   tt_loaded_plugin *accel_p, *integ_p;
   const tt_accel_iface *ai;
@@ -32,7 +32,7 @@ struct tt_session {
   tt_film *film;
   int started;
   int seed_set;
-  uint32_t pass;                /* passes in the film since the last reset */
+  uint32_t pass; /* passes in the film since the last reset */
   tt_session_stats stats;
   /* the tuning target (session_tuning.c) */
   size_t target_index;
@@ -41,9 +41,9 @@ struct tt_session {
   const tt_post_iface *pi;
   tt_post *post;
   float *post_in, *post_out;
-  float *snap;                  /* film accumulators before a measurement pass */
+  float *snap; /* film accumulators before a measurement pass */
   double snap_scale;
-  float *pass_rgb;              /* the image a measurement pass alone rendered */
+  float *pass_rgb; /* the image a measurement pass alone rendered */
   tt_pass_stats ps;
   char *state_camera, *state_context;
 };

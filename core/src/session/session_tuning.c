@@ -109,8 +109,10 @@ tt_status tt_session_tuning_target(tt_session *s, size_t index, int want_images,
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning target: no plugin at index %zu", index);
   const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->reg, index));
   if (e->kind != TT_KIND_ACCEL && e->kind != TT_KIND_INTEGRATOR && e->kind != TT_KIND_POST)
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: a %s plugin cannot be a tuning target (only "
-                        "accel, integrator and post plugins)", e->name, tt_plugin_kind_name(e->kind));
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "%s: a %s plugin cannot be a tuning target (only "
+                        "accel, integrator and post plugins)",
+                        e->name, tt_plugin_kind_name(e->kind));
   size_t px = (size_t)tt_film_width(s->film) * tt_film_height(s->film);
   if (want_images && !s->snap) {
     s->snap = malloc(7 * px * sizeof(float));
@@ -158,7 +160,8 @@ static tt_status tt__plan_target(tt_session *s, const char *name, tt_loaded_plug
     if (tt__hint(integ) && tt__tunable(integ)) *out = integ;
     else if (tt__tunable(accel)) *out = accel;
     else
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "neither the integrator nor the accel "
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "neither the integrator nor the accel "
                           "publishes tunable parameters; name the plugin to tune");
     return TT_OK;
   }
@@ -170,16 +173,22 @@ static tt_status tt__plan_target(tt_session *s, const char *name, tt_loaded_plug
       snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "",
                tt_loaded_plugin_entry(tt_registry_get(s->reg, i))->name);
     }
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "no loaded plugin is called \"%s\" (loaded: "
-                        "%s)", name, names);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "no loaded plugin is called \"%s\" (loaded: "
+                        "%s)",
+                        name, names);
   }
   uint32_t kind = tt_loaded_plugin_entry(p)->kind;
   if (kind != TT_KIND_ACCEL && kind != TT_KIND_INTEGRATOR && kind != TT_KIND_POST)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: a %s plugin cannot be tuned (only accel, "
-                        "integrator and post plugins)", name, tt_plugin_kind_name(kind));
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: a %s plugin cannot be tuned (only accel, "
+                        "integrator and post plugins)",
+                        name, tt_plugin_kind_name(kind));
   if (!tt__tunable(p))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the plugin publishes no tunable "
-                        "parameters", name);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: the plugin publishes no tunable "
+                        "parameters",
+                        name);
   *out = p;
   return TT_OK;
 }

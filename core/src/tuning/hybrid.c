@@ -18,9 +18,9 @@
 
 struct tt_hybrid {
   const tt_host *host;
-  tt_host session_host;        /* host for the per-state sessions: no progress of its own */
+  tt_host session_host; /* host for the per-state sessions: no progress of its own */
   const tt_space *space, *search;
-  tt_config *start;            /* the default configuration (full space) */
+  tt_config *start; /* the default configuration (full space) */
   tt_objective objective;
   const tt_tuner_iface *ti;
   const tt_config *tuner_settings;
@@ -30,25 +30,24 @@ struct tt_hybrid {
   double epsilon;
   uint32_t K, spp, warmup;
   uint64_t seed;
-  tt__pcg32 rng;               /* the eps-greedy draws */
+  tt__pcg32 rng; /* the eps-greedy draws */
   tt_tunedb *db;
   tt_indicator_norm norm;
   int no_exploit_feedback;
-  uint32_t states;             /* steps so far */
+  uint32_t states; /* steps so far */
   /* scratch and the current state */
   tt_config *full, *sub;
   double state[TT_SCENE_INDICATOR_COUNT];
-  double default_cost;         /* of the current state, once known */
-  int default_cached;          /* ... answered by the database (an earlier run) */
-  char *config_json;           /* the last report's configuration */
+  double default_cost; /* of the current state, once known */
+  int default_cached;  /* ... answered by the database (an earlier run) */
+  char *config_json;   /* the last report's configuration */
   /* the default's cost per state where it was measured (this run's states, a warm start's
    * "default" rows): an exploited state's default cost is estimated from the nearest */
-  double *dstate, *dcost;      /* nd x TT_SCENE_INDICATOR_COUNT states, nd costs */
+  double *dstate, *dcost; /* nd x TT_SCENE_INDICATOR_COUNT states, nd costs */
   size_t nd, capd;
-  int dropped_said;            /* "not searched" was said (once per run, not per state) */
-  char *warm_strings[2 * TT_HYBRID_WARM_MAX_KEYS];  /* tt_hybrid_warm_result's values */
+  int dropped_said; /* "not searched" was said (once per run, not per state) */
+  char *warm_strings[2 * TT_HYBRID_WARM_MAX_KEYS]; /* tt_hybrid_warm_result's values */
 };
-
 
 void tt_hybrid_destroy(tt_hybrid *h) {
   if (!h) return;
@@ -111,8 +110,7 @@ static double tt__default_nearest(const tt_hybrid *h, const double *state, doubl
   return cost;
 }
 
-#define TT__HDESC(d, f) \
-  (TT_HAS_FIELD(tt_hybrid_desc, d, f) ? (d)->f : 0)
+#define TT__HDESC(d, f) (TT_HAS_FIELD(tt_hybrid_desc, d, f) ? (d)->f : 0)
 
 tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: out is NULL");
@@ -124,19 +122,22 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   const tt_predictor_iface *pi = TT__HDESC(d, predictor);
   if (!pi || !TT__HDESC(d, model))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: no predictor (table and "
-                        "model) for exploitation");
+                                                 "model) for exploitation");
   if (!TT_PREDICTOR_HAS(pi, observe_ex) || !TT_PREDICTOR_HAS(pi, predict_ex))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: the predictor %s serves an "
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_hybrid_create: the predictor %s serves an "
                         "ABI 1.0 table (no observe_ex/predict_ex); the hybrid loop needs 1.1",
                         TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name) : "");
   double eps = TT__HDESC(d, epsilon);
   if (!(eps >= 0.0 && eps <= 1.0))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: epsilon %g is outside "
-                        "[0, 1]", eps);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_hybrid_create: epsilon %g is outside "
+                        "[0, 1]",
+                        eps);
   uint32_t K = TT__HDESC(d, explore_iterations);
   if (K < 1)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: explore_iterations (K) "
-                        "must be at least 1");
+                                                 "must be at least 1");
   tt_hybrid *h = calloc(1, sizeof *h);
   if (!h) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_hybrid_create: out of memory");
   const char *objective = TT__HDESC(d, objective);
@@ -147,8 +148,8 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   }
   h->host = TT__HDESC(d, host) ? TT__HDESC(d, host) : tt_default_host();
   /* a state's session is one step of the caller's progress, not a task of its own */
-  size_t hs = h->host->struct_size < sizeof h->session_host ? h->host->struct_size
-                                                             : sizeof h->session_host;
+  size_t hs =
+      h->host->struct_size < sizeof h->session_host ? h->host->struct_size : sizeof h->session_host;
   memcpy(&h->session_host, h->host, hs);
   h->session_host.struct_size = (uint32_t)hs;
   if (hs >= offsetof(tt_host, progress) + sizeof h->session_host.progress)
@@ -164,8 +165,8 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   h->tuner_name = tt__strdup(TT__HDESC(d, tuner_name) ? TT__HDESC(d, tuner_name) : "tuner");
   h->pi = pi;
   h->model = d->model;
-  h->predictor_name = tt__strdup(TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name)
-                                                             : "predictor");
+  h->predictor_name =
+      tt__strdup(TT__HDESC(d, predictor_name) ? TT__HDESC(d, predictor_name) : "predictor");
   h->epsilon = eps;
   h->K = K;
   h->spp = TT__HDESC(d, spp) ? TT__HDESC(d, spp) : 1;
@@ -194,7 +195,7 @@ tt_status tt_hybrid_create(const tt_hybrid_desc *d, tt_hybrid **out) {
   if (tt_config_space(h->start) != d->space) {
     tt_hybrid_destroy(h);
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_create: the start configuration is "
-                        "not a configuration of the target space");
+                                                 "not a configuration of the target space");
   }
   *out = h;
   return TT_OK;
@@ -217,8 +218,11 @@ static int tt__to_sub(tt_hybrid *h, const char *json) {
 static void tt__observe(tt_hybrid *h, const char *json, double cost, double default_cost,
                         uint32_t flags) {
   if (tt__to_sub(h, json)) return;
-  tt_predictor_sample s = {.struct_size = sizeof s, .state = h->state, .config = h->sub,
-                           .cost = cost, .default_cost = default_cost};
+  tt_predictor_sample s = {.struct_size = sizeof s,
+                           .state = h->state,
+                           .config = h->sub,
+                           .cost = cost,
+                           .default_cost = default_cost};
   if (h->pi->observe_ex(h->model, &s, 1, TT_PREDICTOR_ONLINE | flags) != TT_OK)
     tt_host_log(h->host, TT_LOG_WARN, NULL, "hybrid: %s: observe: %s", h->predictor_name,
                 tt_last_error());
@@ -227,7 +231,7 @@ static void tt__observe(tt_hybrid *h, const char *json, double cost, double defa
 /* tt_tuning_desc.on_sample of an explored state: every sample goes to the model. */
 static void tt__explore_sample(void *user, const tt_tuning_sample *s) {
   tt_hybrid *h = user;
-  if (s->status == TT_TUNEDB_FAILED) return;  /* maybe transient: says nothing of the config */
+  if (s->status == TT_TUNEDB_FAILED) return; /* maybe transient: says nothing of the config */
   if (s->iteration < 0 && s->status == TT_TUNEDB_OK) {
     h->default_cost = s->cost;
     h->default_cached = s->cached != 0;
@@ -288,7 +292,7 @@ static tt_status tt__session(tt_hybrid *h, const tt_tuning_state *state, const t
   d.tuner = explore ? h->ti : NULL;
   d.tuner_settings = explore ? h->tuner_settings : NULL;
   d.tuner_name = explore ? h->tuner_name : h->predictor_name;
-  d.seed = h->seed;             /* every explored state searches as a tuning run would */
+  d.seed = h->seed; /* every explored state searches as a tuning run would */
   d.iterations = explore ? h->K : 0;
   d.spp = h->spp;
   d.warmup_passes = h->states == 0 ? h->warmup : 0;
@@ -326,13 +330,13 @@ static void tt__sums(const tt_tuning *t, double *cost_sum, uint32_t *cached) {
   }
 }
 
-tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
-                         const tt_tuning_target *target, tt_hybrid_report *out) {
+tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state, const tt_tuning_target *target,
+                         tt_hybrid_report *out) {
   if (!h || !state || !target || !target->apply || !target->render)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_step: NULL argument");
   if (!state->has_indicators)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_hybrid_step: the state has no indicators "
-                        "(the model's input)");
+                                                 "(the model's input)");
   if (h->host->should_stop()) return TT_ERR_INTERRUPTED;
   tt_indicators_normalize(&h->norm, state->indicators, h->state);
   h->default_cost = NAN;
@@ -390,7 +394,7 @@ tt_status tt_hybrid_step(tt_hybrid *h, const tt_tuning_state *state,
         r.predicted_cost = pr.expected_cost;
       }
     } else if (st == TT_ERR_NO_DATA) {
-      r.fallback = 1;  /* nothing learnt yet: the default, still one build */
+      r.fallback = 1; /* nothing learnt yet: the default, still one build */
     } else {
       tt_host_log(h->host, TT_LOG_ERROR, NULL, "hybrid: %s: predict: %s", h->predictor_name,
                   tt_last_error());
@@ -460,8 +464,8 @@ typedef struct tt__warm_row {
   double state[TT_SCENE_INDICATOR_COUNT];
   tt_config *config;
   double cost;
-  char *key;           /* scene id, camera, context: the state's identity */
-  int exploit;         /* mode "exploit": the model's own answer, not a search's */
+  char *key;   /* scene id, camera, context: the state's identity */
+  int exploit; /* mode "exploit": the model's own answer, not a search's */
 } tt__warm_row;
 
 typedef struct tt__default_cost {
@@ -474,8 +478,8 @@ typedef struct tt__default_cost {
 typedef struct tt__warm {
   tt_hybrid *h;
   const tt_hybrid_warm_filter *f;
-  const char *const *keys[2];      /* the filter's context keys and camera keys */
-  cJSON *expected[2];              /* the filter's context and camera, parsed */
+  const char *const *keys[2]; /* the filter's context keys and camera keys */
+  cJSON *expected[2];         /* the filter's context and camera, parsed */
   tt__warm_row *rows;
   size_t n, cap;
   tt__default_cost *defaults;
@@ -488,15 +492,14 @@ static char *tt__state_key(const tt_tunedb_row *r) {
   size_t n = strlen(r->scene_id) + (r->camera ? strlen(r->camera) : 0) +
              (r->context ? strlen(r->context) : 0) + 3;
   char *k = malloc(n);
-  if (k) snprintf(k, n, "%s\n%s\n%s", r->scene_id, r->camera ? r->camera : "",
-                  r->context ? r->context : "");
+  if (k)
+    snprintf(k, n, "%s\n%s\n%s", r->scene_id, r->camera ? r->camera : "",
+             r->context ? r->context : "");
   return k;
 }
 
 /* Field `f` of a warm filter the caller built with struct_size `size`, or 0/NULL. */
-#define TT__WF(f_, field) \
-  ((f_) && TT_HAS_FIELD(tt_hybrid_warm_filter, f_, field) \
-       ? (f_)->field : 0)
+#define TT__WF(f_, field) ((f_) && TT_HAS_FIELD(tt_hybrid_warm_filter, f_, field) ? (f_)->field : 0)
 
 /* JSON text of `v` (malloc), "(none)" for a missing value. */
 static char *tt__json_text(const cJSON *v) {
@@ -517,8 +520,8 @@ static int tt__mismatches(tt__warm *w, const char *context, const char *camera) 
     cJSON *row = text[part] ? cJSON_Parse(text[part]) : NULL;
     for (const char *const *k = w->keys[part]; *k; k++, slot++) {
       if (slot >= TT_HYBRID_WARM_MAX_KEYS) break;
-      const cJSON *a = w->expected[part] ? cJSON_GetObjectItemCaseSensitive(w->expected[part], *k)
-                                         : NULL;
+      const cJSON *a =
+          w->expected[part] ? cJSON_GetObjectItemCaseSensitive(w->expected[part], *k) : NULL;
       const cJSON *b = row ? cJSON_GetObjectItemCaseSensitive(row, *k) : NULL;
       if ((!a && !b) || (a && b && cJSON_Compare(a, b, 1))) continue;
       any = 1;
@@ -626,8 +629,8 @@ static void tt__warm_keys(tt__warm *w) {
     w->expected[part] = text[part] ? cJSON_Parse(text[part]) : NULL;
     if (!w->keys[part]) continue;
     for (const char *const *k = w->keys[part]; *k && slot < TT_HYBRID_WARM_MAX_KEYS; k++, slot++) {
-      const cJSON *v = w->expected[part] ? cJSON_GetObjectItemCaseSensitive(w->expected[part], *k)
-                                         : NULL;
+      const cJSON *v =
+          w->expected[part] ? cJSON_GetObjectItemCaseSensitive(w->expected[part], *k) : NULL;
       char **s = &w->h->warm_strings[TT_HYBRID_WARM_MAX_KEYS + slot];
       free(*s);
       *s = tt__json_text(v);
@@ -653,7 +656,8 @@ tt_status tt_hybrid_warm_start_ex(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_w
   }
   tt__warm_keys(&w);
   tt_status st = tt_tunedb_foreach(db, h->plugin, tt__warm_row_fn, &w);
-  if (st == TT_OK && w.oom) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
+  if (st == TT_OK && w.oom)
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
   /* each state's default cost: the mean of its "default" rows (several runs may have one) */
   size_t nd = 0;
   if (st == TT_OK && w.nd) {
@@ -672,16 +676,19 @@ tt_status tt_hybrid_warm_start_ex(tt_hybrid *h, tt_tunedb *db, const tt_hybrid_w
   }
   /* two batches: what searches found, then the model's own answers (TT_PREDICTOR_EXPLOIT) */
   tt_predictor_sample *batch = st == TT_OK && w.n ? malloc(w.n * sizeof *batch) : NULL;
-  if (st == TT_OK && w.n && !batch) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
+  if (st == TT_OK && w.n && !batch)
+    st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "hybrid: warm start: out of memory");
   for (int exploit = 0; exploit < 2 && st == TT_OK && w.n; exploit++) {
     size_t m = 0;
     for (size_t i = 0; i < w.n; i++) {
       if (w.rows[i].exploit != exploit) continue;
       tt__default_cost probe = {w.rows[i].key, 0, 0, {0}};
-      const tt__default_cost *dc = nd ? bsearch(&probe, w.defaults, nd, sizeof *w.defaults,
-                                                tt__cmp_default) : NULL;
-      batch[m++] = (tt_predictor_sample){.struct_size = sizeof *batch, .state = w.rows[i].state,
-                                         .config = w.rows[i].config, .cost = w.rows[i].cost,
+      const tt__default_cost *dc =
+          nd ? bsearch(&probe, w.defaults, nd, sizeof *w.defaults, tt__cmp_default) : NULL;
+      batch[m++] = (tt_predictor_sample){.struct_size = sizeof *batch,
+                                         .state = w.rows[i].state,
+                                         .config = w.rows[i].config,
+                                         .cost = w.rows[i].cost,
                                          .default_cost = dc ? dc->sum / dc->n : NAN};
     }
     if (!m) continue;

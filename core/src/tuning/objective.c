@@ -24,8 +24,10 @@ tt_status tt_objective_parse(const char *text, tt_objective *out) {
     const char *colon = strchr(name, ':');
     size_t len = colon ? (size_t)(colon - name) : strlen(name);
     if (len == 0 || len >= sizeof out->metric)
-      return tt_set_error(TT_ERR_PARSE, "\"%s\": expected metric:NAME[:min|:max|:target=X] "
-                          "with a metric name of 1..63 characters", text);
+      return tt_set_error(TT_ERR_PARSE,
+                          "\"%s\": expected metric:NAME[:min|:max|:target=X] "
+                          "with a metric name of 1..63 characters",
+                          text);
     out->kind = TT_OBJECTIVE_METRIC;
     memcpy(out->metric, name, len);
     out->goal = TT_OBJECTIVE_MIN;
@@ -40,35 +42,39 @@ tt_status tt_objective_parse(const char *text, tt_objective *out) {
                  (out->target = strtod(g + 7, &end), *end == 0) && isfinite(out->target)) {
         out->goal = TT_OBJECTIVE_TARGET;
       } else {
-        return tt_set_error(TT_ERR_PARSE, "\"%s\": after the metric name expected :min, :max "
-                            "or :target=NUMBER, got \":%s\"", text, g);
+        return tt_set_error(TT_ERR_PARSE,
+                            "\"%s\": after the metric name expected :min, :max "
+                            "or :target=NUMBER, got \":%s\"",
+                            text, g);
       }
     }
   } else {
-    return tt_set_error(TT_ERR_PARSE, "unknown objective \"%s\" (expected render, build, "
+    return tt_set_error(TT_ERR_PARSE,
+                        "unknown objective \"%s\" (expected render, build, "
                         "build+render, rrmse, metric:NAME, metric:NAME:max or "
-                        "metric:NAME:target=X)", text);
+                        "metric:NAME:target=X)",
+                        text);
   }
   /* one spelling per objective, so the database matches "total" and "build+render" */
   switch (out->kind) {
-    case TT_OBJECTIVE_RENDER: snprintf(out->spec, sizeof out->spec, "render"); break;
-    case TT_OBJECTIVE_BUILD: snprintf(out->spec, sizeof out->spec, "build"); break;
-    case TT_OBJECTIVE_TOTAL: snprintf(out->spec, sizeof out->spec, "build+render"); break;
-    case TT_OBJECTIVE_RRMSE: snprintf(out->spec, sizeof out->spec, "rrmse"); break;
-    case TT_OBJECTIVE_METRIC:
-      if (out->goal == TT_OBJECTIVE_TARGET) {
-        /* shortest text that reads back as the same double: 0.234, not 0.23400000000000001 */
-        char num[32];
-        for (int prec = 6; prec <= 17; prec++) {
-          snprintf(num, sizeof num, "%.*g", prec, out->target);
-          if (strtod(num, NULL) == out->target) break;
-        }
-        snprintf(out->spec, sizeof out->spec, "metric:%s:target=%s", out->metric, num);
-      } else {
-        snprintf(out->spec, sizeof out->spec, "metric:%s:%s", out->metric,
-                 out->goal == TT_OBJECTIVE_MAX ? "max" : "min");
+  case TT_OBJECTIVE_RENDER: snprintf(out->spec, sizeof out->spec, "render"); break;
+  case TT_OBJECTIVE_BUILD: snprintf(out->spec, sizeof out->spec, "build"); break;
+  case TT_OBJECTIVE_TOTAL: snprintf(out->spec, sizeof out->spec, "build+render"); break;
+  case TT_OBJECTIVE_RRMSE: snprintf(out->spec, sizeof out->spec, "rrmse"); break;
+  case TT_OBJECTIVE_METRIC:
+    if (out->goal == TT_OBJECTIVE_TARGET) {
+      /* shortest text that reads back as the same double: 0.234, not 0.23400000000000001 */
+      char num[32];
+      for (int prec = 6; prec <= 17; prec++) {
+        snprintf(num, sizeof num, "%.*g", prec, out->target);
+        if (strtod(num, NULL) == out->target) break;
       }
-      break;
+      snprintf(out->spec, sizeof out->spec, "metric:%s:target=%s", out->metric, num);
+    } else {
+      snprintf(out->spec, sizeof out->spec, "metric:%s:%s", out->metric,
+               out->goal == TT_OBJECTIVE_MAX ? "max" : "min");
+    }
+    break;
   }
   return TT_OK;
 }
@@ -94,16 +100,16 @@ double tt_rrmse(const float *rgb, const double *ref, size_t n) {
 tt_status tt__objective_cost(const tt_objective *o, const tt_tuning_measurement *m,
                              const double *ref, size_t pixels, double *cost) {
   switch (o->kind) {
-    case TT_OBJECTIVE_RENDER: *cost = m->render_ms; return TT_OK;
-    case TT_OBJECTIVE_BUILD: *cost = m->build_ms; return TT_OK;
-    case TT_OBJECTIVE_TOTAL: *cost = m->build_ms + m->render_ms; return TT_OK;
-    case TT_OBJECTIVE_RRMSE:
-      if (!m->image || !ref)
-        return tt_set_error(TT_ERR_NO_DATA, "the rrmse objective needs the pass's image and a "
-                            "reference");
-      *cost = tt_rrmse(m->image, ref, pixels);
-      return TT_OK;
-    case TT_OBJECTIVE_METRIC: break;
+  case TT_OBJECTIVE_RENDER: *cost = m->render_ms; return TT_OK;
+  case TT_OBJECTIVE_BUILD: *cost = m->build_ms; return TT_OK;
+  case TT_OBJECTIVE_TOTAL: *cost = m->build_ms + m->render_ms; return TT_OK;
+  case TT_OBJECTIVE_RRMSE:
+    if (!m->image || !ref)
+      return tt_set_error(TT_ERR_NO_DATA, "the rrmse objective needs the pass's image and a "
+                                          "reference");
+    *cost = tt_rrmse(m->image, ref, pixels);
+    return TT_OK;
+  case TT_OBJECTIVE_METRIC: break;
   }
   char names[512] = "";
   const tt_pass_stats *ps = m->pass;
@@ -121,6 +127,8 @@ tt_status tt__objective_cost(const tt_objective *o, const tt_tuning_measurement 
     size_t len = strlen(names);
     snprintf(names + len, sizeof names - len, "%s%s", len ? ", " : "", name);
   }
-  return tt_set_error(TT_ERR_NO_DATA, "the integrator's pass published no finite metric "
-                      "\"%s\" (it has: %s)", o->metric, names[0] ? names : "none");
+  return tt_set_error(TT_ERR_NO_DATA,
+                      "the integrator's pass published no finite metric "
+                      "\"%s\" (it has: %s)",
+                      o->metric, names[0] ? names : "none");
 }

@@ -22,70 +22,68 @@
 
 struct tt_tunedb {
   sqlite3 *sql;
-  sqlite3_stmt *insert;     /* NULL when read-only */
+  sqlite3_stmt *insert; /* NULL when read-only */
   sqlite3_stmt *lookup;
   char *path;
-  int read_only;            /* tt_tunedb_open_readonly */
-  int version;              /* the file's schema version (1 is read as 2 with NULL host, rank) */
-  uint64_t bad_rows;        /* rows the last tt_tunedb_foreach skipped */
+  int read_only;     /* tt_tunedb_open_readonly */
+  int version;       /* the file's schema version (1 is read as 2 with NULL host, rank) */
+  uint64_t bad_rows; /* rows the last tt_tunedb_foreach skipped */
 };
 
 /* Fields of a caller's row beyond the ones its struct_size covers read as absent (rows of
  * callers built before schema 2; a struct_size of 0 is taken as the first layout). */
-#define TT__ROW_HAS(row, field) \
-  TT_HAS_FIELD(tt_tunedb_row, row, field)
+#define TT__ROW_HAS(row, field) TT_HAS_FIELD(tt_tunedb_row, row, field)
 
 /* Version 1 schema. Indicators are a JSON object so the row stays one table when
  * TT_SCENE_INDICATOR_COUNT grows; the CSV export spreads them into columns. */
-static const char tt__schema_v1[] =
-  "CREATE TABLE IF NOT EXISTS samples ("
-  " id INTEGER PRIMARY KEY,"
-  " scene_id TEXT NOT NULL,"
-  " scene TEXT,"
-  " camera TEXT NOT NULL,"
-  " context TEXT NOT NULL,"
-  " indicators TEXT,"
-  " plugin TEXT NOT NULL,"
-  " plugin_version TEXT NOT NULL,"
-  " config TEXT NOT NULL,"
-  " objective TEXT NOT NULL,"
-  " build_ms REAL NOT NULL,"
-  " render_ms REAL NOT NULL,"
-  " cost REAL NOT NULL,"
-  " status INTEGER NOT NULL,"
-  " mode TEXT,"
-  " iteration INTEGER,"
-  " run_id TEXT,"
-  " tuner TEXT,"
-  " metrics TEXT,"
-  " machine TEXT NOT NULL,"
-  " cpu TEXT NOT NULL,"
-  " timestamp TEXT NOT NULL);"
-  "CREATE INDEX IF NOT EXISTS samples_key ON samples"
-  " (scene_id, plugin, plugin_version, objective, config);";
+static const char tt__schema_v1[] = "CREATE TABLE IF NOT EXISTS samples ("
+                                    " id INTEGER PRIMARY KEY,"
+                                    " scene_id TEXT NOT NULL,"
+                                    " scene TEXT,"
+                                    " camera TEXT NOT NULL,"
+                                    " context TEXT NOT NULL,"
+                                    " indicators TEXT,"
+                                    " plugin TEXT NOT NULL,"
+                                    " plugin_version TEXT NOT NULL,"
+                                    " config TEXT NOT NULL,"
+                                    " objective TEXT NOT NULL,"
+                                    " build_ms REAL NOT NULL,"
+                                    " render_ms REAL NOT NULL,"
+                                    " cost REAL NOT NULL,"
+                                    " status INTEGER NOT NULL,"
+                                    " mode TEXT,"
+                                    " iteration INTEGER,"
+                                    " run_id TEXT,"
+                                    " tuner TEXT,"
+                                    " metrics TEXT,"
+                                    " machine TEXT NOT NULL,"
+                                    " cpu TEXT NOT NULL,"
+                                    " timestamp TEXT NOT NULL);"
+                                    "CREATE INDEX IF NOT EXISTS samples_key ON samples"
+                                    " (scene_id, plugin, plugin_version, objective, config);";
 
 /* Version 2: who measured (host name; MPI rank of tunetrace-mpi runs, else NULL) and the
  * tags merged into the file (tt_tunedb_merge: one row per tag, in the rows' transaction). */
 static const char tt__schema_v2[] =
-  "ALTER TABLE samples ADD COLUMN host TEXT;"
-  "ALTER TABLE samples ADD COLUMN rank INTEGER;"
-  "CREATE TABLE IF NOT EXISTS merges ("
-  " tag TEXT PRIMARY KEY,"      /* the caller's name of what was merged (e.g. a job id) */
-  " rows INTEGER NOT NULL,"     /* rows copied */
-  " source TEXT,"               /* the file they came from */
-  " note TEXT,"                 /* free text (a job's JSON) */
-  " timestamp TEXT NOT NULL);"; /* ISO 8601 UTC */
+    "ALTER TABLE samples ADD COLUMN host TEXT;"
+    "ALTER TABLE samples ADD COLUMN rank INTEGER;"
+    "CREATE TABLE IF NOT EXISTS merges ("
+    " tag TEXT PRIMARY KEY,"      /* the caller's name of what was merged (e.g. a job id) */
+    " rows INTEGER NOT NULL,"     /* rows copied */
+    " source TEXT,"               /* the file they came from */
+    " note TEXT,"                 /* free text (a job's JSON) */
+    " timestamp TEXT NOT NULL);"; /* ISO 8601 UTC */
 
 static const char tt__columns[] =
-  "id, scene_id, scene, camera, context, indicators, plugin, plugin_version, config,"
-  " objective, build_ms, render_ms, cost, status, mode, iteration, run_id, tuner, metrics,"
-  " machine, cpu, timestamp, host, rank";
+    "id, scene_id, scene, camera, context, indicators, plugin, plugin_version, config,"
+    " objective, build_ms, render_ms, cost, status, mode, iteration, run_id, tuner, metrics,"
+    " machine, cpu, timestamp, host, rank";
 
 static const char tt__lookup_sql[] =
-  "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
-  " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
-  " AND config = ?6 AND objective = ?7 AND machine = ?8 AND cpu = ?9"
-  " AND status IN (0, 1) AND typeof(cost) IN ('real', 'integer')";
+    "SELECT avg(cost), count(*) FROM samples WHERE scene_id = ?1 AND"
+    " camera = ?2 AND context = ?3 AND plugin = ?4 AND plugin_version = ?5"
+    " AND config = ?6 AND objective = ?7 AND machine = ?8 AND cpu = ?9"
+    " AND status IN (0, 1) AND typeof(cost) IN ('real', 'integer')";
 
 /* Records an SQLite failure with the database path and SQLite's own message. */
 static tt_status tt__sql_error(const tt_tunedb *db, sqlite3 *sql, const char *what) {
@@ -198,9 +196,9 @@ static tt_status tt__user_version(tt_tunedb *db, int *version) {
 /* The columns of table samples every schema version has (tt__columns without id, and
  * without host and rank, which version 2 added). */
 static const char *const tt__required_columns[] = {
-  "scene_id", "scene", "camera", "context", "indicators", "plugin", "plugin_version", "config",
-  "objective", "build_ms", "render_ms", "cost", "status", "mode", "iteration", "run_id", "tuner",
-  "metrics", "machine", "cpu", "timestamp"};
+    "scene_id",  "scene",     "camera",   "context",   "indicators", "plugin", "plugin_version",
+    "config",    "objective", "build_ms", "render_ms", "cost",       "status", "mode",
+    "iteration", "run_id",    "tuner",    "metrics",   "machine",    "cpu",    "timestamp"};
 #define TT__NREQUIRED (sizeof tt__required_columns / sizeof tt__required_columns[0])
 
 /* Appends `name` to the comma-separated list `buf` ("..." once it is full). */
@@ -219,9 +217,10 @@ static tt_status tt__tables(tt_tunedb *db, char *tables, size_t n, int *has_samp
   sqlite3_stmt *st = NULL;
   *has_samples = 0;
   tables[0] = '\0';
-  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM sqlite_master WHERE type = 'table' AND "
-                         "name NOT LIKE 'sqlite\\_%' ESCAPE '\\' ORDER BY name", -1, &st,
-                         NULL) != SQLITE_OK)
+  if (sqlite3_prepare_v2(db->sql,
+                         "SELECT name FROM sqlite_master WHERE type = 'table' AND "
+                         "name NOT LIKE 'sqlite\\_%' ESCAPE '\\' ORDER BY name",
+                         -1, &st, NULL) != SQLITE_OK)
     return tt__sql_error(db, db->sql, "reading the schema");
   int rc;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
@@ -240,8 +239,8 @@ static tt_status tt__missing_columns(tt_tunedb *db, int version, char *missing, 
   int have[TT__NREQUIRED] = {0}, has_host = 0, has_rank = 0;
   missing[0] = '\0';
   sqlite3_stmt *st = NULL;
-  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM pragma_table_info('samples')", -1, &st,
-                         NULL) != SQLITE_OK)
+  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM pragma_table_info('samples')", -1, &st, NULL) !=
+      SQLITE_OK)
     return tt__sql_error(db, db->sql, "reading the columns of table samples");
   int rc;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
@@ -271,30 +270,36 @@ static tt_status tt__check_schema(tt_tunedb *db) {
   tt_status st = tt__user_version(db, &version);
   if (st != TT_OK) return st;
   if (version < 0)
-    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: schema version %d (PRAGMA "
-                        "user_version) is not a tunetrace tuning database's (1..%d)", db->path,
-                        version, TT_TUNEDB_SCHEMA_VERSION);
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "tuning database %s: schema version %d (PRAGMA "
+                        "user_version) is not a tunetrace tuning database's (1..%d)",
+                        db->path, version, TT_TUNEDB_SCHEMA_VERSION);
   if (version > TT_TUNEDB_SCHEMA_VERSION)
-    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: schema version %d is newer "
-                        "than this build reads (%d)", db->path, version,
-                        TT_TUNEDB_SCHEMA_VERSION);
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "tuning database %s: schema version %d is newer "
+                        "than this build reads (%d)",
+                        db->path, version, TT_TUNEDB_SCHEMA_VERSION);
   char tables[512], missing[512];
   int has_samples;
   if ((st = tt__tables(db, tables, sizeof tables, &has_samples)) != TT_OK) return st;
   if (version == 0 && tables[0])
-    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: not a tunetrace tuning "
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "tuning database %s: not a tunetrace tuning "
                         "database (schema version 0 and the tables %s): left as it is",
                         db->path, tables);
   if (version > 0 && !has_samples)
-    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: not a tunetrace tuning "
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "tuning database %s: not a tunetrace tuning "
                         "database (schema version %d without the table samples; tables: %s)",
                         db->path, version, tables[0] ? tables : "none");
   if (version > 0) {
     if ((st = tt__missing_columns(db, version, missing, sizeof missing)) != TT_OK) return st;
     if (missing[0])
-      return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: not a tunetrace tuning "
+      return tt_set_error(TT_ERR_UNSUPPORTED,
+                          "tuning database %s: not a tunetrace tuning "
                           "database (its table samples lacks the columns %s of schema "
-                          "version %d)", db->path, missing, version);
+                          "version %d)",
+                          db->path, missing, version);
   }
   db->version = version;
   return TT_OK;
@@ -318,7 +323,8 @@ static tt_status tt__quick_check(tt_tunedb *db) {
     char *w = !strncmp(what, head, strlen(head)) ? what + strlen(head) : what;
     for (char *p = w; *p; p++)
       if (*p == '\n') *p = ';';
-    status = tt_set_error(TT_ERR_IO, "tuning database %s: the file is damaged (PRAGMA "
+    status = tt_set_error(TT_ERR_IO,
+                          "tuning database %s: the file is damaged (PRAGMA "
                           "quick_check: %s); restore it from a copy, or give another file",
                           db->path, w);
   }
@@ -387,8 +393,10 @@ static int tt__db_file(const char *path, int must_exist) {
 /* Prepares the statements a handle uses (the insert only when writable). */
 static int tt__prepare(tt_tunedb *db) {
   char sql[1024];
-  snprintf(sql, sizeof sql, "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
-           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", tt__columns);
+  snprintf(sql, sizeof sql,
+           "INSERT INTO samples (%s) VALUES (NULL, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
+           " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+           tt__columns);
   if ((!db->read_only && sqlite3_prepare_v2(db->sql, sql, -1, &db->insert, NULL) != SQLITE_OK) ||
       sqlite3_prepare_v2(db->sql, tt__lookup_sql, -1, &db->lookup, NULL) != SQLITE_OK) {
     tt__sql_error(db, db->sql, "preparing statements");
@@ -467,8 +475,10 @@ tt_status tt_tunedb_open_readonly(const char *path, tt_tunedb **out) {
   }
   if (db->version == 0) {
     tt_tunedb_close(db);
-    return tt_set_error(TT_ERR_UNSUPPORTED, "tuning database %s: empty (no schema, no rows): "
-                        "not a tunetrace tuning database yet", path);
+    return tt_set_error(TT_ERR_UNSUPPORTED,
+                        "tuning database %s: empty (no schema, no rows): "
+                        "not a tunetrace tuning database yet",
+                        path);
   }
   if (tt__prepare(db)) {
     tt_tunedb_close(db);
@@ -503,8 +513,7 @@ static char *tt__indicators_json(const tt_tunedb_row *row) {
     /* JSON has no NaN/Inf: an undefined indicator (e.g. variance of one mesh) is null */
     if (isfinite(v))
       n += snprintf(s + n, cap - n, "%s\"%s\":%.17g", i ? "," : "", tt_scene_indicator_name(i), v);
-    else
-      n += snprintf(s + n, cap - n, "%s\"%s\":null", i ? "," : "", tt_scene_indicator_name(i));
+    else n += snprintf(s + n, cap - n, "%s\"%s\":null", i ? "," : "", tt_scene_indicator_name(i));
   }
   snprintf(s + n, cap - n, "}");
   return s;
@@ -544,14 +553,17 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *caller_row) {
   tt_tunedb_row *row = caller_row;
   if (!db || !row || !row->scene_id || !row->plugin || !row->plugin_version || !row->config ||
       !row->objective)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_record: scene_id, plugin, "
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_tunedb_record: scene_id, plugin, "
                         "plugin_version, config and objective are required");
   if (!isfinite(row->cost) || !isfinite(row->build_ms) || !isfinite(row->render_ms))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_record: cost and times must be "
-                        "finite (use TT_COST_INFEASIBLE for failures)");
+                                                 "finite (use TT_COST_INFEASIBLE for failures)");
   if (db->read_only)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning database %s: opened read-only: "
-                        "nothing can be recorded", db->path);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tuning database %s: opened read-only: "
+                        "nothing can be recorded",
+                        db->path);
   char now[64];
   tt__now_iso(now, sizeof now);
   tt_tunedb_row full = tt__complete_row(row, now);
@@ -594,11 +606,11 @@ tt_status tt_tunedb_record(tt_tunedb *db, tt_tunedb_row *caller_row) {
   return TT_OK;
 }
 
-tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost,
-                           uint32_t *count) {
+tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost, uint32_t *count) {
   if (!db || !key || !key->scene_id || !key->plugin || !key->plugin_version || !key->config ||
       !key->objective)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_lookup: scene_id, plugin, "
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_tunedb_lookup: scene_id, plugin, "
                         "plugin_version, config and objective are required");
   sqlite3_stmt *st = db->lookup;
   sqlite3_reset(st);
@@ -629,11 +641,11 @@ tt_status tt_tunedb_lookup(tt_tunedb *db, const tt_tunedb_row *key, double *cost
 /* What an SQLite value is, for messages. */
 static const char *tt__type_name(int type) {
   switch (type) {
-    case SQLITE_INTEGER: return "an integer";
-    case SQLITE_FLOAT: return "a real";
-    case SQLITE_TEXT: return "text";
-    case SQLITE_BLOB: return "a blob";
-    default: return "NULL";
+  case SQLITE_INTEGER: return "an integer";
+  case SQLITE_FLOAT: return "a real";
+  case SQLITE_TEXT: return "text";
+  case SQLITE_BLOB: return "a blob";
+  default: return "NULL";
   }
 }
 
@@ -669,15 +681,30 @@ enum { TT__TEXT, TT__TEXT_OR_NULL, TT__NUMBER, TT__INT, TT__INT_OR_NULL, TT__ID,
 static const struct {
   const char *name;
   int kind;
-} tt__column_kinds[] = {
-  {"id", TT__ID}, {"scene_id", TT__TEXT}, {"scene", TT__TEXT_OR_NULL}, {"camera", TT__TEXT},
-  {"context", TT__TEXT}, {"indicators", TT__JSON}, {"plugin", TT__TEXT},
-  {"plugin_version", TT__TEXT}, {"config", TT__TEXT}, {"objective", TT__TEXT},
-  {"build_ms", TT__NUMBER}, {"render_ms", TT__NUMBER}, {"cost", TT__NUMBER},
-  {"status", TT__INT}, {"mode", TT__TEXT_OR_NULL}, {"iteration", TT__INT_OR_NULL},
-  {"run_id", TT__TEXT_OR_NULL}, {"tuner", TT__TEXT_OR_NULL}, {"metrics", TT__TEXT_OR_NULL},
-  {"machine", TT__TEXT}, {"cpu", TT__TEXT}, {"timestamp", TT__TEXT},
-  {"host", TT__TEXT_OR_NULL}, {"rank", TT__INT_OR_NULL}};
+} tt__column_kinds[] = {{"id", TT__ID},
+                        {"scene_id", TT__TEXT},
+                        {"scene", TT__TEXT_OR_NULL},
+                        {"camera", TT__TEXT},
+                        {"context", TT__TEXT},
+                        {"indicators", TT__JSON},
+                        {"plugin", TT__TEXT},
+                        {"plugin_version", TT__TEXT},
+                        {"config", TT__TEXT},
+                        {"objective", TT__TEXT},
+                        {"build_ms", TT__NUMBER},
+                        {"render_ms", TT__NUMBER},
+                        {"cost", TT__NUMBER},
+                        {"status", TT__INT},
+                        {"mode", TT__TEXT_OR_NULL},
+                        {"iteration", TT__INT_OR_NULL},
+                        {"run_id", TT__TEXT_OR_NULL},
+                        {"tuner", TT__TEXT_OR_NULL},
+                        {"metrics", TT__TEXT_OR_NULL},
+                        {"machine", TT__TEXT},
+                        {"cpu", TT__TEXT},
+                        {"timestamp", TT__TEXT},
+                        {"host", TT__TEXT_OR_NULL},
+                        {"rank", TT__INT_OR_NULL}};
 #define TT__NCOLUMNS (sizeof tt__column_kinds / sizeof tt__column_kinds[0])
 
 /* Checks the current result row of a SELECT of tt__columns against the schema (types, a
@@ -689,19 +716,20 @@ static int tt__check_row(sqlite3_stmt *st, char *why, size_t n) {
     const char *name = tt__column_kinds[i].name;
     int ok = 1;
     switch (kind) {
-      case TT__ID: ok = type == SQLITE_INTEGER; break;
-      case TT__TEXT: ok = type == SQLITE_TEXT; break;
-      case TT__TEXT_OR_NULL: ok = type == SQLITE_TEXT || type == SQLITE_NULL; break;
-      case TT__JSON: ok = type == SQLITE_TEXT || type == SQLITE_NULL; break;
-      case TT__NUMBER: ok = type == SQLITE_INTEGER || type == SQLITE_FLOAT; break;
-      case TT__INT: ok = type == SQLITE_INTEGER; break;
-      case TT__INT_OR_NULL: ok = type == SQLITE_INTEGER || type == SQLITE_NULL; break;
+    case TT__ID: ok = type == SQLITE_INTEGER; break;
+    case TT__TEXT: ok = type == SQLITE_TEXT; break;
+    case TT__TEXT_OR_NULL: ok = type == SQLITE_TEXT || type == SQLITE_NULL; break;
+    case TT__JSON: ok = type == SQLITE_TEXT || type == SQLITE_NULL; break;
+    case TT__NUMBER: ok = type == SQLITE_INTEGER || type == SQLITE_FLOAT; break;
+    case TT__INT: ok = type == SQLITE_INTEGER; break;
+    case TT__INT_OR_NULL: ok = type == SQLITE_INTEGER || type == SQLITE_NULL; break;
     }
     if (!ok) {
       snprintf(why, n, "%s is %s, not %s", name, tt__type_name(type),
-               kind == TT__NUMBER ? "a number"
+               kind == TT__NUMBER                                             ? "a number"
                : kind == TT__INT || kind == TT__INT_OR_NULL || kind == TT__ID ? "an integer"
-               : kind == TT__JSON ? "JSON text" : "text");
+               : kind == TT__JSON                                             ? "JSON text"
+                                                                              : "text");
       return -1;
     }
     if (kind == TT__NUMBER && !isfinite(sqlite3_column_double(st, i))) {
@@ -768,8 +796,7 @@ tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
   /* a file of schema 1 opened read-only is not upgraded: its rows have no host and rank */
   snprintf(sql, sizeof sql, "SELECT %.*s%s FROM samples%s ORDER BY id",
            (int)(sizeof tt__columns - 1 - (db->version < 2 ? strlen(", host, rank") : 0)),
-           tt__columns, db->version < 2 ? ", NULL, NULL" : "",
-           plugin ? " WHERE plugin = ?1" : "");
+           tt__columns, db->version < 2 ? ", NULL, NULL" : "", plugin ? " WHERE plugin = ?1" : "");
   sqlite3_stmt *st = NULL;
   if (sqlite3_prepare_v2(db->sql, sql, -1, &st, NULL) != SQLITE_OK)
     return tt__sql_error(db, db->sql, "reading rows");
@@ -797,17 +824,18 @@ tt_status tt_tunedb_foreach(tt_tunedb *db, const char *plugin,
   sqlite3_finalize(st);
   db->bad_rows = bad;
   if (bad)
-    tt__log(TT_LOG_WARN, "tuning database %s: %llu row%s skipped, not rows of its schema (the "
-            "first, id %lld: %s)", db->path, (unsigned long long)bad, bad == 1 ? "" : "s",
-            first_bad, first_why);
+    tt__log(TT_LOG_WARN,
+            "tuning database %s: %llu row%s skipped, not rows of its schema (the "
+            "first, id %lld: %s)",
+            db->path, (unsigned long long)bad, bad == 1 ? "" : "s", first_bad, first_why);
   return status;
 }
 
 tt_status tt_tunedb_count(tt_tunedb *db, const char *plugin, uint64_t *count) {
   if (!db || !count) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_count: db, count");
   sqlite3_stmt *st = NULL;
-  const char *sql = plugin ? "SELECT count(*) FROM samples WHERE plugin = ?1"
-                           : "SELECT count(*) FROM samples";
+  const char *sql =
+      plugin ? "SELECT count(*) FROM samples WHERE plugin = ?1" : "SELECT count(*) FROM samples";
   if (sqlite3_prepare_v2(db->sql, sql, -1, &st, NULL) != SQLITE_OK)
     return tt__sql_error(db, db->sql, "counting rows");
   if (plugin) tt__bind_text(st, 1, plugin);
@@ -842,8 +870,8 @@ static int tt__csv_row(void *user, const tt_tunedb_row *r) {
   FILE *f = ((tt__csv_ctx *)user)->f;
   static const char *status_names[] = {"ok", "infeasible", "failed"};
   fprintf(f, "%lld,", (long long)r->id);
-  const char *texts[] = {r->scene_id, r->scene, r->camera, r->context, r->plugin,
-                         r->plugin_version, r->config, r->objective};
+  const char *texts[] = {r->scene_id, r->scene,          r->camera, r->context,
+                         r->plugin,   r->plugin_version, r->config, r->objective};
   for (size_t i = 0; i < sizeof texts / sizeof texts[0]; i++) {
     tt__csv_text(f, texts[i]);
     fputc(',', f);
@@ -896,16 +924,17 @@ tt_status tt_tunedb_export_csv(tt_tunedb *db, const char *path) {
     tt_atomic_file_abort(af);
     return tt_set_error(st, "%s", why);
   }
-  return tt_atomic_file_commit(af);  /* the previous export stays if this one fails */
+  return tt_atomic_file_commit(af); /* the previous export stays if this one fails */
 }
 
 /* ---- merging (issue 18) ---- */
 
 /* The samples columns (without id) in the order of tt__columns. */
 static const char *const tt__merge_columns[] = {
-  "scene_id", "scene", "camera", "context", "indicators", "plugin", "plugin_version", "config",
-  "objective", "build_ms", "render_ms", "cost", "status", "mode", "iteration", "run_id", "tuner",
-  "metrics", "machine", "cpu", "timestamp", "host", "rank"};
+    "scene_id",       "scene",  "camera",    "context",  "indicators", "plugin",
+    "plugin_version", "config", "objective", "build_ms", "render_ms",  "cost",
+    "status",         "mode",   "iteration", "run_id",   "tuner",      "metrics",
+    "machine",        "cpu",    "timestamp", "host",     "rank"};
 
 #define TT__MERGE_NCOL (sizeof tt__merge_columns / sizeof tt__merge_columns[0])
 
@@ -914,8 +943,8 @@ static const char *const tt__merge_columns[] = {
 static int tt__src_columns(tt_tunedb *db, int has[TT__MERGE_NCOL]) {
   sqlite3_stmt *st = NULL;
   memset(has, 0, TT__MERGE_NCOL * sizeof *has);
-  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM pragma_table_info('samples', 'src')", -1,
-                         &st, NULL) != SQLITE_OK)
+  if (sqlite3_prepare_v2(db->sql, "SELECT name FROM pragma_table_info('samples', 'src')", -1, &st,
+                         NULL) != SQLITE_OK)
     return -1;
   int n = 0, rc;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
@@ -953,11 +982,12 @@ static tt_status tt__merge_rows(tt_tunedb *db, const char *source, int32_t rank,
   int has[TT__MERGE_NCOL];
   int ncols = tt__src_columns(db, has);
   if (ncols < 0) return tt__sql_error(db, db->sql, "reading the columns of the merged file");
-  int has_samples = ncols > 0 && has[7];  /* config */
+  int has_samples = ncols > 0 && has[7]; /* config */
   if (version < 1 || version > TT_TUNEDB_SCHEMA_VERSION || !has_samples)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: %s is not a tuning database "
-                        "of schema 1..%d (user_version %d%s)", source,
-                        TT_TUNEDB_SCHEMA_VERSION, version,
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_tunedb_merge: %s is not a tuning database "
+                        "of schema 1..%d (user_version %d%s)",
+                        source, TT_TUNEDB_SCHEMA_VERSION, version,
                         has_samples ? "" : ", no table samples");
   char sql[2048];
   size_t n = (size_t)snprintf(sql, sizeof sql, "INSERT INTO main.samples (");
@@ -989,16 +1019,20 @@ tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag, in
   if (!db || !tag || !tag[0])
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: db and a non-empty tag");
   if (db->read_only)
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning database %s: opened read-only: "
-                        "nothing can be merged into it", db->path);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tuning database %s: opened read-only: "
+                        "nothing can be merged into it",
+                        db->path);
   if (source) {
     /* ATTACH would create a missing file and block on a FIFO */
     char why[256];
     if (tt__file_regular_reason(source, why, sizeof why) != 0)
       return tt_set_error(TT_ERR_IO, "tt_tunedb_merge: cannot read %s: %s", source, why);
     if (tt_file_same(source, db->path) == 1)
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tunedb_merge: %s is the database "
-                          "merged into (%s)", source, db->path);
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "tt_tunedb_merge: %s is the database "
+                          "merged into (%s)",
+                          source, db->path);
   }
   if (source) {
     sqlite3_stmt *st = NULL;
@@ -1020,8 +1054,10 @@ tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag, in
       char now[64];
       tt__now_iso(now, sizeof now);
       sqlite3_stmt *st = NULL;
-      if (sqlite3_prepare_v2(db->sql, "INSERT INTO merges (tag, rows, source, note, timestamp)"
-                             " VALUES (?1, ?2, ?3, ?4, ?5)", -1, &st, NULL) != SQLITE_OK) {
+      if (sqlite3_prepare_v2(db->sql,
+                             "INSERT INTO merges (tag, rows, source, note, timestamp)"
+                             " VALUES (?1, ?2, ?3, ?4, ?5)",
+                             -1, &st, NULL) != SQLITE_OK) {
         status = tt__sql_error(db, db->sql, "recording a merge");
       } else {
         tt__bind_text(st, 1, tag);
@@ -1029,7 +1065,8 @@ tt_status tt_tunedb_merge(tt_tunedb *db, const char *source, const char *tag, in
         tt__bind_text(st, 3, source);
         tt__bind_text(st, 4, note);
         tt__bind_text(st, 5, now);
-        if (sqlite3_step(st) != SQLITE_DONE) status = tt__sql_error(db, db->sql, "recording a merge");
+        if (sqlite3_step(st) != SQLITE_DONE)
+          status = tt__sql_error(db, db->sql, "recording a merge");
         sqlite3_finalize(st);
       }
     }

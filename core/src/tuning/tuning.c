@@ -29,23 +29,23 @@
 
 struct tt_tuning {
   const tt_host *host;
-  const tt_space *space;        /* the target's full space: what is measured and checked */
-  const tt_space *search;       /* the searched parameters, or NULL to search all of space */
-  tt_space *own_search;         /* search without the parameters tuners leave alone */
-  tt_config *start;             /* the configured values (the default configuration) */
-  tt_config *cand;              /* the proposal being settled */
-  tt_config *sub;               /* a config of the searched space (tuner / draws) */
-  tt_config *work;              /* the outstanding configuration (repaired), after next() */
-  double *unit;                 /* exploration draw, one per searched parameter */
+  const tt_space *space;  /* the target's full space: what is measured and checked */
+  const tt_space *search; /* the searched parameters, or NULL to search all of space */
+  tt_space *own_search;   /* search without the parameters tuners leave alone */
+  tt_config *start;       /* the configured values (the default configuration) */
+  tt_config *cand;        /* the proposal being settled */
+  tt_config *sub;         /* a config of the searched space (tuner / draws) */
+  tt_config *work;        /* the outstanding configuration (repaired), after next() */
+  double *unit;           /* exploration draw, one per searched parameter */
   tt_objective objective;
   const tt_tuner_iface *ti;
   tt_tuner *tuner;
   char *tuner_name, *plugin, *plugin_version, *run_id;
-  uint64_t rng;                 /* exploration stream */
+  uint64_t rng; /* exploration stream */
   uint32_t requested, spp, warmup;
   double budget_s;
   tt_tunedb *db;
-  tt_tuning_state state;        /* strings below are owned copies */
+  tt_tuning_state state; /* strings below are owned copies */
   char *state_strings[4];
   uint32_t width, height;
   const double *ref;
@@ -53,27 +53,27 @@ struct tt_tuning {
   void (*on_sample)(void *user, const tt_tuning_sample *sample);
   void *user;
 
-  tt_tuning_sample *samples;    /* configs are owned (malloc) */
+  tt_tuning_sample *samples; /* configs are owned (malloc) */
   size_t count, cap;
   uint32_t measured, cached, infeasible, failed;
-  uint32_t unrecorded;          /* database writes that failed */
+  uint32_t unrecorded; /* database writes that failed */
   int converged, interrupted;
-  int32_t next_iteration;       /* -1: the default comes next */
-  int pending;                  /* next() returned `work`; report() is expected */
+  int32_t next_iteration; /* -1: the default comes next */
+  int pending;            /* next() returned `work`; report() is expected */
   char *pending_json;
   uint64_t t0;
   int started;
   double ms;
-  char *applied;                /* config JSON the target runs with (run/verify/apply_best) */
+  char *applied; /* config JSON the target runs with (run/verify/apply_best) */
   char *default_json;
-  char *best_json;              /* cache of tt_tuning_best_json */
-  double *verify_ms;            /* rounds x 2 x 3 of the last verify */
-  char *mode;                   /* desc->mode: the database's mode column, or NULL */
-  int context_sent;             /* the tuner's set_context was called (or cannot be) */
-  int quiet;                    /* no per-run summaries (the hybrid loop's per-state sessions:
+  char *best_json;     /* cache of tt_tuning_best_json */
+  double *verify_ms;   /* rounds x 2 x 3 of the last verify */
+  char *mode;          /* desc->mode: the database's mode column, or NULL */
+  int context_sent;    /* the tuner's set_context was called (or cannot be) */
+  int quiet;           /* no per-run summaries (the hybrid loop's per-state sessions:
                                    it says them once per run) */
-  char *dropped;                /* the parameters not searched (tt__drop_untunable), or NULL */
-  uint32_t remeasured;          /* proposals of a configuration measured earlier in the run */
+  char *dropped;       /* the parameters not searched (tt__drop_untunable), or NULL */
+  uint32_t remeasured; /* proposals of a configuration measured earlier in the run */
   /* the last verification's decision, about the best it verified (verified_json) */
   tt_tuning_verdict verdict;
   char *verified_json;
@@ -118,8 +118,7 @@ void tt_tuning_destroy(tt_tuning *t) {
 }
 
 /* Field `f` of a descriptor the caller built with struct_size `size`, or 0/NULL. */
-#define TT__DESC(d, f) \
-  (TT_HAS_FIELD(tt_tuning_desc, d, f) ? (d)->f : 0)
+#define TT__DESC(d, f) (TT_HAS_FIELD(tt_tuning_desc, d, f) ? (d)->f : 0)
 
 /* Searches only what tuners may change (tunetrace/params.h): a parameter marked not
  * tunable, or one that can never act because a condition names a parameter left out of the
@@ -148,16 +147,16 @@ static tt_status tt__drop_untunable(tt_tuning *t) {
     }
     if (!keep) {
       free(names);
-      return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tuning %s: nothing to search: %s %s not "
+      return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                          "tuning %s: nothing to search: %s %s not "
                           "tunable or cannot act with the values the others are fixed at "
                           "(host --describe %s shows \"tunable\" and \"activeWhen\")",
                           tt_space_plugin(t->space), dropped, strchr(dropped, ',') ? "are" : "is",
                           tt_space_plugin(t->space));
     }
-    tt_space *sub = tt_space_subset(searched, names, keep,
-                                    searched == t->space ? t->start : NULL);
+    tt_space *sub = tt_space_subset(searched, names, keep, searched == t->space ? t->start : NULL);
     free(names);
-    if (!sub) return TT_ERR_INVALID_ARGUMENT;  /* tt_space_subset set the message */
+    if (!sub) return TT_ERR_INVALID_ARGUMENT; /* tt_space_subset set the message */
     tt_space_destroy(t->own_search);
     t->own_search = sub;
     searched = sub;
@@ -191,7 +190,7 @@ tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out)
   *out = NULL;
   if (!d || !TT_HAS_FIELD(tt_tuning_desc, d, space) || !d->space)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: no descriptor or no "
-                        "space to tune");
+                                                 "space to tune");
   const char *objective = TT__DESC(d, objective);
   tt_tuning *t = calloc(1, sizeof *t);
   if (!t) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tuning_create: out of memory");
@@ -240,7 +239,7 @@ tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out)
     run_id = id;
   }
   t->run_id = tt__strdup(run_id);
-    t->mode = tt__strdup(TT__DESC(d, mode));
+  t->mode = tt__strdup(TT__DESC(d, mode));
   const tt_config *start = TT__DESC(d, start);
   t->start = start ? tt_config_clone(start) : tt_config_create(d->space);
   if (!t->tuner_name && t->ti) t->tuner_name = tt__strdup("tuner");
@@ -251,12 +250,12 @@ tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out)
   if (tt_config_space(t->start) != d->space) {
     tt_tuning_destroy(t);
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_create: the start configuration "
-                        "is not a configuration of the tuned space");
+                                                 "is not a configuration of the tuned space");
   }
   if (t->objective.kind == TT_OBJECTIVE_RRMSE && (!t->ref || !t->width || !t->height)) {
     tt_tuning_destroy(t);
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "the rrmse objective needs a reference "
-                        "image (reference_luminance, width, height)");
+                                                 "image (reference_luminance, width, height)");
   }
   t->search = TT__DESC(d, search);
   if ((st = tt__drop_untunable(t)) != TT_OK) {
@@ -362,7 +361,7 @@ static tt_status tt__record(tt_tuning *t, tt_tuning_sample *s) {
   }
   /* after the feedback, so that the session is consistent (tt_tuning_save_state) */
   if (t->on_sample) t->on_sample(t->user, &t->samples[t->count - 1]);
-  t->samples[t->count - 1].image = NULL;  /* valid during on_sample only */
+  t->samples[t->count - 1].image = NULL; /* valid during on_sample only */
   if (st == TT_OK) tt__progress(t, s->iteration);
   return st;
 }
@@ -521,7 +520,7 @@ tt_status tt_tuning_next(tt_tuning *t, tt_config *out) {
   if (!t || !out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_next: NULL argument");
   if (tt_config_space(out) != t->space)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_next: `out` is not a "
-                        "configuration of the tuned space");
+                                                 "configuration of the tuned space");
   if (!t->started) {
     t->started = 1;
     t->t0 = tt__now(t);
@@ -569,7 +568,7 @@ static tt_status tt__report(tt_tuning *t, const tt_tuning_measurement *m, double
                             int logged) {
   if (!t->pending)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_report: no configuration is "
-                        "outstanding (call tt_tuning_next first)");
+                                                 "outstanding (call tt_tuning_next first)");
   int32_t iteration = t->next_iteration;
   if (m->status == TT_ERR_INTERRUPTED) {
     t->pending = 0;
@@ -587,11 +586,11 @@ static tt_status tt__report(tt_tuning *t, const tt_tuning_measurement *m, double
       tt_host_log(t->host, TT_LOG_WARN, NULL, "tuning: iteration %d: the measurement failed: %s",
                   iteration, tt_last_error());
   } else {
-    tt_status st = tt__objective_cost(&t->objective, m, t->ref, (size_t)t->width * t->height,
-                                      &s.cost);
+    tt_status st =
+        tt__objective_cost(&t->objective, m, t->ref, (size_t)t->width * t->height, &s.cost);
     if (st != TT_OK) {
       t->pending = 0;
-      return st;  /* the objective cannot work: nothing is recorded */
+      return st; /* the objective cannot work: nothing is recorded */
     }
     s.status = TT_TUNEDB_OK;
     s.image = m->image;
@@ -812,8 +811,8 @@ static int tt__verify_one(tt_tuning *t, const tt_tuning_target *target, const tt
   if (tt__apply(t, target, cfg, json, &m.build_ms) != TT_OK) return -1;
   tt_status st = target->render(target->user, t->spp, &m);
   if (st == TT_ERR_INTERRUPTED) return 1;
-  if (st != TT_OK || tt__objective_cost(&t->objective, &m, t->ref,
-                                        (size_t)t->width * t->height, &cost) != TT_OK)
+  if (st != TT_OK ||
+      tt__objective_cost(&t->objective, &m, t->ref, (size_t)t->width * t->height, &cost) != TT_OK)
     return -1;
   out[0] = m.build_ms;
   out[1] = m.render_ms;
@@ -833,11 +832,13 @@ static void tt__verdict(tt_tuning *t, const tt_tuning_verification *v, const cha
   if (!t->verified_json) return;
   if (!strcmp(best_json, t->default_json)) {
     t->verdict = TT_TUNING_DEFAULT;
-    snprintf(t->reason, sizeof t->reason, "keeping the default configuration: the search found "
+    snprintf(t->reason, sizeof t->reason,
+             "keeping the default configuration: the search found "
              "nothing better than it");
   } else if (failed) {
     t->verdict = TT_TUNING_REJECTED;
-    snprintf(t->reason, sizeof t->reason, "keeping the default configuration: the tuned one "
+    snprintf(t->reason, sizeof t->reason,
+             "keeping the default configuration: the tuned one "
              "failed when measured again side by side");
   } else if (v->rounds) {
     /* how much the cost changed, as a percentage of the default's when that is meaningful */
@@ -851,14 +852,18 @@ static void tt__verdict(tt_tuning *t, const tt_tuning_verification *v, const cha
                v->cost_difference < 0 ? "lower" : "higher");
     if (v->cost_difference < 0) {
       t->verdict = TT_TUNING_CONFIRMED;
-      snprintf(t->reason, sizeof t->reason, "keeping the tuned configuration: measured side by "
+      snprintf(t->reason, sizeof t->reason,
+               "keeping the tuned configuration: measured side by "
                "side with the default in %u rounds, its cost was lower in %u, the median round "
-               "%s", v->rounds, v->best_faster, how);
+               "%s",
+               v->rounds, v->best_faster, how);
     } else {
       t->verdict = TT_TUNING_REJECTED;
-      snprintf(t->reason, sizeof t->reason, "keeping the default configuration: measured side "
+      snprintf(t->reason, sizeof t->reason,
+               "keeping the default configuration: measured side "
                "by side with it in %u rounds, the tuned one was not faster (its cost was lower "
-               "in only %u, the median round %s)", v->rounds, v->best_faster, how);
+               "in only %u, the median round %s)",
+               v->rounds, v->best_faster, how);
     }
   }
   if (t->verdict != TT_TUNING_UNVERIFIED)
@@ -876,10 +881,10 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
   v.render_ratio = v.total_ratio = v.cost_ratio = NAN;
   tt_config *cfg[2] = {tt_config_create(t->space), tt_config_create(t->space)};
   const char *json[2] = {t->default_json, tt_tuning_best_json(t)};
-  char *best_copy = tt__strdup(json[1]);  /* the sample array does not grow here, but be safe */
+  char *best_copy = tt__strdup(json[1]); /* the sample array does not grow here, but be safe */
   json[1] = best_copy;
   free(t->verify_ms);
-  t->verify_ms = calloc((size_t)rounds * 6 + 1, sizeof *t->verify_ms);  /* [r][who][3] */
+  t->verify_ms = calloc((size_t)rounds * 6 + 1, sizeof *t->verify_ms); /* [r][who][3] */
   double *tmp = calloc((size_t)rounds + 1, sizeof *tmp);
   tt_status rc = TT_OK;
   uint32_t done = 0;
@@ -900,7 +905,7 @@ tt_status tt_tuning_verify(tt_tuning *t, const tt_tuning_target *target, uint32_
       break;
     }
     for (int k = 0; k < 2 && rc == TT_OK; k++) {
-      int who = (r % 2) ? 1 - k : k;  /* 0 = default, 1 = best */
+      int who = (r % 2) ? 1 - k : k; /* 0 = default, 1 = best */
       int res = tt__verify_one(t, target, cfg[who], json[who], &m[((size_t)r * 2 + who) * 3]);
       if (res == 1) rc = TT_ERR_INTERRUPTED;
       if (res < 0) {
@@ -990,7 +995,7 @@ tt_tuning_verdict tt_tuning_get_verdict(const tt_tuning *t, const char **reason)
   if (reason) *reason = NULL;
   if (!t || t->verdict == TT_TUNING_UNVERIFIED || !t->verified_json ||
       strcmp(t->verified_json, tt_tuning_best_json(t)))
-    return TT_TUNING_UNVERIFIED;  /* never verified, or the best changed since */
+    return TT_TUNING_UNVERIFIED; /* never verified, or the best changed since */
   if (reason) *reason = t->reason;
   return t->verdict;
 }
@@ -1000,7 +1005,7 @@ const char *tt__tuning_dropped(const tt_tuning *t) { return t ? t->dropped : NUL
 const char *tt_tuning_kept_json(const tt_tuning *t) {
   if (!t) return NULL;
   return tt_tuning_get_verdict(t, NULL) == TT_TUNING_REJECTED ? t->default_json
-                                                               : tt_tuning_best_json(t);
+                                                              : tt_tuning_best_json(t);
 }
 
 /* ---- resume ------------------------------------------------------------------------ */
@@ -1008,11 +1013,12 @@ const char *tt_tuning_kept_json(const tt_tuning *t) {
 #define TT__STATE_FORMAT 1
 
 tt_status tt_tuning_save_state(const tt_tuning *t, char **json) {
-  if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_save_state: NULL argument");
+  if (!t || !json)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_save_state: NULL argument");
   *json = NULL;
   if (t->pending)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_save_state: a configuration is "
-                        "outstanding (report it first)");
+                                                 "outstanding (report it first)");
   char *tuner = NULL;
   if (t->tuner && t->ti->save_state(t->tuner, &tuner) != TT_OK) return TT_ERR_INTERNAL;
   cJSON *root = cJSON_CreateObject();
@@ -1045,7 +1051,7 @@ tt_status tt_tuning_save_state(const tt_tuning *t, char **json) {
     cJSON_AddNumberToObject(o, "iteration", x->iteration);
     cJSON_AddStringToObject(o, "config", x->config);
     char num[64];
-    snprintf(num, sizeof num, "%.17g", x->cost);  /* exact, and 1e300 survives */
+    snprintf(num, sizeof num, "%.17g", x->cost); /* exact, and 1e300 survives */
     cJSON_AddRawToObject(o, "cost", num);
     snprintf(num, sizeof num, "%.17g", x->build_ms);
     cJSON_AddRawToObject(o, "build_ms", num);
@@ -1083,16 +1089,16 @@ static int tt__state_is(const cJSON *o, const char *k, const char *want) {
 static tt_status tt__state_num(const cJSON *o, const char *k, double lo, double hi,
                                const char *source, const char *where, double *out) {
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
-  if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < lo ||
-      v->valuedouble > hi)
-    return tt_set_error(TT_ERR_PARSE, "%s: %s%s: expected a number in [%g, %g]", source, where,
-                        k, lo, hi);
+  if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < lo || v->valuedouble > hi)
+    return tt_set_error(TT_ERR_PARSE, "%s: %s%s: expected a number in [%g, %g]", source, where, k,
+                        lo, hi);
   *out = v->valuedouble;
   return TT_OK;
 }
 
 tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *source) {
-  if (!t || !json) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_load_state: NULL argument");
+  if (!t || !json)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_load_state: NULL argument");
   if (!source) source = "tuning state";
   if (t->count || t->started)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: a session resumes before its first sample",
@@ -1105,10 +1111,12 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
     st = tt_set_error(TT_ERR_PARSE, "%s: not a tuning session state", source);
     goto done;
   }
-  end += strspn(end, " \t\r\n");  /* nothing may follow the state (a file appended to) */
+  end += strspn(end, " \t\r\n"); /* nothing may follow the state (a file appended to) */
   if (*end) {
-    st = tt_set_error(TT_ERR_PARSE, "%s: unexpected text after the state, at byte %zu: "
-                      "\"%.20s\"", source, (size_t)(end - json), end);
+    st = tt_set_error(TT_ERR_PARSE,
+                      "%s: unexpected text after the state, at byte %zu: "
+                      "\"%.20s\"",
+                      source, (size_t)(end - json), end);
     goto done;
   }
   if (fmt->valuedouble > TT__STATE_FORMAT) {
@@ -1117,15 +1125,19 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
     goto done;
   }
   /* the same search: target, objective, tuner, state and default */
-  struct { const char *key, *mine; } same[] = {
-    {"plugin", t->plugin}, {"objective", t->objective.spec},
-    {"tuner", t->tuner_name}, {"scene_id", t->state.scene_id}, {"camera", t->state.camera},
-    {"context", t->state.context}, {"default", t->default_json}};
+  struct {
+    const char *key, *mine;
+  } same[] = {{"plugin", t->plugin},       {"objective", t->objective.spec},
+              {"tuner", t->tuner_name},    {"scene_id", t->state.scene_id},
+              {"camera", t->state.camera}, {"context", t->state.context},
+              {"default", t->default_json}};
   for (size_t i = 0; i < sizeof same / sizeof same[0]; i++)
     if (!tt__state_is(root, same[i].key, same[i].mine)) {
       const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, same[i].key);
-      st = tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: saved for another %s (\"%.200s\"; this run: "
-                        "\"%.200s\")", source, same[i].key, cJSON_IsString(v) ? v->valuestring : "?",
+      st = tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: saved for another %s (\"%.200s\"; this run: "
+                        "\"%.200s\")",
+                        source, same[i].key, cJSON_IsString(v) ? v->valuestring : "?",
                         same[i].mine ? same[i].mine : "");
       goto done;
     }
@@ -1133,7 +1145,8 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
   const cJSON *next = cJSON_GetObjectItemCaseSensitive(root, "next_iteration");
   const cJSON *c = cJSON_GetObjectItemCaseSensitive(root, "counters");
   const cJSON *rng = cJSON_GetObjectItemCaseSensitive(root, "rng");
-  if (!cJSON_IsArray(samples) || !cJSON_IsNumber(next) || !cJSON_IsObject(c) || !cJSON_IsString(rng)) {
+  if (!cJSON_IsArray(samples) || !cJSON_IsNumber(next) || !cJSON_IsObject(c) ||
+      !cJSON_IsString(rng)) {
     st = tt_set_error(TT_ERR_PARSE, "%s: samples, next_iteration, counters or rng missing", source);
     goto done;
   }
@@ -1141,7 +1154,8 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
   if (t->tuner) {
     char *tj = cJSON_IsString(ts) ? NULL : cJSON_PrintUnformatted(ts);
     const char *text = cJSON_IsString(ts) ? ts->valuestring : tj;
-    st = text ? t->ti->load_state(t->tuner, text) : tt_set_error(TT_ERR_PARSE, "%s: no tuner state", source);
+    st = text ? t->ti->load_state(t->tuner, text)
+              : tt_set_error(TT_ERR_PARSE, "%s: no tuner state", source);
     cJSON_free(tj);
     if (st != TT_OK) {
       st = tt_set_error(st, "%s: %s: %s", source, t->tuner_name, tt_last_error());
@@ -1166,7 +1180,8 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
         (st = tt__state_num(o, "cost", -DBL_MAX, DBL_MAX, source, where, &x.cost)) != TT_OK ||
         (st = tt__state_num(o, "build_ms", 0, DBL_MAX, source, where, &x.build_ms)) != TT_OK ||
         (st = tt__state_num(o, "render_ms", 0, DBL_MAX, source, where, &x.render_ms)) != TT_OK ||
-        (st = tt__state_num(o, "status", TT_TUNEDB_OK, TT_TUNEDB_FAILED, source, where, &status)) != TT_OK)
+        (st = tt__state_num(o, "status", TT_TUNEDB_OK, TT_TUNEDB_FAILED, source, where, &status)) !=
+            TT_OK)
       goto done;
     x.iteration = (int32_t)it;
     x.status = (int32_t)status;
@@ -1207,7 +1222,7 @@ tt_status tt_tuning_load_state(tt_tuning *t, const char *json, const char *sourc
   free(t->best_json);
   t->best_json = NULL;
 done:
-  if (st != TT_OK) {  /* nothing half-restored: the session starts from scratch */
+  if (st != TT_OK) { /* nothing half-restored: the session starts from scratch */
     for (size_t i = 0; i < t->count; i++) free((char *)t->samples[i].config);
     t->count = 0;
     t->next_iteration = -1;

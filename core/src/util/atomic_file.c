@@ -32,12 +32,12 @@
 #include <unistd.h>
 
 struct tt_atomic_file {
-  FILE *stream;       /* fopencookie stream over fd */
+  FILE *stream; /* fopencookie stream over fd */
   int fd;
-  int error;          /* first errno of a failed write, 0 if none */
-  int direct;         /* 1: writing straight into a device or FIFO (nothing to rename) */
-  char *path;         /* final path (a symlink's target, so the link survives) */
-  char *tmp;          /* temporary path, NULL when direct */
+  int error;  /* first errno of a failed write, 0 if none */
+  int direct; /* 1: writing straight into a device or FIFO (nothing to rename) */
+  char *path; /* final path (a symlink's target, so the link survives) */
+  char *tmp;  /* temporary path, NULL when direct */
 };
 
 /* stdio backend: full writes with EINTR retries; the first error is kept for commit. */
@@ -158,10 +158,10 @@ static void tt__remove_stale_temps(const char *path, const char *own) {
     /* a writer alive holds its exclusive lock: a shared one is refused at once; the name
      * must still be the file locked (not a new writer's, made since) */
     if (fstat(fd, &held) == 0 && S_ISREG(held.st_mode) && flock(fd, LOCK_SH | LOCK_NB) == 0 &&
-        lstat(t, &now_st) == 0 && now_st.st_dev == held.st_dev &&
-        now_st.st_ino == held.st_ino && time(NULL) - now_st.st_mtime >= TT__STALE_TEMP_AGE_S)
+        lstat(t, &now_st) == 0 && now_st.st_dev == held.st_dev && now_st.st_ino == held.st_ino &&
+        time(NULL) - now_st.st_mtime >= TT__STALE_TEMP_AGE_S)
       (void)unlink(t);
-    close(fd);  /* drops the shared lock */
+    close(fd); /* drops the shared lock */
   }
   free(t);
 }
@@ -181,8 +181,8 @@ tt_status tt_file_check_writable(const char *path) {
   if (fd < 0) {
     int e = errno;
     char *dir = tt__dirname(path);
-    tt_status s = tt_set_error(TT_ERR_IO, "%s: cannot write: cannot create a file in %s: %s",
-                               path, dir ? dir : "its folder", strerror(e));
+    tt_status s = tt_set_error(TT_ERR_IO, "%s: cannot write: cannot create a file in %s: %s", path,
+                               dir ? dir : "its folder", strerror(e));
     free(dir);
     return s;
   }
@@ -221,8 +221,7 @@ tt_status tt_atomic_file_open(const char *path, tt_atomic_file **out) {
     f->fd = tt__create_temp(f->path, &f->tmp);
     if (f->fd >= 0) {
       /* held until commit or abort (or death): other writers of this output leave it alone */
-      while (flock(f->fd, LOCK_EX) != 0 && errno == EINTR) {
-      }
+      while (flock(f->fd, LOCK_EX) != 0 && errno == EINTR) {}
       /* keep the permissions of the file being replaced */
       if (have) (void)fchmod(f->fd, st.st_mode & 07777);
       tt__remove_stale_temps(f->path, f->tmp);
@@ -288,7 +287,7 @@ tt_status tt_atomic_file_commit(tt_atomic_file *f) {
   }
   if (!f->direct) {
     char *dir = tt__dirname(f->path);
-    if (dir) (void)tt__sync_dir(dir);  /* the new content is in place either way */
+    if (dir) (void)tt__sync_dir(dir); /* the new content is in place either way */
     free(dir);
   }
   tt__atomic_free(f, 0);

@@ -68,8 +68,8 @@ static int tt__open_regular(const char *path, const char *what, struct stat *st)
   char why[256];
   int fd = tt__open_regular_fd(path, st, why, sizeof why);
   if (fd < 0)
-    tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path && *path ? path : "(empty path)",
-                 what, why);
+    tt_set_error(TT_ERR_IO, "%s: cannot open %s: %s", path && *path ? path : "(empty path)", what,
+                 why);
   return fd;
 }
 
@@ -118,7 +118,7 @@ int tt_file_same(const char *a, const char *b) {
   struct stat sa, sb;
   int ha = stat(a, &sa) == 0, hb = stat(b, &sb) == 0;
   if (ha && hb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-  if (ha != hb) return 0;  /* one exists, the other not: two files */
+  if (ha != hb) return 0; /* one exists, the other not: two files */
   /* neither exists yet: the same real folder and name */
   char *ca = tt__canonical(a), *cb = tt__canonical(b);
   int same = ca && cb ? !strcmp(ca, cb) : !strcmp(a, b);
@@ -127,18 +127,20 @@ int tt_file_same(const char *a, const char *b) {
   return same;
 }
 
-tt_status tt_file_check_not_input(const char *output, const char *output_what,
-                                  const char *input, const char *input_what) {
+tt_status tt_file_check_not_input(const char *output, const char *output_what, const char *input,
+                                  const char *input_what) {
   if (!tt_file_same(output, input)) return TT_OK;
   if (!output_what) output_what = "output";
   if (!input_what) input_what = "input";
   if (!strcmp(output, input))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the %s would replace the %s (the same "
-                        "file): give the %s another name", output, output_what, input_what,
-                        output_what);
-  return tt_set_error(TT_ERR_INVALID_ARGUMENT, "%s: the %s would replace the %s %s (the same "
-                      "file): give the %s another name", output, output_what, input_what, input,
-                      output_what);
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "%s: the %s would replace the %s (the same "
+                        "file): give the %s another name",
+                        output, output_what, input_what, output_what);
+  return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                      "%s: the %s would replace the %s %s (the same "
+                      "file): give the %s another name",
+                      output, output_what, input_what, input, output_what);
 }
 
 tt_status tt_file_read(const char *path, const char *what, size_t max_bytes, char **data,

@@ -4,8 +4,8 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-tt_status tt__json_error(tt_status status, const char *source, const char *path,
-                         const char *fmt, ...) {
+tt_status tt__json_error(tt_status status, const char *source, const char *path, const char *fmt,
+                         ...) {
   char msg[1536];
   va_list ap;
   va_start(ap, fmt);

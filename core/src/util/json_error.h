@@ -13,14 +13,14 @@
 
 /* Records "<source>: <path>: <message>" (just "<source>: <message>" when `path` is NULL or
  * empty) as the last error; returns `status`. */
-tt_status tt__json_error(tt_status status, const char *source, const char *path,
-                         const char *fmt, ...) TT_PRINTF(4, 5);
+tt_status tt__json_error(tt_status status, const char *source, const char *path, const char *fmt,
+                         ...) TT_PRINTF(4, 5);
 
 /* How a value is described after "got": the two readers' wordings, which their users'
  * scripts and tests already match. */
 typedef enum tt__json_style {
-  TT__JSON_PARAMS = 0,  /* the number 1.5, a string ("x"), an array */
-  TT__JSON_SCENE = 1    /* 1.5, a string "x", an array of 3 elements */
+  TT__JSON_PARAMS = 0, /* the number 1.5, a string ("x"), an array */
+  TT__JSON_SCENE = 1   /* 1.5, a string "x", an array of 3 elements */
 } tt__json_style;
 
 /* Describes `item` (NULL: "nothing") into `buf`; returns `buf`. */

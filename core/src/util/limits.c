@@ -9,32 +9,32 @@
 #include <string.h>
 
 typedef struct tt__limit_row {
-  const char *name;      /* tt_limit_find */
-  uint64_t lo, hi;       /* integers */
-  double rlo, rhi;       /* reals: (rlo, rhi], or [rlo, rhi] when lo_closed */
+  const char *name; /* tt_limit_find */
+  uint64_t lo, hi;  /* integers */
+  double rlo, rhi;  /* reals: (rlo, rhi], or [rlo, rhi] when lo_closed */
   int real, lo_closed;
-  const char *expected;  /* reals: what the message says was expected */
+  const char *expected; /* reals: what the message says was expected */
 } tt__limit_row;
 
 static const tt__limit_row tt__limits[] = {
-  [TT_LIMIT_SPP] = {"spp", 1, 1u << 24},
-  [TT_LIMIT_WIDTH] = {"width", 1, 65536},
-  [TT_LIMIT_HEIGHT] = {"height", 1, 65536},
-  [TT_LIMIT_SEED] = {"seed", 0, UINT64_MAX},
-  [TT_LIMIT_THREADS] = {"threads", 1, 1024},
-  [TT_LIMIT_ITERATIONS] = {"iterations", 1, 1000000},
-  [TT_LIMIT_TUNE_SPP] = {"tune_spp", 1, 1u << 16},
-  [TT_LIMIT_EXPLORE] = {"explore", 1, 1000000},
-  [TT_LIMIT_VERIFY] = {"verify", 1, 10000},
-  [TT_LIMIT_ROUNDS] = {"rounds", 1, 10000},
-  [TT_LIMIT_REFERENCE_SCALE] = {"reference_scale", 1, 16},
-  [TT_LIMIT_CAMERA_INDEX] = {"camera_index", 0, 99},
-  [TT_LIMIT_TIME] = {"time", 0, 0, 0, 1e7, 1, 0, "seconds > 0 (at most 1e7)"},
-  [TT_LIMIT_FPS] = {"fps", 0, 0, 0, 1000, 1, 0, "frames per second in (0, 1000]"},
-  [TT_LIMIT_EPSILON] = {"epsilon", 0, 0, 0, 1, 1, 1,
-                        "the probability of exploring a state, a number in [0, 1]"},
-  [TT_LIMIT_WARMUP] = {"warmup", 0, 1000},
-  [TT_LIMIT_FRAME] = {"frame", 0, UINT32_MAX - 1},
+    [TT_LIMIT_SPP] = {"spp", 1, 1u << 24},
+    [TT_LIMIT_WIDTH] = {"width", 1, 65536},
+    [TT_LIMIT_HEIGHT] = {"height", 1, 65536},
+    [TT_LIMIT_SEED] = {"seed", 0, UINT64_MAX},
+    [TT_LIMIT_THREADS] = {"threads", 1, 1024},
+    [TT_LIMIT_ITERATIONS] = {"iterations", 1, 1000000},
+    [TT_LIMIT_TUNE_SPP] = {"tune_spp", 1, 1u << 16},
+    [TT_LIMIT_EXPLORE] = {"explore", 1, 1000000},
+    [TT_LIMIT_VERIFY] = {"verify", 1, 10000},
+    [TT_LIMIT_ROUNDS] = {"rounds", 1, 10000},
+    [TT_LIMIT_REFERENCE_SCALE] = {"reference_scale", 1, 16},
+    [TT_LIMIT_CAMERA_INDEX] = {"camera_index", 0, 99},
+    [TT_LIMIT_TIME] = {"time", 0, 0, 0, 1e7, 1, 0, "seconds > 0 (at most 1e7)"},
+    [TT_LIMIT_FPS] = {"fps", 0, 0, 0, 1000, 1, 0, "frames per second in (0, 1000]"},
+    [TT_LIMIT_EPSILON] = {"epsilon", 0, 0, 0, 1, 1, 1,
+                          "the probability of exploring a state, a number in [0, 1]"},
+    [TT_LIMIT_WARMUP] = {"warmup", 0, 1000},
+    [TT_LIMIT_FRAME] = {"frame", 0, UINT32_MAX - 1},
 };
 
 #define TT__LIMITS (sizeof tt__limits / sizeof tt__limits[0])
@@ -110,8 +110,7 @@ static int tt__pair_in(const char *text, char sep, uint64_t lo, uint64_t hi, uin
   return tt__uint_in(first, lo, hi, a) || tt__uint_in(mid + 1, lo, hi, b) ? -1 : 0;
 }
 
-tt_status tt_limit_parse_span(tt_limit which, const char *text, uint64_t *first,
-                              uint64_t *last) {
+tt_status tt_limit_parse_span(tt_limit which, const char *text, uint64_t *first, uint64_t *last) {
   const tt__limit_row *r = tt__limit(which);
   if (!r) return TT_ERR_INVALID_ARGUMENT;
   uint64_t a = 0, b = 0;
@@ -120,18 +119,20 @@ tt_status tt_limit_parse_span(tt_limit which, const char *text, uint64_t *first,
     *last = b;
     return TT_OK;
   }
-  return tt_set_error(TT_ERR_INVALID_ARGUMENT, "expected A:B with A <= B, each an integer in "
-                      "[%llu, %llu], got \"%s\"", (unsigned long long)r->lo,
-                      (unsigned long long)r->hi, text ? text : "");
+  return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                      "expected A:B with A <= B, each an integer in "
+                      "[%llu, %llu], got \"%s\"",
+                      (unsigned long long)r->lo, (unsigned long long)r->hi, text ? text : "");
 }
 
 tt_status tt_limit_parse_resolution(const char *text, uint32_t *width, uint32_t *height) {
-  const tt__limit_row *w = &tt__limits[TT_LIMIT_WIDTH];  /* the same range as the height's */
+  const tt__limit_row *w = &tt__limits[TT_LIMIT_WIDTH]; /* the same range as the height's */
   uint64_t wv = 0, hv = 0;
   if (!width || !height || tt__pair_in(text, 'x', w->lo, w->hi, &wv, &hv))
-    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "expected WIDTHxHEIGHT (%llu..%llu each), got "
-                        "\"%s\"", (unsigned long long)w->lo, (unsigned long long)w->hi,
-                        text ? text : "");
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "expected WIDTHxHEIGHT (%llu..%llu each), got "
+                        "\"%s\"",
+                        (unsigned long long)w->lo, (unsigned long long)w->hi, text ? text : "");
   *width = (uint32_t)wv;
   *height = (uint32_t)hv;
   return TT_OK;

@@ -5,7 +5,7 @@
 
 #include <string.h>
 
-#define TT__SUGGEST_MAX 255  /* longer names are compared on their first 255 characters */
+#define TT__SUGGEST_MAX 255 /* longer names are compared on their first 255 characters */
 
 unsigned tt_edit_distance(const char *a, const char *b) {
   if (!a || !b) return TT__SUGGEST_MAX;
@@ -20,12 +20,11 @@ unsigned tt_edit_distance(const char *a, const char *b) {
     cur[0] = (unsigned)i;
     for (size_t j = 1; j <= m; j++) {
       unsigned cost = a[i - 1] == b[j - 1] ? 0u : 1u;
-      unsigned d = prev[j] + 1;                       /* deletion */
-      if (cur[j - 1] + 1 < d) d = cur[j - 1] + 1;     /* insertion */
-      if (prev[j - 1] + cost < d) d = prev[j - 1] + cost;  /* substitution */
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
-          prev2[j - 2] + 1 < d)
-        d = prev2[j - 2] + 1;                         /* transposition */
+      unsigned d = prev[j] + 1;                           /* deletion */
+      if (cur[j - 1] + 1 < d) d = cur[j - 1] + 1;         /* insertion */
+      if (prev[j - 1] + cost < d) d = prev[j - 1] + cost; /* substitution */
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && prev2[j - 2] + 1 < d)
+        d = prev2[j - 2] + 1; /* transposition */
       cur[j] = d;
     }
   }
@@ -42,7 +41,7 @@ const char *tt_suggest(const char *word, const char *const *candidates, size_t c
   for (size_t k = 0; k < count; k++) {
     const char *c = candidates[k];
     if (!c) continue;
-    if (!strcmp(c, word)) return NULL;  /* not a typo: the caller failed for another reason */
+    if (!strcmp(c, word)) return NULL; /* not a typo: the caller failed for another reason */
     size_t cl = strlen(c), longer = cl > wl ? cl : wl;
     unsigned limit = longer <= 5 ? 1u : longer / 3 < 2 ? (unsigned)(longer / 3) : 2u;
     /* the distance is at least the difference in length: a name longer or shorter than the

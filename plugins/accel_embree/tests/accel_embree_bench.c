@@ -100,7 +100,8 @@ static tt_scene *obj_scene(const char *path) {
            "{\"version\":1,\"camera\":{\"position\":[0,0,5],\"target\":[0,0,0],\"up\":[0,1,0],"
            "\"fov\":40,\"resolution\":[%d,%d]},\"materials\":{\"m\":{\"type\":\"diffuse\","
            "\"albedo\":[0.5,0.5,0.5]}},\"meshes\":[{\"name\":\"obj\",\"material\":\"m\","
-           "\"file\":\"%s\"}]}", W, H, path);
+           "\"file\":\"%s\"}]}",
+           W, H, path);
   tt_scene *s = NULL;
   if (tt_scene_load_json(json, strlen(json), path, NULL, &s) != TT_OK) {
     printf("note: %s does not load (%s): skipped\n", path, tt_last_error());
@@ -204,7 +205,7 @@ static void bounce_rays(const tt_scene *scene, const tt_ray *prim, const tt_hit 
 /* One configuration of the table. */
 typedef struct bench_cfg {
   const char *label;
-  const char *settings;  /* "name=value,..." applied over the defaults */
+  const char *settings; /* "name=value,..." applied over the defaults */
 } bench_cfg;
 
 static const bench_cfg g_cfgs[] = {
@@ -215,13 +216,16 @@ static const bench_cfg g_cfgs[] = {
     {"custom bf8", "backend=custom,branchingFactor=8"},
     {"custom bf4 blk4 leaf8", "backend=custom,branchingFactor=4,sahBlockSize=4,maxLeafSize=8"},
     {"custom bf8 blk4 leaf8", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"},
-    {"custom bf8 blk4 leaf8 q3", "backend=custom,quality=3,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"},
+    {"custom bf8 blk4 leaf8 q3",
+     "backend=custom,quality=3,branchingFactor=8,sahBlockSize=4,maxLeafSize=8"},
     {"custom bf8 blk4 leaf16", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=16"},
-    {"custom bf8 blk4 t2", "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8,travcost=2"},
+    {"custom bf8 blk4 t2",
+     "backend=custom,branchingFactor=8,sahBlockSize=4,maxLeafSize=8,travcost=2"},
     {"custom bf4 robust", "backend=custom,branchingFactor=4,robust=true"},
     /* Embree's own scene arguments (BVH8Triangle4SceneBuilderSAH): native's tree exactly,
      * so this row against native default compares the kernels alone */
-    {"custom as native", "backend=custom,branchingFactor=8,sahBlockSize=4,minLeafSize=4,maxLeafSize=32"},
+    {"custom as native",
+     "backend=custom,branchingFactor=8,sahBlockSize=4,minLeafSize=4,maxLeafSize=32"},
 };
 #define NCFG (sizeof g_cfgs / sizeof g_cfgs[0])
 
@@ -275,7 +279,8 @@ static double rate_isect_stream(const tt_accel_iface *A, const tt_accel *acc, co
     memcpy(work, rays, NRAYS * sizeof *rays);
     double t0 = cpu_s();
     for (size_t i = 0; i < NRAYS; i += STREAM_CHUNK)
-      A->intersect_stream(acc, &work[i], &hits[i], NRAYS - i < STREAM_CHUNK ? NRAYS - i : STREAM_CHUNK);
+      A->intersect_stream(acc, &work[i], &hits[i],
+                          NRAYS - i < STREAM_CHUNK ? NRAYS - i : STREAM_CHUNK);
     v[k] = (double)NRAYS / (cpu_s() - t0) * 1e-6;
   }
   return median(v, runs);
@@ -288,7 +293,8 @@ static double rate_occl_stream(const tt_accel_iface *A, const tt_accel *acc, con
   for (int k = 0; k < runs; k++) {
     double t0 = cpu_s();
     for (size_t i = 0; i < NRAYS; i += STREAM_CHUNK)
-      A->occluded_stream(acc, &rays[i], &occ[i], NRAYS - i < STREAM_CHUNK ? NRAYS - i : STREAM_CHUNK);
+      A->occluded_stream(acc, &rays[i], &occ[i],
+                         NRAYS - i < STREAM_CHUNK ? NRAYS - i : STREAM_CHUNK);
     v[k] = (double)NRAYS / (cpu_s() - t0) * 1e-6;
   }
   return median(v, runs);
@@ -306,7 +312,7 @@ typedef struct mt_job {
   tt_ray *work;
   tt_hit *hits;
   atomic_size_t next;
-  _Atomic long long cpu_ns;  /* CPU time of all worker threads, summed */
+  _Atomic long long cpu_ns; /* CPU time of all worker threads, summed */
 } mt_job;
 
 static void *mt_worker(void *arg) {
@@ -365,7 +371,7 @@ static int g_ratio_n;
 /* Per configuration: log of its ratio to native default (prim, bounce, occl-p, occl-b,
  * all-threads prim, all-threads bounce) summed over scenes, and the scene count. */
 static double g_cfg_log[16][6];
-static double g_cfg_slog[16][4];  /* the same for the stream rates (vs native's streams) */
+static double g_cfg_slog[16][4]; /* the same for the stream rates (vs native's streams) */
 static int g_cfg_n[16], g_cfg_mt_n[16];
 static int g_scene_n;
 
@@ -376,10 +382,10 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
   tt_hit *hits = malloc(NRAYS * sizeof *hits), *ref_hits = malloc(NRAYS * sizeof *ref_hits);
   uint8_t *occ = malloc(NRAYS);
   primary_rays(scene, prim);
-  printf("\n%s: %llu triangles, %zu primary + %zu diffuse-bounce rays, %d runs (medians)\n",
-         name, (unsigned long long)tt_scene_triangle_count(scene), NRAYS, NRAYS, runs);
-  printf("%-24s %9s %8s %7s %7s %8s | %8s %8s | %8s %8s\n", "configuration", "build ms",
-         "MiB", "nodes", "depth", "SAH", "prim", "bounce", "occl-p", "occl-b");
+  printf("\n%s: %llu triangles, %zu primary + %zu diffuse-bounce rays, %d runs (medians)\n", name,
+         (unsigned long long)tt_scene_triangle_count(scene), NRAYS, NRAYS, runs);
+  printf("%-24s %9s %8s %7s %7s %8s | %8s %8s | %8s %8s\n", "configuration", "build ms", "MiB",
+         "nodes", "depth", "SAH", "prim", "bounce", "occl-p", "occl-b");
   const tt_space *space = A->space();
   double native_rate[2] = {0, 0}, native_all[4] = {0, 0, 0, 0}, native_mt[2] = {0, 0};
   double native_stream[4] = {0, 0, 0, 0};
@@ -414,7 +420,8 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
     memcpy(prim_hits, hits, NRAYS * sizeof *hits);
     size_t differ = 0;
     for (size_t i = 0; i < NRAYS; i++)
-      differ += (hits[i].geom_id != ref_hits[i].geom_id) || (hits[i].prim_id != ref_hits[i].prim_id);
+      differ +=
+          (hits[i].geom_id != ref_hits[i].geom_id) || (hits[i].prim_id != ref_hits[i].prim_id);
     double rb = rate_isect(A, acc, bounce, work, hits, runs);
     double op = rate_occl(A, acc, prim, occ, runs);
     double ob = rate_occl(A, acc, bounce, occ, runs);
@@ -444,13 +451,15 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
       for (size_t i = 0; i < NRAYS; i++) odiff += so[i] != o1[i];
       double sob = rate_occl_stream(A, acc, bounce, so, runs);
       printf("%-24s   streams of %d: %8.2f %8.2f | %8.2f %8.2f   (x single: %.2f %.2f | %.2f "
-             "%.2f)\n", "", STREAM_CHUNK, sp, sb, sop, sob, sp / rp, sb / rb, sop / op, sob / ob);
+             "%.2f)\n",
+             "", STREAM_CHUNK, sp, sb, sop, sob, sp / rp, sb / rb, sop / op, sob / ob);
       int custom = strstr(g_cfgs[ci].settings, "backend=custom") != NULL;
       /* custom: exactly (ties go to the smaller ids whatever the order of visit) */
       CHECK_MSG(sdiff <= (custom ? 0 : NRAYS / 10000) && odiff <= (custom ? 0 : NRAYS / 10000) &&
-                sties <= (custom ? 0 : NRAYS / 10000),
+                    sties <= (custom ? 0 : NRAYS / 10000),
                 "%s [%s]: streams differ from single rays on %zu hits (%zu of them ties), %zu "
-                "occlusions", name, g_cfgs[ci].label, sdiff + sties, sties, odiff);
+                "occlusions",
+                name, g_cfgs[ci].label, sdiff + sties, sties, odiff);
       double sall[4] = {sp, sb, sop, sob};
       if (ci == 0) memcpy(native_stream, sall, sizeof sall);
       else if (native_stream[0] > 0 && ci < 16) {
@@ -467,13 +476,14 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
       mp = rate_isect_mt(A, acc, prim, work, hits, runs, &shp);
       size_t mt_differ = 0;
       for (size_t i = 0; i < NRAYS; i++)
-        mt_differ += (hits[i].geom_id != ref_hits[i].geom_id) ||
-                     (hits[i].prim_id != ref_hits[i].prim_id);
-      CHECK_MSG(mt_differ <= NRAYS / 10000, "%s [%s]: %zu all-threads primary hits differ",
-                name, g_cfgs[ci].label, mt_differ);
+        mt_differ +=
+            (hits[i].geom_id != ref_hits[i].geom_id) || (hits[i].prim_id != ref_hits[i].prim_id);
+      CHECK_MSG(mt_differ <= NRAYS / 10000, "%s [%s]: %zu all-threads primary hits differ", name,
+                g_cfgs[ci].label, mt_differ);
       mb = rate_isect_mt(A, acc, bounce, work, hits, runs, &shb);
       printf("%-24s   all %d threads (wall): primary %.2f, bounce %.2f Mrays/s (threads on "
-             "a CPU %.0f%% / %.0f%% of the time)\n", "", g_threads, mp, mb, 100 * shp, 100 * shb);
+             "a CPU %.0f%% / %.0f%% of the time)\n",
+             "", g_threads, mp, mb, 100 * shp, 100 * shb);
     }
     double all[4] = {rp, rb, op, ob};
     if (ci == 0) {
@@ -517,7 +527,8 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
           per[set][1] = (double)cnt.triangles_tested / (double)NRAYS;
         }
         printf("%-24s   per ray: primary %.1f nodes %.1f triangles, bounce %.1f nodes %.1f "
-               "triangles\n", "", per[0][0], per[0][1], per[1][0], per[1][1]);
+               "triangles\n",
+               "", per[0][0], per[0][1], per[1][0], per[1][1]);
         for (int set = 0; set < 2; set++) {
           const tt_ray *rs = set ? bounce : prim;
           for (size_t i = 0; i < NRAYS; i++) occ[i] = (uint8_t)A->occluded1(acc, &rs[i]);
@@ -527,7 +538,8 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
           per[set][1] = (double)cnt.triangles_tested / (double)NRAYS;
         }
         printf("%-24s   per occlusion ray: primary %.1f nodes %.1f triangles, bounce %.1f nodes "
-               "%.1f triangles\n", "", per[0][0], per[0][1], per[1][0], per[1][1]);
+               "%.1f triangles\n",
+               "", per[0][0], per[0][1], per[1][0], per[1][1]);
         A->destroy(acc);
       }
       tt_config_destroy(cc);
@@ -538,7 +550,7 @@ static void bench_scene(const tt_accel_iface *A, const char *name, tt_scene *sce
 
 int main(int argc, char **argv) {
   int runs = argc > 1 ? atoi(argv[1]) : 5;
-  const char *only = argc > 2 ? argv[2] : NULL;  /* scene-name filter, for quick looks */
+  const char *only = argc > 2 ? argv[2] : NULL; /* scene-name filter, for quick looks */
   g_cfg_filter = argc > 3 ? argv[3] : NULL;
   if (runs < 1 || runs > 16) runs = 5;
   long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
@@ -551,7 +563,8 @@ int main(int argc, char **argv) {
   char path[4096];
 
   printf("accel_embree bench: single-thread Mrays/s (intersect1 / occluded1, per CPU second "
-         "of the tracing thread), build ms (wall, Embree's thread pool); medians of %d\n", runs);
+         "of the tracing thread), build ms (wall, Embree's thread pool); medians of %d\n",
+         runs);
   printf("all-threads rows: intersect1 on %d threads (pthreads, chunks of %d rays), Mrays/s "
          "per WALL second (shared machine: other load counts against them), medians of %d\n",
          g_threads, MT_CHUNK, runs);
@@ -606,17 +619,19 @@ int main(int argc, char **argv) {
   }
   if (g_ratio_n)
     printf("\ncustom default / native default, geometric mean over %d scenes: primary %.2fx, "
-           "bounce %.2fx\n", g_ratio_n, exp(g_log_ratio_sum[0] / g_ratio_n),
-           exp(g_log_ratio_sum[1] / g_ratio_n));
+           "bounce %.2fx\n",
+           g_ratio_n, exp(g_log_ratio_sum[0] / g_ratio_n), exp(g_log_ratio_sum[1] / g_ratio_n));
   for (size_t ci = 1; ci < NCFG && ci < 16; ci++)
     if (!strcmp(g_cfgs[ci].label, "custom default (bf2)") && g_cfg_mt_n[ci])
       printf("custom default / native default, all %d threads (wall), geometric mean over %d "
-             "scenes: primary %.2fx, bounce %.2fx\n", g_threads, g_cfg_mt_n[ci],
-             exp(g_cfg_log[ci][4] / g_cfg_mt_n[ci]), exp(g_cfg_log[ci][5] / g_cfg_mt_n[ci]));
+             "scenes: primary %.2fx, bounce %.2fx\n",
+             g_threads, g_cfg_mt_n[ci], exp(g_cfg_log[ci][4] / g_cfg_mt_n[ci]),
+             exp(g_cfg_log[ci][5] / g_cfg_mt_n[ci]));
   printf("\nratios to native default, geometric means over the scenes measured (all threads: "
-         "wall time, %d threads)\n", g_threads);
-  printf("%-24s %7s %7s %7s %7s | %8s %8s\n", "configuration", "prim", "bounce", "occl-p",
-         "occl-b", "all-prim", "all-bnc");
+         "wall time, %d threads)\n",
+         g_threads);
+  printf("%-24s %7s %7s %7s %7s | %8s %8s\n", "configuration", "prim", "bounce", "occl-p", "occl-b",
+         "all-prim", "all-bnc");
   for (size_t ci = 1; ci < NCFG && ci < 16; ci++) {
     if (!g_cfg_n[ci]) continue;
     double n = g_cfg_n[ci];

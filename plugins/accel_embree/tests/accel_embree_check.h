@@ -23,7 +23,7 @@ typedef struct rayset {
   size_t n;
   tt_ray *rays;
   ae_ref *ref;
-  double uv_abs;  /* barycentric tolerance (0: UV_ABS); ill-conditioned sliver triangles
+  double uv_abs; /* barycentric tolerance (0: UV_ABS); ill-conditioned sliver triangles
                    * need more: float u, v err by ~ulp * length / width */
 } rayset;
 
@@ -47,7 +47,7 @@ static inline rayset make_rayset(const tt_scene *scene, uint64_t seed) {
 
 /* Compares one hit with the reference; returns 1 if it is wrong (and reports it). */
 static inline int check_hit(const rayset *rs, size_t i, const tt_ray *after, const tt_hit *h,
-                     const char *what, const char *cfg) {
+                            const char *what, const char *cfg) {
   const ae_ref *ref = &rs->ref[i];
   const tt_ray *ray = &rs->rays[i];
   const double uv_abs = rs->uv_abs > 0 ? rs->uv_abs : UV_ABS;
@@ -56,34 +56,32 @@ static inline int check_hit(const rayset *rs, size_t i, const tt_ray *after, con
     if (h->geom_id == TT_INVALID_ID) return 0;
     if (h->geom_id >= tt_scene_mesh_count(rs->scene) ||
         h->prim_id >= tt_scene_mesh(rs->scene, h->geom_id)->triangle_count) {
-      CHECK_MSG(0, "%s ray %zu [%s]: ids %u/%u out of range", what, i, cfg, h->geom_id,
-                h->prim_id);
+      CHECK_MSG(0, "%s ray %zu [%s]: ids %u/%u out of range", what, i, cfg, h->geom_id, h->prim_id);
       return 1;
     }
     const float *p0, *p1, *p2;
     double t, u, v;
     ae_tri(tt_scene_mesh(rs->scene, h->geom_id), h->prim_id, &p0, &p1, &p2);
-    int ok = ae_mt(ray, p0, p1, p2, 10 * AE_EPS, &t, &u, &v) &&
-             fabs(t - h->t) <= 1e-3 * fabs(t) + 1e-6;
+    int ok =
+        ae_mt(ray, p0, p1, p2, 10 * AE_EPS, &t, &u, &v) && fabs(t - h->t) <= 1e-3 * fabs(t) + 1e-6;
     CHECK_MSG(ok, "%s ray %zu [%s]: reported %u/%u not hit at t=%g", what, i, cfg, h->geom_id,
               h->prim_id, (double)h->t);
     return !ok;
   }
   if (ref->geom == TT_INVALID_ID) {
     bad = h->geom_id != TT_INVALID_ID || after->tfar != ray->tfar;
-    CHECK_MSG(!bad, "%s ray %zu [%s]: reference misses, got %u/%u t=%g", what, i, cfg,
-              h->geom_id, h->prim_id, (double)h->t);
+    CHECK_MSG(!bad, "%s ray %zu [%s]: reference misses, got %u/%u t=%g", what, i, cfg, h->geom_id,
+              h->prim_id, (double)h->t);
     return bad;
   }
   bad = h->geom_id != ref->geom || h->prim_id != ref->prim;
   CHECK_MSG(!bad, "%s ray %zu [%s]: hit %u/%u, reference %u/%u (t %g vs %g)", what, i, cfg,
             h->geom_id, h->prim_id, ref->geom, ref->prim, (double)h->t, ref->t);
   if (bad) return 1;
-  bad = fabs(h->t - ref->t) > T_REL * ref->t + T_ABS ||
-        fabs(h->u - ref->u) > uv_abs || fabs(h->v - ref->v) > uv_abs || after->tfar != h->t;
+  bad = fabs(h->t - ref->t) > T_REL * ref->t + T_ABS || fabs(h->u - ref->u) > uv_abs ||
+        fabs(h->v - ref->v) > uv_abs || after->tfar != h->t;
   CHECK_MSG(!bad, "%s ray %zu [%s]: t %.9g/%.9g uv (%g,%g)/(%g,%g) tfar %g", what, i, cfg,
-            (double)h->t, ref->t, (double)h->u, (double)h->v, ref->u, ref->v,
-            (double)after->tfar);
+            (double)h->t, ref->t, (double)h->u, (double)h->v, ref->u, ref->v, (double)after->tfar);
   const float *p0, *p1, *p2;
   ae_tri(tt_scene_mesh(rs->scene, ref->geom), ref->prim, &p0, &p1, &p2);
   double e1[3], e2[3], n[3], err = 0, len;
@@ -119,7 +117,7 @@ static inline long check_one_origin_streams(const tt_accel_iface *A, const tt_ac
       for (size_t i = 0; i < m; i++) {
         if (i % 5 == 1) r[i].tnear = 3.0f + 0.001f * (float)(i % 17);
         if (i % 7 == 2) r[i].tfar = 3.5f + 0.01f * (float)(i % 13);
-        if (i % 11 == 3) r[i].tfar = r[i].tnear - 1.0f;  /* empty interval */
+        if (i % 11 == 3) r[i].tfar = r[i].tnear - 1.0f; /* empty interval */
         if (i % 97 == 4) r[i].dir[1] = NAN;
         if (i % 89 == 5) r[i].dir[0] = INFINITY;
       }
@@ -142,11 +140,14 @@ static inline long check_one_origin_streams(const tt_accel_iface *A, const tt_ac
       if (!bad && !miss1 && same_tri)
         bad = h1[i].t != h2[i].t || h1[i].u != h2[i].u || h1[i].v != h2[i].v ||
               memcmp(h1[i].ng, h2[i].ng, sizeof h1[i].ng) != 0;
-      CHECK_MSG(!bad, "one-origin stream ray %zu (variant %d) [%s]: %u/%u t=%.9g vs intersect1 "
-                "%u/%u t=%.9g", i, variant, name, h2[i].geom_id, h2[i].prim_id, (double)h2[i].t,
-                h1[i].geom_id, h1[i].prim_id, (double)h1[i].t);
+      CHECK_MSG(!bad,
+                "one-origin stream ray %zu (variant %d) [%s]: %u/%u t=%.9g vs intersect1 "
+                "%u/%u t=%.9g",
+                i, variant, name, h2[i].geom_id, h2[i].prim_id, (double)h2[i].t, h1[i].geom_id,
+                h1[i].prim_id, (double)h1[i].t);
       wrong += bad;
-      if (variant == 0) wrong += check_hit(rs, NRAYS + i, &w2[i], &h2[i], "one-origin stream", name);
+      if (variant == 0)
+        wrong += check_hit(rs, NRAYS + i, &w2[i], &h2[i], "one-origin stream", name);
       int o1 = A->occluded1(acc, &r[i]);
       CHECK_MSG(o1 == o2[i], "one-origin occluded_stream ray %zu (variant %d) [%s]: %d vs %d", i,
                 variant, name, o2[i], o1);
@@ -166,7 +167,7 @@ static tt_status ae_last_build_status;
 /* Builds `cfg` and checks every query on `rs`; returns the number of wrong answers, or -1
  * if the build failed. `max_check` limits the rays (0: all). */
 static inline long check_config(const tt_accel_iface *A, const tt_config *cfg, const rayset *rs,
-                         const char *name, size_t max_check, tt_accel_build_stats *st_out) {
+                                const char *name, size_t max_check, tt_accel_build_stats *st_out) {
   tt_accel *acc = NULL;
   tt_accel_build_stats st;
   memset(&st, 0, sizeof st);
@@ -195,8 +196,8 @@ static inline long check_config(const tt_accel_iface *A, const tt_config *cfg, c
     if (!rs->ref[i].ambiguous) {
       int expect = rs->ref[i].geom != TT_INVALID_ID;
       int o1 = A->occluded1(acc, &rs->rays[i]);
-      CHECK_MSG(o1 == expect && occ[i] == expect, "occluded ray %zu [%s]: %d/%d, expected %d",
-                i, name, o1, occ[i], expect);
+      CHECK_MSG(o1 == expect && occ[i] == expect, "occluded ray %zu [%s]: %d/%d, expected %d", i,
+                name, o1, occ[i], expect);
       wrong += o1 != expect || occ[i] != expect;
     }
   }

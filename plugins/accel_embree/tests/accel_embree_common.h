@@ -76,7 +76,7 @@ static inline void ae_scene_begin(ae_buf *b) {
 
 /* Appends one inline mesh; `first` omits the separating comma. %.9g round-trips floats. */
 static inline void ae_scene_mesh(ae_buf *b, int first, const char *name, const float *pos,
-                          uint32_t vertex_count, const uint32_t *idx, uint32_t tri_count) {
+                                 uint32_t vertex_count, const uint32_t *idx, uint32_t tri_count) {
   ae_printf(b, "%s{\"name\":\"%s\",\"material\":\"m\",\"positions\":[", first ? "" : ",", name);
   for (uint32_t i = 0; i < 3 * vertex_count; i++)
     ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i]);
@@ -122,7 +122,8 @@ static inline tt_scene *ae_random_scene(uint64_t seed, int meshes, const uint32_
       for (int v = 0; v < 3; v++) {
         uint32_t vi = perm[3 * t + (uint32_t)v];
         idx[3 * t + (uint32_t)v] = vi;
-        for (int k = 0; k < 3; k++) pos[3 * vi + (uint32_t)k] = (float)(c[k] + size * ae_uniform(&rng, -0.5, 0.5));
+        for (int k = 0; k < 3; k++)
+          pos[3 * vi + (uint32_t)k] = (float)(c[k] + size * ae_uniform(&rng, -0.5, 0.5));
       }
     }
     char name[16];
@@ -178,7 +179,7 @@ static inline void ae_camera_rays(tt_ray *rays, size_t w, size_t h) {
  * distance of it (or, for a miss, at all). */
 typedef struct ae_ref {
   double t, u, v;
-  uint32_t geom, prim;  /* TT_INVALID_ID on a miss */
+  uint32_t geom, prim; /* TT_INVALID_ID on a miss */
   int ambiguous;
 } ae_ref;
 
@@ -223,7 +224,7 @@ static inline void ae_tri(const tt_mesh *m, uint32_t prim, const float **p0, con
 /* Reference closest hit of one ray over every triangle of the scene. */
 static inline ae_ref ae_brute(const tt_scene *scene, const tt_ray *r) {
   ae_ref best = {INFINITY, 0, 0, TT_INVALID_ID, TT_INVALID_ID, 0};
-  double near_t[2] = {INFINITY, INFINITY};  /* two closest grown-edge hits */
+  double near_t[2] = {INFINITY, INFINITY}; /* two closest grown-edge hits */
   uint64_t near_id[2] = {UINT64_MAX, UINT64_MAX};
   const double lo = r->tnear, hi = r->tfar;
   for (uint32_t g = 0; g < tt_scene_mesh_count(scene); g++) {
@@ -253,9 +254,8 @@ static inline ae_ref ae_brute(const tt_scene *scene, const tt_ray *r) {
   uint64_t bid = ((uint64_t)best.geom << 32) | best.prim;
   double other = near_id[0] == bid ? near_t[1] : near_t[0];
   double w = 1.0 - best.u - best.v;
-  best.ambiguous = other <= best.t * (1 + AE_EPS) + 1e-7 ||
-                   best.u < AE_EPS || best.v < AE_EPS || w < AE_EPS ||
-                   best.t - lo <= AE_EPS * fabs(best.t) + 1e-7 ||
+  best.ambiguous = other <= best.t * (1 + AE_EPS) + 1e-7 || best.u < AE_EPS || best.v < AE_EPS ||
+                   w < AE_EPS || best.t - lo <= AE_EPS * fabs(best.t) + 1e-7 ||
                    hi - best.t <= AE_EPS * fabs(best.t) + 1e-7;
   return best;
 }

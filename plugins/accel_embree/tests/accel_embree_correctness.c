@@ -35,29 +35,29 @@ static void check_hit(const tt_scene *scene, const tt_ray *ray, const tt_ray *af
     ae_tri(m, h->prim_id, &p0, &p1, &p2);
     int ok = ae_mt(ray, p0, p1, p2, 10 * AE_EPS, &t, &u, &v);
     CHECK_MSG(ok && fabs(t - h->t) <= 1e-3 * fabs(t) + 1e-6,
-              "%s ray %zu [%s]: reported triangle %u/%u not hit at t=%g", what, i, cfg,
-              h->geom_id, h->prim_id, (double)h->t);
+              "%s ray %zu [%s]: reported triangle %u/%u not hit at t=%g", what, i, cfg, h->geom_id,
+              h->prim_id, (double)h->t);
     return;
   }
   if (ref->geom == TT_INVALID_ID) {
     CHECK_MSG(h->geom_id == TT_INVALID_ID && h->prim_id == TT_INVALID_ID,
-              "%s ray %zu [%s]: reference misses, Embree hit %u/%u t=%g", what, i, cfg,
-              h->geom_id, h->prim_id, (double)h->t);
+              "%s ray %zu [%s]: reference misses, Embree hit %u/%u t=%g", what, i, cfg, h->geom_id,
+              h->prim_id, (double)h->t);
     CHECK_MSG(after->tfar == ray->tfar || (isnan(after->tfar) && isnan(ray->tfar)),
               "%s ray %zu [%s]: tfar changed on a miss", what, i, cfg);
     return;
   }
   CHECK_MSG(h->geom_id == ref->geom && h->prim_id == ref->prim,
-            "%s ray %zu [%s]: hit %u/%u, reference %u/%u (t %g vs %g)", what, i, cfg,
-            h->geom_id, h->prim_id, ref->geom, ref->prim, (double)h->t, ref->t);
+            "%s ray %zu [%s]: hit %u/%u, reference %u/%u (t %g vs %g)", what, i, cfg, h->geom_id,
+            h->prim_id, ref->geom, ref->prim, (double)h->t, ref->t);
   if (h->geom_id != ref->geom || h->prim_id != ref->prim) return;
   CHECK_MSG(fabs(h->t - ref->t) <= T_REL * ref->t + T_ABS, "%s ray %zu [%s]: t %.9g vs %.9g", what,
             i, cfg, (double)h->t, ref->t);
   CHECK_MSG(fabs(h->u - ref->u) <= UV_ABS && fabs(h->v - ref->v) <= UV_ABS,
-            "%s ray %zu [%s]: uv (%g,%g) vs (%g,%g)", what, i, cfg, (double)h->u,
-            (double)h->v, ref->u, ref->v);
-  CHECK_MSG(after->tfar == h->t, "%s ray %zu [%s]: tfar %g not shortened to t %g", what, i,
-            cfg, (double)after->tfar, (double)h->t);
+            "%s ray %zu [%s]: uv (%g,%g) vs (%g,%g)", what, i, cfg, (double)h->u, (double)h->v,
+            ref->u, ref->v);
+  CHECK_MSG(after->tfar == h->t, "%s ray %zu [%s]: tfar %g not shortened to t %g", what, i, cfg,
+            (double)after->tfar, (double)h->t);
   /* ng must be cross(v1-v0, v2-v0): same direction and length. */
   const float *p0, *p1, *p2;
   ae_tri(tt_scene_mesh(scene, ref->geom), ref->prim, &p0, &p1, &p2);
@@ -69,8 +69,8 @@ static void check_hit(const tt_scene *scene, const tt_ray *ray, const tt_ray *af
   double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   double err = 0;
   for (int k = 0; k < 3; k++) err += (h->ng[k] - n[k]) * (h->ng[k] - n[k]);
-  CHECK_MSG(sqrt(err) <= 1e-3 * len, "%s ray %zu [%s]: ng (%g,%g,%g) vs (%g,%g,%g)", what,
-            i, cfg, (double)h->ng[0], (double)h->ng[1], (double)h->ng[2], n[0], n[1], n[2]);
+  CHECK_MSG(sqrt(err) <= 1e-3 * len, "%s ray %zu [%s]: ng (%g,%g,%g) vs (%g,%g,%g)", what, i, cfg,
+            (double)h->ng[0], (double)h->ng[1], (double)h->ng[2], n[0], n[1], n[2]);
 }
 
 /* Context of the threaded query check. */
@@ -90,8 +90,7 @@ static void par_body(void *user, uint64_t begin, uint64_t end, uint32_t thread) 
   memcpy(c->work + begin, c->rays + begin, (size_t)(end - begin) * sizeof *c->rays);
   if ((begin / 100) % 2)
     for (uint64_t i = begin; i < end; i++) c->A->intersect1(c->acc, &c->work[i], &c->hits[i]);
-  else
-    c->A->intersect_stream(c->acc, c->work + begin, c->hits + begin, (size_t)(end - begin));
+  else c->A->intersect_stream(c->acc, c->work + begin, c->hits + begin, (size_t)(end - begin));
 }
 
 int main(void) {
@@ -134,7 +133,8 @@ int main(void) {
         snprintf(name, sizeof name, "quality=%d bf=%d compact=%d robust=%d static=%d", q, bf,
                  compact, robust, stat);
         CHECK(tt_config_set_number(cfg, (size_t)tt_space_find(space, "quality"), q) == TT_OK);
-        CHECK(tt_config_set_number(cfg, (size_t)tt_space_find(space, "branchingFactor"), bf) == TT_OK);
+        CHECK(tt_config_set_number(cfg, (size_t)tt_space_find(space, "branchingFactor"), bf) ==
+              TT_OK);
         CHECK(tt_config_set_string(cfg, "compact", compact ? "true" : "false") == TT_OK);
         CHECK(tt_config_set_string(cfg, "robust", robust ? "true" : "false") == TT_OK);
         CHECK(tt_config_set_string(cfg, "static", stat ? "true" : "false") == TT_OK);
@@ -163,8 +163,7 @@ int main(void) {
           check_hit(scene, &rays[i], &work[i], &hits[i], &ref[i], "intersect1", i, name);
           occ[i] = (uint8_t)A->occluded1(acc, &rays[i]);
           if (!ref[i].ambiguous)
-            CHECK_MSG(occ[i] == (ref[i].geom != TT_INVALID_ID), "occluded1 ray %zu [%s]", i,
-                      name);
+            CHECK_MSG(occ[i] == (ref[i].geom != TT_INVALID_ID), "occluded1 ray %zu [%s]", i, name);
         }
         /* streams: same answers as the single-ray calls (odd count: a partial chunk) */
         memcpy(work, rays, n * sizeof *rays);
@@ -179,16 +178,17 @@ int main(void) {
                           : fabsf(shits[i].t - hits[i].t) <= 1e-5f * fabsf(hits[i].t) + 1e-7f);
           if (!ref[i].ambiguous) CHECK_MSG(same, "stream vs single ray %zu [%s]", i, name);
           stream_diff += !same;
-          if (!ref[i].ambiguous) CHECK_MSG(socc[i] == occ[i], "occluded_stream ray %zu [%s]", i, name);
+          if (!ref[i].ambiguous)
+            CHECK_MSG(socc[i] == occ[i], "occluded_stream ray %zu [%s]", i, name);
         }
         CHECK(stream_diff <= g_ambiguous);
-        A->intersect_stream(acc, work, shits, 0);  /* empty stream: a no-op */
+        A->intersect_stream(acc, work, shits, 0); /* empty stream: a no-op */
 
         /* counters are not available in the native backend */
         tt_accel_counters c = {.struct_size = sizeof c};
         CHECK(A->counters(acc, &c, 1) == TT_ERR_UNSUPPORTED);
         A->destroy(acc);
-        if (tt_test_failures > 50) break;  /* enough to diagnose */
+        if (tt_test_failures > 50) break; /* enough to diagnose */
       }
   CHECK(combos == 3 * 3 * 8);
   printf("configurations checked: %d\n", combos);
@@ -208,7 +208,7 @@ int main(void) {
     tt_hit h;
     tt_ray w = r;
     A->intersect1(acc, &w, &h);
-    CHECK(rr.geom == TT_INVALID_ID);  /* ref[i] was the closest */
+    CHECK(rr.geom == TT_INVALID_ID); /* ref[i] was the closest */
     CHECK_MSG(h.geom_id == TT_INVALID_ID, "short tfar ray %zu still hits", i);
     CHECK(!A->occluded1(acc, &r));
     r = rays[i];
@@ -243,7 +243,7 @@ int main(void) {
     free(pwork), free(phits);
   }
   A->destroy(acc);
-  A->destroy(NULL);  /* documented no-op */
+  A->destroy(NULL); /* documented no-op */
 
   tt_config_destroy(cfg);
   free(rays), free(work), free(hits), free(shits), free(ref), free(occ), free(socc);

@@ -31,7 +31,7 @@ static void test_log(tt_log_level level, const char *plugin, const char *fmt, ..
 
 /* Leaf / depth / block / cost variants crossed with every quality x bf x robust. */
 static const char *const g_variants[] = {
-    "",  /* Embree defaults: leaves up to 32, maxDepth 32 */
+    "", /* Embree defaults: leaves up to 32, maxDepth 32 */
     "minLeafSize=1,maxLeafSize=1,maxDepth=64",
     "minLeafSize=4,maxLeafSize=8,sahBlockSize=4,maxDepth=20",
     "minLeafSize=3,maxLeafSize=17,sahBlockSize=8,travcost=5,intcost=0.5,maxDepth=48",
@@ -48,8 +48,8 @@ static void run_matrix(const tt_accel_iface *A, const rayset *rs, int quick, con
         for (size_t v = 0; v < (quick ? 2 : NVAR); v++) {
           tt_config *c = tt_config_create(A->space());
           char base[128], name[256];
-          snprintf(base, sizeof base, "backend=custom,quality=%d,branchingFactor=%d,robust=%s",
-                   q, bf, robust ? "true" : "false");
+          snprintf(base, sizeof base, "backend=custom,quality=%d,branchingFactor=%d,robust=%s", q,
+                   bf, robust ? "true" : "false");
           set_all(c, base);
           set_all(c, g_variants[v]);
           snprintf(name, sizeof name, "%s %s,%s", tag, base, g_variants[v]);
@@ -281,7 +281,7 @@ static void test_counters_and_fallback(const tt_accel_iface *A, const rayset *rs
   set_all(c, "compact=true,counters=true");
   tt_accel_build_stats st = {.struct_size = sizeof st};
   CHECK(A->build(rs->scene, c, &acc, &st) == TT_OK);
-  CHECK(st.nodes == 0);  /* native reports no node counts */
+  CHECK(st.nodes == 0); /* native reports no node counts */
   CHECK(A->counters(acc, &cnt, 0) == TT_ERR_UNSUPPORTED);
   CHECK_CONTAINS(tt_last_error(), "native");
   CHECK_CONTAINS(g_last_info, "falls back to native");
@@ -298,10 +298,10 @@ static void test_counters_and_fallback(const tt_accel_iface *A, const rayset *rs
 /* Degenerate inputs: one triangle; zero-area triangles; a NaN vertex (the scene loader
  * refuses it, which is the defined behaviour then: noted, not failed). */
 static void test_degenerate(const tt_accel_iface *A) {
-  static const float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0,            /* a real triangle */
-                              2, 2, 2, 2, 2, 2, 2, 2, 2,            /* a point */
-                              0, 0, 1, 1, 1, 1, 2, 2, 1,            /* collinear */
-                              NAN, 0, 0, 1, 0, 0, 0, 1, 0};         /* NaN vertex */
+  static const float pos[] = {0,   0, 0, 1, 0, 0, 0, 1, 0,  /* a real triangle */
+                              2,   2, 2, 2, 2, 2, 2, 2, 2,  /* a point */
+                              0,   0, 1, 1, 1, 1, 2, 2, 1,  /* collinear */
+                              NAN, 0, 0, 1, 0, 0, 0, 1, 0}; /* NaN vertex */
   static const uint32_t idx[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
   for (int variant = 0; variant < 3; variant++) {
     ae_buf b = {0};
@@ -322,8 +322,8 @@ static void test_degenerate(const tt_accel_iface *A) {
         for (int robust = 0; robust <= 1; robust++) {
           tt_config *c = tt_config_create(A->space());
           char name[128];
-          snprintf(name, sizeof name, "backend=custom,quality=%d,branchingFactor=%d,robust=%s",
-                   q, bf, robust ? "true" : "false");
+          snprintf(name, sizeof name, "backend=custom,quality=%d,branchingFactor=%d,robust=%s", q,
+                   bf, robust ? "true" : "false");
           set_all(c, name);
           tt_accel *acc = NULL;
           tt_accel_build_stats st = {.struct_size = sizeof st};
@@ -340,8 +340,8 @@ static void test_degenerate(const tt_accel_iface *A) {
             CHECK(h.geom_id == TT_INVALID_ID);
           } else {
             CHECK_MSG(h.geom_id == 0 && h.prim_id == 0 && fabsf(h.t - 1.0f) < 1e-6f,
-                      "degenerate %d [%s]: hit %u/%u t %g", variant, name, h.geom_id,
-                      h.prim_id, (double)h.t);
+                      "degenerate %d [%s]: hit %u/%u t %g", variant, name, h.geom_id, h.prim_id,
+                      (double)h.t);
           }
           /* NaN / zero-direction rays: defined (miss), no crash */
           tt_ray bad = {{NAN, 0, 0}, 0.0f, {0, 0, -1}, INFINITY};
@@ -350,7 +350,7 @@ static void test_degenerate(const tt_accel_iface *A) {
           tt_ray zero = {{0.2f, 0.2f, 1.0f}, 0.0f, {0, 0, 0}, INFINITY};
           A->intersect1(acc, &zero, &h);
           CHECK(h.geom_id == TT_INVALID_ID);
-          tt_ray empty = {{0.2f, 0.2f, 1.0f}, 2.0f, {0, 0, -1}, 1.0f};  /* tnear > tfar */
+          tt_ray empty = {{0.2f, 0.2f, 1.0f}, 2.0f, {0, 0, -1}, 1.0f}; /* tnear > tfar */
           CHECK(A->occluded1(acc, &empty) == 0);
           A->destroy(acc);
           tt_config_destroy(c);
@@ -366,7 +366,7 @@ static void test_infeasible(const tt_accel_iface *A, const tt_scene *scene) {
   tt_accel *acc = (tt_accel *)c;
   CHECK(A->build(scene, c, &acc, NULL) == TT_ERR_INFEASIBLE && acc == NULL);
   CHECK_CONTAINS(tt_last_error(), "maxDepth 8 is too small");
-  CHECK_CONTAINS(tt_last_error(), "maxDepth >= 13");  /* 2^12 * 1 >= 3100 */
+  CHECK_CONTAINS(tt_last_error(), "maxDepth >= 13"); /* 2^12 * 1 >= 3100 */
   /* the message's value is feasible for the count bound (Embree may still refuse an
    * unbalanced tree, which is reported as infeasible too) */
   set_all(c, "maxDepth=13");
@@ -392,8 +392,8 @@ static void test_infeasible(const tt_accel_iface *A, const tt_scene *scene) {
  * vertex order, hence the same precomputed edges). Every width, leaves of 1 and 2 and the
  * defaults: stream answers equal intersect1's exactly, and ray 0 never hits the quad. */
 static void test_packet_missed_box(const tt_accel_iface *A) {
-  static const float pos[] = {31, 29, 0, 32, 29, 0, 32, 30, 0, 31, 30, 0,       /* quad */
-                              40, 0, -20, 60, 0, -40, 60, 0, -20, 40, 0, -40};  /* ground */
+  static const float pos[] = {31, 29, 0,   32, 29, 0,   32, 30, 0,   31, 30, 0,    /* quad */
+                              40, 0,  -20, 60, 0,  -40, 60, 0,  -20, 40, 0,  -40}; /* ground */
   static const uint32_t idx[] = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 7, 5};
   ae_buf buf = {0};
   ae_scene_begin(&buf);
@@ -406,7 +406,7 @@ static void test_packet_missed_box(const tt_accel_iface *A) {
     r->org[0] = -40.0f, r->org[1] = 132.0f, r->org[2] = 112.0f;
     r->tnear = 0.0f;
     r->tfar = INFINITY;
-    if (i == 0) {  /* the monument's ray, exactly */
+    if (i == 0) { /* the monument's ray, exactly */
       r->dir[0] = 0x1.b36568p-2f, r->dir[1] = -0x1.39b0d8p-1f, r->dir[2] = -0x1.5519c4p-1f;
       continue;
     }
@@ -444,9 +444,9 @@ static void test_packet_missed_box(const tt_accel_iface *A) {
         int same = h1[i].geom_id == h2[i].geom_id && h1[i].prim_id == h2[i].prim_id &&
                    memcmp(&h1[i].t, &h2[i].t, sizeof h1[i].t) == 0 && h1[i].u == h2[i].u &&
                    h1[i].v == h2[i].v && w1[i].tfar == w2[i].tfar;
-        CHECK_MSG(same, "monument ray %d [%s]: stream %u/%u t=%a, intersect1 %u/%u t=%a", i,
-                  name, h2[i].geom_id, h2[i].prim_id, (double)h2[i].t, h1[i].geom_id,
-                  h1[i].prim_id, (double)h1[i].t);
+        CHECK_MSG(same, "monument ray %d [%s]: stream %u/%u t=%a, intersect1 %u/%u t=%a", i, name,
+                  h2[i].geom_id, h2[i].prim_id, (double)h2[i].t, h1[i].geom_id, h1[i].prim_id,
+                  (double)h1[i].t);
         CHECK_MSG(o2[i] == (uint8_t)A->occluded1(acc, &rays[i]),
                   "monument ray %d [%s]: occluded_stream differs", i, name);
       }

@@ -68,8 +68,10 @@ int main(void) {
       built++;
       repaired += st.repaired != 0;
       CHECK_MSG(wrong == 0, "config %d %s: %ld wrong answers", n, json, wrong);
-      CHECK_MSG(cr != TT_CHECK_INFEASIBLE, "config %d %s: check says infeasible (%s) but it "
-                "built", n, json, why);
+      CHECK_MSG(cr != TT_CHECK_INFEASIBLE,
+                "config %d %s: check says infeasible (%s) but it "
+                "built",
+                n, json, why);
       CHECK_MSG((cr == TT_CHECK_REPAIRED) == (st.repaired != 0),
                 "config %d %s: check %d vs stats.repaired %d", n, json, (int)cr, st.repaired);
     } else {
@@ -87,8 +89,8 @@ int main(void) {
     tt_config_destroy(c);
   }
   printf("fuzz: %d configurations: %d built and checked (%d repaired), %d refused as "
-         "infeasible (check function: %d)\n", CONFIGS, built, repaired, infeasible,
-         check_infeasible);
+         "infeasible (check function: %d)\n",
+         CONFIGS, built, repaired, infeasible, check_infeasible);
   /* the draw must exercise both outcomes */
   CHECK(built > CONFIGS / 3 && infeasible > 0);
 

@@ -24,14 +24,15 @@ static void mesh_json(ae_buf *b, ae_rng *rng, int first, const char *name, uint3
     double m[3], size = ae_uniform(rng, 0.02, 0.2);
     for (int k = 0; k < 3; k++) m[k] = c[k] + ae_uniform(rng, -spread, spread);
     for (int v = 0; v < 3; v++)
-      for (int k = 0; k < 3; k++) pos[3 * (3 * t + v) + k] = (float)(m[k] + size * ae_uniform(rng, -0.5, 0.5));
+      for (int k = 0; k < 3; k++)
+        pos[3 * (3 * t + v) + k] = (float)(m[k] + size * ae_uniform(rng, -0.5, 0.5));
   }
   ae_printf(b, "%s{\"name\":\"%s\",\"material\":\"m\",\"positions\":[", first ? "" : ",", name);
   for (uint32_t i = 0; i < 3 * vc; i++) ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i]);
   ae_printf(b, "],\"indices\":[");
   for (uint32_t i = 0; i < vc; i++) ae_printf(b, "%s%u", i ? "," : "", i);
   ae_printf(b, "]");
-  if (morph) {  /* a target that moves every vertex a little, differently */
+  if (morph) { /* a target that moves every vertex a little, differently */
     ae_printf(b, ",\"morph\":{\"targets\":[{\"positions\":[");
     for (uint32_t i = 0; i < 3 * vc; i++)
       ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i] + ae_uniform(rng, -0.15, 0.15));
@@ -48,11 +49,12 @@ static tt_scene *anim_scene(void) {
   ae_buf b = {0};
   ae_scene_begin(&b);
   const double c0[3] = {-0.4, 0, 0}, c1[3] = {0.5, 0.2, 0}, c2[3] = {0, -0.5, 0.3};
-  mesh_json(&b, &rng, 1, "spinner", 6000, c0, 0.5,
-            "\"animation\":{\"keys\":[{\"time\":0,\"rotate\":[0,0,0],\"translate\":[0,0,0]},"
-            "{\"time\":1,\"rotate\":{\"axis\":[0.3,1,0.2],\"angle\":120},\"translate\":[0.3,0.1,0]},"
-            "{\"time\":2,\"rotate\":{\"axis\":[0.3,1,0.2],\"angle\":230},\"translate\":[0.6,-0.2,0.1]}]}",
-            0);
+  mesh_json(
+      &b, &rng, 1, "spinner", 6000, c0, 0.5,
+      "\"animation\":{\"keys\":[{\"time\":0,\"rotate\":[0,0,0],\"translate\":[0,0,0]},"
+      "{\"time\":1,\"rotate\":{\"axis\":[0.3,1,0.2],\"angle\":120},\"translate\":[0.3,0.1,0]},"
+      "{\"time\":2,\"rotate\":{\"axis\":[0.3,1,0.2],\"angle\":230},\"translate\":[0.6,-0.2,0.1]}]}",
+      0);
   mesh_json(&b, &rng, 0, "cloth", 5000, c1, 0.5, NULL, 1);
   mesh_json(&b, &rng, 0, "still", 4000, c2, 0.7, NULL, 0);
   return ae_scene_end(&b, "accel_embree refit scene");
@@ -106,15 +108,18 @@ static void check_refit(const tt_accel_iface *ai, const char *label, const char 
   CHECK_MSG(ai->build(scene, cfg, &acc, NULL) == TT_OK, "%s: %s", label, tt_last_error());
   CHECK_MSG(ai->build(scene, cfg, &stale, NULL) == TT_OK, "%s: %s", label, tt_last_error());
   tt_ray *rays = malloc(sizeof *rays * RAYS);
-  tt_hit *a = malloc(sizeof *a * RAYS), *f = malloc(sizeof *f * RAYS), *s = malloc(sizeof *s * RAYS);
+  tt_hit *a = malloc(sizeof *a * RAYS), *f = malloc(sizeof *f * RAYS),
+         *s = malloc(sizeof *s * RAYS);
   const double times[] = {0.3, 0.9, 1.6, 2.0};
   size_t total = 0, hits = 0, t_diff = 0, ties = 0, stale_diff = 0;
   for (int k = 0; k < 4 && acc; k++) {
     CHECK(tt_scene_set_time(scene, times[k], times[k] - 1.0 / 24) == TT_OK);
     tt_accel_update_stats us = {.struct_size = sizeof us};
     CHECK_MSG(ai->update(acc, &us) == TT_OK, "%s: update: %s", label, tt_last_error());
-    CHECK_MSG(us.rebuilt == 0 && us.since_rebuild == (uint32_t)k + 1, "%s: update %d: rebuilt %d, "
-              "%u since the build", label, k + 1, us.rebuilt, us.since_rebuild);
+    CHECK_MSG(us.rebuilt == 0 && us.since_rebuild == (uint32_t)k + 1,
+              "%s: update %d: rebuilt %d, "
+              "%u since the build",
+              label, k + 1, us.rebuilt, us.since_rebuild);
     tt_accel *fresh = NULL;
     CHECK_MSG(ai->build(scene, cfg, &fresh, NULL) == TT_OK, "%s: %s", label, tt_last_error());
     if (!fresh) break;
@@ -138,9 +143,11 @@ static void check_refit(const tt_accel_iface *ai, const char *label, const char 
     ai->destroy(fresh);
   }
   printf("%s: %zu rays, %zu hits, %zu t differ, %zu ties broken otherwise, a tree left at t=0 "
-         "differs on %zu\n", label, total, hits, t_diff, ties, stale_diff);
+         "differs on %zu\n",
+         label, total, hits, t_diff, ties, stale_diff);
   CHECK_MSG(total == 4 * RAYS && hits > total / 4, "%s: %zu hits of %zu rays", label, hits, total);
-  CHECK_MSG(t_diff == 0, "%s: %zu of %zu rays hit at another t than a fresh build", label, t_diff, total);
+  CHECK_MSG(t_diff == 0, "%s: %zu of %zu rays hit at another t than a fresh build", label, t_diff,
+            total);
   CHECK_MSG(ties <= total / 10000, "%s: %zu same-t hits on other triangles", label, ties);
   CHECK_MSG(stale_diff > total / 50, "%s: the scene hardly moved (%zu rays differ at t=0)", label,
             stale_diff);
@@ -163,10 +170,14 @@ static void check_schedule(const tt_accel_iface *ai) {
     int rebuilt[6];
   } cases[] = {
       {"rebuild", {"updateMethod", "rebuild", NULL}, {1, 1, 1, 1, 1, 1}},
-      {"native refit every 3", {"updateMethod", "refit", "refitInterval", "3", NULL}, {0, 0, 1, 0, 0, 1}},
-      {"custom refit every 3", {"backend", "custom", "updateMethod", "refit", "refitInterval", "3", NULL},
+      {"native refit every 3",
+       {"updateMethod", "refit", "refitInterval", "3", NULL},
        {0, 0, 1, 0, 0, 1}},
-      {"custom growth", {"backend", "custom", "updateMethod", "refit", "refitSahGrowth", "0.01", NULL},
+      {"custom refit every 3",
+       {"backend", "custom", "updateMethod", "refit", "refitInterval", "3", NULL},
+       {0, 0, 1, 0, 0, 1}},
+      {"custom growth",
+       {"backend", "custom", "updateMethod", "refit", "refitSahGrowth", "0.01", NULL},
        {1, 1, 1, 1, 1, 1}},
       {"custom refit", {"backend", "custom", "updateMethod", "refit", NULL}, {0, 0, 0, 0, 0, 0}},
   };
@@ -174,7 +185,8 @@ static void check_schedule(const tt_accel_iface *ai) {
     tt_scene *scene = anim_scene();
     tt_config *cfg = config_of(ai, cases[c].kv);
     tt_accel *acc = NULL;
-    CHECK_MSG(ai->build(scene, cfg, &acc, NULL) == TT_OK, "%s: %s", cases[c].label, tt_last_error());
+    CHECK_MSG(ai->build(scene, cfg, &acc, NULL) == TT_OK, "%s: %s", cases[c].label,
+              tt_last_error());
     for (int k = 0; acc && k < 6; k++) {
       double t = 0.3 * (k + 1);
       CHECK(tt_scene_set_time(scene, t, t - 1.0 / 24) == TT_OK);
@@ -216,11 +228,22 @@ int main(void) {
   CHECK(TT_HAS_FIELD(tt_accel_iface, ai, update) && ai->update);
   static const char *const native[] = {"updateMethod", "refit", NULL};
   static const char *const native_robust[] = {"updateMethod", "refit", "robust", "true", NULL};
-  static const char *const bvh2[] = {"backend", "custom", "branchingFactor", "2", "updateMethod", "refit", NULL};
-  static const char *const bvh4[] = {"backend", "custom", "branchingFactor", "4", "updateMethod", "refit",
-                                     "maxLeafSize", "8", NULL};
-  static const char *const bvh8[] = {"backend", "custom", "branchingFactor", "8", "updateMethod", "refit",
-                                     "quality", "3", "robust", "true", NULL};
+  static const char *const bvh2[] = {"backend", "custom", "branchingFactor", "2", "updateMethod",
+                                     "refit",   NULL};
+  static const char *const bvh4[] = {
+      "backend", "custom", "branchingFactor", "4", "updateMethod", "refit", "maxLeafSize",
+      "8",       NULL};
+  static const char *const bvh8[] = {"backend",
+                                     "custom",
+                                     "branchingFactor",
+                                     "8",
+                                     "updateMethod",
+                                     "refit",
+                                     "quality",
+                                     "3",
+                                     "robust",
+                                     "true",
+                                     NULL};
   check_refit(ai, "native", native);
   check_refit(ai, "native robust", native_robust);
   check_refit(ai, "custom bvh2", bvh2);

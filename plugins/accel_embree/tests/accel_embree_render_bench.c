@@ -52,7 +52,7 @@
 #define MAX_CFG 16
 #define MAX_RUNS 15
 #define MAX_SCENES 8
-#define MAX_MODES 8  /* (threads, depth) pairs */
+#define MAX_MODES 8 /* (threads, depth) pairs */
 
 /* ---- a host whose parallel_for times every chunk with the thread's CPU clock ---- */
 
@@ -76,8 +76,7 @@ static void timed_chunk(void *ctx, uint64_t begin, uint64_t end, uint32_t thread
 
 /* The default host's pool, each chunk timed (parallel_for is main-thread only and not
  * reentrant, so one global slot for the wrapped function is enough). */
-static tt_status timed_parallel_for(uint64_t count, uint64_t grain, tt_parallel_fn fn,
-                                    void *ctx) {
+static tt_status timed_parallel_for(uint64_t count, uint64_t grain, tt_parallel_fn fn, void *ctx) {
   g_inner_fn = fn;
   g_inner_ctx = ctx;
   return tt_default_host()->parallel_for(count, grain, timed_chunk, NULL);
@@ -95,9 +94,9 @@ static tt_status timed_parallel_for(uint64_t count, uint64_t grain, tt_parallel_
  * column and its traversal figure leaves them out. */
 static const tt_accel_iface *g_real;
 static tt_accel_iface g_timed;
-static _Atomic long long g_hit_ns;     /* closest-hit streams */
-static _Atomic long long g_cam_ns;     /* of those, the streams from one origin (camera) */
-static _Atomic long long g_occl_ns;    /* occlusion streams */
+static _Atomic long long g_hit_ns;  /* closest-hit streams */
+static _Atomic long long g_cam_ns;  /* of those, the streams from one origin (camera) */
+static _Atomic long long g_occl_ns; /* occlusion streams */
 static _Atomic long long g_single_calls;
 
 static void timed_intersect1(const tt_accel *a, tt_ray *ray, tt_hit *hit) {
@@ -118,8 +117,7 @@ static void timed_intersect_stream(const tt_accel *a, tt_ray *rays, tt_hit *hits
   atomic_fetch_add_explicit(&g_hit_ns, dt, memory_order_relaxed);
   if (camera) atomic_fetch_add_explicit(&g_cam_ns, dt, memory_order_relaxed);
 }
-static void timed_occluded_stream(const tt_accel *a, const tt_ray *rays, uint8_t *occ,
-                                  size_t n) {
+static void timed_occluded_stream(const tt_accel *a, const tt_ray *rays, uint8_t *occ, size_t n) {
   long long c0 = thread_cpu_ns();
   g_real->occluded_stream(a, rays, occ, n);
   atomic_fetch_add_explicit(&g_occl_ns, thread_cpu_ns() - c0, memory_order_relaxed);
@@ -140,7 +138,7 @@ static const tt_accel_iface *timed_accel(const tt_accel_iface *real) {
 
 typedef struct bench_cfg {
   char label[48];
-  char settings[200];  /* "name=value,..." over accel_embree's defaults; "pt.name=value"
+  char settings[200]; /* "name=value,..." over accel_embree's defaults; "pt.name=value"
                         * sets integrator_pt's */
 } bench_cfg;
 
@@ -244,10 +242,10 @@ typedef struct scene_result {
   char name[32];
   uint64_t triangles;
   int have[MAX_CFG];
-  double cpu[MAX_MODES][MAX_CFG];   /* median CPU ms */
-  double wall[MAX_MODES][MAX_CFG];  /* median wall ms */
-  double ratio[MAX_MODES][MAX_CFG]; /* median over rounds of native CPU ms / this CPU ms */
-  double trav[MAX_MODES][MAX_CFG];  /* median CPU ms in the accel's streams */
+  double cpu[MAX_MODES][MAX_CFG];        /* median CPU ms */
+  double wall[MAX_MODES][MAX_CFG];       /* median wall ms */
+  double ratio[MAX_MODES][MAX_CFG];      /* median over rounds of native CPU ms / this CPU ms */
+  double trav[MAX_MODES][MAX_CFG];       /* median CPU ms in the accel's streams */
   double trav_ratio[MAX_MODES][MAX_CFG]; /* median over rounds of native's / this one's */
   double rest_ratio[MAX_MODES][MAX_CFG]; /* the same for the rest of the render */
   double mib[MAX_CFG];
@@ -259,7 +257,7 @@ static int g_nres;
 
 typedef struct plugins {
   const tt_accel_iface *A;
-  const tt_accel_iface *Aq;  /* A's copy whose queries time themselves (timed_accel) */
+  const tt_accel_iface *Aq; /* A's copy whose queries time themselves (timed_accel) */
   const tt_integrator_iface *I;
 } plugins;
 
@@ -267,11 +265,11 @@ static int g_runs, g_spp, g_w, g_h;
 
 /* The figures of one render (ms are CPU ms of the rendering threads). */
 typedef struct render_fig {
-  double cpu, wall;      /* the whole render; wall: wall-clock ms */
-  double trav;           /* in the accel's streams (closest hit + occlusion) */
-  double occl, cam;      /* of trav: occlusion streams; camera (one-origin) streams */
+  double cpu, wall; /* the whole render; wall: wall-clock ms */
+  double trav;      /* in the accel's streams (closest hit + occlusion) */
+  double occl, cam; /* of trav: occlusion streams; camera (one-origin) streams */
   uint64_t rays;
-  long long singles;     /* single-ray calls (counted, not timed) */
+  long long singles; /* single-ray calls (counted, not timed) */
 } render_fig;
 
 /* Renders one image (g_spp passes of 1 spp, as the host does) into `film`. */
@@ -385,7 +383,7 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
     double cpu[MAX_CFG][MAX_RUNS], wall[MAX_CFG][MAX_RUNS], trav[MAX_CFG][MAX_RUNS];
     double occl[MAX_CFG][MAX_RUNS], cam[MAX_CFG][MAX_RUNS];
     double mean[MAX_CFG];
-    render_fig warm[MAX_CFG];  /* rays and single-ray calls (the same every round) */
+    render_fig warm[MAX_CFG]; /* rays and single-ray calls (the same every round) */
     memset(mean, 0, sizeof mean);
     memset(warm, 0, sizeof warm);
     /* Warm-up: one render of each, not counted (first touch of the tree's pages). */
@@ -396,7 +394,7 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
       }
     for (int r = 0; r < g_runs; r++)
       for (int k = 0; k < g_ncfg; k++) {
-        int c = (k + r) % g_ncfg;  /* rotate the order */
+        int c = (k + r) % g_ncfg; /* rotate the order */
         if (!acc[c] || !it[c]) continue;
         const render_fig f = render_once(P, it[c], scene, acc[c], film);
         cpu[c][r] = f.cpu, wall[c][r] = f.wall, trav[c][r] = f.trav;
@@ -437,16 +435,17 @@ static void bench_scene(const plugins *P, const char *name, tt_scene *scene) {
              "%8.3fx %8.3fx %6lld | %6.1f %6.1f %6.1f\n",
              g_cfgs[c].label, res->cpu[m][c], mn, 100.0 * (mx - mn) / res->cpu[m][c],
              res->wall[m][c], 100.0 * share, res->ratio[m][c], mn0 / mn,
-             warm[0].rays ? 100.0 * ((double)warm[c].rays - (double)warm[0].rays) /
-                                (double)warm[0].rays : 0.0,
+             warm[0].rays
+                 ? 100.0 * ((double)warm[c].rays - (double)warm[0].rays) / (double)warm[0].rays
+                 : 0.0,
              res->trav[m][c], 100.0 * res->trav[m][c] / res->cpu[m][c], res->trav_ratio[m][c],
              res->rest_ratio[m][c], warm[c].singles, cam_ms, res->trav[m][c] - occl_ms - cam_ms,
              occl_ms);
       /* Same seed, same samples: the images may differ only where a hit differs by
        * round-off (a handful of paths). */
       if (acc[0] && mean[0] > 0)
-        CHECK_MSG(fabs(mean[c] - mean[0]) <= 0.01 * mean[0], "%s [%s]: image mean %g vs %g",
-                  name, g_cfgs[c].label, mean[c], mean[0]);
+        CHECK_MSG(fabs(mean[c] - mean[0]) <= 0.01 * mean[0], "%s [%s]: image mean %g vs %g", name,
+                  g_cfgs[c].label, mean[c], mean[0]);
     }
     fflush(stdout);
   }
@@ -468,7 +467,7 @@ static tt_scene *load_scene(const char *path) {
     return NULL;
   }
   tt_scene *s = NULL;
-  fflush(stdout);  /* the loader's warnings go to stderr */
+  fflush(stdout); /* the loader's warnings go to stderr */
   double t0 = bench_wall_ms();
   if (tt_scene_load(path, &s) != TT_OK) {
     printf("note: %s does not load (%s): skipped\n", path, tt_last_error());
@@ -533,10 +532,8 @@ static void summary(void) {
              g_modes[m].depth);
       for (int s = 0; s < g_nres; s++) {
         const scene_result *r = &g_res[s];
-        if (r->have[0] && r->have[c] && r->ratio[m][c] > 0)
-          printf(" %10.3fx", r->ratio[m][c]);
-        else
-          printf(" %11s", "-");
+        if (r->have[0] && r->have[c] && r->ratio[m][c] > 0) printf(" %10.3fx", r->ratio[m][c]);
+        else printf(" %11s", "-");
       }
       int n;
       double mn, g = geomean_ratio(m, c, &n, &mn);
@@ -551,8 +548,7 @@ static void summary(void) {
     for (int s = 0; s < g_nres; s++)
       if (g_res[s].have[c] && g_res[s].mib[0] > 0)
         printf(" %10.2fx", g_res[s].mib[c] / g_res[s].mib[0]);
-      else
-        printf(" %11s", "-");
+      else printf(" %11s", "-");
     printf("\n");
   }
   printf("\ntraversal speed / native default's (median over rounds of native's stream CPU ms "
@@ -565,8 +561,7 @@ static void summary(void) {
         const scene_result *r = &g_res[s];
         if (r->have[0] && r->have[c] && r->trav_ratio[m][c] > 0)
           printf(" %5.3f %5.3f", r->trav_ratio[m][c], r->rest_ratio[m][c]);
-        else
-          printf(" %11s", "-");
+        else printf(" %11s", "-");
       }
       printf("\n");
     }
@@ -575,17 +570,13 @@ static void summary(void) {
   printf("\ntraversal (the accel's streams) in native default's render, and the traversal "
          "speed (x native's) that a 1.10x render needs with the rest unchanged\n");
   for (int m = 0; m < g_nmodes; m++) {
-    printf("%-28s t%d d%-4d", m == 0 ? "share / needed" : "", g_modes[m].threads,
-           g_modes[m].depth);
+    printf("%-28s t%d d%-4d", m == 0 ? "share / needed" : "", g_modes[m].threads, g_modes[m].depth);
     for (int s = 0; s < g_nres; s++) {
       const scene_result *r = &g_res[s];
       const double T = r->cpu[m][0], t = r->trav[m][0], cut = T - T / 1.10;
-      if (!r->have[0] || T <= 0 || t <= 0)
-        printf(" %11s", "-");
-      else if (t <= cut)
-        printf(" %4.0f%% never", 100.0 * t / T);
-      else
-        printf(" %4.0f%% %4.2fx", 100.0 * t / T, t / (t - cut));
+      if (!r->have[0] || T <= 0 || t <= 0) printf(" %11s", "-");
+      else if (t <= cut) printf(" %4.0f%% never", 100.0 * t / T);
+      else printf(" %4.0f%% %4.2fx", 100.0 * t / T, t / (t - cut));
     }
     printf("\n");
   }
@@ -604,8 +595,9 @@ static void summary(void) {
       double mn, g = geomean_ratio(m, best_c, &n, &mn);
       all_met &= g >= 1.10 && mn >= 1.0;
       printf("  best custom (%s) t%d d%d: geomean %.3fx (goal >= 1.10: %s), min %.3fx "
-             "(goal >= 1.0: %s)\n", g_cfgs[best_c].label, g_modes[m].threads, g_modes[m].depth,
-             g, g >= 1.10 ? "met" : "NOT met", mn, mn >= 1.0 ? "met" : "NOT met");
+             "(goal >= 1.0: %s)\n",
+             g_cfgs[best_c].label, g_modes[m].threads, g_modes[m].depth, g,
+             g >= 1.10 ? "met" : "NOT met", mn, mn >= 1.0 ? "met" : "NOT met");
     }
     printf("  => best custom >= 1.10x geomean, none below 1.0x, in every mode: %s\n",
            all_met ? "met" : "NOT met");
@@ -681,8 +673,8 @@ int main(int argc, char **argv) {
   if (getloadavg(load, 3) < 0) load[0] = load[1] = load[2] = -1;
   printf("accel_embree render bench: integrator_pt, %dx%d, %d spp, %d rounds (medians), "
          "configurations interleaved; figure = CPU ms of the rendering threads; load average "
-         "at start %.2f %.2f %.2f on %ld CPUs\n", g_w, g_h, g_spp, g_runs, load[0], load[1],
-         load[2], sysconf(_SC_NPROCESSORS_ONLN));
+         "at start %.2f %.2f %.2f on %ld CPUs\n",
+         g_w, g_h, g_spp, g_runs, load[0], load[1], load[2], sysconf(_SC_NPROCESSORS_ONLN));
 
   const char *root = getenv("TT_SOURCE_ROOT");
   if (!root) root = ".";
@@ -691,10 +683,8 @@ int main(int argc, char **argv) {
   if (shared) snprintf(sdir, sizeof sdir, "%s", shared);
   else snprintf(sdir, sizeof sdir, "%s/../shared/scenes", root);
   static const char *const scenes[][2] = {
-      {"living-room", "living-room/living-room.pbrt"},
-      {"bmw-m6", "bmw-m6/bmw-m6.pbrt"},
-      {"staircase", "staircase/staircase.pbrt"},
-      {"bathroom", "bathroom/bathroom.pbrt"},
+      {"living-room", "living-room/living-room.pbrt"}, {"bmw-m6", "bmw-m6/bmw-m6.pbrt"},
+      {"staircase", "staircase/staircase.pbrt"},       {"bathroom", "bathroom/bathroom.pbrt"},
       {"killeroos", "killeroos/killeroo-simple.pbrt"},
   };
   for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {

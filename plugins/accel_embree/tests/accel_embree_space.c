@@ -29,18 +29,18 @@ static void counting_log(tt_log_level level, const char *plugin, const char *fmt
 /* One expected parameter of Table 3.1. */
 typedef struct expect {
   const char *name;
-  const char *type;  /* "NOM", "INT", "FLOAT" */
-  double def;        /* numeric default (bool: 0/1) */
-  double min, max;   /* INT/FLOAT range */
-  int nvalues;       /* NOM: number of possible values */
+  const char *type; /* "NOM", "INT", "FLOAT" */
+  double def;       /* numeric default (bool: 0/1) */
+  double min, max;  /* INT/FLOAT range */
+  int nvalues;      /* NOM: number of possible values */
 } expect;
 
 static const expect table31[] = {
-    {"quality", "NOM", 2, 0, 0, 3},        {"branchingFactor", "NOM", 2, 0, 0, 3},
-    {"maxDepth", "INT", 32, 8, 64, 0},     {"sahBlockSize", "INT", 1, 1, 32, 0},
-    {"minLeafSize", "INT", 1, 1, 32, 0},   {"maxLeafSize", "INT", 32, 1, 32, 0},
-    {"travcost", "FLOAT", 1, 0.1, 10, 0},  {"intcost", "FLOAT", 1, 0.1, 10, 0},
-    {"static", "NOM", 0, 0, 0, 2},         {"compact", "NOM", 0, 0, 0, 2},
+    {"quality", "NOM", 2, 0, 0, 3},       {"branchingFactor", "NOM", 2, 0, 0, 3},
+    {"maxDepth", "INT", 32, 8, 64, 0},    {"sahBlockSize", "INT", 1, 1, 32, 0},
+    {"minLeafSize", "INT", 1, 1, 32, 0},  {"maxLeafSize", "INT", 32, 1, 32, 0},
+    {"travcost", "FLOAT", 1, 0.1, 10, 0}, {"intcost", "FLOAT", 1, 0.1, 10, 0},
+    {"static", "NOM", 0, 0, 0, 2},        {"compact", "NOM", 0, 0, 0, 2},
     {"robust", "NOM", 0, 0, 0, 2},
 };
 
@@ -79,12 +79,11 @@ static void test_space(const tt_space *space) {
     CHECK_MSG(p != NULL, "parameter %s missing", e->name);
     if (!p) continue;
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(p, "type");
-    CHECK_MSG(cJSON_IsString(type) && strcmp(type->valuestring, e->type) == 0, "%s type",
-              e->name);
+    CHECK_MSG(cJSON_IsString(type) && strcmp(type->valuestring, e->type) == 0, "%s type", e->name);
     CHECK_NEAR(json_num(cJSON_GetObjectItemCaseSensitive(p, "value")), e->def, 1e-9);
     const cJSON *desc = cJSON_GetObjectItemCaseSensitive(p, "description");
-    CHECK_MSG(cJSON_IsString(desc) && (strstr(desc->valuestring, "native") ||
-                                       strstr(desc->valuestring, "custom")),
+    CHECK_MSG(cJSON_IsString(desc) &&
+                  (strstr(desc->valuestring, "native") || strstr(desc->valuestring, "custom")),
               "%s: description must say which backend it acts in", e->name);
     int idx = tt_space_find(space, e->name);
     CHECK(idx >= 0);
@@ -129,15 +128,17 @@ static void test_space(const tt_space *space) {
   /* counters: instrumentation bool, appended last, default false */
   int cn = tt_space_find(space, "counters");
   CHECK(cn == 12);
-  CHECK(tt_space_type(space, (size_t)cn) == TT_PARAM_NOM && tt_space_nom_count(space, (size_t)cn) == 2);
+  CHECK(tt_space_type(space, (size_t)cn) == TT_PARAM_NOM &&
+        tt_space_nom_count(space, (size_t)cn) == 2);
   CHECK(tt_space_default(space, (size_t)cn).i == 0);
   /* what tuners may change (#17 defect 9): counters is a setting; the custom builder's
    * parameters act only with backend custom and compact false; the rest always act */
   CHECK(!tt_space_is_tunable(space, (size_t)cn));
   const cJSON *cp = find_param(root, "counters");
   CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(cp, "tunable")));
-  static const char *const custom_only[] = {"branchingFactor", "maxDepth", "sahBlockSize",
-                                            "minLeafSize", "maxLeafSize", "travcost", "intcost"};
+  static const char *const custom_only[] = {"branchingFactor", "maxDepth",    "sahBlockSize",
+                                            "minLeafSize",     "maxLeafSize", "travcost",
+                                            "intcost"};
   tt_config *cc = tt_config_create(space);
   for (size_t k = 0; k < 7; k++) {
     size_t i = (size_t)tt_space_find(space, custom_only[k]);
@@ -147,7 +148,8 @@ static void test_space(const tt_space *space) {
     CHECK(tt_config_set_string(cc, "backend", "custom") == TT_OK && tt_config_is_active(cc, i));
     CHECK(tt_config_set_string(cc, "compact", "true") == TT_OK && !tt_config_is_active(cc, i));
     CHECK(tt_config_set_string(cc, "compact", "false") == TT_OK);
-    const cJSON *when = cJSON_GetObjectItemCaseSensitive(find_param(root, custom_only[k]), "activeWhen");
+    const cJSON *when =
+        cJSON_GetObjectItemCaseSensitive(find_param(root, custom_only[k]), "activeWhen");
     const cJSON *wb = cJSON_GetObjectItemCaseSensitive(when, "backend");
     CHECK(cJSON_GetArraySize(wb) == 1 && !strcmp(cJSON_GetArrayItem(wb, 0)->valuestring, "custom"));
   }
@@ -160,15 +162,20 @@ static void test_space(const tt_space *space) {
    * (rebuild by default) always acts; its refit schedule only with refit. None of the three
    * is tunable: a tuning pass measures no update, so a tuner would search noise. */
   int um = tt_space_find(space, "updateMethod");
-  CHECK(um == 13 && tt_space_nom_count(space, (size_t)um) == 2 && tt_space_default(space, (size_t)um).index == 0);
-  CHECK(!tt_space_is_tunable(space, (size_t)um) && tt_space_condition_count(space, (size_t)um) == 0);
+  CHECK(um == 13 && tt_space_nom_count(space, (size_t)um) == 2 &&
+        tt_space_default(space, (size_t)um).index == 0);
+  CHECK(!tt_space_is_tunable(space, (size_t)um) &&
+        tt_space_condition_count(space, (size_t)um) == 0);
   static const char *const refit_only[] = {"refitInterval", "refitSahGrowth"};
   for (size_t k = 0; k < 2; k++) {
     int i = tt_space_find(space, refit_only[k]);
     CHECK_MSG(i == 14 + (int)k && !tt_space_is_tunable(space, (size_t)i) &&
-              tt_space_condition_count(space, (size_t)i) == 1, "%s", refit_only[k]);
-    CHECK(tt_config_set_string(cc, "updateMethod", "rebuild") == TT_OK && !tt_config_is_active(cc, (size_t)i));
-    CHECK(tt_config_set_string(cc, "updateMethod", "refit") == TT_OK && tt_config_is_active(cc, (size_t)i));
+                  tt_space_condition_count(space, (size_t)i) == 1,
+              "%s", refit_only[k]);
+    CHECK(tt_config_set_string(cc, "updateMethod", "rebuild") == TT_OK &&
+          !tt_config_is_active(cc, (size_t)i));
+    CHECK(tt_config_set_string(cc, "updateMethod", "refit") == TT_OK &&
+          tt_config_is_active(cc, (size_t)i));
     CHECK(tt_space_default(space, (size_t)i).f == 0.0);
   }
   tt_config_destroy(cc);
@@ -244,7 +251,7 @@ static void test_build(const tt_accel_iface *A) {
   CHECK(h.geom_id == 0 && h.prim_id == 1);
   CHECK_NEAR(h.t, 3.0, 1e-5);
   CHECK_NEAR(r.tfar, 3.0, 1e-5);
-  CHECK(h.ng[2] > 0);  /* counter-clockwise seen from +z: cross(v1-v0, v2-v0) points at +z */
+  CHECK(h.ng[2] > 0); /* counter-clockwise seen from +z: cross(v1-v0, v2-v0) points at +z */
   r.tfar = INFINITY;
   CHECK(A->occluded1(acc, &r) == 1);
   r.tfar = 2.9f;
@@ -261,7 +268,7 @@ static void test_build(const tt_accel_iface *A) {
   st.struct_size = sizeof st;
   CHECK(A->build(scene, c, &acc, &st) == TT_OK && acc);
   CHECK(st.repaired != 0);
-  CHECK(tt_config_get_int(c, "minLeafSize", -1) == 9);  /* the caller's config is const */
+  CHECK(tt_config_get_int(c, "minLeafSize", -1) == 9); /* the caller's config is const */
   A->destroy(acc);
   /* non-default custom-only parameters under backend native: exactly one WARN, ever */
   CHECK(g_warns == 1);
@@ -316,7 +323,7 @@ static void test_build(const tt_accel_iface *A) {
     memset(&st, 0, sizeof st);
     st.struct_size = sizeof st;
     CHECK(A->build(scene, cc, &acc, &st) == TT_OK && acc);
-    CHECK(st.repaired != 0);  /* the check runs even without the space's check function */
+    CHECK(st.repaired != 0); /* the check runs even without the space's check function */
     A->destroy(acc);
     tt_config_destroy(cc);
     tt_space_destroy(copy);

@@ -36,63 +36,92 @@
 #define REG 4
 #define NREG ((W / REG) * (H / REG) + 1)
 
-#define HEAD                                                                                        \
-  "{\"version\":1,\"camera\":{\"position\":[0,0,3.6],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"  \
-  "\"resolution\":[16,16]},\"materials\":{"                                                         \
-  "\"white\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.7,0.7]},"                                      \
-  "\"red\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.1,0.1]},"                                        \
-  "\"green\":{\"type\":\"diffuse\",\"albedo\":[0.1,0.7,0.1]},"                                      \
-  "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.3,0.5],\"alpha\":0.08,\"ior\":1.5},"          \
-  "\"metal\":{\"type\":\"conductor\",\"alpha\":0.2},"                                               \
-  "\"mirror\":{\"type\":\"mirror\"},"                                                                \
-  "\"rough\":{\"type\":\"dielectric\",\"alpha\":0.15,\"ior\":1.5},"                                 \
-  "\"glass\":{\"type\":\"dielectric\",\"ior\":1.5},"                                                \
+#define HEAD                                                                                       \
+  "{\"version\":1,\"camera\":{\"position\":[0,0,3.6],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":"   \
+  "40,"                                                                                            \
+  "\"resolution\":[16,16]},\"materials\":{"                                                        \
+  "\"white\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.7,0.7]},"                                     \
+  "\"red\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.1,0.1]},"                                       \
+  "\"green\":{\"type\":\"diffuse\",\"albedo\":[0.1,0.7,0.1]},"                                     \
+  "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.3,0.5],\"alpha\":0.08,\"ior\":1.5},"         \
+  "\"metal\":{\"type\":\"conductor\",\"alpha\":0.2},"                                              \
+  "\"mirror\":{\"type\":\"mirror\"},"                                                              \
+  "\"rough\":{\"type\":\"dielectric\",\"alpha\":0.15,\"ior\":1.5},"                                \
+  "\"glass\":{\"type\":\"dielectric\",\"ior\":1.5},"                                               \
   "\"light\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],\"emission\":[12,12,10]}},"
-#define WALLS                                                                                       \
-  "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, 1,1,1, -1,1,1],\"indices\":[0,1,2, 0,2,3]}," \
-  "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, -1,1,-1],\"indices\":[0,1,2, 0,2,3]}," \
-  "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, -1,1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"  \
-  "{\"name\":\"right\",\"material\":\"green\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, 1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
-#define LAMP                                                                                        \
-  "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]}"
-#define FLOOR(mat)                                                                                  \
-  "{\"name\":\"floor\",\"material\":\"" mat "\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
-#define BLOCK(mat)                                                                                  \
-  "{\"name\":\"block\",\"material\":\"" mat "\",\"positions\":[-0.5,-1,-0.3, 0.1,-1,-0.3, 0.1,-0.3,-0.3, -0.5,-0.3,-0.3,"  \
-  " -0.5,-1,0.3, 0.1,-1,0.3, 0.1,-0.3,0.3, -0.5,-0.3,0.3],\"indices\":[0,2,1, 0,3,2, 4,5,6, 4,6,7, 0,1,5, 0,5,4,"        \
+#define WALLS                                                                                      \
+  "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, 1,1,1, "           \
+  "-1,1,1],\"indices\":[0,1,2, 0,2,3]},"                                                           \
+  "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, "           \
+  "-1,1,-1],\"indices\":[0,1,2, 0,2,3]},"                                                          \
+  "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, -1,1,1, "             \
+  "-1,-1,1],\"indices\":[0,1,2, 0,2,3]},"                                                          \
+  "{\"name\":\"right\",\"material\":\"green\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, "             \
+  "1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
+#define LAMP                                                                                       \
+  "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, "      \
+  "0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]}"
+#define FLOOR(mat)                                                                                 \
+  "{\"name\":\"floor\",\"material\":\"" mat                                                        \
+  "\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
+#define BLOCK(mat)                                                                                 \
+  "{\"name\":\"block\",\"material\":\"" mat                                                        \
+  "\",\"positions\":[-0.5,-1,-0.3, 0.1,-1,-0.3, 0.1,-0.3,-0.3, -0.5,-0.3,-0.3,"                    \
+  " -0.5,-1,0.3, 0.1,-1,0.3, 0.1,-0.3,0.3, -0.5,-0.3,0.3],\"indices\":[0,2,1, 0,3,2, 4,5,6, "      \
+  "4,6,7, 0,1,5, 0,5,4,"                                                                           \
   " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]}"
 
 static const char *DIFFUSE = HEAD "\"meshes\":[" FLOOR("white") "," WALLS "," LAMP "]}";
-static const char *GLOSSY = HEAD "\"meshes\":[" FLOOR("glossy") ","
-    "{\"name\":\"panel\",\"material\":\"mirror\",\"positions\":[-0.9,-1,-0.2, -0.3,-1,-0.9, -0.3,0.3,-0.9, -0.9,0.3,-0.2],\"indices\":[0,1,2, 0,2,3]},"
-    WALLS "," LAMP "]}";
-static const char *NORMALS = HEAD "\"meshes\":[" FLOOR("metal") "," WALLS "," LAMP ","
-    "{\"name\":\"bent\",\"material\":\"white\",\"positions\":[-0.6,-1,0.2, 0.4,-1,-0.5, 0.4,0.2,-0.5, -0.6,0.2,0.2],"
-    "\"indices\":[0,1,2, 0,2,3],\"normals\":[0.5,0.3,0.8, 0.7,-0.2,0.6, 0.8,0.1,0.5, 0.4,0.4,0.8]}]}";
-static const char *ENV = HEAD "\"meshes\":["
-    "{\"name\":\"ground\",\"material\":\"white\",\"positions\":[-4,-1,-4, 4,-1,-4, 4,-1,4, -4,-1,4],\"indices\":[0,2,1, 0,3,2]},"
-    BLOCK("rough") "],\"lights\":[{\"type\":\"environment\",\"radiance\":[0.4,0.5,0.7]}]}";
-static const char *DELTA = HEAD "\"meshes\":[" FLOOR("glossy") "," WALLS "," BLOCK("white") "],\"lights\":["
-    "{\"type\":\"point\",\"position\":[0.4,0.6,0.3],\"intensity\":[1.5,1.5,1.2]},"
-    "{\"type\":\"spot\",\"position\":[-0.6,0.9,0.6],\"target\":[0,-1,-0.5],\"intensity\":[4,3,3],\"angle\":35}]}";
-static const char *DISTANT = HEAD "\"meshes\":["
-    "{\"name\":\"ground\",\"material\":\"white\",\"positions\":[-4,-1,-4, 4,-1,-4, 4,-1,4, -4,-1,4],\"indices\":[0,2,1, 0,3,2]},"
-    BLOCK("metal") "],\"lights\":[{\"type\":\"distant\",\"direction\":[0.3,-1,-0.4],\"irradiance\":[2,2,2]}]}";
+static const char *GLOSSY = HEAD "\"meshes\":[" FLOOR(
+    "glossy") ","
+              "{\"name\":\"panel\",\"material\":\"mirror\",\"positions\":[-0.9,-1,-0.2, "
+              "-0.3,-1,-0.9, -0.3,0.3,-0.9, -0.9,0.3,-0.2],\"indices\":[0,1,2, 0,2,3]}," WALLS
+              "," LAMP "]}";
+static const char *NORMALS =
+    HEAD "\"meshes\":[" FLOOR("metal") "," WALLS "," LAMP ","
+                                       "{\"name\":\"bent\",\"material\":\"white\",\"positions\":[-"
+                                       "0.6,-1,0.2, 0.4,-1,-0.5, 0.4,0.2,-0.5, -0.6,0.2,0.2],"
+                                       "\"indices\":[0,1,2, 0,2,3],\"normals\":[0.5,0.3,0.8, "
+                                       "0.7,-0.2,0.6, 0.8,0.1,0.5, 0.4,0.4,0.8]}]}";
+static const char *ENV =
+    HEAD "\"meshes\":["
+         "{\"name\":\"ground\",\"material\":\"white\",\"positions\":[-4,-1,-4, 4,-1,-4, 4,-1,4, "
+         "-4,-1,4],\"indices\":[0,2,1, 0,3,2]}," BLOCK(
+             "rough") "],\"lights\":[{\"type\":\"environment\",\"radiance\":[0.4,0.5,0.7]}]}";
+static const char *DELTA = HEAD "\"meshes\":[" FLOOR("glossy") "," WALLS "," BLOCK(
+    "white") "],\"lights\":["
+             "{\"type\":\"point\",\"position\":[0.4,0.6,0.3],\"intensity\":[1.5,1.5,1.2]},"
+             "{\"type\":\"spot\",\"position\":[-0.6,0.9,0.6],\"target\":[0,-1,-0.5],\"intensity\":["
+             "4,3,3],\"angle\":35}]}";
+static const char *DISTANT =
+    HEAD "\"meshes\":["
+         "{\"name\":\"ground\",\"material\":\"white\",\"positions\":[-4,-1,-4, 4,-1,-4, 4,-1,4, "
+         "-4,-1,4],\"indices\":[0,2,1, 0,3,2]}," BLOCK(
+             "metal") "],\"lights\":[{\"type\":\"distant\",\"direction\":[0.3,-1,-0.4],"
+                      "\"irradiance\":[2,2,2]}]}";
 static const char *BLACK = HEAD "\"meshes\":[" FLOOR("white") "," WALLS "]}";
 /* A light inside a closed cube, the camera outside: no path from the light reaches the camera,
  * whichever side builds it (light tracing included). */
-static const char *ENCLOSED = HEAD "\"meshes\":["
-    "{\"name\":\"cube\",\"material\":\"white\",\"positions\":[-0.5,-0.5,-0.5, 0.5,-0.5,-0.5, 0.5,0.5,-0.5, -0.5,0.5,-0.5,"
-    " -0.5,-0.5,0.5, 0.5,-0.5,0.5, 0.5,0.5,0.5, -0.5,0.5,0.5],\"indices\":[0,2,1, 0,3,2, 4,5,6, 4,6,7, 0,1,5, 0,5,4,"
-    " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]},"
-    "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.2,0.3,-0.2, 0.2,0.3,-0.2, 0.2,0.3,0.2, -0.2,0.3,0.2],\"indices\":[0,1,2, 0,2,3]}],"
-    "\"lights\":[{\"type\":\"spot\",\"position\":[0,-0.3,0],\"target\":[0,-1,0.2],\"intensity\":[4,4,4],\"angle\":50},"
-    "{\"type\":\"point\",\"position\":[0.2,0,0.1],\"intensity\":[2,2,2]}]}";
+static const char *ENCLOSED =
+    HEAD "\"meshes\":["
+         "{\"name\":\"cube\",\"material\":\"white\",\"positions\":[-0.5,-0.5,-0.5, 0.5,-0.5,-0.5, "
+         "0.5,0.5,-0.5, -0.5,0.5,-0.5,"
+         " -0.5,-0.5,0.5, 0.5,-0.5,0.5, 0.5,0.5,0.5, -0.5,0.5,0.5],\"indices\":[0,2,1, 0,3,2, "
+         "4,5,6, 4,6,7, 0,1,5, 0,5,4,"
+         " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]},"
+         "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.2,0.3,-0.2, 0.2,0.3,-0.2, "
+         "0.2,0.3,0.2, -0.2,0.3,0.2],\"indices\":[0,1,2, 0,2,3]}],"
+         "\"lights\":[{\"type\":\"spot\",\"position\":[0,-0.3,0],\"target\":[0,-1,0.2],"
+         "\"intensity\":[4,4,4],\"angle\":50},"
+         "{\"type\":\"point\",\"position\":[0.2,0,0.1],\"intensity\":[2,2,2]}]}";
 /* Degenerate triangles: a zero-area floor triangle, a collinear light triangle. */
-static const char *DEGENERATE = HEAD "\"meshes\":[" FLOOR("white") "," WALLS ","
-    "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, 0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
-    "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
-    "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
+static const char *DEGENERATE = HEAD "\"meshes\":[" FLOOR(
+    "white") "," WALLS ","
+             "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, "
+             "0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
+             "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, "
+             "0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
+             "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
 /* Warnings the plugin logged (tt_default_host's log callback). */
 static char g_warnings[4096];
 static void capture_log(void *user, tt_log_level level, const char *plugin, const char *message) {
@@ -229,28 +258,43 @@ static void check_unbiased(const setup *s, const char *label, const char *config
     for (int k = 0; k < RUNS; ++k) var += (m[k] / cnt - mu) * (m[k] / cnt - mu) / (RUNS - 1);
     rm /= cnt;
     rv /= (double)cnt * cnt;
-    double se = sqrt(var / RUNS + rv) + 1e-6 * fabs(rm);  /* floor: pixels that see only a constant */
+    double se =
+        sqrt(var / RUNS + rv) + 1e-6 * fabs(rm); /* floor: pixels that see only a constant */
     double z = se > 0 ? fabs(mu - rm) / se : (mu == rm ? 0.0 : INFINITY);
-    if (z > worst) { worst = z; worst_r = r; }
-    if (r == NREG - 1) { img_mu = mu; img_var = var / RUNS; img_ref = rm; img_ref_var = rv; }
-    CHECK_MSG(z < 5.0, "%s region %d: bdpt %.5f vs reference %.5f (combined se %.5f)", label, r, mu, rm, se);
+    if (z > worst) {
+      worst = z;
+      worst_r = r;
+    }
+    if (r == NREG - 1) {
+      img_mu = mu;
+      img_var = var / RUNS;
+      img_ref = rm;
+      img_ref_var = rv;
+    }
+    CHECK_MSG(z < 5.0, "%s region %d: bdpt %.5f vs reference %.5f (combined se %.5f)", label, r, mu,
+              rm, se);
   }
   for (int i = 0; i < W * H; ++i) {
     double mu = 0, var = 0;
     for (int k = 0; k < RUNS; ++k) mu += px[k][i] / RUNS;
     for (int k = 0; k < RUNS; ++k) var += (px[k][i] - mu) * (px[k][i] - mu) / (RUNS - 1);
     double v = var / RUNS + ref_se[i] * ref_se[i];
-    if (v > 1e-10 * ref[i] * ref[i]) { z2 += (mu - ref[i]) * (mu - ref[i]) / v; zn++; }
+    if (v > 1e-10 * ref[i] * ref[i]) {
+      z2 += (mu - ref[i]) * (mu - ref[i]) / v;
+      zn++;
+    }
   }
   double se_img = sqrt(img_var + img_ref_var);
   printf("%-18s image mean %.5f vs path tracer %.5f (%+.2f%%, se %.5f); worst region z %.2f (%d); "
-         "pixels: mean z^2 %.2f over %d\n", label, img_mu, img_ref, 100.0 * (img_mu / img_ref - 1.0), se_img,
-         worst, worst_r, zn ? z2 / zn : 0.0, zn);
+         "pixels: mean z^2 %.2f over %d\n",
+         label, img_mu, img_ref, 100.0 * (img_mu / img_ref - 1.0), se_img, worst, worst_r,
+         zn ? z2 / zn : 0.0, zn);
   CHECK(fabs(img_mu / img_ref - 1.0) < 0.01 + 3.0 * se_img / img_ref);
   CHECK_MSG(zn == 0 || z2 / zn < 2.0, "%s: per-pixel mean z^2 %.2f", label, z2 / zn);
 }
 
-static void unbiased_scene(setup *s, const char *label, const char *json, uint32_t depth, uint32_t spp) {
+static void unbiased_scene(setup *s, const char *label, const char *json, uint32_t depth,
+                           uint32_t spp) {
   static double ref[W * H], se[W * H];
   CHECK(pt_fixture_load(&s->fx, json));
   if (!s->fx.pt) return;
@@ -324,14 +368,15 @@ static void check_strategies(setup *s) {
   }
   printf("strategy images: weighted layers sum to the image within %.2e (relative)\n", worst);
   CHECK(worst < 1e-4);
-  uint32_t base = 1;  /* strategy index within depth k: s = 0..k+1 (depth 0: only s = 0) */
+  uint32_t base = 1; /* strategy index within depth k: s = 0..k+1 (depth 0: only s = 0) */
   for (uint32_t k = 1; k <= 3; ++k) {
     double mu[8], se[8];
     printf("depth %u, unweighted image means:", k);
     for (uint32_t s2 = 0; s2 <= k + 1; ++s2) {
       mu[s2] = se[s2] = 0.0;
       for (int q = 0; q < SEEDS; ++q) mu[s2] += mean[q][base + s2] / SEEDS;
-      for (int q = 0; q < SEEDS; ++q) se[s2] += pow(mean[q][base + s2] - mu[s2], 2) / (SEEDS - 1) / SEEDS;
+      for (int q = 0; q < SEEDS; ++q)
+        se[s2] += pow(mean[q][base + s2] - mu[s2], 2) / (SEEDS - 1) / SEEDS;
       se[s2] = sqrt(se[s2]);
       printf(" s%u_t%u %.4f (%.4f)", s2, k + 2 - s2, mu[s2], se[s2]);
     }
@@ -386,16 +431,19 @@ int main(void) {
     CHECK(tt_default_host_set_threads(1) == TT_OK);
     CHECK(render(&s, "{\"tileSize\": 8}", 2, 2, 5, TT_AOV_NORMAL | TT_AOV_DEPTH, &a, ps) == TT_OK);
     CHECK(tt_default_host_set_threads(2) == TT_OK);
-    CHECK(render(&s, "{\"tileSize\": 8}", 2, 2, 5, TT_AOV_NORMAL | TT_AOV_DEPTH, &b, NULL) == TT_OK);
+    CHECK(render(&s, "{\"tileSize\": 8}", 2, 2, 5, TT_AOV_NORMAL | TT_AOV_DEPTH, &b, NULL) ==
+          TT_OK);
     CHECK(render(&s, "{\"tileSize\": 8}", 2, 2, 6, 0, &c, NULL) == TT_OK);
     CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
     CHECK(memcmp(tt_film_splat_rgb(a), tt_film_splat_rgb(b), 3 * sizeof(float) * W * H) == 0);
-    CHECK(memcmp(tt_film_aov(a, TT_AOV_NORMAL), tt_film_aov(b, TT_AOV_NORMAL), 3 * sizeof(float) * W * H) == 0);
+    CHECK(memcmp(tt_film_aov(a, TT_AOV_NORMAL), tt_film_aov(b, TT_AOV_NORMAL),
+                 3 * sizeof(float) * W * H) == 0);
     CHECK(memcmp(tt_film_splat_rgb(a), tt_film_splat_rgb(c), 3 * sizeof(float) * W * H) != 0);
-    CHECK_NEAR(tt_film_splat_scale(a), 1.0 / 4.0, 1e-12);  /* 2 passes of 2 spp */
+    CHECK_NEAR(tt_film_splat_scale(a), 1.0 / 4.0, 1e-12); /* 2 passes of 2 spp */
     CHECK(ps[0].samples == 2u * W * H && ps[0].rays > ps[0].samples && ps[0].nonfinite == 0);
-    printf("glossy box: %.1f rays and %.2f splats per sample, %.0f samples/s\n", metric(&ps[0], "rays_per_sample"),
-           metric(&ps[0], "splats_per_sample"), metric(&ps[0], "samples_per_s"));
+    printf("glossy box: %.1f rays and %.2f splats per sample, %.0f samples/s\n",
+           metric(&ps[0], "rays_per_sample"), metric(&ps[0], "splats_per_sample"),
+           metric(&ps[0], "samples_per_s"));
     CHECK(metric(&ps[0], "splats_per_sample") > 0.1);
     const float *depth = tt_film_aov(a, TT_AOV_DEPTH);
     int hits = 0;
@@ -413,7 +461,11 @@ int main(void) {
     pixels_of(f0, a);
     reference(&s, 0, 256, ref, se);
     double sa = 0, sr = 0, v = 0;
-    for (int i = 0; i < W * H; ++i) { sa += a[i]; sr += ref[i]; v += se[i] * se[i]; }
+    for (int i = 0; i < W * H; ++i) {
+      sa += a[i];
+      sr += ref[i];
+      v += se[i] * se[i];
+    }
     printf("maxDepth 0: image sum %.3f, path tracer %.3f (se %.3f)\n", sa, sr, sqrt(v));
     CHECK(sr > 0 && fabs(sa - sr) < 5.0 * sqrt(2.0 * v));
     tt_film_destroy(f0);
@@ -442,8 +494,10 @@ int main(void) {
     for (int y = 5; y < 11; ++y)
       for (int x = 5; x < 11; ++x) ptc += pt_px[y * W + x] / 36.0;
     double R = pow((1.5 - 1.0) / (1.5 + 1.0), 2.0);
-    printf("caustic: floor under the slab %.4f (BDPT), %.4f (path tracer); open floor %.4f; ratio %.3f "
-           "((1 - R)^2 = %.3f)\n", caustic, ptc, open, caustic / open, (1 - R) * (1 - R));
+    printf("caustic: floor under the slab %.4f (BDPT), %.4f (path tracer); open floor %.4f; ratio "
+           "%.3f "
+           "((1 - R)^2 = %.3f)\n",
+           caustic, ptc, open, caustic / open, (1 - R) * (1 - R));
     CHECK(ptc < 1e-6 * open);
     CHECK(caustic / open > 0.85 && caustic / open < 1.05);
     tt_film_destroy(fc);
@@ -469,12 +523,14 @@ int main(void) {
     tt_default_host_set_log_callback(capture_log, NULL);
     CHECK(render(&s, NULL, 1, 8, 1, 0, &film, &ps) == TT_OK);
     tt_default_host_set_log_callback(NULL, NULL);
-    CHECK_MSG(strstr(g_warnings, "integrator_bdpt: no light reached the camera in 2048 samples") != NULL,
+    CHECK_MSG(strstr(g_warnings, "integrator_bdpt: no light reached the camera in 2048 samples") !=
+                  NULL,
               "enclosed lights: no warning that the image is black; logged: %s", g_warnings);
     tt_film_resolve(film, rgb);
     nz = 0;
     for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);
-    CHECK_MSG(nz == 0 && ps.nonfinite == 0 && ps.rays > ps.samples, "enclosed lights: %d non-zero channels", nz);
+    CHECK_MSG(nz == 0 && ps.nonfinite == 0 && ps.rays > ps.samples,
+              "enclosed lights: %d non-zero channels", nz);
     tt_film_destroy(film);
     pt_fixture_free(&s.fx);
     CHECK(pt_fixture_load(&s.fx, DEGENERATE));

@@ -41,7 +41,8 @@ static double tn_cdf(double sigma, double x) {
 
 static void test_quantile(void) {
   double worst = 0.0;
-  const double ps[] = {1e-300, 1e-100, 1e-20, 1e-9, 1e-4, 0.01, 0.02425, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99, 1 - 1e-9};
+  const double ps[] = {1e-300, 1e-100, 1e-20, 1e-9, 1e-4, 0.01, 0.02425,
+                       0.1,    0.3,    0.5,   0.7,  0.9,  0.99, 1 - 1e-9};
   for (size_t i = 0; i < sizeof ps / sizeof ps[0]; ++i) {
     double x = tt__mlt_normal_quantile(ps[i]);
     /* compare in the nearer tail: 1 - p is exact for p >= 0.5 */
@@ -69,7 +70,8 @@ static void test_tn_histogram(void) {
       double lo = -0.5, hi = 0.5;
       for (int it = 0; it < 100; ++it) {
         double mid = 0.5 * (lo + hi);
-        if (tn_cdf(sg, mid) < (double)k / K) lo = mid; else hi = mid;
+        if (tn_cdf(sg, mid) < (double)k / K) lo = mid;
+        else hi = mid;
       }
       edges[k] = 0.5 * (lo + hi);
     }
@@ -84,12 +86,14 @@ static void test_tn_histogram(void) {
       int lo = 0, hi = K;
       while (hi - lo > 1) {
         int mid = (lo + hi) / 2;
-        if (x >= edges[mid]) lo = mid; else hi = mid;
+        if (x >= edges[mid]) lo = mid;
+        else hi = mid;
       }
       obs[lo]++;
     }
     double c = chi2(obs, prob, K, N);
-    printf("truncated normal sigma %.2f: chi2 %.1f (dof %d, bound %.1f)\n", sg, c, K - 1, chi2_bound(K - 1));
+    printf("truncated normal sigma %.2f: chi2 %.1f (dof %d, bound %.1f)\n", sg, c, K - 1,
+           chi2_bound(K - 1));
     CHECK_MSG(c < chi2_bound(K - 1), "sigma %g chi2 %g", sg, c);
     CHECK(outside == 0);
     /* The density is the derivative of the sampler's inverse CDF. */
@@ -126,7 +130,8 @@ static void test_ratio(void) {
   const double ss[] = {1e-4, 0.01, 0.07, 0.3};
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 4; ++j)
-      for (double n = 1; n <= 16; n *= 4) CHECK(tt__mlt_tn_log_ratio(ds[i], ss[j], ss[j], n) == 0.0);
+      for (double n = 1; n <= 16; n *= 4)
+        CHECK(tt__mlt_tn_log_ratio(ds[i], ss[j], ss[j], n) == 0.0);
   /* non-symmetric case against brute-force transition densities T(p->c) / T(c->p) */
   double worst = 0.0;
   const double pairs[][2] = {{0.01, 0.3}, {0.3, 0.01}, {0.05, 0.2}, {0.2, 0.8}, {0.1, 0.1001}};
@@ -161,18 +166,18 @@ static void test_edges(void) {
   const double sig[5] = {0.001, 0.002, 0.003, 0.004, 0.005};
   tt__mlt_kernel_init(&k, 0.01, 0.3, 1, 5, 4.0 * PI, a, sig);
   CHECK(tt__mlt_bin_of_theta(&k, 0.0) == 1);
-  CHECK(tt__mlt_bin_of_theta(&k, e[1]) == 2);  /* [A_{i-1}, A_i): left-closed */
+  CHECK(tt__mlt_bin_of_theta(&k, e[1]) == 2); /* [A_{i-1}, A_i): left-closed */
   CHECK(tt__mlt_bin_of_theta(&k, nextafter(e[1], 0.0)) == 1);
   CHECK(tt__mlt_bin_of_theta(&k, e[4]) == 5);
   CHECK(tt__mlt_bin_of_theta(&k, 0.999) == 5);
-  CHECK(tt__mlt_bin_of_theta(&k, 7.0) == 5);    /* Theta >= 1 is clamped into the last bin */
-  CHECK(tt__mlt_slot(&k, 0.0f) == 5);           /* delta lobe: Theta = inf */
-  CHECK(tt__mlt_slot(&k, -1.0f) == 0);          /* nothing reported: the default sigma */
+  CHECK(tt__mlt_bin_of_theta(&k, 7.0) == 5); /* Theta >= 1 is clamped into the last bin */
+  CHECK(tt__mlt_slot(&k, 0.0f) == 5);        /* delta lobe: Theta = inf */
+  CHECK(tt__mlt_slot(&k, -1.0f) == 0);       /* nothing reported: the default sigma */
   /* Theta = 1 / (4 pi pdf): a Lambertian pdf cos/pi at cos = 1 gives Theta = 1/4 */
   CHECK_NEAR(tt__mlt_theta(&k, 1.0 / PI), 0.25, 1e-15);
   CHECK(k.slot_sigma[3] == 0.003 && k.slot_sigma[0] == 0.01);
   const double zero[9] = {0};
-  tt__mlt_edges(zero, 4, e);  /* all weights zero: equal widths */
+  tt__mlt_edges(zero, 4, e); /* all weights zero: equal widths */
   CHECK(e[1] == 0.25 && e[2] == 0.5 && e[3] == 0.75 && e[4] == 1.0);
   /* Catch-up shortcuts exist where they are exact and only there. */
   CHECK(isinf(k.composite_max_n) || k.composite_max_n > 1e100);
@@ -205,7 +210,9 @@ static double toy(const tt_sample_source *s) {
   return c;
 }
 
-typedef struct boot_src { uint64_t seed, index; } boot_src;
+typedef struct boot_src {
+  uint64_t seed, index;
+} boot_src;
 static float boot_get(void *self, uint32_t dim) {
   boot_src *b = self;
   return (float)tt__mlt_bootstrap_value(b->seed, b->index, dim);
@@ -256,20 +263,30 @@ static double run_toy(const tt__mlt_kernel *k, int chains, int steps, const char
     double u20 = tt__mlt_chain_value(&c, 20), u16 = tt__mlt_chain_value(&c, 16);
     double u17 = tt__mlt_chain_value(&c, 17);
     h89[(int)(u8 * B8) * B8 + (int)(u9 * B8)]++;
-    if (u8 > 0.5) { h20a[(int)(u20 * B1)]++; n20a++; }
-    else { h20b[(int)(u20 * B1)]++; n20b++; }
-    if (u9 > 0.7) { h16[(int)(u16 * B1)]++; h17[(int)(u17 * B1)]++; n16++; }
+    if (u8 > 0.5) {
+      h20a[(int)(u20 * B1)]++;
+      n20a++;
+    } else {
+      h20b[(int)(u20 * B1)]++;
+      n20b++;
+    }
+    if (u9 > 0.7) {
+      h16[(int)(u16 * B1)]++;
+      h17[(int)(u17 * B1)]++;
+      n16++;
+    }
   }
   free(mem);
   double p89[B8 * B8], p20a[B1], pu[B1], p16[B1];
   for (int i = 0; i < B8; ++i)
     for (int j = 0; j < B8; ++j)
-      p89[i * B8 + j] = (G((i + 1.0) / B8) - G((double)i / B8)) * (G((j + 1.0) / B8) - G((double)j / B8));
+      p89[i * B8 + j] =
+          (G((i + 1.0) / B8) - G((double)i / B8)) * (G((j + 1.0) / B8) - G((double)j / B8));
   for (int i = 0; i < B1; ++i) {
     double lo = (double)i / B1, hi = (i + 1.0) / B1;
     p20a[i] = hi * hi - lo * lo;
     pu[i] = 1.0 / B1;
-    p16[i] = 0.5 * (q(lo) + q(hi - 1e-12)) * (hi - lo);  /* q is constant on each bin */
+    p16[i] = 0.5 * (q(lo) + q(hi - 1e-12)) * (hi - lo); /* q is constant on each bin */
   }
   double c89 = chi2(h89, p89, B8 * B8, chains) / chi2_bound(B8 * B8 - 1);
   double c20a = chi2(h20a, p20a, B1, n20a) / chi2_bound(B1 - 1);
@@ -277,15 +294,16 @@ static double run_toy(const tt__mlt_kernel *k, int chains, int steps, const char
   double c16 = chi2(h16, p16, B1, n16) / chi2_bound(B1 - 1);
   double c17 = chi2(h17, pu, B1, n16) / chi2_bound(B1 - 1);
   printf("%s: acceptance %.3f; chi2/bound (u8,u9) %.2f, u20|u8>.5 %.2f, u20|u8<=.5 %.2f, "
-         "u16|u9>.7 %.2f, u17|u9>.7 %.2f\n", label, (double)accepted / proposed, c89, c20a, c20b,
-         c16, c17);
+         "u16|u9>.7 %.2f, u17|u9>.7 %.2f\n",
+         label, (double)accepted / proposed, c89, c20a, c20b, c16, c17);
   double worst = fmax(fmax(c89, c20a), fmax(c20b, fmax(c16, c17)));
   return worst;
 }
 
 static void test_detailed_balance(void) {
-  const double a[6] = {0.5, 0.5, 0.5, 0.5, 0.5, 0.5};   /* edges 1/6 .. 4/6 */
-  const double bs[5] = {0.3, 0.02, 0.05, 0.05, 0.15};   /* pdf 50 and 2 -> bin 1, 0.3 -> 2, 0.02 -> 5 */
+  const double a[6] = {0.5, 0.5, 0.5, 0.5, 0.5, 0.5}; /* edges 1/6 .. 4/6 */
+  const double bs[5] = {0.3, 0.02, 0.05, 0.05,
+                        0.15}; /* pdf 50 and 2 -> bin 1, 0.3 -> 2, 0.02 -> 5 */
   tt__mlt_kernel k;
   /* default sigma 0.1: pending steps are applied one by one (or are uniform) */
   tt__mlt_kernel_init(&k, 0.1, 0.1, 1, 5, 4.0 * PI, a, bs);

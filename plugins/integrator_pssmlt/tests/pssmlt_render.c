@@ -24,69 +24,89 @@
 #define W 16
 #define H 16
 #ifndef RUNS
-#define RUNS 8
+#  define RUNS 8
 #endif
 #ifndef MPP
-#define MPP 48
+#  define MPP 48
 #endif
-#define REG 4 /* regions of REG x REG pixels */
+#define REG 4                            /* regions of REG x REG pixels */
 #define NREG ((W / REG) * (H / REG) + 1) /* + the whole image */
 
-#define BOX_SIDES                                                                                   \
-  "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, 1,1,1, -1,1,1],\"indices\":[0,1,2, 0,2,3]}," \
-  "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, -1,1,-1],\"indices\":[0,1,2, 0,2,3]}," \
-  "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, -1,1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"  \
-  "{\"name\":\"right\",\"material\":\"green\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, 1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
+#define BOX_SIDES                                                                                  \
+  "{\"name\":\"ceiling\",\"material\":\"white\",\"positions\":[-1,1,-1, 1,1,-1, 1,1,1, "           \
+  "-1,1,1],\"indices\":[0,1,2, 0,2,3]},"                                                           \
+  "{\"name\":\"back\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, "           \
+  "-1,1,-1],\"indices\":[0,1,2, 0,2,3]},"                                                          \
+  "{\"name\":\"left\",\"material\":\"red\",\"positions\":[-1,-1,-1, -1,1,-1, -1,1,1, "             \
+  "-1,-1,1],\"indices\":[0,1,2, 0,2,3]},"                                                          \
+  "{\"name\":\"right\",\"material\":\"green\",\"positions\":[1,-1,-1, 1,1,-1, 1,1,1, "             \
+  "1,-1,1],\"indices\":[0,1,2, 0,2,3]}"
 
-#define BOX_LAMP                                                                                    \
-  "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]}"
+#define BOX_LAMP                                                                                   \
+  "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, "      \
+  "0.3,0.98,0.3, -0.3,0.98,0.3],\"indices\":[0,1,2, 0,2,3]}"
 #define BOX_WALLS BOX_SIDES "," BOX_LAMP
 
-#define BOX_HEAD                                                                                    \
-  "{\"version\":1,\"camera\":{\"position\":[0,0,3.6],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"  \
-  "\"resolution\":[16,16]},\"materials\":{"                                                         \
-  "\"white\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.7,0.7]},"                                      \
-  "\"red\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.1,0.1]},"                                        \
-  "\"green\":{\"type\":\"diffuse\",\"albedo\":[0.1,0.7,0.1]},"                                      \
-  "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.3,0.5],\"alpha\":0.08,\"ior\":1.5},"          \
-  "\"mirror\":{\"type\":\"mirror\"},"                                                                \
-  "\"light\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],\"emission\":[12,12,10],\"twoSided\":true}},"
+#define BOX_HEAD                                                                                   \
+  "{\"version\":1,\"camera\":{\"position\":[0,0,3.6],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":"   \
+  "40,"                                                                                            \
+  "\"resolution\":[16,16]},\"materials\":{"                                                        \
+  "\"white\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.7,0.7]},"                                     \
+  "\"red\":{\"type\":\"diffuse\",\"albedo\":[0.7,0.1,0.1]},"                                       \
+  "\"green\":{\"type\":\"diffuse\",\"albedo\":[0.1,0.7,0.1]},"                                     \
+  "\"glossy\":{\"type\":\"plastic\",\"albedo\":[0.3,0.3,0.5],\"alpha\":0.08,\"ior\":1.5},"         \
+  "\"mirror\":{\"type\":\"mirror\"},"                                                              \
+  "\"light\":{\"type\":\"diffuse\",\"albedo\":[0,0,0],\"emission\":[12,12,10],\"twoSided\":true}}" \
+  ","
 
-static const char *DIFFUSE = BOX_HEAD "\"meshes\":["
-    "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
-    BOX_WALLS "]}";
-static const char *GLOSSY = BOX_HEAD "\"meshes\":["
-    "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
-    "{\"name\":\"panel\",\"material\":\"mirror\",\"positions\":[-0.9,-1,-0.2, -0.3,-1,-0.9, -0.3,0.3,-0.9, -0.9,0.3,-0.2],\"indices\":[0,1,2, 0,2,3]},"
-    BOX_WALLS "]}";
+static const char *DIFFUSE =
+    BOX_HEAD "\"meshes\":["
+             "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, "
+             "-1,-1,1],\"indices\":[0,1,2, 0,2,3]}," BOX_WALLS "]}";
+static const char *GLOSSY = BOX_HEAD
+    "\"meshes\":["
+    "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, "
+    "-1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
+    "{\"name\":\"panel\",\"material\":\"mirror\",\"positions\":[-0.9,-1,-0.2, -0.3,-1,-0.9, "
+    "-0.3,0.3,-0.9, -0.9,0.3,-0.2],\"indices\":[0,1,2, 0,2,3]}," BOX_WALLS "]}";
 static const char *BLACK =
     "{\"version\":1,\"camera\":{\"position\":[0,0,3],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"
     "\"resolution\":[16,16]},\"materials\":{\"grey\":{\"type\":\"diffuse\"}},\"meshes\":["
-    "{\"name\":\"q\",\"material\":\"grey\",\"positions\":[-1,-1,0, 1,-1,0, 1,1,0, -1,1,0],\"indices\":[0,1,2, 0,2,3]}]}";
+    "{\"name\":\"q\",\"material\":\"grey\",\"positions\":[-1,-1,0, 1,-1,0, 1,1,0, "
+    "-1,1,0],\"indices\":[0,1,2, 0,2,3]}]}";
 
 /* A point and a spot light, no area light: only light tracing and next-event connections
  * reach them (no strategy with s = 0). */
-static const char *DELTA = BOX_HEAD "\"meshes\":["
-    "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
-    BOX_SIDES "],\"lights\":["
-    "{\"type\":\"point\",\"position\":[0.4,0.6,0.3],\"intensity\":[1.5,1.5,1.2]},"
-    "{\"type\":\"spot\",\"position\":[-0.6,0.9,0.6],\"target\":[0,-1,-0.5],\"intensity\":[4,3,3],\"angle\":35}]}";
+static const char *DELTA =
+    BOX_HEAD "\"meshes\":["
+             "{\"name\":\"floor\",\"material\":\"glossy\",\"positions\":[-1,-1,-1, 1,-1,-1, "
+             "1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]}," BOX_SIDES "],\"lights\":["
+             "{\"type\":\"point\",\"position\":[0.4,0.6,0.3],\"intensity\":[1.5,1.5,1.2]},"
+             "{\"type\":\"spot\",\"position\":[-0.6,0.9,0.6],\"target\":[0,-1,-0.5],\"intensity\":["
+             "4,3,3],\"angle\":35}]}";
 /* A light inside a closed grey cube, the camera outside: a light exists, none of it reaches
  * the camera (every bootstrap path, camera or light side, has zero contribution). */
-static const char *ENCLOSED = BOX_HEAD "\"meshes\":["
-    "{\"name\":\"cube\",\"material\":\"white\",\"positions\":[-0.5,-0.5,-0.5, 0.5,-0.5,-0.5, 0.5,0.5,-0.5, -0.5,0.5,-0.5,"
-    " -0.5,-0.5,0.5, 0.5,-0.5,0.5, 0.5,0.5,0.5, -0.5,0.5,0.5],\"indices\":[0,2,1, 0,3,2, 4,5,6, 4,6,7, 0,1,5, 0,5,4,"
-    " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]},"
-    "{\"name\":\"inner\",\"material\":\"light\",\"positions\":[-0.2,0,-0.2, 0.2,0,-0.2, 0.2,0,0.2, -0.2,0,0.2],\"indices\":[0,1,2, 0,2,3]}]}";
+static const char *ENCLOSED =
+    BOX_HEAD "\"meshes\":["
+             "{\"name\":\"cube\",\"material\":\"white\",\"positions\":[-0.5,-0.5,-0.5, "
+             "0.5,-0.5,-0.5, 0.5,0.5,-0.5, -0.5,0.5,-0.5,"
+             " -0.5,-0.5,0.5, 0.5,-0.5,0.5, 0.5,0.5,0.5, -0.5,0.5,0.5],\"indices\":[0,2,1, 0,3,2, "
+             "4,5,6, 4,6,7, 0,1,5, 0,5,4,"
+             " 3,6,2, 3,7,6, 0,4,7, 0,7,3, 1,2,6, 1,6,5]},"
+             "{\"name\":\"inner\",\"material\":\"light\",\"positions\":[-0.2,0,-0.2, 0.2,0,-0.2, "
+             "0.2,0,0.2, -0.2,0,0.2],\"indices\":[0,1,2, 0,2,3]}]}";
 /* Degenerate triangles beside real ones (a mesh of nothing but degenerate triangles is a
  * load error, tested in core/tests/scene_errors.c): a zero-area triangle in view, a
  * collinear triangle in the light. */
-static const char *DEGENERATE = BOX_HEAD "\"meshes\":["
-    "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, -1,-1,1],\"indices\":[0,1,2, 0,2,3]},"
-    BOX_SIDES ","
-    "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, 0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
-    "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, 0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
-    "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
+static const char *DEGENERATE =
+    BOX_HEAD "\"meshes\":["
+             "{\"name\":\"floor\",\"material\":\"white\",\"positions\":[-1,-1,-1, 1,-1,-1, 1,-1,1, "
+             "-1,-1,1],\"indices\":[0,1,2, 0,2,3]}," BOX_SIDES ","
+             "{\"name\":\"flat\",\"material\":\"white\",\"positions\":[0,0,0, 0,0,0, 0.5,0.5,0, "
+             "0.5,-0.5,0],\"indices\":[0,1,2, 0,2,3]},"
+             "{\"name\":\"light\",\"material\":\"light\",\"positions\":[-0.3,0.98,-0.3, "
+             "0.3,0.98,-0.3, 0.3,0.98,0.3, -0.3,0.98,0.3, 0,0.98,0],"
+             "\"indices\":[0,1,2, 0,2,3, 0,4,2]}]}";
 
 /* Warnings the plugin logged (tt_default_host's log callback). */
 static char g_warnings[4096];
@@ -197,8 +217,12 @@ static void reference(const setup *s, uint32_t max_depth, uint32_t spp, double *
         tt_path_result pr;
         tt_path_trace(s->fx.pt, &s->fx.tracer, &o, &ray, &source, &pr);
         double l = 0.2126 * pr.L[0] + 0.7152 * pr.L[1] + 0.0722 * pr.L[2];
-        s1[r] += l; s2[r] += l * l; n[r]++;
-        s1[NREG - 1] += l; s2[NREG - 1] += l * l; n[NREG - 1]++;
+        s1[r] += l;
+        s2[r] += l * l;
+        n[r]++;
+        s1[NREG - 1] += l;
+        s2[NREG - 1] += l * l;
+        n[NREG - 1]++;
       }
     }
   for (int r = 0; r < NREG; ++r) {
@@ -233,14 +257,22 @@ static void check_unbiased(const setup *s, const char *label, const char *config
     for (int k = 0; k < RUNS; ++k) var += (m[k][r] - mu) * (m[k][r] - mu) / (RUNS - 1);
     double se = sqrt(var / RUNS + ref_se[r] * ref_se[r]);
     double z = fabs(mu - ref[r]) / se;
-    if (z > worst) { worst = z; worst_r = r; }
-    if (r == NREG - 1) { mean_img = mu; se_img = se; }
-    CHECK_MSG(z < 5.0, "%s region %d: pssmlt %.5f vs reference %.5f (combined se %.5f)", label, r, mu,
-              ref[r], se);
+    if (z > worst) {
+      worst = z;
+      worst_r = r;
+    }
+    if (r == NREG - 1) {
+      mean_img = mu;
+      se_img = se;
+    }
+    CHECK_MSG(z < 5.0, "%s region %d: pssmlt %.5f vs reference %.5f (combined se %.5f)", label, r,
+              mu, ref[r], se);
   }
-  printf("%s: image mean %.5f vs reference %.5f (%+.2f%%, se %.5f); worst region z = %.2f (region %d); "
-         "small-step acceptance %.3f\n", label, mean_img, ref[NREG - 1],
-         100.0 * (mean_img / ref[NREG - 1] - 1.0), se_img, worst, worst_r, acc_small);
+  printf("%s: image mean %.5f vs reference %.5f (%+.2f%%, se %.5f); worst region z = %.2f (region "
+         "%d); "
+         "small-step acceptance %.3f\n",
+         label, mean_img, ref[NREG - 1], 100.0 * (mean_img / ref[NREG - 1] - 1.0), se_img, worst,
+         worst_r, acc_small);
   CHECK(fabs(mean_img / ref[NREG - 1] - 1.0) < 0.01 + 3.0 * se_img / ref[NREG - 1]);
 }
 
@@ -260,8 +292,20 @@ int main(void) {
   CHECK(s.space != NULL);
 
   /* Parameter space: pbrt-v4's defaults in classic mode, the thesis' for binning. */
-  const char *names[] = {"mode", "maxDepth", "largeStepProbability", "sigma", "binning", "bins", "alpha", "a1", "a9",
-                         "sigma1", "sigma8", "mutationsPerPixel", "bootstrapSamples", "chains"};
+  const char *names[] = {"mode",
+                         "maxDepth",
+                         "largeStepProbability",
+                         "sigma",
+                         "binning",
+                         "bins",
+                         "alpha",
+                         "a1",
+                         "a9",
+                         "sigma1",
+                         "sigma8",
+                         "mutationsPerPixel",
+                         "bootstrapSamples",
+                         "chains"};
   for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i)
     CHECK_MSG(tt_space_find(s.space, names[i]) >= 0, "missing %s", names[i]);
   tt_config *def = tt_config_create(s.space);
@@ -283,9 +327,11 @@ int main(void) {
 
   CHECK(pt_fixture_load(&s.fx, DIFFUSE));
   const char *cls = "{\"bootstrapSamples\": 20000, \"chains\": 64}";
-  const char *bin = "{\"bootstrapSamples\": 20000, \"chains\": 64, \"binning\": true, \"largeStepProbability\": 0.1,"
-                    " \"sigma1\": 0.003, \"sigma2\": 0.01, \"sigma3\": 0.03, \"sigma4\": 0.06, \"sigma5\": 0.1,"
-                    " \"sigma6\": 0.2, \"sigma7\": 0.3}";
+  const char *bin =
+      "{\"bootstrapSamples\": 20000, \"chains\": 64, \"binning\": true, \"largeStepProbability\": "
+      "0.1,"
+      " \"sigma1\": 0.003, \"sigma2\": 0.01, \"sigma3\": 0.03, \"sigma4\": 0.06, \"sigma5\": 0.1,"
+      " \"sigma6\": 0.2, \"sigma7\": 0.3}";
 
   /* Statistics of one pass. */
   {
@@ -297,7 +343,8 @@ int main(void) {
     CHECK(metric(&ps, "mutations") == 4.0 * W * H);
     double acc = metric(&ps, "acceptance"), sm = metric(&ps, "small_step_acceptance");
     double lg = metric(&ps, "large_step_acceptance"), b = metric(&ps, "b");
-    printf("classic pass: acceptance %.3f small %.3f large %.3f b %.5f, %.0f mutations/s, bootstrap %.1f ms\n",
+    printf("classic pass: acceptance %.3f small %.3f large %.3f b %.5f, %.0f mutations/s, "
+           "bootstrap %.1f ms\n",
            acc, sm, lg, b, metric(&ps, "mutations_per_s"), metric(&ps, "bootstrap_ms"));
     CHECK(acc > 0.0 && acc < 1.0 && sm > lg && lg > 0.0);
     CHECK(sm == metric(&ps, "acceptance_small"));
@@ -307,15 +354,17 @@ int main(void) {
     /* luminance of the splats sums to exactly one per mutation (expected values) */
     const float *sp = tt_film_splat_rgb(film);
     double lum = 0.0;
-    for (int i = 0; i < W * H; ++i) lum += 0.2126 * sp[3 * i] + 0.7152 * sp[3 * i + 1] + 0.0722 * sp[3 * i + 2];
+    for (int i = 0; i < W * H; ++i)
+      lum += 0.2126 * sp[3 * i] + 0.7152 * sp[3 * i + 1] + 0.0722 * sp[3 * i + 2];
     CHECK_NEAR(lum, 4.0 * W * H, 1e-3 * W * H);
     tt_film_destroy(film);
   }
 
   const char *mm_cls = "{\"mode\": \"mmlt\", \"bootstrapSamples\": 5000, \"chains\": 64}";
-  const char *mm_bin = "{\"mode\": \"mmlt\", \"bootstrapSamples\": 5000, \"chains\": 64, \"binning\": true,"
-                       " \"largeStepProbability\": 0.1, \"sigma1\": 0.003, \"sigma2\": 0.01, \"sigma3\": 0.03,"
-                       " \"sigma4\": 0.06, \"sigma5\": 0.1, \"sigma6\": 0.2, \"sigma7\": 0.3}";
+  const char *mm_bin =
+      "{\"mode\": \"mmlt\", \"bootstrapSamples\": 5000, \"chains\": 64, \"binning\": true,"
+      " \"largeStepProbability\": 0.1, \"sigma1\": 0.003, \"sigma2\": 0.01, \"sigma3\": 0.03,"
+      " \"sigma4\": 0.06, \"sigma5\": 0.1, \"sigma6\": 0.2, \"sigma7\": 0.3}";
   /* Statistics of an mmlt pass: six path depths bootstrapped (5000 each). */
   {
     tt_film *film = NULL;
@@ -324,13 +373,15 @@ int main(void) {
     CHECK(render(&s, cfgs, 1, 4, 1, &film, &ps) == TT_OK);
     CHECK(ps.samples == 4u * W * H && ps.nonfinite == 0);
     double sm = metric(&ps, "small_step_acceptance"), b = metric(&ps, "b");
-    printf("mmlt pass: small-step acceptance %.3f, b %.5f, %.1f rays and %.2f vertices per mutation\n", sm, b,
-           metric(&ps, "rays_per_mutation"), metric(&ps, "mean_path_length"));
+    printf(
+        "mmlt pass: small-step acceptance %.3f, b %.5f, %.1f rays and %.2f vertices per mutation\n",
+        sm, b, metric(&ps, "rays_per_mutation"), metric(&ps, "mean_path_length"));
     CHECK(sm > 0.0 && sm < 1.0 && b > 0.0);
     CHECK(metric(&ps, "rays_per_mutation") > 1.0 && metric(&ps, "mean_path_length") > 1.0);
     const float *sp = tt_film_splat_rgb(film);
     double lum = 0.0;
-    for (int i = 0; i < W * H; ++i) lum += 0.2126 * sp[3 * i] + 0.7152 * sp[3 * i + 1] + 0.0722 * sp[3 * i + 2];
+    for (int i = 0; i < W * H; ++i)
+      lum += 0.2126 * sp[3 * i] + 0.7152 * sp[3 * i + 1] + 0.0722 * sp[3 * i + 2];
     CHECK_NEAR(lum, 4.0 * W * H, 1e-3 * W * H);
     tt_film_destroy(film);
   }
@@ -357,7 +408,8 @@ int main(void) {
   {
     tt_film *film = NULL;
     tt_pass_stats ps[3];
-    const char *cfgs[3] = {cls, bin, "{\"bootstrapSamples\": 20000, \"chains\": 64, \"sigma\": 0.05}"};
+    const char *cfgs[3] = {cls, bin,
+                           "{\"bootstrapSamples\": 20000, \"chains\": 64, \"sigma\": 0.05}"};
     CHECK(render(&s, cfgs, 3, 2, 9, &film, ps) == TT_OK);
     CHECK(metric(&ps[0], "bootstrap_ms") > 0.0);
     CHECK(metric(&ps[1], "bootstrap_ms") == 0.0 && metric(&ps[2], "bootstrap_ms") == 0.0);
@@ -414,7 +466,8 @@ int main(void) {
       tt_film_destroy(film);
       pt_fixture_free(&s.fx);
     }
-    printf("caustic: floor under the slab %.4f (mmlt), %.4f (pssmlt); open floor %.4f (mmlt); ratio %.3f\n",
+    printf("caustic: floor under the slab %.4f (mmlt), %.4f (pssmlt); open floor %.4f (mmlt); "
+           "ratio %.3f\n",
            centre[1], centre[2], centre[0], centre[1] / centre[0]);
     CHECK(centre[1] / centre[0] > 0.8 && centre[1] / centre[0] < 1.1);
     CHECK(centre[2] < 1e-6 * centre[0]);
@@ -426,14 +479,15 @@ int main(void) {
     CHECK(pt_fixture_load(&s.fx, BLACK));
     tt_film *film = NULL;
     tt_pass_stats ps[2];
-    const char *cfgs[2] = {mode ? "{\"mode\": \"mmlt\", \"bootstrapSamples\": 1000}" : "{\"bootstrapSamples\": 1000}",
+    const char *cfgs[2] = {mode ? "{\"mode\": \"mmlt\", \"bootstrapSamples\": 1000}"
+                                : "{\"bootstrapSamples\": 1000}",
                            NULL};
     CHECK(render(&s, cfgs, 2, 1, 1, &film, ps) == TT_OK);
     CHECK(metric(&ps[0], "b") == 0.0 && metric(&ps[1], "mutations") == 0.0);
     float *rgb = malloc(3 * sizeof(float) * W * H);
     tt_film_resolve(film, rgb);
     int nz = 0;
-    for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);  /* NaN counts too */
+    for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f); /* NaN counts too */
     CHECK(nz == 0);
     free(rgb);
     tt_film_destroy(film);
@@ -465,12 +519,14 @@ int main(void) {
     tt_default_host_set_log_callback(capture_log, NULL);
     CHECK(render(&s, cfgs, 1, 2, 1, &film, &ps) == TT_OK);
     tt_default_host_set_log_callback(NULL, NULL);
-    CHECK_MSG(strstr(g_warnings, "integrator_pssmlt: all ") && strstr(g_warnings, "have zero contribution"),
-              "enclosed light, mode %d: no warning that the image is black; logged: %s", mode, g_warnings);
+    CHECK_MSG(strstr(g_warnings, "integrator_pssmlt: all ") &&
+                  strstr(g_warnings, "have zero contribution"),
+              "enclosed light, mode %d: no warning that the image is black; logged: %s", mode,
+              g_warnings);
     CHECK(metric(&ps, "b") == 0.0 && ps.nonfinite == 0);
     tt_film_resolve(film, rgb);
     int nz = 0;
-    for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f);  /* NaN counts too */
+    for (int i = 0; i < 3 * W * H; ++i) nz += !(rgb[i] == 0.0f); /* NaN counts too */
     CHECK_MSG(nz == 0, "enclosed light, mode %d: %d non-zero channels", mode, nz);
     tt_film_destroy(film);
     pt_fixture_free(&s.fx);
@@ -487,8 +543,10 @@ int main(void) {
       bad += !isfinite(rgb[i]) || rgb[i] < 0.0f;
       sum += rgb[i];
     }
-    CHECK_MSG(bad == 0 && sum > 0.0 && ps.nonfinite == 0, "degenerate triangles, mode %d: %d bad channels, "
-              "sum %g, %llu non-finite", mode, bad, sum, (unsigned long long)ps.nonfinite);
+    CHECK_MSG(bad == 0 && sum > 0.0 && ps.nonfinite == 0,
+              "degenerate triangles, mode %d: %d bad channels, "
+              "sum %g, %llu non-finite",
+              mode, bad, sum, (unsigned long long)ps.nonfinite);
     tt_film_destroy(film);
     pt_fixture_free(&s.fx);
     free(rgb);

@@ -21,9 +21,11 @@
 static const char *SCENE =
     "{\"version\":1,\"camera\":{\"position\":[0.2,0.1,0.3],\"target\":[0,0,-1],\"up\":[0,1,0],"
     "\"fov\":70,\"resolution\":[24,20]},\"materials\":{\"glow\":{\"type\":\"diffuse\","
-    "\"albedo\":[0.5,0.5,0.5],\"emission\":[1,1,1]}},\"meshes\":[{\"name\":\"box\",\"material\":\"glow\","
+    "\"albedo\":[0.5,0.5,0.5],\"emission\":[1,1,1]}},\"meshes\":[{\"name\":\"box\",\"material\":"
+    "\"glow\","
     "\"positions\":[-1,-1,-1, 1,-1,-1, 1,1,-1, -1,1,-1, -1,-1,1, 1,-1,1, 1,1,1, -1,1,1],"
-    "\"indices\":[0,1,2, 0,2,3, 5,4,7, 5,7,6, 4,0,3, 4,3,7, 1,5,6, 1,6,2, 3,2,6, 3,6,7, 4,5,1, 4,1,0]}]}";
+    "\"indices\":[0,1,2, 0,2,3, 5,4,7, 5,7,6, 4,0,3, 4,3,7, 1,5,6, 1,6,2, 3,2,6, 3,6,7, 4,5,1, "
+    "4,1,0]}]}";
 
 typedef struct render_setup {
   const tt_integrator_iface *it;
@@ -93,9 +95,10 @@ int main(void) {
   rs.space = rs.it->space();
   CHECK(rs.space != NULL);
   CHECK(tt_space_count(rs.space) == 8);
-  const char *names[8] = {"maxDepth", "rrDepth", "mis", "heuristic", "sampler", "filter", "tileSize",
-                          "wavefront"};
-  for (int i = 0; i < 8; ++i) CHECK_MSG(tt_space_find(rs.space, names[i]) >= 0, "missing %s", names[i]);
+  const char *names[8] = {"maxDepth", "rrDepth", "mis",      "heuristic",
+                          "sampler",  "filter",  "tileSize", "wavefront"};
+  for (int i = 0; i < 8; ++i)
+    CHECK_MSG(tt_space_find(rs.space, names[i]) >= 0, "missing %s", names[i]);
   tt_config *def = tt_config_create(rs.space);
   CHECK(tt_config_get_int(def, "wavefront", -1) == 1);
   CHECK(tt_config_get_int(def, "maxDepth", -1) == 3);
@@ -125,17 +128,19 @@ int main(void) {
     CHECK(render(&rs, configs[c], 8, 0, NULL, &film, &stats) == TT_OK);
     double mean, se;
     image_stats(film, &mean, &se);
-    printf("furnace %s: %.4f +- %.4f (expected %.4f), %.0f samples/s, %.0f rays/s\n", configs[c], mean,
-           se, expected, stats.metrics[0].value, stats.metrics[1].value);
+    printf("furnace %s: %.4f +- %.4f (expected %.4f), %.0f samples/s, %.0f rays/s\n", configs[c],
+           mean, se, expected, stats.metrics[0].value, stats.metrics[1].value);
     double tol = c == 3 ? 0.05 * expected : 3.0 * se;
-    CHECK_MSG(fabs(mean - expected) <= tol, "config %d: %.5f vs %.5f (se %.5f)", c, mean, expected, se);
+    CHECK_MSG(fabs(mean - expected) <= tol, "config %d: %.5f vs %.5f (se %.5f)", c, mean, expected,
+              se);
     CHECK(stats.samples == (uint64_t)W * H * 8);
     CHECK(stats.rays > stats.samples);
     CHECK(stats.nonfinite == 0);
     CHECK(stats.time_ms > 0.0);
     CHECK(stats.metric_count == 2);
     CHECK(strcmp(stats.metrics[0].name, "samples_per_s") == 0 && stats.metrics[0].value > 0.0);
-    CHECK(strcmp(stats.metrics[1].name, "rays_per_s") == 0 && stats.metrics[1].value > stats.metrics[0].value);
+    CHECK(strcmp(stats.metrics[1].name, "rays_per_s") == 0 &&
+          stats.metrics[1].value > stats.metrics[0].value);
     const float *w = tt_film_sum_weight(film);
     int wrong = 0;
     for (int i = 0; i < W * H; ++i) wrong += w[i] != 8.0f;
@@ -158,8 +163,8 @@ int main(void) {
     /* One path at a time (intersect1 / occluded1) and the wavefront (streams, several
      * samples of a pixel in one wave) give the same image, bit for bit. */
     b = NULL;
-    render(&rs, "{\"maxDepth\": 5, \"tileSize\": 8, \"sampler\": \"sobol\", \"wavefront\": false}", 4,
-           0, NULL, &b, NULL);
+    render(&rs, "{\"maxDepth\": 5, \"tileSize\": 8, \"sampler\": \"sobol\", \"wavefront\": false}",
+           4, 0, NULL, &b, NULL);
     CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
     tt_film_destroy(a);
     tt_film_destroy(b);
@@ -169,7 +174,8 @@ int main(void) {
     moved.position[0] += 0.05f;
     a = b = NULL;
     render(&rs, "{\"maxDepth\": 4, \"tileSize\": 8}", 3, all, &moved, &a, NULL);
-    render(&rs, "{\"maxDepth\": 4, \"tileSize\": 8, \"wavefront\": false}", 3, all, &moved, &b, NULL);
+    render(&rs, "{\"maxDepth\": 4, \"tileSize\": 8, \"wavefront\": false}", 3, all, &moved, &b,
+           NULL);
     const tt_aov planes[4] = {TT_AOV_DEPTH, TT_AOV_NORMAL, TT_AOV_ALBEDO, TT_AOV_MOTION};
     CHECK(memcmp(tt_film_sum_rgb(a), tt_film_sum_rgb(b), 3 * sizeof(float) * W * H) == 0);
     for (int i = 0; i < 4; ++i)
@@ -190,11 +196,14 @@ int main(void) {
     uint32_t mask = TT_AOV_DEPTH | TT_AOV_NORMAL | TT_AOV_ALBEDO | TT_AOV_MOTION;
     tt_camera prev = *tt_scene_camera(rs.scene);
     CHECK(render(&rs, NULL, 2, mask, &prev, &film, NULL) == TT_OK);
-    const float *d = tt_film_aov_const(film, TT_AOV_DEPTH), *n = tt_film_aov_const(film, TT_AOV_NORMAL);
-    const float *al = tt_film_aov_const(film, TT_AOV_ALBEDO), *m = tt_film_aov_const(film, TT_AOV_MOTION);
+    const float *d = tt_film_aov_const(film, TT_AOV_DEPTH),
+                *n = tt_film_aov_const(film, TT_AOV_NORMAL);
+    const float *al = tt_film_aov_const(film, TT_AOV_ALBEDO),
+                *m = tt_film_aov_const(film, TT_AOV_MOTION);
     int bad = 0, unit = 0;
     for (int i = 0; i < W * H; ++i) {
-      float len = sqrtf(n[3 * i] * n[3 * i] + n[3 * i + 1] * n[3 * i + 1] + n[3 * i + 2] * n[3 * i + 2]);
+      float len =
+          sqrtf(n[3 * i] * n[3 * i] + n[3 * i + 1] * n[3 * i + 1] + n[3 * i + 2] * n[3 * i + 2]);
       unit += fabsf(len - 1.0f) <= 1e-4f;
       bad += !(d[i] > 0.5f && d[i] < 3.0f) || !(len > 0.7f && len < 1.0f + 1e-4f) ||
              al[3 * i] != 0.5f || fabsf(m[2 * i]) > 1e-2f || fabsf(m[2 * i + 1]) > 1e-2f;
@@ -204,13 +213,14 @@ int main(void) {
     /* The centre pixel looks at the far wall z = -1: depth along the view axis ~ 1.3. */
     CHECK(d[(H / 2) * W + W / 2] > 1.0f && d[(H / 2) * W + W / 2] < 1.6f);
     tt_film_destroy(film);
-    prev.position[0] += 0.1f;  /* the previous camera was to the right: points move right */
+    prev.position[0] += 0.1f; /* the previous camera was to the right: points move right */
     prev.target[0] += 0.1f;
     CHECK(render(&rs, NULL, 1, mask, &prev, &film, NULL) == TT_OK);
     m = tt_film_aov_const(film, TT_AOV_MOTION);
     int left = 0;
     for (int i = 0; i < W * H; ++i) left += m[2 * i] < -0.1f;
-    CHECK_MSG(left == W * H, "motion: %d of %d pixels move left in the previous frame", left, W * H);
+    CHECK_MSG(left == W * H, "motion: %d of %d pixels move left in the previous frame", left,
+              W * H);
     tt_film_destroy(film);
   }
 
@@ -218,9 +228,11 @@ int main(void) {
    * cannot be decoded fails at create with a message naming it, not a black image. */
   {
     const char *glass =
-        "{\"version\":1,\"camera\":{\"position\":[0,0,3],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":40,"
+        "{\"version\":1,\"camera\":{\"position\":[0,0,3],\"target\":[0,0,0],\"up\":[0,1,0],\"fov\":"
+        "40,"
         "\"resolution\":[4,4]},\"materials\":{\"frost\":{\"type\":\"dielectric\",\"alpha\":0.2}},"
-        "\"meshes\":[{\"name\":\"t\",\"material\":\"frost\",\"positions\":[0,0,0,1,0,0,0,1,0],\"indices\":[0,1,2]}]}";
+        "\"meshes\":[{\"name\":\"t\",\"material\":\"frost\",\"positions\":[0,0,0,1,0,0,0,1,0],"
+        "\"indices\":[0,1,2]}]}";
     tt_scene *sc = NULL;
     CHECK(tt_scene_load_json(glass, strlen(glass), "glass", NULL, &sc) == TT_OK);
     tt_integrator *it = NULL;
@@ -239,7 +251,8 @@ int main(void) {
                "{\"version\":1,\"camera\":{\"position\":[0,0,3],\"target\":[0,0,0],\"fov\":40,"
                "\"resolution\":[4,4]},\"materials\":{\"m\":{\"albedo\":0.5}},\"lights\":[{\"type\":"
                "\"environment\",\"image\":\"%s\"}],\"meshes\":[{\"material\":\"m\",\"positions\":"
-               "[0,0,0,1,0,0,0,1,0]}]}", bad);
+               "[0,0,0,1,0,0,0,1,0]}]}",
+               bad);
       CHECK(tt_scene_load_json(json, strlen(json), "badenv", NULL, &sc) == TT_OK);
       it = NULL;
       CHECK(rs.it->create(sc, NULL, &it) == TT_ERR_IO);

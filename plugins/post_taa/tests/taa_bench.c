@@ -52,7 +52,8 @@ typedef float v8f __attribute__((vector_size(32)));
 #if defined(__x86_64__)
 __attribute__((target("avx2,fma"), noinline))
 #endif
-static void fma_loop(v8f *a, long n) {
+static void
+fma_loop(v8f *a, long n) {
   v8f r[12], b, c;
   for (int i = 0; i < 8; i++) b[i] = 1.0000001f, c[i] = 1e-7f;
   for (int i = 0; i < 12; i++) r[i] = a[i];
@@ -119,20 +120,20 @@ static void free_frame(frame_in *f) {
 typedef struct variant {
   char label[64];
   int vctaa;
-  int winograd;    /* tt__net_state.winograd of this row (-1: the plugin's default) */
+  int winograd; /* tt__net_state.winograd of this row (-1: the plugin's default) */
   tt__net_model m;
   tt__net_state s;
   tt__vctaa v;
-  double wall[MAX_ROUNDS], cpu[MAX_ROUNDS], rej[MAX_ROUNDS], rep[MAX_ROUNDS],
-      net[MAX_ROUNDS], mix[MAX_ROUNDS], body[MAX_ROUNDS], kern[MAX_ROUNDS];
-  uint64_t digest;  /* TT_BENCH_DIGEST: FNV-1a 64 of all frames' outputs */
+  double wall[MAX_ROUNDS], cpu[MAX_ROUNDS], rej[MAX_ROUNDS], rep[MAX_ROUNDS], net[MAX_ROUNDS],
+      mix[MAX_ROUNDS], body[MAX_ROUNDS], kern[MAX_ROUNDS];
+  uint64_t digest; /* TT_BENCH_DIGEST: FNV-1a 64 of all frames' outputs */
 } variant;
 
 static variant g_var[MAX_VARIANTS];
 static int g_nvar;
 static double g_peak;
-static uint32_t g_band_rows, g_tile_cols;  /* TT_BENCH_BAND_ROWS, TT_BENCH_TILE_COLS (0: auto) */
-static int g_digest;                       /* TT_BENCH_DIGEST=1 */
+static uint32_t g_band_rows, g_tile_cols; /* TT_BENCH_BAND_ROWS, TT_BENCH_TILE_COLS (0: auto) */
+static int g_digest;                      /* TT_BENCH_DIGEST=1 */
 
 /* Adds a network variant (file, 5x5-layer algorithm: -1 default, 0 direct, 1 Winograd
  * F(2x2, 5x5), 2 F(4x4, 5x5) kernel layer); 0 on failure (reported). */
@@ -166,7 +167,8 @@ static void collect_networks(const char *root, int direct) {
     int n = 0;
     for (struct dirent *e; d && (e = readdir(d)) && n < MAX_VARIANTS;) {
       size_t len = strlen(e->d_name);
-      if (len > 4 && !strcmp(e->d_name + len - 4, ".ttw")) snprintf(names[n++], 256, "%s", e->d_name);
+      if (len > 4 && !strcmp(e->d_name + len - 4, ".ttw"))
+        snprintf(names[n++], 256, "%s", e->d_name);
     }
     if (d) closedir(d);
     qsort(names, (size_t)n, sizeof names[0], (int (*)(const void *, const void *))strcmp);
@@ -186,7 +188,7 @@ static void collect_networks(const char *root, int direct) {
       continue;
     }
     *eq = 0;
-    char *at = strchr(eq + 1, '@');  /* label=file.ttw@LEVEL: that algorithm only */
+    char *at = strchr(eq + 1, '@'); /* label=file.ttw@LEVEL: that algorithm only */
     if (at) {
       *at = 0;
       add_network(tok, eq + 1, atoi(at + 1) < 0 ? 0 : atoi(at + 1) > 2 ? 2 : atoi(at + 1));
@@ -217,15 +219,18 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
   for (int r = 0; r <= rounds; r++) {
     for (int q = 0; q < g_nvar; q++) {
       variant *v = &g_var[(q + r) % g_nvar];
-      tt__net_frame fr = {.color = f.color, .depth = f.depth, .motion = f.motion,
-                          .prev_depth = f.zprev, .jitter_index = (uint32_t)r};
+      tt__net_frame fr = {.color = f.color,
+                          .depth = f.depth,
+                          .motion = f.motion,
+                          .prev_depth = f.zprev,
+                          .jitter_index = (uint32_t)r};
       tt_jitter_halton23((uint32_t)r, fr.jitter);
       double t0 = bench_wall_ms(), c0 = bench_cpu_ms();
       if (v->vctaa) tt__vctaa_process(&v->v, tt_default_host(), &vp, f.color, f.motion, f.out);
       else tt__net_process_frame(&v->s, &v->m, tt_default_host(), &fr, f.out);
       double t = bench_wall_ms() - t0, c = bench_cpu_ms() - c0;
       if (g_digest) v->digest = tt__fnv1a64(v->digest, f.out, (size_t)w * h * 3 * sizeof(float));
-      if (r == 0) continue;  /* warm-up (the first frame has no history) */
+      if (r == 0) continue; /* warm-up (the first frame has no history) */
       int k = r - 1;
       v->wall[k] = t, v->cpu[k] = c;
       if (!v->vctaa) {
@@ -244,8 +249,9 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
       printf("| %-16s | %4ux%-4u | %u | %7.1f | %7.1f | %25s | %6s | %23s |\n", v->label, w, h,
              threads, wall, cpu, "-", "-", "-");
       printf("BENCH %s %ux%u %u %.3f %.3f 0 0 0 0\n", v->label, w, h, threads, wall, cpu);
-      if (g_digest) printf("DIGEST %s %ux%u %u %016llx\n", v->label, w, h, threads,
-                           (unsigned long long)v->digest);
+      if (g_digest)
+        printf("DIGEST %s %ux%u %u %016llx\n", v->label, w, h, threads,
+               (unsigned long long)v->digest);
       tt__vctaa_free(&v->v);
       continue;
     }
@@ -259,12 +265,14 @@ static void bench_size(uint32_t w, uint32_t h, uint32_t threads, int rounds) {
     double sh = bb + kk > 0 ? bb / (bb + kk) : 0;
     double gf = flops * px / (nt * 1e-3) * 1e-9;
     printf("| %-16s | %4ux%-4u | %u | %7.1f | %7.1f | %5.1f / %5.1f / %5.1f / %5.1f | %6.1f | "
-           "%5.1f + %5.1f = %5.0f %3.0f%% |\n", v->label, w, h, threads, wall, cpu, rj, rp, nt,
-           mx, flops, nt * sh, nt * (1 - sh), gf, g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
-    printf("BENCH %s %ux%u %u %.3f %.3f %.3f %.3f %.3f %.3f\n", v->label, w, h, threads, wall,
-           cpu, rj, rp, nt, mx);
-    if (g_digest) printf("DIGEST %s %ux%u %u %016llx\n", v->label, w, h, threads,
-                         (unsigned long long)v->digest);
+           "%5.1f + %5.1f = %5.0f %3.0f%% |\n",
+           v->label, w, h, threads, wall, cpu, rj, rp, nt, mx, flops, nt * sh, nt * (1 - sh), gf,
+           g_peak > 0 ? 100.0 * gf / g_peak : 0.0);
+    printf("BENCH %s %ux%u %u %.3f %.3f %.3f %.3f %.3f %.3f\n", v->label, w, h, threads, wall, cpu,
+           rj, rp, nt, mx);
+    if (g_digest)
+      printf("DIGEST %s %ux%u %u %016llx\n", v->label, w, h, threads,
+             (unsigned long long)v->digest);
     tt__net_state_free(&v->s);
   }
   free_frame(&f);
@@ -292,14 +300,18 @@ int main(void) {
   }
   g_peak = measure_peak();
   printf("FLOP peak (measured, AVX2 FMA loop): %.1f GFLOP/s per core = 2 FMA units x 8 floats "
-         "x 2 flops x %.2f GHz effective clock\n", g_peak, g_peak / 32.0);
+         "x 2 flops x %.2f GHz effective clock\n",
+         g_peak, g_peak / 32.0);
   printf("network instruction set: %s; %d variants interleaved, medians of %d rounds after a "
-         "warm-up round\n", tt__net_fast_isa(), g_nvar, rounds);
+         "warm-up round\n",
+         tt__net_fast_isa(), g_nvar, rounds);
   printf("wall / CPU = ms per frame (CPU: process CPU time, all threads); stages: rejection "
          "masks (wall) / reprojection / network / mix (CPU ms); FLOP/px of the direct "
          "convolutions; body + kernel layer CPU ms = effective GFLOP/s and %% of the peak\n\n");
-  printf("| variant          | size      | T | wall    | CPU     | rej / reproj / net / mix  | FLOP/px | body + kernel = GF/s peak |\n");
-  printf("|------------------|-----------|---|---------|---------|---------------------------|--------|---------------------------|\n");
+  printf("| variant          | size      | T | wall    | CPU     | rej / reproj / net / mix  | "
+         "FLOP/px | body + kernel = GF/s peak |\n");
+  printf("|------------------|-----------|---|---------|---------|---------------------------|-----"
+         "---|---------------------------|\n");
   unsigned th[4] = {1, 2, 0, 0};
   int nth = 2;
   if (tl) {

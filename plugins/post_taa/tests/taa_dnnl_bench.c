@@ -14,12 +14,19 @@
 
 #include <oneapi/dnnl/dnnl.h>
 
-#define OK(x) do { dnnl_status_t s_ = (x); if (s_ != dnnl_success) { fprintf(stderr, "%s: %d\n", #x, (int)s_); exit(1); } } while (0)
+#define OK(x)                                                                                      \
+  do {                                                                                             \
+    dnnl_status_t s_ = (x);                                                                        \
+    if (s_ != dnnl_success) {                                                                      \
+      fprintf(stderr, "%s: %d\n", #x, (int)s_);                                                    \
+      exit(1);                                                                                     \
+    }                                                                                              \
+  } while (0)
 
 /* Times one conv (NHWC src/dst, or with `blocked` the activation layouts oneDNN prefers,
  * e.g. nChw16c; weights always in oneDNN's layout); returns the median CPU ms. */
-static double time_conv(dnnl_engine_t eng, dnnl_stream_t st, int w, int h, int ic, int oc,
-                        int k, int blocked, double *wall) {
+static double time_conv(dnnl_engine_t eng, dnnl_stream_t st, int w, int h, int ic, int oc, int k,
+                        int blocked, double *wall) {
   dnnl_dims_t sd = {1, ic, h, w}, dd = {1, oc, h, w}, wd = {oc, ic, k, k}, bd = {oc};
   dnnl_dims_t strides = {1, 1}, pad = {k / 2, k / 2};
   dnnl_memory_desc_t smd, dmd, wmd_any, bmd, wmd_user;
@@ -30,8 +37,8 @@ static double time_conv(dnnl_engine_t eng, dnnl_stream_t st, int w, int h, int i
   OK(dnnl_memory_desc_init_by_tag(&wmd_user, 4, wd, dnnl_f32, dnnl_oihw));
   OK(dnnl_memory_desc_init_by_tag(&bmd, 1, bd, dnnl_f32, dnnl_x));
   dnnl_convolution_desc_t cd;
-  OK(dnnl_convolution_forward_desc_init(&cd, dnnl_forward_inference, dnnl_convolution_direct,
-                                        &smd, &wmd_any, &bmd, &dmd, strides, pad, pad));
+  OK(dnnl_convolution_forward_desc_init(&cd, dnnl_forward_inference, dnnl_convolution_direct, &smd,
+                                        &wmd_any, &bmd, &dmd, strides, pad, pad));
   dnnl_primitive_desc_t pd;
   OK(dnnl_primitive_desc_create(&pd, &cd, NULL, eng, NULL));
   const dnnl_memory_desc_t *wq = dnnl_primitive_desc_query_md(pd, dnnl_query_weights_md, 0);
@@ -49,8 +56,8 @@ static double time_conv(dnnl_engine_t eng, dnnl_stream_t st, int w, int h, int i
   for (size_t i = 0; i < sbytes / sizeof(float); i++) sp[i] = (float)(i % 17) * 0.1f;
   dnnl_primitive_t prim;
   OK(dnnl_primitive_create(&prim, pd));
-  dnnl_exec_arg_t args[4] = {{DNNL_ARG_SRC, sm}, {DNNL_ARG_WEIGHTS, wm}, {DNNL_ARG_BIAS, bm},
-                             {DNNL_ARG_DST, dm}};
+  dnnl_exec_arg_t args[4] = {
+      {DNNL_ARG_SRC, sm}, {DNNL_ARG_WEIGHTS, wm}, {DNNL_ARG_BIAS, bm}, {DNNL_ARG_DST, dm}};
   double cs[5], ws[5];
   for (int r = 0; r < 6; r++) {
     double c0 = bench_cpu_ms(), w0 = bench_wall_ms();
@@ -63,7 +70,8 @@ static double time_conv(dnnl_engine_t eng, dnnl_stream_t st, int w, int h, int i
   *wall = bench_median(ws, 5);
   dnnl_primitive_destroy(prim);
   dnnl_primitive_desc_destroy(pd);
-  dnnl_memory_destroy(sm), dnnl_memory_destroy(dm), dnnl_memory_destroy(wm), dnnl_memory_destroy(bm);
+  dnnl_memory_destroy(sm), dnnl_memory_destroy(dm), dnnl_memory_destroy(wm),
+      dnnl_memory_destroy(bm);
   return best;
 }
 
@@ -99,8 +107,9 @@ static void time_c(const char *root, int width, int w, int h, int threads) {
     body[r - 1] = s.cpu_network * share, kern[r - 1] = s.cpu_network * (1 - share);
   }
   printf("C (%s) %dx%d W=%d: CPU ms body %.1f, kernel layer %.1f; total %.1f CPU ms (%.1f "
-         "wall), %d thread(s)\n", tt__net_fast_isa(), w, h, width, bench_median(body, 5),
-         bench_median(kern, 5), bench_median(cn, 5), bench_median(wn, 5), threads);
+         "wall), %d thread(s)\n",
+         tt__net_fast_isa(), w, h, width, bench_median(body, 5), bench_median(kern, 5),
+         bench_median(cn, 5), bench_median(wn, 5), threads);
   tt__net_state_free(&s);
   tt__net_free(&m);
   free(color), free(depth), free(motion), free(out);
@@ -127,9 +136,9 @@ int main(void) {
         c[2] = time_conv(eng, st, w, h, width, width, 5, blocked, &wl[2]);
         c[3] = time_conv(eng, st, w, h, width, 50, 5, blocked, &wl[3]);
         printf("oneDNN %s %dx%d W=%d: CPU ms body %.1f (%.1f + %.1f + %.1f), kernel layer "
-               "%.1f; total %.1f CPU ms (%.1f wall)\n", blocked ? "blocked" : "NHWC", w, h,
-               width, c[0] + c[1] + c[2], c[0], c[1], c[2], c[3], c[0] + c[1] + c[2] + c[3],
-               wl[0] + wl[1] + wl[2] + wl[3]);
+               "%.1f; total %.1f CPU ms (%.1f wall)\n",
+               blocked ? "blocked" : "NHWC", w, h, width, c[0] + c[1] + c[2], c[0], c[1], c[2],
+               c[3], c[0] + c[1] + c[2] + c[3], wl[0] + wl[1] + wl[2] + wl[3]);
       }
       time_c(root, width, w, h, threads);
     }

@@ -41,7 +41,7 @@ static void put(buf *b, const void *d, size_t n) {
   memcpy(b->p + b->n, d, n);
   b->n += n;
 }
-static void put_u32(buf *b, uint32_t v) { put(b, &v, 4); }  /* tests run on LE hosts */
+static void put_u32(buf *b, uint32_t v) { put(b, &v, 4); } /* tests run on LE hosts */
 static void put_f32(buf *b, float v) { put(b, &v, 4); }
 
 static uint32_t rng_state = 12345;
@@ -56,7 +56,7 @@ static float rnd(void) {
 /* Model shape for the writer. */
 typedef struct shape {
   uint32_t width, hidden, body, ks[4], sets_body[4], sets_k, sets_h;
-  uint32_t flags;  /* TT__NET_FLAG_* (0: a version-1 file) */
+  uint32_t flags; /* TT__NET_FLAG_* (0: a version-1 file) */
 } shape;
 
 /* Serialises a random model of `s`; layer weights ~ U(-1,1) * scale. */
@@ -133,8 +133,11 @@ static void check_fast_vs_reference(const shape *s, const char *label, int wino)
   double worst = 0.0, worst_state = 0.0;
   for (uint32_t f = 0; f < 3; f++) {
     random_frame(w, h, color, depth, motion);
-    for (size_t i = 0; i < n; i++) zprev[i] = 5.0f + 4.0f * rnd();  /* some rejected */
-    tt__net_frame fr = {.color = color, .depth = depth, .motion = motion, .prev_depth = zprev,
+    for (size_t i = 0; i < n; i++) zprev[i] = 5.0f + 4.0f * rnd(); /* some rejected */
+    tt__net_frame fr = {.color = color,
+                        .depth = depth,
+                        .motion = motion,
+                        .prev_depth = zprev,
                         .jitter_index = 5 + f};
     tt_jitter_halton23(fr.jitter_index, fr.jitter);
     tt__net_process_frame(&fast, &m, tt_default_host(), &fr, o1);
@@ -155,8 +158,8 @@ static void check_fast_vs_reference(const shape *s, const char *label, int wino)
     for (size_t i = 0; i < n * fast.state_ch; i++)
       worst_state = fmax(worst_state, fabs(fast.state[i] - ref.state[i]));
   }
-  printf("%s (%s, %s): fast vs reference: state %.2e, output %.2e\n", label,
-         wino_name(wino), tt__net_fast_isa(), worst_state, worst);
+  printf("%s (%s, %s): fast vs reference: state %.2e, output %.2e\n", label, wino_name(wino),
+         tt__net_fast_isa(), worst_state, worst);
   CHECK_MSG(worst_state < 1e-4, "%s: state differs by %g", label, worst_state);
   CHECK_MSG(worst < 1e-3, "%s: output differs by %g", label, worst);
   free(color), free(depth), free(motion), free(o1), free(o2), free(zprev);
@@ -215,10 +218,13 @@ static void test_isa_dispatch(void) {
 #endif
   const char *isa0 = getenv("TT_POST_TAA_ISA");
   char *saved = isa0 ? strdup(isa0) : NULL;
-  const struct { const char *force, *want; } cases[] = {
-      {NULL, v4 ? "avx512" : v3 ? "avx2" : "generic"},
-      {"avx2", v3 ? "avx2" : "generic"},
-      {"generic", "generic"}};
+  const struct {
+    const char *force, *want;
+  } cases[] = {{NULL, v4   ? "avx512"
+                      : v3 ? "avx2"
+                           : "generic"},
+               {"avx2", v3 ? "avx2" : "generic"},
+               {"generic", "generic"}};
   for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
     set_isa(cases[k].force);
     const char *got = tt__net_fast_isa();
@@ -256,7 +262,10 @@ static void check_isa_bits(const shape *s, const char *label, int wino) {
   for (uint32_t f = 0; f < 2; f++) {
     random_frame(w, h, color, depth, motion);
     for (size_t i = 0; i < n; i++) zprev[i] = 5.0f + 4.0f * rnd();
-    tt__net_frame fr = {.color = color, .depth = depth, .motion = motion, .prev_depth = zprev,
+    tt__net_frame fr = {.color = color,
+                        .depth = depth,
+                        .motion = motion,
+                        .prev_depth = zprev,
                         .jitter_index = 3 + f};
     tt_jitter_halton23(fr.jitter_index, fr.jitter);
     set_isa(NULL);
@@ -326,8 +335,7 @@ static void winograd_vs_direct(const tt__net_model *mp, uint32_t w, uint32_t h, 
   }
   printf("%s vs direct (%s, %ux%u, 4 frames): state %.2e, output %.2e\n", wino_name(level),
          tt__net_fast_isa(), w, h, worst_state, worst);
-  CHECK_MSG(worst_state < 1e-4, "winograd vs direct %ux%u: state differs by %g", w, h,
-            worst_state);
+  CHECK_MSG(worst_state < 1e-4, "winograd vs direct %ux%u: state differs by %g", w, h, worst_state);
   CHECK_MSG(worst < 1e-3, "winograd vs direct %ux%u: output differs by %g", w, h, worst);
   free(color), free(depth), free(motion), free(o1), free(o2);
   tt__net_state_free(&sw);
@@ -342,7 +350,8 @@ static void test_winograd_vs_direct(void) {
   free(b.p);
   const uint32_t sizes[][2] = {{157, 45}, {1, 1}, {3, 2}, {17, 1}, {2, 5}, {33, 3}};
   for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++)
-    for (int level = 2; level >= 1; level--) winograd_vs_direct(&m, sizes[k][0], sizes[k][1], level);
+    for (int level = 2; level >= 1; level--)
+      winograd_vs_direct(&m, sizes[k][0], sizes[k][1], level);
   tt__net_free(&m);
 }
 
@@ -365,8 +374,8 @@ static void run_threads(const tt__net_model *m, uint32_t w, uint32_t h, uint32_t
   for (uint32_t f = 0; f < 4; f++) {
     random_frame(w, h, color, depth, motion);
     for (size_t i = 0; i < n; i++) zprev[i] = 5.0f + 4.0f * rnd();
-    tt__net_frame fr = {.color = color, .depth = depth, .motion = motion, .prev_depth = zprev,
-                        .jitter_index = f};
+    tt__net_frame fr = {
+        .color = color, .depth = depth, .motion = motion, .prev_depth = zprev, .jitter_index = f};
     tt_jitter_halton23(f, fr.jitter);
     tt__net_process_frame(&s, m, tt_default_host(), &fr, *out + f * n * 3);
   }
@@ -384,15 +393,16 @@ static void thread_invariance(const shape *sh, const char *label) {
   tt__net_model m;
   CHECK_MSG(tt__net_parse(b.p, b.n, "threads", &m) == TT_OK, "%s", tt_last_error());
   free(b.p);
-  const uint32_t w = 201, h = 67;  /* not multiples of 8 or 16: column tails, uneven bands */
+  const uint32_t w = 201, h = 67; /* not multiples of 8 or 16: column tails, uneven bands */
   size_t n = (size_t)w * h;
   /* Winograd: odd band heights start bands on odd rows (half a tile pair). */
   for (int wino = 2; wino >= 0; wino--) {
     float *o1, *s1;
     run_threads(&m, w, h, 1, 0, 0, wino, &o1, &s1);
-    struct { uint32_t threads, rows, cols; } cases[] = {
-        {2, 0, 0}, {3, 0, 0}, {2, 16, 0}, {2, 17, 64}, {1, 5, 128}, {2, 0, 64}, {3, 3, 64},
-        {2, 1, 0}};
+    struct {
+      uint32_t threads, rows, cols;
+    } cases[] = {{2, 0, 0},   {3, 0, 0},  {2, 16, 0}, {2, 17, 64},
+                 {1, 5, 128}, {2, 0, 64}, {3, 3, 64}, {2, 1, 0}};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
       float *o2, *s2;
       run_threads(&m, w, h, cases[k].threads, cases[k].rows, cases[k].cols, wino, &o2, &s2);
@@ -401,9 +411,10 @@ static void thread_invariance(const shape *sh, const char *label) {
       printf("%s %s: threads %u, band rows %u, tile columns %u vs 1 thread: %s\n", label,
              wino_name(wino), cases[k].threads, cases[k].rows, cases[k].cols,
              same_out && same_state ? "bit-identical" : "DIFFERENT");
-      CHECK_MSG(same_out && same_state, "%s: threads %u band rows %u tile columns %u: results "
-                "differ from 1 thread", wino_name(wino), cases[k].threads,
-                cases[k].rows, cases[k].cols);
+      CHECK_MSG(same_out && same_state,
+                "%s: threads %u band rows %u tile columns %u: results "
+                "differ from 1 thread",
+                wino_name(wino), cases[k].threads, cases[k].rows, cases[k].cols);
       free(o2), free(s2);
     }
     free(o1), free(s1);
@@ -433,8 +444,10 @@ static void test_golden(const char *root, const char *name) {
   CHECK(gn > 28 && memcmp(g, "TTAAGLD2", 8) == 0);
   uint32_t hdr[5];
   memcpy(hdr, g + 8, sizeof hdr);
-  CHECK_MSG(tt__fnv1a32(wdata, wn) == hdr[0], "golden fixture was made from other weights: rerun "
-            "tools/taa/export_golden.py after changing %s", wpath);
+  CHECK_MSG(tt__fnv1a32(wdata, wn) == hdr[0],
+            "golden fixture was made from other weights: rerun "
+            "tools/taa/export_golden.py after changing %s",
+            wpath);
   tt__net_model m;
   CHECK_MSG(tt__net_parse(wdata, wn, wpath, &m) == TT_OK, "%s", tt_last_error());
   uint32_t w = hdr[1], hh = hdr[2], frames = hdr[3], sc = hdr[4];
@@ -459,8 +472,12 @@ static void test_golden(const char *root, const char *name) {
       const float *zprev = motion + n * 2, *want_state = zprev + n, *want_out = want_state + n * sc;
       p = (const unsigned char *)(want_out + n * 3);
       if (fresh) s.valid = 0;
-      tt__net_frame fr = {.color = color, .depth = depth, .motion = motion, .prev_depth = zprev,
-                          .jitter_index = jit, .jitter = {jxy[0], jxy[1]}};
+      tt__net_frame fr = {.color = color,
+                          .depth = depth,
+                          .motion = motion,
+                          .prev_depth = zprev,
+                          .jitter_index = jit,
+                          .jitter = {jxy[0], jxy[1]}};
       tt__net_process_frame(&s, &m, tt_default_host(), &fr, out);
       for (size_t i = 0; i < n * sc; i++)
         worst_state = fmax(worst_state, fabs(s.state[i] - want_state[i]));
@@ -469,8 +486,8 @@ static void test_golden(const char *root, const char *name) {
     }
     CHECK((size_t)(p - g) == gn);
     printf("golden %s (%s, %s): %u frames %ux%u: state %.2e (tol 1e-4), linear output rel "
-           "%.2e\n", name, wino_name(wino), tt__net_fast_isa(), frames, w, hh,
-           worst_state, worst_out);
+           "%.2e\n",
+           name, wino_name(wino), tt__net_fast_isa(), frames, w, hh, worst_state, worst_out);
     CHECK(worst_state < 1e-4);
     CHECK(worst_out < 1e-3);
     free(out);
@@ -508,11 +525,11 @@ static void test_errors(void) {
   expect_error(c, b.n, TT_ERR_UNSUPPORTED, "version 3 is not supported");
   memcpy(c, b.p, b.n);
   c[8] = 2;
-  c[44] = 4;  /* version 2 with an unknown input flag */
+  c[44] = 4; /* version 2 with an unknown input flag */
   expect_error(c, b.n, TT_ERR_UNSUPPORTED, "input flags 0x4");
-  c[44] = 2;  /* history reset without the rejection input */
+  c[44] = 2; /* history reset without the rejection input */
   expect_error(c, b.n, TT_ERR_UNSUPPORTED, "input flags 0x2");
-  c[44] = 1;  /* the rejection input needs one more input channel */
+  c[44] = 1; /* the rejection input needs one more input channel */
   expect_error(c, b.n, TT_ERR_PARSE, "bad model shape");
   expect_error(b.p, b.n - 100, TT_ERR_PARSE, "truncated");
   expect_error(b.p, 30, TT_ERR_PARSE, "truncated header");
@@ -521,15 +538,15 @@ static void test_errors(void) {
   c[b.n - 50] ^= 0x40;
   expect_error(c, b.n, TT_ERR_PARSE, "checksum");
   memcpy(c, b.p, b.n);
-  c[48 + 24 + 8] = 7;  /* second body layer outputs 7 channels instead of 6 */
+  c[48 + 24 + 8] = 7; /* second body layer outputs 7 channels instead of 6 */
   expect_error(c, b.n, TT_ERR_PARSE, "layer 1 (body)");
   memcpy(c, b.p, b.n);
-  c[16] = 20;  /* in_channels != 9 + hidden */
+  c[16] = 20; /* in_channels != 9 + hidden */
   expect_error(c, b.n, TT_ERR_PARSE, "bad model shape");
   tt__net_model m;
   CHECK(tt__net_load("/nonexistent/w.ttw", &m) == TT_ERR_IO);
   CHECK_CONTAINS(tt_last_error(), "/nonexistent/w.ttw");
-  expect_error(b.p, b.n, TT_OK, "");  /* the intact file parses */
+  expect_error(b.p, b.n, TT_OK, ""); /* the intact file parses */
   /* nothing after the checksum is read: bytes appended to a valid file are refused */
   unsigned char *longer = malloc(b.n + 11);
   memcpy(longer, b.p, b.n);
@@ -561,7 +578,8 @@ static void check_roundtrip(const shape *s, const char *label) {
     uint32_t rec[6];
     memcpy(rec, b.p + 48 + 24 * i, sizeof rec);
     CHECK_MSG(l->in == rec[1] && l->out == rec[2] && l->ksize == rec[3] && l->sets == rec[4] &&
-              l->activation == rec[5], "%s: layer %u record", label, i);
+                  l->activation == rec[5],
+              "%s: layer %u record", label, i);
     size_t nw = (size_t)rec[4] * rec[2] * rec[1] * rec[3] * rec[3], nb = (size_t)rec[4] * rec[2];
     for (size_t k = 0; k < nw; k++) bad += memcmp(&l->w[k], b.p + off + 4 * k, 4) != 0;
     off += 4 * nw;
@@ -629,7 +647,8 @@ static void test_rejection_disocclusion(void) {
       marked += want;
     }
   printf("disocclusion: %u pixels disoccluded; mask differs from them in %u (raw) / %u "
-         "(reset) pixels\n", marked, wrong_raw, wrong_reset);
+         "(reset) pixels\n",
+         marked, wrong_raw, wrong_reset);
   CHECK(wrong_raw == 0 && wrong_reset == 0);
   /* without prevdepth only the off-screen test runs: nothing is rejected here */
   tt__taa_reject_masks(tt_default_host(), w, h, depth0, j0, NULL, motion1, j0, mask, tmp);
@@ -660,9 +679,15 @@ static void test_rejection_disocclusion(void) {
     CHECK(tt__net_state_init(&s, &m, w, h) == TT_OK);
     CHECK(tt__net_state_init(&r, &m, w, h) == TT_OK);
     r.reference = 1;
-    tt__net_frame f0 = {.color = color0, .depth = depth0, .motion = motion0, .prev_depth = depth0,
+    tt__net_frame f0 = {.color = color0,
+                        .depth = depth0,
+                        .motion = motion0,
+                        .prev_depth = depth0,
                         .jitter_index = 0},
-                  f1 = {.color = color1, .depth = depth1, .motion = motion1, .prev_depth = zprev1,
+                  f1 = {.color = color1,
+                        .depth = depth1,
+                        .motion = motion1,
+                        .prev_depth = zprev1,
                         .jitter_index = 1};
     static float out_ref[w * h * 3];
     tt__net_process_frame(&s, &m, tt_default_host(), &f0, out);
@@ -670,7 +695,8 @@ static void test_rejection_disocclusion(void) {
     tt__net_process_frame(&r, &m, tt_default_host(), &f0, out_ref);
     tt__net_process_frame(&r, &m, tt_default_host(), &f1, out_ref);
     double worst = 0;
-    for (size_t i = 0; i < n * 3; i++) worst = fmax(worst, fabs(out[i] - out_ref[i]) / (1 + fabs(out_ref[i])));
+    for (size_t i = 0; i < n * 3; i++)
+      worst = fmax(worst, fabs(out[i] - out_ref[i]) / (1 + fabs(out_ref[i])));
     CHECK_MSG(worst < 1e-3, "fast vs reference: %g", worst);
     /* the fast path's input planes: channels 6..8 reprojected rgb, 9..13 hidden, 14 reject */
     uint32_t reset_ok = 0, red_hist = 0, flag_wrong = 0;
@@ -696,7 +722,7 @@ static void test_rejection_disocclusion(void) {
            "history, %u a red history; rejection input wrong in %u pixels\n",
            k ? "plain" : "reset", reset_ok, red_hist, flag_wrong);
     if (!k) CHECK(reset_ok == 66 && red_hist == 0 && flag_wrong == 0);
-    else CHECK(red_hist >= 40);  /* without rejection the square's red is the history */
+    else CHECK(red_hist >= 40); /* without rejection the square's red is the history */
     tt__net_state_free(&s);
     tt__net_state_free(&r);
     tt__net_free(&m);
@@ -719,10 +745,12 @@ static void test_catmull_rom(void) {
     float fx = 4.0f + (w - 8) * (0.5f + 0.5f * rnd()), fy = 4.0f + (h - 8) * (0.5f + 0.5f * rnd());
     float q, s[2], bl[2];
     tt__taa_sample_catmull_rom(quad, w, h, 1, fx, fy, &q);
-    wq = fmax(wq, fabs(q - (0.3f + 0.02f * fx - 0.01f * fy + 0.0004f * fx * fx + 0.0003f * fx * fy)));
+    wq = fmax(wq,
+              fabs(q - (0.3f + 0.02f * fx - 0.01f * fy + 0.0004f * fx * fx + 0.0003f * fx * fy)));
     tt__taa_sample_catmull_rom(smooth, w, h, 2, fx, fy, s);
     tt__taa_sample_bilinear(smooth, w, h, 2, fx, fy, bl);
-    float e0 = sinf(0.21f * fx) * cosf(0.17f * fy), e1 = 0.5f + 0.5f * cosf(0.11f * fx + 0.07f * fy);
+    float e0 = sinf(0.21f * fx) * cosf(0.17f * fy),
+          e1 = 0.5f + 0.5f * cosf(0.11f * fx + 0.07f * fy);
     ws = fmax(ws, fmax(fabs(s[0] - e0), fabs(s[1] - e1)));
     wb = fmax(wb, fmax(fabs(bl[0] - e0), fabs(bl[1] - e1)));
   }

@@ -17,34 +17,37 @@
 /* A wall at z = 0 seen from z = 5; keys every second, 2.4 units apart (constant velocity
  * through the middle segments). */
 static const char *k_scene =
-  "{\"version\": 1,\n"
-  " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45,\n"
-  "   \"resolution\": [64, 48], \"path\": [\n"
-  "   {\"time\": 0, \"position\": [0, 0, 5], \"target\": [0, 0, 0]},\n"
-  "   {\"time\": 1, \"position\": [2.4, 0, 5], \"target\": [2.4, 0, 0]},\n"
-  "   {\"time\": 2, \"position\": [4.8, 0, 5], \"target\": [4.8, 0, 0]},\n"
-  "   {\"time\": 3, \"position\": [7.2, 0, 5], \"target\": [7.2, 0, 0]}]},\n"
-  " \"render\": {\"spp\": 1, \"maxDepth\": 1},\n"
-  " \"materials\": {\"w\": {\"albedo\": 0.6}, \"b\": {\"albedo\": 0.05}},\n"
-  " \"meshes\": [\n"
-  "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],\n"
-  "   \"indices\": [[0, 1, 2], [0, 2, 3]]},\n"
-  "  {\"material\": \"b\", \"positions\": [[0, -0.3, 0.01], [0.05, -0.3, 0.01], [0.6, 0.4, 0.01]]}],\n"
-  " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
+    "{\"version\": 1,\n"
+    " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45,\n"
+    "   \"resolution\": [64, 48], \"path\": [\n"
+    "   {\"time\": 0, \"position\": [0, 0, 5], \"target\": [0, 0, 0]},\n"
+    "   {\"time\": 1, \"position\": [2.4, 0, 5], \"target\": [2.4, 0, 0]},\n"
+    "   {\"time\": 2, \"position\": [4.8, 0, 5], \"target\": [4.8, 0, 0]},\n"
+    "   {\"time\": 3, \"position\": [7.2, 0, 5], \"target\": [7.2, 0, 0]}]},\n"
+    " \"render\": {\"spp\": 1, \"maxDepth\": 1},\n"
+    " \"materials\": {\"w\": {\"albedo\": 0.6}, \"b\": {\"albedo\": 0.05}},\n"
+    " \"meshes\": [\n"
+    "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, "
+    "0]],\n"
+    "   \"indices\": [[0, 1, 2], [0, 2, 3]]},\n"
+    "  {\"material\": \"b\", \"positions\": [[0, -0.3, 0.01], [0.05, -0.3, 0.01], [0.6, 0.4, "
+    "0.01]]}],\n"
+    " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
 
 /* The same wall approached head-on: z from 5 to 4 in one second. */
 static const char *k_dolly =
-  "{\"version\": 1,\n"
-  " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45,\n"
-  "   \"resolution\": [32, 24], \"path\": [\n"
-  "   {\"time\": 0, \"position\": [0, 0, 5], \"target\": [0, 0, 0]},\n"
-  "   {\"time\": 1, \"position\": [0, 0, 4], \"target\": [0, 0, -1]}]},\n"
-  " \"render\": {\"spp\": 1, \"maxDepth\": 1},\n"
-  " \"materials\": {\"w\": {\"albedo\": 0.6}},\n"
-  " \"meshes\": [\n"
-  "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],\n"
-  "   \"indices\": [[0, 1, 2], [0, 2, 3]]}],\n"
-  " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
+    "{\"version\": 1,\n"
+    " \"camera\": {\"position\": [0, 0, 5], \"target\": [0, 0, 0], \"fov\": 45,\n"
+    "   \"resolution\": [32, 24], \"path\": [\n"
+    "   {\"time\": 0, \"position\": [0, 0, 5], \"target\": [0, 0, 0]},\n"
+    "   {\"time\": 1, \"position\": [0, 0, 4], \"target\": [0, 0, -1]}]},\n"
+    " \"render\": {\"spp\": 1, \"maxDepth\": 1},\n"
+    " \"materials\": {\"w\": {\"albedo\": 0.6}},\n"
+    " \"meshes\": [\n"
+    "  {\"material\": \"w\", \"positions\": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, "
+    "0]],\n"
+    "   \"indices\": [[0, 1, 2], [0, 2, 3]]}],\n"
+    " \"lights\": [{\"type\": \"distant\", \"direction\": [0, 0, -1], \"irradiance\": 2}]}\n";
 
 /* Largest |a - b| over two EXRs of the same shape; -1 if either is unreadable or the
  * shapes differ. */
@@ -52,8 +55,8 @@ static double image_diff(const char *a, const char *b) {
   uint32_t w1, h1, c1, w2, h2, c2;
   float *p1 = NULL, *p2 = NULL;
   double worst = -1;
-  if (tt_image_read(a, &w1, &h1, &c1, &p1) == TT_OK && tt_image_read(b, &w2, &h2, &c2, &p2) == TT_OK &&
-      w1 == w2 && h1 == h2 && c1 == c2) {
+  if (tt_image_read(a, &w1, &h1, &c1, &p1) == TT_OK &&
+      tt_image_read(b, &w2, &h2, &c2, &p2) == TT_OK && w1 == w2 && h1 == h2 && c1 == c2) {
     worst = 0;
     for (size_t i = 0; i < (size_t)w1 * h1 * c1; i++) worst = fmax(worst, fabs(p1[i] - p2[i]));
   }
@@ -71,8 +74,8 @@ static double prev_depth_offset_error(const char *dir, int f, double offset) {
   uint32_t w1, h1, c1, w2, h2, c2;
   float *d = NULL, *p = NULL;
   double worst = -1;
-  if (tt_image_read(a, &w1, &h1, &c1, &d) == TT_OK && tt_image_read(b, &w2, &h2, &c2, &p) == TT_OK &&
-      w1 == w2 && h1 == h2 && c1 == 1 && c2 == 1) {
+  if (tt_image_read(a, &w1, &h1, &c1, &d) == TT_OK &&
+      tt_image_read(b, &w2, &h2, &c2, &p) == TT_OK && w1 == w2 && h1 == h2 && c1 == 1 && c2 == 1) {
     worst = 0;
     for (size_t i = 0; i < (size_t)w1 * h1; i++) worst = fmax(worst, fabs(p[i] - d[i] - offset));
   }
@@ -94,8 +97,10 @@ static void check_same(const char *dir_a, const char *a, const char *dir_b, cons
 static void check_pattern_interface(const char *dir, const char *seq, const char *scene) {
   char args[2048], log[16384], a[512], b[512];
   /* rendered frames + AOVs */
-  snprintf(args, sizeof args, "--quiet --threads 2 --frames 24:27 --out '%s/i/frame_%%04d.exr' "
-           "--aov depth,motion,prevdepth --set integrator_pt.maxDepth=1 '%s'", dir, scene);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --frames 24:27 --out '%s/i/frame_%%04d.exr' "
+           "--aov depth,motion,prevdepth --set integrator_pt.maxDepth=1 '%s'",
+           dir, scene);
   int rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   snprintf(a, sizeof a, "%s/i", dir);
@@ -111,8 +116,10 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   free(man);
 
   /* --supersample: the frames are the Blackman-Harris-downsampled reference */
-  snprintf(args, sizeof args, "--quiet --threads 2 --frames 24:25 --out '%s/r/ref_%%d.exr' "
-           "--supersample 2 --set integrator_pt.maxDepth=1 '%s'", dir, scene);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --frames 24:25 --out '%s/r/ref_%%d.exr' "
+           "--supersample 2 --set integrator_pt.maxDepth=1 '%s'",
+           dir, scene);
   rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   snprintf(a, sizeof a, "%s/r", dir);
@@ -121,8 +128,10 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   CHECK_MSG(access(a, F_OK) != 0, "%s written without --aov", a);
 
   /* --plugin post_taa: the frame is the filtered one, the rendered frame beside it */
-  snprintf(args, sizeof args, "--quiet --threads 2 --frames 24:27 --out '%s/p/f%%03d.exr' "
-           "--plugin post_taa --set integrator_pt.maxDepth=1 '%s'", dir, scene);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --frames 24:27 --out '%s/p/f%%03d.exr' "
+           "--plugin post_taa --set integrator_pt.maxDepth=1 '%s'",
+           dir, scene);
   rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   snprintf(a, sizeof a, "%s/p", dir);
@@ -130,29 +139,36 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   check_same(a, "f027.raw.exr", seq, "color_0027.exr");
 
   /* post_taa.weights=FILE (an option, not a tuned parameter) == the shipped 6-channel model */
-  snprintf(args, sizeof args, "--quiet --threads 2 --frames 24:27 --out '%s/w6/f%%03d.exr' "
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --frames 24:27 --out '%s/w6/f%%03d.exr' "
            "--plugin post_taa --set post_taa.mode=network --set post_taa.channels=6 "
-           "--set integrator_pt.maxDepth=1 '%s'", dir, scene);
+           "--set integrator_pt.maxDepth=1 '%s'",
+           dir, scene);
   CHECK(run_host(args, log, sizeof log) == 0);
-  snprintf(args, sizeof args, "--quiet --threads 2 --frames 24:27 --out '%s/wf/f%%03d.exr' "
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --frames 24:27 --out '%s/wf/f%%03d.exr' "
            "--plugin post_taa --set post_taa.mode=network --set 'post_taa.weights=%s' "
-           "--set integrator_pt.maxDepth=1 '%s'", dir,
-           source_path("plugins/post_taa/post_taa_c6.ttw"), scene);
+           "--set integrator_pt.maxDepth=1 '%s'",
+           dir, source_path("plugins/post_taa/post_taa_c6.ttw"), scene);
   rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   snprintf(a, sizeof a, "%s/w6", dir);
   snprintf(b, sizeof b, "%s/wf", dir);
-  check_same(a, "f027.exr", b, "f027.exr");  /* weights=post_taa_c6.ttw == channels=6 */
+  check_same(a, "f027.exr", b, "f027.exr"); /* weights=post_taa_c6.ttw == channels=6 */
   snprintf(a, sizeof a, "%s/w6/f027.exr", dir);
-  snprintf(b, sizeof b, "%s/post_0027.exr", seq);  /* VCTAA: the network must differ */
+  snprintf(b, sizeof b, "%s/post_0027.exr", seq); /* VCTAA: the network must differ */
   CHECK(image_diff(a, b) > 1e-4);
-  snprintf(args, sizeof args, "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
-           "--set post_taa.mode=network --set post_taa.weights=%s/none.ttw '%s'", dir, dir, scene);
+  snprintf(args, sizeof args,
+           "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
+           "--set post_taa.mode=network --set post_taa.weights=%s/none.ttw '%s'",
+           dir, dir, scene);
   CHECK(run_host(args, log, sizeof log) == 1);
   CHECK_CONTAINS(log, "none.ttw");
   /* a directory as the weights file: refused by name (it asked for ~LONG_MAX bytes, #13) */
-  snprintf(args, sizeof args, "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
-           "--set post_taa.mode=network --set 'post_taa.weights=%s' '%s'", dir, dir, scene);
+  snprintf(args, sizeof args,
+           "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
+           "--set post_taa.mode=network --set 'post_taa.weights=%s' '%s'",
+           dir, dir, scene);
   CHECK(run_host(args, log, sizeof log) == 1);
   CHECK_CONTAINS(log, "cannot open weights file: a directory, not a regular file");
 
@@ -171,8 +187,10 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   snprintf(args, sizeof args, "--out '%s/x/f%%d.exr' '%s'", dir, scene);
   CHECK(run_host(args, log, sizeof log) == 2);
   CHECK_CONTAINS(log, "--frames A:B");
-  snprintf(args, sizeof args, "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
-           "--set post_taa.weight=x '%s'", dir, scene);
+  snprintf(args, sizeof args,
+           "--frames 0:1 --out '%s/x/f%%d.exr' --plugin post_taa "
+           "--set post_taa.weight=x '%s'",
+           dir, scene);
   CHECK(run_host(args, log, sizeof log) == 2);
   CHECK_CONTAINS(log, "weight");
 }
@@ -188,8 +206,10 @@ int main(void) {
   fclose(f);
 
   /* Frames 24..33 lie in the constant-speed segment: 0.1 units per frame. */
-  snprintf(args, sizeof args, "--quiet --threads 2 --sequence 24:33 --out-dir '%s' "
-           "--reference-scale 2 --set integrator_pt.maxDepth=1 --post post_taa '%s'", out, scene);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --sequence 24:33 --out-dir '%s' "
+           "--reference-scale 2 --set integrator_pt.maxDepth=1 --post post_taa '%s'",
+           out, scene);
   int rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
 
@@ -244,8 +264,10 @@ int main(void) {
     float j5[2];
     tt_jitter_halton23(5, j5);
     char want5[256];
-    snprintf(want5, sizeof want5, "{\"index\": 29, \"time\": %.6f, \"jitter_index\": 5, "
-             "\"jitter\": [%.6f, %.6f], \"reset\": false", 29 / 24.0, j5[0], j5[1]);
+    snprintf(want5, sizeof want5,
+             "{\"index\": 29, \"time\": %.6f, \"jitter_index\": 5, "
+             "\"jitter\": [%.6f, %.6f], \"reset\": false",
+             29 / 24.0, j5[0], j5[1]);
     CHECK_CONTAINS(man, want5);
     free(man);
   }
@@ -260,8 +282,10 @@ int main(void) {
   f = fopen(dolly, "w");
   fputs(k_dolly, f);
   fclose(f);
-  snprintf(args, sizeof args, "--quiet --threads 2 --sequence 4:6 --out-dir '%s' "
-           "--set integrator_pt.maxDepth=1 '%s'", dout, dolly);
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --sequence 4:6 --out-dir '%s' "
+           "--set integrator_pt.maxDepth=1 '%s'",
+           dout, dolly);
   rc = run_host(args, log, sizeof log);
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   double dz = prev_depth_offset_error(dout, 5, 1.0 / 24.0);

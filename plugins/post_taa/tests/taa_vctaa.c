@@ -72,19 +72,23 @@ static void test_static_convergence(void) {
     render(pattern_lines, jit, tmp);
     for (int i = 0; i < W * H * 3; i++) ref[i] += tm(tmp[i]) / 8.0f;
   }
-  for (int i = 0; i < W * H * 3; i++) ref[i] = ref[i] / (1.0f - ref[i]);  /* back to linear */
+  for (int i = 0; i < W * H * 3; i++) ref[i] = ref[i] / (1.0f - ref[i]); /* back to linear */
   tt_post *p = make(NULL, NULL);
   double err[33];
   for (uint32_t k = 0; k <= 32; k++) {
-    tt_post_frame f = {.struct_size = sizeof f, .width = W, .height = H, .color = color,
-                       .frame_index = k, .jitter_index = k % 8};
+    tt_post_frame f = {.struct_size = sizeof f,
+                       .width = W,
+                       .height = H,
+                       .color = color,
+                       .frame_index = k,
+                       .jitter_index = k % 8};
     tt_jitter_halton23(k % 8, f.jitter);
     render(pattern_lines, f.jitter, color);
     CHECK(g_post->process(p, &f, out) == TT_OK);
     err[k] = rmse_tm(out, ref, 1);
   }
-  printf("static: rmse vs jitter average: frame 0 %.4f, 4 %.4f, 8 %.4f, 16 %.4f, 32 %.4f\n",
-         err[0], err[4], err[8], err[16], err[32]);
+  printf("static: rmse vs jitter average: frame 0 %.4f, 4 %.4f, 8 %.4f, 16 %.4f, 32 %.4f\n", err[0],
+         err[4], err[8], err[16], err[32]);
   CHECK(err[8] < err[0]);
   CHECK(err[16] < err[0] * 0.75);
   CHECK(err[32] < err[0] * 0.75);
@@ -102,7 +106,7 @@ static double run_moving(int use_motion, double *ghost_out, double *raw_out) {
   static float color[W * H * 3], out[W * H * 3], ref[W * H * 3], motion[W * H * 2];
   const float vx = 1.3f, vy = 0.4f;
   for (int i = 0; i < W * H; i++) {
-    motion[2 * i] = -vx;  /* from this frame back to the previous one */
+    motion[2 * i] = -vx; /* from this frame back to the previous one */
     motion[2 * i + 1] = -vy;
   }
   tt_post *p = make(NULL, NULL);
@@ -110,8 +114,12 @@ static double run_moving(int use_motion, double *ghost_out, double *raw_out) {
   for (uint32_t k = 0; k < 24; k++) {
     g_cx = 6.0f + vx * k;
     g_cy = 10.0f + vy * k;
-    tt_post_frame f = {.struct_size = sizeof f, .width = W, .height = H, .color = color,
-                       .motion = use_motion ? motion : NULL, .frame_index = k,
+    tt_post_frame f = {.struct_size = sizeof f,
+                       .width = W,
+                       .height = H,
+                       .color = color,
+                       .motion = use_motion ? motion : NULL,
+                       .frame_index = k,
                        .jitter_index = k % 8};
     tt_jitter_halton23(k % 8, f.jitter);
     render(pattern_square, f.jitter, color);
@@ -131,7 +139,8 @@ static double run_moving(int use_motion, double *ghost_out, double *raw_out) {
         for (int x = 0; x < W; x++) {
           double s = 0;
           for (int sy = 0; sy < 8; sy++)
-            for (int sx = 0; sx < 8; sx++) s += tm(pattern_square(x + (sx + 0.5f) / 8, y + (sy + 0.5f) / 8));
+            for (int sx = 0; sx < 8; sx++)
+              s += tm(pattern_square(x + (sx + 0.5f) / 8, y + (sy + 0.5f) / 8));
           s /= 64;
           for (int c = 0; c < 3; c++) ref[3 * (y * W + x) + c] = (float)(s / (1 - s));
         }
@@ -150,7 +159,8 @@ static void test_moving_no_ghost(void) {
   double err = run_moving(1, &ghost, &raw);
   double err0 = run_moving(0, &ghost0, &raw0);
   printf("moving: with motion: worst ghost %.4f (tonemapped), rmse %.4f (raw input %.4f); "
-         "motion ignored: ghost %.4f, rmse %.4f\n", ghost, err, raw, ghost0, err0);
+         "motion ignored: ghost %.4f, rmse %.4f\n",
+         ghost, err, raw, ghost0, err0);
   CHECK(ghost < 0.05);
   CHECK(err < raw * 1.5);
   CHECK(err < err0);
@@ -213,10 +223,14 @@ static double energy_ratio(const char *resolve, const char *gamma) {
       float v = -1.5f * logf(u);
       for (int ch = 0; ch < 3; ch++) color[3 * i + ch] = v;
     }
-    tt_post_frame f = {.struct_size = sizeof f, .width = W, .height = H, .color = color,
-                       .frame_index = k, .jitter_index = k % 8};
+    tt_post_frame f = {.struct_size = sizeof f,
+                       .width = W,
+                       .height = H,
+                       .color = color,
+                       .frame_index = k,
+                       .jitter_index = k % 8};
     CHECK(g_post->process(p, &f, out) == TT_OK);
-    if (k < 32) continue;  /* converged history */
+    if (k < 32) continue; /* converged history */
     for (int i = 0; i < W * H * 3; i++) sum += out[i];
     n += W * H * 3;
   }
@@ -228,10 +242,11 @@ static void test_energy(void) {
   double t1 = energy_ratio("tonemapped", "1"), t4 = energy_ratio("tonemapped", "4");
   double l1 = energy_ratio("linear", "1"), l4 = energy_ratio("linear", "4");
   printf("energy: output mean / true mean: tonemapped resolve %.3f (gamma 1) %.3f (gamma 4), "
-         "linear resolve %.3f (gamma 1) %.3f (gamma 4)\n", t1, t4, l1, l4);
-  CHECK(t1 < 0.8 && t4 < 0.8);         /* the documented darkening of the baseline */
-  CHECK(l1 > 0.85 && l1 > t1 + 0.15);  /* linear: the clip's bias only */
-  CHECK(fabs(l4 - 1.0) < 0.02);        /* energy kept */
+         "linear resolve %.3f (gamma 1) %.3f (gamma 4)\n",
+         t1, t4, l1, l4);
+  CHECK(t1 < 0.8 && t4 < 0.8);        /* the documented darkening of the baseline */
+  CHECK(l1 > 0.85 && l1 > t1 + 0.15); /* linear: the clip's bias only */
+  CHECK(fabs(l4 - 1.0) < 0.02);       /* energy kept */
 }
 
 /* Mode none copies; bad sizes and a missing weights file are clear errors. */
@@ -262,8 +277,7 @@ static void test_modes_and_errors(void) {
  * thread pool): finite, non-negative, near the jitter-averaged image, and the same frames
  * after reset() reproduce the same outputs bit for bit. */
 static void test_network_plugin(void) {
-  static float color[W * H * 3], out[W * H * 3], first[W * H * 3], ref[W * H * 3],
-      tmp[W * H * 3];
+  static float color[W * H * 3], out[W * H * 3], first[W * H * 3], ref[W * H * 3], tmp[W * H * 3];
   memset(ref, 0, sizeof ref);
   for (uint32_t j = 0; j < 8; j++) {
     float jit[2];
@@ -287,15 +301,18 @@ static void test_network_plugin(void) {
         float jit[2];
         tt_jitter_halton23(fr % 8, jit);
         render(pattern_lines, jit, color);
-        tt_post_frame f = {.struct_size = sizeof f, .width = W, .height = H, .color = color,
+        tt_post_frame f = {.struct_size = sizeof f,
+                           .width = W,
+                           .height = H,
+                           .color = color,
                            .jitter_index = fr % 8};
         CHECK(g_post->process(p, &f, out) == TT_OK);
         for (int i = 0; i < W * H * 3; i++) bad += !(isfinite(out[i]) && out[i] >= 0.0f);
       }
       CHECK_MSG(bad == 0, "channels %s: %d non-finite or negative outputs", channels[v], bad);
       double e = rmse_tm(out, ref, 2);
-      printf("network %s ch (plugin): RMSE to the jitter average %.4f (pass %d)\n",
-             channels[v], e, pass);
+      printf("network %s ch (plugin): RMSE to the jitter average %.4f (pass %d)\n", channels[v], e,
+             pass);
       CHECK(e < 0.25);
       if (pass == 0) {
         memcpy(first, out, sizeof out);

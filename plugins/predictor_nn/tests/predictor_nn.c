@@ -13,8 +13,8 @@ static const tt_predictor_iface *P, *RBF;
 static tt_space *target;
 
 static tt_status observe(tt_predictor *p, const double *s, const tt_config *c, double cost) {
-  tt_predictor_sample x = {.struct_size = sizeof x, .state = s, .config = c, .cost = cost,
-                           .default_cost = NAN};
+  tt_predictor_sample x = {
+      .struct_size = sizeof x, .state = s, .config = c, .cost = cost, .default_cost = NAN};
   return P->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE);
 }
 
@@ -32,9 +32,7 @@ static char *answer(const tt_predictor *p, const double *s, double *d, double *c
   return j;
 }
 
-static double uni(uint64_t *x) {
-  return tt__u64_to_unit(tt__splitmix64(x));
-}
+static double uni(uint64_t *x) { return tt__u64_to_unit(tt__splitmix64(x)); }
 
 int main(int argc, char **argv) {
   const char *dir = argc > 1 ? argv[1] : NULL;
@@ -90,7 +88,8 @@ int main(int argc, char **argv) {
     }
     double d;
     char *j = answer(p, q, &d, NULL);
-    CHECK_MSG(!strcmp(j, best[near]), "query %d: got %s, nearest state %d has %s", t, j, near, best[near]);
+    CHECK_MSG(!strcmp(j, best[near]), "query %d: got %s, nearest state %d has %s", t, j, near,
+              best[near]);
     CHECK_NEAR(d, sqrt(bd), 1e-12);
     tt_free(j);
   }
@@ -123,7 +122,11 @@ int main(int argc, char **argv) {
   uint64_t before = info.observations;
   tt_predictor_sample batch[2] = {
       {.struct_size = sizeof batch[0], .state = s1, .config = c9, .cost = 1.0, .default_cost = NAN},
-      {.struct_size = sizeof batch[0], .state = s1, .config = c9, .cost = -1.0, .default_cost = NAN}};
+      {.struct_size = sizeof batch[0],
+       .state = s1,
+       .config = c9,
+       .cost = -1.0,
+       .default_cost = NAN}};
   CHECK(P->observe_ex(p, batch, 2, TT_PREDICTOR_OFFLINE) == TT_ERR_INVALID_ARGUMENT);
   P->info(p, &info);
   CHECK(info.observations == before && info.entries == NS + 1 && info.memory_bytes > 0);
@@ -144,7 +147,7 @@ int main(int argc, char **argv) {
   tt_predictor *m = pu_create(P, target, DIM, space, set, 1);
   double u[DIM] = {0}, v[DIM] = {1, 1, 1, 1, 1}, w[DIM] = {0.9, 1, 1, 1, 1};
   CHECK(observe(m, u, a, 10) == TT_OK && observe(m, v, a, 10) == TT_OK);
-  CHECK(observe(m, w, b, 1) == TT_OK);  /* merged into v: v's answer becomes b */
+  CHECK(observe(m, w, b, 1) == TT_OK); /* merged into v: v's answer becomes b */
   P->info(m, &info);
   CHECK(info.entries == 2 && info.observations == 3);
   ja = answer(m, v, NULL, NULL);

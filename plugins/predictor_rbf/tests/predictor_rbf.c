@@ -19,9 +19,7 @@
 static const tt_predictor_iface *P, *NN;
 static tt_space *target;
 
-static double uni(uint64_t *x) {
-  return tt__u64_to_unit(tt__splitmix64(x));
-}
+static double uni(uint64_t *x) { return tt__u64_to_unit(tt__splitmix64(x)); }
 
 /* Synthetic cost: the optimum of state (s0, s1) is leaf-unit = s0, cost-unit = s1, quality
  * index 1, fast false; every step away costs more. */
@@ -30,7 +28,8 @@ static double synth_cost(const double *s, const tt_config *c) {
   tt_config_to_unit(c, u);
   double q = tt_config_get(c, 2).index != 1 ? 0.6 : 0.0;
   double f = tt_config_get(c, 3).index ? 0.4 : 0.0;
-  return 10.0 * (1.0 + 2.0 * (u[0] - s[0]) * (u[0] - s[0]) + 2.0 * (u[1] - s[1]) * (u[1] - s[1]) + q + f);
+  return 10.0 *
+         (1.0 + 2.0 * (u[0] - s[0]) * (u[0] - s[0]) + 2.0 * (u[1] - s[1]) * (u[1] - s[1]) + q + f);
 }
 
 /* Writes a one-feature model file whose Q is maximal at (state, enc(best)). */
@@ -43,22 +42,25 @@ static void write_bump(const char *path, const tt_predictor *like, const double 
   char wb[32];
   snprintf(wb, sizeof wb, "%g", width);
   tt_config_set_string(set, "width", wb);
-  tt_config_set_string(set, "lhsCandidates", "256");  /* an empty pool: the argmax searches */
-  tt_config_set_string(set, "reward", "inverse");      /* Q = 1 / cost */
+  tt_config_set_string(set, "lhsCandidates", "256"); /* an empty pool: the argmax searches */
+  tt_config_set_string(set, "reward", "inverse");    /* Q = 1 / cost */
   tt_config_set_string(set, "refine", "3");
   char *settings = tt_config_to_json(set);
-  tt__pm_header h = {.kind = "predictor_rbf", .plugin_version = "0.1.0",
-                   .state_space = "synthetic", .state_dim = 2, .target = sig,
-                   .settings = settings};
+  tt__pm_header h = {.kind = "predictor_rbf",
+                     .plugin_version = "0.1.0",
+                     .state_space = "synthetic",
+                     .state_dim = 2,
+                     .target = sig,
+                     .settings = settings};
   tt__pm_writer w = {0};
   tt__pm_put_header(&w, &h);
-  tt__pm_put_u64(&w, 7);                 /* seed */
+  tt__pm_put_u64(&w, 7); /* seed */
   tt__pm_put_u64(&w, tt_space_count(target));
-  uint32_t m = 1 + 1 + 3 + 1;          /* leaf, cost, quality one-hot, fast */
+  uint32_t m = 1 + 1 + 3 + 1; /* leaf, cost, quality one-hot, fast */
   tt__pm_put_u64(&w, m);
-  tt__pm_put_u64(&w, 1);                 /* features */
-  tt__pm_put_u64(&w, 0);                 /* updates */
-  tt__pm_put_u64(&w, 1);                 /* observations */
+  tt__pm_put_u64(&w, 1); /* features */
+  tt__pm_put_u64(&w, 0); /* updates */
+  tt__pm_put_u64(&w, 1); /* observations */
   double enc[8], u[4];
   tt_config_to_unit(best, u);
   enc[0] = u[0];
@@ -67,8 +69,8 @@ static void write_bump(const char *path, const tt_predictor *like, const double 
   enc[5] = tt_config_get(best, 3).index;
   tt__pm_put_f64s(&w, state, 2);
   tt__pm_put_f64s(&w, enc, m);
-  tt__pm_put_f64(&w, 1.0);               /* theta */
-  tt__pm_put_u64(&w, 0);                 /* pool */
+  tt__pm_put_f64(&w, 1.0); /* theta */
+  tt__pm_put_u64(&w, 0);   /* pool */
   CHECK(tt__pm_save("test", path, 1, &w) == TT_OK);
   free(w.data);
   free(sig);
@@ -102,10 +104,11 @@ static void argmax_of_a_known_q(const char *dir) {
               "trial %d: nominal values %d %d", trial, tt_config_get(out, 2).index,
               tt_config_get(out, 3).index);
     /* the last coordinate step is 1/32 of the unit range; INT rounding adds 1/62 */
-    CHECK_MSG(fabs(uo[0] - ub[0]) <= 1.0 / 32 + 1.0 / 62 + 1e-9 && fabs(uo[1] - ub[1]) <= 1.0 / 32 + 1e-9,
+    CHECK_MSG(fabs(uo[0] - ub[0]) <= 1.0 / 32 + 1.0 / 62 + 1e-9 &&
+                  fabs(uo[1] - ub[1]) <= 1.0 / 32 + 1e-9,
               "trial %d: leaf %g vs %g, cost %g vs %g", trial, uo[0], ub[0], uo[1], ub[1]);
     CHECK(r.value > 0.9 && r.value <= 1.0 && r.candidates > 256);
-    CHECK_NEAR(r.expected_cost, 1.0 / r.value, 1e-12);  /* inverse reward: cost = 1/Q */
+    CHECK_NEAR(r.expected_cost, 1.0 / r.value, 1e-12); /* inverse reward: cost = 1/Q */
     tt_config_destroy(out);
     tt_config_destroy(best);
     P->destroy(p);
@@ -128,7 +131,7 @@ static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_pred
   tt_config_set_string(set, "decay", "20000");
   tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 3);
   tt_predictor_sample *samples = calloc((size_t)n, sizeof *samples);
-  double (*states)[2] = calloc((size_t)n, sizeof *states);
+  double(*states)[2] = calloc((size_t)n, sizeof *states);
   tt_config **cfgs = calloc((size_t)n, sizeof *cfgs);
   tt_config *def = tt_config_create(target);
   uint64_t x = 11;
@@ -138,21 +141,25 @@ static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_pred
     double u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
     cfgs[i] = tt_config_create(target);
     tt_config_from_unit(cfgs[i], u);
-    samples[i] = (tt_predictor_sample){.struct_size = sizeof samples[i], .state = states[i],
-                                       .config = cfgs[i], .cost = synth_cost(states[i], cfgs[i]),
+    samples[i] = (tt_predictor_sample){.struct_size = sizeof samples[i],
+                                       .state = states[i],
+                                       .config = cfgs[i],
+                                       .cost = synth_cost(states[i], cfgs[i]),
                                        .default_cost = synth_cost(states[i], def)};
   }
-  CHECK_MSG(P->observe_ex(p, samples, (size_t)n, TT_PREDICTOR_OFFLINE) == TT_OK, "%s", tt_last_error());
+  CHECK_MSG(P->observe_ex(p, samples, (size_t)n, TT_PREDICTOR_OFFLINE) == TT_OK, "%s",
+            tt_last_error());
   double excess = 0;
   *wrong_nom = 0;
   tt_config *out = tt_config_create(target);
   for (int t = 0; t < 40; t++) {
     double s[2] = {0.15 + 0.7 * uni(&x), 0.15 + 0.7 * uni(&x)};
-    tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = synth_cost(s, def)};
+    tt_predictor_query q = {
+        .struct_size = sizeof q, .state = s, .default_cost = synth_cost(s, def)};
     tt_predictor_result r = {.struct_size = sizeof r};
     CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
     double c = synth_cost(s, out);
-    excess += c / 10.0 - 1.0;  /* the optimum costs 10 */
+    excess += c / 10.0 - 1.0; /* the optimum costs 10 */
     *wrong_nom += tt_config_get(out, 2).index != 1 || tt_config_get(out, 3).index != 0;
   }
   excess /= 40;
@@ -172,7 +179,7 @@ static double learn_synthetic(const char *reward, int n, int *wrong_nom, tt_pred
  * with either pool source. */
 static void pool_only_answers_observed(const char *source) {
   tt_config *set = tt_config_create(P->space());
-  tt_config_set_string(set, "reward", "inverse");  /* the samples have no default cost */
+  tt_config_set_string(set, "reward", "inverse"); /* the samples have no default cost */
   tt_config_set_string(set, "poolSource", source);
   tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 5);
   tt_config_destroy(set);
@@ -186,8 +193,11 @@ static void pool_only_answers_observed(const char *source) {
     double u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
     cfgs[i] = tt_config_create(target);
     tt_config_from_unit(cfgs[i], u);
-    tt_predictor_sample smp = {.struct_size = sizeof smp, .state = states[i], .config = cfgs[i],
-                               .cost = synth_cost(states[i], cfgs[i]), .default_cost = NAN};
+    tt_predictor_sample smp = {.struct_size = sizeof smp,
+                               .state = states[i],
+                               .config = cfgs[i],
+                               .cost = synth_cost(states[i], cfgs[i]),
+                               .default_cost = NAN};
     CHECK(P->observe_ex(p, &smp, 1, TT_PREDICTOR_OFFLINE) == TT_OK);
   }
   tt_config *def = tt_config_create(target), *out = tt_config_create(target);
@@ -197,7 +207,7 @@ static void pool_only_answers_observed(const char *source) {
     tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
     tt_predictor_result r = {.struct_size = sizeof r};
     CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
-    CHECK(r.candidates <= N + 1);  /* the pool and the default, nothing else */
+    CHECK(r.candidates <= N + 1); /* the pool and the default, nothing else */
     char *oj = tt_config_to_json(out);
     int seen = !strcmp(oj, dj);
     for (int i = 0; i < N && !seen; i++) {
@@ -222,21 +232,27 @@ static void pool_only_answers_observed(const char *source) {
 static void state_pool(const char *dir) {
   tt_config *set = tt_config_create(P->space());
   tt_config_set_string(set, "poolSource", "states");
-  tt_config_set_string(set, "reward", "inverse");  /* the samples have no default cost */
+  tt_config_set_string(set, "reward", "inverse"); /* the samples have no default cost */
   tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 3);
   tt_config *a = pu_config(target, 4, 0.5, 0, 1), *b = pu_config(target, 20, 3.0, 2, 0);
   tt_config *c = pu_config(target, 30, 6.0, 1, 1), *def = tt_config_create(target);
   double st[4][2] = {{0.1, 0.2}, {0.8, 0.3}, {0.4, 0.9}, {0.6, 0.6}};
   /* state 0: A 10, B 12, C 15; state 1: A 9, B 11, C 30; state 2: A 14, B 10 and 11, C 5
    * and 20 (C's single 5 is the lowest cost seen, its mean 12.5 loses to B's 10.5) */
-  struct { int s; tt_config *cfg; double cost; } obs[] = {
-    {0, a, 10}, {0, b, 12}, {0, c, 15}, {1, a, 9}, {1, b, 11}, {1, c, 30},
-    {2, a, 14}, {2, b, 10}, {2, c, 5}, {2, b, 11}, {2, c, 20}};
+  struct {
+    int s;
+    tt_config *cfg;
+    double cost;
+  } obs[] = {{0, a, 10}, {0, b, 12}, {0, c, 15}, {1, a, 9},  {1, b, 11}, {1, c, 30},
+             {2, a, 14}, {2, b, 10}, {2, c, 5},  {2, b, 11}, {2, c, 20}};
   enum { NO = sizeof obs / sizeof obs[0] };
   tt_predictor_sample smp[NO];
   for (int i = 0; i < NO; i++)
-    smp[i] = (tt_predictor_sample){.struct_size = sizeof smp[i], .state = st[obs[i].s],
-                                   .config = obs[i].cfg, .cost = obs[i].cost, .default_cost = NAN};
+    smp[i] = (tt_predictor_sample){.struct_size = sizeof smp[i],
+                                   .state = st[obs[i].s],
+                                   .config = obs[i].cfg,
+                                   .cost = obs[i].cost,
+                                   .default_cost = NAN};
   CHECK(P->observe_ex(p, smp, NO, TT_PREDICTOR_OFFLINE) == TT_OK);
   char *aj = tt_config_to_json(a), *bj = tt_config_to_json(b), *cj = tt_config_to_json(c);
   char *dj = tt_config_to_json(def);
@@ -247,10 +263,13 @@ static void state_pool(const char *dir) {
     tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = NAN};
     tt_predictor_result r = {.struct_size = sizeof r};
     CHECK(P->predict_ex(p, &q, out, &r) == TT_OK);
-    CHECK_MSG(r.candidates == 3, "%llu candidates: the pool must be A and B (the states' "
-              "bests) and the default", (unsigned long long)r.candidates);
+    CHECK_MSG(r.candidates == 3,
+              "%llu candidates: the pool must be A and B (the states' "
+              "bests) and the default",
+              (unsigned long long)r.candidates);
     char *oj = tt_config_to_json(out);
-    CHECK_MSG(!strcmp(oj, aj) || !strcmp(oj, bj) || !strcmp(oj, dj), "answer %s is no state's best", oj);
+    CHECK_MSG(!strcmp(oj, aj) || !strcmp(oj, bj) || !strcmp(oj, dj), "answer %s is no state's best",
+              oj);
     /* the answer is the argmax of estimate() over the three candidates */
     double ca, cb, cd, co;
     CHECK(P->estimate(p, &q, a, &ca) == TT_OK && P->estimate(p, &q, b, &cb) == TT_OK &&
@@ -269,8 +288,8 @@ static void state_pool(const char *dir) {
   CHECK(!strcmp(pa, pb));
   free(pa);
   free(pb);
-  tt_predictor_sample more = {.struct_size = sizeof more, .state = st[3], .config = c, .cost = 2,
-                              .default_cost = NAN};
+  tt_predictor_sample more = {
+      .struct_size = sizeof more, .state = st[3], .config = c, .cost = 2, .default_cost = NAN};
   CHECK(P->observe(p, st[3], c, 2.0) == TT_OK);
   CHECK(P->observe_ex(l, &more, 1, TT_PREDICTOR_ONLINE) == TT_OK);
   pa = pu_predictions(P, p, target, 2, 100);
@@ -320,8 +339,11 @@ static void pool_argmax_is_exact(const char *dir) {
     cfgs[i] = tt_config_create(target);
     tt_config_from_unit(cfgs[i], u);
     cost[i] = synth_cost(st, cfgs[i]);
-    tt_predictor_sample smp = {.struct_size = sizeof smp, .state = st, .config = cfgs[i],
-                               .cost = cost[i], .default_cost = NAN};
+    tt_predictor_sample smp = {.struct_size = sizeof smp,
+                               .state = st,
+                               .config = cfgs[i],
+                               .cost = cost[i],
+                               .default_cost = NAN};
     CHECK(P->observe_ex(p, &smp, 1, i % 2 ? TT_PREDICTOR_ONLINE : TT_PREDICTOR_OFFLINE) == TT_OK);
   }
   /* the K lowest costs, and the default */
@@ -382,8 +404,10 @@ static void pool_argmax_is_exact(const char *dir) {
         tt_free(cj);
       }
       CHECK_MSG(isfinite(got), "state %d: %s is not in the pool", t, oj);
-      CHECK_MSG(got <= best * (1 + 1e-12), "state %d (%s): expected cost %.17g, the pool's best "
-                "%.17g", t, which ? "loaded" : "trained", got, best);
+      CHECK_MSG(got <= best * (1 + 1e-12),
+                "state %d (%s): expected cost %.17g, the pool's best "
+                "%.17g",
+                t, which ? "loaded" : "trained", got, best);
       CHECK_NEAR(r.expected_cost, got, 1e-12 * got);
       tt_free(oj);
     }
@@ -405,7 +429,7 @@ static void bounded_argmax_matches_reference(const char *dir) {
   tt_config *fast = tt_config_create(P->space()), *ref = tt_config_create(P->space());
   tt_config_set_string(fast, "lhsCandidates", "200");
   tt_config_set_string(ref, "lhsCandidates", "200");
-  tt_config_set_string(fast, "reward", "inverse");  /* its samples have no default cost */
+  tt_config_set_string(fast, "reward", "inverse"); /* its samples have no default cost */
   tt_config_set_string(ref, "reward", "inverse");
   tt_config_set_string(ref, "refine", "1");
   tt_config_set_string(ref, "refineStarts", "0");
@@ -416,8 +440,11 @@ static void bounded_argmax_matches_reference(const char *dir) {
   for (int i = 0; i < 400; i++) {
     double st[2] = {uni(&x), uni(&x)}, u[4] = {uni(&x), uni(&x), uni(&x), uni(&x)};
     tt_config_from_unit(c, u);
-    tt_predictor_sample smp = {.struct_size = sizeof smp, .state = st, .config = c,
-                               .cost = synth_cost(st, c), .default_cost = NAN};
+    tt_predictor_sample smp = {.struct_size = sizeof smp,
+                               .state = st,
+                               .config = c,
+                               .cost = synth_cost(st, c),
+                               .default_cost = NAN};
     uint32_t fl = i % 3 ? TT_PREDICTOR_ONLINE : TT_PREDICTOR_OFFLINE;
     CHECK(P->observe_ex(a, &smp, 1, fl) == TT_OK && P->observe_ex(b, &smp, 1, fl) == TT_OK);
   }
@@ -445,7 +472,7 @@ static void bounded_argmax_matches_reference(const char *dir) {
                 which ? "loaded" : "trained", ja, ra.value, jb, rb.value);
       tt_free(ja);
     }
-    CHECK(rb.candidates > 200);  /* the pool, the LHS points that passed the check, the default */
+    CHECK(rb.candidates > 200); /* the pool, the LHS points that passed the check, the default */
     tt_free(jb);
   }
   CHECK_MSG(differ == 0, "%d of 400 predictions differ from the reference loop's", differ);
@@ -465,16 +492,16 @@ static void relative_reward(void) {
   tt_predictor *p = pu_create(P, target, 2, "synthetic", set, 3);
   double s[2] = {0.5, 0.5};
   tt_config *c = pu_config(target, 4, 1.0, 1, 0);
-  tt_predictor_sample x = {.struct_size = sizeof x, .state = s, .config = c, .cost = 5.0,
-                           .default_cost = NAN};
+  tt_predictor_sample x = {
+      .struct_size = sizeof x, .state = s, .config = c, .cost = 5.0, .default_cost = NAN};
   CHECK(P->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE) == TT_OK);
   tt_predictor_info info = {.struct_size = sizeof info};
   P->info(p, &info);
-  CHECK(info.observations == 0);  /* no default cost: no relative reward */
+  CHECK(info.observations == 0); /* no default cost: no relative reward */
   x.default_cost = 10.0;
   for (int k = 0; k < 400; k++) CHECK(P->observe_ex(p, &x, 1, TT_PREDICTOR_ONLINE) == TT_OK);
   P->info(p, &info);
-  CHECK(info.observations == 400 && info.entries == 21);  /* round(3.5 x (2 + 4)) */
+  CHECK(info.observations == 400 && info.entries == 21); /* round(3.5 x (2 + 4)) */
   /* Q -> the speed-up 2; the expected cost needs the query's default cost */
   tt_predictor_query q = {.struct_size = sizeof q, .state = s, .default_cost = 8.0};
   double ec;
@@ -516,10 +543,12 @@ int main(int argc, char **argv) {
   int wrong;
   tt_predictor *trained = NULL;
   double ex = learn_synthetic("inverse", 3000, &wrong, &trained);
-  printf("synthetic, inverse reward: mean excess cost %.4f, wrong nominal values %d/40\n", ex, wrong);
+  printf("synthetic, inverse reward: mean excess cost %.4f, wrong nominal values %d/40\n", ex,
+         wrong);
   CHECK_MSG(ex < 0.05 && wrong <= 2, "inverse: excess %g, wrong %d", ex, wrong);
   ex = learn_synthetic("relative", 3000, &wrong, NULL);
-  printf("synthetic, relative reward: mean excess cost %.4f, wrong nominal values %d/40\n", ex, wrong);
+  printf("synthetic, relative reward: mean excess cost %.4f, wrong nominal values %d/40\n", ex,
+         wrong);
   CHECK_MSG(ex < 0.05 && wrong <= 2, "relative: excess %g, wrong %d", ex, wrong);
 
   /* deterministic: the same seed and data give the same predictions */

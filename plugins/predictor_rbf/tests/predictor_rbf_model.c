@@ -16,9 +16,7 @@
 #include <string.h>
 #include <tt_util/rng.h>
 
-static double uni(uint64_t *x) {
-  return tt__u64_to_unit(tt__splitmix64(x));
-}
+static double uni(uint64_t *x) { return tt__u64_to_unit(tt__splitmix64(x)); }
 
 /* Solves A t = b for symmetric positive definite A (n x n) by Cholesky; 0 on success. */
 static int cholesky_solve(double *A, double *b, int n) {
@@ -33,12 +31,12 @@ static int cholesky_solve(double *A, double *b, int n) {
       A[i * n + j] = s / A[j * n + j];
     }
   }
-  for (int i = 0; i < n; i++) {  /* L y = b */
+  for (int i = 0; i < n; i++) { /* L y = b */
     double s = b[i];
     for (int k = 0; k < i; k++) s -= A[i * n + k] * b[k];
     b[i] = s / A[i * n + i];
   }
-  for (int i = n - 1; i >= 0; i--) {  /* L^T t = y */
+  for (int i = n - 1; i >= 0; i--) { /* L^T t = y */
     double s = b[i];
     for (int k = i + 1; k < n; k++) s -= A[k * n + i] * b[k];
     b[i] = s / A[i * n + i];
@@ -96,7 +94,7 @@ static void gq_least_squares(void) {
     tt__rbf_features(&r, X[j], Phi[j]);
     double q = 0;
     for (int i = 0; i < F; i++) q += theta_star[i] * Phi[j][i];
-    R[j] = q + 0.05 * (uni(&x) - 0.5);  /* noise: the LS theta is not theta_star */
+    R[j] = q + 0.05 * (uni(&x) - 0.5); /* noise: the LS theta is not theta_star */
   }
   double A[F * F] = {0}, b[F] = {0};
   for (int j = 0; j < N; j++)
@@ -104,14 +102,16 @@ static void gq_least_squares(void) {
       b[i] += Phi[j][i] * R[j];
       for (int k = 0; k < F; k++) A[i * F + k] += Phi[j][i] * Phi[j][k];
     }
-  CHECK(cholesky_solve(A, b, F) == 0);  /* b = theta_ls */
+  CHECK(cholesky_solve(A, b, F) == 0); /* b = theta_ls */
   double diff = 0;
   for (int i = 0; i < F; i++) diff += fabs(b[i] - theta_star[i]);
-  CHECK(diff > 1e-4);  /* the noise moved the answer: the LS theta is what GQ must reach */
+  CHECK(diff > 1e-4); /* the noise moved the answer: the LS theta is what GQ must reach */
 
   double te, qe;
   run_gq(&r, X, R, b, 4000, &te, &qe);
-  printf("Greedy-GQ after 4000 passes: |theta - theta_ls| / |theta_ls| = %.2e, max |Q - Q_ls| = %.2e\n", te, qe);
+  printf("Greedy-GQ after 4000 passes: |theta - theta_ls| / |theta_ls| = %.2e, max |Q - Q_ls| = "
+         "%.2e\n",
+         te, qe);
   CHECK_MSG(te < 0.01 && qe < 1e-3, "theta error %g, Q error %g", te, qe);
   run_gq(&r, X, R, b, 2, &te, &qe);
   CHECK_MSG(te > 0.01, "2 passes already at %g: the problem is too easy to test convergence", te);
@@ -137,7 +137,8 @@ static void features_and_split(void) {
   tt__rbf_features(&r, xv, phi);
   for (uint32_t i = 0; i < r.features; i++) {
     double s = 0;
-    for (uint32_t k = 0; k < r.dim; k++) s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
+    for (uint32_t k = 0; k < r.dim; k++)
+      s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
     CHECK_NEAR(phi[i], exp(-1.5 * sqrt(s)), 1e-15);
   }
   tt__rbf_state_part(&r, xv, ds);
@@ -147,7 +148,8 @@ static void features_and_split(void) {
   tt__rbf_action_part(&r, xv + 2, da);
   for (uint32_t i = 0; i < r.features; i++) {
     double s = 0;
-    for (uint32_t k = 2; k < r.dim; k++) s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
+    for (uint32_t k = 2; k < r.dim; k++)
+      s += (xv[k] - r.centres[i * r.dim + k]) * (xv[k] - r.centres[i * r.dim + k]);
     CHECK(da[i] == s);
   }
   CHECK(tt__rbf_q_parts(&r, ds, da) == tt__rbf_q_action(&r, ds, xv + 2));
@@ -167,7 +169,7 @@ static void encoding(void) {
   tt__rbf_encode_action(c, e);
   CHECK_NEAR(e[0], 0.5, 1e-15);
   CHECK(e[1] == 0 && e[2] == 0 && e[3] == 1 && e[4] == 1);
-  CHECK_NEAR(e[5], 0.5, 1e-12);  /* log scale: 1.0 is the middle of [0.1, 10] */
+  CHECK_NEAR(e[5], 0.5, 1e-12); /* log scale: 1.0 is the middle of [0.1, 10] */
   tt_config_set_index(c, 1, 0);
   tt_config_set_index(c, 2, 0);
   tt__rbf_encode_action(c, e);

@@ -23,7 +23,10 @@
 
 static double uni(uint64_t *x) { return tt__u64_to_unit(tt__splitmix64(x)); }
 
-typedef struct kernel { const char *name; tt__rbf_kernels k; } kernel;
+typedef struct kernel {
+  const char *name;
+  tt__rbf_kernels k;
+} kernel;
 
 static int kernels(kernel *out) {
   int n = 0;
@@ -40,16 +43,15 @@ static int kernels(kernel *out) {
   return n;
 }
 
-static size_t last_fine = SIZE_MAX;  /* candidates the coarse level kept, last case */
+static size_t last_fine = SIZE_MAX; /* candidates the coarse level kept, last case */
 
 /* One random model and candidate set; checks every kernel against the reference. Returns
  * the candidates evaluated exactly by the last kernel. */
-static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double width,
-                       double spread, double theta_scale, size_t n, int ties) {
+static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double width, double spread,
+                       double theta_scale, size_t n, int ties) {
   tt__rbf_model r;
   CHECK(tt__rbf_model_init(&r, d, m, f, width, 0.1, 0, tt__splitmix64(x)) == 0);
-  for (size_t i = 0; i < (size_t)f * r.dim; i++)
-    r.centres[i] = 0.5 + spread * (r.centres[i] - 0.5);
+  for (size_t i = 0; i < (size_t)f * r.dim; i++) r.centres[i] = 0.5 + spread * (r.centres[i] - 0.5);
   double tabs = 0;
   for (uint32_t i = 0; i < f; i++) {
     /* beyond 1e300: every theta that large, so that the sums overflow */
@@ -70,8 +72,9 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
   tt__rbf_action_part_float(f, r.theta, thf);
   tt__rbf_action_part_float(f, ds, dsf);
   for (size_t k = 0; k < n; k++) {
-    for (uint32_t j = 0; j < m; j++) acts[k * m + j] = uni(x) < 0.3 ? (double)(uni(x) < 0.5) : uni(x);
-    if (ties && k > 0 && uni(x) < 0.3) {  /* a repeat of an earlier candidate, or 1e-15 from it */
+    for (uint32_t j = 0; j < m; j++)
+      acts[k * m + j] = uni(x) < 0.3 ? (double)(uni(x) < 0.5) : uni(x);
+    if (ties && k > 0 && uni(x) < 0.3) { /* a repeat of an earlier candidate, or 1e-15 from it */
       size_t src = (size_t)(uni(x) * (double)k);
       memcpy(acts + k * m, acts + src * m, m * sizeof(double));
       if (uni(x) < 0.5) acts[k * m] += 1e-15;
@@ -103,14 +106,16 @@ static size_t one_case(uint64_t *x, uint32_t d, uint32_t m, uint32_t f, double w
       if (ks[kk].k.coarse && tabs < 1e34) {
         ks[kk].k.coarse(thf, dsf, frows[k], f8, (float)-width, &qa, &qabs, &qx);
         double tol = tt__rbf_coarse_tol(f, qabs, qx, tabs);
-        CHECK_MSG(fabs(qa - qe) <= 0.5 * tol, "%s (coarse): f %u width %g spread %g theta %g "
-                  "candidate %zu: %.9g vs %.17g, bound %g", ks[kk].name, f, width, spread,
-                  theta_scale, k, qa, qe, tol);
+        CHECK_MSG(fabs(qa - qe) <= 0.5 * tol,
+                  "%s (coarse): f %u width %g spread %g theta %g "
+                  "candidate %zu: %.9g vs %.17g, bound %g",
+                  ks[kk].name, f, width, spread, theta_scale, k, qa, qe, tol);
       }
       ks[kk].k.fine(r.theta, ds, rows[k], f, -width, e_scratch, &qa, &qabs);
       /* exponents below -708: both below 3.4e-308 */
-      CHECK_MSG(fabs(qa - qe) <= 1e-13 * qabs + 4e-308 * tabs, "%s: candidate %zu: %.17g vs %.17g (sum |theta e| %g)",
-                ks[kk].name, k, qa, qe, qabs);
+      CHECK_MSG(fabs(qa - qe) <= 1e-13 * qabs + 4e-308 * tabs,
+                "%s: candidate %zu: %.17g vs %.17g (sum |theta e| %g)", ks[kk].name, k, qa, qe,
+                qabs);
     }
   }
   free(state);
@@ -153,7 +158,7 @@ int main(void) {
   }
   printf("distinct candidates: %.2f evaluated exactly per argmax (%zu argmaxes)\n",
          (double)distinct_exact / (double)distinct_cases, distinct_cases);
-  if (shape_cases) {  /* the coarse level ran: it must leave few of the 257 to the fine one */
+  if (shape_cases) { /* the coarse level ran: it must leave few of the 257 to the fine one */
     printf("coarse level: %.2f of 257 candidates reach the fine level (%zu argmaxes)\n",
            (double)shape_fine / (double)shape_cases, shape_cases);
     CHECK_MSG(shape_fine <= 16 * shape_cases, "%zu in %zu argmaxes", shape_fine, shape_cases);

@@ -11,15 +11,13 @@
 typedef struct fn_ctx {
   int dims;
   double opt[8];
-  double tol;         /* max-norm distance that counts as "reached" */
-  double noise;       /* standard deviation of additive Gaussian noise */
+  double tol;   /* max-norm distance that counts as "reached" */
+  double noise; /* standard deviation of additive Gaussian noise */
   uint64_t rng;
 } fn_ctx;
 
 /* Test-side uniform in (0, 1] (SplitMix64), independent of the tuner's generator. */
-static double urand(uint64_t *s) {
-  return tt__u64_to_unit(tt__splitmix64(s)) + 0x1p-53;
-}
+static double urand(uint64_t *s) { return tt__u64_to_unit(tt__splitmix64(s)) + 0x1p-53; }
 
 /* Max-norm distance of the FLOAT parameters x0.. to the optimum. */
 static double dist(const tt_config *c, const fn_ctx *f) {
@@ -109,8 +107,8 @@ static void test_rosenbrock(const tt_tuner_iface *nm) {
     tt_config *b = tt_config_create(s);
     for (uint64_t seed = 1; seed <= 3; seed++) {
       tnm_run r = tnm_drive(nm, s, set, seed, rosenbrock, reached, NULL, &f, 20000, b);
-      printf("rosenbrock %dD seed %d: within %g after %d evaluations (%d total, best %.3g)\n",
-             d, (int)seed, f.tol, r.to_target, r.evaluations, r.best_cost);
+      printf("rosenbrock %dD seed %d: within %g after %d evaluations (%d total, best %.3g)\n", d,
+             (int)seed, f.tol, r.to_target, r.evaluations, r.best_cost);
       CHECK_MSG(r.to_target > 0 && r.to_target <= budget[d - 2], "%dD seed %d: %d > %d", d,
                 (int)seed, r.to_target, budget[d - 2]);
     }
@@ -184,8 +182,8 @@ static double many_base(int arm) {
 
 static double many(const tt_config *c, void *user) {
   (void)user;
-  int arm = (int)(tt_config_get(c, 0).index * 6 + tt_config_get(c, 1).index * 2 +
-                  tt_config_get(c, 2).i);
+  int arm =
+      (int)(tt_config_get(c, 0).index * 6 + tt_config_get(c, 1).index * 2 + tt_config_get(c, 2).i);
   double o[6], span[6] = {31, 56, 1, 1, 1, 1}, s = many_base(arm);
   many_opt(arm, o);
   for (int d = 0; d < 6; d++) {
@@ -219,18 +217,23 @@ static void test_many_arms(const tt_tuner_iface *nm) {
     to[seed - 1] = r.to_target > 0 ? r.to_target : 1001;
     at120[seed - 1] = r120.best_cost;
     printf("18 arms seed %d: within 0.01 of the optimum after %d evaluations; best after 120: "
-           "%.4f\n", (int)seed, r.to_target, r120.best_cost);
+           "%.4f\n",
+           (int)seed, r.to_target, r120.best_cost);
     CHECK_MSG(r.to_target > 0 && r.to_target <= 700, "seed %d: %d", (int)seed, r.to_target);
     CHECK_MSG(r120.best_cost < 0.2, "seed %d: best after 120 is %g", (int)seed, r120.best_cost);
   }
   /* Medians over the 8 seeds (the tuner without the probe phase: 176 and 0.19). */
   for (int i = 1; i < 8; i++)
     for (int j = i; j > 0 && to[j] < to[j - 1]; j--) {
-      int x = to[j]; to[j] = to[j - 1]; to[j - 1] = x;
+      int x = to[j];
+      to[j] = to[j - 1];
+      to[j - 1] = x;
     }
   for (int i = 1; i < 8; i++)
     for (int j = i; j > 0 && at120[j] < at120[j - 1]; j--) {
-      double x = at120[j]; at120[j] = at120[j - 1]; at120[j - 1] = x;
+      double x = at120[j];
+      at120[j] = at120[j - 1];
+      at120[j - 1] = x;
     }
   double med_to = 0.5 * (to[3] + to[4]), med_b = 0.5 * (at120[3] + at120[4]);
   printf("18 arms: median %.1f evaluations to target, median best after 120: %.4f\n", med_to,
@@ -286,7 +289,8 @@ static void test_noisy(const tt_tuner_iface *nm) {
     tt_config_destroy(set);
   }
   printf("noisy sphere (sigma 0.05, 300 evaluations): mean distance %.4f with reevaluate=1, "
-         "%.4f without\n", sum_dist[0] / 10, sum_dist[1] / 10);
+         "%.4f without\n",
+         sum_dist[0] / 10, sum_dist[1] / 10);
   tt_config_destroy(b);
   tt_space_destroy(s);
 }
@@ -300,8 +304,8 @@ static void test_inits(const tt_tuner_iface *nm) {
     tt_config *set = tnm_settings(nm, "init", inits[k], "tolerance", "1e-6", NULL);
     for (uint64_t seed = 1; seed <= 3; seed++) {
       tnm_run r = tnm_drive(nm, s, set, seed, sphere, reached, NULL, &f, 2000, NULL);
-      printf("sphere 3D init %s seed %d: within 1e-2 after %d evaluations\n", inits[k],
-             (int)seed, r.to_target);
+      printf("sphere 3D init %s seed %d: within 1e-2 after %d evaluations\n", inits[k], (int)seed,
+             r.to_target);
       CHECK(r.to_target > 0 && r.to_target <= 200);
     }
     tt_config_destroy(set);

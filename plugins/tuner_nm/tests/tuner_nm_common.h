@@ -42,7 +42,8 @@ static tt_config *tnm_settings(const tt_tuner_iface *nm, ...) {
   va_start(ap, nm);
   for (const char *k; (k = va_arg(ap, const char *));) {
     const char *v = va_arg(ap, const char *);
-    if (tt_config_set_string(s, k, v) != TT_OK) fprintf(stderr, "setting %s: %s\n", k, tt_last_error());
+    if (tt_config_set_string(s, k, v) != TT_OK)
+      fprintf(stderr, "setting %s: %s\n", k, tt_last_error());
   }
   va_end(ap);
   return s;
@@ -50,9 +51,8 @@ static tt_config *tnm_settings(const tt_tuner_iface *nm, ...) {
 
 /* Runs up to `budget` evaluations; `reached(cfg, user)` marks the target, `visit` (may be
  * NULL) sees every proposal; `best_out` (may be NULL) receives best(). */
-static tnm_run tnm_drive(const tt_tuner_iface *nm, const tt_space *space,
-                         const tt_config *settings, uint64_t seed, tnm_cost_fn cost,
-                         int (*reached)(const tt_config *, void *),
+static tnm_run tnm_drive(const tt_tuner_iface *nm, const tt_space *space, const tt_config *settings,
+                         uint64_t seed, tnm_cost_fn cost, int (*reached)(const tt_config *, void *),
                          void (*visit)(const tt_config *, void *), void *user, int budget,
                          tt_config *best_out) {
   tnm_run r = {0, 0, INFINITY, -1};

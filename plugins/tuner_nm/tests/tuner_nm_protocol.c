@@ -47,7 +47,7 @@ static void pair_visit(const tt_config *c, void *user) {
   tt_config *copy = tt_config_clone(c);
   if (tt_space_check(tt_config_space(c), copy, NULL, 0) != TT_CHECK_OK) v->not_ok++;
   tt_config_destroy(copy);
-  g_repairs = r0, g_rejects = j0;  /* count only the tuner's own checks */
+  g_repairs = r0, g_rejects = j0; /* count only the tuner's own checks */
   for (size_t i = 0; i < 3; i++) {
     double x = tt_config_get(c, i).f;
     if (x < tt_space_min(tt_config_space(c), i) || x > tt_space_max(tt_config_space(c), i))
@@ -56,8 +56,8 @@ static void pair_visit(const tt_config *c, void *user) {
 }
 
 /* Counting wrapper (the tests are single-threaded). */
-static tt_check_result counting_check(const tt_space *space, tt_config *c, char *why,
-                                      size_t sz, void *user) {
+static tt_check_result counting_check(const tt_space *space, tt_config *c, char *why, size_t sz,
+                                      void *user) {
   tt_check_result r = pair_check(space, c, why, sz, user);
   g_repairs += r == TT_CHECK_REPAIRED;
   g_rejects += r == TT_CHECK_INFEASIBLE;
@@ -67,8 +67,8 @@ static tt_check_result counting_check(const tt_space *space, tt_config *c, char 
 static void test_constraints(const tt_tuner_iface *nm) {
   tt_space *s = tt_space_create("pair", "1.0");
   tt_space_add_float(s, "lo", 0.0, 1.0, 0.7, 0, NULL);
-  tt_space_add_float(s, "hi", 0.0, 1.0, 0.3, 0, NULL);  /* default violates lo <= hi */
-  tt_space_add_int(s, "n", 0, 20, 15, NULL);            /* and starts next to the region */
+  tt_space_add_float(s, "hi", 0.0, 1.0, 0.3, 0, NULL); /* default violates lo <= hi */
+  tt_space_add_int(s, "n", 0, 20, 15, NULL);           /* and starts next to the region */
   tt_space_set_check(s, counting_check, NULL);
   tt_config *b = tt_config_create(s);
   for (uint64_t seed = 1; seed <= 4; seed++) {
@@ -76,9 +76,9 @@ static void test_constraints(const tt_tuner_iface *nm) {
     g_repairs = g_rejects = 0;
     tnm_run r = tnm_drive(nm, s, NULL, seed, pair_cost, NULL, pair_visit, &v, 400, b);
     printf("constraints seed %d: %d proposals, %d repaired and %d rejected internally, "
-           "best %.5f (lo %.3f hi %.3f n %d)\n", (int)seed, v.proposals, g_repairs, g_rejects,
-           r.best_cost, tt_config_get(b, 0).f, tt_config_get(b, 1).f,
-           (int)tt_config_get(b, 2).i);
+           "best %.5f (lo %.3f hi %.3f n %d)\n",
+           (int)seed, v.proposals, g_repairs, g_rejects, r.best_cost, tt_config_get(b, 0).f,
+           tt_config_get(b, 1).f, (int)tt_config_get(b, 2).i);
     CHECK(v.not_ok == 0);
     CHECK(v.outside == 0);
     CHECK(g_repairs > 0);
@@ -143,8 +143,8 @@ static void test_lhs(const tt_tuner_iface *nm) {
         }
         for (int st = 0; st <= n; st++) bad += hits[st] != 1;
       }
-      CHECK_MSG(bad == 0, "%d dims, default %g, seed %d: %d strata not hit exactly once", n,
-                def[k], (int)seed, bad);
+      CHECK_MSG(bad == 0, "%d dims, default %g, seed %d: %d strata not hit exactly once", n, def[k],
+                (int)seed, bad);
     }
     tt_space_destroy(s);
   }
@@ -168,7 +168,7 @@ static double resume_cost(const tt_config *c, void *user) {
   double x = tt_config_get(c, 0).f, y = (double)tt_config_get(c, 1).i;
   int m = tt_config_get(c, 2).index, b = (int)tt_config_get(c, 3).i;
   double extra = 0.0;
-  if (tt_space_count(tt_config_space(c)) > 5)  /* the many-arm variant */
+  if (tt_space_count(tt_config_space(c)) > 5) /* the many-arm variant */
     extra = 0.03 * (double)tt_config_get(c, 5).index + 0.07 * (double)tt_config_get(c, 6).i;
   return (x - 0.3 * m) * (x - 0.3 * m) + 0.01 * (y - 7) * (y - 7) + 0.05 * m + 0.1 * b + noise +
          extra;
@@ -226,7 +226,7 @@ static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void),
     tt_free(j);
     nm->feedback(a, resume_cost(c, &rc));
   }
-  nm->next(a, c);  /* outstanding at the cut */
+  nm->next(a, c); /* outstanding at the cut */
   CHECK(nm->save_state(a, &state) == TT_OK);
   nm->destroy(a);
   CHECK(nm->create(s, set, 42, &b) == TT_OK);
@@ -269,7 +269,7 @@ static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void),
       CHECK(nm->create(s, set, 42, &w) == TT_OK);
       CHECK(nm->load_state(w, bad) == TT_ERR_PARSE);
       CHECK_CONTAINS(tt_last_error(), "arm state 0");
-      CHECK_MSG(nm->load_state(w, state) == TT_OK, "%s", tt_last_error());  /* left usable */
+      CHECK_MSG(nm->load_state(w, state) == TT_OK, "%s", tt_last_error()); /* left usable */
       nm->destroy(w);
       free(bad);
     }
@@ -278,8 +278,10 @@ static void test_save_load_at(const tt_tuner_iface *nm, tt_space *(*make)(void),
    * tests/fuzz/fuzz_tuning_state: the cast was undefined behaviour) or fractional ones are
    * refused; the tuner is left usable. */
   {
-    static const char *const keys[][2] = {{"\"cache\":", "\"n\":["}, {"\"armStates\":[{", "\"iter\":"},
-                                          {"\"armStates\":[{", "\"evals\":"}, {"{", "\"evaluations\":"},
+    static const char *const keys[][2] = {{"\"cache\":", "\"n\":["},
+                                          {"\"armStates\":[{", "\"iter\":"},
+                                          {"\"armStates\":[{", "\"evals\":"},
+                                          {"{", "\"evaluations\":"},
                                           {"{", "\"deterministic\":"}};
     static const char *const values[] = {"1.1e91", "2.5"};
     for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++)
@@ -405,8 +407,7 @@ static void test_duplicates(const tt_tuner_iface *nm) {
     dup_ctx d = {0};
     tnm_run r = tnm_drive(nm, s, set0, seed, grid_cost, NULL, dup_visit, &d, 1000, b);
     printf("grid seed %d: %d evaluations, %d distinct, done %d, best (%d,%d)\n", (int)seed,
-           r.evaluations, d.count, r.done, (int)tt_config_get(b, 0).i,
-           (int)tt_config_get(b, 1).i);
+           r.evaluations, d.count, r.done, (int)tt_config_get(b, 0).i, (int)tt_config_get(b, 1).i);
     CHECK(r.done);
     CHECK(d.repeats == 0);
     CHECK(r.evaluations <= 16);
@@ -463,8 +464,8 @@ static void test_nominal_only(const tt_tuner_iface *nm) {
 static void test_protocol(const tt_tuner_iface *nm) {
   const tt_space *ss = nm->space();
   CHECK(ss != NULL);
-  static const char *const names[] = {"reflection", "expansion", "contraction", "shrink",
-                                      "init", "initSize", "tolerance", "reevaluate",
+  static const char *const names[] = {"reflection",     "expansion", "contraction", "shrink",
+                                      "init",           "initSize",  "tolerance",   "reevaluate",
                                       "maxEvaluations", "epsilon"};
   for (size_t i = 0; i < sizeof names / sizeof *names; i++)
     CHECK_MSG(tt_space_find(ss, names[i]) >= 0, "missing setting %s", names[i]);
@@ -490,18 +491,18 @@ static void test_protocol(const tt_tuner_iface *nm) {
   CHECK(nm->create(s, NULL, 1, &t) == TT_OK);
   double cost;
   CHECK(nm->best(t, c, &cost) == TT_ERR_NO_DATA);
-  CHECK(nm->feedback(t, 1.0) == TT_ERR_INVALID_ARGUMENT);  /* nothing outstanding */
+  CHECK(nm->feedback(t, 1.0) == TT_ERR_INVALID_ARGUMENT); /* nothing outstanding */
   CHECK(nm->next(t, c) == TT_OK);
   CHECK(nm->next(t, c2) == TT_OK);
-  CHECK(tt_config_equal(c, c2));  /* re-proposed */
+  CHECK(tt_config_equal(c, c2)); /* re-proposed */
   CHECK(nm->feedback(t, NAN) == TT_ERR_INVALID_ARGUMENT);
   CHECK(nm->feedback(t, -INFINITY) == TT_ERR_INVALID_ARGUMENT);
   CHECK(nm->feedback(t, 3.0) == TT_OK);
-  CHECK(nm->feedback(t, 3.0) == TT_ERR_INVALID_ARGUMENT);  /* already answered */
+  CHECK(nm->feedback(t, 3.0) == TT_ERR_INVALID_ARGUMENT); /* already answered */
   CHECK(nm->best(t, c2, &cost) == TT_OK);
   CHECK(tt_config_equal(c, c2) && cost == 3.0);
   CHECK(nm->next(t, c) == TT_OK);
-  CHECK(nm->feedback(t, INFINITY) == TT_OK);  /* failed measurement */
+  CHECK(nm->feedback(t, INFINITY) == TT_OK); /* failed measurement */
   CHECK(nm->best(t, c2, &cost) == TT_OK && cost == 3.0);
   nm->destroy(t);
 
@@ -569,7 +570,7 @@ static void test_context(const tt_tuner_iface *nm) {
    * smaller than that; 24 arms x 5 = 120 > 50: probe mode, unless the budget covers it */
   CHECK(!probes(nm, few, 0, 6));
   CHECK(probes(nm, few, 12, 6));
-  CHECK(probes(nm, many, 0, 24));   /* 24 arms (flag2 is folded into the simplex), n = 4 */
+  CHECK(probes(nm, many, 0, 24)); /* 24 arms (flag2 is folded into the simplex), n = 4 */
   CHECK(!probes(nm, many, 400, 24));
 
   /* the default's cost: answered from the cache, never proposed (no re-measurement here:
@@ -598,7 +599,8 @@ static void test_context(const tt_tuner_iface *nm) {
       double best = 0;
       CHECK(nm->best(t, c, &best) == TT_OK);
       char *bj = tt_config_to_json(c);
-      if (with) CHECK_MSG(best == 1.0 && !strcmp(bj, defj), "seed %d: best %g %s", (int)seed, best, bj);
+      if (with)
+        CHECK_MSG(best == 1.0 && !strcmp(bj, defj), "seed %d: best %g %s", (int)seed, best, bj);
       tt_free(bj);
       nm->destroy(t);
     }
@@ -612,7 +614,8 @@ static void test_context(const tt_tuner_iface *nm) {
   tt_tuner *t = NULL;
   CHECK(nm->create(many, NULL, 1, &t) == TT_OK);
   double st[2] = {0.5, 0.5};
-  tt_tuner_context bad = {.struct_size = sizeof bad, .state = st, .state_dim = 0, .default_cost = NAN};
+  tt_tuner_context bad = {
+      .struct_size = sizeof bad, .state = st, .state_dim = 0, .default_cost = NAN};
   CHECK(nm->set_context(t, &bad) == TT_ERR_INVALID_ARGUMENT);
   bad.state_dim = 2;
   bad.default_cost = -1;
@@ -620,8 +623,12 @@ static void test_context(const tt_tuner_iface *nm) {
   bad.struct_size = 8;
   CHECK(nm->set_context(t, &bad) == TT_ERR_INVALID_ARGUMENT);
   CHECK_CONTAINS(tt_last_error(), "shorter");
-  tt_tuner_context ok = {.struct_size = sizeof ok, .state = st, .state_dim = 2,
-                         .state_space = "test", .default_cost = 2.0, .budget = 400};
+  tt_tuner_context ok = {.struct_size = sizeof ok,
+                         .state = st,
+                         .state_dim = 2,
+                         .state_space = "test",
+                         .default_cost = 2.0,
+                         .budget = 400};
   CHECK(nm->set_context(t, &ok) == TT_OK);
   CHECK(nm->set_context(t, &ok) == TT_ERR_INVALID_ARGUMENT);
   /* resume: a saved tuner keeps the context's effects without a second call */
@@ -653,9 +660,9 @@ static void test_context(const tt_tuner_iface *nm) {
   CHECK_CONTAINS(state, "\"probe\":false");
   CHECK_CONTAINS(state, "\"contextSet\":true");
   nm->destroy(t);
-  CHECK(nm->create(many, NULL, 1, &t) == TT_OK);  /* created in probe mode (no context) */
+  CHECK(nm->create(many, NULL, 1, &t) == TT_OK); /* created in probe mode (no context) */
   CHECK(nm->load_state(t, state) == TT_OK);
-  CHECK(nm->set_context(t, &ok) == TT_ERR_INVALID_ARGUMENT);  /* already applied */
+  CHECK(nm->set_context(t, &ok) == TT_ERR_INVALID_ARGUMENT); /* already applied */
   for (int i = 25; i < 60; i++) {
     nm->next(t, m);
     char *j = tt_config_to_json(m);

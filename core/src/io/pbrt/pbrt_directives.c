@@ -25,7 +25,9 @@ static tt_status tt__skip_args(tt__pp *P) {
   for (;;) {
     if ((st = tt__peek(P, &t)) != TT_OK) return st;
     if (t.kind == TK_EOF) return TT_OK;
-    if (t.kind == TK_WORD && depth == 0 && !tt__num(&t, &v) && !tt__is(&t, "true") && !tt__is(&t, "false")) return TT_OK;
+    if (t.kind == TK_WORD && depth == 0 && !tt__num(&t, &v) && !tt__is(&t, "true") &&
+        !tt__is(&t, "false"))
+      return TT_OK;
     if (t.kind == TK_LBRACK) depth++;
     if (t.kind == TK_RBRACK && depth > 0) depth--;
     tt__next(P, &t);
@@ -47,7 +49,8 @@ static tt_status tt__include(tt__pp *P, const tt__tok *at, const char *name) {
       char chain[2048] = "";
       const tt__pfile *stack[TT__MAX_INCLUDE_DEPTH + 2];
       int n = 0;
-      for (const tt__pfile *g = P->cur; g && n < TT__MAX_INCLUDE_DEPTH + 1; g = g->parent) stack[n++] = g;
+      for (const tt__pfile *g = P->cur; g && n < TT__MAX_INCLUDE_DEPTH + 1; g = g->parent)
+        stack[n++] = g;
       for (int i = n - 1; i >= 0; i--) {
         strncat(chain, stack[i]->path, sizeof chain - strlen(chain) - 1);
         strncat(chain, " -> ", sizeof chain - strlen(chain) - 1);
@@ -89,7 +92,7 @@ static tt_status tt__typed(tt__pp *P, const tt__tok *at, const char *what, tt__t
 }
 
 static tt_status tt__d_attribute_begin(tt__pp *P, const tt__tok *at, const char *name) {
-  return tt__push(P, name[0], at);  /* 'A'ttributeBegin or 'T'ransformBegin */
+  return tt__push(P, name[0], at); /* 'A'ttributeBegin or 'T'ransformBegin */
 }
 
 static tt_status tt__d_attribute_end(tt__pp *P, const tt__tok *at, const char *name) {
@@ -147,7 +150,8 @@ static tt_status tt__d_look_at(tt__pp *P, const tt__tok *at, const char *name) {
   double v[9];
   tt_status st = tt__arg_nums(P, at, 9, v);
   if (st != TT_OK) return st;
-  double dir[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]}, up[3] = {v[6], v[7], v[8]}, right[3], nu[3];
+  double dir[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]}, up[3] = {v[6], v[7], v[8]}, right[3],
+         nu[3];
   if (!tt__norm(dir) || !tt__norm(up))
     return tt__perr(at->file, at->line, "LookAt: eye equals target or up is zero");
   tt__cross(up, dir, right);
@@ -155,7 +159,8 @@ static tt_status tt__d_look_at(tt__pp *P, const tt__tok *at, const char *name) {
     return tt__perr(at->file, at->line, "LookAt: up vector is parallel to the view direction");
   tt__cross(dir, right, nu);
   double wfc[16] = {right[0], nu[0], dir[0], v[0], right[1], nu[1], dir[1], v[1],
-                    right[2], nu[2], dir[2], v[2], 0, 0, 0, 1}, cfw[16];
+                    right[2], nu[2], dir[2], v[2], 0,        0,     0,      1},
+         cfw[16];
   if (!tt__inverse(wfc, cfw)) return tt__perr(at->file, at->line, "LookAt: degenerate frame");
   tt__concat(P, cfw);
   return TT_OK;
@@ -208,7 +213,9 @@ static tt_status tt__d_coord_sys_transform(tt__pp *P, const tt__tok *at, const c
   if (st != TT_OK) return st;
   size_t i = tt__coordsys_find(P, cs);
   if (i < P->ncs) memcpy(P->gs.ctm, P->cs[i].m, sizeof P->gs.ctm);
-  else tt__pwarn(P, at->file, at->line, cs, "CoordSysTransform: no coordinate system named \"%s\" (ignored)", cs);
+  else
+    tt__pwarn(P, at->file, at->line, cs,
+              "CoordSysTransform: no coordinate system named \"%s\" (ignored)", cs);
   free(cs);
   return st;
 }
@@ -225,13 +232,14 @@ static tt_status tt__d_world_begin(tt__pp *P, const tt__tok *at, const char *nam
   tt__ident(P->gs.ctm);
   P->cs = tt__grow(P->cs, &P->capcs, P->ncs + 1, sizeof *P->cs);
   if (!P->cs) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
-  if (!(P->cs[P->ncs].name = tt__strdup("world"))) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
+  if (!(P->cs[P->ncs].name = tt__strdup("world")))
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   tt__ident(P->cs[P->ncs++].m);
   return TT_OK;
 }
 
 static tt_status tt__d_world_end(tt__pp *P, const tt__tok *at, const char *name) {
-  return TT_OK;  /* pbrt-v3 leftover: harmless */
+  return TT_OK; /* pbrt-v3 leftover: harmless */
 }
 
 static tt_status tt__d_camera(tt__pp *P, const tt__tok *at, const char *name) {
@@ -259,7 +267,8 @@ static tt_status tt__d_option(tt__pp *P, const tt__tok *at, const char *name) {
 }
 
 /* Material "type": the current material (a NULL name: not a named one). */
-static tt_status tt__material_current(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl) {
+static tt_status tt__material_current(tt__pp *P, const tt__tok *at, const char *type,
+                                      tt__plist *pl) {
   return tt__make_material(P, at, type, pl, NULL, &P->gs.mat);
 }
 
@@ -276,7 +285,8 @@ static tt_status tt__d_make_named_material(tt__pp *P, const tt__tok *at, const c
   if (st == TT_OK) st = tt__gets(at, &pl, "type", &type);
   if (st == TT_OK) {
     int32_t mat;
-    if (!type) st = tt__perr(at->file, at->line, "MakeNamedMaterial \"%s\": missing \"string type\"", mname);
+    if (!type)
+      st = tt__perr(at->file, at->line, "MakeNamedMaterial \"%s\": missing \"string type\"", mname);
     else if ((st = tt__make_material(P, at, type, &pl, mname, &mat)) == TT_OK) {
       P->nmat = tt__grow(P->nmat, &P->capnmat, P->nnmat + 1, sizeof *P->nmat);
       if (!P->nmat) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -300,7 +310,8 @@ static tt_status tt__d_named_material(tt__pp *P, const tt__tok *at, const char *
   size_t i;
   for (i = P->nnmat; i-- > 0;)
     if (strcmp(P->nmat[i].name, mname) == 0) break;
-  if (i == (size_t)-1) st = tt__perr(at->file, at->line, "NamedMaterial: no material named \"%s\"", mname);
+  if (i == (size_t)-1)
+    st = tt__perr(at->file, at->line, "NamedMaterial: no material named \"%s\"", mname);
   else P->gs.mat = P->nmat[i].mat;
   free(mname);
   return st;
@@ -346,7 +357,8 @@ static tt_status tt__d_object_begin(tt__pp *P, const tt__tok *at, const char *na
   char *oname = NULL;
   tt_status st = tt__arg_str(P, at, "an object name", &oname);
   if (st != TT_OK) return st;
-  if (P->cur_obj >= 0) st = tt__perr(at->file, at->line, "ObjectBegin \"%s\" inside another ObjectBegin", oname);
+  if (P->cur_obj >= 0)
+    st = tt__perr(at->file, at->line, "ObjectBegin \"%s\" inside another ObjectBegin", oname);
   else if ((st = tt__push(P, 'O', at)) == TT_OK) {
     P->obj = tt__grow(P->obj, &P->capobj, P->nobj + 1, sizeof *P->obj);
     if (!P->obj) st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -382,12 +394,13 @@ static tt_status tt__d_object_instance(tt__pp *P, const tt__tok *at, const char 
 /* MakeNamedMedium "name" params, MediumInterface "inside" ["outside"]: media are not
  * supported; the arguments are read and dropped. */
 static tt_status tt__d_medium(tt__pp *P, const tt__tok *at, const char *name) {
-  tt__pwarn(P, at->file, at->line, name, "%s: participating media are not supported (ignored)", name);
+  tt__pwarn(P, at->file, at->line, name, "%s: participating media are not supported (ignored)",
+            name);
   char *mname = NULL;
   tt__plist pl = {0};
   tt_status st = tt__arg_str(P, at, "a name", &mname);
   if (st == TT_OK) {
-    int interface = name[0] == 'M' && name[1] == 'e';  /* MediumInterface */
+    int interface = name[0] == 'M' && name[1] == 'e'; /* MediumInterface */
     tt__tok n2;
     if (interface && (st = tt__peek(P, &n2)) == TT_OK && n2.kind == TK_STRING) tt__next(P, &n2);
     if (st == TT_OK && !interface) st = tt__params(P, &pl);
@@ -398,7 +411,8 @@ static tt_status tt__d_medium(tt__pp *P, const tt__tok *at, const char *name) {
 }
 
 static tt_status tt__d_attribute(tt__pp *P, const tt__tok *at, const char *name) {
-  tt__pwarn(P, at->file, at->line, name, "Attribute (default parameters) is not supported (ignored)");
+  tt__pwarn(P, at->file, at->line, name,
+            "Attribute (default parameters) is not supported (ignored)");
   char *target = NULL;
   tt__plist pl = {0};
   tt_status st = tt__arg_str(P, at, "a target", &target);
@@ -418,7 +432,8 @@ static tt_status tt__d_active_transform(tt__pp *P, const tt__tok *at, const char
     P->end_only = 0;
   } else if (tt__is(&w, "EndTime")) {
     P->end_only = 1;
-    tt__pwarn(P, at->file, at->line, name, "motion blur is not supported: end-time transforms are ignored");
+    tt__pwarn(P, at->file, at->line, name,
+              "motion blur is not supported: end-time transforms are ignored");
   } else {
     st = tt__perr(w.file, w.line, "ActiveTransform: expected StartTime, EndTime or All, got %s",
                   tt__desc(&w, d, sizeof d));
@@ -444,47 +459,47 @@ typedef struct tt__directive_entry {
 } tt__directive_entry;
 
 static const tt__directive_entry tt__directives[] = {
-  {"AttributeBegin", tt__d_attribute_begin, 0},
-  {"TransformBegin", tt__d_attribute_begin, 0},
-  {"AttributeEnd", tt__d_attribute_end, 0},
-  {"TransformEnd", tt__d_attribute_end, 0},
-  {"Identity", tt__d_identity, 1},
-  {"Translate", tt__d_translate, 1},
-  {"Scale", tt__d_scale, 1},
-  {"Rotate", tt__d_rotate, 1},
-  {"LookAt", tt__d_look_at, 1},
-  {"Transform", tt__d_transform, 1},
-  {"ConcatTransform", tt__d_transform, 1},
-  {"CoordinateSystem", tt__d_coordinate_system, 0},
-  {"CoordSysTransform", tt__d_coord_sys_transform, 1},
-  {"ReverseOrientation", tt__d_reverse_orientation, 0},
-  {"WorldBegin", tt__d_world_begin, 0},
-  {"WorldEnd", tt__d_world_end, 0},
-  {"Camera", tt__d_camera, 0},
-  {"Film", tt__d_option_block, 0},
-  {"Sampler", tt__d_option_block, 0},
-  {"Integrator", tt__d_option_block, 0},
-  {"PixelFilter", tt__d_option_block, 0},
-  {"Accelerator", tt__d_option_block, 0},
-  {"ColorSpace", tt__d_option_block, 0},
-  {"Option", tt__d_option, 0},
-  {"Material", tt__d_material, 0},
-  {"MakeNamedMaterial", tt__d_make_named_material, 0},
-  {"NamedMaterial", tt__d_named_material, 0},
-  {"Texture", tt__d_texture, 0},
-  {"Shape", tt__d_shape, 0},
-  {"LightSource", tt__d_light_source, 0},
-  {"AreaLightSource", tt__d_area_light_source, 0},
-  {"Include", tt__d_include, 0},
-  {"Import", tt__d_include, 0},
-  {"ObjectBegin", tt__d_object_begin, 0},
-  {"ObjectEnd", tt__d_object_end, 0},
-  {"ObjectInstance", tt__d_object_instance, 0},
-  {"MakeNamedMedium", tt__d_medium, 0},
-  {"MediumInterface", tt__d_medium, 0},
-  {"Attribute", tt__d_attribute, 0},
-  {"ActiveTransform", tt__d_active_transform, 0},
-  {"TransformTimes", tt__d_transform_times, 0},
+    {"AttributeBegin", tt__d_attribute_begin, 0},
+    {"TransformBegin", tt__d_attribute_begin, 0},
+    {"AttributeEnd", tt__d_attribute_end, 0},
+    {"TransformEnd", tt__d_attribute_end, 0},
+    {"Identity", tt__d_identity, 1},
+    {"Translate", tt__d_translate, 1},
+    {"Scale", tt__d_scale, 1},
+    {"Rotate", tt__d_rotate, 1},
+    {"LookAt", tt__d_look_at, 1},
+    {"Transform", tt__d_transform, 1},
+    {"ConcatTransform", tt__d_transform, 1},
+    {"CoordinateSystem", tt__d_coordinate_system, 0},
+    {"CoordSysTransform", tt__d_coord_sys_transform, 1},
+    {"ReverseOrientation", tt__d_reverse_orientation, 0},
+    {"WorldBegin", tt__d_world_begin, 0},
+    {"WorldEnd", tt__d_world_end, 0},
+    {"Camera", tt__d_camera, 0},
+    {"Film", tt__d_option_block, 0},
+    {"Sampler", tt__d_option_block, 0},
+    {"Integrator", tt__d_option_block, 0},
+    {"PixelFilter", tt__d_option_block, 0},
+    {"Accelerator", tt__d_option_block, 0},
+    {"ColorSpace", tt__d_option_block, 0},
+    {"Option", tt__d_option, 0},
+    {"Material", tt__d_material, 0},
+    {"MakeNamedMaterial", tt__d_make_named_material, 0},
+    {"NamedMaterial", tt__d_named_material, 0},
+    {"Texture", tt__d_texture, 0},
+    {"Shape", tt__d_shape, 0},
+    {"LightSource", tt__d_light_source, 0},
+    {"AreaLightSource", tt__d_area_light_source, 0},
+    {"Include", tt__d_include, 0},
+    {"Import", tt__d_include, 0},
+    {"ObjectBegin", tt__d_object_begin, 0},
+    {"ObjectEnd", tt__d_object_end, 0},
+    {"ObjectInstance", tt__d_object_instance, 0},
+    {"MakeNamedMedium", tt__d_medium, 0},
+    {"MediumInterface", tt__d_medium, 0},
+    {"Attribute", tt__d_attribute, 0},
+    {"ActiveTransform", tt__d_active_transform, 0},
+    {"TransformTimes", tt__d_transform_times, 0},
 };
 
 /* The table entry of the word token `t`, or NULL. */
@@ -506,7 +521,8 @@ tt_status tt__directive(tt__pp *P, int *done) {
     *done = 1;
     return TT_OK;
   }
-  if (t.kind != TK_WORD) return tt__perr(t.file, t.line, "expected a directive, got %s", tt__desc(&t, d, sizeof d));
+  if (t.kind != TK_WORD)
+    return tt__perr(t.file, t.line, "expected a directive, got %s", tt__desc(&t, d, sizeof d));
   char name[40];
   snprintf(name, sizeof name, "%.*s", (int)(t.n < 39 ? t.n : 39), t.s);
   const tt__directive_entry *e = tt__lookup_directive(&t);

@@ -30,8 +30,10 @@ static void tt__face_forward(tt__mesh_data *d) {
   if (!d->normals) return;
   for (uint32_t t = 0; t < d->triangle_count; t++) {
     uint32_t *ix = d->indices + 3 * (size_t)t;
-    const float *a = d->positions + 3 * (size_t)ix[0], *b = d->positions + 3 * (size_t)ix[1], *c = d->positions + 3 * (size_t)ix[2];
-    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]}, ng[3];
+    const float *a = d->positions + 3 * (size_t)ix[0], *b = d->positions + 3 * (size_t)ix[1],
+                *c = d->positions + 3 * (size_t)ix[2];
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+           e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]}, ng[3];
     tt__cross(e1, e2, ng);
     double dot = 0;
     for (int k = 0; k < 3; k++)
@@ -45,10 +47,12 @@ static void tt__face_forward(tt__mesh_data *d) {
 }
 
 /* Copies a numeric array parameter into floats, checking its arity. */
-static tt_status tt__pfloats(const tt__tok *at, tt__pparam *p, size_t arity, float **out, size_t *count) {
+static tt_status tt__pfloats(const tt__tok *at, tt__pparam *p, size_t arity, float **out,
+                             size_t *count) {
   if (!p->num || p->nnum % arity)
-    return tt__perr(at->file, at->line, "parameter \"%s %s\": expected a multiple of %zu numbers, got %zu", p->type, p->name,
-                    arity, p->nnum);
+    return tt__perr(at->file, at->line,
+                    "parameter \"%s %s\": expected a multiple of %zu numbers, got %zu", p->type,
+                    p->name, arity, p->nnum);
   *out = malloc((p->nnum ? p->nnum : 1) * sizeof **out);
   if (!*out) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   for (size_t i = 0; i < p->nnum; i++) (*out)[i] = (float)p->num[i];
@@ -64,34 +68,43 @@ static tt_status tt__inline_mesh(const tt__tok *at, tt__plist *pl, int per, tt__
   tt__pparam *P3 = tt__find(pl, "P");
   if (!P3) return tt__perr(at->file, at->line, "mesh without \"point3 P\"");
   if ((st = tt__pfloats(at, P3, 3, &d->positions, &nv)) != TT_OK) return st;
-  if (nv == 0 || nv > UINT32_MAX / 4) return tt__perr(at->file, at->line, "mesh \"P\" holds %zu vertices", nv);
+  if (nv == 0 || nv > UINT32_MAX / 4)
+    return tt__perr(at->file, at->line, "mesh \"P\" holds %zu vertices", nv);
   for (size_t i = 0; i < 3 * nv; i++)
-    if (!isfinite(d->positions[i])) return tt__perr(at->file, at->line, "mesh \"P\" has a non-finite value");
+    if (!isfinite(d->positions[i]))
+      return tt__perr(at->file, at->line, "mesh \"P\" has a non-finite value");
   d->vertex_count = (uint32_t)nv;
   tt__pparam *N = tt__find(pl, "N");
   if (N) {
     if ((st = tt__pfloats(at, N, 3, &d->normals, &nn)) != TT_OK) return st;
-    if (nn != nv) return tt__perr(at->file, at->line, "mesh has %zu normals for %zu vertices", nn, nv);
+    if (nn != nv)
+      return tt__perr(at->file, at->line, "mesh has %zu normals for %zu vertices", nn, nv);
   }
   tt__pparam *UV = tt__find(pl, "uv");
   if (!UV) UV = tt__find(pl, "st");
   if (UV) {
     if ((st = tt__pfloats(at, UV, 2, &d->uvs, &nuv)) != TT_OK) return st;
-    if (nuv != nv) return tt__perr(at->file, at->line, "mesh has %zu uvs for %zu vertices", nuv, nv);
+    if (nuv != nv)
+      return tt__perr(at->file, at->line, "mesh has %zu uvs for %zu vertices", nuv, nv);
   }
   tt__pparam *I = tt__find(pl, "indices");
   size_t ni;
   const double *src = NULL;
   if (I) {
-    if (strcmp(I->type, "integer") != 0 || !I->num) return tt__perr(at->file, at->line, "mesh \"indices\" must be integers");
+    if (strcmp(I->type, "integer") != 0 || !I->num)
+      return tt__perr(at->file, at->line, "mesh \"indices\" must be integers");
     ni = I->nnum;
     src = I->num;
   } else {
-    if ((size_t)per != nv) return tt__perr(at->file, at->line, "mesh without \"integer indices\" needs exactly %d vertices, got %zu", per, nv);
+    if ((size_t)per != nv)
+      return tt__perr(at->file, at->line,
+                      "mesh without \"integer indices\" needs exactly %d vertices, got %zu", per,
+                      nv);
     ni = (size_t)per;
   }
   if (ni == 0 || ni % (size_t)per)
-    return tt__perr(at->file, at->line, "mesh \"indices\" holds %zu values, not a multiple of %d", ni, per);
+    return tt__perr(at->file, at->line, "mesh \"indices\" holds %zu values, not a multiple of %d",
+                    ni, per);
   size_t prims = ni / (size_t)per, nt = per == 4 ? 2 * prims : prims;
   if (nt > UINT32_MAX / 3) return tt__perr(at->file, at->line, "mesh is too large");
   d->indices = malloc(3 * nt * sizeof *d->indices);
@@ -106,11 +119,17 @@ static tt_status tt__inline_mesh(const tt__tok *at, tt__plist *pl, int per, tt__
     }
     uint32_t *o = d->indices + 3 * (per == 4 ? 2 * p : p);
     if (per == 3) {
-      o[0] = q[0]; o[1] = q[1]; o[2] = q[2];
+      o[0] = q[0];
+      o[1] = q[1];
+      o[2] = q[2];
     } else {
       /* pbrt bilinear patch: v00 v10 v01 v11 -> (00,10,11), (00,11,01): normal dpdu x dpdv */
-      o[0] = q[0]; o[1] = q[1]; o[2] = q[3];
-      o[3] = q[0]; o[4] = q[3]; o[5] = q[2];
+      o[0] = q[0];
+      o[1] = q[1];
+      o[2] = q[3];
+      o[3] = q[0];
+      o[4] = q[3];
+      o[5] = q[2];
     }
   }
   d->triangle_count = (uint32_t)nt;
@@ -125,7 +144,8 @@ static tt_status tt__emit_shape(tt__pp *P, const tt__tok *at, tt__mesh_data *d) 
   double m[16];
   if (P->cur_obj >= 0) {
     if (emissive) {
-      tt__pwarn(P, at->file, at->line, "AreaLightSource", "area lights inside ObjectBegin are not supported by pbrt-v4 (emission ignored)");
+      tt__pwarn(P, at->file, at->line, "AreaLightSource",
+                "area lights inside ObjectBegin are not supported by pbrt-v4 (emission ignored)");
       emissive = 0;
     }
     memcpy(m, P->gs.ctm, sizeof m);
@@ -162,7 +182,8 @@ tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
   int analytic = 0;
   tt__find(pl, "emissionfilename");
   if (tt__find(pl, "alpha"))
-    tt__pwarn(P, at->file, at->line, "alpha", "%s: alpha (cut-out) textures are not supported (ignored)", what);
+    tt__pwarn(P, at->file, at->line, "alpha",
+              "%s: alpha (cut-out) textures are not supported (ignored)", what);
   if (strcmp(type, "trianglemesh") == 0) {
     tt__find(pl, "S");
     tt__find(pl, "faceIndices");
@@ -179,7 +200,8 @@ tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
       d.normals = NULL;
       d.uvs = NULL;
       int lv = levels < 0 ? 0 : levels > 6 ? 6 : (int)levels;
-      if (levels > 6) tt__pwarn(P, at->file, at->line, "levels", "loopsubdiv levels %g clamped to 6", levels);
+      if (levels > 6)
+        tt__pwarn(P, at->file, at->line, "levels", "loopsubdiv levels %g clamped to 6", levels);
       for (int i = 0; i < lv && st == TT_OK; i++) st = tt__pbrt_loop_subdivide(&d);
       if (st != TT_OK) st = tt__perr(at->file, at->line, "loopsubdiv: %s", tt_last_error());
     }
@@ -188,7 +210,9 @@ tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
     if ((st = tt__gets(at, pl, "filename", &fn)) != TT_OK) return st;
     if (!fn) return tt__perr(at->file, at->line, "plymesh without \"string filename\"");
     tt__pparam *disp = tt__find(pl, "displacement");
-    if (disp) tt__pwarn(P, at->file, at->line, "displacement", "%s: displacement is not supported (ignored)", what);
+    if (disp)
+      tt__pwarn(P, at->file, at->line, "displacement",
+                "%s: displacement is not supported (ignored)", what);
     tt__find(pl, "edgelength");
     char *path = tt__join(at->file->dir, fn, strlen(fn));
     if (!path) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -209,13 +233,18 @@ tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
     double r = 1, zmin = -1e30, zmax = 1e30, phimax = 360, h = 0, ri = 0;
     analytic = 1;
     if ((st = tt__getf(P, at, pl, "radius", &r)) != TT_OK) return st;
-    if (!(r > 0)) return tt__perr(at->file, at->line, "%s: radius must be positive, got %g", what, r);
+    if (!(r > 0))
+      return tt__perr(at->file, at->line, "%s: radius must be positive, got %g", what, r);
     if ((st = tt__getf(P, at, pl, "phimax", &phimax)) != TT_OK) return st;
-    if (phimax < 360) tt__pwarn(P, at->file, at->line, "phimax", "%s: partial shapes (phimax) are tessellated whole", what);
+    if (phimax < 360)
+      tt__pwarn(P, at->file, at->line, "phimax",
+                "%s: partial shapes (phimax) are tessellated whole", what);
     if (type[0] == 's') {
       if ((st = tt__getf(P, at, pl, "zmin", &zmin)) != TT_OK) return st;
       if ((st = tt__getf(P, at, pl, "zmax", &zmax)) != TT_OK) return st;
-      if (zmin > -r || zmax < r) tt__pwarn(P, at->file, at->line, "zmin", "%s: clipped spheres (zmin/zmax) are tessellated whole", what);
+      if (zmin > -r || zmax < r)
+        tt__pwarn(P, at->file, at->line, "zmin",
+                  "%s: clipped spheres (zmin/zmax) are tessellated whole", what);
       st = tt__pbrt_sphere(r, &d);
     } else {
       if ((st = tt__getf(P, at, pl, "height", &h)) != TT_OK) return st;
@@ -223,7 +252,8 @@ tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
       st = tt__pbrt_disk(r, ri, h, &d);
     }
   } else {
-    static const char *const known[] = {"cylinder", "cone", "paraboloid", "hyperboloid", "curve", "nurbs", "heightfield", NULL};
+    static const char *const known[] = {"cylinder", "cone",  "paraboloid",  "hyperboloid",
+                                        "curve",    "nurbs", "heightfield", NULL};
     for (int i = 0; known[i]; i++)
       if (strcmp(type, known[i]) == 0) {
         tt__pwarn(P, at->file, at->line, type, "shape \"%s\" is not supported (skipped)", type);
@@ -238,7 +268,8 @@ tt_status tt__shape(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
   tt__unused(P, at, what, pl);
   if (P->gs.mat == TT__MAT_INTERFACE) {
     /* "interface" marks a medium boundary with no surface: nothing to render */
-    tt__pwarn(P, at->file, at->line, "interface", "%s with material \"interface\" has no surface (skipped)", what);
+    tt__pwarn(P, at->file, at->line, "interface",
+              "%s with material \"interface\" has no surface (skipped)", what);
     tt__mesh_data_free(&d);
     return TT_OK;
   }
@@ -273,7 +304,8 @@ static int tt__mesh_copy(const tt__mesh_data *s, tt__mesh_data *d) {
   d->indices = malloc(3 * (size_t)s->triangle_count * sizeof(uint32_t) + 1);
   if (s->normals) d->normals = malloc(3 * (size_t)s->vertex_count * sizeof(float) + 1);
   if (s->uvs) d->uvs = malloc(2 * (size_t)s->vertex_count * sizeof(float) + 1);
-  if (!d->positions || !d->indices || (s->normals && !d->normals) || (s->uvs && !d->uvs) || (s->name && !d->name)) {
+  if (!d->positions || !d->indices || (s->normals && !d->normals) || (s->uvs && !d->uvs) ||
+      (s->name && !d->name)) {
     tt__mesh_data_free(d);
     return 0;
   }
@@ -286,7 +318,8 @@ static int tt__mesh_copy(const tt__mesh_data *s, tt__mesh_data *d) {
 
 /* ObjectInstance: copies the object's meshes through the current CTM. */
 tt_status tt__instance(tt__pp *P, const tt__tok *at, const char *name) {
-  if (P->cur_obj >= 0) return tt__perr(at->file, at->line, "ObjectInstance \"%s\" inside ObjectBegin", name);
+  if (P->cur_obj >= 0)
+    return tt__perr(at->file, at->line, "ObjectInstance \"%s\" inside ObjectBegin", name);
   tt__object *o = NULL;
   for (size_t i = P->nobj; i-- > 0;)
     if (strcmp(P->obj[i].name, name) == 0) {
@@ -301,7 +334,8 @@ tt_status tt__instance(tt__pp *P, const tt__tok *at, const char *name) {
     if (!tt__mesh_copy(&o->m[i].d, &d)) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
     if (tt__mesh_data_transform(&d, m) != TT_OK) {
       tt__mesh_data_free(&d);
-      return tt__perr(at->file, at->line, "ObjectInstance \"%s\": transform is singular or not affine", name);
+      return tt__perr(at->file, at->line,
+                      "ObjectInstance \"%s\": transform is singular or not affine", name);
     }
     tt_status st = tt__scene_add_mesh(P->scene, &d, (uint32_t)o->m[i].mat);
     tt__mesh_data_free(&d);

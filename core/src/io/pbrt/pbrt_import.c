@@ -90,7 +90,8 @@ tt_status tt__scene_load_pbrt(const char *path, tt_scene **out) {
   while (st == TT_OK && !done) st = tt__directive(&P, &done);
   if (st == TT_OK) st = tt__pstrict_result(&P);
   if (st == TT_OK && P.cur_obj >= 0)
-    st = tt__perr(P.files, P.files ? P.files->line : 0, "ObjectBegin \"%s\" is never closed", P.obj[P.cur_obj].name);
+    st = tt__perr(P.files, P.files ? P.files->line : 0, "ObjectBegin \"%s\" is never closed",
+                  P.obj[P.cur_obj].name);
   if (st == TT_OK) {
     if (!P.in_world && P.scene->mesh_count == 0)
       tt__pwarn(&P, P.files, 0, "WorldBegin", "no WorldBegin: the file describes no world");
@@ -98,8 +99,7 @@ tt_status tt__scene_load_pbrt(const char *path, tt_scene **out) {
     tt__finish_camera(&P);
     st = tt__scene_finish(P.scene);
   }
-  if (P.suppressed)
-    tt__log(TT_LOG_WARN, "%s: %u more warnings suppressed", path, P.suppressed);
+  if (P.suppressed) tt__log(TT_LOG_WARN, "%s: %u more warnings suppressed", path, P.suppressed);
   tt__pp_free(&P);
   if (st != TT_OK) {
     tt_scene_destroy(P.scene);

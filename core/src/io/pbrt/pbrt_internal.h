@@ -66,8 +66,8 @@ void tt__pbrt_blackbody(double kelvin, float rgb[3]);
 
 /* One source file: its text stays alive until the load ends (tokens point into it). */
 typedef struct tt__pfile {
-  char *path;               /* as named (resolved against the includer) */
-  char *dir;                /* directory for relative paths inside it */
+  char *path; /* as named (resolved against the includer) */
+  char *dir;  /* directory for relative paths inside it */
   char *text;
   size_t len, pos;
   int line;
@@ -115,13 +115,13 @@ typedef struct tt__ntex {
   char *name;
   int is_float;
   float rgb[3];
-  char *image;   /* resolved image path (NULL: constant) */
+  char *image; /* resolved image path (NULL: constant) */
   int srgb;
 } tt__ntex;
 
 typedef struct tt__named_mat {
   char *name;
-  int32_t mat;  /* scene material index or TT__MAT_INTERFACE */
+  int32_t mat; /* scene material index or TT__MAT_INTERFACE */
 } tt__named_mat;
 
 typedef struct tt__coordsys {
@@ -153,19 +153,19 @@ typedef struct tt__derived {
 typedef struct tt__gstate {
   double ctm[16];
   int reverse;
-  int32_t mat;        /* -1: pbrt's default diffuse (created on first use) */
-  int area;           /* an AreaLightSource is active */
+  int32_t mat; /* -1: pbrt's default diffuse (created on first use) */
+  int area;    /* an AreaLightSource is active */
   float L[3];
   int two_sided;
-  int kind;           /* 'A' attribute, 'T' transform, 'O' object: which End closes it */
+  int kind; /* 'A' attribute, 'T' transform, 'O' object: which End closes it */
   const tt__pfile *file;
   int line;
 } tt__gstate;
 
 typedef struct tt__pp {
   tt_scene *scene;
-  tt__pfile *cur;          /* innermost open file */
-  tt__pfile *files;        /* every file read */
+  tt__pfile *cur;   /* innermost open file */
+  tt__pfile *files; /* every file read */
   int depth;
   tt__tok peek;
   int has_peek;
@@ -186,22 +186,22 @@ typedef struct tt__pp {
   size_t ncs, capcs;
   tt__object *obj;
   size_t nobj, capobj;
-  int cur_obj;             /* index of the object being defined, or -1 */
+  int cur_obj; /* index of the object being defined, or -1 */
   tt__derived *der;
   size_t nder, capder;
   int32_t default_mat;
-  int world_ready;         /* camera and mirror are fixed */
+  int world_ready; /* camera and mirror are fixed */
   int in_world;
-  double W[16];            /* world mirror applied to everything */
+  double W[16]; /* world mirror applied to everything */
   int has_camera;
-  double cam_ctm[16];      /* pbrt cameraFromWorld */
+  double cam_ctm[16]; /* pbrt cameraFromWorld */
   double fov;
   double sw[4];
   int has_sw;
-  double frame_aspect;     /* 0: from the resolution */
+  double frame_aspect; /* 0: from the resolution */
   long xres, yres;
   int env_seen;
-  int end_only;            /* ActiveTransform EndTime: transforms are ignored */
+  int end_only; /* ActiveTransform EndTime: transforms are ignored */
 } tt__pp;
 
 /* ---- lexer: files, tokens, messages (pbrt_lexer.c) ------------------------------- */
@@ -291,8 +291,8 @@ const tt__ntex *tt__lookup_tex(tt__pp *P, const char *name, int is_float);
 
 /* A colour-like parameter: rgb, spectrum (named, inline pairs or .spd file), blackbody,
  * float (grey) or texture. `found` reports whether it was given. */
-tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name, tt__spectrum_use use,
-                   int allow_tex, tt__texval *v, int *found);
+tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name,
+                   tt__spectrum_use use, int allow_tex, tt__texval *v, int *found);
 
 /* ---- graphics state, transforms, camera, options (pbrt_state.c) ------------------ */
 
@@ -340,16 +340,16 @@ tt_status tt__option(tt__pp *P, const tt__tok *at, const char *dir, tt__plist *p
 
 /* Creates a tt_material from a pbrt material type and its parameters; *out is the scene
  * index, or TT__MAT_INTERFACE for "interface" (no surface). */
-tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl, const char *name,
-                            int32_t *out);
+tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl,
+                            const char *name, int32_t *out);
 
 /* The material a shape gets: the current one (pbrt's default diffuse if none) with the
  * active area light's emission folded into a derived copy. */
 tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out);
 
 /* Texture directive: imagemap keeps its file; scale multiplies; others become constants. */
-tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char *kind, const char *cls,
-                      tt__plist *pl);
+tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char *kind,
+                      const char *cls, tt__plist *pl);
 
 /* ---- shapes and object instances (pbrt_geometry.c) ------------------------------- */
 

@@ -42,7 +42,8 @@ void tt__pstrict(tt__pp *P, const tt__pfile *f, int line, const char *key, const
     return;
   }
   if (!P->strict_errors++)
-    snprintf(P->strict_first, sizeof P->strict_first, "%s:%d: %s", f ? f->path : "(pbrt)", line, msg);
+    snprintf(P->strict_first, sizeof P->strict_first, "%s:%d: %s", f ? f->path : "(pbrt)", line,
+             msg);
   tt__log(TT_LOG_ERROR, "%s:%d: %s", f ? f->path : "(pbrt)", line, msg);
 }
 
@@ -177,7 +178,8 @@ static tt_status tt__lex(tt__pp *P, tt__tok *t) {
     const char *s = f->text;
     size_t i = f->pos, n = f->len;
     for (;;) {
-      while (i < n && (s[i] == ' ' || s[i] == '\t' || s[i] == '\r' || s[i] == '\n' || s[i] == '\f' || s[i] == '\v')) {
+      while (i < n && (s[i] == ' ' || s[i] == '\t' || s[i] == '\r' || s[i] == '\n' ||
+                       s[i] == '\f' || s[i] == '\v')) {
         if (s[i] == '\n') f->line++;
         i++;
       }
@@ -223,10 +225,12 @@ static tt_status tt__lex(tt__pp *P, tt__tok *t) {
       f->pos = j + 1;
       return TT_OK;
     }
-    if (c == '\0' || (unsigned char)c < 0x20) return tt__perr(f, f->line, "unexpected control character (byte 0x%02x)", (unsigned char)c);
+    if (c == '\0' || (unsigned char)c < 0x20)
+      return tt__perr(f, f->line, "unexpected control character (byte 0x%02x)", (unsigned char)c);
     size_t j = i;
     while (j < n && !(s[j] == ' ' || s[j] == '\t' || s[j] == '\r' || s[j] == '\n' || s[j] == '\f' ||
-                      s[j] == '\v' || s[j] == '[' || s[j] == ']' || s[j] == '"' || s[j] == '#' || s[j] == '\0'))
+                      s[j] == '\v' || s[j] == '[' || s[j] == ']' || s[j] == '"' || s[j] == '#' ||
+                      s[j] == '\0'))
       j++;
     t->kind = TK_WORD;
     t->s = s + i;
@@ -298,11 +302,11 @@ int tt__num(const tt__tok *t, double *v) {
 /* Short description of a token for messages. */
 const char *tt__desc(const tt__tok *t, char *buf, size_t n) {
   switch (t->kind) {
-    case TK_EOF: snprintf(buf, n, "end of file"); break;
-    case TK_LBRACK: snprintf(buf, n, "'['"); break;
-    case TK_RBRACK: snprintf(buf, n, "']'"); break;
-    case TK_STRING: snprintf(buf, n, "\"%.*s\"", (int)(t->n > 40 ? 40 : t->n), t->s); break;
-    default: snprintf(buf, n, "'%.*s'", (int)(t->n > 40 ? 40 : t->n), t->s); break;
+  case TK_EOF: snprintf(buf, n, "end of file"); break;
+  case TK_LBRACK: snprintf(buf, n, "'['"); break;
+  case TK_RBRACK: snprintf(buf, n, "']'"); break;
+  case TK_STRING: snprintf(buf, n, "\"%.*s\"", (int)(t->n > 40 ? 40 : t->n), t->s); break;
+  default: snprintf(buf, n, "'%.*s'", (int)(t->n > 40 ? 40 : t->n), t->s); break;
   }
   return buf;
 }
@@ -314,8 +318,9 @@ tt_status tt__arg_str(tt__pp *P, const tt__tok *dir, const char *what, char **ou
   tt_status st = tt__next(P, &t);
   if (st != TT_OK) return st;
   if (t.kind != TK_STRING)
-    return tt__perr(t.file ? t.file : dir->file, t.file ? t.line : dir->line, "%.*s: expected %s (a quoted string), got %s",
-                    (int)dir->n, dir->s, what, tt__desc(&t, d, sizeof d));
+    return tt__perr(t.file ? t.file : dir->file, t.file ? t.line : dir->line,
+                    "%.*s: expected %s (a quoted string), got %s", (int)dir->n, dir->s, what,
+                    tt__desc(&t, d, sizeof d));
   *out = tt__tokstr(&t);
   if (!*out) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   return TT_OK;
@@ -339,8 +344,9 @@ tt_status tt__arg_nums(tt__pp *P, const tt__tok *dir, int n, double *v) {
   if (br) {
     if ((st = tt__next(P, &t)) != TT_OK) return st;
     if (t.kind != TK_RBRACK)
-      return tt__perr(t.file ? t.file : dir->file, t.file ? t.line : dir->line, "%.*s: expected ']' after %d numbers, got %s",
-                      (int)dir->n, dir->s, n, tt__desc(&t, d, sizeof d));
+      return tt__perr(t.file ? t.file : dir->file, t.file ? t.line : dir->line,
+                      "%.*s: expected ']' after %d numbers, got %s", (int)dir->n, dir->s, n,
+                      tt__desc(&t, d, sizeof d));
   }
   return TT_OK;
 }

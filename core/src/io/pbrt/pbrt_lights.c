@@ -16,7 +16,8 @@
 /* Appends an explicit light to the scene. */
 static tt_status tt__add_light(tt__pp *P, const tt_light *l) {
   tt_scene *s = P->scene;
-  tt_light *slot = tt__scene_push((void **)&s->lights, &s->light_count, &s->light_cap, sizeof *slot);
+  tt_light *slot =
+      tt__scene_push((void **)&s->lights, &s->light_count, &s->light_cap, sizeof *slot);
   if (!slot) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   *slot = *l;
   return TT_OK;
@@ -33,9 +34,11 @@ tt_status tt__light(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
   double scale = 1, m[16];
   if ((st = tt__getf(P, at, pl, "scale", &scale)) != TT_OK) return st;
   if (tt__find(pl, "power") || tt__find(pl, "illuminance"))
-    tt__pwarn(P, at->file, at->line, "power", "%s: photometric \"power\"/\"illuminance\" are not supported (scale used)", what);
+    tt__pwarn(P, at->file, at->line, "power",
+              "%s: photometric \"power\"/\"illuminance\" are not supported (scale used)", what);
   if (P->cur_obj >= 0) {
-    tt__pwarn(P, at->file, at->line, "LightSource", "%s inside ObjectBegin is not supported (ignored)", what);
+    tt__pwarn(P, at->file, at->line, "LightSource",
+              "%s inside ObjectBegin is not supported (ignored)", what);
     return TT_OK;
   }
   tt__world_matrix(P, P->gs.ctm, m);
@@ -95,16 +98,20 @@ tt_status tt__light(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
         l.type = TT_LIGHT_ENV_IMAGE;
         l.image = path;
         tt__pwarn(P, at->file, at->line, "filename",
-                  "%s: pbrt-v4 maps \"%s\" with the equal-area octahedral mapping and the light's transform; "
-                  "tunetrace reads it as lat-long, untransformed", what, fn);
+                  "%s: pbrt-v4 maps \"%s\" with the equal-area octahedral mapping and the light's "
+                  "transform; "
+                  "tunetrace reads it as lat-long, untransformed",
+                  what, fn);
       } else {
-        tt__pwarn(P, at->file, at->line, "filename", "%s: environment image \"%s\" not found, using a constant environment of %g",
+        tt__pwarn(P, at->file, at->line, "filename",
+                  "%s: environment image \"%s\" not found, using a constant environment of %g",
                   what, path, scale);
         free(path);
       }
     }
     if (P->env_seen) {
-      tt__pwarn(P, at->file, at->line, "infinite", "only one environment light is supported; this one is ignored");
+      tt__pwarn(P, at->file, at->line, "infinite",
+                "only one environment light is supported; this one is ignored");
       free((void *)l.image);
       return TT_OK;
     }
@@ -137,10 +144,15 @@ tt_status tt__area_light(tt__pp *P, const tt__tok *at, const char *type, tt__pli
   if ((st = tt__getc(P, at, pl, "L", TT__SPEC_ILLUMINANT, 0, &v, NULL)) != TT_OK) return st;
   if ((st = tt__getf(P, at, pl, "scale", &scale)) != TT_OK) return st;
   if ((st = tt__getb(P, at, pl, "twosided", &two)) != TT_OK) return st;
-  if (tt__find(pl, "power")) tt__pwarn(P, at->file, at->line, "power", "AreaLightSource: \"power\" is not supported (scale used)");
-  if (tt__find(pl, "filename")) tt__pwarn(P, at->file, at->line, "filename", "AreaLightSource: image emission is not supported (L used)");
+  if (tt__find(pl, "power"))
+    tt__pwarn(P, at->file, at->line, "power",
+              "AreaLightSource: \"power\" is not supported (scale used)");
+  if (tt__find(pl, "filename"))
+    tt__pwarn(P, at->file, at->line, "filename",
+              "AreaLightSource: image emission is not supported (L used)");
   tt__unused(P, at, "AreaLightSource \"diffuse\"", pl);
-  if (!(scale >= 0)) return tt__perr(at->file, at->line, "AreaLightSource: negative scale %g", scale);
+  if (!(scale >= 0))
+    return tt__perr(at->file, at->line, "AreaLightSource: negative scale %g", scale);
   P->gs.area = 1;
   P->gs.two_sided = two;
   for (int i = 0; i < 3; i++) P->gs.L[i] = (float)(v.rgb[i] * scale);

@@ -22,7 +22,8 @@ static float tt__alpha(double r, int remap) {
 }
 
 /* Reads roughness / uroughness / vroughness (with a prefix for coated materials). */
-static tt_status tt__rough(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *prefix, int remap, float alpha[2]) {
+static tt_status tt__rough(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *prefix,
+                           int remap, float alpha[2]) {
   char n0[64], nu[64], nv[64];
   snprintf(n0, sizeof n0, "%sroughness", prefix);
   snprintf(nu, sizeof nu, "%suroughness", prefix);
@@ -46,19 +47,22 @@ static tt_status tt__ior(tt__pp *P, const tt__tok *at, tt__plist *pl, float *ior
   if (st != TT_OK) return st;
   if (found) {
     float e = (v.rgb[0] + v.rgb[1] + v.rgb[2]) / 3.0f;
-    if (!(e > 0)) return tt__perr(at->file, at->line, "dielectric eta must be positive, got %g", (double)e);
+    if (!(e > 0))
+      return tt__perr(at->file, at->line, "dielectric eta must be positive, got %g", (double)e);
     *ior = e;
   }
   return TT_OK;
 }
 
 /* Conductor eta/k (or pbrt-v4's artist-friendly "reflectance"). */
-static tt_status tt__metal(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *prefix, tt_material *m) {
+static tt_status tt__metal(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *prefix,
+                           tt_material *m) {
   char ne[64], nk[64], nr[64];
   snprintf(ne, sizeof ne, "%seta", prefix);
   snprintf(nk, sizeof nk, "%sk", prefix);
   snprintf(nr, sizeof nr, "%sreflectance", prefix);
-  tt__texval e = {{0.200438f, 0.924033f, 1.10221f}, -1}, k = {{3.91295f, 2.45285f, 2.14219f}, -1}, r;
+  tt__texval e = {{0.200438f, 0.924033f, 1.10221f}, -1}, k = {{3.91295f, 2.45285f, 2.14219f}, -1},
+             r;
   int fr;
   tt_status st;
   if ((st = tt__getc(P, at, pl, ne, TT__SPEC_UNBOUNDED, 0, &e, NULL)) != TT_OK) return st;
@@ -81,13 +85,14 @@ static tt_status tt__metal(tt__pp *P, const tt__tok *at, tt__plist *pl, const ch
 
 /* Creates a tt_material from a pbrt material type and its parameters; *out is the scene
  * index, or TT__MAT_INTERFACE for "interface" (no surface). */
-tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl, const char *name,
-                            int32_t *out) {
+tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl,
+                            const char *name, int32_t *out) {
   tt_status st;
   char what[160];
   snprintf(what, sizeof what, "Material \"%s\"", type);
   /* parameters that only steer pbrt's own sampling: nothing to map, nothing to warn */
-  static const char *const quiet[] = {"remaproughness", "maxdepth", "nsamples", "g", "thickness", "regularize", NULL};
+  static const char *const quiet[] = {"remaproughness", "maxdepth",   "nsamples", "g",
+                                      "thickness",      "regularize", NULL};
   int remap = 1;
   if ((st = tt__getb(P, at, pl, "remaproughness", &remap)) != TT_OK) return st;
   for (int i = 0; quiet[i]; i++) tt__find(pl, quiet[i]);
@@ -111,7 +116,8 @@ tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__
     if ((st = tt__getf(P, at, pl, "amount", &amount)) != TT_OK) return st;
     /* pbrt-v4 picks materials[1] with probability `amount`: keep the dominant one */
     const char *pick = amount <= 0.5 ? mp->str[0] : mp->str[1];
-    tt__pwarn(P, at->file, at->line, "mix", "mix material approximated by its dominant component \"%s\"", pick);
+    tt__pwarn(P, at->file, at->line, "mix",
+              "mix material approximated by its dominant component \"%s\"", pick);
     for (size_t i = P->nnmat; i-- > 0;)
       if (strcmp(P->nmat[i].name, pick) == 0) {
         *out = P->nmat[i].mat;
@@ -128,7 +134,8 @@ tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__
   m.albedo_texture = -1;
   m.specular[0] = m.specular[1] = m.specular[2] = 1.0f;
   m.ior = 1.5f;
-  static const float cu_eta[3] = {0.200438f, 0.924033f, 1.10221f}, cu_k[3] = {3.91295f, 2.45285f, 2.14219f};
+  static const float cu_eta[3] = {0.200438f, 0.924033f, 1.10221f},
+                     cu_k[3] = {3.91295f, 2.45285f, 2.14219f};
   memcpy(m.eta, cu_eta, sizeof m.eta);
   memcpy(m.k, cu_k, sizeof m.k);
   tt__texval refl = {{0.5f, 0.5f, 0.5f}, -1};
@@ -136,18 +143,22 @@ tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__
     m.type = TT_MATERIAL_DIFFUSE;
     if (type[7] == 't') {
       refl.rgb[0] = refl.rgb[1] = refl.rgb[2] = 0.25f;
-      tt__pwarn(P, at->file, at->line, "diffusetransmission", "diffusetransmission approximated by diffuse reflection (transmission dropped)");
+      tt__pwarn(P, at->file, at->line, "diffusetransmission",
+                "diffusetransmission approximated by diffuse reflection (transmission dropped)");
       tt__find(pl, "transmittance");
       double sc = 1;
       if ((st = tt__getf(P, at, pl, "scale", &sc)) != TT_OK) return st;
-      if ((st = tt__getc(P, at, pl, "reflectance", TT__SPEC_UNBOUNDED, 1, &refl, NULL)) != TT_OK) return st;
+      if ((st = tt__getc(P, at, pl, "reflectance", TT__SPEC_UNBOUNDED, 1, &refl, NULL)) != TT_OK)
+        return st;
       for (int i = 0; i < 3; i++) refl.rgb[i] *= (float)sc;
-    } else if ((st = tt__getc(P, at, pl, "reflectance", TT__SPEC_UNBOUNDED, 1, &refl, NULL)) != TT_OK) {
+    } else if ((st = tt__getc(P, at, pl, "reflectance", TT__SPEC_UNBOUNDED, 1, &refl, NULL)) !=
+               TT_OK) {
       return st;
     }
   } else if (strcmp(type, "coateddiffuse") == 0) {
     m.type = TT_MATERIAL_PLASTIC;
-    if ((st = tt__getc(P, at, pl, "reflectance", TT__SPEC_UNBOUNDED, 1, &refl, NULL)) != TT_OK) return st;
+    if ((st = tt__getc(P, at, pl, "reflectance", TT__SPEC_UNBOUNDED, 1, &refl, NULL)) != TT_OK)
+      return st;
     if ((st = tt__rough(P, at, pl, "", remap, m.alpha)) != TT_OK) return st;
     if ((st = tt__ior(P, at, pl, &m.ior)) != TT_OK) return st;
     tt__find(pl, "albedo");
@@ -172,15 +183,16 @@ tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__
     /* dielectric: roughness -> GGX alpha exactly as for conductor (rough glass, Walter 2007).
      * thindielectric has no roughness in pbrt-v4 and stays smooth (alpha 0). */
     if (type[0] == 't')
-      tt__pwarn(P, at->file, at->line, "thindielectric", "thindielectric approximated by a solid dielectric");
-    else if ((st = tt__rough(P, at, pl, "", remap, m.alpha)) != TT_OK)
-      return st;
+      tt__pwarn(P, at->file, at->line, "thindielectric",
+                "thindielectric approximated by a solid dielectric");
+    else if ((st = tt__rough(P, at, pl, "", remap, m.alpha)) != TT_OK) return st;
   } else {
     static const char *const known[] = {"hair", "measured", "subsurface", "coatedconductor", NULL};
     int pbrt_known = 0;
     for (int i = 0; known[i]; i++) pbrt_known |= strcmp(type, known[i]) == 0;
     if (!pbrt_known) return tt__perr(at->file, at->line, "unknown material type \"%s\"", type);
-    tt__pwarn(P, at->file, at->line, type, "material \"%s\" is not supported; using diffuse grey", type);
+    tt__pwarn(P, at->file, at->line, type, "material \"%s\" is not supported; using diffuse grey",
+              type);
     m.type = TT_MATERIAL_DIFFUSE;
     for (size_t i = 0; i < pl->n; i++) pl->p[i].used = 1;
   }
@@ -195,7 +207,8 @@ tt_status tt__make_material(tt__pp *P, const tt__tok *at, const char *type, tt__
   }
   m.name = tt__strdup(nm);
   if (!m.name) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
-  tt_material *slot = tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
+  tt_material *slot =
+      tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
   if (!slot) {
     free((void *)m.name);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -213,7 +226,8 @@ tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out) {
     if (P->default_mat < 0) {
       tt__plist empty = {0};
       tt__tok at = {TK_WORD, "", 0, P->files, 0};
-      tt_status st = tt__make_material(P, &at, "diffuse", &empty, "pbrt-default-diffuse", &P->default_mat);
+      tt_status st =
+          tt__make_material(P, &at, "diffuse", &empty, "pbrt-default-diffuse", &P->default_mat);
       if (st != TT_OK) return st;
     }
     base = P->default_mat;
@@ -224,7 +238,8 @@ tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out) {
   }
   for (size_t i = 0; i < P->nder; i++) {
     const tt__derived *d = &P->der[i];
-    if (d->base == base && d->two_sided == P->gs.two_sided && memcmp(d->L, P->gs.L, sizeof d->L) == 0) {
+    if (d->base == base && d->two_sided == P->gs.two_sided &&
+        memcmp(d->L, P->gs.L, sizeof d->L) == 0) {
       *out = d->mat;
       return TT_OK;
     }
@@ -237,7 +252,8 @@ tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out) {
   if (!m.name) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   memcpy(m.emission, P->gs.L, sizeof m.emission);
   m.two_sided = P->gs.two_sided;
-  tt_material *slot = tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
+  tt_material *slot =
+      tt__scene_push((void **)&s->materials, &s->material_count, &s->material_cap, sizeof *slot);
   P->der = tt__grow(P->der, &P->capder, P->nder + 1, sizeof *P->der);
   if (!slot || !P->der) {
     free((void *)m.name);
@@ -256,12 +272,14 @@ tt_status tt__shape_material(tt__pp *P, int emissive, int32_t *out) {
 /* ---- textures -------------------------------------------------------------------------- */
 
 /* Texture directive: imagemap keeps its file; scale multiplies; others become constants. */
-tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char *kind, const char *cls,
-                      tt__plist *pl) {
+tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char *kind,
+                      const char *cls, tt__plist *pl) {
   tt_status st;
   int is_float = strcmp(kind, "float") == 0;
   if (!is_float && strcmp(kind, "spectrum") != 0 && strcmp(kind, "color") != 0)
-    return tt__perr(at->file, at->line, "Texture \"%s\": type must be \"float\" or \"spectrum\", got \"%s\"", name, kind);
+    return tt__perr(at->file, at->line,
+                    "Texture \"%s\": type must be \"float\" or \"spectrum\", got \"%s\"", name,
+                    kind);
   tt__ntex t;
   memset(&t, 0, sizeof t);
   t.is_float = is_float;
@@ -278,7 +296,10 @@ tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char
   if ((st = tt__getf(P, at, pl, "udelta", &ud)) != TT_OK) return st;
   if ((st = tt__getf(P, at, pl, "vdelta", &vd)) != TT_OK) return st;
   if (us != 1 || vs != 1 || ud != 0 || vd != 0 || (mapping && strcmp(mapping, "uv") != 0))
-    tt__pwarn(P, at->file, at->line, "mapping", "%s: texture mapping (uscale/vscale/udelta/vdelta/mapping) is not supported (plain uv used)", what);
+    tt__pwarn(P, at->file, at->line, "mapping",
+              "%s: texture mapping (uscale/vscale/udelta/vdelta/mapping) is not supported (plain "
+              "uv used)",
+              what);
   if (strcmp(cls, "imagemap") == 0) {
     const char *fn = NULL, *enc = NULL;
     double scale = 1;
@@ -287,7 +308,8 @@ tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char
     if ((st = tt__gets(at, pl, "encoding", &enc)) != TT_OK) return st;
     if ((st = tt__getf(P, at, pl, "scale", &scale)) != TT_OK) return st;
     if ((st = tt__getb(P, at, pl, "invert", &invert)) != TT_OK) return st;
-    if (invert) tt__pwarn(P, at->file, at->line, "invert", "%s: \"invert\" is not supported (ignored)", what);
+    if (invert)
+      tt__pwarn(P, at->file, at->line, "invert", "%s: \"invert\" is not supported (ignored)", what);
     if (!fn) return tt__perr(at->file, at->line, "%s: missing \"string filename\"", what);
     char *path = tt__join(at->file->dir, fn, strlen(fn));
     if (!path) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -296,10 +318,12 @@ tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char
       t.image = path;
       /* pbrt-v4: PNGs default to sRGB, every other format to linear */
       size_t n = strlen(path);
-      t.srgb = enc ? strcasecmp(enc, "sRGB") == 0 : (n >= 4 && strcasecmp(path + n - 4, ".png") == 0);
+      t.srgb =
+          enc ? strcasecmp(enc, "sRGB") == 0 : (n >= 4 && strcasecmp(path + n - 4, ".png") == 0);
       if (enc && strncmp(enc, "gamma", 5) == 0) t.srgb = 1;
     } else {
-      tt__pwarn(P, at->file, at->line, "filename", "%s: image \"%s\" not found, using a constant 0.5", what, path);
+      tt__pwarn(P, at->file, at->line, "filename",
+                "%s: image \"%s\" not found, using a constant 0.5", what, path);
       free(path);
       t.rgb[0] = t.rgb[1] = t.rgb[2] = (float)(0.5 * scale);
     }
@@ -317,7 +341,8 @@ tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char
       if (strcmp(p->type, "texture") == 0) {
         const tt__ntex *src = tt__lookup_tex(P, p->str[0], is_float);
         if (!src) {
-          tt__pwarn(P, at->file, at->line, names[k], "%s: texture \"%s\" is not defined (1 used)", what, p->str[0]);
+          tt__pwarn(P, at->file, at->line, names[k], "%s: texture \"%s\" is not defined (1 used)",
+                    what, p->str[0]);
         } else {
           memcpy(f, src->rgb, sizeof f);
           if (src->image && !t.image) {
@@ -325,7 +350,8 @@ tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char
             t.srgb = src->srgb;
             if (!t.image) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
           } else if (src->image) {
-            tt__pwarn(P, at->file, at->line, names[k], "%s: product of two images; the second is averaged away", what);
+            tt__pwarn(P, at->file, at->line, names[k],
+                      "%s: product of two images; the second is averaged away", what);
           }
         }
       } else {
@@ -357,12 +383,14 @@ tt_status tt__texture(tt__pp *P, const tt__tok *at, const char *name, const char
       } else {
         tt__texval v = {{dst[k][0], dst[k][1], dst[k][2]}, -1};
         ps[k]->used = 0;
-        if ((st = tt__getc(P, at, pl, k ? n2 : n1, TT__SPEC_UNBOUNDED, 0, &v, NULL)) != TT_OK) return st;
+        if ((st = tt__getc(P, at, pl, k ? n2 : n1, TT__SPEC_UNBOUNDED, 0, &v, NULL)) != TT_OK)
+          return st;
         memcpy(dst[k], v.rgb, 3 * sizeof(float));
       }
     }
     for (int i = 0; i < 3; i++) t.rgb[i] = 0.5f * (a[i] + b[i]);
-    tt__pwarn(P, at->file, at->line, cls, "%s: procedural texture \"%s\" replaced by the constant %.3g %.3g %.3g", what, cls,
+    tt__pwarn(P, at->file, at->line, cls,
+              "%s: procedural texture \"%s\" replaced by the constant %.3g %.3g %.3g", what, cls,
               (double)t.rgb[0], (double)t.rgb[1], (double)t.rgb[2]);
     for (size_t i = 0; i < pl->n; i++) pl->p[i].used = 1;
   }

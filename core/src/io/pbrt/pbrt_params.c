@@ -30,8 +30,9 @@ void tt__plist_free(tt__plist *pl) {
 
 /* Type names pbrt-v4 accepts, and whether their values are numbers. */
 static int tt__ptype(const char *t, int *numeric) {
-  static const char *const nums[] = {"integer", "float", "point2", "vector2", "point3", "vector3", "normal",
-                                     "normal3", "point", "vector", "color", "rgb", "blackbody", NULL};
+  static const char *const nums[] = {"integer", "float",  "point2",    "vector2", "point3",
+                                     "vector3", "normal", "normal3",   "point",   "vector",
+                                     "color",   "rgb",    "blackbody", NULL};
   static const char *const strs[] = {"string", "texture", "bool", "spectrum", NULL};
   for (int i = 0; nums[i]; i++)
     if (strcmp(t, nums[i]) == 0) return *numeric = 1, 1;
@@ -51,13 +52,19 @@ static tt_status tt__pvalue(tt__pparam *p, const tt__tok *t) {
     if (is_bool) {
       if (tt__is(t, "true")) v = 1;
       else if (tt__is(t, "false")) v = 0;
-      else return tt__perr(t->file, t->line, "parameter \"%s %s\": expected true or false, got %s", p->type, p->name, tt__desc(t, d, sizeof d));
+      else
+        return tt__perr(t->file, t->line, "parameter \"%s %s\": expected true or false, got %s",
+                        p->type, p->name, tt__desc(t, d, sizeof d));
     } else if (!tt__num(t, &v)) {
-      return tt__perr(t->file, t->line, "parameter \"%s %s\": bad number %s", p->type, p->name, tt__desc(t, d, sizeof d));
+      return tt__perr(t->file, t->line, "parameter \"%s %s\": bad number %s", p->type, p->name,
+                      tt__desc(t, d, sizeof d));
     } else if (!numeric && !is_spec) {
-      return tt__perr(t->file, t->line, "parameter \"%s %s\": expected a quoted string, got %s", p->type, p->name, tt__desc(t, d, sizeof d));
+      return tt__perr(t->file, t->line, "parameter \"%s %s\": expected a quoted string, got %s",
+                      p->type, p->name, tt__desc(t, d, sizeof d));
     }
-    if (p->nstr) return tt__perr(t->file, t->line, "parameter \"%s %s\": mixes strings and numbers", p->type, p->name);
+    if (p->nstr)
+      return tt__perr(t->file, t->line, "parameter \"%s %s\": mixes strings and numbers", p->type,
+                      p->name);
     size_t cap = p->nnum; /* grow by doubling, tracked implicitly: power-of-two sizes */
     if ((cap & (cap - 1)) == 0) {
       double *n = realloc(p->num, (cap ? 2 * cap : 1) * sizeof *n);
@@ -72,7 +79,9 @@ static tt_status tt__pvalue(tt__pparam *p, const tt__tok *t) {
       double v;
       if (t->n == 4 && memcmp(t->s, "true", 4) == 0) v = 1;
       else if (t->n == 5 && memcmp(t->s, "false", 5) == 0) v = 0;
-      else return tt__perr(t->file, t->line, "parameter \"%s %s\": expected true or false, got %s", p->type, p->name, tt__desc(t, d, sizeof d));
+      else
+        return tt__perr(t->file, t->line, "parameter \"%s %s\": expected true or false, got %s",
+                        p->type, p->name, tt__desc(t, d, sizeof d));
       size_t cap = p->nnum;
       if ((cap & (cap - 1)) == 0) {
         double *n = realloc(p->num, (cap ? 2 * cap : 1) * sizeof *n);
@@ -82,8 +91,12 @@ static tt_status tt__pvalue(tt__pparam *p, const tt__tok *t) {
       p->num[p->nnum++] = v;
       return TT_OK;
     }
-    if (numeric) return tt__perr(t->file, t->line, "parameter \"%s %s\": expected numbers, got the string %s", p->type, p->name, tt__desc(t, d, sizeof d));
-    if (p->nnum) return tt__perr(t->file, t->line, "parameter \"%s %s\": mixes strings and numbers", p->type, p->name);
+    if (numeric)
+      return tt__perr(t->file, t->line, "parameter \"%s %s\": expected numbers, got the string %s",
+                      p->type, p->name, tt__desc(t, d, sizeof d));
+    if (p->nnum)
+      return tt__perr(t->file, t->line, "parameter \"%s %s\": mixes strings and numbers", p->type,
+                      p->name);
     size_t cap = p->nstr;
     if ((cap & (cap - 1)) == 0) {
       char **n = realloc(p->str, (cap ? 2 * cap : 1) * sizeof *n);
@@ -95,7 +108,8 @@ static tt_status tt__pvalue(tt__pparam *p, const tt__tok *t) {
     p->str[p->nstr++] = s;
     return TT_OK;
   }
-  return tt__perr(t->file, t->line, "parameter \"%s %s\": unexpected %s", p->type, p->name, tt__desc(t, d, sizeof d));
+  return tt__perr(t->file, t->line, "parameter \"%s %s\": unexpected %s", p->type, p->name,
+                  tt__desc(t, d, sizeof d));
 }
 
 /* Reads "type name" value pairs until the next token is not a string. */
@@ -120,10 +134,12 @@ tt_status tt__params(tt__pp *P, tt__plist *pl) {
     char w0[64] = "", w1[80] = "", w2[8] = "";
     int nw = sscanf(buf, "%63s %79s %7s", w0, w1, w2);
     if (nw != 2 || strlen(w0) >= sizeof p->type || strlen(w1) >= sizeof p->name)
-      return tt__perr(decl.file, decl.line, "bad parameter declaration %s (expected \"type name\")", tt__desc(&decl, d, sizeof d));
+      return tt__perr(decl.file, decl.line, "bad parameter declaration %s (expected \"type name\")",
+                      tt__desc(&decl, d, sizeof d));
     int numeric;
     if (!tt__ptype(w0, &numeric))
-      return tt__perr(decl.file, decl.line, "parameter \"%s %s\": unknown parameter type \"%s\"", w0, w1, w0);
+      return tt__perr(decl.file, decl.line, "parameter \"%s %s\": unknown parameter type \"%s\"",
+                      w0, w1, w0);
     strcpy(p->type, w0);
     strcpy(p->name, w1);
     if ((st = tt__next(P, &t)) != TT_OK) return st;
@@ -133,18 +149,23 @@ tt_status tt__params(tt__pp *P, tt__plist *pl) {
         if ((st = tt__next(P, &t)) != TT_OK) return st;
         if (t.kind == TK_RBRACK) break;
         if (t.kind == TK_EOF || t.file != open.file)
-          return tt__perr(open.file, open.line, "unterminated '[' array of parameter \"%s %s\"", p->type, p->name);
-        if (t.kind == TK_LBRACK) return tt__perr(t.file, t.line, "parameter \"%s %s\": nested '['", p->type, p->name);
+          return tt__perr(open.file, open.line, "unterminated '[' array of parameter \"%s %s\"",
+                          p->type, p->name);
+        if (t.kind == TK_LBRACK)
+          return tt__perr(t.file, t.line, "parameter \"%s %s\": nested '['", p->type, p->name);
         if ((st = tt__pvalue(p, &t)) != TT_OK) return st;
       }
-    } else if (t.kind == TK_STRING || (t.kind == TK_WORD && (tt__is(&t, "true") || tt__is(&t, "false") || tt__num(&t, &(double){0})))) {
+    } else if (t.kind == TK_STRING ||
+               (t.kind == TK_WORD &&
+                (tt__is(&t, "true") || tt__is(&t, "false") || tt__num(&t, &(double){0})))) {
       if ((st = tt__pvalue(p, &t)) != TT_OK) return st;
     } else {
-      return tt__perr(decl.file, decl.line, "parameter \"%s %s\" has no value (got %s)", p->type, p->name,
-                      tt__desc(&t, d, sizeof d));
+      return tt__perr(decl.file, decl.line, "parameter \"%s %s\" has no value (got %s)", p->type,
+                      p->name, tt__desc(&t, d, sizeof d));
     }
     if (p->nnum == 0 && p->nstr == 0)
-      return tt__perr(decl.file, decl.line, "parameter \"%s %s\" has an empty value", p->type, p->name);
+      return tt__perr(decl.file, decl.line, "parameter \"%s %s\" has an empty value", p->type,
+                      p->name);
   }
 }
 
@@ -174,11 +195,15 @@ void tt__unused(tt__pp *P, const tt__tok *at, const char *what, tt__plist *pl) {
     if (!pl->p[i].used) {
       const char *near = tt_suggest(pl->p[i].name, asked, pl->nasked);
       if (near)
-        tt__pstrict(P, at->file, at->line, pl->p[i].name, "%s: unknown parameter \"%s %s\" "
-                    "(did you mean \"%s\"?)", what, pl->p[i].type, pl->p[i].name, near);
+        tt__pstrict(P, at->file, at->line, pl->p[i].name,
+                    "%s: unknown parameter \"%s %s\" "
+                    "(did you mean \"%s\"?)",
+                    what, pl->p[i].type, pl->p[i].name, near);
       else
-        tt__pstrict(P, at->file, at->line, pl->p[i].name, "%s: parameter \"%s %s\" is not "
-                    "used by the importer", what, pl->p[i].type, pl->p[i].name);
+        tt__pstrict(P, at->file, at->line, pl->p[i].name,
+                    "%s: parameter \"%s %s\" is not "
+                    "used by the importer",
+                    what, pl->p[i].type, pl->p[i].name);
     }
 }
 
@@ -187,7 +212,8 @@ tt_status tt__getf(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name
   tt__pparam *p = tt__find(pl, name);
   if (!p) return TT_OK;
   if (strcmp(p->type, "texture") == 0) {
-    tt__pwarn(P, at->file, at->line, name, "textured \"%s\" is not supported; using the default %g", name, *v);
+    tt__pwarn(P, at->file, at->line, name, "textured \"%s\" is not supported; using the default %g",
+              name, *v);
     return TT_OK;
   }
   if (strcmp(p->type, "float") != 0 && strcmp(p->type, "integer") != 0)
@@ -222,13 +248,15 @@ tt_status tt__get3(const tt__tok *at, tt__plist *pl, const char *name, double v[
   tt__pparam *p = tt__find(pl, name);
   if (!p) return TT_OK;
   if (!p->num || p->nnum != 3)
-    return tt__perr(at->file, at->line, "parameter \"%s %s\": expected 3 numbers, got %zu", p->type, p->name, p->nnum);
+    return tt__perr(at->file, at->line, "parameter \"%s %s\": expected 3 numbers, got %zu", p->type,
+                    p->name, p->nnum);
   for (int i = 0; i < 3; i++) v[i] = p->num[i];
   return TT_OK;
 }
 
 /* Reads a .spd file of "lambda value" pairs ('#' comments). */
-static tt_status tt__read_spd(tt__pp *P, const tt__tok *at, const char *path, double **pairs, size_t *n) {
+static tt_status tt__read_spd(tt__pp *P, const tt__tok *at, const char *path, double **pairs,
+                              size_t *n) {
   *pairs = NULL;
   *n = 0;
   char *text;
@@ -264,7 +292,8 @@ static tt_status tt__read_spd(tt__pp *P, const tt__tok *at, const char *path, do
   tt_free(text);
   if (cnt < 2 || cnt % 2) {
     free(v);
-    tt__pwarn(P, at->file, at->line, path, "spectrum file \"%s\" does not hold (lambda, value) pairs", path);
+    tt__pwarn(P, at->file, at->line, path,
+              "spectrum file \"%s\" does not hold (lambda, value) pairs", path);
     return TT_ERR_PARSE;
   }
   *pairs = v;
@@ -291,7 +320,8 @@ static tt_status tt__scene_texture(tt__pp *P, const char *path, int srgb, int32_
       *out = (int32_t)i;
       return TT_OK;
     }
-  tt_texture *t = tt__scene_push((void **)&s->textures, &s->texture_count, &s->texture_cap, sizeof *t);
+  tt_texture *t =
+      tt__scene_push((void **)&s->textures, &s->texture_count, &s->texture_cap, sizeof *t);
   if (!t) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   t->struct_size = sizeof *t;
   t->path = tt__strdup(path);
@@ -306,16 +336,20 @@ static tt_status tt__scene_texture(tt__pp *P, const char *path, int srgb, int32_
 
 /* A colour-like parameter: rgb, spectrum (named, inline pairs or .spd file), blackbody,
  * float (grey) or texture. `found` reports whether it was given. */
-tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name, tt__spectrum_use use,
-                   int allow_tex, tt__texval *v, int *found) {
+tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name,
+                   tt__spectrum_use use, int allow_tex, tt__texval *v, int *found) {
   tt__pparam *p = tt__find(pl, name);
   if (found) *found = p != NULL;
   if (!p) return TT_OK;
   const char *ty = p->type;
   if (strcmp(ty, "rgb") == 0 || strcmp(ty, "color") == 0) {
-    if (p->nnum != 3) return tt__perr(at->file, at->line, "parameter \"%s %s\": expected 3 numbers, got %zu", ty, p->name, p->nnum);
+    if (p->nnum != 3)
+      return tt__perr(at->file, at->line, "parameter \"%s %s\": expected 3 numbers, got %zu", ty,
+                      p->name, p->nnum);
     for (int i = 0; i < 3; i++) {
-      if (p->num[i] < 0) return tt__perr(at->file, at->line, "parameter \"%s %s\": negative component %g", ty, p->name, p->num[i]);
+      if (p->num[i] < 0)
+        return tt__perr(at->file, at->line, "parameter \"%s %s\": negative component %g", ty,
+                        p->name, p->num[i]);
       v->rgb[i] = (float)p->num[i];
     }
     v->tex = -1;
@@ -345,7 +379,8 @@ tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name
       free(path);
       if (st == TT_ERR_OUT_OF_MEMORY) return st;
       if (st != TT_OK) {
-        tt__pwarn(P, at->file, at->line, p->name, "spectrum \"%s\" for \"%s\" is unknown; using the default", p->str[0], p->name);
+        tt__pwarn(P, at->file, at->line, p->name,
+                  "spectrum \"%s\" for \"%s\" is unknown; using the default", p->str[0], p->name);
         return TT_OK;
       }
       tt__pbrt_sampled_spectrum(pairs, n, use, v->rgb);
@@ -356,7 +391,11 @@ tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name
     if (p->nnum == 1) {
       v->rgb[0] = v->rgb[1] = v->rgb[2] = (float)p->num[0];
     } else {
-      if (p->nnum % 2) return tt__perr(at->file, at->line, "parameter \"spectrum %s\": expected (lambda, value) pairs, got %zu numbers", p->name, p->nnum);
+      if (p->nnum % 2)
+        return tt__perr(
+            at->file, at->line,
+            "parameter \"spectrum %s\": expected (lambda, value) pairs, got %zu numbers", p->name,
+            p->nnum);
       tt__pbrt_sampled_spectrum(p->num, p->nnum / 2, use, v->rgb);
     }
     v->tex = -1;
@@ -364,12 +403,14 @@ tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name
   }
   if (strcmp(ty, "texture") == 0) {
     if (!allow_tex) {
-      tt__pwarn(P, at->file, at->line, p->name, "textured \"%s\" is not supported here; using the default", p->name);
+      tt__pwarn(P, at->file, at->line, p->name,
+                "textured \"%s\" is not supported here; using the default", p->name);
       return TT_OK;
     }
     const tt__ntex *t = tt__lookup_tex(P, p->str[0], 0);
     if (!t) {
-      tt__pwarn(P, at->file, at->line, p->name, "texture \"%s\" is not defined; using the default for \"%s\"", p->str[0], p->name);
+      tt__pwarn(P, at->file, at->line, p->name,
+                "texture \"%s\" is not defined; using the default for \"%s\"", p->str[0], p->name);
       return TT_OK;
     }
     memcpy(v->rgb, t->rgb, sizeof v->rgb);
@@ -377,5 +418,7 @@ tt_status tt__getc(tt__pp *P, const tt__tok *at, tt__plist *pl, const char *name
     if (t->image) return tt__scene_texture(P, t->image, t->srgb, &v->tex);
     return TT_OK;
   }
-  return tt__perr(at->file, at->line, "parameter \"%s %s\": expected a colour (rgb, spectrum, blackbody or texture)", ty, p->name);
+  return tt__perr(at->file, at->line,
+                  "parameter \"%s %s\": expected a colour (rgb, spectrum, blackbody or texture)",
+                  ty, p->name);
 }

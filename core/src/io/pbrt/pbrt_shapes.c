@@ -47,9 +47,14 @@ tt_status tt__pbrt_sphere(double r, tt__mesh_data *d) {
   /* pole vertices first: 0 = +z (theta 0), 1 = -z */
   for (int s = 0; s < 2; s++, v++) {
     float z = s ? -1.0f : 1.0f;
-    d->positions[3 * v] = 0; d->positions[3 * v + 1] = 0; d->positions[3 * v + 2] = (float)(z * r);
-    d->normals[3 * v] = 0; d->normals[3 * v + 1] = 0; d->normals[3 * v + 2] = z;
-    d->uvs[2 * v] = 0.5f; d->uvs[2 * v + 1] = s ? 1.0f : 0.0f;
+    d->positions[3 * v] = 0;
+    d->positions[3 * v + 1] = 0;
+    d->positions[3 * v + 2] = (float)(z * r);
+    d->normals[3 * v] = 0;
+    d->normals[3 * v + 1] = 0;
+    d->normals[3 * v + 2] = z;
+    d->uvs[2 * v] = 0.5f;
+    d->uvs[2 * v + 1] = s ? 1.0f : 0.0f;
   }
   for (uint32_t i = 1; i < rings; i++) {
     double th = TT__PI * i / rings;
@@ -65,17 +70,26 @@ tt_status tt__pbrt_sphere(double r, tt__mesh_data *d) {
     }
   }
   uint32_t *t = d->indices;
-#define TT__RV(i, j) (2 + ((i) - 1) * (seg + 1) + (j))
+#define TT__RV(i, j) (2 + ((i)-1) * (seg + 1) + (j))
   /* winding chosen so (b-a)x(c-a) points outward */
   for (uint32_t j = 0; j < seg; j++) {
-    *t++ = 0; *t++ = TT__RV(1, j); *t++ = TT__RV(1, j + 1);
-    *t++ = 1; *t++ = TT__RV(rings - 1, j + 1); *t++ = TT__RV(rings - 1, j);
+    *t++ = 0;
+    *t++ = TT__RV(1, j);
+    *t++ = TT__RV(1, j + 1);
+    *t++ = 1;
+    *t++ = TT__RV(rings - 1, j + 1);
+    *t++ = TT__RV(rings - 1, j);
   }
   for (uint32_t i = 1; i + 1 < rings; i++)
     for (uint32_t j = 0; j < seg; j++) {
-      uint32_t a = TT__RV(i, j), b = TT__RV(i, j + 1), c = TT__RV(i + 1, j), e = TT__RV(i + 1, j + 1);
-      *t++ = a; *t++ = c; *t++ = e;
-      *t++ = a; *t++ = e; *t++ = b;
+      uint32_t a = TT__RV(i, j), b = TT__RV(i, j + 1), c = TT__RV(i + 1, j),
+               e = TT__RV(i + 1, j + 1);
+      *t++ = a;
+      *t++ = c;
+      *t++ = e;
+      *t++ = a;
+      *t++ = e;
+      *t++ = b;
     }
 #undef TT__RV
   return TT_OK;
@@ -91,8 +105,11 @@ tt_status tt__pbrt_disk(double r, double ri, double h, tt__mesh_data *d) {
   if (st != TT_OK) return st;
   uint32_t v = 0;
   if (!annulus) {
-    d->positions[0] = 0; d->positions[1] = 0; d->positions[2] = (float)h;
-    d->uvs[0] = 0; d->uvs[1] = 1;
+    d->positions[0] = 0;
+    d->positions[1] = 0;
+    d->positions[2] = (float)h;
+    d->uvs[0] = 0;
+    d->uvs[1] = 1;
     v = 1;
   }
   for (int ring = annulus ? 0 : 1; ring < 2; ring++)
@@ -107,11 +124,17 @@ tt_status tt__pbrt_disk(double r, double ri, double h, tt__mesh_data *d) {
   uint32_t *t = d->indices;
   for (uint32_t j = 0; j < seg; j++) {
     if (!annulus) {
-      *t++ = 0; *t++ = 1 + j; *t++ = 2 + j;
+      *t++ = 0;
+      *t++ = 1 + j;
+      *t++ = 2 + j;
     } else {
       uint32_t a = j, b = j + 1, c = seg + 1 + j, e = seg + 2 + j;
-      *t++ = a; *t++ = c; *t++ = e;
-      *t++ = a; *t++ = e; *t++ = b;
+      *t++ = a;
+      *t++ = c;
+      *t++ = e;
+      *t++ = a;
+      *t++ = e;
+      *t++ = b;
     }
   }
   return TT_OK;
@@ -121,13 +144,13 @@ tt_status tt__pbrt_disk(double r, double ri, double h, tt__mesh_data *d) {
 
 /* Open-addressing table of undirected edges (a < b) -> edge index. */
 typedef struct tt__edges {
-  uint64_t *keys;     /* (a << 32 | b) + 1; 0 = empty */
+  uint64_t *keys; /* (a << 32 | b) + 1; 0 = empty */
   uint32_t *ids;
   size_t cap;
   uint32_t count;
-  uint32_t *ends;     /* 2 per edge */
-  uint32_t *faces;    /* faces per edge (saturating) */
-  uint32_t *opp;      /* 2 per edge: opposite vertex of the first two faces */
+  uint32_t *ends;  /* 2 per edge */
+  uint32_t *faces; /* faces per edge (saturating) */
+  uint32_t *opp;   /* 2 per edge: opposite vertex of the first two faces */
 } tt__edges;
 
 /* Frees an edge table. */
@@ -155,8 +178,13 @@ static int tt__edges_build(tt__edges *e, const uint32_t *idx, uint32_t nt) {
   if (!e->keys || !e->ids || !e->ends || !e->faces || !e->opp) return 0;
   for (uint32_t t = 0; t < nt; t++)
     for (int k = 0; k < 3; k++) {
-      uint32_t a = idx[3 * (size_t)t + k], b = idx[3 * (size_t)t + (k + 1) % 3], c = idx[3 * (size_t)t + (k + 2) % 3];
-      if (a > b) { uint32_t x = a; a = b; b = x; }
+      uint32_t a = idx[3 * (size_t)t + k], b = idx[3 * (size_t)t + (k + 1) % 3],
+               c = idx[3 * (size_t)t + (k + 2) % 3];
+      if (a > b) {
+        uint32_t x = a;
+        a = b;
+        b = x;
+      }
       uint64_t key = (((uint64_t)a << 32) | b) + 1;
       size_t h = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & (cap - 1);
       while (e->keys[h] && e->keys[h] != key) h = (h + 1) & (cap - 1);
@@ -177,7 +205,11 @@ static int tt__edges_build(tt__edges *e, const uint32_t *idx, uint32_t nt) {
 
 /* Looks up the id of edge (a, b). */
 static uint32_t tt__edges_find(const tt__edges *e, uint32_t a, uint32_t b) {
-  if (a > b) { uint32_t x = a; a = b; b = x; }
+  if (a > b) {
+    uint32_t x = a;
+    a = b;
+    b = x;
+  }
   uint64_t key = (((uint64_t)a << 32) | b) + 1;
   size_t h = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & (e->cap - 1);
   while (e->keys[h] != key) h = (h + 1) & (e->cap - 1);
@@ -190,11 +222,15 @@ static double tt__loop_beta(uint32_t n) { return n == 3 ? 3.0 / 16.0 : 3.0 / (8.
 /* Per-vertex rule: even vertices (limit == 0) or limit-surface positions (limit == 1), from
  * the neighbour sums over the edge table. Boundary and non-manifold vertices use the 1-D
  * boundary rule over their boundary neighbours. */
-static int tt__loop_vertices(const float *pos, uint32_t nv, const tt__edges *e, int limit, float *out) {
+static int tt__loop_vertices(const float *pos, uint32_t nv, const tt__edges *e, int limit,
+                             float *out) {
   double *sum = calloc(3 * (size_t)nv, sizeof *sum), *bsum = calloc(3 * (size_t)nv, sizeof *bsum);
   uint32_t *val = calloc(nv, sizeof *val), *bval = calloc(nv, sizeof *bval);
   if (!sum || !bsum || !val || !bval) {
-    free(sum); free(bsum); free(val); free(bval);
+    free(sum);
+    free(bsum);
+    free(val);
+    free(bval);
     return 0;
   }
   for (uint32_t i = 0; i < e->count; i++) {
@@ -208,8 +244,12 @@ static int tt__loop_vertices(const float *pos, uint32_t nv, const tt__edges *e, 
         bsum[3 * (size_t)b + k] += pos[3 * (size_t)a + k];
       }
     }
-    val[a]++; val[b]++;
-    if (boundary) { bval[a]++; bval[b]++; }
+    val[a]++;
+    val[b]++;
+    if (boundary) {
+      bval[a]++;
+      bval[b]++;
+    }
   }
   for (uint32_t v = 0; v < nv; v++) {
     const float *p = pos + 3 * (size_t)v;
@@ -220,12 +260,16 @@ static int tt__loop_vertices(const float *pos, uint32_t nv, const tt__edges *e, 
     } else if (bval[v] == 0 && val[v] >= 3) {
       double beta = tt__loop_beta(val[v]);
       double w = limit ? 1.0 / (val[v] + 3.0 / (8.0 * beta)) : beta;
-      for (int k = 0; k < 3; k++) o[k] = (float)((1.0 - val[v] * w) * p[k] + w * sum[3 * (size_t)v + k]);
+      for (int k = 0; k < 3; k++)
+        o[k] = (float)((1.0 - val[v] * w) * p[k] + w * sum[3 * (size_t)v + k]);
     } else {
       memcpy(o, p, 3 * sizeof *o); /* corners and non-manifold vertices stay put */
     }
   }
-  free(sum); free(bsum); free(val); free(bval);
+  free(sum);
+  free(bsum);
+  free(val);
+  free(bval);
   return 1;
 }
 
@@ -237,16 +281,25 @@ static int tt__smooth_normals(tt__mesh_data *d) {
     const uint32_t *ix = d->indices + 3 * (size_t)t;
     const float *a = d->positions + 3 * (size_t)ix[0], *b = d->positions + 3 * (size_t)ix[1],
                 *c = d->positions + 3 * (size_t)ix[2];
-    float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    float f[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+          e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    float f[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                  e1[0] * e2[1] - e1[1] * e2[0]};
     for (int k = 0; k < 3; k++)
       for (int j = 0; j < 3; j++) n[3 * (size_t)ix[k] + j] += f[j];
   }
   for (uint32_t v = 0; v < d->vertex_count; v++) {
     float *p = n + 3 * (size_t)v;
     float l = sqrtf(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    if (l > 0) { p[0] /= l; p[1] /= l; p[2] /= l; }
-    else { p[0] = 0; p[1] = 0; p[2] = 1; }
+    if (l > 0) {
+      p[0] /= l;
+      p[1] /= l;
+      p[2] /= l;
+    } else {
+      p[0] = 0;
+      p[1] = 0;
+      p[2] = 1;
+    }
   }
   free(d->normals);
   d->normals = n;
@@ -258,7 +311,8 @@ tt_status tt__pbrt_loop_subdivide(tt__mesh_data *d) {
   tt__edges e;
   tt__mesh_data n;
   memset(&n, 0, sizeof n);
-  if ((uint64_t)d->triangle_count * 4 > UINT32_MAX / 3 || (uint64_t)d->vertex_count + 3ull * d->triangle_count > UINT32_MAX / 3)
+  if ((uint64_t)d->triangle_count * 4 > UINT32_MAX / 3 ||
+      (uint64_t)d->vertex_count + 3ull * d->triangle_count > UINT32_MAX / 3)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "loopsubdiv: mesh too large to subdivide");
   if (!tt__edges_build(&e, d->indices, d->triangle_count)) goto oom;
   uint32_t nv = d->vertex_count + e.count, nt = d->triangle_count * 4;
@@ -269,10 +323,12 @@ tt_status tt__pbrt_loop_subdivide(tt__mesh_data *d) {
   if (!n.positions || !n.indices) goto oom;
   if (!tt__loop_vertices(d->positions, d->vertex_count, &e, 0, n.positions)) goto oom;
   for (uint32_t i = 0; i < e.count; i++) {
-    const float *a = d->positions + 3 * (size_t)e.ends[2 * (size_t)i], *b = d->positions + 3 * (size_t)e.ends[2 * (size_t)i + 1];
+    const float *a = d->positions + 3 * (size_t)e.ends[2 * (size_t)i],
+                *b = d->positions + 3 * (size_t)e.ends[2 * (size_t)i + 1];
     float *o = n.positions + 3 * ((size_t)d->vertex_count + i);
     if (e.faces[i] == 2) {
-      const float *c = d->positions + 3 * (size_t)e.opp[2 * (size_t)i], *f = d->positions + 3 * (size_t)e.opp[2 * (size_t)i + 1];
+      const float *c = d->positions + 3 * (size_t)e.opp[2 * (size_t)i],
+                  *f = d->positions + 3 * (size_t)e.opp[2 * (size_t)i + 1];
       for (int k = 0; k < 3; k++) o[k] = 0.375f * (a[k] + b[k]) + 0.125f * (c[k] + f[k]);
     } else {
       for (int k = 0; k < 3; k++) o[k] = 0.5f * (a[k] + b[k]);
@@ -283,10 +339,18 @@ tt_status tt__pbrt_loop_subdivide(tt__mesh_data *d) {
     uint32_t m[3];
     for (int k = 0; k < 3; k++) m[k] = d->vertex_count + tt__edges_find(&e, ix[k], ix[(k + 1) % 3]);
     uint32_t *o = n.indices + 12 * (size_t)t;
-    o[0] = ix[0]; o[1] = m[0]; o[2] = m[2];
-    o[3] = ix[1]; o[4] = m[1]; o[5] = m[0];
-    o[6] = ix[2]; o[7] = m[2]; o[8] = m[1];
-    o[9] = m[0]; o[10] = m[1]; o[11] = m[2];
+    o[0] = ix[0];
+    o[1] = m[0];
+    o[2] = m[2];
+    o[3] = ix[1];
+    o[4] = m[1];
+    o[5] = m[0];
+    o[6] = ix[2];
+    o[7] = m[2];
+    o[8] = m[1];
+    o[9] = m[0];
+    o[10] = m[1];
+    o[11] = m[2];
   }
   tt__edges_free(&e);
   /* limit positions need the new mesh's own neighbourhoods */

@@ -20,7 +20,6 @@
 
 /* ---- matrices (row-major, column vectors: p' = M p, as pbrt) ---------------------------- */
 
-
 /* Identity matrix. */
 void tt__ident(double m[16]) {
   memset(m, 0, 16 * sizeof *m);
@@ -61,7 +60,8 @@ int tt__inverse(const double m[16], double inv[16]) {
 /* Applies M to a point. */
 void tt__xform_point(const double m[16], const double p[3], double o[3]) {
   double w = m[12] * p[0] + m[13] * p[1] + m[14] * p[2] + m[15];
-  for (int r = 0; r < 3; r++) o[r] = m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3];
+  for (int r = 0; r < 3; r++)
+    o[r] = m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3];
   if (w != 1.0 && w != 0.0)
     for (int r = 0; r < 3; r++) o[r] /= w;
 }
@@ -113,8 +113,8 @@ void tt__pop(tt__pp *P, int kind, const tt__tok *at) {
   }
   tt__gstate *top = &P->stack[P->nstack - 1];
   if (top->kind != kind)
-    tt__pwarn(P, at->file, at->line, nm, "%s closes the block opened at %s:%d by a different Begin", nm,
-              top->file ? top->file->path : "?", top->line);
+    tt__pwarn(P, at->file, at->line, nm, "%s closes the block opened at %s:%d by a different Begin",
+              nm, top->file ? top->file->path : "?", top->line);
   if (kind == 'T') memcpy(P->gs.ctm, top->ctm, sizeof P->gs.ctm);
   else P->gs = *top;
   P->nstack--;
@@ -164,33 +164,40 @@ void tt__world_matrix(tt__pp *P, const double ctm[16], double m[16]) {
 tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__plist *pl) {
   tt_status st;
   if (strcmp(type, "perspective") != 0)
-    tt__pwarn(P, at->file, at->line, type, "camera \"%s\" is approximated by a perspective camera", type);
+    tt__pwarn(P, at->file, at->line, type, "camera \"%s\" is approximated by a perspective camera",
+              type);
   P->has_camera = 1;
   memcpy(P->cam_ctm, P->gs.ctm, sizeof P->cam_ctm);
   double fov = 90, lens = 0, fa = 0;
   if ((st = tt__getf(P, at, pl, "fov", &fov)) != TT_OK) return st;
-  if (!(fov > 0 && fov < 180)) return tt__perr(at->file, at->line, "Camera: fov %g is outside (0, 180)", fov);
+  if (!(fov > 0 && fov < 180))
+    return tt__perr(at->file, at->line, "Camera: fov %g is outside (0, 180)", fov);
   P->fov = fov;
   if ((st = tt__getf(P, at, pl, "lensradius", &lens)) != TT_OK) return st;
   tt__find(pl, "focaldistance");
-  if (lens > 0) tt__pwarn(P, at->file, at->line, "lensradius", "Camera: depth of field (lensradius) is not supported (pinhole used)");
+  if (lens > 0)
+    tt__pwarn(P, at->file, at->line, "lensradius",
+              "Camera: depth of field (lensradius) is not supported (pinhole used)");
   if ((st = tt__getf(P, at, pl, "frameaspectratio", &fa)) != TT_OK) return st;
   P->frame_aspect = fa > 0 ? fa : 0;
   tt__pparam *sw = tt__find(pl, "screenwindow");
   if (sw) {
     if (!sw->num || sw->nnum != 4 || !(sw->num[1] > sw->num[0]) || !(sw->num[3] > sw->num[2]))
-      return tt__perr(at->file, at->line, "Camera: \"screenwindow\" needs 4 numbers x0 x1 y0 y1 with x0 < x1, y0 < y1");
+      return tt__perr(at->file, at->line,
+                      "Camera: \"screenwindow\" needs 4 numbers x0 x1 y0 y1 with x0 < x1, y0 < y1");
     for (int i = 0; i < 4; i++) P->sw[i] = sw->num[i];
     P->has_sw = 1;
     if (fabs(sw->num[0] + sw->num[1]) > 1e-6 || fabs(sw->num[2] + sw->num[3]) > 1e-6)
-      tt__pwarn(P, at->file, at->line, "screenwindow", "Camera: off-centre screenwindow is centred (only its height is used)");
+      tt__pwarn(P, at->file, at->line, "screenwindow",
+                "Camera: off-centre screenwindow is centred (only its height is used)");
   }
   tt__find(pl, "shutteropen");
   tt__find(pl, "shutterclose");
   tt__unused(P, at, "Camera", pl);
   /* the camera's own frame is a named coordinate system */
   double inv[16];
-  if (!tt__inverse(P->gs.ctm, inv)) return tt__perr(at->file, at->line, "Camera: the current transform is singular");
+  if (!tt__inverse(P->gs.ctm, inv))
+    return tt__perr(at->file, at->line, "Camera: the current transform is singular");
   for (size_t i = 0; i < P->ncs; i++)
     if (strcmp(P->cs[i].name, "camera") == 0) {
       memcpy(P->cs[i].m, inv, sizeof inv);
@@ -217,16 +224,19 @@ tt_status tt__option(tt__pp *P, const tt__tok *at, const char *dir, tt__plist *p
     P->xres = (long)x;
     P->yres = (long)y;
     if (tt__find(pl, "cropwindow") || tt__find(pl, "pixelbounds"))
-      tt__pwarn(P, at->file, at->line, "cropwindow", "Film: cropwindow/pixelbounds are not supported (full frame rendered)");
+      tt__pwarn(P, at->file, at->line, "cropwindow",
+                "Film: cropwindow/pixelbounds are not supported (full frame rendered)");
   } else if (strcmp(dir, "Sampler") == 0) {
     double spp = P->scene->settings.spp;
     if ((st = tt__getf(P, at, pl, "pixelsamples", &spp)) != TT_OK) return st;
-    if (!(spp >= 1 && spp <= 16777216)) return tt__perr(at->file, at->line, "Sampler: pixelsamples %g is out of range", spp);
+    if (!(spp >= 1 && spp <= 16777216))
+      return tt__perr(at->file, at->line, "Sampler: pixelsamples %g is out of range", spp);
     P->scene->settings.spp = (uint32_t)spp;
   } else if (strcmp(dir, "Integrator") == 0) {
     double md = P->scene->settings.max_depth;
     if ((st = tt__getf(P, at, pl, "maxdepth", &md)) != TT_OK) return st;
-    if (!(md >= 0 && md <= 100000)) return tt__perr(at->file, at->line, "Integrator: maxdepth %g is out of range", md);
+    if (!(md >= 0 && md <= 100000))
+      return tt__perr(at->file, at->line, "Integrator: maxdepth %g is out of range", md);
     P->scene->settings.max_depth = (uint32_t)md;
   }
   return TT_OK;

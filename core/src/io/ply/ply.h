@@ -16,7 +16,7 @@ tt_status tt__ply_read(const char *path, const char *where, tt__mesh_data *out);
 /* Parses a PLY held in memory (`len` bytes, no terminator needed); `path` names it in
  * messages. The fuzz harness calls this directly. `*out` is filled only on success (its
  * arrays then belong to the caller: tt__mesh_data_free); on failure nothing is allocated. */
-tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
-                        const char *where, tt__mesh_data *out);
+tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path, const char *where,
+                        tt__mesh_data *out);
 
 #endif /* TT_IO_PLY_H */

@@ -15,7 +15,7 @@
 #include <strings.h>
 
 #ifdef TT_HAVE_ZLIB
-#include <zlib.h>
+#  include <zlib.h>
 #endif
 
 /* ---- file reading ---------------------------------------------------------------------- */
@@ -23,7 +23,8 @@
 /* Whole file into memory, gunzipping ".gz" when zlib is available. Only regular files are
  * read (a FIFO would block, /dev/zero never end), and at most TT_FILE_READ_DEFAULT_MAX bytes,
  * decompressed or not. */
-static tt_status tt__read_all(const char *path, const char *where, unsigned char **out, size_t *len) {
+static tt_status tt__read_all(const char *path, const char *where, unsigned char **out,
+                              size_t *len) {
   *out = NULL;
   *len = 0;
   size_t n = strlen(path);
@@ -38,7 +39,9 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
       return tt_set_error(TT_ERR_IO, "%s: %s", where, msg);
     }
     gzFile f = gzopen(path, "rb");
-    if (!f) return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\": %s", where, path, strerror(errno));
+    if (!f)
+      return tt_set_error(TT_ERR_IO, "%s: cannot open PLY file \"%s\": %s", where, path,
+                          strerror(errno));
     for (;;) {
       if (used + 65536 > cap) {
         if (cap >= TT_FILE_READ_DEFAULT_MAX) {
@@ -52,7 +55,8 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
         if (!nb) {
           free(buf);
           gzclose(f);
-          return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading \"%s\"", where, path);
+          return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory reading \"%s\"", where,
+                              path);
         }
         buf = nb;
         cap = ncap;
@@ -71,7 +75,8 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
     *len = used;
     return TT_OK;
 #else
-    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: \"%s\": this build has no zlib for .ply.gz files", where, path);
+    return tt_set_error(TT_ERR_UNSUPPORTED, "%s: \"%s\": this build has no zlib for .ply.gz files",
+                        where, path);
 #endif
   }
   /* plain files: the shared reader (regular files only, size-capped), message prefixed */
@@ -89,7 +94,17 @@ static tt_status tt__read_all(const char *path, const char *where, unsigned char
 /* ---- PLY ------------------------------------------------------------------------------- */
 
 enum { TT__PLY_ASCII, TT__PLY_LE, TT__PLY_BE };
-enum { TT__P_NONE = 0, TT__P_I8, TT__P_U8, TT__P_I16, TT__P_U16, TT__P_I32, TT__P_U32, TT__P_F32, TT__P_F64 };
+enum {
+  TT__P_NONE = 0,
+  TT__P_I8,
+  TT__P_U8,
+  TT__P_I16,
+  TT__P_U16,
+  TT__P_I32,
+  TT__P_U32,
+  TT__P_F32,
+  TT__P_F64
+};
 
 typedef struct tt__ply_prop {
   char name[32];
@@ -106,11 +121,14 @@ typedef struct tt__ply_elem {
 
 /* PLY type name to code (both the classic and the sized spellings). */
 static int tt__ply_type(const char *s) {
-  static const struct { const char *n; int t; } map[] = {
-      {"char", TT__P_I8},     {"int8", TT__P_I8},     {"uchar", TT__P_U8},   {"uint8", TT__P_U8},
-      {"short", TT__P_I16},   {"int16", TT__P_I16},   {"ushort", TT__P_U16}, {"uint16", TT__P_U16},
-      {"int", TT__P_I32},     {"int32", TT__P_I32},   {"uint", TT__P_U32},   {"uint32", TT__P_U32},
-      {"float", TT__P_F32},   {"float32", TT__P_F32}, {"double", TT__P_F64}, {"float64", TT__P_F64}};
+  static const struct {
+    const char *n;
+    int t;
+  } map[] = {
+      {"char", TT__P_I8},   {"int8", TT__P_I8},     {"uchar", TT__P_U8},   {"uint8", TT__P_U8},
+      {"short", TT__P_I16}, {"int16", TT__P_I16},   {"ushort", TT__P_U16}, {"uint16", TT__P_U16},
+      {"int", TT__P_I32},   {"int32", TT__P_I32},   {"uint", TT__P_U32},   {"uint32", TT__P_U32},
+      {"float", TT__P_F32}, {"float32", TT__P_F32}, {"double", TT__P_F64}, {"float64", TT__P_F64}};
   for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
     if (strcmp(s, map[i].n) == 0) return map[i].t;
   return TT__P_NONE;
@@ -119,11 +137,15 @@ static int tt__ply_type(const char *s) {
 /* Byte size of a scalar type. */
 static size_t tt__ply_size(int t) {
   switch (t) {
-    case TT__P_I8: case TT__P_U8: return 1;
-    case TT__P_I16: case TT__P_U16: return 2;
-    case TT__P_I32: case TT__P_U32: case TT__P_F32: return 4;
-    case TT__P_F64: return 8;
-    default: return 0;
+  case TT__P_I8:
+  case TT__P_U8: return 1;
+  case TT__P_I16:
+  case TT__P_U16: return 2;
+  case TT__P_I32:
+  case TT__P_U32:
+  case TT__P_F32: return 4;
+  case TT__P_F64: return 8;
+  default: return 0;
   }
 }
 
@@ -136,11 +158,13 @@ typedef struct tt__ply_cur {
 /* Reads one scalar as double; 0 at end of data or on a malformed ASCII number. */
 static int tt__ply_scalar(tt__ply_cur *c, int t, double *v) {
   if (c->format == TT__PLY_ASCII) {
-    while (c->p < c->end && (*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n')) c->p++;
+    while (c->p < c->end && (*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n'))
+      c->p++;
     if (c->p >= c->end) return 0;
     char tmp[64];
     size_t k = 0;
-    while (c->p < c->end && k + 1 < sizeof tmp && !(*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n'))
+    while (c->p < c->end && k + 1 < sizeof tmp &&
+           !(*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n'))
       tmp[k++] = (char)*c->p++;
     tmp[k] = '\0';
     char *e;
@@ -159,15 +183,50 @@ static int tt__ply_scalar(tt__ply_cur *c, int t, double *v) {
       b[n - 1 - i] = x;
     }
   switch (t) {
-    case TT__P_I8: { int8_t x; memcpy(&x, b, 1); *v = x; break; }
-    case TT__P_U8: *v = b[0]; break;
-    case TT__P_I16: { int16_t x; memcpy(&x, b, 2); *v = x; break; }
-    case TT__P_U16: { uint16_t x; memcpy(&x, b, 2); *v = x; break; }
-    case TT__P_I32: { int32_t x; memcpy(&x, b, 4); *v = x; break; }
-    case TT__P_U32: { uint32_t x; memcpy(&x, b, 4); *v = x; break; }
-    case TT__P_F32: { float x; memcpy(&x, b, 4); *v = x; break; }
-    case TT__P_F64: { double x; memcpy(&x, b, 8); *v = x; break; }
-    default: return 0;
+  case TT__P_I8: {
+    int8_t x;
+    memcpy(&x, b, 1);
+    *v = x;
+    break;
+  }
+  case TT__P_U8: *v = b[0]; break;
+  case TT__P_I16: {
+    int16_t x;
+    memcpy(&x, b, 2);
+    *v = x;
+    break;
+  }
+  case TT__P_U16: {
+    uint16_t x;
+    memcpy(&x, b, 2);
+    *v = x;
+    break;
+  }
+  case TT__P_I32: {
+    int32_t x;
+    memcpy(&x, b, 4);
+    *v = x;
+    break;
+  }
+  case TT__P_U32: {
+    uint32_t x;
+    memcpy(&x, b, 4);
+    *v = x;
+    break;
+  }
+  case TT__P_F32: {
+    float x;
+    memcpy(&x, b, 4);
+    *v = x;
+    break;
+  }
+  case TT__P_F64: {
+    double x;
+    memcpy(&x, b, 8);
+    *v = x;
+    break;
+  }
+  default: return 0;
   }
   return 1;
 }
@@ -177,17 +236,22 @@ enum { TT__A_X, TT__A_Y, TT__A_Z, TT__A_NX, TT__A_NY, TT__A_NZ, TT__A_U, TT__A_V
 
 /* Maps a vertex property name to an attribute slot, or -1. */
 static int tt__ply_attr(const char *n) {
-  static const struct { const char *n; int a; } map[] = {
-      {"x", TT__A_X}, {"y", TT__A_Y}, {"z", TT__A_Z}, {"nx", TT__A_NX}, {"ny", TT__A_NY},
-      {"nz", TT__A_NZ}, {"u", TT__A_U}, {"v", TT__A_V}, {"s", TT__A_U}, {"t", TT__A_V},
-      {"texture_u", TT__A_U}, {"texture_v", TT__A_V}, {"texture_s", TT__A_U}, {"texture_t", TT__A_V}};
+  static const struct {
+    const char *n;
+    int a;
+  } map[] = {{"x", TT__A_X},         {"y", TT__A_Y},         {"z", TT__A_Z},
+             {"nx", TT__A_NX},       {"ny", TT__A_NY},       {"nz", TT__A_NZ},
+             {"u", TT__A_U},         {"v", TT__A_V},         {"s", TT__A_U},
+             {"t", TT__A_V},         {"texture_u", TT__A_U}, {"texture_v", TT__A_V},
+             {"texture_s", TT__A_U}, {"texture_t", TT__A_V}};
   for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
     if (strcmp(n, map[i].n) == 0) return map[i].a;
   return -1;
 }
 
 /* Appends triangle indices, growing the array geometrically. */
-static int tt__push_tri(uint32_t **idx, uint32_t *count, size_t *cap, uint32_t a, uint32_t b, uint32_t c) {
+static int tt__push_tri(uint32_t **idx, uint32_t *count, size_t *cap, uint32_t a, uint32_t b,
+                        uint32_t c) {
   if ((size_t)*count * 3 + 3 > *cap) {
     size_t ncap = *cap ? *cap * 2 : 3 * 1024;
     uint32_t *n = realloc(*idx, ncap * sizeof *n);
@@ -205,8 +269,8 @@ static int tt__push_tri(uint32_t **idx, uint32_t *count, size_t *cap, uint32_t a
 }
 
 /* Parses the header, then the vertex and face elements; other elements are skipped. */
-tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
-                        const char *where, tt__mesh_data *out) {
+tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path, const char *where,
+                        tt__mesh_data *out) {
   const unsigned char *p = data, *end = data + len;
   tt__ply_elem *elems = NULL;
   int elem_count = 0, format = -1;
@@ -217,10 +281,10 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
   float *pos = NULL, *nrm = NULL, *uv = NULL;
   uint64_t nverts = 0;
   int have_vertex = 0;
-#define TT__PLY_FAIL(...)                                         \
-  do {                                                            \
-    st = tt_set_error(TT_ERR_PARSE, __VA_ARGS__);                 \
-    goto done;                                                    \
+#define TT__PLY_FAIL(...)                                                                          \
+  do {                                                                                             \
+    st = tt_set_error(TT_ERR_PARSE, __VA_ARGS__);                                                  \
+    goto done;                                                                                     \
   } while (0)
   if (len < 4 || memcmp(p, "ply", 3) != 0 || (p[3] != '\n' && p[3] != '\r'))
     TT__PLY_FAIL("%s: \"%s\" is not a PLY file (no \"ply\" magic line)", where, path);
@@ -237,7 +301,9 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
     p = nl + 1;
     char w0[32] = "", w1[32] = "", w2[32] = "", w3[32] = "", w4[32] = "";
     int nw = sscanf(line, "%31s %31s %31s %31s %31s", w0, w1, w2, w3, w4);
-    if (nw <= 0 || strcmp(w0, "comment") == 0 || strcmp(w0, "obj_info") == 0 || strcmp(w0, "ply") == 0) continue;
+    if (nw <= 0 || strcmp(w0, "comment") == 0 || strcmp(w0, "obj_info") == 0 ||
+        strcmp(w0, "ply") == 0)
+      continue;
     if (strcmp(w0, "end_header") == 0) break;
     if (strcmp(w0, "format") == 0) {
       if (strcmp(w1, "ascii") == 0) format = TT__PLY_ASCII;
@@ -270,12 +336,14 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
         pr->count_type = tt__ply_type(w2);
         pr->type = tt__ply_type(w3);
         snprintf(pr->name, sizeof pr->name, "%s", w4);
-        if (nw < 5 || !pr->count_type || !pr->type || pr->count_type == TT__P_F32 || pr->count_type == TT__P_F64)
+        if (nw < 5 || !pr->count_type || !pr->type || pr->count_type == TT__P_F32 ||
+            pr->count_type == TT__P_F64)
           TT__PLY_FAIL("%s: \"%s\": bad PLY list property \"%s\"", where, path, line);
       } else {
         pr->type = tt__ply_type(w1);
         snprintf(pr->name, sizeof pr->name, "%s", w2);
-        if (nw < 3 || !pr->type) TT__PLY_FAIL("%s: \"%s\": bad PLY property \"%s\"", where, path, line);
+        if (nw < 3 || !pr->type)
+          TT__PLY_FAIL("%s: \"%s\": bad PLY property \"%s\"", where, path, line);
       }
       el->prop_count++;
     } else {
@@ -311,7 +379,8 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
       pos = malloc(3 * nv * sizeof *pos);
       if (have[TT__A_NX] && have[TT__A_NY] && have[TT__A_NZ]) nrm = malloc(3 * nv * sizeof *nrm);
       if (have[TT__A_U] && have[TT__A_V]) uv = malloc(2 * nv * sizeof *uv);
-      if (!pos || (have[TT__A_NX] && have[TT__A_NY] && have[TT__A_NZ] && !nrm) || (have[TT__A_U] && have[TT__A_V] && !uv)) {
+      if (!pos || (have[TT__A_NX] && have[TT__A_NY] && have[TT__A_NZ] && !nrm) ||
+          (have[TT__A_U] && have[TT__A_V] && !uv)) {
         st = tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory for %llu PLY vertices", where,
                           (unsigned long long)nverts);
         goto done;
@@ -324,21 +393,26 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
           if (pr->count_type) {
             double cnt;
             if (!tt__ply_scalar(&cur, pr->count_type, &cnt) || cnt < 0)
-              TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY vertex %llu", where, path, (unsigned long long)v);
+              TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY vertex %llu", where, path,
+                           (unsigned long long)v);
             for (double k = 0; k < cnt; k++)
               if (!tt__ply_scalar(&cur, pr->type, &x))
-                TT__PLY_FAIL("%s: \"%s\": truncated PLY vertex %llu", where, path, (unsigned long long)v);
+                TT__PLY_FAIL("%s: \"%s\": truncated PLY vertex %llu", where, path,
+                             (unsigned long long)v);
             continue;
           }
           if (!tt__ply_scalar(&cur, pr->type, &x))
-            TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY vertex %llu", where, path, (unsigned long long)v);
+            TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY vertex %llu", where, path,
+                         (unsigned long long)v);
           if (slot[i] >= 0) a[slot[i]] = x;
         }
         for (int k = 0; k < 3; k++) {
           if (!isfinite(a[TT__A_X + k]))
-            TT__PLY_FAIL("%s: \"%s\": PLY vertex %llu is not finite", where, path, (unsigned long long)v);
+            TT__PLY_FAIL("%s: \"%s\": PLY vertex %llu is not finite", where, path,
+                         (unsigned long long)v);
           pos[3 * v + (size_t)k] = (float)a[TT__A_X + k];
-          if (nrm) nrm[3 * v + (size_t)k] = isfinite(a[TT__A_NX + k]) ? (float)a[TT__A_NX + k] : 0.0f;
+          if (nrm)
+            nrm[3 * v + (size_t)k] = isfinite(a[TT__A_NX + k]) ? (float)a[TT__A_NX + k] : 0.0f;
         }
         if (uv) {
           uv[2 * v] = isfinite(a[TT__A_U]) ? (float)a[TT__A_U] : 0.0f;
@@ -350,11 +424,13 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
     int list_prop = -1;
     if (is_face)
       for (int i = 0; i < el->prop_count; i++)
-        if (el->props[i].count_type &&
-            (strcmp(el->props[i].name, "vertex_indices") == 0 || strcmp(el->props[i].name, "vertex_index") == 0))
+        if (el->props[i].count_type && (strcmp(el->props[i].name, "vertex_indices") == 0 ||
+                                        strcmp(el->props[i].name, "vertex_index") == 0))
           list_prop = i;
-    if (is_face && list_prop < 0) TT__PLY_FAIL("%s: \"%s\": PLY face element has no vertex_indices list", where, path);
-    if (is_face && !have_vertex) TT__PLY_FAIL("%s: \"%s\": PLY faces come before the vertices", where, path);
+    if (is_face && list_prop < 0)
+      TT__PLY_FAIL("%s: \"%s\": PLY face element has no vertex_indices list", where, path);
+    if (is_face && !have_vertex)
+      TT__PLY_FAIL("%s: \"%s\": PLY faces come before the vertices", where, path);
     /* rows of an element without properties hold no bytes: nothing to read, and counting
      * through up to 2^64 of them one by one was a hang (found by tests/fuzz/fuzz_ply) */
     if (el->prop_count == 0) continue;
@@ -364,20 +440,23 @@ tt_status tt__ply_parse(const unsigned char *data, size_t len, const char *path,
         double x;
         if (!pr->count_type) {
           if (!tt__ply_scalar(&cur, pr->type, &x))
-            TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY %s %llu", where, path, el->name, (unsigned long long)f);
+            TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY %s %llu", where, path, el->name,
+                         (unsigned long long)f);
           continue;
         }
         double cnt;
         if (!tt__ply_scalar(&cur, pr->count_type, &cnt) || cnt < 0 || cnt > 1e6)
-          TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY %s %llu", where, path, el->name, (unsigned long long)f);
+          TT__PLY_FAIL("%s: \"%s\": truncated or corrupt PLY %s %llu", where, path, el->name,
+                       (unsigned long long)f);
         uint32_t first = 0, prev = 0;
         for (uint32_t k = 0; k < (uint32_t)cnt; k++) {
           if (!tt__ply_scalar(&cur, pr->type, &x))
-            TT__PLY_FAIL("%s: \"%s\": truncated PLY %s %llu", where, path, el->name, (unsigned long long)f);
+            TT__PLY_FAIL("%s: \"%s\": truncated PLY %s %llu", where, path, el->name,
+                         (unsigned long long)f);
           if (i != list_prop) continue;
           if (!(x >= 0) || x >= (double)nverts)
-            TT__PLY_FAIL("%s: \"%s\": PLY face %llu uses vertex %.0f (the file has %llu)", where, path,
-                         (unsigned long long)f, x, (unsigned long long)nverts);
+            TT__PLY_FAIL("%s: \"%s\": PLY face %llu uses vertex %.0f (the file has %llu)", where,
+                         path, (unsigned long long)f, x, (unsigned long long)nverts);
           uint32_t vi = (uint32_t)x;
           if (k == 0) first = vi;
           else if (k >= 2 && !tt__push_tri(&idx, &tri_count, &idx_cap, first, prev, vi)) {

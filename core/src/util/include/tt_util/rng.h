@@ -48,14 +48,10 @@ static inline uint32_t tt__mix32(uint32_t x) {
 }
 
 /* Maps 32 random bits to [0, 1) with 24-bit resolution, so 1.0f is never produced. */
-static inline float tt__u32_to_unit(uint32_t x) {
-  return (float)(x >> 8) * 0x1p-24f;
-}
+static inline float tt__u32_to_unit(uint32_t x) { return (float)(x >> 8) * 0x1p-24f; }
 
 /* Maps 64 random bits to [0, 1) with 53-bit resolution (a double's mantissa). */
-static inline double tt__u64_to_unit(uint64_t x) {
-  return (double)(x >> 11) * 0x1p-53;
-}
+static inline double tt__u64_to_unit(uint64_t x) { return (double)(x >> 11) * 0x1p-53; }
 
 /* Largest float below 1: clamp target for values computed in double. */
 #define TT__ONE_MINUS_EPS 0x1.fffffep-1f
@@ -63,7 +59,7 @@ static inline double tt__u64_to_unit(uint64_t x) {
 /* PCG32 (O'Neill 2014, XSH-RR 64/32). */
 typedef struct tt__pcg32 {
   uint64_t state;
-  uint64_t inc;  /* odd */
+  uint64_t inc; /* odd */
 } tt__pcg32;
 
 #define TT__PCG32_MULT 6364136223846793005ull
@@ -87,9 +83,7 @@ static inline uint32_t tt__pcg32_next(tt__pcg32 *rng) {
 }
 
 /* Uniform float in [0, 1). */
-static inline float tt__pcg32_float(tt__pcg32 *rng) {
-  return tt__u32_to_unit(tt__pcg32_next(rng));
-}
+static inline float tt__pcg32_float(tt__pcg32 *rng) { return tt__u32_to_unit(tt__pcg32_next(rng)); }
 
 /* Uniform double in [0, 1) with 53 random bits, from two draws (the first the high word). */
 static inline double tt__pcg32_double(tt__pcg32 *rng) {
