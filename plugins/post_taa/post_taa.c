@@ -19,7 +19,7 @@
 #  define TT__TAA_SOURCE_DIR "."
 #endif
 
-enum { TAA_MODE_VCTAA = 0, TAA_MODE_NETWORK = 1, TAA_MODE_NONE = 2 };
+enum { TT__TAA_MODE_VCTAA = 0, TT__TAA_MODE_NETWORK = 1, TT__TAA_MODE_NONE = 2 };
 
 static const tt_host *g_host;
 static tt_space *g_space;
@@ -31,17 +31,17 @@ struct tt_post {
   tt__vctaa_params vc_params;
   uint32_t channels;       /* shipped network variant (12 or 6) */
   char weights_path[4096]; /* file the loaded model came from ("" = none) */
-  tt__vctaa vc;
+  tt__vctaa_filter vc;
   tt__net_model net;
   tt__net_state net_state;
   int net_loaded;
 };
 
 /* The host, or libtunetrace's default services when used without init(). */
-static const tt_host *taa_host(void) { return g_host ? g_host : tt_default_host(); }
+static const tt_host *tt__taa_host(void) { return g_host ? g_host : tt_default_host(); }
 
 /* Builds the parameter space once (init). */
-static tt_status taa_build_space(void) {
+static tt_status tt__taa_build_space(void) {
   static const char *const modes[] = {"vctaa", "network", "none"};
   static const int64_t channels[] = {12, 6};
   static const char *const resolves[] = {"tonemapped", "linear"};
@@ -74,11 +74,11 @@ static tt_status taa_build_space(void) {
 }
 
 /* Space accessor for the interface. */
-static const tt_space *taa_space(void) { return g_space; }
+static const tt_space *tt__taa_space(void) { return g_space; }
 
 /* Finds the weights file: option "weights", else $TT_POST_TAA_WEIGHTS, else the shipped file
  * next to the plugin, else in the source tree (uninstalled builds). */
-static void taa_weights_path(uint32_t channels, char *out, size_t size) {
+static void tt__taa_weights_path(uint32_t channels, char *out, size_t size) {
   if (g_weights_option[0]) {
     snprintf(out, size, "%s", g_weights_option);
     return;
@@ -102,11 +102,11 @@ static void taa_weights_path(uint32_t channels, char *out, size_t size) {
 }
 
 /* Reads a configuration into the filter (no state changes). */
-static void taa_read_config(tt_post *p, const tt_config *c) {
+static void tt__taa_read_config(tt_post *p, const tt_config *c) {
   const char *mode = c ? tt_config_get_string(c, "mode") : NULL;
-  p->mode = !mode || !strcmp(mode, "vctaa") ? TAA_MODE_VCTAA
-            : !strcmp(mode, "network")      ? TAA_MODE_NETWORK
-                                            : TAA_MODE_NONE;
+  p->mode = !mode || !strcmp(mode, "vctaa") ? TT__TAA_MODE_VCTAA
+            : !strcmp(mode, "network")      ? TT__TAA_MODE_NETWORK
+                                            : TT__TAA_MODE_NONE;
   p->vc_params.blend = c ? (float)tt_config_get_float(c, "blend", 0.1) : 0.1f;
   p->vc_params.gamma = c ? (float)tt_config_get_float(c, "gamma", 1.0) : 1.0f;
   p->vc_params.catmull_rom = c ? (int)tt_config_get_int(c, "catmullRom", 1) : 1;
@@ -116,9 +116,9 @@ static void taa_read_config(tt_post *p, const tt_config *c) {
 }
 
 /* Loads the network (if the mode needs it and the file changed) and sizes its state. */
-static tt_status taa_prepare_network(tt_post *p) {
+static tt_status tt__taa_prepare_network(tt_post *p) {
   char path[sizeof p->weights_path];
-  taa_weights_path(p->channels, path, sizeof path);
+  tt__taa_weights_path(p->channels, path, sizeof path);
   if (p->net_loaded && !strcmp(path, p->weights_path)) return TT_OK;
   tt__net_model m;
   tt_status st = tt__net_load(path, &m);
@@ -137,7 +137,7 @@ static tt_status taa_prepare_network(tt_post *p) {
   p->net_state = s;
   p->net_loaded = 1;
   snprintf(p->weights_path, sizeof p->weights_path, "%s", path);
-  tt_host_log(taa_host(), TT_LOG_DEBUG, TT__TAA_NAME,
+  tt_host_log(tt__taa_host(), TT_LOG_DEBUG, TT__TAA_NAME,
               "network weights %s: width %u, hidden %u, %u "
               "body layers",
               path, m.width, m.hidden, m.body_count);
@@ -145,7 +145,7 @@ static tt_status taa_prepare_network(tt_post *p) {
 }
 
 /* Destroys a filter (NULL ignored). */
-static void taa_destroy(tt_post *p) {
+static void tt__taa_destroy(tt_post *p) {
   if (!p) return;
   tt__vctaa_free(&p->vc);
   if (p->net_loaded) {
@@ -156,8 +156,8 @@ static void taa_destroy(tt_post *p) {
 }
 
 /* Creates a filter; loads the network now so a bad weights file fails early. */
-static tt_status taa_create(uint32_t width, uint32_t height, const tt_config *config,
-                            tt_post **out) {
+static tt_status tt__taa_create(uint32_t width, uint32_t height, const tt_config *config,
+                                tt_post **out) {
   *out = NULL;
   if (width == 0 || height == 0)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": frame size %ux%u", width, height);
@@ -165,11 +165,11 @@ static tt_status taa_create(uint32_t width, uint32_t height, const tt_config *co
   if (!p) return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory");
   p->width = width;
   p->height = height;
-  taa_read_config(p, config);
+  tt__taa_read_config(p, config);
   tt_status st = tt__vctaa_init(&p->vc, width, height);
-  if (st == TT_OK && p->mode == TAA_MODE_NETWORK) st = taa_prepare_network(p);
+  if (st == TT_OK && p->mode == TT__TAA_MODE_NETWORK) st = tt__taa_prepare_network(p);
   if (st != TT_OK) {
-    taa_destroy(p);
+    tt__taa_destroy(p);
     return st;
   }
   *out = p;
@@ -177,31 +177,31 @@ static tt_status taa_create(uint32_t width, uint32_t height, const tt_config *co
 }
 
 /* Drops the history of both filters. */
-static void taa_reset(tt_post *p) {
+static void tt__taa_reset(tt_post *p) {
   if (!p) return;
   p->vc.valid = 0;
   if (p->net_loaded) p->net_state.valid = 0;
 }
 
 /* Applies new parameters; switching mode starts the new filter without history. */
-static tt_status taa_configure(tt_post *p, const tt_config *config) {
+static tt_status tt__taa_configure(tt_post *p, const tt_config *config) {
   int old_mode = p->mode;
   uint32_t old_channels = p->channels;
-  taa_read_config(p, config);
-  if (p->mode == TAA_MODE_NETWORK) {
-    tt_status st = taa_prepare_network(p);
+  tt__taa_read_config(p, config);
+  if (p->mode == TT__TAA_MODE_NETWORK) {
+    tt_status st = tt__taa_prepare_network(p);
     if (st != TT_OK) {
       p->mode = old_mode;
       p->channels = old_channels;
       return st;
     }
   }
-  if (p->mode != old_mode) taa_reset(p);
+  if (p->mode != old_mode) tt__taa_reset(p);
   return TT_OK;
 }
 
 /* Filters one frame. */
-static tt_status taa_process(tt_post *p, const tt_post_frame *f, float *out_rgb) {
+static tt_status tt__taa_process(tt_post *p, const tt_post_frame *f, float *out_rgb) {
   if (!p || !f || !out_rgb || !f->color)
     return tt_set_error(TT_ERR_INVALID_ARGUMENT, TT__TAA_NAME ": process: NULL argument");
   if (f->width != p->width || f->height != p->height)
@@ -209,19 +209,19 @@ static tt_status taa_process(tt_post *p, const tt_post_frame *f, float *out_rgb)
                         TT__TAA_NAME ": frame is %ux%u, the filter "
                                      "was created for %ux%u",
                         f->width, f->height, p->width, p->height);
-  if (f->reset_history) taa_reset(p);
+  if (f->reset_history) tt__taa_reset(p);
   switch (p->mode) {
-  case TAA_MODE_VCTAA:
-    tt__vctaa_process(&p->vc, taa_host(), &p->vc_params, f->color, f->motion, out_rgb);
+  case TT__TAA_MODE_VCTAA:
+    tt__vctaa_process(&p->vc, tt__taa_host(), &p->vc_params, f->color, f->motion, out_rgb);
     break;
-  case TAA_MODE_NETWORK: {
+  case TT__TAA_MODE_NETWORK: {
     tt__net_frame nf = {.color = f->color,
                         .depth = f->depth,
                         .motion = f->motion,
                         .prev_depth = TT_POST_FRAME_HAS(f, prev_depth) ? f->prev_depth : NULL,
                         .jitter_index = f->jitter_index,
                         .jitter = {f->jitter[0], f->jitter[1]}};
-    tt__net_process_frame(&p->net_state, &p->net, taa_host(), &nf, out_rgb);
+    tt__net_process_frame(&p->net_state, &p->net, tt__taa_host(), &nf, out_rgb);
   } break;
   default: memcpy(out_rgb, f->color, sizeof(float) * 3 * p->width * p->height); break;
   }
@@ -230,12 +230,12 @@ static tt_status taa_process(tt_post *p, const tt_post_frame *f, float *out_rgb)
 
 static const tt_post_iface g_iface = {
     .struct_size = sizeof(tt_post_iface),
-    .space = taa_space,
-    .create = taa_create,
-    .configure = taa_configure,
-    .process = taa_process,
-    .reset = taa_reset,
-    .destroy = taa_destroy,
+    .space = tt__taa_space,
+    .create = tt__taa_create,
+    .configure = tt__taa_configure,
+    .process = tt__taa_process,
+    .reset = tt__taa_reset,
+    .destroy = tt__taa_destroy,
 };
 
 /* ---- options (tt.options/1): settings that are not tuned ---- */
@@ -246,13 +246,15 @@ static const tt_option_info g_options[] = {
 };
 
 /* Number of options. */
-static uint32_t taa_option_count(void) { return 1; }
+static uint32_t tt__taa_option_count(void) { return 1; }
 
 /* Option `i`, or NULL. */
-static const tt_option_info *taa_option_info(uint32_t i) { return i < 1 ? &g_options[i] : NULL; }
+static const tt_option_info *tt__taa_option_info(uint32_t i) {
+  return i < 1 ? &g_options[i] : NULL;
+}
 
 /* Sets an option; the weights file is checked when a network filter is created. */
-static tt_status taa_option_set(const char *key, const char *value) {
+static tt_status tt__taa_option_set(const char *key, const char *value) {
   if (!key || strcmp(key, "weights"))
     return tt_set_error(TT_ERR_INVALID_ARGUMENT,
                         TT__TAA_NAME ": no option \"%s\" (options: "
@@ -268,26 +270,26 @@ static tt_status taa_option_set(const char *key, const char *value) {
 }
 
 /* Current value of an option. */
-static const char *taa_option_get(const char *key) {
+static const char *tt__taa_option_get(const char *key) {
   return key && !strcmp(key, "weights") ? g_weights_option : NULL;
 }
 
 static const tt_options_iface g_options_iface = {
     .struct_size = sizeof(tt_options_iface),
-    .count = taa_option_count,
-    .info = taa_option_info,
-    .set = taa_option_set,
-    .get = taa_option_get,
+    .count = tt__taa_option_count,
+    .info = tt__taa_option_info,
+    .set = tt__taa_option_set,
+    .get = tt__taa_option_get,
 };
 
 /* Keeps the host table and builds the space. */
-static tt_status taa_init(const tt_host *host) {
+static tt_status tt__taa_init(const tt_host *host) {
   g_host = host;
-  return g_space ? TT_OK : taa_build_space();
+  return g_space ? TT_OK : tt__taa_build_space();
 }
 
 /* Releases the space. */
-static void taa_deinit(void) {
+static void tt__taa_deinit(void) {
   tt_space_destroy(g_space);
   g_space = NULL;
   g_host = NULL;
@@ -295,7 +297,7 @@ static void taa_deinit(void) {
 }
 
 /* Serves "tt.post/1" and "tt.options/1". */
-static const void *taa_get_interface(const char *id) {
+static const void *tt__taa_get_interface(const char *id) {
   if (!id) return NULL;
   if (!strcmp(id, TT_POST_INTERFACE_ID)) return &g_iface;
   if (!strcmp(id, TT_OPTIONS_INTERFACE_ID)) return &g_options_iface;
@@ -311,7 +313,7 @@ TT_PLUGIN_EXPORT const tt_plugin tt_plugin_entry = {
     .version = TT__TAA_VERSION,
     .description = "temporal anti-aliasing: variance-clipping TAA and the thesis' "
                    "kernel-prediction network",
-    .init = taa_init,
-    .deinit = taa_deinit,
-    .get_interface = taa_get_interface,
+    .init = tt__taa_init,
+    .deinit = tt__taa_deinit,
+    .get_interface = tt__taa_get_interface,
 };

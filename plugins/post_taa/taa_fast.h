@@ -32,8 +32,8 @@ static inline double tt__net_now_ns(void) {
 }
 
 /* One convolution over n columns of one output row. rowp[ky] points at channel 0 of the
- * input row y + ky - r, whose column x0 + i is at rowp[ky][COL + x0 + i] (x0 in the input
- * row's own coordinates, COL = TT__NET_COL_OFF); channel c adds c * cs. Output channel oc
+ * input row y + ky - r, whose column x0 + i is at rowp[ky][TT__NET_COL_OFF + x0 + i] (x0 in the input
+ * row's own coordinates, TT__NET_COL_OFF = TT__NET_COL_OFF); channel c adds c * cs. Output channel oc
  * of column i goes to dst[oc * dcs + i]; ReLU when `relu`. */
 typedef struct tt__net_conv_args {
   const float *rowp[5];
@@ -92,7 +92,8 @@ typedef struct tt__net_mix_args {
   const tt__net_model *m;
   float *lg; /* logits [50][TT__NET_CHUNK] of columns x0.. (overwritten) */
   uint32_t x0, n, y;
-  const float *hrow; /* last body layer, row y: channel c at hrow[c * hcs + COL + x - hx] */
+  const float
+      *hrow; /* last body layer, row y: channel c at hrow[c * hcs + TT__NET_COL_OFF + x - hx] */
   size_t hcs;
   int hx;               /* first column of the tile's ring rows */
   const float *hw, *hb; /* hidden layer weights [out][in] and biases of this set */

@@ -10,17 +10,16 @@
  * in x tiles): 36 multiplies per 2x2 outputs and input channel instead of 100. B^T and A^T
  * hold small integers (exact in float); the fractions sit in G, applied once per weight
  * set in double. */
-#define WINO_POS TT__NET_WINO_POS
-static const double wino_g[6][5] = {{1.0 / 4, 0, 0, 0, 0},
-                                    {1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6},
-                                    {1.0 / 6, -1.0 / 6, 1.0 / 6, -1.0 / 6, 1.0 / 6},
-                                    {1.0 / 24, 1.0 / 12, 1.0 / 6, 1.0 / 3, 2.0 / 3},
-                                    {1.0 / 24, -1.0 / 12, 1.0 / 6, -1.0 / 3, 2.0 / 3},
-                                    {0, 0, 0, 0, 1}};
+static const double tt__net_wino_g[6][5] = {{1.0 / 4, 0, 0, 0, 0},
+                                            {1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6, 1.0 / 6},
+                                            {1.0 / 6, -1.0 / 6, 1.0 / 6, -1.0 / 6, 1.0 / 6},
+                                            {1.0 / 24, 1.0 / 12, 1.0 / 6, 1.0 / 3, 2.0 / 3},
+                                            {1.0 / 24, -1.0 / 12, 1.0 / 6, -1.0 / 3, 2.0 / 3},
+                                            {0, 0, 0, 0, 1}};
 
 /* U = G g G^T of every (set, output, input) filter into l->wino, laid out
  * [set][block][36][in][oblk] (`uper` floats per set). */
-static void wino_weights(tt__net_layer *l, size_t uper) {
+static void tt__net_wino_weights(tt__net_layer *l, size_t uper) {
   const uint32_t O = l->oblk, I = l->in;
   for (uint32_t s = 0; s < l->sets; s++)
     for (uint32_t oc = 0; oc < l->out; oc++)
@@ -30,17 +29,17 @@ static void wino_weights(tt__net_layer *l, size_t uper) {
         for (int i = 0; i < 6; i++)
           for (int k = 0; k < 5; k++) {
             double a = 0;
-            for (int j = 0; j < 5; j++) a += wino_g[i][j] * g[j * 5 + k];
+            for (int j = 0; j < 5; j++) a += tt__net_wino_g[i][j] * g[j * 5 + k];
             t[i][k] = a;
           }
         for (int i = 0; i < 6; i++)
           for (int j = 0; j < 6; j++) {
             double a = 0;
-            for (int k = 0; k < 5; k++) a += t[i][k] * wino_g[j][k];
+            for (int k = 0; k < 5; k++) a += t[i][k] * tt__net_wino_g[j][k];
             u[i][j] = a;
           }
         uint32_t b = oc / O, o = oc % O;
-        float *dst = l->wino + s * uper + (size_t)b * WINO_POS * I * O;
+        float *dst = l->wino + s * uper + (size_t)b * TT__NET_WINO_POS * I * O;
         for (int p = 0; p < 36; p++) dst[((size_t)p * I + c) * O + o] = (float)u[p / 6][p % 6];
       }
 }
@@ -50,19 +49,18 @@ static void wino_weights(tt__net_layer *l, size_t uper) {
  * V = B^T d B, U = G g G^T: 64 multiplies per 16 outputs and input channel (4 per output,
  * against 9 for F(2x2, 5x5) and 25 direct). B^T (the same as F(6x6, 3x3)'s) and A^T hold
  * small dyadic fractions, exact in float; G is applied once per weight set in double. */
-#define WINO4_POS TT__NET_WINO4_POS
-static const double wino4_g[8][5] = {{-1, 0, 0, 0, 0},
-                                     {-2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9},
-                                     {-2.0 / 9, 2.0 / 9, -2.0 / 9, 2.0 / 9, -2.0 / 9},
-                                     {1.0 / 90, 1.0 / 45, 2.0 / 45, 4.0 / 45, 8.0 / 45},
-                                     {1.0 / 90, -1.0 / 45, 2.0 / 45, -4.0 / 45, 8.0 / 45},
-                                     {32.0 / 45, 16.0 / 45, 8.0 / 45, 4.0 / 45, 2.0 / 45},
-                                     {32.0 / 45, -16.0 / 45, 8.0 / 45, -4.0 / 45, 2.0 / 45},
-                                     {0, 0, 0, 0, 1}};
+static const double tt__net_wino4_g[8][5] = {{-1, 0, 0, 0, 0},
+                                             {-2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9, -2.0 / 9},
+                                             {-2.0 / 9, 2.0 / 9, -2.0 / 9, 2.0 / 9, -2.0 / 9},
+                                             {1.0 / 90, 1.0 / 45, 2.0 / 45, 4.0 / 45, 8.0 / 45},
+                                             {1.0 / 90, -1.0 / 45, 2.0 / 45, -4.0 / 45, 8.0 / 45},
+                                             {32.0 / 45, 16.0 / 45, 8.0 / 45, 4.0 / 45, 2.0 / 45},
+                                             {32.0 / 45, -16.0 / 45, 8.0 / 45, -4.0 / 45, 2.0 / 45},
+                                             {0, 0, 0, 0, 1}};
 
 /* U = G g G^T of every (set, output, input) filter into l->wino4, laid out
  * [set][block][64][in][oblk] (`uper` floats per set). */
-static void wino4_weights(tt__net_layer *l, size_t uper) {
+static void tt__net_wino4_weights(tt__net_layer *l, size_t uper) {
   const uint32_t O = l->oblk, I = l->in;
   for (uint32_t s = 0; s < l->sets; s++)
     for (uint32_t oc = 0; oc < l->out; oc++)
@@ -72,17 +70,17 @@ static void wino4_weights(tt__net_layer *l, size_t uper) {
         for (int i = 0; i < 8; i++)
           for (int k = 0; k < 5; k++) {
             double a = 0;
-            for (int j = 0; j < 5; j++) a += wino4_g[i][j] * g[j * 5 + k];
+            for (int j = 0; j < 5; j++) a += tt__net_wino4_g[i][j] * g[j * 5 + k];
             t[i][k] = a;
           }
         for (int i = 0; i < 8; i++)
           for (int j = 0; j < 8; j++) {
             double a = 0;
-            for (int k = 0; k < 5; k++) a += t[i][k] * wino4_g[j][k];
+            for (int k = 0; k < 5; k++) a += t[i][k] * tt__net_wino4_g[j][k];
             u[i][j] = a;
           }
         uint32_t b = oc / O, o = oc % O;
-        float *dst = l->wino4 + s * uper + (size_t)b * WINO4_POS * I * O;
+        float *dst = l->wino4 + s * uper + (size_t)b * TT__NET_WINO4_POS * I * O;
         for (int p = 0; p < 64; p++) dst[((size_t)p * I + c) * O + o] = (float)u[p / 8][p % 8];
       }
 }
@@ -97,11 +95,11 @@ tt_status tt__net_fast_pack(tt__net_layer *l) {
    * block; used for output blocks of 10 or 12 (not the first layer, which reads the input
    * planes). */
   int wino = l->ksize == 5 && (l->oblk == 10 || l->oblk == 12);
-  size_t uper = wino ? (size_t)l->nob * WINO_POS * l->in * l->oblk : 0;
+  size_t uper = wino ? (size_t)l->nob * TT__NET_WINO_POS * l->in * l->oblk : 0;
   /* F(4x4, 5x5) for 5x5 layers with output blocks of 6, 10 or 12 (the kernel layer, body
    * layers after the first) */
   int wino4 = l->ksize == 5 && (l->oblk == 6 || l->oblk == 10 || l->oblk == 12);
-  size_t u4per = wino4 ? (size_t)l->nob * WINO4_POS * l->in * l->oblk : 0;
+  size_t u4per = wino4 ? (size_t)l->nob * TT__NET_WINO4_POS * l->in * l->oblk : 0;
   l->wq = tt__net_fz_alloc(qper * l->sets + (uper + u4per) * l->sets);
   l->bq = tt__net_fz_alloc((size_t)l->nob * l->oblk * l->sets);
   l->wino = l->wino4 = NULL;
@@ -109,11 +107,11 @@ tt_status tt__net_fast_pack(tt__net_layer *l) {
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for weights");
   if (wino) {
     l->wino = l->wq + qper * l->sets;
-    wino_weights(l, uper);
+    tt__net_wino_weights(l, uper);
   }
   if (wino4) {
     l->wino4 = l->wq + (qper + uper) * l->sets;
-    wino4_weights(l, u4per);
+    tt__net_wino4_weights(l, u4per);
   }
   for (uint32_t s = 0; s < l->sets; s++)
     for (uint32_t oc = 0; oc < o; oc++) {

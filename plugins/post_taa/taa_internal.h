@@ -71,19 +71,19 @@ typedef struct tt__vctaa_params {
   int linear;      /* resolve in linear colour (energy-preserving) instead of tonemapped */
 } tt__vctaa_params;
 
-typedef struct tt__vctaa {
+typedef struct tt__vctaa_filter {
   uint32_t width, height;
   float *history; /* tonemapped RGB of the previous output */
   float *scratch; /* next history */
   float *ycocg;   /* the new frame, tonemapped, in YCoCg */
   int valid;      /* history holds a frame */
   int linear;     /* the history's space (tt__vctaa_params.linear when it was written) */
-} tt__vctaa;
+} tt__vctaa_filter;
 
-tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height);
-void tt__vctaa_free(tt__vctaa *v);
+tt_status tt__vctaa_init(tt__vctaa_filter *v, uint32_t width, uint32_t height);
+void tt__vctaa_free(tt__vctaa_filter *v);
 /* Filters one frame. `motion` may be NULL (static camera). */
-void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
+void tt__vctaa_process(tt__vctaa_filter *v, const tt_host *host, const tt__vctaa_params *p,
                        const float *color, const float *motion, float *out_rgb);
 
 /* ---- history rejection (taa_reject.c) ---- */

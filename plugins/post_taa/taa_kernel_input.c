@@ -8,7 +8,8 @@
 
 /* Catmull-Rom fetch of an 8-channel image (one vector per tap); same weights and order as
  * tt__taa_sample_catmull_rom. */
-AI v8f fast_cr8(const float *img, uint32_t width, uint32_t height, float fx, float fy) {
+TT__NET_AI tt__net_v8f tt__net_fast_cr8(const float *img, uint32_t width, uint32_t height, float fx,
+                                        float fy) {
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float wx[4], wy[4];
@@ -20,19 +21,19 @@ AI v8f fast_cr8(const float *img, uint32_t width, uint32_t height, float fx, flo
     int v = x0 + i;
     xi[i] = v < 0 ? 0 : (v >= w ? w - 1 : v);
   }
-  v8f acc = vsplat(0.0f);
+  tt__net_v8f acc = tt__net_vsplat(0.0f);
   for (int j = 0; j < 4; j++) {
     int yy = y0 + j;
     yy = yy < 0 ? 0 : (yy >= h ? h - 1 : yy);
     const float *row = img + (size_t)yy * width * 8;
-    for (int i = 0; i < 4; i++) acc += vload(row + (size_t)xi[i] * 8) * (wx[i] * wy[j]);
+    for (int i = 0; i < 4; i++) acc += tt__net_vload(row + (size_t)xi[i] * 8) * (wx[i] * wy[j]);
   }
   return acc;
 }
 
 /* The same for C channels known at compile time (scalar taps, unrolled; C = 3 + hidden). */
-AI void fast_crc(const float *img, uint32_t width, uint32_t height, float fx, float fy, const int C,
-                 float *out) {
+TT__NET_AI void tt__net_fast_crc(const float *img, uint32_t width, uint32_t height, float fx,
+                                 float fy, const int C, float *out) {
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float wx[4], wy[4];
@@ -67,7 +68,8 @@ AI void fast_crc(const float *img, uint32_t width, uint32_t height, float fx, fl
 /* Input planes of pixel (x, y): tonemap, motion, depth, the reprojected state (the new
  * frame and hidden 0 on a fresh start), the rejection test (its bits into job->reject)
  * and input channel. `base`: channel 0 of the row in the planes. */
-AI void input_pixel(const tt__net_input_job *job, uint32_t x, uint32_t y, float *base) {
+TT__NET_AI void tt__net_input_pixel(const tt__net_input_job *job, uint32_t x, uint32_t y,
+                                    float *base) {
   tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   uint32_t w = s->width, sc = s->state_ch, nch = 6 + sc;
@@ -80,7 +82,7 @@ AI void input_pixel(const tt__net_input_job *job, uint32_t x, uint32_t y, float 
   uint8_t rj = 0;
   if (job->reject) {
     /* RAW (the input channel) needs only this pixel; RESET (the opening) is added and
-     * applied after the pass (fast_reject_reset) */
+     * applied after the pass (tt__net_fast_reject_reset) */
     rj = !s->valid ? (uint8_t)(TT__TAA_REJECT_RAW | TT__TAA_REJECT_RESET)
                    : tt__taa_reject_test(job->dprev, w, s->height, job->pjx, job->pjy,
                                          job->zprev ? job->zprev[i] : 0.0f, x, y, mx, my, job->jx,
@@ -92,13 +94,13 @@ AI void input_pixel(const tt__net_input_job *job, uint32_t x, uint32_t y, float 
     float fx = (float)x + 0.5f + mx, fy = (float)y + 0.5f + my;
     switch (sc) {
     case 8: {
-      v8f v = fast_cr8(s->state, w, s->height, fx, fy);
+      tt__net_v8f v = tt__net_fast_cr8(s->state, w, s->height, fx, fy);
       memcpy(fb, &v, sizeof v);
       break;
     }
-    case 3: fast_crc(s->state, w, s->height, fx, fy, 3, fb); break;
-    case 4: fast_crc(s->state, w, s->height, fx, fy, 4, fb); break;
-    case 6: fast_crc(s->state, w, s->height, fx, fy, 6, fb); break;
+    case 3: tt__net_fast_crc(s->state, w, s->height, fx, fy, 3, fb); break;
+    case 4: tt__net_fast_crc(s->state, w, s->height, fx, fy, 4, fb); break;
+    case 6: tt__net_fast_crc(s->state, w, s->height, fx, fy, 6, fb); break;
     default: tt__taa_sample_catmull_rom(s->state, w, s->height, sc, fx, fy, fb); break;
     }
   } else {
@@ -118,21 +120,22 @@ AI void input_pixel(const tt__net_input_job *job, uint32_t x, uint32_t y, float 
   for (uint32_t c = 0; c < nin; c++) base[c * cs + x] = v[c];
 }
 
-AI void input_rows_t(const tt__net_input_job *job, uint32_t y0, uint32_t y1) {
+TT__NET_AI void tt__net_input_rows_t(const tt__net_input_job *job, uint32_t y0, uint32_t y1) {
   const tt__net_state *s = job->s;
   for (uint32_t y = y0; y < y1; y++) {
-    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + COL;
-    for (uint32_t x = 0; x < s->width; x++) input_pixel(job, x, y, base);
+    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + TT__NET_COL_OFF;
+    for (uint32_t x = 0; x < s->width; x++) tt__net_input_pixel(job, x, y, base);
   }
 }
 
 #if TT__NET_HAVE_AVX2
 /* 8 pixels x .. x + 7 of row y at once (AVX2 gathers), for a state of SC = 3 (hidden 0) or
- * 8 (hidden 5) channels: the same steps as input_pixel. The Catmull-Rom weights may round
+ * 8 (hidden 5) channels: the same steps as tt__net_input_pixel. The Catmull-Rom weights may round
  * differently from the scalar code in the last bit (a pixel always takes the same path,
  * whatever the threads); the rejection test uses the same float operations as
  * tt__taa_reject_test, bit for bit. */
-AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *base, const int SC) {
+TT__NET_AI void tt__net_input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *base,
+                                 const int SC) {
   const tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   const int w = (int)s->width, h = (int)s->height;
@@ -256,7 +259,7 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
     }
     if (SC == 8) {
       /* one 8-float vector per tap (all state channels), then the 8 x 8 transpose */
-      v8f px[8];
+      tt__net_v8f px[8];
       for (int l = 0; l < 8; l++) {
         __m256 acc = _mm256_setzero_ps();
         for (int j = 0; j < 4; j++) {
@@ -269,8 +272,8 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
         }
         px[l] = acc;
       }
-      v8f ch[8];
-      t8x8(px, ch);
+      tt__net_v8f ch[8];
+      tt__net_t8x8(px, ch);
       for (int k = 0; k < 8; k++) fb[k] = ch[k];
     } else {
       /* each tap's 3 channels as one 4-float load (the 4th, the next pixel's red, is
@@ -306,13 +309,14 @@ AI void input8_t(const tt__net_input_job *job, uint32_t x, uint32_t y, float *ba
 }
 
 /* Rows with a 3- or 8-channel state: groups of 8 pixels by AVX2, the rest pixel by pixel. */
-AI void input_rows8_t(const tt__net_input_job *job, uint32_t y0, uint32_t y1, const int SC) {
+TT__NET_AI void tt__net_input_rows8_t(const tt__net_input_job *job, uint32_t y0, uint32_t y1,
+                                      const int SC) {
   const tt__net_state *s = job->s;
   for (uint32_t y = y0; y < y1; y++) {
-    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + COL;
+    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + TT__NET_COL_OFF;
     uint32_t x = 0;
-    for (; x + 8 <= s->width; x += 8) input8_t(job, x, y, base, SC);
-    for (; x < s->width; x++) input_pixel(job, x, y, base);
+    for (; x + 8 <= s->width; x += 8) tt__net_input8_t(job, x, y, base, SC);
+    for (; x < s->width; x++) tt__net_input_pixel(job, x, y, base);
   }
 }
 #endif
@@ -321,10 +325,10 @@ void TT__NET_K(input_rows)(void *ctx, uint32_t y0, uint32_t y1) {
   const tt__net_input_job *job = ctx;
 #if TT__NET_HAVE_AVX2
   switch (job->s->state_ch) {
-  case 3: input_rows8_t(job, y0, y1, 3); return;
-  case 8: input_rows8_t(job, y0, y1, 8); return;
+  case 3: tt__net_input_rows8_t(job, y0, y1, 3); return;
+  case 8: tt__net_input_rows8_t(job, y0, y1, 8); return;
   default: break;
   }
 #endif
-  input_rows_t(job, y0, y1);
+  tt__net_input_rows_t(job, y0, y1);
 }

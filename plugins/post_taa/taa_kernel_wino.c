@@ -9,9 +9,6 @@
 #  error "the Winograd kernels need AVX2 and FMA (meson.build compiles them for avx2, avx512)"
 #endif
 
-#define WINO_POS TT__NET_WINO_POS
-#define WINO4_POS TT__NET_WINO4_POS
-
 /* ---- F(2x2, 5x5): the kernel layer and 5x5 body layers with output blocks of 10 or 12 ----
  *
  * Tiles are vectorised: 8 tiles (16 columns) per vector, P vectors per group; per group the
@@ -21,13 +18,15 @@
  * band or tile split. */
 
 /* Even lanes of the 16 floats a:b (stride-2 gather of 8 tiles' column). */
-AI v8f wino_even(v8f a, v8f b) { return WINO_SHUF8(a, b, 0, 2, 4, 6, 8, 10, 12, 14); }
+TT__NET_AI tt__net_v8f tt__net_wino_even(tt__net_v8f a, tt__net_v8f b) {
+  return TT__NET_WINO_SHUF8(a, b, 0, 2, 4, 6, 8, 10, 12, 14);
+}
 
 /* B^T of one 6-vector (rows of B^T: 4 0 -5 0 1 0 / 0 4 4 -1 -1 0 / 0 -4 4 1 -1 0 /
  * 0 -2 -1 2 1 0 / 0 2 -1 -2 1 0 / 0 4 0 -5 0 1). */
-AI void wino_bt(const v8f d[6], v8f v[6]) {
-  v8f s12 = d[1] + d[2], s34 = d[3] + d[4], a21 = d[2] - d[1], a34 = d[3] - d[4];
-  v8f a31 = d[3] - d[1], a42 = d[4] - d[2];
+TT__NET_AI void tt__net_wino_bt(const tt__net_v8f d[6], tt__net_v8f v[6]) {
+  tt__net_v8f s12 = d[1] + d[2], s34 = d[3] + d[4], a21 = d[2] - d[1], a34 = d[3] - d[4];
+  tt__net_v8f a31 = d[3] - d[1], a42 = d[4] - d[2];
   v[0] = d[0] * 4.0f - d[2] * 5.0f + d[4];
   v[1] = s12 * 4.0f - s34;
   v[2] = a21 * 4.0f + a34;
@@ -37,41 +36,43 @@ AI void wino_bt(const v8f d[6], v8f v[6]) {
 }
 
 /* A^T of one 6-vector: m0 + m1 + m2 + m3 + m4, m1 - m2 + 2 (m3 - m4) + m5. */
-AI void wino_at(const v8f m[6], v8f *y0, v8f *y1) {
+TT__NET_AI void tt__net_wino_at(const tt__net_v8f m[6], tt__net_v8f *y0, tt__net_v8f *y1) {
   *y0 = (m[0] + m[1]) + (m[2] + m[3]) + m[4];
   *y1 = (m[1] - m[2]) + (m[3] - m[4]) * 2.0f + m[5];
 }
 
 /* One group of 8P tiles (16P columns from xl). */
-AI void wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O, const int P) {
+TT__NET_AI void tt__net_wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O,
+                                     const int P) {
   const uint32_t I = a->in;
   const int T = 8 * P;
   float *V = a->vbuf, *M = a->mbuf;
   for (uint32_t c = 0; c < I; c++) {
 #pragma GCC unroll 2
     for (int j = 0; j < P; j++) {
-      v8f e[6][6];
+      tt__net_v8f e[6][6];
 #pragma GCC unroll 6
       for (int i = 0; i < 6; i++) {
-        const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl + 16 * j - 2;
-        v8f d[6];
+        const float *q = a->rowp[i] + c * a->cs + TT__NET_COL_OFF + a->x0 + xl + 16 * j - 2;
+        tt__net_v8f d[6];
 #pragma GCC unroll 3
         for (int k = 0; k < 6; k += 2) {
-          v8f lo = vload(q + k), hi = vload(q + k + 8), lo1 = vload(q + k + 1),
-              hi1 = vload(q + k + 9);
-          d[k] = wino_even(lo, hi);
-          d[k + 1] = wino_even(lo1, hi1);
+          tt__net_v8f lo = tt__net_vload(q + k), hi = tt__net_vload(q + k + 8),
+                      lo1 = tt__net_vload(q + k + 1), hi1 = tt__net_vload(q + k + 9);
+          d[k] = tt__net_wino_even(lo, hi);
+          d[k + 1] = tt__net_wino_even(lo1, hi1);
         }
-        wino_bt(d, e[i]); /* along the row: e[i][s] */
+        tt__net_wino_bt(d, e[i]); /* along the row: e[i][s] */
       }
 #pragma GCC unroll 6
       for (int s2 = 0; s2 < 6; s2++) {
-        v8f col[6], v[6];
+        tt__net_v8f col[6], v[6];
 #pragma GCC unroll 6
         for (int i = 0; i < 6; i++) col[i] = e[i][s2];
-        wino_bt(col, v); /* along the column: V[r][s2] */
+        tt__net_wino_bt(col, v); /* along the column: V[r][s2] */
 #pragma GCC unroll 6
-        for (int r = 0; r < 6; r++) vstore(V + ((size_t)(r * 6 + s2) * I + c) * T + 8 * j, v[r]);
+        for (int r = 0; r < 6; r++)
+          tt__net_vstore(V + ((size_t)(r * 6 + s2) * I + c) * T + 8 * j, v[r]);
       }
     }
   }
@@ -79,21 +80,21 @@ AI void wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O, const
    * ob - 1 (one output channel and vector after each product) read the other: their adds
    * and loads overlap the products' multiply-adds. */
   for (uint32_t ob = 0; ob <= a->nob; ob++) {
-    float *Mc = M + (size_t)(ob & 1) * WINO_POS * O * T;
-    float *Mp = M + (size_t)(~ob & 1) * WINO_POS * O * T;
-    const float *u = a->u + (size_t)(ob < a->nob ? ob : 0) * WINO_POS * I * O;
-    for (uint32_t pos = 0; pos < WINO_POS; pos++) {
+    float *Mc = M + (size_t)(ob & 1) * TT__NET_WINO_POS * O * T;
+    float *Mp = M + (size_t)(~ob & 1) * TT__NET_WINO_POS * O * T;
+    const float *u = a->u + (size_t)(ob < a->nob ? ob : 0) * TT__NET_WINO_POS * I * O;
+    for (uint32_t pos = 0; pos < TT__NET_WINO_POS; pos++) {
       if (ob < a->nob) {
-        v8f acc[12][2];
+        tt__net_v8f acc[12][2];
 #pragma GCC unroll 12
         for (int o = 0; o < O; o++)
 #pragma GCC unroll 2
-          for (int j = 0; j < P; j++) acc[o][j] = vsplat(0.0f);
+          for (int j = 0; j < P; j++) acc[o][j] = tt__net_vsplat(0.0f);
         const float *vp = V + (size_t)pos * I * T;
         for (uint32_t c = 0; c < I; c++) {
-          v8f in[2];
+          tt__net_v8f in[2];
 #pragma GCC unroll 2
-          for (int j = 0; j < P; j++) in[j] = vload(vp + 8 * j);
+          for (int j = 0; j < P; j++) in[j] = tt__net_vload(vp + 8 * j);
 #pragma GCC unroll 12
           for (int o = 0; o < O; o++) {
             float wv = u[o];
@@ -106,54 +107,56 @@ AI void wino_group_t(const tt__net_wino_args *a, uint32_t xl, const int O, const
 #pragma GCC unroll 12
         for (int o = 0; o < O; o++)
 #pragma GCC unroll 2
-          for (int j = 0; j < P; j++) vstore(Mc + ((size_t)pos * O + o) * T + 8 * j, acc[o][j]);
+          for (int j = 0; j < P; j++)
+            tt__net_vstore(Mc + ((size_t)pos * O + o) * T + 8 * j, acc[o][j]);
       }
       if (ob == 0 || pos >= (uint32_t)(O * P)) continue;
       int o = (int)pos / P, j = (int)pos % P;
       uint32_t oc = (ob - 1) * O + (uint32_t)o;
       if (oc >= a->out) continue;
-      v8f bias = vsplat(a->b[oc]);
-      v8f r0[6], r1[6];
+      tt__net_v8f bias = tt__net_vsplat(a->b[oc]);
+      tt__net_v8f r0[6], r1[6];
 #pragma GCC unroll 6
       for (int i = 0; i < 6; i++) {
-        v8f m[6];
+        tt__net_v8f m[6];
 #pragma GCC unroll 6
-        for (int k = 0; k < 6; k++) m[k] = vload(Mp + ((size_t)(i * 6 + k) * O + o) * T + 8 * j);
-        wino_at(m, &r0[i], &r1[i]); /* along the row: output columns 0, 1 */
+        for (int k = 0; k < 6; k++)
+          m[k] = tt__net_vload(Mp + ((size_t)(i * 6 + k) * O + o) * T + 8 * j);
+        tt__net_wino_at(m, &r0[i], &r1[i]); /* along the row: output columns 0, 1 */
       }
-      v8f y00, y10, y01, y11;
-      wino_at(r0, &y00, &y10); /* along the column: output rows 0, 1 */
-      wino_at(r1, &y01, &y11);
+      tt__net_v8f y00, y10, y01, y11;
+      tt__net_wino_at(r0, &y00, &y10); /* along the column: output rows 0, 1 */
+      tt__net_wino_at(r1, &y01, &y11);
       y00 += bias, y01 += bias, y10 += bias, y11 += bias;
       if (a->relu) {
-        v8f z = vsplat(0.0f);
-        y00 = vsel(y00 > z, y00, z), y01 = vsel(y01 > z, y01, z);
-        y10 = vsel(y10 > z, y10, z), y11 = vsel(y11 > z, y11, z);
+        tt__net_v8f z = tt__net_vsplat(0.0f);
+        y00 = tt__net_vsel(y00 > z, y00, z), y01 = tt__net_vsel(y01 > z, y01, z);
+        y10 = tt__net_vsel(y10 > z, y10, z), y11 = tt__net_vsel(y11 > z, y11, z);
       }
       /* Tile t's columns 2t, 2t + 1: interleave the column-0 and column-1 vectors. */
       float *d0 = a->dst[0] + oc * a->dcs + xl + 16 * j;
       float *d1 = a->dst[1] + oc * a->dcs + xl + 16 * j;
-      vstore(d0, WINO_SHUF8(y00, y01, 0, 8, 1, 9, 2, 10, 3, 11));
-      vstore(d0 + 8, WINO_SHUF8(y00, y01, 4, 12, 5, 13, 6, 14, 7, 15));
-      vstore(d1, WINO_SHUF8(y10, y11, 0, 8, 1, 9, 2, 10, 3, 11));
-      vstore(d1 + 8, WINO_SHUF8(y10, y11, 4, 12, 5, 13, 6, 14, 7, 15));
+      tt__net_vstore(d0, TT__NET_WINO_SHUF8(y00, y01, 0, 8, 1, 9, 2, 10, 3, 11));
+      tt__net_vstore(d0 + 8, TT__NET_WINO_SHUF8(y00, y01, 4, 12, 5, 13, 6, 14, 7, 15));
+      tt__net_vstore(d1, TT__NET_WINO_SHUF8(y10, y11, 0, 8, 1, 9, 2, 10, 3, 11));
+      tt__net_vstore(d1 + 8, TT__NET_WINO_SHUF8(y10, y11, 4, 12, 5, 13, 6, 14, 7, 15));
     }
   }
 }
 
 /* All groups of a chunk: 16 tiles per group with 32 registers (`wide`), else 8. Output
  * blocks of 10 (the kernel layer's 50 outputs) or 12 (12-channel body layers). */
-#define WINO_CASE(O_)                                                                              \
+#define TT__NET_WINO_CASE(O_)                                                                      \
   case O_:                                                                                         \
     for (uint32_t xl = 0; xl < a->n;) {                                                            \
-      if (wide && a->n - xl >= 32) wino_group_t(a, xl, O_, 2), xl += 32;                           \
-      else wino_group_t(a, xl, O_, 1), xl += 16;                                                   \
+      if (wide && a->n - xl >= 32) tt__net_wino_group_t(a, xl, O_, 2), xl += 32;                   \
+      else tt__net_wino_group_t(a, xl, O_, 1), xl += 16;                                           \
     }                                                                                              \
     break;
-AI void wino_dispatch(const tt__net_wino_args *a, uint32_t oblk, const int wide) {
+TT__NET_AI void tt__net_wino_dispatch(const tt__net_wino_args *a, uint32_t oblk, const int wide) {
   switch (oblk) {
-    WINO_CASE(10)
-    WINO_CASE(12)
+    TT__NET_WINO_CASE(10)
+    TT__NET_WINO_CASE(12)
   default: break;
   }
 }
@@ -167,7 +170,7 @@ AI void wino_dispatch(const tt__net_wino_args *a, uint32_t oblk, const int wide)
  * tile's arithmetic is the same whatever lane or group it is in. */
 
 /* 4 x 4 transpose inside each 128-bit half of (r0, r1, r2, r3). */
-#define WINO4_T4(r0, r1, r2, r3)                                                                   \
+#define TT__NET_WINO4_T4(r0, r1, r2, r3)                                                           \
   do {                                                                                             \
     __m256 t0_ = _mm256_unpacklo_ps(r0, r1), t1_ = _mm256_unpackhi_ps(r0, r1);                     \
     __m256 t2_ = _mm256_unpacklo_ps(r2, r3), t3_ = _mm256_unpackhi_ps(r2, r3);                     \
@@ -181,7 +184,7 @@ AI void wino_dispatch(const tt__net_wino_args *a, uint32_t oblk, const int wide)
  * 0 -1 1 17/4 -17/4 -1 1 0 / 0 1/2 1/4 -5/2 -5/4 2 1 0 / 0 -1/2 1/4 5/2 -5/4 -2 1 0 /
  * 0 2 4 -5/2 -5 1/2 1 0 / 0 -2 4 5/2 -5 -1/2 1 0 / 0 -1 0 21/4 0 -21/4 0 1), the even and
  * odd halves of each +-pair computed once. */
-AI void wino4_bt(const __m256 d[8], __m256 v[8]) {
+TT__NET_AI void tt__net_wino4_bt(const __m256 d[8], __m256 v[8]) {
   const __m256 c21 = _mm256_set1_ps(5.25f), c17 = _mm256_set1_ps(4.25f);
   v[0] = _mm256_add_ps(_mm256_sub_ps(d[6], d[0]), _mm256_mul_ps(_mm256_sub_ps(d[2], d[4]), c21));
   v[7] = _mm256_add_ps(_mm256_sub_ps(d[7], d[1]), _mm256_mul_ps(_mm256_sub_ps(d[3], d[5]), c21));
@@ -207,7 +210,7 @@ AI void wino4_bt(const __m256 d[8], __m256 v[8]) {
 
 /* A^T of one 8-vector (rows 1 1 1 1 1 1 1 0 / 0 1 -1 2 -2 1/2 -1/2 0 / 0 1 1 4 4 1/4 1/4 0 /
  * 0 1 -1 8 -8 1/8 -1/8 1). */
-AI void wino4_at(const __m256 m[8], __m256 y[4]) {
+TT__NET_AI void tt__net_wino4_at(const __m256 m[8], __m256 y[4]) {
   __m256 s1 = _mm256_add_ps(m[1], m[2]), d1 = _mm256_sub_ps(m[1], m[2]);
   __m256 s2 = _mm256_add_ps(m[3], m[4]), d2 = _mm256_sub_ps(m[3], m[4]);
   __m256 s3 = _mm256_add_ps(m[5], m[6]), d3 = _mm256_sub_ps(m[5], m[6]);
@@ -221,7 +224,8 @@ AI void wino4_at(const __m256 m[8], __m256 y[4]) {
 
 /* One group of 8P tiles (32P columns from xl), O outputs per block; P = 2 (16 tiles)
  * needs the 32 vector registers of AVX-512VL for its 2 O accumulators. */
-AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, const int P) {
+TT__NET_AI void tt__net_wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O,
+                                      const int P) {
   const uint32_t I = a->in;
   const int T = 8 * P;
   float *V = a->vbuf, *M = a->mbuf, *E = a->ebuf;
@@ -233,10 +237,10 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
     for (int j = 0; j < P; j++) {
 #pragma GCC unroll 8
       for (int i = 0; i < 8; i++) {
-        const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl + 32 * j;
+        const float *q = a->rowp[i] + c * a->cs + TT__NET_COL_OFF + a->x0 + xl + 32 * j;
         __m256 r0 = _mm256_loadu_ps(q), r1 = _mm256_loadu_ps(q + 8), r2 = _mm256_loadu_ps(q + 16),
                r3 = _mm256_loadu_ps(q + 24);
-        WINO4_T4(r0, r1, r2, r3); /* rk: column 4t + k of tile t */
+        TT__NET_WINO4_T4(r0, r1, r2, r3); /* rk: column 4t + k of tile t */
         __m256 d[8];
         d[0] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r2, prev), _mm256_broadcast_ss(q - 2), 1);
         d[1] = _mm256_blend_ps(_mm256_permutevar8x32_ps(r3, prev), _mm256_broadcast_ss(q - 1), 1);
@@ -246,7 +250,7 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
         d[7] =
             _mm256_blend_ps(_mm256_permutevar8x32_ps(r1, next), _mm256_broadcast_ss(q + 33), 0x80);
         __m256 e[8];
-        wino4_bt(d, e); /* along the row: E[i][s] */
+        tt__net_wino4_bt(d, e); /* along the row: E[i][s] */
 #pragma GCC unroll 8
         for (int s2 = 0; s2 < 8; s2++) _mm256_store_ps(E + (i * 8 + s2) * 8, e[s2]);
       }
@@ -255,15 +259,15 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
         __m256 col[8], v[8];
 #pragma GCC unroll 8
         for (int i = 0; i < 8; i++) col[i] = _mm256_load_ps(E + (i * 8 + s2) * 8);
-        wino4_bt(col, v); /* along the column: V[r][s2] */
+        tt__net_wino4_bt(col, v); /* along the column: V[r][s2] */
 #pragma GCC unroll 8
         for (int r = 0; r < 8; r++)
           _mm256_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * T + 8 * j, v[r]);
       }
     }
   for (uint32_t ob = 0; ob < a->nob; ob++) {
-    const float *u = a->u + (size_t)ob * WINO4_POS * I * O;
-    for (uint32_t pos = 0; pos < WINO4_POS; pos++) {
+    const float *u = a->u + (size_t)ob * TT__NET_WINO4_POS * I * O;
+    for (uint32_t pos = 0; pos < TT__NET_WINO4_POS; pos++) {
       __m256 acc[12][2];
 #pragma GCC unroll 12
       for (int o = 0; o < O; o++)
@@ -302,7 +306,7 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
 #pragma GCC unroll 8
           for (int k = 0; k < 8; k++)
             m8[k] = _mm256_load_ps(M + ((size_t)(i * 8 + k) * O + o) * T + 8 * j);
-          wino4_at(m8, t[i]); /* along the row: tile columns 0..3 */
+          tt__net_wino4_at(m8, t[i]); /* along the row: tile columns 0..3 */
         }
         __m256 y[4][4]; /* [row][column] */
 #pragma GCC unroll 4
@@ -310,7 +314,7 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
           __m256 col[8], yy[4];
 #pragma GCC unroll 8
           for (int i = 0; i < 8; i++) col[i] = t[i][k];
-          wino4_at(col, yy); /* along the column: output rows 0..3 */
+          tt__net_wino4_at(col, yy); /* along the column: output rows 0..3 */
 #pragma GCC unroll 4
           for (int r = 0; r < 4; r++) {
             y[r][k] = _mm256_add_ps(yy[r], bias);
@@ -319,7 +323,7 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
         }
 #pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
-          WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]); /* back to column order */
+          TT__NET_WINO4_T4(y[r][0], y[r][1], y[r][2], y[r][3]); /* back to column order */
           float *d = a->dst[r] + oc * a->dcs + xl + 32 * j;
           for (int k = 0; k < 4; k++) _mm256_storeu_ps(d + 8 * k, y[r][k]);
         }
@@ -330,18 +334,18 @@ AI void wino4_group_t(const tt__net_wino4_args *a, uint32_t xl, const int O, con
 
 /* All groups of a chunk; output blocks of 10 (the kernel layer's 50 outputs), 12 or 6
  * (12- and 6-channel body layers). */
-#define WINO4_CASE(O_)                                                                             \
+#define TT__NET_WINO4_CASE(O_)                                                                     \
   case O_:                                                                                         \
     for (uint32_t xl = 0; xl < a->n;) {                                                            \
-      if (wide && a->n - xl >= 64) wino4_group_t(a, xl, O_, 2), xl += 64;                          \
-      else wino4_group_t(a, xl, O_, 1), xl += 32;                                                  \
+      if (wide && a->n - xl >= 64) tt__net_wino4_group_t(a, xl, O_, 2), xl += 64;                  \
+      else tt__net_wino4_group_t(a, xl, O_, 1), xl += 32;                                          \
     }                                                                                              \
     break;
-AI void wino4_dispatch(const tt__net_wino4_args *a, uint32_t oblk, const int wide) {
+TT__NET_AI void tt__net_wino4_dispatch(const tt__net_wino4_args *a, uint32_t oblk, const int wide) {
   switch (oblk) {
-    WINO4_CASE(6)
-    WINO4_CASE(10)
-    WINO4_CASE(12)
+    TT__NET_WINO4_CASE(6)
+    TT__NET_WINO4_CASE(10)
+    TT__NET_WINO4_CASE(12)
   default: break;
   }
 }
@@ -356,7 +360,7 @@ AI void wino4_dispatch(const tt__net_wino4_args *a, uint32_t oblk, const int wid
  * code's operation for operation (same expressions, so the same contractions and
  * roundings): a tile's results do not depend on which of the two codes ran it, so column
  * tiles and chunk tails that mix them stay bit-identical. */
-#  define WINO4_T4_16(r0, r1, r2, r3)                                                              \
+#  define TT__NET_WINO4_T4_16(r0, r1, r2, r3)                                                      \
     do {                                                                                           \
       __m512 t0_ = _mm512_unpacklo_ps(r0, r1), t1_ = _mm512_unpackhi_ps(r0, r1);                   \
       __m512 t2_ = _mm512_unpacklo_ps(r2, r3), t3_ = _mm512_unpackhi_ps(r2, r3);                   \
@@ -366,8 +370,8 @@ AI void wino4_dispatch(const tt__net_wino4_args *a, uint32_t oblk, const int wid
       r3 = _mm512_shuffle_ps(t1_, t3_, 0xEE);                                                      \
     } while (0)
 
-/* wino4_bt on 16 lanes. */
-AI void wino4_bt16(const __m512 d[8], __m512 v[8]) {
+/* tt__net_wino4_bt on 16 lanes. */
+TT__NET_AI void tt__net_wino4_bt16(const __m512 d[8], __m512 v[8]) {
   const __m512 c21 = _mm512_set1_ps(5.25f), c17 = _mm512_set1_ps(4.25f);
   v[0] = _mm512_add_ps(_mm512_sub_ps(d[6], d[0]), _mm512_mul_ps(_mm512_sub_ps(d[2], d[4]), c21));
   v[7] = _mm512_add_ps(_mm512_sub_ps(d[7], d[1]), _mm512_mul_ps(_mm512_sub_ps(d[3], d[5]), c21));
@@ -391,8 +395,8 @@ AI void wino4_bt16(const __m512 d[8], __m512 v[8]) {
   v[6] = _mm512_sub_ps(e3, o3);
 }
 
-/* wino4_at on 16 lanes. */
-AI void wino4_at16(const __m512 m[8], __m512 y[4]) {
+/* tt__net_wino4_at on 16 lanes. */
+TT__NET_AI void tt__net_wino4_at16(const __m512 m[8], __m512 y[4]) {
   __m512 s1 = _mm512_add_ps(m[1], m[2]), d1 = _mm512_sub_ps(m[1], m[2]);
   __m512 s2 = _mm512_add_ps(m[3], m[4]), d2 = _mm512_sub_ps(m[3], m[4]);
   __m512 s3 = _mm512_add_ps(m[5], m[6]), d3 = _mm512_sub_ps(m[5], m[6]);
@@ -404,9 +408,9 @@ AI void wino4_at16(const __m512 m[8], __m512 y[4]) {
       m[7]);
 }
 
-/* One group of 16 tiles (64 columns from xl), O outputs per block: wino4_group_t's steps
+/* One group of 16 tiles (64 columns from xl), O outputs per block: tt__net_wino4_group_t's steps
  * with T = 16 lanes. */
-AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
+TT__NET_AI void tt__net_wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
   const uint32_t I = a->in;
   float *V = a->vbuf, *M = a->mbuf, *E = a->ebuf;
   /* lane shifts by one tile in the lane order above: the tile before / after */
@@ -415,10 +419,10 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
   for (uint32_t c = 0; c < I; c++) {
 #  pragma GCC unroll 8
     for (int i = 0; i < 8; i++) {
-      const float *q = a->rowp[i] + c * a->cs + COL + a->x0 + xl;
+      const float *q = a->rowp[i] + c * a->cs + TT__NET_COL_OFF + a->x0 + xl;
       __m512 r0 = _mm512_loadu_ps(q), r1 = _mm512_loadu_ps(q + 16), r2 = _mm512_loadu_ps(q + 32),
              r3 = _mm512_loadu_ps(q + 48);
-      WINO4_T4_16(r0, r1, r2, r3); /* rk: column 4t + k of tile t */
+      TT__NET_WINO4_T4_16(r0, r1, r2, r3); /* rk: column 4t + k of tile t */
       __m512 d[8];
       d[0] = _mm512_mask_blend_ps(0x0001, _mm512_permutexvar_ps(prev, r2), _mm512_set1_ps(q[-2]));
       d[1] = _mm512_mask_blend_ps(0x0001, _mm512_permutexvar_ps(prev, r3), _mm512_set1_ps(q[-1]));
@@ -426,7 +430,7 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
       d[6] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r0), _mm512_set1_ps(q[64]));
       d[7] = _mm512_mask_blend_ps(0x8000, _mm512_permutexvar_ps(next, r1), _mm512_set1_ps(q[65]));
       __m512 e[8];
-      wino4_bt16(d, e); /* along the row: E[i][s] */
+      tt__net_wino4_bt16(d, e); /* along the row: E[i][s] */
 #  pragma GCC unroll 8
       for (int s2 = 0; s2 < 8; s2++) _mm512_store_ps(E + (i * 8 + s2) * 16, e[s2]);
     }
@@ -435,14 +439,14 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
       __m512 col[8], v[8];
 #  pragma GCC unroll 8
       for (int i = 0; i < 8; i++) col[i] = _mm512_load_ps(E + (i * 8 + s2) * 16);
-      wino4_bt16(col, v); /* along the column: V[r][s2] */
+      tt__net_wino4_bt16(col, v); /* along the column: V[r][s2] */
 #  pragma GCC unroll 8
       for (int r = 0; r < 8; r++) _mm512_store_ps(V + ((size_t)(r * 8 + s2) * I + c) * 16, v[r]);
     }
   }
   for (uint32_t ob = 0; ob < a->nob; ob++) {
-    const float *u = a->u + (size_t)ob * WINO4_POS * I * O;
-    for (uint32_t pos = 0; pos < WINO4_POS; pos++) {
+    const float *u = a->u + (size_t)ob * TT__NET_WINO4_POS * I * O;
+    for (uint32_t pos = 0; pos < TT__NET_WINO4_POS; pos++) {
       __m512 acc[12];
 #  pragma GCC unroll 12
       for (int o = 0; o < O; o++) acc[o] = _mm512_setzero_ps();
@@ -467,7 +471,7 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
         __m512 m8[8];
 #  pragma GCC unroll 8
         for (int k = 0; k < 8; k++) m8[k] = _mm512_load_ps(M + ((size_t)(i * 8 + k) * O + o) * 16);
-        wino4_at16(m8, t[i]); /* along the row: tile columns 0..3 */
+        tt__net_wino4_at16(m8, t[i]); /* along the row: tile columns 0..3 */
       }
       __m512 y[4][4]; /* [row][column] */
 #  pragma GCC unroll 4
@@ -475,7 +479,7 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
         __m512 col[8], yy[4];
 #  pragma GCC unroll 8
         for (int i = 0; i < 8; i++) col[i] = t[i][k];
-        wino4_at16(col, yy); /* along the column: output rows 0..3 */
+        tt__net_wino4_at16(col, yy); /* along the column: output rows 0..3 */
 #  pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
           y[r][k] = _mm512_add_ps(yy[r], bias);
@@ -484,7 +488,7 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
       }
 #  pragma GCC unroll 4
       for (int r = 0; r < 4; r++) {
-        WINO4_T4_16(y[r][0], y[r][1], y[r][2], y[r][3]); /* back to column order */
+        TT__NET_WINO4_T4_16(y[r][0], y[r][1], y[r][2], y[r][3]); /* back to column order */
         float *d = a->dst[r] + oc * a->dcs + xl;
         for (int k = 0; k < 4; k++) _mm512_storeu_ps(d + 16 * k, y[r][k]);
       }
@@ -494,31 +498,31 @@ AI void wino4_group16_t(const tt__net_wino4_args *a, uint32_t xl, const int O) {
 
 /* All groups of a chunk on AVX-512: 64 columns per 16-lane group, a 32-column tail by the
  * 8-lane code. */
-#  define WINO4_CASE16(O_)                                                                         \
+#  define TT__NET_WINO4_CASE16(O_)                                                                 \
   case O_:                                                                                         \
     for (uint32_t xl = 0; xl < a->n;) {                                                            \
-      if (a->n - xl >= 64) wino4_group16_t(a, xl, O_), xl += 64;                                   \
-      else wino4_group_t(a, xl, O_, 1), xl += 32;                                                  \
+      if (a->n - xl >= 64) tt__net_wino4_group16_t(a, xl, O_), xl += 64;                           \
+      else tt__net_wino4_group_t(a, xl, O_, 1), xl += 32;                                          \
     }                                                                                              \
     break;
-AI void wino4_dispatch16(const tt__net_wino4_args *a, uint32_t oblk) {
+TT__NET_AI void tt__net_wino4_dispatch16(const tt__net_wino4_args *a, uint32_t oblk) {
   switch (oblk) {
-    WINO4_CASE16(6)
-    WINO4_CASE16(10)
-    WINO4_CASE16(12)
+    TT__NET_WINO4_CASE16(6)
+    TT__NET_WINO4_CASE16(10)
+    TT__NET_WINO4_CASE16(12)
   default: break;
   }
 }
 #endif
 
 void TT__NET_K(wino)(const tt__net_wino_args *a, uint32_t oblk) {
-  wino_dispatch(a, oblk, TT__NET_HAVE_AVX512); /* 32 registers: 16 tiles per group */
+  tt__net_wino_dispatch(a, oblk, TT__NET_HAVE_AVX512); /* 32 registers: 16 tiles per group */
 }
 
 void TT__NET_K(wino4)(const tt__net_wino4_args *a, uint32_t oblk) {
 #if TT__NET_HAVE_AVX512
-  wino4_dispatch16(a, oblk);
+  tt__net_wino4_dispatch16(a, oblk);
 #else
-  wino4_dispatch(a, oblk, 0);
+  tt__net_wino4_dispatch(a, oblk, 0);
 #endif
 }

@@ -26,13 +26,13 @@
 /* ---- weights file ---- */
 
 /* Reads a little-endian u32 (the format is LE whatever the host). */
-static uint32_t net_u32(const unsigned char *p) {
+static uint32_t tt__net_u32(const unsigned char *p) {
   return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
 /* Reads a little-endian IEEE float. */
-static float net_f32(const unsigned char *p) {
-  uint32_t u = net_u32(p);
+static float tt__net_f32(const unsigned char *p) {
+  uint32_t u = tt__net_u32(p);
   float f;
   memcpy(&f, &u, 4);
   return f;
@@ -40,10 +40,10 @@ static float net_f32(const unsigned char *p) {
 
 /* FNV-1a 32-bit over the payload (<tt_util/hash.h>): cheap and catches torn or edited
  * files. */
-static uint32_t net_fnv1a(const unsigned char *p, size_t n) { return tt__fnv1a32(p, n); }
+static uint32_t tt__net_fnv1a(const unsigned char *p, size_t n) { return tt__fnv1a32(p, n); }
 
 /* 32-byte aligned zeroed floats. */
-static float *net_alloc(size_t count) {
+static float *tt__net_alloc(size_t count) {
   size_t bytes = (count * sizeof(float) + 31) & ~(size_t)31;
   float *p = aligned_alloc(32, bytes ? bytes : 32);
   if (p) memset(p, 0, bytes ? bytes : 32);
@@ -51,7 +51,7 @@ static float *net_alloc(size_t count) {
 }
 
 /* Frees one layer's arrays. */
-static void net_layer_free(tt__net_layer *l) {
+static void tt__net_layer_free(tt__net_layer *l) {
   free(l->w);
   free(l->b);
   free(l->wq);
@@ -60,26 +60,27 @@ static void net_layer_free(tt__net_layer *l) {
 }
 
 void tt__net_free(tt__net_model *m) {
-  for (uint32_t i = 0; i < TT__NET_MAX_LAYERS; i++) net_layer_free(&m->body[i]);
-  net_layer_free(&m->kernel);
-  net_layer_free(&m->hid);
+  for (uint32_t i = 0; i < TT__NET_MAX_LAYERS; i++) tt__net_layer_free(&m->body[i]);
+  tt__net_layer_free(&m->kernel);
+  tt__net_layer_free(&m->hid);
 }
 
 /* Copies weights from the payload and repacks them for the fast path. */
-static tt_status net_layer_read(tt__net_layer *l, const unsigned char *p, const char *src) {
+static tt_status tt__net_layer_read(tt__net_layer *l, const unsigned char *p, const char *src) {
   size_t per = (size_t)l->out * l->in * l->ksize * l->ksize;
-  l->w = net_alloc(per * l->sets);
-  l->b = net_alloc((size_t)l->out * l->sets);
+  l->w = tt__net_alloc(per * l->sets);
+  l->b = tt__net_alloc((size_t)l->out * l->sets);
   if (!l->w || !l->b)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory for weights", src);
-  for (size_t i = 0; i < per * l->sets; i++) l->w[i] = net_f32(p + 4 * i);
+  for (size_t i = 0; i < per * l->sets; i++) l->w[i] = tt__net_f32(p + 4 * i);
   p += 4 * per * l->sets;
-  for (size_t i = 0; i < (size_t)l->out * l->sets; i++) l->b[i] = net_f32(p + 4 * i);
+  for (size_t i = 0; i < (size_t)l->out * l->sets; i++) l->b[i] = tt__net_f32(p + 4 * i);
   return tt__net_fast_pack(l);
 }
 
-#define NET_HEADER_FIXED 48u /* magic 8, version, header size, 6 counts, motion scale, 2 reserved */
-#define NET_LAYER_RECORD 24u /* role, in, out, ksize, sets, activation */
+#define TT__NET_HEADER_FIXED                                                                       \
+  48u /* magic 8, version, header size, 6 counts, motion scale, 2 reserved */
+#define TT__NET_LAYER_RECORD 24u /* role, in, out, ksize, sets, activation */
 
 tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_model *m) {
   const unsigned char *p = data;
@@ -87,23 +88,23 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
   if (size < 12 || memcmp(p, TT__NET_MAGIC, 8) != 0)
     return tt_set_error(TT_ERR_PARSE,
                         "%s: not a post_taa weights file (bad magic; expected \"TTAANET\")", src);
-  uint32_t version = net_u32(p + 8);
+  uint32_t version = tt__net_u32(p + 8);
   if (version < 1 || version > TT__NET_VERSION)
     return tt_set_error(TT_ERR_UNSUPPORTED,
                         "%s: weights format version %u is not supported (this build reads "
                         "versions 1 to %u)",
                         src, version, TT__NET_VERSION);
-  if (size < NET_HEADER_FIXED)
+  if (size < TT__NET_HEADER_FIXED)
     return tt_set_error(TT_ERR_PARSE, "%s: truncated header (%zu bytes, expected at least %u)", src,
-                        size, NET_HEADER_FIXED);
-  uint32_t header_bytes = net_u32(p + 12);
-  m->in_channels = net_u32(p + 16);
-  m->width = net_u32(p + 20);
-  m->hidden = net_u32(p + 24);
-  uint32_t mix_k = net_u32(p + 28), jitter_sets = net_u32(p + 32);
-  uint32_t layers = net_u32(p + 36);
-  m->motion_scale = net_f32(p + 40);
-  m->flags = version >= 2 ? net_u32(p + 44) : 0; /* reserved (ignored) in version 1 */
+                        size, TT__NET_HEADER_FIXED);
+  uint32_t header_bytes = tt__net_u32(p + 12);
+  m->in_channels = tt__net_u32(p + 16);
+  m->width = tt__net_u32(p + 20);
+  m->hidden = tt__net_u32(p + 24);
+  uint32_t mix_k = tt__net_u32(p + 28), jitter_sets = tt__net_u32(p + 32);
+  uint32_t layers = tt__net_u32(p + 36);
+  m->motion_scale = tt__net_f32(p + 40);
+  m->flags = version >= 2 ? tt__net_u32(p + 44) : 0; /* reserved (ignored) in version 1 */
   const uint32_t known = TT__NET_FLAG_REJECT | TT__NET_FLAG_RESET;
   if ((m->flags & ~known) || ((m->flags & TT__NET_FLAG_RESET) && !(m->flags & TT__NET_FLAG_REJECT)))
     return tt_set_error(TT_ERR_UNSUPPORTED,
@@ -127,7 +128,7 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
   if (layers < want_layers_min || layers > TT__NET_MAX_LAYERS)
     return tt_set_error(TT_ERR_PARSE, "%s: %u layers (expected %u to %u)", src, layers,
                         want_layers_min, TT__NET_MAX_LAYERS);
-  if (header_bytes != NET_HEADER_FIXED + layers * NET_LAYER_RECORD)
+  if (header_bytes != TT__NET_HEADER_FIXED + layers * TT__NET_LAYER_RECORD)
     return tt_set_error(TT_ERR_PARSE, "%s: header size %u does not match %u layers", src,
                         header_bytes, layers);
   if (size < header_bytes)
@@ -140,15 +141,15 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
   tt__net_layer recs[TT__NET_MAX_LAYERS];
   uint32_t roles[TT__NET_MAX_LAYERS];
   for (uint32_t i = 0; i < layers; i++) {
-    const unsigned char *r = p + NET_HEADER_FIXED + i * NET_LAYER_RECORD;
+    const unsigned char *r = p + TT__NET_HEADER_FIXED + i * TT__NET_LAYER_RECORD;
     tt__net_layer *l = &recs[i];
     memset(l, 0, sizeof *l);
-    roles[i] = net_u32(r);
-    l->in = net_u32(r + 4);
-    l->out = net_u32(r + 8);
-    l->ksize = net_u32(r + 12);
-    l->sets = net_u32(r + 16);
-    l->activation = net_u32(r + 20);
+    roles[i] = tt__net_u32(r);
+    l->in = tt__net_u32(r + 4);
+    l->out = tt__net_u32(r + 8);
+    l->ksize = tt__net_u32(r + 12);
+    l->sets = tt__net_u32(r + 16);
+    l->activation = tt__net_u32(r + 20);
     const char *what = roles[i] == 1 ? "body" : roles[i] == 2 ? "kernel" : "hidden";
     if (roles[i] < 1 || roles[i] > 3)
       return tt_set_error(TT_ERR_PARSE, "%s: layer %u: unknown role %u", src, i, roles[i]);
@@ -196,15 +197,15 @@ tt_status tt__net_parse(const void *data, size_t size, const char *src, tt__net_
   if (size > want)
     return tt_set_error(TT_ERR_PARSE, "%s: %zu trailing bytes after the checksum", src,
                         size - want);
-  uint32_t sum = net_fnv1a(p + header_bytes, payload);
-  if (sum != net_u32(p + header_bytes + payload))
+  uint32_t sum = tt__net_fnv1a(p + header_bytes, payload);
+  if (sum != tt__net_u32(p + header_bytes + payload))
     return tt_set_error(TT_ERR_PARSE, "%s: checksum mismatch (file corrupted)", src);
   const unsigned char *q = p + header_bytes;
   uint32_t b = 0;
   for (uint32_t i = 0; i < layers; i++) {
     tt__net_layer *dst = roles[i] == 1 ? &m->body[b++] : roles[i] == 2 ? &m->kernel : &m->hid;
     *dst = recs[i];
-    tt_status st = net_layer_read(dst, q, src);
+    tt_status st = tt__net_layer_read(dst, q, src);
     if (st != TT_OK) {
       tt__net_free(m);
       return st;
@@ -243,11 +244,11 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
   size_t px = (size_t)width * height;
   /* + 4 floats: the fast path reads a state pixel as one 4-float vector (3 channels + the
    * next pixel's first, unused), also for the last pixel */
-  s->state = net_alloc(px * s->state_ch + 4);
-  s->next_state = net_alloc(px * s->state_ch + 4);
+  s->state = tt__net_alloc(px * s->state_ch + 4);
+  s->next_state = tt__net_alloc(px * s->state_ch + 4);
   int rej_ok = 1;
   if (m->flags & TT__NET_FLAG_REJECT) {
-    s->prev_depth = net_alloc(px);
+    s->prev_depth = tt__net_alloc(px);
     s->reject = malloc(2 * px);
     rej_ok = s->prev_depth && s->reject;
   }
@@ -262,14 +263,14 @@ tt_status tt__net_state_init(tt__net_state *s, const tt__net_model *m, uint32_t 
 }
 
 /* The reference path's padded HWC planes, allocated on its first use. */
-static tt_status net_reference_planes(tt__net_state *s) {
+static tt_status tt__net_reference_planes(tt__net_state *s) {
   if (s->planes[0]) return TT_OK;
   size_t ch = s->plane_stride;
   size_t ppx = (size_t)(s->width + 2 * TT__NET_BORDER) * (s->height + 2 * TT__NET_BORDER);
-  s->planes[0] = net_alloc(ppx * ch + 8);
-  s->planes[1] = net_alloc(ppx * ch + 8);
-  s->tm = net_alloc(ppx * 3);
-  s->reproj = net_alloc(ppx * 3);
+  s->planes[0] = tt__net_alloc(ppx * ch + 8);
+  s->planes[1] = tt__net_alloc(ppx * ch + 8);
+  s->tm = tt__net_alloc(ppx * 3);
+  s->reproj = tt__net_alloc(ppx * 3);
   if (!s->planes[0] || !s->planes[1] || !s->tm || !s->reproj)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, TT__TAA_NAME ": out of memory for the "
                                                            "reference planes");
@@ -291,7 +292,7 @@ void tt__net_state_free(tt__net_state *s) {
 
 /* ---- per-frame passes ---- */
 
-typedef struct net_job {
+typedef struct tt__net_job {
   tt__net_state *s;
   const tt__net_model *m;
   const float *color, *depth, *motion;
@@ -302,23 +303,23 @@ typedef struct net_job {
   const float *in_plane;
   float *out_plane;
   float *out_rgb;
-} net_job;
+} tt__net_job;
 
 /* Padded plane index of pixel (x, y). */
-static inline size_t net_pidx(const tt__net_state *s, uint32_t x, uint32_t y) {
+static inline size_t tt__net_pidx(const tt__net_state *s, uint32_t x, uint32_t y) {
   return (size_t)(y + TT__NET_BORDER) * (s->width + 2 * TT__NET_BORDER) + x + TT__NET_BORDER;
 }
 
 /* Builds the network input (plane 0), the tonemapped colour and the reprojected RGB. */
-static void net_input_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const net_job *job = ctx;
+static void tt__net_input_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const tt__net_job *job = ctx;
   tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   uint32_t w = s->width, sc = s->state_ch;
   float fb[16];
   for (uint32_t y = y0; y < y1; y++)
     for (uint32_t x = 0; x < w; x++) {
-      size_t i = (size_t)y * w + x, pi = net_pidx(s, x, y);
+      size_t i = (size_t)y * w + x, pi = tt__net_pidx(s, x, y);
       float *in = s->planes[0] + pi * s->plane_stride;
       float t[3];
       tt__taa_tonemap(job->color + 3 * i, t);
@@ -349,8 +350,8 @@ static void net_input_rows(void *ctx, uint32_t y0, uint32_t y1) {
 }
 
 /* Plain scalar reference of one convolution on padded planes (file layout, no packing). */
-static void net_ref_conv(const tt__net_state *s, const tt__net_layer *l, uint32_t set,
-                         const float *in_plane, uint32_t x, uint32_t y, float *out) {
+static void tt__net_ref_conv(const tt__net_state *s, const tt__net_layer *l, uint32_t set,
+                             const float *in_plane, uint32_t x, uint32_t y, float *out) {
   int r = (int)l->ksize / 2;
   uint32_t wp = s->width + 2 * TT__NET_BORDER;
   const float *w = l->w + (size_t)set * l->out * l->in * l->ksize * l->ksize;
@@ -369,33 +370,33 @@ static void net_ref_conv(const tt__net_state *s, const tt__net_layer *l, uint32_
 }
 
 /* Reference body layer rows. */
-static void net_ref_body_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const net_job *job = ctx;
+static void tt__net_ref_body_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const tt__net_job *job = ctx;
   float tmp[TT__NET_MAX_CH];
   for (uint32_t y = y0; y < y1; y++)
     for (uint32_t x = 0; x < job->s->width; x++) {
-      net_ref_conv(job->s, job->layer, job->set, job->in_plane, x, y, tmp);
-      float *o = job->out_plane + net_pidx(job->s, x, y) * job->s->plane_stride;
+      tt__net_ref_conv(job->s, job->layer, job->set, job->in_plane, x, y, tmp);
+      float *o = job->out_plane + tt__net_pidx(job->s, x, y) * job->s->plane_stride;
       for (uint32_t c = 0; c < job->layer->out; c++) o[c] = tmp[c] > 0.0f ? tmp[c] : 0.0f;
     }
 }
 
 /* Reference head rows (libm expf, double accumulation). */
-static void net_ref_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const net_job *job = ctx;
+static void tt__net_ref_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const tt__net_job *job = ctx;
   tt__net_state *s = job->s;
   const tt__net_model *m = job->m;
   uint32_t wp = s->width + 2 * TT__NET_BORDER;
   float k[50], h[8];
   for (uint32_t y = y0; y < y1; y++)
     for (uint32_t x = 0; x < s->width; x++) {
-      net_ref_conv(s, &m->kernel, m->kernel.sets > 1 ? job->set : 0, job->in_plane, x, y, k);
+      tt__net_ref_conv(s, &m->kernel, m->kernel.sets > 1 ? job->set : 0, job->in_plane, x, y, k);
       float mx = -INFINITY;
       for (int n = 0; n < 50; n++) mx = fmaxf(mx, k[n]);
       double sum = 0.0;
       for (int n = 0; n < 50; n++) sum += (k[n] = expf(k[n] - mx));
       double o[3] = {0, 0, 0};
-      size_t pi = net_pidx(s, x, y);
+      size_t pi = tt__net_pidx(s, x, y);
       for (int n = 0; n < 25; n++) {
         size_t q = pi + (size_t)(n / 5) * wp + (size_t)(n % 5) - 2 * wp - 2;
         for (int c = 0; c < 3; c++)
@@ -405,7 +406,7 @@ static void net_ref_head_rows(void *ctx, uint32_t y0, uint32_t y1) {
       float *st = s->next_state + i * s->state_ch;
       for (int c = 0; c < 3; c++) st[c] = (float)(o[c] / sum);
       if (m->hidden) {
-        net_ref_conv(s, &m->hid, m->hid.sets > 1 ? job->set : 0, job->in_plane, x, y, h);
+        tt__net_ref_conv(s, &m->hid, m->hid.sets > 1 ? job->set : 0, job->in_plane, x, y, h);
         for (uint32_t c = 0; c < m->hidden; c++) st[3 + c] = h[c];
       }
       tt__taa_untonemap(st, job->out_rgb + 3 * i);
@@ -456,21 +457,21 @@ void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_ho
   tt__net_reject_begin(s, m, host, f);
   const float *color = f->color, *depth = f->depth, *motion = f->motion;
   uint32_t jitter_index = f->jitter_index;
-  if (net_reference_planes(s) != TT_OK) {
+  if (tt__net_reference_planes(s) != TT_OK) {
     memcpy(out_rgb, color, (size_t)s->width * s->height * 3 * sizeof(float));
     return;
   }
   const tt_host *h = host;
   uint64_t t0 = h && h->clock_ns ? h->clock_ns() : 0;
   double c0 = tt__taa_cpu_ms();
-  net_job job = {.s = s,
-                 .m = m,
-                 .color = color,
-                 .depth = depth,
-                 .motion = motion,
-                 .reject = (m->flags & TT__NET_FLAG_REJECT) ? s->reject : NULL,
-                 .set = jitter_index % TT__NET_JITTER_SETS,
-                 .out_rgb = out_rgb};
+  tt__net_job job = {.s = s,
+                     .m = m,
+                     .color = color,
+                     .depth = depth,
+                     .motion = motion,
+                     .reject = (m->flags & TT__NET_FLAG_REJECT) ? s->reject : NULL,
+                     .set = jitter_index % TT__NET_JITTER_SETS,
+                     .out_rgb = out_rgb};
   /* Depth enters as a fraction of the frame's farthest hit, so scenes of any scale look
    * alike to the network. */
   float dmax = 0.0f;
@@ -478,7 +479,7 @@ void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_ho
     for (size_t i = 0; i < (size_t)s->width * s->height; i++)
       if (depth[i] > dmax && isfinite(depth[i])) dmax = depth[i];
   job.depth_scale = dmax > 0.0f ? 1.0f / dmax : 0.0f;
-  tt__taa_parallel_rows(h, s->height, net_input_rows, &job);
+  tt__taa_parallel_rows(h, s->height, tt__net_input_rows, &job);
   uint64_t t1 = h && h->clock_ns ? h->clock_ns() : 0;
   double c1 = tt__taa_cpu_ms();
   int cur = 0;
@@ -487,14 +488,14 @@ void tt__net_process_frame(tt__net_state *s, const tt__net_model *m, const tt_ho
     job.set = m->body[l].sets > 1 ? jitter_index % TT__NET_JITTER_SETS : 0;
     job.in_plane = s->planes[cur];
     job.out_plane = s->planes[cur ^ 1];
-    tt__taa_parallel_rows(h, s->height, net_ref_body_rows, &job);
+    tt__taa_parallel_rows(h, s->height, tt__net_ref_body_rows, &job);
     cur ^= 1;
   }
   job.set = jitter_index % TT__NET_JITTER_SETS;
   job.in_plane = s->planes[cur];
   uint64_t t2 = h && h->clock_ns ? h->clock_ns() : 0;
   double c2 = tt__taa_cpu_ms();
-  tt__taa_parallel_rows(h, s->height, net_ref_head_rows, &job);
+  tt__taa_parallel_rows(h, s->height, tt__net_ref_head_rows, &job);
   uint64_t t3 = h && h->clock_ns ? h->clock_ns() : 0;
   double c3 = tt__taa_cpu_ms();
   s->cpu_reproject = c1 - c0;

@@ -26,20 +26,18 @@
 
 #include "taa_fast.h"
 
-#define COL TT__NET_COL_OFF
-
 /* Rows a body layer's output must extend beyond a band (what the later layers read). */
-static uint32_t fast_halo_after(const tt__net_model *m, uint32_t l) {
+static uint32_t tt__net_fast_halo_after(const tt__net_model *m, uint32_t l) {
   uint32_t h = m->kernel.ksize / 2;
   for (uint32_t k = l + 1; k < m->body_count; k++) h += m->body[k].ksize / 2;
   return h;
 }
 
 tt_status tt__net_fast_init(tt__net_state *s, const tt__net_model *m) {
-  s->halo = fast_halo_after(m, 0) + m->body[0].ksize / 2;
+  s->halo = tt__net_fast_halo_after(m, 0) + m->body[0].ksize / 2;
   if (s->halo < 2) s->halo = 2;    /* the colour mix reads 2 rows around */
   s->vw = (s->width + 31u) & ~31u; /* F(4x4, 5x5) groups: 8 tiles of 4 columns */
-  s->rs = s->vw + 2 * COL;
+  s->rs = s->vw + 2 * TT__NET_COL_OFF;
   /* Rows of all channels side by side: the first layer reads one contiguous stream per
    * row (the hardware prefetcher follows it) instead of one short stream per channel. */
   s->inp_cs = s->rs;
@@ -88,12 +86,12 @@ const char *tt__net_fast_isa(void) { return tt__net_fast_kernels()->name; }
 /* History reset (models with TT__NET_FLAG_RESET): after the reprojection pass wrote the
  * test bits, the opening marks RESET and the reprojected state of those pixels becomes the
  * fresh-start state (tonemapped colour, hidden 0), as the reference path fetches it. */
-static void fast_reject_reset(tt__net_state *s, const tt__net_model *m) {
+static void tt__net_fast_reject_reset(tt__net_state *s, const tt__net_model *m) {
   size_t n = (size_t)s->width * s->height, cs = s->inp_cs;
   tt__taa_reject_open(s->width, s->height, s->reject, s->reject + n);
   for (uint32_t y = 0; y < s->height; y++) {
     const uint8_t *r = s->reject + (size_t)y * s->width;
-    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + COL;
+    float *base = s->inp + (size_t)(y + s->halo) * s->inp_ys + TT__NET_COL_OFF;
     for (uint32_t x = 0; x < s->width; x++) {
       if (!(r[x] & TT__TAA_REJECT_RESET)) continue;
       for (uint32_t c = 0; c < 3; c++) base[(6 + c) * cs + x] = base[c * cs + x];
@@ -125,7 +123,7 @@ void tt__net_fast_process(tt__net_state *s, const tt__net_model *m, const tt_hos
       if (depth[i] > dmax && isfinite(depth[i])) dmax = depth[i];
   ij.depth_scale = dmax > 0.0f ? 1.0f / dmax : 0.0f;
   tt__taa_parallel_rows(host, s->height, k->input_rows, &ij);
-  if ((m->flags & TT__NET_FLAG_RESET) && s->valid) fast_reject_reset(s, m);
+  if ((m->flags & TT__NET_FLAG_RESET) && s->valid) tt__net_fast_reject_reset(s, m);
   double w1 = tt__net_now_ns() * 1e-6, c1 = tt__taa_cpu_ms();
 
   tt__net_band_times bt;

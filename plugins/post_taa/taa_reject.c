@@ -22,16 +22,16 @@
 
 #include "taa_internal.h"
 
-typedef struct reject_job {
+typedef struct tt__taa_reject_job {
   uint32_t w, h;
   const float *dprev, *zprev, *motion;
   float jx, jy, pjx, pjy;
   uint8_t *mask;
-} reject_job;
+} tt__taa_reject_job;
 
 /* The per-pixel tests of rows [y0, y1). */
-static void reject_test_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const reject_job *j = ctx;
+static void tt__taa_reject_test_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const tt__taa_reject_job *j = ctx;
   for (uint32_t y = y0; y < y1; y++)
     for (uint32_t x = 0; x < j->w; x++) {
       size_t i = (size_t)y * j->w + x;
@@ -83,17 +83,17 @@ void tt__taa_reject_open(uint32_t width, uint32_t height, uint8_t *mask, uint8_t
 void tt__taa_reject_masks(const tt_host *host, uint32_t width, uint32_t height, const float *dprev,
                           const float jitter_prev[2], const float *zprev, const float *motion,
                           const float jitter[2], uint8_t *mask, uint8_t *tmp) {
-  reject_job j = {.w = width,
-                  .h = height,
-                  .dprev = dprev,
-                  .zprev = zprev,
-                  .motion = motion,
-                  .jx = jitter[0],
-                  .jy = jitter[1],
-                  .pjx = jitter_prev[0],
-                  .pjy = jitter_prev[1],
-                  .mask = mask};
+  tt__taa_reject_job j = {.w = width,
+                          .h = height,
+                          .dprev = dprev,
+                          .zprev = zprev,
+                          .motion = motion,
+                          .jx = jitter[0],
+                          .jy = jitter[1],
+                          .pjx = jitter_prev[0],
+                          .pjy = jitter_prev[1],
+                          .mask = mask};
   if (!dprev) j.zprev = NULL;
-  tt__taa_parallel_rows(host, height, reject_test_rows, &j);
+  tt__taa_parallel_rows(host, height, tt__taa_reject_test_rows, &j);
   tt__taa_reject_open(width, height, mask, tmp);
 }

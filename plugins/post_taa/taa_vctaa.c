@@ -13,7 +13,7 @@
 
 #include "taa_internal.h"
 
-tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height) {
+tt_status tt__vctaa_init(tt__vctaa_filter *v, uint32_t width, uint32_t height) {
   memset(v, 0, sizeof *v);
   size_t n = (size_t)width * height * 3;
   v->width = width;
@@ -29,7 +29,7 @@ tt_status tt__vctaa_init(tt__vctaa *v, uint32_t width, uint32_t height) {
   return TT_OK;
 }
 
-void tt__vctaa_free(tt__vctaa *v) {
+void tt__vctaa_free(tt__vctaa_filter *v) {
   free(v->history);
   free(v->scratch);
   free(v->ycocg);
@@ -38,43 +38,43 @@ void tt__vctaa_free(tt__vctaa *v) {
 }
 
 /* RGB -> YCoCg (the luma/chroma space where an axis-aligned box fits colour clouds best). */
-static inline void vc_to_ycocg(const float c[3], float o[3]) {
+static inline void tt__vctaa_to_ycocg(const float c[3], float o[3]) {
   o[0] = 0.25f * c[0] + 0.5f * c[1] + 0.25f * c[2];
   o[1] = 0.5f * c[0] - 0.5f * c[2];
   o[2] = -0.25f * c[0] + 0.5f * c[1] - 0.25f * c[2];
 }
 
 /* YCoCg -> RGB. */
-static inline void vc_from_ycocg(const float o[3], float c[3]) {
+static inline void tt__vctaa_from_ycocg(const float o[3], float c[3]) {
   c[0] = o[0] + o[1] - o[2];
   c[1] = o[0] + o[2];
   c[2] = o[0] - o[1] - o[2];
 }
 
-typedef struct vc_job {
-  tt__vctaa *v;
+typedef struct tt__vctaa_job {
+  tt__vctaa_filter *v;
   const tt__vctaa_params *p;
   const float *color;
   const float *motion;
   float *out;
-} vc_job;
+} tt__vctaa_job;
 
 /* Tonemaps rows [y0, y1) of the new frame into YCoCg once (each is read 9 times). */
-static void vc_prepare_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const vc_job *job = ctx;
+static void tt__vctaa_prepare_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const tt__vctaa_job *job = ctx;
   size_t w = job->v->width;
   for (size_t i = y0 * w; i < y1 * w; i++) {
     float t[3];
     if (job->p->linear)
       for (int c = 0; c < 3; c++) t[c] = tt__taa_fmax(job->color[3 * i + c], 0.0f);
     else tt__taa_tonemap_inl(job->color + 3 * i, t);
-    vc_to_ycocg(t, job->v->ycocg + 3 * i);
+    tt__vctaa_to_ycocg(t, job->v->ycocg + 3 * i);
   }
 }
 
 /* tt__taa_sample_catmull_rom for 3 channels, inlined (same weights, taps and order). */
-static inline void vc_catmull_rom3(const float *img, int w, int h, float fx, float fy,
-                                   float out[3]) {
+static inline void tt__vctaa_catmull_rom3(const float *img, int w, int h, float fx, float fy,
+                                          float out[3]) {
   float ux = fx - 0.5f, uy = fy - 0.5f;
   float bx = floorf(ux), by = floorf(uy);
   float wx[4], wy[4];
@@ -104,9 +104,9 @@ static inline void vc_catmull_rom3(const float *img, int w, int h, float fx, flo
 }
 
 /* Resolves rows [y0, y1). The 3x3 neighbourhood reads edge-clamped rows and columns. */
-static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
-  const vc_job *job = ctx;
-  const tt__vctaa *v = job->v;
+static void tt__vctaa_rows(void *ctx, uint32_t y0, uint32_t y1) {
+  const tt__vctaa_job *job = ctx;
+  const tt__vctaa_filter *v = job->v;
   const tt__vctaa_params *p = job->p;
   uint32_t w = v->width, h = v->height;
   for (uint32_t y = y0; y < y1; y++) {
@@ -136,9 +136,9 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
         memcpy(res, cur, sizeof res);
       } else {
         float hist_rgb[3], hist[3];
-        if (p->catmull_rom) vc_catmull_rom3(v->history, (int)w, (int)h, hx, hy, hist_rgb);
+        if (p->catmull_rom) tt__vctaa_catmull_rom3(v->history, (int)w, (int)h, hx, hy, hist_rgb);
         else tt__taa_sample_bilinear(v->history, w, h, 3, hx, hy, hist_rgb);
-        vc_to_ycocg(hist_rgb, hist);
+        tt__vctaa_to_ycocg(hist_rgb, hist);
         /* Clip toward the box centre along the line to the mean (not a per-axis clamp), so
          * the clipped colour stays on a plausible hue. */
         float scale = 0.0f, d[3];
@@ -156,7 +156,7 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
         for (int c = 0; c < 3; c++) res[c] = hist[c] + p->blend * (cur[c] - hist[c]);
       }
       float rgb[3];
-      vc_from_ycocg(res, rgb);
+      tt__vctaa_from_ycocg(res, rgb);
       if (p->linear) {
         for (int c = 0; c < 3; c++) rgb[c] = tt__taa_fmax(rgb[c], 0.0f);
         memcpy(v->scratch + 3 * i, rgb, sizeof rgb);
@@ -170,13 +170,13 @@ static void vc_rows(void *ctx, uint32_t y0, uint32_t y1) {
   }
 }
 
-void tt__vctaa_process(tt__vctaa *v, const tt_host *host, const tt__vctaa_params *p,
+void tt__vctaa_process(tt__vctaa_filter *v, const tt_host *host, const tt__vctaa_params *p,
                        const float *color, const float *motion, float *out_rgb) {
-  vc_job job = {v, p, color, motion, out_rgb};
+  tt__vctaa_job job = {v, p, color, motion, out_rgb};
   if (v->linear != p->linear) v->valid = 0; /* the history is in the other space */
   v->linear = p->linear;
-  tt__taa_parallel_rows(host, v->height, vc_prepare_rows, &job);
-  tt__taa_parallel_rows(host, v->height, vc_rows, &job);
+  tt__taa_parallel_rows(host, v->height, tt__vctaa_prepare_rows, &job);
+  tt__taa_parallel_rows(host, v->height, tt__vctaa_rows, &job);
   float *t = v->history;
   v->history = v->scratch;
   v->scratch = t;

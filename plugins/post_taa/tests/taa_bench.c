@@ -45,7 +45,7 @@ static double layer_flops(const tt__net_layer *l) {
   return 2.0 * l->ksize * l->ksize * l->in * l->out + l->out;
 }
 
-typedef float v8f __attribute__((vector_size(32)));
+typedef float tt__net_v8f __attribute__((vector_size(32)));
 
 /* 12 independent chains of 8-wide FMAs (2 FMA units x 4 cycles latency need >= 8); a
  * measurement of the machine, not a kernel, so gcc and clang both build it for AVX2+FMA. */
@@ -53,8 +53,8 @@ typedef float v8f __attribute__((vector_size(32)));
 __attribute__((target("avx2,fma"), noinline))
 #endif
 static void
-fma_loop(v8f *a, long n) {
-  v8f r[12], b, c;
+fma_loop(tt__net_v8f *a, long n) {
+  tt__net_v8f r[12], b, c;
   for (int i = 0; i < 8; i++) b[i] = 1.0000001f, c[i] = 1e-7f;
   for (int i = 0; i < 12; i++) r[i] = a[i];
   for (long k = 0; k < n; k++) {
@@ -68,7 +68,7 @@ fma_loop(v8f *a, long n) {
 static double measure_peak(void) {
 #if defined(__x86_64__)
   if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) return 0.0;
-  v8f a[12];
+  tt__net_v8f a[12];
   for (int i = 0; i < 12; i++)
     for (int l = 0; l < 8; l++) a[i][l] = (float)(i + l);
   double best = 0.0;
@@ -123,7 +123,7 @@ typedef struct variant {
   int winograd; /* tt__net_state.winograd of this row (-1: the plugin's default) */
   tt__net_model m;
   tt__net_state s;
-  tt__vctaa v;
+  tt__vctaa_filter v;
   double wall[MAX_ROUNDS], cpu[MAX_ROUNDS], rej[MAX_ROUNDS], rep[MAX_ROUNDS], net[MAX_ROUNDS],
       mix[MAX_ROUNDS], body[MAX_ROUNDS], kern[MAX_ROUNDS];
   uint64_t digest; /* TT_BENCH_DIGEST: FNV-1a 64 of all frames' outputs */
