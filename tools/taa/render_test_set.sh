@@ -4,17 +4,19 @@
 # REF_SPP (8) samples per film pixel (128 per output pixel), through render_noisy.sh.
 #   tools/taa/render_test_set.sh BUILD_DIR OUT_DIR [SCENES]
 # writes OUT_DIR/scenes/NAME/scene.json, OUT_DIR/NAME-ref, OUT_DIR/NAME-spp1, OUT_DIR/NAME-spp8
-# (resumable: finished folders are kept). Environment: RES (160x90), SPPS ("1 8"), REF_SPP,
+# (resumable: finished folders are kept). Environment: SET (test; train and val render the
+# training and validation sequences of the same kind from other scenes), OFFSET (0: the
+# camera path keys K..K+3, sequences named NAME-kK), RES (160x90), SPPS ("1 8"), REF_SPP,
 # THREADS (render_noisy.sh's).
 set -eu
 build=$1
 out=$2
-scenes=${3:-cornell-box,killeroos,veach-mis}
+set=${SET:-test}
 here=$(cd "$(dirname "$0")" && pwd)
 mkdir -p "$out/scenes"
-(cd "$here/../.." && /usr/bin/python3 -m tools.taa.make_test_set "$out/scenes" --res "${RES:-160x90}" \
-  --scenes "$scenes") > /dev/null
-for s in $(echo "$scenes" | tr , ' '); do
-  SPPS=${SPPS:-1 8} REF_SPP=${REF_SPP:-8} sh "$here/render_noisy.sh" "$build" "$out" "$s" \
-    "$out/scenes/$s/scene.json" 24
+scenes=$(cd "$here/../.." && /usr/bin/python3 -m tools.taa.make_test_set "$out/scenes" \
+  --res "${RES:-160x90}" --set "$set" --offset "${OFFSET:-0}" ${3:+--scenes "$3"})
+for sc in $scenes; do
+  name=$(basename "$(dirname "$sc")")
+  SPPS=${SPPS:-1 8} REF_SPP=${REF_SPP:-8} sh "$here/render_noisy.sh" "$build" "$out" "$name" "$sc" 24
 done

@@ -6,7 +6,14 @@
 - test_report.py on a made-up evaluation (10 frames of 4x4, one emitter pixel of 100):
   the goal flags follow the ratios (RMSE x VCTAA <= 0.8, temporal <= 1, mean within 3%),
   the clamped mean of an output that clips the emitter to 1 is exactly 1 while its linear
-  mean is far below; an eval.json without the vctaa row is refused naming the file."""
+  mean is far below; an eval.json without the vctaa row is refused naming the file;
+- make_test_set.py --set train / val / test: the three sets' scenes (the files they import)
+  are disjoint; --offset K starts at the path's key K and names the sequence NAME-kK; an
+  offset past the path's keys is refused naming the file;
+- moving_report.py on a made-up sequence (static camera, 4 pixels uncovered every frame):
+  the disocclusion region is those pixels grown by one (16 of 64), the region errors are
+  measured there only (an error outside it does not count), the ratios to VCTAA and goal
+  flags follow; a sequence without the prevdepth AOV is refused naming the file and field."""
 import json
 import os
 import subprocess
@@ -109,10 +116,95 @@ def test_report(tmp):
           "an evaluation without VCTAA is refused naming the file")
 
 
+def test_sets(tmp):
+    imports = {}
+    for st in ("train", "val", "test"):
+        d = os.path.join(tmp, st)
+        r = run("tools.taa.make_test_set", d, "--set", st)
+        check(r.returncode == 0, f"make_test_set --set {st} runs ({r.stderr.strip()[:200]})")
+        if r.returncode:
+            return
+        names = sorted(os.listdir(d))
+        imports[st] = {json.load(open(os.path.join(d, n, "scene.json")))["import"] for n in names}
+        check(len(imports[st]) == len(names) >= 2, f"--set {st}: {len(names)} scenes, each its own file")
+    check(not (imports["train"] & imports["val"]) and not (imports["train"] & imports["test"])
+          and not (imports["val"] & imports["test"]), "training, validation and test scenes are disjoint")
+    d = os.path.join(tmp, "off")
+    r = run("tools.taa.make_test_set", d, "--scenes", "staircase", "--offset", "2")
+    check(r.returncode == 0 and os.path.exists(os.path.join(d, "staircase-k2", "scene.json")),
+          f"--offset 2 writes staircase-k2 ({r.stderr.strip()[:200]})")
+    if r.returncode == 0:
+        keys = json.load(open(os.path.join(d, "staircase-k2", "scene.json")))["camera"]["path"]
+        src = json.load(open(os.path.join(root, "scenes", "staircase", "scene.json")))["camera"]["path"]
+        check(keys[0]["position"] == src[2]["position"] and keys[16]["position"] == src[4]["position"],
+              "--offset 2: frame 0 is key 2, frame 16 key 4")
+    r = run("tools.taa.make_test_set", d, "--scenes", "killeroos", "--offset", "50")
+    check(r.returncode != 0 and "camera.path" in r.stderr and "--offset 50" in r.stderr,
+          f"an offset past the path's keys is refused ({r.stderr.strip()[:200]})")
+
+
+def test_moving_report(tmp):
+    n, size = 12, 8
+    seq = os.path.join(tmp, "mv", "obj-spp1")
+    os.makedirs(seq)
+    ref = np.full((size, size, 3), 0.25)
+    one = np.ones((size, size, 3))
+    zp = one.copy()
+    zp[3:5, 3:5] = 2.0  # these 4 points were farther away one frame ago: uncovered now
+    frames = []
+    for f in range(n):
+        for k, img in (("reference", ref), ("depth", one), ("prev_depth", zp),
+                       ("motion", np.zeros((size, size, 3)))):
+            write_exr(os.path.join(seq, f"{k}_{f:04d}.exr"), img)
+        frames.append({"index": f, "jitter": [0.0, 0.0], "jitter_index": f % 8,
+                       **{k: f"{k}_{f:04d}.exr" for k in ("reference", "depth", "prev_depth", "motion")}})
+    json.dump({"frames": frames}, open(os.path.join(seq, "manifest.json"), "w"))
+    ev = os.path.join(tmp, "mv", "eval")
+    inside = np.zeros((size, size, 1), bool)
+    inside[2:6, 2:6] = True
+    for m, err_in, err_out in (("vctaa", 0.2, 0.0), ("c12", 0.1, 0.3)):
+        d = os.path.join(ev, "obj-spp1", m)
+        os.makedirs(d)
+        img = ref + np.where(inside, err_in, err_out)
+        for f in range(n):
+            write_exr(os.path.join(d, f"post_{f:04d}.exr"), img)
+        json.dump({"frames": [{"post": f"post_{f:04d}.exr"} for f in range(n)]},
+                  open(os.path.join(d, "manifest.json"), "w"))
+    rows = [("vctaa", 0.02, 0.010), ("c12", 0.015, 0.009)]
+    res = [{"sequence": "obj-spp1", "folder": seq, "frames": n, "spp": 1,
+            "methods": [{"method": m, "rmse": r, "temporal": t, "brightness": 1.0} for m, r, t in rows]}]
+    json.dump(res, open(os.path.join(ev, "eval.json"), "w"))
+    out = os.path.join(tmp, "mv", "report.json")
+    r = run("tools.taa.moving_report", os.path.join(ev, "eval.json"), "--nets", "c12", "--json", out)
+    check(r.returncode == 0, f"moving_report runs ({r.stderr.strip()[-600:]})")
+    if r.returncode:
+        return
+    sq = json.load(open(out))["sequences"][0]
+    check(abs(sq["region_fraction"] - 16 / 64) < 1e-9, f"region: 4 pixels grown by one = 16 of 64 "
+          f"({sq['region_fraction']})")
+    c, v = sq["methods"]["c12"], sq["methods"]["vctaa"]
+    tm = lambda x: x / (1 + x)  # noqa: E731  (grey: max channel = the value)
+    check(abs(v["region_rmse"] - (tm(0.45) - tm(0.25))) < 1e-5 and
+          abs(c["region_rmse"] - (tm(0.35) - tm(0.25))) < 1e-5,
+          f"region RMSE from the region's pixels only ({v['region_rmse']}, {c['region_rmse']})")
+    check(c["region_temporal"] == 0.0, "a still output has no temporal error")
+    check(c["met"] == {"rmse": True, "temporal": True} and abs(c["rmse_vs_vctaa"] - 0.75) < 1e-4,
+          f"whole-frame goal flags from eval.json ({c['met']})")
+    os.remove(os.path.join(seq, "manifest.json"))
+    for fr in frames:
+        del fr["prev_depth"]
+    json.dump({"frames": frames}, open(os.path.join(seq, "manifest.json"), "w"))
+    r = run("tools.taa.moving_report", os.path.join(ev, "eval.json"), "--nets", "c12")
+    check(r.returncode != 0 and "manifest.json" in r.stderr and "prev_depth" in r.stderr,
+          f"a sequence without prevdepth is refused naming file and field ({r.stderr.strip()[:200]})")
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         test_make_test_set(os.path.join(tmp, "scenes"))
         test_report(tmp)
+        test_sets(os.path.join(tmp, "sets"))
+        test_moving_report(tmp)
     print(f"{checks.failures} failure(s)")
     sys.exit(1 if checks.failures else 0)
 
