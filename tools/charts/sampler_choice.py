@@ -1,9 +1,10 @@
-"""Which primary-sample generator integrator_pt should use by default, by measurement: time to
-equal error for the `independent`, `halton` and `sobol` samplers on several scenes.
+"""Which primary-sample generator an integrator (integrator_pt by default, or --integrator
+integrator_bdpt) should use by default, by measurement: time to equal error for the
+`independent`, `halton` and `sobol` samplers (or those --samplers names) on several scenes.
 
 Per scene:
   1. a high-spp reference, rendered once with the independent sampler (unbiased whatever the
-     other samplers do) as two halves of REF_SPP/2 with seeds 0 and 1, averaged. The halves'
+     other samplers do) with the measured integrator, as two halves of REF_SPP/2 with seeds 0 and 1, averaged. The halves'
      difference estimates the reference's own noise, which is subtracted from every error
      below (err^2 - noise^2), so a sampler whose error approaches the reference's noise is
      not penalised for the reference's grain;
@@ -23,14 +24,16 @@ Per scene:
      a = 0.5; the fit also credits a sampler that converges faster than that.
 
 Every render uses the plugin's defaults except the sampler (maxDepth etc. as `host
---describe integrator_pt` says, or --depth), 1 thread (CPU time, not wall, is compared), the
+--describe INTEGRATOR` says, or --depth), 1 thread (CPU time, not wall, is compared), the
 box filter. Writes OUT/sampler_choice.json and OUT/sampler_choice.png (error vs CPU time per
-sampler per scene) and prints a table; renders and the reference go to --work (kept:
+sampler per scene; OUT/sampler_choice_INTEGRATOR.* for an integrator other than
+integrator_pt) and prints a table; renders and the reference go to --work (kept:
 an existing reference is reused). --summarize recomputes the figures, table and chart from
 the renders an earlier run stored in OUT/sampler_choice.json, rendering nothing.
 
 Usage (from the repository root, after `ninja -C build`):
   /usr/bin/python3 -m tools.charts.sampler_choice [--host PATH] [--res 64x64]
+      [--integrator integrator_pt] [--samplers independent,halton,sobol]
       [--scenes cornell-box,cornell-pbrt,veach-ajar,killeroos] [--spps 4,16,64] [--seeds 6]
       [--ref-spp 1024] [--depth N] [--nice 10] [--out tools/charts] [--work /tmp/tt_sampler]
       [--summarize]
@@ -50,11 +53,13 @@ from tools.tttools import cli, figures, host
 ROOT = host.ROOT
 SHARED = os.path.join(os.path.dirname(ROOT), "shared", "scenes")
 SAMPLERS = ("independent", "halton", "sobol")
+INTEGRATORS = ("integrator_pt", "integrator_bdpt")
 # Scenes that render in seconds at 64x64 on one core; the pbrt files come from ../shared.
 SCENES = {
     "cornell-box": os.path.join(ROOT, "scenes", "cornell-box", "scene.json"),
     "cornell-pbrt": os.path.join(SHARED, "cornell-box-pbrt", "cornell-box.pbrt"),
     "cornell-specular": os.path.join(SHARED, "cornell-box-pbrt", "cornell-box-specular.pbrt"),
+    "caustic-glass": os.path.join(ROOT, "scenes", "caustic-glass", "scene.json"),
     "veach-ajar": os.path.join(ROOT, "scenes", "veach-ajar", "scene.json"),
     "killeroos": os.path.join(ROOT, "scenes", "killeroos", "scene.json"),
 }
@@ -62,10 +67,11 @@ SCENES = {
 
 def render(args, scene, sampler, spp, seed, out, threads=1):
     """One render; returns its CPU seconds (host --clock cpu render_ms, all threads)."""
-    extra = ["--spp", str(spp), "--seed", str(seed), "--clock", "cpu", "--plugin", "integrator_pt",
-             "--set", f"integrator_pt.sampler={sampler}"]
+    ig = args.integrator
+    extra = ["--spp", str(spp), "--seed", str(seed), "--clock", "cpu", "--plugin", ig,
+             "--set", f"{ig}.sampler={sampler}"]
     if args.depth is not None:
-        extra += ["--set", f"integrator_pt.maxDepth={args.depth}"]
+        extra += ["--set", f"{ig}.maxDepth={args.depth}"]
     st, _ = host.render(args.host, scene, extra, out=out, stats=out + ".json", res=args.res,
                         threads=threads, nice=args.nice)
     return st["render_ms"] / 1000.0
@@ -86,7 +92,9 @@ def write_exr(path, rgb):
 def reference(args, name, scene):
     """(reference RGB, its rRMSE noise) for a scene: two independent halves averaged; the
     noise of the mean is rRMSE(half A, half B) / 2 (var(A - B) = 4 var(mean))."""
-    d = os.path.join(args.work, name)
+    ig = getattr(args, "integrator", "integrator_pt")
+    # Each integrator's own reference (BDPT's includes light paths the path tracer misses).
+    d = os.path.join(args.work, name) if ig == "integrator_pt" else os.path.join(args.work, ig, name)
     os.makedirs(d, exist_ok=True)
     ref = os.path.join(d, f"ref_{args.ref_spp}spp_{args.res}.exr")
     halves = [os.path.join(d, f"ref_half{s}_{args.ref_spp}spp_{args.res}.exr") for s in (0, 1)]
@@ -112,8 +120,12 @@ def load(path):
             doc = json.load(f)
         for key in ("spps", "seeds", "res", "ref_spp", "max_depth", "scenes"):
             doc[key]
+        doc.setdefault("integrator", "integrator_pt")
+        doc.setdefault("samplers", list(SAMPLERS))
+        if "independent" not in doc["samplers"]:
+            raise ValueError("its samplers lack 'independent', the one every speed-up is against")
         for n, r in doc["scenes"].items():
-            for s in SAMPLERS:
+            for s in doc["samplers"]:
                 for spp in doc["spps"]:
                     r["samplers"][s]["renders"][str(spp)][0]["rrmse"]
     except (OSError, ValueError) as e:
@@ -140,14 +152,16 @@ def time_to(c, a, k, err):
 def measure_scene(args, name, scene, spps, seeds):
     ref, noise = reference(args, name, scene)
     print(f"{name}: reference noise rRMSE {noise:.4f} (subtracted in quadrature)", flush=True)
-    raw = {s: {spp: [] for spp in spps} for s in SAMPLERS}
-    fd, tmp = tempfile.mkstemp(suffix=".exr", dir=os.path.join(args.work, name))
+    samplers = args.samplers
+    raw = {s: {spp: [] for spp in spps} for s in samplers}
+    fd, tmp = tempfile.mkstemp(suffix=".exr", dir=args.work)
     os.close(fd)
     try:
         turn = 0
         for seed in seeds:
             for spp in spps:
-                order = SAMPLERS[turn % 3:] + SAMPLERS[:turn % 3]
+                k = turn % len(samplers)
+                order = samplers[k:] + samplers[:k]
                 turn += 1
                 for s in order:
                     t = render(args, scene, s, spp, seed, tmp)
@@ -164,7 +178,8 @@ def measure_scene(args, name, scene, spps, seeds):
 def summarize(scene, noise, raw, spps):
     """The figures of one scene from its renders raw[sampler][spp] = [{seed, cpu_s, rrmse}]."""
     res = {"scene": scene, "reference_noise": noise, "samplers": {}}
-    for s in SAMPLERS:
+    samplers = [s for s in SAMPLERS if s in raw]
+    for s in samplers:
         pts = []
         for spp in spps:
             # The error is the root mean square over seeds (the expected squared error that
@@ -181,7 +196,7 @@ def summarize(scene, noise, raw, spps):
     targets = {str(spp): ind["points"][i]["rrmse_corrected"] for i, spp in enumerate(spps)
                if i >= len(spps) - 2}
     res["equal_error_targets"] = targets
-    for s in SAMPLERS:
+    for s in samplers:
         r = res["samplers"][s]
         r["speedup_vs_independent"] = {
             spp: time_to(ind["fit_c"], ind["fit_a"], ind["cpu_s_per_spp"], e)
@@ -193,7 +208,7 @@ def summarize(scene, noise, raw, spps):
     return res
 
 
-def chart(results, path, res, spps):
+def chart(results, path, res, spps, integrator):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -203,6 +218,8 @@ def chart(results, path, res, spps):
     fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.6 * rows), squeeze=False)
     for ax, (name, r) in zip(axes.flat, results.items()):
         for s, style in zip(SAMPLERS, ("o-", "s-", "^-")):
+            if s not in r["samplers"]:
+                continue
             q = r["samplers"][s]
             t = [p["cpu_s"] for p in q["points"]]
             e = [p["rrmse_corrected"] for p in q["points"]]
@@ -215,7 +232,7 @@ def chart(results, path, res, spps):
         ax.legend(fontsize=7)
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
-    fig.suptitle(f"integrator_pt samplers: error vs CPU time ({res}, spp {','.join(map(str, spps))}; "
+    fig.suptitle(f"{integrator} samplers: error vs CPU time ({res}, spp {','.join(map(str, spps))}; "
                  "x = time to equal error vs independent)", fontsize=9)
     figures.save(fig, path, dpi=110)
     plt.close(fig)
@@ -225,6 +242,9 @@ def main():
     ap = cli.parser(__doc__)
     ap.add_argument("--scenes", default="cornell-box,cornell-pbrt,veach-ajar,killeroos",
                     help="comma-separated names from: " + ", ".join(SCENES))
+    ap.add_argument("--integrator", default="integrator_pt", help="one of " + ", ".join(INTEGRATORS))
+    ap.add_argument("--samplers", default=",".join(SAMPLERS),
+                    help="comma-separated, from " + ", ".join(SAMPLERS) + "; must include independent")
     ap.add_argument("--res", default="64x64")
     ap.add_argument("--spps", default="4,16,64")
     ap.add_argument("--seeds", type=int, default=6, help="renders per sampler and spp")
@@ -239,8 +259,16 @@ def main():
     args = ap.parse_args()
     if not args.summarize:
         args.host = host.find(args.host)
+    if args.integrator not in INTEGRATORS:
+        raise SystemExit(f"--integrator: unknown integrator '{args.integrator}' "
+                         f"(known: {', '.join(INTEGRATORS)})")
+    args.samplers = [s.strip() for s in args.samplers.split(",") if s.strip()]
+    bad = [s for s in args.samplers if s not in SAMPLERS]
+    if bad or "independent" not in args.samplers or len(set(args.samplers)) != len(args.samplers):
+        raise SystemExit(f"--samplers: expected distinct names from {', '.join(SAMPLERS)} "
+                         f"including independent, got '{','.join(args.samplers)}'")
     names = [n.strip() for n in args.scenes.split(",") if n.strip()]
-    for n in names:
+    for n in ([] if args.summarize else names):  # --summarize renders nothing: no scene needed
         if n not in SCENES:
             raise SystemExit(f"--scenes: unknown scene '{n}' (known: {', '.join(SCENES)})")
         if not os.path.exists(SCENES[n]):
@@ -251,10 +279,12 @@ def main():
         raise SystemExit(f"--spps: expected comma-separated integers, got '{args.spps}'") from None
     if len(spps) < 2 or spps[0] < 1 or args.seeds < 1 or args.ref_spp < 2 * spps[-1]:
         raise SystemExit("--spps: at least two values >= 1; --seeds >= 1; --ref-spp >= 2x the largest spp")
-    jpath = os.path.join(args.out, "sampler_choice.json")
+    stem = "sampler_choice" + ("" if args.integrator == "integrator_pt" else "_" + args.integrator)
+    jpath = os.path.join(args.out, stem + ".json")
     if args.summarize:
         doc = load(jpath)
         spps = doc["spps"]
+        args.integrator = doc["integrator"]
         doc["scenes"] = {n: summarize(r["scene"], r["reference_noise"],
                                       {s: {spp: q["renders"][str(spp)] for spp in spps}
                                        for s, q in r["samplers"].items()}, spps)
@@ -263,19 +293,20 @@ def main():
         args.ref_spp = doc["ref_spp"]
     else:
         seeds = list(range(100, 100 + args.seeds))
-        defaults = host.default_config(args.host, "integrator_pt")
+        defaults = host.default_config(args.host, args.integrator)
         depth = args.depth if args.depth is not None else defaults.get("maxDepth")
         results = {n: measure_scene(args, n, SCENES[n], spps, seeds) for n in names}
-        doc = {"res": args.res, "spps": spps, "seeds": seeds, "ref_spp": args.ref_spp,
+        doc = {"integrator": args.integrator, "samplers": args.samplers, "res": args.res, "spps": spps, "seeds": seeds, "ref_spp": args.ref_spp,
                "max_depth": depth, "threads": 1, "clock": "cpu", "scenes": results}
     os.makedirs(args.out, exist_ok=True)
     tmp = jpath + f".tmp-{os.getpid()}"
     with open(tmp, "w") as f:
         json.dump(doc, f, indent=1)
     os.replace(tmp, jpath)
-    chart(results, os.path.join(args.out, "sampler_choice.png"), args.res, spps)
+    png = os.path.join(args.out, stem + ".png")
+    chart(results, png, args.res, spps, args.integrator)
 
-    print(f"\n{args.res}, maxDepth {depth}, 1 thread; rRMSE: RMS over {len(seeds)} seeds, the "
+    print(f"\n{args.integrator}, {args.res}, maxDepth {depth}, 1 thread; rRMSE: RMS over {len(seeds)} seeds, the "
           f"reference's noise removed; CPU s: median; reference {args.ref_spp} spp (independent)")
     print("| scene | sampler | " + " | ".join(f"rRMSE @{s}" for s in spps)
           + f" | CPU s @{spps[-1]} | fit a | " + " | ".join(
@@ -283,13 +314,13 @@ def main():
           + f" | err^2 x time ratio @{spps[-1]} |")
     print("|---|---|" + "---|" * (len(spps) + 5))
     for n, r in results.items():
-        for s in SAMPLERS:
+        for s in [s for s in SAMPLERS if s in r["samplers"]]:
             q = r["samplers"][s]
             print(f"| {n} | {s} | " + " | ".join(f"{p['rrmse_corrected']:.4f}" for p in q["points"])
                   + f" | {q['points'][-1]['cpu_s']:.2f} | {q['fit_a']:.2f} | "
                   + " | ".join(f"{q['speedup_vs_independent'][str(s2)]:.2f}x" for s2 in spps[-2:])
                   + f" | {q['equal_spp_ratio'][str(spps[-1])]:.2f}x |")
-    print(f"\nwrote {jpath} and {os.path.join(args.out, 'sampler_choice.png')}")
+    print(f"\nwrote {jpath} and {png}")
 
 
 if __name__ == "__main__":

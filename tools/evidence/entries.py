@@ -114,7 +114,7 @@ entry(
         "thesis' render-time gain: five of the eleven parameters do nothing in Embree's native "
         "backend, and a single render varies by 3-20% on this machine, as much as the "
         "configurations differ.",
-    source=["plugins/tuner_nm/README.md", "tools/tuning/README.md"],
+    source=["tools/tuning/README.md", "docs/notes/tuner_nm.md"],
 )
 entry(
     id="ch3-correlation", chapter=3, thesis="Fig. 3.5",
@@ -132,26 +132,28 @@ entry(
     outcome="ties",
     why="Same signs as the thesis for quality against build and render time, with larger "
         "magnitudes (+0.83 / -0.40 against +0.57 / -0.19).",
-    source=["plugins/tuner_nm/README.md"],
+    source=["docs/notes/tuner_nm.md", "tools/tuning/README.md"],
 )
 entry(
-    id="ch3-leafsize", chapter=3, thesis="Figs. 3.6, 3.8, 3.10-3.12",
-    title="Leaf size, sahBlockSize and cost parameters against time",
+    id="ch3-leafsize", chapter=3, thesis="Figs. 3.6, 3.7",
+    title="Leaf size, sahBlockSize and cost parameters against time, explored",
     figures=["tools/tuning/figures/leafsize.png", "tools/tuning/figures/blocksize.png",
              "tools/tuning/figures/costs.png"],
     quick=["quick/tuning_leafsize.png", "quick/tuning_blocksize.png", "quick/tuning_costs.png"],
     ours="Drawn from the same 150-configuration exploration; too few rows per cell to read an "
          "optimum (no numbers claimed).",
-    ours_settings="as Fig. 3.5; leafsize with quality=1, costs and blocksize on the custom-backend rows.",
-    thesis_numbers="Leaf-size tuning up to 8% over the recommended configuration; optimum leaf "
-                   "size 4-7 (sponza), 25-30 (vokselia).",
-    thesis_settings="800,000 configurations; tuning runs for Figs. 3.10-3.12.",
+    ours_settings="as Fig. 3.5 (random configurations, so exploration plots: the thesis' Figs. "
+                  "3.8 and 3.10-3.12 plot tuning runs, which `analyze --mode tune` draws); leafsize "
+                  "with quality=1, costs and blocksize on the custom-backend rows.",
+    thesis_numbers="sahBlockSize: steps at powers of two (Fig. 3.7); leaf-size optimum 4-7 (sponza), "
+                   "25-30 (vokselia) inferred from Fig. 3.6.",
+    thesis_settings="800,000 random configurations over seven scenes.",
     command="/usr/bin/python3 -m tools.tuning.analyze leafsize --db /tmp/e.db --where quality=1 "
             "-o tools/tuning/figures/leafsize.png (and blocksize, costs --metric total)",
     outcome="not compared",
     why="Our exploration is about 5000x smaller than the thesis'; the charts show the tools "
         "work, not the thesis' optima.",
-    source=["plugins/tuner_nm/README.md"],
+    source=["docs/notes/tuner_nm.md", "tools/tuning/README.md"],
 )
 entry(
     id="ch3-cylinder", chapter=3, thesis="Fig. 3.13",
@@ -202,9 +204,10 @@ entry(
 entry(
     id="ch3-accel", chapter=3, thesis="Table 3.1 (baseline)",
     title="Our BVH layout and traversal against Embree's own",
+    figures=["tools/accel/figures/render_split*.png"],
     regenerated=["accel/render_split_t1d3.png"],
     ours="Custom backend at Embree's default arguments renders at 0.79x Embree's speed; the best "
-         "custom configuration 0.98x with 0.57-0.68x of the memory; 1.24x the thesis' Table 3.1 "
+         "custom configuration 0.98x with 0.57-0.87x of the memory; 1.24x the thesis' Table 3.1 "
          "defaults; traversal is 36-51% of a render.",
     ours_settings="whole integrator_pt renders of six scenes, CPU-time ratios, interleaved rounds, "
                   "medians, a quiet 2-vCPU Intel machine; the chart redraws the committed bench output.",
@@ -238,7 +241,7 @@ entry(
     outcome="not compared",
     why="We use the thesis' alpha = 4 pi as is; the histogram shows that two of the default "
         "bins are never used on diffuse scenes, so their sigmas are free parameters for the tuner.",
-    source=["plugins/integrator_pssmlt/README.md"],
+    source=["docs/notes/integrator_pssmlt.md"],
 )
 entry(
     id="ch4-tuning", chapter=4, thesis="Fig. 4.3",
@@ -256,7 +259,7 @@ entry(
     outcome="ties",
     why="The search converges as in the thesis, but one scalar objective does not identify 16 "
         "parameters: the tuned configurations differ from run to run.",
-    source=["plugins/integrator_pssmlt/README.md"],
+    source=["docs/notes/integrator_pssmlt.md"],
 )
 entry(
     id="ch4-fig46", chapter=4, thesis="Fig. 4.6",
@@ -276,7 +279,7 @@ entry(
     thesis_numbers="Ours better than original on the more complex scenes (bathroom, "
                    "caustic-glass among them), not on cornell-box.",
     thesis_settings="pbrt-v3's MLTIntegrator, full-HD images, the thesis' scenes.",
-    command="O=\"--res 32x32 --ref-spp 4096 --bootstrap 5000 --reps 5 --seeds 3 --crop-mpp 200 --mpp 100 200 --counts 8 32 128 512 --out /tmp/ch4run\"; S=\"bathroom caustic-glass veach-ajar cornell-box cornell-specular\"; for step in reference tune fig46 evt crops; do /usr/bin/python3 -m tools.pssmlt.chapter4 $O -- $step $S; done; /usr/bin/python3 -m tools.pssmlt.chapter4 $O --figures tools/pssmlt/figures -- plot $S (reduced settings; the full ones drop --res, --bootstrap and --counts: plugins/integrator_pssmlt/README.md)",
+    command="O=\"--res 32x32 --ref-spp 4096 --bootstrap 5000 --reps 5 --seeds 3 --crop-mpp 200 --mpp 100 200 --counts 8 32 128 512 --out /tmp/ch4run\"; S=\"bathroom caustic-glass veach-ajar cornell-box cornell-specular\"; for step in reference tune fig46 evt crops; do /usr/bin/python3 -m tools.pssmlt.chapter4 $O -- $step $S; done; /usr/bin/python3 -m tools.pssmlt.chapter4 $O --figures tools/pssmlt/figures -- plot $S (reduced settings; the full ones drop --res, --bootstrap and --counts: plugins/integrator_pssmlt/README.md, Which integrator, which mode)",
     outcome="loses",
     why="The thesis' claim holds on veach-ajar only: the acceptance objective drives the "
         "non-direction sigma up to 0.09-0.10 where the default's acceptance is high, and those "
@@ -297,7 +300,7 @@ entry(
     thesis_numbers="pavilion-day at 100 mpp: ours 1.3 s (4%) faster than original, with fewer "
                    "fireflies.",
     thesis_settings="pbrt-v3, pavilion-day, full HD.",
-    command="O=\"--res 32x32 --ref-spp 4096 --bootstrap 5000 --reps 5 --seeds 3 --crop-mpp 200 --mpp 100 200 --counts 8 32 128 512 --out /tmp/ch4run\"; S=\"bathroom caustic-glass veach-ajar cornell-box cornell-specular\"; for step in reference tune fig46 evt crops; do /usr/bin/python3 -m tools.pssmlt.chapter4 $O -- $step $S; done; /usr/bin/python3 -m tools.pssmlt.chapter4 $O --figures tools/pssmlt/figures -- plot $S (reduced settings; the full ones drop --res, --bootstrap and --counts: plugins/integrator_pssmlt/README.md)",
+    command="O=\"--res 32x32 --ref-spp 4096 --bootstrap 5000 --reps 5 --seeds 3 --crop-mpp 200 --mpp 100 200 --counts 8 32 128 512 --out /tmp/ch4run\"; S=\"bathroom caustic-glass veach-ajar cornell-box cornell-specular\"; for step in reference tune fig46 evt crops; do /usr/bin/python3 -m tools.pssmlt.chapter4 $O -- $step $S; done; /usr/bin/python3 -m tools.pssmlt.chapter4 $O --figures tools/pssmlt/figures -- plot $S (reduced settings; the full ones drop --res, --bootstrap and --counts: plugins/integrator_pssmlt/README.md, Which integrator, which mode)",
     outcome="loses",
     why="At these sizes BDPT or the path tracer wins everywhere; 32x32 images make the MLTs' "
         "fixed costs (bootstrap, scene load) large, which favours the others, though not by the "
@@ -348,7 +351,7 @@ entry(
     outcome="loses",
     why="Acceptance 0.234 is not where the error is lowest on these scenes, so it is a weak "
         "objective for the tuner.",
-    source=["plugins/integrator_pssmlt/README.md"],
+    source=["docs/notes/integrator_pssmlt.md"],
 )
 entry(
     id="ch4-bdpt", chapter=4, thesis="4.6 (the base renderer)",
@@ -475,4 +478,26 @@ entry(
             "--max-spp 256 --threads 2 --out /tmp/tt_chart",
     outcome="not compared", why="No thesis counterpart; against Blender Cycles see tools/cycles/README.md.",
     source=["tools/charts/README.md", "tools/cycles/README.md"],
+)
+entry(
+    id="int-sampler-choice", chapter=0, thesis="-",
+    title="Default samplers: time to equal error of independent, Halton and Sobol samples",
+    figures=["tools/charts/sampler_choice*.png"],
+    regenerated=["charts/sampler_choice.png", "charts/sampler_choice_integrator_bdpt.png"],
+    ours="integrator_pt: sobol reaches independent's 16- and 64-spp error 1.17-1.65x faster "
+         "(CPU time) on all four scenes, Halton at 0.25-0.45x the speed (its scrambling costs "
+         "4-5x per sample): sobol is the default. integrator_bdpt: plugins/integrator_bdpt/README.md "
+         "(Default sampler) has its figures and the default they chose.",
+    ours_settings="64x64, the integrator's default maxDepth, 1 thread, CPU time, spp 4/16/64 x 6 "
+                  "seeds, samplers interleaved, rRMSE against a 1024-spp reference with its noise "
+                  "removed; a loaded 2-core machine.",
+    thesis_numbers="-", thesis_settings="-",
+    command="/usr/bin/python3 -m tools.charts.sampler_choice --nice 10 && /usr/bin/python3 -m "
+            "tools.charts.sampler_choice --integrator integrator_bdpt --samplers independent,sobol "
+            "--scenes cornell-box,cornell-pbrt,veach-ajar,killeroos,caustic-glass --nice 10",
+    outcome="not compared",
+    why="No thesis counterpart: it chooses a default. The quick pass redraws the charts from the "
+        "committed renders' JSON (--summarize).",
+    source=["plugins/integrator_pt/README.md", "plugins/integrator_bdpt/README.md",
+            "tools/charts/README.md"],
 )

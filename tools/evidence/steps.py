@@ -276,9 +276,32 @@ def integrator_error_vs_time(ctx):
     return [_png(ctx, "quick/error_vs_time_cornell.png")]
 
 
+def integrator_sampler_choice(ctx):
+    """tools/charts/sampler_choice.py --summarize: the default-sampler charts (integrator_pt,
+    integrator_bdpt) redrawn from the committed renders' JSON (no rendering; a JSON that no
+    longer reads or a tool that rots fails)."""
+    pngs = []
+    src = os.path.join(ROOT, "tools", "charts")
+    for ig, stem in (("integrator_pt", "sampler_choice"),
+                     ("integrator_bdpt", "sampler_choice_integrator_bdpt")):
+        if not os.path.exists(os.path.join(src, stem + ".json")):
+            continue
+        w = os.path.join(ctx.work, "sampler_" + ig)
+        shutil.rmtree(w, ignore_errors=True)
+        os.makedirs(w)
+        shutil.copyfile(os.path.join(src, stem + ".json"), os.path.join(w, stem + ".json"))
+        ctx.run([PY, "-m", "tools.charts.sampler_choice", "--integrator", ig, "--summarize",
+                 "--out", w])
+        shutil.copyfile(os.path.join(w, stem + ".png"), ctx.path("charts", stem + ".png"))
+        pngs.append(_png(ctx, f"charts/{stem}.png"))
+    if not pngs:
+        raise StepError(f"no sampler_choice*.json in {src}")
+    return pngs
+
+
 QUICK = [hybrid_figures, hybrid_speed_vs_roofline, accel_render_split, tuning_analysis,
          tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_speed,
-         integrator_error_vs_time]
+         integrator_error_vs_time, integrator_sampler_choice]
 
 
 def run_quick(host, out, work, log_path, only=None):

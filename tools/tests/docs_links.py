@@ -1,7 +1,8 @@
 """The user docs agree with the tree: every relative link of every Markdown file in the
 repository (README.md files, docs/) names a file that exists, and every #anchor names a
 heading of its target, by GitHub's rule (lower case, punctuation dropped, spaces to '-',
-repeats numbered -1, -2, ...). Links into ../shared (the scenes beside the repository) and
+repeats numbered -1, -2, ...), or an element id (id="..." / name="...") of an HTML target
+such as the results page, docs/results/index.html. Links into ../shared (the scenes beside the repository) and
 absolute URLs are not checked. Exit 1 naming each broken link with its file and line."""
 import os
 import re
@@ -57,6 +58,17 @@ def anchors(path):
     return _anchors[path]
 
 
+_html_ids = {}
+
+
+def html_ids(path):
+    """The id and name attributes of an HTML file: what a #anchor into it can name."""
+    if path not in _html_ids:
+        text = open(path, encoding="utf-8", errors="replace").read()
+        _html_ids[path] = set(re.findall(r"\s(?:id|name)=[\"']([^\"']+)[\"']", text))
+    return _html_ids[path]
+
+
 def main():
     broken = []
     files = markdown_files()
@@ -83,6 +95,9 @@ def main():
                 if anchor and dest.endswith(".md") and anchor not in anchors(dest):
                     broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, ROOT)} has no "
                                   f"heading #{anchor}")
+                if anchor and dest.endswith((".html", ".htm")) and anchor not in html_ids(dest):
+                    broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, ROOT)} has no "
+                                  f"element with id #{anchor}")
     for b in broken:
         print("FAIL:", b)
     print(f"docs_links: {len(files)} Markdown files, {len(broken)} broken links")

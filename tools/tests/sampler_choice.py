@@ -5,7 +5,12 @@
   estimate (half-difference / 2) of two halves with known Gaussian noise is that noise;
 - end to end on the Cornell box at 16x16 (spp 1 and 4, one seed, a 16-spp reference):
   the JSON has every sampler with positive errors and times, independent's speed-up over
-  itself is exactly 1, the chart is a PNG; a bad --spps and an unknown scene are refused."""
+  itself is exactly 1, the chart is a PNG; a bad --spps and an unknown scene are refused;
+- --integrator integrator_bdpt --samplers independent,sobol: BDPT's own reference and
+  renders, only those samplers, written to sampler_choice_integrator_bdpt.json/.png (the
+  integrator_pt files untouched), and --summarize recomputes the same speed-ups from that
+  JSON; an unknown integrator and a sampler list without independent are refused, naming
+  the option."""
 import json
 import math
 import os
@@ -80,9 +85,49 @@ def test_end_to_end():
     check(p.returncode != 0 and "nowhere" in p.stderr, "an unknown scene is refused naming it")
 
 
+def test_integrator_option():
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "out")
+        p = run("--integrator", "integrator_bdpt", "--samplers", "independent,sobol",
+                "--scenes", "cornell-box", "--res", "16x16", "--spps", "1,4", "--seeds", "1",
+                "--ref-spp", "16", "--out", out, "--work", os.path.join(tmp, "w"))
+        check(p.returncode == 0, f"a tiny BDPT run exits 0 ({p.returncode}: {p.stderr[-800:]})")
+        if p.returncode != 0:
+            return
+        jpath = os.path.join(out, "sampler_choice_integrator_bdpt.json")
+        check(os.path.exists(jpath) and not os.path.exists(os.path.join(out, "sampler_choice.json")),
+              "BDPT's figures go to sampler_choice_integrator_bdpt.json, not integrator_pt's file")
+        doc = json.load(open(jpath))
+        r = doc["scenes"]["cornell-box"]
+        check(doc["integrator"] == "integrator_bdpt" and doc["samplers"] == ["independent", "sobol"],
+              f"the JSON names the integrator and samplers ({doc.get('integrator')}, {doc.get('samplers')})")
+        check(set(r["samplers"]) == {"independent", "sobol"}, "only the samplers asked for are measured")
+        check(os.path.exists(os.path.join(tmp, "w", "integrator_bdpt", "cornell-box",
+                                          "ref_16spp_16x16.exr")),
+              "the reference is BDPT's own, kept apart from integrator_pt's")
+        with open(os.path.join(out, "sampler_choice_integrator_bdpt.png"), "rb") as f:
+            check(f.read(8) == b"\x89PNG\r\n\x1a\n", "BDPT's chart is a PNG")
+        check("integrator_bdpt, 16x16" in p.stdout and "| cornell-box | halton |" not in p.stdout,
+              "the table names the integrator and has no halton row")
+        sp = r["samplers"]["sobol"]["speedup_vs_independent"]
+        q = run("--integrator", "integrator_bdpt", "--summarize", "--out", out)
+        check(q.returncode == 0, f"--summarize on BDPT's JSON exits 0 ({q.stderr[-400:]})")
+        again = json.load(open(jpath))["scenes"]["cornell-box"]["samplers"]["sobol"]["speedup_vs_independent"]
+        check(all(abs(again[k] - sp[k]) < 1e-12 for k in sp), f"--summarize recomputes the speed-ups ({sp}, {again})")
+    p = run("--integrator", "integrator_nowhere")
+    check(p.returncode != 0 and "--integrator" in p.stderr and "integrator_nowhere" in p.stderr,
+          "an unknown integrator is refused naming the option and the value")
+    p = run("--samplers", "sobol,halton")
+    check(p.returncode != 0 and "--samplers" in p.stderr and "independent" in p.stderr,
+          "a sampler list without independent is refused, saying it is needed")
+    p = run("--samplers", "independent,owen")
+    check(p.returncode != 0 and "--samplers" in p.stderr, "an unknown sampler is refused naming the option")
+
+
 def main():
     test_math()
     test_end_to_end()
+    test_integrator_option()
     print(f"sampler_choice: {checks.failures} failed")
     return 1 if checks.failures else 0
 

@@ -1,4 +1,5 @@
-"""Parameter analysis of tuning-database rows (thesis 3.2, Figs. 3.3, 3.5, 3.6, 3.8, 3.10-3.12).
+"""Parameter analysis of tuning-database rows (thesis 3.2, Figs. 3.3, 3.5-3.8, 3.10-3.12:
+3.6 and 3.7 from explored rows, 3.8 and 3.10-3.12 from tuning runs).
 
 Input, for every subcommand: a tuning database (--db, the SQLite file host writes) or a CSV
 with the columns of tt_tunedb_export_csv (--csv; a CSV without a `config` column is read as
@@ -11,7 +12,8 @@ scene, run and parameter values; only status-ok rows are used. convergence also 
   $A leafsize    --db t.db --where quality=1 -o leaf.png                         # Fig. 3.6
   $A leafsize    --db t.db --mode tune -o leaf_tuned.png                         # Fig. 3.10
   $A costs       --db t.db --mode tune --metric total -o costs.png               # Figs. 3.11/3.12
-  $A blocksize   --db t.db -o block.png                                          # Fig. 3.8
+  $A blocksize   --db t.db --mode explore -o block.png                           # Fig. 3.7
+  $A blocksize   --db t.db --mode tune -o block_tuned.png                        # Fig. 3.8
   $A convergence render.json total.json -o conv.png                              # Fig. 3.3
   $A convergence --db t.db --scene cornell -o conv.png                           # every run
 
@@ -360,7 +362,7 @@ def cmd_costs(a):
     return _save(fig, a.out)
 
 
-# ---------------------------------------------------------------- sahBlockSize (Fig. 3.8)
+# ------------------------------------------------ sahBlockSize (Figs. 3.7 explored, 3.8 tuned)
 
 
 def cmd_blocksize(a):
