@@ -1,10 +1,17 @@
-"""Spatial splits vs. a rotating thin cylinder (issue 6, thesis Fig. 3.13).
+"""Spatial splits vs. a rotating thin cylinder (thesis 3.2.3, Fig. 3.13).
 
-A long thin cylinder (tools/scenes/generate.py cylinder) is inserted into a scene at K angles
-theta in 0..180 degrees. For every angle the host builds and renders (1 spp, one thread) the
-scene R times with binned SAH (accel_embree.quality=2, no spatial splits) and with SAH plus
-spatial splits (quality=3), for each requested backend (native Embree is the plugin's
-default; --backends native,custom adds our own BVH builder). Runs are interleaved
+The scene is wrapped in a scene.json that imports it, keeps its still camera (the camera path
+is removed) and adds the thesis' rotating thin cylinder with the scene option
+"stress": {"cylinder": ...} (scenes/README.md, "Stress options"): an open cylinder of long thin
+triangles, half the scene's bounding-box diagonal long, centred on the bounds, along +x turned
+about --axis by theta. The K angles theta in 0..180 degrees are the K frames of ONE sequence
+(host --sequence K --fps 1: frame f at time f, theta = 180 f / K, or 180 f / (K - 1) with
+--include-180), rendered in one host process per configuration: at every frame the scene is
+posed and the acceleration structure rebuilt at the configuration's build parameters (the
+manifest's update_ms, a full build of the scene with the cylinder at theta) and the frame
+rendered at 1 spp (render_ms). Configurations: binned SAH (accel_embree.quality=2, no spatial
+splits) and SAH plus spatial splits (quality=3), for each requested backend (native Embree is
+the plugin's default; --backends native,custom adds our own BVH builder). Runs are interleaved
 (repetition-major) so slow drift of the machine hits all configurations alike. The plot shows
 the mean and a two-sided t-distribution confidence band (default 99.99 %) of build ms and
 render ms vs. theta, split vs. no split, one column per backend.
@@ -21,7 +28,7 @@ import os
 import statistics
 import sys
 
-from tools.scenes import generate
+from tools.scenes import scenelib as sl
 from tools.tttools import cli, host
 
 ROOT = host.ROOT
@@ -42,40 +49,77 @@ def t_quantile(p, df):
         return z + g1 / df + g2 / df ** 2 + g3 / df ** 3 + g4 / df ** 4
 
 
+def stress_scene(scene, out, angles, include_180, axis, radius):
+    """The stress scene.json: `scene` (a copy of a scene.json, or a pbrt file imported), its camera path removed, the cylinder turning
+    over the frames of a --fps 1 sequence. Returns the angle (degrees) of every frame."""
+    span = angles - 1 if include_180 else angles
+    cyl = {"axis": axis, "from": 0, "to": 180, "time": [0, max(span, 1)]}
+    if radius:
+        cyl["radius"] = radius
+    if scene.endswith(".json"):
+        # a copy (an imported scene.json may not import again, and wrappers do)
+        wrapper = sl.load_scene(scene)
+        src_dir, dst_dir = os.path.dirname(os.path.abspath(scene)), os.path.dirname(os.path.abspath(out))
+        sl.rebase_files(wrapper, src_dir, dst_dir)
+        if "import" in wrapper and not os.path.isabs(wrapper["import"]):
+            wrapper["import"] = os.path.normpath(os.path.join(src_dir, wrapper["import"]))
+    else:
+        wrapper = {"version": 1, "import": os.path.abspath(scene)}
+    wrapper.setdefault("camera", {})["path"] = []  # the still camera
+    wrapper["stress"] = {"cylinder": cyl}
+    wrapper["_comment"] = ("tools/tuning/cylinder_sweep.py: %s + the rotating thin cylinder of "
+                           "thesis 3.2.3, frame f (at time f) at theta = 180 f / %d"
+                           % (os.path.basename(scene), max(span, 1)))
+    tmp = out + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(wrapper, f, indent=1)
+    os.replace(tmp, out)
+    return [180.0 * f / max(span, 1) for f in range(angles)]
+
+
+def read_frames(manifest_path, angles):
+    """(update_ms, render_ms) of every frame of a sequence's manifest.json."""
+    with open(manifest_path) as f:
+        m = json.load(f)
+    frames = m.get("frames", [])
+    if len(frames) != angles or any("update_ms" not in fr for fr in frames):
+        raise SystemExit("cylinder_sweep: %s: expected %d frames with update_ms and render_ms, "
+                         "got %d (is the scene animated?)" % (manifest_path, angles, len(frames)))
+    return [(float(fr["update_ms"]), float(fr["render_ms"])) for fr in frames]
+
+
 def run(a):
     os.makedirs(a.work, exist_ok=True)
-    thetas = [180.0 * i / a.angles for i in range(a.angles)] if not a.include_180 else \
-        [180.0 * i / (a.angles - 1) for i in range(a.angles)]
-    scenes = {}
-    for th in thetas:
-        out = os.path.join(a.work, "theta_%06.2f.json" % th)
-        if not os.path.exists(out):
-            generate.main(["cylinder", a.scene, out, "--theta", repr(th)] +
-                          (["--radius", str(a.radius)] if a.radius else []))
-        scenes[th] = out
+    scene = os.path.join(a.work, "cylinder.json")
+    thetas = stress_scene(a.scene, scene, a.angles, a.include_180, a.axis, a.radius)
     rows = []
     csv_path = os.path.join(a.work, "runs.csv")
+    seq_dir = os.path.join(a.work, "seq")
     with open(csv_path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["backend", "quality", "theta", "rep", "build_ms", "render_ms"])
         for rep in range(a.reps):
-            for th in thetas:
-                for be in a.backends:
-                    for q in (2, 3):
-                        s = host.run(a.host, ["--quiet", "--no-db", "--spp", "1", "--res", a.res,
-                                              "--threads", str(a.threads),
-                                              "--out", os.path.join(a.work, "img.exr"),
-                                              "--set", "accel_embree.quality=%d" % q,
-                                              "--set", "accel_embree.backend=%s" % be, scenes[th]],
-                                     stats=True, capture=True).stats
-                        row = [be, q, th, rep, s["build_ms"], s["render_ms"]]
+            for be in a.backends:
+                for q in (2, 3):
+                    # one process renders every angle: the sequence rebuilds per frame
+                    host.run(a.host, ["--quiet", "--no-db", "--spp", "1", "--res", a.res,
+                                      "--threads", str(a.threads), "--sequence", str(a.angles),
+                                      "--fps", "1", "--out-dir", seq_dir,
+                                      "--set", "accel_embree.updateMethod=rebuild",
+                                      "--set", "accel_embree.quality=%d" % q,
+                                      "--set", "accel_embree.backend=%s" % be, scene],
+                             capture=True)
+                    frames = read_frames(os.path.join(seq_dir, "manifest.json"), a.angles)
+                    for th, (build_ms, render_ms) in zip(thetas, frames):
+                        row = [be, q, th, rep, build_ms, render_ms]
                         w.writerow(row)
                         rows.append(row)
             f.flush()
             print("rep %d/%d done" % (rep + 1, a.reps), file=sys.stderr)
     with open(os.path.join(a.work, "meta.json"), "w") as f:
         json.dump({"scene": a.scene, "res": a.res, "threads": a.threads, "reps": a.reps,
-                   "angles": thetas, "backends": a.backends, "host": a.host}, f, indent=1)
+                   "angles": thetas, "backends": a.backends, "host": a.host,
+                   "method": "one sequence per configuration (stress.cylinder)"}, f, indent=1)
     return a.work
 
 
@@ -171,7 +215,10 @@ def main():
     p.add_argument("--reps", type=int, default=5)
     p.add_argument("--res", default="128x128")
     p.add_argument("--threads", type=int, default=1)
-    p.add_argument("--radius", type=float, default=None, help="cylinder radius (generator default if unset)")
+    p.add_argument("--radius", type=float, default=None,
+                   help="cylinder radius as a fraction of its length (default 0.002)")
+    p.add_argument("--axis", type=float, nargs=3, default=[0.0, 0.0, 1.0],
+                   help="rotation axis (default 0 0 1)")
     p.add_argument("--backends", default="native", help="comma list: native,custom")
     p.add_argument("--conf", type=float, default=0.9999)
     p.add_argument("--work", default="/tmp/cylinder_sweep")

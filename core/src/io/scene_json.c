@@ -1162,8 +1162,8 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
     cJSON_Delete(root);
     return st;
   }
-  static const char *const known[] = {"version",   "import", "camera", "render",
-                                      "materials", "meshes", "lights", NULL};
+  static const char *const known[] = {"version", "import", "camera", "render", "materials",
+                                      "meshes",  "lights", "stress", NULL};
   tt__jcheck_keys(&c, root, "", known);
   const cJSON *ver = cJSON_GetObjectItemCaseSensitive(root, "version");
   if (!ver) st = tt__jfail(&c, TT_ERR_PARSE, "version", "missing required field (expected 1)");
@@ -1191,6 +1191,7 @@ static tt_status tt__load_json(const char *json, size_t length, const char *sour
   if (st == TT_OK) st = tt__jmeshes(&c, root, imp);
   if (st == TT_OK) st = tt__jlights(&c, root);
   if (st == TT_OK) st = tt__janim_check_range(&c, root);
+  if (st == TT_OK) st = tt__jstress(&c, root);
   if (st == TT_OK) st = tt__scene_finish(c.scene);
   cJSON_Delete(root);
   if (st != TT_OK) {

@@ -93,4 +93,10 @@ tt_status tt__janim_attach(const tt__jctx *c, const cJSON *e, const char *mp, ui
  * the scene describes), naming the first key beyond it. */
 tt_status tt__janim_check_range(const tt__jctx *c, const cJSON *root);
 
+/* ---- stress options (scene_json_stress.c) ---- */
+
+/* The top-level "stress" object: "cylinder" adds the thesis' rotating thin cylinder (sized
+ * and centred by the meshes loaded so far) as a rigid animated mesh. */
+tt_status tt__jstress(const tt__jctx *c, const cJSON *root);
+
 #endif /* TT_IO_SCENE_JSON_INTERNAL_H */

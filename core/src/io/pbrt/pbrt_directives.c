@@ -101,7 +101,9 @@ static tt_status tt__d_attribute_end(tt__pp *P, const tt__tok *at, const char *n
 }
 
 static tt_status tt__d_identity(tt__pp *P, const tt__tok *at, const char *name) {
-  tt__ident(P->gs.ctm);
+  double m[16];
+  tt__ident(m);
+  tt__ctm_set(P, m);
   return TT_OK;
 }
 
@@ -175,7 +177,7 @@ static tt_status tt__d_transform(tt__pp *P, const tt__tok *at, const char *name)
   double m[16];
   for (int r = 0; r < 4; r++)
     for (int c = 0; c < 4; c++) m[4 * r + c] = v[4 * c + r];
-  if (name[0] == 'T') memcpy(P->gs.ctm, m, sizeof m);
+  if (name[0] == 'T') tt__ctm_set(P, m);
   else tt__concat(P, m);
   return TT_OK;
 }
@@ -202,7 +204,10 @@ static tt_status tt__d_coordinate_system(tt__pp *P, const tt__tok *at, const cha
       P->ncs++;
     }
   }
-  if (st == TT_OK) memcpy(P->cs[i].m, P->gs.ctm, sizeof P->gs.ctm);
+  if (st == TT_OK) {
+    memcpy(P->cs[i].m, P->gs.ctm, sizeof P->gs.ctm);
+    memcpy(P->cs[i].m_end, P->gs.ctm_end, sizeof P->gs.ctm_end);
+  }
   free(cs);
   return st;
 }
@@ -212,8 +217,10 @@ static tt_status tt__d_coord_sys_transform(tt__pp *P, const tt__tok *at, const c
   tt_status st = tt__arg_str(P, at, "a coordinate system name", &cs);
   if (st != TT_OK) return st;
   size_t i = tt__coordsys_find(P, cs);
-  if (i < P->ncs) memcpy(P->gs.ctm, P->cs[i].m, sizeof P->gs.ctm);
-  else
+  if (i < P->ncs) { /* pbrt-v4: both CTMs, whatever ActiveTransform says */
+    memcpy(P->gs.ctm, P->cs[i].m, sizeof P->gs.ctm);
+    memcpy(P->gs.ctm_end, P->cs[i].m_end, sizeof P->gs.ctm_end);
+  } else
     tt__pwarn(P, at->file, at->line, cs,
               "CoordSysTransform: no coordinate system named \"%s\" (ignored)", cs);
   free(cs);
@@ -230,11 +237,13 @@ static tt_status tt__d_world_begin(tt__pp *P, const tt__tok *at, const char *nam
   P->in_world = 1;
   tt__world_setup(P);
   tt__ident(P->gs.ctm);
+  tt__ident(P->gs.ctm_end);
   P->cs = tt__grow(P->cs, &P->capcs, P->ncs + 1, sizeof *P->cs);
   if (!P->cs) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   if (!(P->cs[P->ncs].name = tt__strdup("world")))
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
-  tt__ident(P->cs[P->ncs++].m);
+  tt__ident(P->cs[P->ncs].m);
+  tt__ident(P->cs[P->ncs++].m_end);
   return TT_OK;
 }
 
@@ -422,36 +431,51 @@ static tt_status tt__d_attribute(tt__pp *P, const tt__tok *at, const char *name)
   return st;
 }
 
-/* Motion blur: the scene is frozen at the start time, so end-time transforms are dropped. */
+/* ActiveTransform: which of the two CTMs (start time, end time) the transform directives
+ * change from here on (pbrt_motion.c turns shapes whose CTMs differ into animation). */
 static tt_status tt__d_active_transform(tt__pp *P, const tt__tok *at, const char *name) {
   tt__tok w;
   char d[64];
   tt_status st = tt__next(P, &w);
   if (st != TT_OK) return st;
-  if (tt__is(&w, "StartTime") || tt__is(&w, "All")) {
-    P->end_only = 0;
-  } else if (tt__is(&w, "EndTime")) {
-    P->end_only = 1;
-    tt__pwarn(P, at->file, at->line, name,
-              "motion blur is not supported: end-time transforms are ignored");
-  } else {
+  if (tt__is(&w, "StartTime")) P->gs.active = TT__ACTIVE_START;
+  else if (tt__is(&w, "EndTime")) P->gs.active = TT__ACTIVE_END;
+  else if (tt__is(&w, "All")) P->gs.active = TT__ACTIVE_ALL;
+  else
     st = tt__perr(w.file, w.line, "ActiveTransform: expected StartTime, EndTime or All, got %s",
                   tt__desc(&w, d, sizeof d));
-  }
   return st;
 }
 
+/* TransformTimes start end: the times of the two CTMs (seconds on the sequence's axis). */
 static tt_status tt__d_transform_times(tt__pp *P, const tt__tok *at, const char *name) {
   double v[2];
-  return tt__arg_nums(P, at, 2, v);
+  tt_status st = tt__arg_nums(P, at, 2, v);
+  if (st != TT_OK) return st;
+  if (!(v[1] >= v[0]))
+    return tt__perr(at->file, at->line,
+                    "TransformTimes: the end time %g is before the start time %g (expected "
+                    "start <= end)",
+                    v[1], v[0]);
+  if (fabs(v[0]) > 1e9 || fabs(v[1]) > 1e9)
+    return tt__perr(at->file, at->line,
+                    "TransformTimes: times %g, %g are beyond +-1e9 seconds (expected a "
+                    "sequence's time range)",
+                    v[0], v[1]);
+  if (P->in_world)
+    tt__pstrict(P, at->file, at->line, name,
+                "TransformTimes inside the world block (pbrt-v4 accepts it only before "
+                "WorldBegin); applied to the shapes that follow");
+  P->gs.t_start = v[0];
+  P->gs.t_end = v[1];
+  return TT_OK;
 }
 
 /* ---- the table ---------------------------------------------------------------------- */
 
 typedef tt_status (*tt__directive_fn)(tt__pp *P, const tt__tok *at, const char *name);
 
-/* One directive of the pbrt-v4 format. A transform directive is undone under
- * ActiveTransform EndTime (motion blur is not supported). */
+/* One directive of the pbrt-v4 format; `transform`: it changes the active CTMs. */
 typedef struct tt__directive_entry {
   const char *name;
   tt__directive_fn fn;
@@ -534,9 +558,5 @@ tt_status tt__directive(tt__pp *P, int *done) {
                 near ? " (did you mean \"" : "", near ? near : "", near ? "\"?)" : "");
     return tt__skip_args(P);
   }
-  double saved[16];
-  memcpy(saved, P->gs.ctm, sizeof saved);
-  st = e->fn(P, &t, name);
-  if (e->transform && P->end_only) memcpy(P->gs.ctm, saved, sizeof saved);
-  return st;
+  return e->fn(P, &t, name);
 }

@@ -142,13 +142,28 @@ static tt_status tt__emit_shape(tt__pp *P, const tt__tok *at, tt__mesh_data *d) 
   tt_status st;
   int emissive = P->gs.area && (P->gs.L[0] > 0 || P->gs.L[1] > 0 || P->gs.L[2] > 0);
   double m[16];
+  tt__motion mo;
+  memset(&mo, 0, sizeof mo);
+  int animated = 0;
   if (P->cur_obj >= 0) {
     if (emissive) {
       tt__pwarn(P, at->file, at->line, "AreaLightSource",
                 "area lights inside ObjectBegin are not supported by pbrt-v4 (emission ignored)");
       emissive = 0;
     }
+    if (tt__ctm_animated(P))
+      tt__pwarn(P, at->file, at->line, "ActiveTransform",
+                "an animated transform inside ObjectBegin is not supported by pbrt-v4 (the "
+                "start-time transform is used; animate the ObjectInstance instead)");
     memcpy(m, P->gs.ctm, sizeof m);
+  } else if (tt__ctm_animated(P)) {
+    /* the mesh is placed in its own frame now and moved by its node at every time */
+    double m1[16];
+    tt__world_matrix(P, P->gs.ctm, m);
+    tt__world_matrix(P, P->gs.ctm_end, m1);
+    if ((st = tt__motion_split(P, at, "Shape", m, m1, &mo)) != TT_OK) return st;
+    memcpy(m, mo.pre, sizeof m);
+    animated = 1;
   } else {
     tt__world_matrix(P, P->gs.ctm, m);
   }
@@ -167,7 +182,9 @@ static tt_status tt__emit_shape(tt__pp *P, const tt__tok *at, tt__mesh_data *d) 
     memset(d, 0, sizeof *d);
     return TT_OK;
   }
-  return tt__scene_add_mesh(P->scene, d, (uint32_t)mat);
+  const uint32_t index = P->scene->mesh_count;
+  if ((st = tt__scene_add_mesh(P->scene, d, (uint32_t)mat)) != TT_OK) return st;
+  return animated ? tt__motion_attach(P, index, &mo) : TT_OK;
 }
 
 /* Shape directive: builds object-space triangles for the supported shape types. */
@@ -329,6 +346,18 @@ tt_status tt__instance(tt__pp *P, const tt__tok *at, const char *name) {
   if (!o) return tt__perr(at->file, at->line, "ObjectInstance: no object named \"%s\"", name);
   double m[16];
   tt__world_matrix(P, P->gs.ctm, m);
+  /* an animated instance: every copy moves as one rigid body (pbrt-v4's animated
+   * renderFromInstance) */
+  tt__motion mo;
+  memset(&mo, 0, sizeof mo);
+  const int animated = tt__ctm_animated(P);
+  if (animated) {
+    double m1[16];
+    tt__world_matrix(P, P->gs.ctm_end, m1);
+    tt_status st = tt__motion_split(P, at, "ObjectInstance", m, m1, &mo);
+    if (st != TT_OK) return st;
+    memcpy(m, mo.pre, sizeof m);
+  }
   for (size_t i = 0; i < o->n; i++) {
     tt__mesh_data d;
     if (!tt__mesh_copy(&o->m[i].d, &d)) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
@@ -337,8 +366,10 @@ tt_status tt__instance(tt__pp *P, const tt__tok *at, const char *name) {
       return tt__perr(at->file, at->line,
                       "ObjectInstance \"%s\": transform is singular or not affine", name);
     }
+    const uint32_t index = P->scene->mesh_count;
     tt_status st = tt__scene_add_mesh(P->scene, &d, (uint32_t)o->m[i].mat);
     tt__mesh_data_free(&d);
+    if (st == TT_OK && animated) st = tt__motion_attach(P, index, &mo);
     if (st != TT_OK) return st;
   }
   return TT_OK;

@@ -85,6 +85,10 @@ tt_status tt__scene_load_pbrt(const char *path, tt_scene **out) {
   P.gs.mat = -1;
   P.strict = (tt__scene_load_flags & TT_SCENE_LOAD_STRICT) != 0;
   tt__ident(P.gs.ctm);
+  tt__ident(P.gs.ctm_end);
+  P.gs.active = TT__ACTIVE_ALL;
+  P.gs.t_start = 0.0; /* pbrt-v4's TransformTimes default */
+  P.gs.t_end = 1.0;
   tt_status st = tt__push_file(&P, path, NULL, 0);
   int done = 0;
   while (st == TT_OK && !done) st = tt__directive(&P, &done);

@@ -126,7 +126,7 @@ typedef struct tt__named_mat {
 
 typedef struct tt__coordsys {
   char *name;
-  double m[16];
+  double m[16], m_end[16]; /* the CTM at the start and at the end time */
 } tt__coordsys;
 
 /* A shape recorded inside ObjectBegin/End, already in world space of the definition. */
@@ -152,6 +152,9 @@ typedef struct tt__derived {
 /* What AttributeBegin saves. */
 typedef struct tt__gstate {
   double ctm[16];
+  double ctm_end[16];    /* the CTM at the end time (ActiveTransform); == ctm: not animated */
+  unsigned active;       /* TT__ACTIVE_* bits: which CTMs the transform directives change */
+  double t_start, t_end; /* TransformTimes (default 0, 1) */
   int reverse;
   int32_t mat; /* -1: pbrt's default diffuse (created on first use) */
   int area;    /* an AreaLightSource is active */
@@ -201,7 +204,6 @@ typedef struct tt__pp {
   double frame_aspect; /* 0: from the resolution */
   long xres, yres;
   int env_seen;
-  int end_only; /* ActiveTransform EndTime: transforms are ignored */
 } tt__pp;
 
 /* ---- lexer: files, tokens, messages (pbrt_lexer.c) ------------------------------- */
@@ -314,6 +316,13 @@ int tt__norm(double v[3]);
 /* a x b. */
 void tt__cross(const double a[3], const double b[3], double o[3]);
 
+#define TT__ACTIVE_START 1u
+#define TT__ACTIVE_END 2u
+#define TT__ACTIVE_ALL 3u
+
+/* Replaces the active CTMs (Transform, Identity). */
+void tt__ctm_set(tt__pp *P, const double m[16]);
+
 /* Post-multiplies the CTM, as every pbrt transform directive does. */
 void tt__concat(tt__pp *P, const double m[16]);
 
@@ -371,5 +380,27 @@ tt_status tt__area_light(tt__pp *P, const tt__tok *at, const char *type, tt__pli
 
 /* Reads one directive and applies it. *done is set at the end of input. */
 tt_status tt__directive(tt__pp *P, int *done);
+
+/* ---- animated transforms (pbrt_motion.c) ---------------------------------------------- */
+
+/* The start- and end-time CTMs differ. */
+int tt__ctm_animated(const tt__pp *P);
+
+/* An animated placement split for scene/anim.h: `pre` goes into the mesh once (its frame),
+ * then translate t, rotate q and (has_scale) scale s at the start (index 0) and end time. */
+typedef struct tt__motion {
+  double pre[16];
+  float t[2][3], q[2][4], s[2][3];
+  int has_scale;
+} tt__motion;
+
+/* Decomposes the world matrices m0 (start) and m1 (end) of a shape (`what` at `at`, for
+ * messages); an error names the file and line for a singular, non-affine, one-sided
+ * mirroring or shearing motion, or TransformTimes without a span. */
+tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
+                           const double m0[16], const double m1[16], tt__motion *mo);
+
+/* Makes scene mesh `mesh` (already placed by mo->pre) move by `mo` over TransformTimes. */
+tt_status tt__motion_attach(tt__pp *P, uint32_t mesh, const tt__motion *mo);
 
 #endif /* TT_PBRT_INTERNAL_H */

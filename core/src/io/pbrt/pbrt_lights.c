@@ -41,6 +41,11 @@ tt_status tt__light(tt__pp *P, const tt__tok *at, const char *type, tt__plist *p
               "%s inside ObjectBegin is not supported (ignored)", what);
     return TT_OK;
   }
+  if (tt__ctm_animated(P))
+    tt__pwarn(P, at->file, at->line, "ActiveTransform",
+              "%s: an animated light transform is not supported: the light stays at its "
+              "start-time transform (an area light, a Shape with AreaLightSource, moves)",
+              what);
   tt__world_matrix(P, P->gs.ctm, m);
   tt__texval v = {{1, 1, 1}, -1};
   if (strcmp(type, "point") == 0 || strcmp(type, "spot") == 0) {

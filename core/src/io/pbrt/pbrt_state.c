@@ -88,8 +88,17 @@ void tt__cross(const double a[3], const double b[3], double o[3]) {
 
 /* ---- graphics state -------------------------------------------------------------------- */
 
-/* Post-multiplies the CTM, as every pbrt transform directive does. */
-void tt__concat(tt__pp *P, const double m[16]) { tt__mat4_mul(P->gs.ctm, P->gs.ctm, m); }
+/* Replaces the active CTMs (Transform, Identity). */
+void tt__ctm_set(tt__pp *P, const double m[16]) {
+  if (P->gs.active & TT__ACTIVE_START) memcpy(P->gs.ctm, m, sizeof P->gs.ctm);
+  if (P->gs.active & TT__ACTIVE_END) memcpy(P->gs.ctm_end, m, sizeof P->gs.ctm_end);
+}
+
+/* Post-multiplies the active CTMs, as every pbrt transform directive does. */
+void tt__concat(tt__pp *P, const double m[16]) {
+  if (P->gs.active & TT__ACTIVE_START) tt__mat4_mul(P->gs.ctm, P->gs.ctm, m);
+  if (P->gs.active & TT__ACTIVE_END) tt__mat4_mul(P->gs.ctm_end, P->gs.ctm_end, m);
+}
 
 /* Pushes the graphics state for AttributeBegin / TransformBegin / ObjectBegin. */
 tt_status tt__push(tt__pp *P, int kind, const tt__tok *at) {
@@ -115,8 +124,12 @@ void tt__pop(tt__pp *P, int kind, const tt__tok *at) {
   if (top->kind != kind)
     tt__pwarn(P, at->file, at->line, nm, "%s closes the block opened at %s:%d by a different Begin",
               nm, top->file ? top->file->path : "?", top->line);
-  if (kind == 'T') memcpy(P->gs.ctm, top->ctm, sizeof P->gs.ctm);
-  else P->gs = *top;
+  if (kind == 'T') {
+    memcpy(P->gs.ctm, top->ctm, sizeof P->gs.ctm);
+    memcpy(P->gs.ctm_end, top->ctm_end, sizeof P->gs.ctm_end);
+  } else {
+    P->gs = *top;
+  }
   P->nstack--;
 }
 
@@ -168,6 +181,11 @@ tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__plist *
               type);
   P->has_camera = 1;
   memcpy(P->cam_ctm, P->gs.ctm, sizeof P->cam_ctm);
+  if (tt__ctm_animated(P))
+    tt__pwarn(P, at->file, at->line, "Camera",
+              "Camera: an animated camera transform (ActiveTransform) is not supported: the "
+              "camera stays at its start-time transform (give a scene.json wrapper a camera "
+              "path to move it)");
   double fov = 90, lens = 0, fa = 0;
   if ((st = tt__getf(P, at, pl, "fov", &fov)) != TT_OK) return st;
   if (!(fov > 0 && fov < 180))
@@ -195,12 +213,13 @@ tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__plist *
   tt__find(pl, "shutterclose");
   tt__unused(P, at, "Camera", pl);
   /* the camera's own frame is a named coordinate system */
-  double inv[16];
-  if (!tt__inverse(P->gs.ctm, inv))
+  double inv[16], inv_end[16];
+  if (!tt__inverse(P->gs.ctm, inv) || !tt__inverse(P->gs.ctm_end, inv_end))
     return tt__perr(at->file, at->line, "Camera: the current transform is singular");
   for (size_t i = 0; i < P->ncs; i++)
     if (strcmp(P->cs[i].name, "camera") == 0) {
       memcpy(P->cs[i].m, inv, sizeof inv);
+      memcpy(P->cs[i].m_end, inv_end, sizeof inv_end);
       return TT_OK;
     }
   P->cs = tt__grow(P->cs, &P->capcs, P->ncs + 1, sizeof *P->cs);
@@ -208,6 +227,7 @@ tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__plist *
   P->cs[P->ncs].name = tt__strdup("camera");
   if (!P->cs[P->ncs].name) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
   memcpy(P->cs[P->ncs].m, inv, sizeof inv);
+  memcpy(P->cs[P->ncs].m_end, inv_end, sizeof inv_end);
   P->ncs++;
   return TT_OK;
 }

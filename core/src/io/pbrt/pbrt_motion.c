@@ -1,0 +1,185 @@
+/* pbrt-v4 importer: animated transforms (ActiveTransform StartTime/EndTime/All,
+ * TransformTimes). pbrt keeps two CTMs, one at the start and one at the end time, and
+ * interpolates a shape's placement between them as AnimatedTransform does: each end is
+ * decomposed as M = T R S (polar decomposition), T is interpolated linearly, R by slerp
+ * along the shorter arc, S linearly; before the start and after the end the placement is
+ * clamped. pbrt uses this for motion blur within the shutter; tunetrace plays it as
+ * animation over the sequence's time axis (frame f at f / fps), so a shape moves from its
+ * start-time placement at TransformTimes' start to its end-time placement at the end, and
+ * a still renders the start time. The motion becomes one node of scene/anim.h with a
+ * translate, a rotate and (when the scale is axis-aligned) a scale track; a constant
+ * scale that is not axis-aligned, and a mirror, are applied to the mesh once, in its own
+ * frame. A scale that is not axis-aligned and changes between the ends (a shear in
+ * motion) is refused: tunetrace's tracks hold an axis-aligned scale only. */
+#include "io/pbrt/pbrt_internal.h"
+#include "scene/anim.h"
+
+#include <math.h>
+#include <string.h>
+
+int tt__ctm_animated(const tt__pp *P) {
+  return memcmp(P->gs.ctm, P->gs.ctm_end, sizeof P->gs.ctm) != 0;
+}
+
+/* 3x3 helpers on the upper-left block of a row-major 4x4 (a[3 * r + c]). */
+static double tt__det3(const double a[9]) {
+  return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
+         a[2] * (a[3] * a[7] - a[4] * a[6]);
+}
+
+/* Inverse transpose of a 3x3 with determinant det (non-zero). */
+static void tt__inv_t3(const double a[9], double det, double o[9]) {
+  o[0] = (a[4] * a[8] - a[5] * a[7]) / det;
+  o[1] = (a[5] * a[6] - a[3] * a[8]) / det;
+  o[2] = (a[3] * a[7] - a[4] * a[6]) / det;
+  o[3] = (a[2] * a[7] - a[1] * a[8]) / det;
+  o[4] = (a[0] * a[8] - a[2] * a[6]) / det;
+  o[5] = (a[1] * a[6] - a[0] * a[7]) / det;
+  o[6] = (a[1] * a[5] - a[2] * a[4]) / det;
+  o[7] = (a[2] * a[3] - a[0] * a[5]) / det;
+  o[8] = (a[0] * a[4] - a[1] * a[3]) / det;
+}
+
+/* Polar decomposition A = R P of a 3x3 with positive determinant (R a rotation, P
+ * symmetric positive definite), by pbrt's iteration R <- (R + R^-T) / 2. */
+static void tt__polar(const double a[9], double r[9], double p[9]) {
+  memcpy(r, a, 9 * sizeof *a);
+  for (int it = 0; it < 100; it++) {
+    double it3[9], next[9], diff = 0;
+    tt__inv_t3(r, tt__det3(r), it3);
+    for (int i = 0; i < 9; i++) {
+      next[i] = 0.5 * (r[i] + it3[i]);
+      diff = fmax(diff, fabs(next[i] - r[i]));
+    }
+    memcpy(r, next, sizeof next);
+    if (diff < 1e-14) break;
+  }
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double v = 0;
+      for (int k = 0; k < 3; k++) v += r[3 * k + i] * a[3 * k + j]; /* R^T A */
+      p[3 * i + j] = v;
+    }
+  for (int i = 0; i < 3; i++)
+    for (int j = i + 1; j < 3; j++)
+      p[3 * i + j] = p[3 * j + i] = 0.5 * (p[3 * i + j] + p[3 * j + i]);
+}
+
+/* Unit quaternion (x, y, z, w) of a rotation matrix. */
+static void tt__quat_of(const double r[9], float q[4]) {
+  double x, y, z, w, tr = r[0] + r[4] + r[8];
+  if (tr > 0) {
+    double s = sqrt(tr + 1.0) * 2;
+    w = s / 4, x = (r[7] - r[5]) / s, y = (r[2] - r[6]) / s, z = (r[3] - r[1]) / s;
+  } else if (r[0] > r[4] && r[0] > r[8]) {
+    double s = sqrt(1.0 + r[0] - r[4] - r[8]) * 2;
+    w = (r[7] - r[5]) / s, x = s / 4, y = (r[1] + r[3]) / s, z = (r[2] + r[6]) / s;
+  } else if (r[4] > r[8]) {
+    double s = sqrt(1.0 + r[4] - r[0] - r[8]) * 2;
+    w = (r[2] - r[6]) / s, x = (r[1] + r[3]) / s, y = s / 4, z = (r[5] + r[7]) / s;
+  } else {
+    double s = sqrt(1.0 + r[8] - r[0] - r[4]) * 2;
+    w = (r[3] - r[1]) / s, x = (r[2] + r[6]) / s, y = (r[5] + r[7]) / s, z = s / 4;
+  }
+  double l = sqrt(x * x + y * y + z * z + w * w);
+  q[0] = (float)(x / l), q[1] = (float)(y / l), q[2] = (float)(z / l), q[3] = (float)(w / l);
+}
+
+/* Largest off-diagonal magnitude relative to the largest diagonal one. */
+static double tt__offdiag(const double p[9]) {
+  double d = fmax(fabs(p[0]), fmax(fabs(p[4]), fabs(p[8])));
+  double o = fmax(fabs(p[1]), fmax(fabs(p[2]), fabs(p[5])));
+  return d > 0 ? o / d : INFINITY;
+}
+
+tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
+                           const double m0[16], const double m1[16], tt__motion *mo) {
+  memset(mo, 0, sizeof *mo);
+  if (!(P->gs.t_end > P->gs.t_start))
+    return tt__perr(at->file, at->line,
+                    "%s: the transform is animated (ActiveTransform) but TransformTimes gives no "
+                    "time span (start %g, end %g): expected end > start",
+                    what, P->gs.t_start, P->gs.t_end);
+  const double *m[2] = {m0, m1};
+  double a[2][9], det[2];
+  for (int e = 0; e < 2; e++) {
+    if (m[e][12] != 0 || m[e][13] != 0 || m[e][14] != 0 || m[e][15] != 1)
+      return tt__perr(at->file, at->line, "%s: the %s-time transform is not affine", what,
+                      e ? "end" : "start");
+    for (int r = 0; r < 3; r++)
+      for (int c = 0; c < 3; c++) a[e][3 * r + c] = m[e][4 * r + c];
+    det[e] = tt__det3(a[e]);
+    if (!(det[e] != 0) || !isfinite(det[e]))
+      return tt__perr(at->file, at->line, "%s: the %s-time transform is singular", what,
+                      e ? "end" : "start");
+  }
+  if ((det[0] < 0) != (det[1] < 0))
+    return tt__perr(at->file, at->line,
+                    "%s: the animated transform mirrors at one end only (the start- and "
+                    "end-time transforms' determinants have opposite signs, so the shape would "
+                    "turn inside out on the way)",
+                    what);
+  /* a mirror F = diag(-1, 1, 1) is taken out first: M F then has a positive determinant */
+  const int mirror = det[0] < 0;
+  double r[2][9], p[2][9];
+  for (int e = 0; e < 2; e++) {
+    if (mirror)
+      for (int row = 0; row < 3; row++) a[e][3 * row] = -a[e][3 * row];
+    tt__polar(a[e], r[e], p[e]);
+    tt__quat_of(r[e], mo->q[e]);
+    for (int k = 0; k < 3; k++) mo->t[e][k] = (float)m[e][4 * k + 3];
+  }
+  double pre[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  if (tt__offdiag(p[0]) < 1e-7 && tt__offdiag(p[1]) < 1e-7) {
+    mo->has_scale = 1;
+    for (int e = 0; e < 2; e++)
+      for (int k = 0; k < 3; k++) mo->s[e][k] = (float)p[e][4 * k];
+  } else {
+    double dmax = 0, pmax = 0;
+    for (int i = 0; i < 9; i++) {
+      dmax = fmax(dmax, fabs(p[0][i] - p[1][i]));
+      pmax = fmax(pmax, fabs(p[0][i]));
+    }
+    if (dmax > 1e-7 * pmax)
+      return tt__perr(at->file, at->line,
+                      "%s: the animated transform changes a scale that is not axis-aligned (a "
+                      "shear) between the start and end times; tunetrace animates translation, "
+                      "rotation and axis-aligned scale (keep such a scale the same at both ends)",
+                      what);
+    memcpy(pre, p[0], sizeof pre);
+  }
+  /* B = pre * F, applied to the mesh once, in its own frame */
+  tt__ident(mo->pre);
+  for (int row = 0; row < 3; row++)
+    for (int c = 0; c < 3; c++)
+      mo->pre[4 * row + c] = pre[3 * row + c] * (mirror && c == 0 ? -1 : 1);
+  return TT_OK;
+}
+
+tt_status tt__motion_attach(tt__pp *P, uint32_t mesh, const tt__motion *mo) {
+  tt_scene *s = P->scene;
+  uint32_t node;
+  tt_status st = tt__scene_anim_add_node(s, -1, &node);
+  if (st != TT_OK) return st;
+  tt__anim_node *n = tt__scene_anim_node(s, node);
+  const double times[2] = {P->gs.t_start, P->gs.t_end};
+  if (tt__track_alloc(&n->tr, 2, 3, TT__INTERP_LINEAR) != TT_OK ||
+      tt__track_alloc(&n->rot, 2, 4, TT__INTERP_LINEAR) != TT_OK ||
+      (mo->has_scale && tt__track_alloc(&n->sc, 2, 3, TT__INTERP_LINEAR) != TT_OK))
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
+  n->rot.rotation = 1;
+  for (int e = 0; e < 2; e++) {
+    n->tr.times[e] = n->rot.times[e] = times[e];
+    memcpy(n->tr.values + 3 * e, mo->t[e], sizeof mo->t[e]);
+    memcpy(n->rot.values + 4 * e, mo->q[e], sizeof mo->q[e]);
+    if (mo->has_scale) {
+      n->sc.times[e] = times[e];
+      memcpy(n->sc.values + 3 * e, mo->s[e], sizeof mo->s[e]);
+    }
+  }
+  tt__track_align_rotations(&n->rot); /* pbrt: the shorter way */
+  tt__mesh_anim *ma = NULL;
+  if ((st = tt__scene_anim_add_mesh(s, mesh, &ma)) != TT_OK) return st;
+  ma->node = (int32_t)node;
+  return TT_OK;
+}
