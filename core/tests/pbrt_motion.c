@@ -5,7 +5,8 @@
  * pbrt interpolates to (written by hand, compared vertex by vertex). Mirrors, a constant
  * scale that is not axis-aligned, ObjectInstance and TransformEnd/AttributeEnd keep both
  * transforms. Bad input (end before start, NaN, no time span, shear in motion, a mirror at
- * one end only, an unknown ActiveTransform) is refused naming the file and line. Every
+ * one end only, an unknown ActiveTransform) is refused naming the file and line, and so is a
+ * scene.json wrapper whose camera path is shorter than the pbrt animation it imports. Every
  * pbrt file is written by the test into a temporary folder. */
 #include <tunetrace/scene.h>
 
@@ -189,6 +190,44 @@ static void test_bad_input(void) {
   }
 }
 
+/* A scene.json wrapper's camera path is the sequence: an imported pbrt animation beyond it
+ * is refused naming "import", one inside it loads. */
+static void test_wrapper_range(void) {
+  char pbrt[256], json[256];
+  snprintf(pbrt, sizeof pbrt, "%s/w.pbrt", g_dir);
+  snprintf(json, sizeof json, "%s/w.json", g_dir);
+  FILE *f = fopen(pbrt, "w");
+  CHECK(f != NULL);
+  if (!f) return;
+  fputs("TransformTimes 0 1\n" HEAD "ActiveTransform EndTime\nTranslate 1 0 0\n" TRI, f);
+  fclose(f);
+  static const char *const ends[] = {"0.5", "1"};
+  for (int k = 0; k < 2; k++) {
+    f = fopen(json, "w");
+    CHECK(f != NULL);
+    if (!f) return;
+    fprintf(f,
+            "{\"version\": 1, \"import\": \"w.pbrt\", \"camera\": {\"path\": ["
+            "{\"time\": 0, \"position\": [0, -10, 2], \"target\": [0, 0, 0]},"
+            "{\"time\": %s, \"position\": [0, -11, 2], \"target\": [0, 0, 0]}]}}\n",
+            ends[k]);
+    fclose(f);
+    tt_scene *s = NULL;
+    tt_status st = tt_scene_load(json, &s);
+    if (k == 0) {
+      CHECK(st != TT_OK);
+      CHECK_CONTAINS(tt_last_error(),
+                     "w.json: import: the imported scene's animation runs from time 0 to 1: "
+                     "longer than the sequence (this file's camera path runs from 0 to 0.5)");
+    } else {
+      CHECK_MSG(st == TT_OK && s && tt_scene_animated(s), "%s", tt_last_error());
+    }
+    tt_scene_destroy(s);
+  }
+  unlink(json);
+  unlink(pbrt);
+}
+
 int main(void) {
   snprintf(g_dir, sizeof g_dir, "/tmp/tt_pbrt_motion_XXXXXX");
   if (!mkdtemp(g_dir)) TEST_FAIL("cannot create a temporary folder in /tmp");
@@ -196,6 +235,7 @@ int main(void) {
   test_times_scale_mirror();
   test_instance_and_blocks();
   test_bad_input();
+  test_wrapper_range();
   const char *names[] = {"tr", "ts", "na", "in", "ref", "bad"};
   char path[256];
   for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {

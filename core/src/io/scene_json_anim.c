@@ -398,5 +398,16 @@ tt_status tt__janim_check_range(const tt__jctx *c, const cJSON *root) {
           first, last, lo, hi);
     }
   }
+  /* what this file does not key itself: an imported scene's animation (pbrt TransformTimes,
+   * glTF channels, a scene.json's keys) under this file's camera path */
+  double a0, a1;
+  tt__scene_anim_range(c->scene, &a0, &a1);
+  if (cJSON_GetObjectItemCaseSensitive(root, "import") && !(a0 == 0 && a1 == 0) &&
+      (a0 < lo || a1 > hi))
+    return tt__jfail(c, TT_ERR_PARSE, "import",
+                     "the imported scene's animation runs from time %g to %g: longer than the "
+                     "sequence (this file's camera path runs from %g to %g); extend camera.path "
+                     "to cover it",
+                     a0, a1, lo, hi);
   return TT_OK;
 }

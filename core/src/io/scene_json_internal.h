@@ -90,7 +90,8 @@ tt_status tt__janim_attach(const tt__jctx *c, const cJSON *e, const char *mp, ui
                            uint32_t count, const double m[16], int has_tf);
 
 /* Checks that every animation key lies inside the camera path's time range (the sequence
- * the scene describes), naming the first key beyond it. */
+ * the scene describes), naming the first key beyond it, or "import" when the imported
+ * scene's animation runs beyond it. */
 tt_status tt__janim_check_range(const tt__jctx *c, const cJSON *root);
 
 /* ---- stress options (scene_json_stress.c) ---- */
