@@ -67,18 +67,40 @@ void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h,
   free(tmp);
 }
 
-/* Everything one sequence run holds besides the session. */
+/* Everything one sequence run holds besides the session: the output names, the frame
+ * buffers, the post-filter and the manifest. tt__seq_close frees it at any stage. */
 typedef struct tt__seq {
   const tt__host_options *opt;
   tt__session ses; /* scene, plugins, configurations, accel, integrator, film */
   const tt_post_iface *pi;
+  const tt_config *pcfg; /* the post-filter's configuration */
   tt_post *post;
   const char *post_name;
   uint64_t seed;
   uint32_t spp;
   char dir[4096];      /* output folder (--out-dir, or the folder of the --out pattern) */
   const char *pattern; /* file name part of the --out pattern, or NULL */
+  uint32_t w, h, k;    /* frame size; k: --reference-scale (0: no reference) */
+  double fps;
+  int animated;     /* the scene moves: pose and accel update per frame */
+  int render_frame; /* the jittered frame is rendered (not only the reference) */
+  float *rgb, *ref_hi, *ref, *post_rgb, *motion, *prev_depth;
+  tt_film *ref_film;
+  FILE *manifest; /* memstream over mbuf: the manifest text so far */
+  char *mbuf, mpath[4096 + 32];
+  size_t mlen;
+  int entry_open;       /* a frame's manifest entry is started but not closed */
+  uint32_t done_frames; /* frames committed to the manifest */
 } tt__seq;
+
+/* One frame being rendered: its index, poses and jitter, what it has produced so far. */
+typedef struct tt__seq_frame {
+  uint32_t f, ji; /* frame index, index in the jitter cycle */
+  float jit[2];
+  tt_camera cam, prev; /* this frame's pose and the pose one frame interval earlier */
+  const float *depth;  /* the film's depth AOV (NULL when the frame was not rendered) */
+  double render_ms, ref_ms;
+} tt__seq_frame;
 
 /* What a sequence writes per frame. */
 typedef enum tt__seq_file {
@@ -92,9 +114,14 @@ typedef enum tt__seq_file {
   TT__SEQ_PREVDEPTH
 } tt__seq_file;
 
+/* The file the --out pattern names per frame: the reference with --supersample, else the
+ * post-filtered frame when a filter runs, else the rendered frame. */
+static tt__seq_file tt__seq_main_file(const tt__seq *s) {
+  return s->opt->reference_only ? TT__SEQ_REFERENCE : s->post ? TT__SEQ_POST : TT__SEQ_COLOR;
+}
+
 /* File name (inside s->dir) of frame f's `what`. --out-dir: color_0007.exr, depth_0007.exr,
- * ... With an --out pattern the frame itself takes the pattern's name -- the reference with
- * --supersample, else the post-filtered frame when a filter runs, else the rendered frame --
+ * ... With an --out pattern the frame itself takes the pattern's name (tt__seq_main_file)
  * and the other files sit beside it: frame_0007.raw.exr (rendered frame under a filter),
  * frame_0007.depth.exr, frame_0007.motion.exr, frame_0007.reference.exr. */
 static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *out, size_t n) {
@@ -104,15 +131,12 @@ static void tt__seq_name(const tt__seq *s, tt__seq_file what, uint32_t f, char *
     snprintf(out, n, "%s_%04u.exr", legacy[what], f);
     return;
   }
-  tt__seq_file main = s->opt->reference_only ? TT__SEQ_REFERENCE
-                      : s->post              ? TT__SEQ_POST
-                                             : TT__SEQ_COLOR;
   char name[1024];
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wformat-nonliteral"
   snprintf(name, sizeof name, s->pattern, (int)f); /* checked: one %d conversion */
 #pragma GCC diagnostic pop
-  if (what == main) {
+  if (what == tt__seq_main_file(s)) {
     snprintf(out, n, "%s", name);
     return;
   }
@@ -228,6 +252,378 @@ static int tt__seq_manifest_commit(const char *path, FILE *m, char **buf, size_t
   return 0;
 }
 
+/* The output folder: --out-dir, or the folder of the --out pattern (whose file name part
+ * names the frames), created when missing. An exit code. */
+static int tt__seq_dirs(tt__seq *s) {
+  const tt__host_options *opt = s->opt;
+  if (opt->seq_pattern) {
+    const char *slash = strrchr(opt->seq_pattern, '/');
+    if (slash)
+      snprintf(s->dir, sizeof s->dir, "%.*s",
+               (int)(slash - opt->seq_pattern + (slash == opt->seq_pattern)), opt->seq_pattern);
+    else snprintf(s->dir, sizeof s->dir, ".");
+    s->pattern = slash ? slash + 1 : opt->seq_pattern;
+  } else {
+    snprintf(s->dir, sizeof s->dir, "%s", opt->out_dir);
+  }
+  if (tt__ensure_dir(s->dir) != 0) {
+    tt__say("%s %s: cannot create the directory: %s\n", opt->seq_pattern ? "--out" : "--out-dir",
+            s->dir, strerror(errno));
+    return TT_EXIT_OUTPUT;
+  }
+  return TT_EXIT_OK;
+}
+
+/* The post-filter: --post NAME, else a post-filter loaded with --plugin (which runs over the
+ * frames as with --post; not with --supersample, which writes only the references). */
+static int tt__seq_pick_post(tt__seq *s) {
+  const tt__host_options *opt = s->opt;
+  if (opt->post) {
+    char name[128];
+    const char *slash = strrchr(opt->post, '/');
+    snprintf(name, sizeof name, "%s", slash ? slash + 1 : opt->post);
+    char *dot = strstr(name, ".so");
+    if (dot) *dot = 0;
+    s->pi = tt__seq_find(s, TT_KIND_POST, name, &s->pcfg);
+    if (!s->pi) {
+      tt__say("--post %s: not a post-filter plugin (kind post)\n", opt->post);
+      return TT_EXIT_PLUGIN;
+    }
+    s->post_name = tt_loaded_plugin_entry(tt_registry_find_name(s->ses.reg, name))->name;
+    return TT_EXIT_OK;
+  }
+  s->pi = tt__seq_find(s, TT_KIND_POST, NULL, &s->pcfg);
+  if (!s->pi) return TT_EXIT_OK;
+  for (size_t i = 0; i < tt_registry_count(s->ses.reg); i++) {
+    const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s->ses.reg, i));
+    if (e->kind == TT_KIND_POST) {
+      s->post_name = e->name;
+      break;
+    }
+  }
+  if (opt->reference_only) {
+    tt__say("--supersample writes the reference frames: no post-filter (%s is loaded)\n",
+            s->post_name);
+    return TT_EXIT_USAGE;
+  }
+  return TT_EXIT_OK;
+}
+
+/* The frame buffers (the reference's with --reference-scale) and the post-filter's state. */
+static int tt__seq_buffers(tt__seq *s) {
+  size_t px = (size_t)s->w * s->h;
+  uint32_t k = s->k;
+  s->rgb = malloc(px * 3 * sizeof(float));
+  s->post_rgb = malloc(px * 3 * sizeof(float));
+  s->motion = malloc(px * 2 * sizeof(float));
+  s->prev_depth = malloc(px * sizeof(float));
+  if (k) {
+    s->ref_film = tt_film_create(s->w * k, s->h * k, 0);
+    s->ref_hi = malloc(px * k * k * 3 * sizeof(float));
+    s->ref = malloc(px * 3 * sizeof(float));
+  }
+  if (!s->rgb || !s->post_rgb || !s->motion || !s->prev_depth ||
+      (k && (!s->ref_film || !s->ref_hi || !s->ref))) {
+    tt__say("out of memory for %ux%u frames\n", s->w, s->h);
+    return TT_EXIT_FAILURE;
+  }
+  if (s->pi && s->pi->create(s->w, s->h, s->pcfg, &s->post) != TT_OK) {
+    tt__say("post-filter %s: %s\n", s->post_name, tt_last_error());
+    return TT_EXIT_FAILURE;
+  }
+  return TT_EXIT_OK;
+}
+
+/* The manifest: checked writable, its header written into the memstream (the frames follow,
+ * the whole committed after each frame). */
+static int tt__seq_manifest_open(tt__seq *s) {
+  snprintf(s->mpath, sizeof s->mpath, "%s/manifest.json", s->dir);
+  if (tt_file_check_writable(s->mpath) != TT_OK) {
+    tt__say("%s\n", tt_last_error());
+    return TT_EXIT_OUTPUT;
+  }
+  s->manifest = open_memstream(&s->mbuf, &s->mlen);
+  if (!s->manifest) {
+    tt__say("cannot write %s: %s\n", s->mpath, strerror(errno));
+    return TT_EXIT_OUTPUT;
+  }
+  fprintf(s->manifest,
+          "{\n  \"version\": 1,\n  \"scene\": \"%s\",\n  \"width\": %u,\n"
+          "  \"height\": %u,\n  \"fps\": %g,\n  \"spp\": %u,\n  \"seed\": %llu,\n"
+          "  \"jitter_cycle\": %u,\n  \"reference_scale\": %u,\n"
+          "  \"reference_filter\": \"blackman-harris radius %.1f px\",\n  \"post\": %s%s%s,\n"
+          "  \"colour\": \"linear RGB\",\n  \"motion\": \"pixels, this frame -> previous\",\n"
+          "  \"frames\": [\n",
+          tt_scene_source(s->ses.scene), s->w, s->h, s->fps, s->spp, (unsigned long long)s->seed,
+          TT__SEQ_JITTER_CYCLE, s->k, TT__SEQ_BH_RADIUS, s->post_name ? "\"" : "",
+          s->post_name ? s->post_name : "null", s->post_name ? "\"" : "");
+  return TT_EXIT_OK;
+}
+
+/* Logs what the sequence renders (unless --quiet). */
+static void tt__seq_log_start(const tt__seq *s) {
+  const tt__host_options *opt = s->opt;
+  if (opt->quiet) return;
+  uint32_t k = s->k;
+  tt__say("sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n", opt->scene,
+          opt->seq_first, opt->seq_last, s->fps, s->w, s->h, s->spp,
+          k ? (opt->reference_only ? ", reference only x" : ", reference x") : "",
+          k ? (k == 2   ? "2"
+               : k == 4 ? "4"
+                        : "K")
+            : "",
+          s->dir);
+}
+
+/* Create: the output folder, the session (scene, plugins, accel, integrator, a film with
+ * depth and motion), the post-filter, the buffers and the manifest. An exit code; close the
+ * sequence in any case. */
+static int tt__seq_create(tt__seq *s, const tt__host_options *opt) {
+  memset(s, 0, sizeof *s);
+  s->opt = opt;
+  int rc = tt__seq_dirs(s);
+  if (rc == TT_EXIT_OK) rc = tt__session_open(&s->ses, opt);
+  if (rc == TT_EXIT_OK) rc = tt__seq_pick_post(s);
+  if (rc != TT_EXIT_OK) return rc;
+  const tt_render_settings *settings = tt_scene_settings(s->ses.scene);
+  s->seed = opt->seed_set ? opt->seed : settings->seed;
+  s->spp = opt->spp ? opt->spp : settings->spp;
+  /* a still scene's prevdepth is the host's own (from depth and the poses); an animated
+   * scene's comes from the film, which knows where each hit was (objects move too) */
+  s->animated = tt_scene_animated(s->ses.scene);
+  rc = tt__session_start(&s->ses, TT_AOV_DEPTH | TT_AOV_MOTION |
+                                      (s->animated ? TT_AOV_PREV_DEPTH : 0) |
+                                      (opt->aov_mask & ~TT__AOV_PREVDEPTH));
+  if (rc != TT_EXIT_OK) return rc;
+  s->w = s->ses.camera->width;
+  s->h = s->ses.camera->height;
+  s->k = opt->reference_scale;
+  s->fps = opt->fps > 0 ? opt->fps : 24.0;
+  s->render_frame = !opt->reference_only || opt->aov_mask;
+  rc = tt__seq_buffers(s);
+  if (rc == TT_EXIT_OK) rc = tt__seq_manifest_open(s);
+  if (rc == TT_EXIT_OK) tt__seq_log_start(s);
+  return rc;
+}
+
+/* Writes frame f's `what` (w x h x ch) into the folder and names it in the manifest under
+ * `key`. An exit code. */
+static int tt__seq_emit(tt__seq *s, tt__seq_file what, const char *key, uint32_t f, uint32_t ch,
+                        const float *px, const char *const *names) {
+  char name[1024], path[4096 + 1100];
+  tt__seq_name(s, what, f, name, sizeof name);
+  snprintf(path, sizeof path, "%s/%s", s->dir, name);
+  if (tt__seq_write(path, s->w, s->h, ch, px, names)) return TT_EXIT_OUTPUT;
+  fprintf(s->manifest, ", \"%s\": \"%s\"", key, name);
+  return TT_EXIT_OK;
+}
+
+/* The frame's poses and jitter; starts its manifest entry. */
+static void tt__seq_frame_begin(tt__seq *s, tt__seq_frame *fr, uint32_t f) {
+  memset(fr, 0, sizeof *fr);
+  fr->f = f;
+  tt_scene_camera_at(s->ses.scene, f / s->fps, &fr->cam);
+  tt_scene_camera_at(s->ses.scene, (f - 1.0) / s->fps, &fr->prev);
+  fr->cam.width = fr->prev.width = s->w;
+  fr->cam.height = fr->prev.height = s->h;
+  fr->ji = f % TT__SEQ_JITTER_CYCLE;
+  tt_jitter_halton23(fr->ji, fr->jit);
+  s->entry_open = 1;
+  int first = f == s->opt->seq_first;
+  fprintf(s->manifest,
+          "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
+          "\"jitter\": [%.6f, %.6f], \"reset\": %s",
+          first ? "" : ",", f, f / s->fps, fr->ji, fr->jit[0], fr->jit[1],
+          first ? "true" : "false");
+}
+
+/* The one place an animated scene moves: the scene posed at frame f's time and the accel
+ * updated (refit or rebuild, as the accel's configuration says), recorded in the manifest. */
+static int tt__seq_update(tt__seq *s, const tt__seq_frame *fr) {
+  if (!s->animated) return TT_EXIT_OK;
+  tt_accel_update_stats us = {.struct_size = sizeof us};
+  if (tt_session_set_time(s->ses.lib, fr->f / s->fps, 1.0 / s->fps, &us) != TT_OK) {
+    tt__say("frame %u: %s\n", fr->f, tt_last_error());
+    return TT_EXIT_FAILURE;
+  }
+  fprintf(s->manifest, ", \"update\": \"%s\", \"update_ms\": %.3f",
+          us.rebuilt ? "rebuild" : "refit", us.update_ms);
+  if (us.sah_cost > 0) fprintf(s->manifest, ", \"sah_cost\": %.4f", us.sah_cost);
+  return TT_EXIT_OK;
+}
+
+/* The jittered frame: rendered, its motion and previous depth kept for the post-filter, and
+ * the colour and the asked-for AOVs written. */
+static int tt__seq_render_frame(tt__seq *s, tt__seq_frame *fr) {
+  static const char *const depth_names[] = {"Z"};
+  static const char *const motion_names[] = {"X", "Y"};
+  static const char *const normal_names[] = {"X", "Y", "Z"}, *const albedo_names[] = {"R", "G",
+                                                                                      "B"};
+  const tt__host_options *opt = s->opt;
+  const tt_host *host = s->ses.host;
+  tt_film *film = s->ses.film;
+  size_t px = (size_t)s->w * s->h;
+  uint64_t t0 = host->clock_ns();
+  if (tt__seq_render(s, film, &fr->cam, &fr->prev, fr->jit, s->seed + fr->f, s->rgb) != TT_OK) {
+    tt__say("frame %u: %s\n", fr->f, tt_last_error());
+    return TT_EXIT_FAILURE;
+  }
+  fr->render_ms = (host->clock_ns() - t0) * 1e-6;
+  fr->depth = tt_film_aov_const(film, TT_AOV_DEPTH);
+  memcpy(s->motion, tt_film_aov_const(film, TT_AOV_MOTION), px * 2 * sizeof(float));
+  if (s->animated)
+    memcpy(s->prev_depth, tt_film_aov_const(film, TT_AOV_PREV_DEPTH), px * sizeof(float));
+  else tt__seq_prev_depth(&fr->cam, &fr->prev, fr->jit, fr->depth, s->w, s->h, s->prev_depth);
+  const struct {
+    tt__seq_file what;
+    const char *key;
+    int on;
+    uint32_t ch;
+    const float *px;
+    const char *const *names;
+  } files[] = {
+      {TT__SEQ_COLOR, "color", !opt->reference_only, 3, s->rgb, NULL},
+      {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__AOV_DEPTH), 1, fr->depth, depth_names},
+      {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__AOV_MOTION), 2, s->motion, motion_names},
+      {TT__SEQ_NORMAL, "normal", !!(opt->aov_mask & TT__AOV_NORMAL), 3,
+       tt_film_aov_const(film, TT_AOV_NORMAL), normal_names},
+      {TT__SEQ_ALBEDO, "albedo", !!(opt->aov_mask & TT__AOV_ALBEDO), 3,
+       tt_film_aov_const(film, TT_AOV_ALBEDO), albedo_names},
+      {TT__SEQ_PREVDEPTH, "prev_depth", !!(opt->aov_mask & TT__AOV_PREVDEPTH), 1, s->prev_depth,
+       depth_names},
+  };
+  for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+    if (!files[i].on) continue;
+    int rc = tt__seq_emit(s, files[i].what, files[i].key, fr->f, files[i].ch, files[i].px,
+                          files[i].names);
+    if (rc != TT_EXIT_OK) return rc;
+  }
+  return TT_EXIT_OK;
+}
+
+/* The reference frame: the pose at k times the resolution per axis with random sub-pixel
+ * positions, downsampled with the Blackman-Harris filter, written. */
+static int tt__seq_reference(tt__seq *s, tt__seq_frame *fr) {
+  if (!s->k) return TT_EXIT_OK;
+  tt_camera hi = fr->cam;
+  hi.width = s->w * s->k;
+  hi.height = s->h * s->k;
+  uint64_t r0 = s->ses.host->clock_ns();
+  uint64_t seed = s->seed + 1000003u * (fr->f + 1);
+  if (tt__seq_render(s, s->ref_film, &hi, NULL, NULL, seed, s->ref_hi) != TT_OK) {
+    tt__say("reference frame %u: %s\n", fr->f, tt_last_error());
+    return TT_EXIT_FAILURE;
+  }
+  tt__downsample_bh(s->ref_hi, s->k, s->w, s->h, TT__SEQ_BH_RADIUS, s->ref);
+  fr->ref_ms = (s->ses.host->clock_ns() - r0) * 1e-6;
+  return tt__seq_emit(s, TT__SEQ_REFERENCE, "reference", fr->f, 3, s->ref, NULL);
+}
+
+/* The post-filter over the frame (its history reset on the first frame), written. */
+static int tt__seq_post(tt__seq *s, const tt__seq_frame *fr) {
+  if (!s->post) return TT_EXIT_OK;
+  tt_post_frame pf;
+  memset(&pf, 0, sizeof pf);
+  pf.struct_size = sizeof pf;
+  pf.width = s->w;
+  pf.height = s->h;
+  pf.color = s->rgb;
+  pf.depth = fr->depth;
+  pf.motion = s->motion;
+  pf.frame_index = fr->f - s->opt->seq_first;
+  pf.jitter_index = fr->ji;
+  pf.jitter[0] = fr->jit[0];
+  pf.jitter[1] = fr->jit[1];
+  pf.reset_history = fr->f == s->opt->seq_first;
+  pf.prev_depth = s->prev_depth;
+  uint64_t p0 = s->ses.host->clock_ns();
+  if (s->pi->process(s->post, &pf, s->post_rgb) != TT_OK) {
+    tt__say("post-filter %s: frame %u: %s\n", s->post_name, fr->f, tt_last_error());
+    return TT_EXIT_FAILURE;
+  }
+  double post_ms = (s->ses.host->clock_ns() - p0) * 1e-6;
+  int rc = tt__seq_emit(s, TT__SEQ_POST, "post", fr->f, 3, s->post_rgb, NULL);
+  if (rc == TT_EXIT_OK) fprintf(s->manifest, ", \"post_ms\": %.3f", post_ms);
+  return rc;
+}
+
+/* --png: the frame the pattern names (tt__seq_main_file), through the display transform of
+ * stills. */
+static int tt__seq_png(tt__seq *s, const tt__seq_frame *fr) {
+  if (!s->opt->png) return TT_EXIT_OK;
+  tt__seq_file main = tt__seq_main_file(s);
+  const float *px = main == TT__SEQ_REFERENCE ? s->ref
+                    : main == TT__SEQ_POST    ? s->post_rgb
+                                              : s->rgb;
+  char name[1024], path[4096 + 1100];
+  tt__seq_name(s, main, fr->f, name, sizeof name);
+  size_t len = strlen(name);
+  if (len > 4) memcpy(name + len - 4, ".png", 4); /* every frame name ends in .exr */
+  snprintf(path, sizeof path, "%s/%s", s->dir, name);
+  tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
+  if (tt_image_write_png_display(path, s->w, s->h, px, 0.0f, meta, 1) != TT_OK) {
+    tt__say("cannot write %s: %s\n", path, tt_last_error());
+    return TT_EXIT_OUTPUT;
+  }
+  fprintf(s->manifest, ", \"png\": \"%s\"", name);
+  return TT_EXIT_OK;
+}
+
+/* Step: frame f, with the stop held back so that it completes: pose and accel update, the
+ * jittered frame, the reference, the post-filter, the PNG; its manifest entry closed and
+ * the manifest committed. An exit code (a failure leaves the entry open: finish closes it). */
+static int tt__seq_step(tt__seq *s, uint32_t f) {
+  tt__seq_frame fr;
+  tt_default_host_hold_stop(1);
+  tt__seq_frame_begin(s, &fr, f);
+  int rc = tt__seq_update(s, &fr);
+  if (rc == TT_EXIT_OK && s->render_frame) rc = tt__seq_render_frame(s, &fr);
+  if (rc == TT_EXIT_OK) rc = tt__seq_reference(s, &fr);
+  if (rc == TT_EXIT_OK) rc = tt__seq_post(s, &fr);
+  if (rc == TT_EXIT_OK) rc = tt__seq_png(s, &fr);
+  if (rc != TT_EXIT_OK) return rc;
+  fprintf(s->manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", fr.render_ms, fr.ref_ms);
+  s->entry_open = 0;
+  if (tt__seq_manifest_commit(s->mpath, s->manifest, &s->mbuf, &s->mlen)) rc = TT_EXIT_OUTPUT;
+  tt_default_host_hold_stop(0);
+  s->done_frames++;
+  uint32_t nframes = s->opt->seq_last - s->opt->seq_first + 1;
+  tt__progress_update("sequence", (double)(f - s->opt->seq_first + 1) / nframes);
+  return rc;
+}
+
+/* Finish: a frame that failed half-way still closes its manifest entry; the manifest is
+ * committed and what was written reported. Returns `rc` or the manifest's failure. */
+static int tt__seq_finish(tt__seq *s, int rc) {
+  const tt__host_options *opt = s->opt;
+  uint32_t nframes = opt->seq_last - opt->seq_first + 1;
+  tt_default_host_hold_stop(0);
+  if (s->entry_open) fprintf(s->manifest, ", \"incomplete\": true}\n");
+  tt__progress_finish();
+  if (tt__seq_manifest_commit(s->mpath, s->manifest, &s->mbuf, &s->mlen) && rc == TT_EXIT_OK)
+    rc = TT_EXIT_OUTPUT;
+  if (!opt->quiet && rc == TT_EXIT_OK) tt__say("wrote %u frames to %s\n", nframes, s->dir);
+  else if (rc == TT_EXIT_INTERRUPTED)
+    tt__say("interrupted: %u of %u frames written to %s (manifest.json lists them)\n",
+            s->done_frames, nframes, s->dir);
+  return rc;
+}
+
+/* Frees what the sequence holds, at any stage. */
+static void tt__seq_close(tt__seq *s) {
+  if (s->manifest) fclose(s->manifest);
+  free(s->mbuf);
+  if (s->post) s->pi->destroy(s->post);
+  tt_film_destroy(s->ref_film);
+  free(s->rgb);
+  free(s->ref_hi);
+  free(s->ref);
+  free(s->post_rgb);
+  free(s->motion);
+  free(s->prev_depth);
+  tt__session_close(&s->ses);
+}
+
 int tt__run_sequence(const tt__host_options *opt) {
   if (!opt->out_dir && !opt->seq_pattern) {
     tt__say("--sequence needs --out-dir DIR (or --out DIR/frame_%%04d.exr)\n");
@@ -237,318 +633,15 @@ int tt__run_sequence(const tt__host_options *opt) {
    * after every frame); a second signal exits at once, leaving the frames committed so far */
   tt__install_signals("frame");
   tt__seq s;
-  memset(&s, 0, sizeof s);
-  s.opt = opt;
-  if (opt->seq_pattern) {
-    const char *slash = strrchr(opt->seq_pattern, '/');
-    if (slash)
-      snprintf(s.dir, sizeof s.dir, "%.*s",
-               (int)(slash - opt->seq_pattern + (slash == opt->seq_pattern)), opt->seq_pattern);
-    else snprintf(s.dir, sizeof s.dir, ".");
-    s.pattern = slash ? slash + 1 : opt->seq_pattern;
-  } else {
-    snprintf(s.dir, sizeof s.dir, "%s", opt->out_dir);
-  }
-  if (tt__ensure_dir(s.dir) != 0) {
-    tt__say("%s %s: cannot create the directory: %s\n", opt->seq_pattern ? "--out" : "--out-dir",
-            s.dir, strerror(errno));
-    return TT_EXIT_OUTPUT;
-  }
-  int rc = TT_EXIT_OK;
-  float *rgb = NULL, *ref_hi = NULL, *ref = NULL, *post_rgb = NULL, *motion = NULL;
-  tt_film *film = NULL, *ref_film = NULL;
-  float *prev_depth = NULL;
-  FILE *manifest = NULL; /* memstream over mbuf: the manifest text so far */
-  char *mbuf = NULL, mpath[4096 + 32];
-  size_t mlen = 0;
-  rc = tt__session_open(&s.ses, opt);
-  if (rc != TT_EXIT_OK) goto done;
-  const tt_host *host = s.ses.host;
-  const tt_config *pcfg = NULL;
-  if (opt->post) {
-    char name[128];
-    const char *slash = strrchr(opt->post, '/');
-    snprintf(name, sizeof name, "%s", slash ? slash + 1 : opt->post);
-    char *dot = strstr(name, ".so");
-    if (dot) *dot = 0;
-    s.pi = tt__seq_find(&s, TT_KIND_POST, name, &pcfg);
-    if (!s.pi) {
-      tt__say("--post %s: not a post-filter plugin (kind post)\n", opt->post);
-      rc = TT_EXIT_PLUGIN;
-      goto done;
-    }
-    s.post_name = tt_loaded_plugin_entry(tt_registry_find_name(s.ses.reg, name))->name;
-  } else {
-    /* --plugin post_taa: a loaded post-filter runs over the frames as with --post */
-    s.pi = tt__seq_find(&s, TT_KIND_POST, NULL, &pcfg);
-    if (s.pi) {
-      for (size_t i = 0; i < tt_registry_count(s.ses.reg); i++) {
-        const tt_plugin *e = tt_loaded_plugin_entry(tt_registry_get(s.ses.reg, i));
-        if (e->kind == TT_KIND_POST) {
-          s.post_name = e->name;
-          break;
-        }
-      }
-      if (opt->reference_only) {
-        tt__say("--supersample writes the reference frames: no post-filter "
-                "(%s is loaded)\n",
-                s.post_name);
-        rc = TT_EXIT_USAGE;
-        goto done;
-      }
-    }
-  }
-  const tt_render_settings *settings = tt_scene_settings(s.ses.scene);
-  s.seed = opt->seed_set ? opt->seed : settings->seed;
-  s.spp = opt->spp ? opt->spp : settings->spp;
-  /* prevdepth is the host's own (from depth and the poses), not a film AOV */
-  /* a still scene's prevdepth is the host's own (from depth and the poses); an animated
-   * scene's comes from the film, which knows where each hit was (objects move too) */
-  const int animated = tt_scene_animated(s.ses.scene);
-  rc = tt__session_start(&s.ses, TT_AOV_DEPTH | TT_AOV_MOTION | (animated ? TT_AOV_PREV_DEPTH : 0) |
-                                     (opt->aov_mask & ~TT__AOV_PREVDEPTH));
-  if (rc != TT_EXIT_OK) goto done;
-  const tt_camera *still = s.ses.camera;
-  uint32_t w = still->width, h = still->height, k = opt->reference_scale;
-  double fps = opt->fps > 0 ? opt->fps : 24.0;
-  film = s.ses.film;
-  rgb = malloc((size_t)w * h * 3 * sizeof(float));
-  post_rgb = malloc((size_t)w * h * 3 * sizeof(float));
-  motion = malloc((size_t)w * h * 2 * sizeof(float));
-  prev_depth = malloc((size_t)w * h * sizeof(float));
-  if (k) {
-    ref_film = tt_film_create(w * k, h * k, 0);
-    ref_hi = malloc((size_t)w * k * h * k * 3 * sizeof(float));
-    ref = malloc((size_t)w * h * 3 * sizeof(float));
-  }
-  if (!rgb || !post_rgb || !motion || !prev_depth || (k && (!ref_film || !ref_hi || !ref))) {
-    tt__say("out of memory for %ux%u frames\n", w, h);
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  if (s.pi && s.pi->create(w, h, pcfg, &s.post) != TT_OK) {
-    tt__say("post-filter %s: %s\n", s.post_name, tt_last_error());
-    rc = TT_EXIT_FAILURE;
-    goto done;
-  }
-  char path[4096 + 1100], name[1024];
-  snprintf(mpath, sizeof mpath, "%s/manifest.json", s.dir);
-  if (tt_file_check_writable(mpath) != TT_OK) {
-    tt__say("%s\n", tt_last_error());
-    rc = TT_EXIT_OUTPUT;
-    goto done;
-  }
-  manifest = open_memstream(&mbuf, &mlen);
-  if (!manifest) {
-    tt__say("cannot write %s: %s\n", mpath, strerror(errno));
-    rc = TT_EXIT_OUTPUT;
-    goto done;
-  }
-  fprintf(manifest,
-          "{\n  \"version\": 1,\n  \"scene\": \"%s\",\n  \"width\": %u,\n"
-          "  \"height\": %u,\n  \"fps\": %g,\n  \"spp\": %u,\n  \"seed\": %llu,\n"
-          "  \"jitter_cycle\": %u,\n  \"reference_scale\": %u,\n"
-          "  \"reference_filter\": \"blackman-harris radius %.1f px\",\n  \"post\": %s%s%s,\n"
-          "  \"colour\": \"linear RGB\",\n  \"motion\": \"pixels, this frame -> previous\",\n"
-          "  \"frames\": [\n",
-          tt_scene_source(s.ses.scene), w, h, fps, s.spp, (unsigned long long)s.seed,
-          TT__SEQ_JITTER_CYCLE, k, TT__SEQ_BH_RADIUS, s.post_name ? "\"" : "",
-          s.post_name ? s.post_name : "null", s.post_name ? "\"" : "");
-  if (!opt->quiet)
-    tt__say("sequence %s: frames %u..%u at %g fps, %ux%u, %u spp%s%s -> %s\n", opt->scene,
-            opt->seq_first, opt->seq_last, fps, w, h, s.spp,
-            k ? (opt->reference_only ? ", reference only x" : ", reference x") : "",
-            k ? (k == 2   ? "2"
-                 : k == 4 ? "4"
-                          : "K")
-              : "",
-            s.dir);
-  static const char *const depth_names[] = {"Z"};
-  static const char *const motion_names[] = {"X", "Y"};
-  static const char *const normal_names[] = {"X", "Y", "Z"};
-  static const char *const albedo_names[] = {"R", "G", "B"};
-  uint32_t nframes = opt->seq_last - opt->seq_first + 1;
-  /* the jittered frame is rendered unless only the reference is asked for */
-  int render_frame = !opt->reference_only || opt->aov_mask;
-  int entry_open = 0; /* a frame's manifest entry is started but not closed */
-  uint32_t done_frames = 0;
-  for (uint32_t f = opt->seq_first; f <= opt->seq_last && rc == TT_EXIT_OK; f++) {
+  int rc = tt__seq_create(&s, opt);
+  for (uint32_t f = opt->seq_first; rc == TT_EXIT_OK && f <= opt->seq_last; f++) {
     /* a stop asked for during the frame before (or, for the first frame, during the scene
      * loading and accel build) ends the sequence here; the first frame is always completed,
      * as a still completes its first pass: exit 130 comes with what was rendered so far */
-    if (f > opt->seq_first && host->should_stop()) {
-      rc = TT_EXIT_INTERRUPTED;
-      break;
-    }
-    tt_default_host_hold_stop(1);
-    tt_camera cam, prev;
-    tt_scene_camera_at(s.ses.scene, f / fps, &cam);
-    tt_scene_camera_at(s.ses.scene, (f - 1.0) / fps, &prev);
-    cam.width = prev.width = w;
-    cam.height = prev.height = h;
-    uint32_t ji = f % TT__SEQ_JITTER_CYCLE;
-    float jit[2];
-    tt_jitter_halton23(ji, jit);
-    entry_open = 1;
-    fprintf(manifest,
-            "    %s{\"index\": %u, \"time\": %.6f, \"jitter_index\": %u, "
-            "\"jitter\": [%.6f, %.6f], \"reset\": %s",
-            f == opt->seq_first ? "" : ",", f, f / fps, ji, jit[0], jit[1],
-            f == opt->seq_first ? "true" : "false");
-    double render_ms = 0, ref_ms = 0, post_ms = 0;
-    const float *depth = NULL;
-    if (animated) {
-      tt_accel_update_stats us = {.struct_size = sizeof us};
-      if (tt_session_set_time(s.ses.lib, f / fps, 1.0 / fps, &us) != TT_OK) {
-        tt__say("frame %u: %s\n", f, tt_last_error());
-        rc = TT_EXIT_FAILURE;
-        break;
-      }
-      fprintf(manifest, ", \"update\": \"%s\", \"update_ms\": %.3f",
-              us.rebuilt ? "rebuild" : "refit", us.update_ms);
-      if (us.sah_cost > 0) fprintf(manifest, ", \"sah_cost\": %.4f", us.sah_cost);
-    }
-    if (render_frame) {
-      uint64_t t0 = host->clock_ns();
-      if (tt__seq_render(&s, film, &cam, &prev, jit, s.seed + f, rgb) != TT_OK) {
-        tt__say("frame %u: %s\n", f, tt_last_error());
-        rc = TT_EXIT_FAILURE;
-        break;
-      }
-      render_ms = (host->clock_ns() - t0) * 1e-6;
-      depth = tt_film_aov_const(film, TT_AOV_DEPTH);
-      memcpy(motion, tt_film_aov_const(film, TT_AOV_MOTION), (size_t)w * h * 2 * sizeof(float));
-      if (animated)
-        memcpy(prev_depth, tt_film_aov_const(film, TT_AOV_PREV_DEPTH),
-               (size_t)w * h * sizeof(float));
-      else tt__seq_prev_depth(&cam, &prev, jit, depth, w, h, prev_depth);
-      struct {
-        tt__seq_file what;
-        const char *key;
-        int on;
-        uint32_t ch;
-        const float *px;
-        const char *const *names;
-      } files[] = {
-          {TT__SEQ_COLOR, "color", !opt->reference_only, 3, rgb, NULL},
-          {TT__SEQ_DEPTH, "depth", !!(opt->aov_mask & TT__AOV_DEPTH), 1, depth, depth_names},
-          {TT__SEQ_MOTION, "motion", !!(opt->aov_mask & TT__AOV_MOTION), 2, motion, motion_names},
-          {TT__SEQ_NORMAL, "normal", !!(opt->aov_mask & TT__AOV_NORMAL), 3,
-           tt_film_aov_const(film, TT_AOV_NORMAL), normal_names},
-          {TT__SEQ_ALBEDO, "albedo", !!(opt->aov_mask & TT__AOV_ALBEDO), 3,
-           tt_film_aov_const(film, TT_AOV_ALBEDO), albedo_names},
-          {TT__SEQ_PREVDEPTH, "prev_depth", !!(opt->aov_mask & TT__AOV_PREVDEPTH), 1, prev_depth,
-           depth_names},
-      };
-      for (size_t i = 0; i < sizeof files / sizeof files[0] && rc == TT_EXIT_OK; i++) {
-        if (!files[i].on) continue;
-        tt__seq_name(&s, files[i].what, f, name, sizeof name);
-        snprintf(path, sizeof path, "%s/%s", s.dir, name);
-        if (tt__seq_write(path, w, h, files[i].ch, files[i].px, files[i].names))
-          rc = TT_EXIT_OUTPUT;
-        else fprintf(manifest, ", \"%s\": \"%s\"", files[i].key, name);
-      }
-      if (rc != TT_EXIT_OK) break;
-    }
-    if (k) {
-      tt_camera hi = cam;
-      hi.width = w * k;
-      hi.height = h * k;
-      uint64_t r0 = host->clock_ns();
-      if (tt__seq_render(&s, ref_film, &hi, NULL, NULL, s.seed + 1000003u * (f + 1), ref_hi) !=
-          TT_OK) {
-        tt__say("reference frame %u: %s\n", f, tt_last_error());
-        rc = TT_EXIT_FAILURE;
-        break;
-      }
-      tt__downsample_bh(ref_hi, k, w, h, TT__SEQ_BH_RADIUS, ref);
-      ref_ms = (host->clock_ns() - r0) * 1e-6;
-      tt__seq_name(&s, TT__SEQ_REFERENCE, f, name, sizeof name);
-      snprintf(path, sizeof path, "%s/%s", s.dir, name);
-      if (tt__seq_write(path, w, h, 3, ref, NULL)) {
-        rc = TT_EXIT_OUTPUT;
-        break;
-      }
-      fprintf(manifest, ", \"reference\": \"%s\"", name);
-    }
-    if (s.post) {
-      tt_post_frame pf;
-      memset(&pf, 0, sizeof pf);
-      pf.struct_size = sizeof pf;
-      pf.width = w;
-      pf.height = h;
-      pf.color = rgb;
-      pf.depth = depth;
-      pf.motion = motion;
-      pf.frame_index = f - opt->seq_first;
-      pf.jitter_index = ji;
-      pf.jitter[0] = jit[0];
-      pf.jitter[1] = jit[1];
-      pf.reset_history = f == opt->seq_first;
-      pf.prev_depth = prev_depth;
-      uint64_t p0 = host->clock_ns();
-      if (s.pi->process(s.post, &pf, post_rgb) != TT_OK) {
-        tt__say("post-filter %s: frame %u: %s\n", s.post_name, f, tt_last_error());
-        rc = TT_EXIT_FAILURE;
-        break;
-      }
-      post_ms = (host->clock_ns() - p0) * 1e-6;
-      tt__seq_name(&s, TT__SEQ_POST, f, name, sizeof name);
-      snprintf(path, sizeof path, "%s/%s", s.dir, name);
-      if (tt__seq_write(path, w, h, 3, post_rgb, NULL)) {
-        rc = TT_EXIT_OUTPUT;
-        break;
-      }
-      fprintf(manifest, ", \"post\": \"%s\", \"post_ms\": %.3f", name, post_ms);
-    }
-    if (opt->png) {
-      /* the frame the pattern names (tt__seq_name), through the display transform of stills */
-      tt__seq_file main = opt->reference_only ? TT__SEQ_REFERENCE
-                          : s.post            ? TT__SEQ_POST
-                                              : TT__SEQ_COLOR;
-      const float *px = main == TT__SEQ_REFERENCE ? ref : main == TT__SEQ_POST ? post_rgb : rgb;
-      tt__seq_name(&s, main, f, name, sizeof name);
-      size_t len = strlen(name);
-      if (len > 4) memcpy(name + len - 4, ".png", 4); /* every frame name ends in .exr */
-      snprintf(path, sizeof path, "%s/%s", s.dir, name);
-      tt_image_meta meta[] = {{"software", "tunetrace " TT_VERSION_STRING}};
-      if (tt_image_write_png_display(path, w, h, px, 0.0f, meta, 1) != TT_OK) {
-        tt__say("cannot write %s: %s\n", path, tt_last_error());
-        rc = TT_EXIT_OUTPUT;
-        break;
-      }
-      fprintf(manifest, ", \"png\": \"%s\"", name);
-    }
-    fprintf(manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", render_ms, ref_ms);
-    entry_open = 0;
-    if (tt__seq_manifest_commit(mpath, manifest, &mbuf, &mlen)) rc = TT_EXIT_OUTPUT;
-    tt_default_host_hold_stop(0);
-    done_frames++;
-    tt__progress_update("sequence", (double)(f - opt->seq_first + 1) / nframes);
+    if (f > opt->seq_first && s.ses.host->should_stop()) rc = TT_EXIT_INTERRUPTED;
+    else rc = tt__seq_step(&s, f);
   }
-  tt_default_host_hold_stop(0);
-  /* a frame that failed half-way still closes its manifest entry */
-  if (entry_open) fprintf(manifest, ", \"incomplete\": true}\n");
-  tt__progress_finish();
-  if (tt__seq_manifest_commit(mpath, manifest, &mbuf, &mlen) && rc == TT_EXIT_OK)
-    rc = TT_EXIT_OUTPUT;
-  fclose(manifest);
-  manifest = NULL;
-  if (!opt->quiet && rc == TT_EXIT_OK) tt__say("wrote %u frames to %s\n", nframes, s.dir);
-  else if (rc == TT_EXIT_INTERRUPTED)
-    tt__say("interrupted: %u of %u frames written to %s (manifest.json lists them)\n", done_frames,
-            nframes, s.dir);
-done:
-  if (manifest) fclose(manifest);
-  free(mbuf);
-  if (s.post) s.pi->destroy(s.post);
-  tt_film_destroy(ref_film);
-  free(rgb);
-  free(ref_hi);
-  free(ref);
-  free(post_rgb);
-  free(motion);
-  free(prev_depth);
-  tt__session_close(&s.ses);
+  if (s.manifest) rc = tt__seq_finish(&s, rc);
+  tt__seq_close(&s);
   return rc;
 }
