@@ -3,7 +3,9 @@
 # Cornell box and the committed Cornell-box variants load and render with host at 32x32 with
 # exit 0, no non-finite sample, rays > 0 and a non-black mean; the variants in
 # scenes/cornell-box-variants/ are what the generator writes today; --camera-index gives a
-# different image than index 0 on a scene with a path; --frames A:B writes B-A+1 numbered files.
+# different image than index 0 on a scene with a path; --frames A:B writes B-A+1 numbered files;
+# scenes/animated-stress is what tools/scenes/anim_stress.py writes and plays as a sequence;
+# tools/tuning/cylinder_sweep.py measures its angles as the frames of one sequence.
 set -euo pipefail
 PY=/usr/bin/python3
 if ! "$PY" -c 'import numpy' 2>/dev/null; then
@@ -113,6 +115,24 @@ check '[ $rc = 2 ]'
 "${CAM[@]}" merge "$CBOX" "$dir/frag.json" "$dir/merged/scene.json"
 check "grep -q '\"path_keys\": 5}' <<<\"\$(\"$INFO\" \"$dir/merged/scene.json\")\""
 render merged "$dir/merged/scene.json" --camera-index 30
+
+# 5. the animated stress scene (tools/scenes/anim_stress.py): committed == generated; its
+# sequence poses every frame (an update per frame) and stays inside the camera path --------
+"$PY" -m tools.scenes.anim_stress "$dir/as/scene.json" >/dev/null
+check "cmp -s '$TT_SOURCE_ROOT/scenes/animated-stress/scene.json' '$dir/as/scene.json'"
+"$HOST" --quiet --no-db --res 16x12 --spp 1 --threads 2 --sequence 117:119 --out-dir "$dir/as/seq" \
+  "$TT_SOURCE_ROOT/scenes/animated-stress/scene.json"
+check '[ "$(grep -c "\"update\": \"rebuild\"" "$dir/as/seq/manifest.json")" = 3 ]'
+rc=0; "$PY" -m tools.scenes.anim_stress "$dir/as/bad.json" --grid 1 2>"$dir/as/bad.log" || rc=$?
+check '[ $rc = 2 ] && grep -q -- "--grid: expected 2..2000" "$dir/as/bad.log" && [ ! -e "$dir/as/bad.json" ]'
+
+# 6. cylinder_sweep.py: the angles are the frames of one sequence per configuration ---------
+rc=0; "$PY" -m tools.tuning.cylinder_sweep --host "$HOST" --scene "$CBOX" --angles 3 --reps 1 \
+  --res 8x8 --backends native --work "$dir/sweep" >"$dir/sweep.log" 2>&1 || rc=$?
+check '[ $rc = 0 ]'
+check '[ "$(wc -l <"$dir/sweep/runs.csv")" = 7 ]'                  # header + 2 qualities x 3 angles
+check 'grep -q "^native,3,120.0,0," "$dir/sweep/runs.csv"'
+check "\"$PY\" -c 'import json,sys; d=json.load(open(sys.argv[1])); c=d[\"stress\"][\"cylinder\"]; sys.exit(not (c[\"time\"] == [0, 3] and c[\"to\"] == 180 and d[\"camera\"][\"path\"] == []))' '$dir/sweep/cylinder.json'"
 
 [ $HAVE_OIIO = 1 ] || echo "note: python3-openimageio missing: image means and differences not checked"
 exit $fail
