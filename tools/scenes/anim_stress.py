@@ -17,7 +17,7 @@ N / F <= --duration plays the scene; the committed scenes/animated-stress/scene.
 default (5 s: 120 frames at 24 fps):
 
   /usr/bin/python3 -m tools.scenes.anim_stress OUT/scene.json [--objects 64] [--grid 20]
-      [--duration 5] [--seed 1]
+      [--duration 5] [--seed 1] [--detail 0]
 """
 import argparse
 import json
@@ -65,14 +65,21 @@ MATERIALS = {
 BODY_MATERIALS = ["red", "blue", "yellow", "plastic"]
 
 
-def rigid_objects(n, duration, rng, key_dt=0.5):
-    """n rigid bodies with Lissajous paths inside [-4, 4] x [0.6, 3.4] x [-4, 4]."""
+def rigid_objects(n, duration, rng, detail=0, key_dt=0.5):
+    """n rigid bodies with Lissajous paths inside [-4, 4] x [0.6, 3.4] x [-4, 4]; detail > 0:
+    each is an icosphere of that level (20 * 4^detail triangles) squashed along its axes."""
     meshes = []
     times = np.arange(0.0, duration + 1e-9, key_dt)
+    if detail > 0:
+        from tools.scenes.generate import icosphere
+        ico_v, ico_f = icosphere(detail)
     for i in range(n):
         name, make = SHAPES[i % len(SHAPES)]
         p, tris = make()
         size = float(rng.uniform(0.12, 0.35))
+        if detail > 0:
+            name, tris = "blob", ico_f.tolist()
+            p = ico_v * rng.uniform(0.5, 1.3, 3)
         amp = rng.uniform([2.0, 0.6, 2.0], [3.8, 1.3, 3.8])
         centre = np.array([0.0, 2.0, 0.0]) + rng.uniform(-0.3, 0.3, 3)
         omega = rng.uniform(0.4, 1.6, 3) * rng.choice([-1, 1], 3)
@@ -135,21 +142,21 @@ def camera_orbit(duration, n=6):
     return keys
 
 
-def build(objects, grid, duration, seed):
+def build(objects, grid, duration, seed, detail=0):
     rng = np.random.default_rng(seed)
     meshes = [{"name": "floor", "material": "floor",
                "positions": [[-12, 0, -12], [12, 0, -12], [12, 0, 12], [-12, 0, 12]],
                "indices": [[0, 2, 1], [0, 3, 2]]}]
-    meshes += rigid_objects(objects, duration, rng)
+    meshes += rigid_objects(objects, duration, rng, detail)
     meshes.append(cloth(grid, duration))
     path = camera_orbit(duration)
     return {
         "version": 1,
-        "_comment": ("tools/scenes/anim_stress.py --objects %d --grid %d --duration %g --seed %d: "
+        "_comment": ("tools/scenes/anim_stress.py --objects %d --grid %d --duration %g --seed %d%s: "
                      "%d rigid bodies on crossing paths and a %dx%d cloth with two travelling "
                      "waves; %g s (%d frames at 24 fps)"
-                     % (objects, grid, duration, seed, objects, grid, grid, duration,
-                        round(duration * 24))),
+                     % (objects, grid, duration, seed, " --detail %d" % detail if detail else "",
+                        objects, grid, grid, duration, round(duration * 24))),
         "camera": {"position": path[0]["position"], "target": path[0]["target"], "fov": 45,
                    "resolution": [320, 240], "path": path},
         "render": {"spp": 16, "maxDepth": 4},
@@ -182,14 +189,19 @@ def main(argv=None):
     p.add_argument("--grid", type=int, default=20, help="cloth vertices per side (default 20)")
     p.add_argument("--duration", type=float, default=5.0, help="seconds (default 5)")
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--detail", type=int, default=0,
+                   help="bodies as icospheres of this level, 20 * 4^L triangles each (default 0: "
+                        "cubes, octahedra, tetrahedra)")
     a = p.parse_args(argv)
     if a.objects < 0 or a.objects > 100000:
         p.error("--objects: expected 0..100000, got %d" % a.objects)
     if a.grid < 2 or a.grid > 2000:
         p.error("--grid: expected 2..2000 vertices per side, got %d" % a.grid)
+    if a.detail < 0 or a.detail > 6:
+        p.error("--detail: expected 0..6, got %d" % a.detail)
     if not (math.isfinite(a.duration) and 0.25 <= a.duration <= 3600):
         p.error("--duration: expected 0.25..3600 seconds, got %g" % a.duration)
-    scene = build(a.objects, a.grid, a.duration, a.seed)
+    scene = build(a.objects, a.grid, a.duration, a.seed, a.detail)
     tmp = a.out + ".tmp"
     write_compact(tmp, scene)
     os.replace(tmp, a.out)   # atomic: a reader never sees half a scene
