@@ -6,7 +6,8 @@
  * scale that is not axis-aligned, ObjectInstance and TransformEnd/AttributeEnd keep both
  * transforms. Bad input (end before start, NaN, no time span, shear in motion, a mirror at
  * one end only, an unknown ActiveTransform) is refused naming the file and line, and so is a
- * scene.json wrapper whose camera path is shorter than the pbrt animation it imports. Every
+ * scene.json wrapper whose camera path is shorter than the pbrt animation it imports. An
+ * animated Camera becomes a camera path with pbrt's interpolated poses. Every
  * pbrt file is written by the test into a temporary folder. */
 #include <tunetrace/scene.h>
 
@@ -190,6 +191,69 @@ static void test_bad_input(void) {
   }
 }
 
+/* Unit direction from a camera's position to its target. */
+static void cam_dir(const tt_camera *c, double f[3]) {
+  double l = 0;
+  for (int k = 0; k < 3; k++) {
+    f[k] = (double)c->target[k] - c->position[k];
+    l += f[k] * f[k];
+  }
+  for (int k = 0; k < 3; k++) f[k] /= sqrt(l);
+}
+
+/* An animated Camera (its CTM turned 40 degrees about z at the end) becomes a camera path
+ * over TransformTimes: the ends are the cameras of the static files with the start and end
+ * transforms, the middle has pbrt's linearly interpolated position and the direction turned
+ * halfway (slerp), and a still renders the start. */
+static void test_camera(void) {
+  const char *cam = "Camera \"perspective\" \"float fov\" [40]\nWorldBegin\n" TRI;
+  char text[1024];
+  snprintf(text, sizeof text,
+           "TransformTimes 1 3\nLookAt 0 -10 2  0 0 0  0 0 1\nActiveTransform EndTime\n"
+           "Rotate 40 0 0 1\nActiveTransform All\n%s",
+           cam);
+  tt_scene *s = load_ok("cam.pbrt", text);
+  snprintf(text, sizeof text, "LookAt 0 -10 2  0 0 0  0 0 1\n%s", cam);
+  tt_scene *a = load_ok("cam0.pbrt", text);
+  snprintf(text, sizeof text, "LookAt 0 -10 2  0 0 0  0 0 1\nRotate 40 0 0 1\n%s", cam);
+  tt_scene *b = load_ok("cam1.pbrt", text);
+  if (s && a && b) {
+    const tt_camera *c = tt_scene_camera(s), *c0 = tt_scene_camera(a), *c1 = tt_scene_camera(b);
+    CHECK_MSG(c->key_count >= 9, "%u keys for a 40-degree turn", c->key_count);
+    double t0, t1;
+    tt_scene_time_range(s, &t0, &t1);
+    CHECK(t0 == 1 && t1 == 3);
+    CHECK(!tt_scene_animated(s)); /* no moving mesh: only the camera moves */
+    tt_camera at0, at1, mid;
+    tt_scene_camera_at(s, 1.0, &at0);
+    tt_scene_camera_at(s, 3.0, &at1);
+    tt_scene_camera_at(s, 2.0, &mid);
+    double f[3], g[3], h[3], e[3];
+    for (int k = 0; k < 3; k++) {
+      CHECK_NEAR(c->position[k], c0->position[k], 1e-5); /* the still is the start */
+      CHECK_NEAR(at0.position[k], c0->position[k], 1e-5);
+      CHECK_NEAR(at1.position[k], c1->position[k], 1e-4);
+      CHECK_NEAR(mid.position[k], 0.5 * (c0->position[k] + c1->position[k]), 1e-4);
+    }
+    cam_dir(&at1, f);
+    cam_dir(c1, g);
+    CHECK_NEAR(f[0] * g[0] + f[1] * g[1] + f[2] * g[2], 1.0, 1e-9);
+    /* halfway: the start direction turned about z by half the angle between the ends */
+    cam_dir(c0, g);
+    cam_dir(c1, h);
+    double a0 = atan2(g[1], g[0]), a1 = atan2(h[1], h[0]), am = 0.5 * (a0 + a1);
+    double r = sqrt(1 - g[2] * g[2]);
+    e[0] = r * cos(am), e[1] = r * sin(am), e[2] = g[2];
+    CHECK_NEAR(fabs(a1 - a0) * 180 / 3.14159265358979, 40.0, 1e-3);
+    cam_dir(&mid, f);
+    double ang = acos(fmin(1.0, f[0] * e[0] + f[1] * e[1] + f[2] * e[2])) * 180 / 3.14159265358979;
+    CHECK_MSG(ang < 0.05, "the middle camera looks %g degrees away from the slerp direction", ang);
+  }
+  tt_scene_destroy(s);
+  tt_scene_destroy(a);
+  tt_scene_destroy(b);
+}
+
 /* A scene.json wrapper's camera path is the sequence: an imported pbrt animation beyond it
  * is refused naming "import", one inside it loads. */
 static void test_wrapper_range(void) {
@@ -236,7 +300,8 @@ int main(void) {
   test_instance_and_blocks();
   test_bad_input();
   test_wrapper_range();
-  const char *names[] = {"tr", "ts", "na", "in", "ref", "bad"};
+  test_camera();
+  const char *names[] = {"tr", "ts", "na", "in", "ref", "bad", "cam", "cam0", "cam1"};
   char path[256];
   for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
     snprintf(path, sizeof path, "%s/%s.pbrt", g_dir, names[i]);

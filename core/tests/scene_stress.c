@@ -44,19 +44,24 @@ static void rest_vertex(double length, double radius, uint32_t seg, uint32_t i, 
   p[2] = radius * sin(a);
 }
 
-/* Checks every vertex of mesh m against centre + R(axis, deg) * rest. */
-static void check_cylinder(const tt_mesh *m, const double axis[3], double deg, double length,
+/* Checks every vertex of `pos` (a mesh's positions or previous positions) against
+ * centre + R(axis, deg) * rest. */
+static void check_vertices(const float *pos, const double axis[3], double deg, double length,
                            double radius, uint32_t seg, const double centre[3], double t) {
   double worst = 0;
   for (uint32_t i = 0; i < 2 * seg; i++) {
     double p[3], q[3];
     rest_vertex(length, radius, seg, i, p);
     rotate(axis, deg, p, q);
-    for (int k = 0; k < 3; k++)
-      worst = fmax(worst, fabs(m->positions[3 * i + k] - (centre[k] + q[k])));
+    for (int k = 0; k < 3; k++) worst = fmax(worst, fabs(pos[3 * i + k] - (centre[k] + q[k])));
   }
   CHECK_MSG(worst < 2e-5 * length, "t = %g (%g degrees): a vertex is %g from its analytic place", t,
             deg, worst);
+}
+
+static void check_cylinder(const tt_mesh *m, const double axis[3], double deg, double length,
+                           double radius, uint32_t seg, const double centre[3], double t) {
+  check_vertices(m->positions, axis, deg, length, radius, seg, centre, t);
 }
 
 static void test_default_cylinder(void) {
@@ -80,6 +85,9 @@ static void test_default_cylinder(void) {
   for (size_t i = 0; i < sizeof times / sizeof times[0]; i++) {
     CHECK(tt_scene_set_time(s, times[i], times[i] - 0.1) == TT_OK);
     check_cylinder(m, z, 90.0 * times[i], len, r, 8, c, times[i]);
+    /* one frame earlier (motion vectors): the angle 0.1 s before, clamped at the start */
+    check_vertices(m->prev_positions, z, 90.0 * fmax(times[i] - 0.1, 0.0), len, r, 8, c,
+                   times[i] - 0.1);
   }
   /* clamped after the end: the last angle */
   CHECK(tt_scene_set_time(s, 3.0, 2.9) == TT_OK);

@@ -101,7 +101,8 @@ tt_status tt__scene_load_pbrt(const char *path, tt_scene **out) {
       tt__pwarn(&P, P.files, 0, "WorldBegin", "no WorldBegin: the file describes no world");
     tt__world_setup(&P);
     tt__finish_camera(&P);
-    st = tt__scene_finish(P.scene);
+    st = tt__motion_camera(&P);
+    if (st == TT_OK) st = tt__scene_finish(P.scene);
   }
   if (P.suppressed) tt__log(TT_LOG_WARN, "%s: %u more warnings suppressed", path, P.suppressed);
   tt__pp_free(&P);

@@ -197,7 +197,12 @@ typedef struct tt__pp {
   int in_world;
   double W[16]; /* world mirror applied to everything */
   int has_camera;
-  double cam_ctm[16]; /* pbrt cameraFromWorld */
+  double cam_ctm[16];               /* pbrt cameraFromWorld */
+  double cam_ctm_end[16];           /* ... at the end time (cam_animated) */
+  int cam_animated;                 /* the Camera's CTM was animated (ActiveTransform) */
+  double cam_t0, cam_t1;            /* its TransformTimes */
+  const struct tt__pfile *cam_file; /* where the Camera directive is, for messages */
+  int cam_line;
   double fov;
   double sw[4];
   int has_sw;
@@ -402,5 +407,10 @@ tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
 
 /* Makes scene mesh `mesh` (already placed by mo->pre) move by `mo` over TransformTimes. */
 tt_status tt__motion_attach(tt__pp *P, uint32_t mesh, const tt__motion *mo);
+
+/* An animated Camera (P->cam_animated) becomes a camera path: keys over its TransformTimes,
+ * at most 5 degrees of turn apart, each the camera pbrt's interpolated worldFromCamera gives
+ * (under the world mirror of the start camera); called once the still camera is set. */
+tt_status tt__motion_camera(tt__pp *P);
 
 #endif /* TT_PBRT_INTERNAL_H */

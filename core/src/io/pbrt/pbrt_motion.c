@@ -15,6 +15,7 @@
 #include "scene/anim.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 int tt__ctm_animated(const tt__pp *P) {
@@ -92,29 +93,31 @@ static double tt__offdiag(const double p[9]) {
   return d > 0 ? o / d : INFINITY;
 }
 
-tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
-                           const double m0[16], const double m1[16], tt__motion *mo) {
+/* tt__motion_split with explicit times and place. */
+static tt_status tt__motion_split_at(const tt__pfile *file, int line, const char *what, double t0,
+                                     double t1, const double m0[16], const double m1[16],
+                                     tt__motion *mo) {
   memset(mo, 0, sizeof *mo);
-  if (!(P->gs.t_end > P->gs.t_start))
-    return tt__perr(at->file, at->line,
+  if (!(t1 > t0))
+    return tt__perr(file, line,
                     "%s: the transform is animated (ActiveTransform) but TransformTimes gives no "
                     "time span (start %g, end %g): expected end > start",
-                    what, P->gs.t_start, P->gs.t_end);
+                    what, t0, t1);
   const double *m[2] = {m0, m1};
   double a[2][9], det[2];
   for (int e = 0; e < 2; e++) {
     if (m[e][12] != 0 || m[e][13] != 0 || m[e][14] != 0 || m[e][15] != 1)
-      return tt__perr(at->file, at->line, "%s: the %s-time transform is not affine", what,
+      return tt__perr(file, line, "%s: the %s-time transform is not affine", what,
                       e ? "end" : "start");
     for (int r = 0; r < 3; r++)
       for (int c = 0; c < 3; c++) a[e][3 * r + c] = m[e][4 * r + c];
     det[e] = tt__det3(a[e]);
     if (!(det[e] != 0) || !isfinite(det[e]))
-      return tt__perr(at->file, at->line, "%s: the %s-time transform is singular", what,
+      return tt__perr(file, line, "%s: the %s-time transform is singular", what,
                       e ? "end" : "start");
   }
   if ((det[0] < 0) != (det[1] < 0))
-    return tt__perr(at->file, at->line,
+    return tt__perr(file, line,
                     "%s: the animated transform mirrors at one end only (the start- and "
                     "end-time transforms' determinants have opposite signs, so the shape would "
                     "turn inside out on the way)",
@@ -141,7 +144,7 @@ tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
       pmax = fmax(pmax, fabs(p[0][i]));
     }
     if (dmax > 1e-7 * pmax)
-      return tt__perr(at->file, at->line,
+      return tt__perr(file, line,
                       "%s: the animated transform changes a scale that is not axis-aligned (a "
                       "shear) between the start and end times; tunetrace animates translation, "
                       "rotation and axis-aligned scale (keep such a scale the same at both ends)",
@@ -154,6 +157,11 @@ tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
     for (int c = 0; c < 3; c++)
       mo->pre[4 * row + c] = pre[3 * row + c] * (mirror && c == 0 ? -1 : 1);
   return TT_OK;
+}
+
+tt_status tt__motion_split(const tt__pp *P, const tt__tok *at, const char *what,
+                           const double m0[16], const double m1[16], tt__motion *mo) {
+  return tt__motion_split_at(at->file, at->line, what, P->gs.t_start, P->gs.t_end, m0, m1, mo);
 }
 
 tt_status tt__motion_attach(tt__pp *P, uint32_t mesh, const tt__motion *mo) {
@@ -181,5 +189,93 @@ tt_status tt__motion_attach(tt__pp *P, uint32_t mesh, const tt__motion *mo) {
   tt__mesh_anim *ma = NULL;
   if ((st = tt__scene_anim_add_mesh(s, mesh, &ma)) != TT_OK) return st;
   ma->node = (int32_t)node;
+  return TT_OK;
+}
+
+/* ---- an animated camera ------------------------------------------------------------------ */
+
+/* Slerp of unit quaternions along the shorter arc (as pbrt's AnimatedTransform). */
+static void tt__qslerp(const float a[4], const float b[4], double u, double o[4]) {
+  double d = 0, sb = 1;
+  for (int i = 0; i < 4; i++) d += (double)a[i] * b[i];
+  if (d < 0) d = -d, sb = -1;
+  double wa = 1 - u, wb = u;
+  if (d < 0.9995) {
+    double th = acos(d), s = sin(th);
+    wa = sin((1 - u) * th) / s;
+    wb = sin(u * th) / s;
+  }
+  double l = 0;
+  for (int i = 0; i < 4; i++) {
+    o[i] = wa * a[i] + wb * sb * b[i];
+    l += o[i] * o[i];
+  }
+  l = sqrt(l);
+  for (int i = 0; i < 4; i++) o[i] /= l;
+}
+
+/* Row-major 3x3 of a unit quaternion (x, y, z, w). */
+static void tt__qmat(const double q[4], double r[9]) {
+  const double x = q[0], y = q[1], z = q[2], w = q[3];
+  r[0] = 1 - 2 * (y * y + z * z), r[1] = 2 * (x * y - z * w), r[2] = 2 * (x * z + y * w);
+  r[3] = 2 * (x * y + z * w), r[4] = 1 - 2 * (x * x + z * z), r[5] = 2 * (y * z - x * w);
+  r[6] = 2 * (x * z - y * w), r[7] = 2 * (y * z + x * w), r[8] = 1 - 2 * (x * x + y * y);
+}
+
+tt_status tt__motion_camera(tt__pp *P) {
+  if (!P->cam_animated) return TT_OK;
+  double c0[16], c1[16];
+  if (!tt__inverse(P->cam_ctm, c0) || !tt__inverse(P->cam_ctm_end, c1))
+    return tt__perr(P->cam_file, P->cam_line, "Camera: the current transform is singular");
+  /* pbrt interpolates worldFromCamera */
+  tt__motion mo;
+  tt_status st =
+      tt__motion_split_at(P->cam_file, P->cam_line, "Camera", P->cam_t0, P->cam_t1, c0, c1, &mo);
+  if (st != TT_OK) return st;
+  double d = 0;
+  for (int i = 0; i < 4; i++) d += (double)mo.q[0][i] * mo.q[1][i];
+  const double turn = 2 * acos(fmin(1.0, fabs(d))) * 180 / 3.14159265358979323846;
+  uint32_t n = (uint32_t)ceil(turn / 5.0);
+  if (n < 1) n = 1;
+  tt_scene *s = P->scene;
+  tt_camera *cam = &s->camera;
+  free(s->keys);
+  s->keys = calloc(n + 1, sizeof *s->keys);
+  cam->keys = s->keys;
+  cam->key_count = 0;
+  if (!s->keys) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "out of memory");
+  const double sx = P->W[0]; /* the world mirror fixed by the start camera */
+  for (uint32_t k = 0; k <= n; k++) {
+    const double u = (double)k / n;
+    double q[4], r[9], m[9], pos[3], f[3], up[3];
+    tt__qslerp(mo.q[0], mo.q[1], u, q);
+    tt__qmat(q, r);
+    double sc[3] = {1, 1, 1};
+    for (int i = 0; mo.has_scale && i < 3; i++) sc[i] = (1 - u) * mo.s[0][i] + u * mo.s[1][i];
+    /* M = R S pre (3x3): the camera's +z and +y in the world; its origin is the translation */
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) {
+        double v = 0;
+        for (int l = 0; l < 3; l++) v += r[3 * i + l] * sc[l] * mo.pre[4 * l + j];
+        m[3 * i + j] = v;
+      }
+    for (int i = 0; i < 3; i++) {
+      pos[i] = (1 - u) * mo.t[0][i] + u * mo.t[1][i];
+      f[i] = m[3 * i + 2];
+      up[i] = m[3 * i + 1];
+    }
+    if (!tt__norm(f) || !tt__norm(up))
+      return tt__perr(P->cam_file, P->cam_line, "Camera: a degenerate animated camera transform");
+    pos[0] *= sx, f[0] *= sx, up[0] *= sx;
+    tt_camera_key *key = &s->keys[k];
+    key->time = (float)(P->cam_t0 + (P->cam_t1 - P->cam_t0) * u);
+    for (int i = 0; i < 3; i++) {
+      key->position[i] = (float)pos[i];
+      key->target[i] = (float)(pos[i] + f[i]);
+      key->up[i] = (float)up[i];
+    }
+    key->fov_y = cam->fov_y;
+  }
+  cam->key_count = n + 1;
   return TT_OK;
 }

@@ -181,11 +181,13 @@ tt_status tt__camera(tt__pp *P, const tt__tok *at, const char *type, tt__plist *
               type);
   P->has_camera = 1;
   memcpy(P->cam_ctm, P->gs.ctm, sizeof P->cam_ctm);
-  if (tt__ctm_animated(P))
-    tt__pwarn(P, at->file, at->line, "Camera",
-              "Camera: an animated camera transform (ActiveTransform) is not supported: the "
-              "camera stays at its start-time transform (give a scene.json wrapper a camera "
-              "path to move it)");
+  /* an animated camera becomes a camera path (tt__motion_camera, at the end of the file) */
+  P->cam_animated = tt__ctm_animated(P);
+  memcpy(P->cam_ctm_end, P->gs.ctm_end, sizeof P->cam_ctm_end);
+  P->cam_t0 = P->gs.t_start;
+  P->cam_t1 = P->gs.t_end;
+  P->cam_file = at->file;
+  P->cam_line = at->line;
   double fov = 90, lens = 0, fa = 0;
   if ((st = tt__getf(P, at, pl, "fov", &fov)) != TT_OK) return st;
   if (!(fov > 0 && fov < 180))
