@@ -412,7 +412,7 @@ int main(void) {
   CHECK(tt_config_get_int(def, "maxDepth", 0) == 5);
   CHECK(tt_config_get_int(def, "rrDepth", 0) == 3);
   CHECK(strcmp(tt_config_get_string(def, "heuristic"), "power") == 0);
-  CHECK(strcmp(tt_config_get_string(def, "sampler"), "independent") == 0);
+  CHECK(strcmp(tt_config_get_string(def, "sampler"), "sobol") == 0);
   tt_config_destroy(def);
 
   /* Unbiasedness against the path tracer. */
