@@ -12,8 +12,10 @@
  * update() (an animated scene moved): "updateMethod" rebuild builds from scratch with the
  * same settings; refit keeps the tree and recomputes its boxes -- native: the moving meshes
  * were attached with RTC_BUILD_QUALITY_REFIT to a dynamic scene, their vertex buffers are
- * rewritten and the scene committed again; custom: tt__custom_refit, bottom-up -- with a
- * rebuild every refitInterval updates or once the SAH cost grew by refitSahGrowth. */
+ * rewritten and the scene committed again; custom: tt__embree_custom_refit, bottom-up -- with a
+ * rebuild every refitInterval updates or once the SAH cost grew by refitSahGrowth;
+ * instances (native; custom falls back to it) is two-level: each rigid mesh an Embree
+ * instance of its own BVH, only the top level rebuilt (accel_embree_inst.c). */
 #include "accel_embree.h"
 #include "accel_embree_bvh.h"
 
@@ -34,19 +36,21 @@
 
 /* Rays converted per stream chunk: 64 RTCRayHit live on the stack (about 6 KiB), so the
  * stream calls never allocate. */
-#define TT__CHUNK 64
+#define TT__EMBREE_CHUNK 64
 
 struct tt_accel {
-  RTCScene scene;         /* native backend (NULL for custom) */
-  tt__bvh *bvh;           /* custom backend (NULL for native) */
-  tt__kernels kernels;    /* custom: the traversal kernels for this tree's shape */
-  int counting;           /* custom with counters on */
-  const tt_scene *source; /* must outlive us (accel.h contract) */
+  RTCScene scene;             /* native backend (NULL for custom) */
+  tt__embree_bvh *bvh;        /* custom backend (NULL for native) */
+  tt__embree_kernels kernels; /* custom: the traversal kernels for this tree's shape */
+  int counting;               /* custom with counters on */
+  const tt_scene *source;     /* must outlive us (accel.h contract) */
   tt__embree_settings settings;
   /* update(): native refit keeps each moving mesh's Embree vertex buffer (NULL for meshes
    * attached with the tuned quality) and the revision it holds */
   float **vbuf;
   uint64_t *vrev;
+  tt__embree_inst *inst;  /* updateMethod=instances on an animated scene (native): the
+                             two-level structure, whose top level is `scene` */
   uint32_t since_rebuild; /* updates since the last build from scratch */
   double sah_built;       /* SAH cost when last built from scratch (0 unknown) */
 };
@@ -61,12 +65,14 @@ static _Atomic long long g_embree_bytes;
 static atomic_flag g_warned_custom_only = ATOMIC_FLAG_INIT;
 /* Set once the "compact falls back to native" note has been logged. */
 static atomic_flag g_noted_compact = ATOMIC_FLAG_INIT;
+/* Set once the "instances fall back to native" note has been logged. */
+static atomic_flag g_noted_instances = ATOMIC_FLAG_INIT;
 /* Last Embree error message seen on this thread, so build() can put it in its error. */
 static _Thread_local char g_embree_error[256];
 /* Non-zero while this thread expects (and reports) Embree errors itself. */
 static _Thread_local int g_embree_quiet;
 /* Custom backend kernels for this CPU (chosen at init). */
-static const tt__kernel_table *g_kernels;
+static const tt__embree_kernel_table *g_kernels;
 static const char *g_kernels_isa;
 
 /* Embree's error callback: log through the host and keep the text for tt_set_error. */
@@ -78,6 +84,9 @@ static void tt__embree_error(void *user, enum RTCError code, const char *str) {
     tt_host_log(host, g_embree_quiet ? TT_LOG_DEBUG : TT_LOG_ERROR, TT__EMBREE_NAME, "%s",
                 g_embree_error);
 }
+
+/* The device (accel_embree_inst.c creates its scenes and instances on it). */
+RTCDevice tt__embree_device(void) { return g_device; }
 
 /* The calling thread's last Embree error text. */
 const char *tt__embree_last_error(void) { return g_embree_error; }
@@ -94,7 +103,7 @@ static bool tt__embree_memory(void *user, ssize_t bytes, bool post) {
 }
 
 /* Reads and clears Embree's per-thread error code; returns TT_OK or an error naming it. */
-static tt_status tt__embree_status(const char *what) {
+tt_status tt__embree_status(const char *what) {
   enum RTCError e = rtcGetDeviceError(g_device);
   if (e == RTC_ERROR_NONE) return TT_OK;
   tt_status s = e == RTC_ERROR_OUT_OF_MEMORY      ? TT_ERR_OUT_OF_MEMORY
@@ -116,8 +125,10 @@ static const tt_space *tt__embree_space(void) { return g_space; }
 static void tt__embree_release(tt_accel *accel) {
   if (accel->scene) rtcReleaseScene(accel->scene);
   accel->scene = NULL;
-  tt__custom_free(accel->bvh);
+  tt__embree_custom_free(accel->bvh);
   accel->bvh = NULL;
+  tt__embree_inst_free(accel->inst);
+  accel->inst = NULL;
   free(accel->vbuf);
   free(accel->vrev);
   accel->vbuf = NULL;
@@ -132,13 +143,13 @@ static void tt__embree_destroy(tt_accel *accel) {
 }
 
 /* Non-zero when tt_scene_set_time may move the mesh (read only where struct_size has it). */
-static int tt__mesh_moves(const tt_mesh *m) {
+int tt__embree_mesh_moves(const tt_mesh *m) {
   return TT_HAS_FIELD(tt_mesh, m, motion) && m->motion != TT_MESH_STATIC;
 }
 
 /* Checks a mesh before Embree sees it: Embree does not validate indices and would read out
  * of bounds on a bad one, so we reject instead of crashing. */
-static tt_status tt__check_mesh(const tt_mesh *m, uint32_t index) {
+static tt_status tt__embree_check_mesh(const tt_mesh *m, uint32_t index) {
   if (!m) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "accel_embree: mesh %u is NULL", index);
   if (m->triangle_count == 0) return TT_OK;
   if (!m->positions || !m->indices || m->vertex_count == 0)
@@ -157,10 +168,11 @@ static tt_status tt__check_mesh(const tt_mesh *m, uint32_t index) {
   return TT_OK;
 }
 
-/* Creates the triangle geometry for mesh `index` and attaches it under geomID = index;
- * `*vbuf` (if set) receives its Embree vertex buffer. */
-static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t index,
-                                 enum RTCBuildQuality quality, float **vbuf) {
+/* Creates the triangle geometry for mesh `index` over `positions` (3 * vertex_count: the
+ * mesh's world positions, or its object-space ones for an instance) and attaches it under
+ * geomID = index; `*vbuf` (if set) receives its Embree vertex buffer. */
+tt_status tt__embree_attach_mesh(RTCScene scene, const tt_mesh *m, const float *positions,
+                                 uint32_t index, int quality, float **vbuf) {
   RTCGeometry g = rtcNewGeometry(g_device, RTC_GEOMETRY_TYPE_TRIANGLE);
   if (!g) return tt__embree_status("rtcNewGeometry");
   /* Positions are copied into an Embree-allocated buffer: Embree reads vertices with
@@ -172,13 +184,13 @@ static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t inde
     rtcReleaseGeometry(g);
     return tt__embree_status("rtcSetNewGeometryBuffer (vertices)");
   }
-  memcpy(pos, m->positions, (size_t)m->vertex_count * 3 * sizeof(float));
+  memcpy(pos, positions, (size_t)m->vertex_count * 3 * sizeof(float));
   if (vbuf) *vbuf = pos;
   rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->indices, 0,
                              3 * sizeof(uint32_t), m->triangle_count);
   /* Per-geometry quality matters for two-level (dynamic) builds, where each mesh gets its
    * own BVH; setting it too keeps "quality" meaningful in every flag combination. */
-  rtcSetGeometryBuildQuality(g, quality);
+  rtcSetGeometryBuildQuality(g, (enum RTCBuildQuality)quality);
   rtcCommitGeometry(g);
   rtcAttachGeometryByID(scene, g, index);
   rtcReleaseGeometry(g); /* the scene holds its own reference */
@@ -186,8 +198,8 @@ static tt_status tt__attach_mesh(RTCScene scene, const tt_mesh *m, uint32_t inde
 }
 
 /* Builds with backend native: Embree's scene API and its own builders. */
-static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settings *st,
-                                  tt_accel *acc, tt_accel_build_stats *stats) {
+static tt_status tt__embree_build_native(const tt_scene *scene, const tt__embree_settings *st,
+                                         tt_accel *acc, tt_accel_build_stats *stats) {
   static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM,
                                                    RTC_BUILD_QUALITY_HIGH};
   enum RTCBuildQuality quality =
@@ -202,6 +214,16 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
   if (st->robust) flags |= RTC_SCENE_FLAG_ROBUST;
 
   long long bytes0 = atomic_load(&g_embree_bytes);
+  if (st->update_method == TT__EMBREE_UPDATE_INSTANCES && tt_scene_animated(scene)) {
+    const uint64_t t0 = g_host->clock_ns();
+    tt_status s = tt__embree_inst_build(scene, st, (int)quality, &acc->inst, &acc->scene);
+    if (s != TT_OK) return s;
+    rtcRetainScene(acc->scene); /* acc->scene is released like any native scene */
+    long long bytes = atomic_load(&g_embree_bytes) - bytes0;
+    stats->build_ms = (double)(g_host->clock_ns() - t0) * 1e-6;
+    stats->memory_bytes = bytes > 0 ? (uint64_t)bytes : 0;
+    return TT_OK;
+  }
   acc->scene = rtcNewScene(g_device);
   if (!acc->scene) return tt__embree_status("rtcNewScene");
   rtcSetSceneFlags(acc->scene, (enum RTCSceneFlags)flags);
@@ -217,9 +239,10 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
   for (uint32_t i = 0; i < meshes; i++) {
     const tt_mesh *m = tt_scene_mesh(scene, i);
     if (m->triangle_count == 0) continue; /* geomIDs may have gaps; Embree allows it */
-    const int moving = refit && tt__mesh_moves(m);
-    tt_status s = tt__attach_mesh(acc->scene, m, i, moving ? RTC_BUILD_QUALITY_REFIT : quality,
-                                  moving ? &acc->vbuf[i] : NULL);
+    const int moving = refit && tt__embree_mesh_moves(m);
+    tt_status s = tt__embree_attach_mesh(acc->scene, m, m->positions, i,
+                                         moving ? RTC_BUILD_QUALITY_REFIT : quality,
+                                         moving ? &acc->vbuf[i] : NULL);
     if (s != TT_OK) return s;
     if (moving) acc->vrev[i] = m->revision;
   }
@@ -236,7 +259,7 @@ static tt_status tt__build_native(const tt_scene *scene, const tt__embree_settin
   return TT_OK;
 }
 
-static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out);
+static tt_status tt__embree_build_backend(tt_accel *acc, tt_accel_build_stats *out);
 
 /* Validates the inputs, checks/repairs the configuration and dispatches on the backend. */
 static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config, tt_accel **out,
@@ -258,7 +281,7 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
   const uint32_t meshes = tt_scene_mesh_count(scene);
   for (uint32_t i = 0; i < meshes; i++) {
     const tt_mesh *m = tt_scene_mesh(scene, i);
-    tt_status s = tt__check_mesh(m, i);
+    tt_status s = tt__embree_check_mesh(m, i);
     if (s != TT_OK) return s;
     triangles += m->triangle_count;
   }
@@ -287,6 +310,14 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
                   "compact=true: backend custom falls back to native (Embree's compact BVH4 "
                   "with index leaves); logged once");
     st.backend = TT__EMBREE_BACKEND_NATIVE;
+  } else if (st.backend == TT__EMBREE_BACKEND_CUSTOM &&
+             st.update_method == TT__EMBREE_UPDATE_INSTANCES && tt_scene_animated(scene)) {
+    /* Our kernels traverse one tree; instances are Embree's (RTC_GEOMETRY_TYPE_INSTANCE). */
+    if (!atomic_flag_test_and_set(&g_noted_instances))
+      tt_host_log(g_host, TT_LOG_INFO, TT__EMBREE_NAME,
+                  "updateMethod=instances: backend custom falls back to native (Embree's "
+                  "instances over per-object BVHs); logged once");
+    st.backend = TT__EMBREE_BACKEND_NATIVE;
   } else if (st.backend == TT__EMBREE_BACKEND_NATIVE) {
     char names[160];
     if (tt__embree_custom_only_changed(cfg, names, sizeof names) > 0 &&
@@ -305,7 +336,7 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
 
   tt_accel_build_stats stats;
   memset(&stats, 0, sizeof stats);
-  tt_status s = tt__build_backend(acc, &stats);
+  tt_status s = tt__embree_build_backend(acc, &stats);
   if (s != TT_OK) {
     tt__embree_destroy(acc);
     return s;
@@ -327,7 +358,7 @@ static tt_status tt__embree_build(const tt_scene *scene, const tt_config *config
 
 /* Builds acc's structure from scratch over acc->source with acc->settings (the wrapper
  * holds none: a new one, or one released for a rebuild). */
-static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out) {
+static tt_status tt__embree_build_backend(tt_accel *acc, tt_accel_build_stats *out) {
   const tt_scene *scene = acc->source;
   const tt__embree_settings st = acc->settings;
   tt_accel_build_stats stats;
@@ -337,7 +368,7 @@ static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out) {
 
   tt_status s;
   switch (st.backend) {
-  case TT__EMBREE_BACKEND_NATIVE: s = tt__build_native(scene, &st, acc, &stats); break;
+  case TT__EMBREE_BACKEND_NATIVE: s = tt__embree_build_native(scene, &st, acc, &stats); break;
   case TT__EMBREE_BACKEND_CUSTOM: {
     if (!g_kernels) {
       s = tt_set_error(TT_ERR_UNSUPPORTED,
@@ -345,7 +376,7 @@ static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out) {
       break;
     }
     const uint64_t t0 = g_host->clock_ns();
-    s = tt__custom_build(scene, &st, g_device, &acc->bvh, &stats);
+    s = tt__embree_custom_build(scene, &st, g_device, &acc->bvh, &stats);
     stats.build_ms = (double)(g_host->clock_ns() - t0) * 1e-6;
     if (s != TT_OK) break;
     int w = st.branching_factor == 2 ? 0 : st.branching_factor == 4 ? 1 : 2;
@@ -371,7 +402,7 @@ static tt_status tt__build_backend(tt_accel *acc, tt_accel_build_stats *out) {
 
 /* Native refit: the moving meshes' vertex buffers take the new positions (only those
  * whose revision changed), and the commit refits their BVHs and rebuilds the top level. */
-static tt_status tt__refit_native(tt_accel *acc) {
+static tt_status tt__embree_refit_native(tt_accel *acc) {
   const tt_scene *scene = acc->source;
   const uint32_t meshes = tt_scene_mesh_count(scene);
   for (uint32_t i = 0; acc->vbuf && i < meshes; i++) {
@@ -394,23 +425,25 @@ static tt_status tt__embree_update(tt_accel *acc, tt_accel_update_stats *out) {
   const uint64_t t0 = g_host->clock_ns();
   rtcGetDeviceError(g_device);
   g_embree_error[0] = '\0';
-  int rebuild = st->update_method != TT__EMBREE_UPDATE_REFIT ||
+  int rebuild = st->update_method == TT__EMBREE_UPDATE_REBUILD ||
                 (st->refit_interval > 0 && acc->since_rebuild + 1u >= (uint32_t)st->refit_interval);
   double sah = 0.0;
   tt_status s = TT_OK;
-  if (!rebuild && acc->bvh) {
-    sah = tt__custom_refit(acc->source, acc->bvh);
+  if (!rebuild && acc->inst) {
+    s = tt__embree_inst_update(acc->inst);
+  } else if (!rebuild && acc->bvh) {
+    sah = tt__embree_custom_refit(acc->source, acc->bvh);
     /* the growth test needs the refitted cost, so a rebuild it asks for comes after */
     if (st->refit_sah_growth > 0.0f && acc->sah_built > 0.0 &&
         sah > (double)st->refit_sah_growth * acc->sah_built)
       rebuild = 1;
   } else if (!rebuild) {
-    s = tt__refit_native(acc);
+    s = tt__embree_refit_native(acc);
   }
   if (s == TT_OK && rebuild) {
     tt__embree_release(acc);
     tt_accel_build_stats bs;
-    s = tt__build_backend(acc, &bs);
+    s = tt__embree_build_backend(acc, &bs);
     sah = bs.sah_cost;
   } else if (s == TT_OK) {
     acc->since_rebuild++;
@@ -435,7 +468,7 @@ static tt_status tt__embree_update(tt_accel *acc, tt_accel_update_stats *out) {
 /* ---- queries ---- */
 
 /* tt_ray -> RTCRay (mask all ones, time 0, no ray id). */
-static inline void tt__to_rtc_ray(const tt_ray *r, struct RTCRay *e) {
+static inline void tt__embree_to_rtc_ray(const tt_ray *r, struct RTCRay *e) {
   e->org_x = r->org[0];
   e->org_y = r->org[1];
   e->org_z = r->org[2];
@@ -451,7 +484,7 @@ static inline void tt__to_rtc_ray(const tt_ray *r, struct RTCRay *e) {
 }
 
 /* Marks an RTCHit as "no hit yet", as Embree requires before intersecting. */
-static inline void tt__clear_rtc_hit(struct RTCHit *h) {
+static inline void tt__embree_clear_rtc_hit(struct RTCHit *h) {
   h->geomID = RTC_INVALID_GEOMETRY_ID;
   h->primID = RTC_INVALID_GEOMETRY_ID;
   for (int l = 0; l < RTC_MAX_INSTANCE_LEVEL_COUNT; l++) h->instID[l] = RTC_INVALID_GEOMETRY_ID;
@@ -459,7 +492,7 @@ static inline void tt__clear_rtc_hit(struct RTCHit *h) {
 
 /* Copies Embree's result back; on a miss the hit gets invalid ids, t = +inf and the ray
  * keeps its tfar. */
-static inline void tt__from_rtc_hit(const struct RTCRayHit *e, tt_ray *r, tt_hit *h) {
+static inline void tt__embree_from_rtc_hit(const struct RTCRayHit *e, tt_ray *r, tt_hit *h) {
   if (e->hit.geomID == RTC_INVALID_GEOMETRY_ID) {
     h->t = INFINITY;
     h->u = h->v = 0.0f;
@@ -487,10 +520,12 @@ static void tt__embree_intersect1(const tt_accel *accel, tt_ray *ray, tt_hit *hi
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   struct RTCRayHit rh;
-  tt__to_rtc_ray(ray, &rh.ray);
-  tt__clear_rtc_hit(&rh.hit);
+  tt__embree_to_rtc_ray(ray, &rh.ray);
+  tt__embree_clear_rtc_hit(&rh.hit);
   rtcIntersect1(accel->scene, &ctx, &rh);
-  tt__from_rtc_hit(&rh, ray, hit);
+  tt__embree_from_rtc_hit(&rh, ray, hit);
+  if (accel->inst && rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+    tt__embree_inst_normal(accel->inst, rh.hit.instID[0], hit->ng);
 }
 
 /* Occlusion of one ray: Embree sets tfar to -inf when something blocks it. */
@@ -499,14 +534,14 @@ static int tt__embree_occluded1(const tt_accel *accel, const tt_ray *ray) {
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   struct RTCRay r;
-  tt__to_rtc_ray(ray, &r);
+  tt__embree_to_rtc_ray(ray, &r);
   rtcOccluded1(accel->scene, &ctx, &r);
   return r.tfar < 0.0f && isinf(r.tfar);
 }
 
 /* Coherent if every ray of the chunk starts at the same point (camera rays, light rays
  * toward one light): Embree's coherent stream mode then pays off; otherwise incoherent. */
-static enum RTCIntersectContextFlags tt__chunk_coherence(const tt_ray *rays, size_t n) {
+static enum RTCIntersectContextFlags tt__embree_chunk_coherence(const tt_ray *rays, size_t n) {
   for (size_t i = 1; i < n; i++) {
     if (rays[i].org[0] != rays[0].org[0] || rays[i].org[1] != rays[0].org[1] ||
         rays[i].org[2] != rays[0].org[2])
@@ -515,25 +550,30 @@ static enum RTCIntersectContextFlags tt__chunk_coherence(const tt_ray *rays, siz
   return RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
 }
 
-/* Closest hits of a stream, converted TT__CHUNK rays at a time on the stack. */
+/* Closest hits of a stream, converted TT__EMBREE_CHUNK rays at a time on the stack. */
 static void tt__embree_intersect_stream(const tt_accel *accel, tt_ray *rays, tt_hit *hits,
                                         size_t count) {
   if (accel->bvh) {
     accel->kernels.intersect_stream(accel->bvh, rays, hits, count);
     return;
   }
-  struct RTCRayHit buf[TT__CHUNK];
+  struct RTCRayHit buf[TT__EMBREE_CHUNK];
   struct RTCIntersectContext ctx;
-  for (size_t base = 0; base < count; base += TT__CHUNK) {
-    size_t n = count - base < TT__CHUNK ? count - base : TT__CHUNK;
+  for (size_t base = 0; base < count; base += TT__EMBREE_CHUNK) {
+    size_t n = count - base < TT__EMBREE_CHUNK ? count - base : TT__EMBREE_CHUNK;
     for (size_t i = 0; i < n; i++) {
-      tt__to_rtc_ray(&rays[base + i], &buf[i].ray);
-      tt__clear_rtc_hit(&buf[i].hit);
+      tt__embree_to_rtc_ray(&rays[base + i], &buf[i].ray);
+      tt__embree_clear_rtc_hit(&buf[i].hit);
     }
     rtcInitIntersectContext(&ctx);
-    ctx.flags = tt__chunk_coherence(rays + base, n);
+    ctx.flags = tt__embree_chunk_coherence(rays + base, n);
     rtcIntersect1M(accel->scene, &ctx, buf, (unsigned)n, sizeof buf[0]);
-    for (size_t i = 0; i < n; i++) tt__from_rtc_hit(&buf[i], &rays[base + i], &hits[base + i]);
+    for (size_t i = 0; i < n; i++)
+      tt__embree_from_rtc_hit(&buf[i], &rays[base + i], &hits[base + i]);
+    if (accel->inst)
+      for (size_t i = 0; i < n; i++)
+        if (buf[i].hit.geomID != RTC_INVALID_GEOMETRY_ID)
+          tt__embree_inst_normal(accel->inst, buf[i].hit.instID[0], hits[base + i].ng);
   }
 }
 
@@ -544,13 +584,13 @@ static void tt__embree_occluded_stream(const tt_accel *accel, const tt_ray *rays
     accel->kernels.occluded_stream(accel->bvh, rays, occluded, count);
     return;
   }
-  struct RTCRay buf[TT__CHUNK];
+  struct RTCRay buf[TT__EMBREE_CHUNK];
   struct RTCIntersectContext ctx;
-  for (size_t base = 0; base < count; base += TT__CHUNK) {
-    size_t n = count - base < TT__CHUNK ? count - base : TT__CHUNK;
-    for (size_t i = 0; i < n; i++) tt__to_rtc_ray(&rays[base + i], &buf[i]);
+  for (size_t base = 0; base < count; base += TT__EMBREE_CHUNK) {
+    size_t n = count - base < TT__EMBREE_CHUNK ? count - base : TT__EMBREE_CHUNK;
+    for (size_t i = 0; i < n; i++) tt__embree_to_rtc_ray(&rays[base + i], &buf[i]);
     rtcInitIntersectContext(&ctx);
-    ctx.flags = tt__chunk_coherence(rays + base, n);
+    ctx.flags = tt__embree_chunk_coherence(rays + base, n);
     rtcOccluded1M(accel->scene, &ctx, buf, (unsigned)n, sizeof buf[0]);
     for (size_t i = 0; i < n; i++)
       occluded[base + i] = (uint8_t)(buf[i].tfar < 0.0f && isinf(buf[i].tfar));
@@ -622,6 +662,7 @@ static tt_status tt__embree_init(const tt_host *host) {
   atomic_store(&g_embree_bytes, 0);
   atomic_flag_clear(&g_warned_custom_only);
   atomic_flag_clear(&g_noted_compact);
+  atomic_flag_clear(&g_noted_instances);
   /* Kernel set: AVX-512 (F, VL, DQ, BW) when the CPU has it, else AVX2+FMA when it has
    * both, else the SSE4.1 baseline; TT_ACCEL_EMBREE_ISA=avx2 or sse41 caps the choice
    * (tests run every set the CPU has). */
@@ -634,13 +675,13 @@ static tt_status tt__embree_init(const tt_host *host) {
   if (avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
       __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
       !(isa && (strcmp(isa, "sse41") == 0 || strcmp(isa, "avx2") == 0))) {
-    g_kernels = tt__trav_table_avx512();
+    g_kernels = tt__embree_trav_table_avx512();
     g_kernels_isa = "avx512";
   } else if (avx2 && !(isa && strcmp(isa, "sse41") == 0)) {
-    g_kernels = tt__trav_table_avx2();
+    g_kernels = tt__embree_trav_table_avx2();
     g_kernels_isa = "avx2";
   } else if (__builtin_cpu_supports("sse4.1")) {
-    g_kernels = tt__trav_table_sse41();
+    g_kernels = tt__embree_trav_table_sse41();
     g_kernels_isa = "sse41";
   }
   tt_host_log(host, TT_LOG_DEBUG, TT__EMBREE_NAME, "custom backend kernels: %s", g_kernels_isa);

@@ -38,8 +38,10 @@ typedef struct tt__embree_settings {
 
 /* Update methods, in the order of the "updateMethod" NOM parameter's values. */
 typedef enum tt__embree_update_method {
-  TT__EMBREE_UPDATE_REBUILD = 0, /* build from scratch with the same configuration */
-  TT__EMBREE_UPDATE_REFIT = 1    /* keep the tree, recompute its boxes for the new positions */
+  TT__EMBREE_UPDATE_REBUILD = 0,  /* build from scratch with the same configuration */
+  TT__EMBREE_UPDATE_REFIT = 1,    /* keep the tree, recompute its boxes for the new positions */
+  TT__EMBREE_UPDATE_INSTANCES = 2 /* two-level: rigid meshes as instances of their own BVHs,
+                                     only the top level rebuilt (accel_embree_inst.c) */
 } tt__embree_update_method;
 
 /* Builds the published parameter space (once, at init); NULL with tt_set_error on failure. */
@@ -58,21 +60,56 @@ int tt__embree_custom_only_changed(const tt_config *config, char *buf, size_t si
 
 /* ---- custom backend (accel_embree_custom.c) ---- */
 
-struct tt__bvh;
+struct tt__embree_bvh;
 struct RTCDeviceTy;
 
 /* Builds the custom backend's tree for `st` over `scene` with Embree's rtcBuildBVH on
  * `device`; fills nodes/leaves/sah_cost/max_depth/memory_bytes of `stats`. Configurations
  * the builder cannot honour (depth limit, ...) give TT_ERR_INFEASIBLE with a message. */
-tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
-                           struct RTCDeviceTy *device, struct tt__bvh **out,
-                           tt_accel_build_stats *stats);
+tt_status tt__embree_custom_build(const tt_scene *scene, const tt__embree_settings *st,
+                                  struct RTCDeviceTy *device, struct tt__embree_bvh **out,
+                                  tt_accel_build_stats *stats);
 /* Frees a custom tree (NULL is ignored). */
-void tt__custom_free(struct tt__bvh *bvh);
+void tt__embree_custom_free(struct tt__embree_bvh *bvh);
 /* Refits a custom tree to the scene's current positions: every leaf's triangle data is
  * recomputed from the mesh and every box set bottom-up to the union of its children (the
  * topology stays). Returns the tree's SAH cost after the refit (as the build reports it). */
-double tt__custom_refit(const tt_scene *scene, struct tt__bvh *bvh);
+double tt__embree_custom_refit(const tt_scene *scene, struct tt__embree_bvh *bvh);
+
+/* ---- native backend, shared by accel_embree.c and accel_embree_inst.c ---- */
+
+struct RTCSceneTy;
+/* The plugin's Embree device (valid between init and deinit). */
+struct RTCDeviceTy *tt__embree_device(void);
+/* Reads and clears Embree's per-thread error code; returns TT_OK or an error naming `what`. */
+tt_status tt__embree_status(const char *what);
+/* Non-zero when tt_scene_set_time may move the mesh. */
+int tt__embree_mesh_moves(const tt_mesh *m);
+/* Creates the triangle geometry of mesh `index` over `positions` (3 * vertex_count floats,
+ * copied) with build quality `quality` (an RTCBuildQuality) and attaches it to `scene` under
+ * geomID = index; `*vbuf` (if set) receives the Embree vertex buffer. */
+tt_status tt__embree_attach_mesh(struct RTCSceneTy *scene, const tt_mesh *m, const float *positions,
+                                 uint32_t index, int quality, float **vbuf);
+
+/* ---- updateMethod=instances (accel_embree_inst.c) ---- */
+
+typedef struct tt__embree_inst tt__embree_inst;
+/* Builds the two-level structure over an animated scene: one BVH per rigid mesh over its
+ * object-space positions, one for the still meshes, one dynamic scene of the deforming
+ * meshes (refitted per update), instanced in a top-level scene returned in `*top` (owned by
+ * `*out`). `quality`: the RTCBuildQuality of the tuned configuration. */
+tt_status tt__embree_inst_build(const tt_scene *scene, const tt__embree_settings *st, int quality,
+                                tt__embree_inst **out, struct RTCSceneTy **top);
+/* Brings the structure to the scene's current pose: the moved rigid meshes' transforms, the
+ * changed deforming meshes refitted, the top level rebuilt. */
+tt_status tt__embree_inst_update(tt__embree_inst *in);
+/* A hit on instance `inst_id` reports Embree's object-space normal: turns it into the
+ * world-space unnormalised normal of the triangle (unchanged for the identity instances). */
+void tt__embree_inst_normal(const tt__embree_inst *in, uint32_t inst_id, float ng[3]);
+/* Instances in the top level (0 for NULL). */
+uint32_t tt__embree_inst_count(const tt__embree_inst *in);
+/* Releases everything (NULL is ignored). */
+void tt__embree_inst_free(tt__embree_inst *in);
 
 /* Text of the calling thread's last Embree error ("" if none). */
 const char *tt__embree_last_error(void);

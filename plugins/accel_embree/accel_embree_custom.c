@@ -21,38 +21,38 @@
 
 /* Spatial-split builds keep a split budget in the top 5 bits of geomID (Embree 3.13.5,
  * RESERVED_NUM_SPATIAL_SPLITS_GEOMID_BITS); leaves must mask them off. */
-#define TT__GEOMID_BITS 27
-#define TT__GEOMID_MASK ((1u << TT__GEOMID_BITS) - 1u)
+#define TT__EMBREE_GEOMID_BITS 27
+#define TT__EMBREE_GEOMID_MASK ((1u << TT__EMBREE_GEOMID_BITS) - 1u)
 
 /* Deepest tree the kernels' fixed stacks accept (Embree keeps depth <= maxDepth <= 64). */
-#define TT__MAX_TREE_DEPTH 88
+#define TT__EMBREE_MAX_TREE_DEPTH 88
 
 /* Temporary tree, allocated by Embree's thread-local allocator (freed with the RTCBVH). */
-typedef struct tt__tmp_inner {
+typedef struct tt__embree_tmp_inner {
   uint32_t is_leaf; /* 0 */
   uint32_t count;
   void *child[8];
   struct RTCBounds bounds[8];
-} tt__tmp_inner;
+} tt__embree_tmp_inner;
 
-typedef struct tt__tmp_leaf {
+typedef struct tt__embree_tmp_leaf {
   uint32_t is_leaf; /* 1 */
   uint32_t count;
   uint32_t ids[]; /* count (geomID, primID) pairs */
-} tt__tmp_leaf;
+} tt__embree_tmp_leaf;
 
 /* State shared by the callbacks (called from Embree's worker threads). */
-typedef struct tt__cb_ctx {
+typedef struct tt__embree_cb_ctx {
   const tt_scene *scene;
-  uint32_t geom_mask; /* TT__GEOMID_MASK for spatial splits, else all ones */
+  uint32_t geom_mask; /* TT__EMBREE_GEOMID_MASK for spatial splits, else all ones */
   _Atomic uint64_t inner, leaves, slots;
   _Atomic int too_wide; /* a node with more than 8 children was requested */
-} tt__cb_ctx;
+} tt__embree_cb_ctx;
 
 /* createNode: an inner node sized for 8 children (we never ask for more). */
-static void *tt__cb_node(RTCThreadLocalAllocator alloc, unsigned int count, void *user) {
-  tt__cb_ctx *c = user;
-  tt__tmp_inner *n = rtcThreadLocalAlloc(alloc, sizeof *n, 16);
+static void *tt__embree_cb_node(RTCThreadLocalAllocator alloc, unsigned int count, void *user) {
+  tt__embree_cb_ctx *c = user;
+  tt__embree_tmp_inner *n = rtcThreadLocalAlloc(alloc, sizeof *n, 16);
   if (!n) return NULL;
   if (count > 8) {
     atomic_store(&c->too_wide, 1);
@@ -65,25 +65,25 @@ static void *tt__cb_node(RTCThreadLocalAllocator alloc, unsigned int count, void
 }
 
 /* setNodeChildren: keep the child pointers. */
-static void tt__cb_children(void *node, void **children, unsigned int count, void *user) {
+static void tt__embree_cb_children(void *node, void **children, unsigned int count, void *user) {
   (void)user;
-  tt__tmp_inner *n = node;
+  tt__embree_tmp_inner *n = node;
   for (unsigned i = 0; i < count && i < 8; i++) n->child[i] = children[i];
 }
 
 /* setNodeBounds: keep the child boxes (the parent's boxes are what the SoA node stores). */
-static void tt__cb_bounds(void *node, const struct RTCBounds **bounds, unsigned int count,
-                          void *user) {
+static void tt__embree_cb_bounds(void *node, const struct RTCBounds **bounds, unsigned int count,
+                                 void *user) {
   (void)user;
-  tt__tmp_inner *n = node;
+  tt__embree_tmp_inner *n = node;
   for (unsigned i = 0; i < count && i < 8; i++) n->bounds[i] = *bounds[i];
 }
 
 /* createLeaf: the (geomID, primID) pairs; the triangles are packed later, in one pass. */
-static void *tt__cb_leaf(RTCThreadLocalAllocator alloc, const struct RTCBuildPrimitive *prims,
-                         size_t count, void *user) {
-  tt__cb_ctx *c = user;
-  tt__tmp_leaf *l = rtcThreadLocalAlloc(alloc, sizeof *l + 8 * count, 16);
+static void *tt__embree_cb_leaf(RTCThreadLocalAllocator alloc,
+                                const struct RTCBuildPrimitive *prims, size_t count, void *user) {
+  tt__embree_cb_ctx *c = user;
+  tt__embree_tmp_leaf *l = rtcThreadLocalAlloc(alloc, sizeof *l + 8 * count, 16);
   if (!l) return NULL;
   l->is_leaf = 1;
   l->count = (uint32_t)count;
@@ -97,22 +97,22 @@ static void *tt__cb_leaf(RTCThreadLocalAllocator alloc, const struct RTCBuildPri
 }
 
 /* Vertex pointers of a triangle. */
-static inline void tt__tri_verts(const tt_mesh *m, uint32_t prim, const float *v[3]) {
+static inline void tt__embree_tri_verts(const tt_mesh *m, uint32_t prim, const float *v[3]) {
   for (int k = 0; k < 3; k++) v[k] = m->positions + 3 * (size_t)m->indices[3 * (size_t)prim + k];
 }
 
 /* splitPrimitive (quality 3): clips the triangle at the plane and intersects each side's
  * box with the primitive's current box (which may already be a fragment), as Embree's own
  * triangle splitter does. */
-static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim, float pos,
-                         struct RTCBounds *lo, struct RTCBounds *hi, void *user) {
-  tt__cb_ctx *c = user;
+static void tt__embree_cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim, float pos,
+                                struct RTCBounds *lo, struct RTCBounds *hi, void *user) {
+  tt__embree_cb_ctx *c = user;
   const tt_mesh *m = tt_scene_mesh(c->scene, prim->geomID & c->geom_mask);
   const float *v[3];
-  tt__tri_verts(m, prim->primID, v);
+  tt__embree_tri_verts(m, prim->primID, v);
   float l[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
   float r[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-#define TT__EXT(b, p)                                                                              \
+#define TT__EMBREE_EXT(b, p)                                                                       \
   for (int k = 0; k < 3; k++) {                                                                    \
     b[k] = fminf(b[k], (p)[k]);                                                                    \
     b[3 + k] = fmaxf(b[3 + k], (p)[k]);                                                            \
@@ -120,17 +120,17 @@ static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim,
   for (int i = 0; i < 3; i++) {
     const float *a = v[i], *b = v[(i + 1) % 3];
     float ad = a[dim], bd = b[dim];
-    if (ad <= pos) TT__EXT(l, a);
-    if (ad >= pos) TT__EXT(r, a);
+    if (ad <= pos) TT__EMBREE_EXT(l, a);
+    if (ad >= pos) TT__EMBREE_EXT(r, a);
     if ((ad < pos && pos < bd) || (bd < pos && pos < ad)) {
       float t = (pos - ad) / (bd - ad), p[3];
       for (int k = 0; k < 3; k++) p[k] = a[k] + t * (b[k] - a[k]);
       p[dim] = pos;
-      TT__EXT(l, p);
-      TT__EXT(r, p);
+      TT__EMBREE_EXT(l, p);
+      TT__EMBREE_EXT(r, p);
     }
   }
-#undef TT__EXT
+#undef TT__EMBREE_EXT
   const float pl[3] = {prim->lower_x, prim->lower_y, prim->lower_z};
   const float pu[3] = {prim->upper_x, prim->upper_y, prim->upper_z};
   float *lo_lo = &lo->lower_x, *lo_up = &lo->upper_x, *hi_lo = &hi->lower_x, *hi_up = &hi->upper_x;
@@ -145,7 +145,7 @@ static void tt__cb_split(const struct RTCBuildPrimitive *prim, unsigned int dim,
 
 /* ---- flattening into our layout ---- */
 
-typedef struct tt__flat {
+typedef struct tt__embree_flat {
   const tt_scene *scene;
   int N, robust;
   char *arena; /* lines: leaf blocks (BVH2: and nodes), accel_embree_bvh.h */
@@ -157,10 +157,10 @@ typedef struct tt__flat {
   double area_inner, area_leaf_tris;
   uint32_t max_depth;
   const char *error; /* set on the first structural problem */
-} tt__flat;
+} tt__embree_flat;
 
 /* Surface area of a box given as lower[3], upper[3]. */
-static double tt__area(const float *lower, const float *upper) {
+static double tt__embree_area(const float *lower, const float *upper) {
   double d[3];
   for (int k = 0; k < 3; k++) d[k] = upper[k] > lower[k] ? (double)upper[k] - lower[k] : 0.0;
   return 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
@@ -169,10 +169,10 @@ static double tt__area(const float *lower, const float *upper) {
 /* Writes a triangle into lane `lane` of the width-W packet at `pk`: vertices or edges,
  * and Ng computed in double from the same float data the test uses, so den and T agree
  * with it. */
-static void tt__pack_tri(tt__flat *f, float *pk, int W, int lane, tt__id *id, uint32_t geom,
-                         uint32_t prim) {
+static void tt__embree_pack_tri(tt__embree_flat *f, float *pk, int W, int lane, tt__embree_id *id,
+                                uint32_t geom, uint32_t prim) {
   const float *v[3];
-  tt__tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
+  tt__embree_tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
   float e1[3], e2[3];
   for (int k = 0; k < 3; k++) {
     e1[k] = v[0][k] - v[1][k];
@@ -194,68 +194,68 @@ static void tt__pack_tri(tt__flat *f, float *pk, int W, int lane, tt__id *id, ui
 }
 
 /* Lays out the temporary subtree `tmp` (whose box is lower/upper, at `depth`, root = 1)
- * and returns its reference, or TT__REF_NONE for an empty leaf. */
-static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const float *lower,
-                            const float *upper) {
-  if (f->error) return TT__REF_NONE;
+ * and returns its reference, or TT__EMBREE_REF_NONE for an empty leaf. */
+static uint32_t tt__embree_flatten(tt__embree_flat *f, const void *tmp, uint32_t depth,
+                                   const float *lower, const float *upper) {
+  if (f->error) return TT__EMBREE_REF_NONE;
   if (!tmp) {
     f->error = "Embree returned a NULL child";
-    return TT__REF_NONE;
+    return TT__EMBREE_REF_NONE;
   }
   if (depth > f->max_depth) f->max_depth = depth;
-  if (depth > TT__MAX_TREE_DEPTH) {
+  if (depth > TT__EMBREE_MAX_TREE_DEPTH) {
     f->error = "tree deeper than the traversal stack allows";
-    return TT__REF_NONE;
+    return TT__EMBREE_REF_NONE;
   }
-  if (((const tt__tmp_leaf *)tmp)->is_leaf) {
-    const tt__tmp_leaf *l = tmp;
-    if (l->count == 0) return TT__REF_NONE;
+  if (((const tt__embree_tmp_leaf *)tmp)->is_leaf) {
+    const tt__embree_tmp_leaf *l = tmp;
+    if (l->count == 0) return TT__EMBREE_REF_NONE;
     const uint32_t pairs = (l->count + 1) / 2, nslots = 2 * pairs, wide = pairs / 2;
-    if (pairs > TT__LEAF_MAX_PAIRS) {
+    if (pairs > TT__EMBREE_LEAF_MAX_PAIRS) {
       f->error = "a leaf holds more than 32 triangles";
-      return TT__REF_NONE;
+      return TT__EMBREE_REF_NONE;
     }
     /* A leaf block in the arena: packets then ids, whole lines (accel_embree_bvh.h), so the
      * hit's ids come from lines the leaf test already read. */
     const uint64_t line = f->arena_lines, lines = (112u * pairs + 63u) / 64u;
-    if (line + lines > f->arena_cap || line + lines - 1 > TT__LINE2_MASK) {
+    if (line + lines > f->arena_cap || line + lines - 1 > TT__EMBREE_LINE2_MASK) {
       f->error = line + lines > f->arena_cap ? "more leaf lines than counted"
                                              : "leaf arena too large for 27-bit lines";
-      return TT__REF_NONE;
+      return TT__EMBREE_REF_NONE;
     }
     f->arena_lines += lines;
     float *base = (float *)(f->arena + line * 64u);
-    tt__id *id = (tt__id *)((char *)base + (size_t)pairs * 96u);
+    tt__embree_id *id = (tt__embree_id *)((char *)base + (size_t)pairs * 96u);
     for (uint32_t i = 0; i < nslots; i++) id[i].geom = id[i].prim = TT_INVALID_ID;
     for (uint32_t j = 0; j < l->count; j++) {
       /* Slot j: lane j % 4 of 4-wide packet j / 4, or lane j - 4 * wide of the 2-wide
        * packet that closes a leaf with an odd number of pairs. */
       int W = j < 4 * wide ? 4 : 2;
       uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide; /* packet's first slot */
-      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j], l->ids[2 * j],
-                   l->ids[2 * j + 1]);
+      tt__embree_pack_tri(f, base + (size_t)p0 * TT__EMBREE_SLOT_FLOATS, W, (int)(j - p0), &id[j],
+                          l->ids[2 * j], l->ids[2 * j + 1]);
     }
     f->slot_count += nslots;
     f->leaves++;
-    f->area_leaf_tris += tt__area(lower, upper) * l->count;
-    return TT__REF_LEAF | ((pairs - 1) << TT__LEAF_SHIFT) | (uint32_t)line;
+    f->area_leaf_tris += tt__embree_area(lower, upper) * l->count;
+    return TT__EMBREE_REF_LEAF | ((pairs - 1) << TT__EMBREE_LEAF_SHIFT) | (uint32_t)line;
   }
-  const tt__tmp_inner *n = tmp;
-  if (f->node_count >= f->node_cap || f->node_count > TT__NODE_MAX_INDEX) {
+  const tt__embree_tmp_inner *n = tmp;
+  if (f->node_count >= f->node_cap || f->node_count > TT__EMBREE_NODE_MAX_INDEX) {
     f->error = "more inner nodes than Embree created";
-    return TT__REF_NONE;
+    return TT__EMBREE_REF_NONE;
   }
   const int N = f->N;
   uint64_t index = f->node_count++;
   if (N == 2) { /* BVH2: the node's line, before its children's (pre-order) */
-    if (f->arena_lines >= f->arena_cap || f->arena_lines > TT__LINE2_MASK) {
+    if (f->arena_lines >= f->arena_cap || f->arena_lines > TT__EMBREE_LINE2_MASK) {
       f->error = f->arena_lines >= f->arena_cap ? "more BVH2 lines than counted"
                                                 : "BVH2 arena too large for 27-bit lines";
-      return TT__REF_NONE;
+      return TT__EMBREE_REF_NONE;
     }
     index = f->arena_lines++;
   }
-  f->area_inner += tt__area(lower, upper);
+  f->area_inner += tt__embree_area(lower, upper);
   /* Children first (they may be anywhere later in the arrays), then this node's rows; the
    * node is addressed by index because nothing moves, but computing rows after the
    * recursion keeps the code obviously independent of it. */
@@ -273,24 +273,24 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
     const struct RTCBounds *b = &n->bounds[i];
     const float lo[3] = {b->lower_x, b->lower_y, b->lower_z},
                 hi[3] = {b->upper_x, b->upper_y, b->upper_z};
-    area[i] = tt__area(lo, hi);
+    area[i] = tt__embree_area(lo, hi);
     int j = i;
     for (; j > 0 && area[order[j - 1]] < area[i]; j--) order[j] = order[j - 1];
     order[j] = i;
   }
   for (int i = 0; i < N; i++) {
-    refs[i] = TT__REF_NONE;
+    refs[i] = TT__EMBREE_REF_NONE;
     if (i < kids) {
       const struct RTCBounds *b = &n->bounds[order[i]];
       box[i][0] = b->lower_x, box[i][1] = b->lower_y, box[i][2] = b->lower_z;
       box[i][3] = b->upper_x, box[i][4] = b->upper_y, box[i][5] = b->upper_z;
-      refs[i] = tt__flatten(f, n->child[order[i]], depth + 1, box[i], box[i] + 3);
+      refs[i] = tt__embree_flatten(f, n->child[order[i]], depth + 1, box[i], box[i] + 3);
     }
   }
   float *rows = (float *)(N == 2 ? f->arena + index * 64u : f->nodes + index * (uint64_t)(32 * N));
   uint32_t *child = (uint32_t *)(rows + 6 * N);
   for (int i = 0; i < N; i++) {
-    int empty = refs[i] == TT__REF_NONE;
+    int empty = refs[i] == TT__EMBREE_REF_NONE;
     for (int k = 0; k < 3; k++) {
       /* BVH2: row k = (lower c0, lower c1, upper c0, upper c1); wider: rows 2k, 2k+1. */
       float *lo = N == 2 ? &rows[4 * k + i] : &rows[(2 * k) * N + i];
@@ -302,12 +302,12 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
   }
   for (int i = N; i < 2 * N; i++) child[i] = 0u; /* padding */
   if (N == 2) {
-    /* Grandchild hints (tt__node2.grand): the children were laid out first, so an inner
+    /* Grandchild hints (tt__embree_node2.grand): the children were laid out first, so an inner
      * child's node is already written. */
     for (int i = 0; i < 2; i++) {
       uint32_t g = child[i]; /* a leaf (or empty) child: its own lines, or the root's */
-      if (refs[i] != TT__REF_NONE && !(refs[i] & TT__REF_LEAF)) {
-        const tt__node2 *cn = (const tt__node2 *)(f->arena + (uint64_t)refs[i] * 64u);
+      if (refs[i] != TT__EMBREE_REF_NONE && !(refs[i] & TT__EMBREE_REF_LEAF)) {
+        const tt__embree_node2 *cn = (const tt__embree_node2 *)(f->arena + (uint64_t)refs[i] * 64u);
         if (cn->b[0][1] <= cn->b[0][3]) g = cn->child[1]; /* non-empty second box */
       }
       child[2 + i] = g;
@@ -319,7 +319,7 @@ static uint32_t tt__flatten(tt__flat *f, const void *tmp, uint32_t depth, const 
 /* ---- the build ---- */
 
 /* Frees a tree (NULL is ignored). */
-void tt__custom_free(tt__bvh *bvh) {
+void tt__embree_custom_free(tt__embree_bvh *bvh) {
   if (!bvh) return;
   free(bvh->arena);
   free(bvh->nodes);
@@ -327,20 +327,20 @@ void tt__custom_free(tt__bvh *bvh) {
 }
 
 /* Rounds up to a multiple of 64 (aligned_alloc wants size % alignment == 0). */
-static size_t tt__round64(size_t n) { return (n + 63) & ~(size_t)63; }
+static size_t tt__embree_round64(size_t n) { return (n + 63) & ~(size_t)63; }
 
 /* Allocates a tree array (64-byte aligned, `bytes` rounded up to 64). Arrays of 2 MiB and
  * more start on a 2 MiB boundary and are marked MADV_HUGEPAGE before they are first
  * written: incoherent rays touch lines all over a large tree, and with 4 KiB pages nearly
  * every node visit also misses the TLB (a page walk on top of the cache miss). Transparent
  * huge pages need the kernel's "madvise" or "always" mode; otherwise this is a no-op. */
-#define TT__HUGE ((size_t)2 << 20)
-static void *tt__tree_alloc(size_t bytes) {
+#define TT__EMBREE_HUGE ((size_t)2 << 20)
+static void *tt__embree_tree_alloc(size_t bytes) {
   if (!bytes) return NULL;
-  size_t n = tt__round64(bytes);
-  if (n < TT__HUGE) return aligned_alloc(64, n);
-  n = (n + TT__HUGE - 1) & ~(TT__HUGE - 1);
-  void *p = aligned_alloc(TT__HUGE, n);
+  size_t n = tt__embree_round64(bytes);
+  if (n < TT__EMBREE_HUGE) return aligned_alloc(64, n);
+  n = (n + TT__EMBREE_HUGE - 1) & ~(TT__EMBREE_HUGE - 1);
+  void *p = aligned_alloc(TT__EMBREE_HUGE, n);
 #ifdef MADV_HUGEPAGE
   if (p) madvise(p, n, MADV_HUGEPAGE); /* advice only: failure changes nothing */
 #endif
@@ -349,7 +349,7 @@ static void *tt__tree_alloc(size_t bytes) {
 
 /* Smallest maxDepth with bf^(maxDepth-1) * maxLeafSize >= n (a tree of that depth can hold
  * n primitives at all; SAH's unbalanced splits may need more). */
-static int tt__min_depth(uint64_t n, int bf, int max_leaf) {
+static int tt__embree_min_depth(uint64_t n, int bf, int max_leaf) {
   int d = 1;
   double cap = (double)max_leaf;
   while (cap < (double)n && d < 1000) {
@@ -359,8 +359,9 @@ static int tt__min_depth(uint64_t n, int bf, int max_leaf) {
   return d;
 }
 
-tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st, RTCDevice device,
-                           tt__bvh **out, tt_accel_build_stats *stats) {
+tt_status tt__embree_custom_build(const tt_scene *scene, const tt__embree_settings *st,
+                                  RTCDevice device, tt__embree_bvh **out,
+                                  tt_accel_build_stats *stats) {
   *out = NULL;
   const int bf = st->branching_factor;
   if (bf != 2 && bf != 4 && bf != 8)
@@ -401,7 +402,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: %llu triangles is too many",
                         (unsigned long long)n);
   struct RTCBuildPrimitive *prims =
-      cap ? aligned_alloc(32, tt__round64(cap * sizeof *prims)) : NULL;
+      cap ? aligned_alloc(32, tt__embree_round64(cap * sizeof *prims)) : NULL;
   if (cap && !prims)
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot allocate %llu build primitives",
                         (unsigned long long)cap);
@@ -411,7 +412,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     const tt_mesh *m = tt_scene_mesh(scene, g);
     for (uint32_t p = 0; p < m->triangle_count; p++) {
       const float *v[3];
-      tt__tri_verts(m, p, v);
+      tt__embree_tri_verts(m, p, v);
       float lo[3], hi[3];
       int ok = 1;
       for (int k = 0; k < 3; k++) {
@@ -434,7 +435,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
 
   /* Scene-dependent part of the maxDepth constraint, detected before Embree throws. */
   if (count > 0) {
-    int need = tt__min_depth(count, bf, max_leaf);
+    int need = tt__embree_min_depth(count, bf, max_leaf);
     if (st->max_depth < need) {
       free(prims);
       return tt_set_error(TT_ERR_INFEASIBLE,
@@ -446,14 +447,14 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     }
   }
 
-  tt__bvh *bvh = calloc(1, sizeof *bvh);
+  tt__embree_bvh *bvh = calloc(1, sizeof *bvh);
   if (!bvh) {
     free(prims);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: out of memory");
   }
   bvh->width = bf;
   bvh->robust = st->robust != 0;
-  bvh->root = TT__REF_NONE;
+  bvh->root = TT__EMBREE_REF_NONE;
   if (count == 0) { /* every triangle invalid: a tree that nothing hits */
     free(prims);
     *out = bvh;
@@ -461,10 +462,10 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     return TT_OK;
   }
 
-  tt__cb_ctx ctx;
+  tt__embree_cb_ctx ctx;
   memset(&ctx, 0, sizeof ctx);
   ctx.scene = scene;
-  ctx.geom_mask = high && meshes <= TT__GEOMID_MASK ? TT__GEOMID_MASK : 0xFFFFFFFFu;
+  ctx.geom_mask = high && meshes <= TT__EMBREE_GEOMID_MASK ? TT__EMBREE_GEOMID_MASK : 0xFFFFFFFFu;
 
   static const enum RTCBuildQuality qualities[] = {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM,
                                                    RTC_BUILD_QUALITY_HIGH};
@@ -484,16 +485,16 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   args.primitives = prims;
   args.primitiveCount = count;
   args.primitiveArrayCapacity = high ? cap : count;
-  args.createNode = tt__cb_node;
-  args.setNodeChildren = tt__cb_children;
-  args.setNodeBounds = tt__cb_bounds;
-  args.createLeaf = tt__cb_leaf;
-  args.splitPrimitive = high ? tt__cb_split : NULL;
+  args.createNode = tt__embree_cb_node;
+  args.setNodeChildren = tt__embree_cb_children;
+  args.setNodeBounds = tt__embree_cb_bounds;
+  args.createLeaf = tt__embree_cb_leaf;
+  args.splitPrimitive = high ? tt__embree_cb_split : NULL;
   args.buildProgress = NULL;
   args.userPtr = &ctx;
   if (!args.bvh) {
     free(prims);
-    tt__custom_free(bvh);
+    tt__embree_custom_free(bvh);
     return tt_set_error(TT_ERR_INTERNAL, "accel_embree: rtcNewBVH failed: %s",
                         tt__embree_last_error());
   }
@@ -510,7 +511,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
     tt_status code = err == RTC_ERROR_OUT_OF_MEMORY ? TT_ERR_OUT_OF_MEMORY : TT_ERR_INFEASIBLE;
     int depth = msg && strstr(msg, "depth limit") != NULL;
     rtcReleaseBVH(args.bvh);
-    tt__custom_free(bvh);
+    tt__embree_custom_free(bvh);
     if (atomic_load(&ctx.too_wide))
       return tt_set_error(TT_ERR_INTERNAL,
                           "accel_embree: rtcBuildBVH made a node wider than 8 children");
@@ -522,7 +523,7 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
                         depth ? " (raise maxDepth or maxLeafSize)" : "");
   }
 
-  tt__flat f;
+  tt__embree_flat f;
   memset(&f, 0, sizeof f);
   f.scene = scene;
   f.N = bf;
@@ -534,22 +535,22 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   f.arena_cap = (bf == 2 ? f.node_cap : 0) + (112u * pairs + 63u * leaves) / 64u + 1u;
   size_t cap_bytes = (size_t)f.arena_cap * 64u;
   size_t node_bytes = bf == 2 ? 0 : (size_t)f.node_cap * (size_t)(32 * bf);
-  f.arena = tt__tree_alloc(cap_bytes);
-  f.nodes = node_bytes ? tt__tree_alloc(node_bytes) : NULL;
+  f.arena = tt__embree_tree_alloc(cap_bytes);
+  f.nodes = node_bytes ? tt__embree_tree_alloc(node_bytes) : NULL;
   if (!f.arena || (node_bytes && !f.nodes)) {
     free(f.arena);
     free(f.nodes);
     rtcReleaseBVH(args.bvh);
-    tt__custom_free(bvh);
+    tt__embree_custom_free(bvh);
     return tt_set_error(TT_ERR_OUT_OF_MEMORY, "accel_embree: cannot allocate the BVH (%zu bytes)",
                         cap_bytes + node_bytes);
   }
   memset(f.arena, 0, cap_bytes);
-  bvh->root = tt__flatten(&f, root, 1, root_lo, root_hi);
+  bvh->root = tt__embree_flatten(&f, root, 1, root_lo, root_hi);
   rtcReleaseBVH(args.bvh);
   size_t bytes = (size_t)f.arena_lines * 64u;
   if (!f.error && f.arena_lines < f.arena_cap) { /* exact-size copy */
-    char *a = tt__tree_alloc(bytes);
+    char *a = tt__embree_tree_alloc(bytes);
     if (a) {
       memcpy(a, f.arena, bytes);
       free(f.arena);
@@ -564,12 +565,12 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
   bvh->node_count = f.node_count;
   bvh->slot_count = f.slot_count;
   if (f.error) {
-    tt__custom_free(bvh);
+    tt__embree_custom_free(bvh);
     return tt_set_error(TT_ERR_INTERNAL, "accel_embree: custom layout failed: %s", f.error);
   }
   stats->memory_bytes = sizeof *bvh + bytes + node_bytes;
 
-  double root_area = tt__area(root_lo, root_hi);
+  double root_area = tt__embree_area(root_lo, root_hi);
   stats->nodes = f.node_count;
   stats->leaves = f.leaves;
   /* Expected inner-node visits plus triangle tests of a random line through the root box
@@ -585,25 +586,27 @@ tt_status tt__custom_build(const tt_scene *scene, const tt__embree_settings *st,
 /* Refits the subtree `ref` whose box the caller stores: writes its box into lo/hi and adds
  * its SAH terms to f (area_inner per inner node, area * triangles per leaf, as the layout
  * pass counts them). Leaves repack their triangles from the current positions. */
-static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float lo[3], float hi[3]) {
+static void tt__embree_refit_ref(tt__embree_flat *f, const tt__embree_bvh *bvh, uint32_t ref,
+                                 float lo[3], float hi[3]) {
   for (int k = 0; k < 3; k++) {
     lo[k] = INFINITY;
     hi[k] = -INFINITY;
   }
-  if (ref == TT__REF_NONE) return;
-  if (ref & TT__REF_LEAF) {
-    const uint32_t pairs = ((ref >> TT__LEAF_SHIFT) & 0xFu) + 1u, wide = pairs / 2;
-    float *base = (float *)((char *)bvh->arena + (uint64_t)(ref & TT__LINE2_MASK) * 64u);
-    tt__id *id = (tt__id *)((char *)base + (size_t)pairs * 96u);
+  if (ref == TT__EMBREE_REF_NONE) return;
+  if (ref & TT__EMBREE_REF_LEAF) {
+    const uint32_t pairs = ((ref >> TT__EMBREE_LEAF_SHIFT) & 0xFu) + 1u, wide = pairs / 2;
+    float *base = (float *)((char *)bvh->arena + (uint64_t)(ref & TT__EMBREE_LINE2_MASK) * 64u);
+    tt__embree_id *id = (tt__embree_id *)((char *)base + (size_t)pairs * 96u);
     uint32_t tris = 0;
     for (uint32_t j = 0; j < 2 * pairs; j++) {
       if (id[j].geom == TT_INVALID_ID) continue;
       int W = j < 4 * wide ? 4 : 2;
       uint32_t p0 = W == 4 ? j - j % 4 : 4 * wide;
       const uint32_t geom = id[j].geom, prim = id[j].prim;
-      tt__pack_tri(f, base + (size_t)p0 * TT__SLOT_FLOATS, W, (int)(j - p0), &id[j], geom, prim);
+      tt__embree_pack_tri(f, base + (size_t)p0 * TT__EMBREE_SLOT_FLOATS, W, (int)(j - p0), &id[j],
+                          geom, prim);
       const float *v[3];
-      tt__tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
+      tt__embree_tri_verts(tt_scene_mesh(f->scene, geom), prim, v);
       for (int c = 0; c < 3; c++)
         for (int k = 0; k < 3; k++) {
           lo[k] = fminf(lo[k], v[c][k]);
@@ -611,7 +614,7 @@ static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float l
         }
       tris++;
     }
-    f->area_leaf_tris += tt__area(lo, hi) * tris;
+    f->area_leaf_tris += tt__embree_area(lo, hi) * tris;
     return;
   }
   const int N = f->N;
@@ -626,7 +629,7 @@ static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float l
     }
     if (!(*clo[0] <= *cup[0])) continue; /* an empty lane stays empty */
     float b[6];
-    tt__refit_ref(f, bvh, child[i], b, b + 3);
+    tt__embree_refit_ref(f, bvh, child[i], b, b + 3);
     for (int k = 0; k < 3; k++) {
       *clo[k] = b[k];
       *cup[k] = b[3 + k];
@@ -634,18 +637,18 @@ static void tt__refit_ref(tt__flat *f, const tt__bvh *bvh, uint32_t ref, float l
       hi[k] = fmaxf(hi[k], b[3 + k]);
     }
   }
-  f->area_inner += tt__area(lo, hi);
+  f->area_inner += tt__embree_area(lo, hi);
 }
 
-double tt__custom_refit(const tt_scene *scene, tt__bvh *bvh) {
-  if (!bvh || bvh->root == TT__REF_NONE) return 0.0;
-  tt__flat f;
+double tt__embree_custom_refit(const tt_scene *scene, tt__embree_bvh *bvh) {
+  if (!bvh || bvh->root == TT__EMBREE_REF_NONE) return 0.0;
+  tt__embree_flat f;
   memset(&f, 0, sizeof f);
   f.scene = scene;
   f.N = bvh->width;
   f.robust = bvh->robust;
   float lo[3], hi[3];
-  tt__refit_ref(&f, bvh, bvh->root, lo, hi);
-  double root_area = tt__area(lo, hi);
+  tt__embree_refit_ref(&f, bvh, bvh->root, lo, hi);
+  double root_area = tt__embree_area(lo, hi);
   return root_area > 0.0 ? (f.area_inner + f.area_leaf_tris) / root_area : 0.0;
 }

@@ -7,36 +7,36 @@
 
 /* Embree's own defaults for the numeric builder settings (RTCBuildArguments defaults,
  * rtcDefaultBuildArguments), so the default configuration reproduces stock Embree. */
-#define TT__DEF_QUALITY 2
-#define TT__DEF_BF 2
-#define TT__DEF_MAX_DEPTH 32
-#define TT__DEF_SAH_BLOCK 1
-#define TT__DEF_MIN_LEAF 1
-#define TT__DEF_MAX_LEAF 32
-#define TT__DEF_TRAV_COST 1.0
-#define TT__DEF_INT_COST 1.0
+#define TT__EMBREE_DEF_QUALITY 2
+#define TT__EMBREE_DEF_BF 2
+#define TT__EMBREE_DEF_MAX_DEPTH 32
+#define TT__EMBREE_DEF_SAH_BLOCK 1
+#define TT__EMBREE_DEF_MIN_LEAF 1
+#define TT__EMBREE_DEF_MAX_LEAF 32
+#define TT__EMBREE_DEF_TRAV_COST 1.0
+#define TT__EMBREE_DEF_INT_COST 1.0
 /* Default backend: index into {"native", "custom"}; the faster one in the bench on the
  * project's scene set (README.md, "Choosing the default backend"). */
-#define TT__DEF_BACKEND TT__EMBREE_BACKEND_NATIVE
+#define TT__EMBREE_DEF_BACKEND TT__EMBREE_BACKEND_NATIVE
 
 /* Parameters that act only in the custom (rtcBuildBVH) backend, with their defaults. */
 static const struct {
   const char *name;
   double def;
-} tt__custom_only[] = {
-    {"branchingFactor", TT__DEF_BF},     {"maxDepth", TT__DEF_MAX_DEPTH},
-    {"sahBlockSize", TT__DEF_SAH_BLOCK}, {"minLeafSize", TT__DEF_MIN_LEAF},
-    {"maxLeafSize", TT__DEF_MAX_LEAF},   {"travcost", TT__DEF_TRAV_COST},
-    {"intcost", TT__DEF_INT_COST},
+} tt__embree_custom_only[] = {
+    {"branchingFactor", TT__EMBREE_DEF_BF},     {"maxDepth", TT__EMBREE_DEF_MAX_DEPTH},
+    {"sahBlockSize", TT__EMBREE_DEF_SAH_BLOCK}, {"minLeafSize", TT__EMBREE_DEF_MIN_LEAF},
+    {"maxLeafSize", TT__EMBREE_DEF_MAX_LEAF},   {"travcost", TT__EMBREE_DEF_TRAV_COST},
+    {"intcost", TT__EMBREE_DEF_INT_COST},
 };
 
 /* Writes a reason into `why` if there is room (the check's contract allows a NULL buffer). */
-static void tt__why(char *why, size_t size, const char *text) {
+static void tt__embree_why(char *why, size_t size, const char *text) {
   if (why && size) snprintf(why, size, "%s", text);
 }
 
 /* Largest power of two <= v (v >= 1). */
-static int64_t tt__pow2_floor(int64_t v) {
+static int64_t tt__embree_pow2_floor(int64_t v) {
   int64_t p = 1;
   while (p * 2 <= v) p *= 2;
   return p;
@@ -49,30 +49,31 @@ static int64_t tt__pow2_floor(int64_t v) {
 static tt_check_result tt__embree_check(const tt_space *space, tt_config *config, char *why,
                                         size_t why_size, void *user) {
   (void)user;
-  int64_t quality = tt_config_get_int(config, "quality", TT__DEF_QUALITY);
-  int64_t bf = tt_config_get_int(config, "branchingFactor", TT__DEF_BF);
-  int64_t min_leaf = tt_config_get_int(config, "minLeafSize", TT__DEF_MIN_LEAF);
-  int64_t max_leaf = tt_config_get_int(config, "maxLeafSize", TT__DEF_MAX_LEAF);
+  int64_t quality = tt_config_get_int(config, "quality", TT__EMBREE_DEF_QUALITY);
+  int64_t bf = tt_config_get_int(config, "branchingFactor", TT__EMBREE_DEF_BF);
+  int64_t min_leaf = tt_config_get_int(config, "minLeafSize", TT__EMBREE_DEF_MIN_LEAF);
+  int64_t max_leaf = tt_config_get_int(config, "maxLeafSize", TT__EMBREE_DEF_MAX_LEAF);
 
   /* Checked before repairing: a swap cannot make a Morton configuration feasible. */
   if (quality == 1 && (bf > 8 || max_leaf > 32 || min_leaf > 32)) {
-    tt__why(why, why_size, "quality 1 (Morton) supports branchingFactor <= 8 and leaf sizes <= 32");
+    tt__embree_why(why, why_size,
+                   "quality 1 (Morton) supports branchingFactor <= 8 and leaf sizes <= 32");
     return TT_CHECK_INFEASIBLE;
   }
   /* Embree uses only the largest power of two <= sahBlockSize (bsr of it): 5..7 act as 4.
    * Canonicalising spares a tuner from measuring the same tree three times. */
-  int64_t block = tt_config_get_int(config, "sahBlockSize", TT__DEF_SAH_BLOCK);
+  int64_t block = tt_config_get_int(config, "sahBlockSize", TT__EMBREE_DEF_SAH_BLOCK);
   char block_why[128] = "";
-  if (block >= 1 && tt__pow2_floor(block) != block) {
+  if (block >= 1 && tt__embree_pow2_floor(block) != block) {
     int ib = tt_space_find(space, "sahBlockSize");
     if (ib < 0 ||
-        tt_config_set_number(config, (size_t)ib, (double)tt__pow2_floor(block)) != TT_OK) {
-      tt__why(why, why_size, "sahBlockSize is not a power of two and could not be rounded");
+        tt_config_set_number(config, (size_t)ib, (double)tt__embree_pow2_floor(block)) != TT_OK) {
+      tt__embree_why(why, why_size, "sahBlockSize is not a power of two and could not be rounded");
       return TT_CHECK_INFEASIBLE;
     }
     snprintf(block_why, sizeof block_why,
              "sahBlockSize %lld acts as %lld (Embree uses its largest power of two)",
-             (long long)block, (long long)tt__pow2_floor(block));
+             (long long)block, (long long)tt__embree_pow2_floor(block));
   }
   if (min_leaf > max_leaf) {
     int imin = tt_space_find(space, "minLeafSize");
@@ -80,7 +81,7 @@ static tt_check_result tt__embree_check(const tt_space *space, tt_config *config
     if (imin < 0 || imax < 0 ||
         tt_config_set_number(config, (size_t)imin, (double)max_leaf) != TT_OK ||
         tt_config_set_number(config, (size_t)imax, (double)min_leaf) != TT_OK) {
-      tt__why(why, why_size, "minLeafSize > maxLeafSize and the swap failed");
+      tt__embree_why(why, why_size, "minLeafSize > maxLeafSize and the swap failed");
       return TT_CHECK_INFEASIBLE;
     }
     if (why && why_size)
@@ -89,7 +90,7 @@ static tt_check_result tt__embree_check(const tt_space *space, tt_config *config
     return TT_CHECK_REPAIRED;
   }
   if (block_why[0]) {
-    tt__why(why, why_size, block_why);
+    tt__embree_why(why, why_size, block_why);
     return TT_CHECK_REPAIRED;
   }
   return TT_CHECK_OK;
@@ -107,7 +108,7 @@ tt_space *tt__embree_space_create(void) {
   static const int64_t qualities[] = {1, 2, 3};
   static const int64_t factors[] = {2, 4, 8};
   static const char *const backends[] = {"native", "custom"};
-  static const char *const updates[] = {"rebuild", "refit"};
+  static const char *const updates[] = {"rebuild", "refit", "instances"};
   int ok = 1;
   ok &= tt_space_add_nom_int(s, "quality", qualities, 3, 1,
                              "BVH builder: 1 Morton (RTC_BUILD_QUALITY_LOW), 2 binned SAH "
@@ -116,20 +117,20 @@ tt_space *tt__embree_space_create(void) {
                              "children per inner node (maxBranchingFactor; our BVH2/4/8 "
                              "layout); custom backend only (native Embree picks its own "
                              "BVH4/BVH8)") >= 0;
-  ok &= tt_space_add_int(s, "maxDepth", 8, 64, TT__DEF_MAX_DEPTH,
+  ok &= tt_space_add_int(s, "maxDepth", 8, 64, TT__EMBREE_DEF_MAX_DEPTH,
                          "maximum BVH depth (the last 8 levels split by object median); "
                          "custom backend only") >= 0;
-  ok &= tt_space_add_int(s, "sahBlockSize", 1, 32, TT__DEF_SAH_BLOCK,
+  ok &= tt_space_add_int(s, "sahBlockSize", 1, 32, TT__EMBREE_DEF_SAH_BLOCK,
                          "SAH leaf cost granularity (primitives per block; only powers of two "
                          "act, others are rounded down by the check); custom backend only") >= 0;
-  ok &= tt_space_add_int(s, "minLeafSize", 1, 32, TT__DEF_MIN_LEAF,
+  ok &= tt_space_add_int(s, "minLeafSize", 1, 32, TT__EMBREE_DEF_MIN_LEAF,
                          "minimum primitives per leaf; custom backend only") >= 0;
-  ok &= tt_space_add_int(s, "maxLeafSize", 1, 32, TT__DEF_MAX_LEAF,
+  ok &= tt_space_add_int(s, "maxLeafSize", 1, 32, TT__EMBREE_DEF_MAX_LEAF,
                          "maximum primitives per leaf; custom backend only") >= 0;
-  ok &= tt_space_add_float(s, "travcost", 0.1, 10.0, TT__DEF_TRAV_COST, 0,
+  ok &= tt_space_add_float(s, "travcost", 0.1, 10.0, TT__EMBREE_DEF_TRAV_COST, 0,
                            "SAH cost of traversing a node (only travcost/intcost acts); "
                            "custom backend only") >= 0;
-  ok &= tt_space_add_float(s, "intcost", 0.1, 10.0, TT__DEF_INT_COST, 0,
+  ok &= tt_space_add_float(s, "intcost", 0.1, 10.0, TT__EMBREE_DEF_INT_COST, 0,
                            "SAH cost of intersecting a primitive (only travcost/intcost "
                            "acts); custom backend only") >= 0;
   ok &= tt_space_add_nom_bool(s, "static", 0,
@@ -142,7 +143,7 @@ tt_space *tt__embree_space_create(void) {
   ok &= tt_space_add_nom_bool(s, "robust", 0,
                               "RTC_SCENE_FLAG_ROBUST in native; watertight triangle test and "
                               "conservative box test in custom") >= 0;
-  ok &= tt_space_add_nom_string(s, "backend", backends, 2, TT__DEF_BACKEND,
+  ok &= tt_space_add_nom_string(s, "backend", backends, 2, TT__EMBREE_DEF_BACKEND,
                                 "native: Embree's scene API (only quality, static, compact, "
                                 "robust act); custom: rtcBuildBVH with every parameter, our "
                                 "SIMD traversal") >= 0;
@@ -150,13 +151,18 @@ tt_space *tt__embree_space_create(void) {
                               "instrumentation, not a tuning parameter: count rays, nodes "
                               "visited and triangles tested (custom backend; slows queries)") >= 0;
   /* The per-frame update of an animated scene (appended: the Table 3.1 indices stay). */
-  ok &= tt_space_add_nom_string(s, "updateMethod", updates, 2, TT__EMBREE_UPDATE_REBUILD,
+  ok &= tt_space_add_nom_string(s, "updateMethod", updates, 3, TT__EMBREE_UPDATE_REBUILD,
                                 "when an animated scene moves: rebuild (from scratch with "
-                                "these parameters) or refit (keep the tree, recompute its "
+                                "these parameters), refit (keep the tree, recompute its "
                                 "boxes; native: RTC_BUILD_QUALITY_REFIT on a dynamic scene "
-                                "for the moving meshes); nothing changes for a still scene") >= 0;
+                                "for the moving meshes) or instances (two-level: each rigid "
+                                "mesh an Embree instance of its own BVH, built once; only "
+                                "the top level rebuilt, deforming meshes refitted; native, "
+                                "custom falls back to it); nothing changes for a still "
+                                "scene") >= 0;
   ok &= tt_space_add_int(s, "refitInterval", 0, 64, 0,
-                         "refit: build from scratch every this many updates (0: never)") >= 0;
+                         "refit, instances: build from scratch every this many updates "
+                         "(0: never)") >= 0;
   ok &= tt_space_add_float(s, "refitSahGrowth", 0.0, 8.0, 0.0, 0,
                            "refit: build from scratch once the refitted tree's SAH cost "
                            "exceeds this many times its cost when built (0: never; custom "
@@ -176,15 +182,16 @@ tt_space *tt__embree_space_create(void) {
   static const char *const update_params[] = {"updateMethod", "refitInterval", "refitSahGrowth"};
   for (size_t i = 0; ok && i < sizeof update_params / sizeof update_params[0]; i++)
     ok &= tt_space_set_tunable(s, (size_t)tt_space_find(s, update_params[i]), 0) == TT_OK;
-  for (size_t i = 0; ok && i < sizeof tt__custom_only / sizeof tt__custom_only[0]; i++) {
-    size_t k = (size_t)tt_space_find(s, tt__custom_only[i].name);
+  for (size_t i = 0; ok && i < sizeof tt__embree_custom_only / sizeof tt__embree_custom_only[0];
+       i++) {
+    size_t k = (size_t)tt_space_find(s, tt__embree_custom_only[i].name);
     ok &= tt_space_add_condition(s, k, "backend", custom, 1) == TT_OK &&
           tt_space_add_condition(s, k, "compact", no, 1) == TT_OK;
   }
-  static const char *const refit[] = {"refit"};
+  static const char *const refit[] = {"refit", "instances"};
   if (ok)
     ok &= tt_space_add_condition(s, (size_t)tt_space_find(s, "refitInterval"), "updateMethod",
-                                 refit, 1) == TT_OK &&
+                                 refit, 2) == TT_OK &&
           tt_space_add_condition(s, (size_t)tt_space_find(s, "refitSahGrowth"), "updateMethod",
                                  refit, 1) == TT_OK;
   if (!ok) {
@@ -213,18 +220,18 @@ tt_space *tt__embree_space_create(void) {
 
 /* Decodes by name, so the decoding survives reordering of the space. */
 void tt__embree_settings_from_config(const tt_config *c, tt__embree_settings *o) {
-  o->quality = (int)tt_config_get_int(c, "quality", TT__DEF_QUALITY);
-  o->branching_factor = (int)tt_config_get_int(c, "branchingFactor", TT__DEF_BF);
-  o->max_depth = (int)tt_config_get_int(c, "maxDepth", TT__DEF_MAX_DEPTH);
-  o->sah_block_size = (int)tt_config_get_int(c, "sahBlockSize", TT__DEF_SAH_BLOCK);
-  o->min_leaf_size = (int)tt_config_get_int(c, "minLeafSize", TT__DEF_MIN_LEAF);
-  o->max_leaf_size = (int)tt_config_get_int(c, "maxLeafSize", TT__DEF_MAX_LEAF);
-  o->trav_cost = (float)tt_config_get_float(c, "travcost", TT__DEF_TRAV_COST);
-  o->int_cost = (float)tt_config_get_float(c, "intcost", TT__DEF_INT_COST);
+  o->quality = (int)tt_config_get_int(c, "quality", TT__EMBREE_DEF_QUALITY);
+  o->branching_factor = (int)tt_config_get_int(c, "branchingFactor", TT__EMBREE_DEF_BF);
+  o->max_depth = (int)tt_config_get_int(c, "maxDepth", TT__EMBREE_DEF_MAX_DEPTH);
+  o->sah_block_size = (int)tt_config_get_int(c, "sahBlockSize", TT__EMBREE_DEF_SAH_BLOCK);
+  o->min_leaf_size = (int)tt_config_get_int(c, "minLeafSize", TT__EMBREE_DEF_MIN_LEAF);
+  o->max_leaf_size = (int)tt_config_get_int(c, "maxLeafSize", TT__EMBREE_DEF_MAX_LEAF);
+  o->trav_cost = (float)tt_config_get_float(c, "travcost", TT__EMBREE_DEF_TRAV_COST);
+  o->int_cost = (float)tt_config_get_float(c, "intcost", TT__EMBREE_DEF_INT_COST);
   o->is_static = (int)tt_config_get_int(c, "static", 0);
   o->compact = (int)tt_config_get_int(c, "compact", 0);
   o->robust = (int)tt_config_get_int(c, "robust", 0);
-  o->backend = (int)tt_config_get_int(c, "backend", TT__DEF_BACKEND);
+  o->backend = (int)tt_config_get_int(c, "backend", TT__EMBREE_DEF_BACKEND);
   o->counters = (int)tt_config_get_int(c, "counters", 0);
   o->update_method = (int)tt_config_get_int(c, "updateMethod", TT__EMBREE_UPDATE_REBUILD);
   o->refit_interval = (int)tt_config_get_int(c, "refitInterval", 0);
@@ -236,11 +243,13 @@ int tt__embree_custom_only_changed(const tt_config *config, char *buf, size_t si
   int n = 0;
   size_t used = 0;
   if (size) buf[0] = '\0';
-  for (size_t i = 0; i < sizeof tt__custom_only / sizeof tt__custom_only[0]; i++) {
-    double v = tt_config_get_float(config, tt__custom_only[i].name, tt__custom_only[i].def);
-    if (v == tt__custom_only[i].def) continue;
+  for (size_t i = 0; i < sizeof tt__embree_custom_only / sizeof tt__embree_custom_only[0]; i++) {
+    double v =
+        tt_config_get_float(config, tt__embree_custom_only[i].name, tt__embree_custom_only[i].def);
+    if (v == tt__embree_custom_only[i].def) continue;
     if (used < size) {
-      int w = snprintf(buf + used, size - used, "%s%s", n ? ", " : "", tt__custom_only[i].name);
+      int w =
+          snprintf(buf + used, size - used, "%s%s", n ? ", " : "", tt__embree_custom_only[i].name);
       if (w > 0) used += (size_t)w;
     }
     n++;

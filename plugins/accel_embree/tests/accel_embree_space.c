@@ -159,10 +159,11 @@ static void test_space(const tt_space *space) {
     CHECK(tt_space_is_tunable(space, i) && tt_space_condition_count(space, i) == 0);
   }
   /* the per-frame update of animated scenes, appended after counters: updateMethod
-   * (rebuild by default) always acts; its refit schedule only with refit. None of the three
+   * (rebuild by default; refit; instances) always acts; refitInterval with refit and
+   * instances, refitSahGrowth (the custom tree's SAH) with refit only. None of the three
    * is tunable: a tuning pass measures no update, so a tuner would search noise. */
   int um = tt_space_find(space, "updateMethod");
-  CHECK(um == 13 && tt_space_nom_count(space, (size_t)um) == 2 &&
+  CHECK(um == 13 && tt_space_nom_count(space, (size_t)um) == 3 &&
         tt_space_default(space, (size_t)um).index == 0);
   CHECK(!tt_space_is_tunable(space, (size_t)um) &&
         tt_space_condition_count(space, (size_t)um) == 0);
@@ -176,8 +177,12 @@ static void test_space(const tt_space *space) {
           !tt_config_is_active(cc, (size_t)i));
     CHECK(tt_config_set_string(cc, "updateMethod", "refit") == TT_OK &&
           tt_config_is_active(cc, (size_t)i));
+    CHECK(tt_config_set_string(cc, "updateMethod", "instances") == TT_OK &&
+          tt_config_is_active(cc, (size_t)i) == (k == 0));
     CHECK(tt_space_default(space, (size_t)i).f == 0.0);
   }
+  CHECK(tt_config_set_string(cc, "updateMethod", "instances") == TT_OK &&
+        tt_config_get_int(cc, "updateMethod", -1) == 2);
   tt_config_destroy(cc);
   /* constraint texts are published */
   CHECK_CONTAINS(json, "minLeafSize <= maxLeafSize");
