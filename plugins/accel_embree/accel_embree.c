@@ -432,7 +432,7 @@ static tt_status tt__embree_update(tt_accel *acc, tt_accel_update_stats *out) {
   if (!rebuild && acc->inst) {
     s = tt__embree_inst_update(acc->inst);
   } else if (!rebuild && acc->bvh) {
-    sah = tt__embree_custom_refit(acc->source, acc->bvh);
+    sah = tt__embree_custom_refit(acc->source, acc->bvh, g_host);
     /* the growth test needs the refitted cost, so a rebuild it asks for comes after */
     if (st->refit_sah_growth > 0.0f && acc->sah_built > 0.0 &&
         sah > (double)st->refit_sah_growth * acc->sah_built)

@@ -73,8 +73,11 @@ tt_status tt__embree_custom_build(const tt_scene *scene, const tt__embree_settin
 void tt__embree_custom_free(struct tt__embree_bvh *bvh);
 /* Refits a custom tree to the scene's current positions: every leaf's triangle data is
  * recomputed from the mesh and every box set bottom-up to the union of its children (the
- * topology stays). Returns the tree's SAH cost after the refit (as the build reports it). */
-double tt__embree_custom_refit(const tt_scene *scene, struct tt__embree_bvh *bvh);
+ * topology stays). Subtrees are refitted in parallel through host->parallel_for (NULL:
+ * one thread), split by the tree's shape only, so the result is the same whatever the thread
+ * count. Returns the tree's SAH cost after the refit (as the build reports it). */
+double tt__embree_custom_refit(const tt_scene *scene, struct tt__embree_bvh *bvh,
+                               const tt_host *host);
 
 /* ---- native backend, shared by accel_embree.c and accel_embree_inst.c ---- */
 

@@ -640,7 +640,101 @@ static void tt__embree_refit_ref(tt__embree_flat *f, const tt__embree_bvh *bvh, 
   f->area_inner += tt__embree_area(lo, hi);
 }
 
-double tt__embree_custom_refit(const tt_scene *scene, tt__embree_bvh *bvh) {
+/* Parallel refit: the subtrees at depth `depth` of the tree (and the leaves above it), in
+ * depth-first order, are refitted as independent tasks; the nodes above them afterwards,
+ * from the tasks' boxes. The split depends on the tree only, never on the thread count, so
+ * the boxes and the SAH sums (added task by task in that order) are the same bits whatever
+ * --threads says. */
+#define TT__EMBREE_REFIT_TASKS 64 /* at least this many subtrees, where the tree has them */
+
+typedef struct tt__embree_refit_task {
+  uint32_t ref;
+  float box[6];
+  double area_inner, area_leaf_tris;
+} tt__embree_refit_task;
+
+typedef struct tt__embree_refit_job {
+  const tt__embree_flat *proto; /* scene, N, robust */
+  const tt__embree_bvh *bvh;
+  tt__embree_refit_task *task;
+  uint32_t count, next, depth;
+} tt__embree_refit_job;
+
+/* Child slots of inner node `ref`: their references and box rows. */
+static const uint32_t *tt__embree_refit_children(const tt__embree_bvh *bvh, int N, uint32_t ref,
+                                                 float **rows) {
+  *rows = (float *)(N == 2 ? (char *)bvh->arena + (uint64_t)ref * 64u
+                           : (char *)bvh->nodes + (uint64_t)ref * (uint64_t)(32 * N));
+  return (const uint32_t *)(*rows + 6 * N);
+}
+
+/* Counts (task == NULL) or lists the tasks of a split at `depth` below `ref`. */
+static uint32_t tt__embree_refit_split(tt__embree_refit_job *job, uint32_t ref, uint32_t d) {
+  const int N = job->proto->N;
+  if (d == job->depth || (ref & TT__EMBREE_REF_LEAF)) {
+    if (job->task) job->task[job->count].ref = ref;
+    return job->count++, 1;
+  }
+  float *rows;
+  const uint32_t *child = tt__embree_refit_children(job->bvh, N, ref, &rows);
+  uint32_t n = 0;
+  for (int i = 0; i < N; i++)
+    if (rows[N == 2 ? i : i] <= rows[N == 2 ? 2 + i : N + i]) /* lower x <= upper x: a child */
+      n += tt__embree_refit_split(job, child[i], d + 1);
+  return n;
+}
+
+/* Refits tasks [begin, end) (a parallel_for chunk, or all of them). */
+static void tt__embree_refit_tasks(void *ctx, uint64_t begin, uint64_t end, uint32_t thread) {
+  (void)thread;
+  tt__embree_refit_job *job = ctx;
+  for (uint64_t i = begin; i < end; i++) {
+    tt__embree_flat f = *job->proto;
+    tt__embree_refit_task *t = &job->task[i];
+    tt__embree_refit_ref(&f, job->bvh, t->ref, t->box, t->box + 3);
+    t->area_inner = f.area_inner;
+    t->area_leaf_tris = f.area_leaf_tris;
+  }
+}
+
+/* The nodes above the split, from the tasks' boxes (same order as tt__embree_refit_split). */
+static void tt__embree_refit_top(tt__embree_refit_job *job, tt__embree_flat *f, uint32_t ref,
+                                 uint32_t d, float lo[3], float hi[3]) {
+  if (d == job->depth || (ref & TT__EMBREE_REF_LEAF)) {
+    const tt__embree_refit_task *t = &job->task[job->next++];
+    f->area_inner += t->area_inner;
+    f->area_leaf_tris += t->area_leaf_tris;
+    memcpy(lo, t->box, 3 * sizeof(float));
+    memcpy(hi, t->box + 3, 3 * sizeof(float));
+    return;
+  }
+  const int N = f->N;
+  float *rows;
+  const uint32_t *child = tt__embree_refit_children(job->bvh, N, ref, &rows);
+  for (int k = 0; k < 3; k++) {
+    lo[k] = INFINITY;
+    hi[k] = -INFINITY;
+  }
+  for (int i = 0; i < N; i++) {
+    float *clo[3], *cup[3];
+    for (int k = 0; k < 3; k++) {
+      clo[k] = N == 2 ? &rows[4 * k + i] : &rows[(2 * k) * N + i];
+      cup[k] = N == 2 ? &rows[4 * k + 2 + i] : &rows[(2 * k + 1) * N + i];
+    }
+    if (!(*clo[0] <= *cup[0])) continue;
+    float b[6];
+    tt__embree_refit_top(job, f, child[i], d + 1, b, b + 3);
+    for (int k = 0; k < 3; k++) {
+      *clo[k] = b[k];
+      *cup[k] = b[3 + k];
+      lo[k] = fminf(lo[k], b[k]);
+      hi[k] = fmaxf(hi[k], b[3 + k]);
+    }
+  }
+  f->area_inner += tt__embree_area(lo, hi);
+}
+
+double tt__embree_custom_refit(const tt_scene *scene, tt__embree_bvh *bvh, const tt_host *host) {
   if (!bvh || bvh->root == TT__EMBREE_REF_NONE) return 0.0;
   tt__embree_flat f;
   memset(&f, 0, sizeof f);
@@ -648,7 +742,30 @@ double tt__embree_custom_refit(const tt_scene *scene, tt__embree_bvh *bvh) {
   f.N = bvh->width;
   f.robust = bvh->robust;
   float lo[3], hi[3];
-  tt__embree_refit_ref(&f, bvh, bvh->root, lo, hi);
+  /* the shallowest split with enough subtrees (the tree's shape decides, not the threads) */
+  tt__embree_refit_job job = {.proto = &f, .bvh = bvh};
+  uint32_t prev = 0;
+  for (job.depth = 0; job.depth < 24; job.depth++) {
+    job.count = 0;
+    uint32_t n = tt__embree_refit_split(&job, bvh->root, 0);
+    if (n >= TT__EMBREE_REFIT_TASKS || (job.depth > 0 && n == prev)) break;
+    prev = n;
+  }
+  job.count = 0;
+  tt__embree_refit_split(&job, bvh->root, 0);
+  job.task = malloc(sizeof *job.task * job.count);
+  if (!job.task) { /* no memory for the task list: refit in one pass */
+    tt__embree_refit_ref(&f, bvh, bvh->root, lo, hi);
+  } else {
+    job.count = 0;
+    tt__embree_refit_split(&job, bvh->root, 0);
+    if (!host || !host->parallel_for || job.count < 2 ||
+        host->parallel_for(job.count, 1, tt__embree_refit_tasks, &job) != TT_OK)
+      tt__embree_refit_tasks(&job, 0, job.count, 0);
+    job.next = 0;
+    tt__embree_refit_top(&job, &f, bvh->root, 0, lo, hi);
+    free(job.task);
+  }
   double root_area = tt__embree_area(lo, hi);
   return root_area > 0.0 ? (f.area_inner + f.area_leaf_tris) / root_area : 0.0;
 }
