@@ -120,6 +120,32 @@ def hybrid_speed_vs_roofline(ctx):
     return [_png(ctx, "hybrid/speed_vs_roofline.png")]
 
 
+REMEASURED = os.path.join(ROOT, "tools", "hybrid", "figures", "remeasured", "remeasure.json")
+
+
+def hybrid_remeasured(ctx):
+    """The re-measured rooflines (tools/hybrid/remeasure.py): the committed full run's chart
+    redrawn from its JSON, and the tool itself at --quick settings on two scenes of the
+    committed baseline (trained on veach-ajar, tested on one killeroos camera, 32x32)."""
+    from tools.hybrid import remeasure
+    pngs = []
+    if os.path.exists(REMEASURED):
+        with open(REMEASURED) as f:
+            remeasure.draw(json.load(f), ctx.path("hybrid", "roofline_speed.png"))
+        pngs.append(_png(ctx, "hybrid/roofline_speed.png"))
+    w = os.path.join(ctx.work, "remeasure")
+    shutil.rmtree(w, ignore_errors=True)
+    db = os.path.join(w, "b.db")
+    ctx.run([PY, "-m", "tools.hybrid.baseline"] + ctx.host_args() +
+            ["--db", db, "--work", os.path.join(w, "w"), "--scenes", "killeroos,veach-ajar",
+             "--restore", os.path.join(ROOT, "tools", "hybrid", "data", "baseline.sql.xz")])
+    ctx.run([PY, "-m", "tools.hybrid.remeasure"] + ctx.host_args() +
+            ["--db", db, "--work", os.path.join(w, "rm"), "--out", os.path.join(w, "out"),
+             "--train-scenes", "veach-ajar", "--test-scenes", "killeroos", "--quick", "--nice", "0"])
+    shutil.copyfile(os.path.join(w, "out", "roofline_speed.png"), ctx.path("quick", "hybrid_roofline_speed.png"))
+    return pngs + [_png(ctx, "quick/hybrid_roofline_speed.png")]
+
+
 def accel_render_split(ctx):
     """tools/accel/render_split.py on the committed render-bench output."""
     ctx.run([PY, "-m", "tools.accel.render_split",
@@ -299,7 +325,7 @@ def integrator_sampler_choice(ctx):
     return pngs
 
 
-QUICK = [hybrid_figures, hybrid_speed_vs_roofline, accel_render_split, tuning_analysis,
+QUICK = [hybrid_figures, hybrid_speed_vs_roofline, hybrid_remeasured, accel_render_split, tuning_analysis,
          tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_speed,
          integrator_error_vs_time, integrator_sampler_choice]
 
