@@ -259,8 +259,10 @@ def fmt(x, spec="{:.3f}"):
 def markdown(res):
     st = res["settings"]
     loads = res["load_during_measurement"]
+    missing = (f"; {res['not_measured']} more states were not measured (the run was stopped "
+               f"or limited), so the table covers the cameras measured" if res.get("not_measured") else "")
     out = [f"Held-out protocol: trained on every camera of {', '.join(st['train'])}; tested on "
-           f"every camera of {', '.join(st['test'])} ({res['states']} states). Each state's "
+           f"the cameras of {', '.join(st['test'])} ({res['states']} states measured{missing}). Each state's "
            f"candidates measured side by side in one host process, {st['rounds']} rounds "
            f"alternating order, paired ratios to the default's cost in the same round, medians; "
            f"CPU time of one thread, {st['res'] or 'the baseline resolution'}, nice {st['nice']}, "
@@ -273,7 +275,7 @@ def markdown(res):
                 f"fraction of the re-measured roofline)", "",
                 "| scene | cameras | roofline / default (held-out rounds) | default is the roofline "
                 "| search's best / default: baseline, re-measured | "
-                + " | ".join(LABELS[m] for m in models) + " | default |",
+                + " | ".join(LABELS[m] for m in models) + " | default (no search) |",
                 "|---|---|---|---|---|" + "---|" * (len(models) + 1)]
         for sc, e in per.items():
             cells = []

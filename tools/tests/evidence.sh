@@ -25,7 +25,7 @@ for f in hybrid/fig3_17_speedup_render.png hybrid/speed_vs_roofline.png accel/re
          quick/pssmlt_tuning_cornell-box.png quick/pssmlt_equal_mutations.png \
          quick/pssmlt_error_vs_time.png quick/pssmlt_sigma_sweep.png quick/gains_cornell-box.png \
          quick/taa_speed.png quick/error_vs_time_cornell.png taa/speed_vs_rmse.png \
-         charts/sampler_choice.png quick/hybrid_roofline_speed.png; do
+         charts/sampler_choice.png quick/hybrid_roofline_speed.png hybrid/roofline_speed.png; do
   check '[ "$(head -c 4 "$dir/page/$f" | tail -c 3)" = "PNG" ]'
 done
 # every chapter, the outcome table, no failed step
@@ -33,6 +33,8 @@ for id in ch3 ch4 ch5 outcomes quick-pass ch3-hybrid; do check "grep -q 'id=\"$i
 check '! grep -q "FAILED" "$page"'
 # the hybrid table is read from the committed summary (nn on build+render: 2.51x)
 check 'grep -q "2.51x" "$page"'
+# the re-measured rooflines from their committed JSON (nn on build+render, all test states)
+check 'grep -q "build+render, all</td><td>28</td><td>0.548 (0.558)</td><td>0 of 28</td><td>0.516 / 0.550</td><td>1.94x / 0.967" "$page"'
 # and the TAA test set from its committed JSON (c12 on cornell-box at 1 spp: 0.90 x VCTAA's RMSE)
 check 'grep -q "cornell-box-spp1</td><td>0.0177 / 0.0090 / 0.792</td><td>0.90 / 1.33 / 0.960" "$page"'
 
