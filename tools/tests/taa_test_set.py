@@ -13,7 +13,10 @@
 - moving_report.py on a made-up sequence (static camera, 4 pixels uncovered every frame):
   the disocclusion region is those pixels grown by one (16 of 64), the region errors are
   measured there only (an error outside it does not count), the ratios to VCTAA and goal
-  flags follow; a sequence without the prevdepth AOV is refused naming the file and field."""
+  flags follow; a sequence without the prevdepth AOV is refused naming the file and field;
+- select_val.py's rule on a made-up validation: most goals met first, then the smallest
+  network within 1% of the best geo-mean RMSE (a smaller one 0.5% behind is chosen, 1.5%
+  behind is not; one that meets fewer goals is not, however good its RMSE)."""
 import json
 import os
 import subprocess
@@ -199,8 +202,44 @@ def test_moving_report(tmp):
           f"a sequence without prevdepth is refused naming file and field ({r.stderr.strip()[:200]})")
 
 
+def test_select(tmp):
+    os.makedirs(tmp)
+    big = os.path.join(root, "plugins", "post_taa", "post_taa_c12.ttw")
+    small = os.path.join(root, "plugins", "post_taa", "post_taa_c6.ttw")
+
+    def evaluation(b_factor):
+        # two sequences; vctaa RMSE 0.02 / temporal 0.01 on both
+        res = []
+        for i, sq in enumerate(("a-spp1", "a-spp8")):
+            ms = [("vctaa", 0.02, 0.01), ("big", 0.014, 0.009), ("small", 0.014 * b_factor, 0.009),
+                  ("tiny", 0.010, 0.011 if i else 0.009)]   # tiny misses temporal on one
+            res.append({"sequence": sq, "spp": 1, "frames": 24,
+                        "methods": [{"method": m, "rmse": r, "temporal": t, "brightness": 1.0}
+                                    for m, r, t in ms]})
+        path = os.path.join(tmp, f"eval{b_factor}.json")
+        json.dump(res, open(path, "w"))
+        return path
+
+    nets = [f"big={big}", f"small={small}", f"tiny={small}"]
+    for factor, want in ((1.005, "small"), (1.015, "big")):
+        out = os.path.join(tmp, "sel.json")
+        r = run("tools.taa.select_val", evaluation(factor), *nets, "--json", out)
+        check(r.returncode == 0, f"select_val runs ({r.stderr.strip()[-300:]})")
+        if r.returncode:
+            return
+        d = json.load(open(out))
+        check(d["chosen"] == want, f"small network {100 * (factor - 1):.1f}% behind: {want} "
+              f"chosen ({d['chosen']})")
+        tiny = next(x for x in d["rows"] if x["net"] == "tiny")
+        check(tiny["met"] == 1 and d["rows"][-1]["net"] == "tiny",
+              "fewer goals met ranks last despite the lowest RMSE")
+    r = run("tools.taa.select_val", evaluation(1.0), "big=" + os.path.join(tmp, "none.ttw"))
+    check(r.returncode != 0 and "none.ttw" in r.stderr, "a missing weights file is refused naming it")
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
+        test_select(os.path.join(tmp, "sel"))
         test_make_test_set(os.path.join(tmp, "scenes"))
         test_report(tmp)
         test_sets(os.path.join(tmp, "sets"))
