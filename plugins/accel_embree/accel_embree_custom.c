@@ -646,6 +646,10 @@ static void tt__embree_refit_ref(tt__embree_flat *f, const tt__embree_bvh *bvh, 
  * the boxes and the SAH sums (added task by task in that order) are the same bits whatever
  * --threads says. */
 #define TT__EMBREE_REFIT_TASKS 64 /* at least this many subtrees, where the tree has them */
+/* Below this many triangle slots the refit stays on the calling thread: waking the workers
+ * costs more than the whole refit (animated-cornell, 90 triangles: median update 0.056 ms,
+ * but frames of milliseconds on a loaded machine when they were woken). */
+#define TT__EMBREE_REFIT_PARALLEL 8192
 
 typedef struct tt__embree_refit_task {
   uint32_t ref;
@@ -760,6 +764,7 @@ double tt__embree_custom_refit(const tt_scene *scene, tt__embree_bvh *bvh, const
     job.count = 0;
     tt__embree_refit_split(&job, bvh->root, 0);
     if (!host || !host->parallel_for || job.count < 2 ||
+        bvh->slot_count < TT__EMBREE_REFIT_PARALLEL ||
         host->parallel_for(job.count, 1, tt__embree_refit_tasks, &job) != TT_OK)
       tt__embree_refit_tasks(&job, 0, job.count, 0);
     job.next = 0;

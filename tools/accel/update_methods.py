@@ -1,7 +1,8 @@
 """Per-frame acceleration-structure update time and render time of accel_embree's update
 methods side by side: build from scratch every frame (rebuild), refit every frame, and the
 two-level update (instances: each rigid mesh an Embree instance of its own BVH, only the top
-level rebuilt), on scenes/animated-cornell and on a scene of many rigid objects.
+level rebuilt), on scenes/animated-cornell, scenes/animated-stress (64 small rigid bodies and
+a cloth) and a generated scene of many rigid objects of many triangles.
 
 The many-object scene is written by this tool (--objects N spheres of --sphere-tris
 triangles each, every one turning and moving on its own keyframed path over 2 s, above a
@@ -112,7 +113,8 @@ def many_objects_scene(path, objects, sphere_tris, seed=7):
 def main(argv=None):
     p = cli.parser(__doc__)
     p.add_argument("--scene", action="append",
-                   help="scene(s) to measure (default: animated-cornell and the generated one)")
+                   help="scene(s) to measure (default: animated-cornell, animated-stress and the "
+                        "generated one)")
     p.add_argument("--objects", type=int, default=200, help="rigid objects of the generated scene")
     p.add_argument("--sphere-tris", type=int, default=1280,
                    help="triangles per object (20 * 4^k, rounded)")
@@ -134,7 +136,8 @@ def main(argv=None):
             gen = os.path.join(tmp, "many_objects.json")
             tris = many_objects_scene(gen, args.objects, args.sphere_tris)
             print(f"generated scene: {args.objects} rigid objects, {tris} triangles")
-            scenes = [os.path.join(ROOT, "scenes", "animated-cornell", "scene.json"), gen]
+            scenes = [os.path.join(ROOT, "scenes", name, "scene.json")
+                      for name in ("animated-cornell", "animated-stress")] + [gen]
         for scene in scenes:
             frames = {k: [] for k in labels}
             for r in range(args.rounds):
