@@ -76,7 +76,7 @@ static void tt__print_task(FILE *out, unsigned task) {
 
 static void tt__print_head(FILE *out) {
   fprintf(out,
-          "usage: %s [options] [--plugin NAME]... scene.json|scene.pbrt\n\n"
+          "usage: %s [options] [--plugin NAME]... scene.json|scene.pbrt|scene.gltf\n\n"
           "Renders a scene with swappable plugins (defaults: accel_embree, integrator_pt).\n\n",
           tt__prog());
 }

@@ -24,6 +24,8 @@ PACKAGES=(
   libopencolorio-dev                          # display transform for PNG
   libcjson-dev                                # scene.json, parameter spaces, run records
   libassimp-dev                               # OBJ/PLY/glTF mesh import
+  assimp-testmodels                           # glTF-Sample-Models' simple_skin, AnimatedMorphCube:
+                                              # core/tests/gltf_anim.c, gltf_anim_render.c
   libsqlite3-dev                              # tuning database
   zlib1g-dev                                  # .ply.gz meshes in the pbrt importer
   python3-matplotlib                          # tools/tuning/ charts (tools/tests/tune_plot.sh)
@@ -45,7 +47,8 @@ PACKAGES=(
 )
 
 PEER_PACKAGES=(
-  blender                                     # Cycles references: tools/cycles/ (cycles_reference.py)
+  blender                                     # Cycles references: tools/cycles/ (cycles_reference.py);
+                                              # tools/scenes/blender_skinned.py (benchmark glTF)
   libopenexr-dev libgoogle-glog-dev           # pbrt-v3 built as the chapter-4 anchor:
                                               # tools/pssmlt/build_pbrt_v3.sh
 )

@@ -224,7 +224,7 @@ static void test_files(void) {
   st = tt_scene_load("scenes/x.obj", &s);
   CHECK(st == TT_ERR_UNSUPPORTED && s == NULL);
   CHECK_CONTAINS(tt_last_error(),
-                 "scenes/x.obj: unsupported scene format (expected .json or .pbrt)");
+                 "scenes/x.obj: unsupported scene format (expected .json, .pbrt, .gltf or .glb)");
 
   st = tt_scene_load("/nonexistent/dir/scene.json", &s);
   CHECK(st == TT_ERR_IO && s == NULL);

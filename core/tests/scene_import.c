@@ -273,7 +273,9 @@ static void test_errors(void) {
       {"{\"version\": 1, \"import\": \"\"}", TT_ERR_PARSE,
        "w.json: import: expected a non-empty string", NULL},
       {"{\"version\": 1, \"import\": \"mesh.obj\"}", TT_ERR_UNSUPPORTED,
-       "w.json: import: unsupported scene format \"mesh.obj\" (expected .pbrt or .json)", NULL},
+       "w.json: import: unsupported scene format \"mesh.obj\" (expected .pbrt, .json, .gltf or "
+       ".glb)",
+       NULL},
       /* a parse error inside the imported pbrt keeps its file:line */
       {"{\"version\": 1, \"import\": \"broken.pbrt\"}", TT_ERR_PARSE,
        "w.json: import: ", "broken.pbrt:3:"},

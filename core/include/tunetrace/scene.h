@@ -136,8 +136,9 @@ typedef struct tt_render_settings {
   double time_budget_s; /* 0: no budget */
 } tt_render_settings;
 
-/* Loads a scene file (scene.json or .pbrt, chosen by extension; a scene.json may "import"
- * one pbrt/scene.json file and override its camera and settings). On error returns
+/* Loads a scene file (scene.json, .pbrt, or glTF 2.0 .gltf/.glb with its animation, chosen
+ * by extension; a scene.json may "import" one pbrt/scene.json/glTF file and override its
+ * camera and settings). On error returns
  * TT_ERR_IO / TT_ERR_PARSE and a message naming the file, the JSON path and what was
  * expected. `*out` is owned by the caller: free with tt_scene_destroy. Thread-safe. */
 TT_API tt_status tt_scene_load(const char *path, tt_scene **out);

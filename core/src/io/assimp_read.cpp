@@ -6,6 +6,7 @@
 #include <assimp/BaseImporter.h>
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <cstdio>
@@ -94,6 +95,23 @@ extern "C" tt__assimp_result tt__assimp_read(const char *file, unsigned flags, t
   } catch (...) {
     if (n) snprintf(why, n, "unknown exception in assimp");
     delete h;
+    return TT__ASSIMP_FAILED;
+  }
+}
+
+extern "C" tt__assimp_result tt__assimp_validate(tt__assimp *handle, char *why, size_t n) {
+  if (n) why[0] = '\0';
+  try {
+    if (handle->importer.ApplyPostProcessing(aiProcess_ValidateDataStructure)) return TT__ASSIMP_OK;
+    if (n) snprintf(why, n, "%s", handle->importer.GetErrorString());
+    return TT__ASSIMP_FAILED;
+  } catch (const std::bad_alloc &) {
+    return TT__ASSIMP_OUT_OF_MEMORY;
+  } catch (const std::exception &e) {
+    if (n) snprintf(why, n, "%s", e.what());
+    return TT__ASSIMP_FAILED;
+  } catch (...) {
+    if (n) snprintf(why, n, "unknown exception in assimp");
     return TT__ASSIMP_FAILED;
   }
 }

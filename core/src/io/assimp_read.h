@@ -34,6 +34,12 @@ typedef enum tt__assimp_result {
 tt__assimp_result tt__assimp_read(const char *file, unsigned flags, tt__assimp **handle,
                                   const struct aiScene **scene, char *why, size_t n);
 
+/* Runs assimp's data-structure validation (aiProcess_ValidateDataStructure) on an import,
+ * after the caller has checked what it words better itself (key order); TT__ASSIMP_FAILED
+ * with the reason in `why` when the scene is inconsistent (the import is then unusable:
+ * free it). */
+tt__assimp_result tt__assimp_validate(tt__assimp *handle, char *why, size_t n);
+
 /* Frees an import and its scene. NULL is ignored. */
 void tt__assimp_free(tt__assimp *handle);
 

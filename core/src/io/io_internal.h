@@ -19,6 +19,16 @@
 tt_status tt__mesh_import(const char *file, const char *base_name, int split, const char *where,
                           tt__mesh_data **out, uint32_t *count);
 
+/* A .gltf must be a JSON object, a .glb a GLB container whose chunks lie inside it
+ * (mesh_import.c); checked before assimp reads the file. Other extensions pass. */
+tt_status tt__gltf_check(const char *file, const char *where);
+
+/* Loads a glTF 2.0 file (.gltf, .glb) as a scene with its node hierarchy, animation (node
+ * TRS channels, morph target weights), skins, materials and camera (gltf_scene.c).
+ * `imported`: the scene is wrapped by a scene.json "import", which brings its own lights;
+ * a file loaded on its own without lights or emitters gets a white environment. */
+tt_status tt__scene_load_gltf(const char *path, int imported, tt_scene **out);
+
 /* Reads and loads a scene.json file with its own directory as the asset base; depth 0 for
  * the scene being loaded, 1 for a scene.json imported by it (scene_json.c). */
 tt_status tt__scene_load_json_file(const char *path, int depth, tt_scene **out);

@@ -311,7 +311,7 @@ static tt_status tt__glb_check(const char *file, const char *where) {
 /* A .gltf must be a JSON object (glTF's top level); a .glb a GLB container. Checked before
  * assimp so that content of another format gets a message saying what was expected (the
  * glTF readers then check the rest). */
-static tt_status tt__gltf_check(const char *file, const char *where) {
+tt_status tt__gltf_check(const char *file, const char *where) {
   if (tt__has_ext(file, ".glb")) return tt__glb_check(file, where);
   if (!tt__has_ext(file, ".gltf")) return TT_OK;
   char *text = NULL;

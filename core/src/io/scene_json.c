@@ -1049,9 +1049,10 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
                      "cannot be nested (import the scene directly)",
                      rel);
   int pbrt = tt__has_ext(rel, ".pbrt"), json = tt__has_ext(rel, ".json");
-  if (!pbrt && !json)
+  int gltf = tt__has_ext(rel, ".gltf") || tt__has_ext(rel, ".glb");
+  if (!pbrt && !json && !gltf)
     return tt__jfail(c, TT_ERR_UNSUPPORTED, "import",
-                     "unsupported scene format \"%s\" (expected .pbrt or .json)", rel);
+                     "unsupported scene format \"%s\" (expected .pbrt, .json, .gltf or .glb)", rel);
   char *full = tt__resolve(c, rel);
   if (!full) return tt__jfail(c, TT_ERR_OUT_OF_MEMORY, "import", "out of memory");
   char why[256];
@@ -1081,7 +1082,9 @@ static tt_status tt__jimport(const tt__jctx *c, const cJSON *root, int depth, tt
     }
   }
   tt_scene *s = NULL;
-  st = pbrt ? tt__scene_load_pbrt(full, &s) : tt__scene_load_json_file(full, depth + 1, &s);
+  st = pbrt   ? tt__scene_load_pbrt(full, &s)
+       : gltf ? tt__scene_load_gltf(full, 1, &s)
+              : tt__scene_load_json_file(full, depth + 1, &s);
   if (st != TT_OK) {
     /* keep the imported loader's message (file:line or JSON path) behind ours */
     char inner[1024];

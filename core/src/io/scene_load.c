@@ -14,14 +14,17 @@ tt_status tt_scene_load_ex(const char *path, uint32_t flags, tt_scene **out) {
   return st;
 }
 
-/* Reads the file and hands it to the JSON loader with its directory as the asset base. */
+/* Picks the loader by suffix: pbrt-v4, glTF 2.0 (through assimp), else scene.json. */
 tt_status tt_scene_load(const char *path, tt_scene **out) {
   if (!out) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: out is NULL");
   *out = NULL;
   if (!path) return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_scene_load: path is NULL");
   if (tt__has_ext(path, ".pbrt")) return tt__scene_load_pbrt(path, out);
+  if (tt__has_ext(path, ".gltf") || tt__has_ext(path, ".glb"))
+    return tt__scene_load_gltf(path, 0, out);
   if (!tt__has_ext(path, ".json"))
     return tt_set_error(TT_ERR_UNSUPPORTED,
-                        "%s: unsupported scene format (expected .json or .pbrt)", path);
+                        "%s: unsupported scene format (expected .json, .pbrt, .gltf or .glb)",
+                        path);
   return tt__scene_load_json_file(path, 0, out);
 }

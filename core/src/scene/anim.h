@@ -116,4 +116,20 @@ uint64_t tt__scene_anim_hash(const tt_scene *scene, uint64_t h);
  * mesh when a pose is non-finite or beyond TT_SCENE_COORD_LIMIT. */
 tt_status tt__scene_anim_pose(tt_scene *scene, double time);
 
+/* Sets the skin of mesh record `m` (anim_skin.c): `joints` joints, each the node
+ * joint_node[j] (named joint_name[j] in messages when given) with its row-major inverse bind
+ * matrix inverse_bind[16 j]; `influences` (joint_index, joint_weight) pairs per vertex.
+ * TT_ERR_PARSE naming `where` when a joint is a missing node, a matrix is not finite and
+ * affine, or a vertex's weights are negative, name a missing joint or do not sum to 1 within
+ * 1%; the weights are stored normalised. */
+tt_status tt__mesh_anim_set_skin(tt_scene *scene, tt__mesh_anim *m, uint32_t joints,
+                                 const int32_t *joint_node, const char *const *joint_name,
+                                 const double *inverse_bind, uint32_t influences,
+                                 const uint32_t *joint_index, const float *joint_weight,
+                                 const char *where);
+
+/* Computes every node's world matrix at `time` into tt__anim_node.world (a loader placing
+ * what follows a node, e.g. a glTF camera, without posing the meshes). */
+void tt__scene_anim_pose_nodes(tt_scene *scene, double time);
+
 #endif /* TT_SCENE_ANIM_H */

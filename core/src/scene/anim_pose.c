@@ -167,6 +167,10 @@ static void tt__pose_nodes(tt__scene_anim *a, double time) {
   }
 }
 
+void tt__scene_anim_pose_nodes(tt_scene *s, double time) {
+  if (s->anim) tt__pose_nodes(s->anim, time);
+}
+
 /* Cofactor matrix of the upper 3x3 (the inverse transpose times det) and the determinant. */
 static double tt__cofactor(const double *m, double c[9]) {
   c[0] = m[5] * m[10] - m[6] * m[9];
