@@ -19,7 +19,10 @@
 #include <string.h>
 
 int tt__ctm_animated(const tt__pp *P) {
-  return memcmp(P->gs.ctm, P->gs.ctm_end, sizeof P->gs.ctm) != 0;
+  /* by value: -0 and 0 (one transform's rounding, not motion) are the same */
+  for (int i = 0; i < 16; i++)
+    if (P->gs.ctm[i] != P->gs.ctm_end[i]) return 1;
+  return 0;
 }
 
 /* 3x3 helpers on the upper-left block of a row-major 4x4 (a[3 * r + c]). */
