@@ -47,6 +47,7 @@ typedef struct tt__host_options {
   const char *tune_params; /* --tune-params A,B,...: search only these; NULL: the hint's or all */
   uint32_t iterations;     /* --iterations N; 0: TT_HOST_DEFAULT_ITERATIONS */
   uint32_t tune_spp;       /* --tune-spp N: spp per measurement; 0: 1 */
+  uint32_t tune_window;    /* --tune-window N: frames per measurement along a sequence; 0: 8 */
   uint32_t explore;        /* --explore N: random configurations instead of a tuner */
   uint32_t verify;         /* --verify N: default vs best side by side, N rounds */
   const char *db;          /* --db PATH; NULL: tt_tunedb_default_path() */

@@ -106,6 +106,13 @@ static const tt__option tt__table[] = {
      "e.g. PSSMLT's a_i and sigma_i, else all)"},
     {"--tune-spp", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(tune_spp), TT_LIMIT_TUNE_SPP,
      TT__TOPIC_TUNE, 0, 0, "samples per pixel of one measurement pass (default 1)"},
+    /* the range of --tune-spp, 1..65536, bounds a window of frames as well */
+    {"--tune-window", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(tune_window), TT_LIMIT_TUNE_SPP,
+     TT__TOPIC_TUNE, 0, 0,
+     "tuning along an animated sequence: frames per measurement\n"
+     "(default 8); each configuration runs N consecutive frames and\n"
+     "costs their mean accel update + render ms, so a refit\n"
+     "schedule is measured with the rebuild it starts from"},
     {"--explore", NULL, TT__ARG_ONE, "N", tt__set_u32, TT__AT(explore), TT_LIMIT_EXPLORE,
      TT__TOPIC_TUNE, 0, TT__MPI_TUNE | TT__MPI_EXPLORE,
      "measure N random configurations of the target's space (no\n"

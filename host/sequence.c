@@ -6,7 +6,7 @@
  * refit or rebuild) before the frame renders; the manifest records each update. The reference frame
  * is the same pose rendered at --reference-scale times the resolution per axis with
  * ordinary random sub-pixel positions, downsampled with a Blackman-Harris filter. */
-#include "sequence.h"
+#include "sequence_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -66,41 +66,6 @@ void tt__downsample_bh(const float *src, uint32_t scale, uint32_t w, uint32_t h,
   }
   free(tmp);
 }
-
-/* Everything one sequence run holds besides the session: the output names, the frame
- * buffers, the post-filter and the manifest. tt__seq_close frees it at any stage. */
-typedef struct tt__seq {
-  const tt__host_options *opt;
-  tt__session ses; /* scene, plugins, configurations, accel, integrator, film */
-  const tt_post_iface *pi;
-  const tt_config *pcfg; /* the post-filter's configuration */
-  tt_post *post;
-  const char *post_name;
-  uint64_t seed;
-  uint32_t spp;
-  char dir[4096];      /* output folder (--out-dir, or the folder of the --out pattern) */
-  const char *pattern; /* file name part of the --out pattern, or NULL */
-  uint32_t w, h, k;    /* frame size; k: --reference-scale (0: no reference) */
-  double fps;
-  int animated;     /* the scene moves: pose and accel update per frame */
-  int render_frame; /* the jittered frame is rendered (not only the reference) */
-  float *rgb, *ref_hi, *ref, *post_rgb, *motion, *prev_depth;
-  tt_film *ref_film;
-  FILE *manifest; /* memstream over mbuf: the manifest text so far */
-  char *mbuf, mpath[4096 + 32];
-  size_t mlen;
-  int entry_open;       /* a frame's manifest entry is started but not closed */
-  uint32_t done_frames; /* frames committed to the manifest */
-} tt__seq;
-
-/* One frame being rendered: its index, poses and jitter, what it has produced so far. */
-typedef struct tt__seq_frame {
-  uint32_t f, ji; /* frame index, index in the jitter cycle */
-  float jit[2];
-  tt_camera cam, prev; /* this frame's pose and the pose one frame interval earlier */
-  const float *depth;  /* the film's depth AOV (NULL when the frame was not rendered) */
-  double render_ms, ref_ms;
-} tt__seq_frame;
 
 /* What a sequence writes per frame. */
 typedef enum tt__seq_file {
@@ -403,6 +368,7 @@ static int tt__seq_create(tt__seq *s, const tt__host_options *opt) {
   rc = tt__seq_buffers(s);
   if (rc == TT_EXIT_OK) rc = tt__seq_manifest_open(s);
   if (rc == TT_EXIT_OK) tt__seq_log_start(s);
+  if (rc == TT_EXIT_OK) rc = tt__seq_tune_create(s);
   return rc;
 }
 
@@ -438,14 +404,20 @@ static void tt__seq_frame_begin(tt__seq *s, tt__seq_frame *fr, uint32_t f) {
 }
 
 /* The one place an animated scene moves: the scene posed at frame f's time and the accel
- * updated (refit or rebuild, as the accel's configuration says), recorded in the manifest. */
+ * updated (refit or rebuild, as the accel's configuration says; built from scratch with
+ * s->switch_config when tuning changes the configuration at this frame), recorded in the
+ * manifest and in s->update_ms. */
 static int tt__seq_update(tt__seq *s, const tt__seq_frame *fr) {
+  s->update_ms = 0;
   if (!s->animated) return TT_EXIT_OK;
   tt_accel_update_stats us = {.struct_size = sizeof us};
-  if (tt_session_set_time(s->ses.lib, fr->f / s->fps, 1.0 / s->fps, &us) != TT_OK) {
+  const tt_config *cfg = s->switch_config;
+  s->switch_config = NULL;
+  if (tt_session_set_time_config(s->ses.lib, fr->f / s->fps, 1.0 / s->fps, cfg, &us) != TT_OK) {
     tt__say("frame %u: %s\n", fr->f, tt_last_error());
     return TT_EXIT_FAILURE;
   }
+  s->update_ms = us.update_ms;
   fprintf(s->manifest, ", \"update\": \"%s\", \"update_ms\": %.3f",
           us.rebuilt ? "rebuild" : "refit", us.update_ms);
   if (us.sah_cost > 0) fprintf(s->manifest, ", \"sah_cost\": %.4f", us.sah_cost);
@@ -468,7 +440,7 @@ static int tt__seq_render_frame(tt__seq *s, tt__seq_frame *fr) {
     tt__say("frame %u: %s\n", fr->f, tt_last_error());
     return TT_EXIT_FAILURE;
   }
-  fr->render_ms = (host->clock_ns() - t0) * 1e-6;
+  fr->render_ms = s->render_ms = (host->clock_ns() - t0) * 1e-6;
   fr->depth = tt_film_aov_const(film, TT_AOV_DEPTH);
   memcpy(s->motion, tt_film_aov_const(film, TT_AOV_MOTION), px * 2 * sizeof(float));
   if (s->animated)
@@ -572,8 +544,9 @@ static int tt__seq_png(tt__seq *s, const tt__seq_frame *fr) {
 /* Step: frame f, with the stop held back so that it completes: pose and accel update, the
  * jittered frame, the reference, the post-filter, the PNG; its manifest entry closed and
  * the manifest committed. An exit code (a failure leaves the entry open: finish closes it). */
-static int tt__seq_step(tt__seq *s, uint32_t f) {
+int tt__seq_step(tt__seq *s, uint32_t f) {
   tt__seq_frame fr;
+  s->render_ms = 0;
   tt_default_host_hold_stop(1);
   tt__seq_frame_begin(s, &fr, f);
   int rc = tt__seq_update(s, &fr);
@@ -582,6 +555,7 @@ static int tt__seq_step(tt__seq *s, uint32_t f) {
   if (rc == TT_EXIT_OK) rc = tt__seq_post(s, &fr);
   if (rc == TT_EXIT_OK) rc = tt__seq_png(s, &fr);
   if (rc != TT_EXIT_OK) return rc;
+  if (s->frame_note) fputs(s->frame_note, s->manifest);
   fprintf(s->manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", fr.render_ms, fr.ref_ms);
   s->entry_open = 0;
   if (tt__seq_manifest_commit(s->mpath, s->manifest, &s->mbuf, &s->mlen)) rc = TT_EXIT_OUTPUT;
@@ -611,6 +585,7 @@ static int tt__seq_finish(tt__seq *s, int rc) {
 
 /* Frees what the sequence holds, at any stage. */
 static void tt__seq_close(tt__seq *s) {
+  tt__seq_tune_free(s);
   if (s->manifest) fclose(s->manifest);
   free(s->mbuf);
   if (s->post) s->pi->destroy(s->post);
@@ -639,8 +614,9 @@ int tt__run_sequence(const tt__host_options *opt) {
      * loading and accel build) ends the sequence here; the first frame is always completed,
      * as a still completes its first pass: exit 130 comes with what was rendered so far */
     if (f > opt->seq_first && s.ses.host->should_stop()) rc = TT_EXIT_INTERRUPTED;
-    else rc = tt__seq_step(&s, f);
+    else rc = s.tune ? tt__seq_tune_frame(&s, f) : tt__seq_step(&s, f);
   }
+  if (s.tune) rc = tt__seq_tune_finish(&s, rc);
   if (s.manifest) rc = tt__seq_finish(&s, rc);
   tt__seq_close(&s);
   return rc;

@@ -213,25 +213,24 @@ static int tt__choose(tt__tune_ctx *c) {
   return TT_EXIT_OK;
 }
 
-/* Opens the database (--db, the default path, or none with --no-db). */
-static int tt__open_db(tt__tune_ctx *c) {
-  const tt__host_options *opt = c->opt;
+int tt__tune_open_db(const tt__host_options *opt, const tt_host *host, tt_tunedb **db) {
+  *db = NULL;
   if (opt->no_db) return TT_EXIT_OK;
   char *path = opt->db ? tt__strdup(opt->db) : tt_tunedb_default_path();
   if (!path) {
-    c->s->host->log(TT_LOG_WARN, NULL,
-                    "tuning: no $XDG_DATA_HOME or $HOME: tuning without "
-                    "a database (use --db PATH)");
+    host->log(TT_LOG_WARN, NULL,
+              "tuning: no $XDG_DATA_HOME or $HOME: tuning without "
+              "a database (use --db PATH)");
     return TT_EXIT_OK;
   }
-  if (tt_tunedb_open(path, &c->db) != TT_OK) {
+  if (tt_tunedb_open(path, db) != TT_OK) {
     if (opt->db) {
       tt__say("--db: %s\n", tt_last_error());
       free(path);
       return TT_EXIT_FAILURE;
     }
-    c->s->host->log(TT_LOG_WARN, NULL, "tuning: %s; tuning without a database", tt_last_error());
-    c->db = NULL;
+    host->log(TT_LOG_WARN, NULL, "tuning: %s; tuning without a database", tt_last_error());
+    *db = NULL;
   }
   free(path);
   return TT_EXIT_OK;
@@ -326,9 +325,7 @@ static void tt__log_result(const tt__tune_ctx *c, const tt_tuning_verification *
                   best, from, def, gain, st.iterations, st.measured, st.cached, best_json);
 }
 
-/* Checks the tuning options against what is loaded: a tuning option without a tuner or
- * --explore N, or --explore with --iterations, is a usage error (printed). */
-static int tt__tune_check(const tt__host_options *opt, const tt_loaded_plugin *tuner_p) {
+int tt__tune_check(const tt__host_options *opt, const tt_loaded_plugin *tuner_p) {
   if (!tuner_p && !opt->explore) {
     if (!(opt->tune || opt->objective || opt->iterations || opt->tune_spp || opt->verify ||
           opt->tune_pass_images))
@@ -426,7 +423,7 @@ static int tt__tune_create(tt__tune_ctx *c, tt__session *s, tt_loaded_plugin *tu
                  : opt->iterations ? opt->iterations
                                    : TT_HOST_DEFAULT_ITERATIONS;
   int rc = tt__choose(c);
-  if (rc == TT_EXIT_OK) rc = tt__open_db(c);
+  if (rc == TT_EXIT_OK) rc = tt__tune_open_db(opt, s->host, &c->db);
   if (rc != TT_EXIT_OK) return rc;
   t->plugin = tt_loaded_plugin_entry(c->target)->name;
   t->plugin_version = tt_loaded_plugin_entry(c->target)->version;

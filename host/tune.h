@@ -12,4 +12,12 @@
  * requested (free it with tt__tuning_free). */
 int tt__tune_phase(tt__session *s, tt__tuning **out);
 
+/* Checks the tuning options against what is loaded: a tuning option without a tuner or
+ * --explore N, or --explore with --iterations, is a usage error (printed). */
+int tt__tune_check(const tt__host_options *opt, const tt_loaded_plugin *tuner_p);
+
+/* Opens the tuning database (--db, the default path, or none with --no-db: *db NULL);
+ * prints what failed and returns an exit code. */
+int tt__tune_open_db(const tt__host_options *opt, const tt_host *host, tt_tunedb **db);
+
 #endif

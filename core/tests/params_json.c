@@ -279,7 +279,39 @@ static void test_space_errors(void) {
   CHECK_CONTAINS(tt_last_error(), "null.json: no JSON text");
 }
 
+/* "motionOnly": a parameter that acts only while the scene moves: read, written back, kept by
+ * a subset, refused when not a boolean (naming the field). */
+static void test_motion_only(void) {
+  char buf[1024];
+  space_with(buf, sizeof buf,
+             "{\"name\": \"m\", \"type\": \"NOM\", \"possibleValues\": [\"a\", \"b\"], "
+             "\"value\": \"a\", \"motionOnly\": true}");
+  tt_space *s = tt_space_from_json(buf, "motion.json");
+  CHECK_MSG(s != NULL, "%s", tt_last_error());
+  if (!s) return;
+  CHECK(tt_space_is_motion_only(s, 1) && !tt_space_is_motion_only(s, 0) &&
+        tt_space_is_tunable(s, 1) && !tt_space_is_motion_only(s, 7));
+  char *json = tt_space_to_json(s);
+  const char *mo = json ? strstr(json, "\"motionOnly\"") : NULL;
+  CHECK(mo && !strstr(mo + 1, "\"motionOnly\"")); /* written for m alone */
+  tt_space *back = json ? tt_space_from_json(json, "written") : NULL;
+  CHECK(back && tt_space_is_motion_only(back, 1) && !tt_space_is_motion_only(back, 0));
+  const char *names[] = {"m"};
+  tt_space *sub = tt_space_subset(s, names, 1, NULL);
+  CHECK(sub && tt_space_is_motion_only(sub, 0));
+  tt_space_destroy(sub);
+  tt_space_destroy(back);
+  tt_free(json);
+  tt_space_destroy(s);
+  space_with(buf, sizeof buf,
+             "{\"name\": \"m\", \"type\": \"INT\", \"min\": 0, \"max\": 2, \"value\": 0, "
+             "\"motionOnly\": 1}");
+  CHECK(tt_space_from_json(buf, "bad.json") == NULL);
+  CHECK_CONTAINS(tt_last_error(), "bad.json: parameters[1].motionOnly: expected true or false");
+}
+
 int main(void) {
+  test_motion_only();
   test_space_round_trip();
   test_config_round_trip();
   test_fig31();

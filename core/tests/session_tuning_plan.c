@@ -2,7 +2,9 @@
  * what host --tune and Python's Session.tune search.
  *
  *  - no target named: integrator_pt has no hint, so the accel, objective "render", every
- *    parameter searched; integrator_pssmlt serves a hint, so it is the target with the
+ *    parameter searched but, on a still scene, the motion-only ones (the accel's update
+ *    method: nothing moves to tell its values apart); on an animated scene all, and named
+ *    parameters as named; integrator_pssmlt serves a hint, so it is the target with the
  *    hint's objective and tunable list (its a_i and sigma_i), binning on from the setup;
  *  - a post plugin with a hint (tests/fixtures: fixture_hint): the setup {"a": 3, "c": 2}
  *    applies, a value the user set with tt_session_set wins over it, only the hint's "b" is
@@ -18,7 +20,7 @@
 
 #include "tt_test.h"
 
-static char g_scene[4096];
+static char g_scene[4096], g_anim_scene[4096];
 
 /* A session over the Cornell box at 8x8 with the named plugins loaded, started. */
 static tt_session *open_session(const char *const *plugins, size_t n) {
@@ -44,10 +46,41 @@ static void test_defaults(void) {
   tt_tuning_plan plan = {.struct_size = sizeof plan};
   CHECK_MSG(tt_session_tuning_plan(s, NULL, NULL, 0, &plan) == TT_OK, "%s", tt_last_error());
   CHECK(plan.target == tt_session_accel_plugin(s) && !strcmp(plan.objective, "render"));
-  CHECK(plan.search == NULL && plan.space == tt_loaded_plugin_space(plan.target));
   CHECK((int)plan.target_index == tt_session_plugin_index(s, "accel_embree"));
+  /* a still scene: every tunable parameter but the motion-only ones (the accel's update
+   * method and schedule) is searched */
+  const tt_space *full = plan.space;
+  CHECK(plan.space == tt_loaded_plugin_space(plan.target));
+  size_t tunable = 0, motion = 0;
+  for (size_t i = 0; i < tt_space_count(full); i++) {
+    tunable += tt_space_is_tunable(full, i) != 0;
+    motion += tt_space_is_tunable(full, i) && tt_space_is_motion_only(full, i);
+  }
+  CHECK_MSG(motion >= 3 && plan.search && tt_space_count(plan.search) == tunable - motion,
+            "still scene: searched %zu of %zu tunable (%zu motion-only)",
+            plan.search ? tt_space_count(plan.search) : 0, tunable, motion);
+  CHECK(plan.search && tt_space_find(plan.search, "updateMethod") < 0 &&
+        tt_space_find(plan.search, "quality") >= 0);
   tt_tuning_plan_release(&plan);
   tt_tuning_plan_release(&plan); /* twice: a released plan is empty */
+  /* named parameters are searched as named, motion-only or not */
+  const char *named[] = {"updateMethod", "quality"};
+  CHECK(tt_session_tuning_plan(s, NULL, named, 2, &plan) == TT_OK);
+  CHECK(plan.search && tt_space_count(plan.search) == 2 &&
+        tt_space_find(plan.search, "updateMethod") >= 0);
+  tt_tuning_plan_release(&plan);
+  tt_session_destroy(s);
+
+  /* an animated scene: everything tunable is searched, the update method included */
+  s = NULL;
+  CHECK(tt_session_create(NULL, &s) == TT_OK);
+  CHECK_MSG(tt_session_load_scene(s, g_anim_scene) == TT_OK, "%s", tt_last_error());
+  tt_scene_set_resolution(tt_session_scene(s), 8, 8);
+  CHECK_MSG(tt_session_start(s, 0) == TT_OK, "%s", tt_last_error());
+  CHECK(tt_scene_animated(tt_session_scene(s)));
+  CHECK(tt_session_tuning_plan(s, NULL, NULL, 0, &plan) == TT_OK);
+  CHECK(plan.search == NULL && plan.target == tt_session_accel_plugin(s));
+  tt_tuning_plan_release(&plan);
   tt_session_destroy(s);
 
   /* PSSMLT's hint: target, objective, its list, binning on; the user's set wins */
@@ -128,6 +161,7 @@ int main(int argc, char **argv) {
   const char *src = getenv("TT_SOURCE_ROOT");
   if (!src || argc < 3) TEST_SKIP("run through meson test (TT_SOURCE_ROOT, fixture paths)");
   snprintf(g_scene, sizeof g_scene, "%s/scenes/cornell-box/scene.json", src);
+  snprintf(g_anim_scene, sizeof g_anim_scene, "%s/scenes/animated-cornell/scene.json", src);
   tt_default_host_set_log_level(TT_LOG_WARN);
   test_defaults();
   test_fixture_hints(argv[1], argv[2]);

@@ -493,6 +493,87 @@ static void test_database(const tt_space *space) {
   tt_config_destroy(c.applied);
 }
 
+/* tt_tuning_set_state (tuning along a sequence): each measurement is recorded in the state
+ * it was asked for in, the database answers per state, a state change while a configuration
+ * is outstanding is refused, the search goes on across states. */
+static void test_set_state(const tt_space *space) {
+  char path[] = "/tmp/tt_tune_set_state_XXXXXX";
+  int fd = mkstemp(path);
+  CHECK(fd >= 0);
+  close(fd);
+  unlink(path);
+  tt_tunedb *db = NULL;
+  CHECK(tt_tunedb_open(path, &db) == TT_OK);
+  char cams[4][32];
+  tt_tuning_state st[4];
+  for (int i = 0; i < 4; i++) {
+    snprintf(cams[i], sizeof cams[i], "{\"frame\":%d}", i);
+    st[i] = (tt_tuning_state){.struct_size = sizeof st[i],
+                              .scene_id = "0123456789abcdef",
+                              .scene = "analytic.json",
+                              .camera = cams[i],
+                              .context = "{\"spp\":2}"};
+  }
+  target_state a = {0};
+  tt_tuning_desc d = base_desc(space, &st[0]);
+  d.tuner = &g_fixed;
+  d.tuner_name = "fixed";
+  d.db = db;
+  d.iterations = 10;
+  tt_tuning *t = NULL;
+  CHECK(tt_tuning_create(&d, &t) == TT_OK);
+  tt_config *cfg = tt_config_create(space);
+  int asked = 0;
+  for (int i = 0; i < 4; i++) {
+    CHECK(tt_tuning_set_state(t, &st[i]) == TT_OK);
+    tt_status ns = tt_tuning_next(t, cfg);
+    if (ns == TT_DONE) break;
+    CHECK(ns == TT_OK);
+    asked++;
+    CHECK(tt_tuning_set_state(t, &st[(i + 1) % 4]) == TT_ERR_INVALID_ARGUMENT); /* pending */
+    CHECK_CONTAINS(tt_last_error(), "outstanding");
+    tt_tuning_measurement m = {.struct_size = sizeof m};
+    t_apply(&a, cfg, &m.build_ms);
+    m.status = t_render(&a, 2, &m);
+    CHECK(tt_tuning_report(t, &m, NULL) == TT_OK);
+  }
+  CHECK(asked == 4); /* default, A, A, B: the fixed tuner's list went on across the states */
+  CHECK(strstr(tt_tuning_best_json(t), "\"x\":0.3") != NULL);
+  tt_tuning_state nul = {.struct_size = sizeof nul}; /* no scene_id with a database */
+  CHECK(tt_tuning_set_state(t, &nul) == TT_ERR_INVALID_ARGUMENT);
+  CHECK(tt_tuning_set_state(t, NULL) == TT_ERR_INVALID_ARGUMENT);
+  tt_tuning_destroy(t);
+  uint64_t rows = 0;
+  CHECK(tt_tunedb_count(db, "analytic", &rows) == TT_OK && rows == 4);
+  /* the same states again: the database answers a configuration only in the state it was
+   * measured in, and a configuration this session measured is measured again (the tuner
+   * re-measuring against noise). State 0 answers the default (measured there), not A
+   * (measured in state 1): A is measured; state 1 measures A again (this session's), state
+   * 2 measures B (recorded in state 3 only); then the tuner is done: 1 answered, 3 measured */
+  target_state b = {0};
+  CHECK(tt_tuning_create(&d, &t) == TT_OK);
+  for (int i = 0; i < 4; i++) {
+    CHECK(tt_tuning_set_state(t, &st[i]) == TT_OK);
+    tt_status ns = tt_tuning_next(t, cfg);
+    if (ns != TT_OK) break;
+    tt_tuning_measurement m = {.struct_size = sizeof m};
+    t_apply(&b, cfg, &m.build_ms);
+    m.status = t_render(&b, 2, &m);
+    CHECK(tt_tuning_report(t, &m, NULL) == TT_OK);
+  }
+  tt_tuning_stats ts = {.struct_size = sizeof ts};
+  tt_tuning_get_stats(t, &ts);
+  CHECK_MSG(ts.cached == 1 && ts.measured == 3 && b.renders == 3,
+            "answered per state: %u answered, %u measured", ts.cached, ts.measured);
+  CHECK(tt_tunedb_count(db, "analytic", &rows) == TT_OK && rows == 7);
+  tt_tuning_destroy(t);
+  tt_config_destroy(cfg);
+  tt_config_destroy(a.applied);
+  tt_config_destroy(b.applied);
+  tt_tunedb_close(db);
+  unlink(path);
+}
+
 /* Random exploration over the constrained space: infeasible draws recorded, never applied;
  * the draws are a function of the seed. */
 static void test_explore(const tt_space *space) {
@@ -743,6 +824,7 @@ int main(void) {
   test_ask_tell(space);
   test_verify_keeps_default(space);
   test_database(space);
+  test_set_state(space);
   test_explore(space);
   test_objectives(space);
   test_interrupt(space);

@@ -175,13 +175,12 @@ tt_space *tt__embree_space_create(void) {
    * acts would lose configurations. */
   static const char *const custom[] = {"custom"}, *const no[] = {"false"};
   if (ok) ok &= tt_space_set_tunable(s, (size_t)tt_space_find(s, "counters"), 0) == TT_OK;
-  /* The update parameters act only when an animated scene moves, and no tuning run measures
-   * an update yet (a tuning pass builds and renders one still frame): searching them would
-   * spend measurements on noise, so a tuner changes them only when --tune-params names
-   * them. */
+  /* The update parameters act only when an animated scene moves: tunable along a sequence,
+   * whose tuning measures each frame's update + render, and left out of a still scene's
+   * search by the tuning plan (motion-only), where no measurement tells them apart. */
   static const char *const update_params[] = {"updateMethod", "refitInterval", "refitSahGrowth"};
   for (size_t i = 0; ok && i < sizeof update_params / sizeof update_params[0]; i++)
-    ok &= tt_space_set_tunable(s, (size_t)tt_space_find(s, update_params[i]), 0) == TT_OK;
+    ok &= tt_space_set_motion_only(s, (size_t)tt_space_find(s, update_params[i]), 1) == TT_OK;
   for (size_t i = 0; ok && i < sizeof tt__embree_custom_only / sizeof tt__embree_custom_only[0];
        i++) {
     size_t k = (size_t)tt_space_find(s, tt__embree_custom_only[i].name);

@@ -207,6 +207,14 @@ TT_API int tt_config_assign(tt_config *dst, const tt_config *src);
 TT_API tt_status tt_space_set_tunable(tt_space *space, size_t index, int tunable);
 /* Non-zero if tuners may change parameter `index` (0 for an index out of range). */
 TT_API int tt_space_is_tunable(const tt_space *space, size_t index);
+/* Marks parameter `index` as acting only while the scene moves (e.g. how an accel updates
+ * itself between the frames of an animated scene; "motionOnly": true in the space's JSON).
+ * Still tunable: tuning along an animated sequence searches it, while the tuning plan of a
+ * still scene (tt_session_tuning_plan without named parameters) leaves it out, since no
+ * measurement there could tell its values apart. */
+TT_API tt_status tt_space_set_motion_only(tt_space *space, size_t index, int motion_only);
+/* Non-zero if parameter `index` acts only while the scene moves (0 out of range). */
+TT_API int tt_space_is_motion_only(const tt_space *space, size_t index);
 /* Adds a condition to parameter `index`: it acts only while the NOM parameter `parent`
  * holds one of `values` (count >= 1, written as --set would: "custom", "2", "true"). A
  * parameter may not be its own ancestor. Errors name the parameter and the value. */

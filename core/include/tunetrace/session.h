@@ -101,6 +101,18 @@ TT_API const tt_camera *tt_session_camera(const tt_session *s);
 TT_API tt_status tt_session_set_time(tt_session *s, double t, double frame_interval,
                                      tt_accel_update_stats *stats);
 
+/* tt_session_set_time with a configuration change at this frame: once started, the accel
+ * is built from scratch with `accel_config` (of the accel's space) over the new pose instead
+ * of updated -- the frame's update is that build (stats->rebuilt, update_ms), and later
+ * updates follow the new configuration's update method. NULL: tt_session_set_time. The
+ * session's own configuration of the accel is left as it is (tt_session_configure_plugin
+ * or the tuning target change it). A still scene only moves its camera: call
+ * tt_session_apply to change its accel's configuration. Used by tuning along a sequence,
+ * where each measured configuration takes over at a frame. */
+TT_API tt_status tt_session_set_time_config(tt_session *s, double t, double frame_interval,
+                                            const tt_config *accel_config,
+                                            tt_accel_update_stats *stats);
+
 /* Loads a plugin by name (searched) or path and gives it a configuration of its space.
  * `*out` (may be NULL) points to it, owned by the session. Errors are the loader's (missing
  * file, ABI, second plugin of a kind, ...). Before tt_session_start. */

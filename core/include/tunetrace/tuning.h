@@ -332,6 +332,16 @@ TT_API const char *tt_tuning_kept_json(const tt_tuning *t);
  * sentence (NULL when unverified; owned by the session). */
 TT_API tt_tuning_verdict tt_tuning_get_verdict(const tt_tuning *t, const char **reason);
 
+/* Changes the state the next measurements are taken in (appended; tuning along a sequence:
+ * each frame of an animated scene is a state, its geometry and camera another). Samples
+ * asked for afterwards are looked up in and recorded to the database under `state` (copied);
+ * the search goes on (the tuner keeps its course: a sequence's frames change gradually) and
+ * the best is still the lowest mean over every sample of a configuration, whatever its
+ * state. TT_ERR_INVALID_ARGUMENT while a configuration is outstanding (tt_tuning_next without
+ * its report: a measurement belongs to the state it was asked for in), for a NULL or short
+ * state, or one without scene_id in a session with a database. */
+TT_API tt_status tt_tuning_set_state(tt_tuning *t, const tt_tuning_state *state);
+
 #ifdef __cplusplus
 }
 #endif

@@ -31,8 +31,9 @@ typedef struct tt__param {
   int64_t *nom_ints;  /* NOM int and bool values (bool: 0, 1) */
   char **nom_strings; /* NOM string values */
   size_t nom_def;
-  int untunable; /* tt_space_set_tunable(..., 0): tuners leave it alone */
-  size_t ncond;  /* tt_space_add_condition: acts only while all hold */
+  int untunable;   /* tt_space_set_tunable(..., 0): tuners leave it alone */
+  int motion_only; /* tt_space_set_motion_only: acts only while the scene moves */
+  size_t ncond;    /* tt_space_add_condition: acts only while all hold */
   struct tt__cond {
     size_t parent;          /* a NOM parameter of the same space */
     unsigned char *allowed; /* one flag per possible value of the parent */
@@ -1066,6 +1067,18 @@ int tt_space_is_tunable(const tt_space *space, size_t index) {
   return p && !p->untunable;
 }
 
+tt_status tt_space_set_motion_only(tt_space *space, size_t index, int motion_only) {
+  tt_status st = tt__check_mutable(space, index, "tt_space_set_motion_only");
+  if (st != TT_OK) return st;
+  space->params[index].motion_only = !!motion_only;
+  return TT_OK;
+}
+
+int tt_space_is_motion_only(const tt_space *space, size_t index) {
+  const tt__param *p = tt__param_at(space, index);
+  return p && p->motion_only;
+}
+
 /* Non-zero if `anc` is `index` or one of its ancestors through conditions. */
 static int tt__is_ancestor(const tt_space *space, size_t anc, size_t index, unsigned depth) {
   if (anc == index) return 1;
@@ -1270,6 +1283,7 @@ static tt_status tt__copy_marking(tt_space *sub, const tt_space *space, const ch
       }
     }
     sub->params[k].untunable = never;
+    sub->params[k].motion_only = p->motion_only;
   }
   tt_config_destroy(fixed);
   return st;

@@ -311,6 +311,15 @@ static int tt__parse_marking(tt_space *space, const cJSON *item, int i, const ch
              -1;
     tt_space_set_tunable(space, (size_t)i, cJSON_IsTrue(tun));
   }
+  const cJSON *mo = cJSON_GetObjectItemCaseSensitive(item, "motionOnly");
+  if (mo) {
+    snprintf(p, sizeof p, "%s.motionOnly", path);
+    if (!cJSON_IsBool(mo))
+      return tt__json_error(TT_ERR_PARSE, source, p, "expected true or false, got %s",
+                            tt__json_describe(mo, TT__JSON_PARAMS, got, sizeof got)),
+             -1;
+    tt_space_set_motion_only(space, (size_t)i, cJSON_IsTrue(mo));
+  }
   const cJSON *when = cJSON_GetObjectItemCaseSensitive(item, "activeWhen");
   if (!when) return 0;
   snprintf(p, sizeof p, "%s.activeWhen", path);
@@ -516,6 +525,8 @@ char *tt_space_to_json(const tt_space *space) {
     if (d && d[0]) cJSON_AddItemToObject(p, "description", cJSON_CreateString(d));
     if (tt_space_is_log(space, i)) cJSON_AddItemToObject(p, "log", cJSON_CreateTrue());
     if (!tt_space_is_tunable(space, i)) cJSON_AddItemToObject(p, "tunable", cJSON_CreateFalse());
+    if (tt_space_is_motion_only(space, i))
+      cJSON_AddItemToObject(p, "motionOnly", cJSON_CreateTrue());
     size_t nc = tt_space_condition_count(space, i);
     cJSON *when = nc ? cJSON_CreateObject() : NULL;
     if (when) cJSON_AddItemToObject(p, "activeWhen", when);

@@ -163,22 +163,24 @@ static int tt__lights_move(const tt_scene *scene) {
 }
 
 /* Brings the started session's accel up to date after the scene moved. */
-static tt_status tt__update_accel(tt_session *s, tt_accel_update_stats *out) {
+static tt_status tt__update_accel(tt_session *s, const tt_config *config,
+                                  tt_accel_update_stats *out) {
   tt_accel_update_stats u;
   memset(&u, 0, sizeof u);
   u.struct_size = sizeof u;
   tt_status st;
-  if (s->accel && TT_HAS_FIELD(tt_accel_iface, s->ai, update) && s->ai->update) {
+  if (!config && s->accel && TT_HAS_FIELD(tt_accel_iface, s->ai, update) && s->ai->update) {
     st = s->ai->update(s->accel, &u);
     if (st != TT_OK) {
       s->ai->destroy(s->accel);
       s->accel = NULL;
       return tt__session_error(st, "%s: update failed: ", tt_loaded_plugin_entry(s->accel_p)->name);
     }
-  } else { /* an ABI 1.1 accel (or one left without a structure): build from scratch */
+  } else { /* a new configuration, an ABI 1.1 accel, or one left without a structure: build
+            * from scratch */
     double ms = 0;
     uint64_t t0 = s->host->clock_ns();
-    st = tt_session_rebuild_accel(s, NULL, &ms);
+    st = tt_session_rebuild_accel(s, config, &ms);
     if (st != TT_OK) return st;
     u.update_ms = (s->host->clock_ns() - t0) * 1e-6;
     u.rebuilt = 1;
@@ -194,6 +196,11 @@ static tt_status tt__update_accel(tt_session *s, tt_accel_update_stats *out) {
 
 tt_status tt_session_set_time(tt_session *s, double t, double frame_interval,
                               tt_accel_update_stats *stats) {
+  return tt_session_set_time_config(s, t, frame_interval, NULL, stats);
+}
+
+tt_status tt_session_set_time_config(tt_session *s, double t, double frame_interval,
+                                     const tt_config *accel_config, tt_accel_update_stats *stats) {
   if (stats && stats->struct_size > sizeof stats->struct_size) {
     uint32_t size = stats->struct_size;
     memset(stats, 0, size < sizeof *stats ? size : sizeof *stats);
@@ -209,7 +216,7 @@ tt_status tt_session_set_time(tt_session *s, double t, double frame_interval,
   if (st != TT_OK || !tt_scene_animated(s->scene)) return st;
   if ((st = tt_scene_set_time(s->scene, t, t - frame_interval)) != TT_OK) return st;
   if (!s->started) return TT_OK; /* tt_session_start builds over this pose */
-  if ((st = tt__update_accel(s, stats)) != TT_OK) return st;
+  if ((st = tt__update_accel(s, accel_config, stats)) != TT_OK) return st;
   if (tt__lights_move(s->scene)) {
     s->ii->destroy(s->integrator);
     s->integrator = NULL;

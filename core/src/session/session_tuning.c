@@ -145,6 +145,21 @@ static int tt__tunable(const tt_loaded_plugin *p) {
   return space && tt_space_count(space) > 0;
 }
 
+/* The tunable parameters of `space` that act on a still scene (not motion-only) into
+ * `names` (at most `cap`); 0 when that is all of the tunable ones (no subset needed) or more
+ * than `cap`. */
+static size_t tt__still_params(const tt_space *space, const char **names, size_t cap) {
+  size_t n = 0, tunable = 0;
+  for (size_t i = 0; i < tt_space_count(space); i++) {
+    if (!tt_space_is_tunable(space, i)) continue;
+    tunable++;
+    if (tt_space_is_motion_only(space, i)) continue;
+    if (n == cap) return 0;
+    names[n++] = tt_space_name(space, i);
+  }
+  return n < tunable ? n : 0;
+}
+
 /* The plugin's tuning hint (tt.tuning_hint/1) when it names an objective, else NULL. */
 static const tt_tuning_hint *tt__hint(const tt_loaded_plugin *p) {
   const tt_tuning_hint *h = p ? tt_loaded_plugin_get(p, TT_TUNING_HINT_ID) : NULL;
@@ -230,6 +245,21 @@ tt_status tt_session_tuning_plan(tt_session *s, const char *target, const char *
   if (from_hint) {
     names = hint->tunable;
     while (names[n]) n++;
+  }
+  const char *still[256];
+  if (!n && !tt_scene_animated(s->scene) && (n = tt__still_params(space, still, 256)) > 0) {
+    names = still; /* a still scene: the parameters that act only while it moves are left out */
+    char left[512] = "";
+    for (size_t i = 0, used = 0; i < tt_space_count(space) && used < sizeof left; i++)
+      if (tt_space_is_tunable(space, i) && tt_space_is_motion_only(space, i)) {
+        int w = snprintf(left + used, sizeof left - used, "%s%s", used ? ", " : "",
+                         tt_space_name(space, i));
+        if (w > 0) used += (size_t)w;
+      }
+    tt_host_log(s->host, TT_LOG_INFO, NULL,
+                "tuning %s: not searched: %s (they act only while the scene moves, and %s is "
+                "still; tune along an animated sequence, or name them to search them anyway)",
+                tt_loaded_plugin_entry(p)->name, left, tt_scene_source(s->scene));
   }
   tt_space *search = NULL;
   if (n && !(search = tt_space_subset(space, names, n, s->configs[index])))

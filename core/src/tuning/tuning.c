@@ -90,6 +90,44 @@ static char *tt__config_json(const tt_config *cfg) {
 
 static uint64_t tt__now(const tt_tuning *t) { return t->host->clock_ns(); }
 
+/* Takes a copy of `state` (NULL: unknown) as the session's state; -1 when out of memory. */
+static int tt__copy_state(tt_tuning *t, const tt_tuning_state *state) {
+  for (int i = 0; i < 4; i++) free(t->state_strings[i]);
+  memset(t->state_strings, 0, sizeof t->state_strings);
+  memset(&t->state, 0, sizeof t->state);
+  t->state.struct_size = sizeof t->state;
+  if (!state) return 0;
+  const char *src[4] = {state->scene_id, state->scene, state->camera, state->context};
+  int failed = 0;
+  for (int i = 0; i < 4; i++) {
+    t->state_strings[i] = tt__strdup(src[i]);
+    failed |= src[i] && !t->state_strings[i];
+  }
+  t->state.scene_id = t->state_strings[0];
+  t->state.scene = t->state_strings[1];
+  t->state.camera = t->state_strings[2];
+  t->state.context = t->state_strings[3];
+  t->state.has_indicators = state->has_indicators;
+  memcpy(t->state.indicators, state->indicators, sizeof t->state.indicators);
+  return failed ? -1 : 0;
+}
+
+tt_status tt_tuning_set_state(tt_tuning *t, const tt_tuning_state *state) {
+  if (!t || !state || state->struct_size < sizeof *state)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT, "tt_tuning_set_state: NULL or short state");
+  if (t->pending)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_tuning_set_state: a configuration is outstanding (report it "
+                        "first: a measurement belongs to the state it was asked for in)");
+  if (t->db && !state->scene_id)
+    return tt_set_error(TT_ERR_INVALID_ARGUMENT,
+                        "tt_tuning_set_state: a session with a database needs the state's "
+                        "scene_id");
+  if (tt__copy_state(t, state))
+    return tt_set_error(TT_ERR_OUT_OF_MEMORY, "tt_tuning_set_state: out of memory");
+  return TT_OK;
+}
+
 void tt_tuning_destroy(tt_tuning *t) {
   if (!t) return;
   if (t->tuner) t->ti->destroy(t->tuner);
@@ -220,18 +258,8 @@ tt_status tt__tuning_create(const tt_tuning_desc *d, int quiet, tt_tuning **out)
   t->tuner_name = tt__strdup(TT__DESC(d, tuner_name));
   t->plugin = tt__strdup(TT__DESC(d, plugin) ? TT__DESC(d, plugin) : tt_space_plugin(d->space));
   t->plugin_version = tt__strdup(TT__DESC(d, plugin_version) ? TT__DESC(d, plugin_version) : "");
-  const tt_tuning_state *state = TT__DESC(d, state);
   t->state.struct_size = sizeof t->state;
-  if (state) {
-    const char *src[4] = {state->scene_id, state->scene, state->camera, state->context};
-    for (int i = 0; i < 4; i++) t->state_strings[i] = tt__strdup(src[i]);
-    t->state.scene_id = t->state_strings[0];
-    t->state.scene = t->state_strings[1];
-    t->state.camera = t->state_strings[2];
-    t->state.context = t->state_strings[3];
-    t->state.has_indicators = state->has_indicators;
-    memcpy(t->state.indicators, state->indicators, sizeof t->state.indicators);
-  }
+  tt__copy_state(t, TT__DESC(d, state));
   const char *run_id = TT__DESC(d, run_id);
   char id[64];
   if (!run_id) {

@@ -160,17 +160,24 @@ static void test_space(const tt_space *space) {
   }
   /* the per-frame update of animated scenes, appended after counters: updateMethod
    * (rebuild by default; refit; instances) always acts; refitInterval with refit and
-   * instances, refitSahGrowth (the custom tree's SAH) with refit only. None of the three
-   * is tunable: a tuning pass measures no update, so a tuner would search noise. */
+   * instances, refitSahGrowth (the custom tree's SAH) with refit only. All three are
+   * tunable (tuning along a sequence measures each frame's update + render) and
+   * motion-only (a still scene's tuning plan leaves them out), as --describe says. */
   int um = tt_space_find(space, "updateMethod");
   CHECK(um == 13 && tt_space_nom_count(space, (size_t)um) == 3 &&
         tt_space_default(space, (size_t)um).index == 0);
-  CHECK(!tt_space_is_tunable(space, (size_t)um) &&
+  CHECK(tt_space_is_tunable(space, (size_t)um) && tt_space_is_motion_only(space, (size_t)um) &&
         tt_space_condition_count(space, (size_t)um) == 0);
+  const cJSON *ump = find_param(root, "updateMethod");
+  CHECK(cJSON_GetObjectItemCaseSensitive(ump, "tunable") == NULL &&
+        cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(ump, "motionOnly")));
+  for (size_t k = 0; k < 5; k++) /* the Table 3.1 parameters act on a still scene too */
+    CHECK(!tt_space_is_motion_only(space, (size_t)tt_space_find(space, always[k])));
   static const char *const refit_only[] = {"refitInterval", "refitSahGrowth"};
   for (size_t k = 0; k < 2; k++) {
     int i = tt_space_find(space, refit_only[k]);
-    CHECK_MSG(i == 14 + (int)k && !tt_space_is_tunable(space, (size_t)i) &&
+    CHECK_MSG(i == 14 + (int)k && tt_space_is_tunable(space, (size_t)i) &&
+                  tt_space_is_motion_only(space, (size_t)i) &&
                   tt_space_condition_count(space, (size_t)i) == 1,
               "%s", refit_only[k]);
     CHECK(tt_config_set_string(cc, "updateMethod", "rebuild") == TT_OK &&

@@ -1,0 +1,62 @@
+/* host: what sequence.c (the frame loop) and sequence_tune.c (tuning along it) share: the
+ * sequence job and its per-frame step. */
+#ifndef TT_HOST_SEQUENCE_INTERNAL_H
+#define TT_HOST_SEQUENCE_INTERNAL_H
+
+#include "sequence.h"
+
+/* Everything one sequence run holds besides the session: the output names, the frame
+ * buffers, the post-filter and the manifest. tt__seq_close frees it at any stage. */
+typedef struct tt__seq {
+  const tt__host_options *opt;
+  tt__session ses; /* scene, plugins, configurations, accel, integrator, film */
+  const tt_post_iface *pi;
+  const tt_config *pcfg; /* the post-filter's configuration */
+  tt_post *post;
+  const char *post_name;
+  uint64_t seed;
+  uint32_t spp;
+  char dir[4096];      /* output folder (--out-dir, or the folder of the --out pattern) */
+  const char *pattern; /* file name part of the --out pattern, or NULL */
+  uint32_t w, h, k;    /* frame size; k: --reference-scale (0: no reference) */
+  double fps;
+  int animated;     /* the scene moves: pose and accel update per frame */
+  int render_frame; /* the jittered frame is rendered (not only the reference) */
+  float *rgb, *ref_hi, *ref, *post_rgb, *motion, *prev_depth;
+  tt_film *ref_film;
+  FILE *manifest; /* memstream over mbuf: the manifest text so far */
+  char *mbuf, mpath[4096 + 32];
+  size_t mlen;
+  int entry_open;       /* a frame's manifest entry is started but not closed */
+  uint32_t done_frames; /* frames committed to the manifest */
+  /* tuning along the sequence (sequence_tune.c), NULL without */
+  struct tt__seq_tune *tune;
+  const tt_config *switch_config; /* the next frame's update builds the accel with this
+                                     configuration from scratch (NULL: updates as built) */
+  const char *frame_note;         /* JSON members added to the next frame's manifest entry */
+  double update_ms, render_ms;    /* what the last frame's update and render took */
+} tt__seq;
+
+/* One frame being rendered: its index, poses and jitter, what it has produced so far. */
+typedef struct tt__seq_frame {
+  uint32_t f, ji; /* frame index, index in the jitter cycle */
+  float jit[2];
+  tt_camera cam, prev; /* this frame's pose and the pose one frame interval earlier */
+  const float *depth;  /* the film's depth AOV (NULL when the frame was not rendered) */
+  double render_ms, ref_ms;
+} tt__seq_frame;
+
+/* Step: frame f (sequence.c): pose and accel update, the jittered frame, the reference, the
+ * post-filter, the PNG, the manifest entry committed. An exit code. */
+int tt__seq_step(tt__seq *s, uint32_t f);
+
+/* Tuning along the sequence (sequence_tune.c): with a tuner loaded (or --explore N) over an
+ * animated scene, the frames are the measurements. tt__seq_tune_create sets s->tune (left
+ * NULL when nothing is tuned); tt__seq_tune_frame replaces tt__seq_step per frame;
+ * tt__seq_tune_finish logs what was found; tt__seq_tune_free releases it. Exit codes. */
+int tt__seq_tune_create(tt__seq *s);
+int tt__seq_tune_frame(tt__seq *s, uint32_t f);
+int tt__seq_tune_finish(tt__seq *s, int rc);
+void tt__seq_tune_free(tt__seq *s);
+
+#endif
