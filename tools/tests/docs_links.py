@@ -2,8 +2,9 @@
 repository (README.md files, docs/) names a file that exists, and every #anchor names a
 heading of its target, by GitHub's rule (lower case, punctuation dropped, spaces to '-',
 repeats numbered -1, -2, ...), or an element id (id="..." / name="...") of an HTML target
-such as the results page, docs/results/index.html. Links into ../shared (the scenes beside the repository) and
-absolute URLs are not checked. Exit 1 naming each broken link with its file and line."""
+such as the results page, docs/results/index.html. The checker first checks itself on a
+made-up tree (a missing file, heading and HTML id found; good links not). Links into
+../shared (the scenes beside the repository) and absolute URLs are not checked. Exit 1 naming each broken link with its file and line."""
 import os
 import re
 import subprocess
@@ -69,11 +70,11 @@ def html_ids(path):
     return _html_ids[path]
 
 
-def main():
+def broken_links(root, files):
+    """Every broken relative link of the Markdown files `files` (paths relative to `root`)."""
     broken = []
-    files = markdown_files()
     for rel in files:
-        path = os.path.join(ROOT, rel)
+        path = os.path.join(root, rel)
         fence = False
         for no, line in enumerate(open(path, encoding="utf-8"), 1):
             if line.lstrip().startswith("```"):
@@ -87,21 +88,50 @@ def main():
                 file_part, _, anchor = target.partition("#")
                 dest = os.path.normpath(os.path.join(os.path.dirname(path), file_part)) \
                     if file_part else path
-                if os.path.relpath(dest, ROOT).startswith(".."):
+                if os.path.relpath(dest, root).startswith(".."):
                     continue  # ../shared: beside the repository, not in it
                 if not os.path.exists(dest):
-                    broken.append(f"{rel}:{no}: {target}: no file {os.path.relpath(dest, ROOT)}")
+                    broken.append(f"{rel}:{no}: {target}: no file {os.path.relpath(dest, root)}")
                     continue
                 if anchor and dest.endswith(".md") and anchor not in anchors(dest):
-                    broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, ROOT)} has no "
+                    broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, root)} has no "
                                   f"heading #{anchor}")
                 if anchor and dest.endswith((".html", ".htm")) and anchor not in html_ids(dest):
-                    broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, ROOT)} has no "
+                    broken.append(f"{rel}:{no}: {target}: {os.path.relpath(dest, root)} has no "
                                   f"element with id #{anchor}")
+    return broken
+
+
+def self_check():
+    """The checker itself finds what it must: in a made-up tree, a missing file, a missing
+    heading and a missing HTML id are reported, and the good links of each kind are not.
+    Returns the problems (empty when the checker works)."""
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        with open(os.path.join(d, "page.html"), "w") as f:
+            f.write('<h2><a id="here"></a>Here</h2><section id="there"></section>')
+        with open(os.path.join(d, "b.md"), "w") as f:
+            f.write("# A heading\n")
+        with open(os.path.join(d, "a.md"), "w") as f:
+            f.write("[ok](page.html#here) [ok](page.html#there) [ok](b.md#a-heading)\n"
+                    "[bad](page.html#nowhere) [bad](b.md#nowhere) [bad](c.md)\n")
+        got = broken_links(d, ["a.md", "b.md"])
+    want = ["page.html#nowhere", "b.md#nowhere", "c.md"]
+    problems = [f"not reported: {w}" for w in want if not any(f" {w}: " in g for g in got)]
+    problems += [f"reported although good: {g}" for g in got if not any(f" {w}: " in g for w in want)]
+    return problems
+
+
+def main():
+    problems = self_check()
+    for p in problems:
+        print("FAIL: the checker's self-check:", p)
+    files = markdown_files()
+    broken = broken_links(ROOT, files)
     for b in broken:
         print("FAIL:", b)
     print(f"docs_links: {len(files)} Markdown files, {len(broken)} broken links")
-    return 1 if broken or not files else 0
+    return 1 if broken or problems or not files else 0
 
 
 if __name__ == "__main__":
