@@ -380,6 +380,32 @@ static void test_camera(void) {
       " \"animations\": [{\"channels\": [{\"sampler\": 0, \"target\": {\"node\": 1, \"path\": "
       "\"translation\"}}], \"samplers\": [{\"input\": 1, \"output\": 2}]}]}\n";
   const char *path = write_gltf("camera.gltf", json, data, 68);
+  /* the same as a GLB container: the JSON chunk (read for the camera and interpolation)
+   * and the buffer as the BIN chunk */
+  char glb[600];
+  snprintf(glb, sizeof glb, "%s/camera.glb", tmpdir);
+  {
+    char text[4096];
+    const char *at = strstr(json, "@BUFFER@");
+    snprintf(text, sizeof text, "%.*s{\"byteLength\": 68}%s", (int)(at - json), json, at + 8);
+    const uint32_t n = (uint32_t)strlen(text), padded = (n + 3) & ~3u;
+    const uint32_t total = 12 + 8 + padded + 8 + 68;
+    const uint32_t head[5] = {0x46546C67u, 2, total, padded, 0x4E4F534Au};
+    const uint32_t bin[2] = {68, 0x004E4942u};
+    FILE *f = fopen(glb, "wb");
+    if (!f || fwrite(head, 4, 5, f) != 5 || fwrite(text, 1, n, f) != n ||
+        fwrite("   ", 1, padded - n, f) != padded - n || fwrite(bin, 4, 2, f) != 2 ||
+        fwrite(data, 1, 68, f) != 68 || fclose(f) != 0)
+      TEST_FAIL("cannot write %s", glb);
+  }
+  tt_scene *g = load(glb);
+  if (g) {
+    tt_camera at;
+    tt_scene_camera_at(g, 0.5, &at);
+    CHECK_NEAR(at.position[0], 1.0, 1e-5);
+    CHECK_NEAR(tt_scene_camera(g)->fov_y, 0.8 * 180 / PI, 1e-4);
+    tt_scene_destroy(g);
+  }
   tt_scene *s = load(path);
   if (!s) return;
   const tt_camera *c = tt_scene_camera(s);

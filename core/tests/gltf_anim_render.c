@@ -8,6 +8,7 @@
  * assimp-testmodels. */
 #include <tunetrace/tunetrace.h>
 
+#include "host_util.h"
 #include "tt_test.h"
 
 #include <math.h>
@@ -113,6 +114,28 @@ static void check_file(const char *scene, const char *still, const double times[
   free(frames[1]);
 }
 
+/* host renders the glTF as a sequence: one frame per 1/fps second of its animation, the
+ * accel updated at every frame (the manifest's "update"). */
+static void check_host_sequence(const char *tmp) {
+  char args[1024], out[8192], path[600];
+  snprintf(args, sizeof args, "--sequence 0:5 --spp 1 --out-dir '%s/seq' '%s'", tmp,
+           MODELS "/simple_skin/simple_skin.gltf");
+  int rc = run_host(args, out, sizeof out);
+  CHECK_MSG(rc == 0, "host %s: exit %d: %s", args, rc, out);
+  snprintf(path, sizeof path, "%s/seq/manifest.json", tmp);
+  char *m = NULL;
+  size_t len = 0;
+  if (tt_file_read(path, "manifest", 0, &m, &len) != TT_OK) {
+    CHECK_MSG(0, "no manifest: %s", tt_last_error());
+    return;
+  }
+  unsigned updates = 0;
+  for (const char *p = m; (p = strstr(p, "\"update_ms\"")); p++) updates++;
+  CHECK_MSG(updates == 6, "6 frames with an accel update, got %u", updates);
+  CHECK_CONTAINS(m, "\"time\": 0.208333"); /* frame 5 at 24 fps */
+  tt_free(m);
+}
+
 int main(void) {
   char tmp[] = "/tmp/tt_gltf_anim_render_XXXXXX", still[4200];
   if (!mkdtemp(tmp)) TEST_FAIL("cannot create a temporary folder in /tmp");
@@ -121,6 +144,8 @@ int main(void) {
   check_file(MODELS "/simple_skin/simple_skin.gltf", still, skin_t);
   check_file(MODELS "/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf", still,
              morph_t);
+  (void)source_path;
+  check_host_sequence(tmp);
   char cmd[4400];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmp);
