@@ -248,6 +248,15 @@ static void test_camera(void) {
     cam_dir(&mid, f);
     double ang = acos(fmin(1.0, f[0] * e[0] + f[1] * e[1] + f[2] * e[2])) * 180 / 3.14159265358979;
     CHECK_MSG(ang < 0.05, "the middle camera looks %g degrees away from the slerp direction", ang);
+    /* between two keys (u = 0.5625): the path's spline stays within 0.05 degrees too */
+    tt_camera between;
+    tt_scene_camera_at(s, 2.125, &between);
+    am = a0 + 0.5625 * (a1 - a0);
+    e[0] = r * cos(am), e[1] = r * sin(am), e[2] = g[2];
+    cam_dir(&between, f);
+    ang = acos(fmin(1.0, f[0] * e[0] + f[1] * e[1] + f[2] * e[2])) * 180 / 3.14159265358979;
+    fprintf(stderr, "camera between keys: %.4g degrees from the slerp direction\n", ang);
+    CHECK_MSG(ang < 0.05, "between keys the camera looks %g degrees away from the slerp", ang);
   }
   tt_scene_destroy(s);
   tt_scene_destroy(a);
