@@ -21,8 +21,9 @@ mkdir -p "$HOME"
 cd "$tmp"
 paths() {
   local c=$1
-  c=${c//tools\/hybrid\/data\//$TT_SOURCE_ROOT/tools/hybrid/data/}
-  c=${c//scenes\//$TT_SOURCE_ROOT/scenes/}
+  # relative paths only where a word starts (the root itself may contain "scenes/")
+  local d=$'\001'
+  c=$(printf '%s' "$c" | sed -E "s${d}(^|[[:space:]=])(tools/hybrid/data/|scenes/)${d}\1$TT_SOURCE_ROOT/\2${d}g")
   c=${c/#build\/host\/host/$TT_BUILD_ROOT/host/host}
   printf '%s' "$c"
 }
