@@ -42,6 +42,8 @@ from tools.tttools import cli, host
 
 ROOT = host.ROOT
 REF = "default rebuild"
+BUILDER = ["quality", "branchingFactor", "maxDepth", "sahBlockSize", "minLeafSize", "maxLeafSize",
+           "travcost", "intcost", "static", "compact", "robust", "backend"]
 
 
 def sets_of(config):
@@ -90,11 +92,16 @@ def derive(exe, args, tmp):
     d = os.path.join(tmp, "static")
     os.makedirs(d)
     log = os.path.join(d, "host.log")
+    # the still frame of an animated scene: the update parameters would only be noise there,
+    # so the builder's parameters are named (the plan leaves motion-only ones out by itself
+    # only for a scene that never moves)
     host.run(exe, ["--plugin", "tuner_nm", "--objective", "build+render", "--iterations",
-                   str(args.static_iterations), "--spp", str(args.spp), "--res", args.res,
+                   str(args.static_iterations), "--tune-params", ",".join(BUILDER),
+                   "--spp", str(args.spp), "--res", args.res,
                    "--threads", str(args.threads), "--no-db", "--out", os.path.join(d, "still.exr"),
                    args.scene], nice=args.nice, log=log)
     static = best_from_log(log, "still tune")
+    static.update(updateMethod="rebuild", refitInterval=0, refitSahGrowth=0)
     d = os.path.join(tmp, "interval")
     os.makedirs(d)
     run_sequence(exe, args.scene, ["updateMethod=refit"], args, d,
