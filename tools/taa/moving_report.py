@@ -16,6 +16,7 @@ import sys
 
 import numpy as np
 
+from tools.common import images
 from tools.taa import eval as ev
 from tools.taa import rejection
 
@@ -37,9 +38,15 @@ def region_masks(folder):
                 fail(f"{os.path.join(folder, 'manifest.json')}: frames[{i}] has no \"{k}\" "
                      "file; expected a sequence rendered with the depth, motion and prevdepth "
                      "AOVs (tools/taa/render_noisy.sh)")
-    depth = np.stack([x[..., 0] for x in ev.frames(folder, "depth", man)])
-    zprev = np.stack([x[..., 0] for x in ev.frames(folder, "prev_depth", man)])
-    motion = np.stack([x[..., :2] for x in ev.frames(folder, "motion", man)])
+    def aov(key, ch):  # AOVs have 1 (depth) or 2-3 (motion) channels: not eval.frames' RGB
+        out = []
+        for f in fr:
+            try:
+                out.append(images.read_exr(os.path.join(folder, f[key]))[..., ch])
+            except IOError as e:
+                fail(str(e))
+        return np.stack(out)
+    depth, zprev, motion = aov("depth", 0), aov("prev_depth", 0), aov("motion", slice(0, 2))
     jit = np.array([f.get("jitter", [0.0, 0.0]) for f in fr], np.float32)
     reset = np.array([bool(f.get("reset", False)) for f in fr])
     raw, _ = rejection.sequence_masks(depth, zprev, motion, jit, reset)

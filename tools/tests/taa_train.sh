@@ -6,6 +6,8 @@
 # writes every filtered frame), and the plugin computes what PyTorch computes with the same
 # weights (eval_torch.py's RMSE / temporal error of the network equal eval.py's of the
 # plugin's frames to 1e-4 relative: a file the plugin read differently would not match);
+# eval_torch.py --nets (several networks, evaluate.py's eval.json for select_val.py) gives the
+# same network figures as its one-file form and VCTAA's from the sequence's own post frames;
 # a truncated weights file is refused naming the file. The only test that imports torch:
 # tests/support/bootstrap_python blocks it elsewhere so the evaluation tools stay torch-free.
 set -euo pipefail
@@ -44,6 +46,24 @@ ok = rmse > 0 and abs(rmse - t["rmse"]) <= 1e-4 * t["rmse"] and \
     abs(tmp - t["temporal"]) <= 1e-4 * t["temporal"]
 if not ok:
     print("FAIL: the C plugin's output differs from PyTorch's with train.py's weights")
+sys.exit(0 if ok else 1)
+PYEOF
+
+"$PY" -m tools.taa.eval_torch --nets "w=$dir/w.ttw,c6=$TT_SOURCE_ROOT/plugins/post_taa/post_taa_c6.ttw" \
+  "$dir/data" box --skip 2 --eval-json "$dir/multi.json" > /dev/null
+"$PY" -m tools.taa.eval --ref "$dir/data/box" --test "$dir/data/box" --key post --skip 2 --no-flip \
+  --json "$dir/vc.json" > /dev/null
+"$PY" - "$dir/torch.json" "$dir/multi.json" "$dir/vc.json" <<'PYEOF' || fail=1
+import json, sys
+t = json.load(open(sys.argv[1]))["box"]
+res = json.load(open(sys.argv[2]))[0]
+by = {r["method"]: r for r in res["methods"]}
+vc = json.load(open(sys.argv[3]))[0]
+ok = (set(by) == {"vctaa", "input", "w", "c6"} and by["w"]["rmse"] == t["rmse"] and
+      by["w"]["temporal"] == t["temporal"] and abs(by["vctaa"]["rmse"] - vc["rmse"]) <= 1e-9 and
+      by["c6"]["rmse"] != t["rmse"] and all(0 < r["brightness"] < 10 for r in by.values()))
+print(("" if ok else "FAIL: ") + f"eval_torch --nets: w {by['w']['rmse']:.6f} (one-file form "
+      f"{t['rmse']:.6f}), vctaa {by['vctaa']['rmse']:.6f} (eval.py {vc['rmse']:.6f})")
 sys.exit(0 if ok else 1)
 PYEOF
 
