@@ -21,10 +21,40 @@ static char dir[] = "/tmp/tt_tune_tunersXXXXXX";
 static char scene_path[4200];
 static char out[1 << 20];
 
-/* Canonical text of a history entry's config (caller frees). */
-static char *cfg_of(const cJSON *h) {
-  return cJSON_PrintUnformatted(cJSON_GetObjectItem(h, "config"));
+/* Puts each number under `node` back as raw text that reads as the same double. */
+static void exact_numbers(cJSON *node) {
+  for (cJSON *c = node ? node->child : NULL; c; c = c->next) {
+    if (!cJSON_IsNumber(c)) {
+      exact_numbers(c);
+      continue;
+    }
+    char buf[64];
+    for (int prec = 15; prec <= 17; prec++) {
+      snprintf(buf, sizeof buf, "%.*g", prec, c->valuedouble);
+      if (strtod(buf, NULL) == c->valuedouble) break;
+    }
+    char *text = cJSON_malloc(strlen(buf) + 1); /* cJSON_Delete frees it */
+    if (!text) continue;
+    memcpy(text, buf, strlen(buf) + 1);
+    c->valuestring = text;
+    c->type = cJSON_Raw;
+  }
 }
+
+/* Text of a configuration, exact: what the library and the database key it by. cJSON prints
+ * 15 digits when they read back within a relative DBL_EPSILON, which makes configurations
+ * one ulp apart (a tuner's arithmetic makes them; the library measures both) one text.
+ * Caller frees. */
+static char *cfg_text(const cJSON *cfg) {
+  cJSON *copy = cJSON_Duplicate(cfg, 1);
+  exact_numbers(copy);
+  char *text = cJSON_PrintUnformatted(copy);
+  cJSON_Delete(copy);
+  return text;
+}
+
+/* Exact text of a history entry's config (caller frees). */
+static char *cfg_of(const cJSON *h) { return cfg_text(cJSON_GetObjectItem(h, "config")); }
 
 /* One integer from SQL on the database (-1 on error). */
 static long db_int(const char *path, const char *sql) {
@@ -87,7 +117,7 @@ static cJSON *tune_nm(const char *db, const char *name, const char *extra, int i
  * the default measurement included. */
 static int max_repeats(const cJSON *t, int *differ, int *rebuilt) {
   cJSON *hist = cJSON_GetObjectItem(t, "history");
-  char *def = cJSON_PrintUnformatted(cJSON_GetObjectItem(t, "default_config"));
+  char *def = cfg_text(cJSON_GetObjectItem(t, "default_config"));
   int n = cJSON_GetArraySize(hist), best = 1;
   *differ = *rebuilt = 0;
   for (int i = 0; i < n; i++) {
@@ -145,7 +175,7 @@ static void test_reevaluate(void) {
   {
     cJSON *hist = cJSON_GetObjectItem(t, "history");
     int n = cJSON_GetArraySize(hist), distinct = 1; /* the default */
-    char *def = cJSON_PrintUnformatted(cJSON_GetObjectItem(t, "default_config"));
+    char *def = cfg_text(cJSON_GetObjectItem(t, "default_config"));
     for (int i = 0; i < n; i++) {
       char *ci = cfg_of(cJSON_GetArrayItem(hist, i));
       int seen = !strcmp(ci, def);
@@ -158,6 +188,15 @@ static void test_reevaluate(void) {
       free(ci);
     }
     free(def);
+    /* each history configuration is, as text, the one the database recorded */
+    int unmatched = 0;
+    for (int i = 0; i < n; i++) {
+      char *ci = cfg_of(cJSON_GetArrayItem(hist, i));
+      if (db_config_rows(db, ci, "") < 1 && unmatched++ == 0)
+        CHECK_MSG(0, "history configuration %s has no database row", ci);
+      free(ci);
+    }
+    CHECK_MSG(unmatched == 0, "%d history configurations differ from the database's", unmatched);
     char line[96];
     snprintf(line, sizeof line, "%d of 260 iterations measured again", 261 - distinct);
     CHECK_CONTAINS(out, line);
@@ -213,6 +252,41 @@ static void test_reevaluate(void) {
   cJSON_Delete(root);
 }
 
+/* The run record writes configurations exactly: a travcost of 0.1 + 0.2 (17 significant
+ * digits; cJSON alone prints 0.3, one ulp away) reads back as 0.1 + 0.2. Configurations one
+ * ulp apart are distinct for the library, its database and its count of re-measurements, so
+ * a record that printed them alike miscounted them (test_reevaluate's "N of 260 iterations
+ * measured again", when a tuner's arithmetic proposed such a pair). */
+static void test_exact_configs(void) {
+  char db[4400];
+  snprintf(db, sizeof db, "%s/exact.db", dir);
+  const double v = 0.1 + 0.2;
+  CHECK(v != 0.3);
+  cJSON *root = tune_nm(db, "exact", "--set accel_embree.travcost=0.30000000000000004", 2);
+  cJSON *t = cJSON_GetObjectItem(root, "tuning");
+  CHECK(t != NULL);
+  if (!t) {
+    cJSON_Delete(root);
+    return;
+  }
+  cJSON *def = cJSON_GetObjectItem(t, "default_config");
+  double got = num(def, "travcost");
+  CHECK_MSG(got == v, "default_config travcost %.17g, expected %.17g", got, v);
+  /* the default's text is the database's */
+  char *dt = cfg_text(def);
+  CHECK_MSG(db_config_rows(db, dt, "") >= 1, "default %s: %ld database rows", dt,
+            db_config_rows(db, dt, ""));
+  /* and cfg_text tells the two apart */
+  cJSON *other = cJSON_Duplicate(def, 1);
+  cJSON_SetNumberValue(cJSON_GetObjectItem(other, "travcost"), 0.3);
+  char *ot = cfg_text(other);
+  CHECK_MSG(strcmp(dt, ot) != 0, "0.1 + 0.2 and 0.3 print alike: %s", dt);
+  free(ot);
+  cJSON_Delete(other);
+  free(dt);
+  cJSON_Delete(root);
+}
+
 static void test_random(void) {
   char db[4400], stats[4400], args[16384];
   snprintf(db, sizeof db, "%s/random.db", dir);
@@ -238,9 +312,8 @@ static void test_random(void) {
   CHECK(db_int(db, "SELECT count(*) FROM samples WHERE tuner = 'tuner_random' AND status = 0 "
                    "AND cost > 0") == (long)num(t, "measured"));
   /* the final image used the best configuration */
-  char *used = cJSON_PrintUnformatted(
-      cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree"));
-  char *best = cJSON_PrintUnformatted(cJSON_GetObjectItem(t, "best_config"));
+  char *used = cfg_text(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree"));
+  char *best = cfg_text(cJSON_GetObjectItem(t, "best_config"));
   CHECK_MSG(used && best && !strcmp(used, best), "params %s, best %s", used, best);
   free(used);
   free(best);
@@ -317,11 +390,10 @@ static void test_verify(void) {
     CHECK_NEAR(num(v, "cost_ratio"), tot[2], 1e-12);
     /* the verdict: the best is kept only when it was faster in the median round; else the
      * default, said in one sentence, and the final passes use what was kept */
-    char *best = cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "best_config"));
-    char *def = cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "default_config"));
-    char *kept = cJSON_PrintUnformatted(cJSON_GetObjectItem(tj, "kept_config"));
-    char *used = cJSON_PrintUnformatted(
-        cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree"));
+    char *best = cfg_text(cJSON_GetObjectItem(tj, "best_config"));
+    char *def = cfg_text(cJSON_GetObjectItem(tj, "default_config"));
+    char *kept = cfg_text(cJSON_GetObjectItem(tj, "kept_config"));
+    char *used = cfg_text(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "params"), "accel_embree"));
     const char *reason = cJSON_GetStringValue(cJSON_GetObjectItem(tj, "kept_reason"));
     CHECK_MSG(!strcmp(used, kept), "final passes used %s, kept %s", used, kept);
     if (!strcmp(best, def)) {
@@ -355,6 +427,7 @@ int main(void) {
   char data_home[4300];
   snprintf(data_home, sizeof data_home, "%s/data", dir);
   setenv("XDG_DATA_HOME", data_home, 1);
+  test_exact_configs();
   test_reevaluate();
   test_random();
   test_verify();
