@@ -445,6 +445,56 @@ static void test_camera(void) {
   }
 }
 
+/* KHR_lights_punctual: a point light at its node's position, a spot light turned by its
+ * node (looking down -Z, so down -Y after a -90 degree turn about X) and a directional one;
+ * with lights of its own the file gets no default sky. */
+static void test_lights(void) {
+  const char *json =
+      "{\"asset\": {\"version\": \"2.0\"}, \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 2, "
+      "3]}],\n"
+      " \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
+      " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [\n"
+      "   {\"type\": \"point\", \"color\": [1, 0.5, 0.25], \"intensity\": 8},\n"
+      "   {\"type\": \"spot\", \"intensity\": 3, \"spot\": {\"innerConeAngle\": 0.2, "
+      "\"outerConeAngle\": 0.5}},\n"
+      "   {\"type\": \"directional\", \"intensity\": 2}]}},\n"
+      " \"nodes\": [{\"mesh\": 0},\n"
+      "   {\"name\": \"bulb\", \"translation\": [1, 2, 3], \"extensions\": "
+      "{\"KHR_lights_punctual\": {\"light\": 0}}},\n"
+      "   {\"name\": \"lamp\", \"translation\": [0, 4, 0], \"rotation\": [-0.70710678, 0, 0, "
+      "0.70710678], \"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}},\n"
+      "   {\"name\": \"sun\", \"extensions\": {\"KHR_lights_punctual\": {\"light\": 2}}}],\n"
+      " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+      " \"buffers\": [@BUFFER@],\n"
+      " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}],\n"
+      " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": "
+      "\"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}]}\n";
+  tt_scene *s = load(write_gltf("lights.gltf", json, tri, 36));
+  if (!s) return;
+  CHECK_MSG(tt_scene_light_count(s) == 3, "%u lights", tt_scene_light_count(s));
+  for (uint32_t i = 0; i < tt_scene_light_count(s) && tt_scene_light_count(s) == 3; i++) {
+    const tt_light *l = tt_scene_light(s, i);
+    if (l->type == TT_LIGHT_POINT) {
+      CHECK_NEAR(l->position[0], 1, 1e-6);
+      CHECK_NEAR(l->position[1], 2, 1e-6);
+      CHECK_NEAR(l->position[2], 3, 1e-6);
+      CHECK_NEAR(l->radiance[0], 8, 1e-5);
+      CHECK_NEAR(l->radiance[2], 2, 1e-5);
+    } else if (l->type == TT_LIGHT_SPOT) {
+      CHECK_NEAR(l->position[1], 4, 1e-6);
+      CHECK_NEAR(l->direction[1], -1, 1e-5);
+      CHECK_NEAR(l->cos_outer, cos(0.5), 1e-6);
+      CHECK_NEAR(l->cos_inner, cos(0.2), 1e-6);
+      CHECK_NEAR(l->radiance[1], 3, 1e-5);
+    } else {
+      CHECK(l->type == TT_LIGHT_DISTANT);
+      CHECK_NEAR(l->direction[2], -1, 1e-6);
+      CHECK_NEAR(l->radiance[0], 2, 1e-5);
+    }
+  }
+  tt_scene_destroy(s);
+}
+
 /* ---- bad input ------------------------------------------------------------------------------ */
 
 static void test_bad_input(void) {
@@ -491,6 +541,7 @@ int main(void) {
   test_morph_cube();
   test_interpolation();
   test_camera();
+  test_lights();
   test_bad_input();
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);

@@ -198,4 +198,5 @@ def main():
     print(f"blender_skinned: wrote {out} ({a.frames} frames at {a.fps} fps)")
 
 
-main()
+if __name__ == "__main__":  # blender -P runs the script as __main__
+    main()

@@ -26,6 +26,7 @@ NEEDS = {  # module (relative to tools/) -> the blocked package it needs (torch:
     "taa/export_golden.py": "torch (writes the PyTorch golden outputs)",
     "taa/ablations.py": "torch (trains the ablation networks)",
     "cycles/cycles_reference.py": "bpy (runs inside Blender)",
+    "scenes/blender_skinned.py": "bpy (runs inside Blender)",
 }
 MAIN = re.compile(r"__name__\s*==\s*['\"]__main__['\"]")
 SYS_PATH_EDIT = re.compile(r"sys\.path\s*(\.\s*(insert|append|extend)\s*\(|\[|\+?=)")

@@ -1,7 +1,8 @@
 /* glTF 2.0 files as animated scenes, through assimp (io/assimp_read.h): the node hierarchy
  * becomes scene/anim.h's nodes, the file's first animation their keyframed TRS channels and
  * the morph target weights, skins become CPU-skinned meshes (scene/anim_skin.c), the first
- * perspective camera the still camera and, when its node moves, the camera path. assimp
+ * perspective camera the still camera and, when its node moves, the camera path, punctual
+ * lights (KHR_lights_punctual) lights at their start pose. assimp
  * 5.2.5 drops what glTF says about interpolation, so the file's JSON is read too: each
  * sampler's STEP / LINEAR / CUBICSPLINE and the cameras' vertical field of view. Every error
  * names the file and the glTF field. */
@@ -858,6 +859,77 @@ static void tt__gltf_frame(tt_scene *s) {
   s->camera.position[2] = (float)(c[2] + d);
 }
 
+/* ---- lights ---------------------------------------------------------------------------------- */
+
+/* KHR_lights_punctual (assimp's aiLight: colour times intensity, the node's name) at their
+ * nodes' start pose: point (intensity), spot (its cones) and directional (irradiance)
+ * lights, shining down the node's -Z. tunetrace lights do not move: a light on a moving
+ * node is said once. */
+static tt_status tt__gltf_lights(tt__gltf *g) {
+  tt_scene *s = g->scene;
+  double t0, t1;
+  tt__scene_anim_range(s, &t0, &t1);
+  tt__scene_anim_pose_nodes(s, t0);
+  for (unsigned i = 0; i < g->sc->mNumLights; i++) {
+    const struct aiLight *al = g->sc->mLights[i];
+    char what[400];
+    snprintf(what, sizeof what, "light of node \"%.200s\"", al->mName.data);
+    int32_t node;
+    tt_status st = tt__gltf_node_ref(g, al->mName.data, what, &node);
+    if (st != TT_OK) return st;
+    const double *w = tt__scene_anim_node(s, (uint32_t)node)->world;
+    tt_light l;
+    memset(&l, 0, sizeof l);
+    l.struct_size = sizeof l;
+    const float rgb[3] = {al->mColorDiffuse.r, al->mColorDiffuse.g, al->mColorDiffuse.b};
+    for (int k = 0; k < 3; k++) {
+      if (!isfinite(rgb[k]) || rgb[k] < 0)
+        return tt_set_error(TT_ERR_PARSE,
+                            "%s: %s: color times intensity is (%g, %g, %g) (expected finite "
+                            "values >= 0)",
+                            g->file, what, rgb[0], rgb[1], rgb[2]);
+      l.radiance[k] = rgb[k];
+      l.position[k] = (float)w[4 * k + 3];
+      l.direction[k] = (float)-w[4 * k + 2];
+    }
+    double len =
+        sqrt((double)l.direction[0] * l.direction[0] + (double)l.direction[1] * l.direction[1] +
+             (double)l.direction[2] * l.direction[2]);
+    if (al->mType != aiLightSource_POINT && !(len > 0 && isfinite(len)))
+      return tt_set_error(TT_ERR_PARSE,
+                          "%s: %s: the node's matrix gives no direction (zero "
+                          "scale?)",
+                          g->file, what);
+    for (int k = 0; k < 3 && len > 0; k++) l.direction[k] = (float)(l.direction[k] / len);
+    if (al->mType == aiLightSource_POINT) l.type = TT_LIGHT_POINT;
+    else if (al->mType == aiLightSource_DIRECTIONAL) l.type = TT_LIGHT_DISTANT;
+    else if (al->mType == aiLightSource_SPOT) {
+      l.type = TT_LIGHT_SPOT;
+      double outer = al->mAngleOuterCone, inner = al->mAngleInnerCone;
+      if (!(outer > 0 && outer <= TT__PI / 2) || !(inner >= 0 && inner <= outer))
+        return tt_set_error(TT_ERR_PARSE,
+                            "%s: %s: spot.innerConeAngle %g and outerConeAngle %g: expected 0 <= "
+                            "inner <= outer <= pi/2",
+                            g->file, what, inner, outer);
+      l.cos_outer = (float)cos(outer);
+      l.cos_inner = (float)cos(inner);
+    } else {
+      tt__log(TT_LOG_WARN, "%s: %s: unsupported light type (ignored)", g->file, what);
+      continue;
+    }
+    if (g->moves[node])
+      tt__log(TT_LOG_WARN,
+              "%s: %s: the light stays where its node is at the start (%g s); "
+              "lights do not move",
+              g->file, what, t0);
+    tt_light *slot =
+        tt__scene_push((void **)&s->lights, &s->light_count, &s->light_cap, sizeof *slot);
+    if (!slot) return tt_set_error(TT_ERR_OUT_OF_MEMORY, "%s: out of memory", g->file);
+    *slot = l;
+  }
+  return TT_OK;
+}
+
 /* ---- entry point ------------------------------------------------------------------------------ */
 
 tt_status tt__scene_load_gltf(const char *path, int imported, tt_scene **out) {
@@ -923,7 +995,8 @@ tt_status tt__scene_load_gltf(const char *path, int imported, tt_scene **out) {
   if (st == TT_OK && g.scene->mesh_count == 0)
     st = tt_set_error(TT_ERR_PARSE, "%s: meshes: the file contains no triangles", path);
   if (st == TT_OK) st = tt__gltf_camera(&g, &camera);
-  if (st == TT_OK && !imported && !g.has_emitter) {
+  if (st == TT_OK) st = tt__gltf_lights(&g);
+  if (st == TT_OK && !imported && !g.has_emitter && g.scene->light_count == 0) {
     /* a file without lights would render black on its own: a dim white sky and a sun from
      * above and in front (+Y up, +Z toward the default view, as glTF), so shapes read even
      * with glTF's default white albedo, which a uniform sky alone turns into a white
@@ -947,11 +1020,6 @@ tt_status tt__scene_load_gltf(const char *path, int imported, tt_scene **out) {
       }
     }
   }
-  if (st == TT_OK && g.sc->mNumLights > 0)
-    tt__log(TT_LOG_WARN,
-            "%s: the file's %u punctual lights are not imported (light the scene "
-            "from a scene.json that imports it)",
-            path, g.sc->mNumLights);
   if (st == TT_OK) st = tt__scene_finish(g.scene);
   if (st == TT_OK && !camera) tt__gltf_frame(g.scene);
   free(g.ainode);

@@ -26,7 +26,7 @@ tt_status tt__gltf_check(const char *file, const char *where);
 /* Loads a glTF 2.0 file (.gltf, .glb) as a scene with its node hierarchy, animation (node
  * TRS channels, morph target weights), skins, materials and camera (gltf_scene.c).
  * `imported`: the scene is wrapped by a scene.json "import", which brings its own lights;
- * a file loaded on its own without lights or emitters gets a white environment. */
+ * a file loaded on its own without lights or emitters gets a dim sky and a sun. */
 tt_status tt__scene_load_gltf(const char *path, int imported, tt_scene **out);
 
 /* Reads and loads a scene.json file with its own directory as the asset base; depth 0 for
