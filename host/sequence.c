@@ -544,7 +544,7 @@ static int tt__seq_png(tt__seq *s, const tt__seq_frame *fr) {
 /* Step: frame f, with the stop held back so that it completes: pose and accel update, the
  * jittered frame, the reference, the post-filter, the PNG; its manifest entry closed and
  * the manifest committed. An exit code (a failure leaves the entry open: finish closes it). */
-int tt__seq_step(tt__seq *s, uint32_t f) {
+static int tt__seq_step(tt__seq *s, uint32_t f) {
   tt__seq_frame fr;
   s->render_ms = 0;
   tt_default_host_hold_stop(1);
@@ -563,6 +563,17 @@ int tt__seq_step(tt__seq *s, uint32_t f) {
   s->done_frames++;
   uint32_t nframes = s->opt->seq_last - s->opt->seq_first + 1;
   tt__progress_update("sequence", (double)(f - s->opt->seq_first + 1) / nframes);
+  return rc;
+}
+
+/* Frame f, inside a tuning window when tuning along the sequence (a failed frame's window
+ * is not reported: nothing is recorded for it). */
+static int tt__seq_next_frame(tt__seq *s, uint32_t f) {
+  if (!s->tune) return tt__seq_step(s, f);
+  int rc = tt__seq_tune_before(s, f);
+  if (rc == TT_EXIT_OK) rc = tt__seq_step(s, f);
+  s->frame_note = NULL;
+  if (rc == TT_EXIT_OK) rc = tt__seq_tune_after(s, f);
   return rc;
 }
 
@@ -614,7 +625,7 @@ int tt__run_sequence(const tt__host_options *opt) {
      * loading and accel build) ends the sequence here; the first frame is always completed,
      * as a still completes its first pass: exit 130 comes with what was rendered so far */
     if (f > opt->seq_first && s.ses.host->should_stop()) rc = TT_EXIT_INTERRUPTED;
-    else rc = s.tune ? tt__seq_tune_frame(&s, f) : tt__seq_step(&s, f);
+    else rc = tt__seq_next_frame(&s, f);
   }
   if (s.tune) rc = tt__seq_tune_finish(&s, rc);
   if (s.manifest) rc = tt__seq_finish(&s, rc);

@@ -46,16 +46,16 @@ typedef struct tt__seq_frame {
   double render_ms, ref_ms;
 } tt__seq_frame;
 
-/* Step: frame f (sequence.c): pose and accel update, the jittered frame, the reference, the
- * post-filter, the PNG, the manifest entry committed. An exit code. */
-int tt__seq_step(tt__seq *s, uint32_t f);
-
 /* Tuning along the sequence (sequence_tune.c): with a tuner loaded (or --explore N) over an
  * animated scene, the frames are the measurements. tt__seq_tune_create sets s->tune (left
- * NULL when nothing is tuned); tt__seq_tune_frame replaces tt__seq_step per frame;
- * tt__seq_tune_finish logs what was found; tt__seq_tune_free releases it. Exit codes. */
+ * NULL when nothing is tuned); around each frame's step, tt__seq_tune_before starts a window
+ * when one is due (the search's next configuration in s->switch_config, the manifest note in
+ * s->frame_note) and tt__seq_tune_after adds the frame's times (s->update_ms, s->render_ms)
+ * and reports a finished window; tt__seq_tune_finish logs what was found; tt__seq_tune_free
+ * releases it. Exit codes. (The frame loop calls these, never the other way round.) */
 int tt__seq_tune_create(tt__seq *s);
-int tt__seq_tune_frame(tt__seq *s, uint32_t f);
+int tt__seq_tune_before(tt__seq *s, uint32_t f);
+int tt__seq_tune_after(tt__seq *s, uint32_t f);
 int tt__seq_tune_finish(tt__seq *s, int rc);
 void tt__seq_tune_free(tt__seq *s);
 

@@ -228,16 +228,20 @@ static int tt__seq_tune_end(tt__seq *s) {
   return TT_EXIT_FAILURE;
 }
 
-int tt__seq_tune_frame(tt__seq *s, uint32_t f) {
+int tt__seq_tune_before(tt__seq *s, uint32_t f) {
   struct tt__seq_tune *t = s->tune;
   int rc = TT_EXIT_OK;
   if (t->in_window == 0 && (rc = tt__seq_tune_begin(s, f)) != TT_EXIT_OK) return rc;
   tt__seq_tune_note(s, t->in_window == 0);
-  rc = tt__seq_step(s, f);
+  return TT_EXIT_OK;
+}
+
+int tt__seq_tune_after(tt__seq *s, uint32_t f) {
+  struct tt__seq_tune *t = s->tune;
   s->frame_note = NULL;
-  if (rc != TT_EXIT_OK) return rc; /* the window's measurement is not reported */
   t->sum_update += s->update_ms;
   t->sum_render += s->render_ms;
+  int rc = TT_EXIT_OK;
   if (++t->in_window == t->window || f == s->opt->seq_last) {
     rc = tt__seq_tune_end(s);
     t->in_window = 0;
