@@ -236,6 +236,12 @@ struct cJSON;
 int tt__json_read(const char *option, const char *path, const char *what, struct cJSON **root);
 /* Prints `root` on stdout and deletes it; TT_EXIT_OK, or TT_EXIT_OUTPUT when stdout fails. */
 int tt__json_print(struct cJSON *root);
+/* Parses JSON the library wrote (a configuration) so that cJSON prints every number back as
+ * the same double (NULL when text is NULL or unparsable): configurations one ulp apart stay
+ * apart in what the host prints, as in the library and its database (json_io.c). */
+struct cJSON *tt__json_parse_exact(const char *text);
+/* Makes every number under `node` print back as the same double (json_io.c). */
+void tt__json_exact(struct cJSON *node);
 
 /* Adds "scene_id" and "scene_id_parts" (geometry, materials, textures, lights) to a JSON
  * record, so a changed scene id can be explained. */

@@ -273,7 +273,7 @@ static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index,
   cJSON_AddNumberToObject(o, "path_index", path_index);
   cJSON_AddStringToObject(o, "mode", r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit");
   cJSON_AddBoolToObject(o, "fallback", r->fallback != 0);
-  cJSON *cfg = r->config ? cJSON_Parse(r->config) : NULL;
+  cJSON *cfg = tt__json_parse_exact(r->config);
   cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
   const struct {
     const char *name;
@@ -360,7 +360,7 @@ static void tt__hyb_prediction_json(tt__hyb *h, cJSON *o, const tt_predictor_res
   if (h->subset) tt_config_assign(full, sub);
   else tt_config_copy(full, sub);
   char *j = tt_config_to_json(full);
-  cJSON *cfg = j ? cJSON_Parse(j) : NULL;
+  cJSON *cfg = tt__json_parse_exact(j);
   tt_free(j);
   cJSON_AddItemToObject(o, "config", cfg ? cfg : cJSON_CreateNull());
   if (isfinite(r->expected_cost)) cJSON_AddNumberToObject(o, "expected_cost", r->expected_cost);

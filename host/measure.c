@@ -50,6 +50,8 @@ static int tt__measure_read(const char *path, const tt_config *base, tt_config *
   *count = k;
   for (size_t i = 0; i < k; i++) {
     cJSON *item = cJSON_GetArrayItem(root, (int)i);
+    /* exact numbers: the configuration measured is the one the file names, to the last bit */
+    if (cJSON_IsObject(item)) tt__json_exact(item);
     char *json = cJSON_IsObject(item) ? cJSON_PrintUnformatted(item) : NULL;
     char where[4200];
     snprintf(where, sizeof where, "%s[%zu]", path, i);
@@ -144,7 +146,7 @@ static cJSON *tt__measure_config_json(const tt__measure_job *j, size_t i, double
   int ok = j->ok[i];
   cJSON *o = cJSON_CreateObject();
   char *js = tt_config_to_json(j->cfgs[i]);
-  cJSON *cj = js ? cJSON_Parse(js) : NULL;
+  cJSON *cj = tt__json_parse_exact(js);
   tt_free(js);
   cJSON_AddItemToObject(o, "config", cj ? cj : cJSON_CreateNull());
   cJSON_AddStringToObject(o, "status", ok ? "ok" : "infeasible or failed");

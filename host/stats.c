@@ -2,7 +2,6 @@
 #include "host.h"
 
 #include <cjson/cJSON.h>
-#include <locale.h>
 #include <math.h>
 #include <sched.h>
 #include <stdio.h>
@@ -11,38 +10,6 @@
 #include <time.h>
 #include <unistd.h>
 
-/* Turns every number under `node` into raw text that reads back as the same double.
- * cJSON prints 15 significant digits whenever they read back within a relative DBL_EPSILON,
- * so two configurations one ulp apart (a tuner's arithmetic makes such pairs: distinct
- * configurations for the library and the database) would print as one, and a printed
- * configuration would not be the one measured. */
-static void tt__exact_numbers(cJSON *node) {
-  for (cJSON *c = node ? node->child : NULL; c; c = c->next) {
-    if (!cJSON_IsNumber(c)) {
-      tt__exact_numbers(c);
-      continue;
-    }
-    double v = c->valuedouble;
-    if (!isfinite(v)) continue; /* cJSON writes null */
-    char buf[64];
-    for (int prec = 15; prec <= 17; prec++) {
-      snprintf(buf, sizeof buf, "%.*g", prec, v);
-      if (strtod(buf, NULL) == v) break;
-    }
-    /* JSON needs '.', whatever LC_NUMERIC the process selected */
-    const char *dp = localeconv()->decimal_point;
-    if (dp && dp[0] && dp[0] != '.')
-      for (char *p = buf; *p; p++)
-        if (*p == dp[0]) *p = '.';
-    char *text = cJSON_malloc(strlen(buf) + 1);
-    if (!text) continue; /* keeps cJSON's own form */
-    strcpy(text, buf);
-    if (c->valuestring) cJSON_free(c->valuestring);
-    c->valuestring = text;
-    c->type = cJSON_Raw | (c->type & cJSON_StringIsConst);
-  }
-}
-
 /* Adds the configuration of one plugin as a JSON object, or null. */
 static void tt__add_config(cJSON *parent, const char *name, const tt_config *config) {
   if (!config) {
@@ -50,16 +17,14 @@ static void tt__add_config(cJSON *parent, const char *name, const tt_config *con
     return;
   }
   char *json = tt_config_to_json(config);
-  cJSON *obj = json ? cJSON_Parse(json) : NULL;
+  cJSON *obj = tt__json_parse_exact(json);
   tt_free(json);
-  tt__exact_numbers(obj);
   cJSON_AddItemToObject(parent, name, obj ? obj : cJSON_CreateNull());
 }
 
 /* Adds a configuration given as JSON text (null if absent or unparsable). */
 static void tt__add_json(cJSON *parent, const char *name, const char *json) {
-  cJSON *obj = json ? cJSON_Parse(json) : NULL;
-  tt__exact_numbers(obj);
+  cJSON *obj = tt__json_parse_exact(json);
   cJSON_AddItemToObject(parent, name, obj ? obj : cJSON_CreateNull());
 }
 

@@ -285,6 +285,34 @@ static void test_exact_configs(void) {
   cJSON_Delete(other);
   free(dt);
   cJSON_Delete(root);
+
+  /* --measure keeps them apart too: the configurations of its file are measured and printed
+   * to the last bit (its input and output went through cJSON's 15-digit printing) */
+  char file[4400], args[9000];
+  snprintf(file, sizeof file, "%s/exact_measure.json", dir);
+  FILE *f = fopen(file, "w");
+  CHECK(f != NULL);
+  if (!f) return;
+  fputs("[{\"travcost\": 0.30000000000000004}, {\"travcost\": 0.3}]", f);
+  fclose(f);
+  snprintf(args, sizeof args,
+           "--measure '%s' --rounds 1 --res 8x8 --spp 1 --threads 1 --set "
+           "accel_embree.backend=custom '%s'",
+           file, scene_path);
+  int rc = run_host(args, out, sizeof out);
+  CHECK_MSG(rc == 0, "--measure exit %d: %.2000s", rc, out);
+  const char *js = out[0] == '{' ? out : strstr(out, "\n{");
+  cJSON *m = js ? cJSON_Parse(js) : NULL;
+  cJSON *configs = cJSON_GetObjectItem(m, "configs");
+  CHECK_MSG(cJSON_GetArraySize(configs) == 2, "--measure printed %d configurations: %.2000s",
+            cJSON_GetArraySize(configs), out);
+  if (cJSON_GetArraySize(configs) == 2) {
+    double t0 = num(cJSON_GetObjectItem(cJSON_GetArrayItem(configs, 0), "config"), "travcost");
+    double t1 = num(cJSON_GetObjectItem(cJSON_GetArrayItem(configs, 1), "config"), "travcost");
+    CHECK_MSG(t0 == v && t1 == 0.3, "--measure travcost %.17g and %.17g, expected %.17g and 0.3",
+              t0, t1, v);
+  }
+  cJSON_Delete(m);
 }
 
 static void test_random(void) {
