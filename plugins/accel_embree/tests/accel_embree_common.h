@@ -9,6 +9,7 @@
 #include <tunetrace/loader.h>
 #include <tunetrace/tunetrace.h>
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -285,6 +286,74 @@ static inline ae_plugin ae_load(const tt_host *host) {
   p.entry = tt_loaded_plugin_entry(lp);
   p.accel = tt_loaded_plugin_iface(lp);
   return p;
+}
+
+/* Shared by the update tests (accel_embree_refit, accel_embree_instances). */
+
+/* One mesh entry of `tc` random triangles around `c` with extra JSON (animation, morph). */
+static inline void ae_mesh_json(ae_buf *b, ae_rng *rng, int first, const char *name, uint32_t tc,
+                                const double c[3], double spread, const char *extra, int morph) {
+  uint32_t vc = 3 * tc;
+  float *pos = malloc(sizeof(float) * 3 * vc);
+  for (uint32_t t = 0; t < tc; t++) {
+    double m[3], size = ae_uniform(rng, 0.02, 0.2);
+    for (int k = 0; k < 3; k++) m[k] = c[k] + ae_uniform(rng, -spread, spread);
+    for (int v = 0; v < 3; v++)
+      for (int k = 0; k < 3; k++)
+        pos[3 * (3 * t + v) + k] = (float)(m[k] + size * ae_uniform(rng, -0.5, 0.5));
+  }
+  ae_printf(b, "%s{\"name\":\"%s\",\"material\":\"m\",\"positions\":[", first ? "" : ",", name);
+  for (uint32_t i = 0; i < 3 * vc; i++) ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i]);
+  ae_printf(b, "],\"indices\":[");
+  for (uint32_t i = 0; i < vc; i++) ae_printf(b, "%s%u", i ? "," : "", i);
+  ae_printf(b, "]");
+  if (morph) { /* a target that moves every vertex a little, differently */
+    ae_printf(b, ",\"morph\":{\"targets\":[{\"positions\":[");
+    for (uint32_t i = 0; i < 3 * vc; i++)
+      ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i] + ae_uniform(rng, -0.15, 0.15));
+    ae_printf(b, "]}],\"keys\":[{\"time\":0,\"weights\":[0]},{\"time\":2,\"weights\":[1]}]}");
+  }
+  if (extra) ae_printf(b, ",%s", extra);
+  ae_printf(b, "}");
+  free(pos);
+}
+
+/* Random rays with origins in the scene's box. */
+static inline void ae_rays_in(const tt_scene *scene, uint64_t seed, tt_ray *rays, size_t n) {
+  float lo[3], hi[3];
+  tt_scene_bounds(scene, lo, hi);
+  ae_rng rng = {seed};
+  for (size_t i = 0; i < n; i++) {
+    double d[3], len2;
+    do {
+      for (int k = 0; k < 3; k++) d[k] = ae_uniform(&rng, -1.0, 1.0);
+      len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    } while (len2 > 1.0 || len2 < 1e-4);
+    for (int k = 0; k < 3; k++) {
+      rays[i].org[k] = (float)ae_uniform(&rng, lo[k], hi[k]);
+      rays[i].dir[k] = (float)(d[k] / sqrt(len2));
+    }
+    rays[i].tnear = 0.0f;
+    rays[i].tfar = INFINITY;
+  }
+}
+
+/* Closest hits of `rays` (copied: the query shortens tfar). */
+static inline void ae_trace(const tt_accel_iface *ai, const tt_accel *acc, const tt_ray *rays,
+                            tt_hit *hits, size_t n) {
+  for (size_t i = 0; i < n; i++) {
+    tt_ray r = rays[i];
+    ai->intersect1(acc, &r, &hits[i]);
+  }
+}
+
+/* A configuration of the plugin's space from key=value pairs (NULL-terminated). */
+static inline tt_config *ae_config_of(const tt_accel_iface *ai, const char *const *kv) {
+  tt_config *c = tt_config_create(ai->space());
+  for (size_t i = 0; kv[i]; i += 2)
+    if (tt_config_set_string(c, kv[i], kv[i + 1]) != TT_OK)
+      TEST_FAIL("%s=%s: %s", kv[i], kv[i + 1], tt_last_error());
+  return c;
 }
 
 #endif /* TT_ACCEL_EMBREE_COMMON_H */

@@ -26,42 +26,14 @@
 #define RAYS (1u << 18) /* per time; four times: 2^20 rays per configuration */
 #define RIGID 48
 
-/* One mesh entry of `tc` random triangles around `c` with extra JSON (animation, morph). */
-static void mesh_json(ae_buf *b, ae_rng *rng, int first, const char *name, uint32_t tc,
-                      const double c[3], double spread, const char *extra, int morph) {
-  uint32_t vc = 3 * tc;
-  float *pos = malloc(sizeof(float) * 3 * vc);
-  for (uint32_t t = 0; t < tc; t++) {
-    double m[3], size = ae_uniform(rng, 0.02, 0.2);
-    for (int k = 0; k < 3; k++) m[k] = c[k] + ae_uniform(rng, -spread, spread);
-    for (int v = 0; v < 3; v++)
-      for (int k = 0; k < 3; k++)
-        pos[3 * (3 * t + v) + k] = (float)(m[k] + size * ae_uniform(rng, -0.5, 0.5));
-  }
-  ae_printf(b, "%s{\"name\":\"%s\",\"material\":\"m\",\"positions\":[", first ? "" : ",", name);
-  for (uint32_t i = 0; i < 3 * vc; i++) ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i]);
-  ae_printf(b, "],\"indices\":[");
-  for (uint32_t i = 0; i < vc; i++) ae_printf(b, "%s%u", i ? "," : "", i);
-  ae_printf(b, "]");
-  if (morph) {
-    ae_printf(b, ",\"morph\":{\"targets\":[{\"positions\":[");
-    for (uint32_t i = 0; i < 3 * vc; i++)
-      ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i] + ae_uniform(rng, -0.15, 0.15));
-    ae_printf(b, "]}],\"keys\":[{\"time\":0,\"weights\":[0]},{\"time\":2,\"weights\":[1]}]}");
-  }
-  if (extra) ae_printf(b, ",%s", extra);
-  ae_printf(b, "}");
-  free(pos);
-}
-
 /* The animated scene: `rigid` rigid meshes (each its own path), a morphing and a still one. */
 static tt_scene *anim_scene(int rigid) {
   ae_rng rng = {0x1257a9ce5eedull};
   ae_buf b = {0};
   ae_scene_begin(&b);
   const double c1[3] = {0.5, 0.2, 0}, c2[3] = {0, -0.5, 0.3};
-  mesh_json(&b, &rng, 1, "cloth", 3000, c1, 0.5, NULL, 1);
-  mesh_json(&b, &rng, 0, "still", 3000, c2, 0.7, NULL, 0);
+  ae_mesh_json(&b, &rng, 1, "cloth", 3000, c1, 0.5, NULL, 1);
+  ae_mesh_json(&b, &rng, 0, "still", 3000, c2, 0.7, NULL, 0);
   for (int i = 0; i < rigid; i++) {
     double c[3], ax[3], tr[3];
     for (int k = 0; k < 3; k++) {
@@ -81,47 +53,9 @@ static tt_scene *anim_scene(int rigid) {
              ae_uniform(&rng, 0.6, 1.4), ax[0], ax[1] + 1.5, ax[2], ae_uniform(&rng, 160, 300),
              -tr[1], tr[2], tr[0], ae_uniform(&rng, 0.6, 1.4), ae_uniform(&rng, 0.6, 1.4),
              ae_uniform(&rng, 0.6, 1.4));
-    mesh_json(&b, &rng, 0, name, 200 + (uint32_t)(ae_next(&rng) % 400), c, 0.15, anim, 0);
+    ae_mesh_json(&b, &rng, 0, name, 200 + (uint32_t)(ae_next(&rng) % 400), c, 0.15, anim, 0);
   }
   return ae_scene_end(&b, "accel_embree instances scene");
-}
-
-/* Random rays with origins in the scene's box. */
-static void rays_in(const tt_scene *scene, uint64_t seed, tt_ray *rays, size_t n) {
-  float lo[3], hi[3];
-  tt_scene_bounds(scene, lo, hi);
-  ae_rng rng = {seed};
-  for (size_t i = 0; i < n; i++) {
-    double d[3], len2;
-    do {
-      for (int k = 0; k < 3; k++) d[k] = ae_uniform(&rng, -1.0, 1.0);
-      len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    } while (len2 > 1.0 || len2 < 1e-4);
-    for (int k = 0; k < 3; k++) {
-      rays[i].org[k] = (float)ae_uniform(&rng, lo[k], hi[k]);
-      rays[i].dir[k] = (float)(d[k] / sqrt(len2));
-    }
-    rays[i].tnear = 0.0f;
-    rays[i].tfar = INFINITY;
-  }
-}
-
-/* Closest hits of `rays` (copied: the query shortens tfar). */
-static void trace(const tt_accel_iface *ai, const tt_accel *acc, const tt_ray *rays, tt_hit *hits,
-                  size_t n) {
-  for (size_t i = 0; i < n; i++) {
-    tt_ray r = rays[i];
-    ai->intersect1(acc, &r, &hits[i]);
-  }
-}
-
-/* A configuration of the plugin's space from key=value pairs (NULL-terminated). */
-static tt_config *config_of(const tt_accel_iface *ai, const char *const *kv) {
-  tt_config *c = tt_config_create(ai->space());
-  for (size_t i = 0; kv[i]; i += 2)
-    if (tt_config_set_string(c, kv[i], kv[i + 1]) != TT_OK)
-      TEST_FAIL("%s=%s: %s", kv[i], kv[i + 1], tt_last_error());
-  return c;
 }
 
 /* |a - b| / |b| of two normals (vectors). */
@@ -154,7 +88,7 @@ static void check_instances(const tt_accel_iface *ai, const char *label, const c
   ikv[n + 1] = "instances";
   fkv[n + 1] = "rebuild";
   ikv[n + 2] = fkv[n + 2] = NULL;
-  tt_config *icfg = config_of(ai, ikv), *fcfg = config_of(ai, fkv);
+  tt_config *icfg = ae_config_of(ai, ikv), *fcfg = ae_config_of(ai, fkv);
   tt_accel *acc = NULL, *stale = NULL;
   CHECK_MSG(ai->build(scene, icfg, &acc, NULL) == TT_OK, "%s: %s", label, tt_last_error());
   CHECK_MSG(ai->build(scene, icfg, &stale, NULL) == TT_OK, "%s: %s", label, tt_last_error());
@@ -181,10 +115,10 @@ static void check_instances(const tt_accel_iface *ai, const char *label, const c
     tt_accel *fresh = NULL;
     CHECK_MSG(ai->build(scene, fcfg, &fresh, NULL) == TT_OK, "%s: %s", label, tt_last_error());
     if (!fresh) break;
-    rays_in(scene, 7000u + (uint64_t)k, rays, RAYS);
-    trace(ai, acc, rays, a, RAYS);
-    trace(ai, fresh, rays, f, RAYS);
-    trace(ai, stale, rays, s, RAYS);
+    ae_rays_in(scene, 7000u + (uint64_t)k, rays, RAYS);
+    ae_trace(ai, acc, rays, a, RAYS);
+    ae_trace(ai, fresh, rays, f, RAYS);
+    ae_trace(ai, stale, rays, s, RAYS);
     tt_ray *sr = malloc(sizeof *sr * RAYS);
     memcpy(sr, rays, sizeof *sr * RAYS);
     ai->intersect_stream(acc, sr, st, RAYS);
@@ -288,7 +222,7 @@ static void check_instances(const tt_accel_iface *ai, const char *label, const c
 static void check_schedule(const tt_accel_iface *ai) {
   tt_scene *scene = anim_scene(8);
   static const char *const kv[] = {"updateMethod", "instances", "refitInterval", "3", NULL};
-  tt_config *cfg = config_of(ai, kv);
+  tt_config *cfg = ae_config_of(ai, kv);
   tt_accel *acc = NULL;
   CHECK_MSG(ai->build(scene, cfg, &acc, NULL) == TT_OK, "%s", tt_last_error());
   const int expect[6] = {0, 0, 1, 0, 0, 1};
@@ -300,7 +234,7 @@ static void check_schedule(const tt_accel_iface *ai) {
     CHECK(ai->update(acc, &us) == TT_OK);
     CHECK_MSG(us.rebuilt == expect[k], "instances every 3: update %d: rebuilt %d, expected %d",
               k + 1, us.rebuilt, expect[k]);
-    rays_in(scene, 99u + (uint64_t)k, rays, 4096);
+    ae_rays_in(scene, 99u + (uint64_t)k, rays, 4096);
     size_t mismatch = 0, hit = 0;
     for (size_t i = 0; i < 4096; i++) {
       tt_ray r = rays[i];
@@ -315,7 +249,7 @@ static void check_schedule(const tt_accel_iface *ai) {
   /* backend custom falls back to native instances: the same answers bit for bit */
   static const char *const ckv[] = {"updateMethod", "instances", "backend", "custom", NULL};
   static const char *const nkv[] = {"updateMethod", "instances", NULL};
-  tt_config *ccfg = config_of(ai, ckv), *ncfg = config_of(ai, nkv);
+  tt_config *ccfg = ae_config_of(ai, ckv), *ncfg = ae_config_of(ai, nkv);
   tt_accel *ca = NULL, *na = NULL;
   CHECK_MSG(ai->build(scene, ccfg, &ca, NULL) == TT_OK &&
                 ai->build(scene, ncfg, &na, NULL) == TT_OK,
@@ -324,7 +258,7 @@ static void check_schedule(const tt_accel_iface *ai) {
   tt_accel_update_stats us = {.struct_size = sizeof us};
   CHECK(ca && na && ai->update(ca, &us) == TT_OK && us.rebuilt == 0 &&
         ai->update(na, NULL) == TT_OK);
-  rays_in(scene, 4242u, rays, 4096);
+  ae_rays_in(scene, 4242u, rays, 4096);
   size_t differ = 0;
   for (size_t i = 0; ca && na && i < 4096; i++) {
     tt_ray r1 = rays[i], r2 = rays[i];

@@ -15,95 +15,28 @@
 
 #define RAYS (1u << 18) /* per time; four times: 2^20 rays per configuration */
 
-/* One mesh entry of `tc` random triangles around `c` with extra JSON (animation, morph). */
-static void mesh_json(ae_buf *b, ae_rng *rng, int first, const char *name, uint32_t tc,
-                      const double c[3], double spread, const char *extra, int morph) {
-  uint32_t vc = 3 * tc;
-  float *pos = malloc(sizeof(float) * 3 * vc);
-  for (uint32_t t = 0; t < tc; t++) {
-    double m[3], size = ae_uniform(rng, 0.02, 0.2);
-    for (int k = 0; k < 3; k++) m[k] = c[k] + ae_uniform(rng, -spread, spread);
-    for (int v = 0; v < 3; v++)
-      for (int k = 0; k < 3; k++)
-        pos[3 * (3 * t + v) + k] = (float)(m[k] + size * ae_uniform(rng, -0.5, 0.5));
-  }
-  ae_printf(b, "%s{\"name\":\"%s\",\"material\":\"m\",\"positions\":[", first ? "" : ",", name);
-  for (uint32_t i = 0; i < 3 * vc; i++) ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i]);
-  ae_printf(b, "],\"indices\":[");
-  for (uint32_t i = 0; i < vc; i++) ae_printf(b, "%s%u", i ? "," : "", i);
-  ae_printf(b, "]");
-  if (morph) { /* a target that moves every vertex a little, differently */
-    ae_printf(b, ",\"morph\":{\"targets\":[{\"positions\":[");
-    for (uint32_t i = 0; i < 3 * vc; i++)
-      ae_printf(b, "%s%.9g", i ? "," : "", (double)pos[i] + ae_uniform(rng, -0.15, 0.15));
-    ae_printf(b, "]}],\"keys\":[{\"time\":0,\"weights\":[0]},{\"time\":2,\"weights\":[1]}]}");
-  }
-  if (extra) ae_printf(b, ",%s", extra);
-  ae_printf(b, "}");
-  free(pos);
-}
-
 /* The animated scene. */
 static tt_scene *anim_scene(void) {
   ae_rng rng = {0x5eed0f2e1f17ull};
   ae_buf b = {0};
   ae_scene_begin(&b);
   const double c0[3] = {-0.4, 0, 0}, c1[3] = {0.5, 0.2, 0}, c2[3] = {0, -0.5, 0.3};
-  mesh_json(
+  ae_mesh_json(
       &b, &rng, 1, "spinner", 6000, c0, 0.5,
       "\"animation\":{\"keys\":[{\"time\":0,\"rotate\":[0,0,0],\"translate\":[0,0,0]},"
       "{\"time\":1,\"rotate\":{\"axis\":[0.3,1,0.2],\"angle\":120},\"translate\":[0.3,0.1,0]},"
       "{\"time\":2,\"rotate\":{\"axis\":[0.3,1,0.2],\"angle\":230},\"translate\":[0.6,-0.2,0.1]}]}",
       0);
-  mesh_json(&b, &rng, 0, "cloth", 5000, c1, 0.5, NULL, 1);
-  mesh_json(&b, &rng, 0, "still", 4000, c2, 0.7, NULL, 0);
+  ae_mesh_json(&b, &rng, 0, "cloth", 5000, c1, 0.5, NULL, 1);
+  ae_mesh_json(&b, &rng, 0, "still", 4000, c2, 0.7, NULL, 0);
   return ae_scene_end(&b, "accel_embree refit scene");
-}
-
-/* Random rays with origins in the scene's box. */
-static void rays_in(const tt_scene *scene, uint64_t seed, tt_ray *rays, size_t n) {
-  float lo[3], hi[3];
-  tt_scene_bounds(scene, lo, hi);
-  ae_rng rng = {seed};
-  for (size_t i = 0; i < n; i++) {
-    double d[3], len2;
-    do {
-      for (int k = 0; k < 3; k++) d[k] = ae_uniform(&rng, -1.0, 1.0);
-      len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    } while (len2 > 1.0 || len2 < 1e-4);
-    for (int k = 0; k < 3; k++) {
-      double e = 0.0;
-      rays[i].org[k] = (float)ae_uniform(&rng, lo[k] - e, hi[k] + e);
-      rays[i].dir[k] = (float)(d[k] / sqrt(len2));
-    }
-    rays[i].tnear = 0.0f;
-    rays[i].tfar = INFINITY;
-  }
-}
-
-/* Closest hits of `rays` (copied: the query shortens tfar). */
-static void trace(const tt_accel_iface *ai, const tt_accel *acc, const tt_ray *rays, tt_hit *hits,
-                  size_t n) {
-  for (size_t i = 0; i < n; i++) {
-    tt_ray r = rays[i];
-    ai->intersect1(acc, &r, &hits[i]);
-  }
-}
-
-/* A configuration of the plugin's space from key=value pairs (NULL-terminated). */
-static tt_config *config_of(const tt_accel_iface *ai, const char *const *kv) {
-  tt_config *c = tt_config_create(ai->space());
-  for (size_t i = 0; kv[i]; i += 2)
-    if (tt_config_set_string(c, kv[i], kv[i + 1]) != TT_OK)
-      TEST_FAIL("%s=%s: %s", kv[i], kv[i + 1], tt_last_error());
-  return c;
 }
 
 /* Refit against fresh builds along the animation for one configuration. */
 static void check_refit(const tt_accel_iface *ai, const char *label, const char *const *kv) {
   tt_scene *scene = anim_scene();
   CHECK(tt_scene_animated(scene));
-  tt_config *cfg = config_of(ai, kv);
+  tt_config *cfg = ae_config_of(ai, kv);
   tt_accel *acc = NULL, *stale = NULL;
   CHECK_MSG(ai->build(scene, cfg, &acc, NULL) == TT_OK, "%s: %s", label, tt_last_error());
   CHECK_MSG(ai->build(scene, cfg, &stale, NULL) == TT_OK, "%s: %s", label, tt_last_error());
@@ -123,10 +56,10 @@ static void check_refit(const tt_accel_iface *ai, const char *label, const char 
     tt_accel *fresh = NULL;
     CHECK_MSG(ai->build(scene, cfg, &fresh, NULL) == TT_OK, "%s: %s", label, tt_last_error());
     if (!fresh) break;
-    rays_in(scene, 1000u + (uint64_t)k, rays, RAYS);
-    trace(ai, acc, rays, a, RAYS);
-    trace(ai, fresh, rays, f, RAYS);
-    trace(ai, stale, rays, s, RAYS);
+    ae_rays_in(scene, 1000u + (uint64_t)k, rays, RAYS);
+    ae_trace(ai, acc, rays, a, RAYS);
+    ae_trace(ai, fresh, rays, f, RAYS);
+    ae_trace(ai, stale, rays, s, RAYS);
     for (size_t i = 0; i < RAYS; i++) {
       total++;
       hits += f[i].geom_id != TT_INVALID_ID;
@@ -183,7 +116,7 @@ static void check_schedule(const tt_accel_iface *ai) {
   };
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
     tt_scene *scene = anim_scene();
-    tt_config *cfg = config_of(ai, cases[c].kv);
+    tt_config *cfg = ae_config_of(ai, cases[c].kv);
     tt_accel *acc = NULL;
     CHECK_MSG(ai->build(scene, cfg, &acc, NULL) == TT_OK, "%s: %s", cases[c].label,
               tt_last_error());
