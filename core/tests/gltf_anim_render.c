@@ -8,6 +8,7 @@
  * assimp-testmodels. */
 #include <tunetrace/tunetrace.h>
 
+#include "anim_frame.h"
 #include "host_util.h"
 #include "tt_test.h"
 
@@ -16,56 +17,15 @@
 #include <stdlib.h>
 #include <unistd.h>
 
-#define FPS 24.0
 #define MODELS "/usr/share/assimp/models/glTF2"
 
-/* 4 1-spp passes of `path` at time t; `update` (accel_embree's updateMethod, or NULL): the
- * session starts at time 0 and is moved to t before it renders. */
+/* 4 1-spp passes of `path` at time t (anim_frame.h); `update` (accel_embree's updateMethod,
+ * or NULL): the session starts at time 0 and is moved to t before it renders. */
 static float *render_at(const char *path, double t, int animated, const char *write_to,
                         const char *update, uint32_t *w, uint32_t *h) {
-  tt_session *s = NULL;
-  float *rgb = NULL;
-  if (tt_session_create(NULL, &s) != TT_OK || tt_session_load_scene(s, path) != TT_OK) {
-    fprintf(stderr, "%s: %s\n", path, tt_last_error());
-    tt_session_destroy(s);
-    return NULL;
-  }
-  tt_scene *scene = tt_session_scene(s);
-  CHECK(tt_scene_animated(scene) == animated);
-  if (update) {
-    CHECK(tt_session_load_defaults(s) == TT_OK);
-    CHECK_MSG(tt_session_set(s, "accel_embree", "updateMethod", update) == TT_OK, "%s",
-              tt_last_error());
-    CHECK(tt_session_set_time(s, 0.0, 1.0 / FPS, NULL) == TT_OK);
-    CHECK(tt_session_start(s, 0) == TT_OK);
-    tt_accel_update_stats us = {.struct_size = sizeof us};
-    CHECK_MSG(tt_session_set_time(s, t, 1.0 / FPS, &us) == TT_OK, "%s", tt_last_error());
-    CHECK_MSG(us.rebuilt == (strcmp(update, "refit") != 0), "updateMethod %s: rebuilt %d", update,
-              us.rebuilt);
-  } else {
-    if (animated)
-      CHECK_MSG(tt_scene_set_time(scene, t, t - 1.0 / FPS) == TT_OK, "%s", tt_last_error());
-    CHECK(tt_session_set_camera_time(s, t, 1.0 / FPS) == TT_OK);
-  }
-  if (write_to) CHECK_MSG(tt_scene_write_json(scene, write_to) == TT_OK, "%s", tt_last_error());
-  if (tt_session_started(s) || tt_session_start(s, 0) == TT_OK) {
-    for (int i = 0; i < 4; i++) CHECK(tt_session_render_pass(s, 1, NULL) == TT_OK);
-    tt_film *film = tt_session_film(s);
-    *w = tt_film_width(film);
-    *h = tt_film_height(film);
-    rgb = malloc(sizeof(float) * 3 * *w * *h);
-    if (rgb) tt_film_resolve(film, rgb);
-  } else {
-    fprintf(stderr, "start: %s\n", tt_last_error());
-  }
-  tt_session_destroy(s);
-  return rgb;
-}
-
-static size_t differ(const float *a, const float *b, size_t n) {
-  size_t d = 0;
-  for (size_t i = 0; i < n; i++) d += memcmp(&a[i], &b[i], sizeof(float)) != 0;
-  return d;
+  const char *const sets[] = {"updateMethod", update, NULL};
+  anim_frame f = {.t = t, .animated = animated, .write_to = write_to, .sets = update ? sets : NULL};
+  return anim_render_frame(path, &f, w, h);
 }
 
 static void check_file(const char *scene, const char *still, const double times[2]) {
@@ -86,7 +46,7 @@ static void check_file(const char *scene, const char *still, const double times[
       }
       CHECK_MSG(lit > n / 2 && other > n / 20, "%s: %zu of %zu values lit, %zu unlike the corner",
                 scene, lit, n, other);
-      size_t d = differ(anim, ref, n);
+      size_t d = anim_values_differ(anim, ref, n);
       CHECK_MSG(d == 0, "%s t = %g: %zu of %zu values differ from the still scene placed there",
                 scene, times[k], d, n);
       static const char *const updates[] = {"rebuild", "refit"};
@@ -94,7 +54,7 @@ static void check_file(const char *scene, const char *still, const double times[
         uint32_t w3 = 0, h3 = 0;
         float *moved = render_at(scene, times[k], 1, NULL, updates[u], &w3, &h3);
         CHECK(moved && w3 == w && h3 == h);
-        size_t md = moved && w3 == w && h3 == h ? differ(moved, ref, n) : n;
+        size_t md = moved && w3 == w && h3 == h ? anim_values_differ(moved, ref, n) : n;
         CHECK_MSG(md == 0, "%s t = %g, %s: %zu of %zu values differ from the still scene", scene,
                   times[k], updates[u], md, n);
         free(moved);
@@ -104,7 +64,7 @@ static void check_file(const char *scene, const char *still, const double times[
     free(ref);
   }
   if (frames[0] && frames[1]) {
-    size_t moved = differ(frames[0], frames[1], n);
+    size_t moved = anim_values_differ(frames[0], frames[1], n);
     CHECK_MSG(moved > n / 50, "%s: only %zu of %zu values changed between t = %g and %g", scene,
               moved, n, times[0], times[1]);
     printf("%s: frames at %g s and %g s differ in %zu of %zu values, each equal to its still\n",

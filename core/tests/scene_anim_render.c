@@ -12,6 +12,7 @@
  * changes). */
 #include <tunetrace/tunetrace.h>
 
+#include "anim_frame.h"
 #include "tt_test.h"
 
 #include <math.h>
@@ -19,51 +20,14 @@
 #include <stdlib.h>
 #include <unistd.h>
 
-#define FPS 24.0
+#define FPS ANIM_FRAME_FPS
 
-/* Renders 4 1-spp passes of `path` at time t (camera and meshes) into a new buffer;
- * `write_to` (if set) receives the posed scene as scene.json. `sets` (key, value pairs of
- * accel_embree, NULL-terminated; or NULL): the session starts at time 0 with them and moves
- * to t with tt_session_set_time before it renders. */
+/* 4 1-spp passes of `path` at time t (anim_frame.h); `sets`: accel_embree settings the
+ * session starts with at time 0 before it moves to t, or NULL: posed before it starts. */
 static float *render_at(const char *path, double t, int pose, const char *write_to,
                         const char *const *sets, uint32_t *w, uint32_t *h) {
-  tt_session *s = NULL;
-  float *rgb = NULL;
-  if (tt_session_create(NULL, &s) != TT_OK || tt_session_load_scene(s, path) != TT_OK) {
-    fprintf(stderr, "%s: %s\n", path, tt_last_error());
-    tt_session_destroy(s);
-    return NULL;
-  }
-  tt_scene *scene = tt_session_scene(s);
-  CHECK(tt_scene_animated(scene) == pose);
-  if (sets) {
-    CHECK(tt_session_load_defaults(s) == TT_OK);
-    for (size_t i = 0; sets[i]; i += 2)
-      CHECK_MSG(tt_session_set(s, "accel_embree", sets[i], sets[i + 1]) == TT_OK, "%s",
-                tt_last_error());
-    CHECK(tt_session_set_time(s, 0.0, 1.0 / FPS, NULL) == TT_OK);
-    CHECK(tt_session_start(s, 0) == TT_OK);
-    tt_accel_update_stats us = {.struct_size = sizeof us};
-    CHECK_MSG(tt_session_set_time(s, t, 1.0 / FPS, &us) == TT_OK, "%s", tt_last_error());
-    int refit = !strcmp(sets[1], "refit") || !strcmp(sets[1], "instances");
-    if (pose) CHECK_MSG(us.rebuilt == !refit, "updateMethod %s: rebuilt %d", sets[1], us.rebuilt);
-  } else {
-    if (pose) CHECK_MSG(tt_scene_set_time(scene, t, t - 1.0 / FPS) == TT_OK, "%s", tt_last_error());
-    CHECK(tt_session_set_camera_time(s, t, 1.0 / FPS) == TT_OK);
-  }
-  if (write_to) CHECK_MSG(tt_scene_write_json(scene, write_to) == TT_OK, "%s", tt_last_error());
-  if (tt_session_started(s) || tt_session_start(s, 0) == TT_OK) {
-    for (int i = 0; i < 4; i++) CHECK(tt_session_render_pass(s, 1, NULL) == TT_OK);
-    tt_film *film = tt_session_film(s);
-    *w = tt_film_width(film);
-    *h = tt_film_height(film);
-    rgb = malloc(sizeof(float) * 3 * *w * *h);
-    if (rgb) tt_film_resolve(film, rgb);
-  } else {
-    fprintf(stderr, "start: %s\n", tt_last_error());
-  }
-  tt_session_destroy(s);
-  return rgb;
+  anim_frame f = {.t = t, .animated = pose, .write_to = write_to, .sets = sets};
+  return anim_render_frame(path, &f, w, h);
 }
 
 /* The frame at t with the ABI 1.1 fixture accel `plugin`: posed before the session starts
@@ -115,8 +79,7 @@ int main(int argc, char **argv) {
     CHECK(anim && ref && w == w2 && h == h2);
     if (anim && ref && w == w2 && h == h2) {
       n = (size_t)3 * w * h;
-      size_t diff = 0;
-      for (size_t i = 0; i < n; i++) diff += memcmp(&anim[i], &ref[i], sizeof(float)) != 0;
+      size_t diff = anim_values_differ(anim, ref, n);
       CHECK_MSG(diff == 0,
                 "t = %g: %zu of %zu values differ from the still scene placed at that time",
                 times[k], diff, n);
@@ -135,9 +98,7 @@ int main(int argc, char **argv) {
         float *moved = render_at(scene, times[k], 1, NULL, updates[u], &w3, &h3);
         CHECK(moved && w3 == w && h3 == h);
         const float *r = updates[u][2] ? ref_custom : ref;
-        size_t mdiff = 0;
-        for (size_t i = 0; moved && w3 == w && h3 == h && i < n; i++)
-          mdiff += memcmp(&moved[i], &r[i], sizeof(float)) != 0;
+        size_t mdiff = moved && w3 == w && h3 == h ? anim_values_differ(moved, r, n) : n;
         CHECK_MSG(moved && mdiff == 0,
                   "t = %g, %s %s: %zu of %zu values differ from the still scene", times[k],
                   updates[u][1], updates[u][2] ? "custom" : "native", mdiff, n);

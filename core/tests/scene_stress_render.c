@@ -7,41 +7,21 @@
  * the equality is not that of two unchanged images. */
 #include <tunetrace/tunetrace.h>
 
+#include "anim_frame.h"
 #include "tt_test.h"
 
 #include <stdint.h>
 #include <stdlib.h>
 #include <unistd.h>
 
-#define FPS 24.0
-
-/* 2 passes of 1 spp of `path` at time t (camera and meshes; `pose`: the scene is animated
- * and posed with tt_scene_set_time), at 64 x 48; `write_to` (if set) receives the posed
- * scene. A new buffer, NULL on failure. */
+/* 2 passes of 1 spp of `path` at time t at 64 x 48, posed when `pose` (anim_frame.h);
+ * `write_to` (if set) receives the posed scene. A new buffer of *n values, NULL on failure. */
 static float *render_at(const char *path, double t, int pose, const char *write_to, size_t *n) {
-  tt_session *s = NULL;
-  float *rgb = NULL;
-  if (tt_session_create(NULL, &s) != TT_OK || tt_session_load_scene(s, path) != TT_OK) {
-    fprintf(stderr, "%s: %s\n", path, tt_last_error());
-    tt_session_destroy(s);
-    return NULL;
-  }
-  tt_scene *scene = tt_session_scene(s);
-  CHECK_MSG(tt_scene_animated(scene) == pose, "%s: animated %d", path, tt_scene_animated(scene));
-  if (pose) CHECK_MSG(tt_scene_set_time(scene, t, t - 1.0 / FPS) == TT_OK, "%s", tt_last_error());
-  CHECK(tt_session_set_camera_time(s, t, 1.0 / FPS) == TT_OK);
-  CHECK(tt_scene_set_resolution(scene, 64, 48) == TT_OK);
-  if (write_to) CHECK_MSG(tt_scene_write_json(scene, write_to) == TT_OK, "%s", tt_last_error());
-  if (tt_session_start(s, 0) == TT_OK) {
-    for (int i = 0; i < 2; i++) CHECK(tt_session_render_pass(s, 1, NULL) == TT_OK);
-    tt_film *film = tt_session_film(s);
-    *n = (size_t)3 * tt_film_width(film) * tt_film_height(film);
-    rgb = malloc(sizeof(float) * *n);
-    if (rgb) tt_film_resolve(film, rgb);
-  } else {
-    fprintf(stderr, "start: %s\n", tt_last_error());
-  }
-  tt_session_destroy(s);
+  anim_frame f = {
+      .t = t, .animated = pose, .write_to = write_to, .passes = 2, .width = 64, .height = 48};
+  uint32_t w = 0, h = 0;
+  float *rgb = anim_render_frame(path, &f, &w, &h);
+  *n = (size_t)3 * w * h;
   return rgb;
 }
 
