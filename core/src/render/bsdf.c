@@ -10,6 +10,7 @@
  *              Fresnel-weighted probability and f/pdf cover both lobes
  * Opaque BSDFs are two-sided: a viewer below the shading normal sees them mirrored. */
 #include "render/bsdf_internal.h"
+#include "render/warp_internal.h"
 
 #include <complex.h>
 
@@ -47,25 +48,6 @@ static float tt__fresnel_conductor(float cos_i, float eta_re, float k) {
   double complex r_perp = (c - eta * cos_t) / (c + eta * cos_t);
   double f = 0.5 * (creal(r_parl * conj(r_parl)) + creal(r_perp * conj(r_perp)));
   return (float)f;
-}
-
-/* Cosine-weighted hemisphere direction (concentric disk, Shirley-Chiu). */
-static void tt__cosine_hemisphere(float u1, float u2, float out[3]) {
-  float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f, r, phi;
-  if (a == 0.0f && b == 0.0f) {
-    r = 0.0f;
-    phi = 0.0f;
-  } else if (fabsf(a) > fabsf(b)) {
-    r = a;
-    phi = (TT__PI / 4.0f) * (b / a);
-  } else {
-    r = b;
-    phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
-  }
-  out[0] = r * cosf(phi);
-  out[1] = r * sinf(phi);
-  float z2 = 1.0f - out[0] * out[0] - out[1] * out[1];
-  out[2] = z2 > 0.0f ? sqrtf(z2) : 0.0f;
 }
 
 /* ---- GGX (anisotropic, Walter 2007 / Heitz 2014, 2018) ---- */

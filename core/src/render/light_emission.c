@@ -8,6 +8,7 @@
 
 #include "render/bsdf_internal.h"
 #include "render/lights_internal.h"
+#include "render/warp_internal.h"
 
 #define TT__PI 3.14159265358979324f
 #define TT__INV_PI 0.31830988618379067f
@@ -21,29 +22,10 @@ static void tt__uniform_sphere(float u1, float u2, float out[3]) {
   out[2] = z;
 }
 
-/* Concentric map of the unit square onto the unit disk (Shirley-Chiu). */
-static void tt__concentric_disk(float u1, float u2, float *x, float *y) {
-  float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f, r, phi;
-  if (a == 0.0f && b == 0.0f) {
-    *x = *y = 0.0f;
-    return;
-  }
-  if (fabsf(a) > fabsf(b)) {
-    r = a;
-    phi = (TT__PI / 4.0f) * (b / a);
-  } else {
-    r = b;
-    phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
-  }
-  *x = r * cosf(phi);
-  *y = r * sinf(phi);
-}
-
 /* Cosine-weighted direction around the unit normal n. */
 static void tt__cosine_around(const float n[3], float u1, float u2, float out[3]) {
-  float x, y;
-  tt__concentric_disk(u1, u2, &x, &y);
-  float local[3] = {x, y, sqrtf(fmaxf(0.0f, 1.0f - x * x - y * y))};
+  float local[3];
+  tt__cosine_hemisphere(u1, u2, local);
   tt__frame fr;
   tt__frame_from(&fr, n, n);
   tt__to_world(&fr, local, out);

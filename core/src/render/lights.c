@@ -12,6 +12,7 @@
 #include <tunetrace/image.h>
 
 #include "render/bsdf_internal.h"
+#include "render/warp_internal.h"
 
 #define TT__PI 3.14159265358979324f
 #define TT__INV_PI 0.31830988618379067f
@@ -300,20 +301,7 @@ int tt__lights_sample(const tt__lights *ls, const float p[3], const float n[3], 
   }
   case TT_LIGHT_ENV_CONSTANT: {
     float local[3];
-    float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f, r, phi;
-    if (a == 0.0f && b == 0.0f) {
-      r = 0.0f;
-      phi = 0.0f;
-    } else if (fabsf(a) > fabsf(b)) {
-      r = a;
-      phi = (TT__PI / 4.0f) * (b / a);
-    } else {
-      r = b;
-      phi = (TT__PI / 2.0f) - (TT__PI / 4.0f) * (a / b);
-    }
-    local[0] = r * cosf(phi);
-    local[1] = r * sinf(phi);
-    local[2] = sqrtf(fmaxf(0.0f, 1.0f - local[0] * local[0] - local[1] * local[1]));
+    tt__cosine_hemisphere(u1, u2, local);
     if (!(local[2] > 0.0f)) return 0;
     tt__frame fr;
     tt__frame_from(&fr, n, n);
