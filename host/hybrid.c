@@ -11,6 +11,7 @@
  * DIR/state_NNNN.exr). --stats records every state (mode, configuration, cost, predicted
  * cost, builds, predict ms) and the totals.
  */
+#include "hybrid_shared.h"
 #include "tune.h"
 
 #include <tt_util/clock.h>
@@ -26,6 +27,9 @@
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
+
+const char *const tt__hyb_context_keys[] = {"clock", "spp", "threads", "measure", NULL};
+const char *const tt__hyb_camera_keys[] = {"resolution", NULL};
 
 /* The hybrid job (--hybrid, --predict): the host session, the library's hybrid tuner with
  * its model, tuner and database, and what the states measured. tt__hyb_close frees what it
@@ -78,16 +82,25 @@ static int tt__hyb_subset(tt__hyb *h) {
   return 0;
 }
 
-/* Creates the model; loads --model FILE when it exists. Prints and returns an exit code. */
+/* Creates the model over the searched parameters; loads --model FILE when it exists. */
 static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp) {
-  tt__session *s = &h->s;
-  h->pi = tt_loaded_plugin_iface(pp);
   h->predictor_name = tt_loaded_plugin_entry(pp)->name;
-  if (!TT_PREDICTOR_HAS(h->pi, create_ex) || !TT_PREDICTOR_HAS(h->pi, observe_ex) ||
-      !TT_PREDICTOR_HAS(h->pi, predict_ex)) {
+  return tt__hyb_model_create(h->s.lib, h->s.host, pp, h->subset ? h->subset : h->space, &h->norm,
+                              h->s.rec.seed, h->opt->model, &h->pi, &h->model);
+}
+
+int tt__hyb_model_create(tt_session *lib, const tt_host *host, tt_loaded_plugin *pp,
+                         const tt_space *target, const tt_indicator_norm *norm, uint64_t seed,
+                         const char *model_path, const tt_predictor_iface **pi_out,
+                         tt_predictor **model) {
+  const tt_predictor_iface *pi = *pi_out = tt_loaded_plugin_iface(pp);
+  const char *name = tt_loaded_plugin_entry(pp)->name;
+  *model = NULL;
+  if (!TT_PREDICTOR_HAS(pi, create_ex) || !TT_PREDICTOR_HAS(pi, observe_ex) ||
+      !TT_PREDICTOR_HAS(pi, predict_ex)) {
     tt__say("--hybrid: %s serves the ABI 1.0 predictor table; the hybrid loop "
             "needs ABI 1.1 (create_ex, observe_ex, predict_ex)\n",
-            h->predictor_name);
+            name);
     return TT_EXIT_PLUGIN;
   }
   static const char *names[TT_SCENE_INDICATOR_COUNT];
@@ -96,32 +109,31 @@ static int tt__hyb_model(tt__hyb *h, tt_loaded_plugin *pp) {
   tt_predictor_setup su;
   memset(&su, 0, sizeof su);
   su.struct_size = sizeof su;
-  su.target = h->subset ? h->subset : h->space;
+  su.target = target;
   su.state_dim = TT_SCENE_INDICATOR_COUNT;
-  su.state_space = tt_indicator_norm_id(&h->norm, id, sizeof id);
+  su.state_space = tt_indicator_norm_id(norm, id, sizeof id);
   su.state_names = names;
-  su.settings = tt_session_config(s->lib, h->predictor_name);
-  su.seed = s->rec.seed;
-  if (h->pi->create_ex(&su, &h->model) != TT_OK) {
-    tt__say("%s: %s\n", h->predictor_name, tt_last_error());
-    h->model = NULL;
+  su.settings = tt_session_config(lib, name);
+  su.seed = seed;
+  if (pi->create_ex(&su, model) != TT_OK) {
+    tt__say("%s: %s\n", name, tt_last_error());
+    *model = NULL;
     return TT_EXIT_FAILURE;
   }
   struct stat st;
-  if (h->opt->model && stat(h->opt->model, &st) == 0) {
-    if (h->pi->load(h->model, h->opt->model) != TT_OK) {
-      tt__say("--model %s: %s (the file is left as it is)\n", h->opt->model, tt_last_error());
+  if (model_path && stat(model_path, &st) == 0) {
+    if (pi->load(*model, model_path) != TT_OK) {
+      tt__say("--model %s: %s (the file is left as it is)\n", model_path, tt_last_error());
       return TT_EXIT_USAGE;
     }
-    s->host->log(TT_LOG_INFO, NULL, "hybrid: %s: loaded the model %s", h->predictor_name,
-                 h->opt->model);
+    host->log(TT_LOG_INFO, NULL, "hybrid: %s: loaded the model %s", name, model_path);
   }
   return TT_EXIT_OK;
 }
 
 /* --warm-start DB...: each file exists, checked before the scene loads (a typo must not
  * cost the scene's loading time). Prints and returns an exit code. */
-static int tt__hyb_warm_files(const tt__host_options *opt) {
+int tt__hyb_warm_files(const tt__host_options *opt) {
   for (int i = 0; i < opt->warm_start_count; i++) {
     struct stat st;
     if (stat(opt->warm_start[i], &st) != 0) {
@@ -155,8 +167,9 @@ static const char *tt__hyb_key_value(const char *key, const char *value, char *b
  * objective, and per key of the context (clock, threads, spp) and camera (resolution) the
  * rows measured otherwise, with their value and this run's. A warm start that learns
  * nothing while the database has rows is a warning. */
-static void tt__hyb_warm_log(const tt__hyb *h, const char *path, const tt_hybrid_warm_result *r,
-                             const char *objective) {
+static void tt__hyb_warm_log(const tt__hyb_warm_args *a, const char *path,
+                             const tt_hybrid_warm_result *r) {
+  const char *objective = a->objective;
   char why[2048] = "";
   size_t n = 0;
 #define TT__WHY(...)                                                                               \
@@ -185,15 +198,15 @@ static void tt__hyb_warm_log(const tt__hyb *h, const char *path, const tt_hybrid
 #undef TT__WHY
   uint64_t left = r->considered - r->rows;
   int none = r->rows == 0 && r->considered > 0;
-  h->s.host->log(
-      none ? TT_LOG_WARN : TT_LOG_INFO, NULL,
-      "hybrid: %s learnt %llu of the %llu "
-      "rows of %s in %s%s%s%s",
-      h->predictor_name, (unsigned long long)r->rows, (unsigned long long)r->considered,
-      tt_loaded_plugin_entry(h->s.accel_p)->name, path, left ? "; left out: " : "", left ? why : "",
-      none && r->other_context ? " (a warm start learns only costs measured as this "
-                                 "run measures them: match those options, see host/README.md)"
-                               : "");
+  a->host->log(none ? TT_LOG_WARN : TT_LOG_INFO, NULL,
+               "hybrid: %s learnt %llu of the %llu "
+               "rows of %s in %s%s%s%s",
+               a->predictor_name, (unsigned long long)r->rows, (unsigned long long)r->considered,
+               a->accel_name, path, left ? "; left out: " : "", left ? why : "",
+               none && r->other_context
+                   ? " (a warm start learns only costs measured as this "
+                     "run measures them: match those options, see host/README.md)"
+                   : "");
 }
 
 /* What a warm start from `path` learnt and left out, for --stats. */
@@ -222,39 +235,45 @@ static cJSON *tt__hyb_warm_json(const char *path, const tt_hybrid_warm_result *r
   return o;
 }
 
-/* --warm-start DB...: every usable row teaches the model; the clock, spp and threads of the
- * rows' context and the resolution of their camera must be this run's. */
-static int tt__hyb_warm(tt__hyb *h) {
-  static const char *const keys[] = {"clock", "spp", "threads", NULL};
-  static const char *const camera_keys[] = {"resolution", NULL};
-  h->warm = cJSON_CreateArray();
-  for (int i = 0; i < h->opt->warm_start_count; i++) {
-    const char *path = h->opt->warm_start[i];
+int tt__hyb_warm_all(const tt__hyb_warm_args *a, tt_hybrid *hy, cJSON **out) {
+  cJSON *warm = *out = cJSON_CreateArray();
+  for (int i = 0; i < a->opt->warm_start_count; i++) {
+    const char *path = a->opt->warm_start[i];
     tt_tunedb *db = NULL;
     if (tt_tunedb_open_readonly(path, &db) != TT_OK) {
       tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_USAGE;
     }
     tt_hybrid_warm_filter f = {.struct_size = sizeof f,
-                               .context_keys = keys,
-                               .context = h->context,
-                               .camera_keys = camera_keys,
-                               .camera = h->camera0};
+                               .context_keys = tt__hyb_context_keys,
+                               .context = a->context,
+                               .camera_keys = tt__hyb_camera_keys,
+                               .camera = a->camera};
     tt_hybrid_warm_result r = {.struct_size = sizeof r};
-    tt_status ws = tt_hybrid_warm_start_ex(h->hy, db, &f, &r);
+    tt_status ws = tt_hybrid_warm_start_ex(hy, db, &f, &r);
     tt_tunedb_close(db);
     if (ws != TT_OK) {
       tt__say("--warm-start %s: %s\n", path, tt_last_error());
       return TT_EXIT_FAILURE;
     }
-    tt__hyb_warm_log(h, path, &r, h->obj.spec);
-    cJSON_AddItemToArray(h->warm, tt__hyb_warm_json(path, &r));
+    tt__hyb_warm_log(a, path, &r);
+    cJSON_AddItemToArray(warm, tt__hyb_warm_json(path, &r));
   }
   return TT_EXIT_OK;
 }
 
+/* --warm-start DB...: every usable row teaches the model; the clock, spp, threads and
+ * measure (a still's pass, or a sequence's frames) of the rows' context and the resolution
+ * of their camera must be this run's. */
+static int tt__hyb_warm(tt__hyb *h) {
+  tt__hyb_warm_args a = {
+      h->s.host,   h->opt,     h->predictor_name, tt_loaded_plugin_entry(h->s.accel_p)->name,
+      h->obj.spec, h->context, h->camera0};
+  return tt__hyb_warm_all(&a, h->hy, &h->warm);
+}
+
 /* Writes `root` to `path` atomically (tunetrace/file.h). */
-static int tt__hyb_write_json(const char *path, cJSON *root) {
+int tt__hyb_write_json(const char *path, cJSON *root) {
   char *text = cJSON_Print(root);
   tt_status st = text ? tt_file_write_atomic(path, text, strlen(text)) : TT_ERR_OUT_OF_MEMORY;
   cJSON_free(text);
@@ -266,11 +285,11 @@ static int tt__hyb_write_json(const char *path, cJSON *root) {
 }
 
 /* The report of one state as JSON. */
-static cJSON *tt__hyb_state_json(const tt_hybrid_report *r, uint32_t path_index, double total_ms,
-                                 uint32_t passes) {
+cJSON *tt__hyb_state_json(const tt_hybrid_report *r, const char *where, uint32_t index,
+                          double total_ms, uint32_t passes) {
   cJSON *o = cJSON_CreateObject();
   cJSON_AddNumberToObject(o, "state", r->state_index);
-  cJSON_AddNumberToObject(o, "path_index", path_index);
+  cJSON_AddNumberToObject(o, where, index);
   cJSON_AddStringToObject(o, "mode", r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit");
   cJSON_AddBoolToObject(o, "fallback", r->fallback != 0);
   cJSON *cfg = tt__json_parse_exact(r->config);
@@ -346,6 +365,11 @@ static void tt__hyb_raw_state(tt__hyb *h, const cJSON *item, uint32_t i, double 
     for (uint32_t k = 0; k < TT_SCENE_INDICATOR_COUNT; k++)
       raw[k] =
           cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(ind, tt_scene_indicator_name(k)));
+  } else if (h->opt->sequence) { /* frame i of an animated sequence: the scene posed too */
+    double fps = h->opt->fps > 0 ? h->opt->fps : 24.0, t = i / fps;
+    tt_session_set_camera_time(h->s.lib, t, 1.0 / fps);
+    tt_scene_set_time(h->s.scene, t, t - 1.0 / fps);
+    tt_scene_indicators(h->s.scene, raw);
   } else {
     tt__hyb_camera(&h->s, i);
     tt_scene_indicators(h->s.scene, raw);
@@ -391,7 +415,7 @@ static cJSON *tt__hyb_predict_one(tt__hyb *h, const cJSON *item, uint32_t i, tt_
   cJSON *o = cJSON_CreateObject();
   cJSON *id = item ? cJSON_GetObjectItemCaseSensitive(item, "id") : NULL;
   if (id) cJSON_AddItemToObject(o, "id", cJSON_Duplicate(id, 1));
-  else cJSON_AddNumberToObject(o, "path_index", i);
+  else cJSON_AddNumberToObject(o, h->opt->sequence ? "frame" : "path_index", i);
   if (st == TT_OK) {
     tt__hyb_prediction_json(h, o, &r, sub, full, tt__median(ms, 5));
     return o;
@@ -431,7 +455,10 @@ static int tt__hyb_predict(tt__hyb *h) {
     first = 0;
     end = given ? (uint32_t)cJSON_GetArraySize(given) : 0;
   }
-  for (uint32_t i = first; i < end && sub && full; i++) {
+  uint32_t step = h->opt->sequence && !given && h->opt->tune_window ? h->opt->tune_window
+                  : h->opt->sequence && !given                      ? TT__SEQ_HYBRID_WINDOW
+                                                                    : 1;
+  for (uint32_t i = first; i < end && sub && full; i += step) {
     cJSON *item = given ? cJSON_GetArrayItem(given, (int)i) : NULL;
     cJSON_AddItemToArray(arr, tt__hyb_predict_one(h, item, i, sub, full, &rc));
   }
@@ -482,7 +509,15 @@ static int tt__hyb_check(const tt__hyb *h) {
   const tt__host_options *opt = h->opt;
   const char *job = opt->hybrid ? "hybrid" : "predict";
   const char *accel = tt_loaded_plugin_entry(h->s.accel_p)->name;
-  if (tt_scene_camera(h->s.scene)->key_count < 1 && !(opt->predict_only && opt->states)) {
+  if (opt->sequence && (!tt_scene_animated(h->s.scene) || opt->states)) {
+    tt__say("--predict --sequence: %s\n",
+            opt->states ? "--states gives the states itself: leave out --sequence"
+                        : "the scene does not move: predict along its camera path (no "
+                          "--sequence)");
+    return TT_EXIT_USAGE;
+  }
+  if (tt_scene_camera(h->s.scene)->key_count < 1 && !(opt->predict_only && opt->states) &&
+      !opt->sequence) {
     tt__say("--%s: %s has no camera path (camera.path in scene.json): the hybrid "
             "loop moves through the path's states\n",
             job, opt->scene);
@@ -511,7 +546,7 @@ static int tt__hyb_objective(tt__hyb *h) {
   const tt__host_options *opt = h->opt;
   tt_indicator_norm_init(&h->norm);
   if (opt->indicator_norm) tt_indicator_norm_parse(opt->indicator_norm, &h->norm);
-  const char *spec = opt->objective ? opt->objective : "render";
+  const char *spec = opt->objective ? opt->objective : opt->sequence ? "build+render" : "render";
   if (tt__parse_objective("--objective", spec, &h->obj)) return TT_EXIT_USAGE;
   tt_objective_kind k = h->obj.kind;
   if (k != TT_OBJECTIVE_RENDER && k != TT_OBJECTIVE_TOTAL && k != TT_OBJECTIVE_BUILD) {
@@ -541,7 +576,12 @@ static int tt__hyb_open_db(tt__hyb *h) {
 static int tt__hyb_tuner(tt__hyb *h, tt_loaded_plugin *tp) {
   tt__session *s = &h->s;
   const tt__host_options *opt = h->opt;
-  h->context_extra = opt->clock_cpu ? "{\"clock\":\"cpu\"}" : NULL;
+  /* along a sequence (--predict --sequence) the rows learnt are the frames' */
+  h->context_extra =
+      opt->sequence    ? (opt->clock_cpu ? "{\"measure\":\"" TT__SEQ_MEASURE "\",\"clock\":\"cpu\"}"
+                                         : "{\"measure\":\"" TT__SEQ_MEASURE "\"}")
+      : opt->clock_cpu ? "{\"clock\":\"cpu\"}"
+                       : NULL;
   tt_tuning_state st0;
   if (tt_session_tuning_state(s->lib, h->accel_index, h->spp, NULL, h->context_extra, 0, &st0) ==
       TT_OK) {
@@ -600,8 +640,10 @@ static int tt__hyb_create(tt__hyb *h, const tt__host_options *opt) {
   if ((rc = tt__hyb_model(h, pp)) != TT_EXIT_OK || (rc = tt__hyb_open_db(h)) != TT_EXIT_OK ||
       (rc = tt__hyb_tuner(h, tp)) != TT_EXIT_OK || (rc = tt__hyb_warm(h)) != TT_EXIT_OK)
     return rc;
-  h->first = opt->camera_index_set ? opt->camera_index : 0;
-  h->end = opt->camera_index_set ? opt->camera_index_last + 1 : TT_HOST_PATH_SAMPLES;
+  h->first = opt->sequence ? opt->seq_first : opt->camera_index_set ? opt->camera_index : 0;
+  h->end = opt->sequence           ? opt->seq_last + 1
+           : opt->camera_index_set ? opt->camera_index_last + 1
+                                   : TT_HOST_PATH_SAMPLES;
   return TT_EXIT_OK;
 }
 
@@ -711,7 +753,7 @@ static int tt__hyb_step(tt__hyb *h, uint32_t i) {
   uint32_t passes = tt__hyb_passes(h) - pass0;
   double total_ms = (s->host->clock_ns() - t0) * 1e-6;
   if (h->opt->out_dir) tt__hyb_write_state(h, i);
-  cJSON_AddItemToArray(h->states, tt__hyb_state_json(&r, i, total_ms, passes));
+  cJSON_AddItemToArray(h->states, tt__hyb_state_json(&r, "path_index", i, total_ms, passes));
   tt__hyb_account(&h->tot, &r);
   tt__hyb_log_state(h, &r, i);
   tt__progress_update("hybrid", (double)(i + 1 - h->first) / (h->end - h->first));

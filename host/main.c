@@ -25,6 +25,7 @@ int main(int argc, char **argv) {
   if ((rc = tt__check_outputs(&opt)) != TT_EXIT_OK) return rc; /* no output replaces an input */
   if (opt.convert) return tt__run_convert(&opt);
   if (opt.indicators) return tt__run_indicators(&opt);
+  if (opt.hybrid && opt.sequence) return tt__run_sequence(&opt); /* along the sequence */
   if (opt.hybrid || opt.predict_only) return tt__run_hybrid(&opt);
   if (opt.measure) return tt__run_measure(&opt);
   if (opt.sequence) return tt__run_sequence(&opt);

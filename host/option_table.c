@@ -144,7 +144,9 @@ static const tt__option tt__table[] = {
      "--camera-index A:B (both included; default all 100). A state is\n"
      "searched with probability --epsilon (--iterations K, default\n"
      "40), else its configuration is predicted and built once; every\n"
-     "cost goes to the database and the model. --plugin predictor_nn\n"
+     "cost goes to the database and the model. With --sequence A:B\n"
+     "over an animated scene: along the sequence, each window of\n"
+     "--tune-window frames a state. --plugin predictor_nn\n"
      "(default) | predictor_rbf | predictor_static, --plugin tuner_nm\n"
      "(default)"},
     {"--epsilon", NULL, TT__ARG_ONE, "E", tt__set_epsilon, TT__AT(epsilon), TT_LIMIT_EPSILON,

@@ -368,7 +368,7 @@ static int tt__seq_create(tt__seq *s, const tt__host_options *opt) {
   rc = tt__seq_buffers(s);
   if (rc == TT_EXIT_OK) rc = tt__seq_manifest_open(s);
   if (rc == TT_EXIT_OK) tt__seq_log_start(s);
-  if (rc == TT_EXIT_OK) rc = tt__seq_tune_create(s);
+  if (rc == TT_EXIT_OK) rc = opt->hybrid ? tt__seq_hybrid_create(s) : tt__seq_tune_create(s);
   return rc;
 }
 
@@ -544,7 +544,7 @@ static int tt__seq_png(tt__seq *s, const tt__seq_frame *fr) {
 /* Step: frame f, with the stop held back so that it completes: pose and accel update, the
  * jittered frame, the reference, the post-filter, the PNG; its manifest entry closed and
  * the manifest committed. An exit code (a failure leaves the entry open: finish closes it). */
-static int tt__seq_step(tt__seq *s, uint32_t f) {
+int tt__seq_step(tt__seq *s, uint32_t f) {
   tt__seq_frame fr;
   s->render_ms = 0;
   tt_default_host_hold_stop(1);
@@ -558,11 +558,17 @@ static int tt__seq_step(tt__seq *s, uint32_t f) {
   if (s->frame_note) fputs(s->frame_note, s->manifest);
   fprintf(s->manifest, ", \"render_ms\": %.3f, \"reference_ms\": %.3f}\n", fr.render_ms, fr.ref_ms);
   s->entry_open = 0;
-  if (tt__seq_manifest_commit(s->mpath, s->manifest, &s->mbuf, &s->mlen)) rc = TT_EXIT_OUTPUT;
+  if (!s->defer_commit) rc = tt__seq_commit_frames(s, 1);
   tt_default_host_hold_stop(0);
-  s->done_frames++;
+  return rc;
+}
+
+int tt__seq_commit_frames(tt__seq *s, uint32_t n) {
+  int rc = TT_EXIT_OK;
+  if (tt__seq_manifest_commit(s->mpath, s->manifest, &s->mbuf, &s->mlen)) rc = TT_EXIT_OUTPUT;
+  s->done_frames += n;
   uint32_t nframes = s->opt->seq_last - s->opt->seq_first + 1;
-  tt__progress_update("sequence", (double)(f - s->opt->seq_first + 1) / nframes);
+  tt__progress_update("sequence", (double)s->done_frames / nframes);
   return rc;
 }
 
@@ -597,6 +603,7 @@ static int tt__seq_finish(tt__seq *s, int rc) {
 /* Frees what the sequence holds, at any stage. */
 static void tt__seq_close(tt__seq *s) {
   tt__seq_tune_free(s);
+  tt__seq_hybrid_free(s);
   if (s->manifest) fclose(s->manifest);
   free(s->mbuf);
   if (s->post) s->pi->destroy(s->post);
@@ -620,7 +627,8 @@ int tt__run_sequence(const tt__host_options *opt) {
   tt__install_signals("frame");
   tt__seq s;
   int rc = tt__seq_create(&s, opt);
-  for (uint32_t f = opt->seq_first; rc == TT_EXIT_OK && f <= opt->seq_last; f++) {
+  if (rc == TT_EXIT_OK && s.hybrid) rc = tt__seq_hybrid_run(&s);
+  for (uint32_t f = opt->seq_first; rc == TT_EXIT_OK && !s.hybrid && f <= opt->seq_last; f++) {
     /* a stop asked for during the frame before (or, for the first frame, during the scene
      * loading and accel build) ends the sequence here; the first frame is always completed,
      * as a still completes its first pass: exit 130 comes with what was rendered so far */
@@ -628,6 +636,7 @@ int tt__run_sequence(const tt__host_options *opt) {
     else rc = tt__seq_next_frame(&s, f);
   }
   if (s.tune) rc = tt__seq_tune_finish(&s, rc);
+  if (s.hybrid) rc = tt__seq_hybrid_finish(&s, rc);
   if (s.manifest) rc = tt__seq_finish(&s, rc);
   tt__seq_close(&s);
   return rc;

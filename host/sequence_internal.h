@@ -35,6 +35,9 @@ typedef struct tt__seq {
                                      configuration from scratch (NULL: updates as built) */
   const char *frame_note;         /* JSON members added to the next frame's manifest entry */
   double update_ms, render_ms;    /* what the last frame's update and render took */
+  /* the hybrid loop along the sequence (sequence_hybrid.c), NULL without */
+  struct tt__seq_hybrid *hybrid;
+  int defer_commit; /* tt__seq_step leaves the manifest's commit to tt__seq_commit_frames */
 } tt__seq;
 
 /* One frame being rendered: its index, poses and jitter, what it has produced so far. */
@@ -58,5 +61,22 @@ int tt__seq_tune_before(tt__seq *s, uint32_t f);
 int tt__seq_tune_after(tt__seq *s, uint32_t f);
 int tt__seq_tune_finish(tt__seq *s, int rc);
 void tt__seq_tune_free(tt__seq *s);
+
+/* Frame f (sequence.c): pose and accel update, render, outputs, its manifest entry; the
+ * manifest committed unless s->defer_commit. An exit code. */
+int tt__seq_step(tt__seq *s, uint32_t f);
+/* Commits the manifest after `n` frames whose entries it holds now (deferred steps). */
+int tt__seq_commit_frames(tt__seq *s, uint32_t n);
+
+/* The hybrid loop along the sequence (sequence_hybrid.c), with --hybrid: each window of
+ * --tune-window frames a state, explored (a search replaying the window) or exploited (the
+ * model's configuration, played once). tt__seq_hybrid_create sets s->hybrid (or prints and
+ * fails: a still scene, a post-filter); tt__seq_hybrid_run plays the frames (instead of the
+ * frame loop); tt__seq_hybrid_finish logs, saves --model and writes --stats;
+ * tt__seq_hybrid_free releases it. Exit codes. */
+int tt__seq_hybrid_create(tt__seq *s);
+int tt__seq_hybrid_run(tt__seq *s);
+int tt__seq_hybrid_finish(tt__seq *s, int rc);
+void tt__seq_hybrid_free(tt__seq *s);
 
 #endif

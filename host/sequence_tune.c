@@ -14,6 +14,7 @@
  * what was measured at the same frame. Once the search is done the best configuration runs
  * the remaining frames. The manifest says per frame which window and configuration ran. */
 #include "sequence_internal.h"
+#include "hybrid_shared.h"
 #include "tune.h"
 
 #include <math.h>
@@ -153,9 +154,8 @@ static int tt__seq_tune_state(tt__seq *s, uint32_t f, tt_tuning_state *state) {
   char camera[96], context[256];
   snprintf(camera, sizeof camera, "{\"sequence_time\":%.9g}", time);
   snprintf(context, sizeof context,
-           "{\"sequence\":{\"frame\":%u,\"fps\":%.9g,\"window\":%u,\"measure\":"
-           "\"mean per-frame accel update + render\"}}",
-           f, s->fps, t->window);
+           "{\"measure\":\"%s\",\"sequence\":{\"frame\":%u,\"fps\":%.9g,\"window\":%u}}",
+           TT__SEQ_MEASURE, f, s->fps, t->window);
   if (tt_scene_set_time(s->ses.scene, time, time - 1.0 / s->fps) != TT_OK ||
       tt_session_tuning_state(s->ses.lib, t->index, s->spp, camera, context, 1, state) != TT_OK) {
     tt__say("frame %u: tuning state: %s\n", f, tt_last_error());
