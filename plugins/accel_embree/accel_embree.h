@@ -32,8 +32,9 @@ typedef struct tt__embree_settings {
   int counters;           /* custom backend: count rays, nodes and triangles per query */
   int update_method;      /* a tt__embree_update_method: what update() does when the scene moves */
   int refit_interval;     /* refit: build from scratch every this many updates (0 never) */
-  float refit_sah_growth; /* refit, custom: build from scratch once the refitted tree's SAH
-                             cost exceeds this many times its cost when built (0 never) */
+  float refit_sah_growth; /* refit: build from scratch once the refitted tree's SAH cost
+                             exceeds this many times its cost when built (0 never; native:
+                             the estimate of accel_embree_growth.c) */
 } tt__embree_settings;
 
 /* Update methods, in the order of the "updateMethod" NOM parameter's values. */
@@ -57,6 +58,18 @@ void tt__embree_settings_from_config(const tt_config *config, tt__embree_setting
 /* Names (comma-separated, into `buf`) of the parameters that only the custom backend uses
  * and that differ from their defaults; returns how many there are. */
 int tt__embree_custom_only_changed(const tt_config *config, char *buf, size_t size);
+
+/* ---- native refit's SAH-growth estimate (accel_embree_growth.c) ---- */
+
+typedef struct tt__embree_growth tt__embree_growth;
+/* Freezes the grouping of the meshes whose `moving[i]` is non-NULL at their current
+ * positions (Morton order, leaves of 4, nodes of 4); NULL when out of memory. */
+tt__embree_growth *tt__embree_growth_create(const tt_scene *scene, const float *const *moving);
+/* The frozen trees' SAH cost at the meshes' current positions (triangle-weighted mean; 0
+ * when no mesh has an extent). */
+double tt__embree_growth_cost(tt__embree_growth *g, const tt_scene *scene);
+/* Frees it (NULL is ignored). */
+void tt__embree_growth_free(tt__embree_growth *g);
 
 /* ---- custom backend (accel_embree_custom.c) ---- */
 

@@ -165,8 +165,10 @@ tt_space *tt__embree_space_create(void) {
                          "(0: never)") >= 0;
   ok &= tt_space_add_float(s, "refitSahGrowth", 0.0, 8.0, 0.0, 0,
                            "refit: build from scratch once the refitted tree's SAH cost "
-                           "exceeds this many times its cost when built (0: never; custom "
-                           "backend, Embree's scene API reports no SAH cost)") >= 0;
+                           "exceeds this many times its cost when built (0: never; "
+                           "native: Embree's trees are opaque, so the cost is that of a tree "
+                           "of the moving meshes' build-time Morton groups of 4, refitted "
+                           "alike)") >= 0;
   /* What tuners may change (tunetrace/params.h): counters is instrumentation, not a tuning
    * parameter; the custom builder's settings act only with backend custom and compact false
    * (compact=true builds with native). "static" acts with native and with custom+compact

@@ -113,6 +113,11 @@ static void check_schedule(const tt_accel_iface *ai) {
        {"backend", "custom", "updateMethod", "refit", "refitSahGrowth", "0.01", NULL},
        {1, 1, 1, 1, 1, 1}},
       {"custom refit", {"backend", "custom", "updateMethod", "refit", NULL}, {0, 0, 0, 0, 0, 0}},
+      /* native: the growth estimate of accel_embree_growth.c (before it, native ignored the
+       * factor and never rebuilt) */
+      {"native growth",
+       {"updateMethod", "refit", "refitSahGrowth", "0.01", NULL},
+       {1, 1, 1, 1, 1, 1}},
   };
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
     tt_scene *scene = anim_scene();
@@ -155,6 +160,94 @@ static void check_schedule(const tt_accel_iface *ai) {
   tt_scene_destroy(scene);
 }
 
+/* A mesh of `tc` small random triangles in a cube of side 2 whose morph target moves every
+ * triangle, unchanged, by up to 0.2 along each axis: much the same distribution of
+ * triangles, but a tree grouped at the start no longer groups neighbours. */
+static tt_scene *scatter_scene(uint32_t tc) {
+  ae_rng rng = {0x5ca77e4ull};
+  ae_buf b = {0};
+  ae_scene_begin(&b);
+  const uint32_t vc = 3 * tc;
+  float *pos = malloc(sizeof(float) * 6 * vc);
+  for (uint32_t t = 0; t < tc; t++) {
+    double m[3], to[3], size = ae_uniform(&rng, 0.02, 0.05);
+    for (int k = 0; k < 3; k++) {
+      m[k] = ae_uniform(&rng, -1, 1);
+      to[k] = m[k] + ae_uniform(&rng, -0.2, 0.2);
+    }
+    for (int v = 0; v < 3; v++)
+      for (int k = 0; k < 3; k++) {
+        const double d = size * ae_uniform(&rng, -0.5, 0.5);
+        pos[3 * (3 * t + v) + k] = (float)(m[k] + d);
+        pos[3 * vc + 3 * (3 * t + v) + k] = (float)(to[k] + d);
+      }
+  }
+  ae_printf(&b, "{\"name\":\"scatter\",\"material\":\"m\",\"positions\":[");
+  for (uint32_t i = 0; i < 3 * vc; i++) ae_printf(&b, "%s%.9g", i ? "," : "", (double)pos[i]);
+  ae_printf(&b, "],\"indices\":[");
+  for (uint32_t i = 0; i < vc; i++) ae_printf(&b, "%s%u", i ? "," : "", i);
+  ae_printf(&b, "],\"morph\":{\"targets\":[{\"positions\":[");
+  for (uint32_t i = 0; i < 3 * vc; i++)
+    ae_printf(&b, "%s%.9g", i ? "," : "", (double)pos[3 * vc + i]);
+  ae_printf(&b, "]}],\"keys\":[{\"time\":0,\"weights\":[0]},{\"time\":2,\"weights\":[1]}]}}");
+  free(pos);
+  return ae_scene_end(&b, "accel_embree scatter scene");
+}
+
+/* The native SAH-growth estimate measures what refit loses: it stays at 1 where a refitted
+ * tree is as good as a fresh one (a rigid mesh translated and scaled uniformly), grows where
+ * neighbours drift apart (scatter_scene: 1.58), and a factor below that growth rebuilds,
+ * after which the growth is 1 again. */
+static void check_growth_estimate(const tt_accel_iface *ai) {
+  ae_rng rng = {0x9e0e57ull};
+  ae_buf b = {0};
+  ae_scene_begin(&b);
+  const double c[3] = {0, 0, 0};
+  ae_mesh_json(&b, &rng, 1, "glider", 3000, c, 0.6,
+               "\"animation\":{\"keys\":[{\"time\":0,\"translate\":[0,0,0],\"scale\":1},"
+               "{\"time\":2,\"translate\":[0.9,-0.4,0.3],\"scale\":2.5}]}",
+               0);
+  tt_scene *rigid = ae_scene_end(&b, "accel_embree glider scene");
+  static const char *const kv[] = {"updateMethod", "refit", "refitSahGrowth", "8", NULL};
+  tt_config *cfg = ae_config_of(ai, kv);
+  tt_accel *acc = NULL;
+  CHECK_MSG(ai->build(rigid, cfg, &acc, NULL) == TT_OK, "glider: %s", tt_last_error());
+  for (int k = 1; acc && k <= 4; k++) {
+    CHECK(tt_scene_set_time(rigid, 0.5 * k, 0.5 * k - 0.1) == TT_OK);
+    tt_accel_update_stats us = {.struct_size = sizeof us};
+    CHECK(ai->update(acc, &us) == TT_OK);
+    CHECK_MSG(!us.rebuilt && us.sah_cost > 1.0 && fabs(us.sah_growth - 1.0) < 1e-3,
+              "glider t=%g: rebuilt %d, sah %g, growth %.6f (expected 1)", 0.5 * k, us.rebuilt,
+              us.sah_cost, us.sah_growth);
+  }
+  ai->destroy(acc);
+  tt_scene_destroy(rigid);
+
+  for (int limit = 0; limit < 2; limit++) {
+    tt_scene *scene = scatter_scene(4000);
+    static const char *const loose[] = {"updateMethod", "refit", "refitSahGrowth", "8", NULL};
+    static const char *const tight[] = {"updateMethod", "refit", "refitSahGrowth", "1.2", NULL};
+    tt_config *c2 = ae_config_of(ai, limit ? tight : loose);
+    acc = NULL;
+    CHECK_MSG(ai->build(scene, c2, &acc, NULL) == TT_OK, "scatter: %s", tt_last_error());
+    CHECK(tt_scene_set_time(scene, 2.0, 1.9) == TT_OK);
+    tt_accel_update_stats us = {.struct_size = sizeof us};
+    CHECK(acc && ai->update(acc, &us) == TT_OK);
+    if (!limit)
+      CHECK_MSG(!us.rebuilt && us.sah_growth > 1.3 && us.sah_growth < 8.0,
+                "scatter, factor 8: rebuilt %d, growth %g (expected 1.3-8, refitted)", us.rebuilt,
+                us.sah_growth);
+    else
+      CHECK_MSG(us.rebuilt && fabs(us.sah_growth - 1.0) < 1e-9,
+                "scatter, factor 1.2: rebuilt %d, growth %g (expected a rebuild, growth 1)",
+                us.rebuilt, us.sah_growth);
+    ai->destroy(acc);
+    tt_config_destroy(c2);
+    tt_scene_destroy(scene);
+  }
+  tt_config_destroy(cfg);
+}
+
 int main(void) {
   ae_plugin p = ae_load(NULL);
   const tt_accel_iface *ai = p.accel;
@@ -177,6 +270,7 @@ int main(void) {
                                      "robust",
                                      "true",
                                      NULL};
+  check_growth_estimate(ai);
   check_refit(ai, "native", native);
   check_refit(ai, "native robust", native_robust);
   check_refit(ai, "custom bvh2", bvh2);
