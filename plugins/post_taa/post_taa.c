@@ -29,7 +29,7 @@ struct tt_post {
   uint32_t width, height;
   int mode;
   tt__vctaa_params vc_params;
-  uint32_t channels;       /* shipped network variant (12 or 6) */
+  uint32_t channels;       /* shipped network variant (6, the default, or 12) */
   char weights_path[4096]; /* file the loaded model came from ("" = none) */
   tt__vctaa_filter vc;
   tt__net_model net;
@@ -57,8 +57,11 @@ static tt_status tt__taa_build_space(void) {
                            "vctaa: variance box half-size in standard deviations") >= 0;
   ok &= tt_space_add_nom_bool(s, "catmullRom", 1,
                               "vctaa: Catmull-Rom history fetch (false: bilinear)") >= 0;
-  ok &= tt_space_add_nom_int(s, "channels", channels, 2, 0,
-                             "network: shipped model variant (body channels); the option "
+  /* default index 1 (6 channels): the validation rule (tools/taa/select_val.py) chose it; the
+   * order of the values stays, so configurations written before keep their meaning */
+  ok &= tt_space_add_nom_int(s, "channels", channels, 2, 1,
+                             "network: shipped model variant (body channels; 6 is the "
+                             "default, chosen on validation sequences); the option "
                              "weights (--set post_taa.weights=FILE) or the "
                              "TT_POST_TAA_WEIGHTS environment variable names another file") >= 0;
   /* appended in 0.2.0 */
@@ -112,7 +115,7 @@ static void tt__taa_read_config(tt_post *p, const tt_config *c) {
   p->vc_params.catmull_rom = c ? (int)tt_config_get_int(c, "catmullRom", 1) : 1;
   const char *res = c ? tt_config_get_string(c, "resolve") : NULL;
   p->vc_params.linear = res && !strcmp(res, "linear");
-  p->channels = c ? (uint32_t)tt_config_get_int(c, "channels", 12) : 12;
+  p->channels = c ? (uint32_t)tt_config_get_int(c, "channels", 6) : 6;
 }
 
 /* Loads the network (if the mode needs it and the file changed) and sizes its state. */

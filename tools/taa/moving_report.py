@@ -6,7 +6,7 @@ off-screen), grown by one pixel (the neighbourhood a 5 x 5 kernel mixes them int
 masks come from the sequence's own depth, prevdepth and motion AOVs, which follow moving
 objects as well as the camera. Frames from --skip (8) on, tonemapped space (eval.py's).
 
-  /usr/bin/python3 -m tools.taa.moving_report EVAL_OUT/eval.json --nets c12,c6 [--json OUT.json]
+  /usr/bin/python3 -m tools.taa.moving_report EVAL_OUT/eval.json --nets c6,c12 [--json OUT.json]
 
 prints a markdown table and writes the JSON (the committed tools/taa/figures/moving_objects.json)."""
 import argparse
@@ -81,7 +81,7 @@ def fmt(v, d=3):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("eval_json", help="evaluate.py's OUT/eval.json")
-    ap.add_argument("--nets", default="c12,c6", help="network labels to check (c12,c6)")
+    ap.add_argument("--nets", default="c6,c12", help="network labels to check (c6: the default, c12)")
     ap.add_argument("--skip", type=int, default=8, help="warm-up frames left out (8)")
     ap.add_argument("--json", default=None, help="write the per-sequence figures here")
     a = ap.parse_args()

@@ -6,11 +6,11 @@ the load average is printed beside them.
 
   /usr/bin/python3 -m tools.taa.speed [--host BUILD/host/host: its build's taa_bench]
       [--runs 4] [--threads 2] [--weights label=FILE.ttw[@LEVEL],...] [--rounds 9]
-      [--default LABEL (c12)] [--goal LABEL=MS ...]
+      [--default LABEL (c6)] [--goal LABEL=MS ...]
       [--json OUT.json] [--png OUT.png] [--full]   (--full: also 1920x1080)
 
 Goals (640x480, 2 threads, reprojection and colour mix included): network-12 <= 40 ms,
-the default network <= 30 ms (the labels of the shipped files: c12, and the default's)."""
+the default network <= 30 ms (the labels of the shipped files: c12, and the default's, c6)."""
 import json
 import os
 import subprocess
@@ -70,8 +70,8 @@ def main():
     ap.add_argument("--goal", action="append", default=[],
                     help="LABEL=MS: goal per 640x480 frame (default c12=40 and, with "
                          "--default LABEL, LABEL=30)")
-    ap.add_argument("--default", default="c12",
-                    help="label of the shipped default network (goal 30 ms; default c12, the "
+    ap.add_argument("--default", default="c6",
+                    help="label of the shipped default network (goal 30 ms; default c6, the "
                          "network post_taa loads without post_taa.weights)")
     ap.add_argument("--png", default=None, help="chart: 640x480 wall ms per variant (median, "
                     "range) beside the CPU ms split into reprojection / network / mix")

@@ -7,7 +7,7 @@ emitter pixels of radiance up to ~2000 hold most of a scene's linear mean, and a
 that blends in the tonemapped domain cannot keep them. Prints a markdown table and writes
 a small JSON (the committed tools/taa/figures/test_set.json).
 
-  /usr/bin/python3 -m tools.taa.test_report EVAL_OUT/eval.json --nets c12,c6 [--json OUT.json]"""
+  /usr/bin/python3 -m tools.taa.test_report EVAL_OUT/eval.json --nets c6,c12 [--json OUT.json]"""
 import argparse
 import json
 import os
@@ -39,7 +39,7 @@ def clamped_means(eval_dir, res, methods):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("eval_json", help="evaluate.py's OUT/eval.json")
-    ap.add_argument("--nets", default="c12,c6", help="network labels to check (c12,c6)")
+    ap.add_argument("--nets", default="c6,c12", help="network labels to check (c6: the default, c12)")
     ap.add_argument("--json", default=None, help="write the per-sequence figures here")
     a = ap.parse_args()
     try:

@@ -16,7 +16,11 @@
   flags follow; a sequence without the prevdepth AOV is refused naming the file and field;
 - select_val.py's rule on a made-up validation: most goals met first, then the smallest
   network within 1% of the best geo-mean RMSE (a smaller one 0.5% behind is chosen, 1.5%
-  behind is not; one that meets fewer goals is not, however good its RMSE)."""
+  behind is not; one that meets fewer goals is not, however good its RMSE);
+- the shipped default: select_val.py on the committed validation evaluation
+  (tools/taa/figures/validation_eval.json) chooses the network post_taa loads by default
+  (`host --describe post_taa`'s `channels`), and the committed test-set and moving-object
+  reports hold that network's rows."""
 import json
 import os
 import subprocess
@@ -237,9 +241,36 @@ def test_select(tmp):
     check(r.returncode != 0 and "none.ttw" in r.stderr, "a missing weights file is refused naming it")
 
 
+def test_shipped_default(tmp):
+    os.makedirs(tmp)
+    figs = os.path.join(root, "tools", "taa", "figures")
+    nets = [f"c{w}=" + os.path.join(root, "plugins", "post_taa", f"post_taa_c{w}.ttw") for w in (12, 6)]
+    out = os.path.join(tmp, "choice.json")
+    r = run("tools.taa.select_val", os.path.join(figs, "validation_eval.json"), *nets, "--json", out)
+    check(r.returncode == 0, f"select_val runs on the committed validation ({r.stderr.strip()[-300:]})")
+    if r.returncode:
+        return
+    chosen = json.load(open(out))["chosen"]
+    committed = json.load(open(os.path.join(figs, "validation_choice.json")))["chosen"]
+    check(chosen == committed, f"the committed choice is the rule's ({committed} vs {chosen})")
+    exe = os.environ.get("TT_HOST", os.path.join(root, "build", "host", "host"))
+    d = subprocess.run([exe, "--describe", "post_taa"], capture_output=True, text=True)
+    check(d.returncode == 0, f"host --describe post_taa runs ({d.stderr.strip()[-300:]})")
+    if d.returncode:
+        return
+    par = {p["name"]: p for p in json.loads(d.stdout)["parameters"]}
+    default = f"c{par['channels']['value']}"
+    check(default == chosen, f"post_taa's default network {default} is the validation rule's {chosen}")
+    for name in ("test_set.json", "moving_objects.json"):
+        seqs = json.load(open(os.path.join(figs, name)))["sequences"]
+        check(seqs and all(chosen in sq["methods"] for sq in seqs),
+              f"{name} reports the shipped network {chosen} on all {len(seqs)} sequences")
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         test_select(os.path.join(tmp, "sel"))
+        test_shipped_default(os.path.join(tmp, "shipped"))
         test_make_test_set(os.path.join(tmp, "scenes"))
         test_report(tmp)
         test_sets(os.path.join(tmp, "sets"))

@@ -138,10 +138,11 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   check_same(a, "f027.exr", seq, "post_0027.exr");
   check_same(a, "f027.raw.exr", seq, "color_0027.exr");
 
-  /* post_taa.weights=FILE (an option, not a tuned parameter) == the shipped 6-channel model */
+  /* post_taa.weights=FILE (an option, not a tuned parameter) == the shipped 6-channel model,
+   * which is the default network (no channels set: the validation rule chose it) */
   snprintf(args, sizeof args,
            "--quiet --threads 2 --frames 24:27 --out '%s/w6/f%%03d.exr' "
-           "--plugin post_taa --set post_taa.mode=network --set post_taa.channels=6 "
+           "--plugin post_taa --set post_taa.mode=network "
            "--set integrator_pt.maxDepth=1 '%s'",
            dir, scene);
   CHECK(run_host(args, log, sizeof log) == 0);
@@ -154,7 +155,18 @@ static void check_pattern_interface(const char *dir, const char *seq, const char
   CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
   snprintf(a, sizeof a, "%s/w6", dir);
   snprintf(b, sizeof b, "%s/wf", dir);
-  check_same(a, "f027.exr", b, "f027.exr"); /* weights=post_taa_c6.ttw == channels=6 */
+  check_same(a, "f027.exr", b, "f027.exr"); /* weights=post_taa_c6.ttw == the default */
+  /* channels=12 picks the other shipped file: its pixels differ from the default's */
+  snprintf(args, sizeof args,
+           "--quiet --threads 2 --frames 24:27 --out '%s/w12/f%%03d.exr' "
+           "--plugin post_taa --set post_taa.mode=network --set post_taa.channels=12 "
+           "--set integrator_pt.maxDepth=1 '%s'",
+           dir, scene);
+  rc = run_host(args, log, sizeof log);
+  CHECK_MSG(rc == 0, "host exited %d: %s", rc, log);
+  snprintf(a, sizeof a, "%s/w6/f027.exr", dir);
+  snprintf(b, sizeof b, "%s/w12/f027.exr", dir);
+  CHECK_MSG(image_diff(a, b) > 1e-4, "channels=12 renders the default (6-channel) network");
   snprintf(a, sizeof a, "%s/w6/f027.exr", dir);
   snprintf(b, sizeof b, "%s/post_0027.exr", seq); /* VCTAA: the network must differ */
   CHECK(image_diff(a, b) > 1e-4);

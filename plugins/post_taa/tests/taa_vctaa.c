@@ -286,6 +286,11 @@ static void test_network_plugin(void) {
     for (int i = 0; i < W * H * 3; i++) ref[i] += tm(tmp[i]) / 8.0f;
   }
   for (int i = 0; i < W * H * 3; i++) ref[i] = ref[i] / (1.0f - ref[i]);
+  /* the space's default network is the 6-channel one (tools/taa/select_val.py's choice) */
+  tt_config *d = tt_config_create(g_space);
+  CHECK_MSG(tt_config_get_int(d, "channels", -1) == 6, "default channels %lld, want 6",
+            (long long)tt_config_get_int(d, "channels", -1));
+  tt_config_destroy(d);
   const char *channels[2] = {"12", "6"};
   for (int v = 0; v < 2; v++) {
     tt_config *c = tt_config_create(g_space);
