@@ -25,6 +25,17 @@ def loadavg():
     return tuple(float(x) for x in open("/proc/loadavg").read().split()[:3])
 
 
+def cpu_name():
+    """The CPU's model name (/proc/cpuinfo), to say which machine the figures are from."""
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "unknown"
+
+
 def chart(path, rows, lo, hi, threads):
     import matplotlib
     matplotlib.use("Agg")
@@ -131,10 +142,12 @@ def main():
     print(f"\nload average (1 min) during the runs: {min(loads):.2f} - {max(loads):.2f}")
     if a.png:
         chart(a.png, out, min(loads), max(loads), a.threads)
-    if a.json:
-        json.dump({"runs": a.runs, "rounds": a.rounds, "loads": [(r["load_before"], r["load_after"])
-                                                                 for r in runs], "rows": out},
-                  open(a.json, "w"), indent=1)
+    if a.json:  # atomic: a reader (the evidence page) never sees half a file
+        with open(a.json + ".tmp", "w") as f:
+            json.dump({"runs": a.runs, "rounds": a.rounds, "threads": a.threads, "cpu": cpu_name(),
+                       "loads": [(r["load_before"], r["load_after"]) for r in runs], "rows": out},
+                      f, indent=1)
+        os.replace(a.json + ".tmp", a.json)
 
 
 if __name__ == "__main__":
