@@ -154,6 +154,31 @@ def accel_render_split(ctx):
     return [_png(ctx, "accel/render_split_t1d3.png")]
 
 
+ANIM_DATA = os.path.join(ROOT, "tools", "accel", "data")
+
+
+def accel_anim_update(ctx):
+    """tools/accel/anim_update.py: every committed sequence's figure redrawn from its JSON
+    (anim_update_*.json: the real figures) and a toy measurement (animated-stress, 6 frames at
+    16x16, one round, 2-iteration searches, a sweep of two schedules)."""
+    pngs = []
+    for name in sorted(os.listdir(ANIM_DATA)):
+        if not (name.startswith("anim_update_") and name.endswith(".json")):
+            continue
+        png = os.path.join("accel", name[:-5] + ".png")
+        ctx.run([PY, "-m", "tools.accel.anim_update", "--replot", os.path.join(ANIM_DATA, name),
+                 "--fig", ctx.path(png)])
+        pngs.append(_png(ctx, png))
+    if not pngs:
+        raise StepError(f"no anim_update_*.json in {ANIM_DATA}")
+    ctx.run([PY, "-m", "tools.accel.anim_update"] + ctx.host_args() +
+            ["--scene", os.path.join(ROOT, "scenes", "animated-stress", "scene.json"),
+             "--frames", "0:5", "--res", "16x16", "--rounds", "1", "--tune-iterations", "2",
+             "--tune-window", "2", "--static-iterations", "2", "--intervals", "2",
+             "--growths", "1.5", "--fig", ctx.path("quick", "anim_update_animated-stress.png")])
+    return pngs + [_png(ctx, "quick/anim_update_animated-stress.png")]
+
+
 def tuning_analysis(ctx):
     """tools/tuning/analyze.py's five charts (Figs. 3.3, 3.5, 3.6, 3.8, 3.11) on a 12-sample
     exploration and two 6-iteration tuning runs of the Cornell box at 24x24."""
@@ -339,7 +364,8 @@ def integrator_sampler_choice(ctx):
     return pngs
 
 
-QUICK = [hybrid_figures, hybrid_speed_vs_roofline, hybrid_remeasured, accel_render_split, tuning_analysis,
+QUICK = [hybrid_figures, hybrid_speed_vs_roofline, hybrid_remeasured, accel_render_split,
+         accel_anim_update, tuning_analysis,
          tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_speed,
          integrator_error_vs_time, integrator_sampler_choice]
 
