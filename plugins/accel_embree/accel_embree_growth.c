@@ -18,9 +18,10 @@
 #include <string.h>
 
 typedef struct tt__growth_mesh {
-  uint32_t mesh;   /* scene mesh index */
-  uint32_t count;  /* triangles */
-  uint32_t *order; /* triangle indices in the build's Morton order */
+  uint32_t mesh;  /* scene mesh index */
+  uint32_t count; /* triangles */
+  uint32_t *tris; /* the triangles' vertex indices (3 each) in the build's Morton order:
+                     read in sequence, and Morton-near triangles share vertices */
 } tt__growth_mesh;
 
 struct tt__embree_growth {
@@ -49,20 +50,23 @@ static uint32_t tt__growth_spread(float v) {
   return x;
 }
 
-static void tt__growth_tri_box(const tt_mesh *m, uint32_t t, float b[6]) {
-  for (int k = 0; k < 3; k++) {
-    const float *p = m->positions + (size_t)3 * m->indices[(size_t)3 * t + (size_t)k];
-    for (int a = 0; a < 3; a++) {
-      if (k == 0 || p[a] < b[a]) b[a] = p[a];
-      if (k == 0 || p[a] > b[3 + a]) b[3 + a] = p[a];
-    }
+/* min / max without libm's NaN handling (positions are finite: checked at load), so they
+ * compile to single instructions; fminf and fmaxf are calls and took most of the pass. */
+static inline float tt__growth_min(float a, float b) { return a < b ? a : b; }
+static inline float tt__growth_max(float a, float b) { return a > b ? a : b; }
+
+static inline void tt__growth_tri_box(const float *pos, const uint32_t *v, float b[6]) {
+  const float *p = pos + (size_t)3 * v[0], *q = pos + (size_t)3 * v[1], *r = pos + (size_t)3 * v[2];
+  for (int a = 0; a < 3; a++) {
+    b[a] = tt__growth_min(p[a], tt__growth_min(q[a], r[a]));
+    b[3 + a] = tt__growth_max(p[a], tt__growth_max(q[a], r[a]));
   }
 }
 
-static void tt__growth_merge(float d[6], const float s[6]) {
+static inline void tt__growth_merge(float d[6], const float s[6]) {
   for (int a = 0; a < 3; a++) {
-    if (s[a] < d[a]) d[a] = s[a];
-    if (s[3 + a] > d[3 + a]) d[3 + a] = s[3 + a];
+    d[a] = tt__growth_min(d[a], s[a]);
+    d[3 + a] = tt__growth_max(d[3 + a], s[3 + a]);
   }
 }
 
@@ -78,11 +82,11 @@ static double tt__growth_mesh_cost(const tt__growth_mesh *g, const tt_mesh *m, f
   for (uint32_t l = 0; l < n; l++) {
     float *b = boxes + (size_t)6 * l;
     const uint32_t end = 4u * l + 4u < g->count ? 4u * l + 4u : g->count;
-    for (uint32_t i = 4u * l; i < end; i++) {
+    tt__growth_tri_box(m->positions, g->tris + (size_t)12 * l, b);
+    for (uint32_t i = 4u * l + 1u; i < end; i++) {
       float t[6];
-      tt__growth_tri_box(m, g->order[i], t);
-      if (i == 4u * l) memcpy(b, t, sizeof t);
-      else tt__growth_merge(b, t);
+      tt__growth_tri_box(m->positions, g->tris + (size_t)3 * i, t);
+      tt__growth_merge(b, t);
     }
     sum += tt__growth_area(b) * (double)(end - 4u * l);
   }
@@ -117,11 +121,11 @@ tt__embree_growth *tt__embree_growth_create(const tt_scene *scene, const float *
     tt__growth_mesh *gm = &g->meshes[g->mesh_count];
     gm->mesh = i;
     gm->count = m->triangle_count;
-    gm->order = malloc((size_t)gm->count * sizeof *gm->order);
+    gm->tris = malloc((size_t)gm->count * 3 * sizeof *gm->tris);
     tt__growth_key *keys = malloc((size_t)gm->count * sizeof *keys);
-    if (!gm->order || !keys) {
+    if (!gm->tris || !keys) {
       free(keys);
-      free(gm->order);
+      free(gm->tris);
       goto fail;
     }
     g->mesh_count++;
@@ -134,7 +138,7 @@ tt__embree_growth *tt__embree_growth_create(const tt_scene *scene, const float *
       }
     for (uint32_t t = 0; t < gm->count; t++) {
       float b[6];
-      tt__growth_tri_box(m, t, b);
+      tt__growth_tri_box(m->positions, m->indices + (size_t)3 * t, b);
       uint32_t code = 0;
       for (int a = 0; a < 3; a++) {
         const float ext = hi[a] - lo[a];
@@ -145,7 +149,8 @@ tt__embree_growth *tt__embree_growth_create(const tt_scene *scene, const float *
       keys[t].tri = t;
     }
     qsort(keys, gm->count, sizeof *keys, tt__growth_key_cmp);
-    for (uint32_t t = 0; t < gm->count; t++) gm->order[t] = keys[t].tri;
+    for (uint32_t t = 0; t < gm->count; t++)
+      memcpy(gm->tris + (size_t)3 * t, m->indices + (size_t)3 * keys[t].tri, 3 * sizeof(uint32_t));
     free(keys);
     if (gm->count > most) most = gm->count;
   }
@@ -172,7 +177,7 @@ double tt__embree_growth_cost(tt__embree_growth *g, const tt_scene *scene) {
 
 void tt__embree_growth_free(tt__embree_growth *g) {
   if (!g) return;
-  for (uint32_t i = 0; g->meshes && i < g->mesh_count; i++) free(g->meshes[i].order);
+  for (uint32_t i = 0; g->meshes && i < g->mesh_count; i++) free(g->meshes[i].tris);
   free(g->meshes);
   free(g->boxes);
   free(g);
