@@ -130,7 +130,11 @@ def main():
             "cycles_samples_per_cpu_s": w * h * args.spp / ccpu,
             "sampler": args.sampler, "repeat": args.repeat,
         })
-    json.dump(rows, open(os.path.join(args.out, f"compare_d{args.depth}.json"), "w"), indent=1)
+    # numpy scalars (the image means and errors are float32) as plain floats; written atomically
+    path = os.path.join(args.out, f"compare_d{args.depth}.json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(rows, f, indent=1, default=float)
+    os.replace(path + ".tmp", path)
 
     print(f"\nours (integrator_pt) vs Blender Cycles 3.4 CPU, {args.res}, maxDepth {args.depth} "
           f"(Cycles bounces {args.depth - 1}), {args.threads} threads, our sampler {args.sampler}")

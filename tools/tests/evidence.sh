@@ -42,6 +42,8 @@ check 'grep -q "cornell-box-spp1</td><td>0.0178 / 0.0089 / 0.802</td><td>0.78 / 
 check 'grep -q "c6 (chosen: the default)</td><td>19093</td><td>2 / 4</td><td>0.0329</td><td>0.74 / 0.91" "$page"'
 # and the TAA speed table from its committed JSON (the default network at 640x480: 36.4 CPU ms)
 check 'grep -q "c6 (default network)</td><td>640x480</td><td>2</td><td>52.7 (43.2-59.0)</td><td>36.4</td>" "$page"'
+# and the Cycles comparison from its committed JSON (the glossy variant at depth 8)
+check 'grep -q "cornell-glossy</td><td>8</td><td>+0.09%</td><td>0.2470 / 0.1988</td>" "$page"'
 
 out=$("$PY" -m tools.evidence.check_page "$page" 2>&1) || { echo "$out"; echo "FAIL: the page does not pass the browser check"; fail=1; }
 echo "$out"
