@@ -7,7 +7,10 @@
  * tuner (tunetrace/hybrid.h) draws explore or exploit through a tuning target whose one
  * measurement is the window played with a configuration: its first frame's accel update a
  * build from scratch with it, the other frames updated as it says (refit, rebuild every N
- * frames), the cost the mean per-frame update + render ms (--objective build+render,
+ * frames) -- except a state's first play of the configuration already running, which goes
+ * on updating the running structure as the frames would without tuning (so per-frame states
+ * of an unchanged configuration keep refitting) -- the cost the mean per-frame update +
+ * render ms (--objective build+render,
  * default; render or build alone). Exploring searches --iterations K configurations, each
  * replaying the window (the overhead the hybrid loop exists to remove); exploiting plays the
  * model's one configuration once. Every play writes the window's frames; the window is
@@ -53,6 +56,9 @@ struct tt__seq_hybrid {
   uint32_t f0, f1;
   tt_config *pending, *played;
   int has_played; /* the window was played in this state (the database may answer all) */
+  int running;    /* the accel runs `played`, updated up to frame run_end */
+  uint32_t run_end;
+  int continued;  /* the last play continued the running structure (no first-frame build) */
   uint32_t plays; /* plays of the current state */
   double play_update, play_render; /* the last play's mean per-frame ms */
   /* the last play's manifest entries (committed once the state is done) */
@@ -165,10 +171,16 @@ static int tt__sh_play(tt__seq *s) {
     tt__say("--hybrid: out of memory\n");
     return TT_EXIT_FAILURE;
   }
+  /* a state's first play of the configuration already running continues its structure, as
+   * the frames would run without tuning (a refit schedule goes on); every other play starts
+   * from scratch at the window's first frame */
+  h->continued = h->plays == 0 && h->running && h->run_end + 1 == h->f0 &&
+                 tt_config_equal(h->played, h->pending);
   tt_config_copy(h->played, h->pending);
   h->has_played = 1;
   h->plays++;
-  s->switch_config = h->played;
+  h->running = 0;
+  s->switch_config = h->continued ? NULL : h->played;
   FILE *manifest = s->manifest;
   s->manifest = h->wm;
   s->defer_commit = 1;
@@ -194,7 +206,10 @@ static int tt__sh_play(tt__seq *s) {
   if (rc != TT_EXIT_OK) { /* the failed play is not in the manifest (the search goes on) */
     s->entry_open = 0;
     tt_default_host_hold_stop(0);
+    return rc;
   }
+  h->running = 1;
+  h->run_end = h->f1;
   return rc;
 }
 
@@ -213,6 +228,9 @@ static tt_status tt__sh_render(void *user, uint32_t spp, tt_tuning_measurement *
   if (!m)
     return TT_OK; /* no warm-up: the first frame's build pays the set-up, as in a plain
                          * sequence */
+  /* a stop asked for during a search ends it before the next replay; the state's frames
+   * are then not committed (the manifest lists the states done) */
+  if (s->ses.host->should_stop()) return TT_ERR_INTERRUPTED;
   if (tt__sh_play(s) != TT_EXIT_OK) {
     char msg[512];
     snprintf(msg, sizeof msg, "%s", tt_last_error());
@@ -231,9 +249,10 @@ static char *tt__sh_note(const struct tt__seq_hybrid *h, const tt_hybrid_report 
   if (note)
     snprintf(note, n,
              ", \"hybrid\": {\"state\": %u, \"window\": [%u, %u], \"mode\": \"%s\", "
-             "\"fallback\": %s, \"plays\": %u, \"config\": %s}",
+             "\"fallback\": %s, \"plays\": %u, \"continued\": %s, \"config\": %s}",
              r->state_index, h->f0, h->f1, r->mode == TT_HYBRID_EXPLORE ? "explore" : "exploit",
-             r->fallback ? "true" : "false", h->plays, r->config ? r->config : "null");
+             r->fallback ? "true" : "false", h->plays, h->continued ? "true" : "false",
+             r->config ? r->config : "null");
   return note;
 }
 
@@ -272,6 +291,7 @@ static void tt__sh_account(tt__seq *s, const tt_hybrid_report *r, double total_m
   cJSON *o = tt__hyb_state_json(r, "first_frame", h->f0, total_ms, h->plays);
   cJSON_AddNumberToObject(o, "last_frame", h->f1);
   cJSON_AddNumberToObject(o, "plays", h->plays);
+  cJSON_AddBoolToObject(o, "continued", h->continued);
   cJSON_AddNumberToObject(o, "frames_cost", frames_cost);
   cJSON_AddNumberToObject(o, "frames_update_ms", h->play_update);
   cJSON_AddNumberToObject(o, "frames_render_ms", h->play_render);

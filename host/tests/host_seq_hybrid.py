@@ -102,6 +102,7 @@ def check_states(frames, stats, label, window=WINDOW, nframes=FRAMES):
     nstates = (nframes + window - 1) // window
     check(stats is not None and stats["states_done"] == nstates and
           len(stats["states"]) == nstates, f"{label}: {nstates} states in --stats")
+    by_index = {f["index"]: f for f in frames}
     for f in frames:
         hy = f.get("hybrid", {})
         s = f["index"] // window
@@ -113,7 +114,17 @@ def check_states(frames, stats, label, window=WINDOW, nframes=FRAMES):
             check(hy.get("mode") == st["mode"] and hy.get("config") == st["config"],
                   f"{label}: frame {f['index']}: manifest and --stats agree on mode and config")
         if f["index"] % window == 0:
-            check(f["update"] == "rebuild", f"{label}: a state's first frame is built from scratch")
+            # built from scratch, unless the state goes on with the configuration running
+            prev = by_index.get(f["index"] - 1, {}).get("hybrid", {})
+            cont = hy.get("continued")
+            check(cont == (hy.get("plays") is not None and prev.get("config") == hy.get("config")
+                           and hy.get("mode") == "exploit" and hy.get("plays") == 1) or
+                  hy.get("mode") == "explore",
+                  f"{label}: frame {f['index']}: continued {cont} (previous config "
+                  f"{'same' if prev.get('config') == hy.get('config') else 'other'})")
+            if not cont:
+                check(f["update"] == "rebuild",
+                      f"{label}: frame {f['index']}: a state's first frame is built from scratch")
 
 
 def main():
@@ -211,6 +222,16 @@ def main():
         frames, st, _ = hybrid(j("one"), j("one.json"), "--epsilon", "0", "--warm-start", dbp,
                                "--no-db", frames=5, window=1)
         check_states(frames, st, "per-frame", window=1, nframes=5)
+        # per-frame states of an unchanged configuration go on updating its structure: a
+        # refit configuration refits (as the plain sequence with it does), not rebuilt per frame
+        cont = [f for f in frames[1:] if f["hybrid"]["continued"]]
+        check(cont and all(f["hybrid"]["config"] == frames[f["index"] - 1]["hybrid"]["config"]
+                           for f in cont), f"per-frame: states continued {len(cont)}")
+        refit = [f for f in cont if f["hybrid"]["config"]["updateMethod"] == "refit"]
+        check(not refit or any(f["update"] == "refit" for f in refit),
+              f"per-frame: continued refit states refit: {[f['update'] for f in refit]}")
+        check(all(f["update"] == "rebuild" for f in frames[1:] if not f["hybrid"]["continued"]),
+              "per-frame: a state that changes the configuration builds it from scratch")
         # rows of a still never teach a sequence's warm start (nor the other way round)
         still_db = j("still.db")
         r = host("--tune", "accel_embree", "--plugin", "tuner_nm", "--iterations", "2", "--tune-params", PARAMS,

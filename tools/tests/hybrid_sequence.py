@@ -1,0 +1,83 @@
+"""tools/hybrid/sequence.py end to end on tiny settings (16x16, 8 frames, windows of 4, 2
+iterations, 2 rounds; train animated-cornell, validation animated-stress, test
+living-room-cylinder): train, validation and test rows kept apart (one database per scene,
+search.db only the test scene's), the predictor chosen on the validation sequence, the
+per-window best replay runs exactly the configurations the test sequence's search found
+(predictor_nn taught that search answers each window with its best), every method's runs
+have every frame, and --test among --train is refused. Figures are not asserted (a 16x16
+frame times noise); the pipeline is."""
+import json
+import os
+import sqlite3
+import subprocess
+import sys
+import tempfile
+
+SRC = os.environ["TT_SOURCE_ROOT"]
+HOST = os.path.join(os.environ["TT_BUILD_ROOT"], "host", "host")
+failures = 0
+
+
+def check(cond, what):
+    global failures
+    if not cond:
+        failures += 1
+        print(f"FAIL: {what}", file=sys.stderr)
+
+
+def scene_ids(db):
+    with sqlite3.connect(db) as c:
+        return {r[0] for r in c.execute("SELECT DISTINCT scene_id FROM samples")}
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "seq.json")
+        work = os.path.join(tmp, "work")
+        cmd = [sys.executable, "-m", "tools.hybrid.sequence", "--host", HOST, "--train",
+               "animated-cornell", "--validation", "animated-stress", "--test",
+               "living-room-cylinder", "--frames", "0:7", "--res",
+               "16x16", "--window", "4", "--iterations", "2", "--rounds", "2", "--work", work,
+               "--out", out]
+        r = subprocess.run(cmd, cwd=SRC, capture_output=True, text=True)
+        check(r.returncode == 0, f"sequence.py: exit {r.returncode}: {r.stderr[-2000:]}")
+        if r.returncode:
+            return 1
+        with open(out) as f:
+            data = json.load(f)
+        check(data["train"] == ["animated-cornell"] and data["validation"] == "animated-stress"
+              and data["test"] == "living-room-cylinder", "train, validation and test named")
+        vrows = data["validation_rows"]
+        check(data["chosen"] in ("predictor_nn", "predictor_rbf") and
+              vrows[data["chosen"]]["speedup"] == max(vrows[p]["speedup"]
+                                                      for p in ("predictor_nn", "predictor_rbf")),
+              f"the validation chooses the faster predictor: {data['chosen']} of {vrows}")
+        check(data["search"]["states"] == 2 and data["best_agree"] == 2,
+              f"the per-window best replay runs the search's best: {data['best_agree']} of 2")
+        for k, runs in data["runs"].items():
+            check(len(runs) == 2 and all([f["index"] for f in run] == list(range(8))
+                                         for run in runs), f"{k}: 2 rounds of 8 frames")
+        other = "predictor_rbf" if data["chosen"] == "predictor_nn" else "predictor_nn"
+        check(set(data["summary"]) == {"default rebuild", "hybrid-predicted",
+                                       f"hybrid-predicted ({other})", "per-window best"},
+              f"methods: {list(data['summary'])}")
+        check(abs(data["summary"]["per-window best"]["of_best"] - 1.0) < 1e-12 and
+              abs(data["summary"]["default rebuild"]["speedup"] - 1.0) < 1e-12,
+              "ratios are taken against the right runs")
+        ids = [scene_ids(os.path.join(work, n)) for n in
+               ("train_animated-cornell.db", "train_animated-stress.db", "search.db")]
+        check(all(len(i) == 1 for i in ids) and len(set.union(*ids)) == 3,
+              f"train, validation and test rows kept apart: {ids}")
+        check("goal: hybrid-predicted >= 1.3x default rebuild:" in r.stdout and
+              "goal: hybrid-predicted within 5% of the per-window best:" in r.stdout,
+              "both goals printed")
+        bad = subprocess.run(cmd[:-2] + ["--train", "living-room-cylinder"], cwd=SRC,
+                             capture_output=True, text=True)
+        check(bad.returncode != 0 and "keep them apart" in bad.stderr,
+              f"--test among --train refused: {bad.stderr}")
+    print("hybrid_sequence: " + ("ok" if not failures else f"{failures} failed"))
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
