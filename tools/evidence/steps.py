@@ -347,18 +347,23 @@ def integrator_sampler_choice(ctx):
     longer reads or a tool that rots fails)."""
     pngs = []
     src = os.path.join(ROOT, "tools", "charts")
-    for ig, stem in (("integrator_pt", "sampler_choice"),
-                     ("integrator_bdpt", "sampler_choice_integrator_bdpt")):
-        if not os.path.exists(os.path.join(src, stem + ".json")):
+    # (integrator, file stem, folder under tools/charts, name of the page's PNG): the choices,
+    # then BDPT's held-out check (scenes no default was chosen on)
+    for ig, stem, sub, png in (("integrator_pt", "sampler_choice", "", "sampler_choice"),
+                               ("integrator_bdpt", "sampler_choice_integrator_bdpt", "",
+                                "sampler_choice_integrator_bdpt"),
+                               ("integrator_bdpt", "sampler_choice_integrator_bdpt", "heldout",
+                                "sampler_heldout_integrator_bdpt")):
+        if not os.path.exists(os.path.join(src, sub, stem + ".json")):
             continue
-        w = os.path.join(ctx.work, "sampler_" + ig)
+        w = os.path.join(ctx.work, "sampler_" + png)
         shutil.rmtree(w, ignore_errors=True)
         os.makedirs(w)
-        shutil.copyfile(os.path.join(src, stem + ".json"), os.path.join(w, stem + ".json"))
+        shutil.copyfile(os.path.join(src, sub, stem + ".json"), os.path.join(w, stem + ".json"))
         ctx.run([PY, "-m", "tools.charts.sampler_choice", "--integrator", ig, "--summarize",
                  "--out", w])
-        shutil.copyfile(os.path.join(w, stem + ".png"), ctx.path("charts", stem + ".png"))
-        pngs.append(_png(ctx, f"charts/{stem}.png"))
+        shutil.copyfile(os.path.join(w, stem + ".png"), ctx.path("charts", png + ".png"))
+        pngs.append(_png(ctx, f"charts/{png}.png"))
     if not pngs:
         raise StepError(f"no sampler_choice*.json in {src}")
     return pngs
