@@ -319,6 +319,15 @@ def taa_speed_vs_rmse(ctx):
     return [_png(ctx, "taa/speed_vs_rmse.png")]
 
 
+def taa_darkening(ctx):
+    """tools/taa/darkening.py (VCTAA's darkening, both resolves) redrawn from the committed
+    evaluation tools/taa/figures/darkening_eval.json (no rendering)."""
+    ctx.run([PY, "-m", "tools.taa.darkening",
+             os.path.join(ROOT, "tools", "taa", "figures", "darkening_eval.json"),
+             "--out", ctx.path("taa", "darkening.png")])
+    return [_png(ctx, "taa/darkening.png")]
+
+
 def taa_speed(ctx):
     """tools/taa/speed.py (Table 5.2): one run of one round of taa_bench (wall times on a
     loaded machine: the tool runs, the figures are not results)."""
@@ -371,7 +380,7 @@ def integrator_sampler_choice(ctx):
 
 QUICK = [hybrid_figures, hybrid_speed_vs_roofline, hybrid_remeasured, accel_render_split,
          accel_anim_update, tuning_analysis,
-         tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_speed,
+         tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_darkening, taa_speed,
          integrator_error_vs_time, integrator_sampler_choice]
 
 

@@ -24,7 +24,7 @@ for f in hybrid/fig3_17_speedup_render.png hybrid/speed_vs_roofline.png accel/re
          quick/tuning_correlation.png quick/cylinder_cornell-box.png quick/theta_cornell-box.png \
          quick/pssmlt_tuning_cornell-box.png quick/pssmlt_equal_mutations.png \
          quick/pssmlt_error_vs_time.png quick/pssmlt_sigma_sweep.png quick/gains_cornell-box.png \
-         quick/taa_speed.png quick/error_vs_time_cornell.png taa/speed_vs_rmse.png \
+         quick/taa_speed.png quick/error_vs_time_cornell.png taa/speed_vs_rmse.png taa/darkening.png \
          charts/sampler_choice.png charts/sampler_heldout_integrator_bdpt.png quick/hybrid_roofline_speed.png hybrid/roofline_speed.png \
          accel/anim_update_living-room-cylinder.png quick/anim_update_animated-stress.png; do
   check '[ "$(head -c 4 "$dir/page/$f" | tail -c 3)" = "PNG" ]'
