@@ -7,7 +7,8 @@ always refit):
   always refit          refit every frame (never rebuilt)
   refit, tuned schedule refit with a rebuild every N frames or once the refitted tree's SAH
                         cost grew by a factor G: the best of a sweep of whole sequences over
-                        --intervals N and --growths G (one run each, before the rounds)
+                        --intervals N and --growths G (the least of --sweep-rounds runs
+                        each, before the rounds)
   best static           the configuration a still tune finds (build+render of one still
                         frame at the sequence's start time, the update parameters left out),
                         rebuilt every frame
@@ -155,17 +156,23 @@ def schedules(args):
 
 
 def sweep_schedules(exe, args, tmp):
-    """Every schedule over the whole sequence once: {label: {"sets", "frame_ms" (summed),
-    "rebuilt"}}, and the best label."""
+    """Every schedule over the whole sequence, --sweep-rounds times (the order reversed every
+    other round): {label: {"sets", "frame_ms" (the least summed frame time of its runs: the
+    machine's load only adds time), "runs" (each run's sum), "rebuilt"}}, and the best label."""
     out = {}
-    for k, sets in schedules(args).items():
-        d = os.path.join(tmp, "sweep_" + k.replace(" ", "_"))
-        os.makedirs(d)
-        fr = run_sequence(exe, args.scene, sets, args, d)
-        out[k] = {"sets": sets, "frame_ms": sum(frame_ms(f) for f in fr),
-                  "rebuilt": sum(f.get("update") == "rebuild" for f in fr)}
-        print(f"schedule {k:10s}: {out[k]['frame_ms']:10.1f} ms over the sequence, "
-              f"{out[k]['rebuilt']} rebuilt", flush=True)
+    labels = list(schedules(args).items())
+    for r in range(args.sweep_rounds):
+        for k, sets in (labels if r % 2 == 0 else labels[::-1]):
+            d = os.path.join(tmp, f"sweep{r}_" + k.replace(" ", "_"))
+            os.makedirs(d)
+            fr = run_sequence(exe, args.scene, sets, args, d)
+            e = out.setdefault(k, {"sets": sets, "runs": [],
+                                   "rebuilt": sum(f.get("update") == "rebuild" for f in fr)})
+            e["runs"].append(sum(frame_ms(f) for f in fr))
+            e["frame_ms"] = min(e["runs"])
+    for k, e in out.items():
+        print(f"schedule {k:10s}: {e['frame_ms']:10.1f} ms over the sequence (least of "
+              f"{len(e['runs'])}), {e['rebuilt']} rebuilt", flush=True)
     if not out:
         sys.exit("anim_update: --intervals and --growths are both empty: no schedule to sweep")
     return out, min(out, key=lambda k: out[k]["frame_ms"])
@@ -324,10 +331,12 @@ def plot(data, path):
                 c.axhline(statistics.median(sum(frame_ms(f) for f in r) for r in data["runs"][lbl])
                           / reb, color=col, lw=1, ls="--", label=lbl + " (rounds)")
         c.set(ylabel="sequence time / default rebuild's",
-              title="rebuild schedule sweep (one run each; chosen: green)")
+              title="rebuild schedule sweep (least of %d runs; chosen: green)"
+              % max(len(v.get("runs", [0])) for v in sweep.values()))
         c.legend(fontsize=7)
     fig.text(0.01, 0.005, f"{data['res']}, {data['spp']} spp, {data['threads']} threads, "
-             f"{data['rounds']} interleaved rounds, loaded shared machine", fontsize=7)
+             f"{data['rounds']} interleaved rounds, loaded shared machine"
+             + (f"; {data['note']}" if data.get("note") else ""), fontsize=7)
     fig.tight_layout()
     tmp = path + ".tmp.png"
     fig.savefig(tmp, dpi=110)
@@ -379,6 +388,8 @@ def main(argv=None):
                    help="rebuild intervals of the schedule sweep (default 2,4,8,16,32,64)")
     p.add_argument("--growths", type=float_list, default=[1.1, 1.25, 1.5, 2.0],
                    help="SAH growth factors of the schedule sweep (default 1.1,1.25,1.5,2)")
+    p.add_argument("--sweep-rounds", type=int, default=2,
+                   help="runs of every schedule in the sweep, the least kept (default 2)")
     p.add_argument("--methods", type=lambda t: [x.strip() for x in t.split(";") if x.strip()],
                    default=list(METHODS),
                    help="the methods to measure, separated by ';' (their labels hold commas; "
@@ -400,6 +411,8 @@ def main(argv=None):
         if args.fig:
             plot(data, args.fig)
         return 0
+    if args.sweep_rounds < 1:
+        sys.exit("anim_update: --sweep-rounds must be >= 1")
     if min(args.intervals, default=2) < 1 or min(args.growths, default=2) <= 1.0:
         sys.exit("anim_update: --intervals must be >= 1 and --growths > 1 (a schedule that "
                  "rebuilds)")

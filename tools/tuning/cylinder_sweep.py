@@ -199,7 +199,8 @@ def summarize(work, fig, conf, title):
                 ax.set_xlabel("cylinder angle theta [deg]")
             ax.set_xticks(range(0, 181, 45))
     axes[0][0].legend(fontsize=7)
-    fig_.suptitle("%s:\n%s, 1 spp, %d thread(s), n=%d, mean and %.4g%% t-band" %
+    fig_.suptitle("%s:\n%s, 1 spp, %d thread(s), n=%d, mean and %.4g%% t-band; the angles are "
+                  "the frames of one host --sequence per configuration" %
                   (title or os.path.basename(os.path.dirname(meta["scene"])), meta["res"],
                    meta["threads"], meta["reps"], 100 * conf), fontsize=9)
     fig_.tight_layout()
