@@ -27,7 +27,9 @@ would measure the other processes. The search's own costs (the best of K noisy s
 printed too, but the goals use the re-measured replays.
 
   nice -n 10 /usr/bin/python3 -m tools.hybrid.sequence --frames 0:119 --res 160x120 \\
-      --out tools/hybrid/figures/sequence/sequence.json
+      --out tools/hybrid/figures/sequence/sequence.json \\
+      --fig tools/hybrid/figures/sequence/sequence.png
+  /usr/bin/python3 -m tools.hybrid.sequence --replot tools/hybrid/figures/sequence/sequence.json
 """
 import json
 import os
@@ -56,11 +58,20 @@ def hybrid_args(args, stats):
             "--tune-params", args.params, "--stats", stats]
 
 
+def trim(frame):
+    """The manifest fields the figures read: the frame, its update and times, its state."""
+    out = {k: frame[k] for k in ("index", "update", "update_ms", "render_ms") if k in frame}
+    hy = frame.get("hybrid")
+    if isinstance(hy, dict):
+        out["hybrid"] = {k: hy[k] for k in ("state", "mode", "continued") if k in hy}
+    return out
+
+
 def run(exe, args, argv, folder, log):
     os.makedirs(folder, exist_ok=True)
     host.run(exe, argv, nice=args.nice, log=log)
     with open(os.path.join(folder, "manifest.json")) as f:
-        return json.load(f)["frames"]
+        return [trim(fr) for fr in json.load(f)["frames"]]
 
 
 def frames_ms(frames):
@@ -162,6 +173,30 @@ def report(data):
     return rows, goals
 
 
+def plot(data, path):
+    """Per-frame update + render along the test sequence (median over rounds) per method."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(9, 4.2))
+    for k, runs in data["runs"].items():
+        n = min(len(r) for r in runs)
+        ax.plot([runs[0][i]["index"] for i in range(n)],
+                [statistics.median(r[i].get("update_ms", 0.0) + r[i]["render_ms"] for r in runs)
+                 for i in range(n)], label=k, lw=1.1)
+    ax.set(xlabel="frame", ylabel="update + render ms (CPU, median over rounds)",
+           title=f"{data['test']}: hybrid-predicted ({data['chosen']}, learnt from "
+                 f"{', '.join(data['train'] + [data['validation']])})")
+    ax.legend(fontsize=7)
+    fig.text(0.01, 0.005, f"{data['res']}, {data['spp']} spp, {data['threads']} thread, windows "
+             f"of {data['window']} frames, {data['rounds']} interleaved rounds, loaded shared "
+             f"machine", fontsize=7)
+    fig.tight_layout()
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=110)
+    os.replace(tmp, path)
+
+
 def main(argv=None):
     p = cli.parser(__doc__)
     p.add_argument("--train", default="animated-cornell",
@@ -183,11 +218,15 @@ def main(argv=None):
     p.add_argument("--work", help="keep the searches' databases and runs here (resumable)")
     p.add_argument("--nice", type=int, default=None)
     p.add_argument("--out", help="the raw figures as JSON")
-    p.add_argument("--replot", help="a JSON of --out: print it, measure nothing")
+    p.add_argument("--fig", help="PNG: per-frame update + render along the test sequence")
+    p.add_argument("--replot", help="a JSON of --out: print (and --fig draw) it, measure nothing")
     args = p.parse_args(argv)
     if args.replot:
         with open(args.replot) as f:
-            report(json.load(f))
+            data = json.load(f)
+        report(data)
+        if args.fig:
+            plot(data, args.fig)
         return 0
     exe = host.find(args.host)
     train = [t for t in args.train.split(",") if t]
@@ -254,8 +293,10 @@ def main(argv=None):
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
         tmp_out = args.out + ".tmp"
         with open(tmp_out, "w") as f:
-            json.dump(data, f, indent=1)
+            json.dump(data, f, separators=(",", ":"))
         os.replace(tmp_out, args.out)
+    if args.fig:
+        plot(data, args.fig)
     return 0
 
 
