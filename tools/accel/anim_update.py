@@ -16,6 +16,11 @@ always refit):
                         the whole space, update parameters included), replayed as fixed
   tuned, live           that tuning itself: the sequence with the search running in it, its
                         measurement windows included (what a user's one tuned run costs)
+  hybrid-predicted      host --hybrid --sequence --epsilon 0: a model (--hybrid-predictor,
+                        default predictor_rbf, the one tools/hybrid/sequence.py's validation
+                        chose) taught the searches along OTHER sequences (--hybrid-train,
+                        measured with this run's settings) predicts per window of
+                        --tune-window frames (only with --hybrid-train)
 
 The rebuild schedule is swept over whole sequences, not searched in the tuner's windows: a
 window (4-8 frames) starts with a build from scratch of its configuration, so every interval
@@ -63,6 +68,8 @@ REF = "default rebuild"
 SCHEDULE = "refit, tuned schedule"
 # the label an older JSON gives the schedule (an interval tuned by tuner_nm in its windows)
 OLD_SCHEDULE = "refit, tuned interval"
+HYBRID = "hybrid-predicted"
+HYBRID_PARAMS = "updateMethod,refitInterval,refitSahGrowth,quality"
 BUILDER = ["quality", "branchingFactor", "maxDepth", "sahBlockSize", "minLeafSize", "maxLeafSize",
            "travcost", "intcost", "static", "compact", "robust", "backend"]
 # Sequences the tool generates when named as --scene (not committed: large, and
@@ -192,7 +199,25 @@ def derive(exe, args, tmp):
         os.makedirs(d)
         run_sequence(exe, args.scene, [], args, d, live_args(args))
         found["along"] = best_from_log(os.path.join(d, "host.log"), "tuning along the sequence")
+    if HYBRID in args.methods:
+        found["hybrid_db"] = hybrid_train(exe, args, tmp)
     return found
+
+
+def hybrid_args(args):
+    return ["--hybrid", "--tune-window", str(args.tune_window), "--iterations",
+            str(args.tune_iterations), "--tune-params", HYBRID_PARAMS]
+
+
+def hybrid_train(exe, args, tmp):
+    """Searches along every --hybrid-train sequence (each window searched) into one
+    database, measured as this run measures: the model's warm start."""
+    db = os.path.join(tmp, "hybrid_train.db")
+    for i, scene in enumerate(args.hybrid_train):
+        d = os.path.join(tmp, f"hybrid_train_{i}")
+        os.makedirs(d)
+        run_sequence(exe, scene, [], args, d, hybrid_args(args) + ["--epsilon", "1", "--db", db])
+    return db
 
 
 def still_tune(exe, args, tmp):
@@ -224,6 +249,9 @@ METHODS = {
     "best static": lambda found, args: (sets_of(found["static"]), []),
     "tuned, replayed": lambda found, args: (sets_of(found["along"]), []),
     "tuned, live": lambda found, args: ([], live_args(args)),
+    HYBRID: lambda found, args: ([], hybrid_args(args) + [
+        "--epsilon", "0", "--warm-start", found["hybrid_db"], "--no-db", "--plugin",
+        args.hybrid_predictor]),
 }
 
 
@@ -243,6 +271,8 @@ def summarize(data):
     g = {}
     if "tuned, live" in rows:
         g["tuned live >= 1.3x default rebuild"] = rows["tuned, live"]["speedup"] >= 1.3
+    if HYBRID in rows:
+        g["hybrid-predicted >= 1.3x default rebuild"] = rows[HYBRID]["speedup"] >= 1.3
     if "tuned, replayed" in rows and "tuned, live" in rows:
         g["tuned live within 5% of tuned best replayed"] = \
             rows["tuned, live"]["speedup"] >= rows["tuned, replayed"]["speedup"] / 1.05
@@ -394,6 +424,10 @@ def main(argv=None):
                    default=list(METHODS),
                    help="the methods to measure, separated by ';' (their labels hold commas; "
                         "default: all: " + "; ".join(METHODS) + f"; \"{REF}\" is always measured)")
+    p.add_argument("--hybrid-train", type=lambda t: [x for x in t.split(",") if x], default=[],
+                   help="scene.json files (comma-separated, not --scene) whose searches teach "
+                        "the hybrid-predicted model; without, that method is not measured")
+    p.add_argument("--hybrid-predictor", default="predictor_rbf")
     p.add_argument("--nice", type=int, default=None, help="run the host under nice -n NICE")
     p.add_argument("--out", help="raw per-frame figures as JSON")
     p.add_argument("--fig", help="PNG: per-frame update + render, refit's render drift, the sweep")
@@ -421,6 +455,11 @@ def main(argv=None):
         sys.exit(f"anim_update: --methods: unknown {'; '.join(unknown)} (known, separated "
                  f"by ';': {'; '.join(METHODS)})")
     args.methods = [REF] + [m for m in METHODS if m in args.methods and m != REF]
+    if not args.hybrid_train and HYBRID in args.methods:
+        args.methods.remove(HYBRID)  # nothing to learn from: said in the report
+    if any(os.path.abspath(t) == os.path.abspath(args.scene) for t in args.hybrid_train):
+        sys.exit("anim_update: --hybrid-train holds --scene: the model must not learn the "
+                 "sequence it predicts")
     exe = host.find(args.host)
     name = args.scene
     if args.scene in GENERATED:
