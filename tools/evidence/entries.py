@@ -816,7 +816,7 @@ entry(
     command="/usr/bin/python3 -m tools.taa.ablations --data DATA --scenes S --val V --out /tmp/abl "
             "--steps 600 --batch 4 --patch 32 --seed 1 --variants l2,l4,base",
     outcome="not measured yet", why="",
-    source=["tools/taa/README.md"],
+    source=["docs/notes/taa.md"],
 )
 
 # --- integrators -----------------------------------------------------------------------------
