@@ -340,12 +340,17 @@ static void tt__seq_log_start(const tt__seq *s) {
           s->dir);
 }
 
+static int tt__seq_step(tt__seq *s, uint32_t f);
+static int tt__seq_commit_frames(tt__seq *s, uint32_t n);
+
 /* Create: the output folder, the session (scene, plugins, accel, integrator, a film with
  * depth and motion), the post-filter, the buffers and the manifest. An exit code; close the
  * sequence in any case. */
 static int tt__seq_create(tt__seq *s, const tt__host_options *opt) {
   memset(s, 0, sizeof *s);
   s->opt = opt;
+  s->step = tt__seq_step;
+  s->commit_frames = tt__seq_commit_frames;
   int rc = tt__seq_dirs(s);
   if (rc == TT_EXIT_OK) rc = tt__session_open(&s->ses, opt);
   if (rc == TT_EXIT_OK) rc = tt__seq_pick_post(s);
@@ -544,7 +549,7 @@ static int tt__seq_png(tt__seq *s, const tt__seq_frame *fr) {
 /* Step: frame f, with the stop held back so that it completes: pose and accel update, the
  * jittered frame, the reference, the post-filter, the PNG; its manifest entry closed and
  * the manifest committed. An exit code (a failure leaves the entry open: finish closes it). */
-int tt__seq_step(tt__seq *s, uint32_t f) {
+static int tt__seq_step(tt__seq *s, uint32_t f) {
   tt__seq_frame fr;
   s->render_ms = 0;
   tt_default_host_hold_stop(1);
@@ -563,7 +568,7 @@ int tt__seq_step(tt__seq *s, uint32_t f) {
   return rc;
 }
 
-int tt__seq_commit_frames(tt__seq *s, uint32_t n) {
+static int tt__seq_commit_frames(tt__seq *s, uint32_t n) {
   int rc = TT_EXIT_OK;
   if (tt__seq_manifest_commit(s->mpath, s->manifest, &s->mbuf, &s->mlen)) rc = TT_EXIT_OUTPUT;
   s->done_frames += n;

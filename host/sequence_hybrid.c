@@ -189,7 +189,7 @@ static int tt__sh_play(tt__seq *s) {
   for (uint32_t f = h->f0; f <= h->f1 && rc == TT_EXIT_OK; f++) {
     fflush(h->wm);
     h->entry[2 * (f - h->f0)] = ftell(h->wm);
-    rc = tt__seq_step(s, f);
+    rc = s->step(s, f);
     fflush(h->wm);
     h->entry[2 * (f - h->f0) + 1] = ftell(h->wm);
     upd += s->update_ms;
@@ -271,7 +271,7 @@ static int tt__sh_commit(tt__seq *s, const tt_hybrid_report *r) {
     fprintf(s->manifest, "%s}\n", note);
   }
   free(note);
-  int rc = tt__seq_commit_frames(s, h->f1 - h->f0 + 1);
+  int rc = s->commit_frames(s, h->f1 - h->f0 + 1);
   return rc;
 }
 

@@ -37,7 +37,13 @@ typedef struct tt__seq {
   double update_ms, render_ms;    /* what the last frame's update and render took */
   /* the hybrid loop along the sequence (sequence_hybrid.c), NULL without */
   struct tt__seq_hybrid *hybrid;
-  int defer_commit; /* tt__seq_step leaves the manifest's commit to tt__seq_commit_frames */
+  int defer_commit; /* step leaves the manifest's commit to commit_frames */
+  /* the frame loop's own steps, for sequence_hybrid.c (which sequence.c calls, never the
+   * other way round): frame f (pose and accel update, render, outputs, its manifest entry,
+   * the manifest committed unless defer_commit), and the manifest committed after `n`
+   * deferred frames whose entries it now holds. Exit codes. */
+  int (*step)(struct tt__seq *s, uint32_t f);
+  int (*commit_frames)(struct tt__seq *s, uint32_t n);
 } tt__seq;
 
 /* One frame being rendered: its index, poses and jitter, what it has produced so far. */
@@ -61,12 +67,6 @@ int tt__seq_tune_before(tt__seq *s, uint32_t f);
 int tt__seq_tune_after(tt__seq *s, uint32_t f);
 int tt__seq_tune_finish(tt__seq *s, int rc);
 void tt__seq_tune_free(tt__seq *s);
-
-/* Frame f (sequence.c): pose and accel update, render, outputs, its manifest entry; the
- * manifest committed unless s->defer_commit. An exit code. */
-int tt__seq_step(tt__seq *s, uint32_t f);
-/* Commits the manifest after `n` frames whose entries it holds now (deferred steps). */
-int tt__seq_commit_frames(tt__seq *s, uint32_t n);
 
 /* The hybrid loop along the sequence (sequence_hybrid.c), with --hybrid: each window of
  * --tune-window frames a state, explored (a search replaying the window) or exploited (the
