@@ -781,7 +781,7 @@ entry(
     command="nice -n 10 /usr/bin/python3 -m tools.taa.speed --runs 8 --full --default c6 --json "
             "tools/taa/figures/speed.json --png tools/taa/figures/speed.png",
     outcome="wins",
-    why="The default network costs 36 ms of CPU per 640x480 frame, under a third of the 200 ms "
+    why="The default network costs 36 ms of CPU per 640x480 frame, under a fifth of the 200 ms "
         "the thesis' GPU prototype takes end to end (different hardware: a CPU here, a GPU "
         "there); on a loaded machine its wall time is 53 ms.",
     source=["plugins/post_taa/README.md"],
