@@ -191,8 +191,11 @@ def main():
               st["warm_start"][0]["rows"] == len(rows),
               f"warm: 3 predicted states, played once each, {len(rows)} rows learnt: {st}")
         frames2, st2, _ = hybrid(j("warm2"), j("warm2.json"), *warm)
-        check(st and st2 and [x["config"] for x in st["states"]] ==
-              [x["config"] for x in st2["states"]], "warm: the predictions are deterministic")
+        # the first state's answer comes from the warm start alone: the same in every run
+        # (later answers may differ: the model also learns its own answers' measured costs)
+        check(st and st2 and st["states"][0]["config"] == st2["states"][0]["config"],
+              "warm: the first prediction is deterministic")
+        by2 = {f["index"]: f for f in frames2}
         configs = {}
         for f in frames:
             configs.setdefault(json.dumps(f["hybrid"]["config"], sort_keys=True), []).append(
@@ -202,8 +205,11 @@ def main():
             for i in idx:
                 check(np.array_equal(pixels(j("warm"), i), pixels(j(f"plain{n}"), i)),
                       f"warm: frame {i}: not the plain sequence's with --set {cfg}")
-                check(np.array_equal(pixels(j("warm"), i), pixels(j("warm2"), i)),
-                      f"warm: frame {i}: not deterministic")
+                if by2.get(i, {}).get("hybrid", {}).get("config") == json.loads(cfg):
+                    check(np.array_equal(pixels(j("warm"), i), pixels(j("warm2"), i)),
+                          f"warm: frame {i}: not deterministic")
+        check(all(np.array_equal(pixels(j("warm"), i), pixels(j("warm2"), i))
+                  for i in range(WINDOW)), "warm: the first state's frames are deterministic")
         # --predict --sequence: the model's answer per window's first frame, nothing
         # rendered; the first is the one the exploit run played (later states may differ:
         # the exploit run's model also learns from its own answers)
@@ -225,8 +231,10 @@ def main():
         # per-frame states of an unchanged configuration go on updating its structure: a
         # refit configuration refits (as the plain sequence with it does), not rebuilt per frame
         cont = [f for f in frames[1:] if f["hybrid"]["continued"]]
-        check(cont and all(f["hybrid"]["config"] == frames[f["index"] - 1]["hybrid"]["config"]
-                           for f in cont), f"per-frame: states continued {len(cont)}")
+        same = [f for f in frames[1:]
+                if f["hybrid"]["config"] == frames[f["index"] - 1]["hybrid"]["config"]]
+        check(cont == same, f"per-frame: exactly the states of an unchanged configuration "
+              f"continue: {[f['index'] for f in cont]} vs {[f['index'] for f in same]}")
         refit = [f for f in cont if f["hybrid"]["config"]["updateMethod"] == "refit"]
         check(not refit or any(f["update"] == "refit" for f in refit),
               f"per-frame: continued refit states refit: {[f['update'] for f in refit]}")
