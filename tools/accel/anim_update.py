@@ -361,7 +361,7 @@ def plot(data, path):
                 c.axhline(statistics.median(sum(frame_ms(f) for f in r) for r in data["runs"][lbl])
                           / reb, color=col, lw=1, ls="--", label=lbl + " (rounds)")
         c.set(ylabel="sequence time / default rebuild's",
-              title="rebuild schedule sweep (least of %d runs; chosen: green)"
+              title="rebuild schedule sweep (best of %d run(s) each; chosen: green)"
               % max(len(v.get("runs", [0])) for v in sweep.values()))
         c.legend(fontsize=7)
     fig.text(0.01, 0.005, f"{data['res']}, {data['spp']} spp, {data['threads']} threads, "

@@ -401,14 +401,18 @@ entry(
          "tuned rebuild schedule (a sweep over refitInterval 2-64 and refitSahGrowth 1.1-2) "
          "beats always-rebuild everywhere (3.07-5.46x) but always-refit nowhere: at 96x72 the "
          "render is 4-28 ms, so refit's render loss (none on the rigid cylinder, up to 2.5x on "
-         "the stress scene's bodies by frame 110) never pays for a 68-204 ms rebuild. Tuning "
+         "the stress scene's bodies by frame 110) never pays for a 68-204 ms rebuild; at 320x240 "
+         "(stress-detail, renders 164-195 ms) neither: the schedule (SAH growth 1.1) 2.08x, "
+         "always refit 2.68x. Tuning "
          "along the sequence (search included) 0.97-1.20x: the search's windows rebuild "
          "at poor configurations. The small committed scenes (animated-stress, skinned: 3-9 ms "
          "frames) and animated-cornell are noise-level.",
     ours_settings="96x72, 1 spp, 2 threads, 3 interleaved rounds, medians of per-round summed "
                   "frame-time ratios; schedule sweep: each schedule over the whole sequence; "
                   "tuner_nm 8 iterations in windows of 8 frames, still tune 10 iterations; load "
-                  "average 4-5 on a shared 2-core machine, host at nice 10.",
+                  "average 4-7 on a shared 2-core machine, host at nice 10 (two configurations "
+                  "identical up to a frame differ by up to 30% in per-frame render ratio: the "
+                  "per-frame curves are noisy, the summed ratios less so).",
     thesis_numbers="The thesis tunes the static flag (Table 3.1) but measures no per-frame update; "
                    "its rotating cylinder is Fig. 3.13 (entry above).",
     thesis_settings="-",
@@ -417,12 +421,13 @@ entry(
             "--static-iterations 10 --nice 10 --out tools/accel/data/anim_update_stress-detail.json "
             "--fig tools/accel/figures/anim_update_stress-detail.png (the same with --scene "
             "skinned-detail, skinned, scenes/animated-stress/scene.json, "
-            "scenes/living-room-cylinder/scene.json)",
+            "scenes/living-room-cylinder/scene.json; at 320x240: --res 320x240 --methods "
+            "'always refit;refit, tuned schedule')",
     outcome="mixed",
     why="Refit now pays on the three large sequences (3.3-6.6x a rebuild per frame; native refit used to "
         "rebuild the whole scene on each commit), but the goals are missed: tuning along the "
         "sequence, search included, is 0.97-1.20x (goal 1.3x) and far from its own best replayed; "
-        "the tuned rebuild schedule does not beat always-refit at these resolutions; hybrid "
+        "the tuned rebuild schedule does not beat always-refit at 96x72 or 320x240; hybrid "
         "prediction per frame is not measured here.",
     source=["tools/accel/data/anim_update_stress-detail.json",
             "tools/accel/data/anim_update_skinned-detail.json",
