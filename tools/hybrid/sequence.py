@@ -22,6 +22,11 @@ per-window best that a search along the test sequence itself finds.
      ratios default / hybrid (speed-up) and hybrid / per-window best are taken, and their
      medians over rounds reported. Goals: speed-up >= 1.3x, within 5% of the per-window best.
 
+A scene is a folder of scenes/ (animated-cornell, animated-stress, living-room-cylinder) or a
+large sequence that tools/accel/anim_update.py generates into build/anim_scenes/ (stress-detail:
+64 rigid bodies and a cloth, 378,244 triangles; skinned-detail: a Blender-skinned tentacle of
+147,456 vertices; generated on first use, skinned-detail needs Blender).
+
 Costs are CPU time (--clock cpu) of --threads 1 by default: the machine is shared, wall time
 would measure the other processes. The search's own costs (the best of K noisy samples) are
 printed too, but the goals use the re-measured replays.
@@ -44,7 +49,18 @@ SCENES = os.path.join(ROOT, "scenes")
 
 
 def scene_path(name):
-    return os.path.join(SCENES, name, "scene.json")
+    """The scene file of a --train/--validation/--test name: a sequence that
+    tools/accel/anim_update.py generates (stress-detail, skinned-detail, skinned: written into
+    build/anim_scenes/ unless there already), else a folder of scenes/."""
+    from tools.accel import anim_update
+    if name in anim_update.GENERATED:
+        return anim_update.generated_scene(name)
+    path = os.path.join(SCENES, name, "scene.json")
+    if not os.path.isfile(path):
+        sys.exit(f"sequence: scene '{name}' (--train/--validation/--test): expected a folder of "
+                 f"scenes/ with a scene.json ({path} does not exist) or a generated sequence "
+                 f"({', '.join(anim_update.GENERATED)})")
+    return path
 
 
 def common(args, out):
@@ -200,7 +216,8 @@ def plot(data, path):
 def main(argv=None):
     p = cli.parser(__doc__)
     p.add_argument("--train", default="animated-cornell",
-                   help="scenes (folders of scenes/) searched for the training rows")
+                   help="scenes (folders of scenes/ or generated sequences such as "
+                        "stress-detail) searched for the training rows")
     p.add_argument("--validation", default="animated-stress",
                    help="the scene that chooses the predictor (its searches then train too)")
     p.add_argument("--test", default="living-room-cylinder", help="the predicted scene")
@@ -230,6 +247,8 @@ def main(argv=None):
         return 0
     exe = host.find(args.host)
     train = [t for t in args.train.split(",") if t]
+    for t in [*train, args.validation, args.test]:
+        scene_path(t)  # a bad name fails here, before any search runs
     predictors = [x for x in args.predictors.split(",") if x]
     if len({*train, args.validation, args.test}) != len(train) + 2:
         sys.exit("sequence: --train, --validation and --test scenes overlap: keep them apart")

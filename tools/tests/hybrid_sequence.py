@@ -5,7 +5,9 @@ searched state of each is its own): train, validation and test rows kept apart (
 search.db only the test scene's), the predictor chosen on the validation sequence, the
 per-window best replay runs exactly the configurations the test sequence's search found
 (predictor_nn taught that search answers each window with its best), every method's runs
-have every frame, and --test among --train is refused. Figures are not asserted (a 16x16
+have every frame, and --test among --train is refused; a generated sequence's name
+(tools/accel/anim_update.py's stress-detail, skinned-detail) resolves to the file that tool
+generates, and an unknown scene name is refused before anything runs, naming the field. Figures are not asserted (a 16x16
 frame times noise); the pipeline is."""
 import json
 import os
@@ -29,6 +31,27 @@ def check(cond, what):
 def scene_ids(db):
     with sqlite3.connect(db) as c:
         return {r[0] for r in c.execute("SELECT DISTINCT scene_id FROM samples")}
+
+
+def check_generated_names():
+    """Every name anim_update generates goes to its generator (recorded, not run: generating
+    skinned-detail needs Blender and minutes); scenes/ folders resolve to their scene.json."""
+    sys.path.insert(0, SRC)
+    from tools.accel import anim_update
+    from tools.hybrid import sequence
+    asked = []
+    real = anim_update.generated_scene
+    anim_update.generated_scene = lambda name: asked.append(name) or f"/generated/{name}"
+    try:
+        for name in anim_update.GENERATED:
+            got = sequence.scene_path(name)
+            check(got == f"/generated/{name}", f"{name} resolves to its generated file: {got}")
+        check(asked == list(anim_update.GENERATED), f"generated names asked: {asked}")
+        got = sequence.scene_path("animated-cornell")
+        check(got == os.path.join(SRC, "scenes", "animated-cornell", "scene.json") and not
+              asked[len(anim_update.GENERATED):], f"a scenes/ folder resolves to {got}")
+    finally:
+        anim_update.generated_scene = real
 
 
 def main():
@@ -77,6 +100,13 @@ def main():
                              capture_output=True, text=True)
         check(bad.returncode != 0 and "keep them apart" in bad.stderr,
               f"--test among --train refused: {bad.stderr}")
+        bad = subprocess.run(cmd[:-2] + ["--test", "no-such-scene"], cwd=SRC,
+                             capture_output=True, text=True)
+        check(bad.returncode != 0 and "no-such-scene" in bad.stderr and "--test" in bad.stderr
+              and "scene.json" in bad.stderr and "stress-detail" in bad.stderr and
+              not os.path.exists(os.path.join(work, "train_no-such-scene.json")),
+              f"an unknown scene refused with the field and the expectation: {bad.stderr}")
+    check_generated_names()
     print("hybrid_sequence: " + ("ok" if not failures else f"{failures} failed"))
     return 1 if failures else 0
 
