@@ -6,7 +6,7 @@ per-window best that a search along the test sequence itself finds.
   1. searches: `host --hybrid --sequence A:B --epsilon 1` along each --train scene and the
      --validation scene (every window of --window frames searched with tuner_nm,
      --iterations K over --params; every sample a row, one database per scene), and along
-     the --test scene into search.db (what a search finds per window there; never taught
+     the --test scene into search_TEST.db (what a search finds per window there; never taught
      to a predicting model);
   2. validation: each of --predictors, warm-started from the training scenes' rows only,
      predicts the validation sequence (`--hybrid --epsilon 0`); the one with the best
@@ -99,8 +99,16 @@ def search(exe, args, scene, db, work, tag):
     folder = os.path.join(work, tag)
     stats = os.path.join(work, tag + ".json")
     if not os.path.exists(stats):
-        run(exe, args, common(args, folder) + hybrid_args(args, stats) +
+        # a search that did not finish (the host writes its --stats when stopped too) left
+        # rows of part of the sequence: start its database afresh, and name the record only
+        # once the host has exited cleanly, so that a resumed --work never reuses a partial one
+        for x in (db, db + "-wal", db + "-shm"):
+            if os.path.exists(x):
+                os.remove(x)
+        part = stats + ".part"
+        run(exe, args, common(args, folder) + hybrid_args(args, part) +
             ["--epsilon", "1", "--db", db, scene], folder, os.path.join(work, tag + ".log"))
+        os.replace(part, stats)
     with open(stats) as f:
         return json.load(f)["hybrid"]
 
@@ -259,7 +267,8 @@ def main(argv=None):
         dbs = {t: os.path.join(work, f"train_{t}.db") for t in [*train, args.validation]}
         for t in [*train, args.validation]:
             search(exe, args, scene_path(t), dbs[t], work, "train_" + t)
-        search_db = os.path.join(work, "search.db")
+        # one database per test scene: folds sharing a --work folder never mix their searches
+        search_db = os.path.join(work, f"search_{args.test}.db")
         found = search(exe, args, scene_path(args.test), search_db, work, "search_" + args.test)
 
         def warm(names):

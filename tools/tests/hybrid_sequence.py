@@ -2,10 +2,11 @@
 iterations, 2 rounds; train animated-cornell, validation living-room-cylinder, test
 animated-stress, whose windows have distinct indicators (its camera moves), so the nearest
 searched state of each is its own): train, validation and test rows kept apart (one database per scene,
-search.db only the test scene's), the predictor chosen on the validation sequence, the
+search_TEST.db only the test scene's), the predictor chosen on the validation sequence, the
 per-window best replay runs exactly the configurations the test sequence's search found
 (predictor_nn taught that search answers each window with its best), every method's runs
-have every frame, and --test among --train is refused; a generated sequence's name
+have every frame, --test among --train is refused, a search database left by an unfinished
+search is started afresh; a generated sequence's name
 (tools/accel/anim_update.py's stress-detail, skinned-detail) resolves to the file that tool
 generates, and an unknown scene name is refused before anything runs, naming the field. Figures are not asserted (a 16x16
 frame times noise); the pipeline is."""
@@ -63,7 +64,14 @@ def main():
                "animated-stress", "--frames", "0:7", "--res",
                "16x16", "--window", "4", "--iterations", "2", "--rounds", "2", "--work", work,
                "--out", out]
+        # what a search stopped half way leaves in a --work folder (a database without its
+        # finished record) is started afresh, not appended to
+        os.makedirs(work)
+        with open(os.path.join(work, "search_animated-stress.db"), "wb") as f:
+            f.write(b"rows of a search that never finished")
         r = subprocess.run(cmd, cwd=SRC, capture_output=True, text=True)
+        check(not [n for n in os.listdir(work) if n.endswith(".part")],
+              f"no partial search record left: {os.listdir(work)}")
         check(r.returncode == 0, f"sequence.py: exit {r.returncode}: {r.stderr[-2000:]}")
         if r.returncode:
             return 1
@@ -90,7 +98,7 @@ def main():
               abs(data["summary"]["default rebuild"]["speedup"] - 1.0) < 1e-12,
               "ratios are taken against the right runs")
         ids = [scene_ids(os.path.join(work, n)) for n in
-               ("train_animated-cornell.db", "train_living-room-cylinder.db", "search.db")]
+               ("train_animated-cornell.db", "train_living-room-cylinder.db", "search_animated-stress.db")]
         check(all(len(i) == 1 for i in ids) and len(set.union(*ids)) == 3,
               f"train, validation and test rows kept apart: {ids}")
         check("goal: hybrid-predicted >= 1.3x default rebuild:" in r.stdout and
