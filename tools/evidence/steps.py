@@ -179,6 +179,27 @@ def accel_anim_update(ctx):
     return pngs + [_png(ctx, "quick/anim_update_animated-stress.png")]
 
 
+SEQ_HYBRID = os.path.join(ROOT, "tools", "hybrid", "figures")
+
+
+def hybrid_sequence(ctx):
+    """tools/hybrid/sequence.py: every committed fold (figures/sequence*/sequence.json: hybrid
+    prediction along a test sequence the model never saw) redrawn from its JSON (the real
+    figures; measuring a fold takes tens of minutes, its pipeline is tested by
+    tools/tests/hybrid_sequence.py)."""
+    pngs = []
+    for d in sorted(os.listdir(SEQ_HYBRID)):
+        js = os.path.join(SEQ_HYBRID, d, "sequence.json")
+        if not (d.startswith("sequence") and os.path.isfile(js)):
+            continue
+        png = os.path.join("hybrid", d.replace("sequence", "sequence_hybrid", 1) + ".png")
+        ctx.run([PY, "-m", "tools.hybrid.sequence", "--replot", js, "--fig", ctx.path(png)])
+        pngs.append(_png(ctx, png))
+    if not pngs:
+        raise StepError(f"no sequence*/sequence.json in {SEQ_HYBRID}")
+    return pngs
+
+
 def tuning_analysis(ctx):
     """tools/tuning/analyze.py's five charts (Figs. 3.3, 3.5, 3.6, 3.8, 3.11) on a 12-sample
     exploration and two 6-iteration tuning runs of the Cornell box at 24x24."""
@@ -379,7 +400,7 @@ def integrator_sampler_choice(ctx):
 
 
 QUICK = [hybrid_figures, hybrid_speed_vs_roofline, hybrid_remeasured, accel_render_split,
-         accel_anim_update, tuning_analysis,
+         accel_anim_update, hybrid_sequence, tuning_analysis,
          tuning_gains, cylinder_sweep, theta_histogram, pssmlt_tools, taa_speed_vs_rmse, taa_darkening, taa_speed,
          integrator_error_vs_time, integrator_sampler_choice]
 

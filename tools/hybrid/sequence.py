@@ -209,8 +209,9 @@ def plot(data, path):
                 [statistics.median(r[i].get("update_ms", 0.0) + r[i]["render_ms"] for r in runs)
                  for i in range(n)], label=k, lw=1.1)
     ax.set(xlabel="frame", ylabel="update + render ms (CPU, median over rounds)",
-           title=f"{data['test']}: hybrid-predicted ({data['chosen']}, learnt from "
-                 f"{', '.join(data['train'] + [data['validation']])})")
+           title=f"test {data['test']}: hybrid-predicted ({data['chosen']})\nlearnt from "
+                 f"{', '.join(data['train'])}; validation {data['validation']}")
+    ax.title.set_fontsize(9)
     ax.legend(fontsize=7)
     fig.text(0.01, 0.005, f"{data['res']}, {data['spp']} spp, {data['threads']} thread, windows "
              f"of {data['window']} frames, {data['rounds']} interleaved rounds, loaded shared "

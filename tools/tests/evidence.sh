@@ -26,11 +26,12 @@ for f in hybrid/fig3_17_speedup_render.png hybrid/speed_vs_roofline.png accel/re
          quick/pssmlt_error_vs_time.png quick/pssmlt_sigma_sweep.png quick/gains_cornell-box.png \
          quick/taa_speed.png quick/error_vs_time_cornell.png taa/speed_vs_rmse.png taa/darkening.png \
          charts/sampler_choice.png charts/sampler_heldout_integrator_bdpt.png quick/hybrid_roofline_speed.png hybrid/roofline_speed.png \
-         accel/anim_update_living-room-cylinder.png quick/anim_update_animated-stress.png; do
+         accel/anim_update_living-room-cylinder.png quick/anim_update_animated-stress.png \
+         hybrid/sequence_hybrid.png hybrid/sequence_hybrid-stress-detail.png; do
   check '[ "$(head -c 4 "$dir/page/$f" | tail -c 3)" = "PNG" ]'
 done
 # every chapter, the outcome table, no failed step
-for id in ch3 ch4 ch5 outcomes quick-pass ch3-hybrid; do check "grep -q 'id=\"$id\"' '$page'"; done
+for id in ch3 ch4 ch5 outcomes quick-pass ch3-hybrid ch3-sequence-hybrid; do check "grep -q 'id=\"$id\"' '$page'"; done
 check '! grep -q "FAILED" "$page"'
 # the hybrid table is read from the committed summary (nn on build+render: 2.51x)
 check 'grep -q "2.51x" "$page"'
