@@ -37,7 +37,6 @@ def scene_ids(db):
 def check_generated_names():
     """Every name anim_update generates goes to its generator (recorded, not run: generating
     skinned-detail needs Blender and minutes); scenes/ folders resolve to their scene.json."""
-    sys.path.insert(0, SRC)
     from tools.accel import anim_update
     from tools.hybrid import sequence
     asked = []
