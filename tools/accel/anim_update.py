@@ -17,8 +17,8 @@ always refit):
   tuned, live           that tuning itself: the sequence with the search running in it, its
                         measurement windows included (what a user's one tuned run costs)
   hybrid-predicted      host --hybrid --sequence --epsilon 0: a model (--hybrid-predictor,
-                        default predictor_rbf, the one tools/hybrid/sequence.py's validation
-                        chose) taught the searches along OTHER sequences (--hybrid-train,
+                        default predictor_rbf, which tools/hybrid/sequence.py's validation
+                        chose in the living-room-cylinder fold; nn in the two others) taught the searches along OTHER sequences (--hybrid-train,
                         measured with this run's settings) predicts per window of
                         --tune-window frames (only with --hybrid-train)
 
