@@ -71,40 +71,9 @@ struct tt__seq_hybrid {
   int interrupted;
 };
 
-/* The searched parameters (--tune-params, else all of the accel's, the update method
- * included) and the objective: a time. Prints, exit code. */
+/* The searched parameters and the objective (tt__seq_accel_plan); prints, exit code. */
 static int tt__sh_plan(tt__seq *s, struct tt__seq_hybrid *h) {
-  const tt__host_options *opt = s->opt;
-  const char *accel = tt_loaded_plugin_entry(s->ses.accel_p)->name;
-  if (opt->tune && strcmp(opt->tune, accel)) {
-    tt__say("--hybrid --sequence tunes the accel (%s), whose per-frame update + render the "
-            "frames measure, not --tune %s\n",
-            accel, opt->tune);
-    return TT_EXIT_USAGE;
-  }
-  const char *names[256];
-  size_t n = 0;
-  char buf[4096];
-  if (opt->tune_params) {
-    snprintf(buf, sizeof buf, "%s", opt->tune_params);
-    for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
-  }
-  h->plan.struct_size = sizeof h->plan;
-  if (tt_session_tuning_plan(s->ses.lib, accel, opt->tune_params ? names : NULL, n, &h->plan) !=
-      TT_OK) {
-    tt__say("--hybrid: %s\n", tt_last_error());
-    return TT_EXIT_USAGE;
-  }
-  h->objective = opt->objective ? opt->objective : "build+render";
-  if (tt__parse_objective("--objective", h->objective, &h->obj)) return TT_EXIT_USAGE;
-  if (h->obj.kind != TT_OBJECTIVE_RENDER && h->obj.kind != TT_OBJECTIVE_BUILD &&
-      h->obj.kind != TT_OBJECTIVE_TOTAL) {
-    tt__say("--objective %s: along a sequence a state's cost is its frames' times: render, "
-            "build (the per-frame accel update) or build+render (default)\n",
-            h->objective);
-    return TT_EXIT_USAGE;
-  }
-  return TT_EXIT_OK;
+  return tt__seq_accel_plan(s, "--hybrid --sequence", &h->plan, &h->objective, &h->obj);
 }
 
 /* What --hybrid --sequence does not take; prints, exit code. */

@@ -62,6 +62,10 @@ typedef struct tt__seq_frame {
  * s->frame_note) and tt__seq_tune_after adds the frame's times (s->update_ms, s->render_ms)
  * and reports a finished window; tt__seq_tune_finish logs what was found; tt__seq_tune_free
  * releases it. Exit codes. (The frame loop calls these, never the other way round.) */
+/* The accel's tuning plan and objective along a sequence (--tune, --tune-params, --objective
+ * checked); `job` names the caller in messages. Prints, exit code. */
+int tt__seq_accel_plan(tt__seq *s, const char *job, tt_tuning_plan *plan, const char **objective,
+                       tt_objective *obj);
 int tt__seq_tune_create(tt__seq *s);
 int tt__seq_tune_before(tt__seq *s, uint32_t f);
 int tt__seq_tune_after(tt__seq *s, uint32_t f);

@@ -41,30 +41,19 @@ struct tt__seq_tune {
   char *note; /* the manifest members of the window's frames */
 };
 
-/* The objective along a sequence: the frames' times (render, build = the update, or both;
- * default both). Prints and returns TT_EXIT_USAGE for another. */
-static int tt__seq_tune_objective(tt__seq *s, struct tt__seq_tune *t) {
-  t->objective = s->opt->objective ? s->opt->objective : "build+render";
-  tt_objective obj;
-  if (tt__parse_objective("--objective", t->objective, &obj)) return TT_EXIT_USAGE;
-  if (obj.kind == TT_OBJECTIVE_RENDER || obj.kind == TT_OBJECTIVE_BUILD ||
-      obj.kind == TT_OBJECTIVE_TOTAL)
-    return TT_EXIT_OK;
-  tt__say("--objective %s: along a sequence a measurement is frames' times: render, build "
-          "(the per-frame accel update) or build+render (default)\n",
-          t->objective);
-  return TT_EXIT_USAGE;
-}
-
-/* The target: the accel (--tune may name it), its searched parameters (--tune-params, else
- * all tunable ones, the update method included: the scene moves). */
-static int tt__seq_tune_plan(tt__seq *s, struct tt__seq_tune *t) {
+/* The accel's plan along a sequence, shared by --tune / --explore and --hybrid: --tune may name
+ * only the accel (the frames measure its update + render), the searched parameters are
+ * --tune-params or all its tunable ones (the update method included: the scene moves), and
+ * the objective is the frames' times (render, build = the update, or both; default both).
+ * `job` names the caller in messages. Prints, exit code. */
+int tt__seq_accel_plan(tt__seq *s, const char *job, tt_tuning_plan *plan, const char **objective,
+                       tt_objective *obj) {
   const tt__host_options *opt = s->opt;
   const char *accel = tt_loaded_plugin_entry(s->ses.accel_p)->name;
   if (opt->tune && strcmp(opt->tune, accel)) {
-    tt__say("--tune %s: tuning along a sequence tunes the accel (%s), whose per-frame "
-            "update + render the frames measure\n",
-            opt->tune, accel);
+    tt__say("--tune %s: %s tunes the accel (%s), whose per-frame update + render the frames "
+            "measure\n",
+            opt->tune, job, accel);
     return TT_EXIT_USAGE;
   }
   const char *names[256];
@@ -74,15 +63,31 @@ static int tt__seq_tune_plan(tt__seq *s, struct tt__seq_tune *t) {
     snprintf(buf, sizeof buf, "%s", opt->tune_params);
     for (char *tok = strtok(buf, ","); tok && n < 256; tok = strtok(NULL, ",")) names[n++] = tok;
   }
-  t->plan.struct_size = sizeof t->plan;
-  if (tt_session_tuning_plan(s->ses.lib, accel, opt->tune_params ? names : NULL, n, &t->plan) !=
+  plan->struct_size = sizeof *plan;
+  if (tt_session_tuning_plan(s->ses.lib, accel, opt->tune_params ? names : NULL, n, plan) !=
       TT_OK) {
-    tt__say("tuning: %s\n", tt_last_error());
+    tt__say("%s: %s\n", job, tt_last_error());
     return TT_EXIT_USAGE;
   }
+  *objective = opt->objective ? opt->objective : "build+render";
+  if (tt__parse_objective("--objective", *objective, obj)) return TT_EXIT_USAGE;
+  if (obj->kind == TT_OBJECTIVE_RENDER || obj->kind == TT_OBJECTIVE_BUILD ||
+      obj->kind == TT_OBJECTIVE_TOTAL)
+    return TT_EXIT_OK;
+  tt__say("--objective %s: along a sequence a measurement is frames' times: render, build "
+          "(the per-frame accel update) or build+render (default)\n",
+          *objective);
+  return TT_EXIT_USAGE;
+}
+
+/* The target: the accel, its searched parameters and the objective (tt__seq_accel_plan). */
+static int tt__seq_tune_plan(tt__seq *s, struct tt__seq_tune *t) {
+  tt_objective obj;
+  int rc = tt__seq_accel_plan(s, "tuning along a sequence", &t->plan, &t->objective, &obj);
+  if (rc != TT_EXIT_OK) return rc;
   t->target = t->plan.target;
   t->index = t->plan.target_index;
-  return tt__seq_tune_objective(s, t);
+  return TT_EXIT_OK;
 }
 
 /* The library's tuning session over the accel, in the first frame's state (set per window). */
